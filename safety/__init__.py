@@ -1,0 +1,1 @@
+"""swarmdeck.safety"""
