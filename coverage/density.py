@@ -1,0 +1,269 @@
+"""Densities φ(q, t) for coverage control: the Gaussian-mixture snapshot and the Density protocol.
+
+A *Density* is any object with ``.at(t) -> GaussianMixture``. The snapshot carries the
+parameters at time ``t`` together with their exact time derivatives, so that φ_t is analytic
+(REFERENCE.md §5)::
+
+    φ(q)   = floor + Σ_k g_k(q),             g_k = w_k exp(−½ (q − μ_k)ᵀ Σ_k⁻¹ (q − μ_k))
+    φ_t(q) = Σ_k [ẇ_k e_k + g_k ((q − μ_k)ᵀ Σ_k⁻¹ μ̇_k + ½ (q − μ_k)ᵀ Σ_k⁻¹ Σ̇_k Σ_k⁻¹ (q − μ_k))]
+
+For isotropic bumps Σ_k = σ_k² I and the bracket is ``(q−μ)·μ̇/σ² + ‖q−μ‖² σ̇/σ³``; the
+ẇ term is written as ``ẇ_k e_k`` (e_k the unweighted exponential) so a bump fading in from
+w = 0 has a finite φ_t. Units: q and μ in m, σ in m, w and floor in 1/m² (any consistent
+scale: the coverage laws are invariant to scaling φ, the cost H is not), derivatives per s.
+"""
+from __future__ import annotations
+
+from typing import Any, Protocol, runtime_checkable
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+__all__ = ["Density", "GaussianMixture"]
+
+
+@runtime_checkable
+class Density(Protocol):
+    """Anything that gives a Gaussian-mixture snapshot (with time derivatives) at time t [s]."""
+
+    def at(self, t: float) -> "GaussianMixture":  # pragma: no cover - protocol
+        ...
+
+
+def _vector(name: str, value: ArrayLike | None, k: int, default: float | None) -> NDArray[np.float64]:
+    """A (k,) float array named ``name``; ``None`` gives ``default`` everywhere."""
+    if value is None:
+        if default is None:
+            raise ValueError(f"{name} is required (shape ({k},))")
+        return np.full(k, float(default))
+    arr = np.asarray(value, dtype=float)
+    if arr.ndim == 0 and k == 1:
+        arr = arr.reshape(1)
+    if arr.shape != (k,):
+        raise ValueError(f"{name} must have shape ({k},), got {arr.shape}")
+    if not np.all(np.isfinite(arr)):
+        raise ValueError(f"{name} must be finite (no NaN/inf), got {arr}")
+    return arr.copy()
+
+
+def _points(name: str, value: ArrayLike | None, k: int | None) -> NDArray[np.float64]:
+    """A (k, 2) float array named ``name``; ``None`` gives zeros (only when k is known)."""
+    if value is None:
+        if k is None:
+            raise ValueError(f"{name} is required (shape (K, 2))")
+        return np.zeros((k, 2))
+    arr = np.asarray(value, dtype=float)
+    if arr.ndim == 1 and arr.shape == (2,) and k in (None, 1):
+        arr = arr.reshape(1, 2)
+    if arr.size == 0:
+        arr = arr.reshape(0, 2)
+    if arr.ndim != 2 or arr.shape[1] != 2 or (k is not None and arr.shape[0] != k):
+        expect = f"({k}, 2)" if k is not None else "(K, 2)"
+        raise ValueError(f"{name} must have shape {expect}, got {arr.shape}")
+    if not np.all(np.isfinite(arr)):
+        raise ValueError(f"{name} must be finite (no NaN/inf)")
+    return arr.copy()
+
+
+def _matrices(name: str, value: ArrayLike, k: int) -> NDArray[np.float64]:
+    arr = np.asarray(value, dtype=float)
+    if arr.shape != (k, 2, 2):
+        raise ValueError(f"{name} must have shape ({k}, 2, 2), got {arr.shape}")
+    if not np.all(np.isfinite(arr)):
+        raise ValueError(f"{name} must be finite (no NaN/inf)")
+    if not np.allclose(arr, np.swapaxes(arr, 1, 2), rtol=1e-12, atol=1e-15):
+        raise ValueError(f"{name} must be symmetric 2x2 matrices")
+    return 0.5 * (arr + np.swapaxes(arr, 1, 2))
+
+
+def _readonly(*arrays: NDArray[np.float64]) -> None:
+    for a in arrays:
+        a.setflags(write=False)
+
+
+class GaussianMixture:
+    """A snapshot of φ(·, t) = floor + Σ_k w_k exp(−‖q − μ_k‖² / (2σ_k²)) with its time derivatives.
+
+    Parameters
+    ----------
+    floor : float, ≥ 0. Constant part of φ (1–5 % of a bump peak keeps every cell mass > 0).
+    mu : (K, 2) bump centres [m].  sigma : (K,) bump widths [m], > 0.  weight : (K,) peaks, ≥ 0.
+    mu_dot : (K, 2) [m/s], sigma_dot : (K,) [m/s], weight_dot : (K,) [1/s]; ``None`` = 0.
+    cov, cov_dot : keyword-only alternative to ``sigma``/``sigma_dot`` for anisotropic bumps,
+        (K, 2, 2) symmetric positive-definite covariances [m²] and their rates [m²/s].
+
+    The snapshot is immutable and is itself a :class:`Density` (``at(t)`` returns ``self``).
+    Raises ``ValueError`` naming the argument for NaN, negative weights or floor, σ ≤ 0,
+    non-positive-definite covariances, wrong shapes, or a density with zero mass.
+    """
+
+    __slots__ = ("floor", "mu", "sigma", "weight", "mu_dot", "sigma_dot", "weight_dot",
+                 "cov", "cov_dot", "isotropic", "_prec", "_qdot")
+
+    def __init__(
+        self,
+        floor: float = 0.05,
+        mu: ArrayLike | None = None,
+        sigma: ArrayLike | None = None,
+        weight: ArrayLike | None = None,
+        mu_dot: ArrayLike | None = None,
+        sigma_dot: ArrayLike | None = None,
+        weight_dot: ArrayLike | None = None,
+        *,
+        cov: ArrayLike | None = None,
+        cov_dot: ArrayLike | None = None,
+    ) -> None:
+        f = float(floor)
+        if not np.isfinite(f) or f < 0.0:
+            raise ValueError(f"floor must be a finite number >= 0, got {floor!r}")
+        mu_arr = _points("mu", mu if mu is not None else np.zeros((0, 2)), None)
+        k = mu_arr.shape[0]
+        w = _vector("weight", weight, k, 1.0 if k == 0 else None)
+        if np.any(w < 0.0):
+            raise ValueError(f"weight must be >= 0, got {w}")
+        w_dot = _vector("weight_dot", weight_dot, k, 0.0)
+        m_dot = _points("mu_dot", mu_dot, k)
+        if cov is not None:
+            if sigma is not None or sigma_dot is not None:
+                raise ValueError("give either sigma/sigma_dot (isotropic) or cov/cov_dot, not both")
+            c = _matrices("cov", cov, k)
+            eig = np.linalg.eigvalsh(c) if k else np.zeros((0, 2))
+            if np.any(eig <= 0.0):
+                raise ValueError("cov must be positive definite (every eigenvalue > 0)")
+            c_dot = _matrices("cov_dot", cov_dot, k) if cov_dot is not None else np.zeros((k, 2, 2))
+            s = np.sqrt(np.sqrt(np.linalg.det(c))) if k else np.zeros(0)
+            s_dot = np.zeros(k)
+            iso = False
+        else:
+            if cov_dot is not None:
+                raise ValueError("cov_dot needs cov")
+            s = _vector("sigma", sigma, k, 1.0 if k == 0 else None)
+            if np.any(s <= 0.0):
+                raise ValueError(f"sigma must be > 0, got {s}")
+            s_dot = _vector("sigma_dot", sigma_dot, k, 0.0)
+            eye = np.eye(2)
+            c = (s ** 2)[:, None, None] * eye
+            c_dot = (2.0 * s * s_dot)[:, None, None] * eye
+            iso = True
+        if f == 0.0 and not np.any(w > 0.0):
+            raise ValueError("density has zero mass: floor is 0 and no weight is > 0")
+        prec = np.linalg.inv(c) if k else np.zeros((0, 2, 2))
+        # ½ Σ⁻¹ Σ̇ Σ⁻¹: the quadratic form of the σ-rate term of φ_t
+        qdot = 0.5 * prec @ c_dot @ prec if k else np.zeros((0, 2, 2))
+        _readonly(mu_arr, s, w, m_dot, s_dot, w_dot, c, c_dot, prec, qdot)
+        object.__setattr__(self, "floor", f)
+        for name, val in (("mu", mu_arr), ("sigma", s), ("weight", w), ("mu_dot", m_dot),
+                          ("sigma_dot", s_dot), ("weight_dot", w_dot), ("cov", c),
+                          ("cov_dot", c_dot), ("isotropic", iso), ("_prec", prec), ("_qdot", qdot)):
+            object.__setattr__(self, name, val)
+
+    def __setattr__(self, name: str, value: Any) -> None:
+        raise AttributeError("GaussianMixture is immutable")
+
+    # ------------------------------------------------------------------ protocol
+    def at(self, t: float) -> "GaussianMixture":
+        """A snapshot is a (frozen-in-time) Density: returns itself for every t."""
+        return self
+
+    # ------------------------------------------------------------------ properties
+    @property
+    def n_bumps(self) -> int:
+        """Number of Gaussian bumps K."""
+        return int(self.mu.shape[0])
+
+    @property
+    def sigma_min(self) -> float:
+        """Narrowest length scale [m]: min over bumps of √(smallest eigenvalue of Σ_k); inf if K = 0.
+
+        Bumps with zero weight and zero weight rate do not count (they contribute nothing).
+        """
+        live = (self.weight > 0.0) | (self.weight_dot != 0.0)
+        if not np.any(live):
+            return float("inf")
+        eig = np.linalg.eigvalsh(self.cov[live])
+        return float(np.sqrt(eig[:, 0].min()))
+
+    @property
+    def peak(self) -> float:
+        """An upper bound of max φ: floor + Σ w_k [1/m²]."""
+        return float(self.floor + self.weight.sum())
+
+    # ------------------------------------------------------------------ evaluation
+    def _check_q(self, q: ArrayLike) -> NDArray[np.float64]:
+        arr = np.asarray(q, dtype=float)
+        if arr.ndim < 1 or arr.shape[-1] != 2:
+            raise ValueError(f"q must have shape (M, 2), got {arr.shape}")
+        return arr
+
+    def _parts(self, q: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """Differences d = q − μ_k (..., K, 2) and unweighted exponentials e_k (..., K)."""
+        d = q[..., None, :] - self.mu
+        p = self._prec
+        quad = (p[:, 0, 0] * d[..., 0] ** 2 + 2.0 * p[:, 0, 1] * d[..., 0] * d[..., 1]
+                + p[:, 1, 1] * d[..., 1] ** 2)
+        return d, np.exp(-0.5 * quad)
+
+    def evaluate(self, q: ArrayLike) -> NDArray[np.float64]:
+        """φ(q) for query points q (..., 2) [m]; returns shape (...,)."""
+        arr = self._check_q(q)
+        if self.n_bumps == 0:
+            return np.full(arr.shape[:-1], self.floor)
+        _, e = self._parts(arr)
+        return self.floor + e @ self.weight
+
+    def evaluate_dt(self, q: ArrayLike) -> NDArray[np.float64]:
+        """Analytic φ_t(q) [1/(m² s)] for query points q (..., 2); returns shape (...,)."""
+        arr = self._check_q(q)
+        if self.n_bumps == 0:
+            return np.zeros(arr.shape[:-1])
+        return self.evaluate_both(arr)[1]
+
+    def evaluate_both(self, q: ArrayLike) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """(φ(q), φ_t(q)) sharing one evaluation of the exponentials; shapes (...,)."""
+        arr = self._check_q(q)
+        if self.n_bumps == 0:
+            return np.full(arr.shape[:-1], self.floor), np.zeros(arr.shape[:-1])
+        d, e = self._parts(arr)
+        g = e * self.weight
+        p, qd = self._prec, self._qdot
+        pm = np.einsum("kab,kb->ka", p, self.mu_dot)        # Σ⁻¹ μ̇ (K, 2)
+        lin = d[..., 0] * pm[:, 0] + d[..., 1] * pm[:, 1]
+        quad = (qd[:, 0, 0] * d[..., 0] ** 2 + 2.0 * qd[:, 0, 1] * d[..., 0] * d[..., 1]
+                + qd[:, 1, 1] * d[..., 1] ** 2)
+        phi = self.floor + g.sum(axis=-1)
+        phi_t = e @ self.weight_dot + (g * (lin + quad)).sum(axis=-1)
+        return phi, phi_t
+
+    # ------------------------------------------------------------------ misc
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-able parameters (lists of floats) for recording/drawing."""
+        out: dict[str, Any] = {
+            "floor": self.floor,
+            "mu": self.mu.tolist(),
+            "weight": self.weight.tolist(),
+            "mu_dot": self.mu_dot.tolist(),
+            "weight_dot": self.weight_dot.tolist(),
+        }
+        if self.isotropic:
+            out["sigma"] = self.sigma.tolist()
+            out["sigma_dot"] = self.sigma_dot.tolist()
+        else:
+            out["cov"] = self.cov.tolist()
+            out["cov_dot"] = self.cov_dot.tolist()
+        return out
+
+    @classmethod
+    def from_dict(cls, data: dict[str, Any]) -> "GaussianMixture":
+        """Inverse of :meth:`to_dict`; raises ValueError for malformed data."""
+        if not isinstance(data, dict):
+            raise ValueError(f"density parameters must be a dict, got {type(data).__name__}")
+        known = {"floor", "mu", "sigma", "weight", "mu_dot", "sigma_dot", "weight_dot", "cov", "cov_dot"}
+        extra = set(data) - known
+        if extra:
+            raise ValueError(f"unknown density parameters: {sorted(extra)}")
+        kw = {k: data[k] for k in known - {"cov", "cov_dot"} if k in data}
+        return cls(**kw, cov=data.get("cov"), cov_dot=data.get("cov_dot"))
+
+    def __repr__(self) -> str:
+        return (f"GaussianMixture(floor={self.floor}, K={self.n_bumps}, "
+                f"sigma_min={self.sigma_min:.4g})")
