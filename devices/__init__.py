@@ -1,1 +1,39 @@
-"""swarmdeck.devices"""
+"""swarmdeck.devices: the GRITSBot model, the simulated arena and the experiment API.
+
+The :class:`Arena` is what experiments program against, at any abstraction
+level of the paper (wheel speeds, unicycle, single integrator, go-to-goal,
+waypoints, next positions); it runs on a :class:`SimulatedArena` by default.
+"""
+from swarmdeck.devices.arena import Arena, ArenaReport, ExperimentFinished, RunDefaults, RUN_DEFAULTS
+from swarmdeck.devices.backend import RobotBackend
+from swarmdeck.devices.controllers import (
+    HybridPoseController,
+    at_pose,
+    at_position,
+    clf_unicycle_pose_controller,
+    clf_unicycle_position_controller,
+    saturate_norm,
+    si_position_controller,
+)
+from swarmdeck.devices.gritsbot import (
+    GritsBotParams,
+    limit_unicycle,
+    unicycle_step,
+    unicycle_to_wheels,
+    wheel_scale,
+    wheels_to_unicycle,
+    wrap_angle,
+)
+from swarmdeck.devices.initial_conditions import max_robots, random_initial_poses
+from swarmdeck.devices.lookahead import lookahead_points, si_to_unicycle, unicycle_to_si
+from swarmdeck.devices.simulator import ArenaConfig, SimulatedArena
+from swarmdeck.devices.validation import ValidationReport, ValidationRules, colliding_pairs, out_of_bounds
+
+__all__ = [
+    "Arena", "ArenaConfig", "ArenaReport", "ExperimentFinished", "GritsBotParams", "HybridPoseController",
+    "RobotBackend", "RunDefaults", "RUN_DEFAULTS", "SimulatedArena", "ValidationReport", "ValidationRules",
+    "at_pose", "at_position", "clf_unicycle_pose_controller", "clf_unicycle_position_controller",
+    "colliding_pairs", "limit_unicycle", "lookahead_points", "max_robots", "out_of_bounds",
+    "random_initial_poses", "saturate_norm", "si_position_controller", "si_to_unicycle", "unicycle_step",
+    "unicycle_to_si", "unicycle_to_wheels", "wheel_scale", "wheels_to_unicycle", "wrap_angle",
+]

@@ -1,0 +1,429 @@
+"""The experiment API: program the swarm at any abstraction level of the paper (§III-C).
+
+User code talks to one :class:`Arena` whether the robots are simulated or
+real. Each step the current command — wheel speeds, unicycle ``(v, ω)``,
+single-integrator velocities of the look-ahead points, go-to-goal positions or
+poses, waypoint lists, or "next position" difference equations — is converted
+to single-integrator velocities of the look-ahead points, passed through the
+safety filter (on by default), mapped back to ``(v, ω)`` through the
+look-ahead diffeomorphism and sent to the robots, which apply the wheel limits.
+So limits and safety are enforced in exactly one place, whatever the level.
+
+Arrays follow swarmdeck's convention: one row per robot. Commands persist
+until replaced (as in rps); ``ids`` selects a subset of robots to update.
+"""
+from __future__ import annotations
+
+import contextvars
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from typing import Any, Literal, Protocol
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from swarmdeck.devices.backend import RobotBackend
+from swarmdeck.devices.controllers import (
+    HybridPoseController,
+    at_position,
+    clf_unicycle_pose_controller,
+    clf_unicycle_position_controller,
+    si_position_controller,
+)
+from swarmdeck.devices.gritsbot import GritsBotParams, wheels_to_unicycle
+from swarmdeck.devices.lookahead import lookahead_points, si_to_unicycle, unicycle_to_si
+from swarmdeck.devices.simulator import ArenaConfig, SimulatedArena, check_poses
+
+FloatArray = NDArray[np.float64]
+GoalController = Literal["si", "clf", "pose", "hybrid"]
+
+
+class ExperimentFinished(Exception):
+    """Raised by :meth:`Arena.step` when the run's declared duration is over."""
+
+
+class CommandFilter(Protocol):
+    """A safety filter: ``filter(points (N,2), nominal (N,2), obstacles=None) -> (safe (N,2), diagnostics)``."""
+
+    def filter(self, points: ArrayLike, nominal: ArrayLike, obstacles: ArrayLike | None = None) -> tuple[FloatArray, Any]: ...
+
+
+@dataclass(frozen=True)
+class RunDefaults:
+    """Defaults a runner (``swarmdeck run``) hands to Arenas a script creates without arguments."""
+
+    n_robots: int | None = None
+    duration: float | None = None
+    seed: int | None = None
+    safety: bool = True
+    on_create: Any = None  # callable(Arena) -> None, lets the runner find the script's arena
+
+
+RUN_DEFAULTS: contextvars.ContextVar[RunDefaults] = contextvars.ContextVar("swarmdeck_run_defaults", default=RunDefaults())
+
+
+def default_safety_filter(params: GritsBotParams, config: ArenaConfig) -> CommandFilter:
+    """The barrier-certificate filter of :mod:`swarmdeck.safety` for this robot and arena."""
+    from swarmdeck.safety import BarrierConfig, SafetyFilter  # devices -> safety (one way)
+
+    return SafetyFilter(BarrierConfig(bounds=config.bounds, max_speed=params.max_speed, dt=config.dt))
+
+
+@dataclass
+class SafetyStats:
+    """Running counts of the safety filter over a run."""
+
+    calls: int = 0
+    failures: int = 0
+    interventions: int = 0  # robot-steps whose command the filter changed
+    last_status: str = "off"
+    last_diagnostics: Any = None
+    failure_reasons: dict[str, int] = field(default_factory=dict)
+
+
+class Arena:
+    """A swarm of GRITSBots you program at the level you like.
+
+    Args:
+        number_of_robots: N. Ignored when ``initial_conditions`` is given.
+        initial_conditions: ``(N, 3)`` float poses ``[x, y, θ]``; random non-overlapping when omitted.
+        config: arena bounds, period, real-time pacing, seed.
+        params: the robot model.
+        safety: True for the default barrier filter, False to run without it, or any object
+            with ``filter(points, nominal, obstacles=None)``.
+        duration: declared duration, s; :meth:`step` raises :class:`ExperimentFinished` after it.
+        backend: robots to drive; a :class:`SimulatedArena` when omitted.
+
+    Example::
+
+        arena = Arena(6)
+        for _ in range(600):
+            p = arena.positions()
+            arena.set_velocities(-(p - p.mean(axis=0)))
+            arena.step()
+        print(arena.report())
+    """
+
+    def __init__(
+        self,
+        number_of_robots: int | None = None,
+        *,
+        initial_conditions: ArrayLike | None = None,
+        config: ArenaConfig | None = None,
+        params: GritsBotParams | None = None,
+        safety: bool | CommandFilter | None = None,
+        duration: float | None = None,
+        backend: RobotBackend | None = None,
+    ) -> None:
+        defaults = RUN_DEFAULTS.get()
+        if number_of_robots is None:
+            number_of_robots = defaults.n_robots
+        if duration is None:
+            duration = defaults.duration
+        if safety is None:
+            safety = defaults.safety
+        if config is None:
+            config = ArenaConfig(seed=defaults.seed)
+        self.params = params if params is not None else GritsBotParams()
+        self.config = config
+        if duration is not None and not (np.isfinite(duration) and duration > 0):
+            raise ValueError(f"duration must be a positive number of seconds, got {duration!r}")
+        self.duration = duration
+        if backend is None:
+            if number_of_robots is not None and not isinstance(number_of_robots, (int, np.integer)):
+                raise ValueError(f"number_of_robots must be an integer, got {number_of_robots!r}")
+            if initial_conditions is not None:
+                initial_conditions = check_poses(initial_conditions)
+            elif number_of_robots is None:
+                number_of_robots = 6
+            backend = SimulatedArena(number_of_robots, initial_conditions, config=config, params=self.params)
+        self.backend = backend
+        self.n = int(backend.n_robots)
+        self.ell = self.params.lookahead
+        if safety is True:
+            self.safety: CommandFilter | None = default_safety_filter(self.params, config)
+        elif safety is False:
+            self.safety = None
+        else:
+            if not callable(getattr(safety, "filter", None)):
+                raise ValueError("safety must be True, False or an object with a filter(points, nominal) method")
+            self.safety = safety
+        self.safety_stats = SafetyStats()
+        self.invalid_commands = 0
+        self.events: list[str] = []
+        self._command: tuple[str, Any] = ("si", np.zeros((self.n, 2)))
+        self._hybrid = HybridPoseController(lookahead=self.ell)
+        self._waypoint_index = np.zeros(self.n, dtype=int)
+        self._poses_cache: FloatArray | None = None
+        self.last_nominal = np.zeros((self.n, 2))
+        self.last_safe = np.zeros((self.n, 2))
+        if defaults.on_create is not None:
+            defaults.on_create(self)
+
+    # ------------------------------------------------------------------ sensing
+    @property
+    def time(self) -> float:
+        """Seconds since the start of the run."""
+        return float(self.backend.time)
+
+    @property
+    def ids(self) -> NDArray[np.intp]:
+        """Robot ids ``0 … N−1``."""
+        return np.arange(self.n)
+
+    def poses(self) -> FloatArray:
+        """Current poses ``(N, 3)`` ``[x, y, θ]`` (a fresh copy every call)."""
+        return self.backend.poses
+
+    def positions(self) -> FloatArray:
+        """Look-ahead points ``(N, 2)``: the points single-integrator commands move."""
+        return lookahead_points(self.backend.poses, self.ell)
+
+    # ------------------------------------------------------------------ commanding
+    def _ids(self, ids: ArrayLike | None) -> NDArray[np.intp] | None:
+        if ids is None:
+            return None
+        arr = np.atleast_1d(np.asarray(ids))
+        if arr.dtype.kind not in "iu":
+            raise ValueError(f"ids must be integer robot ids, got dtype {arr.dtype}")
+        bad = arr[(arr < 0) | (arr >= self.n)]
+        if len(bad):
+            raise ValueError(f"unknown robot id(s) {bad.tolist()}: this arena has ids 0..{self.n - 1}")
+        if len(np.unique(arr)) != len(arr):
+            raise ValueError(f"ids must not repeat, got {arr.tolist()}")
+        return arr.astype(np.intp)
+
+    def _rows(self, name: str, values: ArrayLike, width: int | None, ids: NDArray[np.intp] | None) -> FloatArray:
+        arr = np.asarray(values)
+        if arr.dtype.kind not in "fiu" or arr.dtype.kind == "b":
+            raise ValueError(f"{name} must be numeric, got dtype {arr.dtype}")
+        rows = self.n if ids is None else len(ids)
+        expected = (rows,) if width is None else (rows, width)
+        if arr.shape != expected:
+            raise ValueError(f"{name} must have shape {expected}, got {arr.shape}")
+        return arr.astype(float, copy=True)
+
+    def _merge(self, kind: str, full: FloatArray, ids: NDArray[np.intp] | None, part: FloatArray) -> None:
+        if ids is None:
+            self._command = (kind, part)
+            return
+        base = full.copy()
+        base[ids] = part
+        self._command = (kind, base)
+
+    def _current(self, kind: str, shape: tuple[int, ...]) -> FloatArray:
+        """The stored command of this kind, or the present motion re-expressed at this level."""
+        if self._command[0] == kind:
+            return self._command[1]
+        return np.zeros(shape)
+
+    def set_wheel_speeds(self, right: ArrayLike, left: ArrayLike, ids: ArrayLike | None = None) -> None:
+        """Wheel speeds ω_R, ω_L in rad/s, ``(N,)`` each (or one per id in ``ids``)."""
+        sel = self._ids(ids)
+        r = self._rows("right", right, None, sel)
+        l = self._rows("left", left, None, sel)
+        self._merge("wheels", self._current("wheels", (self.n, 2)), sel, np.column_stack((r, l)))
+
+    def set_unicycle(self, v: ArrayLike, w: ArrayLike, ids: ArrayLike | None = None) -> None:
+        """Unicycle commands: linear speed v (m/s) and turning rate ω (rad/s), ``(N,)`` each."""
+        sel = self._ids(ids)
+        vv = self._rows("v", v, None, sel)
+        ww = self._rows("w", w, None, sel)
+        self._merge("unicycle", self._current("unicycle", (self.n, 2)), sel, np.column_stack((vv, ww)))
+
+    def set_velocities(self, velocities: ArrayLike, ids: ArrayLike | None = None) -> None:
+        """Single-integrator velocities ``(N, 2)`` (m/s) of the look-ahead points."""
+        sel = self._ids(ids)
+        u = self._rows("velocities", velocities, 2, sel)
+        self._merge("si", self._current("si", (self.n, 2)), sel, u)
+
+    def set_next_positions(self, positions: ArrayLike, ids: ArrayLike | None = None) -> None:
+        """"Next position" difference-equation commands: the look-ahead points should be at
+        ``positions`` ``(N, 2)`` after one period; sent as u = (p_next − p)/dt (then made safe)."""
+        sel = self._ids(ids)
+        p = self._rows("positions", positions, 2, sel)
+        hold = self._command[1] if self._command[0] == "next" else self.positions()
+        self._merge("next", hold, sel, p)
+
+    def set_goals(self, goals: ArrayLike, controller: GoalController = "si", ids: ArrayLike | None = None) -> None:
+        """Go to goal positions ``(N, 2)`` or poses ``(N, 3)``.
+
+        ``controller``: ``"si"`` (look-ahead point to the position, rps si position
+        controller), ``"clf"`` (unicycle CLF position controller), ``"pose"`` (CLF pose
+        controller; needs ``(N, 3)``), ``"hybrid"`` (approach then turn; needs ``(N, 3)``).
+        """
+        if controller not in ("si", "clf", "pose", "hybrid"):
+            raise ValueError(f"controller must be one of 'si', 'clf', 'pose', 'hybrid', got {controller!r}")
+        sel = self._ids(ids)
+        g = np.asarray(goals)
+        width = 3 if controller in ("pose", "hybrid") else (g.shape[-1] if g.ndim == 2 and g.shape[-1] in (2, 3) else 2)
+        goals_arr = self._rows("goals", goals, width, sel)
+        if not np.all(np.isfinite(goals_arr)):
+            raise ValueError("goals contain NaN or inf")
+        if sel is None:
+            base = goals_arr
+        else:
+            kind, cmd = self._command
+            if kind == "goals" and cmd[0] == controller and cmd[1].shape[1] == width:
+                base = cmd[1].copy()
+            else:  # robots not named hold where they are
+                poses = self.poses()
+                base = lookahead_points(poses, self.ell) if controller == "si" else poses[:, :width].copy()
+            base[sel] = goals_arr
+        self._hybrid.reset()
+        self._command = ("goals", (controller, base))
+
+    def set_waypoints(self, waypoints: Sequence[ArrayLike], tolerance: float = 0.03, loop: bool = False) -> None:
+        """One list of waypoints ``(K_i, 2)`` per robot, visited in order by the look-ahead point.
+
+        A robot holds its last waypoint (or starts over when ``loop``).
+        """
+        if len(waypoints) != self.n:
+            raise ValueError(f"waypoints must hold one (K_i, 2) array per robot ({self.n}), got {len(waypoints)}")
+        lengths = np.empty(self.n, dtype=np.intp)
+        arrays = []
+        for i, wp in enumerate(waypoints):  # once per call, not per tick
+            arr = np.asarray(wp, dtype=float)
+            if arr.ndim != 2 or arr.shape[1] != 2 or arr.shape[0] < 1 or not np.all(np.isfinite(arr)):
+                raise ValueError(f"waypoints[{i}] must be a finite (K, 2) array with K >= 1, got shape {np.shape(wp)}")
+            arrays.append(arr)
+            lengths[i] = len(arr)
+        if not tolerance > 0:
+            raise ValueError(f"tolerance must be > 0 m, got {tolerance!r}")
+        table = np.empty((self.n, int(lengths.max()), 2))
+        for i, arr in enumerate(arrays):
+            table[i, : len(arr)] = arr
+            table[i, len(arr) :] = arr[-1]
+        self._waypoint_index = np.zeros(self.n, dtype=np.intp)
+        self._command = ("waypoints", (table, lengths, float(tolerance), bool(loop)))
+
+    def stop(self) -> None:
+        """Command every robot to stand still."""
+        self._command = ("si", np.zeros((self.n, 2)))
+
+    @property
+    def waypoint_index(self) -> NDArray[np.intp]:
+        """Index of the waypoint each robot is heading to (copy)."""
+        return self._waypoint_index.copy()
+
+    # ------------------------------------------------------------------ the step
+    def nominal_velocities(self, poses: FloatArray) -> FloatArray:
+        """Look-ahead velocities ``(N, 2)`` the current command asks for at ``poses``."""
+        kind, cmd = self._command
+        ell, dt = self.ell, self.config.dt
+        if kind == "si":
+            return cmd.copy()
+        if kind == "unicycle":
+            return unicycle_to_si(poses, cmd[:, 0], cmd[:, 1], ell)
+        if kind == "wheels":
+            v, w = wheels_to_unicycle(cmd[:, 0], cmd[:, 1], self.params)
+            return unicycle_to_si(poses, v, w, ell)
+        if kind == "next":
+            return (cmd - lookahead_points(poses, ell)) / dt
+        if kind == "goals":
+            controller, goals = cmd
+            if controller == "si":
+                return si_position_controller(lookahead_points(poses, ell), goals[:, :2], speed_limit=self.params.max_speed)
+            if controller == "clf":
+                v, w = clf_unicycle_position_controller(poses, goals)
+            elif controller == "pose":
+                v, w = clf_unicycle_pose_controller(poses, goals)
+            else:
+                v, w = self._hybrid(poses, goals)
+            return unicycle_to_si(poses, v, w, ell)
+        if kind == "waypoints":
+            table, lengths, tol, loop = cmd
+            p = lookahead_points(poses, ell)
+            rows = np.arange(self.n)
+            idx = self._waypoint_index
+            reached = at_position(p, table[rows, idx], tol)
+            advance = reached & ((idx < lengths - 1) | loop)
+            idx = np.where(advance, (idx + 1) % lengths, idx)
+            self._waypoint_index = idx
+            return si_position_controller(p, table[rows, idx], speed_limit=self.params.max_speed)
+        raise AssertionError(f"unknown command kind {kind}")  # pragma: no cover
+
+    def step(self) -> FloatArray:
+        """Advance one period: nominal → safety filter → (v, ω) → robots. Returns the new poses.
+
+        Robots whose nominal command is NaN or inf are stopped for this step and the
+        event counted. If the safety filter fails, every robot is stopped.
+        """
+        if self.duration is not None and self.time >= self.duration - 1e-9:
+            raise ExperimentFinished(f"declared duration {self.duration} s is over")
+        poses = self.backend.poses
+        nominal = self.nominal_velocities(poses)
+        bad = ~np.all(np.isfinite(nominal), axis=1)
+        if bad.any():
+            nominal = np.where(bad[:, None], 0.0, nominal)
+            self.invalid_commands += int(bad.sum())
+            self.events.append(f"t={self.time:.3f}: non-finite command for robot(s) {np.flatnonzero(bad).tolist()}: stopped")
+        safe = nominal
+        if self.safety is not None:
+            safe, diag = self.safety.filter(lookahead_points(poses, self.ell), nominal)
+            st = self.safety_stats
+            st.calls += 1
+            st.last_diagnostics = diag
+            st.last_status = str(getattr(diag, "status", "ok"))
+            if not getattr(diag, "ok", True):
+                st.failures += 1
+                st.failure_reasons[st.last_status] = st.failure_reasons.get(st.last_status, 0) + 1
+                safe = np.zeros_like(nominal)
+            else:
+                st.interventions += int(np.count_nonzero(np.any(safe != nominal, axis=1)))
+        self.last_nominal, self.last_safe = nominal, np.asarray(safe, dtype=float)
+        v, w = si_to_unicycle(poses, self.last_safe, self.ell)
+        return self.backend.step(v, w)
+
+    # ------------------------------------------------------------------ reporting
+    def report(self) -> "ArenaReport":
+        """What happened so far: validation counts, safety filter statistics, invalid commands."""
+        validation = getattr(self.backend, "report", None)
+        return ArenaReport(self.n, self.time, validation, self.safety_stats, self.invalid_commands, self.safety is not None)
+
+    def call_at_scripts_end(self) -> None:
+        """Print the report (rps compatibility)."""
+        print(self.report())
+
+
+@dataclass
+class ArenaReport:
+    """Summary of a run for people (``str``) and programs (``to_dict``)."""
+
+    n_robots: int
+    time: float
+    validation: Any
+    safety: SafetyStats
+    invalid_commands: int
+    safety_enabled: bool
+
+    def to_dict(self) -> dict:
+        return {
+            "n_robots": self.n_robots,
+            "time": self.time,
+            "validation": self.validation.to_dict() if self.validation is not None else None,
+            "safety": {
+                "enabled": self.safety_enabled,
+                "calls": self.safety.calls,
+                "failures": self.safety.failures,
+                "failure_reasons": dict(self.safety.failure_reasons),
+                "interventions": self.safety.interventions,
+            },
+            "invalid_commands": self.invalid_commands,
+        }
+
+    def __str__(self) -> str:
+        lines = ["swarmdeck run report"]
+        if self.validation is not None:
+            lines.append(self.validation.summary())
+        else:
+            lines.append(f"robots: {self.n_robots}   time: {self.time:.2f} s")
+        if self.safety_enabled:
+            s = self.safety
+            lines.append(
+                f"safety filter: {s.calls} calls, {s.interventions} robot-steps changed, {s.failures} failures (robots stopped)"
+                + (f" {s.failure_reasons}" if s.failure_reasons else "")
+            )
+        else:
+            lines.append("safety filter: OFF")
+        return "\n".join(lines)

@@ -1,0 +1,33 @@
+"""What the experiment API needs from the robots it drives.
+
+The simulated arena satisfies this protocol; the networked transports (real
+GRITSBots through MQTT plus overhead tracking) provide the same calls, so a
+user's experiment runs unchanged on either.
+"""
+from __future__ import annotations
+
+from typing import Protocol, runtime_checkable
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from swarmdeck.devices.gritsbot import GritsBotParams
+
+
+@runtime_checkable
+class RobotBackend(Protocol):
+    """Robots that report poses and take one unicycle command per period."""
+
+    n_robots: int
+    params: GritsBotParams
+
+    @property
+    def poses(self) -> NDArray[np.float64]:
+        """Current poses ``(N, 3)`` (a copy)."""
+
+    @property
+    def time(self) -> float:
+        """Seconds since the start of the run on this backend's clock."""
+
+    def step(self, v: ArrayLike, w: ArrayLike) -> NDArray[np.float64]:
+        """Apply ``(v, ω)`` for one period and return the new poses."""

@@ -1,0 +1,151 @@
+"""The simulated arena: GRITSBot physics on a virtual clock, validated every step.
+
+This is the hardware stand-in. It knows nothing about controllers or safety:
+it takes unicycle commands ``(v, ω)``, applies the wheel limits (one uniform
+scale per robot, :func:`~swarmdeck.devices.gritsbot.limit_unicycle`), stops any
+robot whose command is not finite, integrates the exact unicycle step and
+counts boundary, collision and actuator errors the way rps does.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from swarmdeck.devices.clock import RealTimePacer, VirtualClock
+from swarmdeck.devices.gritsbot import GritsBotParams, limit_unicycle, unicycle_step, wrap_angle
+from swarmdeck.devices.initial_conditions import random_initial_poses
+from swarmdeck.devices.validation import ValidationReport, ValidationRules
+
+Bounds = tuple[float, float, float, float]
+
+
+@dataclass(frozen=True)
+class ArenaConfig:
+    """The arena and its stepping (REFERENCE.md §1).
+
+    Attributes:
+        bounds: ``(x_min, x_max, y_min, y_max)`` of the floor, m.
+        dt: control/integration period, s.
+        real_time: sleep so that one step takes ``dt`` of wall time.
+        seed: seed for random initial conditions (None: fresh entropy).
+    """
+
+    bounds: Bounds = (-1.6, 1.6, -1.0, 1.0)
+    dt: float = 0.033
+    real_time: bool = False
+    seed: int | None = None
+
+    def __post_init__(self) -> None:
+        x0, x1, y0, y1 = (float(b) for b in self.bounds)
+        if not all(np.isfinite([x0, x1, y0, y1])) or not (x1 > x0 and y1 > y0):
+            raise ValueError(f"ArenaConfig.bounds must be finite (x_min < x_max, y_min < y_max), got {self.bounds!r}")
+        if not (np.isfinite(self.dt) and 0 < self.dt <= 1.0):
+            raise ValueError(f"ArenaConfig.dt must be in (0, 1] s, got {self.dt!r}")
+
+    @property
+    def width(self) -> float:
+        return self.bounds[1] - self.bounds[0]
+
+    @property
+    def height(self) -> float:
+        return self.bounds[3] - self.bounds[2]
+
+
+def check_poses(poses: ArrayLike, name: str = "initial_conditions", n: int | None = None) -> NDArray[np.float64]:
+    """Validate and copy a ``(N, 3)`` float pose array; a clear ValueError otherwise.
+
+    Integer arrays are rejected (in rps they silently truncate the dynamics).
+    """
+    arr = np.asarray(poses)
+    if arr.dtype.kind not in "f":
+        raise ValueError(
+            f"{name} must be a float array of shape (N, 3) [x, y, theta]; got dtype {arr.dtype} "
+            "(integer poses would truncate the dynamics: use floats, e.g. np.array(..., dtype=float))"
+        )
+    if arr.ndim != 2 or arr.shape[1] != 3 or arr.shape[0] < 1:
+        raise ValueError(f"{name} must have shape (N, 3) with N >= 1, got {arr.shape}")
+    if n is not None and arr.shape[0] != n:
+        raise ValueError(f"{name} has {arr.shape[0]} rows but the arena has {n} robots")
+    if not np.all(np.isfinite(arr)):
+        raise ValueError(f"{name} contains NaN or inf")
+    out = arr.astype(float, copy=True)
+    out[:, 2] = wrap_angle(out[:, 2])
+    return out
+
+
+@dataclass
+class SimulatedArena:
+    """N simulated GRITSBots on the arena floor.
+
+    Args:
+        n_robots: N; ignored when ``initial_poses`` is given.
+        initial_poses: ``(N, 3)`` float array, or None for random non-overlapping poses.
+        config: the arena.
+        params: the robot model.
+        rules: validation thresholds.
+    """
+
+    n_robots: int | None = None
+    initial_poses: ArrayLike | None = None
+    config: ArenaConfig = field(default_factory=ArenaConfig)
+    params: GritsBotParams = field(default_factory=GritsBotParams)
+    rules: ValidationRules = field(default_factory=ValidationRules)
+
+    def __post_init__(self) -> None:
+        if self.initial_poses is not None and np.asarray(self.initial_poses).size:
+            self._poses = check_poses(self.initial_poses)
+            if self.n_robots is not None and self.n_robots != self._poses.shape[0]:
+                raise ValueError(
+                    f"n_robots={self.n_robots} disagrees with initial_poses of {self._poses.shape[0]} rows"
+                )
+        else:
+            if self.n_robots is None:
+                raise ValueError("give n_robots or initial_poses")
+            self._poses = random_initial_poses(self.n_robots, self.config.bounds, rng=self.config.seed)
+        self.n_robots = self._poses.shape[0]
+        self.clock = VirtualClock()
+        self.report = ValidationReport(self.n_robots)
+        self._pacer = RealTimePacer(self.config.dt) if self.config.real_time else None
+        self._v = np.zeros(self.n_robots)
+        self._w = np.zeros(self.n_robots)
+        self.last_collisions = np.empty((0, 2), dtype=np.intp)
+
+    @property
+    def poses(self) -> NDArray[np.float64]:
+        """Current poses ``(N, 3)``; a copy, so callers can never alter the simulation."""
+        return self._poses.copy()
+
+    @property
+    def time(self) -> float:
+        """Simulated time, s."""
+        return self.clock.now
+
+    @property
+    def applied(self) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """The ``(v, ω)`` actually applied in the last step, after limits (copies)."""
+        return self._v.copy(), self._w.copy()
+
+    def step(self, v: ArrayLike, w: ArrayLike) -> NDArray[np.float64]:
+        """Apply ``(v, ω)`` (each ``(N,)``) for one period; returns the new poses (a copy).
+
+        Non-finite commands stop that robot (and are counted); wheel limits scale
+        v and ω together; errors are counted in :attr:`report`.
+        """
+        v = np.asarray(v, dtype=float).reshape(-1)
+        w = np.asarray(w, dtype=float).reshape(-1)
+        n = self.n_robots
+        if v.shape != (n,) or w.shape != (n,):
+            raise ValueError(f"v and w must each have shape ({n},), got {v.shape} and {w.shape}")
+        invalid = ~(np.isfinite(v) & np.isfinite(w))
+        v = np.where(invalid, 0.0, v)
+        w = np.where(invalid, 0.0, w)
+        v, w, saturated = limit_unicycle(v, w, self.params)
+        self._v, self._w = v, w
+        self._poses = unicycle_step(self._poses, v, w, self.config.dt)
+        t = self.clock.advance(self.config.dt)
+        self.last_collisions = self.report.record(self._poses, self.config.bounds, saturated, invalid, t, self.rules)
+        if self._pacer is not None:
+            self._pacer.wait()
+        return self._poses.copy()

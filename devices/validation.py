@@ -1,0 +1,149 @@
+"""Per-step validation of a run, counted the way the Robotarium's rps simulator does.
+
+REFERENCE.md §1–2: a robot is out of bounds when its centre leaves the arena
+rectangle; two robots collide when their centres, each shifted 0.025 m forward
+along its heading, are at most 0.135 m apart; an actuator error is a command
+whose wheel speeds exceed the limit. swarmdeck counts each per robot *and* per
+step, and keeps the acceptance rules of the Robotarium's verifier.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+from scipy.spatial import cKDTree
+
+Bounds = tuple[float, float, float, float]
+
+
+@dataclass(frozen=True)
+class ValidationRules:
+    """Thresholds of the rps validator and the Robotarium verifier (REFERENCE.md §1–2).
+
+    Attributes:
+        collision_shift: forward shift of each centre before the distance test, m.
+        collision_distance: shifted centres at most this far apart collide, m.
+        max_violation_steps: the verifier rejects a run with more steps than this
+            with robots too close, or with robots out of bounds.
+        max_time_factor: the verifier rejects runs longer than this × declared duration.
+    """
+
+    collision_shift: float = 0.025
+    collision_distance: float = 0.135
+    max_violation_steps: int = 100
+    max_time_factor: float = 1.5
+
+
+def out_of_bounds(poses: ArrayLike, bounds: Bounds) -> NDArray[np.bool_]:
+    """``(N,)`` mask of robots whose centre lies outside the rectangle ``bounds``."""
+    p = np.asarray(poses, dtype=float)
+    x0, x1, y0, y1 = bounds
+    return (p[:, 0] < x0) | (p[:, 0] > x1) | (p[:, 1] < y0) | (p[:, 1] > y1)
+
+
+def colliding_pairs(poses: ArrayLike, rules: ValidationRules = ValidationRules()) -> NDArray[np.intp]:
+    """``(K, 2)`` index pairs ``i < j`` that collide by the rps test."""
+    p = np.asarray(poses, dtype=float)
+    if p.shape[0] < 2:
+        return np.empty((0, 2), dtype=np.intp)
+    shifted = p[:, :2] + rules.collision_shift * np.column_stack((np.cos(p[:, 2]), np.sin(p[:, 2])))
+    return cKDTree(shifted).query_pairs(rules.collision_distance, output_type="ndarray").astype(np.intp)
+
+
+@dataclass
+class ValidationReport:
+    """Running counts of a run: per robot (arrays of length N) and per step.
+
+    ``steps_with_*`` count steps in which at least one robot had that error;
+    ``*_per_robot`` count, for each robot, the steps in which it had it.
+    """
+
+    n_robots: int
+    steps: int = 0
+    time: float = 0.0
+    collisions_per_robot: NDArray[np.int64] = field(default=None)  # type: ignore[assignment]
+    boundary_per_robot: NDArray[np.int64] = field(default=None)  # type: ignore[assignment]
+    actuator_per_robot: NDArray[np.int64] = field(default=None)  # type: ignore[assignment]
+    invalid_command_per_robot: NDArray[np.int64] = field(default=None)  # type: ignore[assignment]
+    steps_with_collision: int = 0
+    steps_with_boundary: int = 0
+    steps_with_actuator: int = 0
+    collision_pairs: int = 0
+    first_collision_time: float | None = None
+
+    def __post_init__(self) -> None:
+        for name in ("collisions_per_robot", "boundary_per_robot", "actuator_per_robot", "invalid_command_per_robot"):
+            if getattr(self, name) is None:
+                setattr(self, name, np.zeros(self.n_robots, dtype=np.int64))
+
+    def record(
+        self,
+        poses: ArrayLike,
+        bounds: Bounds,
+        saturated: NDArray[np.bool_],
+        invalid: NDArray[np.bool_],
+        time: float,
+        rules: ValidationRules = ValidationRules(),
+    ) -> NDArray[np.intp]:
+        """Count one step's errors at the post-step ``poses``; returns the colliding pairs."""
+        pairs = colliding_pairs(poses, rules)
+        oob = out_of_bounds(poses, bounds)
+        self.steps += 1
+        self.time = time
+        if len(pairs):
+            hit = np.zeros(self.n_robots, dtype=bool)
+            hit[pairs.ravel()] = True
+            self.collisions_per_robot += hit
+            self.steps_with_collision += 1
+            self.collision_pairs += len(pairs)
+            if self.first_collision_time is None:
+                self.first_collision_time = time
+        self.boundary_per_robot += oob
+        self.steps_with_boundary += bool(oob.any())
+        self.actuator_per_robot += saturated
+        self.steps_with_actuator += bool(np.any(saturated))
+        self.invalid_command_per_robot += invalid
+        return pairs
+
+    def verdict(self, declared_duration: float | None = None, rules: ValidationRules = ValidationRules()) -> list[str]:
+        """Reasons the Robotarium verifier would reject this run (empty when accepted)."""
+        reasons = []
+        if self.steps_with_collision > rules.max_violation_steps:
+            reasons.append(f"robots too close in {self.steps_with_collision} steps (> {rules.max_violation_steps})")
+        if self.steps_with_boundary > rules.max_violation_steps:
+            reasons.append(f"robots out of bounds in {self.steps_with_boundary} steps (> {rules.max_violation_steps})")
+        if declared_duration is not None and self.time > rules.max_time_factor * declared_duration:
+            reasons.append(
+                f"simulated time {self.time:.1f} s exceeds {rules.max_time_factor} x declared {declared_duration:.1f} s"
+            )
+        return reasons
+
+    def to_dict(self) -> dict:
+        """A JSON-serialisable summary."""
+        return {
+            "n_robots": self.n_robots,
+            "steps": self.steps,
+            "time": self.time,
+            "steps_with_collision": self.steps_with_collision,
+            "steps_with_boundary": self.steps_with_boundary,
+            "steps_with_actuator": self.steps_with_actuator,
+            "collision_pairs": self.collision_pairs,
+            "first_collision_time": self.first_collision_time,
+            "collisions_per_robot": self.collisions_per_robot.tolist(),
+            "boundary_per_robot": self.boundary_per_robot.tolist(),
+            "actuator_per_robot": self.actuator_per_robot.tolist(),
+            "invalid_command_per_robot": self.invalid_command_per_robot.tolist(),
+        }
+
+    def summary(self) -> str:
+        """Human-readable lines, as rps's ``call_at_scripts_end`` prints."""
+        lines = [
+            f"robots: {self.n_robots}   steps: {self.steps}   simulated time: {self.time:.2f} s",
+            f"collisions: {self.collision_pairs} pair-steps in {self.steps_with_collision} steps"
+            + (f" (first at {self.first_collision_time:.2f} s)" if self.first_collision_time is not None else ""),
+            f"out of bounds: {int(self.boundary_per_robot.sum())} robot-steps in {self.steps_with_boundary} steps",
+            f"actuator saturation: {int(self.actuator_per_robot.sum())} robot-steps in {self.steps_with_actuator} steps",
+            f"invalid (NaN/inf) commands stopped: {int(self.invalid_command_per_robot.sum())}",
+        ]
+        return "\n".join(lines)
