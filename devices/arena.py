@@ -57,6 +57,7 @@ class RunDefaults:
     seed: int | None = None
     safety: bool = True
     on_create: Any = None  # callable(Arena) -> None, lets the runner find the script's arena
+    on_step: Any = None  # callable(Arena) -> None after every step (progress display)
 
 
 RUN_DEFAULTS: contextvars.ContextVar[RunDefaults] = contextvars.ContextVar("swarmdeck_run_defaults", default=RunDefaults())
@@ -157,6 +158,7 @@ class Arena:
         self._poses_cache: FloatArray | None = None
         self.last_nominal = np.zeros((self.n, 2))
         self.last_safe = np.zeros((self.n, 2))
+        self._on_step = defaults.on_step
         if defaults.on_create is not None:
             defaults.on_create(self)
 
@@ -373,7 +375,10 @@ class Arena:
                 st.interventions += int(np.count_nonzero(np.any(safe != nominal, axis=1)))
         self.last_nominal, self.last_safe = nominal, np.asarray(safe, dtype=float)
         v, w = si_to_unicycle(poses, self.last_safe, self.ell)
-        return self.backend.step(v, w)
+        new_poses = self.backend.step(v, w)
+        if self._on_step is not None:
+            self._on_step(self)
+        return new_poses
 
     # ------------------------------------------------------------------ reporting
     def report(self) -> "ArenaReport":
