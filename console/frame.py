@@ -17,7 +17,9 @@ active barrier pairs, B density bumps, C contacts)::
 
     format        int, FRAME_FORMAT
     tick          int, tick index from 0
-    time          float s, the loop's clock (virtual in simulation, monotonic live)
+    time          float s, the loop's clock (virtual under tick(), monotonic when threaded)
+    run_time      float s, behaviour time: advances by dt only on ticks that ran (not paused/stopped);
+                  time-varying densities are evaluated at run_time
     dt            float s, control period
     bounds        [x_min, x_max, y_min, y_max] m
     lookahead     float m, ℓ of the controlled (look-ahead) points
@@ -349,6 +351,7 @@ class Frame:
     v: FloatArray
     w: FloatArray
     dt: float = 0.033
+    run_time: float = 0.0
     bounds: tuple[float, float, float, float] = (-1.6, 1.6, -1.0, 1.0)
     lookahead: float = 0.03
     seen: NDArray[np.bool_] | None = None
@@ -369,6 +372,7 @@ class Frame:
         _set(self, "tick", int(self.tick))
         _set(self, "time", float(self.time))
         _set(self, "dt", float(self.dt))
+        _set(self, "run_time", float(self.run_time))
         _set(self, "lookahead", float(self.lookahead))
         _set(self, "bounds", tuple(float(b) for b in self.bounds))
         if len(self.bounds) != 4:
@@ -419,6 +423,7 @@ class Frame:
             "tick": self.tick,
             "time": _enc_float(self.time),
             "dt": _enc_float(self.dt),
+            "run_time": _enc_float(self.run_time),
             "bounds": [_enc_float(b) for b in self.bounds],
             "lookahead": _enc_float(self.lookahead),
             "ids": self.ids.tolist(),
@@ -455,6 +460,7 @@ class Frame:
                       for k, v in d.get("params", {}).items()}
             return cls(
                 tick=d["tick"], time=_dec_float(d["time"]), dt=_dec_float(d["dt"]),
+                run_time=_dec_float(d.get("run_time", 0.0)),
                 bounds=tuple(_dec_float(b) for b in d["bounds"]), lookahead=_dec_float(d["lookahead"]),
                 ids=_dec_array(d["ids"], np.int64, (), "ids"),
                 poses=_dec_array(d["poses"], float, (3,), "poses"),

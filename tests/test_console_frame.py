@@ -18,7 +18,7 @@ def make_frame(rng: np.random.Generator, n: int = 5, k: int = 2, with_parts: boo
     cells = [rng.normal(size=(int(rng.integers(3, 7)), 2)) for _ in range(n)]
     offsets = np.concatenate(([0], np.cumsum([len(c) for c in cells])))
     return Frame(
-        tick=int(rng.integers(0, 10**6)), time=float(rng.uniform(0, 100)),
+        tick=int(rng.integers(0, 10**6)), time=float(rng.uniform(0, 100)), run_time=float(rng.uniform(0, 50)),
         poses=rng.normal(size=(n, 3)), ids=np.arange(n), nominal=rng.normal(size=(n, 2)),
         safe=rng.normal(size=(n, 2)), v=rng.normal(size=n), w=rng.normal(size=n),
         seen=rng.uniform(size=n) > 0.3,
