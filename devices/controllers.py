@@ -60,12 +60,14 @@ def clf_unicycle_pose_controller(
     approach_angle_gain: float = 1.0,
     desired_angle_gain: float = 2.7,
     rotation_error_gain: float = 1.0,
+    near_goal: float = 1e-3,
 ) -> tuple[FloatArray, FloatArray]:
     """Pose (position and heading) controller in polar coordinates (rps ``create_clf_unicycle_pose_controller``).
 
     In the goal frame: e = ‖R(−θ_g)(p_g − p)‖, ϑ = atan2 of that vector,
     α = wrap(ϑ − (θ − θ_g)); v = γ e cos α, ω = k α + γ (cos α · sin α/α)(α + h ϑ).
-    sin α/α is evaluated as ``np.sinc(α/π)`` so α = 0 is well defined (rps divides by zero).
+    sin α/α is evaluated as ``np.sinc(α/π)`` so α = 0 is well defined (rps divides by zero),
+    and within ``near_goal`` m of the goal only the heading is corrected (ω = k·(θ_g − θ)).
     """
     poses = np.asarray(poses, dtype=float)
     goals = np.asarray(goals, dtype=float)
@@ -81,6 +83,11 @@ def clf_unicycle_pose_controller(
     g, k, h = approach_angle_gain, desired_angle_gain, rotation_error_gain
     v = g * e * ca
     w = k * alpha + g * ca * sinc * (alpha + h * theta)
+    # At the goal the polar angle ϑ is undefined and flips by ±π on round-off, which
+    # makes rps's controller spin a parked robot; there, only the heading is corrected.
+    near = e < near_goal
+    v = np.where(near, 0.0, v)
+    w = np.where(near, k * wrap_angle(goals[:, 2] - poses[:, 2]), w)
     return v, w
 
 
