@@ -35,7 +35,7 @@ def lattice_sites(bounds: Bounds, spacing: float, wall_margin: float) -> NDArray
     return pts
 
 
-def max_robots(bounds: Bounds = (-1.6, 1.6, -1.0, 1.0), spacing: float = 0.26, wall_margin: float = 0.15) -> int:
+def max_robots(bounds: Bounds = (-1.6, 1.6, -1.0, 1.0), spacing: float = 0.245, wall_margin: float = 0.13) -> int:
     """The largest N :func:`random_initial_poses` can place with these settings."""
     return int(len(lattice_sites(bounds, spacing, wall_margin)))
 
@@ -44,14 +44,14 @@ def random_initial_poses(
     n: int,
     bounds: Bounds = (-1.6, 1.6, -1.0, 1.0),
     *,
-    spacing: float = 0.26,
-    min_separation: float = 0.24,
-    wall_margin: float = 0.15,
+    spacing: float = 0.245,
+    min_separation: float = 0.23,
+    wall_margin: float = 0.13,
     rng: np.random.Generator | int | None = None,
 ) -> NDArray[np.float64]:
     """``(n, 3)`` random poses, pairwise at least ``min_separation`` apart (m).
 
-    The default separation 0.24 m keeps the look-ahead points (ℓ = 0.03 m) at
+    The default separation 0.23 m keeps the look-ahead points (ℓ = 0.03 m) at
     least D_s = 0.17 m apart whatever the headings, so the safety barrier starts
     in its safe set.
 

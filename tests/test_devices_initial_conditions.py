@@ -8,13 +8,13 @@ from swarmdeck.devices import max_robots, random_initial_poses
 
 def test_every_n_up_to_the_maximum_fits():
     top = max_robots()
-    assert top >= 50
+    assert top >= 100
     for n in list(range(1, 21)) + [top // 2, top]:
         p = random_initial_poses(n, rng=n)
         assert p.shape == (n, 3)
         if n > 1:
-            assert pdist(p[:, :2]).min() >= 0.24 - 1e-12
-        assert np.all(np.abs(p[:, 0]) <= 1.6 - 0.15 + 1e-12) and np.all(np.abs(p[:, 1]) <= 1.0 - 0.15 + 1e-12)
+            assert pdist(p[:, :2]).min() >= 0.23 - 1e-12
+        assert np.all(np.abs(p[:, 0]) <= 1.6 - 0.13 + 1e-12) and np.all(np.abs(p[:, 1]) <= 1.0 - 0.13 + 1e-12)
 
 
 def test_too_many_names_the_maximum():
@@ -26,7 +26,7 @@ def test_too_many_names_the_maximum():
 def test_larger_arena_holds_more():
     assert max_robots((-8.0, 8.0, -5.0, 5.0)) >= 1000
     p = random_initial_poses(1000, (-8.0, 8.0, -5.0, 5.0), rng=0)
-    assert pdist(p[:, :2]).min() >= 0.24 - 1e-12
+    assert pdist(p[:, :2]).min() >= 0.23 - 1e-12
 
 
 @pytest.mark.parametrize("bad", [0, -3, 2.5, True, "4"])
