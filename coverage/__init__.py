@@ -1,4 +1,23 @@
 """swarmdeck.coverage: time-varying-density coverage control (REFERENCE.md §5)."""
+from swarmdeck.coverage.controller import (CoverageConfig, CoverageController, CoverageState,
+                                           coverage_tick)
+from swarmdeck.coverage.densities import (AnalyticDensity, Bump, Constant, Fixed, Linear,
+                                          Lissajous, Orbit, Pulse, Sine, moving_density,
+                                          s1_density)
 from swarmdeck.coverage.density import Density, GaussianMixture
+from swarmdeck.coverage.image import image_density, letter_image
+from swarmdeck.coverage.jacobian import EdgeOptions, centroid_jacobian
+from swarmdeck.coverage.laws import LAWS, parse_law, saturate
+from swarmdeck.coverage.packing import packing_warning, predicted_spacing
+from swarmdeck.coverage.quadrature import CellMoments, QuadratureOptions, cell_moments
+from swarmdeck.coverage.raster import raster_moments
+from swarmdeck.coverage.voronoi import BoundedVoronoi, bounded_voronoi, precondition_positions
 
-__all__ = ["Density", "GaussianMixture"]
+__all__ = [
+    "AnalyticDensity", "BoundedVoronoi", "Bump", "CellMoments", "Constant", "CoverageConfig",
+    "CoverageController", "CoverageState", "Density", "EdgeOptions", "Fixed", "GaussianMixture",
+    "LAWS", "Linear", "Lissajous", "Orbit", "Pulse", "QuadratureOptions", "Sine",
+    "bounded_voronoi", "cell_moments", "centroid_jacobian", "coverage_tick", "image_density",
+    "letter_image", "moving_density", "packing_warning", "parse_law", "precondition_positions",
+    "predicted_spacing", "raster_moments", "s1_density", "saturate",
+]
