@@ -1,0 +1,208 @@
+"""Analytic time-varying densities: bumps that move, grow and shrink, fade in and out.
+
+An :class:`AnalyticDensity` is a floor plus bumps; each :class:`Bump` has a centre trajectory,
+a width profile and a weight profile, each giving its value *and its exact time derivative*, so
+``at(t)`` returns a :class:`GaussianMixture` snapshot with exact μ̇, σ̇, ẇ and hence an exact φ_t.
+
+Profiles (scalar, value and d/dt): :class:`Constant`, :class:`Sine` (breathing width, pulsing
+weight), :class:`Pulse` (smoothstep fade in at ``t_on`` and out at ``t_off``).
+Trajectories ((2,), value and d/dt): :class:`Fixed`, :class:`Orbit` (circle),
+:class:`Lissajous`, :class:`Linear`.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+from numpy.typing import NDArray
+
+from swarmdeck.coverage.density import GaussianMixture
+
+__all__ = ["Constant", "Sine", "Pulse", "Fixed", "Orbit", "Lissajous", "Linear", "Bump",
+           "AnalyticDensity", "s1_density", "moving_density"]
+
+_TWO_PI = 2.0 * np.pi
+
+
+# ---------------------------------------------------------------- scalar profiles
+@dataclass(frozen=True)
+class Constant:
+    """value(t) = value."""
+
+    value: float
+
+    def __call__(self, t: float) -> tuple[float, float]:
+        return float(self.value), 0.0
+
+
+@dataclass(frozen=True)
+class Sine:
+    """value(t) = mean + amplitude · sin(2π t / period + phase); period [s] > 0."""
+
+    mean: float
+    amplitude: float
+    period: float
+    phase: float = 0.0
+
+    def __post_init__(self) -> None:
+        if not self.period > 0:
+            raise ValueError(f"period must be > 0, got {self.period!r}")
+
+    def __call__(self, t: float) -> tuple[float, float]:
+        w = _TWO_PI / self.period
+        arg = w * t + self.phase
+        return (self.mean + self.amplitude * np.sin(arg), self.amplitude * w * np.cos(arg))
+
+
+def _smoothstep(x: float) -> tuple[float, float]:
+    """s(x) = 3x² − 2x³ on [0, 1] (clamped) and s'(x)."""
+    if x <= 0.0:
+        return 0.0, 0.0
+    if x >= 1.0:
+        return 1.0, 0.0
+    return 3 * x * x - 2 * x ** 3, 6 * x - 6 * x * x
+
+
+@dataclass(frozen=True)
+class Pulse:
+    """level · s((t − t_on)/ramp) · (1 − s((t − t_off)/ramp)): fades in over ``ramp`` seconds from
+    ``t_on`` and out from ``t_off`` (smoothstep, so the rate stays finite). ``period`` > 0 repeats
+    the pulse every ``period`` seconds."""
+
+    level: float = 1.0
+    t_on: float = 0.0
+    t_off: float = float("inf")
+    ramp: float = 0.4
+    period: float | None = None
+
+    def __post_init__(self) -> None:
+        if not self.ramp > 0:
+            raise ValueError(f"ramp must be > 0, got {self.ramp!r}")
+        if self.level < 0:
+            raise ValueError(f"level must be >= 0, got {self.level!r}")
+        if self.period is not None and not self.period > 0:
+            raise ValueError(f"period must be > 0 or None, got {self.period!r}")
+
+    def __call__(self, t: float) -> tuple[float, float]:
+        if self.period is not None:
+            t = t % self.period
+        a, da = _smoothstep((t - self.t_on) / self.ramp)
+        b, db = _smoothstep((t - self.t_off) / self.ramp) if np.isfinite(self.t_off) else (0.0, 0.0)
+        val = self.level * a * (1.0 - b)
+        rate = self.level * (da * (1.0 - b) - a * db) / self.ramp
+        return val, rate
+
+
+# ---------------------------------------------------------------- trajectories
+@dataclass(frozen=True)
+class Fixed:
+    """μ(t) = point [m]."""
+
+    point: tuple[float, float]
+
+    def __call__(self, t: float) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        return np.asarray(self.point, dtype=float), np.zeros(2)
+
+
+@dataclass(frozen=True)
+class Orbit:
+    """μ(t) = centre + radius (cos(2πt/period + phase), sin(…)); negative period turns clockwise."""
+
+    centre: tuple[float, float] = (0.0, 0.0)
+    radius: float = 0.6
+    period: float = 20.0
+    phase: float = 0.0
+
+    def __post_init__(self) -> None:
+        if self.period == 0:
+            raise ValueError("period must be non-zero")
+
+    def __call__(self, t: float) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        w = _TWO_PI / self.period
+        arg = w * t + self.phase
+        c = np.asarray(self.centre, dtype=float)
+        return (c + self.radius * np.array([np.cos(arg), np.sin(arg)]),
+                self.radius * w * np.array([-np.sin(arg), np.cos(arg)]))
+
+
+@dataclass(frozen=True)
+class Lissajous:
+    """μ(t) = centre + (ax sin(2πt/px + φx), ay sin(2πt/py + φy))."""
+
+    centre: tuple[float, float] = (0.0, 0.0)
+    amplitude: tuple[float, float] = (1.0, 0.5)
+    period: tuple[float, float] = (24.0, 16.0)
+    phase: tuple[float, float] = (0.0, 0.0)
+
+    def __call__(self, t: float) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        w = _TWO_PI / np.asarray(self.period, dtype=float)
+        arg = w * t + np.asarray(self.phase, dtype=float)
+        a = np.asarray(self.amplitude, dtype=float)
+        return np.asarray(self.centre, dtype=float) + a * np.sin(arg), a * w * np.cos(arg)
+
+
+@dataclass(frozen=True)
+class Linear:
+    """μ(t) = start + velocity · t (m, m/s)."""
+
+    start: tuple[float, float]
+    velocity: tuple[float, float]
+
+    def __call__(self, t: float) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        v = np.asarray(self.velocity, dtype=float)
+        return np.asarray(self.start, dtype=float) + v * t, v
+
+
+# ---------------------------------------------------------------- density
+@dataclass(frozen=True)
+class Bump:
+    """One Gaussian bump: centre trajectory ``mu``, width ``sigma`` [m], peak ``weight``."""
+
+    mu: Fixed | Orbit | Lissajous | Linear
+    sigma: Constant | Sine | Pulse = Constant(0.3)
+    weight: Constant | Sine | Pulse = Constant(1.0)
+
+
+@dataclass(frozen=True)
+class AnalyticDensity:
+    """φ(q, t) = floor + Σ_k w_k(t) exp(−‖q − μ_k(t)‖² / (2σ_k(t)²)) with exact derivatives.
+
+    ``at(t)`` raises ValueError when a profile gives σ ≤ 0 or w < 0 at t.
+    """
+
+    floor: float = 0.05
+    bumps: tuple[Bump, ...] = field(default_factory=tuple)
+
+    def at(self, t: float) -> GaussianMixture:
+        """The snapshot at time t [s] with exact μ̇, σ̇, ẇ."""
+        k = len(self.bumps)
+        mu, mu_dot = np.zeros((k, 2)), np.zeros((k, 2))
+        sig, sig_dot, w, w_dot = np.zeros(k), np.zeros(k), np.zeros(k), np.zeros(k)
+        for i, b in enumerate(self.bumps):
+            mu[i], mu_dot[i] = b.mu(t)
+            sig[i], sig_dot[i] = b.sigma(t)
+            w[i], w_dot[i] = b.weight(t)
+        w = np.maximum(w, 0.0)      # round-off of a fading weight
+        return GaussianMixture(self.floor, mu, sig, w, mu_dot, sig_dot, w_dot)
+
+
+def s1_density() -> AnalyticDensity:
+    """Scenario S1 (REFERENCE.md §5): φ = 0.05 + exp(−‖q − μ(t)‖²/(2·0.4²)),
+    μ(t) = 0.6 (cos(2πt/20), sin(2πt/20))."""
+    return AnalyticDensity(0.05, (Bump(Orbit((0.0, 0.0), 0.6, 20.0), Constant(0.4), Constant(1.0)),))
+
+
+def moving_density(bounds: tuple[float, float, float, float] = (-1.6, 1.6, -1.0, 1.0)
+                   ) -> AnalyticDensity:
+    """Demo density: one bump orbiting, one breathing on a Lissajous path, one fading in and
+    out every 16 s, all scaled to ``bounds``."""
+    x0, x1, y0, y1 = bounds
+    cx, cy = 0.5 * (x0 + x1), 0.5 * (y0 + y1)
+    sx, sy = 0.5 * (x1 - x0), 0.5 * (y1 - y0)
+    s = min(sx, sy)
+    return AnalyticDensity(0.05, (
+        Bump(Orbit((cx - 0.35 * sx, cy), 0.45 * s, 20.0), Constant(0.25 * s), Constant(1.0)),
+        Bump(Lissajous((cx + 0.4 * sx, cy), (0.3 * sx, 0.5 * sy), (18.0, 12.0)),
+             Sine(0.22 * s, 0.08 * s, 10.0), Constant(0.8)),
+        Bump(Fixed((cx, cy - 0.55 * sy)), Constant(0.2 * s), Pulse(1.0, 2.0, 10.0, 1.0, 16.0)),
+    ))

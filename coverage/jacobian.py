@@ -1,0 +1,131 @@
+"""The centroid Jacobian ∂c/∂p as a sparse block matrix from edge integrals (REFERENCE.md §5).
+
+For a shared edge e_ij (d_ij = ‖p_j − p_i‖, ds arc length)::
+
+    ∂c_i/∂p_j = (1/(m_i d_ij)) ∫_{e_ij} φ (q − c_i)(p_j − q)ᵀ ds          (neighbour block)
+    ∂c_i/∂p_i = Σ_j (1/(m_i d_ij)) ∫_{e_ij} φ (q − c_i)(q − p_i)ᵀ ds     (self block)
+
+walls add nothing. Row = component of c_i, column = component of p_j; the matrix is 2N × 2N
+with rows/columns ordered (x_0, y_0, x_1, y_1, …), i.e. it acts on ``p.reshape(-1)``.
+Each edge is split into pieces no longer than ``resolution``·σ of the nearby bumps and
+integrated by Gauss–Legendre with ``nodes`` points per piece, all edges at once.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import lru_cache
+
+import numpy as np
+import scipy.sparse as sp
+from numpy.typing import NDArray
+
+from swarmdeck.coverage.density import GaussianMixture
+from swarmdeck.coverage.quadrature import CellMoments
+from swarmdeck.coverage.voronoi import BoundedVoronoi
+
+__all__ = ["EdgeOptions", "centroid_jacobian"]
+
+
+@dataclass(frozen=True)
+class EdgeOptions:
+    """nodes: Gauss–Legendre points per edge piece; resolution: piece length / σ of a nearby
+    bump (≤); reach: a bump counts for an edge within reach·σ of it; max_pieces per edge."""
+
+    nodes: int = 6
+    resolution: float = 1.0
+    reach: float = 7.0
+    max_pieces: int = 64
+
+    def __post_init__(self) -> None:
+        if not (1 <= self.nodes <= 64 and self.resolution > 0 and self.reach > 0
+                and self.max_pieces >= 1):
+            raise ValueError("need 1 <= nodes <= 64, resolution > 0, reach > 0, max_pieces >= 1")
+
+
+@lru_cache(maxsize=16)
+def _gauss_legendre(n: int) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """Nodes in [0, 1] and weights summing to 1 (read-only)."""
+    x, w = np.polynomial.legendre.leggauss(n)
+    x, w = 0.5 * (x + 1.0), 0.5 * w
+    x.setflags(write=False)
+    w.setflags(write=False)
+    return x, w
+
+
+def _pieces(a: NDArray[np.float64], b: NDArray[np.float64], density: GaussianMixture,
+            opts: EdgeOptions) -> NDArray[np.intp]:
+    """Number of pieces per edge (E,) from its end points (E, 2) and the live bumps."""
+    e = a.shape[0]
+    live = (density.weight > 0.0) | (density.weight_dot != 0.0)
+    if not np.any(live) or e == 0:
+        return np.ones(e, dtype=np.intp)
+    sig = np.sqrt(np.linalg.eigvalsh(density.cov[live])[:, 0])
+    mu = density.mu[live]
+    mid = 0.5 * (a + b)
+    length = np.hypot(*(b - a).T)
+    dist = np.sqrt(((mid[:, None, :] - mu[None]) ** 2).sum(axis=2)) - 0.5 * length[:, None]
+    near = dist < opts.reach * sig[None]
+    ratio = np.where(near, length[:, None] / (opts.resolution * sig[None]), 0.0).max(axis=1)
+    return np.clip(np.ceil(ratio), 1, opts.max_pieces).astype(np.intp)
+
+
+def centroid_jacobian(vor: BoundedVoronoi, moments: CellMoments, density: GaussianMixture,
+                      opts: EdgeOptions = EdgeOptions()) -> sp.csr_array:
+    """∂c/∂p (2N × 2N, CSR) for the diagram ``vor`` with its cell ``moments`` under ``density``.
+
+    Cells flagged massless in ``moments`` get zero rows.
+    """
+    n = vor.n
+    pairs = vor.edge_pairs
+    if pairs.shape[0] == 0:
+        return sp.csr_array((2 * n, 2 * n))
+    seg = vor.vertices[vor.edge_vertices]                                  # (E, 2, 2)
+    a, b = seg[:, 0], seg[:, 1]
+    pieces = _pieces(a, b, density, opts)
+    x, w = _gauss_legendre(opts.nodes)
+    # Node positions along every edge: piece k of n_e, node x_l → s = (k + x_l) / n_e.
+    edge = np.repeat(np.arange(pairs.shape[0]), pieces)
+    first = np.repeat(np.cumsum(pieces) - pieces, pieces)
+    k = np.arange(edge.size) - first
+    npc = pieces[edge]
+    s = ((k[:, None] + x[None, :]) / npc[:, None]).ravel()                 # (Q,)
+    edge_q = np.repeat(edge, x.size)
+    length = np.hypot(*(b - a).T)
+    wq = (np.tile(w, edge.size) / np.repeat(npc, x.size)) * length[edge_q]  # ds weights
+    mid = 0.5 * (a + b)
+    r = (a[edge_q] - mid[edge_q]) + s[:, None] * (b - a)[edge_q]            # q − mid (Q, 2)
+    phi = density.evaluate(r + mid[edge_q])
+    fw = phi * wq
+    # Edge moments about the midpoint: S0 = ∫φ, S1 = ∫φ r, S2 = ∫φ r rᵀ.
+    ne = pairs.shape[0]
+    S0 = np.bincount(edge_q, weights=fw, minlength=ne)
+    S1 = np.column_stack([np.bincount(edge_q, weights=fw * r[:, c], minlength=ne) for c in (0, 1)])
+    S2 = np.empty((ne, 2, 2))
+    S2[:, 0, 0] = np.bincount(edge_q, weights=fw * r[:, 0] * r[:, 0], minlength=ne)
+    S2[:, 1, 1] = np.bincount(edge_q, weights=fw * r[:, 1] * r[:, 1], minlength=ne)
+    S2[:, 0, 1] = S2[:, 1, 0] = np.bincount(edge_q, weights=fw * r[:, 0] * r[:, 1], minlength=ne)
+
+    def f(av: NDArray[np.float64], vv: NDArray[np.float64]) -> NDArray[np.float64]:
+        """∫ φ (q − a)(v − q)ᵀ ds per edge (E, 2, 2) for points a, v (E, 2)."""
+        a_ = av - mid
+        v_ = vv - mid
+        return (S1[:, :, None] * v_[:, None, :] - S2 - S0[:, None, None] * a_[:, :, None] * v_[:, None, :]
+                + a_[:, :, None] * S1[:, None, :])
+
+    i, j = pairs[:, 0], pairs[:, 1]
+    p, c, m = vor.points, moments.centroids, moments.masses
+    d = np.hypot(*(p[j] - p[i]).T)
+    inv_i = np.where(moments.massless[i], 0.0, 1.0 / (np.where(moments.massless[i], 1.0, m[i]) * d))
+    inv_j = np.where(moments.massless[j], 0.0, 1.0 / (np.where(moments.massless[j], 1.0, m[j]) * d))
+    blocks = np.concatenate([
+        inv_i[:, None, None] * f(c[i], p[j]),          # ∂c_i/∂p_j
+        -inv_i[:, None, None] * f(c[i], p[i]),         # contribution to ∂c_i/∂p_i
+        inv_j[:, None, None] * f(c[j], p[i]),          # ∂c_j/∂p_i
+        -inv_j[:, None, None] * f(c[j], p[j]),         # contribution to ∂c_j/∂p_j
+    ])                                                  # (4E, 2, 2)
+    brow = np.concatenate([i, i, j, j])
+    bcol = np.concatenate([j, i, i, j])
+    rows = (2 * brow[:, None, None] + np.arange(2)[None, :, None]) + np.zeros((1, 1, 2), dtype=np.intp)
+    cols = (2 * bcol[:, None, None] + np.arange(2)[None, None, :]) + np.zeros((1, 2, 1), dtype=np.intp)
+    mat = sp.coo_array((blocks.ravel(), (rows.ravel(), cols.ravel())), shape=(2 * n, 2 * n))
+    return mat.tocsr()
