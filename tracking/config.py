@@ -1,0 +1,142 @@
+"""Tracker configuration (a frozen dataclass, defaults from REFERENCE.md §7) and its JSON file.
+
+The arena file written by ``swarmdeck calibrate arena`` is this dataclass as JSON::
+
+    {"dictionary": "DICT_4X4_50", "tag_size": 0.08, "tag_height": 0.06,
+     "reference_height": 0.0, "references": [{"id": 46, "x": -1.7, "y": -1.1, "size": 0.1,
+     "heading": 0.0}, ...], "camera_position": [x, y, z] | null,
+     "fallback_homography": 3×3 | null, "calibration": {...} | null, ...}
+"""
+from __future__ import annotations
+
+import json
+from dataclasses import asdict, dataclass, fields, replace
+from pathlib import Path
+
+import numpy as np
+
+from swarmdeck.tracking.calibration import CalibrationError, CameraCalibration
+from swarmdeck.tracking.markers import DEFAULT_REFERENCES, ReferenceMarker
+from swarmdeck.tracking.raster import DICTIONARIES
+
+
+class ConfigError(ValueError):
+    """A tracker configuration value or file is unusable (message names the field)."""
+
+
+@dataclass(frozen=True, eq=False)
+class TrackerConfig:
+    """Everything the tracker needs to know about the arena and the camera.
+
+    dictionary: ArUco dictionary of all tags. references: surveyed reference markers (ids
+    never used by robots). tag_height / reference_height: heights (m) of robot tags and of the
+    reference markers above the floor; their difference is corrected as parallax. stale_after_s:
+    a robot not seen for longer is stale (0.1 s: the Robotarium's monitor zeroes robots whose
+    poses are older, REFERENCE.md §9). expected_ids: robots listed even before they are first
+    seen (NaN pose, stale). min_references / max_reference_rms_m / max_anisotropy: homography
+    acceptance. camera_position: (x, y, height above the reference plane) m, used for parallax
+    when there is no calibration. fallback_homography: undistorted px → m, used until the first
+    good fit. calibration: intrinsics (None: no undistortion). bounds: arena rectangle.
+    """
+
+    dictionary: str = "DICT_4X4_50"
+    references: tuple[ReferenceMarker, ...] = DEFAULT_REFERENCES
+    tag_size: float = 0.08
+    tag_height: float = 0.06
+    reference_height: float = 0.0
+    stale_after_s: float = 0.1
+    expected_ids: tuple[int, ...] = ()
+    min_references: int = 3
+    max_reference_rms_m: float = 0.01
+    max_anisotropy: float = 10.0
+    camera_position: tuple[float, float, float] | None = None
+    fallback_homography: tuple[tuple[float, ...], ...] | None = None
+    calibration: CameraCalibration | None = None
+    bounds: tuple[float, float, float, float] = (-1.6, 1.6, -1.0, 1.0)
+
+    def __post_init__(self) -> None:
+        if self.dictionary not in DICTIONARIES:
+            raise ConfigError(f"dictionary must be one of {sorted(DICTIONARIES)}, got {self.dictionary!r}")
+        if not (0 < self.tag_size < 1):
+            raise ConfigError(f"tag_size must be in (0, 1) m, got {self.tag_size}")
+        if not self.stale_after_s > 0:
+            raise ConfigError(f"stale_after_s must be > 0, got {self.stale_after_s}")
+        if not (1 <= self.min_references):
+            raise ConfigError(f"min_references must be >= 1, got {self.min_references}")
+        ids = [r.id for r in self.references]
+        if len(set(ids)) != len(ids):
+            raise ConfigError(f"reference ids must be distinct, got {ids}")
+        if set(ids) & set(self.expected_ids):
+            raise ConfigError(f"expected robot ids {sorted(set(ids) & set(self.expected_ids))} are reference ids")
+        if self.camera_position is not None and (len(self.camera_position) != 3 or not self.camera_position[2] > 0):
+            raise ConfigError(f"camera_position must be (x, y, height > 0), got {self.camera_position}")
+        if self.fallback_homography is not None and np.asarray(self.fallback_homography).shape != (3, 3):
+            raise ConfigError("fallback_homography must be 3×3")
+
+    def with_(self, **changes: object) -> "TrackerConfig":
+        """A copy with some fields replaced."""
+        return replace(self, **changes)
+
+    def to_dict(self) -> dict:
+        """JSON-able form."""
+        d = {f.name: getattr(self, f.name) for f in fields(self)}
+        d["references"] = [asdict(r) for r in self.references]
+        d["expected_ids"] = list(self.expected_ids)
+        d["bounds"] = list(self.bounds)
+        d["camera_position"] = None if self.camera_position is None else [float(v) for v in self.camera_position]
+        d["fallback_homography"] = None if self.fallback_homography is None else \
+            np.asarray(self.fallback_homography, float).tolist()
+        d["calibration"] = None if self.calibration is None else self.calibration.to_dict()
+        return d
+
+    @staticmethod
+    def from_dict(d: dict) -> "TrackerConfig":
+        """Parse the JSON form; unknown keys and bad values raise :class:`ConfigError`."""
+        known = {f.name for f in fields(TrackerConfig)}
+        unknown = set(d) - known
+        if unknown:
+            raise ConfigError(f"unknown tracker config key(s) {sorted(unknown)}; known: {sorted(known)}")
+        kw = dict(d)
+        try:
+            if "references" in kw:
+                kw["references"] = tuple(ReferenceMarker(int(r["id"]), float(r["x"]), float(r["y"]),
+                                                         float(r.get("size", 0.10)), float(r.get("heading", 0.0)))
+                                         for r in kw["references"])
+            if "expected_ids" in kw:
+                kw["expected_ids"] = tuple(int(i) for i in kw["expected_ids"])
+            if "bounds" in kw:
+                kw["bounds"] = tuple(float(v) for v in kw["bounds"])
+            if kw.get("camera_position") is not None:
+                kw["camera_position"] = tuple(float(v) for v in kw["camera_position"])
+            if kw.get("fallback_homography") is not None:
+                kw["fallback_homography"] = tuple(tuple(float(v) for v in row) for row in kw["fallback_homography"])
+            if kw.get("calibration") is not None:
+                kw["calibration"] = CameraCalibration.from_dict(kw["calibration"])
+            for k in ("tag_size", "tag_height", "reference_height", "stale_after_s", "max_reference_rms_m",
+                      "max_anisotropy"):
+                if k in kw:
+                    kw[k] = float(kw[k])
+            if "min_references" in kw:
+                kw["min_references"] = int(kw["min_references"])
+        except (KeyError, TypeError, ValueError) as exc:
+            if isinstance(exc, (ConfigError, CalibrationError)):
+                raise
+            raise ConfigError(f"bad tracker config value: {exc}") from exc
+        return TrackerConfig(**kw)
+
+    def save(self, path: str | Path) -> None:
+        """Write the JSON file."""
+        Path(path).write_text(json.dumps(self.to_dict(), indent=2) + "\n")
+
+    @staticmethod
+    def load(path: str | Path) -> "TrackerConfig":
+        """Read a JSON file written by :meth:`save` or ``swarmdeck calibrate arena``."""
+        try:
+            d = json.loads(Path(path).read_text())
+        except OSError as exc:
+            raise ConfigError(f"cannot read tracker config {path}: {exc.strerror or exc}") from exc
+        except json.JSONDecodeError as exc:
+            raise ConfigError(f"tracker config {path} is not JSON: {exc}") from exc
+        if not isinstance(d, dict):
+            raise ConfigError(f"tracker config {path} must hold a JSON object")
+        return TrackerConfig.from_dict(d)
