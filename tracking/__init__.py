@@ -1,1 +1,31 @@
-"""swarmdeck.tracking"""
+"""swarmdeck.tracking — overhead camera tracking with ArUco tags (issue 9).
+
+Camera sources (webcam, video file, image folder, synthetic renderer) yield
+:class:`CameraFrame`; :class:`Tracker` turns frames into :class:`TrackedPoses`;
+:class:`CameraPoseSource` does both once per control tick::
+
+    from swarmdeck.tracking import CameraPoseSource, SyntheticCamera, Tracker, TrackerConfig
+    cam = SyntheticCamera(lambda t: sim_poses(t), ids=range(n))
+    src = CameraPoseSource(cam, Tracker(TrackerConfig(calibration=cam_calibration)))
+    tracked = src.read(now)          # TrackedPoses: ids, poses (N, 3), seen, stamps, status, stale
+    src.health(); src.rectified_image(); src.thumbnail()
+"""
+from swarmdeck.tracking.calibration import CalibrationError, CameraCalibration, CharucoSpec, calibrate_charuco
+from swarmdeck.tracking.camera_model import PinholeCamera, overhead_camera
+from swarmdeck.tracking.config import ConfigError, TrackerConfig
+from swarmdeck.tracking.markers import DEFAULT_REFERENCES, ReferenceMarker, marker_corners, poses_from_corners
+from swarmdeck.tracking.pose_source import CameraPoseSource
+from swarmdeck.tracking.sources import (
+    CameraError, CameraSource, ImageFolderSource, OpenCVCamera, VideoFileSource, open_source)
+from swarmdeck.tracking.synthetic import (
+    SyntheticCamera, SyntheticCameraConfig, SyntheticFrame, SyntheticRenderer, random_poses)
+from swarmdeck.tracking.tracker import Tracker, check_image
+from swarmdeck.tracking.types import CameraFrame, TrackedPoses
+
+__all__ = [
+    "CalibrationError", "CameraCalibration", "CameraError", "CameraFrame", "CameraPoseSource", "CameraSource",
+    "CharucoSpec", "ConfigError", "DEFAULT_REFERENCES", "ImageFolderSource", "OpenCVCamera", "PinholeCamera",
+    "ReferenceMarker", "SyntheticCamera", "SyntheticCameraConfig", "SyntheticFrame", "SyntheticRenderer",
+    "TrackedPoses", "Tracker", "TrackerConfig", "VideoFileSource", "calibrate_charuco", "check_image",
+    "marker_corners", "open_source", "overhead_camera", "poses_from_corners", "random_poses",
+]

@@ -19,6 +19,7 @@ from dataclasses import dataclass, field
 import cv2
 import numpy as np
 
+from swarmdeck.tracking.calibration import CharucoSpec
 from swarmdeck.tracking.camera_model import PinholeCamera, overhead_camera
 from swarmdeck.tracking.markers import DEFAULT_REFERENCES, ReferenceMarker, marker_corners
 from swarmdeck.tracking.raster import disc_coverage, marker_image, pixel_edge_square, warp_into
@@ -354,7 +355,7 @@ class SyntheticCamera:
         self.last = frame
         self.render_time_s = time.perf_counter() - t0
         self.status = f"synthetic camera {self.config.width}×{self.config.height}"
-        out = CameraFrame(image=frame.image, stamp=float(now), index=self._index)
+        out = CameraFrame(image=frame.image, stamp=float(now), index=self._index, wall=time.monotonic())
         self._index += 1
         return out
 
@@ -382,3 +383,47 @@ def random_poses(n: int, rng: np.random.Generator, bounds: tuple[float, float, f
     if len(out) < n:
         raise ValueError(f"cannot place {n} robots {min_distance} m apart in {bounds}")
     return np.column_stack([out, rng.uniform(-np.pi, np.pi, n)])
+
+
+def charuco_views(camera: PinholeCamera, spec: CharucoSpec, n_views: int, rng: np.random.Generator,
+                  blur_sigma: float = 0.6, noise_sigma: float = 2.0) -> list[np.ndarray]:
+    """``n_views`` RGB images of a ChArUco board held in front of ``camera`` (its intrinsics and
+    distortion; extrinsics ignored) at random distances, tilts and image positions — input for
+    a calibration round trip. Board texture from OpenCV's own ``generateImage``, whose pixel
+    edges coincide with the board's object-point coordinates."""
+    ppsq = 100
+    tex = spec.board().generateImage((spec.squares_x * ppsq, spec.squares_y * ppsq), marginSize=0, borderBits=1)
+    texel = spec.square_length / ppsq
+    bw, bh = spec.squares_x * spec.square_length, spec.squares_y * spec.square_length
+    grid = camera.normalised_pixel_grid()
+    w, h = camera.size
+    f = camera.K[0, 0]
+    tex_blurred: dict[int, np.ndarray] = {}
+    views = []
+    for _ in range(n_views):
+        depth = rng.uniform(0.8, 1.6) * f * bw / (0.45 * w)          # board ≈ 30–55 % of the width
+        ax, ay, az = rng.uniform(-0.6, 0.6), rng.uniform(-0.6, 0.6), rng.uniform(-0.4, 0.4)
+        R, _ = cv2.Rodrigues(np.array([ax, ay, az]))
+        target = np.array([rng.uniform(0.15, 0.85) * w, rng.uniform(0.15, 0.85) * h])
+        ray = np.linalg.solve(camera.K, np.array([*target, 1.0]))
+        centre_c = ray / ray[2] * depth
+        t = centre_c - R @ np.array([bw / 2, bh / 2, 0.0])
+        Hplane = np.column_stack([R[:, 0], R[:, 1], t])              # board (x, y, 1) → normalised
+        xy = _apply_h(np.linalg.inv(Hplane), grid)
+        footprint = depth / f / max(abs(R[2, 2]), 0.3)
+        sig = int(round(max(0.4 * footprint / texel, 0.0) * 4))
+        if sig not in tex_blurred:
+            tex_blurred[sig] = cv2.GaussianBlur(tex.astype(np.float32), (0, 0), sig / 4) if sig > 1 else tex.astype(np.float32)
+        mx = (xy[..., 0] / texel - 0.5).astype(np.float32)
+        my = (xy[..., 1] / texel - 0.5).astype(np.float32)
+        img = cv2.remap(tex_blurred[sig], mx, my, cv2.INTER_LINEAR, borderMode=cv2.BORDER_CONSTANT, borderValue=120.0)
+        # pixels whose ray meets the plane behind the camera see background
+        behind = (Hplane @ np.array([bw / 2, bh / 2, 1.0]))[2] <= 0
+        if behind:
+            img[:] = 120.0
+        if blur_sigma > 0:
+            img = cv2.GaussianBlur(img, (0, 0), blur_sigma)
+        img = img + rng.standard_normal(img.shape, dtype=np.float32) * np.float32(noise_sigma)
+        g = np.clip(img + 0.5, 0, 255).astype(np.uint8)
+        views.append(cv2.cvtColor(g, cv2.COLOR_GRAY2RGB))
+    return views

@@ -17,12 +17,14 @@ class CameraFrame:
 
     image: (H, W, 3) uint8 RGB. stamp: capture time in seconds on the clock of the loop that
     reads the source (``time.monotonic()`` for real cameras, the virtual clock for the
-    synthetic camera). index: frame counter of the source (monotonic, starts at 0).
+    synthetic camera). index: frame counter of the source (increasing). wall:
+    ``time.monotonic()`` when the image was captured/rendered/decoded (for latency figures).
     """
 
     image: np.ndarray
     stamp: float
     index: int = 0
+    wall: float = float("nan")
 
 
 @dataclass(frozen=True, eq=False)

@@ -1,0 +1,162 @@
+"""A camera and a tracker combined: one call per control tick gives robot poses.
+
+``CameraPoseSource.read(now) -> TrackedPoses`` is what the console loop calls in place of the
+simulator's truth; ``health()`` gives the status-line numbers; ``rectified_image()`` the
+arena-aligned top-down picture for drawing as the floor; ``thumbnail()`` the raw view.
+"""
+from __future__ import annotations
+
+import dataclasses
+import math
+import time
+from collections.abc import Callable
+
+import cv2
+import numpy as np
+
+from swarmdeck.tracking.homography import apply_homography
+from swarmdeck.tracking.sources import CameraSource
+from swarmdeck.tracking.tracker import Tracker
+from swarmdeck.tracking.types import CameraFrame, TrackedPoses
+
+
+class CameraPoseSource:
+    """Reads the newest frame of ``source`` and tracks it.
+
+    ``clock`` (wall time) measures frame rate and processing time; latency is capture →
+    poses ready, from ``CameraFrame.wall`` (``time.monotonic``) to the end of tracking.
+    ``rectify_height`` (m above the reference plane; default: the tag height, so tags line up
+    with robots drawn in metres) and ``px_per_m`` set the rectified image.
+    """
+
+    def __init__(self, source: CameraSource, tracker: Tracker | None = None,
+                 clock: Callable[[], float] = time.monotonic, px_per_m: float = 200.0,
+                 rectify_height: float | None = None, thumbnail_width: int = 320) -> None:
+        self.source = source
+        self.tracker = tracker if tracker is not None else Tracker()
+        self._clock = clock
+        self.px_per_m = px_per_m
+        cfg = self.tracker.config
+        self.rectify_height = (cfg.tag_height - cfg.reference_height) if rectify_height is None else rectify_height
+        self.thumbnail_width = thumbnail_width
+        self.frame: CameraFrame | None = None
+        self.poses: TrackedPoses = self.tracker.last
+        self._fps = float("nan")
+        self._last_frame_wall: float | None = None
+        self._latency = float("nan")
+        self._processing = float("nan")
+        self._frames = 0
+        self._no_frame_ticks = 0
+        self._rect_cache: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
+        self._rect_img: tuple[int, np.ndarray] | None = None
+
+    def read(self, now: float) -> TrackedPoses:
+        """Newest frame → poses; without a new frame the previous poses with ``seen`` False
+        and staleness judged at ``now``. Never raises."""
+        wall0 = self._clock()
+        try:
+            frame = self.source.read(now)
+        except Exception as exc:  # noqa: BLE001 - a broken source must not stop the loop
+            frame = None
+            self.source.status = f"camera error: {type(exc).__name__}: {exc}"
+        if frame is None:
+            self._no_frame_ticks += 1
+            self.poses = self.tracker.poses_at(now, f"no new frame ({self.source.status}); {self.tracker.last.status}")
+            return self.poses
+        wall0 = self._clock()
+        tp = self.tracker.update(frame)
+        wall1 = self._clock()
+        self._processing = wall1 - wall0
+        # latency: capture (frame.wall, time.monotonic) → poses ready
+        lat = time.monotonic() - frame.wall
+        self._latency = lat if math.isfinite(lat) and lat >= 0.0 else self._processing
+        if self._last_frame_wall is not None:
+            dt = wall1 - self._last_frame_wall
+            if dt > 0:
+                inst = 1.0 / dt
+                self._fps = inst if not math.isfinite(self._fps) else 0.9 * self._fps + 0.1 * inst
+        self._last_frame_wall = wall1
+        self._frames += 1
+        self.frame = frame
+        if math.isfinite(now) and not math.isclose(now, frame.stamp):
+            tp = dataclasses.replace(tp, stale=(now - tp.stamps) > self.tracker.config.stale_after_s)
+        self.poses = tp
+        return self.poses
+
+    def health(self) -> dict:
+        """JSON-able health for the status line: fps, latency_ms, processing_ms, frames,
+        markers/references seen, homography state, source status."""
+        h = self.tracker.health()
+        def ms(x: float) -> float | None:
+            return None if not math.isfinite(x) else round(1000.0 * x, 2)
+        return {
+            "fps": None if not math.isfinite(self._fps) else round(self._fps, 1),
+            "latency_ms": ms(self._latency),
+            "processing_ms": ms(self._processing),
+            "frames": self._frames,
+            "ticks_without_frame": self._no_frame_ticks,
+            "source": self.source.status,
+            "source_ok": bool(self.source.ok),
+            "status": self.poses.status,
+            **h,
+        }
+
+    def status_line(self) -> str:
+        """One short line: 'camera 29.8 fps, 12 ms, 24 markers, refs 4/4, homography ok'."""
+        h = self.health()
+        fps = "–" if h["fps"] is None else f"{h['fps']:.1f}"
+        lat = "–" if h["latency_ms"] is None else f"{h['latency_ms']:.0f} ms"
+        return (f"camera {fps} fps, {lat}, {h['markers_seen']} markers, refs {h['references_seen']}/"
+                f"{h['references_total']}, homography {h['homography']}")
+
+    def thumbnail(self) -> np.ndarray | None:
+        """The newest raw frame scaled to ``thumbnail_width`` px wide (RGB uint8), or None."""
+        if self.frame is None:
+            return None
+        img = self.frame.image
+        w = self.thumbnail_width
+        h = max(1, int(round(img.shape[0] * w / img.shape[1])))
+        return cv2.resize(img, (w, h), interpolation=cv2.INTER_AREA)
+
+    def rectified_image(self) -> tuple[np.ndarray, tuple[float, float, float, float]] | None:
+        """The newest frame warped to a top-down view of the arena bounds on the plane
+        ``rectify_height`` m above the references: (image (h, w, 3) RGB uint8 with row 0 at
+        y_max and column 0 at x_min, bounds). None without a frame or homography. Lens
+        distortion is removed when the tracker has a calibration."""
+        H = self.tracker.homography
+        if self.frame is None or H is None:
+            return None
+        bounds = self.tracker.config.bounds
+        if self._rect_img is not None and self._rect_img[0] == self.frame.index:
+            return self._rect_img[1], bounds
+        mx, my = self._maps(H, bounds)
+        img = cv2.remap(self.frame.image, mx, my, cv2.INTER_LINEAR, borderMode=cv2.BORDER_CONSTANT, borderValue=0)
+        self._rect_img = (self.frame.index, img)
+        return img, bounds
+
+    def _maps(self, H: np.ndarray, bounds: tuple[float, float, float, float]) -> tuple[np.ndarray, np.ndarray]:
+        """Remap tables arena pixel → camera pixel, recomputed only when H moves the arena
+        corners by more than 0.25 px."""
+        x0, x1, y0, y1 = bounds
+        Hinv = np.linalg.inv(H)
+        probe = apply_homography(Hinv, np.array([[x0, y0], [x1, y0], [x1, y1], [x0, y1]], float))
+        if self._rect_cache is not None and np.max(np.abs(self._rect_cache[0] - probe)) < 0.25:
+            return self._rect_cache[1], self._rect_cache[2]
+        w = max(2, int(round((x1 - x0) * self.px_per_m)))
+        h = max(2, int(round((y1 - y0) * self.px_per_m)))
+        xs = x0 + (np.arange(w) + 0.5) / self.px_per_m
+        ys = y1 - (np.arange(h) + 0.5) / self.px_per_m
+        X, Y = np.meshgrid(xs, ys)
+        pts = np.stack([X, Y], axis=-1)
+        C = self.tracker.camera_centre
+        dh = self.rectify_height
+        if C is not None and dh != 0.0:
+            # a point at height dh seen along the ray from C meets the reference plane farther out
+            pts = C[:2] + (pts - C[:2]) * (C[2] / (C[2] - dh))
+        px = apply_homography(Hinv, pts)
+        cal = self.tracker.config.calibration
+        if cal is not None:
+            px = cal.distort(px)
+        mx, my = px[..., 0].astype(np.float32), px[..., 1].astype(np.float32)
+        self._rect_cache = (probe, mx, my)
+        return mx, my
