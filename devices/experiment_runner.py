@@ -10,6 +10,9 @@ run with its traceback; the robots are stopped and the report still printed.
 """
 from __future__ import annotations
 
+import contextlib
+import importlib.util
+import re
 import runpy
 import sys
 import traceback
@@ -19,6 +22,7 @@ from pathlib import Path
 from typing import Any
 
 from swarmdeck.devices.arena import RUN_DEFAULTS, Arena, ArenaReport, ExperimentFinished, RunDefaults
+from swarmdeck.devices.rps import rps_aliases
 
 
 class ScriptError(Exception):
@@ -53,6 +57,10 @@ def _load(path: Path) -> dict:
     return {"source": source}
 
 
+def _mentions_rps(source: str) -> bool:
+    return re.search(r"^\s*(import rps\b|from rps\b)", source, re.MULTILINE) is not None
+
+
 def run_experiment(
     target: str | Path | Callable[[Arena], Any],
     *,
@@ -61,8 +69,13 @@ def run_experiment(
     seed: int | None = None,
     safety: bool = True,
     on_step: Callable[[Arena], None] | None = None,
+    rps: bool | None = None,
 ) -> RunResult:
-    """Run a script file (or an ``experiment(arena)`` callable) and return its :class:`RunResult`."""
+    """Run a script file (or an ``experiment(arena)`` callable) and return its :class:`RunResult`.
+
+    ``rps``: make ``import rps…`` resolve to swarmdeck's rps facade for this run;
+    None (default) does so when the script mentions rps and no real rps is installed.
+    """
     result = RunResult()
     defaults = RunDefaults(n_robots=n_robots, duration=duration, seed=seed, safety=safety,
                            on_create=result.arenas.append, on_step=on_step)
@@ -73,14 +86,17 @@ def run_experiment(
                 result.returned = target(Arena())
             else:
                 path = Path(target)
-                _load(path)
+                source = _load(path)["source"]
+                if rps is None:
+                    rps = _mentions_rps(source) and importlib.util.find_spec("rps") is None
                 sys.path.insert(0, str(path.parent.resolve()))
                 try:
-                    namespace = runpy.run_path(str(path), run_name="__swarmdeck_experiment__")
-                    fn = namespace.get("experiment")
-                    if callable(fn):
-                        result.returned = fn(Arena())
-                    elif not result.arenas:
+                    with rps_aliases() if rps else contextlib.nullcontext():
+                        namespace = runpy.run_path(str(path), run_name="__swarmdeck_experiment__")
+                        fn = namespace.get("experiment")
+                        if callable(fn):
+                            result.returned = fn(Arena())
+                    if not callable(fn) and not result.arenas:
                         raise ScriptError(
                             f"{path} neither defines experiment(arena) nor creates an Arena at top level"
                         )

@@ -19,6 +19,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--seed", type=int, default=None, help="seed for random initial conditions")
     parser.add_argument("--no-safety", action="store_true", help="run without the barrier-certificate safety filter")
     parser.add_argument("--json", action="store_true", help="print the report as JSON")
+    parser.add_argument("--rps", action=argparse.BooleanOptionalAction, default=None,
+                        help="resolve `import rps...` to swarmdeck's rps facade (default: when the script imports rps and no rps is installed)")
 
 
 def main(args: argparse.Namespace) -> int:
@@ -31,7 +33,7 @@ def main(args: argparse.Namespace) -> int:
     on_step, close = progress_bar(args.duration)
     try:
         result = run_experiment(args.script, n_robots=args.robots, duration=args.duration, seed=args.seed,
-                                safety=not args.no_safety, on_step=on_step)
+                                safety=not args.no_safety, on_step=on_step, rps=args.rps)
     except ScriptError as exc:
         raise UsageError(str(exc)) from exc
     except ValueError as exc:  # e.g. too many robots for the arena

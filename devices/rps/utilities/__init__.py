@@ -1,0 +1,1 @@
+"""rps.utilities counterparts (see :mod:`swarmdeck.devices.rps`)."""

@@ -1,0 +1,72 @@
+"""rps.utilities.barrier_certificates backed by swarmdeck's barrier QP (clarabel, status checked).
+
+Unlike rps: the caller's arrays are never normalised in place, there is no
+30-robot preallocation, the *solution* is speed-bounded, and a failed solve
+returns zeros (robots stop) instead of an unconverged iterate.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from swarmdeck.devices.lookahead import lookahead_points, si_to_unicycle, unicycle_to_si
+from swarmdeck.safety import BarrierConfig, SafetyFilter
+
+_OPEN = (-1e6, 1e6, -1e6, 1e6)  # "no walls" for the variants without a boundary
+
+
+def _boundary(points) -> tuple[float, float, float, float]:
+    b = np.asarray(points, dtype=float).reshape(-1)
+    if b.shape != (4,):
+        raise ValueError(f"boundary_points must be [x_min, x_max, y_min, y_max], got shape {b.shape}")
+    return (float(b[0]), float(b[1]), float(b[2]), float(b[3]))
+
+
+def _si(barrier_gain, safety_radius, magnitude_limit, bounds):
+    flt = SafetyFilter(BarrierConfig(safety_distance=safety_radius, gamma=barrier_gain, max_speed=magnitude_limit,
+                                     bounds=bounds))
+
+    def f(dxi, x):
+        safe, _ = flt.filter(np.asarray(x, dtype=float)[:2].T, np.asarray(dxi, dtype=float).T)
+        return safe.T
+
+    return f
+
+
+def create_single_integrator_barrier_certificate(barrier_gain: float = 100, safety_radius: float = 0.17,
+                                                 magnitude_limit: float = 0.2):
+    """f(dxi (2, N), x (2, N)) → safe (2, N), pairwise constraints only."""
+    return _si(barrier_gain, safety_radius, magnitude_limit, _OPEN)
+
+
+def create_single_integrator_barrier_certificate_with_boundary(barrier_gain: float = 100, safety_radius: float = 0.17,
+                                                               magnitude_limit: float = 0.2,
+                                                               boundary_points=np.array([-1.6, 1.6, -1.0, 1.0])):
+    """f(dxi (2, N), x (2, N)) → safe (2, N), with the arena walls."""
+    return _si(barrier_gain, safety_radius, magnitude_limit, _boundary(boundary_points))
+
+
+def _uni(barrier_gain, safety_radius, projection_distance, magnitude_limit, bounds):
+    si = _si(barrier_gain, safety_radius + projection_distance, magnitude_limit, bounds)
+
+    def f(dxu, x):
+        poses = np.asarray(x, dtype=float).T
+        dxu = np.asarray(dxu, dtype=float)
+        pts = lookahead_points(poses, projection_distance).T
+        u = unicycle_to_si(poses, dxu[0], dxu[1], projection_distance).T
+        v, w = si_to_unicycle(poses, si(u, pts).T, projection_distance)
+        return np.vstack((v, w))
+
+    return f
+
+
+def create_unicycle_barrier_certificate(barrier_gain: float = 100, safety_radius: float = 0.12,
+                                        projection_distance: float = 0.05, magnitude_limit: float = 0.2):
+    """f(dxu (2, N), x (3, N)) → safe (2, N) [v; ω], barrier on the look-ahead points (radius r + ℓ, as rps)."""
+    return _uni(barrier_gain, safety_radius, projection_distance, magnitude_limit, _OPEN)
+
+
+def create_unicycle_barrier_certificate_with_boundary(barrier_gain: float = 100, safety_radius: float = 0.12,
+                                                      projection_distance: float = 0.05, magnitude_limit: float = 0.2,
+                                                      boundary_points=np.array([-1.6, 1.6, -1.0, 1.0])):
+    """As :func:`create_unicycle_barrier_certificate`, with the arena walls."""
+    return _uni(barrier_gain, safety_radius, projection_distance, magnitude_limit, _boundary(boundary_points))

@@ -1,0 +1,35 @@
+"""rps.utilities.misc: initial conditions and arrival tests, in rps's column layout."""
+from __future__ import annotations
+
+import numpy as np
+
+from swarmdeck.devices.controllers import at_pose as _at_pose, at_position as _at_position
+from swarmdeck.devices.initial_conditions import random_initial_poses
+
+
+def generate_initial_conditions(N: int, spacing: float = 0.3, width: float = 3, height: float = 1.8) -> np.ndarray:
+    """(3, N) random float poses at least ``spacing`` apart in a width × height box at the centre."""
+    bounds = (-width / 2, width / 2, -height / 2, height / 2)
+    return random_initial_poses(N, bounds, spacing=spacing + 0.01, min_separation=spacing, wall_margin=0.0).T
+
+
+def at_pose(states, poses, position_error: float = 0.05, rotation_error: float = 0.2) -> np.ndarray:
+    """Indices of robots at their goal pose (as rps: ``np.nonzero(...)``)."""
+    return np.nonzero(_at_pose(np.asarray(states, dtype=float).T, np.asarray(poses, dtype=float).T,
+                               position_error, rotation_error))
+
+
+def at_position(states, points, position_error: float = 0.02) -> np.ndarray:
+    """Indices of robots at their goal position."""
+    return np.nonzero(_at_position(np.asarray(states, dtype=float)[:2].T, np.asarray(points, dtype=float)[:2].T,
+                                   position_error))
+
+
+def determine_marker_size(robotarium, marker_size_meters: float) -> float:
+    """rps sizes matplotlib markers; there is no figure here, so the size in metres is returned."""
+    return float(marker_size_meters)
+
+
+def determine_font_size(robotarium, font_height_meters: float) -> float:
+    """rps sizes matplotlib fonts; there is no figure here, so the height in metres is returned."""
+    return float(font_height_meters)

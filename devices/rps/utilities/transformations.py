@@ -1,0 +1,69 @@
+"""rps.utilities.transformations: single integrator ↔ unicycle, in rps's (2, N) / (3, N) columns."""
+from __future__ import annotations
+
+import numpy as np
+
+from swarmdeck.devices.lookahead import lookahead_points, si_to_unicycle, unicycle_to_si
+
+
+def create_si_to_uni_dynamics(linear_velocity_gain: float = 1, angular_velocity_limit: float = np.pi):
+    """rps's heading-based map: v = k‖u‖cos φ, ω = ω_max·2/π·atan2(sin φ, cos φ) (φ: angle of u to θ)."""
+
+    def si_to_uni_dyn(dxi, poses):
+        dxi = np.asarray(dxi, dtype=float)
+        poses = np.asarray(poses, dtype=float)
+        a = np.cos(poses[2])
+        b = np.sin(poses[2])
+        dxu = np.zeros((2, dxi.shape[1]))
+        dxu[0] = linear_velocity_gain * (a * dxi[0] + b * dxi[1])
+        dxu[1] = angular_velocity_limit * np.arctan2(-b * dxi[0] + a * dxi[1], dxu[0]) / (np.pi / 2)
+        return dxu
+
+    return si_to_uni_dyn
+
+
+def create_si_to_uni_dynamics_with_backwards_motion(linear_velocity_gain: float = 1, angular_velocity_limit: float = np.pi):
+    """As :func:`create_si_to_uni_dynamics`, driving backwards when the target is behind."""
+
+    def si_to_uni_dyn(dxi, poses):
+        dxi = np.asarray(dxi, dtype=float)
+        poses = np.asarray(poses, dtype=float)
+        a = np.cos(poses[2])
+        b = np.sin(poses[2])
+        dxu = np.zeros((2, dxi.shape[1]))
+        dxu[0] = linear_velocity_gain * (a * dxi[0] + b * dxi[1])
+        dxu[1] = angular_velocity_limit * np.arctan(np.divide(-b * dxi[0] + a * dxi[1], dxu[0],
+                                                              out=np.zeros_like(dxu[0]), where=dxu[0] != 0)) / (np.pi / 2)
+        return dxu
+
+    return si_to_uni_dyn
+
+
+def create_si_to_uni_mapping(projection_distance: float = 0.05, angular_velocity_limit: float = np.pi):
+    """The look-ahead diffeomorphism: returns (si_to_uni_dyn(dxi, poses), uni_to_si_states(poses))."""
+
+    def si_to_uni_dyn(dxi, poses):
+        poses = np.asarray(poses, dtype=float).T
+        v, w = si_to_unicycle(poses, np.asarray(dxi, dtype=float).T, projection_distance)
+        return np.vstack((v, np.clip(w, -angular_velocity_limit, angular_velocity_limit)))
+
+    def uni_to_si_states(poses):
+        return lookahead_points(np.asarray(poses, dtype=float).T, projection_distance).T
+
+    return si_to_uni_dyn, uni_to_si_states
+
+
+def create_uni_to_si_dynamics(projection_distance: float = 0.05):
+    """Look-ahead point velocity (2, N) of unicycle commands dxu (2, N) at poses (3, N)."""
+
+    def uni_to_si_dyn(dxu, poses):
+        dxu = np.asarray(dxu, dtype=float)
+        return unicycle_to_si(np.asarray(poses, dtype=float).T, dxu[0], dxu[1], projection_distance).T
+
+    return uni_to_si_dyn
+
+
+__all__ = [
+    "create_si_to_uni_dynamics", "create_si_to_uni_dynamics_with_backwards_motion", "create_si_to_uni_mapping",
+    "create_uni_to_si_dynamics",
+]
