@@ -1,0 +1,174 @@
+"""The simulated GRITSBot fleet as a network node: firmware model + MQTT.
+
+Subscribes like the GRITSBot X firmware (``matlab_api/<id>`` for each of its
+robots), keeps only the newest command per robot, integrates the unicycle
+model every firmware loop (16 ms), brakes after 500 ms without commands, and
+publishes ``<id>/status`` every second and ground-truth poses on
+``overhead_tracker/all_robot_pose_data`` at the tracker rate, which the console
+can use in place of a camera. ``swarmdeck robots`` runs one in its own process;
+several, on several machines with distinct ids, can share one broker.
+"""
+from __future__ import annotations
+
+import os
+import socket
+import threading
+import time
+from collections.abc import Callable
+from typing import IO
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from swarmdeck.devices.fleet import BatteryParams, FirmwareParams, FleetState
+from swarmdeck.devices.gritsbot import GritsBotParams
+from swarmdeck.devices.mqtt_config import MqttConfig
+from swarmdeck.devices.mqtt_link import MqttLink
+from swarmdeck.devices.mqtt_wire import WireError, decode_command, encode_poses, encode_status
+from swarmdeck.devices.transport import Counters
+
+
+class FleetNode:
+    """Simulated robots behind an MQTT broker.
+
+    Args:
+        config: broker and topic layout.
+        ids: ``(N,)`` robot ids this node simulates.
+        poses: ``(N, 3)`` initial poses.
+        firmware, battery, params: models.
+        name: node name reported in status messages (default ``fleet-<host>-<pid>``).
+        trace: optional text stream; one line ``"<recv_time> <id> <v> <w>"`` per command
+            received (monotonic clock), for latency measurements.
+        clock: monotonic clock.
+    """
+
+    def __init__(
+        self,
+        config: MqttConfig,
+        ids: ArrayLike,
+        poses: ArrayLike,
+        *,
+        firmware: FirmwareParams = FirmwareParams(),
+        battery: BatteryParams = BatteryParams(),
+        params: GritsBotParams = GritsBotParams(),
+        name: str | None = None,
+        trace: IO[str] | None = None,
+        clock: Callable[[], float] = time.monotonic,
+    ) -> None:
+        self.config = config
+        self.clock = clock
+        self.name = name or f"fleet-{socket.gethostname()}-{os.getpid()}"
+        self.counters = Counters()
+        self.state = FleetState(ids, poses, clock(), firmware=firmware, battery=battery, params=params)
+        self.firmware = firmware
+        self._lock = threading.Lock()
+        self._trace = trace
+        self._stop = threading.Event()
+        self._seq = 0
+        self.link = MqttLink(
+            config.with_client_id(config.client_id or f"{self.name}"),
+            subscriptions=[config.command_topic(i) for i in self.state.ids],
+            on_message=self._on_message,
+            counters=self.counters,
+            name=self.name,
+            clock=clock,
+        )
+        self._thread: threading.Thread | None = None
+
+    # ---------------------------------------------------------------- messages
+    def _on_message(self, topic: str, payload: bytes, t: float) -> None:
+        rid = self.config.robot_id_of_command_topic(topic)
+        row = None if rid is None else self.state.index_of(rid)
+        if row is None:
+            self.counters.add("unknown_topic", f"{self.name}: ignored message on {topic!r} (not one of my robots)")
+            return
+        try:
+            cmd = decode_command(payload)
+        except WireError as exc:  # the firmware logs and drops malformed JSON
+            self.counters.add("malformed_command", f"{self.name}: robot {rid}: {exc}")
+            return
+        leds = None
+        if cmd.left_led is not None or cmd.right_led is not None:
+            with self._lock:
+                cur = self.state.leds[row].copy()
+            if cmd.left_led is not None:
+                cur[0] = cmd.left_led
+            if cmd.right_led is not None:
+                cur[1] = cmd.right_led
+            leds = cur[None]
+        with self._lock:
+            self.state.receive([row], [cmd.v], [cmd.w], [t], leds)
+        if self._trace is not None:
+            self._trace.write(f"{t!r} {rid} {cmd.v!r} {cmd.w!r}\n")
+
+    # ---------------------------------------------------------------- loop
+    def start(self) -> "FleetNode":
+        """Connect and run the firmware loop in a background thread."""
+        self.link.start()
+        self._thread = threading.Thread(target=self.run, name=f"{self.name}-loop", daemon=True)
+        self._thread.start()
+        return self
+
+    def run(self) -> None:
+        """The firmware loop (blocks until :meth:`stop`)."""
+        fw = self.firmware
+        next_loop = self.clock()
+        next_pose = next_loop
+        next_status = next_loop
+        while not self._stop.is_set():
+            now = self.clock()
+            with self._lock:
+                poses = self.state.advance(now)
+            if now >= next_pose:
+                next_pose = max(next_pose + fw.pose_period, now)
+                self._publish_poses(poses, now)
+            if now >= next_status:
+                next_status = max(next_status + fw.status_period, now)
+                self._publish_status(now)
+            next_loop += fw.loop_period
+            delay = next_loop - self.clock()
+            if delay > 0:
+                self._stop.wait(delay)
+            else:
+                next_loop = self.clock()
+
+    def _publish_poses(self, poses: np.ndarray, now: float) -> None:
+        st = self.state
+        payload = encode_poses(st.ids, poses, st.battery_voltage(), st.charging(),
+                               decimals=self.firmware.pose_decimals, stamp=now)
+        self.link.publish(self.config.pose_topic, payload)
+
+    def _publish_status(self, now: float) -> None:
+        st = self.state
+        with self._lock:
+            volts, charging, ages = st.battery_voltage(), st.charging(), st.command_age()
+        self._seq += 1
+        topics = [self.config.status_topic(i) for i in st.ids]
+        payloads = [
+            encode_status(b, c, cmd_age=a, seq=self._seq, node=self.name, stamp=now)
+            for b, c, a in zip(volts.tolist(), charging.tolist(), ages.tolist())
+        ]
+        self.link.publish_many(topics, payloads)
+
+    def snapshot(self) -> dict[str, np.ndarray]:
+        """A consistent copy of the fleet's state: poses, applied v/w, command age, ids, time."""
+        with self._lock:
+            v, w = self.state.applied()
+            return {
+                "t": np.array(self.state.t),
+                "ids": self.state.ids.copy(),
+                "poses": self.state.poses.copy(),
+                "v": v,
+                "w": w,
+                "command_age": self.state.command_age(),
+                "last_command_time": self.state.cur_t.copy(),
+                "timeouts": self.state.timeouts.copy(),
+                "commands_received": self.state.commands_received.copy(),
+            }
+
+    def stop(self) -> None:
+        """Stop the loop and disconnect (idempotent)."""
+        self._stop.set()
+        if self._thread is not None and self._thread is not threading.current_thread():
+            self._thread.join(timeout=2.0)
+        self.link.close()
