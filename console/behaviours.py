@@ -1,0 +1,235 @@
+"""Behaviours the console can run: nominal single-integrator velocities for the look-ahead points.
+
+Each behaviour is called once per tick with a :class:`TickInput` and returns
+``(nominal (N, 2) m/s, coverage_state | None)``. The loop validates the result
+(shape, finiteness), saturates it to the speed limit and passes it through the
+safety filter, so a behaviour never has to be safe itself.
+
+Names (``--behaviour``): ``coverage`` (TVD-D1 or another law on the console's
+density), ``rendezvous`` (consensus, paper §V-A), ``formation`` (rigid polygon,
+paper §V-B), ``goto`` (go to goal positions) and ``script:PATH`` (a user's
+Python file defining ``behaviour(poses, t) -> (N, 2)``).
+"""
+from __future__ import annotations
+
+import importlib.util
+import math
+import sys
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, Protocol
+
+import numpy as np
+from numpy.typing import NDArray
+
+from swarmdeck.coverage.graphs import complete_laplacian, rigid_formation
+from swarmdeck.coverage.group import consensus, formation_control
+from swarmdeck.devices.controllers import si_position_controller
+
+FloatArray = NDArray[np.float64]
+BUILTIN = ("coverage", "rendezvous", "formation", "goto")
+LAWS = ("lloyd", "lloyd-ff", "tvd-d1", "tvd-dk")
+
+
+class BehaviourError(ValueError):
+    """A behaviour name, script or parameter that cannot be used."""
+
+
+@dataclass(frozen=True)
+class BehaviourParams:
+    """Parameters of the built-in behaviours (GUI and ``[behaviour]`` in the config file).
+
+    kappa: coverage gain κ, 1/s (0.1–5). law: coverage law (``LAWS``).
+    gain: rendezvous / go-to gain, 1/s (0.1–5). formation_edge: side of the
+    formation polygon, m (0.2–1.0). formation_gain: α of the edge-tension
+    gradient, 1/(m² s) (0.5–50). goals: ``(N, 2)`` go-to positions, m, or None
+    for a grid spread over the arena.
+    """
+
+    kappa: float = 1.0
+    law: str = "tvd-d1"
+    gain: float = 1.0
+    formation_edge: float = 0.4
+    formation_gain: float = 10.0
+    goals: tuple[tuple[float, float], ...] | None = None
+
+    def __post_init__(self) -> None:
+        checks = (("kappa", 0.1, 5.0), ("gain", 0.1, 5.0), ("formation_edge", 0.2, 1.0), ("formation_gain", 0.5, 50.0))
+        for name, lo, hi in checks:
+            v = getattr(self, name)
+            if not (isinstance(v, (int, float)) and math.isfinite(v) and lo <= v <= hi):
+                raise BehaviourError(f"{name} must be in [{lo}, {hi}], got {v!r}")
+        if self.law not in LAWS:
+            raise BehaviourError(f"law must be one of {', '.join(LAWS)}, got {self.law!r}")
+        if self.goals is not None:
+            g = np.asarray(self.goals, dtype=float)
+            if g.ndim != 2 or g.shape[1] != 2 or not np.all(np.isfinite(g)):
+                raise BehaviourError(f"goals must be a list of finite [x, y] pairs, got shape {g.shape}")
+
+
+@dataclass(frozen=True)
+class TickInput:
+    """What a behaviour sees: poses (N, 3), look-ahead points (N, 2), run time t (s), the density
+    (any ``.at(t)`` object), the arena bounds and the speed limit (m/s)."""
+
+    poses: FloatArray
+    points: FloatArray
+    t: float
+    density: Any
+    bounds: tuple[float, float, float, float]
+    max_speed: float
+
+
+class Behaviour(Protocol):
+    name: str
+
+    def __call__(self, tick: TickInput) -> tuple[Any, Any | None]: ...
+
+
+class Coverage:
+    """Coverage control on the console's density (``swarmdeck.coverage.CoverageController``)."""
+
+    name = "coverage"
+
+    def __init__(self, params: BehaviourParams, bounds: tuple[float, float, float, float],
+                 max_speed: float, safety_distance: float) -> None:
+        from swarmdeck.coverage import CoverageConfig, CoverageController
+
+        self._config = CoverageConfig(law=params.law, kappa=params.kappa, max_speed=max_speed, bounds=bounds,
+                                      safety_distance=safety_distance)
+        self._make = CoverageController
+        self._ctrl: Any = None
+
+    def __call__(self, tick: TickInput) -> tuple[FloatArray, Any]:
+        if self._ctrl is None:
+            self._ctrl = self._make(self._config, tick.density)
+        elif self._ctrl.density is not tick.density:
+            self._ctrl.density = tick.density
+        return self._ctrl(tick.points, tick.t)
+
+
+class Rendezvous:
+    """Consensus on the complete graph, scaled by 1/N: u_i = gain · (mean(p) − p_i) (paper §V-A)."""
+
+    name = "rendezvous"
+
+    def __init__(self, params: BehaviourParams) -> None:
+        self.gain = params.gain
+
+    def __call__(self, tick: TickInput) -> tuple[FloatArray, None]:
+        n = len(tick.points)
+        if n < 2:
+            return np.zeros((n, 2)), None
+        return consensus(tick.points, complete_laplacian(n), self.gain / n), None
+
+
+class Formation:
+    """Rigid regular N-gon by edge-tension gradient descent (paper §V-B), plus a weak pull
+    of the group's centre to the arena centre so the formation stays on the floor."""
+
+    name = "formation"
+
+    def __init__(self, params: BehaviourParams) -> None:
+        self.edge, self.alpha = params.formation_edge, params.formation_gain
+        self._cache: tuple[int, Any, Any] | None = None
+
+    def __call__(self, tick: TickInput) -> tuple[FloatArray, None]:
+        n = len(tick.points)
+        if n < 3:
+            return Rendezvous(BehaviourParams())(tick)
+        if self._cache is None or self._cache[0] != n:
+            _, edges, lengths = rigid_formation(n, self.edge)
+            self._cache = (n, edges, lengths)
+        _, edges, lengths = self._cache
+        u = formation_control(tick.points, edges, lengths, self.alpha)
+        x0, x1, y0, y1 = tick.bounds
+        centre = np.array([(x0 + x1) / 2, (y0 + y1) / 2])
+        return u + 0.3 * (centre - tick.points.mean(axis=0)), None
+
+
+def default_goals(n: int, bounds: tuple[float, float, float, float], margin: float = 0.3) -> FloatArray:
+    """``(n, 2)`` goal positions on a grid filling the arena (m), as square as the arena allows."""
+    x0, x1, y0, y1 = bounds
+    w, h = (x1 - x0) - 2 * margin, (y1 - y0) - 2 * margin
+    cols = max(1, int(math.ceil(math.sqrt(n * w / max(h, 1e-9)))))
+    rows = int(math.ceil(n / cols))
+    xs = np.linspace(x0 + margin, x1 - margin, cols) if cols > 1 else np.array([(x0 + x1) / 2])
+    ys = np.linspace(y1 - margin, y0 + margin, rows) if rows > 1 else np.array([(y0 + y1) / 2])
+    gx, gy = np.meshgrid(xs, ys)
+    return np.column_stack((gx.ravel(), gy.ravel()))[:n]
+
+
+class GoTo:
+    """Go to goal positions with the single-integrator position controller (look-ahead points)."""
+
+    name = "goto"
+
+    def __init__(self, params: BehaviourParams, bounds: tuple[float, float, float, float]) -> None:
+        self.gain = params.gain
+        self.bounds = bounds
+        self.goals = None if params.goals is None else np.asarray(params.goals, dtype=float)
+
+    def __call__(self, tick: TickInput) -> tuple[FloatArray, None]:
+        n = len(tick.points)
+        goals = self.goals
+        if goals is None or len(goals) != n:
+            goals = default_goals(n, self.bounds)
+        return si_position_controller(tick.points, goals, self.gain, tick.max_speed), None
+
+
+class Script:
+    """A user's file defining ``behaviour(poses, t) -> (N, 2)`` SI velocities of the look-ahead points.
+
+    ``poses`` is a fresh ``(N, 3)`` copy, ``t`` the run time in s. Whatever the
+    function raises or returns is checked by the loop: robots stop, the
+    console shows the message, the loop keeps running.
+    """
+
+    def __init__(self, path: str | Path) -> None:
+        self.path = Path(path)
+        self.name = f"script:{path}"
+        self.func = load_script(self.path)
+
+    def __call__(self, tick: TickInput) -> tuple[Any, None]:
+        return self.func(np.array(tick.poses), float(tick.t)), None
+
+
+def load_script(path: Path) -> Callable[..., Any]:
+    """Import a behaviour script and return its ``behaviour`` function (BehaviourError otherwise)."""
+    if not path.is_file():
+        raise BehaviourError(f"behaviour script {path} does not exist")
+    mod_name = f"swarmdeck_user_behaviour_{abs(hash(str(path.resolve())))}"
+    spec = importlib.util.spec_from_file_location(mod_name, path)
+    if spec is None or spec.loader is None:
+        raise BehaviourError(f"cannot load {path} as a Python file")
+    module = importlib.util.module_from_spec(spec)
+    try:
+        spec.loader.exec_module(module)
+    except Exception as exc:  # user code: report, never crash the console
+        raise BehaviourError(f"behaviour script {path} failed to import: {type(exc).__name__}: {exc}") from exc
+    finally:
+        sys.modules.pop(mod_name, None)
+    func = getattr(module, "behaviour", None)
+    if not callable(func):
+        raise BehaviourError(f"behaviour script {path} must define a function behaviour(poses, t) -> (N, 2) array")
+    return func
+
+
+def make_behaviour(name: str, params: BehaviourParams, bounds: tuple[float, float, float, float],
+                   max_speed: float, safety_distance: float) -> Behaviour:
+    """The behaviour called ``name`` (see the module docstring); BehaviourError for unknown names."""
+    if name == "coverage":
+        return Coverage(params, bounds, max_speed, safety_distance)
+    if name == "rendezvous":
+        return Rendezvous(params)
+    if name == "formation":
+        return Formation(params)
+    if name == "goto":
+        return GoTo(params, bounds)
+    if name.startswith("script:"):
+        path = name[len("script:"):]
+        if not path:
+            raise BehaviourError("script: needs a path, e.g. --behaviour script:my_behaviour.py")
+        return Script(path)
+    raise BehaviourError(f"unknown behaviour {name!r}: use one of {', '.join(BUILTIN)} or script:PATH")
