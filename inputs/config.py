@@ -1,0 +1,176 @@
+"""Input configuration: listeners (ports, transports, presets, calibration) and
+the contacts-to-density settings, loadable from a dict or a TOML ``[inputs]`` table.
+
+Example (``swarmdeck.toml``)::
+
+    [inputs]
+    bounds = [-1.6, 1.6, -1.0, 1.0]      # arena, m (default)
+
+    [[inputs.listeners]]                  # a TUIO tablet on UDP 3333
+    port = 3333
+    host = "0.0.0.0"                      # accept a phone/tablet on the LAN
+    timeout = 1.0                         # s of silence before its contacts are lost
+    calibration = { flip_y = false, rotation_deg = 0, scale = [1, 1], offset = [0, 0] }
+
+    [[inputs.listeners]]                  # a Leap through ManosOsc (port 7110)
+    preset = "manososc"
+
+    [[inputs.listeners]]                  # TUIO/TCP (4-byte length framing)
+    transport = "tcp"
+    port = 3334
+
+    [inputs.density]
+    sigma = 0.3
+    fade = 0.4
+
+Without an ``[inputs]`` table there is one UDP TUIO listener on 127.0.0.1:3333.
+"""
+from __future__ import annotations
+
+import dataclasses
+import math
+import tomllib
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from .calibration import DEFAULT_BOUNDS, Calibration
+from .density import DensityConfig
+from .pointstream import PRESETS, PointStreamConfig
+
+
+class ConfigError(ValueError):
+    """A configuration value that is missing, unknown or out of range."""
+
+
+@dataclass(frozen=True)
+class ListenerConfig:
+    """One input socket.
+
+    Attributes:
+        name: label shown in the monitor.
+        transport: ``"udp"`` (TUIO/UDP, OSC) or ``"tcp"`` (TUIO/TCP: each OSC
+            packet preceded by its 4-byte big-endian length).
+        host, port: where to bind (port 0 = any free port). Default 127.0.0.1:3333;
+            use ``0.0.0.0`` for a tablet or phone on the network.
+        tuio: decode ``/tuio/*`` (1.1) and ``/tuio2/*`` (2.0) messages.
+        streams: generic OSC point streams decoded on this socket.
+        calibration: default surface → arena map of this listener's sources.
+        source_calibrations: ``(glob on the source name, Calibration)`` pairs tried
+            first, e.g. ``("*TuioPad@*", Calibration(flip_x=True))``.
+        timeout: s of silence after which a source's contacts are lost.
+        max_datagram: bytes; larger datagrams are rejected and counted.
+        future_tolerance: s a bundle timetag may lead the wall clock before it is
+            counted as a ``future_timetag`` quirk (it is never waited for).
+    """
+
+    name: str = "tuio"
+    transport: str = "udp"
+    host: str = "127.0.0.1"
+    port: int = 3333
+    tuio: bool = True
+    streams: tuple[PointStreamConfig, ...] = ()
+    calibration: Calibration = field(default_factory=Calibration)
+    source_calibrations: tuple[tuple[str, Calibration], ...] = ()
+    timeout: float = 1.0
+    max_datagram: int = 65536
+    future_tolerance: float = 0.5
+
+    def __post_init__(self) -> None:
+        if self.transport not in ("udp", "tcp"):
+            raise ConfigError(f"listener {self.name!r}: transport must be 'udp' or 'tcp', got {self.transport!r}")
+        if not (isinstance(self.port, int) and 0 <= self.port <= 65535):
+            raise ConfigError(f"listener {self.name!r}: port must be an int in 0..65535, got {self.port!r}")
+        if not (isinstance(self.timeout, (int, float)) and math.isfinite(self.timeout) and self.timeout > 0):
+            raise ConfigError(f"listener {self.name!r}: timeout must be a positive number of seconds, got {self.timeout!r}")
+        if not (isinstance(self.max_datagram, int) and 16 <= self.max_datagram <= 65536):
+            raise ConfigError(f"listener {self.name!r}: max_datagram must be an int in 16..65536, got {self.max_datagram!r}")
+
+    @classmethod
+    def from_preset(cls, preset: str, **overrides) -> "ListenerConfig":
+        """A UDP listener for a gesture-bridge preset (``manososc``, ``leap-osc``,
+        ``ultraleap-osc-sender``) or ``tuio``; ``overrides`` replace fields."""
+        if preset == "tuio":
+            return cls(**overrides)
+        if preset not in PRESETS:
+            raise ConfigError(f"unknown preset {preset!r}; known: tuio, {', '.join(sorted(PRESETS))}")
+        streams = PRESETS[preset]
+        kw = {"name": preset, "tuio": False, "streams": streams,
+              "port": streams[0].port if streams[0].port is not None else 3333}
+        kw.update(overrides)
+        return cls(**kw)
+
+    @classmethod
+    def from_dict(cls, d: dict, bounds: tuple[float, float, float, float] | None = None) -> "ListenerConfig":
+        """Build from a mapping (a ``[[inputs.listeners]]`` TOML table)."""
+        if not isinstance(d, dict):
+            raise ConfigError(f"a listener must be a table/dict, got {type(d).__name__}")
+        known = {f.name for f in dataclasses.fields(cls)} | {"preset"}
+        extra = set(d) - known
+        if extra:
+            raise ConfigError(f"unknown listener keys {sorted(extra)}; expected some of {sorted(known)}")
+        kw = dict(d)
+        preset = kw.pop("preset", None)
+        try:
+            if "calibration" in kw:
+                kw["calibration"] = Calibration.from_dict(kw["calibration"], bounds)
+            elif bounds is not None:
+                kw["calibration"] = Calibration(bounds=tuple(bounds))
+            if "source_calibrations" in kw:
+                sc = kw["source_calibrations"]
+                if not isinstance(sc, dict):
+                    raise ConfigError("source_calibrations must be a table {glob = {calibration...}}")
+                kw["source_calibrations"] = tuple((k, Calibration.from_dict(v, bounds)) for k, v in sc.items())
+            if "streams" in kw:
+                kw["streams"] = tuple(PointStreamConfig.from_dict(s) for s in kw["streams"])
+            if preset is not None:
+                return cls.from_preset(preset, **kw)
+            return cls(**kw)
+        except ConfigError:
+            raise
+        except (ValueError, TypeError) as exc:
+            raise ConfigError(f"listener {d.get('name', preset or '')!r}: {exc}") from None
+
+
+@dataclass(frozen=True)
+class InputConfig:
+    """All inputs of a console: listeners plus the density built from contacts."""
+
+    listeners: tuple[ListenerConfig, ...] = (ListenerConfig(),)
+    density: DensityConfig = field(default_factory=DensityConfig)
+    bounds: tuple[float, float, float, float] = DEFAULT_BOUNDS
+
+    @classmethod
+    def from_dict(cls, d: dict) -> "InputConfig":
+        """Build from the ``[inputs]`` mapping; unknown keys are an error."""
+        if not isinstance(d, dict):
+            raise ConfigError(f"[inputs] must be a table/dict, got {type(d).__name__}")
+        extra = set(d) - {"listeners", "density", "bounds"}
+        if extra:
+            raise ConfigError(f"unknown [inputs] keys {sorted(extra)}; expected listeners, density, bounds")
+        try:
+            bounds = tuple(float(v) for v in d.get("bounds", DEFAULT_BOUNDS))
+        except (TypeError, ValueError):
+            raise ConfigError(f"[inputs] bounds must be 4 numbers (x_min, x_max, y_min, y_max), got {d['bounds']!r}") from None
+        if len(bounds) != 4 or not (bounds[0] < bounds[1] and bounds[2] < bounds[3]):
+            raise ConfigError(f"[inputs] bounds must be (x_min, x_max, y_min, y_max) with min < max, got {bounds}")
+        raw = d.get("listeners", [{}])
+        if not isinstance(raw, list):
+            raise ConfigError("[inputs] listeners must be an array of tables ([[inputs.listeners]])")
+        listeners = tuple(ListenerConfig.from_dict(x, bounds) for x in raw)
+        try:
+            density = DensityConfig.from_dict(d.get("density", {}))
+        except (ValueError, TypeError) as exc:
+            raise ConfigError(f"[inputs.density]: {exc}") from None
+        return cls(listeners, density, bounds)
+
+    @classmethod
+    def load_toml(cls, path: str | Path, section: str = "inputs") -> "InputConfig":
+        """Read ``[section]`` of a TOML file (defaults if the table is absent)."""
+        try:
+            with open(path, "rb") as f:
+                doc = tomllib.load(f)
+        except OSError as exc:
+            raise ConfigError(f"cannot read {path}: {exc.strerror}") from None
+        except tomllib.TOMLDecodeError as exc:
+            raise ConfigError(f"{path} is not valid TOML: {exc}") from None
+        return cls.from_dict(doc.get(section, {}))

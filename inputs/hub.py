@@ -1,0 +1,97 @@
+"""``InputHub``: several listeners merged into one view for the console.
+
+Typical use in the console loop::
+
+    hub = InputHub.from_config(InputConfig.load_toml("swarmdeck.toml"), clock=loop_clock,
+                               on_datagram=recorder.raw_datagram)
+    density = ContactDensity(hub.config.density)
+    with hub:                               # binds every socket, starts the threads
+        while running:
+            now = loop_clock()
+            snap = hub.poll(now)            # contacts, events since last poll, health
+            density.update(snap.contacts, now)
+            controller.density = density    # once; the controller calls density.at(t)
+"""
+from __future__ import annotations
+
+import time
+from collections.abc import Callable, Sequence
+
+from .config import InputConfig
+from .contact import Contact, InputSnapshot, SourceHealth
+from .listener import DatagramHook, InputSource, make_listener
+
+
+class InputHub:
+    """Merges the snapshots of several :class:`InputSource` s (usually listeners).
+
+    Args:
+        sources: the sources to merge (more can be added with :meth:`add`).
+        clock: used by :meth:`poll` when ``now`` is omitted.
+        config: the configuration the hub was built from, if any.
+    """
+
+    def __init__(self, sources: Sequence[InputSource] = (), *, clock: Callable[[], float] = time.monotonic,
+                 config: InputConfig | None = None) -> None:
+        self._sources: list[InputSource] = list(sources)
+        self._clock = clock
+        self.config = config or InputConfig()
+
+    @classmethod
+    def from_config(cls, config: InputConfig, *, clock: Callable[[], float] = time.monotonic,
+                    on_datagram: DatagramHook | None = None) -> "InputHub":
+        """One UDP/TCP listener per ``config.listeners`` entry (not started)."""
+        return cls([make_listener(lc, clock=clock, on_datagram=on_datagram) for lc in config.listeners],
+                   clock=clock, config=config)
+
+    @property
+    def sources(self) -> tuple[InputSource, ...]:
+        """The merged sources."""
+        return tuple(self._sources)
+
+    def add(self, source: InputSource) -> None:
+        """Merge one more source."""
+        self._sources.append(source)
+
+    def start(self) -> "InputHub":
+        """Start every source (binds sockets); on failure, close what started and re-raise."""
+        started = []
+        try:
+            for s in self._sources:
+                s.start()
+                started.append(s)
+        except Exception:
+            for s in started:
+                s.close()
+            raise
+        return self
+
+    def close(self) -> None:
+        """Close every source."""
+        for s in self._sources:
+            s.close()
+
+    def __enter__(self) -> "InputHub":
+        return self.start()
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+    def poll(self, now: float | None = None) -> InputSnapshot:
+        """Poll every source at ``now`` (default ``clock()``): all contacts, all
+        events since the previous poll (ordered by time), all health records."""
+        t = self._clock() if now is None else float(now)
+        snaps = [s.poll(t) for s in self._sources]
+        contacts = tuple(c for s in snaps for c in s.contacts)
+        events = tuple(sorted((e for s in snaps for e in s.events), key=lambda e: e.t))
+        health = tuple(h for s in snaps for h in s.health)
+        return InputSnapshot(t, contacts, events, health)
+
+    def contacts(self) -> tuple[Contact, ...]:
+        """Current contacts of every source (no expiry, no events drained)."""
+        return tuple(c for s in self._sources for c in s.contacts())
+
+    def health(self, now: float | None = None) -> tuple[SourceHealth, ...]:
+        """Health of every source."""
+        t = self._clock() if now is None else float(now)
+        return tuple(h for s in self._sources for h in s.health(t))

@@ -1,0 +1,333 @@
+"""Input sources: the socket-free core (:class:`InputSource`) and thin socket
+listeners with lifetimes (:class:`UdpListener`, :class:`TcpListener`).
+
+Every datagram — from a socket or from a recording — goes through
+:meth:`InputSource.feed`: the ``on_datagram`` hook (for the recorder) sees the raw
+bytes first, then the datagram is parsed whole, decoded (TUIO 1.1/2.0, OSC point
+streams) and applied to the contact table. Malformed input is counted per
+source with a clear reason; nothing raises out of ``feed`` or the socket threads.
+One lock serialises ``feed`` and ``poll`` so the console thread always sees a
+consistent snapshot.
+"""
+from __future__ import annotations
+
+import fnmatch
+import socket
+import struct
+import threading
+import time
+from collections.abc import Callable
+
+from .calibration import Calibration
+from .config import ListenerConfig
+from .contact import Contact, InputSnapshot, SourceHealth
+from .contacts import ContactTable, HealthBook
+from .oscparse import MalformedDatagram, parse_datagram
+from .pointstream import PointStreamDecoder
+from .tuio import TuioAssembler
+
+#: ``hook(data, peer, transport, t)``, called for every datagram before parsing.
+DatagramHook = Callable[[bytes, object, str, float], None]
+
+BIG_DATAGRAM = 8192
+_LEN = struct.Struct(">I")
+
+
+def peer_name(transport: str, peer: object) -> str:
+    """``"udp://10.0.0.2:50000"`` from a ``(host, port)`` peer; strings pass through
+    (with the transport prefixed unless they already have a scheme)."""
+    if isinstance(peer, (tuple, list)) and len(peer) >= 2:
+        return f"{transport}://{peer[0]}:{peer[1]}"
+    s = str(peer)
+    return s if "://" in s else f"{transport}://{s}"
+
+
+class InputSource:
+    """Datagrams in; contacts, events and health out. No sockets.
+
+    Args:
+        config: ports are ignored here; decoders, calibration and timeout are used.
+        on_datagram: recorder hook ``(data, peer, transport, t)``.
+        wallclock: Unix-seconds clock for future-timetag checks (bundle timetags
+            are never waited for).
+    """
+
+    def __init__(self, config: ListenerConfig | None = None, *, on_datagram: DatagramHook | None = None,
+                 wallclock: Callable[[], float] = time.time) -> None:
+        self.config = config or ListenerConfig()
+        self.on_datagram = on_datagram
+        self._wallclock = wallclock
+        self._lock = threading.Lock()
+        self._health = HealthBook()
+        self._tuio = TuioAssembler(self._health) if self.config.tuio else None
+        self._points = PointStreamDecoder(self.config.streams, self._health)
+        self._table = ContactTable(self._calibration_for, self.config.timeout, on_lost=self._forget)
+
+    # ------------------------------------------------------------------ helpers
+    def _calibration_for(self, name: str) -> Calibration:
+        for pattern, cal in self.config.source_calibrations:
+            if fnmatch.fnmatchcase(name, pattern):
+                return cal
+        return self.config.calibration
+
+    def _forget(self, name: str) -> None:
+        if self._tuio is not None:
+            self._tuio.forget(name)
+        self._points.forget(name)
+
+    # ------------------------------------------------------------------ data in
+    def feed(self, data: bytes, peer: object, t: float, transport: str | None = None) -> None:
+        """Process one datagram received from ``peer`` at time ``t`` (s, the
+        console's clock — virtual in tests and replays). Never raises."""
+        transport = transport or self.config.transport
+        with self._lock:
+            self._feed(bytes(data), peer, float(t), transport)
+
+    def _feed(self, data: bytes, peer: object, t: float, transport: str) -> None:
+        pname = peer_name(transport, peer)
+        health = self._health
+        hook = self.on_datagram
+        if hook is not None:
+            try:
+                hook(data, peer, transport, t)
+            except Exception as exc:  # a recorder bug must not stop input
+                health.error(pname, "peer", "hook_error", f"on_datagram hook raised {type(exc).__name__}: {exc}")
+        health.seen(pname, "peer", t)
+        try:
+            parsed = parse_datagram(data, self.config.max_datagram)
+        except MalformedDatagram as exc:
+            health.error(pname, "peer", exc.reason, str(exc))
+            return
+        try:
+            if len(data) > BIG_DATAGRAM:
+                health.warn(pname, "peer", "over_8KiB")
+            if parsed.timetag is not None and parsed.timetag > self._wallclock() + self.config.future_tolerance:
+                health.warn(pname, "peer", "future_timetag")
+            tuio = self._tuio
+            points = self._points
+            if tuio is not None:
+                tuio.begin(pname)
+            points.begin(pname)
+            for address, params in parsed.messages:
+                if tuio is not None and (address.startswith("/tuio/") or address.startswith("/tuio2/")):
+                    tuio.message(address, params)
+                elif not points.message(address, params):
+                    health.warn(pname, "peer", "unmatched_address")
+            frames = tuio.end() if tuio is not None else []
+            frames.extend(points.end())
+            table = self._table
+            for f in frames:
+                health.seen(f.source, f.kind, t)
+                table.apply(f, t)
+        except Exception as exc:  # never let a bug in a decoder escape into the listener thread
+            health.error(pname, "peer", "internal_error", f"{type(exc).__name__}: {exc}")
+
+    # ------------------------------------------------------------------ data out
+    def poll(self, now: float) -> InputSnapshot:
+        """Expire silent sources as of ``now``, then return the contacts, the
+        events since the previous poll and the health of every source."""
+        with self._lock:
+            self._table.expire(now)
+            return InputSnapshot(now, self._table.contacts(), tuple(self._table.drain_events()),
+                                 self._health.snapshot(now, self._table.counts(), self._table.lost()))
+
+    def contacts(self) -> tuple[Contact, ...]:
+        """Current contacts (without expiring or draining events)."""
+        with self._lock:
+            return self._table.contacts()
+
+    def health(self, now: float) -> tuple[SourceHealth, ...]:
+        """Health of every source as of ``now`` (without expiring)."""
+        with self._lock:
+            return self._health.snapshot(now, self._table.counts(), self._table.lost())
+
+    # lifetimes are no-ops for the socket-free core
+    def start(self) -> "InputSource":
+        """Nothing to start without a socket."""
+        return self
+
+    def close(self) -> None:
+        """Nothing to close without a socket."""
+
+    def __enter__(self) -> "InputSource":
+        return self.start()
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+
+class UdpListener(InputSource):
+    """An :class:`InputSource` fed by one UDP socket on a background thread.
+
+    Datagrams are read whole (up to 65 536 bytes: nothing is silently truncated)
+    and stamped with ``clock()`` on receipt. ``start()`` binds; ``close()`` stops
+    the thread and closes the socket. ``address`` is the bound ``(host, port)``.
+    """
+
+    def __init__(self, config: ListenerConfig | None = None, *, clock: Callable[[], float] = time.monotonic,
+                 on_datagram: DatagramHook | None = None, wallclock: Callable[[], float] = time.time) -> None:
+        super().__init__(config, on_datagram=on_datagram, wallclock=wallclock)
+        self._clock = clock
+        self._sock: socket.socket | None = None
+        self._thread: threading.Thread | None = None
+        self._stop = threading.Event()
+        self.address: tuple[str, int] | None = None
+
+    def start(self) -> "UdpListener":
+        """Bind the socket and start the receive thread (idempotent)."""
+        if self._thread is not None:
+            return self
+        sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+        try:
+            sock.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, 1 << 20)
+            sock.bind((self.config.host, self.config.port))
+        except OSError as exc:
+            sock.close()
+            raise OSError(exc.errno, f"cannot bind UDP {self.config.host}:{self.config.port} for input "
+                                     f"{self.config.name!r}: {exc.strerror}") from None
+        sock.settimeout(0.05)
+        self._sock = sock
+        self.address = sock.getsockname()[:2]
+        self._stop.clear()
+        self._thread = threading.Thread(target=self._run, name=f"swarmdeck-udp-{self.address[1]}", daemon=True)
+        self._thread.start()
+        return self
+
+    def _run(self) -> None:
+        sock = self._sock
+        assert sock is not None
+        while not self._stop.is_set():
+            try:
+                data, addr = sock.recvfrom(65536)
+            except TimeoutError:
+                continue
+            except OSError as exc:
+                if self._stop.is_set():
+                    break
+                with self._lock:
+                    self._health.error(peer_name("udp", self.address), "peer", "socket_error", str(exc))
+                self._stop.wait(0.05)
+                continue
+            self.feed(data, addr, self._clock(), "udp")
+
+    def close(self) -> None:
+        """Stop the thread and close the socket (idempotent)."""
+        self._stop.set()
+        if self._thread is not None:
+            self._thread.join(timeout=2.0)
+            self._thread = None
+        if self._sock is not None:
+            self._sock.close()
+            self._sock = None
+
+
+class TcpListener(InputSource):
+    """TUIO/TCP: accepts connections; each carries OSC packets preceded by their
+    4-byte big-endian length (OSC 1.0 stream framing, the reference
+    ``TcpSender``). One thread accepts, one thread per connection reads. A length
+    of 0 or above ``max_datagram`` is counted and closes that connection."""
+
+    def __init__(self, config: ListenerConfig | None = None, *, clock: Callable[[], float] = time.monotonic,
+                 on_datagram: DatagramHook | None = None, wallclock: Callable[[], float] = time.time) -> None:
+        super().__init__(config, on_datagram=on_datagram, wallclock=wallclock)
+        self._clock = clock
+        self._sock: socket.socket | None = None
+        self._threads: list[threading.Thread] = []
+        self._conns: set[socket.socket] = set()
+        self._conn_lock = threading.Lock()
+        self._stop = threading.Event()
+        self.address: tuple[str, int] | None = None
+
+    def start(self) -> "TcpListener":
+        """Bind, listen and start the accept thread (idempotent)."""
+        if self._sock is not None:
+            return self
+        sock = socket.socket(socket.AF_INET, socket.SOCK_STREAM)
+        sock.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
+        try:
+            sock.bind((self.config.host, self.config.port))
+            sock.listen(8)
+        except OSError as exc:
+            sock.close()
+            raise OSError(exc.errno, f"cannot listen on TCP {self.config.host}:{self.config.port} for input "
+                                     f"{self.config.name!r}: {exc.strerror}") from None
+        sock.settimeout(0.05)
+        self._sock = sock
+        self.address = sock.getsockname()[:2]
+        self._stop.clear()
+        th = threading.Thread(target=self._accept, name=f"swarmdeck-tcp-{self.address[1]}", daemon=True)
+        self._threads.append(th)
+        th.start()
+        return self
+
+    def _accept(self) -> None:
+        while not self._stop.is_set():
+            try:
+                conn, addr = self._sock.accept()  # type: ignore[union-attr]
+            except TimeoutError:
+                continue
+            except OSError:
+                if self._stop.is_set():
+                    break
+                self._stop.wait(0.05)
+                continue
+            conn.settimeout(0.05)
+            with self._conn_lock:
+                self._conns.add(conn)
+            th = threading.Thread(target=self._read, args=(conn, addr), daemon=True,
+                                  name=f"swarmdeck-tcp-{addr[0]}:{addr[1]}")
+            self._threads.append(th)
+            th.start()
+
+    def _read(self, conn: socket.socket, addr: tuple) -> None:
+        buf = bytearray()
+        pname = peer_name("tcp", addr)
+        limit = self.config.max_datagram
+        try:
+            while not self._stop.is_set():
+                try:
+                    chunk = conn.recv(65536)
+                except TimeoutError:
+                    continue
+                except OSError:
+                    break
+                if not chunk:
+                    break
+                buf += chunk
+                while len(buf) >= 4:
+                    (n,) = _LEN.unpack_from(buf, 0)
+                    if n == 0 or n > limit:
+                        with self._lock:
+                            self._health.error(pname, "peer", "bad_frame_length",
+                                               f"TUIO/TCP length prefix {n} is not in 1..{limit}; connection closed")
+                        return
+                    if len(buf) < 4 + n:
+                        break
+                    packet = bytes(buf[4:4 + n])
+                    del buf[:4 + n]
+                    self.feed(packet, addr, self._clock(), "tcp")
+        finally:
+            with self._conn_lock:
+                self._conns.discard(conn)
+            conn.close()
+
+    def close(self) -> None:
+        """Stop all threads, close the connections and the listening socket."""
+        self._stop.set()
+        for th in self._threads:
+            th.join(timeout=2.0)
+        self._threads = []
+        with self._conn_lock:
+            for c in self._conns:
+                c.close()
+            self._conns.clear()
+        if self._sock is not None:
+            self._sock.close()
+            self._sock = None
+
+
+def make_listener(config: ListenerConfig, *, clock: Callable[[], float] = time.monotonic,
+                  on_datagram: DatagramHook | None = None) -> UdpListener | TcpListener:
+    """The listener class for ``config.transport`` (not started)."""
+    cls = UdpListener if config.transport == "udp" else TcpListener
+    return cls(config, clock=clock, on_datagram=on_datagram)

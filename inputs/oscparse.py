@@ -1,0 +1,145 @@
+"""Parse one OSC datagram whole with python-osc's ``OscBundle``/``OscMessage``.
+
+No Dispatcher and no python-osc server are involved (REFERENCE.md §6, notes/tuio.md §4):
+bundle timetags are reported, never waited for; datagrams of any size up to the
+configured limit are parsed (the socketserver servers silently drop > 8192 bytes);
+nested bundles are flattened in their original order.
+
+Before python-osc sees the bytes, a cheap structural walk rejects what python-osc
+would mis-handle: bundle element sizes that are negative, unaligned or overrun
+the datagram (python-osc can loop forever on a negative size) and type tags it
+does not know (it logs and silently mis-parses the remaining arguments).
+"""
+from __future__ import annotations
+
+import struct
+from dataclasses import dataclass
+
+from pythonosc import osc_bundle, osc_message
+from pythonosc.parsing import osc_types
+
+BUNDLE_PREFIX = b"#bundle\x00"
+#: Type tags python-osc can parse (``osc_message.OscMessage``).
+KNOWN_TAGS = b"ifsdbhrmtTFN[]"
+_INT = struct.Struct(">i")
+_MAX_DEPTH = 8
+
+
+class MalformedDatagram(ValueError):
+    """A datagram that is not valid OSC. ``reason`` is a short counter key
+    (``empty``, ``too_large``, ``unaligned``, ``not_osc``, ``bad_bundle``,
+    ``bad_message``, ``unknown_type``, ``parse_error``); ``str(exc)`` explains it."""
+
+    def __init__(self, reason: str, detail: str) -> None:
+        super().__init__(f"{reason}: {detail}")
+        self.reason = reason
+        self.detail = detail
+
+
+@dataclass(frozen=True, slots=True)
+class ParsedDatagram:
+    """``messages``: ``[(address, params), ...]`` in datagram order; ``timetag``:
+    the latest bundle timetag in Unix seconds, ``None`` for unbundled messages and
+    immediate bundles."""
+
+    messages: list
+    timetag: float | None
+
+
+def _check_message(data: bytes, start: int, end: int) -> None:
+    """Structural check of one message ``data[start:end]``: address, then a type
+    tag string of known tags (an absent type tag string is legal OSC 1.0)."""
+    if data[start:start + 1] != b"/":
+        raise MalformedDatagram("bad_message", f"element at byte {start} does not start with '/' (got {data[start:start + 8]!r})")
+    nul = data.find(b"\x00", start, end)
+    if nul < 0:
+        raise MalformedDatagram("bad_message", f"address at byte {start} is not NUL-terminated")
+    tag_start = start + ((nul - start) // 4 + 1) * 4
+    if tag_start >= end:
+        return
+    if data[tag_start:tag_start + 1] != b",":
+        raise MalformedDatagram("bad_message", f"type tag string at byte {tag_start} does not start with ','")
+    tag_end = data.find(b"\x00", tag_start, end)
+    if tag_end < 0:
+        raise MalformedDatagram("bad_message", f"type tag string at byte {tag_start} is not NUL-terminated")
+    bad = data[tag_start + 1:tag_end].translate(None, KNOWN_TAGS)
+    if bad:
+        raise MalformedDatagram("unknown_type", f"unsupported OSC type tag(s) {bad.decode('latin-1')!r}; supported: {KNOWN_TAGS.decode()}")
+
+
+def _check_bundle(data: bytes, start: int, end: int, depth: int) -> None:
+    """Walk a bundle's element sizes (each > 0, a multiple of 4 and within the
+    bundle) and check each message's address and type tags (inlined for speed)."""
+    if depth > _MAX_DEPTH:
+        raise MalformedDatagram("bad_bundle", f"bundles nested deeper than {_MAX_DEPTH}")
+    i = start + 16
+    if i > end:
+        raise MalformedDatagram("bad_bundle", f"bundle at byte {start} is shorter than its 16-byte header")
+    unpack = _INT.unpack_from
+    find = data.find
+    while i < end:
+        if i + 4 > end:
+            raise MalformedDatagram("bad_bundle", f"element size at byte {i} is truncated")
+        (size,) = unpack(data, i)
+        i += 4
+        stop = i + size
+        if size <= 0 or size & 3 or stop > end:
+            raise MalformedDatagram("bad_bundle", f"element size {size} at byte {i - 4} must be a positive multiple of 4 within the {end - i} bytes left")
+        first = data[i]
+        if first == 47:  # "/": a message; "," cannot occur in an OSC address
+            comma = find(b",", i, stop)
+            if comma >= 0:
+                nul = find(b"\x00", comma, stop)
+                if nul < 0 or data[comma - 1] != 0 or data[comma + 1:nul].translate(None, KNOWN_TAGS):
+                    _check_message(data, i, stop)  # slow path: precise error
+            else:
+                _check_message(data, i, stop)
+        elif data.startswith(BUNDLE_PREFIX, i):
+            _check_bundle(data, i, stop, depth + 1)
+        else:
+            raise MalformedDatagram("bad_message", f"element at byte {i} is neither a message ('/') nor a bundle (got {data[i:i + 8]!r})")
+        i = stop
+
+
+def _flatten(bundle: osc_bundle.OscBundle, out: list, stamps: list) -> None:
+    ts = bundle.timestamp
+    if ts:  # 0 == IMMEDIATELY
+        stamps.append(ts)
+    for item in bundle:
+        if isinstance(item, osc_bundle.OscBundle):
+            _flatten(item, out, stamps)
+        else:
+            out.append((item.address, item.params))
+
+
+def parse_datagram(data: bytes, max_bytes: int = 65536) -> ParsedDatagram:
+    """Parse a whole OSC datagram (bundle or single message).
+
+    Raises:
+        MalformedDatagram: with a reason key and a message naming what was wrong.
+    """
+    n = len(data)
+    if n == 0:
+        raise MalformedDatagram("empty", "empty datagram")
+    if n > max_bytes:
+        raise MalformedDatagram("too_large", f"datagram of {n} bytes exceeds the {max_bytes}-byte limit")
+    if n % 4:
+        raise MalformedDatagram("unaligned", f"datagram length {n} is not a multiple of 4 (OSC packets are 4-byte aligned)")
+    try:
+        if data.startswith(BUNDLE_PREFIX):
+            _check_bundle(data, 0, n, 0)
+            out: list = []
+            stamps: list = []
+            _flatten(osc_bundle.OscBundle(data), out, stamps)
+            return ParsedDatagram(out, max(stamps) if stamps else None)
+        if data[:1] == b"/":
+            _check_message(data, 0, n)
+            m = osc_message.OscMessage(data)
+            return ParsedDatagram([(m.address, m.params)], None)
+    except MalformedDatagram:
+        raise
+    except (osc_bundle.ParseError, osc_message.ParseError, osc_types.ParseError) as exc:
+        raise MalformedDatagram("parse_error", f"python-osc could not parse it: {exc}") from None
+    except Exception as exc:  # python-osc raises assorted errors on hostile bytes
+        raise MalformedDatagram("parse_error", f"{type(exc).__name__}: {exc}") from None
+    raise MalformedDatagram("not_osc", f"datagram starts with {data[:8]!r}, neither '#bundle' nor '/'")
