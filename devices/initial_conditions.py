@@ -35,9 +35,11 @@ def lattice_sites(bounds: Bounds, spacing: float, wall_margin: float) -> NDArray
     return pts
 
 
-def max_robots(bounds: Bounds = (-1.6, 1.6, -1.0, 1.0), spacing: float = 0.245, wall_margin: float = 0.13) -> int:
+def max_robots(
+    bounds: Bounds = (-1.6, 1.6, -1.0, 1.0), spacing: float = 0.245, min_separation: float = 0.23, wall_margin: float = 0.13
+) -> int:
     """The largest N :func:`random_initial_poses` can place with these settings."""
-    return int(len(lattice_sites(bounds, spacing, wall_margin)))
+    return int(len(lattice_sites(bounds, spacing, wall_margin + (spacing - min_separation) / 2.0)))
 
 
 def random_initial_poses(
@@ -66,7 +68,8 @@ def random_initial_poses(
     if min_separation > spacing:
         raise ValueError(f"min_separation ({min_separation}) must not exceed spacing ({spacing})")
     rng = np.random.default_rng(rng)
-    sites = lattice_sites(bounds, spacing, wall_margin)
+    jr = (spacing - min_separation) / 2.0  # jitter radius: keeps pairs >= min_separation apart
+    sites = lattice_sites(bounds, spacing, wall_margin + jr)
     if n > len(sites):
         x0, x1, y0, y1 = bounds
         raise ValueError(
@@ -74,8 +77,6 @@ def random_initial_poses(
             f"{min_separation} m separation: at most {len(sites)}; use a larger arena or fewer robots"
         )
     chosen = sites[rng.choice(len(sites), size=n, replace=False)]
-    # Jitter within a disc of radius (spacing - min_separation)/2 keeps every pair >= min_separation.
-    jr = (spacing - min_separation) / 2.0
     ang = rng.uniform(0, 2 * np.pi, n)
     rad = jr * np.sqrt(rng.uniform(0, 1, n))
     xy = chosen + np.column_stack((rad * np.cos(ang), rad * np.sin(ang)))

@@ -19,7 +19,7 @@ def test_boundary_is_centre_outside_rectangle():
 
 
 def test_counts_per_robot_and_per_step():
-    start = np.array([[-0.3, 0.0, 0.0], [0.3, 0.0, np.pi], [1.0, 0.5, 0.0]])
+    start = np.array([[-0.3, 0.0, 0.0], [0.3, 0.0, np.pi], [1.005, 0.5, 0.0]])
     sim = SimulatedArena(initial_poses=start, config=ArenaConfig(dt=0.1))
     v = np.array([0.2, 0.2, 0.2])
     w = np.zeros(3)
@@ -35,8 +35,8 @@ def test_counts_per_robot_and_per_step():
     assert rep.steps_with_boundary == 0
     for _ in range(20):
         sim.step(np.array([0.0, 0.0, 0.2]), w)
-    # Robot 2 reaches x = 1.0 + 0.4 + 0.02k > 1.6 for k >= 11 of the new 20 steps.
-    assert rep.boundary_per_robot.tolist() == [0, 0, 10]
+    # Robot 2 is at x = 1.005 + 0.4 + 0.02 k > 1.6 for k >= 10 of the new 20 steps.
+    assert rep.boundary_per_robot.tolist() == [0, 0, 11]
     assert rep.steps == 40
     assert rep.verdict(declared_duration=10.0) == []
 
