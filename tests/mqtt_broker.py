@@ -94,3 +94,73 @@ def mosquitto(tmp_path: Path):
         yield broker
     finally:
         broker.stop()
+
+
+class Collector:
+    """A raw paho client (no swarmdeck code) that records every message on ``topics`` of a broker."""
+
+    def __init__(self, broker: Broker, topics: list[str]) -> None:
+        import threading
+
+        import paho.mqtt.client as mqtt
+        from paho.mqtt.enums import CallbackAPIVersion
+
+        self.messages: list[tuple[str, bytes]] = []
+        self._lock = threading.Lock()
+        self._ready = threading.Event()
+        self.client = mqtt.Client(CallbackAPIVersion.VERSION2)
+
+        def on_connect(client, userdata, flags, reason, props):
+            for t in topics:
+                client.subscribe(t)
+
+        def on_message(client, userdata, msg):
+            with self._lock:
+                self.messages.append((msg.topic, msg.payload))
+
+        acks = []
+
+        def on_subscribe(client, userdata, mid, reasons, props):
+            acks.append(mid)
+            if len(acks) == len(topics):  # every subscription is active at the broker
+                self._ready.set()
+
+        self.client.on_connect = on_connect
+        self.client.on_message = on_message
+        self.client.on_subscribe = on_subscribe
+        self.client.connect("127.0.0.1", broker.port)
+        self.client.loop_start()
+        if not self._ready.wait(10):
+            raise RuntimeError("collector could not subscribe")
+
+    def publish(self, topic: str, payload: bytes) -> None:
+        self.client.publish(topic, payload).wait_for_publish(5)
+
+    def wait_for(self, predicate, timeout: float = 10.0) -> list[tuple[str, bytes]]:
+        """Poll (with a deadline) until ``predicate(messages)`` is true; returns the messages."""
+        deadline = time.monotonic() + timeout
+        while time.monotonic() < deadline:
+            with self._lock:
+                msgs = list(self.messages)
+            if predicate(msgs):
+                return msgs
+            time.sleep(0.01)
+        with self._lock:
+            raise AssertionError(f"condition not met within {timeout} s; got {len(self.messages)} messages: "
+                                 f"{self.messages[-5:]}")
+
+    def close(self) -> None:
+        self.client.disconnect()
+        self.client.loop_stop()
+
+
+def wait_until(predicate, timeout: float = 10.0, what: str = "condition"):
+    """Poll ``predicate()`` until it returns something truthy (returned) or fail after ``timeout`` s."""
+    deadline = time.monotonic() + timeout
+    while True:
+        value = predicate()
+        if value:
+            return value
+        if time.monotonic() > deadline:
+            raise AssertionError(f"{what} not reached within {timeout} s")
+        time.sleep(0.01)
