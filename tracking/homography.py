@@ -43,7 +43,8 @@ def fit_floor_homography(img_corners: np.ndarray, arena_corners: np.ndarray, ima
     H is not finite or singular, the Jacobian at the image centre is degenerate or more
     anisotropic than ``max_anisotropy``, mirrors the wrong way (image y down must become arena
     y up), or the reference corners miss their surveyed positions by more than ``max_rms_m``
-    RMS (a moved marker or a misdetection).
+    RMS (a misdetected corner, a bent marker; a moved marker shows only with more than four
+    references, since a homography fits any four centres).
     """
     img = np.asarray(img_corners, dtype=np.float64).reshape(-1, 4, 2)
     arena = np.asarray(arena_corners, dtype=np.float64).reshape(-1, 4, 2)
@@ -72,7 +73,7 @@ def fit_floor_homography(img_corners: np.ndarray, arena_corners: np.ndarray, ima
                              n, rms, aniso)
     if not rms <= max_rms_m:
         return HomographyFit(None, False, f"reference corners off by {rms * 1000:.1f} mm RMS "
-                             f"(> {max_rms_m * 1000:.0f} mm): moved or misdetected marker", n, rms, aniso)
+                             f"(> {max_rms_m * 1000:.0f} mm): misdetected or moved marker", n, rms, aniso)
     return HomographyFit(H, True, "", n, rms, aniso)
 
 

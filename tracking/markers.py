@@ -1,8 +1,9 @@
 """Geometry of square ArUco tags in the arena plane (pure functions on numpy arrays).
 
-Corner order is OpenCV's: top-left, top-right, bottom-right, bottom-left of the printed tag,
-clockwise in the image (y down), hence counter-clockwise in the arena (y up) as seen from above
-(REFERENCE.md §7).
+Corner order is OpenCV's: top-left, top-right, bottom-right, bottom-left of the printed tag.
+Seen from above the printed tag is the same picture in the image and in the arena, so the order
+is visually clockwise in both; numerically the shoelace area is positive in image coordinates
+(y down) and negative in arena coordinates (y up) — the sign flip REFERENCE.md §7 refers to.
 
 Heading convention (the Robotarium's, robotarium.md §4.4): a tag is mounted with its printed
 +x edge (top-left → top-right) along the robot's forward axis, so the heading is the direction

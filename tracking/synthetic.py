@@ -22,7 +22,7 @@ import numpy as np
 from swarmdeck.tracking.calibration import CharucoSpec
 from swarmdeck.tracking.camera_model import PinholeCamera, overhead_camera
 from swarmdeck.tracking.markers import DEFAULT_REFERENCES, ReferenceMarker, marker_corners
-from swarmdeck.tracking.raster import disc_coverage, marker_image, pixel_edge_square, warp_into
+from swarmdeck.tracking.raster import dictionary, disc_coverage, marker_image, pixel_edge_square, warp_into
 from swarmdeck.tracking.types import CameraFrame
 
 
@@ -57,7 +57,7 @@ class SyntheticCameraConfig:
     tag_height: float = 0.06
     body_radius: float = 0.055
     body_rgb: tuple[int, int, int] = (40, 44, 52)
-    floor_texel: float = 0.0015
+    floor_texel: float = 0.002
     sprite_texel: float = 0.0005
     blur_sigma: float = 0.6
     noise_sigma: float = 3.0
@@ -176,17 +176,28 @@ class SyntheticRenderer:
         base[..., :3] = np.array(cfg.body_rgb, np.float32)
         base[..., :3] = base[..., :3] * (1 - plate_a[..., None]) + 245.0 * plate_a[..., None]
         base[..., 3] = np.maximum(body_a, plate_a) * 255.0
-        d = cv2.aruco.getPredefinedDictionary(cv2.aruco.DICT_4X4_50)
-        n_ids = d.bytesList.shape[0]
+        n_ids = dictionary(cfg.dictionary).bytesList.shape[0]
         cols = 8
         rows = int(np.ceil(n_ids / cols))
         atlas = np.zeros((rows * side, cols * side, 4), np.float32)
+        self._cols = cols
+        self._sprite_base = base
+        self._n_ids = n_ids
+        return atlas, {}, side
+
+    def _ensure_sprites(self, ids: np.ndarray) -> None:
+        """Draw the sprites of ``ids`` into the atlas the first time they are needed."""
+        cfg = self.config
+        todo = [int(k) for k in np.unique(ids) if 0 <= k < self._n_ids and int(k) not in self._slot_of]
+        if not todo:
+            return
+        s, side = cfg.sprite_texel, self._sprite_side
+        c0 = (side - 1) / 2
         tag_px = marker_corners(np.zeros((1, 2)), np.zeros(1), cfg.tag_size)[0] / s
         tag_tex = np.column_stack([c0 + tag_px[:, 0], c0 - tag_px[:, 1]])
         sigma = 0.4 * self._top_footprint / s
-        slot = {}
-        for k in range(n_ids):
-            sp = base.copy()
+        for k in todo:
+            sp = self._sprite_base.copy()
             img = marker_image(cfg.dictionary, k)
             rgb = np.repeat(img[..., None], 3, axis=2).astype(np.float32) * (235.0 / 255.0) + 10.0
             color = sp[..., :3].copy()
@@ -194,13 +205,11 @@ class SyntheticRenderer:
             sp[..., :3] = color
             if sigma > 0.3:
                 sp = cv2.GaussianBlur(sp, (0, 0), sigma)
-            rr, cc = divmod(k, cols)
-            atlas[rr * side:(rr + 1) * side, cc * side:(cc + 1) * side] = sp
-            slot[k] = k
-        # premultiply colour by alpha so bilinear lookups at the rim stay unbiased
-        atlas[..., :3] *= atlas[..., 3:4] / 255.0
-        self._cols = cols
-        return atlas, slot, side
+            # premultiply colour by alpha so bilinear lookups at the rim stay unbiased
+            sp[..., :3] *= sp[..., 3:4] / 255.0
+            rr, cc = divmod(k, self._cols)
+            self._atlas[rr * side:(rr + 1) * side, cc * side:(cc + 1) * side] = sp
+            self._slot_of[k] = k
 
     # -- per-frame layers ------------------------------------------------------------------
     def _density_layer(self, img: np.ndarray, out: np.ndarray) -> None:
@@ -229,6 +238,7 @@ class SyntheticRenderer:
         n = len(ids)
         if n == 0:
             return np.zeros(0, bool)
+        self._ensure_sprites(ids)
         h, w = out.shape[:2]
         centres = np.column_stack([poses[:, :2], np.full(n, cfg.tag_height)])
         px = self.camera.project(centres)

@@ -148,10 +148,11 @@ class Tracker:
                 h_status = f"no homography: {fit.reason} ({n_refs})"
             elif math.isfinite(self._H_stamp):
                 self._H_kind = "held"
-                h_status = f"homography held: {fit.reason}; using the last good one from {stamp - self._H_stamp:.1f} s ago"
+                h_status = (f"homography held ({n_refs}): {fit.reason}; using the last good one from "
+                            f"{stamp - self._H_stamp:.1f} s ago")
             else:
                 self._H_kind = "fallback"
-                h_status = f"fallback homography: {fit.reason}"
+                h_status = f"fallback homography ({n_refs}): {fit.reason}"
 
         robots = good & ~np.isin(ids, self._ref_ids)
         new_ids = ids[robots]

@@ -1,0 +1,218 @@
+"""``swarmdeck calibrate camera|arena`` — camera intrinsics and the arena's reference markers.
+
+``calibrate camera``: intrinsics from ChArUco board images in a folder → calibration JSON
+(``--write-board`` prints the board; ``--write-synthetic`` renders board views from the
+synthetic camera to try it without hardware).
+
+``calibrate arena``: detects the reference markers in one image (a file, or a frame from a
+camera / video / folder / the synthetic camera), fits the floor homography from their surveyed
+positions, reports the residuals and writes the tracker config (references, fallback homography,
+camera position, calibration) that ``swarmdeck console --camera …`` loads. ``--measure IDS``
+adds markers lying on the floor as further references at their measured positions.
+"""
+from __future__ import annotations
+
+import argparse
+import math
+import time
+from pathlib import Path
+
+import cv2
+import numpy as np
+
+from swarmdeck.console.cli import UsageError
+
+NAME = "calibrate"
+HELP = "calibrate the overhead camera (ChArUco intrinsics) or the arena (reference markers)"
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    """``camera`` and ``arena`` sub-subcommands."""
+    sub = parser.add_subparsers(dest="what", metavar="camera|arena", required=True)
+    cam = sub.add_parser("camera", help="intrinsics from ChArUco board images in a folder")
+    cam.add_argument("--images", type=Path, help="folder of board images (png/jpg/…)")
+    cam.add_argument("--out", type=Path, default=Path("camera_calibration.json"), help="calibration JSON to write")
+    cam.add_argument("--squares", default="7x5", help="board squares, COLSxROWS (default 7x5)")
+    cam.add_argument("--square-length", type=float, default=0.04, help="square side in m (default 0.04)")
+    cam.add_argument("--marker-length", type=float, default=0.03, help="marker side in m (default 0.03)")
+    cam.add_argument("--dictionary", default="DICT_5X5_100", help="board dictionary (default DICT_5X5_100)")
+    cam.add_argument("--write-board", type=Path, metavar="PNG", help="write a printable board image and exit")
+    cam.add_argument("--write-synthetic", type=Path, metavar="DIR",
+                     help="render N synthetic board views (see --views) into DIR and exit")
+    cam.add_argument("--views", type=int, default=15, help="number of synthetic views (default 15)")
+    cam.add_argument("--seed", type=int, default=0, help="seed of the synthetic views")
+
+    ar = sub.add_parser("arena", help="detect the reference markers and write the tracker config")
+    src = ar.add_mutually_exclusive_group(required=True)
+    src.add_argument("--image", type=Path, help="an image of the arena")
+    src.add_argument("--camera", help="camera spec: webcam index, stream URL, video file, folder, or 'synthetic'")
+    ar.add_argument("--calibration", type=Path, help="camera calibration JSON (from `calibrate camera`)")
+    ar.add_argument("--config", type=Path, help="existing tracker config to start from (reference layout etc.)")
+    ar.add_argument("--out", type=Path, default=Path("arena.json"), help="tracker config JSON to write")
+    ar.add_argument("--tag-height", type=float, help="robot tag height above the floor, m")
+    ar.add_argument("--measure", default="", help="comma-separated marker ids on the floor to add as references")
+    ar.add_argument("--timeout", type=float, default=5.0, help="seconds to wait for a camera frame")
+
+
+def _squares(text: str) -> tuple[int, int]:
+    try:
+        a, b = (int(v) for v in text.lower().split("x"))
+    except ValueError as exc:
+        raise UsageError(f"--squares must look like 7x5, got {text!r}") from exc
+    if a < 3 or b < 3:
+        raise UsageError("--squares needs at least 3x3")
+    return a, b
+
+
+def _camera(args: argparse.Namespace) -> int:
+    from swarmdeck.tracking import CalibrationError, CharucoSpec, calibrate_charuco
+    from swarmdeck.tracking.synthetic import SyntheticCameraConfig, charuco_views
+
+    sx, sy = _squares(args.squares)
+    try:
+        spec = CharucoSpec(sx, sy, args.square_length, args.marker_length, args.dictionary)
+        spec.board()
+    except (CalibrationError, ValueError) as exc:
+        raise UsageError(str(exc)) from exc
+    if args.write_board:
+        cv2.imwrite(str(args.write_board), spec.image())
+        print(f"wrote {args.write_board} ({sx}×{sy} squares of {args.square_length * 1000:g} mm; print at that size)")
+        return 0
+    if args.write_synthetic:
+        args.write_synthetic.mkdir(parents=True, exist_ok=True)
+        cam = SyntheticCameraConfig().camera()
+        views = charuco_views(cam, spec, args.views, np.random.default_rng(args.seed))
+        for k, img in enumerate(views):
+            cv2.imwrite(str(args.write_synthetic / f"board_{k:03d}.png"), img[..., ::-1])
+        print(f"wrote {len(views)} synthetic views to {args.write_synthetic} (true fx {cam.K[0, 0]:.1f} px, "
+              f"dist {np.round(cam.dist, 4).tolist()})")
+        return 0
+    if args.images is None:
+        raise UsageError("give --images DIR (or --write-board / --write-synthetic)")
+    if not args.images.is_dir():
+        raise UsageError(f"--images {args.images} is not a folder")
+    from swarmdeck.tracking.sources import IMAGE_SUFFIXES
+    files = sorted(p for p in args.images.iterdir() if p.suffix.lower() in IMAGE_SUFFIXES)
+    images = []
+    for p in files:
+        img = cv2.imread(str(p), cv2.IMREAD_GRAYSCALE)
+        if img is None:
+            print(f"skipping unreadable {p.name}")
+            continue
+        images.append(img)
+    try:
+        cal = calibrate_charuco(images, spec)
+    except CalibrationError as exc:
+        raise UsageError(f"{exc} (in {len(images)} readable images in {args.images})") from exc
+    cal.save(args.out)
+    K = cal.camera_matrix
+    print(f"calibrated from {cal.n_images}/{len(images)} images: fx {K[0, 0]:.1f} fy {K[1, 1]:.1f} "
+          f"cx {K[0, 2]:.1f} cy {K[1, 2]:.1f} px, dist {np.round(cal.dist_coeffs, 4).tolist()}, "
+          f"reprojection RMS {cal.rms_px:.3f} px → {args.out}")
+    return 0
+
+
+def _grab(spec: str, timeout: float, calibration_size: tuple[int, int] | None) -> np.ndarray:
+    from swarmdeck.tracking import CameraError, open_source
+
+    kw: dict = {}
+    if spec == "synthetic":
+        kw = {"get_poses": lambda t: np.zeros((0, 3))}
+    try:
+        source = open_source(spec, paced=False, **kw)
+    except CameraError as exc:
+        raise UsageError(str(exc)) from exc
+    try:
+        t_end = time.monotonic() + timeout
+        while time.monotonic() < t_end:
+            frame = source.read(time.monotonic())
+            if frame is not None:
+                return frame.image
+            time.sleep(0.05)
+        raise UsageError(f"no frame from camera {spec!r} within {timeout:g} s: {source.status}")
+    finally:
+        source.close()
+
+
+def _arena(args: argparse.Namespace) -> int:
+    from swarmdeck.tracking import CalibrationError, CameraCalibration, ConfigError, ReferenceMarker, TrackerConfig
+    from swarmdeck.tracking.detector import MarkerDetector
+    from swarmdeck.tracking.homography import apply_homography, camera_centre_from_homography, fit_floor_homography
+    from swarmdeck.tracking.markers import poses_from_corners, reference_corners
+    from swarmdeck.tracking.tracker import check_image
+
+    try:
+        cfg = TrackerConfig.load(args.config) if args.config else TrackerConfig()
+        if args.calibration:
+            cfg = cfg.with_(calibration=CameraCalibration.load(args.calibration))
+        if args.tag_height is not None:
+            cfg = cfg.with_(tag_height=args.tag_height)
+    except (ConfigError, CalibrationError) as exc:
+        raise UsageError(str(exc)) from exc
+    try:
+        measure = [int(v) for v in args.measure.split(",") if v.strip()]
+    except ValueError as exc:
+        raise UsageError(f"--measure must be comma-separated ids, got {args.measure!r}") from exc
+    cal = cfg.calibration
+    if args.image is not None:
+        if not args.image.is_file():
+            raise UsageError(f"no such image {args.image}")
+        bgr = cv2.imread(str(args.image), cv2.IMREAD_COLOR)
+        if bgr is None:
+            raise UsageError(f"cannot read image {args.image}")
+        image = cv2.cvtColor(bgr, cv2.COLOR_BGR2RGB)
+    else:
+        image = _grab(args.camera, args.timeout, None if cal is None else cal.image_size)
+    err = check_image(image, None if cal is None else cal.image_size)
+    if err:
+        raise UsageError(err)
+    det = MarkerDetector(cfg.dictionary, cfg.references, None if cal is None else cal.camera_matrix,
+                         None if cal is None else cal.dist_coeffs).detect(cv2.cvtColor(image, cv2.COLOR_RGB2GRAY))
+    und = det.corners if cal is None else cal.undistort(det.corners)
+    ref_ids, ref_c = reference_corners(cfg.references)
+    uniq, counts = np.unique(det.ids, return_counts=True)
+    dup = set(uniq[counts > 1].tolist())
+    found = [k for k, i in enumerate(ref_ids) if i in det.ids and i not in dup]
+    rows = [int(np.flatnonzero(det.ids == ref_ids[k])[0]) for k in found]
+    missing = [int(ref_ids[k]) for k in range(len(ref_ids)) if k not in found]
+    print(f"found {len(found)}/{len(ref_ids)} reference markers" + (f"; missing ids {missing}" if missing else "")
+          + (f"; duplicate ids {sorted(dup)}" if dup else ""))
+    fit = fit_floor_homography(und[rows], ref_c[found], (image.shape[1], image.shape[0]), cfg.min_references,
+                               cfg.max_reference_rms_m, cfg.max_anisotropy)
+    if not fit.ok:
+        raise UsageError(f"cannot calibrate the arena: {fit.reason}")
+    res = np.linalg.norm(apply_homography(fit.H, und[rows]) - ref_c[found], axis=-1).mean(axis=1)
+    for k, r in zip(found, res):
+        print(f"  reference {int(ref_ids[k])}: residual {r * 1000:.2f} mm")
+    changes: dict = {"fallback_homography": tuple(tuple(float(v) for v in row) for row in fit.H)}
+    if cal is not None:
+        C = camera_centre_from_homography(fit.H, cal.camera_matrix)
+        if C is not None:
+            changes["camera_position"] = tuple(float(v) for v in C)
+            print(f"camera at x {C[0]:.3f} y {C[1]:.3f} m, {C[2]:.3f} m above the reference plane")
+    refs = list(cfg.references)
+    for mid in measure:
+        k = np.flatnonzero(det.ids == mid)
+        if mid in ref_ids:
+            raise UsageError(f"--measure {mid}: already a reference marker")
+        if len(k) != 1:
+            raise UsageError(f"--measure {mid}: marker {'not found' if len(k) == 0 else 'seen more than once'}")
+        c = apply_homography(fit.H, und[k])
+        pose = poses_from_corners(c)[0]
+        size = float(np.mean(np.linalg.norm(c[0] - np.roll(c[0], 1, axis=0), axis=1)))
+        refs.append(ReferenceMarker(mid, round(float(pose[0]), 4), round(float(pose[1]), 4), round(size, 4),
+                                    round(float(pose[2]), 4)))
+        print(f"  measured marker {mid}: x {pose[0]:.4f} y {pose[1]:.4f} m, side {size * 1000:.1f} mm, "
+              f"heading {math.degrees(pose[2]):.1f}°")
+    try:
+        out = cfg.with_(references=tuple(refs), **changes)
+    except ConfigError as exc:
+        raise UsageError(str(exc)) from exc
+    out.save(args.out)
+    print(f"homography from {fit.n_references} references, {fit.rms_m * 1000:.2f} mm RMS → {args.out}")
+    return 0
+
+
+def main(args: argparse.Namespace) -> int:
+    """Run ``calibrate camera`` or ``calibrate arena``."""
+    return _camera(args) if args.what == "camera" else _arena(args)
