@@ -1,7 +1,8 @@
 """The console's density φ(·, t): a moving bump, bumps painted in the browser, input contacts, merged.
 
-All are *Densities* (``.at(t) -> GaussianMixture``, see :mod:`swarmdeck.coverage.density`).
-:func:`merge_mixtures` concatenates the bumps of several snapshots into one
+:class:`MovingBump` is a *Density* (``.at(t) -> GaussianMixture``, see
+:mod:`swarmdeck.coverage.density`); :meth:`BumpSet.snapshot` gives the painted
+bumps at a time (or None). :func:`merge_mixtures` concatenates the bumps of several snapshots into one
 snapshot (floors are not added: the merged floor is the given one), so the
 coverage controller sees one φ and one analytic φ_t.
 """
@@ -82,6 +83,7 @@ class BumpSet:
     max_bumps: int = 32
     _bumps: dict[int, Bump] = field(default_factory=dict)
     _next: int = 0
+    revision: int = 0  # incremented on every change (lets callers cache snapshots)
     _lock: threading.Lock = field(default_factory=threading.Lock, repr=False)
 
     def _check(self, sigma: float, weight: float) -> None:
@@ -104,6 +106,7 @@ class BumpSet:
             bid = self._next
             self._next += 1
             self._bumps[bid] = Bump(bid, (float(m[0]), float(m[1])), float(sigma), float(weight), float(t))
+            self.revision += 1
             return bid
 
     def move(self, bid: int, mu: ArrayLike) -> None:
@@ -113,6 +116,7 @@ class BumpSet:
         with self._lock:
             if bid in self._bumps:
                 self._bumps[bid].mu = (float(m[0]), float(m[1]))
+                self.revision += 1
 
     def update(self, bid: int, sigma: float | None = None, weight: float | None = None) -> None:
         with self._lock:
@@ -123,6 +127,7 @@ class BumpSet:
             w = b.weight if weight is None else float(weight)
             self._check(s, w)
             b.sigma, b.weight = s, w
+            self.revision += 1
 
     def remove(self, bid: int, t: float) -> None:
         """Start fading bump ``bid`` out (it disappears after ``ramp`` s)."""
@@ -130,6 +135,7 @@ class BumpSet:
             b = self._bumps.get(bid)
             if b is not None and b.dying_since is None:
                 b.dying_since = float(t)
+                self.revision += 1
 
     def live(self) -> list[Bump]:
         """Bumps not being removed (copies)."""
@@ -141,8 +147,9 @@ class BumpSet:
             b = self._bumps.get(bid)
             return None if b is None else Bump(**vars(b))
 
-    def snapshot(self, t: float) -> GaussianMixture | None:
-        """Bumps at run time t (floor 0) with ramped weights and their exact rates; None when there are none."""
+    def snapshot(self, t: float, floor: float = 0.05) -> GaussianMixture | None:
+        """Bumps at run time t over ``floor`` (> 0: a bump fading in from weight 0 is still a valid
+        density) with ramped weights and their exact rates; None when there are none."""
         with self._lock:
             gone = [k for k, b in self._bumps.items() if b.dying_since is not None and t - b.dying_since >= self.ramp]
             for k in gone:
@@ -162,7 +169,7 @@ class BumpSet:
         ds_out = np.where(np.isnan(dying), 0.0, ds_out)
         scale = s_in * s_out
         rate = (ds_in * s_out - s_in * ds_out) / self.ramp
-        return GaussianMixture(0.0, mu=mu, sigma=sigma, weight=w * scale, weight_dot=w * rate)
+        return GaussianMixture(floor, mu=mu, sigma=sigma, weight=w * scale, weight_dot=w * rate)
 
 
 def merge_mixtures(parts: Sequence[GaussianMixture | None], floor: float) -> GaussianMixture:

@@ -118,10 +118,18 @@ class ConsoleDensity:
         self.moving = MovingBump(params.radius, params.period, params.sigma, params.weight, params.floor)
         self.bumps = bumps
         self.contacts: GaussianMixture | None = None
+        self._cache: tuple[Any, GaussianMixture] | None = None
+        self._cache_contacts: GaussianMixture | None = None
 
     def at(self, t: float) -> GaussianMixture:
-        parts = [self.moving.at(t) if self.params.moving else None, self.bumps.snapshot(t), self.contacts]
-        return merge_mixtures(parts, self.params.floor)
+        key = (t, self.bumps.revision, self.params)
+        if self._cache is not None and self._cache[0] == key and self._cache_contacts is self.contacts:
+            return self._cache[1]
+        parts = [self.moving.at(t) if self.params.moving else None, self.bumps.snapshot(t, self.params.floor),
+                 self.contacts]
+        snap = merge_mixtures(parts, self.params.floor)
+        self._cache, self._cache_contacts = (key, snap), self.contacts
+        return snap
 
 
 def _min_distance(points: NDArray[np.float64]) -> float:
@@ -413,6 +421,8 @@ class ControlLoop:
                     self._alert("inputs", f"inputs failed: {type(exc).__name__}: {exc}")
         try:
             snapshot: GaussianMixture | None = self.density.at(self._run_time)
+            with self._lock:
+                self._alert("density", None)
         except Exception as exc:
             self._count("density")
             snapshot = None

@@ -30,7 +30,7 @@ LAYERS: tuple[str, ...] = (
 )
 DEFAULT_OFF = frozenset({"cells", "nominal"})
 
-ROBOT = np.array([40, 100, 200], dtype=np.uint8)
+ROBOT = np.array([20, 70, 170], dtype=np.uint8)
 CHANGED = np.array([255, 140, 0], dtype=np.uint8)
 STOPPED = np.array([210, 30, 30], dtype=np.uint8)
 PAUSED = np.array([90, 110, 140], dtype=np.uint8)
@@ -158,11 +158,15 @@ class ArenaScene:
         cx, cy, w, h = (x0 + x1) / 2, (y0 + y1) / 2, x1 - x0, y1 - y0
         sc.configure_environment_map(None)
         sc.set_up_direction("+z")
+        # Top-down: a narrow perspective from high above (viser has no orthographic camera). The view
+        # is shifted right by ~half the control panel so the arena sits in the visible part of a
+        # 1280×800 window (REFERENCE.md §8).
         cam = self.server.initial_camera
         fov = math.radians(20.0)
+        view_h = max(h, w / 1.1) * 1.17
         cam.fov = fov
-        cam.look_at = (cx, cy, 0.0)
-        cam.position = (cx, cy, 0.5 * (max(w / 1.6, h) + 0.2) / math.tan(fov / 2))
+        cam.look_at = (cx + 0.24 * view_h, cy, 0.0)
+        cam.position = (cx + 0.24 * view_h, cy, 0.5 * view_h / math.tan(fov / 2))
         cam.up = (0.0, 1.0, 0.0)
         corners = np.array([[x0, y0], [x1, y0], [x1, y1], [x0, y1]])
         self._h["boundary"] = sc.add_line_segments(

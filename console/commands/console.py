@@ -1,0 +1,116 @@
+"""``swarmdeck console``: the operator console in the browser (simulated robots unless told otherwise)."""
+from __future__ import annotations
+
+import argparse
+import sys
+from dataclasses import replace
+
+from swarmdeck.console.cli import UsageError
+
+NAME = "console"
+HELP = "start the operator console (control loop + browser view) and print its URL"
+ORDER = 1
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("--host", default=None, help="interface to bind (default 127.0.0.1: this machine only)")
+    parser.add_argument("--port", type=int, default=None, help="TCP port (default 8080; 0 picks a free one)")
+    parser.add_argument("--robots", type=int, default=None, metavar="N", help="number of simulated robots (default 12)")
+    parser.add_argument("--behaviour", "--behavior", default=None,
+                        help="coverage (default) | rendezvous | formation | goto | script:PATH "
+                             "(PATH defines behaviour(poses, t) -> (N, 2) velocities in m/s)")
+    parser.add_argument("--config", default=None, metavar="FILE", help="TOML file ([console], [behaviour], "
+                        "[safety], [density], [inputs] tables)")
+    parser.add_argument("--seed", type=int, default=None, help="seed for the random initial poses")
+    parser.add_argument("--duration", type=float, default=None, metavar="S",
+                        help="stop after S seconds (scripted/headless use); default: run until Ctrl-C")
+    parser.add_argument("--no-inputs", action="store_true",
+                        help="do not open the TUIO/OSC input listeners (UDP 3333 by default)")
+
+
+def main(args: argparse.Namespace) -> int:
+    from swarmdeck.console.behaviours import BehaviourError
+    from swarmdeck.console.config import ConfigFileError, ConsoleSettings, load_settings
+    from swarmdeck.console.loop import ControlLoop, LoopConfig
+
+    try:
+        settings = load_settings(args.config) if args.config else ConsoleSettings(LoopConfig())
+    except ConfigFileError as exc:
+        raise UsageError(str(exc)) from None
+    changes = {}
+    if args.robots is not None:
+        changes["n_robots"] = args.robots
+    if args.behaviour is not None:
+        changes["behaviour"] = args.behaviour
+    if args.seed is not None:
+        changes["seed"] = args.seed
+    try:
+        config = replace(settings.loop, **changes)
+    except ValueError as exc:
+        raise UsageError(str(exc)) from None
+    host = args.host if args.host is not None else settings.host
+    port = args.port if args.port is not None else settings.port
+    if not 0 <= port <= 65535:
+        raise UsageError(f"--port must be in [0, 65535], got {port}")
+    if args.duration is not None and not args.duration > 0:
+        raise UsageError(f"--duration must be > 0 s, got {args.duration}")
+
+    hub = None
+    if not args.no_inputs:
+        hub = _start_inputs(settings.inputs)
+    try:
+        loop = ControlLoop(config, inputs=hub, contact_density=_contact_density(hub))
+    except (BehaviourError, ValueError) as exc:
+        if hub is not None:
+            hub.close()
+        raise UsageError(str(exc)) from None
+
+    from swarmdeck.console.app import ConsoleApp
+
+    try:
+        app = ConsoleApp(loop, host=host, port=port)
+    except OSError as exc:
+        loop.close()
+        raise UsageError(f"cannot serve on {host}:{port}: {exc}") from None
+    app.start()
+    print(f"swarmdeck console: {app.url}  ({config.n_robots} robots, {loop.behaviour_name}; Ctrl-C to stop)",
+          flush=True)
+    try:
+        app.wait(args.duration)
+    except KeyboardInterrupt:
+        print("swarmdeck console: stopping (robots stopped)", file=sys.stderr)
+    finally:
+        frame = loop.latest
+        app.close()
+    if frame is not None and args.duration is not None:
+        b = frame.barrier
+        print(f"ran {frame.tick + 1} ticks, t = {frame.run_time:.1f} s; "
+              f"min distance {b.min_distance:.3f} m" if b is not None else "")
+    return 0
+
+
+def _start_inputs(table: dict | None):
+    """The TUIO/OSC listeners of ``[inputs]`` (default: TUIO on UDP 3333), started; None if they cannot bind."""
+    from swarmdeck.inputs import ConfigError, InputConfig, InputHub
+
+    try:
+        cfg = InputConfig.from_dict(table) if table is not None else InputConfig()
+    except ConfigError as exc:
+        raise UsageError(str(exc)) from None
+    hub = InputHub.from_config(cfg)
+    try:
+        hub.start()
+    except OSError as exc:
+        print(f"swarmdeck console: inputs disabled: {exc}", file=sys.stderr)
+        return None
+    names = ", ".join(getattr(s, "name", type(s).__name__) for s in hub.sources)
+    print(f"swarmdeck console: listening for inputs: {names}", file=sys.stderr)
+    return hub
+
+
+def _contact_density(hub):
+    if hub is None:
+        return None
+    from swarmdeck.inputs import ContactDensity
+
+    return ContactDensity(hub.config.density)
