@@ -145,6 +145,10 @@ class GaussianMixture:
             c = (s ** 2)[:, None, None] * eye
             c_dot = (2.0 * s * s_dot)[:, None, None] * eye
             iso = True
+        with np.errstate(over="ignore"):
+            total = f + w.sum()
+        if not np.isfinite(total):
+            raise ValueError("floor + sum(weight) overflows: use weights of a sensible scale")
         if f == 0.0 and not np.any(w > 0.0):
             raise ValueError("density has zero mass: floor is 0 and no weight is > 0")
         prec = np.linalg.inv(c) if k else np.zeros((0, 2, 2))

@@ -19,6 +19,7 @@ near degenerate CVTs; it is only available behind ``allow_centralised=True``.
 from __future__ import annotations
 
 import re
+import warnings
 
 import numpy as np
 import scipy.sparse as sp
@@ -93,7 +94,8 @@ def law_command(family: str, k: int, kappa: float, positions: NDArray[np.float64
     if family == "tvd-c":
         n2 = flat.size
         lhs = (sp.eye_array(n2, format="csc") - jacobian.tocsc())
-        with np.errstate(all="ignore"):
+        with np.errstate(all="ignore"), warnings.catch_warnings():
+            warnings.simplefilter("ignore", spla.MatrixRankWarning)
             try:
                 sol = spla.spsolve(lhs, flat)
             except RuntimeError as exc:  # pragma: no cover - scipy raises on singular

@@ -119,6 +119,7 @@ def test_isotropic_and_equivalent_anisotropic_agree(rng):
     (dict(floor=-0.1), "floor"),
     (dict(floor=float("nan")), "floor"),
     (dict(floor=0.0), "zero mass"),
+    (dict(mu=[[0, 0], [1, 1]], sigma=[0.2, 0.2], weight=[1e308, 1e308]), "overflows"),
     (dict(floor=0.0, mu=[[0, 0]], sigma=[0.2], weight=[0.0]), "zero mass"),
     (dict(mu=[[0, 0]], weight=[1.0], cov=[[[0.1, 0], [0, -0.1]]]), "cov"),
     (dict(mu=[[0, 0]], weight=[1.0], cov=[[[0.1, 0.2], [0.0, 0.1]]]), "cov"),
