@@ -78,18 +78,30 @@ class InputHub:
         self.close()
 
     def poll(self, now: float | None = None) -> InputSnapshot:
-        """Poll every source at ``now`` (default ``clock()``): all contacts, all
-        events since the previous poll (ordered by time), all health records."""
+        """Poll every source at ``now`` (default ``clock()``): all contacts (one per
+        ``(source, id)``), all events since the previous poll (ordered by time),
+        all health records."""
         t = self._clock() if now is None else float(now)
         snaps = [s.poll(t) for s in self._sources]
-        contacts = tuple(c for s in snaps for c in s.contacts)
+        contacts = self._dedupe(c for s in snaps for c in s.contacts)
         events = tuple(sorted((e for s in snaps for e in s.events), key=lambda e: e.t))
         health = tuple(h for s in snaps for h in s.health)
         return InputSnapshot(t, contacts, events, health)
 
     def contacts(self) -> tuple[Contact, ...]:
         """Current contacts of every source (no expiry, no events drained)."""
-        return tuple(c for s in self._sources for c in s.contacts())
+        return self._dedupe(c for s in self._sources for c in s.contacts())
+
+    @staticmethod
+    def _dedupe(contacts) -> tuple[Contact, ...]:
+        """One contact per ``(source, id)``: a sender that reaches two listeners
+        (reacTIVision can send to several ports) is the same finger; keep the newest."""
+        out: dict = {}
+        for c in contacts:
+            old = out.get(c.key)
+            if old is None or c.last_seen >= old.last_seen:
+                out[c.key] = c
+        return tuple(out.values())
 
     def health(self, now: float | None = None) -> tuple[SourceHealth, ...]:
         """Health of every source."""

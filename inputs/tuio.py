@@ -51,7 +51,7 @@ class _Profile:
     def __init__(self) -> None:
         self.last_fseq: int | None = None
         self.entities: dict = {}
-        self.alive: set | None = None  # last committed ALIVE (ids may still lack a SET)
+        self.alive: dict | None = None  # last committed ALIVE (ids may still lack a SET)
 
 
 class _Group:
@@ -287,11 +287,11 @@ class TuioAssembler:
         old = st.entities
         sets = buf.sets
         if buf.alive is not None:
-            alive = st.alive = set(buf.alive)
+            alive = st.alive = dict.fromkeys(buf.alive)  # ordered, like the ALIVE list
         elif st.alive is not None:  # frame without ALIVE: the last ALIVE still holds
             alive = st.alive
         else:  # a sender that never sent ALIVE: take its SETs as they come
-            alive = set(old) | set(sets)
+            alive = {**dict.fromkeys(old), **dict.fromkeys(sets)}
         new = {}
         for sid in alive:
             e = sets.get(sid)
