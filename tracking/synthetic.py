@@ -353,7 +353,9 @@ class SyntheticCamera:
         """Render the scene at ``now`` → a new frame stamped ``now`` (None on error)."""
         t0 = time.perf_counter()
         try:
-            poses = np.asarray(self._get_poses(now), dtype=float).reshape(-1, 3)
+            poses = np.asarray(self._get_poses(now), dtype=float)
+            if poses.ndim != 2 or poses.shape[1] != 3 or not np.all(np.isfinite(poses)):
+                raise ValueError(f"get_poses returned shape {poses.shape}, expected finite (N, 3) poses")
             ids = self._ids if self._ids is not None else np.arange(len(poses))
             if len(ids) != len(poses):
                 raise ValueError(f"{len(poses)} poses for {len(ids)} ids")
