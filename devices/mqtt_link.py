@@ -60,7 +60,8 @@ class MqttLink:
         self._state = f"connecting to {config.url}"
         self._closed = False
         self.connections = 0
-        self._connected_event = threading.Event()
+        self._connected_event = threading.Event()  # connected and every subscription acknowledged
+        self._pending_subs: set[int] = set()
         v5 = config.protocol == "5"
         self._client = mqtt.Client(
             CallbackAPIVersion.VERSION2,
@@ -81,6 +82,7 @@ class MqttLink:
         self._client.on_connect_fail = self._on_connect_fail
         self._client.on_disconnect = self._on_disconnect
         self._client.on_message = self._on_message
+        self._client.on_subscribe = self._on_subscribe
         self._expiry: Properties | None = None
         if v5:  # commands older than 1 s are useless: let the broker drop them
             self._expiry = Properties(PacketTypes.PUBLISH)
@@ -101,7 +103,7 @@ class MqttLink:
         return self
 
     def wait_connected(self, timeout: float) -> bool:
-        """Block until connected or ``timeout`` s passed; True when connected."""
+        """Block until connected with every subscription active, or ``timeout`` s passed; True when so."""
         return self._connected_event.wait(timeout)
 
     def close(self) -> None:
@@ -129,10 +131,10 @@ class MqttLink:
         with self._lock:
             self._connected = connected
             self._state = state
-        if connected:
-            self._connected_event.set()
-        else:
-            self._connected_event.clear()
+            if connected and not self._pending_subs:
+                self._connected_event.set()
+            elif not connected:
+                self._connected_event.clear()
 
     # ---------------------------------------------------------------- publishing
     def publish(self, topic: str, payload: bytes, *, expire: bool = False, qos: int | None = None) -> bool:
@@ -169,14 +171,28 @@ class MqttLink:
                 self.counters.add("connect_refused", msg)
                 self._set_state(False, msg + f"; retrying (up to every {self.config.reconnect_max:g} s)")
                 return
-            for topic in self._subscriptions:
-                client.subscribe(topic, qos=self.config.qos)
+            with self._lock:
+                self._pending_subs = set()
+                for topic in self._subscriptions:
+                    rc, mid = client.subscribe(topic, qos=self.config.qos)
+                    if rc == mqtt.MQTT_ERR_SUCCESS and mid is not None:
+                        self._pending_subs.add(mid)
             self.connections += 1
             if self.connections > 1:
                 self.counters.add("reconnects")
             self._set_state(True, f"connected to {self.config.url}")
         except Exception as exc:  # noqa: BLE001 - never raise into paho's thread
             self.counters.add("handler_errors", f"on_connect failed: {exc!r}")
+
+    def _on_subscribe(self, client: mqtt.Client, userdata: object, mid: int, reasons: object, props: object) -> None:
+        for r in reasons if isinstance(reasons, list) else []:
+            if getattr(r, "is_failure", False):
+                self.counters.add("subscribe_refused", f"broker {self.config.url} refused a subscription: {r}")
+        with self._lock:
+            self._pending_subs.discard(mid)
+            ready = self._connected and not self._pending_subs
+        if ready:
+            self._connected_event.set()
 
     def _on_connect_fail(self, client: mqtt.Client, userdata: object) -> None:
         msg = f"cannot reach broker {self.config.url} (connection refused or timed out); retrying with back-off"

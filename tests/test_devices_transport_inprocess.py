@@ -1,0 +1,54 @@
+"""The in-process transport: the default path, bit-identical to driving the simulated arena directly."""
+from __future__ import annotations
+
+import numpy as np
+
+from swarmdeck.devices import Arena, ArenaConfig, RobotBackend, SimulatedArena
+from swarmdeck.devices.transport import PoseSource, RobotTransport
+from swarmdeck.devices.transport_backend import TransportBackend
+from swarmdeck.devices.transport_inprocess import InProcessTransport
+
+
+def backend_on_transport(n: int, seed: int) -> tuple[TransportBackend, InProcessTransport]:
+    transport = InProcessTransport(SimulatedArena(n, config=ArenaConfig(seed=seed)))
+    backend = TransportBackend(transport, np.arange(n), clock=lambda: transport.time, real_time=False, wait_for_poses=0)
+    return backend, transport
+
+
+def test_protocols_are_satisfied():
+    backend, transport = backend_on_transport(3, 1)
+    assert isinstance(transport, RobotTransport) and isinstance(transport, PoseSource)
+    assert isinstance(backend, RobotBackend)
+
+
+def test_arena_through_the_transport_matches_the_direct_simulation():
+    n, seed = 5, 8
+    direct = Arena(n, config=ArenaConfig(seed=seed), safety=False)
+    backend, transport = backend_on_transport(n, seed)
+    via = Arena(backend=backend, config=ArenaConfig(seed=seed), safety=False)
+    assert np.array_equal(direct.poses(), via.poses())
+    goals = np.random.default_rng(3).uniform([-1.2, -0.7], [1.2, 0.7], (n, 2))
+    for arena in (direct, via):
+        arena.set_goals(goals, controller="clf")
+    for _ in range(90):
+        direct.step()
+        via.step()
+    assert np.array_equal(direct.poses(), via.poses())
+    assert backend.streamer.counters.get("stale_pose_robot_ticks") == 0
+    assert transport.status().counters["commands_sent"] == 90 * n
+
+
+def test_robots_not_named_stand_still_and_status_reports_batteries():
+    transport = InProcessTransport(SimulatedArena(3, config=ArenaConfig(seed=4)))
+    before = transport.latest_poses().poses
+    for _ in range(30):
+        assert transport.send([1], [0.2], [0.0])
+    after = transport.latest_poses().poses
+    assert np.array_equal(after[[0, 2]], before[[0, 2]])
+    assert np.isclose(np.linalg.norm(after[1, :2] - before[1, :2]), 0.2 * 30 * 0.033)
+    st = transport.status()
+    assert st.connected and st.robots.link == ("ok", "ok", "ok")
+    assert st.robots.battery_voltage[1] < st.robots.battery_voltage[0] < 4.2
+    assert st.robots.command_age[1] == 0 and np.isinf(st.robots.command_age[0])
+    transport.close()
+    assert transport.send([1], [0.2], [0.0]) is False
