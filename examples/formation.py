@@ -17,6 +17,11 @@ from swarmdeck.devices import Arena, saturate_norm
 def experiment(arena: Arena, edge_length: float = 0.4, alpha: float = 4.0) -> dict:
     """Form a regular polygon of ``arena.n`` robots; return the final edge-length errors."""
     _, edges, distances = rigid_formation(arena.n, edge_length)
+    # Give the polygon's corners to the robots in their angular order around the swarm's
+    # centre, so nobody has to pass through anybody else (the barrier would not let them).
+    p0 = arena.positions() - arena.positions().mean(axis=0)
+    order = np.argsort(np.arctan2(p0[:, 1], p0[:, 0]))
+    edges = order[edges]
     end = arena.duration if arena.duration is not None else 40.0
     while arena.time < end - 1e-9:
         p = arena.positions()

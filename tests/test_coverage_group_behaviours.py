@@ -83,8 +83,8 @@ def test_rendezvous_example_gathers_safely(seed):
     arena = Arena(6, duration=30.0, config=ArenaConfig(seed=seed), safety=_safety_or_skip())
     result = experiment(arena)
     # Six robots whose look-ahead points stay 0.17 m apart: the tightest cluster has radius ~0.17 m.
-    assert result["cluster radius (m)"] < 0.4
-    assert result["centroid drift (m)"] < 0.25
+    assert result["cluster radius (m)"] < 0.3
+    assert result["centroid drift (m)"] < 0.01
     assert arena.report().validation.steps_with_collision == 0
 
 
