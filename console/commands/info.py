@@ -15,6 +15,9 @@ ORDER = 62
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("file", help="a .mcap recording")
     parser.add_argument("--json", action="store_true", help="print the summary as JSON")
+    parser.add_argument("--resimulate", action="store_true",
+                        help="also re-run the session on a fresh simulated loop from its recorded input datagrams "
+                             "and compare every frame (exit code 1 when they differ)")
 
 
 def summarise(path: str) -> dict:
@@ -57,9 +60,13 @@ def main(args: argparse.Namespace) -> int:
         s = summarise(args.file)
     except RecordingError as exc:
         raise UsageError(str(exc)) from exc
+    result = _resimulate(args.file) if args.resimulate else None
     if args.json:
+        if result is not None:
+            s["resimulation"] = {"frames": result.frames, "identical": result.identical, "ok": result.ok,
+                                 "summary": result.summary(), "differing_keys": result.differing_keys}
         print(json.dumps(s, indent=2))
-        return 0
+        return 0 if result is None or result.ok else 1
     robots = s["robots"]
     print(f"{s['file']}")
     print(f"  created     {s['created']}")
@@ -75,4 +82,18 @@ def main(args: argparse.Namespace) -> int:
         print(f"  warning     {w}")
     for e in s["first_events"]:
         print(f"  event       {e}")
+    if result is not None:
+        print(result.summary())
+        return 0 if result.ok else 1
     return 0
+
+
+def _resimulate(path: str):
+    from swarmdeck.console.recording_reader import open_recording
+    from swarmdeck.console.resimulate import resimulate_and_compare
+
+    with open_recording(path) as rec:
+        try:
+            return resimulate_and_compare(rec)
+        except ValueError as exc:
+            raise UsageError(f"cannot re-simulate {path}: {exc}") from exc

@@ -1,0 +1,56 @@
+"""The file opens with the mcap package's own reader and every message validates against its channel's JSON Schema."""
+from __future__ import annotations
+
+import json
+
+import jsonschema
+from mcap.reader import make_reader
+
+from swarmdeck.console.recorder import Recorder, RecorderConfig
+from swarmdeck.console.recording_schemas import CHANNELS, PROFILE
+from swarmdeck.console.recording_synth import simulated_frames
+
+
+def test_mcap_reader_and_json_schemas(tmp_path):
+    path = tmp_path / "s.mcap"
+    rec = Recorder(path, {"robots": [0, 1, 2, 3, 4]}, RecorderConfig(chunk_size=10_000))
+    for f in simulated_frames(n_robots=5, n_ticks=30, seed=1):
+        rec.write_frame(f)
+        rec.write_datagram(b"/tuio/2Dcur\x00", ("10.0.0.2", 3333), "udp", f.time)
+    rec.write_event(1.0, "operator", "e-stop")
+    rec.close()
+
+    with open(path, "rb") as fh:
+        reader = make_reader(fh)
+        assert reader.get_header().profile == PROFILE
+        summary = reader.get_summary()
+        assert summary is not None and len(summary.chunk_indexes) >= 2
+        assert all(ci.compression == "zstd" for ci in summary.chunk_indexes)
+        meta = {m.name: m.metadata for m in reader.iter_metadata()}
+        assert json.loads(meta["swarmdeck"]["recording_format"]) == 1
+        counts: dict[str, int] = {}
+        validators = {}
+        for schema, channel, message in reader.iter_messages():
+            assert channel.message_encoding == "json" and schema.encoding == "jsonschema"
+            if channel.topic not in validators:
+                declared = json.loads(schema.data)
+                assert declared == CHANNELS[channel.topic][1]
+                jsonschema.Draft202012Validator.check_schema(declared)
+                validators[channel.topic] = jsonschema.Draft202012Validator(declared)
+            validators[channel.topic].validate(json.loads(message.data))
+            counts[channel.topic] = counts.get(channel.topic, 0) + 1
+    assert counts["/swarmdeck/frame"] == 30 and counts["/swarmdeck/datagram"] == 30
+    assert counts["/swarmdeck/config"] == 1 and counts["/swarmdeck/event"] >= 1
+
+
+def test_schema_rejects_a_malformed_frame():
+    schema = CHANNELS["/swarmdeck/frame"][1]
+    frame = next(simulated_frames(n_robots=3, n_ticks=1)).to_dict()
+    jsonschema.validate(frame, schema)
+    bad = dict(frame, poses=[[0.0, 0.0]] * 3)  # (N, 2) instead of (N, 3)
+    try:
+        jsonschema.validate(bad, schema)
+    except jsonschema.ValidationError:
+        pass
+    else:
+        raise AssertionError("a (N, 2) pose array must not validate")
