@@ -4,9 +4,11 @@ One isotropic bump per contact (REFERENCE.md §5, "Density from touches")::
 
     φ(q, t) = floor + Σ_k w_k(t) exp(−‖q − μ_k(t)‖² / (2 σ_k(t)²))
 
-* μ_k(t) = p_k + v_k · clip(t − t_k, 0, h): the contact's last position p_k (at its
-  receive time t_k) extrapolated along its velocity v_k for at most ``extrapolate``
-  = h seconds; μ̇_k = v_k while 0 ≤ t − t_k < h, else 0 (exact derivative).
+* μ_k(t) = p_k + v_k · clip(t − t_k, 0, h): the contact's position p_k as of the
+  last :meth:`ContactDensity.update` (at time t_k, the caller's clock — contact
+  receive stamps are never mixed in, so listener and loop clocks may differ)
+  extrapolated along its velocity v_k for at most ``extrapolate`` = h seconds;
+  μ̇_k = v_k while 0 ≤ t − t_k < h, else 0 (exact derivative).
 * w_k(t) = W · S((t − t_down)/T) · (1 − S((t − t_up)/T)), S(u) = 3u² − 2u³ on
   [0, 1] (smoothstep), T = ``fade`` (0.3–0.5 s), so a new touch fades in, a lifted or
   lost one fades out from where it was (its velocity set to 0) instead of
@@ -153,7 +155,7 @@ class ContactDensity:
             if b is None:
                 if live >= cfg.max_bumps:
                     continue
-                self._bumps[key] = _Bump(c.source, p, v, float(c.last_seen), float(t))
+                self._bumps[key] = _Bump(c.source, p, v, float(t), float(t))
                 live += 1
                 continue
             if b.t_up < math.inf:  # came back while fading out: fade in from the current level
@@ -161,7 +163,7 @@ class ContactDensity:
                 b.t_down = t - _inverse_smoothstep(f) * cfg.fade
                 b.t_up = math.inf
                 live += 1
-            b.p, b.v, b.t_ref = p, v, float(c.last_seen)
+            b.p, b.v, b.t_ref = p, v, float(t)
         for key, b in list(self._bumps.items()):
             if key in seen:
                 continue

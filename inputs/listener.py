@@ -30,6 +30,7 @@ from .tuio import TuioAssembler
 DatagramHook = Callable[[bytes, object, str, float], None]
 
 BIG_DATAGRAM = 8192
+CLOCK_TOLERANCE = 0.5  # s between a socket listener's clock and the time it is polled at
 _LEN = struct.Struct(">I")
 
 
@@ -141,6 +142,16 @@ class InputSource:
         with self._lock:
             return self._health.snapshot(now, self._table.counts(), self._table.lost())
 
+    def _check_clock(self, clock: Callable[[], float], now: float, address: object, transport: str) -> None:
+        """Receive times come from ``clock``; polling with another time base would
+        break timeouts (a ghost finger that never expires). Count it loudly."""
+        skew = clock() - now
+        if abs(skew) > CLOCK_TOLERANCE:
+            with self._lock:
+                self._health.error(peer_name(transport, address), "listener", "clock_mismatch",
+                                   f"poll(now={now:.3f}) is {skew:+.3f} s off this listener's receive clock; "
+                                   "build the listener/hub with clock= the loop's clock")
+
     # lifetimes are no-ops for the socket-free core
     def start(self) -> "InputSource":
         """Nothing to start without a socket."""
@@ -209,6 +220,13 @@ class UdpListener(InputSource):
                 self._stop.wait(0.05)
                 continue
             self.feed(data, addr, self._clock(), "udp")
+
+    def poll(self, now: float) -> InputSnapshot:
+        """As :meth:`InputSource.poll`; ``now`` must be on this listener's ``clock``
+        (a mismatch is counted as ``clock_mismatch`` on the listener's own entry)."""
+        if self.address is not None:
+            self._check_clock(self._clock, now, self.address, "udp")
+        return super().poll(now)
 
     def close(self) -> None:
         """Stop the thread and close the socket (idempotent)."""
@@ -310,6 +328,12 @@ class TcpListener(InputSource):
             with self._conn_lock:
                 self._conns.discard(conn)
             conn.close()
+
+    def poll(self, now: float) -> InputSnapshot:
+        """As :meth:`InputSource.poll`; ``now`` must be on this listener's ``clock``."""
+        if self.address is not None:
+            self._check_clock(self._clock, now, self.address, "tcp")
+        return super().poll(now)
 
     def close(self) -> None:
         """Stop all threads, close the connections and the listening socket."""

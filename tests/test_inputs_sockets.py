@@ -159,3 +159,12 @@ def test_hub_merges_two_listeners_and_port_in_use_is_a_clear_error():
         assert sum(h.kind == "peer" for h in snap.health) == 2
         with pytest.raises(OSError, match="cannot bind UDP"):
             UdpListener(ListenerConfig(port=socks[0][1])).start()
+
+
+def test_polling_on_another_clock_than_the_receive_clock_is_reported(udp):
+    lst, clock = udp  # receive clock reads 100 s
+    snap = lst.poll(3.0)
+    (h,) = [h for h in snap.health if h.kind == "listener"]
+    assert h.errors == {"clock_mismatch": 1}
+    assert "+97.000 s off" in h.last_error and "clock=" in h.last_error
+    assert not [h for h in lst.poll(100.2).health if h.kind == "listener" and h.errors["clock_mismatch"] > 1]
