@@ -35,7 +35,7 @@ def letter_image(text: str = "R", height: int = 200, width: int = 320) -> NDArra
     img = np.full((height, width), 255, dtype=np.uint8)
     font = cv2.FONT_HERSHEY_SIMPLEX
     scale = height / 30.0
-    thick = max(2, height // 12)
+    thick = max(2, height // 7)
     (tw, th), _ = cv2.getTextSize(text, font, scale, thick)
     scale *= min(0.8 * width / max(tw, 1), 0.8 * height / max(th, 1))
     (tw, th), _ = cv2.getTextSize(text, font, scale, thick)

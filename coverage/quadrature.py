@@ -99,26 +99,49 @@ def triangle_rule(level: int) -> tuple[NDArray[np.float64], NDArray[np.float64]]
     return pts, w
 
 
-def _levels(tri: NDArray[np.float64], density: GaussianMixture, opts: QuadratureOptions
-            ) -> NDArray[np.intp]:
-    """Subdivision level per triangle (T,) from the triangles (T, 3, 2) and the bumps."""
-    t = tri.shape[0]
-    level = np.full(t, opts.min_level, dtype=np.intp)
+def _split(tri: NDArray[np.float64], cell: NDArray[np.intp]
+           ) -> tuple[NDArray[np.float64], NDArray[np.intp]]:
+    """4-way midpoint split of triangles (T, 3, 2) → (4T, 3, 2), keeping orientation."""
+    a, b, c = tri[:, 0], tri[:, 1], tri[:, 2]
+    ab, bc, ca = 0.5 * (a + b), 0.5 * (b + c), 0.5 * (c + a)
+    out = np.concatenate([np.stack([a, ab, ca], 1), np.stack([ab, b, bc], 1),
+                          np.stack([ca, bc, c], 1), np.stack([bc, ca, ab], 1)])
+    return out, np.tile(cell, 4)
+
+
+def _refine(tri: NDArray[np.float64], cell: NDArray[np.intp], origin: NDArray[np.float64],
+            density: GaussianMixture, opts: QuadratureOptions
+            ) -> tuple[NDArray[np.float64], NDArray[np.intp]]:
+    """Adaptive subdivision. tri (T, 3, 2) in coordinates relative to ``origin[cell]``.
+
+    Every triangle is split ``min_level`` times; then, round by round, the triangles that are
+    within ``reach``·σ_k of a bump k and wider than ``resolution``·σ_k are split again, up to
+    ``max_level`` rounds. Returns the final triangles and their cells.
+    """
+    for _ in range(opts.min_level):
+        tri, cell = _split(tri, cell)
     live = (density.weight > 0.0) | (density.weight_dot != 0.0)
     if not np.any(live) or opts.max_level == opts.min_level:
-        return level
+        return tri, cell
     sig = np.sqrt(np.linalg.eigvalsh(density.cov[live])[:, 0])            # (K,)
     mu = density.mu[live]
-    g = tri.mean(axis=1)                                                   # (T, 2)
-    rad = np.sqrt(((tri - g[:, None]) ** 2).sum(axis=2)).max(axis=1)       # (T,)
-    e = tri - np.roll(tri, 1, axis=1)
-    diam = np.sqrt((e ** 2).sum(axis=2)).max(axis=1)                       # (T,)
-    dist = np.sqrt(((g[:, None, :] - mu[None]) ** 2).sum(axis=2)) - rad[:, None]   # (T, K)
-    near = dist < opts.reach * sig[None]
-    ratio = np.where(near, diam[:, None] / (opts.resolution * sig[None]), 0.0).max(axis=1)
-    with np.errstate(divide="ignore"):
-        need = np.ceil(np.log2(np.maximum(ratio, 1e-300)))
-    return np.clip(need, opts.min_level, opts.max_level).astype(np.intp)
+    reach = opts.reach * sig
+    done_t, done_c = [], []
+    for _ in range(opts.max_level - opts.min_level):
+        g = tri.mean(axis=1)                                               # local centroid
+        rad = np.sqrt(((tri - g[:, None]) ** 2).sum(axis=2)).max(axis=1)
+        diam = 2.0 * rad
+        gw = g + origin[cell]
+        dist = np.sqrt(((gw[:, None, :] - mu[None]) ** 2).sum(axis=2)) - rad[:, None]   # (T, K)
+        need = ((dist < reach[None]) & (diam[:, None] > opts.resolution * sig[None])).any(axis=1)
+        if not need.any():
+            break
+        done_t.append(tri[~need])
+        done_c.append(cell[~need])
+        tri, cell = _split(tri[need], cell[need])
+    done_t.append(tri)
+    done_c.append(cell)
+    return np.concatenate(done_t), np.concatenate(done_c)
 
 
 def cell_moments(vor: BoundedVoronoi, density: GaussianMixture,
@@ -126,36 +149,29 @@ def cell_moments(vor: BoundedVoronoi, density: GaussianMixture,
     """Integrate φ and φ_t over every cell of ``vor``; see the module docstring."""
     n = vor.n
     p = vor.points
-    cell = vor.tri_cell
-    a = vor.vertices[vor.tri_a]
-    b = vor.vertices[vor.tri_b]
-    pc = p[cell]
-    tri = np.stack([pc, a, b], axis=1)                                     # (T, 3, 2)
-    ea, eb = a - pc, b - pc
+    pc = p[vor.tri_cell]
+    tri = np.stack([np.zeros_like(pc), vor.vertices[vor.tri_a] - pc, vor.vertices[vor.tri_b] - pc],
+                   axis=1)                                                 # (T, 3, 2) local
+    geo_area = 0.5 * np.abs(tri[:, 1, 0] * tri[:, 2, 1] - tri[:, 1, 1] * tri[:, 2, 0])
+    areas = np.bincount(vor.tri_cell, weights=geo_area, minlength=n)
+    tri, cell = _refine(tri, vor.tri_cell, p, density, opts)
+    order = np.argsort(cell, kind="stable")          # cells are compact: keeps points local
+    tri, cell = tri[order], cell[order]
+    ea, eb = tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0]
     area = 0.5 * np.abs(ea[:, 0] * eb[:, 1] - ea[:, 1] * eb[:, 0])         # (T,)
-    levels = _levels(tri, density, opts)
-    acc = np.zeros((10, n))
-    n_points = 0
-    for lev in np.unique(levels):
-        sel = np.flatnonzero(levels == lev)
-        bary, w = triangle_rule(int(lev))
-        # local coordinates relative to the robot: r = q − p_i
-        r = bary[None, :, 1, None] * ea[sel, None, :] + bary[None, :, 2, None] * eb[sel, None, :]
-        q = r + pc[sel, None, :]
-        phi, phi_t = density.evaluate_both(q)                              # (S, P)
-        wa = w[None, :] * area[sel, None]
-        fw = phi * wa
-        gw = phi_t * wa
-        rx, ry = r[..., 0], r[..., 1]
-        cs = cell[sel]
-        for row, val in enumerate((fw, fw * rx, fw * ry, fw * (rx * rx + ry * ry),
-                                   gw, gw * rx, gw * ry)):
-            acc[row] += np.bincount(cs, weights=val.sum(axis=1), minlength=n)
-        acc[7] += np.bincount(cs, weights=area[sel], minlength=n)
-        acc[8] += np.bincount(cs, weights=(wa * rx).sum(axis=1), minlength=n)
-        acc[9] += np.bincount(cs, weights=(wa * ry).sum(axis=1), minlength=n)
-        n_points += phi.size
-    m, mx, my, m2, g0, gx, gy, areas, ax, ay = acc
+    bary, w = triangle_rule(0)
+    r = np.einsum("pv,tvc->tpc", bary, tri)                                 # (T, 7, 2) = q − p_i
+    phi, phi_t = density.evaluate_both(r + p[cell][:, None, :])             # (T, 7)
+    wa = w[None, :] * area[:, None]
+    fw = phi * wa
+    gw = phi_t * wa
+    rx, ry = r[..., 0], r[..., 1]
+    acc = np.empty((9, n))
+    for row, val in enumerate((fw, fw * rx, fw * ry, fw * (rx * rx + ry * ry),
+                               gw, gw * rx, gw * ry, wa * rx, wa * ry)):
+        acc[row] = np.bincount(cell, weights=val.sum(axis=1), minlength=n)
+    n_points = phi.size
+    m, mx, my, m2, g0, gx, gy, ax, ay = acc
     if not (np.all(np.isfinite(acc))):
         raise ValueError("the density gave NaN or inf inside the arena")
     # A cell whose mass underflows (no floor, far from every bump) falls back to its area
