@@ -53,6 +53,7 @@ class TrackerConfig:
     fallback_homography: tuple[tuple[float, ...], ...] | None = None
     calibration: CameraCalibration | None = None
     bounds: tuple[float, float, float, float] = (-1.6, 1.6, -1.0, 1.0)
+    threshold_windows: tuple[int, int, int] = (7, 17, 10)
 
     def __post_init__(self) -> None:
         if self.dictionary not in DICTIONARIES:
@@ -70,6 +71,9 @@ class TrackerConfig:
             raise ConfigError(f"expected robot ids {sorted(set(ids) & set(self.expected_ids))} are reference ids")
         if self.camera_position is not None and (len(self.camera_position) != 3 or not self.camera_position[2] > 0):
             raise ConfigError(f"camera_position must be (x, y, height > 0), got {self.camera_position}")
+        tw = tuple(self.threshold_windows)
+        if len(tw) != 3 or not (3 <= tw[0] <= tw[1]) or tw[2] < 1:
+            raise ConfigError(f"threshold_windows must be (min, max, step) with 3 <= min <= max, step >= 1, got {tw}")
         if self.fallback_homography is not None and np.asarray(self.fallback_homography).shape != (3, 3):
             raise ConfigError("fallback_homography must be 3×3")
 
@@ -83,6 +87,7 @@ class TrackerConfig:
         d["references"] = [asdict(r) for r in self.references]
         d["expected_ids"] = list(self.expected_ids)
         d["bounds"] = list(self.bounds)
+        d["threshold_windows"] = list(self.threshold_windows)
         d["camera_position"] = None if self.camera_position is None else [float(v) for v in self.camera_position]
         d["fallback_homography"] = None if self.fallback_homography is None else \
             np.asarray(self.fallback_homography, float).tolist()
@@ -106,6 +111,8 @@ class TrackerConfig:
                 kw["expected_ids"] = tuple(int(i) for i in kw["expected_ids"])
             if "bounds" in kw:
                 kw["bounds"] = tuple(float(v) for v in kw["bounds"])
+            if "threshold_windows" in kw:
+                kw["threshold_windows"] = tuple(int(v) for v in kw["threshold_windows"])
             if kw.get("camera_position") is not None:
                 kw["camera_position"] = tuple(float(v) for v in kw["camera_position"])
             if kw.get("fallback_homography") is not None:

@@ -26,12 +26,21 @@ class Detections:
     recovered: int = 0
 
 
-def detector_parameters() -> cv2.aruco.DetectorParameters:
-    """DetectorParameters of REFERENCE.md §7."""
+DEFAULT_THRESHOLD_WINDOWS = (7, 17, 10)
+
+
+def detector_parameters(threshold_windows: tuple[int, int, int] = DEFAULT_THRESHOLD_WINDOWS,
+                        ) -> cv2.aruco.DetectorParameters:
+    """DetectorParameters of REFERENCE.md §7, plus the adaptive-threshold windows
+    (min, max, step) px: (7, 17, 10) = two passes instead of OpenCV's three (3, 13, 23) — 1.7×
+    faster at 1920×1080 with no loss of detections on 20–35 px tags (bench/bench_tracking.py);
+    use (3, 23, 10) for OpenCV's default, or larger windows for tags over ~60 px."""
     p = cv2.aruco.DetectorParameters()
     p.cornerRefinementMethod = cv2.aruco.CORNER_REFINE_SUBPIX
     p.relativeCornerRefinmentWinSize = 1.0
     p.useAruco3Detection = False
+    p.adaptiveThreshWinSizeMin, p.adaptiveThreshWinSizeMax, p.adaptiveThreshWinSizeStep = (
+        int(v) for v in threshold_windows)
     return p
 
 
@@ -39,9 +48,11 @@ class MarkerDetector:
     """Detects tags of one dictionary and recovers missed reference markers."""
 
     def __init__(self, dict_name: str, references: tuple[ReferenceMarker, ...],
-                 camera_matrix: np.ndarray | None = None, dist_coeffs: np.ndarray | None = None) -> None:
+                 camera_matrix: np.ndarray | None = None, dist_coeffs: np.ndarray | None = None,
+                 threshold_windows: tuple[int, int, int] = DEFAULT_THRESHOLD_WINDOWS) -> None:
         self._dict = dictionary(dict_name)
-        self._det = cv2.aruco.ArucoDetector(self._dict, detector_parameters(), cv2.aruco.RefineParameters())
+        self._det = cv2.aruco.ArucoDetector(self._dict, detector_parameters(threshold_windows),
+                                            cv2.aruco.RefineParameters())
         ref_ids, ref_c = reference_corners(references)
         self._ref_ids = ref_ids
         self._board = None

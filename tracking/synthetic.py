@@ -108,14 +108,20 @@ class SyntheticRenderer:
         self._floor_footprint = float(np.median(step))
         top_step = np.linalg.norm(np.diff(self._top_xy, axis=1), axis=-1)
         self._top_footprint = float(np.median(top_step))
-        self._base = self._render_floor()
+        w, h = cam.size
+        u, v = np.meshgrid((np.arange(w) - (w - 1) / 2) / (w / 2), (np.arange(h) - (h - 1) / 2) / (h / 2))
+        self._gain = (1.0 - config.vignetting * 0.5 * (u ** 2 + v ** 2)).astype(np.float32)[..., None]
+        # static floor with vignetting and the camera blur applied once; the robot sprites get
+        # the same blur folded into their pre-filter, so no full-frame blur is needed per frame
+        base = self._render_floor() * self._gain
+        self._base = cv2.GaussianBlur(base, (0, 0), config.blur_sigma) if config.blur_sigma > 0 else base
         self._atlas, self._slot_of, self._sprite_side = self._build_sprites()
         extent = self._sprite_side * config.sprite_texel / 2
         self._window = int(np.ceil(2 * extent / float(top_step.min()))) + 3
         self._density_maps: dict[tuple[int, int], tuple[np.ndarray, np.ndarray, np.ndarray]] = {}
-        w, h = cam.size
-        u, v = np.meshgrid((np.arange(w) - (w - 1) / 2) / (w / 2), (np.arange(h) - (h - 1) / 2) / (h / 2))
-        self._gain = (1.0 - config.vignetting * 0.5 * (u ** 2 + v ** 2)).astype(np.float32)[..., None]
+        pad = 32
+        self._noise = (np.random.default_rng(config.seed + 7).standard_normal((h + pad, w + pad, 3), dtype=np.float32)
+                       * np.float32(config.noise_sigma)) if config.noise_sigma > 0 else None
 
     # -- static layers ---------------------------------------------------------------------
     def _render_floor(self) -> np.ndarray:
@@ -195,7 +201,7 @@ class SyntheticRenderer:
         c0 = (side - 1) / 2
         tag_px = marker_corners(np.zeros((1, 2)), np.zeros(1), cfg.tag_size)[0] / s
         tag_tex = np.column_stack([c0 + tag_px[:, 0], c0 - tag_px[:, 1]])
-        sigma = 0.4 * self._top_footprint / s
+        sigma = float(np.hypot(0.4, cfg.blur_sigma)) * self._top_footprint / s
         for k in todo:
             sp = self._sprite_base.copy()
             img = marker_image(cfg.dictionary, k)
@@ -259,7 +265,7 @@ class SyntheticRenderer:
         ly = -s * d[..., 0] + c * d[..., 1]
         side = self._sprite_side
         c0 = (side - 1) / 2
-        slot = np.array([self._slot_of.get(int(i), -1) for i in ids])
+        slot = np.where((ids >= 0) & (ids < self._n_ids), ids, -1)
         valid &= (slot >= 0)[:, None, None]
         rr, cc = np.divmod(np.maximum(slot, 0), self._cols)
         tx = cfg.sprite_texel
@@ -273,12 +279,13 @@ class SyntheticRenderer:
         flat = (vc * w + uc)[inside]
         a = alpha[inside]
         col = samp[..., :3][inside]
-        sum_a = np.bincount(flat, weights=a, minlength=h * w)
+        idx, inv = np.unique(flat, return_inverse=True)
+        sum_a = np.bincount(inv, weights=a, minlength=len(idx))
         outf = out.reshape(-1, 3)
         keep = np.clip(1.0 - sum_a, 0.0, 1.0)
-        idx = np.flatnonzero(sum_a > 0)
-        premult = np.stack([np.bincount(flat, weights=col[:, k], minlength=h * w)[idx] for k in range(3)], axis=1)
-        outf[idx] = outf[idx] * keep[idx, None] + premult
+        premult = np.stack([np.bincount(inv, weights=col[:, k], minlength=len(idx)) for k in range(3)], axis=1)
+        gain = self._gain.reshape(-1)[idx]
+        outf[idx] = outf[idx] * keep[:, None] + premult * gain[:, None]
         return visible
 
     # -- public ----------------------------------------------------------------------------
@@ -296,12 +303,13 @@ class SyntheticRenderer:
         if density is not None:
             self._density_layer(density, out)
         visible = self._robot_layer(ids, poses, out)
-        out *= self._gain
-        if cfg.blur_sigma > 0:
-            out = cv2.GaussianBlur(out, (0, 0), cfg.blur_sigma)
-        if cfg.noise_sigma > 0:
-            out += rng.standard_normal(out.shape, dtype=np.float32) * np.float32(cfg.noise_sigma)
-        img = np.clip(out + 0.5, 0, 255).astype(np.uint8)
+        h, w = out.shape[:2]
+        if self._noise is not None:          # a random window of a fixed Gaussian noise field
+            dy, dx = rng.integers(0, self._noise.shape[0] - h + 1), rng.integers(0, self._noise.shape[1] - w + 1)
+            out += self._noise[dy:dy + h, dx:dx + w]
+        out += np.float32(0.5)
+        np.clip(out, 0, 255, out=out)
+        img = out.astype(np.uint8)
         if cfg.jpeg_quality is not None:
             ok, buf = cv2.imencode(".jpg", img, [cv2.IMWRITE_JPEG_QUALITY, int(cfg.jpeg_quality)])
             if ok:

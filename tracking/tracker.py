@@ -50,7 +50,7 @@ class Tracker:
         cal = config.calibration
         self._detector = MarkerDetector(config.dictionary, config.references,
                                         None if cal is None else cal.camera_matrix,
-                                        None if cal is None else cal.dist_coeffs)
+                                        None if cal is None else cal.dist_coeffs, config.threshold_windows)
         ref_ids, ref_c = reference_corners(config.references)
         order = np.argsort(ref_ids)
         self._ref_ids = ref_ids[order]

@@ -167,7 +167,7 @@ def _arena(args: argparse.Namespace) -> int:
     if err:
         raise UsageError(err)
     det = MarkerDetector(cfg.dictionary, cfg.references, None if cal is None else cal.camera_matrix,
-                         None if cal is None else cal.dist_coeffs).detect(cv2.cvtColor(image, cv2.COLOR_RGB2GRAY))
+                         None if cal is None else cal.dist_coeffs, cfg.threshold_windows).detect(cv2.cvtColor(image, cv2.COLOR_RGB2GRAY))
     und = det.corners if cal is None else cal.undistort(det.corners)
     ref_ids, ref_c = reference_corners(cfg.references)
     uniq, counts = np.unique(det.ids, return_counts=True)

@@ -1,0 +1,118 @@
+"""Tracking benchmark: detection + poses per frame on one core, accuracy, and latency.
+
+Run: ``/work/venv/bin/python bench/bench_tracking.py`` (prints a markdown table).
+
+Scenarios (issue 9 targets): 1280×720 with 20 robots (+4 references) ≤ 15 ms, 1920×1080 with
+50 tags (46 robots + 4 references) ≤ 30 ms, ``cv2.setNumThreads(1)``. Time per frame is
+``Tracker.update`` (grey conversion, detection, reference recovery, undistortion, homography,
+parallax, poses) as process CPU time — on one thread that is the time on one core, and it is
+robust to other processes sharing the machine; wall time is shown too. Baseline in the same
+process: OpenCV's ``ArucoDetector`` with default parameters, detection only. Latency: a
+``CameraPoseSource`` on the synthetic camera, from the end of rendering (capture) to poses.
+"""
+from __future__ import annotations
+
+import argparse
+import platform
+import statistics
+import time
+
+import cv2
+import numpy as np
+
+from swarmdeck.tracking import (
+    CameraCalibration, CameraFrame, CameraPoseSource, SyntheticCamera, SyntheticCameraConfig, SyntheticRenderer,
+    Tracker, TrackerConfig, random_poses)
+
+
+def _cpu() -> str:
+    try:
+        for line in open("/proc/cpuinfo"):
+            if line.startswith("model name"):
+                return line.split(":", 1)[1].strip()
+    except OSError:
+        pass
+    return platform.processor() or "unknown"
+
+
+def scenario(width: int, height: int, n_robots: int, frames: int, rounds: int, seed: int) -> dict:
+    r = SyntheticRenderer(SyntheticCameraConfig(width=width, height=height))
+    rng = np.random.default_rng(seed)
+    truths = [random_poses(n_robots, rng, min_distance=0.2) for _ in range(frames)]
+    images = [r.render(np.arange(n_robots), t, rng=rng).image for t in truths]
+    cfg = TrackerConfig(calibration=CameraCalibration.from_camera(r.camera))
+    baseline = cv2.aruco.ArucoDetector(cv2.aruco.getPredefinedDictionary(cv2.aruco.DICT_4X4_50))
+    grays = [cv2.cvtColor(im, cv2.COLOR_RGB2GRAY) for im in images]
+    t_track, t_base, c_track = [], [], []
+    errs, seen = [], 0
+    for rd in range(rounds + 1):                  # round 0 warms up
+        for k, im in enumerate(images):
+            tracker = Tracker(cfg)
+            c0 = time.process_time()
+            t0 = time.perf_counter()
+            tp = tracker.update(CameraFrame(im, float(k)))
+            t1 = time.perf_counter()
+            c1 = time.process_time()
+            baseline.detectMarkers(grays[k])
+            c2 = time.process_time()
+            if rd > 0:
+                t_track.append(t1 - t0)
+                c_track.append(c1 - c0)
+                t_base.append(c2 - c1)
+            if rd == 1:
+                rows = np.searchsorted(tp.ids, np.arange(n_robots))
+                ok = (rows < len(tp.ids)) & (tp.ids[np.minimum(rows, len(tp.ids) - 1)] == np.arange(n_robots))
+                ok &= tp.seen[np.minimum(rows, len(tp.ids) - 1)]
+                seen += int(ok.sum())
+                e = tp.poses[rows[ok]] - truths[k][ok]
+                e[:, 2] = np.angle(np.exp(1j * e[:, 2]))
+                errs.append(e)
+    e = np.concatenate(errs)
+    med, base = statistics.median(c_track), statistics.median(t_base)
+    return {
+        "name": f"{width}×{height}, {n_robots} robots + 4 refs",
+        "median_ms": 1000 * med, "min_ms": 1000 * min(c_track), "wall_ms": 1000 * statistics.median(t_track),
+        "base_ms": 1000 * base, "ratio": med / base,
+        "detected": f"{seen}/{n_robots * frames}",
+        "pos_mm": 1000 * float(np.sqrt(np.mean(np.sum(e[:, :2] ** 2, axis=1)))),
+        "head_deg": float(np.degrees(np.sqrt(np.mean(e[:, 2] ** 2)))),
+        "renderer": r,
+    }
+
+
+def latency(r: SyntheticRenderer, n_robots: int, ticks: int) -> dict:
+    p = random_poses(n_robots, np.random.default_rng(7))
+    cam = SyntheticCamera(lambda t: p, ids=range(n_robots), renderer=r)
+    src = CameraPoseSource(cam, Tracker(TrackerConfig(calibration=CameraCalibration.from_camera(r.camera))))
+    lat, render = [], []
+    for k in range(ticks + 2):
+        src.read(0.033 * k)
+        if k >= 2:
+            lat.append(src.health()["latency_ms"])
+            render.append(1000 * cam.render_time_s)
+    return {"latency_ms": statistics.median(lat), "render_ms": statistics.median(render)}
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--frames", type=int, default=5)
+    ap.add_argument("--rounds", type=int, default=6)
+    args = ap.parse_args()
+    cv2.setNumThreads(1)
+    rows = [scenario(1280, 720, 20, args.frames, args.rounds, 1), scenario(1920, 1080, 46, args.frames, args.rounds, 2)]
+    lat = [latency(rows[0]["renderer"], 20, 20), latency(rows[1]["renderer"], 46, 20)]
+    print(f"cv2 {cv2.__version__}, cv2.setNumThreads(1), {time.strftime('%Y-%m-%d %H:%M UTC', time.gmtime())}, "
+          f"{_cpu()}, {platform.python_version()}\n")
+    print("| scenario | tracker CPU ms median (min) | tracker wall ms median | baseline detectMarkers "
+          "(OpenCV default params) CPU ms | ratio | detected | position RMS mm | heading RMS ° "
+          "| capture→poses latency ms | synthetic render ms |")
+    print("| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |")
+    for row, la in zip(rows, lat):
+        print(f"| {row['name']} | {row['median_ms']:.1f} ({row['min_ms']:.1f}) | {row['wall_ms']:.1f} | "
+              f"{row['base_ms']:.1f} | "
+              f"{row['ratio']:.2f} | {row['detected']} | {row['pos_mm']:.2f} | {row['head_deg']:.2f} | "
+              f"{la['latency_ms']:.1f} | {la['render_ms']:.1f} |")
+
+
+if __name__ == "__main__":
+    main()
