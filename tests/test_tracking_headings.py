@@ -27,7 +27,7 @@ def test_detected_corners_follow_the_printed_order(scene) -> None:
         k = np.flatnonzero(det.ids == i)
         assert len(k) == 1
         # corner j of the detection is corner j of the truth (not a rotated/mirrored order)
-        assert np.max(np.linalg.norm(det.corners[k[0]] - f.tag_corners_px[i], axis=1)) < 1.5
+        assert np.max(np.linalg.norm(det.corners[k[0]] - f.tag_corners_px[i], axis=1)) < 3.0   # side ≈ 22 px
 
 
 def test_heading_sign_in_image_and_in_tracked_poses(scene) -> None:
