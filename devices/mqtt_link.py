@@ -10,6 +10,7 @@ robot commands for later).
 """
 from __future__ import annotations
 
+import socket
 import ssl
 import threading
 import time
@@ -171,6 +172,7 @@ class MqttLink:
                 self.counters.add("connect_refused", msg)
                 self._set_state(False, msg + f"; retrying (up to every {self.config.reconnect_max:g} s)")
                 return
+            self._no_delay(client)
             with self._lock:
                 self._pending_subs = set()
                 for topic in self._subscriptions:
@@ -183,6 +185,17 @@ class MqttLink:
             self._set_state(True, f"connected to {self.config.url}")
         except Exception as exc:  # noqa: BLE001 - never raise into paho's thread
             self.counters.add("handler_errors", f"on_connect failed: {exc!r}")
+
+    @staticmethod
+    def _no_delay(client: mqtt.Client) -> None:
+        """Turn off Nagle's algorithm: small command messages must leave at once, not wait for an ACK."""
+        sock = client.socket()
+        try:
+            if sock is not None:
+                raw = getattr(sock, "_socket", sock)
+                raw.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
+        except (OSError, AttributeError):  # e.g. a TLS or websocket wrapper without the option
+            pass
 
     def _on_subscribe(self, client: mqtt.Client, userdata: object, mid: int, reasons: object, props: object) -> None:
         for r in reasons if isinstance(reasons, list) else []:
