@@ -14,7 +14,7 @@ from typing import Any, Protocol, runtime_checkable
 import numpy as np
 from numpy.typing import NDArray
 
-from swarmdeck.devices import ArenaConfig, GritsBotParams, SimulatedArena
+from swarmdeck.devices import ArenaConfig, GritsBotParams, SimulatedArena, max_robots, random_initial_poses
 
 
 @dataclass(frozen=True)
@@ -71,6 +71,11 @@ class SimulatedRobots:
         cfg = config if config is not None else ArenaConfig()
         if cfg.real_time:
             raise ValueError("SimulatedRobots: the console paces the loop itself; use ArenaConfig(real_time=False)")
+        if initial_poses is None and n_robots > max_robots(cfg.bounds):
+            # Denser than the default lattice, still barrier-safe: 0.24 m between centres keeps the
+            # look-ahead points (ℓ = 0.03 m) ≥ 0.18 m > D_s apart. Raises naming the maximum if N does not fit.
+            initial_poses = random_initial_poses(n_robots, cfg.bounds, spacing=0.24, min_separation=0.24,
+                                                 rng=cfg.seed)
         self.sim = SimulatedArena(n_robots if initial_poses is None else None, initial_poses, config=cfg,
                                   params=params if params is not None else GritsBotParams())
         self._ids = np.arange(self.sim.n_robots, dtype=np.int64)

@@ -60,6 +60,7 @@ class SceneStyle:
     trail_every: int = 3  # ticks between trail samples
     disc_segments: int = 20
     label_offset: float = 0.07
+    label_step: float = 0.01  # m a robot moves before its label is moved
 
 
 def robot_mesh(radius: float) -> tuple[NDArray[np.float32], NDArray[np.uint32]]:
@@ -214,6 +215,7 @@ class ArenaScene:
                          visible=self.visible["labels"])
             for i, p in zip(frame.ids, frame.poses)
         ]
+        self._label_xy = frame.poses[:, :2].copy()
         self._n = n
         self._trail = None
         self._apply_visibility("robots")
@@ -258,8 +260,12 @@ class ArenaScene:
             h.batched_wxyzs = _yaw_wxyz(poses[:, 2])
             h.batched_colors = robot_colors(frame)
         if v["labels"]:
-            for lab, p in zip(self._labels, poses):
-                lab.position = (float(p[0]), float(p[1]) + st.label_offset, 0.02)
+            # One message per label: only move labels whose robot moved more than label_step since
+            # the label was last placed (cheap at N = 100; a label lags its robot by < label_step).
+            moved = np.flatnonzero(np.linalg.norm(poses[:, :2] - self._label_xy, axis=1) > st.label_step)
+            for i in moved:
+                self._labels[i].position = (float(poses[i, 0]), float(poses[i, 1]) + st.label_offset, 0.02)
+            self._label_xy[moved] = poses[moved, :2]
         if v["density"] and frame.density is not None:
             self._h["density"].image = heatmap(frame.density, self.bounds, st.heatmap_px_per_m)
         cov = frame.coverage

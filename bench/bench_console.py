@@ -1,0 +1,109 @@
+"""Benchmark: one console tick (sense, density, coverage, barrier, actuate) and the server-side scene update.
+
+Run: ``/work/venv/bin/python bench/bench_console.py`` (prints a markdown table).
+
+For N = 12, 50, 100 simulated robots running coverage (TVD-D1) on the circling density:
+* ``tick``: ``ControlLoop.tick()`` (no subscribers), ms;
+* ``scene``: ``ArenaScene.draw(frame)`` into a viser server with no browser connected (the
+  serialisation cost every tab shares; the default layers), ms;
+* ``tick + scene`` and the spare share of the 33 ms control period (target at N = 100: ≥ 30 %).
+The scene runs on its own thread in the console; the sum is the one-core worst case.
+Each N first runs 300 ticks (10 s) so the swarm has spread from its initial lattice.
+Baseline: the same process times a fixed numpy workload (200×200 matmul ×20) so machines can be compared.
+"""
+from __future__ import annotations
+
+import os
+
+for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):  # one core, no BLAS thread thrash
+    os.environ.setdefault(_var, "1")
+
+import platform  # noqa: E402
+import statistics  # noqa: E402
+import sys  # noqa: E402
+import time  # noqa: E402
+
+import numpy as np  # noqa: E402
+
+
+def median_ms(samples: list[float]) -> float:
+    return 1e3 * statistics.median(samples)
+
+
+def p90_ms(samples: list[float]) -> float:
+    return 1e3 * float(np.percentile(samples, 90))
+
+
+def baseline(repeats: int = 30) -> float:
+    a = np.random.default_rng(0).normal(size=(200, 200))
+    out = []
+    for _ in range(repeats):
+        t = time.perf_counter()
+        for _ in range(20):
+            a @ a
+        out.append(time.perf_counter() - t)
+    return median_ms(out)
+
+
+def run(n: int, server, warm: int = 300, ticks: int = 150) -> dict[str, float]:
+    from swarmdeck.console.loop import ControlLoop, LoopConfig
+    from swarmdeck.console.scene import ArenaScene
+
+    server.scene.reset()
+    loop = ControlLoop(LoopConfig(seed=1, n_robots=n))
+    scene = ArenaScene(server, loop.config.bounds)
+    for _ in range(warm):
+        scene.draw(loop.tick())
+    tick_s, scene_s, both = [], [], []
+    stages: dict[str, list[float]] = {}
+    for _ in range(ticks):
+        t0 = time.perf_counter()
+        f = loop.tick()
+        t1 = time.perf_counter()
+        scene.draw(f)
+        t2 = time.perf_counter()
+        tick_s.append(t1 - t0)
+        scene_s.append(t2 - t1)
+        both.append(t2 - t0)
+        for k, v in f.timing.items():
+            stages.setdefault(k, []).append(v)
+    return {
+        "tick": median_ms(tick_s), "tick_p90": p90_ms(tick_s), "scene": median_ms(scene_s),
+        "scene_p90": p90_ms(scene_s), "both": median_ms(both), "both_p90": p90_ms(both),
+        **{f"stage_{k}": median_ms(v) for k, v in stages.items()},
+    }
+
+
+def main() -> int:
+    import viser
+
+    server = viser.ViserServer(host="127.0.0.1", port=0, verbose=False)
+    try:
+        base0 = baseline()
+        rows = [(n, run(n, server)) for n in (12, 50, 100)]
+        base1 = baseline()
+    finally:
+        server.stop()
+    base = 0.5 * (base0 + base1)
+    cpu = "unknown"
+    try:
+        with open("/proc/cpuinfo") as f:
+            cpu = next(line.split(":", 1)[1].strip() for line in f if line.startswith("model name"))
+    except (OSError, StopIteration):
+        pass
+    print(f"machine: {os.cpu_count()} cores, {cpu}; Python {platform.python_version()}; "
+          f"baseline (200×200 matmul ×20) {base:.2f} ms")
+    print()
+    print("| N | tick ms (p90) | coverage ms | barrier ms | scene ms (p90) | tick + scene ms (p90) | "
+          "spare of 33 ms | (tick+scene)/baseline |")
+    print("|---|---|---|---|---|---|---|---|")
+    for n, r in rows:
+        spare = 100.0 * (1.0 - r["both"] / 33.0)
+        print(f"| {n} | {r['tick']:.2f} ({r['tick_p90']:.2f}) | {r['stage_control']:.2f} | {r['stage_safety']:.2f} | "
+              f"{r['scene']:.2f} ({r['scene_p90']:.2f}) | {r['both']:.2f} ({r['both_p90']:.2f}) | {spare:.0f} % | "
+              f"{r['both'] / base:.1f} |")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
