@@ -1,24 +1,31 @@
 """The session recorder: Frames, raw input datagrams and events into an MCAP file.
 
 The loop thread only *enqueues* (an append under a lock, a few µs); a
-background writer thread serialises (``Frame.to_dict`` → JSON), writes chunked,
-zstd-compressed MCAP (format in :mod:`swarmdeck.console.recording_schemas`) and
-closes the current chunk every ``flush_interval`` seconds, so a crash or
-``kill -9`` loses at most that much (plus the OS never loses what was written:
-page cache survives the process). The queue is bounded: when the disk cannot
-keep up the *oldest* queued items are dropped and counted (``status().dropped``,
-and a recorder event in the file). An unwritable path or a full disk never
-raises into the loop: the recorder turns itself off, ``status().message`` says
-why, and the run goes on.
+background writer thread serialises (``Frame.to_dict`` → JSON) and writes
+chunked, zstd-compressed MCAP (format in
+:mod:`swarmdeck.console.recording_schemas`). It closes the current chunk every
+``flush_interval`` seconds of wall time or of recorded time, whichever comes
+first: a crash or ``kill -9`` loses at most about that much (what was written
+sits in the OS page cache, which survives the process), and a seek decodes at
+most that much data, even in files written faster than real time.
 
-Wiring in the console loop::
+The queue is bounded: when the disk cannot keep up, the *oldest* queued items
+are dropped and counted (``status().dropped``, and a recorder event in the
+file). An unwritable path or a full disk never raises into the loop: the
+recorder turns itself off, ``status().message`` says why, and the run goes on.
 
-    rec = Recorder(path, {"robots": ids.tolist(), "bounds": bounds, "config": cfg_dict})
-    hub = InputHub.from_config(cfg, clock=clock, on_datagram=rec.raw_datagram)
-    ...every tick:  rec.write_frame(frame)
-    ...operator actions:  rec.write_event(t, "operator", "e-stop")
-    ...show rec.status().message when not rec.status().ok
-    rec.close()
+Wiring in the console (``--record PATH`` / ``--no-record``)::
+
+    from swarmdeck.console.recorder import Recorder, default_path
+    from swarmdeck.console.resimulate import session_metadata
+
+    rec = Recorder(args.record or default_path(),            # sessions/<UTC timestamp>.mcap
+                   session_metadata(loop_config, inputs_table))  # what re-simulation needs
+    hub = InputHub.from_config(input_config, clock=clock, on_datagram=rec.raw_datagram)
+    loop.subscribe(rec.write_frame)                          # enqueue only, on the loop thread
+    rec.write_event(t, "operator", "e-stop")                 # optional: operator actions
+    st = rec.status()                                        # show st.message when not st.ok
+    rec.close()                                              # at exit: finishes the index
 """
 from __future__ import annotations
 
@@ -32,7 +39,7 @@ from collections import deque
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import Any, BinaryIO
 
 from swarmdeck.console.frame import FRAME_FORMAT, Frame
 from swarmdeck.console.recording_schemas import (
@@ -143,12 +150,15 @@ class Recorder:
             ``robots``/``bounds`` default to the first frame's.
         config: :class:`RecorderConfig`.
         wallclock: Unix seconds, for the file's start time (tests pass a fixed clock).
+        opener: opens ``path`` for binary writing (default ``open(path, "wb")``; tests pass a
+            file that stalls like a slow disk). Needs ``write``, ``flush``, ``tell``, ``close``.
 
     Every method is safe to call from any thread and never raises on I/O problems.
     """
 
     def __init__(self, path: str | os.PathLike[str] | None = None, metadata: Mapping[str, Any] | None = None,
-                 config: RecorderConfig | None = None, *, wallclock: Callable[[], float] = time.time) -> None:
+                 config: RecorderConfig | None = None, *, wallclock: Callable[[], float] = time.time,
+                 opener: Callable[[Path], BinaryIO] | None = None) -> None:
         self.config = config or RecorderConfig()
         self.path = Path(default_path() if path is None else path)
         self._meta = dict(metadata or {})
@@ -160,6 +170,7 @@ class Recorder:
         self._message = f"recording to {self.path}"
         self._bytes = 0
         self._start_ns = int(wallclock() * 1e9)
+        self._opener = opener or (lambda p: open(p, "wb"))
         self._origin: float | None = None
         self._file: Any = None
         self._writer: Any = None
@@ -237,7 +248,7 @@ class Recorder:
         from mcap.writer import Writer
 
         self.path.parent.mkdir(parents=True, exist_ok=True)
-        self._file = open(self.path, "wb")
+        self._file = self._opener(self.path)
         w = Writer(self._file, chunk_size=self.config.chunk_size, compression=_compression(self.config.compression))
         swarmdeck_version = software_versions().get("swarmdeck", "0")
         w.start(profile=PROFILE, library=f"swarmdeck {swarmdeck_version}")
@@ -308,7 +319,7 @@ class Recorder:
         last_flush = time.monotonic()
         dirty = False
         reported_drops = 0
-        last_t = 0.0
+        last_t = chunk_t0 = 0.0
         try:
             while True:
                 stopping = self._stop.is_set()
@@ -323,7 +334,13 @@ class Recorder:
                         self._message = f"recording to {self.path}; skipped an unwritable item: {exc}"
                         continue
                     last_t = item[1].time if item[0] == "f" else (item[4] if item[0] == "d" else item[1])
+                    if not dirty:
+                        chunk_t0 = last_t
                     dirty = True
+                    if last_t - chunk_t0 >= interval:  # a chunk never spans more than `interval` s of data
+                        self._writer.flush()
+                        self._bytes = self._file.tell()
+                        last_flush, dirty = time.monotonic(), False
                 if dropped > reported_drops and self._origin is not None:
                     self._add(TOPIC_EVENT, last_t, {"t": last_t, "kind": "recorder",
                                                     "text": f"queue full: {dropped - reported_drops} items dropped"})
