@@ -60,6 +60,7 @@ class InputSource:
         self._wallclock = wallclock
         self._lock = threading.Lock()
         self._health = HealthBook()
+        self._peer_names: dict = {}
         self._tuio = TuioAssembler(self._health) if self.config.tuio else None
         self._points = PointStreamDecoder(self.config.streams, self._health)
         self._table = ContactTable(self._calibration_for, self.config.timeout, on_lost=self._forget)
@@ -85,7 +86,14 @@ class InputSource:
             self._feed(bytes(data), peer, float(t), transport)
 
     def _feed(self, data: bytes, peer: object, t: float, transport: str) -> None:
-        pname = peer_name(transport, peer)
+        key = (transport, peer) if isinstance(peer, (tuple, str)) else None
+        pname = self._peer_names.get(key) if key is not None else None
+        if pname is None:
+            pname = peer_name(transport, peer)
+            if key is not None:
+                if len(self._peer_names) > 4096:
+                    self._peer_names.clear()
+                self._peer_names[key] = pname
         health = self._health
         hook = self.on_datagram
         if hook is not None:
@@ -109,10 +117,9 @@ class InputSource:
             if tuio is not None:
                 tuio.begin(pname)
             points.begin(pname)
-            for address, params in parsed.messages:
-                if tuio is not None and (address.startswith("/tuio/") or address.startswith("/tuio2/")):
-                    tuio.message(address, params)
-                elif not points.message(address, params):
+            rest = tuio.messages(parsed.messages) if tuio is not None else parsed.messages
+            for address, params in rest:
+                if not points.message(address, params):
                     health.warn(pname, "peer", "unmatched_address")
             frames = tuio.end() if tuio is not None else []
             frames.extend(points.end())

@@ -101,15 +101,34 @@ def _check_bundle(data: bytes, start: int, end: int, depth: int) -> None:
         i = stop
 
 
+def _direct_fields_work() -> bool:
+    """python-osc 1.10 keeps a message's address and argument list in
+    ``_address_regexp`` / ``_parameters``; reading them directly (no property
+    call, no list copy) is ~10 % of the parse time of a 10-finger bundle. Verified
+    once at import against the public ``address``/``params``; else use those."""
+    try:
+        m = osc_message.OscMessage(b"/a\x00\x00,if\x00\x00\x00\x00\x00\x07?\x80\x00\x00")
+        return m._address_regexp == m.address == "/a" and m._parameters == m.params == [7, 1.0]
+    except Exception:  # pragma: no cover - other python-osc internals
+        return False
+
+
+_DIRECT = _direct_fields_work()
+_Message = osc_message.OscMessage
+
+
 def _flatten(bundle: osc_bundle.OscBundle, out: list, stamps: list) -> None:
     ts = bundle.timestamp
     if ts:  # 0 == IMMEDIATELY
         stamps.append(ts)
     for item in bundle:
-        if isinstance(item, osc_bundle.OscBundle):
-            _flatten(item, out, stamps)
+        if type(item) is _Message:
+            if _DIRECT:
+                out.append((item._address_regexp, item._parameters))
+            else:  # pragma: no cover
+                out.append((item.address, item.params))
         else:
-            out.append((item.address, item.params))
+            _flatten(item, out, stamps)
 
 
 def parse_datagram(data: bytes, max_bytes: int = 65536) -> ParsedDatagram:

@@ -144,23 +144,35 @@ class TuioAssembler:
 
     def message(self, address: str, p: list) -> None:
         """Handle one ``/tuio/...`` or ``/tuio2/...`` message of the current datagram."""
-        if address == "/tuio/2Dcur" and len(p) == 7 and p[0] == "set":
-            # fast path for the common 2Dcur SET (s x y X Y m), all floats
-            sid, x, y, vx, vy, m = p[1], p[2], p[3], p[4], p[5], p[6]
-            if (type(sid) is int and type(x) is float and type(y) is float and type(vx) is float
-                    and type(vy) is float and type(m) is float):
-                tot = x + y + vx + vy + m
-                if tot - tot == 0.0 and 0.0 <= x <= 1.0 and 0.0 <= y <= 1.0:
-                    key = (self._source, "2Dcur")
-                    buf = self._bufs.get(key)
-                    if buf is None:
-                        buf = self._bufs[key] = _Buffer()
-                    buf.sets[sid] = (x, y, vx, vy, NAN, NAN, "cursor", None)
-                    return
-        if address.startswith("/tuio/"):
-            self._message1(address[6:], p)
-        elif address.startswith("/tuio2/"):
-            self._message2(address[7:], p)
+        self.messages(((address, p),))
+
+    def messages(self, msgs) -> list:
+        """Handle the ``(address, params)`` messages of the current datagram in
+        order; returns the ones that are neither ``/tuio/`` nor ``/tuio2/``."""
+        rest = []
+        bufs = self._bufs
+        for address, p in msgs:
+            if address == "/tuio/2Dcur" and len(p) == 7 and p[0] == "set":
+                # fast path for the common 2Dcur SET (s x y X Y m), all floats, in range
+                sid, x, y, vx, vy, m = p[1], p[2], p[3], p[4], p[5], p[6]
+                if (type(sid) is int and type(x) is float and type(y) is float and type(vx) is float
+                        and type(vy) is float and type(m) is float):
+                    tot = x + y + vx + vy + m
+                    if tot - tot == 0.0 and 0.0 <= x <= 1.0 and 0.0 <= y <= 1.0:
+                        key = (self._source, "2Dcur")
+                        buf = bufs.get(key)
+                        if buf is None:
+                            buf = bufs[key] = _Buffer()
+                        buf.sets[sid] = (x, y, vx, vy, NAN, NAN, "cursor", None)
+                        continue
+                self._message1("2Dcur", p)
+            elif address.startswith("/tuio/"):
+                self._message1(address[6:], p)
+            elif address.startswith("/tuio2/"):
+                self._message2(address[7:], p)
+            else:
+                rest.append((address, p))
+        return rest
 
     # ------------------------------------------------------------------ names
     def _group(self, version: int, source: str) -> _Group:
