@@ -140,6 +140,7 @@ class CommandStreamer:
         self._thread: threading.Thread | None = None
         self._stop = threading.Event()
         self.last_tick: StreamTick | None = None
+        self._tick_lock = threading.Lock()
 
     # ---------------------------------------------------------------- input side
     def submit(self, ids: ArrayLike, v: ArrayLike, w: ArrayLike, leds: ArrayLike | None = None,
@@ -164,7 +165,11 @@ class CommandStreamer:
 
     # ---------------------------------------------------------------- one tick
     def tick(self, now: float | None = None) -> StreamTick:
-        """Apply the watchdogs to the latest input and send one command per robot."""
+        """Apply the watchdogs to the latest input and send one command per robot (thread-safe)."""
+        with self._tick_lock:
+            return self._tick(now)
+
+    def _tick(self, now: float | None) -> StreamTick:
         now = self.clock() if now is None else float(now)
         with self._lock:
             inp = self._input
@@ -260,7 +265,12 @@ class CommandStreamer:
 
     # ---------------------------------------------------------------- background streaming
     def start(self) -> "CommandStreamer":
-        """Call :meth:`tick` every ``period`` s in a background thread until :meth:`stop`."""
+        """Keep commands flowing from a background thread until :meth:`stop`.
+
+        The thread ticks whenever no tick happened for ``period`` s, so a loop that calls
+        :meth:`tick` itself right after :meth:`submit` sees no added latency, and a loop
+        that hangs still has its robots zeroed (stale input) at the streaming rate.
+        """
         if self._thread is not None:
             return self
         self._stop.clear()
@@ -272,10 +282,12 @@ class CommandStreamer:
         period = self.config.period
         nxt = self.clock()
         while not self._stop.is_set():
-            try:
-                self.tick()
-            except Exception as exc:  # noqa: BLE001 - the streaming thread must survive anything
-                self.counters.add("tick_errors", f"tick failed: {exc!r}")
+            last = self.last_tick
+            if last is None or self.clock() - last.t >= 0.9 * period:
+                try:
+                    self.tick()
+                except Exception as exc:  # noqa: BLE001 - the streaming thread must survive anything
+                    self.counters.add("tick_errors", f"tick failed: {exc!r}")
             nxt += period
             delay = nxt - self.clock()
             if delay > 0:
