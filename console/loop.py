@@ -379,7 +379,7 @@ class ControlLoop:
 
         # 1. sense
         try:
-            sensed = self.source.read()
+            sensed = self.source.read(now)
             self._last_sensed = sensed
             with self._lock:
                 self._alert("source", None)
@@ -462,9 +462,7 @@ class ControlLoop:
         # 4. safety
         if sp.enabled:
             try:
-                safe, diag = filt.filter(points, nominal)
-                safe = np.asarray(safe, dtype=float)
-                barrier = BarrierFrame.from_diagnostics(diag, n, sp.safety_distance, enabled=True)
+                safe, barrier = self._filter_seen(filt, points, nominal, seen, sp.safety_distance)
                 if not barrier.ok or safe.shape != (n, 2) or not np.all(np.isfinite(safe)):
                     safe = np.zeros((n, 2))
                     with self._lock:
@@ -543,6 +541,31 @@ class ControlLoop:
                 self.post(f"frame listener failed: {type(exc).__name__}: {exc}")
         return frame
 
+    @staticmethod
+    def _filter_seen(filt: Any, points: NDArray[np.float64], nominal: NDArray[np.float64],
+                     seen: NDArray[np.bool_], d_s: float) -> tuple[NDArray[np.float64], BarrierFrame]:
+        """Barrier QP over the robots seen this tick; unseen robots (no fresh pose: they get zero
+        commands) are fixed obstacles at their last known points. Indices map back to all N."""
+        n = len(points)
+        if seen.all():
+            safe, diag = filt.filter(points, nominal)
+            return np.asarray(safe, dtype=float), BarrierFrame.from_diagnostics(diag, n, d_s, enabled=True)
+        idx = np.flatnonzero(seen)
+        known = ~seen & np.all(np.isfinite(points), axis=1)
+        obstacles = points[known] if known.any() else None
+        safe = np.zeros((n, 2))
+        if len(idx) == 0:
+            return safe, BarrierFrame(status="no robot seen", intervention=np.zeros(n), safety_distance=d_s)
+        sub, diag = filt.filter(points[idx], nominal[idx], obstacles)
+        sub_b = BarrierFrame.from_diagnostics(diag, len(idx), d_s, enabled=True)
+        safe[idx] = np.asarray(sub, dtype=float)
+        inter = np.zeros(n)
+        if len(sub_b.intervention) == len(idx):
+            inter[idx] = sub_b.intervention
+        pairs = sub_b.active_pairs
+        keep = np.all((pairs >= 0) & (pairs < len(idx)), axis=1)  # pairs among robots (not obstacles)
+        return safe, replace(sub_b, active_pairs=idx[pairs[keep]], active_h=sub_b.active_h[keep], intervention=inter)
+
     # ------------------------------------------------------------------ threaded running
     def start(self) -> "ControlLoop":
         """Run :meth:`tick` every ``dt`` seconds (monotonic clock) on a daemon thread."""
@@ -584,5 +607,8 @@ class ControlLoop:
         try:
             self.sink.close()
         finally:
+            close_source = getattr(self.source, "close", None)
+            if self.source is not self.sink and close_source is not None:
+                close_source()
             if self.inputs is not None:
                 self.inputs.close()

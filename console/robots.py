@@ -30,8 +30,8 @@ class SensedPoses:
 class PoseSource(Protocol):
     name: str
 
-    def read(self) -> SensedPoses:
-        """The robots' poses now."""
+    def read(self, now: float) -> SensedPoses:
+        """The robots' poses at loop time ``now`` (s)."""
 
     def health(self) -> str:
         """One short line for the status bar."""
@@ -85,7 +85,7 @@ class SimulatedRobots:
     def n_robots(self) -> int:
         return int(self.sim.n_robots)
 
-    def read(self) -> SensedPoses:
+    def read(self, now: float = 0.0) -> SensedPoses:
         return SensedPoses(self._ids, self.sim.poses, self._seen)
 
     def send(self, ids: NDArray[np.int64], v: NDArray[np.float64], w: NDArray[np.float64]) -> None:

@@ -24,6 +24,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--seed", type=int, default=None, help="seed for the random initial poses")
     parser.add_argument("--duration", type=float, default=None, metavar="S",
                         help="stop after S seconds (scripted/headless use); default: run until Ctrl-C")
+    parser.add_argument("--camera", default=None, metavar="SPEC",
+                        help="track the robots with an overhead camera: 'synthetic' (rendered from the "
+                             "simulation), a webcam INDEX, a stream URL, a video FILE or a folder of images")
+    parser.add_argument("--robots-via", default=None, metavar="URL",
+                        help="drive GRITSBots over MQTT instead of simulating them, e.g. mqtt://127.0.0.1:1883 "
+                             "(try `swarmdeck robots --broker URL` for a simulated fleet)")
     parser.add_argument("--no-inputs", action="store_true",
                         help="do not open the TUIO/OSC input listeners (UDP 3333 by default)")
 
@@ -59,8 +65,15 @@ def main(args: argparse.Namespace) -> int:
     if not args.no_inputs:
         hub = _start_inputs(settings.inputs)
     try:
-        loop = ControlLoop(config, inputs=hub, contact_density=_contact_density(hub))
+        source, sink = _robots(config, args.camera, args.robots_via)
+    except (ValueError, OSError) as exc:
+        if hub is not None:
+            hub.close()
+        raise UsageError(str(exc)) from None
+    try:
+        loop = ControlLoop(config, source=source, sink=sink, inputs=hub, contact_density=_contact_density(hub))
     except (BehaviourError, ValueError) as exc:
+        sink.close()
         if hub is not None:
             hub.close()
         raise UsageError(str(exc)) from None
@@ -87,6 +100,32 @@ def main(args: argparse.Namespace) -> int:
         print(f"ran {frame.tick + 1} ticks, t = {frame.run_time:.1f} s; "
               f"min distance {b.min_distance:.3f} m" if b is not None else "")
     return 0
+
+
+def _robots(config, camera: str | None, robots_via: str | None):
+    """(pose source, command sink): simulation by default, MQTT robots with --robots-via, camera poses
+    with --camera. Raises ValueError/OSError naming what could not be opened."""
+    import numpy as np
+
+    from swarmdeck.console.hardware import camera_source, mqtt_robots
+    from swarmdeck.console.robots import SimulatedRobots
+    from swarmdeck.devices import ArenaConfig
+
+    ids = np.arange(config.n_robots, dtype=np.int64)
+    if robots_via:
+        sink, source = mqtt_robots(robots_via, ids)
+        truth = source.truth
+    else:
+        sim = SimulatedRobots(config.n_robots, ArenaConfig(bounds=config.bounds, dt=config.dt, seed=config.seed))
+        sink = source = sim
+        truth = lambda now: sim.sim.poses  # noqa: E731
+    if camera:
+        try:
+            source = camera_source(camera, ids, truth, config.bounds)
+        except Exception:
+            sink.close()
+            raise
+    return source, sink
 
 
 def _start_inputs(table: dict | None):
