@@ -5,17 +5,17 @@
   renders the robots the command sink knows (the simulator's truth, or the poses
   the MQTT robots report) through the synthetic overhead camera, so the whole
   camera → ArUco → homography → poses path runs with no hardware.
-* ``--robots-via mqtt://HOST:PORT`` → :class:`StreamerSink` (an
-  ``MqttTransport`` behind the ``CommandStreamer`` watchdogs: stale poses, stale
-  inputs and missing robots get zero) and, without a camera, poses from the
-  robots' pose topic (:class:`TransportPoseSource`).
+* ``--robots-via mqtt://HOST:PORT`` → ``devices.transport_console.NetworkRobots``
+  as the command sink (an ``MqttTransport`` behind the ``CommandStreamer``
+  watchdogs: stale poses, stale inputs and missing robots get zero; missing
+  robots become barrier obstacles) and, without a camera, poses from the
+  robots' pose topic (:class:`NetworkPoseSource`).
 
 Robots without a fresh pose are "not seen": the loop commands them zero and the
 barrier treats them as fixed obstacles.
 """
 from __future__ import annotations
 
-import time
 from collections.abc import Callable
 from typing import Any
 
@@ -23,9 +23,6 @@ import numpy as np
 from numpy.typing import NDArray
 
 from swarmdeck.console.robots import SensedPoses
-
-STALE_AFTER = 0.1  # s: poses older than this are not used for control (Robotarium monitor, REFERENCE.md §9)
-
 
 def _finite_or_zero(poses: NDArray[np.float64]) -> NDArray[np.float64]:
     out = np.array(poses, dtype=float)
@@ -74,76 +71,41 @@ class TrackedPoseSource:
             close()
 
 
-class TransportPoseSource:
-    """Poses the robots' transport receives (the tracker topic ``overhead_tracker/all_robot_pose_data``)."""
+class NetworkPoseSource:
+    """The pose side of ``devices.transport_console.NetworkRobots`` (the robots' pose topic) for the loop.
 
-    def __init__(self, transport: Any, ids: NDArray[np.int64], clock: Callable[[], float] = time.monotonic) -> None:
-        self.transport = transport
-        self.ids = np.asarray(ids, dtype=np.int64)
-        self.clock = clock
+    Robots the transport reports missing or duplicated are left out (excluded from control);
+    the sink's ``obstacles()`` gives their last positions to the barrier.
+    """
+
+    def __init__(self, robots: Any) -> None:
+        self.robots = robots
         self.name = "robots' pose topic"
-        self._fresh = 0
 
     def read(self, now: float) -> SensedPoses:
-        sample = self.transport.latest_poses()
-        poses, stamps = sample.select(self.ids)
-        seen = np.all(np.isfinite(poses), axis=1) & (self.clock() - stamps <= STALE_AFTER)
-        self._fresh = int(seen.sum())
-        return SensedPoses(self.ids, _finite_or_zero(poses), seen)
+        r = self.robots.read()
+        return SensedPoses(np.asarray(r.ids, dtype=np.int64), np.asarray(r.poses, dtype=float),
+                           np.asarray(r.seen, dtype=bool))
 
     def truth(self, now: float) -> NDArray[np.float64]:
-        """Latest reported poses (N, 3) (for the synthetic camera); never-seen robots at the origin."""
-        poses, _ = self.transport.latest_poses().select(self.ids)
-        return _finite_or_zero(poses)
+        """Latest reported poses (N, 3) of the robots under control (for the synthetic camera)."""
+        return _finite_or_zero(self.robots.read().poses)
 
     def health(self) -> str:
-        return f"poses {self._fresh}/{len(self.ids)} fresh"
+        return self.robots.health()
 
 
-class StreamerSink:
-    """Commands to robots over a transport through the ``CommandStreamer`` watchdogs.
+def mqtt_robots(url: str, ids: NDArray[np.int64], wait_for_poses: float = 5.0) -> tuple[Any, NetworkPoseSource]:
+    """Connect to the broker at ``url`` (GRITSBots, or ``swarmdeck robots``): the command sink (a
+    ``NetworkRobots``: streamer watchdogs, obstacles for excluded robots) and its pose source.
 
-    ``send`` submits the tick's commands and streams them at once; the streamer's own
-    thread keeps sending (zeros once the input goes stale) if the loop stalls.
+    Raises ValueError for a malformed URL or robots that sent no pose within ``wait_for_poses`` s.
     """
+    from swarmdeck.devices.transport_console import NetworkRobots
 
-    def __init__(self, transport: Any, streamer: Any, ids: NDArray[np.int64], name: str) -> None:
-        self.transport, self.streamer = transport, streamer
-        self.ids = np.asarray(ids, dtype=np.int64)
-        self.name = name
-
-    def send(self, ids: NDArray[np.int64], v: NDArray[np.float64], w: NDArray[np.float64]) -> None:
-        self.streamer.submit(ids, v, w)
-        self.streamer.tick()
-
-    def hold(self) -> None:
-        self.send(self.ids, np.zeros(len(self.ids)), np.zeros(len(self.ids)))
-
-    def health(self) -> str:
-        h = self.streamer.health()
-        excl = f", excluded {h.excluded.tolist()}" if len(h.excluded) else ""
-        return f"{self.name}: {h.state}{excl}"
-
-    def close(self) -> None:
-        try:
-            self.streamer.stop()
-        finally:
-            self.transport.close()
-
-
-def mqtt_robots(url: str, ids: NDArray[np.int64]) -> tuple[StreamerSink, TransportPoseSource]:
-    """Connect to the broker at ``url``: a command sink and the robots' pose topic as a pose source.
-
-    Raises ValueError for a malformed URL (the message says the expected form).
-    """
-    from swarmdeck.devices.mqtt_config import parse_broker_url
-    from swarmdeck.devices.streamer import CommandStreamer
-    from swarmdeck.devices.transport_mqtt import MqttTransport
-
-    config = parse_broker_url(url)
-    transport = MqttTransport(config, ids=ids).start()
-    streamer = CommandStreamer(transport, poses=transport).start()
-    return StreamerSink(transport, streamer, ids, f"mqtt {config.host}:{config.port}"), TransportPoseSource(transport, ids)
+    robots = NetworkRobots.connect(url, ids=ids, wait_for_poses=wait_for_poses)
+    robots.name = f"mqtt {url}"
+    return robots, NetworkPoseSource(robots)
 
 
 def camera_source(spec: str, ids: NDArray[np.int64], truth: Callable[[float], NDArray[np.float64]] | None,

@@ -462,7 +462,9 @@ class ControlLoop:
         # 4. safety
         if sp.enabled:
             try:
-                safe, barrier = self._filter_seen(filt, points, nominal, seen, sp.safety_distance)
+                extra_fn = getattr(self.sink, "obstacles", None)
+                extra = np.asarray(extra_fn(), dtype=float).reshape(-1, 2) if extra_fn is not None else None
+                safe, barrier = self._filter_seen(filt, points, nominal, seen, sp.safety_distance, extra)
                 if not barrier.ok or safe.shape != (n, 2) or not np.all(np.isfinite(safe)):
                     safe = np.zeros((n, 2))
                     with self._lock:
@@ -543,16 +545,20 @@ class ControlLoop:
 
     @staticmethod
     def _filter_seen(filt: Any, points: NDArray[np.float64], nominal: NDArray[np.float64],
-                     seen: NDArray[np.bool_], d_s: float) -> tuple[NDArray[np.float64], BarrierFrame]:
+                     seen: NDArray[np.bool_], d_s: float,
+                     extra: NDArray[np.float64] | None = None) -> tuple[NDArray[np.float64], BarrierFrame]:
         """Barrier QP over the robots seen this tick; unseen robots (no fresh pose: they get zero
-        commands) are fixed obstacles at their last known points. Indices map back to all N."""
+        commands) and ``extra`` (M, 2) points (robots excluded by the sink) are fixed obstacles.
+        Indices map back to all N."""
         n = len(points)
+        extra = None if extra is None or len(extra) == 0 else extra
         if seen.all():
-            safe, diag = filt.filter(points, nominal)
+            safe, diag = filt.filter(points, nominal, extra)
             return np.asarray(safe, dtype=float), BarrierFrame.from_diagnostics(diag, n, d_s, enabled=True)
         idx = np.flatnonzero(seen)
         known = ~seen & np.all(np.isfinite(points), axis=1)
-        obstacles = points[known] if known.any() else None
+        parts = [points[known]] + ([extra] if extra is not None else [])
+        obstacles = np.concatenate(parts) if sum(len(p) for p in parts) else None
         safe = np.zeros((n, 2))
         if len(idx) == 0:
             return safe, BarrierFrame(status="no robot seen", intervention=np.zeros(n), safety_distance=d_s)
