@@ -142,7 +142,8 @@ def _start_inputs(table: dict | None):
     except OSError as exc:
         print(f"swarmdeck console: inputs disabled: {exc}", file=sys.stderr)
         return None
-    names = ", ".join(getattr(s, "name", type(s).__name__) for s in hub.sources)
+    names = ", ".join(f"{s.config.name} ({type(s).__name__.replace('Listener', '').upper()} "
+                      f"{getattr(s, 'address', ('', s.config.port))[1]})" for s in hub.sources)
     print(f"swarmdeck console: listening for inputs: {names}", file=sys.stderr)
     return hub
 
