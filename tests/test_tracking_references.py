@@ -87,3 +87,27 @@ def test_wrongly_surveyed_layout_is_rejected(scene) -> None:
     refs[1] = type(refs[1])(refs[1].id, refs[1].x, refs[1].y, size=refs[1].size * 1.3)
     tp = Tracker(_config(r).with_(references=tuple(refs))).update(CameraFrame(f.image, 0.0))
     assert tp.homography == "none" and "misdetected or moved" in tp.status
+
+
+def test_reference_among_rejected_candidates_is_recovered_by_refinement(scene) -> None:
+    """A reference whose quad ended up among the rejected candidates (unreadable bits) is
+    re-found by refineDetectedMarkers from the other references and the calibration."""
+    from swarmdeck.tracking.detector import MarkerDetector, detector_parameters
+
+    r, poses, f = scene
+    gray = cv2.cvtColor(f.image, cv2.COLOR_RGB2GRAY)
+    d = cv2.aruco.getPredefinedDictionary(cv2.aruco.DICT_4X4_50)
+    corners, ids, rejected = cv2.aruco.ArucoDetector(d, detector_parameters()).detectMarkers(gray)
+    lost = r.config.references[1].id
+    k = int(np.flatnonzero(ids.ravel() == lost)[0])
+    corners2 = tuple(c for j, c in enumerate(corners) if j != k)
+    ids2 = np.delete(ids, k, axis=0)
+    rejected2 = tuple(rejected) + (corners[k],)
+    cal = CameraCalibration.from_camera(r.camera)
+    det = MarkerDetector("DICT_4X4_50", r.config.references, cal.camera_matrix, cal.dist_coeffs)
+    out = det.recover_references(gray, corners2, ids2, rejected2)
+    assert lost in out.ids and out.recovered == 1
+    row = int(np.flatnonzero(out.ids == lost)[0])
+    assert np.allclose(out.corners[row], corners[k].reshape(4, 2), atol=0.2)   # corners re-refined
+    # nothing to recover when all references were found
+    assert det.recover_references(gray, corners, ids, rejected).recovered == 0

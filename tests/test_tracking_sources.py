@@ -73,3 +73,33 @@ def test_image_folder_in_name_order_through_open_source(recording) -> None:
     xs = [pose_src.read(0.1 * k).poses[0, 0] for k in range(N_FRAMES)]
     assert np.allclose(xs, [t[0, 0] for t in truth], atol=0.002)
     assert pose_src.health()["frames"] == N_FRAMES
+
+
+def test_threaded_capture_hands_out_only_the_newest_frame(recording) -> None:
+    """OpenCVCamera (the webcam path) on a stream that delivers faster than it is read: every
+    read returns the newest frame, never the same frame twice, never an older one."""
+    _, _, video, _ = recording
+    from swarmdeck.tracking import OpenCVCamera
+
+    cam = OpenCVCamera(str(video), retry_s=0.01)
+
+    def wait_for(pred) -> bool:                 # bounded polling of the capture thread, no timing claims
+        for _ in range(3000):
+            if pred():
+                return True
+            cam._stop.wait(0.01)
+        return False
+
+    try:
+        assert wait_for(lambda: cam.frames_grabbed >= 3), cam.status
+        f1 = cam.read(0.0)
+        assert f1.index >= 2                               # the newest, not the first queued
+        assert f1.image.shape == (720, 1280, 3) and f1.image.dtype == np.uint8
+        f2 = cam.read(0.0)
+        assert f2 is None or f2.index > f1.index           # never the same frame twice
+        n = cam.frames_grabbed
+        assert wait_for(lambda: cam.frames_grabbed >= n + 3), cam.status
+        f3 = cam.read(0.0)
+        assert f3.index >= n + 2                           # older frames were dropped, not queued
+    finally:
+        cam.close()

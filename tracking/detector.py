@@ -66,9 +66,15 @@ class MarkerDetector:
         """Detect in a grey uint8 image; then re-find missing references among the rejected
         candidates (when at least one reference was found)."""
         corners, ids, rejected = self._det.detectMarkers(gray)
+        return self.recover_references(gray, corners, ids, rejected)
+
+    def recover_references(self, gray: np.ndarray, corners: tuple, ids: np.ndarray | None,
+                           rejected: tuple) -> Detections:
+        """``refineDetectedMarkers`` against the reference board (PnP with the calibration when
+        there is one, else a homography) for references missing from ``ids`` → Detections."""
         recovered = 0
         if self._board is not None and ids is not None and len(rejected) > 0:
-            found = np.isin(self._ref_ids, ids.ravel())
+            found = np.isin(self._ref_ids, np.asarray(ids).ravel())
             if found.any() and not found.all():
                 if self._K is not None:
                     corners, ids, rejected, rec = self._det.refineDetectedMarkers(

@@ -9,13 +9,17 @@ from __future__ import annotations
 import dataclasses
 import math
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
+from pathlib import Path
 
 import cv2
 import numpy as np
 
+from swarmdeck.tracking.calibration import CameraCalibration
+from swarmdeck.tracking.config import TrackerConfig
 from swarmdeck.tracking.homography import apply_homography
-from swarmdeck.tracking.sources import CameraSource
+from swarmdeck.tracking.sources import CameraError, CameraSource, open_source
+from swarmdeck.tracking.synthetic import SyntheticCamera, SyntheticCameraConfig
 from swarmdeck.tracking.tracker import Tracker
 from swarmdeck.tracking.types import CameraFrame, TrackedPoses
 
@@ -49,6 +53,44 @@ class CameraPoseSource:
         self._no_frame_ticks = 0
         self._rect_cache: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
         self._rect_img: tuple[int, np.ndarray] | None = None
+
+    @classmethod
+    def open(cls, spec: str | int, *, get_poses: Callable[[float], np.ndarray] | None = None,
+             ids: Sequence[int] | None = None, config: TrackerConfig | str | Path | None = None,
+             get_density: Callable[[float], np.ndarray | None] | None = None,
+             synthetic: SyntheticCameraConfig | None = None, paced: bool = True) -> "CameraPoseSource":
+        """Build a camera + tracker from a command-line spec (``swarmdeck console --camera``).
+
+        ``"synthetic"``: a :class:`SyntheticCamera` rendering ``get_poses(now)`` (robot ``ids``)
+        and ``get_density(now)``; its tracker uses the camera's exact intrinsics and tag height
+        unless ``config`` is given. Otherwise (webcam index, URL, video file, image folder) the
+        tracker config comes from ``config`` (a :class:`TrackerConfig` or the JSON file written
+        by ``swarmdeck calibrate arena``) or the defaults. ``ids`` become ``expected_ids`` so a
+        robot that never shows up is reported stale. Raises :class:`CameraError` /
+        ``ConfigError`` for a spec or file that names nothing usable.
+        """
+        cfg = TrackerConfig.load(config) if isinstance(config, (str, Path)) else config
+        if str(spec).strip() == "synthetic":
+            if get_poses is None:
+                raise CameraError("the synthetic camera needs get_poses (a callable now -> (N, 3) poses)")
+            cam = SyntheticCamera(get_poses, ids=ids, config=synthetic or SyntheticCameraConfig(),
+                                  get_density=get_density)
+            if cfg is None:
+                sc = cam.config
+                cfg = TrackerConfig(dictionary=sc.dictionary, references=sc.references, tag_size=sc.tag_size,
+                                    tag_height=sc.tag_height, bounds=sc.bounds,
+                                    calibration=CameraCalibration.from_camera(cam.renderer.camera))
+            source: CameraSource = cam
+        else:
+            source = open_source(spec, paced=paced)
+            cfg = cfg if cfg is not None else TrackerConfig()
+        if ids is not None:
+            cfg = cfg.with_(expected_ids=tuple(sorted(set(cfg.expected_ids) | {int(i) for i in ids})))
+        return cls(source, Tracker(cfg))
+
+    def close(self) -> None:
+        """Close the camera source."""
+        self.source.close()
 
     def read(self, now: float) -> TrackedPoses:
         """Newest frame → poses; without a new frame the previous poses with ``seen`` False
