@@ -78,11 +78,17 @@ class InputHub:
         self.close()
 
     def poll(self, now: float | None = None) -> InputSnapshot:
-        """Poll every source at ``now`` (default ``clock()``): all contacts (one per
-        ``(source, id)``), all events since the previous poll (ordered by time),
-        all health records."""
+        """Poll every source: all contacts (one per ``(source, id)``), all events
+        since the previous poll (ordered by time), all health records.
+
+        ``now`` (default ``clock()``) stamps the snapshot and is the poll time of
+        socket-free sources (replays); socket listeners are polled on their own
+        receive clock, so contact/event times are on that clock."""
         t = self._clock() if now is None else float(now)
-        snaps = [s.poll(t) for s in self._sources]
+        # socket listeners are polled on their own receive clock, so their timeouts
+        # hold whatever clock the caller's `now` is on (a ghost finger must not
+        # survive a clock mix-up); socket-free sources are polled at `now`
+        snaps = [s.poll(s.poll_time(t)) for s in self._sources]
         contacts = self._dedupe(c for s in snaps for c in s.contacts)
         events = tuple(sorted((e for s in snaps for e in s.events), key=lambda e: e.t))
         health = tuple(h for s in snaps for h in s.health)
@@ -104,6 +110,6 @@ class InputHub:
         return tuple(out.values())
 
     def health(self, now: float | None = None) -> tuple[SourceHealth, ...]:
-        """Health of every source."""
+        """Health of every source (socket listeners on their own clock)."""
         t = self._clock() if now is None else float(now)
-        return tuple(h for s in self._sources for h in s.health(t))
+        return tuple(h for s in self._sources for h in s.health(s.poll_time(t)))

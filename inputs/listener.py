@@ -149,6 +149,12 @@ class InputSource:
         with self._lock:
             return self._health.snapshot(now, self._table.counts(), self._table.lost())
 
+    def poll_time(self, now: float) -> float:
+        """The time to poll this source at: ``now`` for the socket-free core (its
+        times are whatever ``feed`` was given); socket listeners override this
+        with a reading of their receive clock."""
+        return now
+
     def _check_clock(self, clock: Callable[[], float], now: float, address: object, transport: str) -> None:
         """Receive times come from ``clock``; polling with another time base would
         break timeouts (a ghost finger that never expires). Count it loudly."""
@@ -228,9 +234,14 @@ class UdpListener(InputSource):
                 continue
             self.feed(data, addr, self._clock(), "udp")
 
+    def poll_time(self, now: float) -> float:
+        """This listener's receive clock (``now`` is ignored)."""
+        return self._clock()
+
     def poll(self, now: float) -> InputSnapshot:
         """As :meth:`InputSource.poll`; ``now`` must be on this listener's ``clock``
-        (a mismatch is counted as ``clock_mismatch`` on the listener's own entry)."""
+        (a mismatch is counted as ``clock_mismatch`` on the listener's own entry).
+        :class:`InputHub` always polls listeners on their own clock."""
         if self.address is not None:
             self._check_clock(self._clock, now, self.address, "udp")
         return super().poll(now)
@@ -297,6 +308,7 @@ class TcpListener(InputSource):
                 self._stop.wait(0.05)
                 continue
             conn.settimeout(0.05)
+            self._threads = [th for th in self._threads if th.is_alive()]
             with self._conn_lock:
                 self._conns.add(conn)
             th = threading.Thread(target=self._read, args=(conn, addr), daemon=True,
@@ -335,6 +347,10 @@ class TcpListener(InputSource):
             with self._conn_lock:
                 self._conns.discard(conn)
             conn.close()
+
+    def poll_time(self, now: float) -> float:
+        """This listener's receive clock (``now`` is ignored)."""
+        return self._clock()
 
     def poll(self, now: float) -> InputSnapshot:
         """As :meth:`InputSource.poll`; ``now`` must be on this listener's ``clock``."""

@@ -168,3 +168,15 @@ def test_polling_on_another_clock_than_the_receive_clock_is_reported(udp):
     assert h.errors == {"clock_mismatch": 1}
     assert "+97.000 s off" in h.last_error and "clock=" in h.last_error
     assert not [h for h in lst.poll(100.2).health if h.kind == "listener" and h.errors["clock_mismatch"] > 1]
+
+
+def test_hub_polls_listeners_on_their_own_clock_so_timeouts_survive_a_clock_mix_up(udp):
+    lst, clock = udp  # receive clock at 100 s; the caller's loop clock starts at 0
+    hub = InputHub([lst])
+    socket.socket(socket.AF_INET, socket.SOCK_DGRAM).sendto(
+        ob.tuio_bundle("2Dcur", [1], ob.cursor_sets([(1, 0.5, 0.5)]), fseq=1), lst.address)
+    wait_for(lambda: hub.poll(0.0).contacts)
+    clock.t = 101.2  # the tablet went silent 1.2 s ago on the receive clock
+    snap = hub.poll(0.033)
+    assert snap.contacts == () and ("source_lost", None) in [(e.kind, e.id) for e in snap.events]
+    assert not [h for h in snap.health if h.kind == "listener"]  # no clock_mismatch via the hub
