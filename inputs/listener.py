@@ -65,6 +65,11 @@ class InputSource:
         self._points = PointStreamDecoder(self.config.streams, self._health)
         self._table = ContactTable(self._calibration_for, self.config.timeout, on_lost=self._forget)
 
+    @property
+    def name(self) -> str:
+        """The listener's configured name (``ListenerConfig.name``)."""
+        return self.config.name
+
     # ------------------------------------------------------------------ helpers
     def _calibration_for(self, name: str) -> Calibration:
         for pattern, cal in self.config.source_calibrations:
