@@ -79,8 +79,8 @@ class RobotStatusTable:
         ids: ``(N,)`` robot ids, ascending.
         battery_voltage: ``(N,)`` V (NaN: never reported).
         charging: ``(N,)`` bool.
-        command_age: ``(N,)`` s between the robot's last received command and its
-            status report, as the robot reports it (NaN: unknown; inf: never commanded).
+        command_age: ``(N,)`` s since the robot last received a command, now: its reported
+            age plus the age of the report (NaN: robot does not report it; inf: never commanded).
         status_age: ``(N,)`` s since the last status message arrived (inf: never).
         link: per robot one of ``ok``, ``stale``, ``missing``, ``unknown``.
     """

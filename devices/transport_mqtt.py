@@ -308,7 +308,8 @@ class MqttTransport:
             tab = self._t
             order = np.argsort(ids, kind="stable")
             table = RobotStatusTable(
-                ids[order].copy(), tab.batt[order].copy(), tab.charging[order].copy(), tab.cmd_age[order].copy(),
+                # the robot's reported command age, carried forward to now
+                ids[order].copy(), tab.batt[order].copy(), tab.charging[order].copy(), (tab.cmd_age + status_age)[order],
                 status_age[order], tuple(link[k] for k in order),
             )
         return TransportStatus(self.link.connected, self.link.state, table, self.counters.snapshot(), self.counters.last_error)

@@ -45,7 +45,7 @@ def test_firmware_stops_500ms_after_the_last_command(mosquitto):
         def final_pose():
             # a status report sent after the brake (cmd_age > 0.5 s), then a pose message received after it
             st = transport.status().robots
-            age = st.command_age[1]
+            age = st.command_age[1] - st.status_age[1]  # as reported by the robot, at its report
             if not (np.isfinite(age) and age > 0.5):
                 return None
             t_status = time.monotonic() - st.status_age[1]

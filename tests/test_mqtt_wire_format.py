@@ -19,10 +19,10 @@ from swarmdeck.devices.transport_mqtt import MqttTransport
 pytestmark = pytest.mark.mqtt
 
 
-@pytest.mark.parametrize("protocol", ["3.1.1", "5"])
-def test_console_commands_on_the_wire(mosquitto, protocol):
+@pytest.mark.parametrize("protocol, qos", [("3.1.1", 0), ("5", 1)])
+def test_console_commands_on_the_wire(mosquitto, protocol, qos):
     raw = Collector(mosquitto, ["matlab_api/#"])
-    transport = MqttTransport(parse_broker_url(mosquitto.url, protocol=protocol), ids=[0, 1, 2]).start()
+    transport = MqttTransport(parse_broker_url(mosquitto.url, protocol=protocol, qos=qos), ids=[0, 1, 2]).start()
     try:
         assert transport.link.wait_connected(10)
         assert transport.send([0, 1, 2], [0.1, -0.05, 0.0], [0.5, 0.0, -1.25])
