@@ -108,3 +108,23 @@ def test_tick_without_new_frame_marks_nobody_seen_and_ages(setup) -> None:
     assert not tp.seen.any() and not tp.stale.any() and "no new frame" in tp.status
     tp = src.read(1.5)
     assert tp.stale.all() and np.all(tp.stamps == 1.0)
+
+
+def test_open_synthetic_spec_wires_camera_tracker_and_expected_ids(setup, tmp_path) -> None:
+    r, sim, _ = setup
+    src = CameraPoseSource.open("synthetic", get_poses=lambda t: sim.poses(t)[:3], ids=[0, 1, 2],
+                                config=TrackerConfig(expected_ids=(30,)))
+    tp = src.read(0.0)
+    assert tp.homography == "ok" and list(tp.ids) == [0, 1, 2, 30]
+    assert tp.seen[:3].all() and np.max(np.hypot(*(tp.poses[:3, :2] - sim.poses(0.0)[:3, :2]).T)) < 0.003
+    # robot 30 is expected (the simulator has it) but never seen: listed stale
+    assert tp.stale[3] and not tp.seen[3] and "30 (never seen)" in tp.status
+    # the tracker config (as written by `calibrate arena`) is accepted by path for other sources
+    cfg_path = tmp_path / "arena.json"
+    src.tracker.config.with_(expected_ids=()).save(cfg_path)
+    folder = tmp_path / "imgs"
+    folder.mkdir()
+    cv2.imwrite(str(folder / "a.png"), src.source.read(0.1).image[..., ::-1])
+    src.close()
+    src3 = CameraPoseSource.open(str(folder), config=cfg_path, paced=False)
+    assert src3.read(0.2).seen.sum() == 3

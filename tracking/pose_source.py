@@ -62,8 +62,8 @@ class CameraPoseSource:
         """Build a camera + tracker from a command-line spec (``swarmdeck console --camera``).
 
         ``"synthetic"``: a :class:`SyntheticCamera` rendering ``get_poses(now)`` (robot ``ids``)
-        and ``get_density(now)``; its tracker uses the camera's exact intrinsics and tag height
-        unless ``config`` is given. Otherwise (webcam index, URL, video file, image folder) the
+        and ``get_density(now)``; its tracker uses the camera's layout, tag height and exact
+        intrinsics, or ``config`` (completed with the exact intrinsics when it has none). Otherwise (webcam index, URL, video file, image folder) the
         tracker config comes from ``config`` (a :class:`TrackerConfig` or the JSON file written
         by ``swarmdeck calibrate arena``) or the defaults. ``ids`` become ``expected_ids`` so a
         robot that never shows up is reported stale. Raises :class:`CameraError` /
@@ -75,11 +75,13 @@ class CameraPoseSource:
                 raise CameraError("the synthetic camera needs get_poses (a callable now -> (N, 3) poses)")
             cam = SyntheticCamera(get_poses, ids=ids, config=synthetic or SyntheticCameraConfig(),
                                   get_density=get_density)
+            exact = CameraCalibration.from_camera(cam.renderer.camera)
             if cfg is None:
                 sc = cam.config
                 cfg = TrackerConfig(dictionary=sc.dictionary, references=sc.references, tag_size=sc.tag_size,
-                                    tag_height=sc.tag_height, bounds=sc.bounds,
-                                    calibration=CameraCalibration.from_camera(cam.renderer.camera))
+                                    tag_height=sc.tag_height, bounds=sc.bounds, calibration=exact)
+            elif cfg.calibration is None:
+                cfg = cfg.with_(calibration=exact)
             source: CameraSource = cam
         else:
             source = open_source(spec, paced=paced)
