@@ -312,7 +312,7 @@ class ControlLoop:
         x0, x1, y0, y1 = self.config.bounds
         p = np.asarray(xy, dtype=float).reshape(-1)[:2]
         if not (x0 <= p[0] <= x1 and y0 <= p[1] <= y1):
-            raise ValueError(f"bump centre {tuple(np.round(p, 3))} is outside the arena {self.config.bounds}")
+            raise ValueError(f"bump centre ({p[0]:.3f}, {p[1]:.3f}) m is outside the arena {self.config.bounds}")
         d = self.density.params
         bid = self.bumps.add(p, d.bump_sigma if sigma is None else sigma, d.bump_weight if weight is None else weight,
                              self._run_time)

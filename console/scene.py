@@ -28,7 +28,7 @@ LAYERS: tuple[str, ...] = (
     "grid", "density", "voronoi", "cells", "centroids", "robots", "labels", "nominal", "safe",
     "barrier", "discs", "trails", "contacts",
 )
-DEFAULT_OFF = frozenset({"cells", "nominal"})
+DEFAULT_OFF = frozenset({"cells"})
 
 ROBOT = np.array([20, 70, 170], dtype=np.uint8)
 CHANGED = np.array([255, 140, 0], dtype=np.uint8)

@@ -134,6 +134,32 @@ def test_emergency_stop_button_stops_the_robots(page, console) -> None:
     page.get_by_text("EMERGENCY STOP", exact=False).first.wait_for()
 
 
+def test_space_bar_is_an_emergency_stop(page, console) -> None:
+    loop = console.loop
+    running(console)
+    wait_until(lambda: loop.latest.run_state == "running")
+    page.get_by_text("RUNNING").first.click()  # focus the page without clicking the arena
+    page.keyboard.press("Space")
+    wait_until(lambda: loop.latest.run_state == "estop")
+
+
+def test_a_late_tab_sees_the_current_state(page, console) -> None:
+    loop = console.loop
+    running(console)
+    loop.pause()
+    wait_until(lambda: loop.latest.run_state == "paused")
+    settled = loop.latest.tick
+    wait_until(lambda: loop.latest.tick >= settled + 2)
+    now = loop.latest.poses[:, :2].tolist()
+    late = page.context.browser.new_page(viewport=VIEW)
+    try:
+        late.goto(console.url)
+        late.wait_for_function(POSITIONS_MATCH, arg=[now, 1e-4], polling="raf", timeout=60000)
+        page.wait_for_function(POSITIONS_MATCH, arg=[now, 1e-4], polling="raf", timeout=20000)
+    finally:
+        late.close()
+
+
 def test_screenshot(page, console) -> None:
     running(console)
     if not console.loop.bumps.live():
