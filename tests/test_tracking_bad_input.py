@@ -130,3 +130,20 @@ def test_webcam_that_cannot_open_reports_and_retries() -> None:
     finally:
         cam.close()
     assert "closed" in cam.status
+
+
+def test_source_that_raises_is_contained(renderer) -> None:
+    class Exploding:
+        status = "exploding source"
+        ok = True
+
+        def read(self, now: float):
+            raise OSError("USB unplugged")
+
+        def close(self) -> None:
+            pass
+
+    src = CameraPoseSource(Exploding(), _tracker(renderer))
+    tp = src.read(1.0)
+    assert "camera error: OSError: USB unplugged" in tp.status
+    assert src.health()["source_ok"] is False and "USB unplugged" in src.health()["source"]

@@ -51,6 +51,7 @@ class CameraPoseSource:
         self._processing = float("nan")
         self._frames = 0
         self._no_frame_ticks = 0
+        self._source_error = ""
         self._rect_cache: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
         self._rect_img: tuple[int, np.ndarray] | None = None
 
@@ -100,12 +101,14 @@ class CameraPoseSource:
         wall0 = self._clock()
         try:
             frame = self.source.read(now)
+            self._source_error = ""
         except Exception as exc:  # noqa: BLE001 - a broken source must not stop the loop
             frame = None
-            self.source.status = f"camera error: {type(exc).__name__}: {exc}"
+            self._source_error = f"camera error: {type(exc).__name__}: {exc}"
         if frame is None:
             self._no_frame_ticks += 1
-            self.poses = self.tracker.poses_at(now, f"no new frame ({self.source.status}); {self.tracker.last.status}")
+            why = self._source_error or self.source.status
+            self.poses = self.tracker.poses_at(now, f"no new frame ({why}); {self.tracker.last.status}")
             return self.poses
         wall0 = self._clock()
         tp = self.tracker.update(frame)
@@ -139,8 +142,8 @@ class CameraPoseSource:
             "processing_ms": ms(self._processing),
             "frames": self._frames,
             "ticks_without_frame": self._no_frame_ticks,
-            "source": self.source.status,
-            "source_ok": bool(self.source.ok),
+            "source": self._source_error or self.source.status,
+            "source_ok": bool(self.source.ok) and not self._source_error,
             "status": self.poses.status,
             **h,
         }
@@ -166,7 +169,10 @@ class CameraPoseSource:
         """The newest frame warped to a top-down view of the arena bounds on the plane
         ``rectify_height`` m above the references: (image (h, w, 3) RGB uint8 with row 0 at
         y_max and column 0 at x_min, bounds). None without a frame or homography. Lens
-        distortion is removed when the tracker has a calibration."""
+        distortion is removed when the tracker has a calibration. In viser draw it with
+        ``scene.add_image(..., render_width=x_max − x_min, render_height=y_max − y_min,
+        position=(centre x, centre y, 0), wxyz=(0, 1, 0, 0))`` (REFERENCE.md §8: without that
+        rotation it shows upside-down)."""
         H = self.tracker.homography
         if self.frame is None or H is None:
             return None
