@@ -25,6 +25,10 @@ from .contact import Contact, ContactEvent, SourceHealth
 from .frames import SourceFrame
 
 MAX_EVENTS = 10_000
+#: Most sources (health entries, contact sources) kept; beyond it the least
+#: recently seen ones without contacts are forgotten (ephemeral peers such as
+#: reconnecting TCP tablets or one-shot senders would otherwise pile up).
+MAX_SOURCES = 1024
 
 
 class _Health:
@@ -50,6 +54,9 @@ class HealthBook:
     def _get(self, name: str, kind: str) -> _Health:
         h = self._entries.get(name)
         if h is None:
+            if len(self._entries) >= MAX_SOURCES:
+                oldest = min(self._entries, key=lambda n: self._entries[n].last_seen)
+                del self._entries[oldest]
             h = self._entries[name] = _Health(kind)
         return h
 
@@ -156,6 +163,10 @@ class ContactTable:
         """Apply one committed frame received at ``t``."""
         src = self._sources.get(frame.source)
         if src is None:
+            if len(self._sources) >= MAX_SOURCES:
+                idle = [n for n, x in self._sources.items() if not x.states]
+                if idle:
+                    del self._sources[min(idle, key=lambda n: self._sources[n].last_seen)]
             src = self._sources[frame.source] = _Source(frame.source, self._cal_for(frame.source))
         src.last_seen = t
         src.lost = False

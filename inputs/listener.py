@@ -12,6 +12,7 @@ consistent snapshot.
 from __future__ import annotations
 
 import fnmatch
+import math
 import socket
 import struct
 import threading
@@ -87,8 +88,21 @@ class InputSource:
         """Process one datagram received from ``peer`` at time ``t`` (s, the
         console's clock — virtual in tests and replays). Never raises."""
         transport = transport or self.config.transport
+        try:
+            data = bytes(data)
+            t = float(t)
+        except (TypeError, ValueError) as exc:
+            with self._lock:
+                self._health.error(peer_name(transport, peer), "peer", "bad_feed",
+                                   f"feed() needs bytes and a time in s: {exc}")
+            return
+        if not math.isfinite(t):
+            with self._lock:
+                self._health.error(peer_name(transport, peer), "peer", "bad_feed",
+                                   f"feed() receive time must be finite, got {t}")
+            return
         with self._lock:
-            self._feed(bytes(data), peer, float(t), transport)
+            self._feed(data, peer, t, transport)
 
     def _feed(self, data: bytes, peer: object, t: float, transport: str) -> None:
         key = (transport, peer) if isinstance(peer, (tuple, str)) else None

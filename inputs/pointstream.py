@@ -190,7 +190,11 @@ class PointStreamDecoder:
             u = min(max(u, 0.0), 1.0)
             v = min(max(v, 0.0), 1.0)
         key = tuple(fields[f] if isinstance(f, str) else p[f] for f in s.id_fields)
-        ids = self._ids.setdefault(name, {})
+        ids = self._ids.get(name)
+        if ids is None:
+            if len(self._ids) >= MAX_IDS_PER_STREAM:  # many ephemeral peers: forget the oldest
+                del self._ids[next(iter(self._ids))]
+            ids = self._ids[name] = {}
         pid = ids.get(key)
         if pid is None:
             if len(ids) >= MAX_IDS_PER_STREAM:

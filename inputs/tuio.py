@@ -31,6 +31,7 @@ from datetime import datetime
 from .frames import AREA, KIND, NAN, Problems, SourceFrame
 
 RESTART_GAP = 100
+MAX_GROUPS = 1024  # (peer, source) groups kept; beyond it empty ones are forgotten
 TUIO2_LATE_WINDOW = 1.0
 _NUM = (int, float)
 
@@ -179,6 +180,11 @@ class TuioAssembler:
         key = (self._peer, version, source)
         g = self._groups.get(key)
         if g is None:
+            if len(self._groups) >= MAX_GROUPS:  # forget the oldest group without entities
+                for k, old in self._groups.items():
+                    if not any(st.entities for st in old.profiles.values()) and old not in self._dirty.values():
+                        del self._groups[k]
+                        break
             if version == 1:
                 name = f"{self._peer}/{source}" if source else f"{self._peer}/tuio"
             else:
