@@ -4,11 +4,14 @@ Camera sources (webcam, video file, image folder, synthetic renderer) yield
 :class:`CameraFrame`; :class:`Tracker` turns frames into :class:`TrackedPoses`;
 :class:`CameraPoseSource` does both once per control tick::
 
-    from swarmdeck.tracking import CameraPoseSource, SyntheticCamera, Tracker, TrackerConfig
-    cam = SyntheticCamera(lambda t: sim_poses(t), ids=range(n))
-    src = CameraPoseSource(cam, Tracker(TrackerConfig(calibration=cam_calibration)))
+    from swarmdeck.tracking import CameraPoseSource
+    src = CameraPoseSource.open("synthetic", get_poses=lambda t: arena.poses(), ids=range(n))
+    # or CameraPoseSource.open("0" | "rtsp://…" | "video.mp4" | "frames/", config="arena.json")
     tracked = src.read(now)          # TrackedPoses: ids, poses (N, 3), seen, stamps, status, stale
-    src.health(); src.rectified_image(); src.thumbnail()
+    src.health(); src.status_line(); src.rectified_image(); src.thumbnail(); src.close()
+
+Calibration: ``swarmdeck calibrate camera`` (ChArUco → intrinsics JSON) and
+``swarmdeck calibrate arena`` (reference markers → tracker config JSON).
 """
 from swarmdeck.tracking.calibration import CalibrationError, CameraCalibration, CharucoSpec, calibrate_charuco
 from swarmdeck.tracking.camera_model import PinholeCamera, overhead_camera

@@ -85,5 +85,5 @@ class MarkerDetector:
                 recovered = 0 if rec is None else len(rec)
         if ids is None or len(ids) == 0:
             return Detections(np.zeros(0, dtype=int), np.zeros((0, 4, 2)), recovered)
-        c = np.concatenate([np.asarray(x, dtype=np.float64).reshape(1, 4, 2) for x in corners], axis=0)
+        c = np.asarray(corners, dtype=np.float64).reshape(-1, 4, 2)
         return Detections(np.asarray(ids, dtype=int).reshape(-1), c, recovered)

@@ -112,7 +112,7 @@ def _camera(args: argparse.Namespace) -> int:
     return 0
 
 
-def _grab(spec: str, timeout: float, calibration_size: tuple[int, int] | None) -> np.ndarray:
+def _grab(spec: str, timeout: float) -> np.ndarray:
     from swarmdeck.tracking import CameraError, open_source
 
     kw: dict = {}
@@ -162,7 +162,7 @@ def _arena(args: argparse.Namespace) -> int:
             raise UsageError(f"cannot read image {args.image}")
         image = cv2.cvtColor(bgr, cv2.COLOR_BGR2RGB)
     else:
-        image = _grab(args.camera, args.timeout, None if cal is None else cal.image_size)
+        image = _grab(args.camera, args.timeout)
     err = check_image(image, None if cal is None else cal.image_size)
     if err:
         raise UsageError(err)
