@@ -40,6 +40,25 @@ _MAX_OPCODE = 0x0F
 _REC = struct.Struct("<BQ")
 
 
+def _json_decoder() -> Any:
+    try:
+        import msgspec
+
+        dec = msgspec.json.Decoder()
+
+        def loads(data: bytes) -> Any:
+            try:
+                return dec.decode(data)
+            except msgspec.DecodeError as exc:
+                raise ValueError(f"not JSON: {exc}") from None
+        return loads
+    except ImportError:  # pragma: no cover - msgspec comes with viser
+        return json.loads
+
+
+_loads = _json_decoder()
+
+
 class RecordingError(Exception):
     """The file cannot be played: not MCAP, not a swarmdeck recording, a newer format, unreadable."""
 
@@ -284,7 +303,7 @@ class Recording:
         frames = []
         for ns, data in self._chunk_messages(i).get(TOPIC_FRAME, []):
             try:
-                frames.append((ns, Frame.from_dict(json.loads(data))))
+                frames.append((ns, Frame.from_dict(_loads(data))))
             except (ValueError, TypeError) as exc:
                 msg = f"undecodable frame at log time {ns} skipped: {exc}"
                 if len(self.warnings) < 100 and msg not in self.warnings:
