@@ -335,6 +335,10 @@ class ConsoleGui:
             self._rate = inst if self._rate == 0 else 0.9 * self._rate + 0.1 * inst
         self._last_tick_time = frame.time
         b, c = frame.barrier, frame.coverage
+        with self._lock:  # the viewer thread reads the series while the loop thread appends
+            self._append(frame, b, c)
+
+    def _append(self, frame: Frame, b: Any, c: Any) -> None:
         s = self._series
         s["t"].append(frame.time)
         s["dmin"].append(b.min_distance if b is not None and math.isfinite(b.min_distance) else math.nan)
@@ -351,7 +355,8 @@ class ConsoleGui:
         if not force and now - self._last_gui_update < period:
             return
         self._last_gui_update = now
-        s = {k: np.asarray(v, dtype=float) for k, v in self._series.items()}
+        with self._lock:
+            s = {k: np.asarray(v, dtype=float) for k, v in self._series.items()}
         if len(s["t"]) >= 2:
             self.plot_dist.data = (s["t"], s["dmin"], s["ds"])
             self.plot_active.data = (s["t"], s["active"])
