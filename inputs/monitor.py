@@ -1,34 +1,28 @@
 """``swarmdeck inputs monitor``: a live terminal view of input sources, contacts,
 message rates and malformed counts — what an operator checks before a run.
-
-The command module (``console/commands/inputs.py``) only forwards to
-:func:`add_arguments` and :func:`main`; ``python -m swarmdeck.inputs.monitor``
-runs the same thing.
+The command line is in :mod:`swarmdeck.inputs.cli`.
 """
 from __future__ import annotations
 
-import argparse
 import math
 import sys
 import time
 from collections.abc import Callable
 from typing import TextIO
 
-from .config import ConfigError, InputConfig, ListenerConfig
+from .config import InputConfig
 from .contact import InputSnapshot
 from .hub import InputHub
-
-NAME = "inputs"
-HELP = "check input devices: `swarmdeck inputs monitor [--port 3333]` shows TUIO/OSC sources, contacts and errors live"
 
 
 def _counts(d: dict[str, int]) -> str:
     return ", ".join(f"{k} {v}" for k, v in sorted(d.items())) or "-"
 
 
-def render(snap: InputSnapshot, listeners: tuple[str, ...] = ()) -> str:
-    """A plain-text page describing ``snap`` (sources, then contacts, then recent events)."""
-    lines = [f"swarmdeck inputs monitor   t={snap.t:.2f} s   listening: {', '.join(listeners) or '-'}", ""]
+def render(snap: InputSnapshot, listeners: tuple[str, ...] = (), t0: float = 0.0) -> str:
+    """A plain-text page describing ``snap``: every source's health, then every
+    contact; the header shows ``snap.t - t0`` (time since the monitor started)."""
+    lines = [f"swarmdeck inputs monitor   t={snap.t - t0:.1f} s   listening: {', '.join(listeners) or '-'}", ""]
     lines.append(f"{'source':<48} {'kind':<6} {'rate/s':>7} {'age s':>6} {'cont':>4}  state   errors / warnings")
     if not snap.health:
         lines.append("  (nothing received yet — is the sender pointed at this host and port?)")
@@ -48,30 +42,6 @@ def render(snap: InputSnapshot, listeners: tuple[str, ...] = ()) -> str:
     return "\n".join(lines)
 
 
-def add_arguments(parser: argparse.ArgumentParser) -> None:
-    """Options of ``swarmdeck inputs``."""
-    parser.add_argument("action", nargs="?", default="monitor", choices=["monitor"],
-                        help="what to do (monitor: live view of sources and contacts)")
-    parser.add_argument("--port", type=int, default=None, help="UDP/TCP port to listen on (default 3333, or the preset's)")
-    parser.add_argument("--host", default="127.0.0.1", help="address to bind (0.0.0.0 for a tablet on the network)")
-    parser.add_argument("--tcp", action="store_true", help="TUIO/TCP (4-byte length framing) instead of UDP")
-    parser.add_argument("--preset", default="tuio", help="tuio, manososc, leap-osc or ultraleap-osc-sender")
-    parser.add_argument("--config", default=None, help="TOML file with an [inputs] table (overrides the options above)")
-    parser.add_argument("--timeout", type=float, default=1.0, help="s of silence before a source's contacts are lost")
-    parser.add_argument("--interval", type=float, default=0.5, help="s between screen updates")
-    parser.add_argument("--duration", type=float, default=None, help="stop after this many seconds (default: until Ctrl-C)")
-
-
-def config_from_args(args: argparse.Namespace) -> InputConfig:
-    """The :class:`InputConfig` the options describe; ``ConfigError`` on bad values."""
-    if args.config:
-        return InputConfig.load_toml(args.config)
-    over: dict = {"host": args.host, "timeout": args.timeout, "transport": "tcp" if args.tcp else "udp"}
-    if args.port is not None:
-        over["port"] = args.port
-    return InputConfig(listeners=(ListenerConfig.from_preset(args.preset, **over),))
-
-
 def run(config: InputConfig, *, duration: float | None = None, interval: float = 0.5, out: TextIO = sys.stdout,
         clock: Callable[[], float] = time.monotonic) -> int:
     """Listen as ``config`` says and print a page every ``interval`` s."""
@@ -83,39 +53,9 @@ def run(config: InputConfig, *, duration: float | None = None, interval: float =
         print(f"listening on {', '.join(names)}", file=out, flush=True)
         while True:
             now = clock()
-            page = render(hub.poll(now), names)
+            page = render(hub.poll(now), names, t0)
             out.write(("\x1b[H\x1b[2J" if tty else "\n") + page + "\n")
             out.flush()
             if duration is not None and now - t0 >= duration:
                 return 0
             time.sleep(interval if duration is None else max(0.0, min(interval, t0 + duration - now)))
-
-
-def main(args: argparse.Namespace) -> int:
-    """Entry point of ``swarmdeck inputs``."""
-    try:
-        from swarmdeck.console.cli import UsageError
-    except ImportError:  # pragma: no cover - console is part of the package
-        UsageError = ValueError  # type: ignore[misc,assignment]
-    if args.interval <= 0:
-        raise UsageError(f"--interval must be > 0 s, got {args.interval}")
-    try:
-        cfg = config_from_args(args)
-    except ConfigError as exc:
-        raise UsageError(str(exc)) from None
-    try:
-        return run(cfg, duration=args.duration, interval=args.interval)
-    except OSError as exc:
-        raise UsageError(str(exc)) from None
-
-
-if __name__ == "__main__":  # pragma: no cover
-    p = argparse.ArgumentParser(prog="python -m swarmdeck.inputs.monitor", description=HELP)
-    add_arguments(p)
-    try:
-        sys.exit(main(p.parse_args()))
-    except KeyboardInterrupt:
-        sys.exit(130)
-    except Exception as exc:  # UsageError
-        print(f"error: {exc}", file=sys.stderr)
-        sys.exit(2)

@@ -6,7 +6,8 @@ import io
 
 from swarmdeck.inputs import InputHub, InputSource
 from swarmdeck.inputs import oscbuild as ob
-from swarmdeck.inputs.monitor import add_arguments, config_from_args, render, run
+from swarmdeck.inputs.cli import add_arguments, config_from_args, main
+from swarmdeck.inputs.monitor import render, run
 
 
 def test_page_shows_sources_rates_contacts_and_errors():
@@ -44,3 +45,46 @@ def test_run_prints_pages_for_a_bounded_duration():
     assert run(cfg, duration=0.0, interval=0.01, out=out, clock=lambda: next(ticks)) == 0
     text = out.getvalue()
     assert text.startswith("listening on udp://127.0.0.1:") and "nothing received yet" in text
+
+
+def test_send_demo_fingers_reach_a_real_listener():
+    import time as _time
+
+    import numpy as np
+
+    from swarmdeck.inputs import ListenerConfig, UdpListener
+    from swarmdeck.inputs import sender
+
+    with UdpListener(ListenerConfig(port=0), clock=lambda: 0.0) as lst:
+        now = [0.0]  # virtual sender clock: advances only by the sender's sleeps
+
+        def sleep(s):
+            now[0] += s
+        n = sender.run("127.0.0.1", lst.address[1], duration=0.99, rate=20.0, fingers=2,
+                       clock=lambda: now[0], sleep=sleep)
+        assert n == 20
+        end = _time.monotonic() + 5
+        events = []
+        while _time.monotonic() < end and not any(e.kind == "up" for e in events):
+            events += lst.poll(0.0).events
+            _time.sleep(0.002)
+    kinds = [(e.kind, e.id) for e in events]
+    assert kinds[:2] == [("down", 1), ("down", 2)] and kinds[-2:] == [("up", 1), ("up", 2)]
+    moves = [e.contact for e in events if e.kind == "move" and e.id == 1]
+    assert len(moves) == 19
+    # the demo circles around the arena centre: radius 0.3..1 × 0.25 of the surface
+    r = [np.hypot(*(c.position / [3.2, 2.0])) for c in moves]
+    assert 0.25 * 0.3 - 1e-6 <= min(r) and max(r) <= 0.25 + 1e-6
+
+
+def test_cli_send_rejects_bad_values():
+    p = argparse.ArgumentParser()
+    add_arguments(p)
+    import pytest
+
+    from swarmdeck.console.cli import UsageError
+
+    with pytest.raises(UsageError, match="rate > 0"):
+        main(p.parse_args(["send", "--rate", "0", "--port", "9"]))
+    with pytest.raises(UsageError, match="interval"):
+        main(p.parse_args(["monitor", "--interval", "0"]))
