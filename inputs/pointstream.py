@@ -20,6 +20,7 @@ from __future__ import annotations
 import math
 import re
 from dataclasses import dataclass, field
+from types import MappingProxyType
 
 from .frames import NAN, Problems, SourceFrame
 
@@ -114,7 +115,8 @@ class PointStreamConfig:
 _LEAP_X = (-0.2, 0.2)   # m, Leap x (right) over the interaction box
 _LEAP_Z = (-0.15, 0.15)  # m, Leap z (towards the user) → surface v (down)
 
-PRESETS: dict[str, tuple[PointStreamConfig, ...]] = {
+#: Read-only preset name → point streams.
+PRESETS: MappingProxyType = MappingProxyType({
     "manososc": (PointStreamConfig(
         name="manososc", address="/finger{hand}-{finger}", x_arg=3, y_arg=5, id_fields=(1, 2),
         scale=0.001, x_range=_LEAP_X, y_range=_LEAP_Z, port=7110),),
@@ -124,7 +126,7 @@ PRESETS: dict[str, tuple[PointStreamConfig, ...]] = {
     "ultraleap-osc-sender": (PointStreamConfig(
         name="ultraleap", address="/leap/{side}", x_arg=0, y_arg=2, id_fields=("side",),
         scale=0.001, x_range=_LEAP_X, y_range=_LEAP_Z, port=5000),),
-}
+})
 
 
 class PointStreamDecoder:
