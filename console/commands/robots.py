@@ -91,6 +91,8 @@ def main(args: argparse.Namespace) -> int:
     layout = args.layout if args.layout is not None else int(ids.max()) + 1
     if layout <= ids.max():
         raise UsageError(f"--layout {layout} is too small for robot id {int(ids.max())} (needs > the largest id)")
+    if not (np.isfinite(args.pose_rate) and args.pose_rate > 0):
+        raise UsageError(f"--pose-rate must be a positive number of messages per second, got {args.pose_rate}")
     try:
         cfg = parse_broker_url(
             args.broker, qos=args.qos, protocol=args.mqtt_version, prefix=args.prefix, username=args.username,
@@ -101,7 +103,7 @@ def main(args: argparse.Namespace) -> int:
                                   pose_decimals=args.pose_decimals)
         battery = BatteryParams(capacity_ah=args.battery_ah)
         poses = random_initial_poses(layout, tuple(args.bounds), rng=args.seed)[ids]
-    except (ValueError, ZeroDivisionError) as exc:
+    except ValueError as exc:
         raise UsageError(str(exc)) from None
     trace = open(args.trace, "a", buffering=1 << 16) if args.trace else None
     node = FleetNode(cfg, ids, poses, firmware=firmware, battery=battery, name=args.name, trace=trace)
