@@ -163,7 +163,7 @@ class GaussianMixture:
         qdot = 0.5 * prec @ c_dot @ prec if k else np.zeros((0, 2, 2))
         # Polynomial coefficients on the features F(q) = [1, x, y, x², xy, y²] (6, K):
         # (q − μ)ᵀ P (q − μ) = F·cq and (q − μ)ᵀ P μ̇ + (q − μ)ᵀ Q (q − μ) = F·ct, so the
-        # evaluation is two small matrix products and one exp over (M, K) (BLAS, no (M, K, 2)).
+        # evaluation is two small matrix products and one exp over (M, K) (no (M, K, 2) arrays).
         cq = _quadratic_coeffs(prec, mu_arr)
         pm = np.einsum("kab,kb->ka", prec, m_dot) if k else np.zeros((0, 2))
         ct = _quadratic_coeffs(qdot, mu_arr)
@@ -244,7 +244,7 @@ class GaussianMixture:
         if k == 0 or m == 0:
             return phi.reshape(shape), phi_t.reshape(shape)
         local = k > 8
-        step = 4096 if local else max(1, (1 << 21) // k)     # bound the (M, K) temporaries
+        step = 1024 if local else max(1, (1 << 21) // k)     # bound the (M, K) temporaries
         if local:
             reach = 9.0 * np.sqrt(np.linalg.eigvalsh(self.cov)[:, 1])
         for lo in range(0, m, step):
@@ -259,10 +259,13 @@ class GaussianMixture:
                     cq, ct, w, wd = cq[:, near], ct[:, near], w[near], wd[near]
             x, y = chunk[:, 0], chunk[:, 1]
             feat = np.column_stack([np.ones_like(x), x, y, x * x, x * y, y * y])
-            e = np.exp(-0.5 * (feat @ cq))
-            phi[lo:lo + step] += e @ w
+            # einsum rather than @: multi-threaded BLAS on these thin products is slower and
+            # thrashes when the control loop shares the CPU with other work.
+            e = np.exp(-0.5 * np.einsum("mf,fk->mk", feat, cq))
+            phi[lo:lo + step] += np.einsum("mk,k->m", e, w)
             if rate:
-                phi_t[lo:lo + step] = e @ wd + (e * (feat @ ct)).sum(axis=1)
+                phi_t[lo:lo + step] = (np.einsum("mk,k->m", e, wd)
+                                       + np.einsum("mk,mk->m", e, np.einsum("mf,fk->mk", feat, ct)))
         return phi.reshape(shape), phi_t.reshape(shape)
 
     # ------------------------------------------------------------------ misc

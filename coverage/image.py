@@ -45,7 +45,7 @@ def letter_image(text: str = "R", height: int = 200, width: int = 320) -> NDArra
 
 def image_density(image: str | Path | ArrayLike,
                   bounds: tuple[float, float, float, float] = (-1.6, 1.6, -1.0, 1.0),
-                  floor: float = 0.05, columns: int = 24, invert: bool = True,
+                  floor: float = 0.05, columns: int = 16, invert: bool = True,
                   threshold: float = 0.02) -> GaussianMixture:
     """Density from a grey image: a path, or an array (H, W) of grey values (uint8 0–255 or
     floats in [0, 1]); (H, W, 3) arrays are converted to grey.

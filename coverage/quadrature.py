@@ -130,7 +130,8 @@ def _refine(tri: NDArray[np.float64], cell: NDArray[np.intp], origin: NDArray[np
     for _ in range(opts.max_level - opts.min_level):
         g = tri.mean(axis=1)                                               # local centroid
         rad = np.sqrt(((tri - g[:, None]) ** 2).sum(axis=2)).max(axis=1)
-        diam = 2.0 * rad
+        edge = tri - tri[:, [1, 2, 0]]
+        diam = np.sqrt((edge ** 2).sum(axis=2)).max(axis=1)
         gw = g + origin[cell]
         dist = np.sqrt(((gw[:, None, :] - mu[None]) ** 2).sum(axis=2)) - rad[:, None]   # (T, K)
         need = ((dist < reach[None]) & (diam[:, None] > opts.resolution * sig[None])).any(axis=1)
@@ -160,7 +161,8 @@ def cell_moments(vor: BoundedVoronoi, density: GaussianMixture,
     ea, eb = tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0]
     area = 0.5 * np.abs(ea[:, 0] * eb[:, 1] - ea[:, 1] * eb[:, 0])         # (T,)
     bary, w = triangle_rule(0)
-    r = np.einsum("pv,tvc->tpc", bary, tri)                                 # (T, 7, 2) = q − p_i
+    r = (bary[None, :, 0, None] * tri[:, None, 0] + bary[None, :, 1, None] * tri[:, None, 1]
+         + bary[None, :, 2, None] * tri[:, None, 2])                        # (T, 7, 2) = q − p_i
     phi, phi_t = density.evaluate_both(r + p[cell][:, None, :])             # (T, 7)
     wa = w[None, :] * area[:, None]
     fw = phi * wa

@@ -12,11 +12,15 @@ from dataclasses import dataclass, replace
 import numpy as np
 from numpy.typing import NDArray
 
-from swarmdeck.coverage.controller import CoverageConfig, coverage_tick
+from swarmdeck.coverage.controller import CoverageConfig
 from swarmdeck.coverage.densities import s1_density
-from swarmdeck.coverage.quadrature import QuadratureOptions
+from swarmdeck.coverage.jacobian import centroid_jacobian
+from swarmdeck.coverage.laws import law_command, parse_law, saturate
+from swarmdeck.coverage.quadrature import QuadratureOptions, cell_moments
+from swarmdeck.coverage.voronoi import bounded_voronoi
 
-__all__ = ["S1_REFERENCE", "S1_T0", "S1Result", "s1_start", "s1_config", "run_s1"]
+__all__ = ["S1_REFERENCE", "S1_T0", "S1Result", "s1_start", "s1_config", "run_s1", "run_s1_all",
+           "format_s1_table"]
 
 #: law → (mean H over [0, 40] s, mean ‖p − c‖) from REFERENCE.md §5.
 S1_REFERENCE: dict[str, tuple[float, float]] = {
@@ -70,14 +74,41 @@ def run_s1(law: str, steps: int = S1_STEPS, dt: float = S1_DT,
     hs = np.empty(steps)
     ds = np.empty(steps)
     vmax = 0.0
+    family, hops = parse_law(cfg.law, cfg.hops)
+    needs_jacobian = family in ("tvd-dk", "tvd-c")
     for k in range(steps):
         t = k * dt
-        u, state, _ = coverage_tick(p, density.at(t), cfg, t)
-        if not state.ok:
-            raise RuntimeError(f"S1 {law} failed at t = {t:.3f} s: {state.status}")
-        hs[k] = state.cost_H
-        ds[k] = state.mean_centroid_distance
+        snap = density.at(t)
+        # the controller's pipeline without the drawing state (polygons, edges, packing)
+        vor = bounded_voronoi(p, S1_BOUNDS)
+        mom = cell_moments(vor, snap, cfg.quadrature)
+        jac = centroid_jacobian(vor, mom, snap, cfg.edges) if needs_jacobian else None
+        u = saturate(law_command(family, hops, cfg.kappa, p, mom.centroids, mom.dc_dt, jac),
+                     cfg.max_speed)
+        hs[k] = mom.cost_H
+        ds[k] = float(np.hypot(*(mom.centroids - p).T).mean())
         vmax = max(vmax, float(np.hypot(u[:, 0], u[:, 1]).max()))
         p = np.clip(p + dt * u, lo, hi)
     return S1Result(law=law, mean_H=float(hs.mean()), mean_distance=float(ds.mean()), H=hs,
                     max_speed=vmax, positions=p)
+
+
+def run_s1_all(progress: bool = False) -> dict[str, S1Result]:
+    """Run S1 for every law of :data:`S1_REFERENCE` (``progress`` prints one line per law)."""
+    out = {}
+    for law in S1_REFERENCE:
+        out[law] = run_s1(law)
+        if progress:
+            print(f"  {law}: done", flush=True)
+    return out
+
+
+def format_s1_table(results: dict[str, S1Result]) -> str:
+    """Markdown table: mean H and mean ‖p − c‖ per law next to the reference values."""
+    lines = ["| law | mean H | reference | rel. diff | mean ‖p − c‖ (m) | reference | max speed (m/s) |",
+             "| --- | ---: | ---: | ---: | ---: | ---: | ---: |"]
+    for law, r in results.items():
+        ref_h, ref_d = S1_REFERENCE.get(law, (float("nan"), float("nan")))
+        lines.append(f"| {law} | {r.mean_H:.5f} | {ref_h:.5f} | {r.mean_H / ref_h - 1:+.1e} | "
+                     f"{r.mean_distance:.4f} | {ref_d:.4f} | {r.max_speed:.3f} |")
+    return "\n".join(lines)

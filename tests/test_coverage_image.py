@@ -20,7 +20,7 @@ def test_ink_attracts_and_paper_does_not(tmp_path):
     img = letter_image("R", 200, 320)
     path = tmp_path / "r.png"
     assert cv2.imwrite(str(path), img)
-    g = image_density(path, BOUNDS, floor=0.05)
+    g = image_density(path, BOUNDS, floor=0.05, columns=24)
     assert isinstance(g, GaussianMixture) and g.n_bumps > 10
     ink = np.argwhere(cv2.erode(255 - img, np.ones((15, 15), np.uint8)) > 200)
     paper = np.argwhere(cv2.erode(img, np.ones((25, 25), np.uint8)) > 250)
@@ -30,7 +30,7 @@ def test_ink_attracts_and_paper_does_not(tmp_path):
     assert g.evaluate(q_paper).max() < 0.15
     np.testing.assert_array_equal(g.evaluate_dt(q_ink), 0.0)
     # bright-on-dark with invert=False gives the same density as the inverted image
-    g2 = image_density(255 - img, BOUNDS, floor=0.05, invert=False)
+    g2 = image_density(255 - img, BOUNDS, floor=0.05, columns=24, invert=False)
     np.testing.assert_allclose(g2.evaluate(q_ink), g.evaluate(q_ink), rtol=1e-6)
 
 
