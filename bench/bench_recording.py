@@ -4,7 +4,7 @@ Run: ``/work/venv/bin/python bench/bench_recording.py`` (prints markdown tables;
 
 1. Overhead per tick on the loop thread at N = 100: the real ControlLoop ticks with the
    recorder subscribed (enqueue only) vs without, interleaved blocks; and the cost of the
-   enqueue call itself vs serialising inline (``to_dict`` + JSON + MCAP, what the writer
+   enqueue call itself vs serialising inline (``to_dict`` + msgspec JSON + MCAP, what the writer
    thread does) — the baseline a synchronous recorder would pay on the loop thread.
 2. File size per minute at N = 12 and N = 100 (real loop frames, zstd chunks of 0.25 s).
 3. Seek to the middle of a one-hour file (N = 12, 30 Hz, synthetic: real frames re-timed):
@@ -24,7 +24,7 @@ from pathlib import Path
 import numpy as np
 
 from swarmdeck.console.loop import ControlLoop, LoopConfig
-from swarmdeck.console.recorder import Recorder
+from swarmdeck.console.recorder import Recorder, encode_json
 from swarmdeck.console.recording_reader import open_recording
 from swarmdeck.console.recording_synth import retimed
 
@@ -76,7 +76,7 @@ def overhead(tmp: Path, n: int = 100, blocks: int = 3, ticks: int = 40) -> list[
         inline = []
         for k in range(40):
             t = time.perf_counter()
-            data = json.dumps(frame.to_dict(), separators=(",", ":")).encode()
+            data = encode_json(frame.to_dict())
             w.add_message(ch, log_time=k, data=data, publish_time=k)
             inline.append(time.perf_counter() - t)
         w.finish()
@@ -89,7 +89,7 @@ def overhead(tmp: Path, n: int = 100, blocks: int = 3, ticks: int = 40) -> list[
         "| measure | median (ms) | note |",
         "| --- | ---: | --- |",
         f"| `write_frame` (enqueue) on the loop thread | {ms(e_med)} | p99 {ms(e_p99)} ms; {st.dropped} dropped |",
-        f"| inline serialisation baseline (to_dict + JSON + MCAP) | {ms(i_med)} | {i_med / e_med:.0f}x the enqueue |",
+        f"| inline serialisation baseline (to_dict + JSON + MCAP add) | {ms(i_med)} | {i_med / e_med:.0f}x the enqueue |",
         f"| tick without recorder | {ms(t_without)} | {blocks}×{ticks} ticks, interleaved |",
         f"| tick with recorder (writer thread running) | {ms(t_with)} | {100 * (t_with / t_without - 1):+.1f} % (GIL share of the writer) |",
     ]

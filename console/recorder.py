@@ -148,6 +148,8 @@ def _json_encoder() -> Callable[[Any], bytes]:
 
 
 _json = _json_encoder()
+#: Compact strict JSON bytes of a JSON-able object, as the recorder writes messages.
+encode_json: Callable[[Any], bytes] = _json
 
 
 class Recorder:

@@ -137,6 +137,7 @@ class Recording:
         self.library = ""
         self.metadata: dict[str, Any] = {}
         self._channels: dict[int, str] = {}
+        self._counts: dict[str, int] | None = None
         self._chunks: list[ChunkRef] = []
         self._starts: list[int] = []
         self._cache: OrderedDict[int, dict[str, list[tuple[int, bytes]]]] = OrderedDict()
@@ -218,6 +219,13 @@ class Recording:
             self.warnings.append("the MCAP summary points outside the file; scanned the file instead")
             return False
         self._channels = {cid: ch.topic for cid, ch in summary.channels.items()}
+        if summary.statistics is not None:
+            counts: dict[str, int] = {}
+            for cid, c in summary.statistics.channel_message_counts.items():
+                topic = self._channels.get(cid)
+                if topic is not None:
+                    counts[topic] = counts.get(topic, 0) + int(c)
+            self._counts = counts
         self._chunks = chunks
         self.indexed = True
         return True
@@ -472,9 +480,20 @@ class Recording:
                 break
         return dict(self.metadata)
 
+    def message_counts(self) -> dict[str, int]:
+        """Messages per topic: from the MCAP statistics of a cleanly closed file, else by
+        reading every chunk (damaged chunks count as empty)."""
+        if self._counts is None:
+            counts: dict[str, int] = {}
+            for i in range(len(self._chunks)):
+                for topic, msgs in self._chunk_messages(i).items():
+                    counts[topic] = counts.get(topic, 0) + len(msgs)
+            self._counts = counts
+        return dict(self._counts)
+
     def count_frames(self) -> int:
-        """Number of readable frames (decodes the message lists of every chunk)."""
-        return sum(len(self._chunk_messages(i).get(TOPIC_FRAME, [])) for i in range(len(self._chunks)))
+        """Number of frames in the file (see :meth:`message_counts`)."""
+        return self.message_counts().get(TOPIC_FRAME, 0)
 
     def close(self) -> None:
         self._f.close()

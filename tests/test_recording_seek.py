@@ -42,7 +42,7 @@ def _expected_at(times, t):
 
 
 @pytest.mark.parametrize("which", [0, 1])
-@settings(max_examples=60, deadline=None)
+@settings(max_examples=30, deadline=None)
 @given(t=st.floats(-1.0, N_FRAMES * 0.05 + 1.0, allow_nan=False))
 def test_frame_at_is_the_last_frame_not_after_t(recorded, which, t):
     path, cut, frames, times = recorded

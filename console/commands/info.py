@@ -23,12 +23,18 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 def summarise(path: str) -> dict:
     """The summary printed by ``swarmdeck info`` as a dict (RecordingError for unplayable files)."""
     from swarmdeck.console.recording_reader import open_recording
+    from swarmdeck.console.recording_schemas import TOPIC_DATAGRAM, TOPIC_EVENT
 
     with open_recording(path) as rec:
         cfg = rec.config()
         first, last = rec.first_frame, rec.last_frame
-        events = [f"{e.t:.3f} s [{e.kind}] {e.text}" for e in rec.events()]
-        n_datagrams = sum(1 for _ in rec.datagrams())
+        counts = rec.message_counts()
+        events = []
+        for e in rec.events():
+            events.append(f"{e.t:.3f} s [{e.kind}] {e.text}")
+            if len(events) >= 10:
+                break
+        n_datagrams = counts.get(TOPIC_DATAGRAM, 0)
         return {
             "file": str(rec.path),
             "size_bytes": os.path.getsize(rec.path),
@@ -36,7 +42,7 @@ def summarise(path: str) -> dict:
             "duration_s": rec.duration,
             "frames": rec.count_frames(),
             "datagrams": n_datagrams,
-            "events": len(events),
+            "events": counts.get(TOPIC_EVENT, 0),
             "robots": list(cfg.get("robots", [] if first is None else first.ids.tolist())),
             "bounds": list(cfg.get("bounds", [] if first is None else first.bounds)),
             "dt": None if first is None else first.dt,
@@ -49,7 +55,7 @@ def summarise(path: str) -> dict:
             "chunks": rec.n_chunks,
             "closed_cleanly": rec.indexed,
             "warnings": list(rec.warnings),
-            "first_events": events[:10],
+            "first_events": events,
         }
 
 

@@ -24,7 +24,7 @@ def app(tmp_path_factory):
 
     path = tmp_path_factory.mktemp("play") / "run.mcap"
     rec = Recorder(path)
-    for f in simulated_frames(n_robots=6, n_ticks=150, dt=0.033, seed=5):
+    for f in simulated_frames(n_robots=6, n_ticks=90, dt=0.033, seed=5):
         rec.write_frame(f)
     rec.close()
     recording = open_recording(path)
