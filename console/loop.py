@@ -185,6 +185,7 @@ class ControlLoop:
         self._alerts: dict[str, str] = {}
         self._events: list[str] = []
         self._listeners: list[FrameListener] = []
+        self._health_fns: dict[str, Callable[[], str]] = {}
         self.errors: dict[str, int] = {}
         self.latest: Frame | None = None
         self._last_sensed: SensedPoses | None = None
@@ -339,6 +340,11 @@ class ControlLoop:
     def _post(self, message: str) -> None:
         self._events.append(str(message))
 
+    def add_health(self, name: str, fn: Callable[[], str]) -> None:
+        """Show ``fn()`` under ``name`` in every Frame's ``health`` (e.g. the recorder's state)."""
+        with self._lock:
+            self._health_fns[str(name)] = fn
+
     def subscribe(self, listener: FrameListener) -> Callable[[], None]:
         """Call ``listener(frame)`` on the loop thread after every tick; returns an unsubscribe function."""
         with self._lock:
@@ -402,6 +408,13 @@ class ControlLoop:
         contacts = ContactsFrame()
         health: dict[str, str] = {"robots": self.source.health(), "commands": self.sink.health()} \
             if self.source is not self.sink else {"robots": self.source.health()}
+        with self._lock:
+            health_fns = list(self._health_fns.items())
+        for name, fn in health_fns:
+            try:
+                health[name] = str(fn())
+            except Exception as exc:
+                health[name] = f"error: {type(exc).__name__}: {exc}"
         if self.inputs is not None:
             try:
                 snap = self.inputs.poll(now)

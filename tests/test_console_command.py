@@ -8,11 +8,19 @@ from swarmdeck.console.config import ConfigFileError, load_settings
 
 
 def test_console_runs_headless_for_a_duration_and_prints_the_url(capsys) -> None:
-    rc = main(["console", "--port", "0", "--duration", "0.5", "--robots", "5", "--no-inputs", "--seed", "1"])
+    rc = main(["console", "--port", "0", "--duration", "0.5", "--robots", "5", "--no-inputs", "--seed", "1",
+               "--no-record"])
     out = capsys.readouterr().out
     assert rc == 0
     assert "swarmdeck console: http://127.0.0.1:" in out and "5 robots, coverage" in out
     assert "ran " in out and "ticks" in out
+
+
+def test_console_records_the_session(tmp_path, capsys) -> None:
+    path = tmp_path / "run.mcap"
+    rc = main(["console", "--port", "0", "--duration", "0.5", "--robots", "4", "--no-inputs", "--record", str(path)])
+    assert rc == 0 and path.stat().st_size > 0
+    assert f"recording to {path}" in capsys.readouterr().err
 
 
 @pytest.mark.parametrize("argv, message", [

@@ -3,6 +3,7 @@ from __future__ import annotations
 
 import argparse
 import sys
+import time
 from dataclasses import replace
 
 from swarmdeck.console.cli import UsageError
@@ -30,12 +31,15 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--robots-via", default=None, metavar="URL",
                         help="drive GRITSBots over MQTT instead of simulating them, e.g. mqtt://127.0.0.1:1883 "
                              "(try `swarmdeck robots --broker URL` for a simulated fleet)")
+    parser.add_argument("--record", default=None, metavar="PATH",
+                        help="record the session to PATH (MCAP; default sessions/<UTC time>.mcap)")
+    parser.add_argument("--no-record", action="store_true", help="do not record the session")
     parser.add_argument("--no-inputs", action="store_true",
                         help="do not open the TUIO/OSC input listeners (UDP 3333 by default)")
 
 
 def main(args: argparse.Namespace) -> int:
-    from swarmdeck.console.behaviours import BehaviourError
+    from swarmdeck.console.behaviours import BehaviourError, make_behaviour
     from swarmdeck.console.config import ConfigFileError, ConsoleSettings, load_settings
     from swarmdeck.console.loop import ControlLoop, LoopConfig
 
@@ -61,22 +65,38 @@ def main(args: argparse.Namespace) -> int:
     if args.duration is not None and not args.duration > 0:
         raise UsageError(f"--duration must be > 0 s, got {args.duration}")
 
-    hub = None
-    if not args.no_inputs:
-        hub = _start_inputs(settings.inputs)
+    if args.record and args.no_record:
+        raise UsageError("--record and --no-record exclude each other")
+    try:  # check the behaviour (name, script) before opening anything
+        make_behaviour(config.behaviour, config.behaviour_params, config.bounds, config.max_speed,
+                       config.safety.safety_distance)
+    except BehaviourError as exc:
+        raise UsageError(str(exc)) from None
     try:
         source, sink = _robots(config, args.camera, args.robots_via)
     except (ValueError, OSError) as exc:
-        if hub is not None:
-            hub.close()
         raise UsageError(str(exc)) from None
+    rec = None
+    if not args.no_record:
+        rec = _recorder(args.record, config, settings.inputs, args.camera or args.robots_via or "simulation")
+    hub = None
+    if not args.no_inputs:
+        hub = _start_inputs(settings.inputs, rec)
     try:
-        loop = ControlLoop(config, source=source, sink=sink, inputs=hub, contact_density=_contact_density(hub))
+        # One monotonic clock for the loop and the input listeners' receive stamps.
+        loop = ControlLoop(config, source=source, sink=sink, inputs=hub, contact_density=_contact_density(hub),
+                           clock=time.monotonic)
     except (BehaviourError, ValueError) as exc:
         sink.close()
         if hub is not None:
             hub.close()
+        if rec is not None:
+            rec.close()
         raise UsageError(str(exc)) from None
+    if rec is not None:
+        loop.subscribe(rec.write_frame)
+        loop.add_health("recording", lambda: rec.status().message)
+        print(f"swarmdeck console: recording to {rec.path}", file=sys.stderr)
 
     from swarmdeck.console.app import ConsoleApp
 
@@ -95,6 +115,9 @@ def main(args: argparse.Namespace) -> int:
     finally:
         frame = loop.latest
         app.close()
+        if rec is not None:
+            st = rec.close()
+            print(f"swarmdeck console: {st.message}", file=sys.stderr)
     if frame is not None and args.duration is not None:
         b = frame.barrier
         print(f"ran {frame.tick + 1} ticks, t = {frame.run_time:.1f} s; "
@@ -128,15 +151,24 @@ def _robots(config, camera: str | None, robots_via: str | None):
     return source, sink
 
 
-def _start_inputs(table: dict | None):
-    """The TUIO/OSC listeners of ``[inputs]`` (default: TUIO on UDP 3333), started; None if they cannot bind."""
+def _recorder(path: str | None, config, inputs_table: dict | None, source: str):
+    """The session recorder (MCAP), writing in the background; never raises into the run."""
+    from swarmdeck.console.recorder import Recorder, default_path
+    from swarmdeck.console.resimulate import session_metadata
+
+    return Recorder(path or default_path(), session_metadata(config, inputs_table, source=source))
+
+
+def _start_inputs(table: dict | None, rec=None):
+    """The TUIO/OSC listeners of ``[inputs]`` (default: TUIO on UDP 3333), started; None if they cannot bind.
+    Raw datagrams go to the recorder, if any."""
     from swarmdeck.inputs import ConfigError, InputConfig, InputHub
 
     try:
         cfg = InputConfig.from_dict(table) if table is not None else InputConfig()
     except ConfigError as exc:
         raise UsageError(str(exc)) from None
-    hub = InputHub.from_config(cfg)
+    hub = InputHub.from_config(cfg, clock=time.monotonic, on_datagram=rec.raw_datagram if rec is not None else None)
     try:
         hub.start()
     except OSError as exc:
