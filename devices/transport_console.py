@@ -123,8 +123,12 @@ class NetworkRobots:
         return cls(transport, ids, streamer=streamer)
 
     # ---------------------------------------------------------------- pose source
-    def read(self) -> SensedRobots:
-        """Robots under control (not missing/duplicated) with their last known poses and freshness."""
+    def read(self, now: float | None = None) -> SensedRobots:
+        """Robots under control (not missing/duplicated) with their last known poses and freshness.
+
+        ``now`` (the loop's clock) is accepted for the console's PoseSource protocol and not used:
+        freshness is judged on this transport's own monotonic clock.
+        """
         sample = self.transport.latest_poses()
         ids = sample.ids if self.ids is None else self.ids
         ids = np.setdiff1d(ids, self.transport.excluded(), assume_unique=True)
