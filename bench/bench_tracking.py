@@ -97,10 +97,47 @@ def latency(r: SyntheticRenderer, n_robots: int, ticks: int) -> dict:
     return {"latency_ms": statistics.median(lat), "render_ms": statistics.median(render)}
 
 
+def detection_ab(frames: int) -> list[str]:
+    """Detections (of robots + references) and detection CPU time: REFERENCE.md §7 settings
+    alone (OpenCV's other defaults) vs swarmdeck's (plus threshold windows and 8 px/cell)."""
+    from swarmdeck.tracking.detector import detector_parameters
+
+    d = cv2.aruco.getPredefinedDictionary(cv2.aruco.DICT_4X4_50)
+    ref7 = cv2.aruco.DetectorParameters()
+    ref7.cornerRefinementMethod = cv2.aruco.CORNER_REFINE_SUBPIX
+    ref7.relativeCornerRefinmentWinSize = 1.0
+    dets = {"§7 only": cv2.aruco.ArucoDetector(d, ref7), "swarmdeck": cv2.aruco.ArucoDetector(d, detector_parameters())}
+    cases = [("1280×720 default noise", SyntheticCameraConfig(), 20),
+             ("1280×720 harsh (noise σ 6, blur σ 1.0, JPEG q70)",
+              SyntheticCameraConfig(noise_sigma=6.0, blur_sigma=1.0, jpeg_quality=70), 20),
+             ("1920×1080 default noise", SyntheticCameraConfig(width=1920, height=1080), 46)]
+    lines = ["| frames | detected, §7 only | detected, swarmdeck | detection CPU ms median, §7 only | swarmdeck |",
+             "| --- | --- | --- | --- | --- |"]
+    for name, cfg, n in cases:
+        r = SyntheticRenderer(cfg)
+        rng = np.random.default_rng(5)
+        grays = [cv2.cvtColor(r.render(np.arange(n), random_poses(n, rng), rng=rng).image, cv2.COLOR_RGB2GRAY)
+                 for _ in range(frames)]
+        found, cpu = {}, {}
+        for key, det in dets.items():
+            found[key], ts = 0, []
+            for g in grays:
+                c0 = time.process_time()
+                _, ids, _ = det.detectMarkers(g)
+                ts.append(time.process_time() - c0)
+                found[key] += 0 if ids is None else len(ids)
+            cpu[key] = 1000 * statistics.median(ts)
+        total = (n + 4) * frames
+        lines.append(f"| {name}, {frames} frames | {found['§7 only']}/{total} | {found['swarmdeck']}/{total} | "
+                     f"{cpu['§7 only']:.1f} | {cpu['swarmdeck']:.1f} |")
+    return lines
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--frames", type=int, default=5)
     ap.add_argument("--rounds", type=int, default=6)
+    ap.add_argument("--ab-frames", type=int, default=25)
     args = ap.parse_args()
     cv2.setNumThreads(1)
     rows = [scenario(1280, 720, 20, args.frames, args.rounds, 1), scenario(1920, 1080, 46, args.frames, args.rounds, 2)]
@@ -116,6 +153,8 @@ def main() -> None:
               f"{row['base_ms']:.1f} | "
               f"{row['ratio']:.2f} | {row['detected']} | {row['pos_mm']:.2f} | {row['head_deg']:.2f} | "
               f"{la['latency_ms']:.1f} | {la['render_ms']:.1f} |")
+    print()
+    print("\n".join(detection_ab(args.ab_frames)))
 
 
 if __name__ == "__main__":
