@@ -187,6 +187,8 @@ class ConsoleGui:
             self.notify(f"barrier not changed: {exc}")
 
     def _on_behaviour(self, event: Any) -> None:
+        if self._reverting:
+            return
         try:
             self.loop.set_behaviour(str(self.behaviour.value))
         except ValueError as exc:
@@ -363,6 +365,7 @@ class ConsoleGui:
             self.plot_H.data = (s["t"], s["H"], s["mpc"])
             self.plot_tick.data = (s["t"], s["tick_ms"], s["solve_ms"])
         self.status.content = self.status_line(frame)
+        self._sync_widgets(frame)
         alerts = list(frame.alerts)
         if frame.coverage is not None and frame.coverage.packing_warning:
             alerts.append(f"packing: {frame.coverage.packing_warning}")
@@ -370,6 +373,24 @@ class ConsoleGui:
         if self.messages:
             text += ("\n\n" if text else "") + "\n".join(f"- {m}" for m in list(self.messages)[-3:])
         self.alerts.content = text
+
+    def _sync_widgets(self, frame: Frame) -> None:
+        """Widgets follow changes made elsewhere (another tab's script, the API, a config file)."""
+        barrier_differs = (frame.barrier is not None and frame.barrier.enabled != self.barrier_on.value
+                           and self._modal is None)
+        if frame.behaviour == self.behaviour.value and not barrier_differs:
+            return
+        self._reverting = True
+        try:
+            if frame.behaviour != self.behaviour.value:
+                if frame.behaviour not in self.behaviour.options:
+                    self.behaviour.options = tuple(o for o in self.behaviour.options
+                                                   if not o.startswith("script:")) + (frame.behaviour,)
+                self.behaviour.value = frame.behaviour
+            if barrier_differs:
+                self.barrier_on.value = frame.barrier.enabled
+        finally:
+            self._reverting = False
 
     def status_line(self, frame: Frame) -> str:
         """The status text: state, tick rate, solver time, robots, input sources and their health."""
