@@ -70,3 +70,19 @@ def test_robot_body_is_drawn_at_tag_height(clean) -> None:
     at = grey[int(round(top[1])), int(round(top[0]))]
     plain = clean.render([], np.zeros((0, 3))).image.mean(axis=2)
     assert abs(at - plain[int(round(top[1])), int(round(top[0]))]) > 20     # something drawn there
+
+
+def test_density_image_rasterises_a_callable_with_its_peak_coloured() -> None:
+    from swarmdeck.tracking import density_image
+
+    def bump(q: np.ndarray) -> np.ndarray:
+        return np.exp(-np.sum((q - [1.0, 0.5]) ** 2, axis=1) / 0.05)
+
+    img = density_image(bump, (-1.6, 1.6, -1.0, 1.0), (100, 160), rgb=(255, 0, 0))
+    assert img.shape == (100, 160, 3) and img.dtype == np.uint8
+    peak = np.unravel_index(np.argmin(img[..., 1].astype(int)), img.shape[:2])
+    # pixel centre of the peak ≈ (1.0, 0.5): col = (1.0 + 1.6) / 0.02, row = (1.0 − 0.5) / 0.02
+    assert abs(peak[1] - 130) <= 1 and abs(peak[0] - 25) <= 1
+    assert tuple(img[99, 0]) == (255, 255, 255)
+    flat = density_image(lambda q: np.ones(len(q)))
+    assert np.all(flat == 255)

@@ -21,7 +21,7 @@ from swarmdeck.tracking.pose_source import CameraPoseSource
 from swarmdeck.tracking.sources import (
     CameraError, CameraSource, ImageFolderSource, OpenCVCamera, VideoFileSource, open_source)
 from swarmdeck.tracking.synthetic import (
-    SyntheticCamera, SyntheticCameraConfig, SyntheticFrame, SyntheticRenderer, random_poses)
+    SyntheticCamera, SyntheticCameraConfig, SyntheticFrame, SyntheticRenderer, density_image, random_poses)
 from swarmdeck.tracking.tracker import Tracker, check_image
 from swarmdeck.tracking.types import CameraFrame, TrackedPoses
 
@@ -29,6 +29,6 @@ __all__ = [
     "CalibrationError", "CameraCalibration", "CameraError", "CameraFrame", "CameraPoseSource", "CameraSource",
     "CharucoSpec", "ConfigError", "DEFAULT_REFERENCES", "ImageFolderSource", "OpenCVCamera", "PinholeCamera",
     "ReferenceMarker", "SyntheticCamera", "SyntheticCameraConfig", "SyntheticFrame", "SyntheticRenderer",
-    "TrackedPoses", "Tracker", "TrackerConfig", "VideoFileSource", "calibrate_charuco", "check_image",
+    "TrackedPoses", "Tracker", "TrackerConfig", "VideoFileSource", "calibrate_charuco", "check_image", "density_image",
     "marker_corners", "open_source", "overhead_camera", "poses_from_corners", "random_poses",
 ]

@@ -447,3 +447,23 @@ def charuco_views(camera: PinholeCamera, spec: CharucoSpec, n_views: int, rng: n
         g = np.clip(img + 0.5, 0, 255).astype(np.uint8)
         views.append(cv2.cvtColor(g, cv2.COLOR_GRAY2RGB))
     return views
+
+
+def density_image(evaluate: Callable[[np.ndarray], np.ndarray],
+                  bounds: tuple[float, float, float, float] = (-1.6, 1.6, -1.0, 1.0),
+                  shape: tuple[int, int] = (100, 160), rgb: tuple[int, int, int] = (255, 120, 20)) -> np.ndarray:
+    """Rasterise a density for the synthetic projector: ``evaluate(q (M, 2)) -> φ (M,)`` (e.g.
+    ``GaussianMixture.evaluate``) on a ``shape`` (rows, cols) grid of pixel centres over
+    ``bounds`` (row 0 at y_max) → (rows, cols, 3) uint8, white where φ is smallest and ``rgb``
+    where it is largest (φ normalised by its range on the grid)."""
+    rows, cols = shape
+    x0, x1, y0, y1 = bounds
+    xs = x0 + (np.arange(cols) + 0.5) * (x1 - x0) / cols
+    ys = y1 - (np.arange(rows) + 0.5) * (y1 - y0) / rows
+    X, Y = np.meshgrid(xs, ys)
+    phi = np.asarray(evaluate(np.column_stack([X.ravel(), Y.ravel()])), dtype=float).reshape(rows, cols)
+    lo, hi = np.nanmin(phi), np.nanmax(phi)
+    t = np.zeros_like(phi) if not hi > lo else np.clip((phi - lo) / (hi - lo), 0.0, 1.0)
+    t = np.nan_to_num(t)[..., None]
+    out = 255.0 * (1 - t) + np.asarray(rgb, float) * t
+    return np.clip(out + 0.5, 0, 255).astype(np.uint8)
