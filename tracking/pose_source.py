@@ -66,7 +66,8 @@ class CameraPoseSource:
         and ``get_density(now)``; its tracker uses the camera's layout, tag height and exact
         intrinsics, or ``config`` (completed with the exact intrinsics when it has none). Otherwise (webcam index, URL, video file, image folder) the
         tracker config comes from ``config`` (a :class:`TrackerConfig` or the JSON file written
-        by ``swarmdeck calibrate arena``) or the defaults. ``ids`` become ``expected_ids`` so a
+        by ``swarmdeck calibrate arena``) or the defaults; webcams are asked for the calibrated
+        image size. ``ids`` become ``expected_ids`` so a
         robot that never shows up is reported stale. Raises :class:`CameraError` /
         ``ConfigError`` for a spec or file that names nothing usable.
         """
@@ -85,8 +86,9 @@ class CameraPoseSource:
                 cfg = cfg.with_(calibration=exact)
             source: CameraSource = cam
         else:
-            source = open_source(spec, paced=paced)
             cfg = cfg if cfg is not None else TrackerConfig()
+            source = open_source(spec, paced=paced,
+                                 size=None if cfg.calibration is None else cfg.calibration.image_size)
         if ids is not None:
             cfg = cfg.with_(expected_ids=tuple(sorted(set(cfg.expected_ids) | {int(i) for i in ids})))
         return cls(source, Tracker(cfg))

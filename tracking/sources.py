@@ -301,25 +301,28 @@ class ImageFolderSource:
 
 
 def open_source(spec: str | int, *, paced: bool = True, get_poses: Callable[[float], np.ndarray] | None = None,
-                ids: list[int] | None = None, **synthetic_kw: object) -> CameraSource:
+                ids: list[int] | None = None, size: tuple[int, int] | None = None,
+                **synthetic_kw: object) -> CameraSource:
     """A source from a command-line style spec.
 
     ``"synthetic"`` → :class:`SyntheticCamera` (needs ``get_poses``); an int or digit string →
     webcam index; ``scheme://…`` → stream URL; a folder → :class:`ImageFolderSource`; a file →
-    :class:`VideoFileSource`. Raises :class:`CameraError` when the spec names nothing (missing
-    path, synthetic without ``get_poses``).
+    :class:`VideoFileSource`. ``size`` (w, h) is requested from webcams and streams. Raises
+    :class:`CameraError` when the spec names nothing (missing path, synthetic without
+    ``get_poses``).
     """
     from swarmdeck.tracking.synthetic import SyntheticCamera, SyntheticCameraConfig
 
+    w, h = size if size is not None else (None, None)
     if isinstance(spec, int) or (isinstance(spec, str) and spec.strip().isdigit()):
-        return OpenCVCamera(int(spec))
+        return OpenCVCamera(int(spec), width=w, height=h)
     s = str(spec).strip()
     if s == "synthetic":
         if get_poses is None:
             raise CameraError("the synthetic camera needs get_poses (a callable now -> (N, 3) poses)")
         return SyntheticCamera(get_poses, ids=ids, config=SyntheticCameraConfig(**synthetic_kw))
     if "://" in s:
-        return OpenCVCamera(s)
+        return OpenCVCamera(s, width=w, height=h)
     p = Path(s).expanduser()
     if p.is_dir():
         return ImageFolderSource(p, paced=paced)
