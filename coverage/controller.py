@@ -78,7 +78,8 @@ class CoverageConfig:
 class CoverageState:
     """What the console and the recorder need from one coverage tick.
 
-    t [s]; law; status ``"ok"`` or ``"error: …"`` (then the command is zero);
+    t [s]; law; status ``"ok"`` or ``"error: …"`` (then the command is zero, centroids are the
+    positions, masses and costs are 0 and there are no cells: everything stays finite/JSON-able);
     positions (N, 2) the pre-conditioned positions used; centroids (N, 2) [m]; masses (N,);
     dc_dt (N, 2) [m/s]; cost_H: locational cost H = Σ_i ∫_{V_i} ‖q − p_i‖² φ;
     cost_H_normalised: H / ∫φ; mean_centroid_distance, max_centroid_distance: ‖p_i − c_i‖ [m];
@@ -150,9 +151,9 @@ def coverage_tick(positions: ArrayLike, density: GaussianMixture, config: Covera
         zero = np.zeros((n, 2))
         state = CoverageState(
             t=float(t), law=config.law, status=f"error: {exc}", positions=pts,
-            centroids=pts.copy(), masses=np.zeros(n), dc_dt=np.zeros((n, 2)), cost_H=float("nan"),
-            cost_H_normalised=float("nan"), mean_centroid_distance=float("nan"),
-            max_centroid_distance=float("nan"), edges=np.zeros((0, 2, 2)),
+            centroids=pts.copy(), masses=np.zeros(n), dc_dt=np.zeros((n, 2)), cost_H=0.0,
+            cost_H_normalised=0.0, mean_centroid_distance=0.0,
+            max_centroid_distance=0.0, edges=np.zeros((0, 2, 2)),
             neighbours=np.zeros((0, 2), dtype=np.intp), cells=[], packing_warning=packing,
             repaired=repaired, saturated=0)
         return zero, state, None

@@ -13,7 +13,6 @@ integrated by Gauss–Legendre with ``nodes`` points per piece, all edges at onc
 from __future__ import annotations
 
 from dataclasses import dataclass
-from functools import lru_cache
 
 import numpy as np
 import scipy.sparse as sp
@@ -42,14 +41,10 @@ class EdgeOptions:
             raise ValueError("need 1 <= nodes <= 64, resolution > 0, reach > 0, max_pieces >= 1")
 
 
-@lru_cache(maxsize=16)
 def _gauss_legendre(n: int) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-    """Nodes in [0, 1] and weights summing to 1 (read-only)."""
+    """Nodes in [0, 1] and weights summing to 1."""
     x, w = np.polynomial.legendre.leggauss(n)
-    x, w = 0.5 * (x + 1.0), 0.5 * w
-    x.setflags(write=False)
-    w.setflags(write=False)
-    return x, w
+    return 0.5 * (x + 1.0), 0.5 * w
 
 
 def _pieces(a: NDArray[np.float64], b: NDArray[np.float64], density: GaussianMixture,

@@ -14,7 +14,6 @@ not split. Moments are taken in coordinates relative to p_i, so they stay accura
 from __future__ import annotations
 
 from dataclasses import dataclass
-from functools import lru_cache
 
 import numpy as np
 from numpy.typing import NDArray
@@ -79,11 +78,10 @@ def _dunavant7() -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     return pts, w
 
 
-@lru_cache(maxsize=16)
 def triangle_rule(level: int) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """Composite 7-point rule on a triangle split 4-way ``level`` times.
 
-    Returns barycentric points (7·4^L, 3) and weights (7·4^L,) summing to 1 (read-only).
+    Returns barycentric points (7·4^L, 3) and weights (7·4^L,) summing to 1.
     """
     tris = np.eye(3)[None]                          # (1, 3 vertices, 3 bary)
     for _ in range(level):
@@ -94,8 +92,6 @@ def triangle_rule(level: int) -> tuple[NDArray[np.float64], NDArray[np.float64]]
     p7, w7 = _dunavant7()
     pts = np.einsum("pv,tvb->tpb", p7, tris).reshape(-1, 3)
     w = np.tile(w7, tris.shape[0]) / tris.shape[0]
-    pts.setflags(write=False)
-    w.setflags(write=False)
     return pts, w
 
 
@@ -160,7 +156,7 @@ def cell_moments(vor: BoundedVoronoi, density: GaussianMixture,
     tri, cell = tri[order], cell[order]
     ea, eb = tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0]
     area = 0.5 * np.abs(ea[:, 0] * eb[:, 1] - ea[:, 1] * eb[:, 0])         # (T,)
-    bary, w = triangle_rule(0)
+    bary, w = _dunavant7()
     r = (bary[None, :, 0, None] * tri[:, None, 0] + bary[None, :, 1, None] * tri[:, None, 1]
          + bary[None, :, 2, None] * tri[:, None, 2])                        # (T, 7, 2) = q − p_i
     phi, phi_t = density.evaluate_both(r + p[cell][:, None, :])             # (T, 7)

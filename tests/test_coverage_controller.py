@@ -26,7 +26,7 @@ def test_one_tick_state(rng):
     assert st.cost_H_normalised == pytest.approx(st.cost_H / st.masses.sum())
     assert st.packing_warning is None and st.repaired == 0
     assert st.t == 1.5
-    back = json.loads(json.dumps(st.to_dict()))
+    back = json.loads(json.dumps(st.to_dict(), allow_nan=False))
     np.testing.assert_array_equal(back["centroids"], st.centroids)
     assert len(back["cells"]) == 30 and back["status"] == "ok"
     with pytest.raises(ValueError):
@@ -113,7 +113,7 @@ def test_numerical_failure_stops_the_robots():
     u, st = CoverageController(CoverageConfig(), g)(np.array([[0.0, 0.0], [0.5, 0.5]]), 0.0)
     assert not st.ok and "NaN" in st.status
     np.testing.assert_array_equal(u, 0.0)
-    json.dumps(st.to_dict())
+    json.dumps(st.to_dict(), allow_nan=False)
 
 
 def test_packing_warning_when_the_bump_is_too_narrow(rng):

@@ -124,3 +124,14 @@ def test_bad_positions_raise(bad):
 def test_bad_bounds_raise():
     with pytest.raises(ValueError, match="bounds"):
         precondition_positions([[0, 0]], (1.0, -1.0, 0.0, 1.0))
+
+
+@pytest.mark.parametrize("centre, spread", [((0.0, 0.0), 0.05), ((1.5, 0.9), 0.05),
+                                            ((-1.0, 0.0), 0.3), ((0.0, -0.95), 0.02)])
+def test_clusters_far_from_walls_get_the_reflections_they_need(centre, spread):
+    """Robots bunched together: the first guess of which robots to reflect is wrong for them."""
+    rng = np.random.default_rng(5)
+    raw = np.array(centre) + rng.normal(0.0, spread, (40, 2))
+    p, _ = precondition_positions(raw, BOUNDS)
+    vor = _check_diagram(p)
+    np.testing.assert_allclose(vor.areas(), _shapely_areas(p), rtol=1e-9, atol=1e-12)
