@@ -96,7 +96,8 @@ class ConsoleApp:
 
         self.loop = loop
         self.server = viser.ViserServer(host=host, port=port, verbose=verbose)
-        self.scene = ArenaScene(self.server, loop.config.bounds, robot_radius=loop.robot.radius)
+        self.scene = ArenaScene(self.server, loop.config.bounds, robot_radius=loop.robot.radius,
+                                image_provider=getattr(loop.source, "image", None))
         self.gui = ConsoleGui(self.server, loop, self.scene)
         self.viewer = FrameViewer(self.scene, self.gui, on_error=loop.post)
         self._unsubscribe = loop.subscribe(self.viewer.offer)

@@ -65,6 +65,16 @@ class TrackedPoseSource:
     def health(self) -> str:
         return self.camera.status_line()
 
+    @property
+    def image_ref(self) -> str | None:
+        """Reference of the newest camera frame (for Frame.image_ref), or None before the first."""
+        frame = self.camera.frame
+        return None if frame is None else f"camera:{frame.index}"
+
+    def image(self, ref: str) -> Any:
+        """(rectified RGB image with row 0 at y_max, its bounds) of the newest frame, or None."""
+        return self.camera.rectified_image()
+
     def close(self) -> None:
         close = getattr(self.camera.source, "close", None)
         if close is not None:

@@ -397,6 +397,8 @@ class ControlLoop:
             if prev is None:
                 raise
             sensed = SensedPoses(prev.ids, prev.poses, np.zeros(len(prev.ids), dtype=bool))
+        image_ref = getattr(self.source, "image_ref", None)
+        image_ref = image_ref if isinstance(image_ref, str) else None
         ids = np.asarray(sensed.ids, dtype=np.int64)
         poses = np.asarray(sensed.poses, dtype=float)
         seen = np.asarray(sensed.seen, dtype=bool)
@@ -540,7 +542,7 @@ class ControlLoop:
             tick=self._tick, time=now, run_time=self._run_time, dt=dt, bounds=self.config.bounds, lookahead=ell,
             poses=poses, ids=ids, seen=seen, nominal=nominal, safe=safe, v=v, w=w, barrier=barrier,
             coverage=coverage, density=snapshot, contacts=contacts, behaviour=behaviour.name, run_state=run_state,
-            params=params, events=events, alerts=alerts, health=health, timing=timing,
+            params=params, events=events, alerts=alerts, health=health, timing=timing, image_ref=image_ref,
         )
         self._tick += 1
         if active:

@@ -8,7 +8,8 @@ not give, except the trails (the last positions of consecutive Frames; a jump
 in the tick index resets them) and the geometry caches that depend on N.
 
 Layers (``LAYERS``), each toggleable with :meth:`ArenaScene.set_layer`:
-grid, density heat map, Voronoi edges, filled cells, centroids, robots,
+camera (the rectified overhead image of the Frame's ``image_ref``, when an
+image provider is given), grid, density heat map, Voronoi edges, filled cells, centroids, robots,
 labels, nominal arrows, safe arrows, barrier pairs, safety discs, trails,
 contacts. Colours: robots blue; robots whose command the barrier changed
 orange; stopped (emergency stop) red; paused slate; not seen grey.
@@ -16,6 +17,7 @@ orange; stopped (emergency stop) red; paused slate; not seen grey.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
@@ -25,7 +27,7 @@ from numpy.typing import NDArray
 from swarmdeck.console.frame import Frame
 
 LAYERS: tuple[str, ...] = (
-    "grid", "density", "voronoi", "cells", "centroids", "robots", "labels", "nominal", "safe",
+    "camera", "grid", "density", "voronoi", "cells", "centroids", "robots", "labels", "nominal", "safe",
     "barrier", "discs", "trails", "contacts",
 )
 DEFAULT_OFF = frozenset({"cells"})
@@ -136,8 +138,11 @@ class ArenaScene:
     """
 
     def __init__(self, server: Any, bounds: tuple[float, float, float, float] = (-1.6, 1.6, -1.0, 1.0),
-                 robot_radius: float = 0.055, style: SceneStyle | None = None) -> None:
+                 robot_radius: float = 0.055, style: SceneStyle | None = None,
+                 image_provider: Callable[[str], Any] | None = None) -> None:
         self.server = server
+        self.image_provider = image_provider
+        self._image_ref: str | None = None
         self.scene = server.scene
         self.bounds = tuple(float(b) for b in bounds)
         self.style = style or SceneStyle()
@@ -182,6 +187,7 @@ class ArenaScene:
                                           cast_shadow=False, receive_shadow=False)
         self._h["voronoi"] = sc.add_line_segments("/voronoi", _EMPTY_SEG, (60, 60, 60), thickness=0.006)
         self._h["cells"] = None
+        self._h["camera"] = None
         self._h["centroids"] = sc.add_point_cloud("/centroids", np.zeros((1, 3), np.float32) - [0, 0, 5],
                                                   (200, 30, 60), point_size=0.035, point_shape="diamond",
                                                   precision="float32")
@@ -266,6 +272,9 @@ class ArenaScene:
             for i in moved:
                 self._labels[i].position = (float(poses[i, 0]), float(poses[i, 1]) + st.label_offset, 0.02)
             self._label_xy[moved] = poses[moved, :2]
+        if v["camera"] and frame.image_ref is not None and self.image_provider is not None \
+                and frame.image_ref != self._image_ref:
+            self._draw_camera(frame.image_ref)
         if v["density"] and frame.density is not None:
             self._h["density"].image = heatmap(frame.density, self.bounds, st.heatmap_px_per_m)
         cov = frame.coverage
@@ -307,6 +316,22 @@ class ArenaScene:
             cp = np.column_stack((c, np.full(len(c), 0.012))).astype(np.float32) if len(c) else \
                 np.array([[0, 0, -5]], dtype=np.float32)
             self._h["contacts"].points = cp
+
+    def _draw_camera(self, ref: str) -> None:
+        """The overhead image (RGB, row 0 at y_max, covering its bounds) just above the heat map."""
+        got = self.image_provider(ref)
+        if got is None:
+            return
+        img, (x0, x1, y0, y1) = got
+        self._image_ref = ref
+        h = self._h.get("camera")
+        if h is None:
+            self._h["camera"] = self.scene.add_image(
+                "/camera", np.asarray(img), render_width=x1 - x0, render_height=y1 - y0, format="jpeg",
+                jpeg_quality=80, position=((x0 + x1) / 2, (y0 + y1) / 2, -0.008), wxyz=(0.0, 1.0, 0.0, 0.0),
+                cast_shadow=False, receive_shadow=False, visible=self.visible["camera"])
+        else:
+            h.image = np.asarray(img)
 
     def _arrows(self, start: NDArray[np.float64], u: NDArray[np.float64], z: float) -> NDArray[np.float32]:
         end = start + self.style.arrow_scale * u

@@ -30,3 +30,24 @@ def test_bad_camera_spec_is_named() -> None:
         camera_source("/no/such/video.mp4", np.arange(2), None, (-1.6, 1.6, -1.0, 1.0))
     with pytest.raises(ValueError, match="needs robots"):
         camera_source("synthetic", np.arange(2), None, (-1.6, 1.6, -1.0, 1.0))
+
+
+def test_camera_image_is_drawn_under_the_robots() -> None:
+    import viser
+
+    from swarmdeck.console.scene import ArenaScene
+
+    cfg = LoopConfig(seed=2, n_robots=4)
+    sim = SimulatedRobots(4, ArenaConfig(seed=2))
+    src = camera_source("synthetic", np.arange(4), lambda now: sim.sim.poses, cfg.bounds)
+    loop = ControlLoop(cfg, source=src, sink=sim)
+    server = viser.ViserServer(host="127.0.0.1", port=0, verbose=False)
+    try:
+        scene = ArenaScene(server, cfg.bounds, image_provider=src.image)
+        f = loop.tick()
+        assert f.image_ref == "camera:0"
+        scene.draw(f)
+        img, bounds = src.image(f.image_ref)
+        assert scene._h["camera"] is not None and img.shape[2] == 3 and bounds == cfg.bounds
+    finally:
+        server.stop()
