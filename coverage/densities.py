@@ -167,7 +167,7 @@ class Bump:
 class AnalyticDensity:
     """φ(q, t) = floor + Σ_k w_k(t) exp(−‖q − μ_k(t)‖² / (2σ_k(t)²)) with exact derivatives.
 
-    ``at(t)`` raises ValueError when a profile gives σ ≤ 0 or w < 0 at t.
+    ``at(t)`` raises ValueError when a profile gives σ ≤ 0 or w < 0 at t (naming the bump).
     """
 
     floor: float = 0.05
@@ -182,6 +182,10 @@ class AnalyticDensity:
             mu[i], mu_dot[i] = b.mu(t)
             sig[i], sig_dot[i] = b.sigma(t)
             w[i], w_dot[i] = b.weight(t)
+        if np.any(w < -1e-12):
+            k_bad = int(np.flatnonzero(w < -1e-12)[0])
+            raise ValueError(f"bump {k_bad}: weight profile is negative at t = {t} ({w[k_bad]:.3g}); "
+                             "weights must stay >= 0 (e.g. Sine mean >= amplitude)")
         w = np.maximum(w, 0.0)      # round-off of a fading weight
         return GaussianMixture(self.floor, mu, sig, w, mu_dot, sig_dot, w_dot)
 

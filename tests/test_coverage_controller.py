@@ -5,6 +5,8 @@ import json
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from swarmdeck.coverage import (CoverageConfig, CoverageController, CoverageState, GaussianMixture,
                                 moving_density, s1_density)
@@ -125,3 +127,19 @@ def test_packing_warning_when_the_bump_is_too_narrow(rng):
     ctrl.density = GaussianMixture(0.2, [[0.0, 0.0]], [0.5], [1.0])
     _, st = ctrl(p, 0.1)
     assert st.packing_warning is None
+
+
+_coord = st.one_of(st.floats(-2.0, 2.0), st.sampled_from([-1.6, 1.6, -1.0, 1.0, 0.0]))
+
+
+@settings(max_examples=30, deadline=None)
+@given(points=st.lists(st.tuples(_coord, _coord), min_size=1, max_size=25),
+       dup=st.integers(0, 5), law=st.sampled_from(["lloyd", "lloyd-ff", "tvd-d1", "tvd-d2"]),
+       t=st.floats(0.0, 30.0))
+def test_any_positions_give_finite_saturated_commands(points, dup, law, t):
+    p = np.array(points + points[:dup], dtype=float)        # walls, corners, outside, duplicates
+    u, state = CoverageController(CoverageConfig(law=law), moving_density())(p, t)
+    assert state.ok, state.status
+    assert u.shape == p.shape and np.all(np.isfinite(u))
+    assert np.hypot(*u.T).max() <= 0.2 + 1e-12
+    assert len(state.cells) == len(p) and np.all(np.isfinite(state.centroids))

@@ -166,3 +166,7 @@ def test_profiles_reject_bad_parameters():
     bad = AnalyticDensity(0.05, (Bump(Fixed((0, 0)), Sine(0.1, 0.2, 4.0), Constant(1.0)),))
     with pytest.raises(ValueError, match="sigma"):
         bad.at(3.0)      # σ = 0.1 − 0.2 < 0
+    negative = AnalyticDensity(0.05, (Bump(Fixed((0, 0)), Constant(0.2), Sine(0.5, 1.0, 4.0)),))
+    negative.at(1.0)
+    with pytest.raises(ValueError, match="bump 0: weight"):
+        negative.at(3.0)  # w = 0.5 − 1.0 < 0
