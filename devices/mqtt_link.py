@@ -60,6 +60,7 @@ class MqttLink:
         self._connected = False
         self._state = f"connecting to {config.url}"
         self._closed = False
+        self._refused = False
         self.connections = 0
         self._connected_event = threading.Event()  # connected and every subscription acknowledged
         self._pending_subs: set[int] = set()
@@ -170,8 +171,10 @@ class MqttLink:
             if getattr(reason, "is_failure", False):
                 msg = f"broker {self.config.url} refused the connection: {reason}"
                 self.counters.add("connect_refused", msg)
+                self._refused = True
                 self._set_state(False, msg + f"; retrying (up to every {self.config.reconnect_max:g} s)")
                 return
+            self._refused = False
             self._no_delay(client)
             with self._lock:
                 self._pending_subs = set()
@@ -213,7 +216,7 @@ class MqttLink:
         self._set_state(False, msg)
 
     def _on_disconnect(self, client: mqtt.Client, userdata: object, flags: object, reason: object, props: object) -> None:
-        if self._closed:
+        if self._closed or self._refused:  # the refusal already says what happened
             return
         msg = f"lost connection to broker {self.config.url} ({reason}); reconnecting with back-off"
         self.counters.add("disconnects", msg)

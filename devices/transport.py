@@ -18,6 +18,7 @@ non-negative ints; v in m/s, ω in rad/s, LED colours ``(N, 3)`` ints 0–255.
 """
 from __future__ import annotations
 
+import threading
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Protocol, runtime_checkable
@@ -206,7 +207,7 @@ def check_command(ids: ArrayLike, v: ArrayLike, w: ArrayLike, leds: ArrayLike | 
     problems: list[str] = []
     raw_ids = np.asarray(ids).reshape(-1)
     if raw_ids.dtype.kind not in "iu":
-        as_float = np.asarray(raw_ids, dtype=float) if raw_ids.dtype.kind in "fb" else None
+        as_float = np.asarray(raw_ids, dtype=float) if raw_ids.dtype.kind == "f" else None
         if as_float is None or not np.all(np.isfinite(as_float)) or not np.all(as_float == np.round(as_float)):
             problems.append(f"robot ids must be integers, got dtype {raw_ids.dtype}: batch dropped")
             empty = np.empty(0)
@@ -250,11 +251,9 @@ def check_command(ids: ArrayLike, v: ArrayLike, w: ArrayLike, leds: ArrayLike | 
 
 
 class Counters:
-    """Named event counts (thread-safe enough for CPython: one dict, int increments under a lock)."""
+    """Named event counts, thread-safe, with the most recent problem message."""
 
     def __init__(self) -> None:
-        import threading
-
         self._lock = threading.Lock()
         self._counts: dict[str, int] = {}
         self.last_error: str | None = None

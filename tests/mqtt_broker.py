@@ -7,6 +7,7 @@ down and bring it back on the same port.
 """
 from __future__ import annotations
 
+import getpass
 import os
 import shutil
 import socket
@@ -28,15 +29,16 @@ def free_port() -> int:
 class Broker:
     """One mosquitto process on ``127.0.0.1:port``."""
 
-    def __init__(self, workdir: Path, port: int | None = None) -> None:
+    def __init__(self, workdir: Path, port: int | None = None, listener_conf: str = "allow_anonymous true\n") -> None:
         self.port = port or free_port()
         self.workdir = workdir
         self.conf = workdir / "mosquitto.conf"
         self.log = workdir / "mosquitto.log"
         self.conf.write_text(
             f"listener {self.port} 127.0.0.1\n"
-            "allow_anonymous true\n"
-            "persistence false\n"
+            + listener_conf
+            + f"user {getpass.getuser()}\n"  # as root, mosquitto would switch to 'mosquitto' and lose our files
+            + "persistence false\n"
             f"log_dest file {self.log}\n"
             "log_type error\nlog_type warning\nlog_type notice\n"
             "max_queued_messages 10000\n"
