@@ -23,6 +23,7 @@ import os
 import struct
 from bisect import bisect_right
 from collections import OrderedDict
+from itertools import accumulate
 from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
@@ -200,8 +201,11 @@ class Recording:
                                  f"({self.library}); this swarmdeck reads frame format {FRAME_FORMAT}: upgrade to play it")
         if not self._index_from_summary():
             self._index_by_scan(pos)
-        self._chunks.sort(key=lambda c: (c.start_ns, c.offset))
-        self._starts = [c.start_ns for c in self._chunks]
+        # File order is write order: frames are in time order across chunks. Chunk start times can
+        # dip (an input datagram stamped just before the previous chunk's last frame), so bisect
+        # on their running maximum.
+        self._chunks.sort(key=lambda c: c.offset)
+        self._starts = list(accumulate((c.start_ns for c in self._chunks), max))
 
     def _index_from_summary(self) -> bool:
         from mcap.reader import SeekingReader
@@ -429,9 +433,7 @@ class Recording:
         lo = None if start is None else self._ns(start)
         hi = None if end is None else self._ns(end)
         for i, ref in enumerate(self._chunks):
-            if hi is not None and ref.start_ns >= hi:
-                break
-            if lo is not None and ref.end_ns < lo:
+            if hi is not None and ref.start_ns >= hi or lo is not None and ref.end_ns < lo:
                 continue
             for ns, data in self._chunk_messages(i).get(topic, []):
                 if (lo is None or ns >= lo) and (hi is None or ns < hi):
@@ -442,8 +444,8 @@ class Recording:
         lo = None if start is None else self._ns(start)
         hi = None if end is None else self._ns(end)
         for i, ref in enumerate(self._chunks):
-            if hi is not None and ref.start_ns >= hi:
-                break
+            if hi is not None and self._starts[i] >= hi:
+                break  # frames are in file order: none of the later chunks has a frame before hi
             if lo is not None and ref.end_ns < lo:
                 continue
             for ns, fr in self._chunk_frames(i):

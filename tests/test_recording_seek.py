@@ -18,13 +18,16 @@ N_FRAMES = 240
 @pytest.fixture(scope="module")
 def recorded(tmp_path_factory):
     """A file of many small chunks; datagrams interleaved slightly *before* each frame so chunk
-    time ranges overlap the previous chunk's frames (as when input threads race the loop)."""
+    time ranges overlap the previous chunk's frames (as when input threads race the loop), and a
+    few stamped a second late, so chunk start times are not monotonic."""
     d = tmp_path_factory.mktemp("seek")
     path = d / "seek.mcap"
     frames = list(simulated_frames(n_robots=4, n_ticks=N_FRAMES, dt=0.05, seed=2, coverage=False))
     rec = Recorder(path, config=RecorderConfig(chunk_size=3000))
-    for f in frames:
+    for k, f in enumerate(frames):
         rec.write_datagram(b"x" * 40, ("h", 1), "udp", f.time - 0.07)
+        if k % 37 == 36:  # a datagram delivered a second late: chunk start times dip
+            rec.write_datagram(b"late", ("h", 2), "udp", f.time - 1.0)
         rec.write_frame(f)
     rec.close()
     # the same data without DataEnd and summary (the file a crash leaves): the reader scans it
