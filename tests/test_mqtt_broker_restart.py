@@ -58,9 +58,10 @@ def test_broker_restart_mid_run(mosquitto):
             return s if np.all((s["v"] == 0) & (s["w"] == 0)) else None
 
         stopped = wait_until(all_stopped, 5, "robots braking after the broker died")
-        # no command arrives after the kill (50 ms for bytes already in the socket buffer to be read),
-        # and each robot brakes exactly 0.5 s after its last command: stopped by t_kill + 0.5 s
-        assert np.all(stopped["last_command_time"] <= t_kill + 0.05)
+        # no command arrives after the kill (bytes already in the fleet's socket buffer may still be read a
+        # little later on a loaded machine: 0.25 s slack), and each robot brakes exactly 0.5 s after its
+        # last command (the firmware model): stopped by t_kill + 0.5 s
+        assert np.all(stopped["last_command_time"] <= t_kill + 0.25)
         assert np.all(stopped["timeouts"] >= 1)
         wait_until(lambda: not transport.status().connected, 5, "console noticing the lost broker")
         assert "broker" in transport.status().state
