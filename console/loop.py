@@ -132,6 +132,23 @@ class ConsoleDensity:
         return snap
 
 
+def _checked(sensed: Any) -> SensedPoses:
+    """A pose reading as arrays of the right shapes (ValueError naming the problem otherwise).
+    Rows with a non-finite pose are not seen (they get zero commands) and are drawn at the origin."""
+    ids = np.asarray(sensed.ids, dtype=np.int64).reshape(-1)
+    poses = np.asarray(sensed.poses, dtype=float)
+    seen = np.asarray(sensed.seen, dtype=bool).reshape(-1)
+    n = len(ids)
+    if poses.shape != (n, 3) or seen.shape != (n,):
+        raise ValueError(f"pose source gave ids {ids.shape}, poses {poses.shape}, seen {seen.shape}; "
+                         f"expected (N,), (N, 3), (N,)")
+    finite = np.all(np.isfinite(poses), axis=1)
+    if not finite.all():
+        poses = np.where(finite[:, None], poses, 0.0)
+        seen = seen & finite
+    return SensedPoses(ids, poses, seen)
+
+
 def _min_distance(points: NDArray[np.float64]) -> float:
     if len(points) < 2:
         return math.inf
@@ -385,7 +402,7 @@ class ControlLoop:
 
         # 1. sense
         try:
-            sensed = self.source.read(now)
+            sensed = _checked(self.source.read(now))
             self._last_sensed = sensed
             with self._lock:
                 self._alert("source", None)
@@ -399,19 +416,19 @@ class ControlLoop:
             sensed = SensedPoses(prev.ids, prev.poses, np.zeros(len(prev.ids), dtype=bool))
         image_ref = getattr(self.source, "image_ref", None)
         image_ref = image_ref if isinstance(image_ref, str) else None
-        ids = np.asarray(sensed.ids, dtype=np.int64)
-        poses = np.asarray(sensed.poses, dtype=float)
-        seen = np.asarray(sensed.seen, dtype=bool)
+        ids, poses, seen = sensed.ids, sensed.poses, sensed.seen
         n = len(ids)
         points = lookahead_points(poses, ell)
         t_sense = time.perf_counter()
 
         # 2. inputs
         contacts = ContactsFrame()
-        health: dict[str, str] = {"robots": self.source.health(), "commands": self.sink.health()} \
-            if self.source is not self.sink else {"robots": self.source.health()}
         with self._lock:
-            health_fns = list(self._health_fns.items())
+            health_fns = [("robots", self.source.health)]
+            if self.source is not self.sink:
+                health_fns.append(("commands", self.sink.health))
+            health_fns += list(self._health_fns.items())
+        health: dict[str, str] = {}
         for name, fn in health_fns:
             try:
                 health[name] = str(fn())

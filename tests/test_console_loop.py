@@ -229,3 +229,49 @@ def test_config_validation_names_the_field() -> None:
         SafetyParams(gamma=0.0)
     with pytest.raises(ValueError, match="law"):
         BehaviourParams(law="magic")
+
+
+class _FlakySource:
+    """A pose source that fails on demand (bad shapes, exceptions)."""
+
+    name = "flaky"
+
+    def __init__(self, inner) -> None:
+        self.inner, self.mode = inner, "ok"
+
+    def read(self, now: float):
+        if self.mode == "raise":
+            raise OSError("camera unplugged")
+        r = self.inner.read(now)
+        if self.mode == "shape":
+            return type(r)(r.ids, r.poses[:, :2], r.seen)
+        if self.mode == "nan":
+            p = r.poses.copy()
+            p[0] = np.nan
+            return type(r)(r.ids, p, r.seen)
+        return r
+
+    def health(self) -> str:
+        if self.mode == "raise":
+            raise RuntimeError("no health either")
+        return "ok"
+
+
+def test_failing_pose_source_stops_robots_and_loop_survives() -> None:
+    from swarmdeck.console.robots import SimulatedRobots
+    from swarmdeck.devices import ArenaConfig
+
+    sim = SimulatedRobots(4, ArenaConfig(seed=1))
+    src = _FlakySource(sim)
+    loop = ControlLoop(LoopConfig(n_robots=4, behaviour="rendezvous"), source=src, sink=sim)
+    assert not loop.tick().stopped
+    for mode, text in (("raise", "camera unplugged"), ("shape", "expected (N,), (N, 3), (N,)")):
+        src.mode = mode
+        f = loop.tick()
+        assert f.stopped and not f.seen.any() and any(text in a for a in f.alerts)
+    src.mode = "nan"
+    f = loop.tick()
+    assert not f.seen[0] and f.seen[1:].all() and f.v[0] == 0.0 and np.all(np.isfinite(f.poses))
+    src.mode = "ok"
+    f = loop.tick()
+    assert f.seen.all() and not f.alerts
