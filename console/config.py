@@ -52,10 +52,10 @@ def _build(cls: type, table: dict, name: str, path: Path, convert: dict[str, Any
     if extra:
         raise ConfigFileError(f"{path}: unknown key(s) {sorted(extra)} in [{name}]; expected some of {sorted(known)}")
     kw = dict(table)
-    for key, fn in (convert or {}).items():
-        if key in kw:
-            kw[key] = fn(kw[key])
     try:
+        for key, fn in (convert or {}).items():
+            if key in kw:
+                kw[key] = fn(kw[key])
         return cls(**kw)
     except (TypeError, ValueError) as exc:
         raise ConfigFileError(f"{path}: [{name}]: {exc}") from None
@@ -83,11 +83,11 @@ def load_settings(path: str | Path) -> ConsoleSettings:
     sp = _build(SafetyParams, _table(doc, "safety", p), "safety", p, {"gamma": float, "safety_distance": float})
     dp = _build(DensityParams, _table(doc, "density", p), "density", p)
     loop_kw: dict[str, Any] = {"behaviour_params": bp, "safety": sp, "density": dp}
-    for key, target in (("robots", "n_robots"), ("behaviour", "behaviour"), ("seed", "seed"), ("dt", "dt"),
-                        ("max_speed", "max_speed"), ("bounds", "bounds")):
-        if key in con:
-            loop_kw[target] = tuple(float(b) for b in con[key]) if key == "bounds" else con[key]
     try:
+        for key, target in (("robots", "n_robots"), ("behaviour", "behaviour"), ("seed", "seed"), ("dt", "dt"),
+                            ("max_speed", "max_speed"), ("bounds", "bounds")):
+            if key in con:
+                loop_kw[target] = tuple(float(b) for b in con[key]) if key == "bounds" else con[key]
         loop = LoopConfig(**loop_kw)
     except (TypeError, ValueError) as exc:
         raise ConfigFileError(f"{p}: [console]: {exc}") from None

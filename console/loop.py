@@ -466,6 +466,8 @@ class ControlLoop:
         nominal = np.zeros((n, 2))
         coverage = None
         try:
+            if n == 0:
+                raise BehaviourError("no robots to control (none seen or all excluded)")
             raw, state = behaviour(TickInput(poses.copy(), points.copy(), self._run_time, self.density,
                                              self.config.bounds, self.config.max_speed))
             arr = np.asarray(raw, dtype=float) if not isinstance(raw, np.ndarray) else raw.astype(float, copy=True)

@@ -56,6 +56,9 @@ def test_config_file_sets_everything(tmp_path) -> None:
     ("[behaviour]\nlaw = 'magic'\n", "law"),
     ("[extras]\nx = 1\n", "unknown table(s) ['extras']"),
     ("[console\n", "not valid TOML"),
+    ("[safety]\ngamma = 'strong'\n", "[safety]"),
+    ("[behaviour]\ngoals = [[0, 'a']]\n", "[behaviour]"),
+    ("[console]\nbounds = 3\n", "[console]"),
 ])
 def test_bad_config_files_are_named(tmp_path, body, message) -> None:
     p = tmp_path / "bad.toml"
