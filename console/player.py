@@ -215,6 +215,7 @@ class PlayerApp:
         self.server = viser.ViserServer(host=host, port=port, verbose=False)
         self.scene = ArenaScene(self.server, bounds=first.bounds)
         self._syncing = False
+        self._draw_lock = threading.RLock()
         self._stop = threading.Event()
         self._thread: threading.Thread | None = None
         self._series: dict[str, deque] = {k: deque(maxlen=600) for k in ("t", "dmin", "ds", "H", "active")}
@@ -305,6 +306,10 @@ class PlayerApp:
     # ------------------------------------------------------------------ drawing
     def refresh(self, force: bool = False) -> None:
         """Draw the player's frame if it changed, move the slider, update status and plots."""
+        with self._draw_lock:  # GUI callbacks and the playback thread both draw
+            self._refresh(force)
+
+    def _refresh(self, force: bool) -> None:
         p = self.player
         self.play_button.label = "Pause" if p.playing else "Play"
         if p.version == self._drawn_version and not force:

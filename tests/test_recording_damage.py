@@ -151,3 +151,15 @@ def test_undecodable_frames_are_skipped_with_a_warning(tmp_path):
     with open_recording(tmp_path / "mixed.mcap") as r:
         assert [f.tick for _, f in r.frames()] == [0, 1]
         assert sum("undecodable frame" in w for w in r.warnings) == 2
+
+
+def test_a_garbled_summary_falls_back_to_scanning(tmp_path, clean):
+    path, frames, _ = clean
+    data = bytearray(path.read_bytes())
+    summary_start = int.from_bytes(data[len(data) - 28: len(data) - 20], "little")
+    data[summary_start: len(data) - 37] = bytes(len(data) - 37 - summary_start)
+    p = tmp_path / "garbled.mcap"
+    p.write_bytes(bytes(data))
+    with open_recording(p) as r:
+        assert not r.indexed and r.warnings
+        assert _dicts(r) == [f.to_dict() for f in frames]
