@@ -58,6 +58,7 @@ class ConsoleGui:
                                           ("t", "dmin", "ds", "active", "H", "mpc", "tick_ms", "solve_ms")}
         self._last_gui_update = 0.0
         self._last_tick_time: float | None = None
+        self._t0: float | None = None
         self._rate = 0.0
         self.messages: deque[str] = deque(maxlen=6)
 
@@ -342,7 +343,9 @@ class ConsoleGui:
 
     def _append(self, frame: Frame, b: Any, c: Any) -> None:
         s = self._series
-        s["t"].append(frame.time)
+        if self._t0 is None:
+            self._t0 = frame.time
+        s["t"].append(frame.time - self._t0)  # seconds since the panel saw its first frame
         s["dmin"].append(b.min_distance if b is not None and math.isfinite(b.min_distance) else math.nan)
         s["ds"].append(frame.params.get("safety_distance", math.nan))
         s["active"].append(b.n_active if b is not None else 0)
