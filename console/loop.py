@@ -241,7 +241,13 @@ class ControlLoop:
 
     @property
     def run_time(self) -> float:
+        """Behaviour time, s: advances by dt only on ticks with motion."""
         return self._run_time
+
+    @property
+    def pending_steps(self) -> int:
+        """Ticks with motion still to run after :meth:`step` (0 when none)."""
+        return self._steps
 
     def run(self) -> None:
         """Resume (ignored while the emergency stop is engaged)."""

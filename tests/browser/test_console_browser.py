@@ -93,7 +93,7 @@ def test_robot_positions_follow_the_simulation(page, console) -> None:
     before = loop.latest.poses[:, :2].tolist()
     page.wait_for_function(POSITIONS_MATCH, arg=[before, 1e-4], polling="raf", timeout=20000)
     loop.step(30)
-    wait_until(lambda: loop._steps == 0)
+    wait_until(lambda: loop.pending_steps == 0)
     settled = loop.latest.tick
     wait_until(lambda: loop.latest.tick >= settled + 2)  # a paused frame sensed after the last step
     after = loop.latest.poses[:, :2].tolist()
