@@ -105,14 +105,29 @@ def _split(tri: NDArray[np.float64], cell: NDArray[np.intp]
     return out, np.tile(cell, 4)
 
 
+def _bisect(tri: NDArray[np.float64], cell: NDArray[np.intp], len2: NDArray[np.float64]
+            ) -> tuple[NDArray[np.float64], NDArray[np.intp]]:
+    """Split every triangle (T, 3, 2) in two at the midpoint of its longest edge, keeping the
+    orientation. len2 (T, 3): squared lengths of the edges opposite vertices 0, 1, 2."""
+    k = np.argmax(len2, axis=1)
+    perm = np.array([[0, 1, 2], [1, 2, 0], [2, 0, 1]])[k]           # longest edge opposite vertex 0
+    t = tri[np.arange(tri.shape[0])[:, None], perm]
+    a, b, c = t[:, 0], t[:, 1], t[:, 2]
+    m = 0.5 * (b + c)
+    out = np.concatenate([np.stack([a, b, m], 1), np.stack([a, m, c], 1)])
+    return out, np.tile(cell, 2)
+
+
 def _refine(tri: NDArray[np.float64], cell: NDArray[np.intp], origin: NDArray[np.float64],
             density: GaussianMixture, opts: QuadratureOptions
             ) -> tuple[NDArray[np.float64], NDArray[np.intp]]:
     """Adaptive subdivision. tri (T, 3, 2) in coordinates relative to ``origin[cell]``.
 
-    Every triangle is split ``min_level`` times; then, round by round, the triangles that are
-    within ``reach``·σ_k of a bump k and wider than ``resolution``·σ_k are split again, up to
-    ``max_level`` rounds. Returns the final triangles and their cells.
+    Every triangle is split 4-way ``min_level`` times; then, round by round, the triangles that
+    are within ``reach``·σ_k of a bump k and whose longest edge exceeds ``resolution``·σ_k are
+    bisected at their longest edge, up to 2·(max_level − min_level) rounds (each round halves
+    the area; longest-edge bisection also repairs the slivers of the fan). Returns the final
+    triangles and their cells.
     """
     for _ in range(opts.min_level):
         tri, cell = _split(tri, cell)
@@ -123,11 +138,12 @@ def _refine(tri: NDArray[np.float64], cell: NDArray[np.intp], origin: NDArray[np
     mu = density.mu[live]
     reach = opts.reach * sig
     done_t, done_c = [], []
-    for _ in range(opts.max_level - opts.min_level):
+    for _ in range(2 * (opts.max_level - opts.min_level)):
         g = tri.mean(axis=1)                                               # local centroid
         rad = np.sqrt(((tri - g[:, None]) ** 2).sum(axis=2)).max(axis=1)
-        edge = tri - tri[:, [1, 2, 0]]
-        diam = np.sqrt((edge ** 2).sum(axis=2)).max(axis=1)
+        e = tri[:, [2, 0, 1]] - tri[:, [1, 2, 0]]                          # edge opposite vertex i
+        len2 = (e ** 2).sum(axis=2)
+        diam = np.sqrt(len2.max(axis=1))
         gw = g + origin[cell]
         dist = np.sqrt(((gw[:, None, :] - mu[None]) ** 2).sum(axis=2)) - rad[:, None]   # (T, K)
         need = ((dist < reach[None]) & (diam[:, None] > opts.resolution * sig[None])).any(axis=1)
@@ -135,7 +151,7 @@ def _refine(tri: NDArray[np.float64], cell: NDArray[np.intp], origin: NDArray[np
             break
         done_t.append(tri[~need])
         done_c.append(cell[~need])
-        tri, cell = _split(tri[need], cell[need])
+        tri, cell = _bisect(tri[need], cell[need], len2[need])
     done_t.append(tri)
     done_c.append(cell)
     return np.concatenate(done_t), np.concatenate(done_c)
