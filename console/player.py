@@ -28,6 +28,7 @@ from swarmdeck.console.recording_reader import Recording
 
 RATE_MIN, RATE_MAX = 0.1, 4.0
 RATES: tuple[float, ...] = (0.1, 0.25, 0.5, 1.0, 2.0, 4.0)
+PLOT_BACKFILL = 5.0  # s of recording shown in the plots after a seek
 
 
 class Player:
@@ -250,6 +251,10 @@ class PlayerApp:
                 ({"label": "t (s)"}, {"label": "min distance (m)", "stroke": "#1f77b4", "width": 2},
                  {"label": "D_s (m)", "stroke": "#d62728", "width": 1, "dash": [6, 4]}),
                 title="Minimum distance vs D_s", aspect=2.0, scales={"x": {"time": False}})
+            self.plot_active = gui.add_uplot(
+                (np.zeros(1), np.zeros(1)),
+                ({"label": "t (s)"}, {"label": "active constraints", "stroke": "#ff7f0e", "width": 2}),
+                title="Active barrier constraints", aspect=2.5, scales={"x": {"time": False}})
             self.plot_H = gui.add_uplot(
                 (np.zeros(1), np.zeros(1)),
                 ({"label": "t (s)"}, {"label": "H", "stroke": "#2ca02c", "width": 2}),
@@ -279,7 +284,6 @@ class PlayerApp:
         if self._syncing:
             return
         self.player.seek(float(self.slider.value))
-        self._reset_series()
         self.refresh()
 
     def _on_play(self) -> None:
@@ -298,6 +302,15 @@ class PlayerApp:
         a, b = self.player.range
         self.range_text.content = ("A/B: whole recording" if self.player.a is None and self.player.b is None
                                    else f"A/B: {a:.2f} s – {b:.2f} s")
+
+    def _sample(self, t: float, frame: Frame) -> None:
+        s = self._series
+        s["t"].append(t)
+        b = frame.barrier
+        s["dmin"].append(b.min_distance if b is not None and math.isfinite(b.min_distance) else float("nan"))
+        s["ds"].append(b.safety_distance if b is not None else 0.17)
+        s["active"].append(float(b.n_active) if b is not None else float("nan"))
+        s["H"].append(frame.coverage.cost_H if frame.coverage is not None else float("nan"))
 
     def _reset_series(self) -> None:
         for d in self._series.values():
@@ -323,12 +336,13 @@ class PlayerApp:
         finally:
             self._syncing = False
         s = self._series
-        s["t"].append(p.frame_time)
-        b = frame.barrier
-        s["dmin"].append(b.min_distance if b is not None and math.isfinite(b.min_distance) else float("nan"))
-        s["ds"].append(b.safety_distance if b is not None else 0.17)
-        s["H"].append(frame.coverage.cost_H if frame.coverage is not None else float("nan"))
+        if s["t"] and not 0.0 < p.frame_time - s["t"][-1] <= 1.0:  # a jump: plot the seconds before it
+            self._reset_series()
+            for t, f in self.recording.frames(max(0.0, p.frame_time - PLOT_BACKFILL), p.frame_time):
+                self._sample(t, f)
+        self._sample(p.frame_time, frame)
         self.plot_dist.data = tuple(np.asarray(s[k], dtype=float) for k in ("t", "dmin", "ds"))
+        self.plot_active.data = tuple(np.asarray(s[k], dtype=float) for k in ("t", "active"))
         self.plot_H.data = tuple(np.asarray(s[k], dtype=float) for k in ("t", "H"))
         state = "playing" if p.playing else "paused"
         self.status.content = (f"**{state}** {p.rate:g}x · t = {p.frame_time:.2f} / {p.duration:.2f} s · "
