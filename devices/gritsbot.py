@@ -75,9 +75,8 @@ def wheel_scale(v: ArrayLike, w: ArrayLike, params: GritsBotParams) -> FloatArra
     """
     right, left = unicycle_to_wheels(v, w, params)
     peak = np.maximum(np.abs(right), np.abs(left))
-    with np.errstate(divide="ignore", invalid="ignore"):
-        s = np.where(peak > params.max_wheel_speed, params.max_wheel_speed / peak, 1.0)
-    return s
+    over = peak > params.max_wheel_speed
+    return np.divide(params.max_wheel_speed, peak, out=np.ones_like(peak), where=over)
 
 
 def limit_unicycle(v: ArrayLike, w: ArrayLike, params: GritsBotParams) -> tuple[FloatArray, FloatArray, NDArray[np.bool_]]:
