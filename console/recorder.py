@@ -190,7 +190,7 @@ class Recorder:
         self._thread: threading.Thread | None = None
         try:
             self._open()
-        except (OSError, ValueError) as exc:
+        except Exception as exc:  # noqa: BLE001 - unwritable path, full disk, …: record nothing, run on
             self._fail("disabled", f"recording disabled: cannot write {self.path}: {_reason(exc)}")
             return
         self._thread = threading.Thread(target=self._run, name="swarmdeck-recorder", daemon=True)
@@ -372,7 +372,7 @@ class Recorder:
             with self._lock:
                 self._state = "closed"
                 self._message = f"recorded {self._counts['frames']} frames to {self.path}"
-        except OSError as exc:
+        except Exception as exc:  # noqa: BLE001 - a full disk above all; whatever it is, the run goes on
             self._fail("failed", f"recording stopped: cannot write {self.path}: {_reason(exc)}; the run goes on")
 
     def _fail(self, state: str, message: str) -> None:
