@@ -99,13 +99,15 @@ class GaussianMixture:
     cov, cov_dot : keyword-only alternative to ``sigma``/``sigma_dot`` for anisotropic bumps,
         (K, 2, 2) symmetric positive-definite covariances [m²] and their rates [m²/s].
 
+    Derived: ``cov`` (K, 2, 2) and ``cov_dot`` always; ``std_min``/``std_max`` (K,) the smallest
+    and largest standard deviation of each bump [m]; ``isotropic``.
     The snapshot is immutable and is itself a :class:`Density` (``at(t)`` returns ``self``).
     Raises ``ValueError`` naming the argument for NaN, negative weights or floor, σ ≤ 0,
     non-positive-definite covariances, wrong shapes, or a density with zero mass.
     """
 
     __slots__ = ("floor", "mu", "sigma", "weight", "mu_dot", "sigma_dot", "weight_dot",
-                 "cov", "cov_dot", "isotropic", "_prec", "_qdot", "_cq", "_ct")
+                 "cov", "cov_dot", "isotropic", "std_min", "std_max", "_prec", "_qdot", "_cq", "_ct")
 
     def __init__(
         self,
@@ -141,6 +143,7 @@ class GaussianMixture:
             s = np.sqrt(np.sqrt(np.linalg.det(c))) if k else np.zeros(0)
             s_dot = np.zeros(k)
             iso = False
+            std_lo, std_hi = np.sqrt(eig[:, 0]), np.sqrt(eig[:, 1])
         else:
             if cov_dot is not None:
                 raise ValueError("cov_dot needs cov")
@@ -152,6 +155,7 @@ class GaussianMixture:
             c = (s ** 2)[:, None, None] * eye
             c_dot = (2.0 * s * s_dot)[:, None, None] * eye
             iso = True
+            std_lo, std_hi = s.copy(), s.copy()
         with np.errstate(over="ignore"):
             total = f + w.sum()
         if not np.isfinite(total):
@@ -170,11 +174,12 @@ class GaussianMixture:
         ct[0] -= (mu_arr * pm).sum(axis=1)
         ct[1:3] += pm.T
         ct = ct * w
-        _readonly(mu_arr, s, w, m_dot, s_dot, w_dot, c, c_dot, prec, qdot, cq, ct)
+        _readonly(mu_arr, s, w, m_dot, s_dot, w_dot, c, c_dot, prec, qdot, cq, ct, std_lo, std_hi)
         object.__setattr__(self, "floor", f)
         for name, val in (("mu", mu_arr), ("sigma", s), ("weight", w), ("mu_dot", m_dot),
                           ("sigma_dot", s_dot), ("weight_dot", w_dot), ("cov", c),
-                          ("cov_dot", c_dot), ("isotropic", iso), ("_prec", prec), ("_qdot", qdot),
+                          ("cov_dot", c_dot), ("isotropic", iso), ("std_min", std_lo),
+                          ("std_max", std_hi), ("_prec", prec), ("_qdot", qdot),
                           ("_cq", cq), ("_ct", ct)):
             object.__setattr__(self, name, val)
 
@@ -201,8 +206,7 @@ class GaussianMixture:
         live = (self.weight > 0.0) | (self.weight_dot != 0.0)
         if not np.any(live):
             return float("inf")
-        eig = np.linalg.eigvalsh(self.cov[live])
-        return float(np.sqrt(eig[:, 0].min()))
+        return float(self.std_min[live].min())
 
     @property
     def peak(self) -> float:
@@ -244,9 +248,11 @@ class GaussianMixture:
         if k == 0 or m == 0:
             return phi.reshape(shape), phi_t.reshape(shape)
         local = k > 8
-        step = 1024 if local else max(1, (1 << 21) // k)     # bound the (M, K) temporaries
-        if local:
-            reach = 9.0 * np.sqrt(np.linalg.eigvalsh(self.cov)[:, 1])
+        # Chunks keep the (M, K) temporaries small; products small enough for OpenBLAS to run
+        # single-threaded use BLAS, larger ones einsum: a threaded GEMM on a busy CPU is 100×
+        # slower in wall time than either (measured while other processes shared the cores).
+        step = 1024 if local else max(1, 30000 // k)
+        reach = 9.0 * self.std_max if local else None
         for lo in range(0, m, step):
             chunk = flat[lo:lo + step]
             cq, ct, w, wd = self._cq, self._ct, self.weight, self.weight_dot
@@ -259,13 +265,15 @@ class GaussianMixture:
                     cq, ct, w, wd = cq[:, near], ct[:, near], w[near], wd[near]
             x, y = chunk[:, 0], chunk[:, 1]
             feat = np.column_stack([np.ones_like(x), x, y, x * x, x * y, y * y])
-            # einsum rather than @: multi-threaded BLAS on these thin products is slower and
-            # thrashes when the control loop shares the CPU with other work.
-            e = np.exp(-0.5 * np.einsum("mf,fk->mk", feat, cq))
+            small = chunk.shape[0] * cq.shape[1] * 6 < 200_000
+
+            def poly(c: NDArray[np.float64]) -> NDArray[np.float64]:
+                return feat @ c if small else np.einsum("mf,fk->mk", feat, c)
+
+            e = np.exp(-0.5 * poly(cq))
             phi[lo:lo + step] += np.einsum("mk,k->m", e, w)
             if rate:
-                phi_t[lo:lo + step] = (np.einsum("mk,k->m", e, wd)
-                                       + np.einsum("mk,mk->m", e, np.einsum("mf,fk->mk", feat, ct)))
+                phi_t[lo:lo + step] = np.einsum("mk,k->m", e, wd) + np.einsum("mk,mk->m", e, poly(ct))
         return phi.reshape(shape), phi_t.reshape(shape)
 
     # ------------------------------------------------------------------ misc

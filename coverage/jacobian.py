@@ -39,12 +39,15 @@ class EdgeOptions:
         if not (1 <= self.nodes <= 64 and self.resolution > 0 and self.reach > 0
                 and self.max_pieces >= 1):
             raise ValueError("need 1 <= nodes <= 64, resolution > 0, reach > 0, max_pieces >= 1")
+        x, w = np.polynomial.legendre.leggauss(self.nodes)
+        x, w = 0.5 * (x + 1.0), 0.5 * w            # on [0, 1], weights summing to 1
+        x.setflags(write=False)
+        w.setflags(write=False)
+        object.__setattr__(self, "_gl", (x, w))
 
-
-def _gauss_legendre(n: int) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-    """Nodes in [0, 1] and weights summing to 1."""
-    x, w = np.polynomial.legendre.leggauss(n)
-    return 0.5 * (x + 1.0), 0.5 * w
+    def gauss_legendre(self) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """Gauss–Legendre nodes on [0, 1] and weights summing to 1 (read-only)."""
+        return self._gl  # type: ignore[attr-defined]
 
 
 def _pieces(a: NDArray[np.float64], b: NDArray[np.float64], density: GaussianMixture,
@@ -54,7 +57,7 @@ def _pieces(a: NDArray[np.float64], b: NDArray[np.float64], density: GaussianMix
     live = (density.weight > 0.0) | (density.weight_dot != 0.0)
     if not np.any(live) or e == 0:
         return np.ones(e, dtype=np.intp)
-    sig = np.sqrt(np.linalg.eigvalsh(density.cov[live])[:, 0])
+    sig = density.std_min[live]
     mu = density.mu[live]
     mid = 0.5 * (a + b)
     length = np.hypot(*(b - a).T)
@@ -77,7 +80,7 @@ def centroid_jacobian(vor: BoundedVoronoi, moments: CellMoments, density: Gaussi
     seg = vor.vertices[vor.edge_vertices]                                  # (E, 2, 2)
     a, b = seg[:, 0], seg[:, 1]
     pieces = _pieces(a, b, density, opts)
-    x, w = _gauss_legendre(opts.nodes)
+    x, w = opts.gauss_legendre()
     # Node positions along every edge: piece k of n_e, node x_l → s = (k + x_l) / n_e.
     edge = np.repeat(np.arange(pairs.shape[0]), pieces)
     first = np.repeat(np.cumsum(pieces) - pieces, pieces)

@@ -134,7 +134,7 @@ def _refine(tri: NDArray[np.float64], cell: NDArray[np.intp], origin: NDArray[np
     live = (density.weight > 0.0) | (density.weight_dot != 0.0)
     if not np.any(live) or opts.max_level == opts.min_level:
         return tri, cell
-    sig = np.sqrt(np.linalg.eigvalsh(density.cov[live])[:, 0])            # (K,)
+    sig = density.std_min[live]            # (K,)
     mu = density.mu[live]
     reach = opts.reach * sig
     done_t, done_c = [], []

@@ -129,8 +129,8 @@ class BoundedVoronoi:
         ang = np.arctan2(a[:, 1], a[:, 0])
         order = np.lexsort((ang, self.tri_cell))
         verts = self.vertices[self.tri_a[order]]
-        counts = np.bincount(self.tri_cell, minlength=self.n)
-        return np.split(verts, np.cumsum(counts)[:-1])
+        ends = np.cumsum(np.bincount(self.tri_cell, minlength=self.n)).tolist()
+        return [verts[a:b] for a, b in zip([0] + ends[:-1], ends)]
 
     def neighbours_of(self, i: int) -> NDArray[np.intp]:
         """Robots sharing an edge with robot i."""
