@@ -122,7 +122,7 @@ class ConsoleApp:
         return self
 
     def wait(self, duration: float | None = None) -> None:
-        """Block until ``duration`` s of loop time have passed (forever when None)."""
+        """Block for ``duration`` s of wall time (forever when None) while the threads run."""
         start = time.monotonic()
         while duration is None or time.monotonic() - start < duration:
             time.sleep(0.1)
