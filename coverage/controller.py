@@ -11,7 +11,7 @@ Example::
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, fields
 from typing import Any
 
 import numpy as np
@@ -72,6 +72,32 @@ class CoverageConfig:
             raise ValueError("need 0 < wall_margin < 0.01 m and 0 <= min_separation < 0.1 m")
         if int(self.packing_every) < 1:
             raise ValueError(f"packing_every must be >= 1, got {self.packing_every!r}")
+
+    @classmethod
+    def from_dict(cls, data: dict[str, Any]) -> "CoverageConfig":
+        """Build from a plain dict (e.g. a TOML table); ``quadrature`` and ``edges`` may be
+        nested tables. Raises ValueError naming unknown keys or bad values."""
+        if not isinstance(data, dict):
+            raise ValueError(f"coverage config must be a table/dict, got {type(data).__name__}")
+        known = {f.name for f in fields(cls)}
+        extra = sorted(set(data) - known)
+        if extra:
+            raise ValueError(f"unknown coverage config keys {extra}; known: {sorted(known)}")
+        kw = dict(data)
+        for key, typ in (("quadrature", QuadratureOptions), ("edges", EdgeOptions)):
+            if isinstance(kw.get(key), dict):
+                sub = kw[key]
+                known_sub = {f.name for f in fields(typ)}
+                bad = sorted(set(sub) - known_sub)
+                if bad:
+                    raise ValueError(f"unknown coverage.{key} keys {bad}; known: {sorted(known_sub)}")
+                kw[key] = typ(**sub)
+        if "bounds" in kw:
+            kw["bounds"] = tuple(kw["bounds"])
+        try:
+            return cls(**kw)
+        except TypeError as exc:
+            raise ValueError(f"bad coverage config: {exc}") from exc
 
 
 @dataclass(frozen=True)

@@ -113,3 +113,19 @@ def test_commands_are_saturated_and_finite(law, rng):
 def test_config_validation(kwargs):
     with pytest.raises(ValueError):
         CoverageConfig(**kwargs)
+
+
+def test_config_from_a_toml_table():
+    import tomllib
+
+    cfg = CoverageConfig.from_dict(tomllib.loads(
+        'law = "tvd-d2"\nkappa = 2.0\nbounds = [-2.0, 2.0, -1.0, 1.0]\n'
+        '[quadrature]\nresolution = 0.8\n[edges]\nnodes = 8\n'))
+    assert cfg.law == "tvd-d2" and cfg.kappa == 2.0 and cfg.bounds == (-2.0, 2.0, -1.0, 1.0)
+    assert cfg.quadrature.resolution == 0.8 and cfg.edges.nodes == 8
+    with pytest.raises(ValueError, match="unknown coverage config keys"):
+        CoverageConfig.from_dict({"lawn": "lloyd"})
+    with pytest.raises(ValueError, match="coverage.quadrature"):
+        CoverageConfig.from_dict({"quadrature": {"fineness": 2}})
+    with pytest.raises(ValueError, match="kappa"):
+        CoverageConfig.from_dict({"kappa": -1.0})
