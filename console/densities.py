@@ -66,6 +66,8 @@ class Bump:
     weight: float
     born: float
     dying_since: float | None = None
+    velocity: tuple[float, float] = (0.0, 0.0)  # m/s, estimated from the last two drags
+    moved_at: float | None = None  # run time of the last drag, s
 
 
 @dataclass
@@ -73,11 +75,16 @@ class BumpSet:
     """Bumps painted in the browser (thread-safe: GUI threads edit, the loop reads).
 
     Weights ramp in over ``ramp`` s after :meth:`add` and out after :meth:`remove`
-    with a smoothstep, so φ_t stays finite (REFERENCE.md §5). Times are the
-    loop's run time (s), passed in by the caller.
+    with a smoothstep, so φ_t stays finite (REFERENCE.md §5). A bump being dragged
+    (:meth:`move`) gets a velocity from its last two positions (if they are at most
+    ``max_gap`` s apart) and is extrapolated along it for up to ``extrapolate`` s, with
+    μ̇ reported, so the time-varying coverage laws see the motion (as the contact
+    density does for touches). Times are the loop's run time (s), passed in by the caller.
     """
 
     ramp: float = 0.4
+    extrapolate: float = 0.1
+    max_gap: float = 0.5
     sigma_range: tuple[float, float] = (0.05, 1.0)
     weight_range: tuple[float, float] = (0.0, 5.0)
     max_bumps: int = 32
@@ -109,14 +116,26 @@ class BumpSet:
             self.revision += 1
             return bid
 
-    def move(self, bid: int, mu: ArrayLike) -> None:
+    def move(self, bid: int, mu: ArrayLike, t: float | None = None) -> None:
+        """Put bump ``bid`` at ``mu`` (m) at run time ``t`` (s; None: a jump, no velocity)."""
         m = np.asarray(mu, dtype=float).reshape(-1)[:2]
         if m.shape != (2,) or not np.all(np.isfinite(m)):
             raise ValueError(f"bump centre must be a finite (x, y) in m, got {mu!r}")
         with self._lock:
-            if bid in self._bumps:
-                self._bumps[bid].mu = (float(m[0]), float(m[1]))
-                self.revision += 1
+            b = self._bumps.get(bid)
+            if b is None:
+                return
+            if t is None:
+                b.velocity, b.moved_at = (0.0, 0.0), None
+            else:
+                gap = None if b.moved_at is None else float(t) - b.moved_at
+                if gap is not None and 0.0 < gap <= self.max_gap:
+                    b.velocity = ((m[0] - b.mu[0]) / gap, (m[1] - b.mu[1]) / gap)
+                elif gap is None or gap > self.max_gap:
+                    b.velocity = (0.0, 0.0)
+                b.moved_at = float(t)  # gap == 0 (same tick): keep the last velocity estimate
+            b.mu = (float(m[0]), float(m[1]))
+            self.revision += 1
 
     def update(self, bid: int, sigma: float | None = None, weight: float | None = None) -> None:
         with self._lock:
@@ -158,6 +177,8 @@ class BumpSet:
             if not bumps:
                 return None
             mu = np.array([b.mu for b in bumps])
+            vel = np.array([b.velocity for b in bumps])
+            since = np.array([np.nan if b.moved_at is None else t - b.moved_at for b in bumps])
             sigma = np.array([b.sigma for b in bumps])
             w = np.array([b.weight for b in bumps])
             born = np.array([b.born for b in bumps])
@@ -169,7 +190,11 @@ class BumpSet:
         ds_out = np.where(np.isnan(dying), 0.0, ds_out)
         scale = s_in * s_out
         rate = (ds_in * s_out - s_in * ds_out) / self.ramp
-        return GaussianMixture(floor, mu=mu, sigma=sigma, weight=w * scale, weight_dot=w * rate)
+        since = np.nan_to_num(since, nan=np.inf)
+        moving = (since >= 0.0) & (since < self.extrapolate)
+        mu = mu + vel * np.clip(since, 0.0, self.extrapolate)[:, None] * np.isfinite(since)[:, None]
+        return GaussianMixture(floor, mu=mu, sigma=sigma, weight=w * scale, weight_dot=w * rate,
+                               mu_dot=vel * moving[:, None])
 
 
 def merge_mixtures(parts: Sequence[GaussianMixture | None], floor: float) -> GaussianMixture:

@@ -346,7 +346,7 @@ class ControlLoop:
     def move_bump(self, bid: int, xy: Any) -> None:
         x0, x1, y0, y1 = self.config.bounds
         p = np.asarray(xy, dtype=float).reshape(-1)[:2]
-        self.bumps.move(bid, np.clip(p, [x0, y0], [x1, y1]))
+        self.bumps.move(bid, np.clip(p, [x0, y0], [x1, y1]), self._run_time)
 
     def update_bump(self, bid: int, sigma: float | None = None, weight: float | None = None) -> None:
         self.bumps.update(bid, sigma, weight)
