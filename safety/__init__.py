@@ -1,1 +1,29 @@
-"""swarmdeck.safety"""
+"""swarmdeck.safety: barrier certificates that keep the robots apart and inside the arena.
+
+``SafetyFilter(BarrierConfig()).filter(points, nominal, obstacles=None) -> (safe, diag)``
+for single-integrator controlled points (look-ahead points), and
+``UnicycleSafetyFilter().filter(poses, v, w, obstacles=None) -> (v, w, diag)``
+for unicycle robots with wheel limits (REFERENCE.md §3, paper §IV-B).
+"""
+from .config import BarrierConfig, UnicycleParams
+from .diagnostics import BarrierDiagnostics
+from .filter import SafetyFilter
+from .unicycle import (
+    UnicycleSafetyFilter,
+    lookahead_points,
+    si_to_unicycle,
+    unicycle_to_si,
+    wheel_speeds,
+)
+
+__all__ = [
+    "BarrierConfig",
+    "BarrierDiagnostics",
+    "SafetyFilter",
+    "UnicycleParams",
+    "UnicycleSafetyFilter",
+    "lookahead_points",
+    "si_to_unicycle",
+    "unicycle_to_si",
+    "wheel_speeds",
+]

@@ -1,0 +1,155 @@
+"""Configuration of the barrier certificates (REFERENCE.md §1, §3).
+
+Everything is in metres, seconds and radians. The safety distance ``D_s`` is
+applied to the *controlled points* handed to the filter (the look-ahead points
+of the robots): the default 0.17 m is rps's ``0.12 + ℓ`` with ℓ = 0.05, and
+also ``0.11 + 2·0.03``: two GRITSBots (Ø 0.11 m) whose look-ahead points
+(ℓ = 0.03 m) are 0.17 m apart cannot touch.
+
+Discrete-time note: the certificates are continuous-time conditions applied
+once per control period ``dt``. With the cubic class-K function the closed loop
+``x ← x + u·dt`` keeps ``h ≥ 0`` exactly as long as ``γ·dt·h² ≤ 1`` wherever a
+row can bind (true for the defaults by a factor > 10); with the linear one it
+needs ``γ·dt ≤ 1`` (e.g. γ ≤ 30 at dt = 0.033 s).
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Literal
+
+DEFAULT_BOUNDS: tuple[float, float, float, float] = (-1.6, 1.6, -1.0, 1.0)
+
+
+@dataclass(frozen=True)
+class BarrierConfig:
+    """Parameters of the single-integrator barrier QP (REFERENCE.md §3).
+
+    safety_distance: D_s in m between controlled points (rps classic: 0.17).
+    gamma: barrier gain γ (rps: 100).
+    class_k: ``"cubic"`` κ(h) = h³ (rps) or ``"linear"`` κ(h) = h (paper).
+    max_speed: bound on the *solution's* speed ‖u_i‖ ≤ v_max in m/s (0.2).
+    bounds: arena rectangle (x_min, x_max, y_min, y_max) in m.
+    wall_margin: distance the controlled point keeps from each wall, m; None → D_s/2 (rps).
+    wall_gain: wall rows use ``wall_gain·γ·κ(δ)`` with δ the clearance beyond the margin (rps 0.4).
+    dt: control period in s; widens the neighbour radius by 2·v_max·dt so the
+        candidate set also covers the next tick (REFERENCE.md §1: 0.033).
+    recovery: robots already inside the unsafe set (h < 0) get separating
+        commands (hard "no further approach" rows plus soft separation at
+        ``recovery_speed``); False keeps the plain rows, which can be infeasible.
+    recovery_speed: separation speed (m/s) aimed for along each violated row.
+    recovery_weight: penalty weight of the soft separation rows relative to ‖u − û‖².
+    solver: ``"auto"`` (pass-through check, active set certified by KKT, clarabel
+        fallback) or ``"clarabel"`` (always the interior-point solver).
+    max_active_set_iterations: active-set iterations before falling back to clarabel.
+    clarabel_max_iter, clarabel_tol: clarabel's max_iter and tol_gap_abs/rel/tol_feas.
+    """
+
+    safety_distance: float = 0.17
+    gamma: float = 100.0
+    class_k: Literal["cubic", "linear"] = "cubic"
+    max_speed: float = 0.2
+    bounds: tuple[float, float, float, float] = DEFAULT_BOUNDS
+    wall_margin: float | None = None
+    wall_gain: float = 0.4
+    dt: float = 0.033
+    recovery: bool = True
+    recovery_speed: float = 0.05
+    recovery_weight: float = 100.0
+    solver: Literal["auto", "clarabel"] = "auto"
+    max_active_set_iterations: int = 40
+    clarabel_max_iter: int = 100
+    clarabel_tol: float = 1e-9
+
+    def __post_init__(self) -> None:
+        checks = [
+            (self.safety_distance > 0, "safety_distance must be > 0 m"),
+            (self.gamma > 0, "gamma must be > 0"),
+            (self.class_k in ("cubic", "linear"), "class_k must be 'cubic' or 'linear'"),
+            (self.max_speed > 0, "max_speed must be > 0 m/s"),
+            (self.wall_gain > 0, "wall_gain must be > 0"),
+            (self.dt >= 0, "dt must be >= 0 s"),
+            (self.recovery_speed >= 0, "recovery_speed must be >= 0 m/s"),
+            (self.recovery_weight > 0, "recovery_weight must be > 0"),
+            (self.solver in ("auto", "clarabel"), "solver must be 'auto' or 'clarabel'"),
+            (self.max_active_set_iterations >= 1, "max_active_set_iterations must be >= 1"),
+            (self.clarabel_max_iter >= 1, "clarabel_max_iter must be >= 1"),
+            (0 < self.clarabel_tol < 1e-3, "clarabel_tol must be in (0, 1e-3)"),
+            (len(self.bounds) == 4, "bounds must be (x_min, x_max, y_min, y_max)"),
+        ]
+        for ok, message in checks:
+            if not ok:
+                raise ValueError(f"BarrierConfig: {message}")
+        x_min, x_max, y_min, y_max = (float(v) for v in self.bounds)
+        m = self.margin
+        if not all(math.isfinite(v) for v in (x_min, x_max, y_min, y_max)):
+            raise ValueError("BarrierConfig: bounds must be finite")
+        if m < 0 or x_max - x_min <= 2 * m or y_max - y_min <= 2 * m:
+            raise ValueError(
+                f"BarrierConfig: bounds {self.bounds} leave no room inside the wall margin {m} m"
+            )
+
+    @property
+    def margin(self) -> float:
+        """Wall margin in m (``wall_margin`` or D_s/2)."""
+        return self.safety_distance / 2 if self.wall_margin is None else float(self.wall_margin)
+
+    def kappa(self, h):
+        """Class-K function κ(h) (elementwise, keeps the sign of h)."""
+        return h * h * h if self.class_k == "cubic" else h
+
+    def pair_bind_distance(self) -> float:
+        """Largest distance d at which a pair row can bind with ‖u‖ ≤ v_max.
+
+        The row −2eᵀ(u_i − u_j) ≤ γκ(d² − D_s²) has a left side of at most
+        4·d·v_max, so it binds only where γκ(d² − D_s²) ≤ 4·d·v_max. Solved by
+        bisection (the gap is increasing in d for d > D_s).
+        """
+        d_lo, d_hi = self.safety_distance, self.safety_distance + 1.0
+        gap = lambda d: self.gamma * self.kappa(d * d - self.safety_distance**2) - 4 * d * self.max_speed
+        while gap(d_hi) < 0:
+            d_hi *= 2
+        for _ in range(80):
+            mid = 0.5 * (d_lo + d_hi)
+            if gap(mid) < 0:
+                d_lo = mid
+            else:
+                d_hi = mid
+        return d_hi
+
+    def neighbour_radius(self) -> float:
+        """k-d tree radius (m): binding distance plus 2·v_max·dt for the next tick."""
+        return self.pair_bind_distance() + 2 * self.max_speed * self.dt
+
+    def wall_bind_clearance(self) -> float:
+        """Clearance δ beyond the margin where a wall row can bind: wall_gain·γ·κ(δ) = v_max."""
+        c = self.max_speed / (self.wall_gain * self.gamma)
+        return c ** (1.0 / 3.0) if self.class_k == "cubic" else c
+
+    def wall_radius(self) -> float:
+        """Distance from a wall (m) within which its row is built."""
+        return self.margin + self.wall_bind_clearance() + self.max_speed * self.dt
+
+
+@dataclass(frozen=True)
+class UnicycleParams:
+    """Differential-drive robot constants (GRITSBot, REFERENCE.md §1).
+
+    Kept here so that safety imports nothing from devices. wheel_radius and
+    axle_length in m, max_wheel_speed in rad/s, lookahead ℓ in m.
+    """
+
+    wheel_radius: float = 0.016
+    axle_length: float = 0.105
+    max_wheel_speed: float = 12.5
+    lookahead: float = 0.03
+
+    def __post_init__(self) -> None:
+        for name in ("wheel_radius", "axle_length", "max_wheel_speed", "lookahead"):
+            if not getattr(self, name) > 0:
+                raise ValueError(f"UnicycleParams: {name} must be > 0")
+
+    @property
+    def max_linear_speed(self) -> float:
+        """Forward speed with both wheels at the limit, m/s (0.2 for the GRITSBot)."""
+        return self.wheel_radius * self.max_wheel_speed

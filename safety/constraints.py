@@ -1,0 +1,181 @@
+"""Barrier rows that can bind, built with a k-d tree and no per-robot loops.
+
+Every row acts on at most two robots and is stored as a structure of arrays
+(:class:`Rows`): ``ci·u_i + cj·u_j ≤ b`` with ``cj = 0`` for single-robot rows.
+Rows are normalised so the coefficient vectors are unit vectors and ``b`` is a
+speed in m/s; this leaves the feasible set, and so the QP's solution, unchanged.
+
+* pair (REFERENCE.md §3): −2(x_i − x_j)ᵀ(u_i − u_j) ≤ γκ(h_ij), h_ij = ‖x_i − x_j‖² − D_s²,
+  stored as ``n_ijᵀ(u_j − u_i) ≤ γκ(h_ij)/(2‖x_i − x_j‖)`` with n_ij the unit vector from j to i;
+* obstacle (fixed point o): −2(x_i − o)ᵀu_i ≤ γκ(h_io), the robot alone keeps the distance;
+* wall (rps): u_x ≤ g·γ·κ(x_max − m − x) and the three analogous rows, g = wall_gain,
+  m = wall margin; here h is the clearance δ beyond the margin (m).
+
+Rows farther than the binding distance (``BarrierConfig.neighbour_radius`` /
+``wall_radius``) cannot be active for any command with ‖u_i‖ ≤ v_max and are
+not built.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.spatial import cKDTree
+
+from .config import BarrierConfig
+
+PAIR, WALL, OBSTACLE, LIMIT = 0, 1, 2, 3
+_GOLDEN = 2.399963229728653  # golden angle, rad: deterministic directions for coincident points
+
+
+@dataclass(frozen=True)
+class Rows:
+    """Linear constraints ``ci·u_i + cj·u_j ≤ b`` (m rows), one or two robots each.
+
+    i, j: (m,) int robot indices (j = −1 for single-robot rows); ci, cj: (m, 2);
+    b: (m,) m/s; h: (m,) barrier value (pair/obstacle: m², wall: m, limit: +inf);
+    kind: (m,) PAIR/WALL/OBSTACLE/LIMIT; key: (m,) int64 identity across ticks
+    (pair i<j: i·N + j; wall: N² + 4i + side; obstacle: N² + 4N + i·M + k;
+    limit rows: N² + 4N + N·M + 4i + s).
+    """
+
+    i: np.ndarray
+    j: np.ndarray
+    ci: np.ndarray
+    cj: np.ndarray
+    b: np.ndarray
+    h: np.ndarray
+    kind: np.ndarray
+    key: np.ndarray
+
+    @property
+    def m(self) -> int:
+        return int(self.b.shape[0])
+
+    @property
+    def jj(self) -> np.ndarray:
+        """Second robot index with single-robot rows pointing at their own robot (cj = 0 there)."""
+        return np.where(self.j < 0, self.i, self.j)
+
+    def lhs(self, u: np.ndarray) -> np.ndarray:
+        """Left-hand sides ``ci·u_i + cj·u_j`` for velocities u (N, 2) → (m,)."""
+        jj = self.jj
+        return np.einsum("kd,kd->k", self.ci, u[self.i]) + np.einsum("kd,kd->k", self.cj, u[jj])
+
+    def select(self, mask: np.ndarray) -> "Rows":
+        """The rows where ``mask`` is true (boolean or index array)."""
+        return Rows(*(getattr(self, f)[mask] for f in _FIELDS))
+
+    @staticmethod
+    def concat(parts: list["Rows"]) -> "Rows":
+        return Rows(*(np.concatenate([getattr(p, f) for p in parts]) for f in _FIELDS))
+
+    @staticmethod
+    def empty() -> "Rows":
+        z = np.zeros(0)
+        zi = np.zeros(0, dtype=np.int64)
+        z2 = np.zeros((0, 2))
+        return Rows(zi, zi, z2, z2, z, z, np.zeros(0, dtype=np.int8), zi)
+
+
+_FIELDS = ("i", "j", "ci", "cj", "b", "h", "kind", "key")
+
+
+def _unit_or_fallback(e: np.ndarray, d: np.ndarray, seed: np.ndarray) -> np.ndarray:
+    """Unit vectors e/d; for coincident points (d ≈ 0) a deterministic direction from ``seed``."""
+    tiny = d < 1e-12
+    n = e / np.where(tiny, 1.0, d)[:, None]
+    if tiny.any():
+        phi = _GOLDEN * seed[tiny].astype(float)
+        n[tiny] = np.stack([np.cos(phi), np.sin(phi)], axis=1)
+    return n
+
+
+def pair_rows(points: np.ndarray, cfg: BarrierConfig, tree: cKDTree | None = None) -> Rows:
+    """Pair rows for all pairs closer than ``cfg.neighbour_radius()`` (k-d tree query)."""
+    n_robots = points.shape[0]
+    if n_robots < 2:
+        return Rows.empty()
+    tree = cKDTree(points) if tree is None else tree
+    pairs = tree.query_pairs(cfg.neighbour_radius(), output_type="ndarray")
+    if pairs.shape[0] == 0:
+        return Rows.empty()
+    pairs = pairs[np.lexsort((pairs[:, 1], pairs[:, 0]))]
+    i = pairs[:, 0].astype(np.int64)
+    j = pairs[:, 1].astype(np.int64)
+    e = points[i] - points[j]
+    d = np.sqrt(np.einsum("kd,kd->k", e, e))
+    key = i * n_robots + j
+    n = _unit_or_fallback(e, d, key)
+    h = d * d - cfg.safety_distance**2
+    b = cfg.gamma * cfg.kappa(h) / (2.0 * np.maximum(d, 1e-12))
+    kind = np.full(i.shape[0], PAIR, dtype=np.int8)
+    return Rows(i, j, -n, n, b, h, kind, key)
+
+
+def obstacle_rows(points: np.ndarray, obstacles: np.ndarray, cfg: BarrierConfig,
+                  tree: cKDTree | None = None) -> Rows:
+    """Rows keeping each robot D_s from fixed obstacle points (M, 2) within the neighbour radius."""
+    n_robots, n_obs = points.shape[0], obstacles.shape[0]
+    if n_robots == 0 or n_obs == 0:
+        return Rows.empty()
+    tree = cKDTree(points) if tree is None else tree
+    close = tree.sparse_distance_matrix(cKDTree(obstacles), cfg.neighbour_radius(),
+                                        output_type="ndarray")
+    # sparse_distance_matrix drops exact zero distances; coincident points are found separately.
+    i = close["i"].astype(np.int64)
+    k = close["j"].astype(np.int64)
+    zi, zk = _coincident(points, obstacles, tree)
+    if zi.size:
+        i, k = np.concatenate([i, zi]), np.concatenate([k, zk])
+        i, k = np.unique(np.stack([i, k], axis=1), axis=0).T
+    if i.size == 0:
+        return Rows.empty()
+    order = np.lexsort((k, i))
+    i, k = i[order], k[order]
+    e = points[i] - obstacles[k]
+    d = np.sqrt(np.einsum("kd,kd->k", e, e))
+    key = n_robots * n_robots + 4 * n_robots + i * n_obs + k
+    n = _unit_or_fallback(e, d, key)
+    h = d * d - cfg.safety_distance**2
+    b = cfg.gamma * cfg.kappa(h) / (2.0 * np.maximum(d, 1e-12))
+    kind = np.full(i.shape[0], OBSTACLE, dtype=np.int8)
+    return Rows(i, np.full_like(i, -1), -n, np.zeros_like(n), b, h, kind, key)
+
+
+def _coincident(points: np.ndarray, obstacles: np.ndarray, tree: cKDTree) -> tuple[np.ndarray, np.ndarray]:
+    dist, idx = tree.query(obstacles, k=1)
+    hit = np.flatnonzero(dist == 0.0)
+    return idx[hit].astype(np.int64), hit.astype(np.int64)
+
+
+def wall_rows(points: np.ndarray, cfg: BarrierConfig) -> Rows:
+    """Wall rows for robots within ``cfg.wall_radius()`` of a wall (sides +x, −x, +y, −y)."""
+    n_robots = points.shape[0]
+    x_min, x_max, y_min, y_max = cfg.bounds
+    m = cfg.margin
+    x, y = points[:, 0], points[:, 1]
+    clearance = np.stack([x_max - m - x, x - x_min - m, y_max - m - y, y - y_min - m], axis=1)  # (N,4)
+    near = clearance <= cfg.wall_radius() - m
+    i, side = np.nonzero(near)
+    i = i.astype(np.int64)
+    side = side.astype(np.int64)
+    normals = np.array([[1.0, 0.0], [-1.0, 0.0], [0.0, 1.0], [0.0, -1.0]])
+    delta = clearance[i, side]
+    b = cfg.wall_gain * cfg.gamma * cfg.kappa(delta)
+    kind = np.full(i.shape[0], WALL, dtype=np.int8)
+    key = n_robots * n_robots + 4 * i + side
+    ci = normals[side]
+    return Rows(i, np.full_like(i, -1), ci, np.zeros_like(ci), b, delta, kind, key)
+
+
+def barrier_rows(points: np.ndarray, cfg: BarrierConfig, obstacles: np.ndarray | None = None,
+                 tree: cKDTree | None = None) -> Rows:
+    """All candidate rows (pairs, walls, obstacles) for controlled points (N, 2)."""
+    if points.shape[0] == 0:
+        return Rows.empty()
+    tree = cKDTree(points) if tree is None else tree
+    parts = [pair_rows(points, cfg, tree), wall_rows(points, cfg)]
+    if obstacles is not None and obstacles.shape[0]:
+        parts.append(obstacle_rows(points, obstacles, cfg, tree))
+    return Rows.concat(parts)

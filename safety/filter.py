@@ -1,0 +1,286 @@
+"""The single-integrator safety filter: one object, one call per tick.
+
+``SafetyFilter(BarrierConfig()).filter(points, nominal, obstacles=None) -> (safe, diag)``
+solves the barrier QP of REFERENCE.md §3 (paper §IV-B)::
+
+    min Σ‖u_i − û_i‖²  s.t. pair, wall and obstacle rows,  ‖u_i‖ ≤ v_max
+
+in stages, cheapest first:
+
+1. validate the input (shapes, finiteness) — anything wrong stops the robots;
+2. build only the rows that can bind (k-d tree, ``constraints.py``);
+3. **pass-through**: if û satisfies every row and every speed bound, return a
+   copy of û (bit-for-bit): the filter never perturbs a safe command;
+4. robots already inside the unsafe set (h < 0) and the clusters (connected
+   components of the row graph) they belong to are solved by clarabel with
+   hard "no further approach" rows and slack-penalised separation targets;
+5. every other robot goes to the active-set solver, warm-started from the
+   previous tick's active rows and certified by the KKT conditions;
+   clarabel solves whatever it cannot certify.
+
+Every solver status is checked. On any failure (infeasible, iteration limit,
+numerical trouble, NaN/inf or malformed input) every robot gets a zero command
+and ``diag.ok`` is False with the reason in ``diag.status``.
+"""
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.sparse as sp
+from scipy.sparse.csgraph import connected_components
+from scipy.spatial import cKDTree
+
+from .active_set import solve_active_set
+from .config import BarrierConfig
+from .constraints import LIMIT, OBSTACLE, PAIR, Rows, barrier_rows
+from .diagnostics import BarrierDiagnostics
+from .qp_clarabel import solve_qp
+
+_ACTIVE_TOL = 1e-7  # m/s: a row within this of its bound counts as active in clarabel answers
+
+
+class InputError(ValueError):
+    """Malformed input to the filter (shape or non-finite values)."""
+
+
+def as_points(x, name: str, n: int | None = None) -> np.ndarray:
+    """``x`` as a float (n, 2) array, or InputError naming what is wrong."""
+    try:
+        arr = np.asarray(x, dtype=float)
+    except (TypeError, ValueError) as exc:
+        raise InputError(f"{name} must be a numeric (N, 2) array: {exc}") from None
+    if arr.ndim != 2 or arr.shape[1] != 2:
+        raise InputError(f"{name} must have shape (N, 2), got {arr.shape}")
+    if n is not None and arr.shape[0] != n:
+        raise InputError(f"{name} must have shape ({n}, 2) like points, got {arr.shape}")
+    if not np.all(np.isfinite(arr)):
+        bad = np.flatnonzero(~np.all(np.isfinite(arr), axis=1))
+        raise InputError(f"{name} contains NaN or inf in rows {bad[:10].tolist()}")
+    return arr
+
+
+def robot_count(points, nominal) -> int:
+    """Best guess of N for a fail-stop answer to malformed input."""
+    for x in (nominal, points):
+        try:
+            arr = np.asarray(x)
+            if arr.ndim >= 1:
+                return int(arr.shape[0])
+        except Exception:  # noqa: BLE001 - anything unreadable gives no count
+            pass
+    return 0
+
+
+def restrict(rows: Rows, robots: np.ndarray, n: int) -> tuple[Rows, np.ndarray]:
+    """Rows whose first robot is in ``robots`` ((N,) bool), re-indexed to the subset."""
+    remap = np.full(n, -1, dtype=np.int64)
+    remap[robots] = np.arange(int(robots.sum()))
+    keep = robots[rows.i]
+    sub = rows.select(keep)
+    j = np.where(sub.j >= 0, remap[np.maximum(sub.j, 0)], -1)
+    return Rows(remap[sub.i], j, sub.ci, sub.cj, sub.b, sub.h, sub.kind, sub.key), keep
+
+
+@dataclass(frozen=True)
+class _Solved:
+    u: np.ndarray
+    active: np.ndarray  # (m,) bool rows at equality
+    n_speed: int
+    method: str
+    iterations: int
+
+
+class SafetyFilter:
+    """Barrier-certificate filter for single-integrator controlled points.
+
+    Holds only the warm start (the previous tick's active rows); call
+    :meth:`reset` when the robot set changes meaning (it is also reset
+    automatically when N or the obstacle count changes, and after a failure).
+    """
+
+    def __init__(self, config: BarrierConfig | None = None) -> None:
+        self.config = BarrierConfig() if config is None else config
+        self._warm_keys = np.zeros(0, dtype=np.int64)
+        self._warm_shape: tuple[int, int] = (-1, -1)
+
+    def reset(self) -> None:
+        """Forget the warm start."""
+        self._warm_keys = np.zeros(0, dtype=np.int64)
+        self._warm_shape = (-1, -1)
+
+    # ------------------------------------------------------------------ public
+    def filter(self, points, nominal, obstacles=None) -> tuple[np.ndarray, BarrierDiagnostics]:
+        """Safe velocities for controlled points.
+
+        points (N, 2) m, nominal (N, 2) m/s, obstacles (M, 2) m or None (fixed
+        points every robot keeps D_s from). Returns (safe (N, 2) new array,
+        diagnostics). Never raises for bad input: zeros and ``diag.ok`` False.
+        """
+        t0 = time.perf_counter()
+        try:
+            P = as_points(points, "points")
+            U = as_points(nominal, "nominal", P.shape[0])
+            O = None if obstacles is None else as_points(obstacles, "obstacles")
+        except InputError as exc:
+            return self.fail_stop(robot_count(points, nominal), nominal, f"invalid input: {exc}", t0)
+        return self.solve(P, U, O, None, self.config.max_speed, t0)
+
+    # ------------------------------------------------------------ for subclasses
+    def fail_stop(self, n: int, nominal, reason: str, t0: float, n_constraints: int = 0
+                  ) -> tuple[np.ndarray, BarrierDiagnostics]:
+        """Zero commands for every robot and a diagnostic saying why."""
+        self.reset()
+        try:
+            nom = np.asarray(nominal, dtype=float).reshape(n, 2)
+            inter = np.nan_to_num(np.linalg.norm(nom, axis=1), nan=0.0, posinf=0.0)
+        except Exception:  # noqa: BLE001 - unreadable nominal: no intervention figure
+            inter = np.zeros(n)
+        diag = BarrierDiagnostics(
+            ok=False, status=f"failed: {reason}", solve_time_s=time.perf_counter() - t0,
+            n_constraints=n_constraints, n_active=0, active_pairs=np.zeros((0, 2), dtype=np.int64),
+            active_h=np.zeros(0), min_distance=float("nan"), min_wall_clearance=float("nan"),
+            intervention=inter, nominal_was_safe=False, method="fail-stop",
+        )
+        return np.zeros((n, 2)), diag
+
+    def solve(self, P: np.ndarray, U: np.ndarray, O: np.ndarray | None, extra: Rows | None,
+              max_speed: float | None, t0: float) -> tuple[np.ndarray, BarrierDiagnostics]:
+        """Filter validated arrays; ``extra`` rows (e.g. wheel limits) are added to the barrier rows."""
+        cfg = self.config
+        n = P.shape[0]
+        n_obs = 0 if O is None else O.shape[0]
+        if n == 0:
+            return np.zeros((0, 2)), self._diag(True, "no robots", t0, Rows.empty(), P, U, U, O,
+                                                np.zeros(0, bool), 0, True, "pass-through", 0, 0, 0)
+        tree = cKDTree(P)
+        rows = barrier_rows(P, cfg, O, tree)
+        if extra is not None and extra.m:
+            rows = Rows.concat([rows, extra])
+        unsafe = (rows.h < 0) & (rows.kind != LIMIT)
+        n_unsafe = int(unsafe.sum())
+        recovering = cfg.recovery and n_unsafe > 0
+        b_target = np.where(unsafe, np.minimum(rows.b, -cfg.recovery_speed), rows.b) if recovering else rows.b
+
+        # pass-through: û satisfies every row and speed bound → u* = û exactly
+        lhs_nom = rows.lhs(U)
+        speed_ok = True if max_speed is None else bool(np.all(np.einsum("kd,kd->k", U, U) <= max_speed**2))
+        if speed_ok and bool(np.all(lhs_nom <= b_target)):
+            self._remember(rows, np.zeros(rows.m, bool), n, n_obs)
+            n_clusters = self._clusters(rows, n)[0]
+            return U.copy(), self._diag(True, "nominal safe", t0, rows, P, U, U, O, np.zeros(rows.m, bool),
+                                        0, True, "pass-through", 0, n_clusters, n_unsafe)
+
+        n_clusters, labels = self._clusters(rows, n)
+        if recovering:
+            bad_clusters = np.unique(labels[rows.i[unsafe]])
+            in_bad = np.isin(labels, bad_clusters)
+        else:
+            in_bad = np.zeros(n, dtype=bool)
+        u = np.zeros((n, 2))
+        active = np.zeros(rows.m, dtype=bool)
+        methods, iterations, n_speed = [], 0, 0
+        if in_bad.any():
+            sub, keep = restrict(rows, in_bad, n)
+            sub_unsafe = unsafe[keep]
+            soft = np.flatnonzero(sub_unsafe)
+            b_hard = np.where(sub_unsafe, np.maximum(sub.b, 0.0), sub.b)
+            res = solve_qp(sub, U[in_bad], max_speed, b_hard=b_hard, soft=soft,
+                           b_soft=b_target[keep][soft], soft_weight=cfg.recovery_weight,
+                           max_iter=cfg.clarabel_max_iter, tol=cfg.clarabel_tol)
+            if not res.ok:
+                return self.fail_stop(n, U, f"{res.reason} (recovering {n_unsafe} unsafe rows)", t0, rows.m)
+            u[in_bad] = res.u
+            active[keep] = sub.lhs(res.u) >= b_hard - _ACTIVE_TOL
+            methods.append("clarabel")
+            iterations += res.iterations
+        good = ~in_bad
+        if good.any():
+            if in_bad.any():
+                sub, keep = restrict(rows, good, n)
+            else:
+                sub, keep = rows, np.ones(rows.m, dtype=bool)
+            solved = self._solve_plain(sub, U[good], max_speed, n, n_obs, keep, rows)
+            if isinstance(solved, str):
+                return self.fail_stop(n, U, solved, t0, rows.m)
+            u[good] = solved.u
+            active[keep] = solved.active
+            methods.append(solved.method)
+            iterations += solved.iterations
+            n_speed = solved.n_speed
+        self._remember(rows, active, n, n_obs)
+        method = methods[0] if len(methods) == 1 else "mixed"
+        status = f"optimal (recovering {n_unsafe} unsafe rows)" if recovering else "optimal"
+        return u, self._diag(True, status, t0, rows, P, U, u, O, active, n_speed, False, method,
+                             iterations, n_clusters, n_unsafe)
+
+    # ---------------------------------------------------------------- helpers
+    def _solve_plain(self, rows: Rows, U: np.ndarray, max_speed: float | None, n: int, n_obs: int,
+                     keep: np.ndarray, all_rows: Rows) -> _Solved | str:
+        cfg = self.config
+        iterations = 0
+        if cfg.solver == "auto":
+            warm = None
+            if self._warm_shape == (n, n_obs) and self._warm_keys.size:
+                warm = np.isin(rows.key, self._warm_keys, assume_unique=True)
+            res = solve_active_set(rows, U, max_speed, warm, cfg.max_active_set_iterations)
+            iterations += res.iterations
+            if res.ok:
+                return _Solved(res.u, res.active, int(res.speed_active.sum()), "active-set", iterations)
+        qp = solve_qp(rows, U, max_speed, max_iter=cfg.clarabel_max_iter, tol=cfg.clarabel_tol)
+        if not qp.ok:
+            return qp.reason
+        speed = 0 if max_speed is None else int(np.sum(np.linalg.norm(qp.u, axis=1) >= max_speed - _ACTIVE_TOL))
+        return _Solved(qp.u, rows.lhs(qp.u) >= rows.b - _ACTIVE_TOL, speed, "clarabel",
+                       iterations + qp.iterations)
+
+    def _remember(self, rows: Rows, active: np.ndarray, n: int, n_obs: int) -> None:
+        self._warm_keys = np.sort(rows.key[active])
+        self._warm_shape = (n, n_obs)
+
+    @staticmethod
+    def _clusters(rows: Rows, n: int) -> tuple[int, np.ndarray]:
+        two = rows.j >= 0
+        if not two.any():
+            return n, np.arange(n)
+        graph = sp.coo_matrix((np.ones(int(two.sum())), (rows.i[two], rows.j[two])), shape=(n, n))
+        return connected_components(graph, directed=False)
+
+    def _diag(self, ok, status, t0, rows: Rows, P, U, u, O, active, n_speed, was_safe, method,
+              iterations, n_clusters, n_unsafe) -> BarrierDiagnostics:
+        cfg = self.config
+        n = P.shape[0]
+        pair = rows.kind == PAIR
+        act_pair = pair & active
+        if pair.any():
+            min_d = float(np.sqrt(np.min(rows.h[pair]) + cfg.safety_distance**2))
+        elif n >= 2:
+            min_d = float(cKDTree(P).query(P, k=2)[0][:, 1].min())
+        else:
+            min_d = float("inf")
+        x_min, x_max, y_min, y_max = cfg.bounds
+        if n:
+            clear = np.stack([P[:, 0] - x_min, x_max - P[:, 0], P[:, 1] - y_min, y_max - P[:, 1]], axis=1)
+            min_wall = float(clear.min())
+        else:
+            min_wall = float("inf")
+        obs = rows.kind == OBSTACLE
+        if obs.any():
+            min_obs = float(np.sqrt(np.min(rows.h[obs]) + cfg.safety_distance**2))
+        elif O is not None and O.shape[0] and n:
+            min_obs = float(cKDTree(O).query(P, k=1)[0].min())
+        else:
+            min_obs = float("inf")
+        inter = np.zeros(n) if was_safe else np.sqrt(np.einsum("kd,kd->k", u - U, u - U))
+        return BarrierDiagnostics(
+            ok=ok, status=status, solve_time_s=time.perf_counter() - t0, n_constraints=rows.m,
+            n_active=int(active.sum()) + int(n_speed),
+            active_pairs=np.stack([rows.i[act_pair], rows.j[act_pair]], axis=1),
+            active_h=rows.h[act_pair].copy(), min_distance=min_d, min_wall_clearance=min_wall,
+            intervention=inter, nominal_was_safe=was_safe, method=method, iterations=iterations,
+            n_clusters=int(n_clusters), n_unsafe=n_unsafe, min_obstacle_distance=min_obs,
+        )
+
+
+__all__ = ["SafetyFilter", "InputError", "as_points", "robot_count", "restrict"]

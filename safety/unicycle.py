@@ -1,0 +1,124 @@
+"""Unicycle barrier: the single-integrator QP on the look-ahead points, within wheel limits.
+
+For poses (x, y, θ) the controlled point is p = (x + ℓ cos θ, y + ℓ sin θ)
+(REFERENCE.md §1, Olfati-Saber). Its velocity is ṗ = M(θ)[v, ω]ᵀ with
+M = [[cos θ, −ℓ sin θ], [sin θ, ℓ cos θ]], inverted by v = cos θ u_x + sin θ u_y,
+ω = (−sin θ u_x + cos θ u_y)/ℓ. The barrier rows of :mod:`constraints` act on
+p with the filter's D_s (the default 0.17 m = Ø 0.11 + 2ℓ keeps the bodies
+apart: each centre lies within ℓ of its point). Instead of a speed disc, each
+robot gets the four wheel-limit rows |ω_R|, |ω_L| ≤ ω_max with
+ω_R,L = (v ± Lω/2)/r — exactly the commands the robot can execute, so no
+saturation is needed afterwards and the certificate holds for what is driven.
+"""
+from __future__ import annotations
+
+import dataclasses
+import time
+
+import numpy as np
+
+from .config import BarrierConfig, UnicycleParams
+from .constraints import LIMIT, Rows
+from .diagnostics import BarrierDiagnostics
+from .filter import InputError, SafetyFilter, as_points, robot_count
+
+
+def lookahead_points(poses: np.ndarray, lookahead: float) -> np.ndarray:
+    """Look-ahead points (N, 2) of poses (N, 3)."""
+    th = poses[:, 2]
+    return poses[:, :2] + lookahead * np.stack([np.cos(th), np.sin(th)], axis=1)
+
+
+def unicycle_to_si(poses: np.ndarray, v: np.ndarray, w: np.ndarray, lookahead: float) -> np.ndarray:
+    """Look-ahead point velocities (N, 2) m/s for unicycle commands v (N,) m/s, ω (N,) rad/s."""
+    c, s = np.cos(poses[:, 2]), np.sin(poses[:, 2])
+    return np.stack([c * v - lookahead * s * w, s * v + lookahead * c * w], axis=1)
+
+
+def si_to_unicycle(poses: np.ndarray, u: np.ndarray, lookahead: float) -> tuple[np.ndarray, np.ndarray]:
+    """Inverse of :func:`unicycle_to_si`: (v (N,), ω (N,)) for point velocities u (N, 2)."""
+    c, s = np.cos(poses[:, 2]), np.sin(poses[:, 2])
+    return c * u[:, 0] + s * u[:, 1], (-s * u[:, 0] + c * u[:, 1]) / lookahead
+
+
+def wheel_speeds(v: np.ndarray, w: np.ndarray, params: UnicycleParams) -> tuple[np.ndarray, np.ndarray]:
+    """Right and left wheel speeds (rad/s): ω_R,L = (2v ± Lω)/(2r)."""
+    r, L = params.wheel_radius, params.axle_length
+    return (2 * v + L * w) / (2 * r), (2 * v - L * w) / (2 * r)
+
+
+def wheel_limit_rows(poses: np.ndarray, params: UnicycleParams, n_obs: int = 0) -> Rows:
+    """Rows ±ω_R ≤ ω_max, ±ω_L ≤ ω_max as linear rows on the point velocity u_i (normalised)."""
+    n = poses.shape[0]
+    c, s = np.cos(poses[:, 2]), np.sin(poses[:, 2])
+    k = params.axle_length / (2 * params.lookahead)
+    g_right = np.stack([c - k * s, s + k * c], axis=1) / params.wheel_radius
+    g_left = np.stack([c + k * s, s - k * c], axis=1) / params.wheel_radius
+    g = np.stack([g_right, -g_right, g_left, -g_left], axis=1).reshape(-1, 2)  # (4N, 2)
+    norm = np.sqrt(1 + k * k) / params.wheel_radius
+    i = np.repeat(np.arange(n, dtype=np.int64), 4)
+    side = np.tile(np.arange(4, dtype=np.int64), n)
+    key = n * n + 4 * n + n * n_obs + 4 * i + side
+    return Rows(i, np.full_like(i, -1), g / norm, np.zeros_like(g), np.full(4 * n, params.max_wheel_speed / norm),
+                np.full(4 * n, np.inf), np.full(4 * n, LIMIT, dtype=np.int8), key)
+
+
+def max_point_speed(params: UnicycleParams) -> float:
+    """Largest look-ahead point speed reachable within the wheel limits, m/s."""
+    v = params.max_linear_speed
+    return max(v, params.lookahead * 2 * v / params.axle_length)
+
+
+class UnicycleSafetyFilter:
+    """Barrier filter for unicycle robots: poses and (v, ω) in, safe (v, ω) out.
+
+    ``filter(poses (N, 3), v (N,), w (N,), obstacles=None) -> (v_safe, w_safe, diag)``;
+    the safe commands keep every wheel within ±max_wheel_speed. The config's
+    max_speed is replaced by the fastest look-ahead speed the wheels allow
+    (it sets the neighbour radius). A safe nominal is returned bit-for-bit.
+    """
+
+    def __init__(self, config: BarrierConfig | None = None, params: UnicycleParams | None = None) -> None:
+        self.params = UnicycleParams() if params is None else params
+        base = BarrierConfig() if config is None else config
+        self.config = dataclasses.replace(base, max_speed=max_point_speed(self.params))
+        self._si = SafetyFilter(self.config)
+
+    def reset(self) -> None:
+        """Forget the warm start."""
+        self._si.reset()
+
+    def filter(self, poses, v, w, obstacles=None) -> tuple[np.ndarray, np.ndarray, BarrierDiagnostics]:
+        """Safe (v (N,) m/s, ω (N,) rad/s) and diagnostics (intervention in point m/s)."""
+        t0 = time.perf_counter()
+        try:
+            X = np.asarray(poses, dtype=float)
+            if X.ndim != 2 or X.shape[1] != 3:
+                raise InputError(f"poses must have shape (N, 3), got {X.shape}")
+            n = X.shape[0]
+            V = np.asarray(v, dtype=float)
+            Wc = np.asarray(w, dtype=float)
+            if V.shape != (n,) or Wc.shape != (n,):
+                raise InputError(f"v and w must have shape ({n},), got {V.shape} and {Wc.shape}")
+            if not (np.all(np.isfinite(X)) and np.all(np.isfinite(V)) and np.all(np.isfinite(Wc))):
+                raise InputError("poses, v or w contain NaN or inf")
+            O = None if obstacles is None else as_points(obstacles, "obstacles")
+        except (InputError, TypeError, ValueError) as exc:
+            n = robot_count(poses, v)
+            _, diag = self._si.fail_stop(n, np.zeros((n, 2)), f"invalid input: {exc}", t0)
+            return np.zeros(n), np.zeros(n), diag
+        ell = self.params.lookahead
+        P = lookahead_points(X, ell)
+        U = unicycle_to_si(X, V, Wc, ell)
+        extra = wheel_limit_rows(X, self.params, 0 if O is None else O.shape[0])
+        u, diag = self._si.solve(P, U, O, extra, None, t0)
+        if not diag.ok:
+            return np.zeros(n), np.zeros(n), diag
+        if diag.nominal_was_safe:
+            return V.copy(), Wc.copy(), diag
+        vs, ws = si_to_unicycle(X, u, ell)
+        # the rows hold to 1e-8 m/s; remove that rounding so the wheels never exceed the limit
+        wr, wl = wheel_speeds(vs, ws, self.params)
+        peak = np.maximum(np.abs(wr), np.abs(wl))
+        scale = np.minimum(1.0, self.params.max_wheel_speed / np.maximum(peak, 1e-300))
+        return vs * scale, ws * scale, diag
