@@ -23,9 +23,9 @@ import os
 import struct
 from bisect import bisect_right
 from collections import OrderedDict
-from itertools import accumulate
 from collections.abc import Iterator
 from dataclasses import dataclass
+from itertools import accumulate
 from pathlib import Path
 from typing import Any
 

@@ -1,6 +1,7 @@
 """Round trip: a recorded simulated run reads back frame for frame, datagram for datagram, event for event."""
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
@@ -16,10 +17,9 @@ from swarmdeck.console.recording_synth import simulated_frames
 def frames():
     out = list(simulated_frames(n_robots=7, n_ticks=60, seed=4))
     # non-finite numbers and NaN params must survive too
-    out[5] = out[5].__class__(**{**{k: getattr(out[5], k) for k in out[5].__dataclass_fields__},
-                                 "barrier": BarrierFrame(min_distance=math.nan, min_wall_clearance=-math.inf,
-                                                         intervention=np.zeros(7)),
-                                 "params": {"gamma": math.inf, "law": "tvd-d1"}})
+    out[5] = dataclasses.replace(out[5], barrier=BarrierFrame(min_distance=math.nan, min_wall_clearance=-math.inf,
+                                                              intervention=np.zeros(7)),
+                                 params={"gamma": math.inf, "law": "tvd-d1"})
     return out
 
 
