@@ -272,9 +272,15 @@ def resimulate_and_compare(recording: Recording, *, max_frames: int | None = Non
             path, mag = diffs[0]
             top = path.split(".")[0]
             first = Difference(rec.tick, path, mag, str(rec.to_dict().get(top))[:200], str(sim.to_dict().get(top))[:200])
-    n_dg = sum(1 for _ in recording.datagrams())
+    dgs = list(recording.datagrams())
+    n_dg = len(dgs)
     notes = []
     cfg = recording.config().get("config", {}) or {}
+    listeners = (cfg.get("inputs") or {}).get("listeners") or []
+    transports = [str(lc.get("transport", "udp")) for lc in listeners if isinstance(lc, dict)]
+    if any(d.listener is None for d in dgs) and len(transports) != len(set(transports)):
+        notes.append("datagrams were recorded without their listener's name and several listeners share a "
+                     "transport: they were all replayed into the first one (record with Recorder.datagram_hook)")
     if not cfg.get("loop"):
         notes.append("the recording has no loop configuration (config.loop): defaults were used")
     if cfg.get("source", "simulation") != "simulation":
