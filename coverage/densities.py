@@ -156,11 +156,38 @@ class Linear:
 # ---------------------------------------------------------------- density
 @dataclass(frozen=True)
 class Bump:
-    """One Gaussian bump: centre trajectory ``mu``, width ``sigma`` [m], peak ``weight``."""
+    """One Gaussian bump: centre trajectory ``mu``, width ``sigma`` [m], peak ``weight``.
+
+    Anisotropic bumps: ``aspect`` ≠ 1 stretches the bump along its major axis (std σ·aspect
+    there, σ across), and ``angle`` [rad] (a profile, so it may rotate) turns that axis from +x:
+    Σ = σ² R(θ) diag(aspect², 1) R(θ)ᵀ, with the exact Σ̇ from σ̇ and θ̇.
+    """
 
     mu: Fixed | Orbit | Lissajous | Linear
     sigma: Constant | Sine | Pulse = Constant(0.3)
     weight: Constant | Sine | Pulse = Constant(1.0)
+    aspect: float = 1.0
+    angle: Constant | Sine | Pulse = Constant(0.0)
+
+    def __post_init__(self) -> None:
+        if not (np.isfinite(self.aspect) and self.aspect > 0):
+            raise ValueError(f"aspect must be > 0, got {self.aspect!r}")
+
+    @property
+    def isotropic(self) -> bool:
+        return self.aspect == 1.0
+
+    def covariance(self, t: float) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """Σ(t) and Σ̇(t) (2, 2) [m², m²/s]."""
+        s, s_dot = self.sigma(t)
+        th, th_dot = self.angle(t)
+        c, si = np.cos(th), np.sin(th)
+        rot = np.array([[c, -si], [si, c]])
+        rot_dot = th_dot * np.array([[-si, -c], [c, -si]])
+        d0 = np.diag([self.aspect ** 2, 1.0])
+        shape = rot @ d0 @ rot.T
+        shape_dot = rot_dot @ d0 @ rot.T + rot @ d0 @ rot_dot.T
+        return s * s * shape, 2.0 * s * s_dot * shape + s * s * shape_dot
 
 
 @dataclass(frozen=True)
@@ -187,7 +214,16 @@ class AnalyticDensity:
             raise ValueError(f"bump {k_bad}: weight profile is negative at t = {t} ({w[k_bad]:.3g}); "
                              "weights must stay >= 0 (e.g. Sine mean >= amplitude)")
         w = np.maximum(w, 0.0)      # round-off of a fading weight
-        return GaussianMixture(self.floor, mu, sig, w, mu_dot, sig_dot, w_dot)
+        if all(b.isotropic for b in self.bumps):
+            return GaussianMixture(self.floor, mu, sig, w, mu_dot, sig_dot, w_dot)
+        if np.any(sig <= 0):
+            k_bad = int(np.flatnonzero(sig <= 0)[0])
+            raise ValueError(f"bump {k_bad}: sigma profile is <= 0 at t = {t} ({sig[k_bad]:.3g})")
+        cov, cov_dot = np.zeros((k, 2, 2)), np.zeros((k, 2, 2))
+        for i, b in enumerate(self.bumps):
+            cov[i], cov_dot[i] = b.covariance(t)
+        return GaussianMixture(self.floor, mu, weight=w, mu_dot=mu_dot, weight_dot=w_dot,
+                               cov=cov, cov_dot=cov_dot)
 
 
 def s1_density() -> AnalyticDensity:
@@ -198,8 +234,8 @@ def s1_density() -> AnalyticDensity:
 
 def moving_density(bounds: tuple[float, float, float, float] = (-1.6, 1.6, -1.0, 1.0)
                    ) -> AnalyticDensity:
-    """Demo density: one bump orbiting, one breathing on a Lissajous path, one fading in and
-    out every 16 s, all scaled to ``bounds``."""
+    """Demo density: one bump orbiting, one breathing on a Lissajous path, one elongated bump
+    that rocks back and forth and fades in and out every 16 s, all scaled to ``bounds``."""
     x0, x1, y0, y1 = bounds
     cx, cy = 0.5 * (x0 + x1), 0.5 * (y0 + y1)
     sx, sy = 0.5 * (x1 - x0), 0.5 * (y1 - y0)
@@ -208,5 +244,6 @@ def moving_density(bounds: tuple[float, float, float, float] = (-1.6, 1.6, -1.0,
         Bump(Orbit((cx - 0.35 * sx, cy), 0.45 * s, 20.0), Constant(0.25 * s), Constant(1.0)),
         Bump(Lissajous((cx + 0.4 * sx, cy), (0.3 * sx, 0.5 * sy), (18.0, 12.0)),
              Sine(0.22 * s, 0.08 * s, 10.0), Constant(0.8)),
-        Bump(Fixed((cx, cy - 0.55 * sy)), Constant(0.2 * s), Pulse(1.0, 2.0, 10.0, 1.0, 16.0)),
+        Bump(Fixed((cx, cy - 0.55 * sy)), Constant(0.2 * s), Pulse(1.0, 2.0, 10.0, 1.0, 16.0),
+             aspect=2.0, angle=Sine(0.0, 0.6, 8.0)),
     ))

@@ -42,6 +42,9 @@ def test_floor_only_density_is_uniform():
 @pytest.mark.parametrize("density", [
     s1_density(),
     moving_density(),
+    AnalyticDensity(0.03, (Bump(Orbit((0.2, 0.1), 0.5, 7.0), Sine(0.2, 0.05, 5.0), Constant(1.0),
+                                aspect=2.5, angle=Sine(0.3, 1.0, 3.0)),
+                           Bump(Fixed((-0.5, 0.0)), Constant(0.3), Constant(0.5)))),
     AnalyticDensity(0.02, (Bump(Linear((0.0, 0.0), (0.3, -0.2)), Sine(0.25, 0.1, 3.0), Pulse(1.0, 0.5, 2.5, 0.7)),
                            Bump(Lissajous((0.1, 0.2), (0.5, 0.3), (5.0, 7.0), (0.3, 1.0)),
                                 Constant(0.2), Sine(0.8, 0.2, 4.0)))),
@@ -154,6 +157,18 @@ def test_dict_round_trip(rng):
         np.testing.assert_array_equal(back.evaluate_dt(q), g.evaluate_dt(q))
     with pytest.raises(ValueError, match="unknown"):
         GaussianMixture.from_dict({"floor": 0.1, "colour": 3})
+
+
+def test_rotating_elongated_bump_has_the_right_shape():
+    d = AnalyticDensity(0.0, (Bump(Fixed((0.0, 0.0)), Constant(0.1), Constant(1.0), aspect=3.0,
+                                   angle=Constant(np.pi / 2)),))
+    g = d.at(0.0)
+    assert not g.isotropic
+    np.testing.assert_allclose(g.std_min, [0.1]) and np.testing.assert_allclose(g.std_max, [0.3])
+    # major axis along +y: one major std up is exp(-1/2), one minor std right too
+    np.testing.assert_allclose(g.evaluate(np.array([[0.0, 0.3], [0.1, 0.0]])), np.exp(-0.5))
+    with pytest.raises(ValueError, match="aspect"):
+        Bump(Fixed((0, 0)), aspect=0.0)
 
 
 def test_profiles_reject_bad_parameters():
