@@ -136,6 +136,8 @@ class ConsoleGui:
         self.bump_clear.on_click(lambda _: self._remove_all())
         server.scene.on_click()(self._on_scene_click)
 
+        self.top_view = gui.add_button("Top view", hint="Put this tab's camera back above the arena")
+        self.top_view.on_click(self._on_top_view)
         with gui.add_folder("Layers", expand_by_default=False):
             self.layers = {name: gui.add_checkbox(name, initial_value=scene.visible[name]) for name in LAYERS}
         for name, box in self.layers.items():
@@ -249,6 +251,17 @@ class ConsoleGui:
                 self.barrier_on.value = False
             finally:
                 self._reverting = False
+
+    def _on_top_view(self, event: Any) -> None:
+        client = getattr(event, "client", None)
+        if client is None:
+            return
+        cam = self.server.initial_camera
+        # position first: viser moves look_at along with the position, then look_at sets the aim
+        client.camera.fov = cam.fov
+        client.camera.position = cam.position
+        client.camera.look_at = cam.look_at
+        client.camera.up_direction = cam.up
 
     # ------------------------------------------------------------------ bumps
     def _on_scene_click(self, event: Any) -> None:

@@ -165,6 +165,15 @@ def test_screenshot(page, console) -> None:
     if not console.loop.bumps.live():
         console.loop.add_bump((1.0, -0.4))
     wait_until(lambda: console.loop.latest.tick > 0)
+    page.mouse.move(300, 400)
+    page.mouse.down()
+    page.mouse.move(420, 330, steps=5)  # orbit the view away…
+    page.mouse.up()
+    page.get_by_role("button", name="Top view", exact=True).click()  # …and back to the top view
+    client = next(iter(console.server.get_clients().values()))
+    top = np.asarray(console.server.initial_camera.position)
+    wait_until(lambda: np.allclose(client.camera.position, top, atol=1e-3)
+               and np.allclose(client.camera.look_at, console.server.initial_camera.look_at, atol=1e-3))
     page.wait_for_timeout(1500)  # let a few updates render for the picture (not for any assertion)
     ARTIFACTS.mkdir(exist_ok=True)
     out = ARTIFACTS / "console.png"
