@@ -1,4 +1,16 @@
-"""swarmdeck.coverage: time-varying-density coverage control (REFERENCE.md §5)."""
+"""swarmdeck.coverage: time-varying-density coverage control (REFERENCE.md §5).
+
+    ctrl = CoverageController(CoverageConfig(law="tvd-d1"), density)   # any Density: .at(t)
+    nominal, state = ctrl(positions, t)      # (N, 2) m/s → safety filter; CoverageState
+
+Densities: :class:`GaussianMixture` (snapshot with analytic φ_t, isotropic or anisotropic bumps),
+:class:`AnalyticDensity` of :class:`Bump` s that move/grow/fade/rotate (``s1_density``,
+``moving_density``), ``image_density`` (grey image → static mixture). Numerics, usable on their
+own: ``precondition_positions``, ``bounded_voronoi``, ``cell_moments``, ``centroid_jacobian``,
+``raster_moments`` (test oracle), ``predicted_spacing``/``packing_warning``; laws in
+:mod:`swarmdeck.coverage.laws`; scenario S1 in :mod:`swarmdeck.coverage.scenario`.
+Group behaviours (consensus, formation): :mod:`swarmdeck.coverage.group`, ``.graphs``.
+"""
 from swarmdeck.coverage.controller import (CoverageConfig, CoverageController, CoverageState,
                                            coverage_tick)
 from swarmdeck.coverage.densities import (AnalyticDensity, Bump, Constant, Fixed, Linear,
