@@ -44,7 +44,9 @@ class BehaviourParams:
     gain: rendezvous / go-to gain, 1/s (0.1–5). formation_edge: side of the
     formation polygon, m (0.2–1.0). formation_gain: α of the edge-tension
     gradient, 1/(m² s) (0.5–50). goals: ``(N, 2)`` go-to positions, m, or None
-    for a grid spread over the arena.
+    for a grid spread over the arena. goal_centre: ``(x, y)`` m — when set (and
+    ``goals`` is None), robots gather in a hexagonal cluster (0.25 m spacing) there
+    (the console's shift-click).
     """
 
     kappa: float = 1.0
@@ -53,6 +55,7 @@ class BehaviourParams:
     formation_edge: float = 0.4
     formation_gain: float = 10.0
     goals: tuple[tuple[float, float], ...] | None = None
+    goal_centre: tuple[float, float] | None = None
 
     def __post_init__(self) -> None:
         checks = (("kappa", 0.1, 5.0), ("gain", 0.1, 5.0), ("formation_edge", 0.2, 1.0), ("formation_gain", 0.5, 50.0))
@@ -62,6 +65,10 @@ class BehaviourParams:
                 raise BehaviourError(f"{name} must be in [{lo}, {hi}], got {v!r}")
         if self.law not in LAWS:
             raise BehaviourError(f"law must be one of {', '.join(LAWS)}, got {self.law!r}")
+        if self.goal_centre is not None:
+            c = np.asarray(self.goal_centre, dtype=float)
+            if c.shape != (2,) or not np.all(np.isfinite(c)):
+                raise BehaviourError(f"goal_centre must be a finite (x, y) in m, got {self.goal_centre!r}")
         if self.goals is not None:
             g = np.asarray(self.goals, dtype=float)
             if g.ndim != 2 or g.shape[1] != 2 or not np.all(np.isfinite(g)):
@@ -160,6 +167,20 @@ def default_goals(n: int, bounds: tuple[float, float, float, float], margin: flo
     return np.column_stack((gx.ravel(), gy.ravel()))[:n]
 
 
+def cluster_goals(n: int, centre: tuple[float, float], bounds: tuple[float, float, float, float],
+                  spacing: float = 0.25, margin: float = 0.15) -> FloatArray:
+    """``(n, 2)`` goals on a hexagonal lattice (pitch ``spacing`` m) nearest to ``centre``, shifted so
+    all lie at least ``margin`` m inside the arena (when the arena is large enough)."""
+    k = int(math.ceil(math.sqrt(n))) + 2
+    i, j = np.meshgrid(np.arange(-k, k + 1), np.arange(-k, k + 1))
+    pts = np.column_stack(((i + 0.5 * (j % 2)).ravel() * spacing, (j * math.sqrt(3) / 2).ravel() * spacing))
+    pts = pts[np.argsort(np.linalg.norm(pts, axis=1), kind="stable")[:n]] + np.asarray(centre, dtype=float)
+    x0, x1, y0, y1 = bounds
+    lo, hi = pts.min(axis=0), pts.max(axis=0)
+    shift = np.maximum(np.array([x0, y0]) + margin - lo, 0.0) + np.minimum(np.array([x1, y1]) - margin - hi, 0.0)
+    return pts + shift
+
+
 class GoTo:
     """Go to goal positions with the single-integrator position controller (look-ahead points)."""
 
@@ -169,12 +190,14 @@ class GoTo:
         self.gain = params.gain
         self.bounds = bounds
         self.goals = None if params.goals is None else np.asarray(params.goals, dtype=float)
+        self.centre = params.goal_centre
 
     def __call__(self, tick: TickInput) -> tuple[FloatArray, None]:
         n = len(tick.points)
         goals = self.goals
         if goals is None or len(goals) != n:
-            goals = default_goals(n, self.bounds)
+            goals = default_goals(n, self.bounds) if self.centre is None else \
+                cluster_goals(n, self.centre, self.bounds)
         return si_position_controller(tick.points, goals, self.gain, tick.max_speed), None
 
 

@@ -122,7 +122,8 @@ class ConsoleGui:
         dp = loop.density.params
         with gui.add_folder("Density"):
             self.moving = gui.add_checkbox("Circling bump", initial_value=dp.moving)
-            self.click_adds = gui.add_checkbox("Click on arena adds a bump", initial_value=True)
+            self.click_adds = gui.add_checkbox("Click on arena adds a bump", initial_value=True,
+                                               hint="Shift-click sends the robots there (goto)")
             self.bump_select = gui.add_dropdown("Bump", ("none",), initial_value="none")
             self.bump_sigma = gui.add_slider("σ (m)", min=0.05, max=1.0, step=0.01, initial_value=dp.bump_sigma)
             self.bump_weight = gui.add_slider("Weight", min=0.0, max=5.0, step=0.1, initial_value=dp.bump_weight)
@@ -135,6 +136,7 @@ class ConsoleGui:
         self.bump_remove.on_click(lambda _: self._remove_selected())
         self.bump_clear.on_click(lambda _: self._remove_all())
         server.scene.on_click()(self._on_scene_click)
+        server.scene.on_click(modifier="shift")(self._on_shift_click)
 
         self.top_view = gui.add_button("Top view", hint="Put this tab's camera back above the arena")
         self.top_view.on_click(self._on_top_view)
@@ -271,6 +273,24 @@ class ConsoleGui:
         if hit is None:
             return
         self.add_bump(hit, getattr(event, "client", None))
+
+    def _on_shift_click(self, event: Any) -> None:
+        hit = ray_to_floor(event.ray_origin, event.ray_direction)
+        if hit is not None:
+            self.go_to(hit, getattr(event, "client", None))
+
+    def go_to(self, xy: tuple[float, float], client: Any = None) -> None:
+        """Shift-click: switch to ``goto`` with the robots gathering around ``xy`` (m)."""
+        x0, x1, y0, y1 = self.loop.config.bounds
+        if not (x0 <= xy[0] <= x1 and y0 <= xy[1] <= y1):
+            self.notify(f"goal ({xy[0]:.2f}, {xy[1]:.2f}) m is outside the arena", client)
+            return
+        try:
+            self.loop.set_params(goal_centre=(float(xy[0]), float(xy[1])))
+            if self.loop.behaviour_name != "goto":
+                self.loop.set_behaviour("goto")
+        except ValueError as exc:
+            self.notify(f"goal not set: {exc}", client)
 
     def add_bump(self, xy: tuple[float, float], client: Any = None) -> int | None:
         """Add a bump at ``xy`` (m) with the panel's σ and weight, with a drag handle."""

@@ -133,3 +133,22 @@ def test_ray_to_floor() -> None:
     assert ray_to_floor((0.0, 0.0, 6.0), (0.1, -0.05, -1.0)) == pytest.approx((0.6, -0.3))
     assert ray_to_floor((0.0, 0.0, 6.0), (1.0, 0.0, 0.0)) is None
     assert ray_to_floor((0.0, 0.0, 6.0), (0.0, 0.0, 1.0)) is None
+
+
+def test_shift_click_sends_the_robots_there(console) -> None:
+    loop, _, gui = console
+    gui.go_to((1.2, -0.6))
+    assert loop.behaviour_name == "goto" and loop.behaviour_params.goal_centre == (1.2, -0.6)
+    f = loop.tick()
+    # every robot heads for a goal near the clicked point (the cluster is pushed inside the arena)
+    from swarmdeck.console.behaviours import cluster_goals
+
+    goals = cluster_goals(f.n, (1.2, -0.6), loop.config.bounds)
+    assert np.linalg.norm(goals.mean(axis=0) - (1.2, -0.6)) < 0.3
+    assert np.all(goals[:, 0] <= 1.6 - 0.15 + 1e-9) and np.all(goals[:, 1] >= -1.0 + 0.15 - 1e-9)
+    assert len({tuple(np.round(g, 6)) for g in goals}) == f.n
+    heading = goals - f.points
+    cosine = np.sum(heading * f.nominal, axis=1) / (np.linalg.norm(heading, axis=1) * np.linalg.norm(f.nominal, axis=1))
+    assert np.all(cosine > 0.999)
+    gui.go_to((5.0, 0.0))
+    assert any("outside the arena" in m for m in gui.messages)
