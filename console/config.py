@@ -4,7 +4,8 @@ Tables (every key optional; defaults from REFERENCE.md)::
 
     [console]   host = "127.0.0.1", port = 8080, robots = 12, behaviour = "coverage",
                 seed = 1, dt = 0.033, max_speed = 0.2, bounds = [-1.6, 1.6, -1.0, 1.0]
-    [behaviour] kappa, law, gain, formation_edge, formation_gain, goals = [[x, y], ...]
+    [behaviour] kappa, law, gain, formation_edge, formation_gain, goals = [[x, y], ...],
+                goal_centre = [x, y]
     [safety]    enabled, safety_distance, gamma, class_k
     [density]   moving, radius, period, sigma, weight, floor, bump_sigma, bump_weight
     [inputs]    see swarmdeck.inputs.InputConfig (listeners, density, bounds)
@@ -79,7 +80,8 @@ def load_settings(path: str | Path) -> ConsoleSettings:
     if bad:
         raise ConfigFileError(f"{p}: unknown key(s) {sorted(bad)} in [console]; expected some of {list(CONSOLE_KEYS)}")
     goals = lambda g: tuple(tuple(float(c) for c in row) for row in g)  # noqa: E731
-    bp = _build(BehaviourParams, _table(doc, "behaviour", p), "behaviour", p, {"goals": goals})
+    bp = _build(BehaviourParams, _table(doc, "behaviour", p), "behaviour", p,
+                {"goals": goals, "goal_centre": lambda c: tuple(float(v) for v in c)})
     sp = _build(SafetyParams, _table(doc, "safety", p), "safety", p, {"gamma": float, "safety_distance": float})
     dp = _build(DensityParams, _table(doc, "density", p), "density", p)
     loop_kw: dict[str, Any] = {"behaviour_params": bp, "safety": sp, "density": dp}

@@ -39,13 +39,14 @@ def test_config_file_sets_everything(tmp_path) -> None:
     p = tmp_path / "console.toml"
     p.write_text(
         '[console]\nport = 0\nrobots = 7\nbehaviour = "goto"\nseed = 3\n'
-        '[behaviour]\nkappa = 2.0\nlaw = "lloyd"\ngoals = [[0.0, 0.0], [0.5, 0.5]]\n'
+        '[behaviour]\nkappa = 2.0\nlaw = "lloyd"\ngoals = [[0.0, 0.0], [0.5, 0.5]]\ngoal_centre = [0.5, 0]\n'
         '[safety]\ngamma = 50\nsafety_distance = 0.2\n'
         '[density]\nmoving = false\nbump_sigma = 0.3\n'
     )
     s = load_settings(p)
     assert (s.port, s.loop.n_robots, s.loop.behaviour, s.loop.seed) == (0, 7, "goto", 3)
     assert s.loop.behaviour_params.kappa == 2.0 and s.loop.behaviour_params.goals == ((0.0, 0.0), (0.5, 0.5))
+    assert s.loop.behaviour_params.goal_centre == (0.5, 0.0)
     assert s.loop.safety.gamma == 50.0 and s.loop.density.moving is False and s.inputs is None
 
 
