@@ -109,6 +109,16 @@ def _read_head(f: Any, pos: int, size: int) -> tuple[int, int] | None:
     return op, length
 
 
+def _runs_past_end(f: Any, pos: int, size: int) -> bool:
+    """True when the record at ``pos`` has a valid opcode but is cut off by the end of the file."""
+    f.seek(pos)
+    head = f.read(9)
+    if len(head) < 9:
+        return True
+    op, length = _REC.unpack(head)
+    return 0 < op <= _MAX_OPCODE and pos + 9 + length > size
+
+
 def _parse_channel(body: bytes) -> tuple[int, str]:
     """(id, topic) of a Channel record body: id u16, schema_id u16, topic (u32 length + UTF-8), …"""
     cid, _schema, n = struct.unpack_from("<HHI", body, 0)
@@ -295,11 +305,13 @@ class Recording:
         while True:
             head = _read_head(f, pos, size)
             if head is None:
-                if pos < size:
-                    self.warnings.append(f"file damaged or truncated at byte {pos} of {size}: "
-                                         "playing everything before it")
-                else:
+                if pos >= size:
                     self.warnings.append("file was not closed cleanly (no summary); recovered by scanning")
+                elif _runs_past_end(f, pos, size):
+                    self.warnings.append(f"file ends inside a record at byte {pos} of {size} (the recording was "
+                                         "cut off there); playing everything before it")
+                else:
+                    self.warnings.append(f"file damaged at byte {pos} of {size}: playing everything before it")
                 break
             op, length = head
             if op == _OP_CHUNK:
