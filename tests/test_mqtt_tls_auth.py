@@ -6,9 +6,8 @@ import shutil
 import subprocess
 from pathlib import Path
 
-import numpy as np
 import pytest
-from mqtt_broker import MOSQUITTO, Broker, Collector, wait_until  # noqa: F401
+from mqtt_broker import MOSQUITTO, Broker, wait_until
 
 from swarmdeck.devices.mqtt_config import parse_broker_url
 from swarmdeck.devices.transport_mqtt import MqttTransport
