@@ -142,16 +142,19 @@ class FleetNode:
         next_pose = next_loop
         next_status = next_loop
         while not self._stop.is_set():
-            with self._lock:
-                now = self.clock()
-                self._drain()
-                poses = self.state.advance(now)
-            if now >= next_pose:
-                next_pose = max(next_pose + fw.pose_period, now)
-                self._publish_poses(poses, now)
-            if now >= next_status:
-                next_status = max(next_status + fw.status_period, now)
-                self._publish_status(now)
+            try:
+                with self._lock:
+                    now = self.clock()
+                    self._drain()
+                    poses = self.state.advance(now)
+                if now >= next_pose:
+                    next_pose = max(next_pose + fw.pose_period, now)
+                    self._publish_poses(poses, now)
+                if now >= next_status:
+                    next_status = max(next_status + fw.status_period, now)
+                    self._publish_status(now)
+            except Exception as exc:  # noqa: BLE001 - keep simulating; the problem is counted and shown
+                self.counters.add("loop_errors", f"{self.name}: firmware loop step failed: {exc!r}")
             next_loop += fw.loop_period
             delay = next_loop - self.clock()
             if delay > 0:
