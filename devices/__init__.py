@@ -29,7 +29,29 @@ from swarmdeck.devices.lookahead import lookahead_points, si_to_unicycle, unicyc
 from swarmdeck.devices.simulator import ArenaConfig, SimulatedArena
 from swarmdeck.devices.validation import ValidationReport, ValidationRules, colliding_pairs, out_of_bounds
 
-__all__ = [
+# Transports load paho-mqtt; import them on first use so `import swarmdeck.devices` stays light.
+_LAZY = {
+    "RobotTransport": "transport",
+    "InProcessTransport": "transport_inprocess",
+    "MqttTransport": "transport_mqtt",
+    "CommandStreamer": "streamer",
+    "TransportBackend": "transport_backend",
+    "mqtt_backend": "transport_backend",
+    "NetworkRobots": "transport_console",
+    "parse_broker_url": "mqtt_config",
+    "MqttConfig": "mqtt_config",
+}
+
+
+def __getattr__(name: str):
+    if name in _LAZY:
+        import importlib
+
+        return getattr(importlib.import_module(f"{__name__}.{_LAZY[name]}"), name)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
+__all__ = [*_LAZY,
     "Arena", "ArenaConfig", "ArenaReport", "ExperimentFinished", "GritsBotParams", "HybridPoseController",
     "RobotBackend", "RunDefaults", "RUN_DEFAULTS", "SimulatedArena", "ValidationReport", "ValidationRules",
     "at_pose", "at_position", "clf_unicycle_pose_controller", "clf_unicycle_position_controller",
