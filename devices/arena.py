@@ -15,6 +15,7 @@ until replaced (as in rps); ``ids`` selects a subset of robots to update.
 from __future__ import annotations
 
 import contextvars
+from collections import deque
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import Any, Literal, Protocol
@@ -151,7 +152,7 @@ class Arena:
             self.safety = safety
         self.safety_stats = SafetyStats()
         self.invalid_commands = 0
-        self.events: list[str] = []
+        self.events: deque[str] = deque(maxlen=200)  # the most recent events only: a run can be long
         self._command: tuple[str, Any] = ("si", np.zeros((self.n, 2)))
         self._hybrid = HybridPoseController(lookahead=self.ell)
         self._waypoint_index = np.zeros(self.n, dtype=int)
@@ -214,7 +215,7 @@ class Arena:
         self._command = (kind, base)
 
     def _current(self, kind: str, shape: tuple[int, ...]) -> FloatArray:
-        """The stored command of this kind, or the present motion re-expressed at this level."""
+        """The stored command of this kind, or zeros (robots not named in ``ids`` stand still)."""
         if self._command[0] == kind:
             return self._command[1]
         return np.zeros(shape)
@@ -309,10 +310,15 @@ class Arena:
         return self._waypoint_index.copy()
 
     # ------------------------------------------------------------------ the step
-    def nominal_velocities(self, poses: FloatArray) -> FloatArray:
-        """Look-ahead velocities ``(N, 2)`` the current command asks for at ``poses``."""
+    def nominal_velocities(self, poses: FloatArray, points: FloatArray | None = None) -> FloatArray:
+        """Look-ahead velocities ``(N, 2)`` the current command asks for at ``poses`` ``(N, 3)``.
+
+        ``points``: the look-ahead points ``(N, 2)`` of ``poses`` when the caller has them already.
+        """
         kind, cmd = self._command
         ell, dt = self.ell, self.config.dt
+        if points is None:
+            points = lookahead_points(poses, ell)
         if kind == "si":
             return cmd.copy()
         if kind == "unicycle":
@@ -321,11 +327,11 @@ class Arena:
             v, w = wheels_to_unicycle(cmd[:, 0], cmd[:, 1], self.params)
             return unicycle_to_si(poses, v, w, ell)
         if kind == "next":
-            return (cmd - lookahead_points(poses, ell)) / dt
+            return (cmd - points) / dt
         if kind == "goals":
             controller, goals = cmd
             if controller == "si":
-                return si_position_controller(lookahead_points(poses, ell), goals[:, :2], speed_limit=self.params.max_speed)
+                return si_position_controller(points, goals[:, :2], speed_limit=self.params.max_speed)
             if controller == "clf":
                 v, w = clf_unicycle_position_controller(poses, goals)
             elif controller == "pose":
@@ -335,7 +341,7 @@ class Arena:
             return unicycle_to_si(poses, v, w, ell)
         if kind == "waypoints":
             table, lengths, tol, loop = cmd
-            p = lookahead_points(poses, ell)
+            p = points
             rows = np.arange(self.n)
             idx = self._waypoint_index
             reached = at_position(p, table[rows, idx], tol)
@@ -354,7 +360,8 @@ class Arena:
         if self.duration is not None and self.time >= self.duration - 1e-9:
             raise ExperimentFinished(f"declared duration {self.duration} s is over")
         poses = self.backend.poses
-        nominal = self.nominal_velocities(poses)
+        points = lookahead_points(poses, self.ell)
+        nominal = self.nominal_velocities(poses, points)
         bad = ~np.all(np.isfinite(nominal), axis=1)
         if bad.any():
             nominal = np.where(bad[:, None], 0.0, nominal)
@@ -362,12 +369,17 @@ class Arena:
             self.events.append(f"t={self.time:.3f}: non-finite command for robot(s) {np.flatnonzero(bad).tolist()}: stopped")
         safe = nominal
         if self.safety is not None:
-            safe, diag = self.safety.filter(lookahead_points(poses, self.ell), nominal)
+            safe, diag = self.safety.filter(points, nominal)
+            safe = np.asarray(safe, dtype=float)
             st = self.safety_stats
             st.calls += 1
             st.last_diagnostics = diag
             st.last_status = str(getattr(diag, "status", "ok"))
-            if not getattr(diag, "ok", True):
+            ok = bool(getattr(diag, "ok", True))
+            if ok and (safe.shape != nominal.shape or not np.all(np.isfinite(safe))):
+                ok = False
+                st.last_status = f"filter returned shape {safe.shape} or non-finite values; expected ({self.n}, 2)"
+            if not ok:
                 st.failures += 1
                 st.failure_reasons[st.last_status] = st.failure_reasons.get(st.last_status, 0) + 1
                 safe = np.zeros_like(nominal)
@@ -420,9 +432,10 @@ class ArenaReport:
     def __str__(self) -> str:
         lines = ["swarmdeck run report"]
         if self.validation is not None:
-            lines.append(self.validation.summary())
+            lines.append(self.validation.summary(invalid_upstream=self.invalid_commands))
         else:
             lines.append(f"robots: {self.n_robots}   time: {self.time:.2f} s")
+            lines.append(f"invalid (NaN/inf) commands stopped: {self.invalid_commands} robot-steps")
         if self.safety_enabled:
             s = self.safety
             lines.append(

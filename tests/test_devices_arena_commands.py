@@ -1,0 +1,72 @@
+"""The experiment API's command path: bad commands stop robots and are reported; inputs never mutated."""
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from swarmdeck.devices import Arena
+
+
+def _arena(n=4, safety=False, **kw):
+    poses = np.column_stack((np.linspace(-1.0, 1.0, n), np.zeros(n), np.zeros(n)))
+    return Arena(initial_conditions=poses, safety=safety, **kw)
+
+
+def test_nan_command_stops_that_robot_and_the_report_counts_it():
+    arena = _arena()
+    u = np.full((4, 2), 0.1)
+    u[1] = np.nan
+    before = arena.poses()
+    for _ in range(3):
+        arena.set_velocities(u)
+        arena.step()
+    after = arena.poses()
+    assert np.allclose(after[1], before[1])  # stopped
+    assert not np.allclose(after[0], before[0])  # the others moved
+    report = arena.report()
+    assert report.to_dict()["invalid_commands"] == 3
+    assert "invalid (NaN/inf) commands stopped: 3 robot-steps" in str(report)
+
+
+def test_filter_returning_garbage_stops_every_robot():
+    class Broken:
+        def filter(self, points, nominal, obstacles=None):
+            return np.full_like(nominal, np.nan), None
+
+    arena = _arena(safety=Broken())
+    before = arena.poses()
+    arena.set_velocities(np.full((4, 2), 0.1))
+    arena.step()
+    assert np.array_equal(arena.poses(), before)
+    assert arena.report().safety.failures == 1
+
+
+def test_events_are_bounded():
+    arena = _arena(n=2)
+    arena.set_velocities(np.full((2, 2), np.inf))
+    for _ in range(500):
+        arena.step()
+    assert arena.invalid_commands == 1000 and len(arena.events) <= 200
+
+
+@settings(max_examples=40, deadline=None)
+@given(rows=st.integers(0, 6), cols=st.integers(0, 4))
+def test_wrong_shapes_name_the_argument_and_shape(rows, cols):
+    arena = _arena()
+    if (rows, cols) == (4, 2):
+        return
+    with pytest.raises(ValueError, match=r"velocities must have shape \(4, 2\)"):
+        arena.set_velocities(np.zeros((rows, cols)))
+
+
+def test_caller_arrays_are_never_modified():
+    arena = _arena()
+    u = np.full((4, 2), 0.1)
+    u[2] = np.nan
+    goals = np.array([[0.5, 0.5], [0.1, 0.2], [-0.5, 0.0], [0.0, -0.5]])
+    copies = u.copy(), goals.copy()
+    arena.set_velocities(u)
+    arena.step()
+    arena.set_goals(goals)
+    arena.step()
+    assert np.array_equal(u, copies[0], equal_nan=True) and np.array_equal(goals, copies[1])
