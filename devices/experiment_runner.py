@@ -6,7 +6,12 @@ calls it — or is a plain rps-style script that builds its own ``Arena()``;
 Arenas built without arguments take the runner's robot count and duration.
 The run ends when the script returns or when the declared duration is over
 (:class:`~swarmdeck.devices.ExperimentFinished`). A script that raises ends the
-run with its traceback; the robots are stopped and the report still printed.
+run: the robots are stopped, the report is still produced, and the error is kept
+both as one line naming the script's own line (:attr:`RunResult.error_line`) and
+as the full traceback (:attr:`RunResult.error`). ``sys.exit()`` / ``sys.exit(0)``
+in a script ends the run normally; a non-zero exit is reported as an error.
+Arenas the runner builds itself (``experiment(arena)``) are built outside the
+script's error handling, so a bad ``--robots`` is a plain :class:`ValueError`.
 """
 from __future__ import annotations
 
@@ -29,6 +34,17 @@ class ScriptError(Exception):
     """The script could not be loaded (missing, unreadable, syntax error)."""
 
 
+class RunnerArenaError(ValueError):
+    """The runner could not build the Arena it hands to ``experiment(arena)`` (e.g. too many robots)."""
+
+
+def _runner_arena() -> Arena:
+    try:
+        return Arena()
+    except ValueError as exc:
+        raise RunnerArenaError(str(exc)) from exc
+
+
 @dataclass
 class RunResult:
     """What a run produced: the reports of every arena it built, and how it ended."""
@@ -36,6 +52,7 @@ class RunResult:
     reports: list[ArenaReport] = field(default_factory=list)
     arenas: list[Arena] = field(default_factory=list)
     error: str | None = None  # formatted traceback of the script's own exception
+    error_line: str | None = None  # the same in one line: "script.py:12 (in f): ValueError: …"
     returned: Any = None
 
     @property
@@ -55,6 +72,23 @@ def _load(path: Path) -> dict:
     except SyntaxError as exc:
         raise ScriptError(f"syntax error in {path}:{exc.lineno}: {exc.msg}") from exc
     return {"source": source}
+
+
+def describe_error(exc: BaseException, script: str | None = None) -> str:
+    """One line for a script's exception: where in the script it happened, its type and message.
+
+    The location is the innermost frame in ``script`` (the file the user wrote), else the
+    innermost frame outside swarmdeck, else the innermost frame.
+    """
+    frames = traceback.extract_tb(exc.__traceback__)
+    mine = [f for f in frames if script is not None and Path(f.filename).resolve() == Path(script).resolve()]
+    if not mine:
+        package = str(Path(__file__).resolve().parents[1])
+        mine = [f for f in frames if not str(Path(f.filename).resolve()).startswith(package)
+                and not f.filename.startswith("<frozen")] or frames
+    where = f"{Path(mine[-1].filename).name}:{mine[-1].lineno} (in {mine[-1].name}): " if mine else ""
+    text = " ".join(str(exc).split()) or "(no message)"
+    return f"{where}{type(exc).__name__}: {text}"
 
 
 def _mentions_rps(source: str) -> bool:
@@ -80,10 +114,11 @@ def run_experiment(
     defaults = RunDefaults(n_robots=n_robots, duration=duration, seed=seed, safety=safety,
                            on_create=result.arenas.append, on_step=on_step)
     token = RUN_DEFAULTS.set(defaults)
+    script = None if callable(target) else str(target)
     try:
         try:
             if callable(target):
-                result.returned = target(Arena())
+                result.returned = target(_runner_arena())
             else:
                 path = Path(target)
                 source = _load(path)["source"]
@@ -95,7 +130,7 @@ def run_experiment(
                         namespace = runpy.run_path(str(path), run_name="__swarmdeck_experiment__")
                         fn = namespace.get("experiment")
                         if callable(fn):
-                            result.returned = fn(Arena())
+                            result.returned = fn(_runner_arena())
                     if not callable(fn) and not result.arenas:
                         raise ScriptError(
                             f"{path} neither defines experiment(arena) nor creates an Arena at top level"
@@ -104,10 +139,16 @@ def run_experiment(
                     sys.path.remove(str(path.parent.resolve()))
         except ExperimentFinished:
             pass
-        except ScriptError:
-            raise
-        except Exception:  # the user's own code failed: report it, keep the data
+        except SystemExit as exc:  # sys.exit() in a script ends the run, not swarmdeck
+            if exc.code not in (None, 0):
+                result.error = f"the script called sys.exit({exc.code!r})"
+                result.error_line = f"{Path(script or '?').name}: called sys.exit({exc.code!r})"
+        except Exception as exc:  # the user's own code failed: report it, keep the data
+            if isinstance(exc, (ScriptError, RunnerArenaError)):
+                raise
             result.error = traceback.format_exc()
+            result.error_line = describe_error(exc, script)
+        if result.error is not None:
             for arena in result.arenas:
                 arena.stop()
     finally:

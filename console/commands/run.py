@@ -3,9 +3,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import sys
-
-from swarmdeck.console.cli import UsageError
 
 NAME = "run"
 HELP = "run an experiment script headless on the simulated arena and print its report"
@@ -24,31 +21,17 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def main(args: argparse.Namespace) -> int:
-    from swarmdeck.devices.experiment_runner import ScriptError, progress_bar, run_experiment
+    from swarmdeck.console.examples._common import raise_if_failed, run_headless
 
-    if args.robots is not None and args.robots < 1:
-        raise UsageError(f"--robots must be >= 1, got {args.robots}")
-    if args.duration is not None and not args.duration > 0:
-        raise UsageError(f"--duration must be > 0 s, got {args.duration}")
-    on_step, close = progress_bar(args.duration)
-    try:
-        result = run_experiment(args.script, n_robots=args.robots, duration=args.duration, seed=args.seed,
-                                safety=not args.no_safety, on_step=on_step, rps=args.rps)
-    except ScriptError as exc:
-        raise UsageError(str(exc)) from exc
-    except ValueError as exc:  # e.g. too many robots for the arena
-        raise UsageError(str(exc)) from exc
-    finally:
-        close()
+    result = run_headless(args.script, args, rps=args.rps)
     if args.json:
-        print(json.dumps({"reports": [r.to_dict() for r in result.reports], "error": result.error}, indent=2))
+        print(json.dumps({"reports": [r.to_dict() for r in result.reports], "error": result.error,
+                          "error_line": result.error_line}, indent=2))
     else:
         for report in result.reports:
             print(report)
         if isinstance(result.returned, dict):
             for key, value in result.returned.items():
                 print(f"{key}: {value}")
-    if result.error:
-        print("the experiment script raised; robots were stopped:\n" + result.error, file=sys.stderr)
-        return 1
+    raise_if_failed(result)
     return 0

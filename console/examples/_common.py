@@ -2,7 +2,7 @@
 from __future__ import annotations
 
 import argparse
-import sys
+import math
 from collections.abc import Callable
 from typing import Any
 
@@ -17,27 +17,47 @@ def add_run_arguments(parser: argparse.ArgumentParser, robots: int, duration: fl
     parser.add_argument("--no-safety", action="store_true", help="run without the safety barrier")
 
 
-def run_example(experiment: Callable[..., Any], args: argparse.Namespace) -> int:
-    """Run ``experiment(arena)`` headless on the simulated arena; print the report and its results."""
-    from swarmdeck.devices.experiment_runner import progress_bar, run_experiment
+def check_run_arguments(robots: int | None, duration: float | None) -> None:
+    """UsageError unless ``--robots`` is >= 1 and ``--duration`` a finite number > 0 (None: not given)."""
+    if robots is not None and robots < 1:
+        raise UsageError(f"--robots must be >= 1, got {robots}")
+    if duration is not None and not (math.isfinite(duration) and duration > 0):
+        raise UsageError(f"--duration must be a finite number of seconds > 0, got {duration}")
 
-    if args.robots < 1:
-        raise UsageError(f"--robots must be >= 1, got {args.robots}")
-    if not args.duration > 0:
-        raise UsageError(f"--duration must be > 0 s, got {args.duration}")
+
+def run_headless(experiment: Callable[..., Any] | str, args: argparse.Namespace, **kw: Any) -> Any:
+    """Run ``experiment`` (a callable or a script path) with the common arguments; print the reports.
+
+    Returns the :class:`~swarmdeck.devices.experiment_runner.RunResult`. Raises UsageError when
+    the run cannot start (bad script file, too many robots) or when the experiment raised
+    (one line naming the script's line; the reports are printed first, the robots were stopped).
+    """
+    from swarmdeck.devices.experiment_runner import ScriptError, progress_bar, run_experiment
+
+    check_run_arguments(args.robots, args.duration)
     on_step, close = progress_bar(args.duration)
     try:
         result = run_experiment(experiment, n_robots=args.robots, duration=args.duration, seed=args.seed,
-                                safety=not args.no_safety, on_step=on_step)
-    except ValueError as exc:
+                                safety=not args.no_safety, on_step=on_step, **kw)
+    except (ScriptError, ValueError) as exc:
         raise UsageError(str(exc)) from exc
     finally:
         close()
+    return result
+
+
+def raise_if_failed(result: Any) -> None:
+    """After the reports are printed: a run whose experiment raised is a UsageError (exit 2)."""
+    if result.error_line:
+        raise UsageError(f"the experiment raised, robots were stopped: {result.error_line}")
+
+
+def run_example(experiment: Callable[..., Any], args: argparse.Namespace) -> int:
+    """Run ``experiment(arena)`` headless on the simulated arena; print the report and its results."""
+    result = run_headless(experiment, args)
     for report in result.reports:
         print(report)
     for name, value in (result.returned or {}).items():
         print(f"{name}: {value:.4f}" if isinstance(value, float) else f"{name}: {value}")
-    if result.error:
-        print(result.error, file=sys.stderr)
-        return 1
+    raise_if_failed(result)
     return 0

@@ -11,13 +11,12 @@ locational cost (for the mass-normalised density) and the mean distance to the c
 from __future__ import annotations
 
 import argparse
-import sys
 from typing import Any
 
 import numpy as np
 
 from swarmdeck.console.cli import UsageError
-from swarmdeck.console.examples._common import add_run_arguments
+from swarmdeck.console.examples._common import add_run_arguments, check_run_arguments, raise_if_failed, run_headless
 from swarmdeck.coverage import (CoverageConfig, CoverageController, Density, image_density,
                                 letter_image, moving_density)
 
@@ -106,12 +105,8 @@ def main(args: argparse.Namespace) -> int:
         return _run_s1()
     from swarmdeck.coverage import parse_law
     from swarmdeck.devices import ArenaConfig
-    from swarmdeck.devices.experiment_runner import progress_bar, run_experiment
 
-    if args.robots < 1:
-        raise UsageError(f"--robots must be >= 1, got {args.robots}")
-    if not args.duration > 0:
-        raise UsageError(f"--duration must be > 0 s, got {args.duration}")
+    check_run_arguments(args.robots, args.duration)
     try:
         family, _ = parse_law(args.law)
         CoverageConfig(law=args.law, kappa=args.kappa)
@@ -120,20 +115,10 @@ def main(args: argparse.Namespace) -> int:
     if family == "tvd-c":
         raise UsageError("tvd-c is a centralised reference law, not offered here")
     density = make_density(args.density, ArenaConfig().bounds)
-    on_step, close = progress_bar(args.duration)
-    try:
-        result = run_experiment(lambda arena: coverage_experiment(arena, density, args.law, args.kappa),
-                                n_robots=args.robots, duration=args.duration, seed=args.seed,
-                                safety=not args.no_safety, on_step=on_step)
-    except ValueError as exc:
-        raise UsageError(str(exc)) from exc
-    finally:
-        close()
+    result = run_headless(lambda arena: coverage_experiment(arena, density, args.law, args.kappa), args)
     for report in result.reports:
         print(report)
-    if result.error:
-        print(result.error, file=sys.stderr)
-        return 1
+    raise_if_failed(result)
     res = result.returned
     print(f"coverage: law {args.law}, κ = {args.kappa:g}, density {args.density}, "
           f"{args.robots} robots, {args.duration:g} s")
