@@ -83,8 +83,11 @@ class CameraCalibration:
         return CameraCalibration(K, dist, size, float(d.get("rms_px", float("nan"))), int(d.get("n_images", 0)))
 
     def save(self, path: str | Path) -> None:
-        """Write the JSON file."""
-        Path(path).write_text(json.dumps(self.to_dict(), indent=2) + "\n")
+        """Write the JSON file (raises :class:`CalibrationError` naming the path when it cannot)."""
+        try:
+            Path(path).write_text(json.dumps(self.to_dict(), indent=2) + "\n")
+        except OSError as exc:
+            raise CalibrationError(f"cannot write calibration file {path}: {exc.strerror or exc}") from exc
 
     @staticmethod
     def load(path: str | Path) -> "CameraCalibration":
@@ -110,10 +113,19 @@ class CharucoSpec:
     marker_length: float = 0.03
     dictionary: str = "DICT_5X5_100"
 
+    def __post_init__(self) -> None:
+        if not all(isinstance(v, (int, np.integer)) and v >= 3 for v in (self.squares_x, self.squares_y)):
+            raise CalibrationError(f"a ChArUco board needs at least 3x3 squares, got {self.squares_x}x{self.squares_y}")
+        for name in ("square_length", "marker_length"):
+            v = getattr(self, name)
+            if not (isinstance(v, (int, float, np.floating)) and np.isfinite(v) and v > 0):
+                raise CalibrationError(f"{name} must be a finite length > 0 m, got {v!r}")
+        if self.marker_length >= self.square_length:
+            raise CalibrationError(f"marker_length ({self.marker_length} m) must be smaller than "
+                                   f"square_length ({self.square_length} m)")
+
     def board(self) -> cv2.aruco.CharucoBoard:
         """The OpenCV board object."""
-        if self.marker_length >= self.square_length:
-            raise CalibrationError("marker_length must be smaller than square_length")
         return cv2.aruco.CharucoBoard((self.squares_x, self.squares_y), self.square_length,
                                       self.marker_length, dictionary(self.dictionary))
 

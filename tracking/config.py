@@ -60,8 +60,16 @@ class TrackerConfig:
             raise ConfigError(f"dictionary must be one of {sorted(DICTIONARIES)}, got {self.dictionary!r}")
         if not (0 < self.tag_size < 1):
             raise ConfigError(f"tag_size must be in (0, 1) m, got {self.tag_size}")
-        if not self.stale_after_s > 0:
-            raise ConfigError(f"stale_after_s must be > 0, got {self.stale_after_s}")
+        if not (np.isfinite(self.stale_after_s) and self.stale_after_s > 0):
+            raise ConfigError(f"stale_after_s must be a finite number > 0 s, got {self.stale_after_s}")
+        for name in ("tag_height", "reference_height"):  # NaN here would make every pose NaN
+            v = getattr(self, name)
+            if not (np.isfinite(v) and 0 <= v < 10):
+                raise ConfigError(f"{name} must be a height in [0, 10) m above the floor, got {v}")
+        for name in ("max_reference_rms_m", "max_anisotropy"):
+            v = getattr(self, name)
+            if not (np.isfinite(v) and v > 0):
+                raise ConfigError(f"{name} must be a finite number > 0, got {v}")
         if not (1 <= self.min_references):
             raise ConfigError(f"min_references must be >= 1, got {self.min_references}")
         ids = [r.id for r in self.references]
@@ -69,7 +77,8 @@ class TrackerConfig:
             raise ConfigError(f"reference ids must be distinct, got {ids}")
         if set(ids) & set(self.expected_ids):
             raise ConfigError(f"expected robot ids {sorted(set(ids) & set(self.expected_ids))} are reference ids")
-        if self.camera_position is not None and (len(self.camera_position) != 3 or not self.camera_position[2] > 0):
+        if self.camera_position is not None and (len(self.camera_position) != 3 or not self.camera_position[2] > 0
+                                                 or not np.all(np.isfinite(self.camera_position))):
             raise ConfigError(f"camera_position must be (x, y, height > 0), got {self.camera_position}")
         tw = tuple(self.threshold_windows)
         if len(tw) != 3 or not (3 <= tw[0] <= tw[1]) or tw[2] < 1:
@@ -132,8 +141,11 @@ class TrackerConfig:
         return TrackerConfig(**kw)
 
     def save(self, path: str | Path) -> None:
-        """Write the JSON file."""
-        Path(path).write_text(json.dumps(self.to_dict(), indent=2) + "\n")
+        """Write the JSON file (raises :class:`ConfigError` naming the path when it cannot)."""
+        try:
+            Path(path).write_text(json.dumps(self.to_dict(), indent=2) + "\n")
+        except OSError as exc:
+            raise ConfigError(f"cannot write tracker config {path}: {exc.strerror or exc}") from exc
 
     @staticmethod
     def load(path: str | Path) -> "TrackerConfig":

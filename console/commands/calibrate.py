@@ -64,6 +64,16 @@ def _squares(text: str) -> tuple[int, int]:
     return a, b
 
 
+def _write_image(path: Path, image: np.ndarray, option: str) -> None:
+    """cv2.imwrite, with its status checked (it returns False instead of raising)."""
+    try:
+        ok = cv2.imwrite(str(path), image)
+    except cv2.error as exc:  # e.g. an unknown file extension
+        raise UsageError(f"{option} {path}: cannot write the image ({exc.err})") from exc
+    if not ok:
+        raise UsageError(f"{option} {path}: cannot write the image (does the folder exist and is it writable?)")
+
+
 def _camera(args: argparse.Namespace) -> int:
     from swarmdeck.tracking import CalibrationError, CharucoSpec, calibrate_charuco
     from swarmdeck.tracking.synthetic import SyntheticCameraConfig, charuco_views
@@ -75,15 +85,21 @@ def _camera(args: argparse.Namespace) -> int:
     except (CalibrationError, ValueError) as exc:
         raise UsageError(str(exc)) from exc
     if args.write_board:
-        cv2.imwrite(str(args.write_board), spec.image())
+        _write_image(args.write_board, spec.image(), "--write-board")
         print(f"wrote {args.write_board} ({sx}×{sy} squares of {args.square_length * 1000:g} mm; print at that size)")
         return 0
     if args.write_synthetic:
-        args.write_synthetic.mkdir(parents=True, exist_ok=True)
+        if args.views < 1:
+            raise UsageError(f"--views must be >= 1, got {args.views}")
+        try:
+            args.write_synthetic.mkdir(parents=True, exist_ok=True)
+        except OSError as exc:
+            raise UsageError(f"--write-synthetic {args.write_synthetic}: cannot create the folder: "
+                             f"{exc.strerror or exc}") from exc
         cam = SyntheticCameraConfig().camera()
         views = charuco_views(cam, spec, args.views, np.random.default_rng(args.seed))
         for k, img in enumerate(views):
-            cv2.imwrite(str(args.write_synthetic / f"board_{k:03d}.png"), img[..., ::-1])
+            _write_image(args.write_synthetic / f"board_{k:03d}.png", img[..., ::-1], "--write-synthetic")
         print(f"wrote {len(views)} synthetic views to {args.write_synthetic} (true fx {cam.K[0, 0]:.1f} px, "
               f"dist {np.round(cam.dist, 4).tolist()})")
         return 0
@@ -104,7 +120,10 @@ def _camera(args: argparse.Namespace) -> int:
         cal = calibrate_charuco(images, spec)
     except CalibrationError as exc:
         raise UsageError(f"{exc} (in {len(images)} readable images in {args.images})") from exc
-    cal.save(args.out)
+    try:
+        cal.save(args.out)
+    except CalibrationError as exc:
+        raise UsageError(f"--out: {exc}") from exc
     K = cal.camera_matrix
     print(f"calibrated from {cal.n_images}/{len(images)} images: fx {K[0, 0]:.1f} fy {K[1, 1]:.1f} "
           f"cx {K[0, 2]:.1f} cy {K[1, 2]:.1f} px, dist {np.round(cal.dist_coeffs, 4).tolist()}, "
@@ -153,6 +172,8 @@ def _arena(args: argparse.Namespace) -> int:
         measure = [int(v) for v in args.measure.split(",") if v.strip()]
     except ValueError as exc:
         raise UsageError(f"--measure must be comma-separated ids, got {args.measure!r}") from exc
+    if not (math.isfinite(args.timeout) and args.timeout > 0):
+        raise UsageError(f"--timeout must be a finite number of seconds > 0, got {args.timeout}")
     cal = cfg.calibration
     if args.image is not None:
         if not args.image.is_file():
@@ -208,7 +229,10 @@ def _arena(args: argparse.Namespace) -> int:
         out = cfg.with_(references=tuple(refs), **changes)
     except ConfigError as exc:
         raise UsageError(str(exc)) from exc
-    out.save(args.out)
+    try:
+        out.save(args.out)
+    except ConfigError as exc:
+        raise UsageError(f"--out: {exc}") from exc
     print(f"homography from {fit.n_references} references, {fit.rms_m * 1000:.2f} mm RMS → {args.out}")
     return 0
 
