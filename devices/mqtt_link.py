@@ -74,10 +74,16 @@ class MqttLink:
         if config.username is not None:
             self._client.username_pw_set(config.username, config.password)
         if config.tls:
-            self._client.tls_set(
-                ca_certs=config.ca_certs, certfile=config.certfile, keyfile=config.keyfile,
-                cert_reqs=ssl.CERT_REQUIRED, tls_version=ssl.PROTOCOL_TLS_CLIENT,
-            )
+            try:
+                self._client.tls_set(
+                    ca_certs=config.ca_certs, certfile=config.certfile, keyfile=config.keyfile,
+                    cert_reqs=ssl.CERT_REQUIRED, tls_version=ssl.PROTOCOL_TLS_CLIENT,
+                )
+            except (OSError, ssl.SSLError) as exc:  # missing/unreadable/invalid certificate or key files
+                files = {k: v for k, v in (("ca_certs", config.ca_certs), ("certfile", config.certfile),
+                                           ("keyfile", config.keyfile)) if v}
+                raise ValueError(f"TLS set-up for {config.url} failed with {files}: "
+                                 f"{getattr(exc, 'strerror', None) or exc}") from exc
         self._client.reconnect_delay_set(config.reconnect_min, config.reconnect_max)  # type: ignore[arg-type]
         self._client.max_queued_messages_set(1000)
         self._client.on_connect = self._on_connect

@@ -93,6 +93,8 @@ def main(args: argparse.Namespace) -> int:
         raise UsageError(f"--layout {layout} is too small for robot id {int(ids.max())} (needs > the largest id)")
     if not (np.isfinite(args.pose_rate) and args.pose_rate > 0):
         raise UsageError(f"--pose-rate must be a positive number of messages per second, got {args.pose_rate}")
+    if args.duration is not None and not (np.isfinite(args.duration) and args.duration > 0):
+        raise UsageError(f"--duration must be a finite number of seconds > 0, got {args.duration}")
     try:
         cfg = parse_broker_url(
             args.broker, qos=args.qos, protocol=args.mqtt_version, prefix=args.prefix, username=args.username,
@@ -105,8 +107,16 @@ def main(args: argparse.Namespace) -> int:
         poses = random_initial_poses(layout, tuple(args.bounds), rng=args.seed)[ids]
     except ValueError as exc:
         raise UsageError(str(exc)) from None
-    trace = open(args.trace, "a", buffering=1 << 16) if args.trace else None
-    node = FleetNode(cfg, ids, poses, firmware=firmware, battery=battery, name=args.name, trace=trace)
+    try:
+        trace = open(args.trace, "a", buffering=1 << 16) if args.trace else None
+    except OSError as exc:
+        raise UsageError(f"--trace {args.trace}: cannot open for appending: {exc.strerror or exc}") from None
+    try:
+        node = FleetNode(cfg, ids, poses, firmware=firmware, battery=battery, name=args.name, trace=trace)
+    except ValueError as exc:  # e.g. unreadable TLS files
+        if trace is not None:
+            trace.close()
+        raise UsageError(str(exc)) from None
     stop = threading.Event()
 
     def on_signal(signum: int, frame: object) -> None:
