@@ -6,16 +6,20 @@ small sparse SPD system::
 
     (A_W A_Wᵀ) λ = A_W û − b_W,     u = û − A_Wᵀ λ.
 
-The speed discs enter as tangent cuts ``n_iᵀu_i ≤ v_max`` whose normals are
-rotated to ``u_i/‖u_i‖`` until they stop moving: at that fixed point the cut's
-multiplier is the disc's (∇‖u_i‖ = n_i), so the KKT conditions of the conic
-problem hold. Iterations add every violated row and drop every row with a
-negative multiplier; the answer is returned only when it is certified:
-λ ≥ 0, every built row satisfied to ``feas_tol`` (m/s), every speed ≤ v_max,
-and the linear system solved to a small residual. Otherwise ``ok`` is False
-and the caller falls back to clarabel.
+Speed discs first enter as tangent cuts ``n_iᵀu_i ≤ v_max`` (normals rotated to
+``u_i/‖u_i‖``) while the row working set settles: violated rows are added and
+rows with negative multipliers dropped (all at once for the first iterations,
+then by Lawson–Hanson ratio steps so the dual objective increases
+monotonically and the iteration cannot cycle). Once the rows stop changing the
+discs are handled exactly: with u(λ) = Π_D(û − A_Wᵀλ) (Π_D the projection on
+the speed discs) the equations A_W u(λ) = b_W are solved by semismooth Newton
+steps with the generalised Hessian A_W J A_Wᵀ, J = ∂Π_D (quadratic convergence
+where the cut rotation alone converges linearly).
 
-Robots that no row touches are solved in closed form (û scaled into the disc).
+An answer is returned only when it is certified: λ ≥ 0, every built row
+satisfied to ``feas_tol`` (m/s), rows with λ > 0 at equality, speeds ≤ v_max;
+stationarity holds by construction. Otherwise ``ok`` is False and the caller
+falls back to clarabel. Robots no row touches are solved in closed form.
 """
 from __future__ import annotations
 
@@ -28,13 +32,14 @@ import scipy.sparse.linalg as spla
 
 from .constraints import Rows
 
-_DENSE_LIMIT = 250_000  # use a dense Cholesky while w × 2N stays below this
+_DENSE_LIMIT = 250_000  # dense Cholesky while (rows in W) × 2N stays below this
 # Tikhonov term on the Gram matrix: working sets can hold linearly dependent rows
 # (more rows than relative degrees of freedom in a cluster); the ridge selects the
 # least-norm multipliers, and errors along null(A_Wᵀ) do not change u = û − A_Wᵀλ.
 _RIDGE = 1e-11
-_DEBUG = False
 _AGGRESSIVE_ITERS = 8  # drop every negative multiplier at once, then switch to Lawson–Hanson steps
+_NEWTON_STEPS = 15
+_EYE = np.eye(2)
 
 
 @dataclass(frozen=True)
@@ -49,33 +54,86 @@ class ActiveSetResult:
     iterations: int
 
 
-def _gram_solve(ai, ajj, aci, acj, rhs, n_robots):
-    """Solve (A_W A_Wᵀ) λ = rhs for rows with coefficients aci on robot ai and acj on robot ajj."""
-    w = ai.shape[0]
-    if w * 2 * n_robots <= _DENSE_LIMIT:
-        Ad = np.zeros((w, 2 * n_robots))
-        r = np.arange(w)
-        Ad[r, 2 * ajj] = acj[:, 0]
-        Ad[r, 2 * ajj + 1] = acj[:, 1]
-        Ad[r, 2 * ai] += aci[:, 0]
-        Ad[r, 2 * ai + 1] += aci[:, 1]
-        G = Ad @ Ad.T
-        G[np.diag_indices_from(G)] += _RIDGE
+def _project(w: np.ndarray, vmax: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Π_D(w) per robot; also the mask of robots outside the disc and their norms."""
+    s2 = np.einsum("kd,kd->k", w, w)
+    over = s2 > vmax * vmax
+    u = w.copy()
+    norms = np.sqrt(s2[over])
+    if over.any():
+        u[over] *= (vmax / norms)[:, None]
+    return u, over, norms
+
+
+class _Working:
+    """Rows held at equality, as flat arrays (single-robot rows have cj = 0, aj = ai)."""
+
+    def __init__(self, ai, aj, aci, acj, b, n: int) -> None:
+        self.ai, self.aj, self.aci, self.acj, self.b, self.n = ai, aj, aci, acj, b, n
+
+    def At(self, lam: np.ndarray) -> np.ndarray:
+        """A_Wᵀλ as (N, 2)."""
+        n = self.n
+        out = np.empty((n, 2))
+        wi = lam[:, None] * self.aci
+        wj = lam[:, None] * self.acj
+        out[:, 0] = np.bincount(self.ai, wi[:, 0], n) + np.bincount(self.aj, wj[:, 0], n)
+        out[:, 1] = np.bincount(self.ai, wi[:, 1], n) + np.bincount(self.aj, wj[:, 1], n)
+        return out
+
+    def A(self, u: np.ndarray) -> np.ndarray:
+        return np.einsum("kd,kd->k", self.aci, u[self.ai]) + np.einsum("kd,kd->k", self.acj, u[self.aj])
+
+    def solve(self, J: np.ndarray | None, rhs: np.ndarray) -> np.ndarray | None:
+        """Solve (A_W J A_Wᵀ + ridge·I) δ = rhs; J (N, 2, 2) blocks or None for the identity."""
+        w, n = self.ai.shape[0], self.n
+        if w * 2 * n <= _DENSE_LIMIT:
+            Ad = np.zeros((w, n, 2))
+            r = np.arange(w)
+            Ad[r, self.aj] = self.acj
+            Ad[r, self.ai] += self.aci
+            B = Ad if J is None else np.einsum("wnd,nde->wne", Ad, J)
+            G = B.reshape(w, 2 * n) @ Ad.reshape(w, 2 * n).T
+            G[np.diag_indices_from(G)] += _RIDGE
+            try:
+                return sla.cho_solve(sla.cho_factor(G, check_finite=False), rhs, check_finite=False)
+            except (np.linalg.LinAlgError, ValueError):
+                return None
+        indptr = np.arange(0, 4 * w + 1, 4)
+        cols = np.stack([2 * self.ai, 2 * self.ai + 1, 2 * self.aj, 2 * self.aj + 1], axis=1).reshape(-1)
+        data = np.concatenate([self.aci, self.acj], axis=1).reshape(-1)
+        A = sp.csr_matrix((data, cols, indptr), shape=(w, 2 * n))
+        if J is None:
+            G = A @ A.T
+        else:
+            Jb = sp.bsr_matrix((J, np.arange(n), np.arange(n + 1)), shape=(2 * n, 2 * n)).tocsr()
+            G = A @ (Jb @ A.T)
+        G = (G + _RIDGE * sp.identity(w, format="csr")).tocsc()
         try:
-            lam = sla.cho_solve(sla.cho_factor(G, check_finite=False), rhs, check_finite=False)
-        except (np.linalg.LinAlgError, ValueError):
+            return spla.splu(G, permc_spec="MMD_AT_PLUS_A").solve(rhs)
+        except RuntimeError:  # exactly singular
             return None
-        return lam
-    indptr = np.arange(0, 4 * w + 1, 4)
-    cols = np.stack([2 * ai, 2 * ai + 1, 2 * ajj, 2 * ajj + 1], axis=1).reshape(-1)
-    data = np.concatenate([aci, acj], axis=1).reshape(-1)
-    A = sp.csr_matrix((data, cols, indptr), shape=(w, 2 * n_robots))
-    G = (A @ A.T + _RIDGE * sp.identity(w, format="csr")).tocsc()
-    try:
-        lam = spla.splu(G, permc_spec="MMD_AT_PLUS_A").solve(rhs)
-    except RuntimeError:  # exactly singular
-        return None
-    return lam
+
+
+def _newton_discs(work: _Working, uh: np.ndarray, vmax: float, lam0: np.ndarray
+                  ) -> tuple[np.ndarray, np.ndarray] | None:
+    """Solve A_W Π_D(û − A_Wᵀλ) = b_W for λ (consistent working set), or None."""
+    lam = lam0.copy()
+    for _ in range(_NEWTON_STEPS):
+        w = uh - work.At(lam)
+        u, over, norms = _project(w, vmax)
+        F = work.A(u) - work.b
+        if float(np.max(np.abs(F), initial=0.0)) <= 1e-12:
+            return lam, u
+        J = np.broadcast_to(_EYE, (work.n, 2, 2)).copy()
+        if over.any():
+            wh = w[over] / norms[:, None]
+            J[over] = (vmax / norms)[:, None, None] * (_EYE - wh[:, :, None] * wh[:, None, :])
+        delta = work.solve(J, F)
+        if delta is None or not np.all(np.isfinite(delta)):
+            return None
+        lam = lam + delta
+    return None
 
 
 def solve_active_set(rows: Rows, nominal: np.ndarray, max_speed: float | None,
@@ -89,60 +147,72 @@ def solve_active_set(rows: Rows, nominal: np.ndarray, max_speed: float | None,
     involved = np.zeros(n, dtype=bool)
     involved[rows.i] = True
     involved[jj] = True
-    speed2 = np.einsum("kd,kd->k", uh, uh)
     vmax = np.inf if max_speed is None else float(max_speed)
 
     # closed form for robots without rows: û scaled into the speed disc
-    base = uh.copy()
-    free_fast = (~involved) & (speed2 > vmax * vmax)
-    if free_fast.any():
-        base[free_fast] *= (vmax / np.sqrt(speed2[free_fast]))[:, None]
+    base, _, _ = _project(uh, vmax)
+    base[involved] = uh[involved]
 
     if warm is not None and warm.any():
         W = warm.copy()  # last tick's active rows; violated rows join after the first solve
     else:
         W = rows.lhs(uh) > rows.b
-    cut = involved & (speed2 > vmax * vmax)
+    # speed cuts join after the first solve, in the direction of the answer (û's is often poor)
+    cut = np.zeros(n, dtype=bool)
     normals = np.zeros((n, 2))
-    if cut.any():
-        normals[cut] = uh[cut] / np.sqrt(speed2[cut])[:, None]
-
     lam_rows = np.zeros(m)
     lam_cut = np.zeros(n)
-    fail = lambda reason, it: ActiveSetResult(np.zeros((n, 2)), False, reason, W, cut, it)
+
+    def fail(reason: str, it: int) -> ActiveSetResult:
+        return ActiveSetResult(np.zeros((n, 2)), False, reason, W, cut, it)
+
+    def certify(u: np.ndarray, work: _Working | None, lam: np.ndarray, it: int) -> ActiveSetResult | None:
+        if np.any(rows.lhs(u) - rows.b > feas_tol):
+            return None
+        if work is not None and lam.size:
+            eq = work.A(u) - work.b
+            if float(np.max(np.abs(eq[lam > 0]), initial=0.0)) > 1e-8:
+                return None
+        speed = np.einsum("kd,kd->k", u, u)
+        over = speed > vmax * vmax
+        if np.any(speed > (vmax * (1 + 1e-9)) ** 2):
+            return None
+        if over.any():  # rounding only
+            u = u.copy()
+            u[over] *= (vmax / np.sqrt(speed[over]))[:, None]
+        return ActiveSetResult(u, True, "certified", W & (lam_rows > 0),
+                               speed >= vmax * vmax * (1 - 1e-9), it)
+
     for it in range(1, max_iter + 1):
         aggressive = it <= _AGGRESSIVE_ITERS
-        # subspace minimiser over the working set, stepping back along the segment from the
-        # previous (non-negative) multipliers whenever one turns negative (Lawson–Hanson),
-        # so the dual objective decreases monotonically and the iteration cannot cycle
         while True:
             idx = np.flatnonzero(W)
             cidx = np.flatnonzero(cut)
-            ai = np.concatenate([rows.i[idx], cidx])
-            aj = np.concatenate([jj[idx], cidx])
-            aci = np.concatenate([rows.ci[idx], normals[cidx]])
-            acj = np.concatenate([rows.cj[idx], np.zeros((cidx.size, 2))])
-            ab = np.concatenate([rows.b[idx], np.full(cidx.size, vmax)])
-            if ai.size == 0:
-                lam, rhs = np.zeros(0), np.zeros(0)
+            work = _Working(np.concatenate([rows.i[idx], cidx]), np.concatenate([jj[idx], cidx]),
+                            np.concatenate([rows.ci[idx], normals[cidx]]),
+                            np.concatenate([rows.cj[idx], np.zeros((cidx.size, 2))]),
+                            np.concatenate([rows.b[idx], np.full(cidx.size, vmax)]), n)
+            if work.ai.size == 0:
+                lam = np.zeros(0)
                 break
-            rhs = np.einsum("kd,kd->k", aci, uh[ai]) + np.einsum("kd,kd->k", acj, uh[aj]) - ab
-            lam = _gram_solve(ai, aj, aci, acj, rhs, n)
+            rhs = work.A(uh) - work.b
+            lam = work.solve(None, rhs)
             if lam is None or not np.all(np.isfinite(lam)):
                 return fail("singular working set", it)
             neg = lam < 0
-            if _DEBUG: print('   inner', idx.size, cidx.size, int(neg.sum()), int(neg[idx.size:].sum()))
             if not neg.any():
                 break
             old = np.concatenate([lam_rows[idx], lam_cut[cidx]])
-            alpha = float(np.min(old[neg] / (old[neg] - lam[neg])))
-            step = old + alpha * (lam - old)
-            drop = neg & (step <= 1e-15 * max(1.0, float(np.max(old))))
             if aggressive:
                 drop = neg
-            if not drop.any():  # rounding: drop the most negative
-                drop = lam == lam.min()
-            step[drop] = 0.0
+                step = np.where(neg, 0.0, lam)
+            else:  # Lawson–Hanson: step back to the first multiplier that reaches zero
+                alpha = float(np.min(old[neg] / (old[neg] - lam[neg])))
+                step = old + alpha * (lam - old)
+                drop = neg & (step <= 1e-15 * max(1.0, float(np.max(old))))
+                if not drop.any():
+                    drop = lam == lam.min()
+                step[drop] = 0.0
             lam_rows[idx] = step[: idx.size]
             lam_cut[cidx] = step[idx.size:]
             W[idx[drop[: idx.size]]] = False
@@ -151,40 +221,32 @@ def solve_active_set(rows: Rows, nominal: np.ndarray, max_speed: float | None,
         lam_cut[:] = 0.0
         lam_rows[idx] = lam[: idx.size]
         lam_cut[cidx] = lam[idx.size:]
-        u = base.copy()
-        if ai.size:
-            wx = lam[:, None] * aci
-            wy = lam[:, None] * acj
-            u[:, 0] -= np.bincount(ai, wx[:, 0], n) + np.bincount(aj, wy[:, 0], n)
-            u[:, 1] -= np.bincount(ai, wx[:, 1], n) + np.bincount(aj, wy[:, 1], n)
+        u = base - work.At(lam) if lam.size else base.copy()
         viol = (rows.lhs(u) - rows.b > feas_tol) & ~W
         sp2 = np.einsum("kd,kd->k", u, u)
         new_cut = involved & ~cut & (sp2 > vmax * vmax * (1 + 1e-12))
-        moved = 0.0
-        if cidx.size:
+        if not viol.any() and not new_cut.any():
+            if cidx.size == 0:
+                done = certify(u, work, lam, it)
+                return done if done is not None else fail("not certified", it)
+            # the rows have settled: solve the discs exactly (Newton on u(λ) = Π_D(û − Aᵀλ))
+            rw = _Working(rows.i[idx], jj[idx], rows.ci[idx], rows.cj[idx], rows.b[idx], n)
+            sol = _newton_discs(rw, uh, vmax, lam[: idx.size]) if idx.size else (np.zeros(0), _project(uh, vmax)[0])
+            if sol is not None and np.all(sol[0] >= 0):
+                lam_rows[:] = 0.0
+                lam_rows[idx] = sol[0]
+                done = certify(sol[1], rw if idx.size else None, sol[0], it)
+                if done is not None:
+                    return done
+                viol = (rows.lhs(sol[1]) - rows.b > feas_tol) & ~W
+                if viol.any():
+                    u = sol[1]
+                    sp2 = np.einsum("kd,kd->k", u, u)
+        if cidx.size:  # rotate the cuts to the answer's direction
             sc = np.sqrt(sp2[cidx])
             if np.any(sc == 0):
                 return fail("degenerate speed cut", it)
-            nn = u[cidx] / sc[:, None]
-            moved = float(np.max(np.abs(nn - normals[cidx])))
-            normals[cidx] = nn
-        if _DEBUG: print(it, int(W.sum()), int(cut.sum()), int(viol.sum()), int(new_cut.sum()), moved)
-        if not viol.any() and not new_cut.any() and moved <= 1e-10:
-            if ai.size:
-                # complementarity: rows with a positive multiplier hold at equality
-                eq = np.einsum("kd,kd->k", aci, u[ai]) + np.einsum("kd,kd->k", acj, u[aj]) - ab
-                if float(np.max(np.abs(eq[lam > 0]), initial=0.0)) > 1e-8:
-                    return fail("inaccurate linear solve", it)
-            # the rotated cuts are tangent: bring the last rounding error inside the disc
-            over = sp2 > vmax * vmax
-            if over.any():
-                s = np.sqrt(sp2[over])
-                if np.any(s > vmax * (1 + 1e-7)):
-                    return fail("speed bound not certified", it)
-                u[over] *= (vmax / s)[:, None]
-            if np.any(rows.lhs(u) - rows.b > 1e-8):
-                return fail("rows not certified", it)
-            return ActiveSetResult(u, True, "certified", W & (lam_rows > 0), cut & (lam_cut > 0), it)
+            normals[cidx] = u[cidx] / sc[:, None]
         W |= viol
         if new_cut.any():
             normals[new_cut] = u[new_cut] / np.sqrt(sp2[new_cut])[:, None]

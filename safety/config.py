@@ -55,7 +55,7 @@ class BarrierConfig:
     dt: float = 0.033
     recovery: bool = True
     recovery_speed: float = 0.05
-    recovery_weight: float = 100.0
+    recovery_weight: float = 1e4
     solver: Literal["auto", "clarabel"] = "auto"
     max_active_set_iterations: int = 40
     clarabel_max_iter: int = 100

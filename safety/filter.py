@@ -161,7 +161,8 @@ class SafetyFilter:
         unsafe = (rows.h < 0) & (rows.kind != LIMIT)
         n_unsafe = int(unsafe.sum())
         recovering = cfg.recovery and n_unsafe > 0
-        b_target = np.where(unsafe, np.minimum(rows.b, -cfg.recovery_speed), rows.b) if recovering else rows.b
+        # recovery: rows with h < 0 aim at separating at recovery_speed (m/s, rows are normalised)
+        b_target = np.where(unsafe, -cfg.recovery_speed, rows.b) if recovering else rows.b
 
         # pass-through: û satisfies every row and speed bound → u* = û exactly
         lhs_nom = rows.lhs(U)

@@ -104,7 +104,7 @@ class UnicycleSafetyFilter:
                 raise InputError("poses, v or w contain NaN or inf")
             O = None if obstacles is None else as_points(obstacles, "obstacles")
         except (InputError, TypeError, ValueError) as exc:
-            n = robot_count(poses, v)
+            n = robot_count(v, poses)  # the poses' row count first
             _, diag = self._si.fail_stop(n, np.zeros((n, 2)), f"invalid input: {exc}", t0)
             return np.zeros(n), np.zeros(n), diag
         ell = self.params.lookahead

@@ -1,0 +1,51 @@
+"""Random test and benchmark scenes (REFERENCE.md §3 "dense random scenes").
+
+Robots on a random subset of a jittered grid whose pitch is just wider than
+D_s, every point inside the wall margin, with random nominal directions and
+speeds up to v_max.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from .config import BarrierConfig
+
+
+def arena_for(n: int, pitch: float, fill: float = 0.8, aspect: float = 1.6,
+              margin: float = 0.095) -> tuple[float, float, float, float]:
+    """A centred arena (x_min, x_max, y_min, y_max) whose grid holds n robots at ``fill`` occupancy."""
+    cells = n / fill
+    rows = math.ceil(math.sqrt(cells / aspect))
+    cols = math.ceil(cells / rows)
+    half_w = (cols - 1) * pitch / 2 + margin + 1e-3
+    half_h = (rows - 1) * pitch / 2 + margin + 1e-3
+    return (-half_w, half_w, -half_h, half_h)
+
+
+def grid_scene(n: int, rng: np.random.Generator, cfg: BarrierConfig | None = None,
+               pitch: float | None = None, jitter: float = 0.004) -> tuple[np.ndarray, np.ndarray]:
+    """(points (n, 2), nominal (n, 2)) on a jittered grid inside ``cfg.bounds``.
+
+    pitch defaults to D_s + 2·jitter + 0.01 m, so every pair starts ≥ D_s + 0.01
+    apart; points keep ≥ margin + jitter from the walls. Raises ValueError when
+    the arena cannot hold n robots at that pitch.
+    """
+    cfg = BarrierConfig() if cfg is None else cfg
+    pitch = cfg.safety_distance + 2 * jitter + 0.01 if pitch is None else pitch
+    x_min, x_max, y_min, y_max = cfg.bounds
+    inset = cfg.margin + jitter + 1e-6
+    xs = np.arange(x_min + inset, x_max - inset + 1e-12, pitch)
+    ys = np.arange(y_min + inset, y_max - inset + 1e-12, pitch)
+    xs += (x_max - inset - xs[-1]) / 2 if xs.size else 0.0
+    ys += (y_max - inset - ys[-1]) / 2 if ys.size else 0.0
+    X, Y = np.meshgrid(xs, ys)
+    cells = np.stack([X.ravel(), Y.ravel()], axis=1)
+    if cells.shape[0] < n:
+        raise ValueError(f"grid_scene: the arena {cfg.bounds} holds {cells.shape[0]} robots at pitch {pitch}, not {n}")
+    pts = cells[rng.permutation(cells.shape[0])[:n]] + rng.uniform(-jitter, jitter, (n, 2))
+    ang = rng.uniform(0, 2 * np.pi, n)
+    speed = rng.uniform(0, cfg.max_speed, n)
+    nominal = np.stack([np.cos(ang), np.sin(ang)], axis=1) * speed[:, None]
+    return pts, nominal
