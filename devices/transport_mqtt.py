@@ -122,8 +122,9 @@ class MqttTransport:
             if np.any(arr < 0) or len(np.unique(arr)) != len(arr):
                 raise ValueError(f"ids must be distinct non-negative integers, got {arr.tolist()}")
             self.expected = frozenset(int(i) for i in arr)
-            for i in sorted(self.expected):
+            for i in sorted(self.expected):  # once, at construction
                 self._t.row(i)
+        self._expected_arr = None if self.expected is None else np.array(sorted(self.expected), dtype=np.intp)
         self._topic_cache: dict[int, str] = {}
         self.link = MqttLink(
             config,
@@ -176,8 +177,8 @@ class MqttTransport:
             ok = False
         sel = cmd.ids
         v_out, w_out, led_out = cmd.v, cmd.w, cmd.leds
-        if self.expected is not None and len(sel):
-            known = np.fromiter((int(i) in self.expected for i in sel.tolist()), bool, len(sel))
+        if self._expected_arr is not None and len(sel):
+            known = np.isin(sel, self._expected_arr)
             if not known.all():
                 self.counters.add("unknown_id", f"command for unknown robot id(s) {sel[~known].tolist()} not sent "
                                   f"(this console controls {sorted(self.expected)})")
@@ -256,8 +257,8 @@ class MqttTransport:
             self.counters.add("bad_pose_rows", p)
         ids = msg.ids
         keep = np.ones(len(ids), dtype=bool)
-        if self.expected is not None:
-            keep = np.fromiter((int(i) in self.expected for i in ids.tolist()), bool, len(ids))
+        if self._expected_arr is not None:
+            keep = np.isin(ids, self._expected_arr)
             if not keep.all():
                 self.counters.add("unknown_id", f"poses of unknown robot id(s) {ids[~keep].tolist()} ignored",
                                   n=int((~keep).sum()))
@@ -288,18 +289,23 @@ class MqttTransport:
             order = np.argsort(tab.ids[seen], kind="stable")
             return PoseSample(tab.ids[seen][order].copy(), tab.pose[seen][order].copy(), tab.pose_t[seen][order].copy())
 
-    def _links(self, now: float) -> tuple[NDArray[np.intp], list[str], NDArray[np.float64], NDArray[np.float64]]:
+    # Link states as small integer codes (vectorised masks); names only when a status is shown.
+    _OK, _STALE, _MISSING, _UNKNOWN, _DUPLICATE = range(5)
+    _LINK_NAMES = np.array([LINK_OK, LINK_STALE, LINK_MISSING, LINK_UNKNOWN, LINK_DUPLICATE], dtype=object)
+
+    def _links(self, now: float) -> tuple[NDArray[np.intp], NDArray[np.int8], NDArray[np.float64], NDArray[np.float64]]:
+        """Ids, link codes (``_OK`` … ``_DUPLICATE``), pose and status ages (s) of every row."""
         tab = self._t
         last = np.maximum(tab.pose_t, tab.status_t)
         pose_age = now - tab.pose_t
         status_age = now - tab.status_t
         tm = self.timeouts
-        link = np.full(len(tab.ids), LINK_OK, dtype=object)
-        link[pose_age > tm.stale_after] = LINK_STALE
-        link[now - last > tm.missing_after] = LINK_MISSING
-        link[~np.isfinite(last)] = LINK_UNKNOWN
-        link[now - tab.duplicate_t < tm.duplicate_hold] = LINK_DUPLICATE
-        return tab.ids, link.tolist(), pose_age, status_age
+        link = np.full(len(tab.ids), self._OK, dtype=np.int8)
+        link[pose_age > tm.stale_after] = self._STALE
+        link[now - last > tm.missing_after] = self._MISSING
+        link[~np.isfinite(last)] = self._UNKNOWN
+        link[now - tab.duplicate_t < tm.duplicate_hold] = self._DUPLICATE
+        return tab.ids, link, pose_age, status_age
 
     def status(self) -> TransportStatus:
         now = self.clock()
@@ -310,7 +316,7 @@ class MqttTransport:
             table = RobotStatusTable(
                 # the robot's reported command age, carried forward to now
                 ids[order].copy(), tab.batt[order].copy(), tab.charging[order].copy(), (tab.cmd_age + status_age)[order],
-                status_age[order], tuple(link[k] for k in order),
+                status_age[order], tuple(self._LINK_NAMES[link[order]].tolist()),
             )
         return TransportStatus(self.link.connected, self.link.state, table, self.counters.snapshot(), self.counters.last_error)
 
@@ -319,7 +325,7 @@ class MqttTransport:
         now = self.clock()
         with self._lock:
             ids, link, _, _ = self._links(now)
-            mask = np.array([lk in (LINK_OK, LINK_STALE) for lk in link], dtype=bool)
+            mask = link <= self._STALE
             return np.sort(ids[mask]) if len(ids) else np.empty(0, dtype=np.intp)
 
     def excluded(self) -> NDArray[np.intp]:
@@ -327,5 +333,5 @@ class MqttTransport:
         now = self.clock()
         with self._lock:
             ids, link, _, _ = self._links(now)
-            mask = np.array([lk in (LINK_MISSING, LINK_DUPLICATE) for lk in link], dtype=bool)
+            mask = (link == self._MISSING) | (link == self._DUPLICATE)
             return np.sort(ids[mask]) if len(ids) else np.empty(0, dtype=np.intp)
