@@ -6,18 +6,32 @@ import numpy as np
 from swarmdeck.devices.lookahead import lookahead_points, si_to_unicycle, unicycle_to_si
 
 
+def _heading_map(dxi, poses, linear_velocity_gain: float, angular_velocity_limit: float, backwards: bool) -> np.ndarray:
+    """rps's heading-based single-integrator → unicycle map, (2, N) from dxi (2, N) at poses (3, N).
+
+    v = k (cos θ u_x + sin θ u_y); with u_⊥ = −sin θ u_x + cos θ u_y, ω = ω_max·(2/π)·atan2(u_⊥, v)
+    (forward only) or ω_max·(2/π)·atan(u_⊥ / v) (backwards allowed; ω = 0 where v = 0).
+    """
+    dxi = np.asarray(dxi, dtype=float)
+    poses = np.asarray(poses, dtype=float)
+    a = np.cos(poses[2])
+    b = np.sin(poses[2])
+    dxu = np.zeros((2, dxi.shape[1]))
+    dxu[0] = linear_velocity_gain * (a * dxi[0] + b * dxi[1])
+    perp = -b * dxi[0] + a * dxi[1]
+    if backwards:
+        angle = np.arctan(np.divide(perp, dxu[0], out=np.zeros_like(dxu[0]), where=dxu[0] != 0))
+    else:
+        angle = np.arctan2(perp, dxu[0])
+    dxu[1] = angular_velocity_limit * angle / (np.pi / 2)
+    return dxu
+
+
 def create_si_to_uni_dynamics(linear_velocity_gain: float = 1, angular_velocity_limit: float = np.pi):
     """rps's heading-based map: v = k‖u‖cos φ, ω = ω_max·2/π·atan2(sin φ, cos φ) (φ: angle of u to θ)."""
 
     def si_to_uni_dyn(dxi, poses):
-        dxi = np.asarray(dxi, dtype=float)
-        poses = np.asarray(poses, dtype=float)
-        a = np.cos(poses[2])
-        b = np.sin(poses[2])
-        dxu = np.zeros((2, dxi.shape[1]))
-        dxu[0] = linear_velocity_gain * (a * dxi[0] + b * dxi[1])
-        dxu[1] = angular_velocity_limit * np.arctan2(-b * dxi[0] + a * dxi[1], dxu[0]) / (np.pi / 2)
-        return dxu
+        return _heading_map(dxi, poses, linear_velocity_gain, angular_velocity_limit, backwards=False)
 
     return si_to_uni_dyn
 
@@ -26,15 +40,7 @@ def create_si_to_uni_dynamics_with_backwards_motion(linear_velocity_gain: float 
     """As :func:`create_si_to_uni_dynamics`, driving backwards when the target is behind."""
 
     def si_to_uni_dyn(dxi, poses):
-        dxi = np.asarray(dxi, dtype=float)
-        poses = np.asarray(poses, dtype=float)
-        a = np.cos(poses[2])
-        b = np.sin(poses[2])
-        dxu = np.zeros((2, dxi.shape[1]))
-        dxu[0] = linear_velocity_gain * (a * dxi[0] + b * dxi[1])
-        dxu[1] = angular_velocity_limit * np.arctan(np.divide(-b * dxi[0] + a * dxi[1], dxu[0],
-                                                              out=np.zeros_like(dxu[0]), where=dxu[0] != 0)) / (np.pi / 2)
-        return dxu
+        return _heading_map(dxi, poses, linear_velocity_gain, angular_velocity_limit, backwards=True)
 
     return si_to_uni_dyn
 
