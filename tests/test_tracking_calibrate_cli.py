@@ -50,3 +50,13 @@ def test_board_spec_checked(kw):
 def test_tracker_config_rejects_non_finite(kw):
     with pytest.raises(ConfigError):
         TrackerConfig(**kw)
+
+
+@pytest.mark.parametrize("content", [b"\x89PNG\r\n\x1a\n\x00\x00binary", b"[1, 2]", b"{not json"])
+@pytest.mark.parametrize("option", ["--calibration", "--config"])
+def test_unusable_input_files_are_one_line(option, content, tmp_path, capsys):
+    bad = tmp_path / "bad.json"
+    bad.write_bytes(content)
+    assert main(["calibrate", "arena", "--camera", "synthetic", option, str(bad)]) == 2
+    err = capsys.readouterr().err
+    assert "Traceback" not in err and len(err.strip().splitlines()) == 1 and "bad.json" in err

@@ -7,7 +7,6 @@ floor homography, iterated to convergence.
 """
 from __future__ import annotations
 
-import json
 from collections.abc import Iterable
 from dataclasses import dataclass
 from pathlib import Path
@@ -16,6 +15,7 @@ import cv2
 import numpy as np
 
 from swarmdeck.tracking.camera_model import PinholeCamera
+from swarmdeck.tracking.jsonfile import read_json_object, write_json
 from swarmdeck.tracking.raster import dictionary
 
 
@@ -84,20 +84,12 @@ class CameraCalibration:
 
     def save(self, path: str | Path) -> None:
         """Write the JSON file (raises :class:`CalibrationError` naming the path when it cannot)."""
-        try:
-            Path(path).write_text(json.dumps(self.to_dict(), indent=2) + "\n")
-        except OSError as exc:
-            raise CalibrationError(f"cannot write calibration file {path}: {exc.strerror or exc}") from exc
+        write_json(path, self.to_dict(), "calibration file", CalibrationError)
 
     @staticmethod
     def load(path: str | Path) -> "CameraCalibration":
         """Read a JSON calibration file (raises :class:`CalibrationError` naming the problem)."""
-        try:
-            d = json.loads(Path(path).read_text())
-        except OSError as exc:
-            raise CalibrationError(f"cannot read calibration file {path}: {exc.strerror or exc}") from exc
-        except json.JSONDecodeError as exc:
-            raise CalibrationError(f"calibration file {path} is not JSON: {exc}") from exc
+        d = read_json_object(path, "calibration file", CalibrationError)
         return CameraCalibration.from_dict(d)
 
 

@@ -9,13 +9,13 @@ The arena file written by ``swarmdeck calibrate arena`` is this dataclass as JSO
 """
 from __future__ import annotations
 
-import json
 from dataclasses import asdict, dataclass, fields, replace
 from pathlib import Path
 
 import numpy as np
 
 from swarmdeck.tracking.calibration import CalibrationError, CameraCalibration
+from swarmdeck.tracking.jsonfile import read_json_object, write_json
 from swarmdeck.tracking.markers import DEFAULT_REFERENCES, ReferenceMarker
 from swarmdeck.tracking.raster import DICTIONARIES
 
@@ -142,20 +142,10 @@ class TrackerConfig:
 
     def save(self, path: str | Path) -> None:
         """Write the JSON file (raises :class:`ConfigError` naming the path when it cannot)."""
-        try:
-            Path(path).write_text(json.dumps(self.to_dict(), indent=2) + "\n")
-        except OSError as exc:
-            raise ConfigError(f"cannot write tracker config {path}: {exc.strerror or exc}") from exc
+        write_json(path, self.to_dict(), "tracker config", ConfigError)
 
     @staticmethod
     def load(path: str | Path) -> "TrackerConfig":
         """Read a JSON file written by :meth:`save` or ``swarmdeck calibrate arena``."""
-        try:
-            d = json.loads(Path(path).read_text())
-        except OSError as exc:
-            raise ConfigError(f"cannot read tracker config {path}: {exc.strerror or exc}") from exc
-        except json.JSONDecodeError as exc:
-            raise ConfigError(f"tracker config {path} is not JSON: {exc}") from exc
-        if not isinstance(d, dict):
-            raise ConfigError(f"tracker config {path} must hold a JSON object")
+        d = read_json_object(path, "tracker config", ConfigError)
         return TrackerConfig.from_dict(d)
