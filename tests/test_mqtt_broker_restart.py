@@ -51,22 +51,23 @@ def test_broker_restart_mid_run(mosquitto):
 
         wait_until(all_moving, 10, "robots moving under console control")
         mosquitto.kill()
-        t_kill = time.monotonic()  # the broker process is gone
 
         def all_stopped():
             s = fleet.snapshot()
             return s if np.all((s["v"] == 0) & (s["w"] == 0)) else None
 
         stopped = wait_until(all_stopped, 5, "robots braking after the broker died")
-        # no command arrives after the kill (bytes already in the fleet's socket buffer may still be read a
-        # little later on a loaded machine: 0.25 s slack), and each robot brakes exactly 0.5 s after its
-        # last command (the firmware model): stopped by t_kill + 0.5 s
-        assert np.all(stopped["last_command_time"] <= t_kill + 0.25)
+        # They stopped by their own firmware brake (exactly 0.5 s after the last command, in the
+        # fleet model's time: tests/test_devices_transport_fleet_model.py), not by a zero command,
+        # and stay stopped with no command arriving while the broker is down (no wall-clock bounds).
         assert np.all(stopped["timeouts"] >= 1)
         wait_until(lambda: not transport.status().connected, 5, "console noticing the lost broker")
         assert "broker" in transport.status().state
         wait_until(lambda: streamer.counters.get("undelivered_ticks") > 0, 5, "streamer counting undelivered ticks")
         received_at_kill = stopped["commands_received"].copy()
+        down = fleet.snapshot()
+        assert np.array_equal(down["commands_received"], received_at_kill)
+        assert np.all((down["v"] == 0) & (down["w"] == 0))
 
         mosquitto.start()
         wait_until(lambda: transport.status().connected and fleet.link.connected, 15, "both sides reconnected")
