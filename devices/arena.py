@@ -276,28 +276,47 @@ class Arena:
         self._hybrid.reset()
         self._command = ("goals", (controller, base))
 
-    def set_waypoints(self, waypoints: Sequence[ArrayLike], tolerance: float = 0.03, loop: bool = False) -> None:
-        """One list of waypoints ``(K_i, 2)`` per robot, visited in order by the look-ahead point.
+    def set_waypoints(self, waypoints: Sequence[ArrayLike], tolerance: float = 0.03, loop: bool = False,
+                      ids: ArrayLike | None = None) -> None:
+        """One list of waypoints ``(K_i, 2)`` (m) per robot, visited in order by the look-ahead point.
 
-        A robot holds its last waypoint (or starts over when ``loop``).
+        A robot holds its last waypoint (or starts over when ``loop``). With ``ids``, one list
+        per id: robots not named keep their waypoint lists if they had some, else hold where
+        they are; ``tolerance`` (m) and ``loop`` then apply to every robot.
         """
-        if len(waypoints) != self.n:
-            raise ValueError(f"waypoints must hold one (K_i, 2) array per robot ({self.n}), got {len(waypoints)}")
-        lengths = np.empty(self.n, dtype=np.intp)
-        arrays = []
-        for i, wp in enumerate(waypoints):  # once per call, not per tick
-            arr = np.asarray(wp, dtype=float)
-            if arr.ndim != 2 or arr.shape[1] != 2 or arr.shape[0] < 1 or not np.all(np.isfinite(arr)):
-                raise ValueError(f"waypoints[{i}] must be a finite (K, 2) array with K >= 1, got shape {np.shape(wp)}")
-            arrays.append(arr)
-            lengths[i] = len(arr)
+        sel = self._ids(ids)
+        named = np.arange(self.n) if sel is None else sel
+        if len(waypoints) != len(named):
+            raise ValueError(f"waypoints must hold one (K_i, 2) array per robot{'' if sel is None else ' in ids'} "
+                             f"({len(named)}), got {len(waypoints)}")
         if not tolerance > 0:
             raise ValueError(f"tolerance must be > 0 m, got {tolerance!r}")
+        lists: list[FloatArray] = [np.empty((0, 2))] * self.n
+        index = np.zeros(self.n, dtype=np.intp)
+        if sel is not None:  # robots not named: their current lists, or hold here
+            kind, cmd = self._command
+            if kind == "waypoints":
+                table, lengths = cmd[0], cmd[1]
+                lists = [table[i, : lengths[i]] for i in range(self.n)]  # once per call, not per tick
+                index = self._waypoint_index.copy()
+            else:
+                here = self.positions()
+                lists = [here[i : i + 1] for i in range(self.n)]
+        for k, (i, wp) in enumerate(zip(named.tolist(), waypoints)):  # once per call, not per tick
+            try:
+                arr = np.array(wp, dtype=float)
+            except (TypeError, ValueError) as exc:
+                raise ValueError(f"waypoints[{k}] must be a finite (K, 2) array of metres: {exc}") from None
+            if arr.ndim != 2 or arr.shape[1] != 2 or arr.shape[0] < 1 or not np.all(np.isfinite(arr)):
+                raise ValueError(f"waypoints[{k}] must be a finite (K, 2) array with K >= 1, got shape {arr.shape}")
+            lists[i] = arr
+            index[i] = 0
+        lengths = np.array([len(a) for a in lists], dtype=np.intp)
         table = np.empty((self.n, int(lengths.max()), 2))
-        for i, arr in enumerate(arrays):
+        for i, arr in enumerate(lists):
             table[i, : len(arr)] = arr
             table[i, len(arr) :] = arr[-1]
-        self._waypoint_index = np.zeros(self.n, dtype=np.intp)
+        self._waypoint_index = index
         self._command = ("waypoints", (table, lengths, float(tolerance), bool(loop)))
 
     def stop(self) -> None:

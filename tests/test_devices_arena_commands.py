@@ -70,3 +70,23 @@ def test_caller_arrays_are_never_modified():
     arena.set_goals(goals)
     arena.step()
     assert np.array_equal(u, copies[0], equal_nan=True) and np.array_equal(goals, copies[1])
+
+
+def test_waypoints_for_a_subset_of_robots():
+    arena = _arena(n=3)
+    start = arena.positions()
+    arena.set_waypoints([start[0:1] + [0.1, 0.1], start[2:3] + [[0.0, 0.1], [0.1, 0.1]]], ids=[0, 2])
+    for _ in range(200):
+        arena.step()
+    p = arena.positions()
+    assert np.linalg.norm(p[0] - (start[0] + [0.1, 0.1])) < 0.03
+    assert np.linalg.norm(p[1] - start[1]) < 1e-3  # not named: holds
+    assert np.linalg.norm(p[2] - (start[2] + [0.1, 0.1])) < 0.03 and arena.waypoint_index[2] == 1
+    arena.set_waypoints([start[1:2] + [-0.1, 0.0]], ids=[1])  # the others keep their lists
+    for _ in range(200):
+        arena.step()
+    p = arena.positions()
+    assert np.linalg.norm(p[1] - (start[1] + [-0.1, 0.0])) < 0.03
+    assert np.linalg.norm(p[2] - (start[2] + [0.1, 0.1])) < 0.03 and arena.waypoint_index[2] == 1
+    with pytest.raises(ValueError, match=r"one \(K_i, 2\) array per robot in ids \(2\)"):
+        arena.set_waypoints([start[0:1]], ids=[0, 1])
