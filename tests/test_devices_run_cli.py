@@ -33,6 +33,8 @@ def test_bad_scripts_give_one_line_and_exit_2(name, tmp_path, capsys):
     ["run", "{script}", "--duration", "nan"],
     ["example", "rendezvous", "--robots", "500"],
     ["example", "formation", "--duration", "inf"],
+    ["example", "formation", "--robots", "2"],
+    ["example", "rendezvous", "--robots", "1"],
 ])
 def test_bad_arguments_give_one_line_and_exit_2(argv, tmp_path, capsys):
     script = tmp_path / "ok.py"

@@ -17,15 +17,16 @@ def add_run_arguments(parser: argparse.ArgumentParser, robots: int, duration: fl
     parser.add_argument("--no-safety", action="store_true", help="run without the safety barrier")
 
 
-def check_run_arguments(robots: int | None, duration: float | None) -> None:
-    """UsageError unless ``--robots`` is >= 1 and ``--duration`` a finite number > 0 (None: not given)."""
-    if robots is not None and robots < 1:
-        raise UsageError(f"--robots must be >= 1, got {robots}")
+def check_run_arguments(robots: int | None, duration: float | None, min_robots: int = 1, what: str = "") -> None:
+    """UsageError unless ``--robots`` is >= ``min_robots`` and ``--duration`` a finite number > 0 (None: not given)."""
+    if robots is not None and robots < min_robots:
+        raise UsageError(f"--robots must be >= {min_robots}{' for ' + what if what else ''}, got {robots}")
     if duration is not None and not (math.isfinite(duration) and duration > 0):
         raise UsageError(f"--duration must be a finite number of seconds > 0, got {duration}")
 
 
-def run_headless(experiment: Callable[..., Any] | str, args: argparse.Namespace, **kw: Any) -> Any:
+def run_headless(experiment: Callable[..., Any] | str, args: argparse.Namespace, min_robots: int = 1,
+                 what: str = "", **kw: Any) -> Any:
     """Run ``experiment`` (a callable or a script path) with the common arguments; print the reports.
 
     Returns the :class:`~swarmdeck.devices.experiment_runner.RunResult`. Raises UsageError when
@@ -34,7 +35,7 @@ def run_headless(experiment: Callable[..., Any] | str, args: argparse.Namespace,
     """
     from swarmdeck.devices.experiment_runner import ScriptError, progress_bar, run_experiment
 
-    check_run_arguments(args.robots, args.duration)
+    check_run_arguments(args.robots, args.duration, min_robots, what)
     on_step, close = progress_bar(args.duration)
     try:
         result = run_experiment(experiment, n_robots=args.robots, duration=args.duration, seed=args.seed,
@@ -52,9 +53,12 @@ def raise_if_failed(result: Any) -> None:
         raise UsageError(f"the experiment raised, robots were stopped: {result.error_line}")
 
 
-def run_example(experiment: Callable[..., Any], args: argparse.Namespace) -> int:
-    """Run ``experiment(arena)`` headless on the simulated arena; print the report and its results."""
-    result = run_headless(experiment, args)
+def run_example(experiment: Callable[..., Any], args: argparse.Namespace, min_robots: int = 1, what: str = "") -> int:
+    """Run ``experiment(arena)`` headless on the simulated arena; print the report and its results.
+
+    ``min_robots``: the fewest robots the example works with (``what`` names it in the error).
+    """
+    result = run_headless(experiment, args, min_robots, what)
     for report in result.reports:
         print(report)
     for name, value in (result.returned or {}).items():

@@ -15,4 +15,4 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def main(args: argparse.Namespace) -> int:
-    return run_example(_example.experiment, args)
+    return run_example(_example.experiment, args, min_robots=2, what="rendezvous on a cycle")
