@@ -32,7 +32,8 @@ import scipy.sparse.linalg as spla
 
 from .constraints import Rows
 
-_DENSE_LIMIT = 250_000  # dense Cholesky while (rows in W) × 2N stays below this
+_DENSE_ROWS = 400  # dense Cholesky of the Gram matrix up to this many working rows
+_DIRECT_LIMIT = 40_000  # below this (rows × 2N) the dense A_W is formed directly
 # Tikhonov term on the Gram matrix: working sets can hold linearly dependent rows
 # (more rows than relative degrees of freedom in a cluster); the ridge selects the
 # least-norm multipliers, and errors along null(A_Wᵀ) do not change u = û − A_Wᵀλ.
@@ -85,18 +86,23 @@ class _Working:
         return np.einsum("kd,kd->k", self.aci, u[self.ai]) + np.einsum("kd,kd->k", self.acj, u[self.aj])
 
     def solve(self, J: np.ndarray | None, rhs: np.ndarray) -> np.ndarray | None:
-        """Solve (A_W J A_Wᵀ + ridge·I) δ = rhs; J (N, 2, 2) blocks or None for the identity."""
+        """Solve (A_W J A_Wᵀ + ridge·I) δ = rhs; J (N, 2, 2) blocks or None for the identity.
+
+        A_W is assembled as CSR straight from the row arrays (four entries per row);
+        the Gram matrix is formed sparse, then factorised densely (Cholesky) while
+        small, by sparse LU beyond.
+        """
         w, n = self.ai.shape[0], self.n
-        if w * 2 * n <= _DENSE_LIMIT:
+        if w * 2 * n <= _DIRECT_LIMIT:  # small: dense A_W straight from the rows
             Ad = np.zeros((w, n, 2))
             r = np.arange(w)
             Ad[r, self.aj] = self.acj
             Ad[r, self.ai] += self.aci
             B = Ad if J is None else np.einsum("wnd,nde->wne", Ad, J)
-            G = B.reshape(w, 2 * n) @ Ad.reshape(w, 2 * n).T
-            G[np.diag_indices_from(G)] += _RIDGE
+            Gd = B.reshape(w, 2 * n) @ Ad.reshape(w, 2 * n).T
+            Gd[np.diag_indices_from(Gd)] += _RIDGE
             try:
-                return sla.cho_solve(sla.cho_factor(G, check_finite=False), rhs, check_finite=False)
+                return sla.cho_solve(sla.cho_factor(Gd, check_finite=False), rhs, check_finite=False)
             except (np.linalg.LinAlgError, ValueError):
                 return None
         indptr = np.arange(0, 4 * w + 1, 4)
@@ -108,6 +114,13 @@ class _Working:
         else:
             Jb = sp.bsr_matrix((J, np.arange(n), np.arange(n + 1)), shape=(2 * n, 2 * n)).tocsr()
             G = A @ (Jb @ A.T)
+        if w <= _DENSE_ROWS:
+            Gd = G.toarray()
+            Gd[np.diag_indices_from(Gd)] += _RIDGE
+            try:
+                return sla.cho_solve(sla.cho_factor(Gd, check_finite=False), rhs, check_finite=False)
+            except (np.linalg.LinAlgError, ValueError):
+                return None
         G = (G + _RIDGE * sp.identity(w, format="csr")).tocsc()
         try:
             return spla.splu(G, permc_spec="MMD_AT_PLUS_A").solve(rhs)

@@ -42,6 +42,9 @@ class BarrierConfig:
     solver: ``"auto"`` (pass-through check, active set certified by KKT, clarabel
         fallback) or ``"clarabel"`` (always the interior-point solver).
     max_active_set_iterations: active-set iterations before falling back to clarabel.
+    active_set_max_rows: "auto" uses the active set only when the starting working set
+        (last tick's active rows, or the rows û violates) has at most this many rows;
+        larger, degenerate working sets go to clarabel directly (measured faster).
     clarabel_max_iter, clarabel_tol: clarabel's max_iter and tol_gap_abs/rel/tol_feas.
     """
 
@@ -57,7 +60,8 @@ class BarrierConfig:
     recovery_speed: float = 0.05
     recovery_weight: float = 1e4
     solver: Literal["auto", "clarabel"] = "auto"
-    max_active_set_iterations: int = 40
+    max_active_set_iterations: int = 15
+    active_set_max_rows: int = 100
     clarabel_max_iter: int = 100
     clarabel_tol: float = 1e-9
 
@@ -73,6 +77,7 @@ class BarrierConfig:
             (self.recovery_weight > 0, "recovery_weight must be > 0"),
             (self.solver in ("auto", "clarabel"), "solver must be 'auto' or 'clarabel'"),
             (self.max_active_set_iterations >= 1, "max_active_set_iterations must be >= 1"),
+            (self.active_set_max_rows >= 0, "active_set_max_rows must be >= 0"),
             (self.clarabel_max_iter >= 1, "clarabel_max_iter must be >= 1"),
             (0 < self.clarabel_tol < 1e-3, "clarabel_tol must be in (0, 1e-3)"),
             (len(self.bounds) == 4, "bounds must be (x_min, x_max, y_min, y_max)"),

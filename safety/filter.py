@@ -15,8 +15,9 @@ in stages, cheapest first:
    components of the row graph) they belong to are solved by clarabel with
    hard "no further approach" rows and slack-penalised separation targets;
 5. every other robot goes to the active-set solver, warm-started from the
-   previous tick's active rows and certified by the KKT conditions;
-   clarabel solves whatever it cannot certify.
+   previous tick's active rows and certified by the KKT conditions, when the
+   starting working set is small (``BarrierConfig.active_set_max_rows``);
+   clarabel solves large working sets and whatever the active set cannot certify.
 
 Every solver status is checked. On any failure (infeasible, iteration limit,
 numerical trouble, NaN/inf or malformed input) every robot gets a zero command
@@ -225,10 +226,12 @@ class SafetyFilter:
             warm = None
             if self._warm_shape == (n, n_obs) and self._warm_keys.size:
                 warm = np.isin(rows.key, self._warm_keys, assume_unique=True)
-            res = solve_active_set(rows, U, max_speed, warm, cfg.max_active_set_iterations)
-            iterations += res.iterations
-            if res.ok:
-                return _Solved(res.u, res.active, int(res.speed_active.sum()), "active-set", iterations)
+            start = int(warm.sum()) if warm is not None and warm.any() else int(np.sum(rows.lhs(U) > rows.b))
+            if start <= cfg.active_set_max_rows:
+                res = solve_active_set(rows, U, max_speed, warm, cfg.max_active_set_iterations)
+                iterations += res.iterations
+                if res.ok:
+                    return _Solved(res.u, res.active, int(res.speed_active.sum()), "active-set", iterations)
         qp = solve_qp(rows, U, max_speed, max_iter=cfg.clarabel_max_iter, tol=cfg.clarabel_tol)
         if not qp.ok:
             return qp.reason

@@ -1,0 +1,114 @@
+"""Benchmark of the safety filter (issue 4): median ms per call on dense random scenes.
+
+Run: ``OPENBLAS_NUM_THREADS=1 /work/venv/bin/python bench/bench_safety.py [--quick]``
+(BLAS threads are pinned to one below as well, before numpy is imported).
+
+Scenes (REFERENCE.md §3): robots on a random subset (80 % occupancy) of a
+jittered grid of pitch 0.188 m (D_s + 0.018 m), every pair ≥ D_s + 0.01 m apart,
+random nominal directions and speeds up to v_max. N ≤ 100 in the default
+3.2 × 2.0 m arena; N ≥ 200 in a larger arena of the same aspect and occupancy
+(200 robots do not fit the default arena at that pitch).
+
+Columns: *cold* = a fresh filter per scene (no warm start); *closed loop* = the
+same filter over 20 consecutive ticks (x ← x + u·dt, nominal directions
+drifting), median over ticks 2…20 (warm-started active set); *pruned clarabel*
+= the same pruned rows solved by clarabel every call (``solver="clarabel"``);
+*all pairs* = the plain dense formulation (``safety.reference``), the in-process
+baseline; ratio = all pairs / cold.
+"""
+from __future__ import annotations
+
+import os
+
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+os.environ.setdefault("OMP_NUM_THREADS", "1")
+os.environ.setdefault("MKL_NUM_THREADS", "1")
+
+import argparse  # noqa: E402
+import collections  # noqa: E402
+import dataclasses  # noqa: E402
+import platform  # noqa: E402
+import time  # noqa: E402
+
+import numpy as np  # noqa: E402
+
+from swarmdeck.safety import BarrierConfig, SafetyFilter  # noqa: E402
+from swarmdeck.safety.reference import all_pairs_filter  # noqa: E402
+from swarmdeck.safety.scenes import arena_for, grid_scene  # noqa: E402
+
+PITCH = 0.188
+
+
+def config_for(n: int) -> BarrierConfig:
+    if n <= 100:
+        return BarrierConfig()
+    return BarrierConfig(bounds=arena_for(n, PITCH, fill=0.8))
+
+
+def timed(fn, *args):
+    t = time.perf_counter()
+    out = fn(*args)
+    return time.perf_counter() - t, out
+
+
+def bench(n: int, scenes: int, ticks: int, baseline: bool, rng: np.random.Generator) -> dict:
+    cfg = config_for(n)
+    cold, loop, pruned, dense = [], [], [], []
+    methods = collections.Counter()
+    fails = 0
+    for _ in range(scenes):
+        x, nominal = grid_scene(n, rng, cfg, pitch=PITCH)
+        t, (u, diag) = timed(SafetyFilter(cfg).filter, x, nominal)
+        cold.append(t)
+        methods[diag.method] += 1
+        fails += not diag.ok
+        t, (_, d2) = timed(SafetyFilter(dataclasses.replace(cfg, solver="clarabel")).filter, x, nominal)
+        pruned.append(t)
+        if baseline:
+            t, res = timed(all_pairs_filter, x, nominal, cfg)
+            dense.append(t)
+            assert res.ok and diag.ok and np.abs(res.u - u).max() < 1e-5, "filter disagrees with the baseline"
+        f = SafetyFilter(cfg)
+        ang = np.arctan2(nominal[:, 1], nominal[:, 0])
+        speed = np.linalg.norm(nominal, axis=1)
+        for k in range(ticks):
+            nom = np.stack([np.cos(ang), np.sin(ang)], axis=1) * speed[:, None]
+            t, (u, diag) = timed(f.filter, x, nom)
+            if k:
+                loop.append(t)
+            fails += not diag.ok
+            x = x + u * cfg.dt
+            ang = ang + rng.normal(0, 0.1, n)
+    med = lambda v: 1e3 * float(np.median(v)) if v else float("nan")
+    return dict(n=n, cold=med(cold), loop=med(loop), pruned=med(pruned), dense=med(dense),
+                methods=dict(methods), fails=fails, arena=cfg.bounds)
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--quick", action="store_true", help="fewer scenes")
+    ap.add_argument("--seed", type=int, default=0)
+    args = ap.parse_args()
+    rng = np.random.default_rng(args.seed)
+    cpu = next((l.split(":", 1)[1].strip() for l in open("/proc/cpuinfo") if l.startswith("model name")), "?")
+    print(f"# bench_safety  {time.strftime('%Y-%m-%d %H:%M UTC', time.gmtime())}  nproc={os.cpu_count()}  "
+          f"cpu={cpu}  python={platform.python_version()}  load={os.getloadavg()[0]:.1f}\n")
+    print("| N | arena (m) | cold ms | closed-loop ms | pruned clarabel ms | all pairs ms | ratio all pairs / cold | cold methods |")
+    print("| --- | --- | --- | --- | --- | --- | --- | --- |")
+    plan = [(10, 40, 20, True), (20, 40, 20, True), (50, 30, 20, True), (100, 20, 20, True),
+            (200, 10, 20, True), (500, 5, 20, False), (1000, 3, 20, False)]
+    for n, scenes, ticks, baseline in plan:
+        if args.quick:
+            scenes = max(2, scenes // 4)
+        r = bench(n, scenes, ticks, baseline, rng)
+        x_min, x_max, y_min, y_max = r["arena"]
+        ratio = r["dense"] / r["cold"] if baseline else float("nan")
+        methods = ", ".join(f"{k} {v}" for k, v in sorted(r["methods"].items()))
+        failed = f" ({r['fails']} FAILED)" if r["fails"] else ""
+        print(f"| {n} | {x_max - x_min:.1f} × {y_max - y_min:.1f} | {r['cold']:.2f} | {r['loop']:.2f} | "
+              f"{r['pruned']:.2f} | {r['dense']:.1f} | {ratio:.1f} | "
+              f"{methods}{failed} |", flush=True)
+
+
+if __name__ == "__main__":
+    main()
