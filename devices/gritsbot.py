@@ -72,10 +72,13 @@ def wheel_scale(v: ArrayLike, w: ArrayLike, params: GritsBotParams) -> FloatArra
 
     Scaling v and ω by the same s keeps the commanded curvature ω/v (unlike rps,
     which clips each wheel on its own and so changes the direction of motion).
+    Peaks within 1e-12 (relative) of the limit count as within it, so limiting an
+    already limited command changes nothing (the console, the transport backend and
+    the simulated robots may each apply the limits).
     """
     right, left = unicycle_to_wheels(v, w, params)
     peak = np.maximum(np.abs(right), np.abs(left))
-    over = peak > params.max_wheel_speed
+    over = peak > params.max_wheel_speed * (1.0 + 1e-12)
     return np.divide(params.max_wheel_speed, peak, out=np.ones_like(peak), where=over)
 
 

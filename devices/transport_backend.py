@@ -24,7 +24,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from swarmdeck.devices.clock import RealTimePacer
-from swarmdeck.devices.gritsbot import GritsBotParams
+from swarmdeck.devices.gritsbot import GritsBotParams, limit_unicycle
 from swarmdeck.devices.mqtt_config import parse_broker_url
 from swarmdeck.devices.streamer import CommandStreamer, StreamerConfig
 from swarmdeck.devices.transport import PoseSource, RobotTransport
@@ -94,6 +94,8 @@ class TransportBackend:
             time.sleep(0.02)
         self._last = p
         self._t0 = clock()
+        self.saturated = 0  # robot-steps whose command the wheel limits scaled down
+        self.invalid = 0  # robot-steps whose command was NaN/inf (sent as zero)
 
     @property
     def poses(self) -> FloatArray:
@@ -109,7 +111,21 @@ class TransportBackend:
         return self.clock() - self._t0
 
     def step(self, v: ArrayLike, w: ArrayLike) -> FloatArray:
-        """Send ``(v, ω)`` ``(N,)`` through the watchdogs, wait one period, return the new poses."""
+        """Send ``(v, ω)`` ``(N,)`` through the watchdogs, wait one period, return the new poses.
+
+        As on the simulated arena, non-finite commands become zero and the wheel limits are applied
+        by one uniform scale per robot (curvature kept) before anything is sent: real firmware clips
+        each wheel on its own, which would change the direction of motion. ``saturated`` counts the
+        robot-steps scaled down, ``invalid`` the non-finite ones.
+        """
+        v = np.asarray(v, dtype=float).reshape(-1)
+        w = np.asarray(w, dtype=float).reshape(-1)
+        if v.shape != (self.n_robots,) or w.shape != (self.n_robots,):
+            raise ValueError(f"v and w must each have shape ({self.n_robots},), got {v.shape} and {w.shape}")
+        bad = ~(np.isfinite(v) & np.isfinite(w))
+        v, w, saturated = limit_unicycle(np.where(bad, 0.0, v), np.where(bad, 0.0, w), self.params)
+        self.saturated += int(saturated.sum())
+        self.invalid += int(bad.sum())
         self.streamer.submit(self.ids, v, w, valid_for=max(3 * self.dt, self.streamer.config.input_timeout))
         self.streamer.tick()
         if self._pacer is not None:

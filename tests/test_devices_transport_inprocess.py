@@ -4,6 +4,7 @@ from __future__ import annotations
 import numpy as np
 
 from swarmdeck.devices import Arena, ArenaConfig, RobotBackend, SimulatedArena
+from swarmdeck.devices.gritsbot import unicycle_to_wheels
 from swarmdeck.devices.transport import PoseSource, RobotTransport
 from swarmdeck.devices.transport_backend import TransportBackend
 from swarmdeck.devices.transport_inprocess import InProcessTransport
@@ -52,3 +53,16 @@ def test_robots_not_named_stand_still_and_status_reports_batteries():
     assert st.robots.command_age[1] == 0 and np.isinf(st.robots.command_age[0])
     transport.close()
     assert transport.send([1], [0.2], [0.0]) is False
+
+
+def test_backend_applies_wheel_limits_before_sending():
+    backend, _ = backend_on_transport(2, 6)
+    v, w = np.array([1.0, 0.1]), np.array([4.0, np.nan])
+    backend.step(v, w)
+    sent = backend.streamer.last_tick
+    right, left = unicycle_to_wheels(sent.v, sent.w, backend.params)
+    assert np.all(np.maximum(np.abs(right), np.abs(left)) <= backend.params.max_wheel_speed + 1e-9)
+    assert np.isclose(sent.w[0] / sent.v[0], 4.0)  # curvature kept
+    assert sent.v[1] == 0.0 and sent.w[1] == 0.0  # NaN sent as zero
+    assert backend.saturated == 1 and backend.invalid == 1
+    assert np.array_equal(v, [1.0, 0.1])  # caller's arrays untouched

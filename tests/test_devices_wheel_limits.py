@@ -46,3 +46,13 @@ def test_rps_clipping_would_change_direction_but_ours_does_not():
     lv, lw, sat = limit_unicycle(v, w, P)
     assert sat[0]
     np.testing.assert_allclose(lw / lv, w / v)
+
+
+@settings(max_examples=200, deadline=None)
+@given(speeds, speeds)
+def test_limiting_twice_changes_nothing(v, w):
+    lv, lw, _ = limit_unicycle(v, w, P)
+    lv2, lw2, sat2 = limit_unicycle(lv, lw, P)
+    np.testing.assert_array_equal(lv2, lv)
+    np.testing.assert_array_equal(lw2, lw)
+    assert not sat2.any()
