@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from functools import cached_property
 from typing import Literal
 
 DEFAULT_BOUNDS: tuple[float, float, float, float] = (-1.6, 1.6, -1.0, 1.0)
@@ -122,9 +123,15 @@ class BarrierConfig:
                 d_hi = mid
         return d_hi
 
+    @cached_property
+    def _radii(self) -> tuple[float, float]:
+        # computed once per config (the bisection is not free at 30 Hz)
+        wall = self.margin + self.wall_bind_clearance() + self.max_speed * self.dt
+        return self.pair_bind_distance() + 2 * self.max_speed * self.dt, wall
+
     def neighbour_radius(self) -> float:
         """k-d tree radius (m): binding distance plus 2·v_max·dt for the next tick."""
-        return self.pair_bind_distance() + 2 * self.max_speed * self.dt
+        return self._radii[0]
 
     def wall_bind_clearance(self) -> float:
         """Clearance δ beyond the margin where a wall row can bind: wall_gain·γ·κ(δ) = v_max."""
@@ -133,7 +140,7 @@ class BarrierConfig:
 
     def wall_radius(self) -> float:
         """Distance from a wall (m) within which its row is built."""
-        return self.margin + self.wall_bind_clearance() + self.max_speed * self.dt
+        return self._radii[1]
 
 
 @dataclass(frozen=True)

@@ -30,7 +30,8 @@ class BarrierDiagnostics:
     row, so u* = û exactly.
     method: "pass-through", "active-set", "clarabel", "mixed" or "fail-stop".
     iterations: active-set iterations (+ clarabel's). n_clusters: connected
-    components of the candidate-row graph. n_unsafe: rows with h < 0 (robots
+    components of the candidate-row graph, computed only when some robots are
+    inside the unsafe set (their clusters are solved apart); 0 otherwise. n_unsafe: rows with h < 0 (robots
     already inside the unsafe set). min_obstacle_distance: m (inf without obstacles).
     """
 

@@ -170,12 +170,12 @@ class SafetyFilter:
         speed_ok = True if max_speed is None else bool(np.all(np.einsum("kd,kd->k", U, U) <= max_speed**2))
         if speed_ok and bool(np.all(lhs_nom <= b_target)):
             self._remember(rows, np.zeros(rows.m, bool), n, n_obs)
-            n_clusters = self._clusters(rows, n)[0]
             return U.copy(), self._diag(True, "nominal safe", t0, rows, P, U, U, O, np.zeros(rows.m, bool),
-                                        0, True, "pass-through", 0, n_clusters, n_unsafe)
+                                        0, True, "pass-through", 0, 0, n_unsafe)
 
-        n_clusters, labels = self._clusters(rows, n)
+        n_clusters = 0
         if recovering:
+            n_clusters, labels = self._clusters(rows, n)
             bad_clusters = np.unique(labels[rows.i[unsafe]])
             in_bad = np.isin(labels, bad_clusters)
         else:

@@ -13,7 +13,7 @@ def test_overlapping_pair_separates() -> None:
     x = np.array([[0.0, 0.0], [0.1, 0.0]])
     f = SafetyFilter(cfg)
     u, diag = f.filter(x, np.array([[0.2, 0.0], [-0.2, 0.0]]))  # even while driving at each other
-    assert diag.ok and diag.n_unsafe == 1 and "recovering" in diag.status
+    assert diag.ok and diag.n_unsafe == 1 and "recovering" in diag.status and diag.n_clusters == 1
     assert u[1, 0] - u[0, 0] >= 0.95 * cfg.recovery_speed
 
 
