@@ -22,6 +22,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from swarmdeck.devices.checks import require_positive
 from swarmdeck.devices.gritsbot import GritsBotParams, limit_unicycle, unicycle_step, unicycle_to_wheels
 
 FloatArray = NDArray[np.float64]
@@ -46,10 +47,7 @@ class FirmwareParams:
     pose_decimals: int = 3
 
     def __post_init__(self) -> None:
-        for name in ("command_timeout", "loop_period", "status_period", "pose_period"):
-            x = getattr(self, name)
-            if not (np.isfinite(x) and x > 0):
-                raise ValueError(f"FirmwareParams.{name} must be a positive number of seconds, got {x!r}")
+        require_positive(self, ("command_timeout", "loop_period", "status_period", "pose_period"), "seconds")
         if not (0 <= self.pose_decimals <= 6):
             raise ValueError(f"FirmwareParams.pose_decimals must be 0..6, got {self.pose_decimals!r}")
 
@@ -74,12 +72,8 @@ class BatteryParams:
     def __post_init__(self) -> None:
         if not (0 < self.empty_voltage < self.full_voltage):
             raise ValueError(f"BatteryParams needs 0 < empty_voltage < full_voltage, got {self.empty_voltage}, {self.full_voltage}")
-        for name in ("capacity_ah",):
-            if not getattr(self, name) > 0:
-                raise ValueError(f"BatteryParams.{name} must be > 0")
-        for name in ("idle_current", "motor_current_per_wheel_speed"):
-            if not getattr(self, name) >= 0:
-                raise ValueError(f"BatteryParams.{name} must be >= 0")
+        require_positive(self, ("capacity_ah",), "Ah")
+        require_positive(self, ("idle_current", "motor_current_per_wheel_speed"), allow_zero=True)
 
     def voltage(self, charge: ArrayLike) -> FloatArray:
         """Terminal voltage for state of charge ``charge`` ∈ [0, 1], V."""

@@ -11,6 +11,8 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from swarmdeck.devices.checks import require_positive
+
 FloatArray = NDArray[np.float64]
 
 
@@ -35,10 +37,7 @@ class GritsBotParams:
     lookahead: float = 0.03
 
     def __post_init__(self) -> None:
-        for name in ("diameter", "wheel_radius", "axle_length", "max_speed", "max_wheel_speed", "lookahead"):
-            value = getattr(self, name)
-            if not (np.isfinite(value) and value > 0):
-                raise ValueError(f"GritsBotParams.{name} must be a positive finite number, got {value!r}")
+        require_positive(self, ("diameter", "wheel_radius", "axle_length", "max_speed", "max_wheel_speed", "lookahead"))
 
     @property
     def radius(self) -> float:

@@ -33,6 +33,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from swarmdeck.devices.checks import require_positive
 from swarmdeck.devices.transport import Counters, PoseSource, RobotTransport, check_command
 
 FloatArray = NDArray[np.float64]
@@ -56,10 +57,7 @@ class StreamerConfig:
     max_events: int = 200
 
     def __post_init__(self) -> None:
-        for name in ("pose_timeout", "input_timeout", "period"):
-            x = getattr(self, name)
-            if not (np.isfinite(x) and x > 0):
-                raise ValueError(f"StreamerConfig.{name} must be a positive number of seconds, got {x!r}")
+        require_positive(self, ("pose_timeout", "input_timeout", "period"), "seconds")
 
 
 @dataclass(frozen=True)
