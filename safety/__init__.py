@@ -3,11 +3,13 @@
 ``SafetyFilter(BarrierConfig()).filter(points, nominal, obstacles=None) -> (safe, diag)``
 for single-integrator controlled points (look-ahead points), and
 ``UnicycleSafetyFilter().filter(poses, v, w, obstacles=None) -> (v, w, diag)``
-for unicycle robots with wheel limits (REFERENCE.md §3, paper §IV-B).
+for unicycle robots with wheel limits (REFERENCE.md §3, paper §IV-B);
+``verify(x0, controller, steps)`` scores a closed loop by simulation (REFERENCE.md §4).
 """
 from .config import BarrierConfig, UnicycleParams
 from .diagnostics import BarrierDiagnostics
 from .filter import SafetyFilter
+from .verifier import VerificationReport, verify
 from .unicycle import (
     UnicycleSafetyFilter,
     lookahead_points,
@@ -22,6 +24,8 @@ __all__ = [
     "SafetyFilter",
     "UnicycleParams",
     "UnicycleSafetyFilter",
+    "VerificationReport",
+    "verify",
     "lookahead_points",
     "si_to_unicycle",
     "unicycle_to_si",
