@@ -60,3 +60,16 @@ def test_unusable_input_files_are_one_line(option, content, tmp_path, capsys):
     assert main(["calibrate", "arena", "--camera", "synthetic", option, str(bad)]) == 2
     err = capsys.readouterr().err
     assert "Traceback" not in err and len(err.strip().splitlines()) == 1 and "bad.json" in err
+
+
+def test_repeated_views_do_not_count(tmp_path):
+    import cv2
+
+    from swarmdeck.tracking import calibrate_charuco
+
+    views = tmp_path / "views"
+    assert main(["calibrate", "camera", "--write-synthetic", str(views), "--views", "6"]) == 0
+    images = [cv2.imread(str(p), cv2.IMREAD_GRAYSCALE) for p in sorted(views.iterdir())]
+    with pytest.raises(CalibrationError, match="1 distinct view"):
+        calibrate_charuco([images[0]] * 6, CharucoSpec())
+    assert calibrate_charuco(images, CharucoSpec()).n_images == 6

@@ -91,4 +91,4 @@ def test_cli_calibrate_camera_then_arena(tmp_path, capsys) -> None:
     assert cli(["calibrate", "arena", "--image", str(tmp_path / "none.png")]) == 2
     assert "no such image" in capsys.readouterr().err
     assert cli(["calibrate", "camera", "--images", str(tmp_path)]) == 2
-    assert "found the ChArUco board in 0 image(s)" in capsys.readouterr().err
+    assert "found the ChArUco board in 0 distinct view(s)" in capsys.readouterr().err

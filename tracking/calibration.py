@@ -157,10 +157,27 @@ def calibrate_charuco(images: Iterable[np.ndarray], spec: CharucoSpec = CharucoS
         elif s != size:
             raise CalibrationError(f"calibration images differ in size: {size} and {s}")
         o, p = detect_charuco(im, spec)
-        if len(o) >= 6:
+        if len(o) >= 6 and not _repeats_a_view(o, p, obj_pts, img_pts):
             obj_pts.append(o.astype(np.float32))
             img_pts.append(p.astype(np.float32))
     if size is None or len(obj_pts) < min_views:
-        raise CalibrationError(f"found the ChArUco board in {len(obj_pts)} image(s); need at least {min_views}")
-    rms, K, dist, _, _ = cv2.calibrateCamera(obj_pts, img_pts, size, None, None)
+        raise CalibrationError(f"found the ChArUco board in {len(obj_pts)} distinct view(s); need at least {min_views} "
+                               "(views of the board in different positions and tilts)")
+    try:
+        rms, K, dist, _, _ = cv2.calibrateCamera(obj_pts, img_pts, size, None, None)
+    except cv2.error as exc:
+        raise CalibrationError(f"cv2.calibrateCamera failed: {exc.err}") from exc
+    if not (np.isfinite(rms) and np.all(np.isfinite(K)) and np.all(np.isfinite(dist)) and K[0, 0] > 0 and K[1, 1] > 0):
+        raise CalibrationError(f"calibration did not converge (RMS {rms}, fx {K[0, 0]}, fy {K[1, 1]})")
     return CameraCalibration(K, dist.reshape(-1), size, float(rms), len(obj_pts))
+
+
+def _repeats_a_view(obj: np.ndarray, img: np.ndarray, objs: list[np.ndarray], imgs: list[np.ndarray],
+                    tol_px: float = 1.0) -> bool:
+    """True when the same board corners were already seen within ``tol_px`` (RMS) of these
+    image positions: a repeated view adds no information but would make the fit look confident."""
+    for o, p in zip(objs, imgs):
+        if o.shape == obj.shape and np.array_equal(o, obj.astype(np.float32)):
+            if float(np.sqrt(np.mean(np.sum((p - img) ** 2, axis=1)))) < tol_px:
+                return True
+    return False
