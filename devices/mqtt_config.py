@@ -109,7 +109,7 @@ class MqttConfig:
 
 
 def _small_int(text: str) -> int | None:
-    if not text.isdigit() or len(text) > 9:
+    if not (text.isascii() and text.isdigit()) or len(text) > 9:
         return None
     return int(text)
 

@@ -208,7 +208,7 @@ def decode_poses(payload: bytes) -> PoseMessage:
     stamps: list[float] = []
     problems: list[str] = []
     for key, row in obj.items():  # one pass over the message (tens to hundreds of rows)
-        rid = int(key) if key.isdigit() and len(key) <= 9 else None
+        rid = int(key) if key.isascii() and key.isdigit() and len(key) <= 9 else None
         if rid is None:
             problems.append(f"{what}: key {key!r} is not a robot id (expected a non-negative integer)")
             continue
