@@ -286,6 +286,8 @@ class Arena:
         """
         sel = self._ids(ids)
         named = np.arange(self.n) if sel is None else sel
+        if isinstance(waypoints, (str, bytes)) or not hasattr(waypoints, "__len__"):
+            raise ValueError(f"waypoints must be a sequence of (K_i, 2) arrays, one per robot, got {type(waypoints).__name__}")
         if len(waypoints) != len(named):
             raise ValueError(f"waypoints must hold one (K_i, 2) array per robot{'' if sel is None else ' in ids'} "
                              f"({len(named)}), got {len(waypoints)}")
@@ -303,10 +305,10 @@ class Arena:
                 here = self.positions()
                 lists = [here[i : i + 1] for i in range(self.n)]
         for k, (i, wp) in enumerate(zip(named.tolist(), waypoints)):  # once per call, not per tick
-            try:
-                arr = np.array(wp, dtype=float)
-            except (TypeError, ValueError) as exc:
-                raise ValueError(f"waypoints[{k}] must be a finite (K, 2) array of metres: {exc}") from None
+            raw = np.asarray(wp)
+            if raw.dtype.kind not in "fiu":
+                raise ValueError(f"waypoints[{k}] must be a real (K, 2) array of metres, got dtype {raw.dtype}")
+            arr = raw.astype(float)  # a copy: later changes to the caller's array do not move the robots
             if arr.ndim != 2 or arr.shape[1] != 2 or arr.shape[0] < 1 or not np.all(np.isfinite(arr)):
                 raise ValueError(f"waypoints[{k}] must be a finite (K, 2) array with K >= 1, got shape {arr.shape}")
             lists[i] = arr

@@ -90,3 +90,20 @@ def test_waypoints_for_a_subset_of_robots():
     assert np.linalg.norm(p[2] - (start[2] + [0.1, 0.1])) < 0.03 and arena.waypoint_index[2] == 1
     with pytest.raises(ValueError, match=r"one \(K_i, 2\) array per robot in ids \(2\)"):
         arena.set_waypoints([start[0:1]], ids=[0, 1])
+
+
+@pytest.mark.parametrize("bad", [3, 3.5, "abc", [np.zeros((1, 2), dtype=complex)] * 4, [[["a", "b"]]] * 4,
+                                 [np.array([[0.0, np.nan]])] * 4, [np.zeros((0, 2))] * 4])
+def test_bad_waypoints_are_value_errors(bad):
+    with pytest.raises(ValueError, match="waypoints"):
+        _arena().set_waypoints(bad)
+
+
+def test_waypoints_copied_from_the_caller():
+    arena = _arena(n=1)
+    wps = np.array([[0.3, 0.2]])
+    arena.set_waypoints([wps])
+    wps[0] = [5.0, 5.0]
+    for _ in range(400):
+        arena.step()
+    assert np.linalg.norm(arena.positions()[0] - [0.3, 0.2]) < 0.03
