@@ -51,3 +51,14 @@ def test_robotarium_object_has_no_rps_defects():
         np.testing.assert_array_equal(pts, keep_pts)
         assert safe[0, 0] < 0.2  # approaching pair slowed
     assert "rps" not in sys.modules
+
+
+@pytest.mark.parametrize("ids", [[0.5, 1.0], ["a", "b"], [True, False]])
+def test_set_velocities_rejects_ids_that_are_not_indices(ids):
+    from swarmdeck.devices.rps.robotarium import Robotarium
+
+    r = Robotarium(number_of_robots=3, sim_in_real_time=False)
+    with pytest.raises(ValueError, match="ids"):
+        r.set_velocities(np.array(ids), np.zeros((2, 2)))
+    r.set_velocities(np.array([0.0, 2.0]), np.zeros((2, 2)))  # whole numbers as floats are fine
+    r.set_velocities(np.array([True, False, True]), np.zeros((2, 2)))

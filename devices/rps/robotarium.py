@@ -53,8 +53,14 @@ class Robotarium:
         idx = np.atleast_1d(np.asarray(ids))
         if vel.ndim != 2 or vel.shape[0] != 2:
             raise ValueError(f"velocities must have shape (2, N), got {vel.shape}")
-        if idx.dtype.kind not in "iu":
-            idx = np.arange(self.number_of_robots)[idx] if idx.dtype == bool else idx.astype(int)
+        if idx.dtype == bool:
+            if idx.shape != (self.number_of_robots,):
+                raise ValueError(f"a boolean ids mask must have shape ({self.number_of_robots},), got {idx.shape}")
+            idx = np.flatnonzero(idx)
+        elif idx.dtype.kind == "f" and np.all(np.isfinite(idx)) and np.all(idx == np.round(idx)):
+            idx = idx.astype(int)  # rps scripts pass np.arange(N) as floats sometimes; whole numbers only
+        elif idx.dtype.kind not in "iu":
+            raise ValueError(f"ids must be robot indices (integers), got {idx.tolist()!r}")
         if vel.shape[1] != len(idx):
             raise ValueError(f"velocities has {vel.shape[1]} columns for {len(idx)} ids")
         self._arena.set_unicycle(vel[0], vel[1], ids=idx)
