@@ -9,6 +9,7 @@ random nominal directions and speeds up to v_max. N ≤ 100 in the default
 3.2 × 2.0 m arena; N ≥ 200 in a larger arena of the same aspect and occupancy
 (200 robots do not fit the default arena at that pitch).
 
+Times are process CPU time (one thread; robust to other load on a shared VM).
 Columns: *cold* = a fresh filter per scene (no warm start); *closed loop* = the
 same filter over 20 consecutive ticks (x ← x + u·dt, nominal directions
 drifting), median over ticks 2…20 (warm-started active set); *pruned clarabel*
@@ -46,9 +47,10 @@ def config_for(n: int) -> BarrierConfig:
 
 
 def timed(fn, *args):
-    t = time.perf_counter()
+    """(process CPU seconds, result): CPU time is robust to the other processes on a shared VM."""
+    t = time.process_time()
     out = fn(*args)
-    return time.perf_counter() - t, out
+    return time.process_time() - t, out
 
 
 def bench(n: int, scenes: int, ticks: int, baseline: bool, rng: np.random.Generator) -> dict:
