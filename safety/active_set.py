@@ -26,7 +26,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-import scipy.linalg as sla
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
@@ -66,6 +65,15 @@ def _project(w: np.ndarray, vmax: float) -> tuple[np.ndarray, np.ndarray, np.nda
     return u, over, norms
 
 
+def _dense_spd_solve(G: np.ndarray, rhs: np.ndarray) -> np.ndarray | None:
+    """Solve (G + ridge·I) x = rhs for a small dense Gram matrix (LAPACK, little call overhead)."""
+    G[np.diag_indices_from(G)] += _RIDGE
+    try:
+        return np.linalg.solve(G, rhs)
+    except np.linalg.LinAlgError:
+        return None
+
+
 class _Working:
     """Rows held at equality, as flat arrays (single-robot rows have cj = 0, aj = ai)."""
 
@@ -100,11 +108,7 @@ class _Working:
             Ad[r, self.ai] += self.aci
             B = Ad if J is None else np.einsum("wnd,nde->wne", Ad, J)
             Gd = B.reshape(w, 2 * n) @ Ad.reshape(w, 2 * n).T
-            Gd[np.diag_indices_from(Gd)] += _RIDGE
-            try:
-                return sla.cho_solve(sla.cho_factor(Gd, check_finite=False), rhs, check_finite=False)
-            except (np.linalg.LinAlgError, ValueError):
-                return None
+            return _dense_spd_solve(Gd, rhs)
         indptr = np.arange(0, 4 * w + 1, 4)
         cols = np.stack([2 * self.ai, 2 * self.ai + 1, 2 * self.aj, 2 * self.aj + 1], axis=1).reshape(-1)
         data = np.concatenate([self.aci, self.acj], axis=1).reshape(-1)
@@ -115,12 +119,7 @@ class _Working:
             Jb = sp.bsr_matrix((J, np.arange(n), np.arange(n + 1)), shape=(2 * n, 2 * n)).tocsr()
             G = A @ (Jb @ A.T)
         if w <= _DENSE_ROWS:
-            Gd = G.toarray()
-            Gd[np.diag_indices_from(Gd)] += _RIDGE
-            try:
-                return sla.cho_solve(sla.cho_factor(Gd, check_finite=False), rhs, check_finite=False)
-            except (np.linalg.LinAlgError, ValueError):
-                return None
+            return _dense_spd_solve(G.toarray(), rhs)
         G = (G + _RIDGE * sp.identity(w, format="csr")).tocsc()
         try:
             return spla.splu(G, permc_spec="MMD_AT_PLUS_A").solve(rhs)
