@@ -55,8 +55,10 @@ def image_density(image: str | Path | ArrayLike,
     (y_max) of the arena. Raises ValueError for unreadable or malformed images.
     """
     img = load_grey(image) if isinstance(image, (str, Path)) else np.asarray(image)
-    if img.ndim == 3 and img.shape[2] in (3, 4):
-        img = cv2.cvtColor(np.ascontiguousarray(img[..., :3]).astype(np.uint8), cv2.COLOR_RGB2GRAY)
+    if img.ndim == 3 and img.shape[2] in (3, 4):  # RGB(A), uint8 or floats in [0, 1]: ITU-R BT.601 luma
+        rgb = img[..., :3]
+        luma = rgb.astype(float) @ np.array([0.299, 0.587, 0.114])
+        img = np.clip(np.round(luma), 0, 255).astype(np.uint8) if rgb.dtype == np.uint8 else luma
     if img.ndim != 2 or img.shape[0] < 2 or img.shape[1] < 2:
         raise ValueError(f"image must be a grey (H, W) array with H, W >= 2, got shape {img.shape}")
     grey = img.astype(float)

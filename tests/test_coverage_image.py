@@ -77,3 +77,17 @@ def test_blank_image_with_floor_is_uniform_and_without_floor_has_no_mass():
     assert g.n_bumps == 0
     with pytest.raises(ValueError, match="zero mass"):
         image_density(np.full((20, 30), 255, np.uint8), BOUNDS, floor=0.0)
+
+
+def test_float_rgb_images_are_grey_not_cast_to_uint8():
+    import numpy as np
+
+    from swarmdeck.coverage import image_density
+
+    grey = np.ones((40, 64))
+    grey[10:30, 20:40] = 0.0  # a dark square on white, floats in [0, 1]
+    rgb = np.repeat(grey[..., None], 3, axis=2)
+    a, b = image_density(grey), image_density(rgb)
+    assert np.allclose(a.mu, b.mu) and np.allclose(a.weight, b.weight)
+    c = image_density((rgb * 255).astype(np.uint8))
+    assert np.allclose(a.mu, c.mu) and np.allclose(a.weight, c.weight)
