@@ -15,7 +15,7 @@ needs ``γ·dt ≤ 1`` (e.g. γ ≤ 30 at dt = 0.033 s).
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 from functools import cached_property
 from typing import Literal
 
@@ -94,6 +94,29 @@ class BarrierConfig:
             raise ValueError(
                 f"BarrierConfig: bounds {self.bounds} leave no room inside the wall margin {m} m"
             )
+
+    @classmethod
+    def from_dict(cls, data: dict) -> "BarrierConfig":
+        """Build from a plain mapping (e.g. a TOML ``[safety]`` table); unknown keys are refused."""
+        if not isinstance(data, dict):
+            raise ValueError(f"BarrierConfig: expected a table of settings, got {type(data).__name__}")
+        known = {f.name for f in fields(cls)}
+        unknown = sorted(set(data) - known)
+        if unknown:
+            raise ValueError(f"BarrierConfig: unknown setting(s) {unknown}; known: {sorted(known)}")
+        values = dict(data)
+        if "bounds" in values:
+            try:
+                values["bounds"] = tuple(float(v) for v in values["bounds"])
+            except (TypeError, ValueError):
+                raise ValueError(f"BarrierConfig: bounds must be 4 numbers, got {data['bounds']!r}") from None
+        return cls(**values)
+
+    def to_dict(self) -> dict:
+        """Plain dict of the settings (JSON/TOML-able)."""
+        out = {f.name: getattr(self, f.name) for f in fields(self)}
+        out["bounds"] = list(self.bounds)
+        return out
 
     @property
     def margin(self) -> float:

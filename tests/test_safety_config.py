@@ -37,3 +37,12 @@ def test_bad_config_refused(kwargs) -> None:
 def test_bad_params_refused() -> None:
     with pytest.raises(ValueError, match="wheel_radius"):
         UnicycleParams(wheel_radius=0)
+
+
+def test_from_dict_round_trip_and_errors() -> None:
+    cfg = BarrierConfig(gamma=150.0, class_k="linear", bounds=(-1.0, 1.0, -0.5, 0.5))
+    assert BarrierConfig.from_dict(cfg.to_dict()) == cfg
+    with pytest.raises(ValueError, match="unknown setting"):
+        BarrierConfig.from_dict({"gama": 3})
+    with pytest.raises(ValueError, match="bounds"):
+        BarrierConfig.from_dict({"bounds": "wide"})
