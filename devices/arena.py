@@ -273,7 +273,10 @@ class Arena:
                 poses = self.poses()
                 base = lookahead_points(poses, self.ell) if controller == "si" else poses[:, :width].copy()
             base[sel] = goals_arr
-        self._hybrid.reset()
+        kind, cmd = self._command
+        same = kind == "goals" and cmd[0] == controller and np.array_equal(cmd[1], base)
+        if not same:  # rps-style loops set the same goals every step: keep the hybrid phases then
+            self._hybrid.reset()
         self._command = ("goals", (controller, base))
 
     def set_waypoints(self, waypoints: Sequence[ArrayLike], tolerance: float = 0.03, loop: bool = False,

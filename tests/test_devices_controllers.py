@@ -49,3 +49,18 @@ def test_next_position_commands_track_a_path():
         arena.set_next_positions(target[None, :])
         arena.step()
     assert np.linalg.norm(arena.positions()[0] - target) < 0.01
+
+
+def test_setting_the_same_goals_every_step_changes_nothing():
+    """rps-style loops call set_goals every step: that must not reset the hybrid controller's phase
+    (robots the barrier pushes out of their goal must not switch phase differently)."""
+    n = 6
+    once = Arena(n, config=ArenaConfig(seed=2))
+    every = Arena(n, config=ArenaConfig(seed=2))
+    goals = np.column_stack((np.full(n, 0.0) + 0.12 * np.arange(n) - 0.3, np.zeros(n), np.linspace(-3, 3, n)))
+    once.set_goals(goals, controller="hybrid")
+    for _ in range(900):
+        once.step()
+        every.set_goals(goals.copy(), controller="hybrid")
+        every.step()
+    assert np.array_equal(once.poses(), every.poses())
