@@ -321,6 +321,10 @@ class Arena:
         for i, arr in enumerate(lists):
             table[i, : len(arr)] = arr
             table[i, len(arr) :] = arr[-1]
+        kind, cmd = self._command
+        if (kind == "waypoints" and np.array_equal(cmd[1], lengths) and np.array_equal(cmd[0], table)
+                and cmd[2] == float(tolerance) and cmd[3] == bool(loop)):
+            index = self._waypoint_index  # the same lists again (set every step): keep each robot's progress
         self._waypoint_index = index
         self._command = ("waypoints", (table, lengths, float(tolerance), bool(loop)))
 

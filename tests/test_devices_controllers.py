@@ -64,3 +64,15 @@ def test_setting_the_same_goals_every_step_changes_nothing():
         every.set_goals(goals.copy(), controller="hybrid")
         every.step()
     assert np.array_equal(once.poses(), every.poses())
+
+
+def test_setting_the_same_waypoints_every_step_keeps_progress():
+    arena = Arena(initial_conditions=np.array([[0.0, 0.0, 0.0]]), safety=False)
+    square = np.array([[0.5, 0.0], [0.5, 0.5], [0.0, 0.5], [0.0, 0.0]])
+    for _ in range(1500):
+        arena.set_waypoints([square.copy()], tolerance=0.03)
+        arena.step()
+    assert arena.waypoint_index[0] == 3
+    assert np.linalg.norm(arena.positions()[0] - square[-1]) < 0.03
+    arena.set_waypoints([square[::-1].copy()], tolerance=0.03)  # different lists start over
+    assert arena.waypoint_index[0] == 0
