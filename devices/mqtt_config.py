@@ -9,7 +9,7 @@ several testbeds can share one lab broker):
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 from urllib.parse import unquote, urlsplit
 
 COMMAND_ROOT = "matlab_api"
@@ -45,7 +45,7 @@ class MqttConfig:
     certfile: str | None = None
     keyfile: str | None = None
     username: str | None = None
-    password: str | None = None
+    password: str | None = field(default=None, repr=False)  # never in logs, status lines or recordings
     client_id: str = ""
     reconnect_min: float = 0.1
     reconnect_max: float = 2.0
@@ -114,6 +114,19 @@ def _small_int(text: str) -> int | None:
     return int(text)
 
 
+def redact_url(url: str) -> str:
+    """``url`` with any password replaced by ``***`` (for messages, status lines and recordings)."""
+    text = str(url)
+    scheme, sep, rest = text.partition("://")
+    if not sep:
+        return text
+    auth, at, host = rest.rpartition("@")
+    if not at or ":" not in auth.split("/")[0]:
+        return text
+    user = auth.split(":", 1)[0]
+    return f"{scheme}://{user}:***@{host}"
+
+
 def parse_broker_url(url: str, **overrides: object) -> MqttConfig:
     """``mqtt://[user[:password]@]host[:port][/prefix/]`` → :class:`MqttConfig`.
 
@@ -125,15 +138,16 @@ def parse_broker_url(url: str, **overrides: object) -> MqttConfig:
         ValueError: the URL is not of that form (the message says what is expected).
     """
     expected = "expected mqtt://HOST:PORT or mqtts://HOST:PORT (optionally user:password@ and /prefix/)"
+    shown = redact_url(url)
     try:
         parts = urlsplit(url)
         port = parts.port
     except ValueError as exc:
-        raise ValueError(f"bad broker URL {url!r}: {exc}; {expected}") from None
+        raise ValueError(f"bad broker URL {shown!r}: {exc}; {expected}") from None
     if parts.scheme not in ("mqtt", "mqtts", "tcp", "ssl"):
-        raise ValueError(f"bad broker URL {url!r}: scheme {parts.scheme!r} is not supported; {expected}")
+        raise ValueError(f"bad broker URL {shown!r}: scheme {parts.scheme!r} is not supported; {expected}")
     if not parts.hostname:
-        raise ValueError(f"bad broker URL {url!r}: no host; {expected}")
+        raise ValueError(f"bad broker URL {shown!r}: no host; {expected}")
     tls = parts.scheme in ("mqtts", "ssl")
     prefix = parts.path.strip("/")
     fields: dict[str, object] = {
