@@ -25,7 +25,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from swarmdeck.devices.mqtt_config import parse_broker_url
+from swarmdeck.devices.mqtt_config import parse_broker_url, redact_url
 from swarmdeck.devices.streamer import CommandStreamer, StreamerConfig
 from swarmdeck.devices.transport_mqtt import LinkTimeouts, MqttTransport
 
@@ -115,7 +115,7 @@ class NetworkRobots:
                     st = transport.status().state
                     what = f"robot id(s) {missing.tolist()}" if ids is not None else "any robot"
                     raise ValueError(f"no pose from {what} on {cfg.url} within {wait_for_poses} s ({st}); "
-                                     f"is `swarmdeck robots --broker {url}` (or the tracker) running?")
+                                     f"is `swarmdeck robots --broker {redact_url(url)}` (or the tracker) running?")
                 time.sleep(0.02)
         except BaseException:
             transport.close()

@@ -24,3 +24,11 @@ def test_bad_url_messages_hide_the_password(url, capsys):
                                         ("mqtts://u:p@h:1/x/", "mqtts://u:***@h:1/x/"), ("nonsense", "nonsense")])
 def test_redact_url(url, shown):
     assert redact_url(url) == shown
+
+
+def test_no_robots_message_hides_the_password():
+    from swarmdeck.devices.transport_console import NetworkRobots
+
+    with pytest.raises(ValueError) as err:
+        NetworkRobots.connect("mqtt://alice:s3cret@127.0.0.1:1", n_robots=1, wait_for_poses=0.2)
+    assert "s3cret" not in str(err.value) and "alice:***@" in str(err.value)
