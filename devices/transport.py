@@ -193,6 +193,24 @@ class CheckedCommand:
     zeroed: NDArray[np.bool_]
 
 
+def _real_array(x: object) -> FloatArray:
+    """``x`` as a float array, or an empty ``(0,)`` array when it is not real numbers (text, complex, ragged)."""
+    try:
+        arr = np.asarray(x)
+        if arr.dtype.kind not in "fiub":
+            return np.empty(0)
+        return arr.astype(float)
+    except (TypeError, ValueError):
+        return np.empty(0)
+
+
+def _shape(x: object) -> object:
+    try:
+        return np.shape(x)
+    except (TypeError, ValueError):
+        return "ragged"
+
+
 def check_command(ids: ArrayLike, v: ArrayLike, w: ArrayLike, leds: ArrayLike | None = None) -> CheckedCommand:
     """Validate one command batch without raising.
 
@@ -214,11 +232,11 @@ def check_command(ids: ArrayLike, v: ArrayLike, w: ArrayLike, leds: ArrayLike | 
             return CheckedCommand(np.empty(0, np.intp), empty, empty, None, tuple(problems), np.zeros(0, bool))
         raw_ids = as_float.astype(np.int64)
     k = len(raw_ids)
-    v_arr = np.asarray(v, dtype=float).reshape(-1) if np.size(v) else np.empty(0)
-    w_arr = np.asarray(w, dtype=float).reshape(-1) if np.size(w) else np.empty(0)
+    v_arr, w_arr = _real_array(v).reshape(-1), _real_array(w).reshape(-1)
     zeroed = np.zeros(k, dtype=bool)
     if v_arr.shape != (k,) or w_arr.shape != (k,):
-        problems.append(f"v and w must have shape ({k},) like ids, got {v_arr.shape} and {w_arr.shape}: all robots stopped")
+        problems.append(f"v and w must be real numbers with shape ({k},) like ids, got {_shape(v)} and "
+                        f"{_shape(w)}: all robots stopped")
         v_arr, w_arr = np.zeros(k), np.zeros(k)
         zeroed[:] = True
     bad = ~(np.isfinite(v_arr) & np.isfinite(w_arr))
@@ -240,13 +258,14 @@ def check_command(ids: ArrayLike, v: ArrayLike, w: ArrayLike, leds: ArrayLike | 
     w_out = np.where(zeroed, 0.0, w_arr)[keep]
     led_out: NDArray[np.uint8] | None = None
     if leds is not None:
-        arr = np.asarray(leds, dtype=float)
+        arr = _real_array(leds)
         if arr.shape == (k, 3):
             arr = np.repeat(arr[:, None, :], 2, axis=1)
         if arr.shape == (k, 2, 3) and np.all(np.isfinite(arr)):
             led_out = np.clip(np.rint(arr), 0, 255).astype(np.uint8)[keep]
         else:
-            problems.append(f"leds must be finite with shape ({k}, 3) or ({k}, 2, 3), got {arr.shape}: LEDs not sent")
+            problems.append(f"leds must be finite numbers with shape ({k}, 3) or ({k}, 2, 3), got shape "
+                            f"{_shape(leds)}: LEDs not sent")
     return CheckedCommand(raw_ids[keep].astype(np.intp), v_out, w_out, led_out, tuple(problems), zeroed[keep])
 
 
