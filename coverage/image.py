@@ -31,7 +31,13 @@ def load_grey(path: str | Path) -> NDArray[np.uint8]:
 
 
 def letter_image(text: str = "R", height: int = 200, width: int = 320) -> NDArray[np.uint8]:
-    """A grey (H, W) uint8 image: black ``text`` centred on white."""
+    """A grey (H, W) uint8 image: black ``text`` centred on white.
+
+    ``text`` must be printable ASCII with at least one visible character (OpenCV's Hershey
+    fonts draw anything else as "?"); raises ValueError otherwise.
+    """
+    if not (isinstance(text, str) and text.isascii() and text.isprintable() and text.strip()):
+        raise ValueError(f"letter text must be printable ASCII with a visible character, got {text!r}")
     img = np.full((height, width), 255, dtype=np.uint8)
     font = cv2.FONT_HERSHEY_SIMPLEX
     scale = height / 30.0

@@ -91,3 +91,11 @@ def test_float_rgb_images_are_grey_not_cast_to_uint8():
     assert np.allclose(a.mu, b.mu) and np.allclose(a.weight, b.weight)
     c = image_density((rgb * 255).astype(np.uint8))
     assert np.allclose(a.mu, c.mu) and np.allclose(a.weight, c.weight)
+
+
+@pytest.mark.parametrize("text", ["Ω", " ", "", "R\n", "é"])
+def test_letters_opencv_cannot_draw_are_errors(text):
+    from swarmdeck.coverage import letter_image
+
+    with pytest.raises(ValueError, match="printable ASCII"):
+        letter_image(text)
