@@ -31,7 +31,7 @@ from swarmdeck.devices.controllers import (
     clf_unicycle_position_controller,
     si_position_controller,
 )
-from swarmdeck.devices.gritsbot import GritsBotParams, wheels_to_unicycle
+from swarmdeck.devices.gritsbot import GritsBotParams, limit_unicycle, wheels_to_unicycle
 from swarmdeck.devices.lookahead import lookahead_points, si_to_unicycle, unicycle_to_si
 from swarmdeck.devices.simulator import ArenaConfig, SimulatedArena, check_poses
 
@@ -64,11 +64,31 @@ class RunDefaults:
 RUN_DEFAULTS: contextvars.ContextVar[RunDefaults] = contextvars.ContextVar("swarmdeck_run_defaults", default=RunDefaults())
 
 
-def default_safety_filter(params: GritsBotParams, config: ArenaConfig) -> CommandFilter:
-    """The barrier-certificate filter of :mod:`swarmdeck.safety` for this robot and arena."""
-    from swarmdeck.safety import BarrierConfig, SafetyFilter  # devices -> safety (one way)
+class UnicycleCommandFilter(Protocol):
+    """A filter on unicycle commands: ``filter(poses (N,3), v (N,), w (N,), obstacles=None) -> (v, w, diagnostics)``."""
 
-    return SafetyFilter(BarrierConfig(bounds=config.bounds, max_speed=params.max_speed, dt=config.dt))
+    def filter(self, poses: ArrayLike, v: ArrayLike, w: ArrayLike, obstacles: ArrayLike | None = None) -> tuple[FloatArray, FloatArray, Any]: ...
+
+
+def default_safety_filter(params: GritsBotParams, config: ArenaConfig) -> UnicycleCommandFilter:
+    """The barrier-certificate filter of :mod:`swarmdeck.safety` for this robot and arena.
+
+    The unicycle form: the barrier QP on the look-ahead points with the four
+    wheel-limit rows of each robot, so what it returns is exactly what the
+    wheels can do and no later saturation can undo the certificate.
+    """
+    from swarmdeck.safety import BarrierConfig, UnicycleParams, UnicycleSafetyFilter  # devices -> safety (one way)
+
+    robot = UnicycleParams(wheel_radius=params.wheel_radius, axle_length=params.axle_length,
+                           max_wheel_speed=params.max_wheel_speed, lookahead=params.lookahead)
+    return UnicycleSafetyFilter(BarrierConfig(bounds=config.bounds, max_speed=params.max_speed, dt=config.dt), robot)
+
+
+def _is_unicycle_filter(obj: Any) -> bool:
+    """True for swarmdeck's unicycle barrier (poses, v, w); other filters take points and SI velocities."""
+    from swarmdeck.safety import UnicycleSafetyFilter
+
+    return isinstance(obj, UnicycleSafetyFilter)
 
 
 @dataclass
@@ -78,6 +98,7 @@ class SafetyStats:
     calls: int = 0
     failures: int = 0
     interventions: int = 0  # robot-steps whose command the filter changed
+    saturations: int = 0  # robot-steps whose command was scaled down to the wheel limits before filtering
     last_status: str = "off"
     last_diagnostics: Any = None
     failure_reasons: dict[str, int] = field(default_factory=dict)
@@ -143,13 +164,14 @@ class Arena:
         self.n = int(backend.n_robots)
         self.ell = self.params.lookahead
         if safety is True:
-            self.safety: CommandFilter | None = default_safety_filter(self.params, config)
+            self.safety: CommandFilter | UnicycleCommandFilter | None = default_safety_filter(self.params, config)
         elif safety is False:
             self.safety = None
         else:
             if not callable(getattr(safety, "filter", None)):
                 raise ValueError("safety must be True, False or an object with a filter(points, nominal) method")
             self.safety = safety
+        self._unicycle_safety = self.safety is not None and _is_unicycle_filter(self.safety)
         self.safety_stats = SafetyStats()
         self.invalid_commands = 0
         self.events: deque[str] = deque(maxlen=200)  # the most recent events only: a run can be long
@@ -395,26 +417,38 @@ class Arena:
             nominal = np.where(bad[:, None], 0.0, nominal)
             self.invalid_commands += int(bad.sum())
             self.events.append(f"t={self.time:.3f}: non-finite command for robot(s) {np.flatnonzero(bad).tolist()}: stopped")
-        safe = nominal
+        # Wheel limits first, by one scale per robot (keeps the curvature); the filter then
+        # only changes commands that are unsafe, and the unicycle filter stays within the limits.
+        v, w = si_to_unicycle(poses, nominal, self.ell)
+        v, w, saturated = limit_unicycle(v, w, self.params)
+        self.safety_stats.saturations += int(saturated.sum())
         if self.safety is not None:
-            safe, diag = self.safety.filter(points, nominal)
-            safe = np.asarray(safe, dtype=float)
             st = self.safety_stats
             st.calls += 1
+            if self._unicycle_safety:
+                vs, ws, diag = self.safety.filter(poses, v, w)
+                vs, ws = np.asarray(vs, dtype=float), np.asarray(ws, dtype=float)
+                valid = vs.shape == v.shape and ws.shape == w.shape and bool(np.all(np.isfinite(vs)) and np.all(np.isfinite(ws)))
+            else:
+                u = unicycle_to_si(poses, v, w, self.ell)
+                safe_u, diag = self.safety.filter(points, u)
+                safe_u = np.asarray(safe_u, dtype=float)
+                valid = safe_u.shape == u.shape and bool(np.all(np.isfinite(safe_u)))
+                vs, ws = si_to_unicycle(poses, safe_u, self.ell) if valid else (v, w)
             st.last_diagnostics = diag
             st.last_status = str(getattr(diag, "status", "ok"))
             ok = bool(getattr(diag, "ok", True))
-            if ok and (safe.shape != nominal.shape or not np.all(np.isfinite(safe))):
+            if ok and not valid:
                 ok = False
-                st.last_status = f"filter returned shape {safe.shape} or non-finite values; expected ({self.n}, 2)"
+                st.last_status = f"filter returned the wrong shape or non-finite values for {self.n} robots"
             if not ok:
                 st.failures += 1
                 st.failure_reasons[st.last_status] = st.failure_reasons.get(st.last_status, 0) + 1
-                safe = np.zeros_like(nominal)
+                vs, ws = np.zeros(self.n), np.zeros(self.n)
             else:
-                st.interventions += int(np.count_nonzero(np.any(safe != nominal, axis=1)))
-        self.last_nominal, self.last_safe = nominal, np.asarray(safe, dtype=float)
-        v, w = si_to_unicycle(poses, self.last_safe, self.ell)
+                st.interventions += int(np.count_nonzero((vs != v) | (ws != w)))
+            v, w = vs, ws
+        self.last_nominal, self.last_safe = nominal, unicycle_to_si(poses, v, w, self.ell)
         new_poses = self.backend.step(v, w)
         if self._on_step is not None:
             self._on_step(self)

@@ -50,9 +50,11 @@ def test_console_loop_covers_safely_over_mqtt(mosquitto):
     try:
         probe = MqttTransport(parse_broker_url(mosquitto.url), ids=range(n)).start()
         try:
-            wait_until(lambda: probe.counters.get("pose_messages") >= 1, 10, "first pose message")
+            # The console's final zero may be overtaken under load; the firmware's 500 ms
+            # timeout stops the robots regardless. 20 pose messages at 30 Hz span > 0.6 s.
+            wait_until(lambda: probe.counters.get("pose_messages") >= 20, 10, "0.6 s of pose messages")
             first = probe.latest_poses().poses
-            wait_until(lambda: probe.counters.get("pose_messages") >= 15, 10, "more pose messages")
+            wait_until(lambda: probe.counters.get("pose_messages") >= 35, 10, "more pose messages")
             last = probe.latest_poses().poses
         finally:
             probe.close()
