@@ -34,7 +34,15 @@ from swarmdeck.console.densities import BumpSet, MovingBump, merge_mixtures
 from swarmdeck.console.frame import BarrierFrame, ContactsFrame, CoverageFrame, Frame
 from swarmdeck.console.robots import CommandSink, PoseSource, SensedPoses, SimulatedRobots
 from swarmdeck.coverage.density import GaussianMixture
-from swarmdeck.devices import ArenaConfig, GritsBotParams, limit_unicycle, lookahead_points, saturate_norm, si_to_unicycle
+from swarmdeck.devices import (
+    ArenaConfig,
+    GritsBotParams,
+    limit_unicycle,
+    lookahead_points,
+    saturate_norm,
+    si_to_unicycle,
+    unicycle_to_si,
+)
 from swarmdeck.devices.clock import RealTimePacer
 
 Bounds = tuple[float, float, float, float]
@@ -215,11 +223,16 @@ class ControlLoop:
         return make_behaviour(name, params, self.config.bounds, self.config.max_speed, safety.safety_distance)
 
     def _make_filter(self, p: SafetyParams) -> Any:
-        from swarmdeck.safety import BarrierConfig, SafetyFilter
+        """The unicycle barrier: the QP on the look-ahead points plus each robot's four wheel-limit
+        rows, so the certified command is one the wheels can execute (no saturation afterwards)."""
+        from swarmdeck.safety import BarrierConfig, UnicycleParams, UnicycleSafetyFilter
 
-        return SafetyFilter(BarrierConfig(safety_distance=p.safety_distance, gamma=p.gamma, class_k=p.class_k,
-                                          max_speed=self.config.max_speed, bounds=self.config.bounds,
-                                          dt=self.config.dt))
+        r = self.robot
+        return UnicycleSafetyFilter(
+            BarrierConfig(safety_distance=p.safety_distance, gamma=p.gamma, class_k=p.class_k,
+                          max_speed=self.config.max_speed, bounds=self.config.bounds, dt=self.config.dt),
+            UnicycleParams(wheel_radius=r.wheel_radius, axle_length=r.axle_length,
+                           max_wheel_speed=r.max_wheel_speed, lookahead=r.lookahead))
 
     # ------------------------------------------------------------------ operator commands (thread-safe)
     @property
@@ -504,7 +517,9 @@ class ControlLoop:
             try:
                 extra_fn = getattr(self.sink, "obstacles", None)
                 extra = np.asarray(extra_fn(), dtype=float).reshape(-1, 2) if extra_fn is not None else None
-                safe, barrier = self._filter_seen(filt, points, nominal, seen, sp.safety_distance, extra)
+                # wheel limits by one scale per robot first (keeps the curvature), then the barrier
+                v_lim, w_lim, _ = limit_unicycle(*si_to_unicycle(poses, nominal, ell), self.robot)
+                safe, barrier = self._filter_seen(filt, poses, v_lim, w_lim, seen, sp.safety_distance, extra)
                 if not barrier.ok or safe.shape != (n, 2) or not np.all(np.isfinite(safe)):
                     safe = np.zeros((n, 2))
                     with self._lock:
@@ -533,6 +548,7 @@ class ControlLoop:
         # 5. actuate
         v, w = si_to_unicycle(poses, safe, ell)
         v, w, _ = limit_unicycle(v, w, self.robot)
+        v, w = np.where(seen, v, 0.0), np.where(seen, w, 0.0)  # unseen robots may have NaN poses
         if not active:
             v, w = np.zeros(n), np.zeros(n)
         try:
@@ -584,27 +600,29 @@ class ControlLoop:
         return frame
 
     @staticmethod
-    def _filter_seen(filt: Any, points: NDArray[np.float64], nominal: NDArray[np.float64],
+    def _filter_seen(filt: Any, poses: NDArray[np.float64], v: NDArray[np.float64], w: NDArray[np.float64],
                      seen: NDArray[np.bool_], d_s: float,
                      extra: NDArray[np.float64] | None = None) -> tuple[NDArray[np.float64], BarrierFrame]:
-        """Barrier QP over the robots seen this tick; unseen robots (no fresh pose: they get zero
-        commands) and ``extra`` (M, 2) points (robots excluded by the sink) are fixed obstacles.
-        Indices map back to all N."""
-        n = len(points)
+        """Unicycle barrier QP over the robots seen this tick, returning safe look-ahead velocities
+        (N, 2); unseen robots (no fresh pose: they get zero commands) and ``extra`` (M, 2) points
+        (robots excluded by the sink) are fixed obstacles. Indices map back to all N."""
+        n = len(poses)
+        ell = filt.params.lookahead
         extra = None if extra is None or len(extra) == 0 else extra
         if seen.all():
-            safe, diag = filt.filter(points, nominal, extra)
-            return np.asarray(safe, dtype=float), BarrierFrame.from_diagnostics(diag, n, d_s, enabled=True)
+            vs, ws, diag = filt.filter(poses, v, w, extra)
+            return unicycle_to_si(poses, vs, ws, ell), BarrierFrame.from_diagnostics(diag, n, d_s, enabled=True)
         idx = np.flatnonzero(seen)
+        points = lookahead_points(poses, ell)
         known = ~seen & np.all(np.isfinite(points), axis=1)
         parts = [points[known]] + ([extra] if extra is not None else [])
         obstacles = np.concatenate(parts) if sum(len(p) for p in parts) else None
         safe = np.zeros((n, 2))
         if len(idx) == 0:
             return safe, BarrierFrame(status="no robot seen", intervention=np.zeros(n), safety_distance=d_s)
-        sub, diag = filt.filter(points[idx], nominal[idx], obstacles)
+        vs, ws, diag = filt.filter(poses[idx], v[idx], w[idx], obstacles)
         sub_b = BarrierFrame.from_diagnostics(diag, len(idx), d_s, enabled=True)
-        safe[idx] = np.asarray(sub, dtype=float)
+        safe[idx] = unicycle_to_si(poses[idx], vs, ws, ell)
         inter = np.zeros(n)
         if len(sub_b.intervention) == len(idx):
             inter[idx] = sub_b.intervention
