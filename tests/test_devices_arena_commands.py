@@ -107,3 +107,15 @@ def test_waypoints_copied_from_the_caller():
     for _ in range(400):
         arena.step()
     assert np.linalg.norm(arena.positions()[0] - [0.3, 0.2]) < 0.03
+
+
+def test_round_off_is_not_counted_as_an_intervention():
+    class RoundTrip:  # returns the nominal through a lossy float round trip, changes nothing really
+        def filter(self, points, nominal, obstacles=None):
+            return (np.asarray(nominal) * 3.0) / 3.0 + 1e-17, None
+
+    arena = _arena(safety=RoundTrip())
+    for _ in range(20):
+        arena.set_unicycle(np.full(4, 0.1), np.full(4, 0.7))
+        arena.step()
+    assert arena.report().safety.interventions == 0
