@@ -99,6 +99,7 @@ class SafetyStats:
     failures: int = 0
     interventions: int = 0  # robot-steps whose command the filter changed
     saturations: int = 0  # robot-steps whose command was scaled down to the wheel limits before filtering
+    saturation_steps: int = 0  # steps in which at least one robot's command was scaled down
     last_status: str = "off"
     last_diagnostics: Any = None
     failure_reasons: dict[str, int] = field(default_factory=dict)
@@ -422,6 +423,7 @@ class Arena:
         v, w = si_to_unicycle(poses, nominal, self.ell)
         v, w, saturated = limit_unicycle(v, w, self.params)
         self.safety_stats.saturations += int(saturated.sum())
+        self.safety_stats.saturation_steps += bool(saturated.any())
         if self.safety is not None:
             st = self.safety_stats
             st.calls += 1
@@ -490,6 +492,8 @@ class ArenaReport:
                 "failures": self.safety.failures,
                 "failure_reasons": dict(self.safety.failure_reasons),
                 "interventions": self.safety.interventions,
+                "saturations": self.safety.saturations,
+                "saturation_steps": self.safety.saturation_steps,
             },
             "invalid_commands": self.invalid_commands,
         }
@@ -497,7 +501,8 @@ class ArenaReport:
     def __str__(self) -> str:
         lines = ["swarmdeck run report"]
         if self.validation is not None:
-            lines.append(self.validation.summary(invalid_upstream=self.invalid_commands))
+            lines.append(self.validation.summary(invalid_upstream=self.invalid_commands,
+                                                 saturated_upstream=(self.safety.saturations, self.safety.saturation_steps)))
         else:
             lines.append(f"robots: {self.n_robots}   time: {self.time:.2f} s")
             lines.append(f"invalid (NaN/inf) commands stopped: {self.invalid_commands} robot-steps")

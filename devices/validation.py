@@ -136,18 +136,22 @@ class ValidationReport:
             "invalid_command_per_robot": self.invalid_command_per_robot.tolist(),
         }
 
-    def summary(self, invalid_upstream: int = 0) -> str:
+    def summary(self, invalid_upstream: int = 0, saturated_upstream: tuple[int, int] = (0, 0)) -> str:
         """Human-readable lines, as rps's ``call_at_scripts_end`` prints.
 
         ``invalid_upstream``: robot-steps whose non-finite command was already stopped
         before reaching the robots (by :class:`~swarmdeck.devices.Arena`), added to the count.
+        ``saturated_upstream``: (robot-steps, steps) whose commands were already scaled down to
+        the wheel limits before reaching the robots, shown with the robots' own count.
         """
         lines = [
             f"robots: {self.n_robots}   steps: {self.steps}   simulated time: {self.time:.2f} s",
             f"collisions: {self.collision_pairs} pair-steps in {self.steps_with_collision} steps"
             + (f" (first at {self.first_collision_time:.2f} s)" if self.first_collision_time is not None else ""),
             f"out of bounds: {int(self.boundary_per_robot.sum())} robot-steps in {self.steps_with_boundary} steps",
-            f"actuator saturation: {int(self.actuator_per_robot.sum())} robot-steps in {self.steps_with_actuator} steps",
+            f"actuator saturation: {int(self.actuator_per_robot.sum())} robot-steps in {self.steps_with_actuator} steps"
+            + (f" at the robots; commands scaled down to the wheel limits: {saturated_upstream[0]} robot-steps in "
+               f"{saturated_upstream[1]} steps" if saturated_upstream[0] else ""),
             f"invalid (NaN/inf) commands stopped: {int(self.invalid_command_per_robot.sum()) + int(invalid_upstream)} robot-steps",
         ]
         return "\n".join(lines)

@@ -119,3 +119,14 @@ def test_round_off_is_not_counted_as_an_intervention():
         arena.set_unicycle(np.full(4, 0.1), np.full(4, 0.7))
         arena.step()
     assert arena.report().safety.interventions == 0
+
+
+@pytest.mark.parametrize("safety", [False, True])
+def test_commands_scaled_to_the_wheel_limits_are_reported(safety):
+    arena = _arena(safety=safety)
+    for _ in range(5):
+        arena.set_unicycle(np.full(4, 1.0), np.zeros(4))  # 1 m/s: five times what the wheels can do
+        arena.step()
+    report = arena.report()
+    assert report.to_dict()["safety"]["saturations"] == 20 and report.to_dict()["safety"]["saturation_steps"] == 5
+    assert "commands scaled down to the wheel limits: 20 robot-steps in 5 steps" in str(report)
