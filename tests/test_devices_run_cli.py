@@ -35,6 +35,10 @@ def test_bad_scripts_give_one_line_and_exit_2(name, tmp_path, capsys):
     ["example", "formation", "--duration", "inf"],
     ["example", "formation", "--robots", "2"],
     ["example", "rendezvous", "--robots", "1"],
+    ["run", "{script}", "--seed", "-1"],
+    ["example", "coverage", "--seed", "-3"],
+    ["robots", "--seed", "-1", "--duration", "1"],
+    ["calibrate", "camera", "--write-synthetic", "{script}.d", "--seed", "-1"],
 ])
 def test_bad_arguments_give_one_line_and_exit_2(argv, tmp_path, capsys):
     script = tmp_path / "ok.py"
@@ -42,6 +46,8 @@ def test_bad_arguments_give_one_line_and_exit_2(argv, tmp_path, capsys):
     assert main([a.format(script=script) for a in argv]) == 2
     err = capsys.readouterr().err
     assert "Traceback" not in err and len(err.strip().splitlines()) == 1
+    if "--seed" in argv:
+        assert "--seed must be a non-negative integer" in err
 
 
 def test_sys_exit_zero_ends_the_run_normally(tmp_path, capsys):

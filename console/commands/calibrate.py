@@ -91,6 +91,8 @@ def _camera(args: argparse.Namespace) -> int:
     if args.write_synthetic:
         if args.views < 1:
             raise UsageError(f"--views must be >= 1, got {args.views}")
+        if args.seed < 0:
+            raise UsageError(f"--seed must be a non-negative integer, got {args.seed}")
         try:
             args.write_synthetic.mkdir(parents=True, exist_ok=True)
         except OSError as exc:

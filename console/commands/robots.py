@@ -93,6 +93,8 @@ def main(args: argparse.Namespace) -> int:
         raise UsageError(f"--layout {layout} is too small for robot id {int(ids.max())} (needs > the largest id)")
     if not (np.isfinite(args.pose_rate) and args.pose_rate > 0):
         raise UsageError(f"--pose-rate must be a positive number of messages per second, got {args.pose_rate}")
+    if args.seed is not None and args.seed < 0:
+        raise UsageError(f"--seed must be a non-negative integer, got {args.seed}")
     if args.duration is not None and not (np.isfinite(args.duration) and args.duration > 0):
         raise UsageError(f"--duration must be a finite number of seconds > 0, got {args.duration}")
     try:

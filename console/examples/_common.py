@@ -17,8 +17,17 @@ def add_run_arguments(parser: argparse.ArgumentParser, robots: int, duration: fl
     parser.add_argument("--no-safety", action="store_true", help="run without the safety barrier")
 
 
-def check_run_arguments(robots: int | None, duration: float | None, min_robots: int = 1, what: str = "") -> None:
-    """UsageError unless ``--robots`` is >= ``min_robots`` and ``--duration`` a finite number > 0 (None: not given)."""
+def check_seed(seed: int | None) -> None:
+    """UsageError unless ``--seed`` is None or a non-negative integer (what numpy's generators take)."""
+    if seed is not None and seed < 0:
+        raise UsageError(f"--seed must be a non-negative integer, got {seed}")
+
+
+def check_run_arguments(robots: int | None, duration: float | None, min_robots: int = 1, what: str = "",
+                        seed: int | None = None) -> None:
+    """UsageError unless ``--robots`` is >= ``min_robots``, ``--duration`` a finite number > 0 and
+    ``--seed`` non-negative (None: not given)."""
+    check_seed(seed)
     if robots is not None and robots < min_robots:
         raise UsageError(f"--robots must be >= {min_robots}{' for ' + what if what else ''}, got {robots}")
     if duration is not None and not (math.isfinite(duration) and duration > 0):
@@ -35,7 +44,7 @@ def run_headless(experiment: Callable[..., Any] | str, args: argparse.Namespace,
     """
     from swarmdeck.devices.experiment_runner import ScriptError, progress_bar, run_experiment
 
-    check_run_arguments(args.robots, args.duration, min_robots, what)
+    check_run_arguments(args.robots, args.duration, min_robots, what, args.seed)
     on_step, close = progress_bar(args.duration)
     try:
         result = run_experiment(experiment, n_robots=args.robots, duration=args.duration, seed=args.seed,

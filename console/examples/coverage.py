@@ -106,7 +106,7 @@ def main(args: argparse.Namespace) -> int:
     from swarmdeck.coverage import parse_law
     from swarmdeck.devices import ArenaConfig
 
-    check_run_arguments(args.robots, args.duration)
+    check_run_arguments(args.robots, args.duration, seed=args.seed)
     try:
         family, _ = parse_law(args.law)
         CoverageConfig(law=args.law, kappa=args.kappa)
