@@ -121,4 +121,6 @@ class UnicycleSafetyFilter:
         wr, wl = wheel_speeds(vs, ws, self.params)
         peak = np.maximum(np.abs(wr), np.abs(wl))
         scale = np.minimum(1.0, self.params.max_wheel_speed / np.maximum(peak, 1e-300))
-        return vs * scale, ws * scale, diag
+        # robots the QP left alone get their own command back bit for bit, not its round trip
+        untouched = np.all(u == U, axis=1)
+        return np.where(untouched, V, vs * scale), np.where(untouched, Wc, ws * scale), diag

@@ -78,7 +78,10 @@ def main(args: argparse.Namespace) -> int:
         raise UsageError(str(exc)) from None
     rec = None
     if not args.no_record:
-        rec = _recorder(args.record, config, settings.inputs, args.camera or args.robots_via or "simulation")
+        from swarmdeck.devices.mqtt_config import redact_url  # never record a broker password
+
+        source_name = args.camera or (redact_url(args.robots_via) if args.robots_via else "simulation")
+        rec = _recorder(args.record, config, settings.inputs, source_name)
     hub = None
     if not args.no_inputs:
         hub = _start_inputs(settings.inputs, rec)
