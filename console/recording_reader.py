@@ -129,15 +129,10 @@ def _parse_channel(body: bytes) -> tuple[int, str]:
 
 def _read_record_at(f: Any, pos: int, size: int) -> tuple[int, int, bytes] | None:
     """(opcode, length, body) of the record at ``pos``, or None when damaged/truncated."""
-    if pos + 9 > size:
+    head = _read_head(f, pos, size)
+    if head is None:
         return None
-    f.seek(pos)
-    head = f.read(9)
-    if len(head) < 9:
-        return None
-    op, length = _REC.unpack(head)
-    if op == 0 or op > _MAX_OPCODE or pos + 9 + length > size:
-        return None
+    op, length = head
     body = f.read(length)
     if len(body) < length:
         return None
