@@ -49,8 +49,8 @@ def baseline(repeats: int = 30) -> float:
 
 
 def run(n: int, server, warm: int = 300, ticks: int = 150) -> dict[str, float]:
-    from swarmdeck.console.loop import ControlLoop, LoopConfig
-    from swarmdeck.console.scene import ArenaScene
+    from swarmdeck.console.runtime.loop import ControlLoop, LoopConfig
+    from swarmdeck.console.web.scene import ArenaScene
 
     server.scene.reset()
     loop = ControlLoop(LoopConfig(seed=1, n_robots=n))

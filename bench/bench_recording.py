@@ -23,10 +23,11 @@ from pathlib import Path
 
 import numpy as np
 
-from swarmdeck.console.loop import ControlLoop, LoopConfig
-from swarmdeck.console.recorder import Recorder, encode_json
-from swarmdeck.console.recording_reader import open_recording
-from swarmdeck.console.recording_synth import retimed
+from swarmdeck.console.runtime.loop import ControlLoop, LoopConfig
+from swarmdeck.console.recording.recorder import Recorder, encode_json
+from swarmdeck.console.recording.reader import open_recording
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))  # the synthetic-session fixture
+from recording_synth import retimed  # noqa: E402
 
 
 def ms(x: float) -> str:

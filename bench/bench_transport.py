@@ -28,9 +28,9 @@ from pathlib import Path
 import numpy as np
 
 from swarmdeck.devices.clock import RealTimePacer
-from swarmdeck.devices.mqtt_config import parse_broker_url
-from swarmdeck.devices.streamer import CommandStreamer
-from swarmdeck.devices.transport_mqtt import MqttTransport
+from swarmdeck.devices.net.mqtt_config import parse_broker_url
+from swarmdeck.devices.net.streamer import CommandStreamer
+from swarmdeck.devices.net.transport_mqtt import MqttTransport
 
 W_STEP = 1e-4  # ω of tick k is (k + 1)·W_STEP rad/s (robots turn in place, v = 0)
 

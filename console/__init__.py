@@ -2,15 +2,15 @@
 
 Public API (import from the submodules; this package imports nothing so the CLI starts fast):
 
-* :mod:`swarmdeck.console.frame` — ``Frame`` (one immutable record per control tick, the
+* :mod:`swarmdeck.console.runtime.frame` — ``Frame`` (one immutable record per control tick, the
   recording format: ``to_dict`` / ``from_dict``), ``BarrierFrame``, ``CoverageFrame``, ``ContactsFrame``.
-* :mod:`swarmdeck.console.loop` — ``ControlLoop`` (sense → inputs → behaviour → safety → actuate →
+* :mod:`swarmdeck.console.runtime.loop` — ``ControlLoop`` (sense → inputs → behaviour → safety → actuate →
   Frame; ``tick()`` on a virtual clock or ``start()`` on its own thread), ``LoopConfig``,
   ``SafetyParams``, ``DensityParams``.
-* :mod:`swarmdeck.console.behaviours` — coverage, rendezvous, formation, goto, ``script:PATH``.
-* :mod:`swarmdeck.console.robots` / :mod:`swarmdeck.console.hardware` — pose sources and command
+* :mod:`swarmdeck.console.runtime.behaviours` — coverage, rendezvous, formation, goto, ``script:PATH``.
+* :mod:`swarmdeck.console.runtime.ports` / :mod:`swarmdeck.console.runtime.hardware` — pose sources and command
   sinks: ``SimulatedRobots``; camera tracking and MQTT robots.
-* :mod:`swarmdeck.console.scene` — ``ArenaScene.draw(frame)``: the viser scene as a function of Frames.
-* :mod:`swarmdeck.console.gui`, :mod:`swarmdeck.console.app` — the control panel and ``ConsoleApp``.
-* ``swarmdeck console`` (:mod:`swarmdeck.console.commands.console`) starts it all.
+* :mod:`swarmdeck.console.web.scene` — ``ArenaScene.draw(frame)``: the viser scene as a function of Frames.
+* :mod:`swarmdeck.console.web.gui`, :mod:`swarmdeck.console.web.app` — the control panel and ``ConsoleApp``.
+* ``swarmdeck console`` (:mod:`swarmdeck.console.cli.console`) starts it all.
 """

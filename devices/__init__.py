@@ -25,21 +25,21 @@ from swarmdeck.devices.gritsbot import (
     wrap_angle,
 )
 from swarmdeck.devices.initial_conditions import max_robots, random_initial_poses
-from swarmdeck.devices.lookahead import lookahead_points, si_to_unicycle, unicycle_to_si
+from swarmdeck.core.kinematics import lookahead_points, si_to_unicycle, unicycle_to_si
 from swarmdeck.devices.simulator import ArenaConfig, SimulatedArena
 from swarmdeck.devices.validation import ValidationReport, ValidationRules, colliding_pairs, out_of_bounds
 
 # Transports load paho-mqtt; import them on first use so `import swarmdeck.devices` stays light.
 _LAZY = {
-    "RobotTransport": "transport",
-    "InProcessTransport": "transport_inprocess",
-    "MqttTransport": "transport_mqtt",
-    "CommandStreamer": "streamer",
-    "TransportBackend": "transport_backend",
-    "mqtt_backend": "transport_backend",
-    "NetworkRobots": "transport_console",
-    "parse_broker_url": "mqtt_config",
-    "MqttConfig": "mqtt_config",
+    "RobotTransport": "net.transport",
+    "InProcessTransport": "net.transport_inprocess",
+    "MqttTransport": "net.transport_mqtt",
+    "CommandStreamer": "net.streamer",
+    "TransportBackend": "net.transport_backend",
+    "mqtt_backend": "net.transport_backend",
+    "NetworkRobots": "net.console_robots",
+    "parse_broker_url": "net.mqtt_config",
+    "MqttConfig": "net.mqtt_config",
 }
 
 

@@ -32,7 +32,7 @@ from swarmdeck.devices.controllers import (
     si_position_controller,
 )
 from swarmdeck.devices.gritsbot import GritsBotParams, limit_unicycle, wheels_to_unicycle
-from swarmdeck.devices.lookahead import lookahead_points, si_to_unicycle, unicycle_to_si
+from swarmdeck.core.kinematics import lookahead_points, si_to_unicycle, unicycle_to_si
 from swarmdeck.devices.simulator import ArenaConfig, SimulatedArena, check_poses
 
 FloatArray = NDArray[np.float64]

@@ -14,7 +14,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from swarmdeck.devices.gritsbot import wrap_angle
-from swarmdeck.devices.lookahead import si_to_unicycle
+from swarmdeck.core.kinematics import si_to_unicycle
 
 FloatArray = NDArray[np.float64]
 

@@ -11,7 +11,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from swarmdeck.devices.checks import require_positive
+from swarmdeck.core.checks import require_positive
 
 FloatArray = NDArray[np.float64]
 

@@ -1,6 +1,6 @@
 """``swarmdeck inputs monitor``: a live terminal view of input sources, contacts,
 message rates and malformed counts — what an operator checks before a run.
-The command line is in :mod:`swarmdeck.inputs.cli`.
+The command line is in :mod:`swarmdeck.console.cli.inputs`.
 """
 from __future__ import annotations
 

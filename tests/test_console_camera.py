@@ -4,9 +4,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from swarmdeck.console.hardware import camera_source
-from swarmdeck.console.loop import ControlLoop, LoopConfig
-from swarmdeck.console.robots import SimulatedRobots
+from swarmdeck.console.runtime.hardware import camera_source
+from swarmdeck.console.runtime.loop import ControlLoop, LoopConfig
+from swarmdeck.console.runtime.ports import SimulatedRobots
 from swarmdeck.devices import ArenaConfig
 
 
@@ -35,7 +35,7 @@ def test_bad_camera_spec_is_named() -> None:
 def test_camera_image_is_drawn_under_the_robots() -> None:
     import viser
 
-    from swarmdeck.console.scene import ArenaScene
+    from swarmdeck.console.web.scene import ArenaScene
 
     cfg = LoopConfig(seed=2, n_robots=4)
     sim = SimulatedRobots(4, ArenaConfig(seed=2))

@@ -4,7 +4,7 @@ from __future__ import annotations
 import pytest
 
 from swarmdeck.console.cli import main
-from swarmdeck.console.config import ConfigFileError, load_settings
+from swarmdeck.console.runtime.config import ConfigFileError, load_settings
 
 
 def test_console_runs_headless_for_a_duration_and_prints_the_url(capsys) -> None:

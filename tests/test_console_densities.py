@@ -9,7 +9,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from swarmdeck.console.densities import BumpSet, MovingBump, merge_mixtures
+from swarmdeck.console.runtime.density import BumpSet, MovingBump, merge_mixtures
 from swarmdeck.coverage import GaussianMixture
 
 Q = np.array([[0.0, 0.0], [0.5, -0.3], [-1.2, 0.7], [1.0, 0.5]])

@@ -9,7 +9,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from swarmdeck.console.frame import BarrierFrame, ContactsFrame, CoverageFrame, Frame
+from swarmdeck.console.runtime.frame import BarrierFrame, ContactsFrame, CoverageFrame, Frame
 from swarmdeck.coverage import GaussianMixture
 
 

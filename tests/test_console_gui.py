@@ -5,9 +5,9 @@ import numpy as np
 import pytest
 import viser
 
-from swarmdeck.console.gui import ConsoleGui, ray_to_floor
-from swarmdeck.console.loop import ControlLoop, DensityParams, LoopConfig
-from swarmdeck.console.scene import ArenaScene
+from swarmdeck.console.web.gui import ConsoleGui, ray_to_floor
+from swarmdeck.console.runtime.loop import ControlLoop, DensityParams, LoopConfig
+from swarmdeck.console.web.scene import ArenaScene
 
 
 @pytest.fixture(scope="module")
@@ -141,7 +141,7 @@ def test_shift_click_sends_the_robots_there(console) -> None:
     assert loop.behaviour_name == "goto" and loop.behaviour_params.goal_centre == (1.2, -0.6)
     f = loop.tick()
     # every robot heads for a goal near the clicked point (the cluster is pushed inside the arena)
-    from swarmdeck.console.behaviours import cluster_goals
+    from swarmdeck.console.runtime.behaviours import cluster_goals
 
     goals = cluster_goals(f.n, (1.2, -0.6), loop.config.bounds)
     assert np.linalg.norm(goals.mean(axis=0) - (1.2, -0.6)) < 0.3

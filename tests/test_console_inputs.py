@@ -6,7 +6,7 @@ import time
 
 import numpy as np
 
-from swarmdeck.console.loop import ControlLoop, DensityParams, LoopConfig
+from swarmdeck.console.runtime.loop import ControlLoop, DensityParams, LoopConfig
 from swarmdeck.inputs import InputHub, ListenerConfig, UdpListener
 from swarmdeck.inputs import oscbuild as ob
 

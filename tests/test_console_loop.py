@@ -6,8 +6,8 @@ import time
 import numpy as np
 import pytest
 
-from swarmdeck.console.behaviours import BehaviourError, BehaviourParams
-from swarmdeck.console.loop import ControlLoop, DensityParams, LoopConfig, SafetyParams
+from swarmdeck.console.runtime.behaviours import BehaviourError, BehaviourParams
+from swarmdeck.console.runtime.loop import ControlLoop, DensityParams, LoopConfig, SafetyParams
 
 
 def make_loop(**kw) -> ControlLoop:
@@ -258,7 +258,7 @@ class _FlakySource:
 
 
 def test_failing_pose_source_stops_robots_and_loop_survives() -> None:
-    from swarmdeck.console.robots import SimulatedRobots
+    from swarmdeck.console.runtime.ports import SimulatedRobots
     from swarmdeck.devices import ArenaConfig
 
     sim = SimulatedRobots(4, ArenaConfig(seed=1))

@@ -7,11 +7,11 @@ import numpy as np
 import pytest
 from mqtt_broker import mosquitto, wait_until  # noqa: F401
 
-from swarmdeck.console.hardware import mqtt_robots
-from swarmdeck.console.loop import ControlLoop, LoopConfig
+from swarmdeck.console.runtime.hardware import mqtt_robots
+from swarmdeck.console.runtime.loop import ControlLoop, LoopConfig
 from swarmdeck.devices import random_initial_poses
-from swarmdeck.devices.fleet_mqtt import FleetNode
-from swarmdeck.devices.mqtt_config import parse_broker_url
+from swarmdeck.devices.net.fleet import FleetNode
+from swarmdeck.devices.net.mqtt_config import parse_broker_url
 
 pytestmark = pytest.mark.mqtt
 

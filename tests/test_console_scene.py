@@ -7,10 +7,10 @@ import numpy as np
 import pytest
 import viser
 
-from swarmdeck.console.app import FrameViewer
-from swarmdeck.console.frame import Frame
-from swarmdeck.console.loop import ControlLoop, DensityParams, LoopConfig
-from swarmdeck.console.scene import ArenaScene, heatmap, robot_colors
+from swarmdeck.console.web.app import FrameViewer
+from swarmdeck.console.runtime.frame import Frame
+from swarmdeck.console.runtime.loop import ControlLoop, DensityParams, LoopConfig
+from swarmdeck.console.web.scene import ArenaScene, heatmap, robot_colors
 from swarmdeck.coverage import GaussianMixture
 
 

@@ -1,7 +1,7 @@
 """Coverage through the safety filter on the simulated arena: TVD-D1 still beats Lloyd in mean H."""
 from __future__ import annotations
 
-from swarmdeck.console.examples.coverage import coverage_experiment
+from swarmdeck.console.cli.examples.coverage import coverage_experiment
 from swarmdeck.coverage import moving_density
 from swarmdeck.devices import Arena, ArenaConfig
 

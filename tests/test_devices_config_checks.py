@@ -3,8 +3,8 @@ import numpy as np
 import pytest
 
 from swarmdeck.devices import GritsBotParams
-from swarmdeck.devices.fleet import BatteryParams, FirmwareParams
-from swarmdeck.devices.streamer import StreamerConfig
+from swarmdeck.devices.net.firmware import BatteryParams, FirmwareParams
+from swarmdeck.devices.net.streamer import StreamerConfig
 
 
 @pytest.mark.parametrize("cls, field", [

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from swarmdeck.console.cli import main as cli_main
-from swarmdeck.devices.experiment_runner import run_experiment
+from swarmdeck.devices.runner import run_experiment
 from swarmdeck.devices.rps import rps_aliases
 
 SCRIPT = Path(__file__).parent / "data" / "rps" / "si_barriers_with_boundary.py"

@@ -5,7 +5,7 @@ import numpy as np
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from swarmdeck.devices.fleet import BatteryParams, FirmwareParams, FleetState
+from swarmdeck.devices.net.firmware import BatteryParams, FirmwareParams, FleetState
 from swarmdeck.devices.gritsbot import GritsBotParams, unicycle_step
 
 

@@ -5,9 +5,9 @@ import numpy as np
 
 from swarmdeck.devices import Arena, ArenaConfig, RobotBackend, SimulatedArena
 from swarmdeck.devices.gritsbot import unicycle_to_wheels
-from swarmdeck.devices.transport import PoseSource, RobotTransport
-from swarmdeck.devices.transport_backend import TransportBackend
-from swarmdeck.devices.transport_inprocess import InProcessTransport
+from swarmdeck.devices.net.transport import PoseSource, RobotTransport
+from swarmdeck.devices.net.transport_backend import TransportBackend
+from swarmdeck.devices.net.transport_inprocess import InProcessTransport
 
 
 def backend_on_transport(n: int, seed: int) -> tuple[TransportBackend, InProcessTransport]:

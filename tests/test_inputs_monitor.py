@@ -6,7 +6,7 @@ import io
 
 from swarmdeck.inputs import InputHub, InputSource
 from swarmdeck.inputs import oscbuild as ob
-from swarmdeck.inputs.cli import add_arguments, config_from_args, main
+from swarmdeck.console.cli.inputs import add_arguments, config_from_args, main
 from swarmdeck.inputs.monitor import render, run
 
 

@@ -7,10 +7,10 @@ import numpy as np
 import pytest
 from mqtt_broker import Collector, free_port, mosquitto, wait_until  # noqa: F401
 
-from swarmdeck.devices.mqtt_config import parse_broker_url
-from swarmdeck.devices.mqtt_wire import encode_poses, encode_status
-from swarmdeck.devices.streamer import CommandStreamer, StreamerConfig
-from swarmdeck.devices.transport_mqtt import MqttTransport
+from swarmdeck.devices.net.mqtt_config import parse_broker_url
+from swarmdeck.devices.net.wire import encode_poses, encode_status
+from swarmdeck.devices.net.streamer import CommandStreamer, StreamerConfig
+from swarmdeck.devices.net.transport_mqtt import MqttTransport
 
 pytestmark = pytest.mark.mqtt
 TRACKER = "overhead_tracker/all_robot_pose_data"
@@ -81,7 +81,7 @@ def test_malformed_unknown_and_out_of_order_messages_are_counted(mosquitto):
 
 
 def test_experiment_backend_names_robots_that_never_sent_a_pose(mosquitto):
-    from swarmdeck.devices.transport_backend import mqtt_backend
+    from swarmdeck.devices.net.transport_backend import mqtt_backend
 
     with pytest.raises(ValueError, match=r"no pose received for robot id\(s\) \[0, 1\].*swarmdeck robots"):
         mqtt_backend(mosquitto.url, n_robots=2, wait_for_poses=0.3)

@@ -10,10 +10,10 @@ from mqtt_broker import mosquitto, wait_until  # noqa: F401
 
 from swarmdeck.devices import colliding_pairs, lookahead_points, random_initial_poses, si_to_unicycle
 from swarmdeck.devices.controllers import si_position_controller
-from swarmdeck.devices.fleet_mqtt import FleetNode
-from swarmdeck.devices.mqtt_config import parse_broker_url
-from swarmdeck.devices.streamer import CommandStreamer
-from swarmdeck.devices.transport_mqtt import MqttTransport
+from swarmdeck.devices.net.fleet import FleetNode
+from swarmdeck.devices.net.mqtt_config import parse_broker_url
+from swarmdeck.devices.net.streamer import CommandStreamer
+from swarmdeck.devices.net.transport_mqtt import MqttTransport
 
 pytestmark = pytest.mark.mqtt
 

@@ -2,7 +2,7 @@
 import numpy as np
 import pytest
 
-from swarmdeck.devices.transport import check_command
+from swarmdeck.devices.net.transport import check_command
 
 
 @pytest.mark.parametrize("v", [["a", "b"], [1 + 2j, 0.0], None, [[0.0, 1.0], [1.0]], "fast", [0.1]])

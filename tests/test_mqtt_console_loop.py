@@ -10,12 +10,12 @@ import numpy as np
 import pytest
 from mqtt_broker import mosquitto, wait_until  # noqa: F401
 
-from swarmdeck.console.hardware import mqtt_robots
-from swarmdeck.console.loop import ControlLoop, LoopConfig
+from swarmdeck.console.runtime.hardware import mqtt_robots
+from swarmdeck.console.runtime.loop import ControlLoop, LoopConfig
 from swarmdeck.devices import colliding_pairs
 from swarmdeck.devices.clock import RealTimePacer
-from swarmdeck.devices.mqtt_config import parse_broker_url
-from swarmdeck.devices.transport_mqtt import MqttTransport
+from swarmdeck.devices.net.mqtt_config import parse_broker_url
+from swarmdeck.devices.net.transport_mqtt import MqttTransport
 
 pytestmark = pytest.mark.mqtt
 

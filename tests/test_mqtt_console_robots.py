@@ -7,10 +7,10 @@ import pytest
 from mqtt_broker import mosquitto, wait_until  # noqa: F401
 
 from swarmdeck.devices import lookahead_points, random_initial_poses, si_to_unicycle
-from swarmdeck.devices.fleet_mqtt import FleetNode
-from swarmdeck.devices.mqtt_config import parse_broker_url
-from swarmdeck.devices.transport_console import NetworkRobots
-from swarmdeck.devices.transport_mqtt import LinkTimeouts
+from swarmdeck.devices.net.fleet import FleetNode
+from swarmdeck.devices.net.mqtt_config import parse_broker_url
+from swarmdeck.devices.net.console_robots import NetworkRobots
+from swarmdeck.devices.net.transport_mqtt import LinkTimeouts
 from swarmdeck.safety import BarrierConfig, SafetyFilter
 
 pytestmark = pytest.mark.mqtt

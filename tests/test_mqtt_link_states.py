@@ -7,9 +7,9 @@ import json
 
 import numpy as np
 
-from swarmdeck.devices.mqtt_config import parse_broker_url
-from swarmdeck.devices.mqtt_wire import encode_status
-from swarmdeck.devices.transport_mqtt import MqttTransport
+from swarmdeck.devices.net.mqtt_config import parse_broker_url
+from swarmdeck.devices.net.wire import encode_status
+from swarmdeck.devices.net.transport_mqtt import MqttTransport
 
 
 class Clock:

@@ -2,7 +2,7 @@
 import pytest
 
 from swarmdeck.console.cli import main
-from swarmdeck.devices.mqtt_config import parse_broker_url, redact_url
+from swarmdeck.devices.net.mqtt_config import parse_broker_url, redact_url
 
 
 def test_repr_hides_the_password():
@@ -27,7 +27,7 @@ def test_redact_url(url, shown):
 
 
 def test_no_robots_message_hides_the_password():
-    from swarmdeck.devices.transport_console import NetworkRobots
+    from swarmdeck.devices.net.console_robots import NetworkRobots
 
     with pytest.raises(ValueError) as err:
         NetworkRobots.connect("mqtt://alice:s3cret@127.0.0.1:1", n_robots=1, wait_for_poses=0.2)

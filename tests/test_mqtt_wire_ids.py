@@ -3,8 +3,8 @@ import json
 
 import pytest
 
-from swarmdeck.devices.mqtt_config import parse_broker_url
-from swarmdeck.devices.mqtt_wire import decode_poses
+from swarmdeck.devices.net.mqtt_config import parse_broker_url
+from swarmdeck.devices.net.wire import decode_poses
 
 
 @pytest.mark.parametrize("key", ["²", "³", "١", "٣", "１", "-1", "1.0", " 1", "9999999999"])

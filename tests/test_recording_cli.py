@@ -6,7 +6,7 @@ import json
 import pytest
 
 from swarmdeck.console.cli import main
-from swarmdeck.console.recording_synth import write_synthetic_session
+from recording_synth import write_synthetic_session
 
 
 @pytest.fixture(scope="module")

@@ -8,12 +8,12 @@ import sys
 import textwrap
 import time
 
-from swarmdeck.console.recording_reader import open_recording
+from swarmdeck.console.recording.reader import open_recording
 
 CHILD = textwrap.dedent("""
     import sys, time
-    from swarmdeck.console.recorder import Recorder
-    from swarmdeck.console.recording_synth import retimed, simulated_frames
+    from swarmdeck.console.recording.recorder import Recorder
+    from recording_synth import retimed, simulated_frames
 
     frames = list(simulated_frames(n_robots=20, n_ticks=50, dt=0.02, coverage=False))
     rec = Recorder(sys.argv[1], {"config": {"child": True}})
@@ -32,7 +32,8 @@ CHILD = textwrap.dedent("""
 
 def test_kill_9_loses_at_most_the_last_second(tmp_path):
     path = tmp_path / "crash.mcap"
-    proc = subprocess.Popen([sys.executable, "-c", CHILD, str(path)], stdout=subprocess.PIPE, text=True)
+    env = {**os.environ, "PYTHONPATH": os.path.dirname(os.path.abspath(__file__))}  # recording_synth lives beside this file
+    proc = subprocess.Popen([sys.executable, "-c", CHILD, str(path)], stdout=subprocess.PIPE, text=True, env=env)
     written = []
     try:
         for line in proc.stdout:

@@ -7,9 +7,9 @@ import pytest
 from mcap.reader import make_reader
 from mcap.writer import Writer
 
-from swarmdeck.console.recorder import Recorder, RecorderConfig
-from swarmdeck.console.recording_reader import RecordingError, open_recording
-from swarmdeck.console.recording_synth import simulated_frames
+from swarmdeck.console.recording.recorder import Recorder, RecorderConfig
+from swarmdeck.console.recording.reader import RecordingError, open_recording
+from recording_synth import simulated_frames
 
 
 @pytest.fixture(scope="module")

@@ -2,13 +2,14 @@
 from __future__ import annotations
 
 import json
+import os
 import subprocess
 import sys
 import textwrap
 
-from swarmdeck.console.recorder import Recorder
-from swarmdeck.console.recording_reader import open_recording
-from swarmdeck.console.recording_synth import simulated_frames
+from swarmdeck.console.recording.recorder import Recorder
+from swarmdeck.console.recording.reader import open_recording
+from recording_synth import simulated_frames
 
 
 def test_unwritable_path_disables_recording_with_a_message(tmp_path):
@@ -33,8 +34,8 @@ def test_a_device_that_is_full_from_the_start(tmp_path):
 
 CHILD = textwrap.dedent("""
     import json, resource, signal, sys
-    from swarmdeck.console.recorder import Recorder
-    from swarmdeck.console.recording_synth import retimed, simulated_frames
+    from swarmdeck.console.recording.recorder import Recorder
+    from recording_synth import retimed, simulated_frames
 
     signal.signal(signal.SIGXFSZ, signal.SIG_IGN)           # writes past the limit fail with EFBIG instead
     resource.setrlimit(resource.RLIMIT_FSIZE, (30_000, 30_000))  # a disk that fills up after ~30 kB
@@ -56,7 +57,8 @@ CHILD = textwrap.dedent("""
 
 def test_disk_full_mid_run_stops_recording_and_the_loop_goes_on(tmp_path):
     path = tmp_path / "full.mcap"
-    out = subprocess.run([sys.executable, "-c", CHILD, str(path)], capture_output=True, text=True, timeout=60)
+    env = {**os.environ, "PYTHONPATH": os.path.dirname(os.path.abspath(__file__))}  # recording_synth lives beside this file
+    out = subprocess.run([sys.executable, "-c", CHILD, str(path)], capture_output=True, text=True, timeout=60, env=env)
     assert out.returncode == 0, out.stderr
     res = json.loads(out.stdout.strip().splitlines()[-1])
     assert res["state"] == "failed" and "File too large" in res["message"] and "the run goes on" in res["message"]

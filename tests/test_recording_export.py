@@ -10,11 +10,11 @@ import numpy as np
 import pytest
 import zstandard
 
-from swarmdeck.console.export_csv import ROBOT_COLUMNS, export_csv
-from swarmdeck.console.export_html import export_html
-from swarmdeck.console.recorder import Recorder
-from swarmdeck.console.recording_reader import open_recording
-from swarmdeck.console.recording_synth import simulated_frames
+from swarmdeck.console.recording.export_csv import ROBOT_COLUMNS, export_csv
+from swarmdeck.console.recording.export_html import export_html
+from swarmdeck.console.recording.recorder import Recorder
+from swarmdeck.console.recording.reader import open_recording
+from recording_synth import simulated_frames
 
 
 @pytest.fixture(scope="module")

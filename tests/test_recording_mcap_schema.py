@@ -6,9 +6,9 @@ import json
 import jsonschema
 from mcap.reader import make_reader
 
-from swarmdeck.console.recorder import Recorder, RecorderConfig
-from swarmdeck.console.recording_schemas import CHANNELS, PROFILE
-from swarmdeck.console.recording_synth import simulated_frames
+from swarmdeck.console.recording.recorder import Recorder, RecorderConfig
+from swarmdeck.console.recording.schemas import CHANNELS, PROFILE
+from recording_synth import simulated_frames
 
 
 def test_mcap_reader_and_json_schemas(tmp_path):

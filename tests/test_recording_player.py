@@ -5,10 +5,10 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from swarmdeck.console.player import Player
-from swarmdeck.console.recorder import Recorder, RecorderConfig
-from swarmdeck.console.recording_reader import open_recording
-from swarmdeck.console.recording_synth import simulated_frames
+from swarmdeck.console.web.player import Player
+from swarmdeck.console.recording.recorder import Recorder, RecorderConfig
+from swarmdeck.console.recording.reader import open_recording
+from recording_synth import simulated_frames
 
 DT = 0.05
 N = 101  # 5 s

@@ -3,10 +3,10 @@ from __future__ import annotations
 
 import pytest
 
-from swarmdeck.console.loop import ControlLoop, LoopConfig
-from swarmdeck.console.recorder import Recorder
-from swarmdeck.console.recording_reader import open_recording
-from swarmdeck.console.resimulate import (
+from swarmdeck.console.runtime.loop import ControlLoop, LoopConfig
+from swarmdeck.console.recording.recorder import Recorder
+from swarmdeck.console.recording.reader import open_recording
+from swarmdeck.console.recording.resimulate import (
     compare_frames, loop_config_from_dict, loop_config_to_dict, resimulate_and_compare, session_metadata,
 )
 from swarmdeck.inputs import InputConfig, InputHub, InputSource
@@ -66,7 +66,7 @@ def test_an_unrecorded_action_is_reported_where_it_happened(tmp_path):
 def test_compare_frames_sees_a_changed_pose(tmp_path):
     import dataclasses
 
-    from swarmdeck.console.recording_synth import simulated_frames
+    from recording_synth import simulated_frames
 
     f = next(simulated_frames(n_robots=3, n_ticks=1, coverage=False))
     poses = f.poses.copy()
@@ -77,7 +77,7 @@ def test_compare_frames_sees_a_changed_pose(tmp_path):
 
 
 def test_loop_config_round_trips():
-    from swarmdeck.console.behaviours import BehaviourParams
+    from swarmdeck.console.runtime.behaviours import BehaviourParams
 
     cfg = LoopConfig(n_robots=9, seed=3, behaviour="formation",
                      behaviour_params=BehaviourParams(kappa=2.0, goals=((0.1, 0.2),) * 9))

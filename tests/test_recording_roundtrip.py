@@ -7,10 +7,10 @@ import math
 import numpy as np
 import pytest
 
-from swarmdeck.console.frame import BarrierFrame
-from swarmdeck.console.recorder import Recorder, RecorderConfig
-from swarmdeck.console.recording_reader import open_recording
-from swarmdeck.console.recording_synth import simulated_frames
+from swarmdeck.console.runtime.frame import BarrierFrame
+from swarmdeck.console.recording.recorder import Recorder, RecorderConfig
+from swarmdeck.console.recording.reader import open_recording
+from recording_synth import simulated_frames
 
 
 @pytest.fixture(scope="module")
@@ -69,7 +69,7 @@ def test_close_is_idempotent_and_late_writes_are_refused(tmp_path, frames):
 
 
 def test_default_path_is_a_fresh_timestamped_file_in_sessions(tmp_path):
-    from swarmdeck.console.recorder import default_path
+    from swarmdeck.console.recording.recorder import default_path
 
     p1 = default_path(tmp_path, now=1_800_000_000.0)
     assert p1.parent == tmp_path and p1.name == "20270115-080000.mcap"

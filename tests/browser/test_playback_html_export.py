@@ -6,10 +6,10 @@ import os
 import numpy as np
 import pytest
 
-from swarmdeck.console.export_html import export_html
-from swarmdeck.console.recorder import Recorder
-from swarmdeck.console.recording_reader import open_recording
-from swarmdeck.console.recording_synth import simulated_frames
+from swarmdeck.console.recording.export_html import export_html
+from swarmdeck.console.recording.recorder import Recorder
+from swarmdeck.console.recording.reader import open_recording
+from recording_synth import simulated_frames
 
 CHROMIUM = "/usr/bin/chromium"
 pytestmark = [pytest.mark.browser,

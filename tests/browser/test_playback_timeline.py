@@ -6,9 +6,9 @@ import os
 import numpy as np
 import pytest
 
-from swarmdeck.console.recorder import Recorder
-from swarmdeck.console.recording_reader import open_recording
-from swarmdeck.console.recording_synth import simulated_frames
+from swarmdeck.console.recording.recorder import Recorder
+from swarmdeck.console.recording.reader import open_recording
+from recording_synth import simulated_frames
 
 CHROMIUM = "/usr/bin/chromium"
 pytestmark = [pytest.mark.browser,
@@ -20,7 +20,7 @@ POSITIONS = "() => Array.from(window.__viserSceneTree.getState()['/robots'].mess
 
 @pytest.fixture(scope="module")
 def app(tmp_path_factory):
-    from swarmdeck.console.player import PlayerApp
+    from swarmdeck.console.web.player import PlayerApp
 
     path = tmp_path_factory.mktemp("play") / "run.mcap"
     rec = Recorder(path)

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from swarmdeck.devices.lookahead import lookahead_points, si_to_unicycle, unicycle_to_si
+from swarmdeck.core.kinematics import lookahead_points, si_to_unicycle, unicycle_to_si
 from swarmdeck.safety import BarrierConfig, SafetyFilter
 
 _OPEN = (-1e6, 1e6, -1e6, 1e6)  # "no walls" for the variants without a boundary

@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from swarmdeck.devices.lookahead import lookahead_points, si_to_unicycle, unicycle_to_si
+from swarmdeck.core.kinematics import lookahead_points, si_to_unicycle, unicycle_to_si
 
 
 def _heading_map(dxi, poses, linear_velocity_gain: float, angular_velocity_limit: float, backwards: bool) -> np.ndarray:

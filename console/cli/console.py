@@ -1,0 +1,191 @@
+"""``swarmdeck console``: the operator console in the browser (simulated robots unless told otherwise)."""
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+from dataclasses import replace
+
+from swarmdeck.console.cli import UsageError
+
+NAME = "console"
+HELP = "start the operator console (control loop + browser view) and print its URL"
+ORDER = 1
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("--host", default=None, help="interface to bind (default 127.0.0.1: this machine only)")
+    parser.add_argument("--port", type=int, default=None, help="TCP port (default 8080; 0 picks a free one)")
+    parser.add_argument("--robots", type=int, default=None, metavar="N", help="number of simulated robots (default 12)")
+    parser.add_argument("--behaviour", "--behavior", default=None,
+                        help="coverage (default) | rendezvous | formation | goto | script:PATH "
+                             "(PATH defines behaviour(poses, t) -> (N, 2) velocities in m/s)")
+    parser.add_argument("--config", default=None, metavar="FILE", help="TOML file ([console], [behaviour], "
+                        "[safety], [density], [inputs] tables)")
+    parser.add_argument("--seed", type=int, default=None, help="seed for the random initial poses")
+    parser.add_argument("--duration", type=float, default=None, metavar="S",
+                        help="stop after S seconds (scripted/headless use); default: run until Ctrl-C")
+    parser.add_argument("--camera", default=None, metavar="SPEC",
+                        help="track the robots with an overhead camera: 'synthetic' (rendered from the "
+                             "simulation), a webcam INDEX, a stream URL, a video FILE or a folder of images")
+    parser.add_argument("--robots-via", default=None, metavar="URL",
+                        help="drive GRITSBots over MQTT instead of simulating them, e.g. mqtt://127.0.0.1:1883 "
+                             "(try `swarmdeck robots --broker URL` for a simulated fleet)")
+    parser.add_argument("--record", default=None, metavar="PATH",
+                        help="record the session to PATH (MCAP; default sessions/<UTC time>.mcap)")
+    parser.add_argument("--no-record", action="store_true", help="do not record the session")
+    parser.add_argument("--no-inputs", action="store_true",
+                        help="do not open the TUIO/OSC input listeners (UDP 3333 by default)")
+
+
+def main(args: argparse.Namespace) -> int:
+    from swarmdeck.console.runtime.behaviours import BehaviourError, make_behaviour
+    from swarmdeck.console.runtime.config import ConfigFileError, ConsoleSettings, load_settings
+    from swarmdeck.console.runtime.loop import ControlLoop, LoopConfig
+
+    try:
+        settings = load_settings(args.config) if args.config else ConsoleSettings(LoopConfig())
+    except ConfigFileError as exc:
+        raise UsageError(str(exc)) from None
+    changes = {}
+    if args.robots is not None:
+        changes["n_robots"] = args.robots
+    if args.behaviour is not None:
+        changes["behaviour"] = args.behaviour
+    if args.seed is not None:
+        changes["seed"] = args.seed
+    try:
+        config = replace(settings.loop, **changes)
+    except ValueError as exc:
+        raise UsageError(str(exc)) from None
+    host = args.host if args.host is not None else settings.host
+    port = args.port if args.port is not None else settings.port
+    if not 0 <= port <= 65535:
+        raise UsageError(f"--port must be in [0, 65535], got {port}")
+    if args.duration is not None and not args.duration > 0:
+        raise UsageError(f"--duration must be > 0 s, got {args.duration}")
+
+    if args.record and args.no_record:
+        raise UsageError("--record and --no-record exclude each other")
+    try:  # check the behaviour (name, script) before opening anything
+        make_behaviour(config.behaviour, config.behaviour_params, config.bounds, config.max_speed,
+                       config.safety.safety_distance)
+    except BehaviourError as exc:
+        raise UsageError(str(exc)) from None
+    try:
+        source, sink = _robots(config, args.camera, args.robots_via)
+    except (ValueError, OSError) as exc:
+        raise UsageError(str(exc)) from None
+    rec = None
+    if not args.no_record:
+        from swarmdeck.devices.net.mqtt_config import redact_url  # never record a broker password
+
+        source_name = args.camera or (redact_url(args.robots_via) if args.robots_via else "simulation")
+        rec = _recorder(args.record, config, settings.inputs, source_name)
+    hub = None
+    if not args.no_inputs:
+        hub = _start_inputs(settings.inputs, rec)
+    try:
+        # One monotonic clock for the loop and the input listeners' receive stamps.
+        loop = ControlLoop(config, source=source, sink=sink, inputs=hub, contact_density=_contact_density(hub),
+                           clock=time.monotonic)
+    except (BehaviourError, ValueError) as exc:
+        sink.close()
+        if hub is not None:
+            hub.close()
+        if rec is not None:
+            rec.close()
+        raise UsageError(str(exc)) from None
+    if rec is not None:
+        loop.subscribe(rec.write_frame)
+        loop.add_health("recording", lambda: rec.status().message)
+        print(f"swarmdeck console: recording to {rec.path}", file=sys.stderr)
+
+    from swarmdeck.console.web.app import ConsoleApp
+
+    try:
+        app = ConsoleApp(loop, host=host, port=port)
+    except OSError as exc:
+        loop.close()
+        raise UsageError(f"cannot serve on {host}:{port}: {exc}") from None
+    app.start()
+    print(f"swarmdeck console: {app.url}  ({config.n_robots} robots, {loop.behaviour_name}; Ctrl-C to stop)",
+          flush=True)
+    try:
+        app.wait(args.duration)
+    except KeyboardInterrupt:
+        print("swarmdeck console: stopping (robots stopped)", file=sys.stderr)
+    finally:
+        frame = loop.latest
+        app.close()
+        if rec is not None:
+            st = rec.close()
+            print(f"swarmdeck console: {st.message}", file=sys.stderr)
+    if frame is not None and args.duration is not None:
+        b = frame.barrier
+        print(f"ran {frame.tick + 1} ticks, t = {frame.run_time:.1f} s; "
+              f"min distance {b.min_distance:.3f} m" if b is not None else "")
+    return 0
+
+
+def _robots(config, camera: str | None, robots_via: str | None):
+    """(pose source, command sink): simulation by default, MQTT robots with --robots-via, camera poses
+    with --camera. Raises ValueError/OSError naming what could not be opened."""
+    import numpy as np
+
+    from swarmdeck.console.runtime.hardware import camera_source, mqtt_robots
+    from swarmdeck.console.runtime.ports import SimulatedRobots
+    from swarmdeck.devices import ArenaConfig
+
+    ids = np.arange(config.n_robots, dtype=np.int64)
+    if robots_via:
+        sink, source = mqtt_robots(robots_via, ids)
+        truth = source.truth
+    else:
+        sim = SimulatedRobots(config.n_robots, ArenaConfig(bounds=config.bounds, dt=config.dt, seed=config.seed))
+        sink = source = sim
+        truth = lambda now: sim.sim.poses  # noqa: E731
+    if camera:
+        try:
+            source = camera_source(camera, ids, truth, config.bounds)
+        except Exception:
+            sink.close()
+            raise
+    return source, sink
+
+
+def _recorder(path: str | None, config, inputs_table: dict | None, source: str):
+    """The session recorder (MCAP), writing in the background; never raises into the run."""
+    from swarmdeck.console.recording.recorder import Recorder, default_path
+    from swarmdeck.console.recording.resimulate import session_metadata
+
+    return Recorder(path or default_path(), session_metadata(config, inputs_table, source=source))
+
+
+def _start_inputs(table: dict | None, rec=None):
+    """The TUIO/OSC listeners of ``[inputs]`` (default: TUIO on UDP 3333), started; None if they cannot bind.
+    Raw datagrams go to the recorder, if any."""
+    from swarmdeck.inputs import ConfigError, InputConfig, InputHub
+
+    try:
+        cfg = InputConfig.from_dict(table) if table is not None else InputConfig()
+    except ConfigError as exc:
+        raise UsageError(str(exc)) from None
+    hub = InputHub.from_config(cfg, clock=time.monotonic, on_datagram=rec.raw_datagram if rec is not None else None)
+    try:
+        hub.start()
+    except OSError as exc:
+        print(f"swarmdeck console: inputs disabled: {exc}", file=sys.stderr)
+        return None
+    names = ", ".join(f"{s.config.name} ({type(s).__name__.replace('Listener', '').upper()} "
+                      f"{getattr(s, 'address', ('', s.config.port))[1]})" for s in hub.sources)
+    print(f"swarmdeck console: listening for inputs: {names}", file=sys.stderr)
+    return hub
+
+
+def _contact_density(hub):
+    if hub is None:
+        return None
+    from swarmdeck.inputs import ContactDensity
+
+    return ContactDensity(hub.config.density)

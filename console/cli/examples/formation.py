@@ -1,0 +1,18 @@
+"""``swarmdeck example formation``: the formation example on the simulated arena (see examples/formation.py)."""
+from __future__ import annotations
+
+import argparse
+
+from swarmdeck.console.cli.examples._common import add_run_arguments, run_example
+from swarmdeck.examples import formation as _example
+
+NAME = "formation"
+HELP = _example.__doc__.strip().splitlines()[0]
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    add_run_arguments(parser, robots=6, duration=40.0)
+
+
+def main(args: argparse.Namespace) -> int:
+    return run_example(_example.experiment, args, min_robots=3, what="a rigid formation")

@@ -1,0 +1,18 @@
+"""``swarmdeck example rendezvous``: the rendezvous example on the simulated arena (see examples/rendezvous.py)."""
+from __future__ import annotations
+
+import argparse
+
+from swarmdeck.console.cli.examples._common import add_run_arguments, run_example
+from swarmdeck.examples import rendezvous as _example
+
+NAME = "rendezvous"
+HELP = _example.__doc__.strip().splitlines()[0]
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    add_run_arguments(parser, robots=6, duration=30.0)
+
+
+def main(args: argparse.Namespace) -> int:
+    return run_example(_example.experiment, args, min_robots=2, what="rendezvous on a cycle")

@@ -1,0 +1,105 @@
+"""``swarmdeck info FILE``: summarise one recording."""
+from __future__ import annotations
+
+import argparse
+import json
+import os
+
+from swarmdeck.console.cli import UsageError
+
+NAME = "info"
+HELP = "summarise a recorded session (start, duration, robots, channels, damage)"
+ORDER = 62
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("file", help="a .mcap recording")
+    parser.add_argument("--json", action="store_true", help="print the summary as JSON")
+    parser.add_argument("--resimulate", action="store_true",
+                        help="also re-run the session on a fresh simulated loop from its recorded input datagrams "
+                             "and compare every frame (exit code 1 when they differ)")
+
+
+def summarise(path: str) -> dict:
+    """The summary printed by ``swarmdeck info`` as a dict (RecordingError for unplayable files)."""
+    from swarmdeck.console.recording.reader import open_recording
+    from swarmdeck.console.recording.schemas import TOPIC_DATAGRAM, TOPIC_EVENT
+
+    with open_recording(path) as rec:
+        cfg = rec.config()
+        first, last = rec.first_frame, rec.last_frame
+        counts = rec.message_counts()
+        events = []
+        for e in rec.events():
+            events.append(f"{e.t:.3f} s [{e.kind}] {e.text}")
+            if len(events) >= 10:
+                break
+        n_datagrams = counts.get(TOPIC_DATAGRAM, 0)
+        return {
+            "file": str(rec.path),
+            "size_bytes": os.path.getsize(rec.path),
+            "created": cfg.get("created", rec.metadata.get("created")),
+            "duration_s": rec.duration,
+            "frames": rec.count_frames(),
+            "datagrams": n_datagrams,
+            "events": counts.get(TOPIC_EVENT, 0),
+            "robots": list(cfg.get("robots", [] if first is None else first.ids.tolist())),
+            "bounds": list(cfg.get("bounds", [] if first is None else first.bounds)),
+            "dt": None if first is None else first.dt,
+            "behaviours": sorted({first.behaviour, last.behaviour}) if first and last else [],
+            "recording_format": rec.metadata.get("recording_format"),
+            "frame_format": rec.metadata.get("frame_format"),
+            "writer": rec.library,
+            "versions": cfg.get("versions", rec.metadata.get("versions", {})),
+            "config": cfg.get("config", {}),
+            "chunks": rec.n_chunks,
+            "closed_cleanly": rec.indexed,
+            "warnings": list(rec.warnings),
+            "first_events": events,
+        }
+
+
+def main(args: argparse.Namespace) -> int:
+    from swarmdeck.console.recording.reader import RecordingError
+
+    try:
+        s = summarise(args.file)
+    except RecordingError as exc:
+        raise UsageError(str(exc)) from exc
+    result = _resimulate(args.file) if args.resimulate else None
+    if args.json:
+        if result is not None:
+            s["resimulation"] = {"frames": result.frames, "identical": result.identical, "ok": result.ok,
+                                 "summary": result.summary(), "differing_keys": result.differing_keys}
+        print(json.dumps(s, indent=2))
+        return 0 if result is None or result.ok else 1
+    robots = s["robots"]
+    print(f"{s['file']}")
+    print(f"  created     {s['created']}")
+    print(f"  duration    {s['duration_s']:.2f} s, {s['frames']} frames (dt {s['dt']} s), "
+          f"{s['datagrams']} input datagrams, {s['events']} events")
+    print(f"  robots      {len(robots)}: {', '.join(map(str, robots[:30]))}{' …' if len(robots) > 30 else ''}")
+    print(f"  arena       {s['bounds']} m")
+    print(f"  behaviour   {', '.join(s['behaviours'])}")
+    print(f"  size        {s['size_bytes'] / 1e6:.2f} MB in {s['chunks']} chunks"
+          f"{'' if s['closed_cleanly'] else ' (not closed cleanly: recovered by scanning)'}")
+    print(f"  format      recording {s['recording_format']}, frame {s['frame_format']}, written by {s['writer']}")
+    for w in s["warnings"]:
+        print(f"  warning     {w}")
+    for e in s["first_events"]:
+        print(f"  event       {e}")
+    if result is not None:
+        print(result.summary())
+        return 0 if result.ok else 1
+    return 0
+
+
+def _resimulate(path: str):
+    from swarmdeck.console.recording.reader import open_recording
+    from swarmdeck.console.recording.resimulate import resimulate_and_compare
+
+    with open_recording(path) as rec:
+        try:
+            return resimulate_and_compare(rec)
+        except ValueError as exc:
+            raise UsageError(f"cannot re-simulate {path}: {exc}") from exc

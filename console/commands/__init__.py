@@ -1,1 +1,0 @@
-"""Subcommands of the ``swarmdeck`` CLI, one module each (see :mod:`swarmdeck.console.cli`)."""

@@ -1,0 +1,574 @@
+"""Reading swarmdeck recordings, tolerant of damage.
+
+:func:`open_recording` checks that the file is an MCAP file written by
+swarmdeck in a format this version understands (else :class:`RecordingError`
+with a one-line reason), then indexes its chunks: from the MCAP summary when
+the file was closed cleanly, else by a linear scan of the data section that
+stops at the first damaged record (a crash, ``kill -9``, a truncated copy).
+Everything before the damage stays readable; damaged chunks (bad CRC,
+undecodable) are skipped and listed in :attr:`Recording.warnings`.
+
+Seeking (:meth:`Recording.frame_at`) bisects the chunk index by time and
+decodes one small chunk (a few hundred ms of data), so it costs the same on a
+one-hour file as on a one-minute one. Times in this API are seconds since the
+recording's first frame ("recording time"); ``Frame.time`` keeps the loop's
+clock.
+"""
+from __future__ import annotations
+
+import base64
+import io
+import json
+import os
+import struct
+from bisect import bisect_right
+from collections import OrderedDict
+from collections.abc import Iterator
+from dataclasses import dataclass
+from itertools import accumulate
+from pathlib import Path
+from typing import Any
+
+from swarmdeck.console.runtime.frame import FRAME_FORMAT, Frame
+from swarmdeck.console.recording.schemas import (
+    METADATA_NAME, PROFILE, RECORDING_FORMAT, TOPIC_CONFIG, TOPIC_DATAGRAM, TOPIC_EVENT, TOPIC_FRAME,
+)
+
+MAGIC = bytes([137, 77, 67, 65, 80, 48, 13, 10])
+_OP_HEADER, _OP_FOOTER, _OP_SCHEMA, _OP_CHANNEL, _OP_MESSAGE, _OP_CHUNK = 0x01, 0x02, 0x03, 0x04, 0x05, 0x06
+_OP_CHUNK_INDEX, _OP_STATISTICS, _OP_METADATA, _OP_DATA_END = 0x08, 0x0B, 0x0C, 0x0F
+_MAX_OPCODE = 0x0F
+_REC = struct.Struct("<BQ")
+
+
+def _json_decoder() -> Any:
+    try:
+        import msgspec
+
+        dec = msgspec.json.Decoder()
+
+        def loads(data: bytes) -> Any:
+            try:
+                return dec.decode(data)
+            except msgspec.DecodeError as exc:
+                raise ValueError(f"not JSON: {exc}") from None
+        return loads
+    except ImportError:  # pragma: no cover - msgspec comes with viser
+        return json.loads
+
+
+_loads = _json_decoder()
+
+
+class RecordingError(Exception):
+    """The file cannot be played: not MCAP, not a swarmdeck recording, a newer format, unreadable."""
+
+
+@dataclass(frozen=True)
+class ChunkRef:
+    """Where one chunk is: ``offset`` of its record (opcode byte), message time range (ns)."""
+
+    offset: int
+    start_ns: int
+    end_ns: int
+
+
+@dataclass(frozen=True)
+class RecordedDatagram:
+    """One recorded input datagram: raw ``data``, ``peer`` (tuple (host, port) or name),
+    ``transport``, console receive time ``t`` (s), receiving ``listener`` name or None."""
+
+    t: float
+    data: bytes
+    peer: object
+    transport: str
+    listener: str | None
+
+
+@dataclass(frozen=True)
+class RecordedEvent:
+    """``t`` s console time, ``kind`` ("operator", "frame", "recorder", …), ``text``."""
+
+    t: float
+    kind: str
+    text: str
+
+
+def _read_head(f: Any, pos: int, size: int) -> tuple[int, int] | None:
+    """(opcode, length) of the record at ``pos`` (file left at its body), or None when the record is
+    damaged (opcode 0 or unknown) or runs past the end of the file."""
+    if pos + 9 > size:
+        return None
+    f.seek(pos)
+    head = f.read(9)
+    if len(head) < 9:
+        return None
+    op, length = _REC.unpack(head)
+    if op == 0 or op > _MAX_OPCODE or pos + 9 + length > size:
+        return None
+    return op, length
+
+
+def _runs_past_end(f: Any, pos: int, size: int) -> bool:
+    """True when the record at ``pos`` has a valid opcode but is cut off by the end of the file."""
+    f.seek(pos)
+    head = f.read(9)
+    if len(head) < 9:
+        return True
+    op, length = _REC.unpack(head)
+    return 0 < op <= _MAX_OPCODE and pos + 9 + length > size
+
+
+def _parse_channel(body: bytes) -> tuple[int, str]:
+    """(id, topic) of a Channel record body: id u16, schema_id u16, topic (u32 length + UTF-8), …"""
+    cid, _schema, n = struct.unpack_from("<HHI", body, 0)
+    if 8 + n > len(body):
+        raise ValueError("channel topic runs past the record")
+    return cid, body[8:8 + n].decode("utf-8")
+
+
+def _read_record_at(f: Any, pos: int, size: int) -> tuple[int, int, bytes] | None:
+    """(opcode, length, body) of the record at ``pos``, or None when damaged/truncated."""
+    head = _read_head(f, pos, size)
+    if head is None:
+        return None
+    op, length = head
+    body = f.read(length)
+    if len(body) < length:
+        return None
+    return op, length, body
+
+
+def _parse_header(body: bytes) -> tuple[str, str]:
+    from mcap.data_stream import ReadDataStream
+    from mcap.records import Header
+
+    h = Header.read(ReadDataStream(io.BytesIO(body)))
+    return h.profile, h.library
+
+
+def _parse_metadata(body: bytes) -> tuple[str, dict[str, str]]:
+    from mcap.data_stream import ReadDataStream
+    from mcap.records import Metadata
+
+    m = Metadata.read(ReadDataStream(io.BytesIO(body)))
+    return m.name, dict(m.metadata)
+
+
+class Recording:
+    """An open recording. Use :func:`open_recording`; close with :meth:`close` (or ``with``)."""
+
+    def __init__(self, path: str | os.PathLike[str], cache_chunks: int = 16) -> None:
+        self.path = Path(path)
+        self.warnings: list[str] = []
+        self.indexed = False
+        self.profile = ""
+        self.library = ""
+        self.metadata: dict[str, Any] = {}
+        self._channels: dict[int, str] = {}
+        self._counts: dict[str, int] | None = None
+        self._chunks: list[ChunkRef] = []
+        self._starts: list[int] = []
+        self._cache: OrderedDict[int, dict[str, list[tuple[int, bytes]]]] = OrderedDict()
+        self._cache_size = cache_chunks
+        self._frame_cache: OrderedDict[int, list[tuple[int, Frame]]] = OrderedDict()
+        try:
+            self._f = open(self.path, "rb")
+        except OSError as exc:
+            raise RecordingError(f"cannot open {self.path}: {exc.strerror or exc}") from None
+        try:
+            self.size = os.fstat(self._f.fileno()).st_size
+            self._check_and_index()
+            self._first = self._find_first_frame()
+            self._last = self._find_last_frame()
+        except RecordingError:
+            self._f.close()
+            raise
+
+    # ------------------------------------------------------------------ opening
+    def _check_and_index(self) -> None:
+        f, size = self._f, self.size
+        if size < len(MAGIC):
+            raise RecordingError(f"{self.path} is not an MCAP file (only {size} bytes)")
+        if f.read(8) != MAGIC:
+            raise RecordingError(f"{self.path} is not an MCAP file (no MCAP magic at the start)")
+        rec = _read_record_at(f, 8, size)
+        if rec is None or rec[0] != _OP_HEADER:
+            raise RecordingError(f"{self.path}: damaged MCAP file (no header record after the magic)")
+        self.profile, self.library = _parse_header(rec[2])
+        if self.profile != PROFILE:
+            raise RecordingError(f"{self.path} is an MCAP file from another tool (profile {self.profile!r}, "
+                                 f"library {self.library!r}), not a swarmdeck recording")
+        pos = 8 + 9 + rec[1]
+        meta_found = False
+        # Metadata records follow the header directly.
+        while True:
+            rec = _read_record_at(f, pos, size)
+            if rec is None or rec[0] != _OP_METADATA:
+                break
+            name, data = _parse_metadata(rec[2])
+            if name == METADATA_NAME:
+                meta_found = True
+                for k, v in data.items():
+                    try:
+                        self.metadata[k] = json.loads(v)
+                    except ValueError:
+                        self.metadata[k] = v
+            pos += 9 + rec[1]
+        if not meta_found:
+            raise RecordingError(f"{self.path}: damaged swarmdeck recording (no '{METADATA_NAME}' metadata record)")
+        fmt = self.metadata.get("recording_format")
+        if not isinstance(fmt, int):
+            raise RecordingError(f"{self.path}: recording_format missing or not an int ({fmt!r})")
+        if fmt > RECORDING_FORMAT:
+            raise RecordingError(f"{self.path} was recorded in format {fmt} by a newer swarmdeck "
+                                 f"({self.library}); this swarmdeck reads format {RECORDING_FORMAT}: upgrade to play it")
+        ffmt = self.metadata.get("frame_format")
+        if isinstance(ffmt, int) and ffmt > FRAME_FORMAT:
+            raise RecordingError(f"{self.path} holds frames in format {ffmt} from a newer swarmdeck "
+                                 f"({self.library}); this swarmdeck reads frame format {FRAME_FORMAT}: upgrade to play it")
+        if not self._index_from_summary():
+            self._index_by_scan(pos)
+        # File order is write order: frames are in time order across chunks. Chunk start times can
+        # dip (an input datagram stamped just before the previous chunk's last frame), so bisect
+        # on their running maximum.
+        self._chunks.sort(key=lambda c: c.offset)
+        self._starts = list(accumulate((c.start_ns for c in self._chunks), max))
+
+    def _index_from_summary(self) -> bool:
+        """Chunk index, channels and message counts from the MCAP summary (a cleanly closed file).
+        Reads only what seeking needs, with ``struct`` (12 000 chunk indexes in a few ms). False when
+        the summary is missing or inconsistent: the caller scans the file instead."""
+        from mcap.data_stream import ReadDataStream
+        from mcap.records import Statistics
+
+        f, size = self._f, self.size
+        footer_at = size - 8 - 29  # Footer: opcode, length 20, summary_start, summary_offset_start, crc
+        if footer_at < 8:
+            return False
+        f.seek(footer_at)
+        tail = f.read(37)
+        if len(tail) != 37 or tail[29:] != MAGIC or _REC.unpack_from(tail)[:2] != (_OP_FOOTER, 20):
+            return False
+        summary_start = struct.unpack_from("<Q", tail, 9)[0]
+        if not 8 <= summary_start < footer_at:
+            return False
+        f.seek(summary_start)
+        buf = f.read(footer_at - summary_start)
+        chunks: list[ChunkRef] = []
+        channels: dict[int, str] = {}
+        stats = None
+        p = 0
+        try:
+            while p + 9 <= len(buf):
+                op, length = _REC.unpack_from(buf, p)
+                body, end = p + 9, p + 9 + length
+                if end > len(buf):
+                    return False
+                if op == _OP_CHUNK_INDEX:
+                    start_ns, end_ns, offset = struct.unpack_from("<QQQ", buf, body)
+                    chunks.append(ChunkRef(offset, start_ns, end_ns))
+                elif op == _OP_CHANNEL:
+                    cid, topic = _parse_channel(buf[body:end])
+                    channels[cid] = topic
+                elif op == _OP_STATISTICS:
+                    stats = Statistics.read(ReadDataStream(io.BytesIO(buf[body:end])))
+                p = end
+        except (struct.error, ValueError, UnicodeDecodeError):
+            return False
+        if not chunks:
+            return False
+        if any(c.offset < 8 or c.offset >= summary_start for c in chunks):
+            self.warnings.append("the MCAP summary points outside the data; scanned the file instead")
+            return False
+        self._channels = channels
+        if stats is not None:
+            counts: dict[str, int] = {}
+            for cid, c in stats.channel_message_counts.items():
+                topic = channels.get(cid)
+                if topic is not None:
+                    counts[topic] = counts.get(topic, 0) + int(c)
+            self._counts = counts
+        self._chunks = chunks
+        self.indexed = True
+        return True
+
+    def _index_by_scan(self, pos: int) -> None:
+        """Walk the data section record by record (reading only chunk headers), up to the first
+        damaged or truncated record."""
+        f, size = self._f, self.size
+        while True:
+            head = _read_head(f, pos, size)
+            if head is None:
+                if pos >= size:
+                    self.warnings.append("file was not closed cleanly (no summary); recovered by scanning")
+                elif _runs_past_end(f, pos, size):
+                    self.warnings.append(f"file ends inside a record at byte {pos} of {size} (the recording was "
+                                         "cut off there); playing everything before it")
+                else:
+                    self.warnings.append(f"file damaged at byte {pos} of {size}: playing everything before it")
+                break
+            op, length = head
+            if op == _OP_CHUNK:
+                if length >= 16:
+                    start_ns, end_ns = struct.unpack("<QQ", f.read(16))
+                    self._chunks.append(ChunkRef(pos, start_ns, end_ns))
+                else:
+                    self.warnings.append(f"damaged chunk at byte {pos} skipped")
+            elif op == _OP_CHANNEL:
+                try:
+                    cid, topic = _parse_channel(f.read(length))
+                    self._channels[cid] = topic
+                except (struct.error, ValueError, UnicodeDecodeError):
+                    self.warnings.append(f"damaged channel record at byte {pos} skipped")
+            elif op in (_OP_DATA_END, _OP_FOOTER):
+                self.warnings.append("the MCAP summary is unreadable; recovered by scanning")
+                break
+            pos += 9 + length
+
+    # ------------------------------------------------------------------ chunks
+    def _chunk_messages(self, i: int) -> dict[str, list[tuple[int, bytes]]]:
+        """Messages of chunk ``i`` by topic as (log_time ns, data); {} if the chunk is damaged."""
+        hit = self._cache.get(i)
+        if hit is not None:
+            self._cache.move_to_end(i)
+            return hit
+        from mcap.data_stream import ReadDataStream
+        from mcap.records import Channel, Chunk, Message
+        from mcap.stream_reader import breakup_chunk
+
+        ref = self._chunks[i]
+        out: dict[str, list[tuple[int, bytes]]] = {}
+        try:
+            rec = _read_record_at(self._f, ref.offset, self.size)
+            if rec is None or rec[0] != _OP_CHUNK:
+                raise ValueError("not a chunk record")
+            chunk = Chunk.read(ReadDataStream(io.BytesIO(rec[2])))
+            records = breakup_chunk(chunk, validate_crc=True)
+        except Exception as exc:  # noqa: BLE001 - damage of any kind: skip the chunk, say so
+            msg = f"damaged chunk at byte {ref.offset} skipped ({type(exc).__name__})"
+            if msg not in self.warnings:
+                self.warnings.append(msg)
+            records = []
+        for r in records:
+            if isinstance(r, Channel):
+                self._channels[r.id] = r.topic
+            elif isinstance(r, Message):
+                topic = self._channels.get(r.channel_id)
+                if topic is not None:
+                    out.setdefault(topic, []).append((r.log_time, r.data))
+        for lst in out.values():
+            lst.sort(key=lambda m: m[0])
+        self._cache[i] = out
+        if len(self._cache) > self._cache_size:
+            self._cache.popitem(last=False)
+        return out
+
+    def _chunk_frames(self, i: int) -> list[tuple[int, Frame]]:
+        hit = self._frame_cache.get(i)
+        if hit is not None:
+            self._frame_cache.move_to_end(i)
+            return hit
+        frames = []
+        for ns, data in self._chunk_messages(i).get(TOPIC_FRAME, []):
+            try:
+                frames.append((ns, Frame.from_dict(_loads(data))))
+            except (ValueError, TypeError) as exc:
+                msg = f"undecodable frame at log time {ns} skipped: {exc}"
+                if len(self.warnings) < 100 and msg not in self.warnings:
+                    self.warnings.append(msg)
+        self._frame_cache[i] = frames
+        if len(self._frame_cache) > self._cache_size:
+            self._frame_cache.popitem(last=False)
+        return frames
+
+    def _find_first_frame(self) -> tuple[int, Frame] | None:
+        for i in range(len(self._chunks)):
+            fr = self._chunk_frames(i)
+            if fr:
+                return fr[0]
+        return None
+
+    def _find_last_frame(self) -> tuple[int, Frame] | None:
+        for i in range(len(self._chunks) - 1, -1, -1):
+            fr = self._chunk_frames(i)
+            if fr:
+                return fr[-1]
+        return None
+
+    # ------------------------------------------------------------------ public API
+    @property
+    def empty(self) -> bool:
+        """True when no frame could be read."""
+        return self._first is None
+
+    @property
+    def damaged(self) -> bool:
+        """True when part of the file could not be read (see :attr:`warnings`)."""
+        return any("damaged" in w for w in self.warnings)
+
+    @property
+    def start_ns(self) -> int:
+        """Log time (ns) of the first frame."""
+        return self._first[0] if self._first else 0
+
+    @property
+    def duration(self) -> float:
+        """s from the first to the last frame."""
+        if self._first is None or self._last is None:
+            return 0.0
+        return (self._last[0] - self._first[0]) / 1e9
+
+    @property
+    def first_frame(self) -> Frame | None:
+        return None if self._first is None else self._first[1]
+
+    @property
+    def last_frame(self) -> Frame | None:
+        return None if self._last is None else self._last[1]
+
+    @property
+    def n_chunks(self) -> int:
+        return len(self._chunks)
+
+    def rel(self, ns: int) -> float:
+        """Recording time (s since the first frame) of a log time (ns)."""
+        return (ns - self.start_ns) / 1e9
+
+    def _ns(self, rel: float) -> int:
+        return self.start_ns + round(rel * 1e9)
+
+    def frame_at(self, rel: float) -> tuple[float, Frame] | None:
+        """The last frame at or before recording time ``rel`` s (the first frame for ``rel`` ≤ 0):
+        ``(its recording time, frame)``; None for an empty recording."""
+        if self._first is None:
+            return None
+        ns = self._ns(rel)
+        if ns <= self._first[0]:
+            return 0.0, self._first[1]
+        i = bisect_right(self._starts, ns) - 1
+        while i >= 0:
+            frames = self._chunk_frames(i)
+            k = bisect_right([f[0] for f in frames], ns) - 1
+            if k >= 0:
+                # a later chunk may start earlier than this one's frames end (interleaving) — check the next one
+                best = frames[k]
+                j = i + 1
+                while j < len(self._chunks) and self._chunks[j].start_ns <= ns:
+                    for fns, fr in self._chunk_frames(j):
+                        if best[0] < fns <= ns:
+                            best = (fns, fr)
+                    j += 1
+                return self.rel(best[0]), best[1]
+            i -= 1
+        return 0.0, self._first[1]
+
+    def frame_after(self, rel: float) -> tuple[float, Frame] | None:
+        """The first frame strictly after recording time ``rel`` s, or None at the end."""
+        if self._first is None:
+            return None
+        ns = self._ns(rel)
+        if ns < self._first[0]:
+            return 0.0, self._first[1]
+        i = max(0, bisect_right(self._starts, ns) - 1)
+        # chunks before i cannot hold frames after ns unless their range says so
+        while i > 0 and self._chunks[i - 1].end_ns > ns:
+            i -= 1
+        for j in range(i, len(self._chunks)):
+            if self._chunks[j].end_ns <= ns:
+                continue
+            for fns, fr in self._chunk_frames(j):
+                if fns > ns:
+                    return self.rel(fns), fr
+        return None
+
+    def frame_before(self, rel: float) -> tuple[float, Frame] | None:
+        """The last frame strictly before recording time ``rel`` s, or None at the start."""
+        return None if rel <= 0 or self._first is None else self.frame_at(rel - 1e-9)
+
+    def _messages(self, topic: str, start: float | None, end: float | None) -> Iterator[tuple[int, bytes]]:
+        lo = None if start is None else self._ns(start)
+        hi = None if end is None else self._ns(end)
+        for i, ref in enumerate(self._chunks):
+            if hi is not None and ref.start_ns >= hi or lo is not None and ref.end_ns < lo:
+                continue
+            for ns, data in self._chunk_messages(i).get(topic, []):
+                if (lo is None or ns >= lo) and (hi is None or ns < hi):
+                    yield ns, data
+
+    def frames(self, start: float | None = None, end: float | None = None) -> Iterator[tuple[float, Frame]]:
+        """``(recording time s, Frame)`` for every readable frame in [start, end) s, in order."""
+        lo = None if start is None else self._ns(start)
+        hi = None if end is None else self._ns(end)
+        for i, ref in enumerate(self._chunks):
+            if hi is not None and self._starts[i] >= hi:
+                break  # frames are in file order: none of the later chunks has a frame before hi
+            if lo is not None and ref.end_ns < lo:
+                continue
+            for ns, fr in self._chunk_frames(i):
+                if (lo is None or ns >= lo) and (hi is None or ns < hi):
+                    yield self.rel(ns), fr
+
+    def datagrams(self, start: float | None = None, end: float | None = None) -> Iterator[RecordedDatagram]:
+        """Every readable recorded datagram in [start, end) s, in receive order."""
+        for ns, data in self._messages(TOPIC_DATAGRAM, start, end):
+            try:
+                d = json.loads(data)
+                peer = d["peer"]
+                yield RecordedDatagram(float(d["t"]), base64.b64decode(d["data"], validate=True),
+                                       tuple(peer) if isinstance(peer, list) else peer, str(d["transport"]),
+                                       d.get("listener"))
+            except (ValueError, KeyError, TypeError) as exc:
+                self.warnings.append(f"undecodable datagram at log time {ns} skipped: {exc}")
+
+    def events(self, start: float | None = None, end: float | None = None) -> Iterator[RecordedEvent]:
+        """Every readable event in [start, end) s."""
+        for ns, data in self._messages(TOPIC_EVENT, start, end):
+            try:
+                d = json.loads(data)
+                yield RecordedEvent(float(d["t"]), str(d["kind"]), str(d["text"]))
+            except (ValueError, KeyError, TypeError):
+                continue
+
+    def config(self) -> dict[str, Any]:
+        """The run's configuration message (falls back to the metadata record)."""
+        for _, data in self._messages(TOPIC_CONFIG, None, None):
+            try:
+                return dict(json.loads(data))
+            except ValueError:
+                break
+        return dict(self.metadata)
+
+    def message_counts(self) -> dict[str, int]:
+        """Messages per topic: from the MCAP statistics of a cleanly closed file, else by
+        reading every chunk (damaged chunks count as empty)."""
+        if self._counts is None:
+            counts: dict[str, int] = {}
+            for i in range(len(self._chunks)):
+                for topic, msgs in self._chunk_messages(i).items():
+                    counts[topic] = counts.get(topic, 0) + len(msgs)
+            self._counts = counts
+        return dict(self._counts)
+
+    def count_frames(self) -> int:
+        """Number of frames in the file (see :meth:`message_counts`)."""
+        return self.message_counts().get(TOPIC_FRAME, 0)
+
+    def close(self) -> None:
+        self._f.close()
+
+    def __enter__(self) -> "Recording":
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+
+def open_recording(path: str | os.PathLike[str]) -> Recording:
+    """Open a swarmdeck recording; :class:`RecordingError` with a clear reason if it cannot be played."""
+    p = Path(path)
+    if p.is_dir():
+        raise RecordingError(f"{p} is a folder, not a recording (try `swarmdeck sessions {p}`)")
+    if not p.exists():
+        raise RecordingError(f"{p}: no such file")
+    return Recording(p)

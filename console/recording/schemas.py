@@ -1,0 +1,154 @@
+"""The swarmdeck recording format: MCAP profile, topics and their JSON Schemas.
+
+A recording is an MCAP file (REFERENCE.md §10) with header profile
+``"swarmdeck"``, a ``"swarmdeck"`` Metadata record (string map, every value
+JSON-encoded: ``recording_format``, ``frame_format``, ``created``, ``robots``,
+``bounds``, ``versions``, …) written straight after the header, and JSON
+channels (message encoding ``json``, schema encoding ``jsonschema``, so
+Foxglove shows them):
+
+==========================  ===============================================
+topic                       message
+==========================  ===============================================
+``/swarmdeck/frame``        ``Frame.to_dict()`` (console/runtime/frame.py), one per tick
+``/swarmdeck/datagram``     one raw input datagram: ``{t, data (base64), peer, transport, listener}``
+``/swarmdeck/config``       the run's configuration and metadata, once at the start
+``/swarmdeck/event``        ``{t, kind, text}`` operator actions, frame events, recorder notices
+==========================  ===============================================
+
+Message ``log_time`` is ``start_unix_ns + round((t − time_origin) · 1e9)`` where
+``t`` is the console clock of the message (s) and ``time_origin``/``start_unix_ns``
+are in the metadata; the exact ``t`` is inside every message.
+"""
+from __future__ import annotations
+
+from typing import Any
+
+PROFILE = "swarmdeck"
+#: Version of the container layout (topics, metadata keys). Readers refuse newer files.
+RECORDING_FORMAT = 1
+METADATA_NAME = "swarmdeck"
+
+TOPIC_FRAME = "/swarmdeck/frame"
+TOPIC_DATAGRAM = "/swarmdeck/datagram"
+TOPIC_CONFIG = "/swarmdeck/config"
+TOPIC_EVENT = "/swarmdeck/event"
+
+_NUM: dict[str, Any] = {"oneOf": [{"type": "number"}, {"enum": ["NaN", "Infinity", "-Infinity"]}]}
+_INT: dict[str, Any] = {"type": "integer"}
+
+
+def _arr(items: dict[str, Any], length: int | None = None) -> dict[str, Any]:
+    out: dict[str, Any] = {"type": "array", "items": items}
+    if length is not None:
+        out["minItems"] = out["maxItems"] = length
+    return out
+
+
+_VEC2 = _arr(_NUM, 2)
+_MAP_SCALARS = {"type": "object", "additionalProperties": {"type": ["number", "string", "boolean", "null"]}}
+
+FRAME_SCHEMA: dict[str, Any] = {
+    "$schema": "https://json-schema.org/draft/2020-12/schema",
+    "title": "swarmdeck.Frame",
+    "description": "One control tick of the swarmdeck console (console/runtime/frame.py). Units m, s, rad.",
+    "type": "object",
+    "required": ["format", "tick", "time", "dt", "bounds", "lookahead", "ids", "poses", "seen",
+                 "nominal", "safe", "v", "w", "barrier", "coverage", "density", "contacts",
+                 "behaviour", "run_state"],
+    "properties": {
+        "format": _INT,
+        "tick": {"type": "integer", "minimum": 0},
+        "time": _NUM, "dt": _NUM, "run_time": _NUM, "lookahead": _NUM,
+        "bounds": _arr(_NUM, 4),
+        "ids": _arr(_INT),
+        "poses": _arr(_arr(_NUM, 3)),
+        "seen": _arr({"type": "boolean"}),
+        "nominal": _arr(_VEC2), "safe": _arr(_VEC2),
+        "v": _arr(_NUM), "w": _arr(_NUM),
+        "barrier": {"oneOf": [{"type": "null"}, {
+            "type": "object",
+            "required": ["enabled", "ok", "status", "active_pairs", "active_h", "intervention"],
+            "properties": {
+                "enabled": {"type": "boolean"}, "ok": {"type": "boolean"}, "status": {"type": "string"},
+                "solve_time_s": _NUM, "n_constraints": _INT, "n_active": _INT,
+                "active_pairs": _arr(_arr(_INT, 2)), "active_h": _arr(_NUM),
+                "min_distance": _NUM, "min_wall_clearance": _NUM, "intervention": _arr(_NUM),
+                "nominal_was_safe": {"type": "boolean"}, "safety_distance": _NUM,
+            }}]},
+        "coverage": {"oneOf": [{"type": "null"}, {
+            "type": "object",
+            "required": ["centroids", "masses", "edges", "neighbours", "cost_H", "mean_centroid_distance"],
+            "properties": {
+                "centroids": _arr(_VEC2), "masses": _arr(_NUM), "edges": _arr(_arr(_VEC2, 2)),
+                "neighbours": _arr(_arr(_INT, 2)), "cost_H": _NUM, "mean_centroid_distance": _NUM,
+                "packing_warning": {"type": ["string", "null"]},
+                "cell_vertices": _arr(_VEC2), "cell_offsets": _arr(_INT),
+            }}]},
+        "density": {"oneOf": [{"type": "null"}, {
+            "type": "object", "required": ["floor", "mu", "weight"],
+            "properties": {"floor": _NUM, "mu": _arr(_VEC2), "weight": _arr(_NUM)}}]},
+        "contacts": {
+            "type": "object", "required": ["sources", "ids", "positions", "velocities"],
+            "properties": {"sources": _arr({"type": "string"}), "ids": _arr(_INT),
+                           "positions": _arr(_VEC2), "velocities": _arr(_VEC2)}},
+        "behaviour": {"type": "string"},
+        "run_state": {"enum": ["running", "paused", "estop"]},
+        "params": _MAP_SCALARS,
+        "events": _arr({"type": "string"}),
+        "alerts": _arr({"type": "string"}),
+        "health": {"type": "object", "additionalProperties": {"type": "string"}},
+        "timing": {"type": "object", "additionalProperties": _NUM},
+        "image_ref": {"type": ["string", "null"]},
+    },
+}
+
+DATAGRAM_SCHEMA: dict[str, Any] = {
+    "$schema": "https://json-schema.org/draft/2020-12/schema",
+    "title": "swarmdeck.Datagram",
+    "description": "One raw input datagram as received, before parsing (replayed through the real parser).",
+    "type": "object",
+    "required": ["t", "data", "peer", "transport"],
+    "properties": {
+        "t": {"type": "number", "description": "receive time, s, console clock"},
+        "data": {"type": "string", "contentEncoding": "base64", "description": "the datagram bytes"},
+        "peer": {"oneOf": [{"type": "string"}, {"type": "array", "items": {"type": ["string", "integer"]}}],
+                 "description": "sender: [host, port] or a name"},
+        "transport": {"type": "string", "description": "udp | tcp | …"},
+        "listener": {"type": ["string", "null"], "description": "name of the receiving listener, if known"},
+    },
+}
+
+CONFIG_SCHEMA: dict[str, Any] = {
+    "$schema": "https://json-schema.org/draft/2020-12/schema",
+    "title": "swarmdeck.Config",
+    "description": "Configuration and metadata of the recorded run.",
+    "type": "object",
+    "required": ["recording_format", "frame_format", "created", "robots", "bounds", "versions"],
+    "properties": {
+        "recording_format": _INT,
+        "frame_format": _INT,
+        "created": {"type": "string", "description": "ISO 8601 UTC start time"},
+        "robots": _arr(_INT),
+        "bounds": _arr({"type": "number"}, 4),
+        "versions": {"type": "object", "additionalProperties": {"type": "string"}},
+        "config": {"type": "object"},
+    },
+}
+
+EVENT_SCHEMA: dict[str, Any] = {
+    "$schema": "https://json-schema.org/draft/2020-12/schema",
+    "title": "swarmdeck.Event",
+    "description": "A timestamped message: an operator action, a frame event or a recorder notice.",
+    "type": "object",
+    "required": ["t", "kind", "text"],
+    "properties": {"t": {"type": "number"}, "kind": {"type": "string"}, "text": {"type": "string"}},
+}
+
+#: topic -> (schema name, JSON schema)
+CHANNELS: dict[str, tuple[str, dict[str, Any]]] = {
+    TOPIC_CONFIG: ("swarmdeck.Config", CONFIG_SCHEMA),
+    TOPIC_FRAME: ("swarmdeck.Frame", FRAME_SCHEMA),
+    TOPIC_DATAGRAM: ("swarmdeck.Datagram", DATAGRAM_SCHEMA),
+    TOPIC_EVENT: ("swarmdeck.Event", EVENT_SCHEMA),
+}

@@ -1,0 +1,678 @@
+"""The control loop (DESIGN.md "One tick"): sense → inputs → behaviour → safety → actuate → Frame.
+
+:class:`ControlLoop` runs in its own thread at the control period
+(:meth:`start`), or one tick at a time on a virtual clock (:meth:`tick`, for
+tests and benchmarks). Every tick produces one immutable
+:class:`~swarmdeck.console.runtime.frame.Frame`, handed to subscribers (the viser
+scene, the recorder) and kept as :attr:`latest`. Subscribers run on the loop
+thread and must only hand the Frame over (the console's viewer stores it and
+draws on its own thread, so a slow browser never slows the loop).
+
+Operator commands (:meth:`run`, :meth:`pause`, :meth:`step`, :meth:`estop`,
+behaviour and parameter changes, density bumps) are thread-safe and take
+effect at the start of the next tick. The emergency stop zeroes every command
+of the next tick and every tick after it until :meth:`release` (which leaves
+the loop paused). Anything that goes wrong in a behaviour, the safety filter,
+the pose source or the command sink stops the robots for that tick, raises a
+visible alert in the Frame, and the loop keeps running.
+"""
+from __future__ import annotations
+
+import math
+import threading
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field, replace
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+from scipy.spatial import cKDTree
+
+from swarmdeck.console.runtime.behaviours import Behaviour, BehaviourError, BehaviourParams, TickInput, make_behaviour
+from swarmdeck.console.runtime.density import BumpSet, MovingBump, merge_mixtures
+from swarmdeck.console.runtime.frame import BarrierFrame, ContactsFrame, CoverageFrame, Frame
+from swarmdeck.console.runtime.ports import CommandSink, PoseSource, SensedPoses, SimulatedRobots
+from swarmdeck.coverage.density import GaussianMixture
+from swarmdeck.devices import (
+    ArenaConfig,
+    GritsBotParams,
+    limit_unicycle,
+    lookahead_points,
+    saturate_norm,
+    si_to_unicycle,
+    unicycle_to_si,
+)
+from swarmdeck.devices.clock import RealTimePacer
+
+Bounds = tuple[float, float, float, float]
+FrameListener = Callable[[Frame], None]
+
+
+@dataclass(frozen=True)
+class SafetyParams:
+    """The barrier filter as the operator sets it: on/off, D_s (m, 0.11–0.4), γ (1–1000), class-K."""
+
+    enabled: bool = True
+    safety_distance: float = 0.17
+    gamma: float = 100.0
+    class_k: str = "cubic"
+
+    def __post_init__(self) -> None:
+        if not (math.isfinite(self.safety_distance) and 0.11 <= self.safety_distance <= 0.4):
+            raise ValueError(f"safety_distance (D_s) must be in [0.11, 0.4] m, got {self.safety_distance!r}")
+        if not (math.isfinite(self.gamma) and 1.0 <= self.gamma <= 1000.0):
+            raise ValueError(f"gamma must be in [1, 1000], got {self.gamma!r}")
+        if self.class_k not in ("cubic", "linear"):
+            raise ValueError(f"class_k must be 'cubic' or 'linear', got {self.class_k!r}")
+
+
+@dataclass(frozen=True)
+class DensityParams:
+    """The console's density: an optional circling bump (REFERENCE.md §5 S1) and defaults for new bumps."""
+
+    moving: bool = True
+    radius: float = 0.6
+    period: float = 20.0
+    sigma: float = 0.4
+    weight: float = 1.0
+    floor: float = 0.05
+    bump_sigma: float = 0.25
+    bump_weight: float = 1.0
+
+    def __post_init__(self) -> None:
+        MovingBump(self.radius, self.period, self.sigma, self.weight, self.floor)  # validates
+        if not self.floor > 0:
+            raise ValueError(f"density floor must be > 0 (keeps every cell's mass positive), got {self.floor!r}")
+        if not (0.05 <= self.bump_sigma <= 1.0):
+            raise ValueError(f"bump_sigma must be in [0.05, 1.0] m, got {self.bump_sigma!r}")
+        if not (0.0 <= self.bump_weight <= 5.0):
+            raise ValueError(f"bump_weight must be in [0, 5], got {self.bump_weight!r}")
+
+
+@dataclass(frozen=True)
+class LoopConfig:
+    """Everything the loop starts with. Units m, s."""
+
+    n_robots: int = 12
+    dt: float = 0.033
+    bounds: Bounds = (-1.6, 1.6, -1.0, 1.0)
+    seed: int | None = None
+    behaviour: str = "coverage"
+    max_speed: float = 0.2
+    behaviour_params: BehaviourParams = field(default_factory=BehaviourParams)
+    safety: SafetyParams = field(default_factory=SafetyParams)
+    density: DensityParams = field(default_factory=DensityParams)
+
+    def __post_init__(self) -> None:
+        if isinstance(self.n_robots, bool) or not isinstance(self.n_robots, int) or not 1 <= self.n_robots <= 200:
+            raise ValueError(f"n_robots must be an integer in [1, 200], got {self.n_robots!r}")
+        if not (math.isfinite(self.dt) and 0.005 <= self.dt <= 0.5):
+            raise ValueError(f"dt must be in [0.005, 0.5] s, got {self.dt!r}")
+        if not (math.isfinite(self.max_speed) and 0 < self.max_speed <= 1.0):
+            raise ValueError(f"max_speed must be in (0, 1] m/s, got {self.max_speed!r}")
+        ArenaConfig(bounds=self.bounds, dt=self.dt)  # validates bounds
+
+
+class ConsoleDensity:
+    """The one density the behaviours see: circling bump + browser bumps + input contacts (a Density).
+
+    ``at(t)`` takes the loop's run time; the contact part is the snapshot the loop
+    set for this tick (contacts live on the loop clock).
+    """
+
+    def __init__(self, params: DensityParams, bumps: BumpSet) -> None:
+        self.params = params
+        self.moving = MovingBump(params.radius, params.period, params.sigma, params.weight, params.floor)
+        self.bumps = bumps
+        self.contacts: GaussianMixture | None = None
+        self._cache: tuple[Any, GaussianMixture] | None = None
+        self._cache_contacts: GaussianMixture | None = None
+
+    def at(self, t: float) -> GaussianMixture:
+        key = (t, self.bumps.revision, self.params)
+        if self._cache is not None and self._cache[0] == key and self._cache_contacts is self.contacts:
+            return self._cache[1]
+        parts = [self.moving.at(t) if self.params.moving else None, self.bumps.snapshot(t, self.params.floor),
+                 self.contacts]
+        snap = merge_mixtures(parts, self.params.floor)
+        self._cache, self._cache_contacts = (key, snap), self.contacts
+        return snap
+
+
+def _checked(sensed: Any) -> SensedPoses:
+    """A pose reading as arrays of the right shapes (ValueError naming the problem otherwise).
+    Rows with a non-finite pose are not seen (they get zero commands) and are drawn at the origin."""
+    ids = np.asarray(sensed.ids, dtype=np.int64).reshape(-1)
+    poses = np.asarray(sensed.poses, dtype=float)
+    seen = np.asarray(sensed.seen, dtype=bool).reshape(-1)
+    n = len(ids)
+    if poses.shape != (n, 3) or seen.shape != (n,):
+        raise ValueError(f"pose source gave ids {ids.shape}, poses {poses.shape}, seen {seen.shape}; "
+                         f"expected (N,), (N, 3), (N,)")
+    finite = np.all(np.isfinite(poses), axis=1)
+    if not finite.all():
+        poses = np.where(finite[:, None], poses, 0.0)
+        seen = seen & finite
+    return SensedPoses(ids, poses, seen)
+
+
+def _min_distance(points: NDArray[np.float64]) -> float:
+    if len(points) < 2:
+        return math.inf
+    d, _ = cKDTree(points).query(points, k=2)
+    return float(d[:, 1].min())
+
+
+class ControlLoop:
+    """The console's control loop. See the module docstring.
+
+    Args:
+        config: initial settings.
+        source, sink: where poses come from / commands go; both default to one
+            :class:`SimulatedRobots` (N = ``config.n_robots``, seeded by ``config.seed``).
+        inputs: an ``swarmdeck.inputs.InputHub`` (started by the caller) whose contacts
+            become density bumps through ``contact_density`` (a ``ContactDensity``).
+        clock: the loop's clock in s; None → virtual (tick × dt).
+        robot: the robot model (look-ahead ℓ, wheel limits).
+    """
+
+    def __init__(self, config: LoopConfig | None = None, *, source: PoseSource | None = None,
+                 sink: CommandSink | None = None, inputs: Any = None, contact_density: Any = None,
+                 clock: Callable[[], float] | None = None, robot: GritsBotParams | None = None) -> None:
+        self.config = config if config is not None else LoopConfig()
+        cfg = self.config
+        self.robot = robot if robot is not None else GritsBotParams()
+        if source is None or sink is None:
+            sim = SimulatedRobots(cfg.n_robots, ArenaConfig(bounds=cfg.bounds, dt=cfg.dt, seed=cfg.seed), self.robot)
+            source = source if source is not None else sim
+            sink = sink if sink is not None else sim
+        self.source, self.sink = source, sink
+        self.inputs = inputs
+        if inputs is not None and contact_density is None:
+            from swarmdeck.inputs import ContactDensity
+
+            contact_density = ContactDensity()
+        self.contact_density = contact_density
+        self._clock = clock
+        self._lock = threading.RLock()
+        self.bumps = BumpSet()
+        self.density = ConsoleDensity(cfg.density, self.bumps)
+        self._behaviour_params = cfg.behaviour_params
+        self._safety_params = cfg.safety
+        self._behaviour: Behaviour = self._make_behaviour(cfg.behaviour, cfg.behaviour_params, cfg.safety)
+        self._filter = self._make_filter(cfg.safety)
+        self._state = "running"
+        self._estop = False
+        self._steps = 0
+        self._tick = 0
+        self._run_time = 0.0
+        self._alerts: dict[str, str] = {}
+        self._events: list[str] = []
+        self._listeners: list[FrameListener] = []
+        self._health_fns: dict[str, Callable[[], str]] = {}
+        self.errors: dict[str, int] = {}
+        self.latest: Frame | None = None
+        self._last_sensed: SensedPoses | None = None
+        self._thread: threading.Thread | None = None
+        self._stop = threading.Event()
+        self.overruns = 0
+
+    # ------------------------------------------------------------------ construction helpers
+    def _make_behaviour(self, name: str, params: BehaviourParams, safety: SafetyParams) -> Behaviour:
+        return make_behaviour(name, params, self.config.bounds, self.config.max_speed, safety.safety_distance)
+
+    def _make_filter(self, p: SafetyParams) -> Any:
+        """The unicycle barrier: the QP on the look-ahead points plus each robot's four wheel-limit
+        rows, so the certified command is one the wheels can execute (no saturation afterwards)."""
+        from swarmdeck.safety import BarrierConfig, UnicycleParams, UnicycleSafetyFilter
+
+        r = self.robot
+        return UnicycleSafetyFilter(
+            BarrierConfig(safety_distance=p.safety_distance, gamma=p.gamma, class_k=p.class_k,
+                          max_speed=self.config.max_speed, bounds=self.config.bounds, dt=self.config.dt),
+            UnicycleParams(wheel_radius=r.wheel_radius, axle_length=r.axle_length,
+                           max_wheel_speed=r.max_wheel_speed, lookahead=r.lookahead))
+
+    # ------------------------------------------------------------------ operator commands (thread-safe)
+    @property
+    def run_state(self) -> str:
+        """``"running"``, ``"paused"`` or ``"estop"``."""
+        return "estop" if self._estop else self._state
+
+    @property
+    def behaviour_name(self) -> str:
+        return self._behaviour.name
+
+    @property
+    def behaviour_params(self) -> BehaviourParams:
+        return self._behaviour_params
+
+    @property
+    def safety_params(self) -> SafetyParams:
+        return self._safety_params
+
+    @property
+    def run_time(self) -> float:
+        """Behaviour time, s: advances by dt only on ticks with motion."""
+        return self._run_time
+
+    @property
+    def pending_steps(self) -> int:
+        """Ticks with motion still to run after :meth:`step` (0 when none)."""
+        return self._steps
+
+    def run(self) -> None:
+        """Resume (ignored while the emergency stop is engaged)."""
+        with self._lock:
+            if self._estop:
+                self._post("run ignored: release the emergency stop first")
+                return
+            self._state = "running"
+
+    def pause(self) -> None:
+        """Robots hold still (a simulation stops advancing) until :meth:`run` or :meth:`step`."""
+        with self._lock:
+            self._state = "paused"
+
+    def step(self, n: int = 1) -> None:
+        """While paused: run exactly ``n`` more ticks with motion."""
+        with self._lock:
+            if self._estop:
+                self._post("step ignored: release the emergency stop first")
+                return
+            self._state = "paused"
+            self._steps += int(n)
+
+    def estop(self) -> None:
+        """Emergency stop: every command of the next tick (and after) is zero."""
+        with self._lock:
+            if not self._estop:
+                self._estop = True
+                self._steps = 0
+                self._post("EMERGENCY STOP")
+
+    def release(self) -> None:
+        """Release the emergency stop; the loop stays paused until :meth:`run`."""
+        with self._lock:
+            if self._estop:
+                self._estop = False
+                self._state = "paused"
+                self._post("emergency stop released (paused)")
+
+    def set_behaviour(self, name: str) -> None:
+        """Switch behaviour; raises BehaviourError (nothing changes) for an unknown name or a bad script."""
+        b = self._make_behaviour(name, self._behaviour_params, self._safety_params)
+        with self._lock:
+            self._behaviour = b
+            self._alerts.pop("behaviour", None)
+            self._post(f"behaviour: {b.name}")
+
+    def set_params(self, **changes: Any) -> BehaviourParams:
+        """Change behaviour parameters (see BehaviourParams); BehaviourError/ValueError for bad values."""
+        try:
+            params = replace(self._behaviour_params, **changes)
+        except TypeError as exc:
+            raise BehaviourError(str(exc)) from None
+        name = self._behaviour.name
+        b = self._make_behaviour(name, params, self._safety_params) if not name.startswith("script:") else self._behaviour
+        with self._lock:
+            self._behaviour_params = params
+            self._behaviour = b
+            self._post("parameters: " + ", ".join(f"{k}={v}" for k, v in changes.items()))
+        return params
+
+    def set_safety(self, **changes: Any) -> SafetyParams:
+        """Change the barrier (enabled, safety_distance, gamma, class_k); ValueError for bad values."""
+        try:
+            params = replace(self._safety_params, **changes)
+        except TypeError as exc:
+            raise ValueError(str(exc)) from None
+        filt = self._make_filter(params)
+        with self._lock:
+            rebuild = params.safety_distance != self._safety_params.safety_distance
+            self._safety_params = params
+            self._filter = filt
+            if rebuild and self._behaviour.name == "coverage":
+                self._behaviour = self._make_behaviour("coverage", self._behaviour_params, params)
+            self._post("safety: " + ", ".join(f"{k}={v}" for k, v in changes.items()))
+            if not params.enabled:
+                self._post("WARNING: safety barrier OFF")
+        return params
+
+    def set_moving_density(self, on: bool) -> None:
+        with self._lock:
+            self.density.params = replace(self.density.params, moving=bool(on))
+
+    def add_bump(self, xy: Any, sigma: float | None = None, weight: float | None = None) -> int:
+        """Add a density bump at ``xy`` (m); returns its id. ValueError for bad values."""
+        x0, x1, y0, y1 = self.config.bounds
+        p = np.asarray(xy, dtype=float).reshape(-1)[:2]
+        if not (x0 <= p[0] <= x1 and y0 <= p[1] <= y1):
+            raise ValueError(f"bump centre ({p[0]:.3f}, {p[1]:.3f}) m is outside the arena {self.config.bounds}")
+        d = self.density.params
+        bid = self.bumps.add(p, d.bump_sigma if sigma is None else sigma, d.bump_weight if weight is None else weight,
+                             self._run_time)
+        self.post(f"bump {bid} added at ({p[0]:.2f}, {p[1]:.2f})")
+        return bid
+
+    def move_bump(self, bid: int, xy: Any) -> None:
+        x0, x1, y0, y1 = self.config.bounds
+        p = np.asarray(xy, dtype=float).reshape(-1)[:2]
+        self.bumps.move(bid, np.clip(p, [x0, y0], [x1, y1]), self._run_time)
+
+    def update_bump(self, bid: int, sigma: float | None = None, weight: float | None = None) -> None:
+        self.bumps.update(bid, sigma, weight)
+
+    def remove_bump(self, bid: int) -> None:
+        self.bumps.remove(bid, self._run_time)
+        self.post(f"bump {bid} removed")
+
+    def post(self, message: str) -> None:
+        """Add a message to the next Frame's events (thread-safe)."""
+        with self._lock:
+            self._post(message)
+
+    def _post(self, message: str) -> None:
+        self._events.append(str(message))
+
+    def add_health(self, name: str, fn: Callable[[], str]) -> None:
+        """Show ``fn()`` under ``name`` in every Frame's ``health`` (e.g. the recorder's state)."""
+        with self._lock:
+            self._health_fns[str(name)] = fn
+
+    def subscribe(self, listener: FrameListener) -> Callable[[], None]:
+        """Call ``listener(frame)`` on the loop thread after every tick; returns an unsubscribe function."""
+        with self._lock:
+            self._listeners.append(listener)
+
+        def unsubscribe() -> None:
+            with self._lock:
+                if listener in self._listeners:
+                    self._listeners.remove(listener)
+
+        return unsubscribe
+
+    # ------------------------------------------------------------------ the tick
+    def _count(self, what: str) -> None:
+        self.errors[what] = self.errors.get(what, 0) + 1
+
+    def _alert(self, key: str, message: str | None) -> None:
+        if message is None:
+            self._alerts.pop(key, None)
+        elif self._alerts.get(key) != message:
+            self._alerts[key] = message
+            self._events.append(message)
+
+    def tick(self) -> Frame:
+        """Run one tick now and return its Frame (virtual clock unless a clock was given)."""
+        t_start = time.perf_counter()
+        with self._lock:
+            behaviour, filt, sp = self._behaviour, self._filter, self._safety_params
+            estop = self._estop
+            active = not estop and (self._state == "running" or self._steps > 0)
+            if active and self._state != "running":
+                self._steps -= 1
+            run_state = self.run_state
+            density_params = self.density.params
+        dt = self.config.dt
+        now = self._clock() if self._clock is not None else self._tick * dt
+        ell = self.robot.lookahead
+
+        # 1. sense
+        try:
+            sensed = _checked(self.source.read(now))
+            self._last_sensed = sensed
+            with self._lock:
+                self._alert("source", None)
+        except Exception as exc:  # a failing pose source: stop everything, keep looping
+            self._count("source")
+            with self._lock:
+                self._alert("source", f"pose source failed: {type(exc).__name__}: {exc}; robots stopped")
+            prev = self._last_sensed
+            if prev is None:
+                raise
+            sensed = SensedPoses(prev.ids, prev.poses, np.zeros(len(prev.ids), dtype=bool))
+        image_ref = getattr(self.source, "image_ref", None)
+        image_ref = image_ref if isinstance(image_ref, str) else None
+        ids, poses, seen = sensed.ids, sensed.poses, sensed.seen
+        n = len(ids)
+        points = lookahead_points(poses, ell)
+        t_sense = time.perf_counter()
+
+        # 2. inputs
+        contacts = ContactsFrame()
+        with self._lock:
+            health_fns = [("robots", self.source.health)]
+            if self.source is not self.sink:
+                health_fns.append(("commands", self.sink.health))
+            health_fns += list(self._health_fns.items())
+        health: dict[str, str] = {}
+        for name, fn in health_fns:
+            try:
+                health[name] = str(fn())
+            except Exception as exc:
+                health[name] = f"error: {type(exc).__name__}: {exc}"
+        if self.inputs is not None:
+            try:
+                snap = self.inputs.poll(now)
+                self.contact_density.update(snap.contacts, now)
+                self.density.contacts = self.contact_density.at(now)
+                contacts = ContactsFrame.from_contacts(snap.contacts)
+                for h in snap.health:
+                    state = "LOST" if h.lost else f"{h.rate_hz:.0f} Hz"
+                    errs = f", {h.error_count} errors" if h.error_count else ""
+                    health[h.name] = f"{state}, {h.contacts} contacts{errs}"
+                with self._lock:
+                    self._alert("inputs", None)
+            except Exception as exc:
+                self._count("inputs")
+                self.density.contacts = None
+                with self._lock:
+                    self._alert("inputs", f"inputs failed: {type(exc).__name__}: {exc}")
+        try:
+            snapshot: GaussianMixture | None = self.density.at(self._run_time)
+            with self._lock:
+                self._alert("density", None)
+        except Exception as exc:
+            self._count("density")
+            snapshot = None
+            with self._lock:
+                self._alert("density", f"density failed: {type(exc).__name__}: {exc}")
+        t_inputs = time.perf_counter()
+
+        # 3. control
+        nominal = np.zeros((n, 2))
+        coverage = None
+        try:
+            if n == 0:
+                raise BehaviourError("no robots to control (none seen or all excluded)")
+            raw, state = behaviour(TickInput(poses.copy(), points.copy(), self._run_time, self.density,
+                                             self.config.bounds, self.config.max_speed))
+            arr = np.asarray(raw, dtype=float) if not isinstance(raw, np.ndarray) else raw.astype(float, copy=True)
+            if arr.shape != (n, 2):
+                raise BehaviourError(f"behaviour returned shape {arr.shape}, expected ({n}, 2) velocities in m/s")
+            bad = ~np.all(np.isfinite(arr), axis=1)
+            arr[bad] = 0.0
+            nominal = arr
+            if state is not None:
+                coverage = CoverageFrame.from_state(state)
+            with self._lock:
+                if bad.any():
+                    self._count("behaviour")
+                    self._alert("behaviour", f"{behaviour.name}: non-finite command for robot(s) "
+                                f"{ids[bad].tolist()}; those robots stopped")
+                else:
+                    self._alert("behaviour", None)
+        except Exception as exc:  # user scripts and bad parameters: stop, tell, keep looping
+            self._count("behaviour")
+            with self._lock:
+                self._alert("behaviour", f"{behaviour.name} failed: {type(exc).__name__}: {exc}; robots stopped")
+        nominal[~seen] = 0.0
+        nominal = saturate_norm(nominal, self.config.max_speed)
+        t_control = time.perf_counter()
+
+        # 4. safety
+        if sp.enabled:
+            try:
+                extra_fn = getattr(self.sink, "obstacles", None)
+                extra = np.asarray(extra_fn(), dtype=float).reshape(-1, 2) if extra_fn is not None else None
+                # wheel limits by one scale per robot first (keeps the curvature), then the barrier
+                v_lim, w_lim, _ = limit_unicycle(*si_to_unicycle(poses, nominal, ell), self.robot)
+                safe, barrier = self._filter_seen(filt, poses, v_lim, w_lim, seen, sp.safety_distance, extra)
+                if not barrier.ok or safe.shape != (n, 2) or not np.all(np.isfinite(safe)):
+                    safe = np.zeros((n, 2))
+                    with self._lock:
+                        self._alert("safety", f"safety filter: {barrier.status}; robots stopped")
+                else:
+                    with self._lock:
+                        self._alert("safety", None)
+            except Exception as exc:
+                self._count("safety")
+                safe = np.zeros((n, 2))
+                barrier = BarrierFrame(enabled=True, ok=False, status=f"{type(exc).__name__}: {exc}",
+                                       min_distance=_min_distance(points), intervention=np.zeros(n),
+                                       safety_distance=sp.safety_distance)
+                with self._lock:
+                    self._alert("safety", f"safety filter failed: {type(exc).__name__}: {exc}; robots stopped")
+        else:
+            safe = nominal.copy()
+            barrier = BarrierFrame(enabled=False, status="off", min_distance=_min_distance(points),
+                                   intervention=np.zeros(n), safety_distance=sp.safety_distance)
+            with self._lock:
+                self._alert("safety", "safety barrier OFF")
+        if not active:
+            safe = np.zeros((n, 2))
+        t_safety = time.perf_counter()
+
+        # 5. actuate
+        v, w = si_to_unicycle(poses, safe, ell)
+        v, w, _ = limit_unicycle(v, w, self.robot)
+        v, w = np.where(seen, v, 0.0), np.where(seen, w, 0.0)  # unseen robots may have NaN poses
+        if not active:
+            v, w = np.zeros(n), np.zeros(n)
+        try:
+            if active or estop:
+                self.sink.send(ids, v, w)
+            else:
+                self.sink.hold()
+            with self._lock:
+                self._alert("sink", None)
+        except Exception as exc:
+            self._count("sink")
+            with self._lock:
+                self._alert("sink", f"command sink failed: {type(exc).__name__}: {exc}")
+        t_actuate = time.perf_counter()
+
+        # 6. the Frame
+        with self._lock:
+            events = tuple(self._events)
+            self._events.clear()
+            alerts = tuple(self._alerts.values())
+        bp = self._behaviour_params
+        params = {
+            "kappa": bp.kappa, "law": bp.law, "gain": bp.gain, "formation_edge": bp.formation_edge,
+            "formation_gain": bp.formation_gain, "safety_enabled": sp.enabled, "safety_distance": sp.safety_distance,
+            "gamma": sp.gamma, "class_k": sp.class_k, "moving_density": density_params.moving,
+            "max_speed": self.config.max_speed,
+        }
+        timing = {"sense": t_sense - t_start, "inputs": t_inputs - t_sense, "control": t_control - t_inputs,
+                  "safety": t_safety - t_control, "actuate": t_actuate - t_safety}
+        timing["total"] = time.perf_counter() - t_start
+        frame = Frame(
+            tick=self._tick, time=now, run_time=self._run_time, dt=dt, bounds=self.config.bounds, lookahead=ell,
+            poses=poses, ids=ids, seen=seen, nominal=nominal, safe=safe, v=v, w=w, barrier=barrier,
+            coverage=coverage, density=snapshot, contacts=contacts, behaviour=behaviour.name, run_state=run_state,
+            params=params, events=events, alerts=alerts, health=health, timing=timing, image_ref=image_ref,
+        )
+        self._tick += 1
+        if active:
+            self._run_time += dt
+        self.latest = frame
+        with self._lock:
+            listeners = list(self._listeners)
+        for listener in listeners:
+            try:
+                listener(frame)
+            except Exception as exc:
+                self._count("listener")
+                self.post(f"frame listener failed: {type(exc).__name__}: {exc}")
+        return frame
+
+    @staticmethod
+    def _filter_seen(filt: Any, poses: NDArray[np.float64], v: NDArray[np.float64], w: NDArray[np.float64],
+                     seen: NDArray[np.bool_], d_s: float,
+                     extra: NDArray[np.float64] | None = None) -> tuple[NDArray[np.float64], BarrierFrame]:
+        """Unicycle barrier QP over the robots seen this tick, returning safe look-ahead velocities
+        (N, 2); unseen robots (no fresh pose: they get zero commands) and ``extra`` (M, 2) points
+        (robots excluded by the sink) are fixed obstacles. Indices map back to all N."""
+        n = len(poses)
+        ell = filt.params.lookahead
+        extra = None if extra is None or len(extra) == 0 else extra
+        if seen.all():
+            vs, ws, diag = filt.filter(poses, v, w, extra)
+            return unicycle_to_si(poses, vs, ws, ell), BarrierFrame.from_diagnostics(diag, n, d_s, enabled=True)
+        idx = np.flatnonzero(seen)
+        points = lookahead_points(poses, ell)
+        known = ~seen & np.all(np.isfinite(points), axis=1)
+        parts = [points[known]] + ([extra] if extra is not None else [])
+        obstacles = np.concatenate(parts) if sum(len(p) for p in parts) else None
+        safe = np.zeros((n, 2))
+        if len(idx) == 0:
+            return safe, BarrierFrame(status="no robot seen", intervention=np.zeros(n), safety_distance=d_s)
+        vs, ws, diag = filt.filter(poses[idx], v[idx], w[idx], obstacles)
+        sub_b = BarrierFrame.from_diagnostics(diag, len(idx), d_s, enabled=True)
+        safe[idx] = unicycle_to_si(poses[idx], vs, ws, ell)
+        inter = np.zeros(n)
+        if len(sub_b.intervention) == len(idx):
+            inter[idx] = sub_b.intervention
+        pairs = sub_b.active_pairs
+        keep = np.all((pairs >= 0) & (pairs < len(idx)), axis=1)  # pairs among robots (not obstacles)
+        return safe, replace(sub_b, active_pairs=idx[pairs[keep]], active_h=sub_b.active_h[keep], intervention=inter)
+
+    # ------------------------------------------------------------------ threaded running
+    def start(self) -> "ControlLoop":
+        """Run :meth:`tick` every ``dt`` seconds (monotonic clock) on a daemon thread."""
+        if self._thread is not None and self._thread.is_alive():
+            return self
+        if self._clock is None:
+            t0 = time.monotonic() - self._tick * self.config.dt
+            self._clock = lambda: time.monotonic() - t0
+        self._stop.clear()
+        self._thread = threading.Thread(target=self._run_forever, name="swarmdeck-loop", daemon=True)
+        self._thread.start()
+        return self
+
+    def _run_forever(self) -> None:
+        pacer = RealTimePacer(self.config.dt)
+        while not self._stop.is_set():
+            try:
+                self.tick()
+            except Exception as exc:  # never let the thread die silently
+                self._count("tick")
+                self.post(f"tick failed: {type(exc).__name__}: {exc}")
+                try:
+                    self.sink.hold()
+                except Exception:
+                    self._count("sink")
+            pacer.wait()
+        self.overruns = pacer.overruns
+
+    def stop(self, timeout: float = 2.0) -> None:
+        """Stop the thread (robots stop: the sink is closed by :meth:`close`)."""
+        self._stop.set()
+        if self._thread is not None:
+            self._thread.join(timeout)
+            self._thread = None
+
+    def close(self) -> None:
+        """Stop the thread, stop the robots, close the sink and the inputs."""
+        self.stop()
+        try:
+            self.sink.close()
+        finally:
+            close_source = getattr(self.source, "close", None)
+            if self.source is not self.sink and close_source is not None:
+                close_source()
+            if self.inputs is not None:
+                self.inputs.close()

@@ -1,0 +1,137 @@
+"""The running console: control loop + viser server + scene + panel, with the scene drawn off the loop thread.
+
+The loop hands each Frame to :class:`FrameViewer`, which only stores it
+(latest-frame-wins) and wakes its own thread; that thread draws the newest
+Frame and refreshes the panel. So any number of browser tabs, or a slow one,
+never slows the loop: at worst frames are skipped in the drawing (viser then
+also coalesces per node, so a slow tab sees the newest state, not a backlog).
+"""
+from __future__ import annotations
+
+import threading
+import time
+from typing import Any
+
+from swarmdeck.console.runtime.frame import Frame
+from swarmdeck.console.web.gui import ConsoleGui
+from swarmdeck.console.runtime.loop import ControlLoop
+from swarmdeck.console.web.scene import ArenaScene
+
+
+class FrameViewer:
+    """Draws the newest Frame on its own thread (latest-frame-wins)."""
+
+    def __init__(self, scene: ArenaScene, gui: ConsoleGui | None = None, on_error: Any = None) -> None:
+        self.scene, self.gui = scene, gui
+        self._pending: Frame | None = None
+        self._lock = threading.Lock()
+        self._wake = threading.Event()
+        self._stop = threading.Event()
+        self._thread: threading.Thread | None = None
+        self.drawn = 0
+        self.skipped = 0
+        self.errors = 0
+        self.last_error: str | None = None
+        self._on_error = on_error
+
+    def offer(self, frame: Frame) -> None:
+        """Called on the loop thread: keep only the newest frame and wake the drawing thread."""
+        with self._lock:
+            if self._pending is not None:
+                self.skipped += 1
+            self._pending = frame
+        if self.gui is not None:
+            self.gui.record(frame)
+        self._wake.set()
+
+    def start(self) -> "FrameViewer":
+        self._thread = threading.Thread(target=self._run, name="swarmdeck-viewer", daemon=True)
+        self._thread.start()
+        return self
+
+    def draw_pending(self) -> Frame | None:
+        """Draw the newest pending frame now (the thread's body; callable directly in tests)."""
+        with self._lock:
+            frame, self._pending = self._pending, None
+        if frame is None:
+            return None
+        try:
+            self.scene.draw(frame)
+            if self.gui is not None:
+                self.gui.update(frame)
+            self.drawn += 1
+        except Exception as exc:  # a broken tab or a drawing bug must not stop the console
+            self.errors += 1
+            msg = f"drawing failed: {type(exc).__name__}: {exc}"
+            if msg != self.last_error and self._on_error is not None:
+                self._on_error(msg)
+            self.last_error = msg
+        return frame
+
+    def _run(self) -> None:
+        while not self._stop.is_set():
+            if not self._wake.wait(0.5):
+                continue
+            self._wake.clear()
+            self.draw_pending()
+
+    def stop(self) -> None:
+        self._stop.set()
+        self._wake.set()
+        if self._thread is not None:
+            self._thread.join(2.0)
+
+
+class ConsoleApp:
+    """A loop shown in a browser: ``ConsoleApp(loop, host, port).start()``; ``url``; ``close()``.
+
+    Args:
+        loop: the control loop (not yet started).
+        host: interface to bind (127.0.0.1 by default: not reachable from other machines).
+        port: TCP port; 0 picks a free one.
+    """
+
+    def __init__(self, loop: ControlLoop, host: str = "127.0.0.1", port: int = 8080, verbose: bool = False) -> None:
+        import viser
+
+        self.loop = loop
+        self.server = viser.ViserServer(host=host, port=port, verbose=verbose)
+        self.scene = ArenaScene(self.server, loop.config.bounds, robot_radius=loop.robot.radius,
+                                image_provider=getattr(loop.source, "image", None))
+        self.gui = ConsoleGui(self.server, loop, self.scene)
+        self.viewer = FrameViewer(self.scene, self.gui, on_error=loop.post)
+        self._unsubscribe = loop.subscribe(self.viewer.offer)
+        self.host = host
+
+    @property
+    def port(self) -> int:
+        return int(self.server.get_port())
+
+    @property
+    def url(self) -> str:
+        host = "127.0.0.1" if self.host in ("0.0.0.0", "") else self.host
+        return f"http://{host}:{self.port}"
+
+    def start(self) -> "ConsoleApp":
+        """Draw the first frame, then start the viewer and the loop threads."""
+        frame = self.loop.tick() if self.loop.latest is None else self.loop.latest
+        self.scene.draw(frame)
+        self.gui.update(frame, force=True)
+        self.viewer.start()
+        self.loop.start()
+        return self
+
+    def wait(self, duration: float | None = None) -> None:
+        """Block for ``duration`` s of wall time (forever when None) while the threads run."""
+        start = time.monotonic()
+        while duration is None or time.monotonic() - start < duration:
+            time.sleep(0.1)
+
+    def close(self) -> None:
+        """Stop the loop (robots stop), the viewer and the server."""
+        self._unsubscribe()
+        try:
+            self.loop.close()
+        finally:
+            self.viewer.stop()
+            self.server.stop()

@@ -1,0 +1,444 @@
+"""The console's control panel (viser GUI): run/pause/step, emergency stop, behaviour and
+barrier parameters, density bumps, layer toggles, live plots and the status line.
+
+Every widget lives on ``server.gui`` (shared by all tabs). Callbacks only call
+the thread-safe :class:`~swarmdeck.console.runtime.loop.ControlLoop` API, so they take
+effect at the next tick. Bad values (out of range, unknown behaviour, a script
+that fails to load) are shown as a message in the panel and change nothing.
+Assigning a handle's ``.value`` in Python runs the same callbacks (tests).
+"""
+from __future__ import annotations
+
+import math
+import threading
+import time
+from collections import deque
+from typing import Any
+
+import numpy as np
+
+from swarmdeck.console.runtime.behaviours import BUILTIN, LAWS
+from swarmdeck.console.runtime.frame import Frame
+from swarmdeck.console.runtime.loop import ControlLoop
+from swarmdeck.console.web.scene import LAYERS, ArenaScene
+
+PLOT_WINDOW = 300  # samples kept in the live plots
+
+
+def ray_to_floor(origin: Any, direction: Any) -> tuple[float, float] | None:
+    """Intersect a click ray with the floor z = 0; None when it does not hit it."""
+    o = np.asarray(origin, dtype=float)
+    d = np.asarray(direction, dtype=float)
+    if abs(d[2]) < 1e-9:
+        return None
+    s = -o[2] / d[2]
+    if s <= 0:
+        return None
+    p = o + s * d
+    return float(p[0]), float(p[1])
+
+
+class ConsoleGui:
+    """Builds the panel on ``server.gui`` and keeps it in step with the loop's Frames.
+
+    Args:
+        server: a ``viser.ViserServer``.
+        loop: the control loop to command.
+        scene: the arena scene (for layer toggles).
+    """
+
+    def __init__(self, server: Any, loop: ControlLoop, scene: ArenaScene) -> None:
+        self.server, self.loop, self.scene = server, loop, scene
+        gui = server.gui
+        self.gui = gui
+        self._lock = threading.Lock()
+        self._reverting = False
+        self._bump_handles: dict[int, Any] = {}
+        self._series: dict[str, deque] = {k: deque(maxlen=PLOT_WINDOW) for k in
+                                          ("t", "dmin", "ds", "active", "H", "mpc", "tick_ms", "solve_ms")}
+        self._last_gui_update = 0.0
+        self._last_tick_time: float | None = None
+        self._t0: float | None = None
+        self._rate = 0.0
+        self.messages: deque[str] = deque(maxlen=6)
+
+        gui.configure_theme(show_share_button=False, control_width="large", dark_mode=False,
+                            brand_color=(40, 100, 200))
+        gui.set_panel_label("swarmdeck")
+        self.status = gui.add_markdown("starting…")
+        self.alerts = gui.add_markdown("")
+
+        with gui.add_folder("Run"):
+            self.run_button = gui.add_button("Run", color="green", icon=None)
+            self.pause_button = gui.add_button("Pause", color="gray")
+            self.step_button = gui.add_button("Step")
+            self.estop_button = gui.add_button("EMERGENCY STOP", color="red",
+                                               hint="Zero every command now (hotkey: space)")
+            self.release_button = gui.add_button("Release emergency stop", color="yellow")
+        self.estop_command = gui.add_command("Emergency stop", description="Zero every robot command",
+                                             hotkey="space")
+        self.run_button.on_click(lambda _: self.loop.run())
+        self.pause_button.on_click(lambda _: self.loop.pause())
+        self.step_button.on_click(lambda _: self.loop.step())
+        self.estop_button.on_click(lambda _: self.loop.estop())
+        self.release_button.on_click(lambda _: self.loop.release())
+        self.estop_command.on_trigger(lambda _: self.loop.estop())
+
+        bp = loop.behaviour_params
+        with gui.add_folder("Behaviour"):
+            options = list(BUILTIN)
+            if loop.behaviour_name not in options:
+                options.append(loop.behaviour_name)
+            self.behaviour = gui.add_dropdown("Behaviour", tuple(options), initial_value=loop.behaviour_name)
+            self.script_path = gui.add_text("Script path", initial_value="",
+                                            hint="A .py file defining behaviour(poses, t) -> (N, 2)")
+            self.load_script = gui.add_button("Load script")
+            self.kappa = gui.add_slider("κ (coverage gain)", min=0.1, max=5.0, step=0.1, initial_value=bp.kappa)
+            self.law = gui.add_dropdown("Coverage law", LAWS, initial_value=bp.law)
+            self.gain = gui.add_slider("Gain (rendezvous/goto)", min=0.1, max=5.0, step=0.1, initial_value=bp.gain)
+            self.edge = gui.add_slider("Formation edge (m)", min=0.2, max=1.0, step=0.05,
+                                       initial_value=bp.formation_edge)
+        self.behaviour.on_update(self._on_behaviour)
+        self.load_script.on_click(self._on_load_script)
+        self.kappa.on_update(lambda _: self._set_param(kappa=float(self.kappa.value)))
+        self.law.on_update(lambda _: self._set_param(law=str(self.law.value)))
+        self.gain.on_update(lambda _: self._set_param(gain=float(self.gain.value)))
+        self.edge.on_update(lambda _: self._set_param(formation_edge=float(self.edge.value)))
+
+        sp = loop.safety_params
+        with gui.add_folder("Safety barrier"):
+            self.barrier_on = gui.add_checkbox("Barrier on", initial_value=sp.enabled)
+            self.gamma = gui.add_slider("γ", min=1.0, max=1000.0, step=1.0, initial_value=sp.gamma)
+            self.d_s = gui.add_slider("D_s (m)", min=0.11, max=0.4, step=0.01, initial_value=sp.safety_distance)
+            self.class_k = gui.add_dropdown("κ(h)", ("cubic", "linear"), initial_value=sp.class_k)
+        self.barrier_on.on_update(self._on_barrier_toggle)
+        self.gamma.on_update(lambda _: self._set_safety(gamma=float(self.gamma.value)))
+        self.d_s.on_update(lambda _: self._set_safety(safety_distance=float(self.d_s.value)))
+        self.class_k.on_update(lambda _: self._set_safety(class_k=str(self.class_k.value)))
+        self.confirm_off = None
+        self.cancel_off = None
+        self._modal = None
+
+        dp = loop.density.params
+        with gui.add_folder("Density"):
+            self.moving = gui.add_checkbox("Circling bump", initial_value=dp.moving)
+            self.click_adds = gui.add_checkbox("Click on arena adds a bump", initial_value=True,
+                                               hint="Shift-click sends the robots there (goto)")
+            self.bump_select = gui.add_dropdown("Bump", ("none",), initial_value="none")
+            self.bump_sigma = gui.add_slider("σ (m)", min=0.05, max=1.0, step=0.01, initial_value=dp.bump_sigma)
+            self.bump_weight = gui.add_slider("Weight", min=0.0, max=5.0, step=0.1, initial_value=dp.bump_weight)
+            self.bump_remove = gui.add_button("Remove bump")
+            self.bump_clear = gui.add_button("Remove all bumps")
+        self.moving.on_update(lambda _: self.loop.set_moving_density(bool(self.moving.value)))
+        self.bump_select.on_update(self._on_bump_select)
+        self.bump_sigma.on_update(lambda _: self._edit_bump(sigma=float(self.bump_sigma.value)))
+        self.bump_weight.on_update(lambda _: self._edit_bump(weight=float(self.bump_weight.value)))
+        self.bump_remove.on_click(lambda _: self._remove_selected())
+        self.bump_clear.on_click(lambda _: self._remove_all())
+        server.scene.on_click()(self._on_scene_click)
+        server.scene.on_click(modifier="shift")(self._on_shift_click)
+
+        self.top_view = gui.add_button("Top view", hint="Put this tab's camera back above the arena")
+        self.top_view.on_click(self._on_top_view)
+        with gui.add_folder("Layers", expand_by_default=False):
+            self.layers = {name: gui.add_checkbox(name, initial_value=scene.visible[name]) for name in LAYERS}
+        for name, box in self.layers.items():
+            box.on_update(lambda _, name=name, box=box: self.scene.set_layer(name, bool(box.value)))
+
+        with gui.add_folder("Plots"):
+            empty = (np.zeros(1), np.zeros(1))
+            self.plot_dist = gui.add_uplot(
+                (np.zeros(1), np.zeros(1), np.zeros(1)),
+                ({"label": "t (s)"}, {"label": "min distance (m)", "stroke": "#1f77b4", "width": 2},
+                 {"label": "D_s", "stroke": "#d62728", "width": 1, "dash": [6, 4]}),
+                title="Minimum distance vs D_s", aspect=2.0, scales={"x": {"time": False}})
+            self.plot_active = gui.add_uplot(
+                empty, ({"label": "t (s)"}, {"label": "active constraints", "stroke": "#ff7f0e", "width": 2}),
+                title="Active barrier constraints", aspect=2.5, scales={"x": {"time": False}})
+            self.plot_H = gui.add_uplot(
+                (np.zeros(1), np.zeros(1), np.zeros(1)),
+                ({"label": "t (s)"}, {"label": "H", "stroke": "#2ca02c", "width": 2, "scale": "H"},
+                 {"label": "mean ‖p−c‖ (m)", "stroke": "#9467bd", "width": 2, "scale": "m"}),
+                title="Coverage cost H(t) and mean ‖p − c‖", aspect=2.0,
+                scales={"x": {"time": False}, "H": {"auto": True}, "m": {"auto": True}},
+                axes=({}, {"scale": "H"}, {"scale": "m", "side": 1}))
+            self.plot_tick = gui.add_uplot(
+                (np.zeros(1), np.zeros(1), np.zeros(1)),
+                ({"label": "t (s)"}, {"label": "tick (ms)", "stroke": "#17becf", "width": 2},
+                 {"label": "barrier solve (ms)", "stroke": "#8c564b", "width": 1}),
+                title="Tick time", aspect=2.5, scales={"x": {"time": False}})
+
+    # ------------------------------------------------------------------ helpers
+    def notify(self, text: str, client: Any = None, error: bool = True) -> None:
+        """Show a message in the panel (and as a notification to the tab that caused it)."""
+        self.messages.append(text)
+        self.loop.post(text)
+        if client is not None:
+            try:
+                client.add_notification("swarmdeck", text, auto_close_seconds=6.0, color="red" if error else None)
+            except Exception:  # a tab that disconnected mid-update
+                pass
+
+    def _set_param(self, **changes: Any) -> None:
+        try:
+            self.loop.set_params(**changes)
+        except ValueError as exc:
+            self.notify(f"parameter not changed: {exc}")
+
+    def _set_safety(self, **changes: Any) -> None:
+        try:
+            self.loop.set_safety(**changes)
+        except ValueError as exc:
+            self.notify(f"barrier not changed: {exc}")
+
+    def _on_behaviour(self, event: Any) -> None:
+        if self._reverting:
+            return
+        try:
+            self.loop.set_behaviour(str(self.behaviour.value))
+        except ValueError as exc:
+            self.notify(f"behaviour not changed: {exc}", getattr(event, "client", None))
+
+    def _on_load_script(self, event: Any) -> None:
+        path = str(self.script_path.value).strip()
+        name = f"script:{path}"
+        try:
+            self.loop.set_behaviour(name)
+        except ValueError as exc:
+            self.notify(f"script not loaded: {exc}", getattr(event, "client", None))
+            return
+        opts = tuple(o for o in self.behaviour.options if not o.startswith("script:")) + (name,)
+        self.behaviour.options = opts
+        self._reverting = True
+        try:
+            self.behaviour.value = name
+        finally:
+            self._reverting = False
+
+    def _on_barrier_toggle(self, event: Any) -> None:
+        if self._reverting:
+            return
+        if self.barrier_on.value:
+            self._set_safety(enabled=True)
+            return
+        # Turning the barrier off needs a confirmation; until then it stays on.
+        self._reverting = True
+        try:
+            self.barrier_on.value = True
+        finally:
+            self._reverting = False
+        self._open_confirmation()
+
+    def _open_confirmation(self) -> None:
+        if self._modal is not None:
+            return
+        self._modal = self.gui.add_modal("Turn the safety barrier off?")
+        with self._modal:
+            self.gui.add_markdown("Without the barrier certificates nothing keeps the robots from colliding "
+                                  "or leaving the arena. Only do this in simulation or with a hand on the "
+                                  "emergency stop.")
+            self.confirm_off = self.gui.add_button("Turn barrier OFF", color="red")
+            self.cancel_off = self.gui.add_button("Keep it on")
+        self.confirm_off.on_click(lambda _: self._close_confirmation(True))
+        self.cancel_off.on_click(lambda _: self._close_confirmation(False))
+
+    def _close_confirmation(self, off: bool) -> None:
+        if self._modal is not None:
+            self._modal.close()
+            self._modal = None
+        if off:
+            self._set_safety(enabled=False)
+            self._reverting = True
+            try:
+                self.barrier_on.value = False
+            finally:
+                self._reverting = False
+
+    def _on_top_view(self, event: Any) -> None:
+        client = getattr(event, "client", None)
+        if client is None:
+            return
+        cam = self.server.initial_camera
+        # position first: viser moves look_at along with the position, then look_at sets the aim
+        client.camera.fov = cam.fov
+        client.camera.position = cam.position
+        client.camera.look_at = cam.look_at
+        client.camera.up_direction = cam.up
+
+    # ------------------------------------------------------------------ bumps
+    def _on_scene_click(self, event: Any) -> None:
+        if not self.click_adds.value:
+            return
+        hit = ray_to_floor(event.ray_origin, event.ray_direction)
+        if hit is None:
+            return
+        self.add_bump(hit, getattr(event, "client", None))
+
+    def _on_shift_click(self, event: Any) -> None:
+        hit = ray_to_floor(event.ray_origin, event.ray_direction)
+        if hit is not None:
+            self.go_to(hit, getattr(event, "client", None))
+
+    def go_to(self, xy: tuple[float, float], client: Any = None) -> None:
+        """Shift-click: switch to ``goto`` with the robots gathering around ``xy`` (m)."""
+        x0, x1, y0, y1 = self.loop.config.bounds
+        if not (x0 <= xy[0] <= x1 and y0 <= xy[1] <= y1):
+            self.notify(f"goal ({xy[0]:.2f}, {xy[1]:.2f}) m is outside the arena", client)
+            return
+        try:
+            self.loop.set_params(goal_centre=(float(xy[0]), float(xy[1])))
+            if self.loop.behaviour_name != "goto":
+                self.loop.set_behaviour("goto")
+        except ValueError as exc:
+            self.notify(f"goal not set: {exc}", client)
+
+    def add_bump(self, xy: tuple[float, float], client: Any = None) -> int | None:
+        """Add a bump at ``xy`` (m) with the panel's σ and weight, with a drag handle."""
+        try:
+            bid = self.loop.add_bump(xy, float(self.bump_sigma.value), float(self.bump_weight.value))
+        except ValueError as exc:
+            self.notify(f"no bump added: {exc}", client)
+            return None
+        handle = self.server.scene.add_transform_controls(
+            f"/bumps/b{bid}", scale=0.3, disable_rotations=True, active_axes=(True, True, False),
+            depth_test=False, position=(float(xy[0]), float(xy[1]), 0.02))
+        handle.on_update(lambda _, bid=bid, handle=handle: self.loop.move_bump(bid, handle.position[:2]))
+        with self._lock:
+            self._bump_handles[bid] = handle
+        self._refresh_bump_options(select=bid)
+        return bid
+
+    def _refresh_bump_options(self, select: int | None = None) -> None:
+        with self._lock:
+            ids = sorted(self._bump_handles)
+        opts = tuple(f"bump {i}" for i in ids) or ("none",)
+        self.bump_select.options = opts
+        want = f"bump {select}" if select is not None else (opts[-1] if opts else "none")
+        if want in opts:
+            self.bump_select.value = want
+
+    def selected_bump(self) -> int | None:
+        v = str(self.bump_select.value)
+        return int(v.split()[1]) if v.startswith("bump ") else None
+
+    def _on_bump_select(self, _: Any) -> None:
+        bid = self.selected_bump()
+        b = self.loop.bumps.get(bid) if bid is not None else None
+        if b is None:
+            return
+        self._reverting = True
+        try:
+            self.bump_sigma.value = b.sigma
+            self.bump_weight.value = b.weight
+        finally:
+            self._reverting = False
+
+    def _edit_bump(self, **changes: float) -> None:
+        if self._reverting:
+            return
+        bid = self.selected_bump()
+        if bid is None:
+            return
+        try:
+            self.loop.update_bump(bid, **changes)
+        except ValueError as exc:
+            self.notify(f"bump not changed: {exc}")
+
+    def _remove_selected(self) -> None:
+        bid = self.selected_bump()
+        if bid is not None:
+            self.remove_bump(bid)
+
+    def remove_bump(self, bid: int) -> None:
+        self.loop.remove_bump(bid)
+        with self._lock:
+            handle = self._bump_handles.pop(bid, None)
+        if handle is not None:
+            handle.remove()
+        self._refresh_bump_options()
+
+    def _remove_all(self) -> None:
+        with self._lock:
+            ids = list(self._bump_handles)
+        for bid in ids:
+            self.remove_bump(bid)
+
+    # ------------------------------------------------------------------ per-frame update
+    def record(self, frame: Frame) -> None:
+        """Add one Frame's numbers to the plot series (cheap; every frame the viewer sees)."""
+        if self._last_tick_time is not None and frame.time > self._last_tick_time:
+            inst = 1.0 / (frame.time - self._last_tick_time)
+            self._rate = inst if self._rate == 0 else 0.9 * self._rate + 0.1 * inst
+        self._last_tick_time = frame.time
+        b, c = frame.barrier, frame.coverage
+        with self._lock:  # the viewer thread reads the series while the loop thread appends
+            self._append(frame, b, c)
+
+    def _append(self, frame: Frame, b: Any, c: Any) -> None:
+        s = self._series
+        if self._t0 is None:
+            self._t0 = frame.time
+        s["t"].append(frame.time - self._t0)  # seconds since the panel saw its first frame
+        s["dmin"].append(b.min_distance if b is not None and math.isfinite(b.min_distance) else math.nan)
+        s["ds"].append(frame.params.get("safety_distance", math.nan))
+        s["active"].append(b.n_active if b is not None else 0)
+        s["H"].append(c.cost_H if c is not None else math.nan)
+        s["mpc"].append(c.mean_centroid_distance if c is not None else math.nan)
+        s["tick_ms"].append(1e3 * frame.timing.get("total", math.nan))
+        s["solve_ms"].append(1e3 * b.solve_time_s if b is not None else math.nan)
+
+    def update(self, frame: Frame, force: bool = False, period: float = 0.25) -> None:
+        """Refresh plots and the status line at most every ``period`` s (wall time)."""
+        now = time.monotonic()
+        if not force and now - self._last_gui_update < period:
+            return
+        self._last_gui_update = now
+        with self._lock:
+            s = {k: np.asarray(v, dtype=float) for k, v in self._series.items()}
+        if len(s["t"]) >= 2:
+            self.plot_dist.data = (s["t"], s["dmin"], s["ds"])
+            self.plot_active.data = (s["t"], s["active"])
+            self.plot_H.data = (s["t"], s["H"], s["mpc"])
+            self.plot_tick.data = (s["t"], s["tick_ms"], s["solve_ms"])
+        self.status.content = self.status_line(frame)
+        self._sync_widgets(frame)
+        alerts = list(frame.alerts)
+        if frame.coverage is not None and frame.coverage.packing_warning:
+            alerts.append(f"packing: {frame.coverage.packing_warning}")
+        text = "\n".join(f"- ⚠ {a}" for a in alerts)
+        if self.messages:
+            text += ("\n\n" if text else "") + "\n".join(f"- {m}" for m in list(self.messages)[-3:])
+        self.alerts.content = text
+
+    def _sync_widgets(self, frame: Frame) -> None:
+        """Widgets follow changes made elsewhere (another tab's script, the API, a config file)."""
+        barrier_differs = (frame.barrier is not None and frame.barrier.enabled != self.barrier_on.value
+                           and self._modal is None)
+        if frame.behaviour == self.behaviour.value and not barrier_differs:
+            return
+        self._reverting = True
+        try:
+            if frame.behaviour != self.behaviour.value:
+                if frame.behaviour not in self.behaviour.options:
+                    self.behaviour.options = tuple(o for o in self.behaviour.options
+                                                   if not o.startswith("script:")) + (frame.behaviour,)
+                self.behaviour.value = frame.behaviour
+            if barrier_differs:
+                self.barrier_on.value = frame.barrier.enabled
+        finally:
+            self._reverting = False
+
+    def status_line(self, frame: Frame) -> str:
+        """The status text: state, tick rate, solver time, robots, input sources and their health."""
+        b = frame.barrier
+        state = {"running": "RUNNING", "paused": "PAUSED", "estop": "**EMERGENCY STOP**"}[frame.run_state]
+        solve = f"{1e3 * b.solve_time_s:.1f} ms" if b is not None and b.enabled else "off"
+        dmin = f"{b.min_distance:.3f} m" if b is not None and math.isfinite(b.min_distance) else "–"
+        lines = [
+            f"**{state}** · {frame.behaviour} · N = {frame.n} · t = {frame.run_time:.1f} s",
+            f"{self._rate:.1f} ticks/s · tick {1e3 * frame.timing.get('total', 0.0):.1f} ms · barrier {solve}"
+            f" · active {b.n_active if b is not None else 0} · min dist {dmin}",
+        ]
+        if frame.health:
+            lines.append(" · ".join(f"{k}: {v}" for k, v in frame.health.items()))
+        return "  \n".join(lines)

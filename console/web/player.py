@@ -1,0 +1,369 @@
+"""Playback of recorded sessions: the timeline logic and the viser player.
+
+:class:`Player` is the timeline with no I/O: a position in recording time
+(s since the first frame), play/pause, step, rate 0.1×–4×, loop and an A/B
+range, advanced by :meth:`Player.update` from any clock (virtual in tests).
+It reads frames from a :class:`~swarmdeck.console.recording.reader.Recording`
+(seeking through the chunk index, so long files seek as fast as short ones).
+
+:class:`PlayerApp` shows a recording in the browser: the console's own
+:class:`~swarmdeck.console.web.scene.ArenaScene` draws every Frame (live and
+playback differ only in where Frames come from), with a timeline panel
+(slider, play/pause, step, rate, loop, A/B), the layer toggles and plots of
+the frames shown. ``swarmdeck play FILE`` runs it.
+"""
+from __future__ import annotations
+
+import math
+import threading
+import time
+from collections import deque
+from collections.abc import Callable
+
+import numpy as np
+
+from swarmdeck.console.runtime.frame import Frame
+from swarmdeck.console.recording.reader import Recording
+
+RATE_MIN, RATE_MAX = 0.1, 4.0
+RATES: tuple[float, ...] = (0.1, 0.25, 0.5, 1.0, 2.0, 4.0)
+PLOT_BACKFILL = 5.0  # s of recording shown in the plots after a seek
+
+
+class Player:
+    """Timeline over a recording (no I/O). Times are recording time, s.
+
+    Args:
+        recording: an open recording with at least one frame.
+        clock: monotonic seconds used by :meth:`update` when ``now`` is omitted.
+    """
+
+    def __init__(self, recording: Recording, clock: Callable[[], float] = time.monotonic) -> None:
+        if recording.empty:
+            raise ValueError(f"{recording.path} holds no readable frame")
+        self.recording = recording
+        self.duration = recording.duration
+        self._clock = clock
+        self._lock = threading.RLock()
+        self._pos = 0.0
+        self._frame_t, self._frame = 0.0, recording.first_frame
+        self.playing = False
+        self.rate = 1.0
+        self.loop = False
+        self.a: float | None = None
+        self.b: float | None = None
+        self._last: float | None = None
+        self.version = 0  # bumps whenever the shown frame changes
+
+    # ------------------------------------------------------------------ state
+    @property
+    def position(self) -> float:
+        """Playback position, s since the first frame."""
+        return self._pos
+
+    @property
+    def frame(self) -> Frame:
+        """The frame shown at the position (the last frame at or before it)."""
+        return self._frame  # type: ignore[return-value]
+
+    @property
+    def frame_time(self) -> float:
+        """Recording time of :attr:`frame`, s."""
+        return self._frame_t
+
+    @property
+    def range(self) -> tuple[float, float]:
+        """The A/B range in force (the whole recording when unset), s."""
+        a = 0.0 if self.a is None else self.a
+        b = self.duration if self.b is None else self.b
+        return a, b
+
+    def _show(self, pos: float) -> None:
+        self._pos = min(max(pos, 0.0), self.duration)
+        hit = self.recording.frame_at(self._pos)
+        if hit is not None and (hit[1] is not self._frame):
+            self._frame_t, self._frame = hit
+            self.version += 1
+
+    # ------------------------------------------------------------------ commands
+    def seek(self, t: float) -> Frame:
+        """Jump to recording time ``t`` s (clamped to the recording); returns the frame shown."""
+        if not math.isfinite(t):
+            raise ValueError(f"seek time must be a finite number of seconds, got {t!r}")
+        with self._lock:
+            self._show(t)
+            self._last = None
+            return self.frame
+
+    def play(self) -> None:
+        """Start playing at the current rate (from A when outside the range or at its end)."""
+        with self._lock:
+            a, b = self.range
+            if self._pos < a or self._pos >= b:
+                self._show(a)
+            self.playing = True
+            self._last = None
+
+    def pause(self) -> None:
+        with self._lock:
+            self.playing = False
+            self._last = None
+
+    def toggle(self) -> bool:
+        """Play if paused, pause if playing; returns the new ``playing``."""
+        if self.playing:
+            self.pause()
+        else:
+            self.play()
+        return self.playing
+
+    def step(self, n: int = 1) -> Frame:
+        """Pause and move ``n`` frames forward (negative: backward); stops at the ends."""
+        with self._lock:
+            self.playing = False
+            self._last = None
+            for _ in range(abs(int(n))):
+                hit = (self.recording.frame_after(self._frame_t) if n > 0
+                       else self.recording.frame_before(self._frame_t))
+                if hit is None:
+                    break
+                self._pos = hit[0]
+                self._frame_t, self._frame = hit
+                self.version += 1
+            return self.frame
+
+    def set_rate(self, rate: float) -> None:
+        """Playback rate, ×; ValueError outside [0.1, 4]."""
+        if not (isinstance(rate, (int, float)) and RATE_MIN - 1e-9 <= rate <= RATE_MAX + 1e-9):
+            raise ValueError(f"rate must be between {RATE_MIN}x and {RATE_MAX}x, got {rate!r}")
+        with self._lock:
+            self.rate = float(rate)
+
+    def set_loop(self, on: bool) -> None:
+        self.loop = bool(on)
+
+    def set_range(self, a: float | None, b: float | None) -> None:
+        """Restrict play/loop to [a, b] s (None: the recording's start/end); ValueError if a ≥ b."""
+        aa = 0.0 if a is None else min(max(float(a), 0.0), self.duration)
+        bb = self.duration if b is None else min(max(float(b), 0.0), self.duration)
+        if not aa < bb:
+            raise ValueError(f"A/B range needs A < B, got A={aa:.3f} s, B={bb:.3f} s")
+        with self._lock:
+            self.a, self.b = (None if a is None else aa), (None if b is None else bb)
+
+    def set_a(self) -> None:
+        """A := the current position (B is dropped if it is not after A)."""
+        with self._lock:
+            b = self.b if self.b is not None and self.b > self._pos else None
+            if b is None and self._pos >= self.duration:
+                raise ValueError("A at the very end leaves an empty range")
+            self.set_range(self._pos, b)
+
+    def set_b(self) -> None:
+        """B := the current position (A is dropped if it is not before B)."""
+        with self._lock:
+            a = self.a if self.a is not None and self.a < self._pos else None
+            self.set_range(a, self._pos)
+
+    def clear_range(self) -> None:
+        with self._lock:
+            self.a = self.b = None
+
+    def update(self, now: float | None = None) -> bool:
+        """Advance a playing timeline to clock time ``now`` (s); True when the shown frame changed."""
+        with self._lock:
+            t = self._clock() if now is None else float(now)
+            if not self.playing:
+                self._last = t
+                return False
+            if self._last is None:
+                self._last = t
+                return False
+            before = self.version
+            pos = self._pos + (t - self._last) * self.rate
+            self._last = t
+            a, b = self.range
+            if pos >= b:
+                if self.loop and b > a:
+                    pos = a + (pos - b) % (b - a)
+                else:
+                    pos = b
+                    self.playing = False
+            self._show(pos)
+            return self.version != before
+
+
+class PlayerApp:
+    """A recording in the browser: the console's scene + a timeline panel.
+
+    Args:
+        recording: an open recording.
+        host, port: where viser listens (port 0 = any free port).
+        clock: for the playback thread.
+    """
+
+    def __init__(self, recording: Recording, host: str = "127.0.0.1", port: int = 8080,
+                 clock: Callable[[], float] = time.monotonic) -> None:
+        import viser
+
+        from swarmdeck.console.web.scene import LAYERS, ArenaScene
+
+        self.player = Player(recording, clock)
+        self.recording = recording
+        first = recording.first_frame
+        assert first is not None
+        self.server = viser.ViserServer(host=host, port=port, verbose=False)
+        self.scene = ArenaScene(self.server, bounds=first.bounds)
+        self._syncing = False
+        self._draw_lock = threading.RLock()
+        self._stop = threading.Event()
+        self._thread: threading.Thread | None = None
+        self._series: dict[str, deque] = {k: deque(maxlen=600) for k in ("t", "dmin", "ds", "H", "active")}
+        self._drawn_version = -1
+        gui = self.server.gui
+        gui.configure_theme(show_share_button=False, control_width="large", dark_mode=False,
+                            brand_color=(40, 100, 200))
+        gui.set_panel_label(f"swarmdeck playback: {recording.path.name}")
+        self.status = gui.add_markdown("")
+        dt = max(first.dt, 1e-3)
+        with gui.add_folder("Timeline"):
+            self.slider = gui.add_slider("Time (s)", min=0.0, max=max(self.player.duration, dt), step=dt,
+                                         initial_value=0.0)
+            self.play_button = gui.add_button("Play", icon=None)
+            self.back_button = gui.add_button("◀ Step")
+            self.fwd_button = gui.add_button("Step ▶")
+            self.rate = gui.add_dropdown("Rate", tuple(f"{r:g}x" for r in RATES), initial_value="1x")
+            self.loop = gui.add_checkbox("Loop", initial_value=False)
+            self.a_button = gui.add_button("Set A")
+            self.b_button = gui.add_button("Set B")
+            self.clear_button = gui.add_button("Clear A/B")
+            self.range_text = gui.add_markdown("A/B: whole recording")
+        with gui.add_folder("Layers", expand_by_default=False):
+            self._layer_boxes = {}
+            for name in LAYERS:
+                box = gui.add_checkbox(name, initial_value=self.scene.visible[name])
+                box.on_update(lambda _e, n=name, b=box: self._on_layer(n, b.value))
+                self._layer_boxes[name] = box
+        with gui.add_folder("Plots"):
+            self.plot_dist = gui.add_uplot(
+                (np.zeros(1), np.zeros(1), np.zeros(1)),
+                ({"label": "t (s)"}, {"label": "min distance (m)", "stroke": "#1f77b4", "width": 2},
+                 {"label": "D_s (m)", "stroke": "#d62728", "width": 1, "dash": [6, 4]}),
+                title="Minimum distance vs D_s", aspect=2.0, scales={"x": {"time": False}})
+            self.plot_active = gui.add_uplot(
+                (np.zeros(1), np.zeros(1)),
+                ({"label": "t (s)"}, {"label": "active constraints", "stroke": "#ff7f0e", "width": 2}),
+                title="Active barrier constraints", aspect=2.5, scales={"x": {"time": False}})
+            self.plot_H = gui.add_uplot(
+                (np.zeros(1), np.zeros(1)),
+                ({"label": "t (s)"}, {"label": "H", "stroke": "#2ca02c", "width": 2}),
+                title="Coverage cost H(t)", aspect=2.0, scales={"x": {"time": False}})
+        self.events = gui.add_markdown("")
+        self.slider.on_update(lambda _e: self._on_slider())
+        self.play_button.on_click(lambda _e: self._on_play())
+        self.back_button.on_click(lambda _e: self._after(self.player.step(-1)))
+        self.fwd_button.on_click(lambda _e: self._after(self.player.step(1)))
+        self.rate.on_update(lambda _e: self.player.set_rate(float(self.rate.value.rstrip("x"))))
+        self.loop.on_update(lambda _e: self.player.set_loop(self.loop.value))
+        self.a_button.on_click(lambda _e: self._range(self.player.set_a))
+        self.b_button.on_click(lambda _e: self._range(self.player.set_b))
+        self.clear_button.on_click(lambda _e: self._range(self.player.clear_range))
+        self.refresh(force=True)
+
+    @property
+    def port(self) -> int:
+        return int(self.server.get_port())
+
+    # ------------------------------------------------------------------ callbacks
+    def _on_layer(self, name: str, visible: bool) -> None:
+        self.scene.set_layer(name, visible)
+        self.refresh(force=True)
+
+    def _on_slider(self) -> None:
+        if self._syncing:
+            return
+        self.player.seek(float(self.slider.value))
+        self.refresh()
+
+    def _on_play(self) -> None:
+        self.player.toggle()
+        self.refresh(force=True)
+
+    def _after(self, _frame: Frame) -> None:
+        self.refresh()
+
+    def _range(self, action: Callable[[], None]) -> None:
+        try:
+            action()
+        except ValueError as exc:
+            self.range_text.content = f"A/B: {exc}"
+            return
+        a, b = self.player.range
+        self.range_text.content = ("A/B: whole recording" if self.player.a is None and self.player.b is None
+                                   else f"A/B: {a:.2f} s – {b:.2f} s")
+
+    def _sample(self, t: float, frame: Frame) -> None:
+        s = self._series
+        s["t"].append(t)
+        b = frame.barrier
+        s["dmin"].append(b.min_distance if b is not None and math.isfinite(b.min_distance) else float("nan"))
+        s["ds"].append(b.safety_distance if b is not None else 0.17)
+        s["active"].append(float(b.n_active) if b is not None else float("nan"))
+        s["H"].append(frame.coverage.cost_H if frame.coverage is not None else float("nan"))
+
+    def _reset_series(self) -> None:
+        for d in self._series.values():
+            d.clear()
+
+    # ------------------------------------------------------------------ drawing
+    def refresh(self, force: bool = False) -> None:
+        """Draw the player's frame if it changed, move the slider, update status and plots."""
+        with self._draw_lock:  # GUI callbacks and the playback thread both draw
+            self._refresh(force)
+
+    def _refresh(self, force: bool) -> None:
+        p = self.player
+        self.play_button.label = "Pause" if p.playing else "Play"
+        if p.version == self._drawn_version and not force:
+            return
+        self._drawn_version = p.version
+        frame = p.frame
+        self.scene.draw(frame)
+        self._syncing = True
+        try:
+            self.slider.value = round(p.frame_time, 6)
+        finally:
+            self._syncing = False
+        s = self._series
+        if s["t"] and not 0.0 < p.frame_time - s["t"][-1] <= 1.0:  # a jump: plot the seconds before it
+            self._reset_series()
+            for t, f in self.recording.frames(max(0.0, p.frame_time - PLOT_BACKFILL), p.frame_time):
+                self._sample(t, f)
+        self._sample(p.frame_time, frame)
+        self.plot_dist.data = tuple(np.asarray(s[k], dtype=float) for k in ("t", "dmin", "ds"))
+        self.plot_active.data = tuple(np.asarray(s[k], dtype=float) for k in ("t", "active"))
+        self.plot_H.data = tuple(np.asarray(s[k], dtype=float) for k in ("t", "H"))
+        state = "playing" if p.playing else "paused"
+        self.status.content = (f"**{state}** {p.rate:g}x · t = {p.frame_time:.2f} / {p.duration:.2f} s · "
+                               f"tick {frame.tick} · {frame.n} robots · {frame.behaviour} · {frame.run_state}")
+        notes = list(frame.events) + list(frame.alerts)
+        self.events.content = "\n".join(f"- {n}" for n in notes[-6:])
+
+    def _run(self, period: float) -> None:
+        while not self._stop.wait(period):
+            if self.player.update():
+                self.refresh()
+            elif not self.player.playing and self.play_button.label != "Play":
+                self.refresh(force=True)
+
+    def start(self, period: float = 1 / 30) -> "PlayerApp":
+        """Start the playback thread (advances and draws every ``period`` s)."""
+        self._thread = threading.Thread(target=self._run, args=(period,), name="swarmdeck-player", daemon=True)
+        self._thread.start()
+        return self
+
+    def close(self) -> None:
+        self._stop.set()
+        if self._thread is not None:
+            self._thread.join(2.0)
+        self.server.stop()

@@ -1,0 +1,405 @@
+"""The arena drawn in viser, top-down, as a function of Frames (live or played back).
+
+:class:`ArenaScene` owns the scene nodes under ``/arena``, ``/density``,
+``/voronoi``, ``/robots``, … of one viser server and updates them in place from
+a :class:`~swarmdeck.console.runtime.frame.Frame` inside a single ``server.atomic()``
+block per call to :meth:`ArenaScene.draw`. It keeps no state that a Frame does
+not give, except the trails (the last positions of consecutive Frames; a jump
+in the tick index resets them) and the geometry caches that depend on N.
+
+Layers (``LAYERS``), each toggleable with :meth:`ArenaScene.set_layer`:
+camera (the rectified overhead image of the Frame's ``image_ref``, when an
+image provider is given), grid, density heat map, Voronoi edges, filled cells, centroids, robots,
+labels, nominal arrows, safe arrows, barrier pairs, safety discs, trails,
+contacts. Colours: robots blue; robots whose command the barrier changed
+orange; stopped (emergency stop) red; paused slate; not seen grey.
+"""
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from swarmdeck.console.runtime.frame import Frame
+
+LAYERS: tuple[str, ...] = (
+    "camera", "grid", "density", "voronoi", "cells", "centroids", "robots", "labels", "nominal", "safe",
+    "barrier", "discs", "trails", "contacts",
+)
+DEFAULT_OFF = frozenset({"cells"})
+
+ROBOT = np.array([20, 70, 170], dtype=np.uint8)
+CHANGED = np.array([255, 140, 0], dtype=np.uint8)
+STOPPED = np.array([210, 30, 30], dtype=np.uint8)
+PAUSED = np.array([90, 110, 140], dtype=np.uint8)
+UNSEEN = np.array([160, 160, 160], dtype=np.uint8)
+
+# Heat map colours (low → high φ): near-white → light orange → red-orange.
+_LUT_STOPS = np.array([[250, 250, 246], [254, 227, 180], [253, 174, 97], [227, 74, 51]], dtype=float)
+_EMPTY_SEG = np.array([[[0.0, 0.0, -5.0], [0.0, 0.0, -5.0]]], dtype=np.float32)
+
+
+def _lut() -> NDArray[np.uint8]:
+    x = np.linspace(0.0, 1.0, 256)
+    xp = np.linspace(0.0, 1.0, len(_LUT_STOPS))
+    return np.column_stack([np.interp(x, xp, _LUT_STOPS[:, c]) for c in range(3)]).astype(np.uint8)
+
+
+LUT = _lut()
+
+
+@dataclass(frozen=True)
+class SceneStyle:
+    """Sizes in m (world units) and sampling of the drawing."""
+
+    heatmap_px_per_m: float = 50.0
+    arrow_scale: float = 1.5  # s: an arrow is the distance travelled in this time
+    trail_length: int = 40
+    trail_every: int = 3  # ticks between trail samples
+    disc_segments: int = 20
+    label_offset: float = 0.07
+    label_step: float = 0.01  # m a robot moves before its label is moved
+
+
+def robot_mesh(radius: float) -> tuple[NDArray[np.float32], NDArray[np.uint32]]:
+    """A flat teardrop pointing along +x (a disc with a nose): vertices (V, 3), faces (F, 3)."""
+    ang = np.linspace(math.radians(35), math.radians(325), 22)
+    rim = np.column_stack((radius * np.cos(ang), radius * np.sin(ang)))
+    rim = np.vstack((rim, [[1.5 * radius, 0.0]]))
+    verts = np.vstack(([[0.0, 0.0]], rim))
+    verts = np.column_stack((verts, np.zeros(len(verts)))).astype(np.float32)
+    m = len(rim)
+    faces = np.array([[0, 1 + i, 1 + (i + 1) % m] for i in range(m)], dtype=np.uint32)
+    return verts, faces
+
+
+def heatmap(density: Any, bounds: tuple[float, float, float, float], px_per_m: float) -> NDArray[np.uint8]:
+    """RGB image (H, W, 3) of φ over the arena, row 0 at y_max, colour-mapped by φ / max φ."""
+    x0, x1, y0, y1 = bounds
+    w = max(2, int(round((x1 - x0) * px_per_m)))
+    h = max(2, int(round((y1 - y0) * px_per_m)))
+    xs = x0 + (np.arange(w) + 0.5) * (x1 - x0) / w
+    ys = y1 - (np.arange(h) + 0.5) * (y1 - y0) / h
+    gx, gy = np.meshgrid(xs, ys)
+    phi = density.evaluate(np.stack((gx, gy), axis=-1))
+    top = float(phi.max())
+    idx = np.zeros(phi.shape, dtype=np.intp) if top <= 0 else np.clip(phi / top * 255.0, 0, 255).astype(np.intp)
+    return LUT[idx]
+
+
+def _segments_2d(a: NDArray[np.float64], b: NDArray[np.float64], z: float) -> NDArray[np.float32]:
+    """(K, 2, 3) segments from (K, 2) starts and ends at height z; a hidden stub when K = 0."""
+    if len(a) == 0:
+        return _EMPTY_SEG
+    out = np.empty((len(a), 2, 3), dtype=np.float32)
+    out[:, 0, :2], out[:, 1, :2] = a, b
+    out[:, :, 2] = z
+    return out
+
+
+def _yaw_wxyz(theta: NDArray[np.float64]) -> NDArray[np.float32]:
+    h = 0.5 * theta
+    return np.column_stack((np.cos(h), np.zeros_like(h), np.zeros_like(h), np.sin(h))).astype(np.float32)
+
+
+def robot_colors(frame: Frame) -> NDArray[np.uint8]:
+    """(N, 3) colours by state: stopped red, paused slate, unseen grey, changed by the barrier orange, else blue."""
+    n = frame.n
+    cols = np.tile(ROBOT, (n, 1))
+    if frame.barrier is not None and len(frame.barrier.intervention) == n:
+        cols[frame.barrier.intervention > 1e-3] = CHANGED
+    if frame.run_state == "estop":
+        cols[:] = STOPPED
+    elif frame.run_state == "paused":
+        cols[:] = PAUSED
+    cols[~frame.seen] = UNSEEN
+    return cols
+
+
+def h_colors(h: NDArray[np.float64], d_s: float) -> NDArray[np.uint8]:
+    """(K, 2, 3) colours for active pairs by barrier value h (m²): red at h ≤ 0 → yellow at h ≥ 0.1."""
+    s = np.clip(np.asarray(h, dtype=float) / 0.1, 0.0, 1.0)
+    c = np.column_stack((np.full_like(s, 230), 40 + 180 * s, 20 + 20 * s)).astype(np.uint8)
+    return np.repeat(c[:, None, :], 2, axis=1)
+
+
+class ArenaScene:
+    """Draw Frames into ``server.scene`` (shared by every browser tab). See the module docstring.
+
+    Args:
+        server: a ``viser.ViserServer``.
+        bounds: the arena rectangle (x_min, x_max, y_min, y_max), m.
+        robot_radius: body radius for the robot glyph, m.
+        style: sizes and sampling.
+    """
+
+    def __init__(self, server: Any, bounds: tuple[float, float, float, float] = (-1.6, 1.6, -1.0, 1.0),
+                 robot_radius: float = 0.055, style: SceneStyle | None = None,
+                 image_provider: Callable[[str], Any] | None = None) -> None:
+        self.server = server
+        self.image_provider = image_provider
+        self._image_ref: str | None = None
+        self.scene = server.scene
+        self.bounds = tuple(float(b) for b in bounds)
+        self.style = style or SceneStyle()
+        self.robot_radius = robot_radius
+        self.visible = {name: name not in DEFAULT_OFF for name in LAYERS}
+        self._n = -1
+        self._labels: list[Any] = []
+        self._last_tick: int | None = None
+        self._trail: NDArray[np.float64] | None = None
+        self._trail_count = 0
+        self._h: dict[str, Any] = {}
+        self.frames_drawn = 0
+        self._setup_static()
+
+    # ------------------------------------------------------------------ setup
+    def _setup_static(self) -> None:
+        sc = self.scene
+        x0, x1, y0, y1 = self.bounds
+        cx, cy, w, h = (x0 + x1) / 2, (y0 + y1) / 2, x1 - x0, y1 - y0
+        sc.configure_environment_map(None)
+        sc.set_up_direction("+z")
+        # Top-down: a narrow perspective from high above (viser has no orthographic camera). The view
+        # is shifted right by ~half the control panel so the arena sits in the visible part of a
+        # 1280×800 window (REFERENCE.md §8).
+        cam = self.server.initial_camera
+        fov = math.radians(20.0)
+        view_h = max(h, w / 1.1) * 1.17
+        cam.fov = fov
+        cam.look_at = (cx + 0.24 * view_h, cy, 0.0)
+        cam.position = (cx + 0.24 * view_h, cy, 0.5 * view_h / math.tan(fov / 2))
+        cam.up = (0.0, 1.0, 0.0)
+        corners = np.array([[x0, y0], [x1, y0], [x1, y1], [x0, y1]])
+        self._h["boundary"] = sc.add_line_segments(
+            "/arena/boundary", _segments_2d(corners, np.roll(corners, -1, axis=0), 0.004), (40, 40, 40),
+            thickness=0.015)
+        self._h["grid"] = sc.add_grid("/arena/grid", width=w, height=h, plane="xy", cell_size=0.1, section_size=0.5,
+                                      cell_color=(215, 215, 215), section_color=(170, 170, 170),
+                                      position=(cx, cy, -0.004), shadow_opacity=0.0)
+        blank = np.full((8, 8, 3), 250, dtype=np.uint8)
+        self._h["density"] = sc.add_image("/density", blank, render_width=w, render_height=h, format="jpeg",
+                                          jpeg_quality=90, position=(cx, cy, -0.01), wxyz=(0.0, 1.0, 0.0, 0.0),
+                                          cast_shadow=False, receive_shadow=False)
+        self._h["voronoi"] = sc.add_line_segments("/voronoi", _EMPTY_SEG, (60, 60, 60), thickness=0.006)
+        self._h["cells"] = None
+        self._h["camera"] = None
+        self._h["centroids"] = sc.add_point_cloud("/centroids", np.zeros((1, 3), np.float32) - [0, 0, 5],
+                                                  (200, 30, 60), point_size=0.035, point_shape="diamond",
+                                                  precision="float32")
+        self._h["trails"] = sc.add_line_segments("/trails", _EMPTY_SEG, (120, 160, 220), thickness=0.006)
+        self._h["discs"] = sc.add_line_segments("/discs", _EMPTY_SEG, (120, 120, 120), thickness=0.004)
+        self._h["barrier"] = sc.add_line_segments("/barrier", _EMPTY_SEG, (230, 40, 20), thickness=0.014)
+        stub = np.array([[[0, 0, -5], [0.001, 0, -5]]], dtype=np.float32)
+        self._h["nominal"] = sc.add_arrows("/arrows/nominal", stub, (130, 130, 130), shaft_radius=0.006,
+                                           head_radius=0.016, head_length=0.03)
+        self._h["safe"] = sc.add_arrows("/arrows/safe", stub, (20, 150, 60), shaft_radius=0.007,
+                                        head_radius=0.018, head_length=0.03)
+        self._h["contacts"] = sc.add_point_cloud("/contacts", np.zeros((1, 3), np.float32) - [0, 0, 5],
+                                                 (200, 0, 200), point_size=0.07, point_shape="circle",
+                                                 precision="float32")
+        for name in LAYERS:
+            self._apply_visibility(name)
+
+    def _setup_robots(self, frame: Frame) -> None:
+        n = frame.n
+        sc = self.scene
+        verts, faces = robot_mesh(self.robot_radius)
+        pos = np.column_stack((frame.poses[:, :2], np.full(n, 0.01))).astype(np.float32)
+        self._h["robots"] = sc.add_batched_meshes_simple(
+            "/robots", verts, faces, batched_wxyzs=_yaw_wxyz(frame.poses[:, 2]), batched_positions=pos,
+            batched_colors=robot_colors(frame), flat_shading=True, cast_shadow=False, receive_shadow=False)
+        for lab in self._labels:
+            lab.remove()
+        self._labels = [
+            sc.add_label(f"/labels/r{int(i)}", str(int(i)), position=(float(p[0]), float(p[1]) + self.style.label_offset, 0.02),
+                         font_size_mode="screen", font_screen_scale=0.8, anchor="center-center",
+                         visible=self.visible["labels"])
+            for i, p in zip(frame.ids, frame.poses)
+        ]
+        self._label_xy = frame.poses[:, :2].copy()
+        self._n = n
+        self._trail = None
+        self._apply_visibility("robots")
+
+    # ------------------------------------------------------------------ layers
+    def _apply_visibility(self, name: str) -> None:
+        if name == "labels":
+            for lab in self._labels:
+                lab.visible = self.visible["labels"]
+            return
+        h = self._h.get(name)
+        if h is not None:
+            h.visible = self.visible[name]
+
+    def set_layer(self, name: str, visible: bool) -> None:
+        """Show or hide one layer (``LAYERS``); ValueError for unknown names."""
+        if name not in LAYERS:
+            raise ValueError(f"unknown layer {name!r}; layers are {', '.join(LAYERS)}")
+        self.visible[name] = bool(visible)
+        if name == "cells" and not visible and self._h.get("cells") is not None:
+            self._h["cells"].remove()
+            self._h["cells"] = None
+        self._apply_visibility(name)
+
+    # ------------------------------------------------------------------ drawing
+    def draw(self, frame: Frame) -> None:
+        """Update every visible layer from ``frame`` in one atomic viser update."""
+        with self.server.atomic():
+            self._draw(frame)
+        self.frames_drawn += 1
+
+    def _draw(self, frame: Frame) -> None:
+        v = self.visible
+        st = self.style
+        if frame.n != self._n:
+            self._setup_robots(frame)
+        pts = frame.points
+        poses = frame.poses
+        if v["robots"]:
+            h = self._h["robots"]
+            h.batched_positions = np.column_stack((poses[:, :2], np.full(frame.n, 0.01))).astype(np.float32)
+            h.batched_wxyzs = _yaw_wxyz(poses[:, 2])
+            h.batched_colors = robot_colors(frame)
+        if v["labels"]:
+            # One message per label: only move labels whose robot moved more than label_step since
+            # the label was last placed (cheap at N = 100; a label lags its robot by < label_step).
+            moved = np.flatnonzero(np.linalg.norm(poses[:, :2] - self._label_xy, axis=1) > st.label_step)
+            for i in moved:
+                self._labels[i].position = (float(poses[i, 0]), float(poses[i, 1]) + st.label_offset, 0.02)
+            self._label_xy[moved] = poses[moved, :2]
+        if v["camera"] and frame.image_ref is not None and self.image_provider is not None \
+                and frame.image_ref != self._image_ref:
+            self._draw_camera(frame.image_ref)
+        if v["density"] and frame.density is not None:
+            self._h["density"].image = heatmap(frame.density, self.bounds, st.heatmap_px_per_m)
+        cov = frame.coverage
+        if v["voronoi"]:
+            if cov is not None and len(cov.edges):
+                segs = np.empty((len(cov.edges), 2, 3), dtype=np.float32)
+                segs[:, :, :2] = cov.edges
+                segs[:, :, 2] = 0.003
+            else:
+                segs = _EMPTY_SEG
+            self._h["voronoi"].points = segs
+        if v["centroids"]:
+            c = cov.centroids if cov is not None else np.zeros((0, 2))
+            cp = np.column_stack((c, np.full(len(c), 0.006))).astype(np.float32) if len(c) else \
+                np.array([[0, 0, -5]], dtype=np.float32)
+            self._h["centroids"].points = cp
+        if v["cells"]:
+            self._draw_cells(frame)
+        if v["nominal"]:
+            self._h["nominal"].points = self._arrows(pts, frame.nominal, 0.02)
+        if v["safe"]:
+            self._h["safe"].points = self._arrows(pts, frame.safe, 0.025)
+        b = frame.barrier
+        if v["barrier"]:
+            h = self._h["barrier"]
+            if b is not None and len(b.active_pairs) and b.active_pairs.max() < frame.n:
+                pairs = b.active_pairs
+                h.points = _segments_2d(pts[pairs[:, 0]], pts[pairs[:, 1]], 0.008)
+                h.colors = h_colors(b.active_h, b.safety_distance)
+            else:
+                h.points = _EMPTY_SEG
+                h.colors = np.array([230, 40, 20], dtype=np.uint8)
+        if v["discs"]:
+            d_s = b.safety_distance if b is not None else 0.17
+            self._h["discs"].points = self._discs(pts, 0.5 * d_s)
+        self._update_trails(frame)  # accumulates even while hidden, so showing trails is instant
+        if v["contacts"]:
+            c = frame.contacts.positions
+            cp = np.column_stack((c, np.full(len(c), 0.012))).astype(np.float32) if len(c) else \
+                np.array([[0, 0, -5]], dtype=np.float32)
+            self._h["contacts"].points = cp
+
+    def _draw_camera(self, ref: str) -> None:
+        """The overhead image (RGB, row 0 at y_max, covering its bounds) just above the heat map."""
+        got = self.image_provider(ref)
+        if got is None:
+            return
+        img, (x0, x1, y0, y1) = got
+        self._image_ref = ref
+        h = self._h.get("camera")
+        if h is None:
+            self._h["camera"] = self.scene.add_image(
+                "/camera", np.asarray(img), render_width=x1 - x0, render_height=y1 - y0, format="jpeg",
+                jpeg_quality=80, position=((x0 + x1) / 2, (y0 + y1) / 2, -0.008), wxyz=(0.0, 1.0, 0.0, 0.0),
+                cast_shadow=False, receive_shadow=False, visible=self.visible["camera"])
+        else:
+            h.image = np.asarray(img)
+
+    def _arrows(self, start: NDArray[np.float64], u: NDArray[np.float64], z: float) -> NDArray[np.float32]:
+        end = start + self.style.arrow_scale * u
+        tiny = np.linalg.norm(u, axis=1) < 1e-4
+        end[tiny] = start[tiny] + np.array([1e-4, 0.0])
+        out = np.empty((len(start), 2, 3), dtype=np.float32)
+        out[:, 0, :2], out[:, 1, :2] = start, end
+        out[:, :, 2] = z
+        if tiny.all():
+            out[:, :, 2] = -5.0
+        return out
+
+    def _discs(self, centres: NDArray[np.float64], r: float) -> NDArray[np.float32]:
+        k = self.style.disc_segments
+        a = np.linspace(0, 2 * np.pi, k + 1)
+        ring = r * np.column_stack((np.cos(a), np.sin(a)))
+        p = centres[:, None, :] + ring[None, :, :]  # (N, k+1, 2)
+        return _segments_2d(p[:, :-1].reshape(-1, 2), p[:, 1:].reshape(-1, 2), 0.002)
+
+    def _update_trails(self, frame: Frame) -> None:
+        st = self.style
+        L = st.trail_length
+        xy = frame.poses[:, :2]
+        consecutive = self._last_tick is not None and frame.tick == self._last_tick + 1
+        self._last_tick = frame.tick
+        if self._trail is None or not consecutive or self._trail.shape[1] != frame.n:
+            self._trail = np.repeat(xy[None], L, axis=0)
+            self._trail_count = 0
+            self._trail_colors = None
+        elif frame.tick % st.trail_every == 0:
+            self._trail = np.roll(self._trail, -1, axis=0)
+            self._trail[-1] = xy
+        else:
+            return
+        if not self.visible["trails"]:
+            return
+        tr = self._trail  # (L, N, 2), oldest first
+        a = tr[:-1].transpose(1, 0, 2).reshape(-1, 2)
+        b = tr[1:].transpose(1, 0, 2).reshape(-1, 2)
+        h = self._h["trails"]
+        if self._trail_colors is None:
+            fade = np.linspace(0.0, 1.0, L - 1)
+            c = (np.array([235, 240, 250])[None] * (1 - fade[:, None]) + np.array([70, 120, 210])[None] * fade[:, None])
+            c = np.tile(c, (frame.n, 1)).astype(np.uint8)
+            self._trail_colors = np.repeat(c[:, None, :], 2, axis=1)
+        h.points = _segments_2d(a, b, 0.001)
+        h.colors = self._trail_colors
+
+    def _draw_cells(self, frame: Frame) -> None:
+        cov = frame.coverage
+        old = self._h.get("cells")
+        if cov is None or len(cov.cell_offsets) < 2:
+            if old is not None:
+                old.remove()
+                self._h["cells"] = None
+            return
+        import trimesh
+
+        o = cov.cell_offsets
+        verts = np.column_stack((cov.cell_vertices, np.full(len(cov.cell_vertices), -0.006)))
+        counts = np.diff(o)
+        cell_of = np.repeat(np.arange(len(counts)), np.maximum(counts - 2, 0))
+        start = o[cell_of]
+        k = np.arange(len(cell_of)) - np.repeat(np.cumsum(np.maximum(counts - 2, 0)) - np.maximum(counts - 2, 0),
+                                                np.maximum(counts - 2, 0))
+        faces = np.column_stack((start, start + k + 1, start + k + 2))
+        m = cov.masses / max(float(cov.masses.max()), 1e-12)
+        shade = (np.array([200, 220, 255])[None] * (1 - m[:, None]) + np.array([60, 110, 220])[None] * m[:, None])
+        face_colors = np.column_stack((shade[cell_of], np.full(len(cell_of), 90))).astype(np.uint8)
+        mesh = trimesh.Trimesh(vertices=verts, faces=faces, face_colors=face_colors, process=False)
+        self._h["cells"] = self.scene.add_mesh_trimesh("/cells", mesh)

@@ -1,0 +1,188 @@
+"""Networked robots as the console loop's pose source and command sink (``--robots-via mqtt://…``).
+
+:class:`NetworkRobots` has the two duck-typed interfaces of
+``swarmdeck.console.runtime.ports`` — ``read() -> (ids, poses, seen)`` and
+``send(ids, v, w)`` / ``hold()`` / ``health()`` / ``close()`` — on top of any
+:class:`~swarmdeck.devices.net.transport.RobotTransport` that is also a
+:class:`~swarmdeck.devices.net.transport.PoseSource` (the MQTT transport: poses
+from ``overhead_tracker/all_robot_pose_data``, i.e. ``swarmdeck robots`` or a
+real tracker). Commands pass through a
+:class:`~swarmdeck.devices.net.streamer.CommandStreamer`, which also keeps
+streaming (zeros, once inputs are stale) from a background thread if the loop
+stalls.
+
+Robots the transport reports missing or duplicated are left out of
+:meth:`NetworkRobots.read` (excluded from control) and returned by
+:meth:`NetworkRobots.obstacles` at their last known position, for
+``SafetyFilter.filter(points, nominal, obstacles=robots.obstacles())``.
+"""
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from swarmdeck.devices.net.mqtt_config import parse_broker_url, redact_url
+from swarmdeck.devices.net.streamer import CommandStreamer, StreamerConfig
+from swarmdeck.devices.net.transport_mqtt import LinkTimeouts, MqttTransport
+
+
+@dataclass(frozen=True)
+class SensedRobots:
+    """One reading (same fields as ``swarmdeck.console.runtime.ports.SensedPoses``).
+
+    Attributes:
+        ids: ``(N,)`` robot ids under control.
+        poses: ``(N, 3)`` last known poses, m / rad.
+        seen: ``(N,)`` pose younger than the streamer's pose timeout (0.1 s).
+    """
+
+    ids: NDArray[np.int64]
+    poses: NDArray[np.float64]
+    seen: NDArray[np.bool_]
+
+
+class NetworkRobots:
+    """Robots behind a transport, for the console loop.
+
+    Args:
+        transport: a started transport that also gives poses (``latest_poses()``).
+        ids: robot ids to control (None: every robot the transport hears of).
+        streamer: watchdog thresholds and the background streaming period.
+        background: keep a background streaming thread (zeros flow even if the loop hangs).
+        clock: the transport's monotonic clock.
+        name: shown in the console's status bar.
+    """
+
+    def __init__(
+        self,
+        transport: MqttTransport,
+        ids: ArrayLike | None = None,
+        *,
+        streamer: StreamerConfig = StreamerConfig(),
+        background: bool = True,
+        clock: Callable[[], float] = time.monotonic,
+        name: str = "mqtt",
+    ) -> None:
+        self.transport = transport
+        self.name = name
+        self.clock = clock
+        self.ids = None if ids is None else np.asarray(ids, dtype=np.int64).reshape(-1).copy()
+        self.streamer = CommandStreamer(transport, transport, streamer, clock)
+        if background:
+            self.streamer.start()
+
+    @classmethod
+    def connect(
+        cls,
+        url: str,
+        ids: ArrayLike | None = None,
+        *,
+        n_robots: int | None = None,
+        wait_for_poses: float = 5.0,
+        timeouts: LinkTimeouts = LinkTimeouts(),
+        streamer: StreamerConfig = StreamerConfig(),
+        **mqtt: object,
+    ) -> "NetworkRobots":
+        """Connect to ``url`` and wait up to ``wait_for_poses`` s for the first pose of every robot.
+
+        ``ids`` (or ``n_robots`` for ids 0..N−1) fixes the robots to control; with neither,
+        every robot heard of within ``wait_for_poses`` is used. Extra keywords go to
+        :class:`~swarmdeck.devices.net.mqtt_config.MqttConfig` (``qos``, ``protocol``, ``ca_certs``, …).
+
+        Raises:
+            ValueError: bad URL, or no robot (or not every named robot) sent a pose in time;
+                the message names the missing ids and the link state.
+        """
+        if ids is None and n_robots is not None:
+            ids = np.arange(int(n_robots))
+        cfg = parse_broker_url(url, **mqtt)
+        transport = MqttTransport(cfg, ids=ids, timeouts=timeouts).start()
+        try:
+            deadline = time.monotonic() + wait_for_poses
+            while True:
+                seen = transport.latest_poses().ids
+                if ids is not None:
+                    missing = np.setdiff1d(np.asarray(ids, dtype=np.int64), seen)
+                    if not len(missing):
+                        break
+                elif len(seen) and time.monotonic() > deadline - wait_for_poses / 2:
+                    break  # robots heard of; half the wait spent collecting stragglers
+                if time.monotonic() > deadline:
+                    st = transport.status().state
+                    what = f"robot id(s) {missing.tolist()}" if ids is not None else "any robot"
+                    raise ValueError(f"no pose from {what} on {cfg.url} within {wait_for_poses} s ({st}); "
+                                     f"is `swarmdeck robots --broker {redact_url(url)}` (or the tracker) running?")
+                time.sleep(0.02)
+        except BaseException:
+            transport.close()
+            raise
+        return cls(transport, ids, streamer=streamer)
+
+    # ---------------------------------------------------------------- pose source
+    def read(self, now: float | None = None) -> SensedRobots:
+        """Robots under control (not missing/duplicated) with their last known poses and freshness.
+
+        ``now`` (the loop's clock) is accepted for the console's PoseSource protocol and not used:
+        freshness is judged on this transport's own monotonic clock.
+        """
+        sample = self.transport.latest_poses()
+        ids = sample.ids if self.ids is None else self.ids
+        ids = np.setdiff1d(ids, self.transport.excluded(), assume_unique=True)
+        poses, stamps = sample.select(ids)
+        known = np.all(np.isfinite(poses), axis=1)
+        ids, poses, stamps = ids[known], poses[known], stamps[known]
+        seen = (self.clock() - stamps) <= self.streamer.config.pose_timeout
+        return SensedRobots(ids.astype(np.int64), poses, seen)
+
+    def obstacles(self) -> NDArray[np.float64]:
+        """``(M, 2)`` last known centres of robots excluded from control (fixed obstacles), m."""
+        return self.streamer.obstacles()
+
+    # ---------------------------------------------------------------- command sink
+    def send(self, ids: ArrayLike, v: ArrayLike, w: ArrayLike, leds: ArrayLike | None = None) -> None:
+        """Hand this tick's commands to the streamer and send them at once (watchdogs applied)."""
+        self.streamer.submit(ids, v, w, leds)
+        self.streamer.tick()
+
+    def hold(self) -> None:
+        """Paused: every robot under control gets zero."""
+        ids = self.read().ids
+        self.streamer.submit(ids, np.zeros(len(ids)), np.zeros(len(ids)))
+        self.streamer.tick()
+
+    def health(self) -> str:
+        """One line for the status bar: link, robots ok/stale/missing, battery, command age, problems."""
+        st = self.transport.status()
+        links = st.robots.link
+        counts = {k: links.count(k) for k in ("ok", "stale", "missing", "duplicate", "unknown") if links.count(k)}
+        batt = st.robots.battery_voltage[np.isfinite(st.robots.battery_voltage)]
+        age = st.robots.command_age[np.isfinite(st.robots.command_age)]
+        parts = [("connected" if st.connected else "DISCONNECTED: " + st.state),
+                 ", ".join(f"{v} {k}" for k, v in counts.items()) or "no robots"]
+        if len(batt):
+            parts.append(f"battery min {batt.min():.2f} V")
+        if len(age):
+            parts.append(f"cmd age max {age.max():.2f} s")
+        c = self.streamer.counters.snapshot()
+        bad = {k: v for k, v in st.counters.items()
+               if k not in ("commands_sent", "pose_messages", "status_received", "reconnects")}
+        if bad or c.get("undelivered_ticks"):
+            parts.append(f"problems {dict(bad, undelivered_ticks=c.get('undelivered_ticks', 0))}")
+        return "; ".join(parts)
+
+    def robot_health(self) -> dict:
+        """Per robot ``{"<id>": {link, battery_voltage, charging, command_age, status_age}}`` (JSON-able)."""
+        return self.transport.status().robots.to_dict()
+
+    def events(self) -> tuple[str, ...]:
+        """Recent watchdog events (stale poses/inputs, exclusions, delivery lost/regained)."""
+        return tuple(self.streamer.events)
+
+    def close(self) -> None:
+        """Stop streaming, command zero once, disconnect."""
+        self.streamer.stop()
+        self.transport.close()
