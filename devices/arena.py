@@ -4,10 +4,11 @@ User code talks to one :class:`Arena` whether the robots are simulated or
 real. Each step the current command — wheel speeds, unicycle ``(v, ω)``,
 single-integrator velocities of the look-ahead points, go-to-goal positions or
 poses, waypoint lists, or "next position" difference equations — is converted
-to single-integrator velocities of the look-ahead points, passed through the
-safety filter (on by default), mapped back to ``(v, ω)`` through the
-look-ahead diffeomorphism and sent to the robots, which apply the wheel limits.
-So limits and safety are enforced in exactly one place, whatever the level.
+to single-integrator velocities of the look-ahead points and handed to
+:func:`~swarmdeck.devices.pipeline.certify`: the look-ahead map to ``(v, ω)``,
+the wheel limits by one uniform scale per robot, the safety filter (on by
+default) and fail-stop. The console's control loop calls the same function, so
+an experiment and the console drive robots identically, whatever the level.
 
 Arrays follow swarmdeck's convention: one row per robot. Commands persist
 until replaced (as in rps); ``ids`` selects a subset of robots to update.
@@ -31,8 +32,9 @@ from swarmdeck.devices.controllers import (
     clf_unicycle_position_controller,
     si_position_controller,
 )
-from swarmdeck.devices.gritsbot import GritsBotParams, limit_unicycle, wheels_to_unicycle
-from swarmdeck.core.kinematics import lookahead_points, si_to_unicycle, unicycle_to_si
+from swarmdeck.devices.gritsbot import GritsBotParams, wheels_to_unicycle
+from swarmdeck.core.kinematics import lookahead_points, unicycle_to_si
+from swarmdeck.devices.pipeline import barrier_filter, certify
 from swarmdeck.devices.simulator import ArenaConfig, SimulatedArena, check_poses
 
 FloatArray = NDArray[np.float64]
@@ -68,27 +70,6 @@ class UnicycleCommandFilter(Protocol):
     """A filter on unicycle commands: ``filter(poses (N,3), v (N,), w (N,), obstacles=None) -> (v, w, diagnostics)``."""
 
     def filter(self, poses: ArrayLike, v: ArrayLike, w: ArrayLike, obstacles: ArrayLike | None = None) -> tuple[FloatArray, FloatArray, Any]: ...
-
-
-def default_safety_filter(params: GritsBotParams, config: ArenaConfig) -> UnicycleCommandFilter:
-    """The barrier-certificate filter of :mod:`swarmdeck.safety` for this robot and arena.
-
-    The unicycle form: the barrier QP on the look-ahead points with the four
-    wheel-limit rows of each robot, so what it returns is exactly what the
-    wheels can do and no later saturation can undo the certificate.
-    """
-    from swarmdeck.safety import BarrierConfig, UnicycleParams, UnicycleSafetyFilter  # devices -> safety (one way)
-
-    robot = UnicycleParams(wheel_radius=params.wheel_radius, axle_length=params.axle_length,
-                           max_wheel_speed=params.max_wheel_speed, lookahead=params.lookahead)
-    return UnicycleSafetyFilter(BarrierConfig(bounds=config.bounds, max_speed=params.max_speed, dt=config.dt), robot)
-
-
-def _is_unicycle_filter(obj: Any) -> bool:
-    """True for swarmdeck's unicycle barrier (poses, v, w); other filters take points and SI velocities."""
-    from swarmdeck.safety import UnicycleSafetyFilter
-
-    return isinstance(obj, UnicycleSafetyFilter)
 
 
 @dataclass
@@ -165,14 +146,14 @@ class Arena:
         self.n = int(backend.n_robots)
         self.ell = self.params.lookahead
         if safety is True:
-            self.safety: CommandFilter | UnicycleCommandFilter | None = default_safety_filter(self.params, config)
+            self.safety: CommandFilter | UnicycleCommandFilter | None = barrier_filter(
+                self.params, config.bounds, config.dt, max_speed=self.params.max_speed)
         elif safety is False:
             self.safety = None
         else:
             if not callable(getattr(safety, "filter", None)):
                 raise ValueError("safety must be True, False or an object with a filter(points, nominal) method")
             self.safety = safety
-        self._unicycle_safety = self.safety is not None and _is_unicycle_filter(self.safety)
         self.safety_stats = SafetyStats()
         self.invalid_commands = 0
         self.events: deque[str] = deque(maxlen=200)  # the most recent events only: a run can be long
@@ -403,7 +384,8 @@ class Arena:
         raise AssertionError(f"unknown command kind {kind}")  # pragma: no cover
 
     def step(self) -> FloatArray:
-        """Advance one period: nominal → safety filter → (v, ω) → robots. Returns the new poses.
+        """Advance one period: nominal → :func:`~swarmdeck.devices.pipeline.certify` (wheel limits,
+        safety filter) → robots. Returns the new poses.
 
         Robots whose nominal command is NaN or inf are stopped for this step and the
         event counted. If the safety filter fails, every robot is stopped.
@@ -411,50 +393,26 @@ class Arena:
         if self.duration is not None and self.time >= self.duration - 1e-9:
             raise ExperimentFinished(f"declared duration {self.duration} s is over")
         poses = self.backend.poses
-        points = lookahead_points(poses, self.ell)
-        nominal = self.nominal_velocities(poses, points)
-        bad = ~np.all(np.isfinite(nominal), axis=1)
-        if bad.any():
-            nominal = np.where(bad[:, None], 0.0, nominal)
-            self.invalid_commands += int(bad.sum())
-            self.events.append(f"t={self.time:.3f}: non-finite command for robot(s) {np.flatnonzero(bad).tolist()}: stopped")
-        # Wheel limits first, by one scale per robot (keeps the curvature); the filter then
-        # only changes commands that are unsafe, and the unicycle filter stays within the limits.
-        v, w = si_to_unicycle(poses, nominal, self.ell)
-        v, w, saturated = limit_unicycle(v, w, self.params)
-        self.safety_stats.saturations += int(saturated.sum())
-        self.safety_stats.saturation_steps += bool(saturated.any())
+        nominal = self.nominal_velocities(poses)
+        cert = certify(poses, nominal, self.params, self.safety)
+        if cert.invalid.any():
+            self.invalid_commands += int(cert.invalid.sum())
+            self.events.append(f"t={self.time:.3f}: non-finite command for robot(s) "
+                               f"{np.flatnonzero(cert.invalid).tolist()}: stopped")
+        st = self.safety_stats
+        st.saturations += int(cert.saturated.sum())
+        st.saturation_steps += bool(cert.saturated.any())
         if self.safety is not None:
-            st = self.safety_stats
             st.calls += 1
-            if self._unicycle_safety:
-                vs, ws, diag = self.safety.filter(poses, v, w)
-                vs, ws = np.asarray(vs, dtype=float), np.asarray(ws, dtype=float)
-                valid = vs.shape == v.shape and ws.shape == w.shape and bool(np.all(np.isfinite(vs)) and np.all(np.isfinite(ws)))
-            else:
-                u = unicycle_to_si(poses, v, w, self.ell)
-                safe_u, diag = self.safety.filter(points, u)
-                safe_u = np.asarray(safe_u, dtype=float)
-                valid = safe_u.shape == u.shape and bool(np.all(np.isfinite(safe_u)))
-                vs, ws = si_to_unicycle(poses, safe_u, self.ell) if valid else (v, w)
-            st.last_diagnostics = diag
-            st.last_status = str(getattr(diag, "status", "ok"))
-            ok = bool(getattr(diag, "ok", True))
-            if ok and not valid:
-                ok = False
-                st.last_status = f"filter returned the wrong shape or non-finite values for {self.n} robots"
-            if not ok:
+            st.last_diagnostics, st.last_status = cert.diagnostics, cert.status
+            if not cert.ok:
                 st.failures += 1
-                st.failure_reasons[st.last_status] = st.failure_reasons.get(st.last_status, 0) + 1
-                vs, ws = np.zeros(self.n), np.zeros(self.n)
+                st.failure_reasons[cert.status] = st.failure_reasons.get(cert.status, 0) + 1
             else:
-                # changed beyond round-off (the unicycle filter's look-ahead round trip moves
-                # untouched commands by ~1e-16, which is not an intervention)
-                changed = ~(np.isclose(vs, v, rtol=1e-9, atol=1e-12) & np.isclose(ws, w, rtol=1e-9, atol=1e-12))
-                st.interventions += int(np.count_nonzero(changed))
-            v, w = vs, ws
-        self.last_nominal, self.last_safe = nominal, unicycle_to_si(poses, v, w, self.ell)
-        new_poses = self.backend.step(v, w)
+                st.interventions += int(np.count_nonzero(cert.changed()))
+        self.last_nominal = np.where(cert.invalid[:, None], 0.0, nominal)
+        self.last_safe = cert.safe
+        new_poses = self.backend.step(cert.v, cert.w)
         if self._on_step is not None:
             self._on_step(self)
         return new_poses

@@ -1,4 +1,4 @@
-"""The control loop (DESIGN.md "One tick"): sense → inputs → behaviour → safety → actuate → Frame.
+"""The control loop (DESIGN.md "One tick"): sense → inputs → control → safety+actuation → send → Frame.
 
 :class:`ControlLoop` runs in its own thread at the control period
 (:meth:`start`), or one tick at a time on a virtual clock (:meth:`tick`, for
@@ -8,20 +8,39 @@ scene, the recorder) and kept as :attr:`latest`. Subscribers run on the loop
 thread and must only hand the Frame over (the console's viewer stores it and
 draws on its own thread, so a slow browser never slows the loop).
 
+The tick reads top to bottom as its stages:
+
+1. **sense** — the pose source's ``(ids, poses, seen)``; rows with a non-finite
+   pose are not seen;
+2. **inputs** — contacts from the input hub become density bumps; the density
+   snapshot the behaviours see; one health line per port;
+3. **control** — the behaviour's nominal look-ahead velocities ``(N, 2)``
+   (unseen robots zero, at most ``max_speed``);
+4. **safety and actuation** — :func:`swarmdeck.devices.pipeline.certify`, the
+   pipeline ``Arena.step`` uses too: look-ahead map, wheel limits by one uniform
+   scale, the unicycle barrier with the wheel-limit rows (unseen robots and the
+   sink's ``obstacles()`` as fixed obstacles), fail-stop;
+5. **send** — the command sink gets ``(ids, v, ω)``, or ``hold()`` while paused;
+6. **Frame** — everything above, to every subscriber.
+
+One error policy covers every stage (:meth:`ControlLoop._stage`): a stage that
+raises is counted in :attr:`ControlLoop.errors`, raises a visible alert in the
+Frame (cleared when the stage next succeeds), and — for sense, control and
+safety — every robot gets zero for that tick; the loop keeps running.
+
 Operator commands (:meth:`run`, :meth:`pause`, :meth:`step`, :meth:`estop`,
 behaviour and parameter changes, density bumps) are thread-safe and take
 effect at the start of the next tick. The emergency stop zeroes every command
 of the next tick and every tick after it until :meth:`release` (which leaves
-the loop paused). Anything that goes wrong in a behaviour, the safety filter,
-the pose source or the command sink stops the robots for that tick, raises a
-visible alert in the Frame, and the loop keeps running.
+the loop paused).
 """
 from __future__ import annotations
 
 import math
 import threading
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
 from dataclasses import dataclass, field, replace
 from typing import Any
 
@@ -34,16 +53,9 @@ from swarmdeck.console.runtime.density import BumpSet, MovingBump, merge_mixture
 from swarmdeck.console.runtime.frame import BarrierFrame, ContactsFrame, CoverageFrame, Frame
 from swarmdeck.console.runtime.ports import CommandSink, PoseSource, SensedPoses, SimulatedRobots
 from swarmdeck.coverage.density import GaussianMixture
-from swarmdeck.devices import (
-    ArenaConfig,
-    GritsBotParams,
-    limit_unicycle,
-    lookahead_points,
-    saturate_norm,
-    si_to_unicycle,
-    unicycle_to_si,
-)
+from swarmdeck.devices import ArenaConfig, GritsBotParams, lookahead_points, saturate_norm
 from swarmdeck.devices.clock import RealTimePacer
+from swarmdeck.devices.pipeline import Certified, barrier_filter, certify
 
 Bounds = tuple[float, float, float, float]
 FrameListener = Callable[[Frame], None]
@@ -157,6 +169,20 @@ def _checked(sensed: Any) -> SensedPoses:
     return SensedPoses(ids, poses, seen)
 
 
+class _Stage:
+    """One stage's outcome under the loop's error policy (:meth:`ControlLoop._stage`)."""
+
+    def __init__(self) -> None:
+        self.failed = False
+        self.error: Exception | None = None
+        self.alert: str | None = None
+        self.counted = False
+
+    def warn(self, message: str, *, count: bool = False) -> None:
+        """The stage ran but the operator should know (shown as its alert; ``count``: an error)."""
+        self.alert, self.counted = message, count
+
+
 def _min_distance(points: NDArray[np.float64]) -> float:
     if len(points) < 2:
         return math.inf
@@ -225,14 +251,9 @@ class ControlLoop:
     def _make_filter(self, p: SafetyParams) -> Any:
         """The unicycle barrier: the QP on the look-ahead points plus each robot's four wheel-limit
         rows, so the certified command is one the wheels can execute (no saturation afterwards)."""
-        from swarmdeck.safety import BarrierConfig, UnicycleParams, UnicycleSafetyFilter
-
-        r = self.robot
-        return UnicycleSafetyFilter(
-            BarrierConfig(safety_distance=p.safety_distance, gamma=p.gamma, class_k=p.class_k,
-                          max_speed=self.config.max_speed, bounds=self.config.bounds, dt=self.config.dt),
-            UnicycleParams(wheel_radius=r.wheel_radius, axle_length=r.axle_length,
-                           max_wheel_speed=r.max_wheel_speed, lookahead=r.lookahead))
+        cfg = self.config
+        return barrier_filter(self.robot, cfg.bounds, cfg.dt, safety_distance=p.safety_distance, gamma=p.gamma,
+                              class_k=p.class_k, max_speed=cfg.max_speed)
 
     # ------------------------------------------------------------------ operator commands (thread-safe)
     @property
@@ -404,167 +425,187 @@ class ControlLoop:
             self._alerts[key] = message
             self._events.append(message)
 
-    def tick(self) -> Frame:
-        """Run one tick now and return its Frame (virtual clock unless a clock was given)."""
-        t_start = time.perf_counter()
+    @contextmanager
+    def _stage(self, key: str, failure: str, *, stops: bool = True) -> Iterator[_Stage]:
+        """The tick's one error policy, around one stage.
+
+        If the stage raises: count it under ``errors[key]``, raise the alert ``key`` as
+        "<failure>: <Type>: <message>[; robots stopped]", keep the stage's stopped defaults and
+        (``stops``) send zero to every robot this tick; the loop keeps running. Otherwise the
+        alert ``key`` shows what the stage :meth:`_Stage.warn`-ed, or is cleared.
+        """
+        stage = _Stage()
+        try:
+            yield stage
+        except Exception as exc:  # a failing stage stops the robots, tells, and the loop keeps running
+            stage.failed, stage.error = True, exc
+            self._count(key)
+            message: str | None = f"{failure}: {type(exc).__name__}: {exc}" + ("; robots stopped" if stops else "")
+        else:
+            if stage.counted:
+                self._count(key)
+            message = stage.alert
         with self._lock:
-            behaviour, filt, sp = self._behaviour, self._filter, self._safety_params
-            estop = self._estop
+            self._alert(key, message)
+
+    def tick(self) -> Frame:
+        """Run one tick now and return its Frame (virtual clock unless a clock was given).
+
+        The stages of the module docstring, each under :meth:`_stage` (the one error policy).
+        """
+        marks = [time.perf_counter()]
+        with self._lock:
+            behaviour, filt, sp, estop = self._behaviour, self._filter, self._safety_params, self._estop
             active = not estop and (self._state == "running" or self._steps > 0)
             if active and self._state != "running":
                 self._steps -= 1
-            run_state = self.run_state
-            density_params = self.density.params
-        dt = self.config.dt
-        now = self._clock() if self._clock is not None else self._tick * dt
-        ell = self.robot.lookahead
+            run_state, density_params = self.run_state, self.density.params
+        now = self._clock() if self._clock is not None else self._tick * self.config.dt
 
-        # 1. sense
-        try:
-            sensed = _checked(self.source.read(now))
-            self._last_sensed = sensed
-            with self._lock:
-                self._alert("source", None)
-        except Exception as exc:  # a failing pose source: stop everything, keep looping
-            self._count("source")
-            with self._lock:
-                self._alert("source", f"pose source failed: {type(exc).__name__}: {exc}; robots stopped")
-            prev = self._last_sensed
-            if prev is None:
-                raise
-            sensed = SensedPoses(prev.ids, prev.poses, np.zeros(len(prev.ids), dtype=bool))
-        image_ref = getattr(self.source, "image_ref", None)
-        image_ref = image_ref if isinstance(image_ref, str) else None
+        # 1. sense: this tick's poses (if the source fails: the last poses, nobody seen)
+        with self._stage("source", "pose source failed") as sense:
+            sensed = self._sense(now)
+        if sense.failed:
+            sensed = self._nobody_seen(sense.error)
         ids, poses, seen = sensed.ids, sensed.poses, sensed.seen
-        n = len(ids)
-        points = lookahead_points(poses, ell)
-        t_sense = time.perf_counter()
+        n, points = len(ids), lookahead_points(poses, self.robot.lookahead)
+        marks.append(time.perf_counter())
 
-        # 2. inputs
-        contacts = ContactsFrame()
-        with self._lock:
-            health_fns = [("robots", self.source.health)]
-            if self.source is not self.sink:
-                health_fns.append(("commands", self.sink.health))
-            health_fns += list(self._health_fns.items())
-        health: dict[str, str] = {}
-        for name, fn in health_fns:
-            try:
-                health[name] = str(fn())
-            except Exception as exc:
-                health[name] = f"error: {type(exc).__name__}: {exc}"
+        # 2. inputs: contacts -> density bumps; the density snapshot behaviours see; health lines
+        health, contacts, mixture, snapshot = self._health(), ContactsFrame(), None, None
         if self.inputs is not None:
-            try:
-                snap = self.inputs.poll(now)
-                self.contact_density.update(snap.contacts, now)
-                self.density.contacts = self.contact_density.at(now)
-                contacts = ContactsFrame.from_contacts(snap.contacts)
-                for h in snap.health:
-                    state = "LOST" if h.lost else f"{h.rate_hz:.0f} Hz"
-                    errs = f", {h.error_count} errors" if h.error_count else ""
-                    health[h.name] = f"{state}, {h.contacts} contacts{errs}"
-                with self._lock:
-                    self._alert("inputs", None)
-            except Exception as exc:
-                self._count("inputs")
-                self.density.contacts = None
-                with self._lock:
-                    self._alert("inputs", f"inputs failed: {type(exc).__name__}: {exc}")
-        try:
-            snapshot: GaussianMixture | None = self.density.at(self._run_time)
-            with self._lock:
-                self._alert("density", None)
-        except Exception as exc:
-            self._count("density")
-            snapshot = None
-            with self._lock:
-                self._alert("density", f"density failed: {type(exc).__name__}: {exc}")
-        t_inputs = time.perf_counter()
+            with self._stage("inputs", "inputs failed", stops=False):
+                contacts, mixture = self._poll_inputs(now, health)
+            self.density.contacts = mixture
+        with self._stage("density", "density failed", stops=False):
+            snapshot = self.density.at(self._run_time)
+        marks.append(time.perf_counter())
 
-        # 3. control
-        nominal = np.zeros((n, 2))
-        coverage = None
-        try:
-            if n == 0:
-                raise BehaviourError("no robots to control (none seen or all excluded)")
-            raw, state = behaviour(TickInput(poses.copy(), points.copy(), self._run_time, self.density,
-                                             self.config.bounds, self.config.max_speed))
-            arr = np.asarray(raw, dtype=float) if not isinstance(raw, np.ndarray) else raw.astype(float, copy=True)
-            if arr.shape != (n, 2):
-                raise BehaviourError(f"behaviour returned shape {arr.shape}, expected ({n}, 2) velocities in m/s")
-            bad = ~np.all(np.isfinite(arr), axis=1)
-            arr[bad] = 0.0
-            nominal = arr
-            if state is not None:
-                coverage = CoverageFrame.from_state(state)
-            with self._lock:
-                if bad.any():
-                    self._count("behaviour")
-                    self._alert("behaviour", f"{behaviour.name}: non-finite command for robot(s) "
-                                f"{ids[bad].tolist()}; those robots stopped")
-                else:
-                    self._alert("behaviour", None)
-        except Exception as exc:  # user scripts and bad parameters: stop, tell, keep looping
-            self._count("behaviour")
-            with self._lock:
-                self._alert("behaviour", f"{behaviour.name} failed: {type(exc).__name__}: {exc}; robots stopped")
+        # 3. control: the behaviour's nominal look-ahead velocities, within max_speed
+        nominal, coverage = np.zeros((n, 2)), None
+        with self._stage("behaviour", f"{behaviour.name} failed") as control:
+            nominal, coverage = self._control(behaviour, control, poses, points, ids)
         nominal[~seen] = 0.0
         nominal = saturate_norm(nominal, self.config.max_speed)
-        t_control = time.perf_counter()
+        marks.append(time.perf_counter())
 
-        # 4. safety
-        if sp.enabled:
-            try:
-                extra_fn = getattr(self.sink, "obstacles", None)
-                extra = np.asarray(extra_fn(), dtype=float).reshape(-1, 2) if extra_fn is not None else None
-                # wheel limits by one scale per robot first (keeps the curvature), then the barrier
-                v_lim, w_lim, _ = limit_unicycle(*si_to_unicycle(poses, nominal, ell), self.robot)
-                safe, barrier = self._filter_seen(filt, poses, v_lim, w_lim, seen, sp.safety_distance, extra)
-                if not barrier.ok or safe.shape != (n, 2) or not np.all(np.isfinite(safe)):
-                    safe = np.zeros((n, 2))
-                    with self._lock:
-                        self._alert("safety", f"safety filter: {barrier.status}; robots stopped")
-                else:
-                    with self._lock:
-                        self._alert("safety", None)
-            except Exception as exc:
-                self._count("safety")
-                safe = np.zeros((n, 2))
-                barrier = BarrierFrame(enabled=True, ok=False, status=f"{type(exc).__name__}: {exc}",
-                                       min_distance=_min_distance(points), intervention=np.zeros(n),
-                                       safety_distance=sp.safety_distance)
-                with self._lock:
-                    self._alert("safety", f"safety filter failed: {type(exc).__name__}: {exc}; robots stopped")
+        # 4. safety and actuation: the pipeline Arena.step uses too (look-ahead map, wheel limits, barrier)
+        cert = None
+        with self._stage("safety", "safety filter failed") as safety:
+            cert, barrier = self._certify(filt if sp.enabled else None, sp, poses, points, nominal, seen, safety)
+        if cert is None or not active or sense.failed or control.failed:
+            v, w, safe = np.zeros(n), np.zeros(n), np.zeros((n, 2))
         else:
-            safe = nominal.copy()
-            barrier = BarrierFrame(enabled=False, status="off", min_distance=_min_distance(points),
-                                   intervention=np.zeros(n), safety_distance=sp.safety_distance)
-            with self._lock:
-                self._alert("safety", "safety barrier OFF")
-        if not active:
-            safe = np.zeros((n, 2))
-        t_safety = time.perf_counter()
+            v, w, safe = cert.v, cert.w, (cert.safe if sp.enabled else nominal.copy())
+        if safety.failed:
+            barrier = BarrierFrame(enabled=True, ok=False, status=f"{type(safety.error).__name__}: {safety.error}",
+                                   min_distance=_min_distance(points), intervention=np.zeros(n),
+                                   safety_distance=sp.safety_distance)
+        marks.append(time.perf_counter())
 
-        # 5. actuate
-        v, w = si_to_unicycle(poses, safe, ell)
-        v, w, _ = limit_unicycle(v, w, self.robot)
-        v, w = np.where(seen, v, 0.0), np.where(seen, w, 0.0)  # unseen robots may have NaN poses
-        if not active:
-            v, w = np.zeros(n), np.zeros(n)
-        try:
+        # 5. send (paused: hold; robots stop by themselves when commands go stale)
+        with self._stage("sink", "command sink failed", stops=False):
             if active or estop:
                 self.sink.send(ids, v, w)
             else:
                 self.sink.hold()
-            with self._lock:
-                self._alert("sink", None)
-        except Exception as exc:
-            self._count("sink")
-            with self._lock:
-                self._alert("sink", f"command sink failed: {type(exc).__name__}: {exc}")
-        t_actuate = time.perf_counter()
+        marks.append(time.perf_counter())
 
-        # 6. the Frame
+        # 6. the Frame, to every subscriber
+        frame = self._frame(now, sensed, points, nominal, safe, v, w, barrier, coverage, snapshot, contacts,
+                            behaviour.name, run_state, sp, density_params, health, marks)
+        self._tick += 1
+        if active:
+            self._run_time += self.config.dt
+        self.latest = frame
+        self._publish(frame)
+        return frame
+
+    # ------------------------------------------------------------------ the stages' bodies
+    def _sense(self, now: float) -> SensedPoses:
+        sensed = _checked(self.source.read(now))
+        self._last_sensed = sensed
+        return sensed
+
+    def _nobody_seen(self, error: Exception | None) -> SensedPoses:
+        """The last poses with nobody seen (robots get zero); re-raises ``error`` before any reading."""
+        prev = self._last_sensed
+        if prev is None:
+            assert error is not None
+            raise error
+        return SensedPoses(prev.ids, prev.poses, np.zeros(len(prev.ids), dtype=bool))
+
+    def _health(self) -> dict[str, str]:
+        """One line per port and per registered health function (a failing one shows its error)."""
+        with self._lock:
+            fns = [("robots", self.source.health)]
+            if self.source is not self.sink:
+                fns.append(("commands", self.sink.health))
+            fns += list(self._health_fns.items())
+        health: dict[str, str] = {}
+        for name, fn in fns:
+            try:
+                health[name] = str(fn())
+            except Exception as exc:  # a health line never stops the tick
+                health[name] = f"error: {type(exc).__name__}: {exc}"
+        return health
+
+    def _poll_inputs(self, now: float, health: dict[str, str]) -> tuple[ContactsFrame, GaussianMixture]:
+        """This tick's contacts (for the Frame) and their density (for the behaviours); adds input health."""
+        snap = self.inputs.poll(now)
+        self.contact_density.update(snap.contacts, now)
+        mixture = self.contact_density.at(now)
+        contacts = ContactsFrame.from_contacts(snap.contacts)
+        for h in snap.health:
+            state = "LOST" if h.lost else f"{h.rate_hz:.0f} Hz"
+            errs = f", {h.error_count} errors" if h.error_count else ""
+            health[h.name] = f"{state}, {h.contacts} contacts{errs}"
+        return contacts, mixture
+
+    def _control(self, behaviour: Behaviour, stage: _Stage, poses: NDArray[np.float64], points: NDArray[np.float64],
+                 ids: NDArray[np.int64]) -> tuple[NDArray[np.float64], CoverageFrame | None]:
+        """The behaviour's (N, 2) velocities (non-finite rows zeroed and warned) and its coverage state."""
+        n = len(ids)
+        if n == 0:
+            raise BehaviourError("no robots to control (none seen or all excluded)")
+        raw, state = behaviour(TickInput(poses.copy(), points.copy(), self._run_time, self.density,
+                                         self.config.bounds, self.config.max_speed))
+        arr = np.asarray(raw, dtype=float) if not isinstance(raw, np.ndarray) else raw.astype(float, copy=True)
+        if arr.shape != (n, 2):
+            raise BehaviourError(f"behaviour returned shape {arr.shape}, expected ({n}, 2) velocities in m/s")
+        bad = ~np.all(np.isfinite(arr), axis=1)
+        arr[bad] = 0.0
+        if bad.any():
+            stage.warn(f"{behaviour.name}: non-finite command for robot(s) {ids[bad].tolist()}; "
+                       "those robots stopped", count=True)
+        return arr, (CoverageFrame.from_state(state) if state is not None else None)
+
+    def _certify(self, filt: Any, sp: SafetyParams, poses: NDArray[np.float64], points: NDArray[np.float64],
+                 nominal: NDArray[np.float64], seen: NDArray[np.bool_], stage: _Stage) -> tuple[Certified, BarrierFrame]:
+        """:func:`~swarmdeck.devices.pipeline.certify` with the sink's obstacles, and its BarrierFrame."""
+        n, d_s = len(poses), sp.safety_distance
+        if filt is None:
+            stage.warn("safety barrier OFF")
+            return certify(poses, nominal, self.robot, None, seen=seen), BarrierFrame(
+                enabled=False, status="off", min_distance=_min_distance(points), intervention=np.zeros(n),
+                safety_distance=d_s)
+        obstacles = getattr(self.sink, "obstacles", None)
+        cert = certify(poses, nominal, self.robot, filt, seen=seen,
+                       obstacles=None if obstacles is None else obstacles())
+        if cert.diagnostics is None:
+            barrier = BarrierFrame(ok=cert.ok, status=cert.status, intervention=np.zeros(n), safety_distance=d_s)
+        else:
+            barrier = BarrierFrame.from_diagnostics(cert.diagnostics, n, d_s, enabled=True)
+        if not cert.ok:
+            barrier = replace(barrier, ok=False, status=cert.status)
+            stage.warn(f"safety filter: {cert.status}; robots stopped")
+        return cert, barrier
+
+    def _frame(self, now: float, sensed: SensedPoses, points: NDArray[np.float64], nominal: NDArray[np.float64],
+               safe: NDArray[np.float64], v: NDArray[np.float64], w: NDArray[np.float64], barrier: BarrierFrame,
+               coverage: CoverageFrame | None, snapshot: GaussianMixture | None, contacts: ContactsFrame,
+               behaviour: str, run_state: str, sp: SafetyParams, density_params: DensityParams,
+               health: dict[str, str], marks: list[float]) -> Frame:
         with self._lock:
             events = tuple(self._events)
             self._events.clear()
@@ -576,19 +617,20 @@ class ControlLoop:
             "gamma": sp.gamma, "class_k": sp.class_k, "moving_density": density_params.moving,
             "max_speed": self.config.max_speed,
         }
-        timing = {"sense": t_sense - t_start, "inputs": t_inputs - t_sense, "control": t_control - t_inputs,
-                  "safety": t_safety - t_control, "actuate": t_actuate - t_safety}
-        timing["total"] = time.perf_counter() - t_start
-        frame = Frame(
-            tick=self._tick, time=now, run_time=self._run_time, dt=dt, bounds=self.config.bounds, lookahead=ell,
-            poses=poses, ids=ids, seen=seen, nominal=nominal, safe=safe, v=v, w=w, barrier=barrier,
-            coverage=coverage, density=snapshot, contacts=contacts, behaviour=behaviour.name, run_state=run_state,
-            params=params, events=events, alerts=alerts, health=health, timing=timing, image_ref=image_ref,
+        timing = {name: b - a for name, a, b in zip(("sense", "inputs", "control", "safety", "actuate"),
+                                                     marks, marks[1:])}
+        timing["total"] = time.perf_counter() - marks[0]
+        image_ref = getattr(self.source, "image_ref", None)
+        return Frame(
+            tick=self._tick, time=now, run_time=self._run_time, dt=self.config.dt, bounds=self.config.bounds,
+            lookahead=self.robot.lookahead, poses=sensed.poses, ids=sensed.ids, seen=sensed.seen, nominal=nominal,
+            safe=safe, v=v, w=w, barrier=barrier, coverage=coverage, density=snapshot, contacts=contacts,
+            behaviour=behaviour, run_state=run_state, params=params, events=events, alerts=alerts, health=health,
+            timing=timing, image_ref=image_ref if isinstance(image_ref, str) else None,
         )
-        self._tick += 1
-        if active:
-            self._run_time += dt
-        self.latest = frame
+
+    def _publish(self, frame: Frame) -> None:
+        """Hand the Frame to every subscriber; a failing one is counted and reported, the rest still run."""
         with self._lock:
             listeners = list(self._listeners)
         for listener in listeners:
@@ -597,38 +639,6 @@ class ControlLoop:
             except Exception as exc:
                 self._count("listener")
                 self.post(f"frame listener failed: {type(exc).__name__}: {exc}")
-        return frame
-
-    @staticmethod
-    def _filter_seen(filt: Any, poses: NDArray[np.float64], v: NDArray[np.float64], w: NDArray[np.float64],
-                     seen: NDArray[np.bool_], d_s: float,
-                     extra: NDArray[np.float64] | None = None) -> tuple[NDArray[np.float64], BarrierFrame]:
-        """Unicycle barrier QP over the robots seen this tick, returning safe look-ahead velocities
-        (N, 2); unseen robots (no fresh pose: they get zero commands) and ``extra`` (M, 2) points
-        (robots excluded by the sink) are fixed obstacles. Indices map back to all N."""
-        n = len(poses)
-        ell = filt.params.lookahead
-        extra = None if extra is None or len(extra) == 0 else extra
-        if seen.all():
-            vs, ws, diag = filt.filter(poses, v, w, extra)
-            return unicycle_to_si(poses, vs, ws, ell), BarrierFrame.from_diagnostics(diag, n, d_s, enabled=True)
-        idx = np.flatnonzero(seen)
-        points = lookahead_points(poses, ell)
-        known = ~seen & np.all(np.isfinite(points), axis=1)
-        parts = [points[known]] + ([extra] if extra is not None else [])
-        obstacles = np.concatenate(parts) if sum(len(p) for p in parts) else None
-        safe = np.zeros((n, 2))
-        if len(idx) == 0:
-            return safe, BarrierFrame(status="no robot seen", intervention=np.zeros(n), safety_distance=d_s)
-        vs, ws, diag = filt.filter(poses[idx], v[idx], w[idx], obstacles)
-        sub_b = BarrierFrame.from_diagnostics(diag, len(idx), d_s, enabled=True)
-        safe[idx] = unicycle_to_si(poses[idx], vs, ws, ell)
-        inter = np.zeros(n)
-        if len(sub_b.intervention) == len(idx):
-            inter[idx] = sub_b.intervention
-        pairs = sub_b.active_pairs
-        keep = np.all((pairs >= 0) & (pairs < len(idx)), axis=1)  # pairs among robots (not obstacles)
-        return safe, replace(sub_b, active_pairs=idx[pairs[keep]], active_h=sub_b.active_h[keep], intervention=inter)
 
     # ------------------------------------------------------------------ threaded running
     def start(self) -> "ControlLoop":

@@ -1,0 +1,185 @@
+"""One tick's commands, the same for every driver (DESIGN.md "One tick", step 4).
+
+:func:`certify` is the only place where nominal commands become the unicycle
+commands a robot receives. The console's :class:`ControlLoop` (and so
+``swarmdeck console`` with any robots) and the experiment API's
+:meth:`Arena.step` (and so ``swarmdeck run`` and the rps facade) both call it,
+so the same poses and nominal velocities give bit-identical wheel commands
+whoever drives the robots.
+
+The stages, for ``N`` robots:
+
+1. nominal single-integrator velocities ``(N, 2)`` of the look-ahead points
+   (m/s); rows that are NaN/inf (``invalid``) or belong to robots not seen this
+   tick become zero;
+2. the look-ahead map to unicycle ``(v, ω)`` (REFERENCE.md §1,
+   v = cos θ u_x + sin θ u_y, ω = (−sin θ u_x + cos θ u_y)/ℓ);
+3. the wheel limits by one uniform scale per robot (the curvature ω/v is kept;
+   ``saturated`` marks the robots scaled down);
+4. the barrier filter (optional): swarmdeck's unicycle barrier QP on the
+   look-ahead points with each robot's four wheel-limit rows, so no later
+   saturation can undo the certificate; any other filter on
+   ``(points, velocities)`` is accepted and its answer limited again. Only
+   robots seen this tick are filtered: unseen robots (their last known
+   look-ahead point) and ``obstacles`` (M, 2) are fixed obstacles, and the
+   diagnostics are mapped back to all N robots;
+5. fail-stop: a filter that reports failure (``diag.ok`` False) or returns the
+   wrong shape or non-finite values stops every robot (all commands zero).
+
+Exceptions raised by a filter propagate: the caller decides (the console loop
+counts them, alerts and stops the robots; an ``Arena`` script sees them).
+"""
+from __future__ import annotations
+
+import dataclasses
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from swarmdeck.core.kinematics import lookahead_points, si_to_unicycle, unicycle_to_si
+from swarmdeck.devices.gritsbot import GritsBotParams, limit_unicycle
+
+FloatArray = NDArray[np.float64]
+BoolArray = NDArray[np.bool_]
+
+
+@dataclasses.dataclass(frozen=True, eq=False)
+class Certified:
+    """The commands of one tick and how they came about (N robots).
+
+    Attributes:
+        v, w: ``(N,)`` commands to send, m/s and rad/s (zero for unseen robots, all zero on failure).
+        safe: ``(N, 2)`` velocity of each look-ahead point under ``(v, w)``, m/s.
+        v_nominal, w_nominal: ``(N,)`` the nominal after the wheel limits, before the barrier.
+        saturated: ``(N,)`` nominal scaled down by the wheel limits.
+        invalid: ``(N,)`` nominal rows that were NaN/inf (commanded zero).
+        ok: False when the filter failed and every robot was stopped.
+        status: the filter's status in words ("off" without a filter, "no robot seen", …).
+        diagnostics: the filter's diagnostics with per-robot arrays over all N robots, or None
+            (no filter, or no robot seen).
+    """
+
+    v: FloatArray
+    w: FloatArray
+    safe: FloatArray
+    v_nominal: FloatArray
+    w_nominal: FloatArray
+    saturated: BoolArray
+    invalid: BoolArray
+    ok: bool
+    status: str
+    diagnostics: Any
+
+    def changed(self) -> BoolArray:
+        """``(N,)`` robots whose command the filter changed (beyond round-off of a non-unicycle filter)."""
+        same = (np.isclose(self.v, self.v_nominal, rtol=1e-9, atol=1e-12)
+                & np.isclose(self.w, self.w_nominal, rtol=1e-9, atol=1e-12))
+        return ~same
+
+
+def barrier_filter(robot: GritsBotParams, bounds: tuple[float, float, float, float], dt: float,
+                   **barrier: Any) -> Any:
+    """swarmdeck's unicycle barrier filter for this robot and arena.
+
+    ``barrier``: further :class:`~swarmdeck.safety.BarrierConfig` fields (``safety_distance``,
+    ``gamma``, ``class_k``, ``max_speed``); their defaults are REFERENCE.md's.
+    """
+    from swarmdeck.safety import BarrierConfig, UnicycleParams, UnicycleSafetyFilter  # devices -> safety (one way)
+
+    params = UnicycleParams(wheel_radius=robot.wheel_radius, axle_length=robot.axle_length,
+                            max_wheel_speed=robot.max_wheel_speed, lookahead=robot.lookahead)
+    return UnicycleSafetyFilter(BarrierConfig(bounds=bounds, dt=dt, **barrier), params)
+
+
+def is_unicycle_filter(filt: Any) -> bool:
+    """True for swarmdeck's unicycle barrier (poses, v, w); other filters take points and SI velocities."""
+    from swarmdeck.safety import UnicycleSafetyFilter
+
+    return isinstance(filt, UnicycleSafetyFilter)
+
+
+def certify(poses: ArrayLike, nominal: ArrayLike, robot: GritsBotParams, filt: Any = None, *,
+            seen: ArrayLike | None = None, obstacles: ArrayLike | None = None) -> Certified:
+    """Nominal look-ahead velocities → the unicycle commands to send (see the module docstring).
+
+    Args:
+        poses: ``(N, 3)`` ``[x, y, θ]``, m/rad (rows of unseen robots may be NaN).
+        nominal: ``(N, 2)`` single-integrator velocities of the look-ahead points, m/s.
+        robot: the robot model (look-ahead ℓ, wheel radius, axle, wheel-speed limit).
+        filt: None (no barrier), a unicycle filter ``filter(poses, v, w, obstacles) -> (v, w, diag)``
+            or an SI filter ``filter(points, u[, obstacles]) -> (u, diag)``.
+        seen: ``(N,)`` robots with a fresh pose (default: all).
+        obstacles: ``(M, 2)`` further fixed points (e.g. robots excluded from control), m.
+    """
+    poses = np.asarray(poses, dtype=float)
+    nominal = np.asarray(nominal, dtype=float)
+    n = len(poses)
+    if poses.shape != (n, 3) or nominal.shape != (n, 2):
+        raise ValueError(f"certify: poses {poses.shape} and nominal {nominal.shape} must be (N, 3) and (N, 2)")
+    seen_mask = np.ones(n, dtype=bool) if seen is None else np.asarray(seen, dtype=bool).reshape(n)
+    invalid = ~np.all(np.isfinite(nominal), axis=1)
+    u = np.where((invalid | ~seen_mask)[:, None], 0.0, nominal)
+    ell = robot.lookahead
+    v0, w0, saturated = limit_unicycle(*si_to_unicycle(poses, u, ell), robot)
+    if filt is None:
+        v, w, ok, status, diag = v0, w0, True, "off", None
+    else:
+        v, w, ok, status, diag = _filter(filt, poses, v0, w0, seen_mask, obstacles, robot)
+    if not seen_mask.all():
+        v, w = np.where(seen_mask, v, 0.0), np.where(seen_mask, w, 0.0)
+    safe = unicycle_to_si(np.where(seen_mask[:, None], poses, 0.0), v, w, ell)
+    return Certified(v, w, safe, v0, w0, saturated, invalid, ok, status, diag)
+
+
+def _filter(filt: Any, poses: FloatArray, v: FloatArray, w: FloatArray, seen: BoolArray,
+            obstacles: ArrayLike | None, robot: GritsBotParams) -> tuple[FloatArray, FloatArray, bool, str, Any]:
+    """The barrier over the seen robots; unseen ones and ``obstacles`` are fixed points. Fail-stop."""
+    n, ell = len(poses), robot.lookahead
+    extra = None if obstacles is None else np.asarray(obstacles, dtype=float).reshape(-1, 2)
+    extra = None if extra is None or len(extra) == 0 else extra
+    idx = np.flatnonzero(seen)
+    if len(idx) == 0:
+        return np.zeros(n), np.zeros(n), True, "no robot seen", None
+    if len(idx) < n:
+        points = lookahead_points(poses, ell)
+        known = ~seen & np.all(np.isfinite(points), axis=1)
+        parts = [points[known]] + ([extra] if extra is not None else [])
+        extra = np.concatenate(parts) if sum(len(p) for p in parts) else None
+        poses, v, w = poses[idx], v[idx], w[idx]
+    k = len(idx)
+    if is_unicycle_filter(filt):
+        vs, ws, diag = filt.filter(poses, v, w, extra)
+        vs, ws = np.asarray(vs, dtype=float), np.asarray(ws, dtype=float)
+    else:
+        u = unicycle_to_si(poses, v, w, ell)
+        points = lookahead_points(poses, ell)
+        safe_u, diag = filt.filter(points, u) if extra is None else filt.filter(points, u, extra)
+        safe_u = np.asarray(safe_u, dtype=float)
+        vs, ws = (np.zeros(0), np.zeros(0)) if safe_u.shape != (k, 2) else si_to_unicycle(poses, safe_u, ell)
+        vs, ws, _ = limit_unicycle(vs, ws, robot)
+    ok, status = bool(getattr(diag, "ok", True)), str(getattr(diag, "status", "ok"))
+    if ok and not (vs.shape == (k,) and ws.shape == (k,) and np.all(np.isfinite(vs)) and np.all(np.isfinite(ws))):
+        ok, status = False, f"filter returned the wrong shape or non-finite values for {k} robots"
+    if not ok:
+        return np.zeros(n), np.zeros(n), False, status, _remap(diag, idx, n)
+    if k == n:
+        return vs, ws, True, status, diag
+    v_all, w_all = np.zeros(n), np.zeros(n)
+    v_all[idx], w_all[idx] = vs, ws
+    return v_all, w_all, True, status, _remap(diag, idx, n)
+
+
+def _remap(diag: Any, idx: NDArray[np.intp], n: int) -> Any:
+    """Diagnostics of the robots ``idx`` as diagnostics over all ``n``: intervention ``(n,)`` (zero
+    for robots not filtered), active robot pairs in full indices (pairs with obstacles dropped)."""
+    if len(idx) == n or not dataclasses.is_dataclass(diag) or not hasattr(diag, "active_pairs"):
+        return diag
+    inter = np.zeros(n)
+    sub_inter = np.asarray(getattr(diag, "intervention", np.zeros(0)), dtype=float)
+    if len(sub_inter) == len(idx):
+        inter[idx] = sub_inter
+    pairs = np.asarray(diag.active_pairs, dtype=np.int64).reshape(-1, 2)
+    keep = np.all((pairs >= 0) & (pairs < len(idx)), axis=1)  # pairs among robots (not obstacles)
+    return dataclasses.replace(diag, active_pairs=idx[pairs[keep]], active_h=np.asarray(diag.active_h)[keep],
+                               intervention=inter)
