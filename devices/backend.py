@@ -1,8 +1,11 @@
-"""What the experiment API needs from the robots it drives.
+"""What the experiment API needs from the robots it drives (its synchronous view of them).
 
-The simulated arena satisfies this protocol; the networked transports (real
-GRITSBots through MQTT plus overhead tracking) provide the same calls, so a
-user's experiment runs unchanged on either.
+:class:`RobotBackend` is the ``Arena``'s role in the robot-port vocabulary of
+:mod:`swarmdeck.core.ports`: ``poses``, ``time`` and ``step(v, w)``, which applies
+one unicycle command per robot and advances one period. The simulated arena
+satisfies it; ``devices.net.transport_backend.TransportBackend`` gives the same
+calls for real GRITSBots (a ``RobotTransport`` and its ``PoseFeed``), so a user's
+experiment runs unchanged on either.
 """
 from __future__ import annotations
 

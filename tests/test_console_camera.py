@@ -6,7 +6,7 @@ import pytest
 
 from swarmdeck.console.runtime.hardware import camera_source
 from swarmdeck.console.runtime.loop import ControlLoop, LoopConfig
-from swarmdeck.console.runtime.ports import SimulatedRobots
+from swarmdeck.devices.simulated_robots import SimulatedRobots
 from swarmdeck.devices import ArenaConfig
 
 

@@ -258,7 +258,7 @@ class _FlakySource:
 
 
 def test_failing_pose_source_stops_robots_and_loop_survives() -> None:
-    from swarmdeck.console.runtime.ports import SimulatedRobots
+    from swarmdeck.devices.simulated_robots import SimulatedRobots
     from swarmdeck.devices import ArenaConfig
 
     sim = SimulatedRobots(4, ArenaConfig(seed=1))

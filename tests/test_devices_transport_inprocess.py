@@ -5,7 +5,7 @@ import numpy as np
 
 from swarmdeck.devices import Arena, ArenaConfig, RobotBackend, SimulatedArena
 from swarmdeck.devices.gritsbot import unicycle_to_wheels
-from swarmdeck.devices.net.transport import PoseSource, RobotTransport
+from swarmdeck.devices.net.transport import PoseFeed, RobotTransport
 from swarmdeck.devices.net.transport_backend import TransportBackend
 from swarmdeck.devices.net.transport_inprocess import InProcessTransport
 
@@ -18,7 +18,7 @@ def backend_on_transport(n: int, seed: int) -> tuple[TransportBackend, InProcess
 
 def test_protocols_are_satisfied():
     backend, transport = backend_on_transport(3, 1)
-    assert isinstance(transport, RobotTransport) and isinstance(transport, PoseSource)
+    assert isinstance(transport, RobotTransport) and isinstance(transport, PoseFeed)
     assert isinstance(backend, RobotBackend)
 
 

@@ -11,7 +11,7 @@ from __future__ import annotations
 import numpy as np
 
 from swarmdeck.console.runtime.loop import ControlLoop, LoopConfig
-from swarmdeck.console.runtime.ports import SimulatedRobots
+from swarmdeck.devices.simulated_robots import SimulatedRobots
 from swarmdeck.devices import Arena, ArenaConfig, GritsBotParams, lookahead_points, unicycle_to_wheels
 from swarmdeck.devices.pipeline import barrier_filter, certify
 from swarmdeck.safety import UnicycleSafetyFilter

@@ -1,8 +1,11 @@
 """A camera and a tracker combined: one call per control tick gives robot poses.
 
-``CameraPoseSource.read(now) -> TrackedPoses`` is what the console loop calls in place of the
-simulator's truth; ``health()`` gives the status-line numbers; ``rectified_image()`` the
-arena-aligned top-down picture for drawing as the floor; ``thumbnail()`` the raw view.
+``CameraPoseSource.read(now) -> TrackedPoses`` gives the tracker's full record (stamps,
+staleness, duplicates, homography state); ``health()`` the status-line numbers;
+``rectified_image()`` the arena-aligned top-down picture for drawing as the floor;
+``thumbnail()`` the raw view. :class:`TrackedPoseSource` is the same camera as the control
+loop's :class:`~swarmdeck.core.ports.PoseSource` (``read(now) -> SensedPoses`` for the robots
+the loop controls), which the console loop reads in place of the simulator's truth.
 """
 from __future__ import annotations
 
@@ -15,6 +18,7 @@ from pathlib import Path
 import cv2
 import numpy as np
 
+from swarmdeck.core.ports import SensedPoses
 from swarmdeck.tracking.calibration import CameraCalibration
 from swarmdeck.tracking.config import TrackerConfig
 from swarmdeck.tracking.homography import apply_homography
@@ -212,3 +216,59 @@ class CameraPoseSource:
         mx, my = px[..., 0].astype(np.float32), px[..., 1].astype(np.float32)
         self._rect_cache = (probe, mx, my)
         return mx, my
+
+
+class TrackedPoseSource:
+    """The overhead camera as the control loop's :class:`~swarmdeck.core.ports.PoseSource`.
+
+    Each ``read(now)`` tracks the newest frame of ``camera`` and gives one row per robot the
+    loop controls: the last observed pose (zero before the first), ``seen`` when the tracker has
+    a pose that is not stale (``TrackerConfig.stale_after_s``); stale or never-seen robots get
+    zero commands and are fixed obstacles of the barrier.
+
+    Args:
+        camera: the camera and its tracker.
+        ids: the robot ids the loop controls (the tracker lists them even before they are seen).
+    """
+
+    def __init__(self, camera: CameraPoseSource, ids: Sequence[int] | np.ndarray, name: str = "camera") -> None:
+        self.camera = camera
+        self.ids = np.asarray(ids, dtype=np.int64)
+        self.name = name
+        self._last = np.zeros((len(self.ids), 3))
+
+    def read(self, now: float) -> SensedPoses:
+        tp = self.camera.read(now)
+        poses = np.array(self._last)
+        seen = np.zeros(len(self.ids), dtype=bool)
+        if len(tp.ids):
+            pos = np.searchsorted(tp.ids, self.ids)
+            pos_c = np.minimum(pos, len(tp.ids) - 1)
+            hit = tp.ids[pos_c] == self.ids
+            rows = pos_c[hit]
+            got = tp.poses[rows]
+            ok = np.all(np.isfinite(got), axis=1)
+            stale = tp.stale[rows] if len(tp.stale) == len(tp.ids) else np.zeros(len(rows), dtype=bool)
+            where = np.flatnonzero(hit)
+            poses[where[ok]] = got[ok]
+            seen[where] = ok & ~stale
+        self._last = poses
+        return SensedPoses(self.ids, poses, seen)
+
+    def health(self) -> str:
+        return self.camera.status_line()
+
+    @property
+    def image_ref(self) -> str | None:
+        """Reference of the newest camera frame (for Frame.image_ref), or None before the first."""
+        frame = self.camera.frame
+        return None if frame is None else f"camera:{frame.index}"
+
+    def image(self, ref: str) -> tuple[np.ndarray, tuple[float, float, float, float]] | None:
+        """(rectified RGB image with row 0 at y_max, its bounds) of the newest frame, or None."""
+        return self.camera.rectified_image()
+
+    def close(self) -> None:
+        close = getattr(self.camera.source, "close", None)
+        if close is not None:
+            close()

@@ -134,7 +134,7 @@ def _robots(config, camera: str | None, robots_via: str | None):
     import numpy as np
 
     from swarmdeck.console.runtime.hardware import camera_source, mqtt_robots
-    from swarmdeck.console.runtime.ports import SimulatedRobots
+    from swarmdeck.devices.simulated_robots import SimulatedRobots
     from swarmdeck.devices import ArenaConfig
 
     ids = np.arange(config.n_robots, dtype=np.int64)

@@ -201,7 +201,7 @@ def resimulate(recording: Recording, *, max_frames: int | None = None) -> Iterat
     Raises ValueError when the recording lacks what a re-simulation needs (no frames, a
     configuration that does not rebuild)."""
     from swarmdeck.console.runtime.loop import ControlLoop
-    from swarmdeck.console.runtime.ports import SimulatedRobots
+    from swarmdeck.devices.simulated_robots import SimulatedRobots
     from swarmdeck.devices import ArenaConfig
     from swarmdeck.inputs import ContactDensity, InputConfig, InputHub, InputSource
 

@@ -1,11 +1,13 @@
 """Camera tracking and real (or fleet-simulated) robots for the loop: pose sources and command sinks.
 
-* ``--camera synthetic|INDEX|FILE`` → :class:`TrackedPoseSource`, a
+The ports are :mod:`swarmdeck.core.ports`'s ``PoseSource`` and ``CommandSink``.
+
+* ``--camera synthetic|INDEX|FILE`` → ``swarmdeck.tracking.TrackedPoseSource``, a
   ``swarmdeck.tracking.CameraPoseSource`` read once per tick. ``synthetic``
   renders the robots the command sink knows (the simulator's truth, or the poses
   the MQTT robots report) through the synthetic overhead camera, so the whole
   camera → ArUco → homography → poses path runs with no hardware.
-* ``--robots-via mqtt://HOST:PORT`` → ``devices.transport_console.NetworkRobots``
+* ``--robots-via mqtt://HOST:PORT`` → ``devices.net.console_robots.NetworkRobots``
   as the command sink (an ``MqttTransport`` behind the ``CommandStreamer``
   watchdogs: stale poses, stale inputs and missing robots get zero; missing
   robots become barrier obstacles) and, without a camera, poses from the
@@ -17,12 +19,16 @@ barrier treats them as fixed obstacles.
 from __future__ import annotations
 
 from collections.abc import Callable
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from numpy.typing import NDArray
 
-from swarmdeck.console.runtime.ports import SensedPoses
+from swarmdeck.core.ports import SensedPoses
+
+if TYPE_CHECKING:
+    from swarmdeck.tracking import TrackedPoseSource
+
 
 def _finite_or_zero(poses: NDArray[np.float64]) -> NDArray[np.float64]:
     out = np.array(poses, dtype=float)
@@ -30,59 +36,8 @@ def _finite_or_zero(poses: NDArray[np.float64]) -> NDArray[np.float64]:
     return out
 
 
-class TrackedPoseSource:
-    """Poses from an overhead camera through ``swarmdeck.tracking`` (one frame per tick).
-
-    Args:
-        camera: a ``tracking.CameraPoseSource``.
-        ids: the robot ids the loop controls (the tracker lists them even before they are seen).
-    """
-
-    def __init__(self, camera: Any, ids: NDArray[np.int64], name: str = "camera") -> None:
-        self.camera = camera
-        self.ids = np.asarray(ids, dtype=np.int64)
-        self.name = name
-        self._last = np.zeros((len(self.ids), 3))
-
-    def read(self, now: float) -> SensedPoses:
-        tp = self.camera.read(now)
-        poses = np.array(self._last)
-        seen = np.zeros(len(self.ids), dtype=bool)
-        if len(tp.ids):
-            pos = np.searchsorted(tp.ids, self.ids)
-            pos_c = np.minimum(pos, len(tp.ids) - 1)
-            hit = tp.ids[pos_c] == self.ids
-            rows = pos_c[hit]
-            got = tp.poses[rows]
-            ok = np.all(np.isfinite(got), axis=1)
-            stale = tp.stale[rows] if len(tp.stale) == len(tp.ids) else np.zeros(len(rows), dtype=bool)
-            where = np.flatnonzero(hit)
-            poses[where[ok]] = got[ok]
-            seen[where] = ok & ~stale
-        self._last = poses
-        return SensedPoses(self.ids, poses, seen)
-
-    def health(self) -> str:
-        return self.camera.status_line()
-
-    @property
-    def image_ref(self) -> str | None:
-        """Reference of the newest camera frame (for Frame.image_ref), or None before the first."""
-        frame = self.camera.frame
-        return None if frame is None else f"camera:{frame.index}"
-
-    def image(self, ref: str) -> Any:
-        """(rectified RGB image with row 0 at y_max, its bounds) of the newest frame, or None."""
-        return self.camera.rectified_image()
-
-    def close(self) -> None:
-        close = getattr(self.camera.source, "close", None)
-        if close is not None:
-            close()
-
-
 class NetworkPoseSource:
-    """The pose side of ``devices.transport_console.NetworkRobots`` (the robots' pose topic) for the loop.
+    """The pose side of ``devices.net.console_robots.NetworkRobots`` (the robots' pose topic) for the loop.
 
     Robots the transport reports missing or duplicated are left out (excluded from control);
     the sink's ``obstacles()`` gives their last positions to the barrier.
@@ -123,7 +78,7 @@ def camera_source(spec: str, ids: NDArray[np.int64], truth: Callable[[float], ND
     """A tracked pose source for ``--camera`` ``synthetic`` (rendering ``truth(now)``), a webcam index,
     a stream URL, a folder of images or a video file. Raises ValueError naming what is wrong."""
     from swarmdeck.tracking import (CameraCalibration, CameraPoseSource, SyntheticCamera, SyntheticCameraConfig,
-                                    Tracker, TrackerConfig, open_source)
+                                    TrackedPoseSource, Tracker, TrackerConfig, open_source)
 
     expected = tuple(int(i) for i in ids)
     if spec == "synthetic":

@@ -51,11 +51,12 @@ from scipy.spatial import cKDTree
 from swarmdeck.console.runtime.behaviours import Behaviour, BehaviourError, BehaviourParams, TickInput, make_behaviour
 from swarmdeck.console.runtime.density import BumpSet, MovingBump, merge_mixtures
 from swarmdeck.console.runtime.frame import BarrierFrame, ContactsFrame, CoverageFrame, Frame
-from swarmdeck.console.runtime.ports import CommandSink, PoseSource, SensedPoses, SimulatedRobots
+from swarmdeck.core.ports import CommandSink, PoseSource, SensedPoses
 from swarmdeck.coverage.density import GaussianMixture
 from swarmdeck.devices import ArenaConfig, GritsBotParams, lookahead_points, saturate_norm
 from swarmdeck.devices.clock import RealTimePacer
 from swarmdeck.devices.pipeline import Certified, barrier_filter, certify
+from swarmdeck.devices.simulated_robots import SimulatedRobots
 
 Bounds = tuple[float, float, float, float]
 FrameListener = Callable[[Frame], None]

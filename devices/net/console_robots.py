@@ -1,10 +1,10 @@
 """Networked robots as the console loop's pose source and command sink (``--robots-via mqtt://…``).
 
-:class:`NetworkRobots` has the two duck-typed interfaces of
-``swarmdeck.console.runtime.ports`` — ``read() -> (ids, poses, seen)`` and
-``send(ids, v, w)`` / ``hold()`` / ``health()`` / ``close()`` — on top of any
-:class:`~swarmdeck.devices.net.transport.RobotTransport` that is also a
-:class:`~swarmdeck.devices.net.transport.PoseSource` (the MQTT transport: poses
+:class:`NetworkRobots` is both robot ports of :mod:`swarmdeck.core.ports` —
+the ``PoseSource`` (``read(now) -> SensedPoses``) and the ``CommandSink``
+(``send(ids, v, w)`` / ``hold()`` / ``health()`` / ``close()`` / ``obstacles()``)
+— on top of any :class:`~swarmdeck.devices.net.transport.RobotTransport` that is
+also a :class:`~swarmdeck.devices.net.transport.PoseFeed` (the MQTT transport: poses
 from ``overhead_tracker/all_robot_pose_data``, i.e. ``swarmdeck robots`` or a
 real tracker). Commands pass through a
 :class:`~swarmdeck.devices.net.streamer.CommandStreamer`, which also keeps
@@ -20,29 +20,14 @@ from __future__ import annotations
 
 import time
 from collections.abc import Callable
-from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from swarmdeck.core.ports import SensedPoses
 from swarmdeck.devices.net.mqtt_config import parse_broker_url, redact_url
 from swarmdeck.devices.net.streamer import CommandStreamer, StreamerConfig
 from swarmdeck.devices.net.transport_mqtt import LinkTimeouts, MqttTransport
-
-
-@dataclass(frozen=True)
-class SensedRobots:
-    """One reading (same fields as ``swarmdeck.console.runtime.ports.SensedPoses``).
-
-    Attributes:
-        ids: ``(N,)`` robot ids under control.
-        poses: ``(N, 3)`` last known poses, m / rad.
-        seen: ``(N,)`` pose younger than the streamer's pose timeout (0.1 s).
-    """
-
-    ids: NDArray[np.int64]
-    poses: NDArray[np.float64]
-    seen: NDArray[np.bool_]
 
 
 class NetworkRobots:
@@ -123,10 +108,10 @@ class NetworkRobots:
         return cls(transport, ids, streamer=streamer)
 
     # ---------------------------------------------------------------- pose source
-    def read(self, now: float | None = None) -> SensedRobots:
+    def read(self, now: float | None = None) -> SensedPoses:
         """Robots under control (not missing/duplicated) with their last known poses and freshness.
 
-        ``now`` (the loop's clock) is accepted for the console's PoseSource protocol and not used:
+        ``now`` (the loop's clock) is accepted for the PoseSource protocol and not used:
         freshness is judged on this transport's own monotonic clock.
         """
         sample = self.transport.latest_poses()
@@ -136,7 +121,7 @@ class NetworkRobots:
         known = np.all(np.isfinite(poses), axis=1)
         ids, poses, stamps = ids[known], poses[known], stamps[known]
         seen = (self.clock() - stamps) <= self.streamer.config.pose_timeout
-        return SensedRobots(ids.astype(np.int64), poses, seen)
+        return SensedPoses(ids.astype(np.int64), poses, seen)
 
     def obstacles(self) -> NDArray[np.float64]:
         """``(M, 2)`` last known centres of robots excluded from control (fixed obstacles), m."""

@@ -34,7 +34,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from swarmdeck.core.checks import require_positive
-from swarmdeck.devices.net.transport import Counters, PoseSource, RobotTransport, check_command
+from swarmdeck.devices.net.transport import Counters, PoseFeed, RobotTransport, check_command
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.intp]
@@ -121,7 +121,7 @@ class CommandStreamer:
     def __init__(
         self,
         transport: RobotTransport,
-        poses: PoseSource | None = None,
+        poses: PoseFeed | None = None,
         config: StreamerConfig = StreamerConfig(),
         clock: Callable[[], float] = time.monotonic,
     ) -> None:

@@ -9,9 +9,12 @@ robots and brings back what they report. Implementations:
   (real, or the simulated fleet of ``swarmdeck robots``) over an MQTT broker,
   in the wire format of REFERENCE.md §9.
 
-Both also act as a :class:`PoseSource` (tracker-style poses: the simulator's
-ground truth, or ``overhead_tracker/all_robot_pose_data``), which the command
-streamer's watchdogs and the console's loop read.
+Both are also a :class:`PoseFeed`: stamped tracker-style pose samples (the
+simulator's ground truth, or ``overhead_tracker/all_robot_pose_data``) whose
+freshness the command streamer's watchdogs judge on the receiver's clock. The
+control loop does not read these directly: ``NetworkRobots`` turns them into
+the loop's ``PoseSource`` / ``CommandSink`` ports (:mod:`swarmdeck.core.ports`,
+which describes the whole vocabulary).
 
 Arrays follow the shared convention: one row per robot; ids are small
 non-negative ints; v in m/s, ω in rad/s, LED colours ``(N, 3)`` ints 0–255.
@@ -145,7 +148,7 @@ class TransportStatus:
 
 @runtime_checkable
 class RobotTransport(Protocol):
-    """Carries unicycle commands to robots and their status back (HELPERS.md contract)."""
+    """Carries unicycle commands to robots and their status back (the wire)."""
 
     def send(self, ids: ArrayLike, v: ArrayLike, w: ArrayLike, leds: ArrayLike | None = None) -> bool:
         """Send one command per robot: ``ids (K,)``, ``v (K,)`` m/s, ``w (K,)`` rad/s,
@@ -167,8 +170,8 @@ class RobotTransport(Protocol):
 
 
 @runtime_checkable
-class PoseSource(Protocol):
-    """Anything that yields tracker-style poses."""
+class PoseFeed(Protocol):
+    """Stamped tracker-style poses as received (the wire side; the loop's port is ``core.ports.PoseSource``)."""
 
     def latest_poses(self) -> PoseSample:
         """The newest pose of every robot seen so far, with receive stamps."""

@@ -2,7 +2,7 @@
 
 The experiment API (:class:`~swarmdeck.devices.arena.Arena`) calls
 ``backend.poses`` and ``backend.step(v, w)``; here poses come from a
-tracker-style :class:`~swarmdeck.devices.net.transport.PoseSource` (the MQTT pose
+tracker-style :class:`~swarmdeck.devices.net.transport.PoseFeed` (the MQTT pose
 topic, i.e. the simulated fleet's ground truth or a real tracker) and commands
 go out through a :class:`~swarmdeck.devices.net.streamer.CommandStreamer`, so its
 watchdogs apply to every step. ``step`` paces itself to real time (one
@@ -27,7 +27,7 @@ from swarmdeck.devices.clock import RealTimePacer
 from swarmdeck.devices.gritsbot import GritsBotParams, limit_unicycle
 from swarmdeck.devices.net.mqtt_config import parse_broker_url
 from swarmdeck.devices.net.streamer import CommandStreamer, StreamerConfig
-from swarmdeck.devices.net.transport import PoseSource, RobotTransport
+from swarmdeck.devices.net.transport import PoseFeed, RobotTransport
 from swarmdeck.devices.net.transport_mqtt import MqttTransport
 
 FloatArray = NDArray[np.float64]
@@ -39,7 +39,7 @@ class TransportBackend:
     Args:
         transport: a started transport.
         ids: ``(N,)`` robot ids; row k of every array is robot ``ids[k]``.
-        poses: pose source (default: ``transport`` itself, which must then be a PoseSource).
+        poses: pose feed (default: ``transport`` itself, which must then be a PoseFeed).
         params: robot model (for the Arena's look-ahead and limits).
         dt: control period, s.
         streamer: watchdog thresholds.
@@ -56,7 +56,7 @@ class TransportBackend:
         transport: RobotTransport,
         ids: ArrayLike,
         *,
-        poses: PoseSource | None = None,
+        poses: PoseFeed | None = None,
         params: GritsBotParams = GritsBotParams(),
         dt: float = 0.033,
         streamer: StreamerConfig | None = None,
@@ -74,14 +74,14 @@ class TransportBackend:
         self.clock = clock
         src = poses if poses is not None else transport
         if not callable(getattr(src, "latest_poses", None)):
-            raise ValueError("the transport gives no poses: pass poses=<a PoseSource>")
-        self.pose_source: PoseSource = src  # type: ignore[assignment]
+            raise ValueError("the transport gives no poses: pass poses=<a PoseFeed>")
+        self.pose_feed: PoseFeed = src  # type: ignore[assignment]
         cfg = streamer if streamer is not None else StreamerConfig(period=self.dt)
-        self.streamer = CommandStreamer(transport, self.pose_source, cfg, clock)
+        self.streamer = CommandStreamer(transport, self.pose_feed, cfg, clock)
         self._pacer = RealTimePacer(self.dt) if real_time else None
         deadline = clock() + wait_for_poses
         while True:
-            p, _ = self.pose_source.latest_poses().select(self.ids)
+            p, _ = self.pose_feed.latest_poses().select(self.ids)
             missing = self.ids[~np.all(np.isfinite(p), axis=1)]
             if not len(missing):
                 break
@@ -100,7 +100,7 @@ class TransportBackend:
     @property
     def poses(self) -> FloatArray:
         """Latest pose of every robot ``(N, 3)`` (last known for robots gone silent)."""
-        p, _ = self.pose_source.latest_poses().select(self.ids)
+        p, _ = self.pose_feed.latest_poses().select(self.ids)
         ok = np.all(np.isfinite(p), axis=1)
         self._last = np.where(ok[:, None], p, self._last)
         return self._last.copy()

@@ -1,0 +1,81 @@
+"""The robot ports: how poses come in and commands go out (DESIGN.md "One tick", steps 1 and 5).
+
+One name per concept, for every kind of robot (the simulator, the overhead
+camera, GRITSBots over MQTT, the in-process transport):
+
+* :class:`SensedPoses` — one reading: ids ``(N,)``, poses ``(N, 3)``
+  ``[x, y, θ]`` (m, rad), ``seen`` ``(N,)`` (a fresh pose this tick; robots not
+  seen get zero commands and are fixed obstacles of the barrier).
+* :class:`PoseSource` — what the control loop reads once per tick:
+  ``read(now) -> SensedPoses``, ``health() -> str``, ``name``. Implemented by
+  ``devices.simulated_robots.SimulatedRobots`` (the simulator's truth),
+  ``tracking.TrackedPoseSource`` (camera → ArUco → homography), and
+  ``devices.net.console_robots.NetworkRobots`` (the robots' MQTT pose topic).
+* :class:`CommandSink` — where the control loop sends one unicycle command
+  ``(v m/s, ω rad/s)`` per robot id each tick: ``send``, ``hold`` (paused),
+  ``health``, ``close``, optionally ``obstacles() -> (M, 2)`` (robots excluded
+  from control, for the barrier). Implemented by ``SimulatedRobots`` and
+  ``NetworkRobots`` (any ``RobotTransport`` behind the streamer's watchdogs).
+
+Two neighbouring roles keep their own names because they really differ:
+
+* ``devices.net.transport.RobotTransport`` — the wire: carries commands (with
+  LEDs) to robots and brings back their status and stamped pose samples
+  (``PoseFeed.latest_poses() -> PoseSample``, judged for staleness by the
+  command streamer on the receiver's clock). Implemented by ``MqttTransport``
+  and ``InProcessTransport``; the loop reaches it only through ``NetworkRobots``.
+* ``devices.backend.RobotBackend`` — the experiment API's synchronous view
+  (``poses``, ``time``, ``step(v, w)`` advancing one period), which ``Arena``
+  drives: ``SimulatedArena`` or ``TransportBackend``.
+
+This module is at the bottom of the dependency graph so that every subsystem
+(``tracking`` included, which imports nothing above ``core``) can speak it.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Protocol, runtime_checkable
+
+import numpy as np
+from numpy.typing import NDArray
+
+
+@dataclass(frozen=True)
+class SensedPoses:
+    """One reading: ids (N,) int, poses (N, 3) [x, y, θ] (m, rad), seen (N,) bool (fresh this tick)."""
+
+    ids: NDArray[np.int64]
+    poses: NDArray[np.float64]
+    seen: NDArray[np.bool_]
+
+
+@runtime_checkable
+class PoseSource(Protocol):
+    """Where the control loop's poses come from, once per tick."""
+
+    name: str
+
+    def read(self, now: float) -> SensedPoses:
+        """The robots' poses at loop time ``now`` (s)."""
+
+    def health(self) -> str:
+        """One short line for the status bar."""
+
+
+@runtime_checkable
+class CommandSink(Protocol):
+    """Where the control loop's commands go, once per tick."""
+
+    name: str
+
+    def send(self, ids: NDArray[np.int64], v: NDArray[np.float64], w: NDArray[np.float64]) -> None:
+        """Apply / transmit (v m/s, ω rad/s) for the given robot ids (one period)."""
+
+    def hold(self) -> None:
+        """Paused: robots stand still (a simulation does not advance)."""
+
+    def health(self) -> str:
+        """One short line for the status bar."""
+
+    def close(self) -> None:
+        """Stop the robots and release resources."""

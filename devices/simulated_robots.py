@@ -1,0 +1,68 @@
+"""The simulated arena as the control loop's robot ports: pose source and command sink in one.
+
+:class:`SimulatedRobots` is the :class:`~swarmdeck.core.ports.PoseSource` and
+:class:`~swarmdeck.core.ports.CommandSink` of a :class:`SimulatedArena` (no
+hardware): every robot is seen every tick, each ``send`` steps the simulation
+one period on its virtual clock, ``hold`` leaves it standing still.
+"""
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from swarmdeck.core.ports import SensedPoses
+from swarmdeck.devices.gritsbot import GritsBotParams
+from swarmdeck.devices.initial_conditions import max_robots, random_initial_poses
+from swarmdeck.devices.simulator import ArenaConfig, SimulatedArena
+
+
+class SimulatedRobots:
+    """The simulated arena as pose source and command sink (no hardware).
+
+    Args:
+        n_robots: N (random non-overlapping poses from ``seed``), ignored if ``initial_poses``.
+        config: arena bounds and period (``real_time`` must be False: the loop paces itself).
+        params: robot model.
+        initial_poses: optional ``(N, 3)`` float array.
+    """
+
+    name = "simulation"
+
+    def __init__(self, n_robots: int = 12, config: ArenaConfig | None = None, params: GritsBotParams | None = None,
+                 initial_poses: Any = None) -> None:
+        cfg = config if config is not None else ArenaConfig()
+        if cfg.real_time:
+            raise ValueError("SimulatedRobots: the console paces the loop itself; use ArenaConfig(real_time=False)")
+        if initial_poses is None and n_robots > max_robots(cfg.bounds):
+            # Denser than the default lattice, still barrier-safe: 0.24 m between centres keeps the
+            # look-ahead points (ℓ = 0.03 m) ≥ 0.18 m > D_s apart. Raises naming the maximum if N does not fit.
+            initial_poses = random_initial_poses(n_robots, cfg.bounds, spacing=0.24, min_separation=0.24,
+                                                 rng=cfg.seed)
+        self.sim = SimulatedArena(n_robots if initial_poses is None else None, initial_poses, config=cfg,
+                                  params=params if params is not None else GritsBotParams())
+        self._ids = np.arange(self.sim.n_robots, dtype=np.int64)
+        self._seen = np.ones(self.sim.n_robots, dtype=bool)
+
+    @property
+    def n_robots(self) -> int:
+        return int(self.sim.n_robots)
+
+    def read(self, now: float = 0.0) -> SensedPoses:
+        return SensedPoses(self._ids, self.sim.poses, self._seen)
+
+    def send(self, ids: NDArray[np.int64], v: NDArray[np.float64], w: NDArray[np.float64]) -> None:
+        if len(ids) != self.n_robots or np.any(np.asarray(ids) != self._ids):
+            raise ValueError(f"simulation expects commands for ids 0..{self.n_robots - 1} in order")
+        self.sim.step(v, w)
+
+    def hold(self) -> None:
+        """Paused simulation: nothing moves and simulated time stands still."""
+
+    def health(self) -> str:
+        rep = self.sim.report
+        return f"sim t={self.sim.time:.1f} s, collision steps {rep.steps_with_collision}"
+
+    def close(self) -> None:
+        """Nothing to release."""
