@@ -38,7 +38,7 @@ CHILD = textwrap.dedent("""
     from recording_synth import retimed, simulated_frames
 
     signal.signal(signal.SIGXFSZ, signal.SIG_IGN)           # writes past the limit fail with EFBIG instead
-    resource.setrlimit(resource.RLIMIT_FSIZE, (30_000, 30_000))  # a disk that fills up after ~30 kB
+    resource.setrlimit(resource.RLIMIT_FSIZE, (150_000, 150_000))  # a disk that fills up after ~150 kB
     base = list(simulated_frames(n_robots=30, n_ticks=10, coverage=False))
     rec = Recorder(sys.argv[1])
     ticks = 0

@@ -34,6 +34,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--record", default=None, metavar="PATH",
                         help="record the session to PATH (MCAP; default sessions/<UTC time>.mcap)")
     parser.add_argument("--no-record", action="store_true", help="do not record the session")
+    parser.add_argument("--foxglove", nargs="?", type=int, const=8765, default=None, metavar="PORT",
+                        help="also serve the run live to Foxglove over its WebSocket protocol (default port 8765, "
+                             "on --host): open ws://127.0.0.1:PORT in Foxglove and import `swarmdeck foxglove-layout`")
     parser.add_argument("--no-inputs", action="store_true",
                         help="do not open the TUIO/OSC input listeners (UDP 3333 by default)")
 
@@ -62,6 +65,8 @@ def main(args: argparse.Namespace) -> int:
     port = args.port if args.port is not None else settings.port
     if not 0 <= port <= 65535:
         raise UsageError(f"--port must be in [0, 65535], got {port}")
+    if args.foxglove is not None and not 0 <= args.foxglove <= 65535:
+        raise UsageError(f"--foxglove port must be in [0, 65535], got {args.foxglove}")
     if args.duration is not None and not args.duration > 0:
         raise UsageError(f"--duration must be > 0 s, got {args.duration}")
 
@@ -81,7 +86,7 @@ def main(args: argparse.Namespace) -> int:
         from swarmdeck.devices.net.mqtt_config import redact_url  # never record a broker password
 
         source_name = args.camera or (redact_url(args.robots_via) if args.robots_via else "simulation")
-        rec = _recorder(args.record, config, settings.inputs, source_name)
+        rec = _recorder(args.record, config, settings.inputs, source_name, getattr(source, "image", None))
     hub = None
     if not args.no_inputs:
         hub = _start_inputs(settings.inputs, rec)
@@ -103,11 +108,29 @@ def main(args: argparse.Namespace) -> int:
 
     from swarmdeck.console.web.app import ConsoleApp
 
+    bridge = None
+    if args.foxglove is not None:
+        from swarmdeck.console.web.foxglove_live import FoxgloveBridge, FoxglovePortInUse
+
+        try:
+            bridge = FoxgloveBridge(config.bounds, host=host, port=args.foxglove, robot_radius=loop.robot.radius,
+                                    image_provider=getattr(source, "image", None))
+        except FoxglovePortInUse as exc:
+            loop.close()
+            if rec is not None:
+                rec.close()
+            raise UsageError(f"{exc}: choose another with --foxglove PORT") from None
     try:
         app = ConsoleApp(loop, host=host, port=port)
     except OSError as exc:
         loop.close()
+        if bridge is not None:
+            bridge.close()
         raise UsageError(f"cannot serve on {host}:{port}: {exc}") from None
+    if bridge is not None:
+        loop.subscribe(bridge.offer)
+        bridge.start()
+        print(f"swarmdeck console: Foxglove live at {bridge.url} (import `swarmdeck foxglove-layout`)", flush=True)
     app.start()
     print(f"swarmdeck console: {app.url}  ({config.n_robots} robots, {loop.behaviour_name}; Ctrl-C to stop)",
           flush=True)
@@ -118,6 +141,8 @@ def main(args: argparse.Namespace) -> int:
     finally:
         frame = loop.latest
         app.close()
+        if bridge is not None:
+            bridge.close()
         if rec is not None:
             st = rec.close()
             print(f"swarmdeck console: {st.message}", file=sys.stderr)
@@ -154,12 +179,14 @@ def _robots(config, camera: str | None, robots_via: str | None):
     return source, sink
 
 
-def _recorder(path: str | None, config, inputs_table: dict | None, source: str):
-    """The session recorder (MCAP), writing in the background; never raises into the run."""
+def _recorder(path: str | None, config, inputs_table: dict | None, source: str, image_provider=None):
+    """The session recorder (MCAP), writing in the background; never raises into the run. ``image_provider``
+    (the camera source's ``image``) feeds the Foxglove camera channel."""
     from swarmdeck.console.recording.recorder import Recorder, default_path
     from swarmdeck.console.recording.resimulate import session_metadata
 
-    return Recorder(path or default_path(), session_metadata(config, inputs_table, source=source))
+    return Recorder(path or default_path(), session_metadata(config, inputs_table, source=source),
+                    image_provider=image_provider)
 
 
 def _start_inputs(table: dict | None, rec=None):

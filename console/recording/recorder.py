@@ -41,6 +41,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, BinaryIO
 
+from swarmdeck.console.recording.foxglove import TOPIC_LOG, FoxgloveConfig, FoxgloveEncoder, channel_specs
 from swarmdeck.console.runtime.frame import FRAME_FORMAT, Frame
 from swarmdeck.console.recording.schemas import (
     CHANNELS, METADATA_NAME, PROFILE, RECORDING_FORMAT, TOPIC_CONFIG, TOPIC_DATAGRAM, TOPIC_EVENT, TOPIC_FRAME,
@@ -57,12 +58,15 @@ class RecorderConfig:
     flush_interval: s between chunk closes (bounds the data lost on a crash).
     chunk_size: bytes; a chunk is also closed when it grows past this.
     compression: "zstd", "lz4" or "none" (falls back to what is importable).
+    foxglove: also write Foxglove's native channels (``recording/foxglove.py``: scene, poses, density,
+        camera, transforms, log, metrics), so Foxglove's panels draw the run without an extension.
     """
 
     queue_size: int = 4096
     flush_interval: float = 0.25
     chunk_size: int = 4 * 1024 * 1024
     compression: str = "zstd"
+    foxglove: bool = True
 
     def __post_init__(self) -> None:
         if not (isinstance(self.queue_size, int) and self.queue_size >= 1):
@@ -111,7 +115,7 @@ def software_versions() -> dict[str, str]:
     from importlib.metadata import PackageNotFoundError, version
 
     out = {"python": platform.python_version(), "platform": platform.platform()}
-    for pkg in ("swarmdeck", "numpy", "scipy", "mcap", "viser", "clarabel"):
+    for pkg in ("swarmdeck", "numpy", "scipy", "mcap", "foxglove-sdk", "viser", "clarabel"):
         try:
             out[pkg] = version(pkg)
         except PackageNotFoundError:
@@ -164,13 +168,16 @@ class Recorder:
         wallclock: Unix seconds, for the file's start time (tests pass a fixed clock).
         opener: opens ``path`` for binary writing (default ``open(path, "wb")``; tests pass a
             file that stalls like a slow disk). Needs ``write``, ``flush``, ``tell``, ``close``.
+        image_provider: the camera source's ``image(ref)`` for the Foxglove camera channel, if a camera runs.
+        foxglove: options of the Foxglove channels (``FoxgloveConfig``).
 
     Every method is safe to call from any thread and never raises on I/O problems.
     """
 
     def __init__(self, path: str | os.PathLike[str] | None = None, metadata: Mapping[str, Any] | None = None,
                  config: RecorderConfig | None = None, *, wallclock: Callable[[], float] = time.time,
-                 opener: Callable[[Path], BinaryIO] | None = None) -> None:
+                 opener: Callable[[Path], BinaryIO] | None = None, image_provider: Callable[[str], Any] | None = None,
+                 foxglove: FoxgloveConfig | None = None) -> None:
         self.config = config or RecorderConfig()
         self.path = Path(default_path() if path is None else path)
         self._meta = dict(metadata or {})
@@ -188,6 +195,11 @@ class Recorder:
         self._writer: Any = None
         self._channels: dict[str, int] = {}
         self._thread: threading.Thread | None = None
+        self._image_provider = image_provider
+        self._foxglove_config = foxglove
+        self._foxglove: FoxgloveEncoder | None = None
+        self._foxglove_errors = 0
+        self._foxglove_error = ""
         try:
             self._open()
         except Exception as exc:  # noqa: BLE001 - unwritable path, full disk, …: record nothing, run on
@@ -276,6 +288,11 @@ class Recorder:
         for topic, (name, schema) in CHANNELS.items():
             sid = w.register_schema(name=name, encoding="jsonschema", data=_json(schema))
             self._channels[topic] = w.register_channel(topic=topic, message_encoding="json", schema_id=sid)
+        if self.config.foxglove:
+            for spec in channel_specs():
+                sid = w.register_schema(name=spec.schema_name, encoding=spec.schema_encoding, data=spec.schema_data)
+                self._channels[spec.topic] = w.register_channel(topic=spec.topic, message_encoding=spec.message_encoding,
+                                                                schema_id=sid)
         self._writer = w
         self._file.flush()
         self._bytes = self._file.tell()
@@ -313,6 +330,7 @@ class Recorder:
             for text in frame.events:
                 self._add(TOPIC_EVENT, frame.time, {"t": frame.time, "kind": "frame", "text": text})
             self._counts["frames"] += 1
+            self._write_foxglove(lambda enc, ns: enc.encode(frame, ns, frame.time - self._origin), frame)
         elif kind == "d":
             import base64
 
@@ -325,6 +343,26 @@ class Recorder:
             _, t, k, text = item
             self._add(TOPIC_EVENT, t, {"t": t, "kind": k, "text": text})
             self._counts["events"] += 1
+            self._write_foxglove(lambda enc, ns: [(TOPIC_LOG, ns, enc.log(ns, text, name=k))], None, t)
+
+    def _write_foxglove(self, messages: Callable[[FoxgloveEncoder, int], Any], frame: Frame | None,
+                        t: float | None = None) -> None:
+        """Write the Foxglove channels' messages; a failure there never costs the Frame (counted, said once)."""
+        if not self.config.foxglove:
+            return
+        try:
+            if self._foxglove is None:
+                bounds = self._meta.get("bounds", frame.bounds if frame is not None else (-1.6, 1.6, -1.0, 1.0))
+                self._foxglove = FoxgloveEncoder(tuple(bounds), config=self._foxglove_config,
+                                                 image_provider=self._image_provider)
+            ns = self._log_ns(frame.time if frame is not None else t)
+            for topic, at, data in messages(self._foxglove, ns):
+                self._writer.add_message(self._channels[topic], log_time=at, data=data, publish_time=at)
+        except Exception as exc:  # noqa: BLE001 - a drawing-side bug must not stop the recording
+            self._foxglove_errors += 1
+            if self._foxglove_errors == 1:
+                self._foxglove_error = f"Foxglove channels failed: {type(exc).__name__}: {exc}"
+                self._message = f"recording to {self.path}; {self._foxglove_error}"
 
     def _run(self) -> None:
         interval = self.config.flush_interval
@@ -372,6 +410,8 @@ class Recorder:
             with self._lock:
                 self._state = "closed"
                 self._message = f"recorded {self._counts['frames']} frames to {self.path}"
+                if self._foxglove_errors:
+                    self._message += f"; {self._foxglove_error} ({self._foxglove_errors} frames)"
         except Exception as exc:  # noqa: BLE001 - a full disk above all; whatever it is, the run goes on
             self._fail("failed", f"recording stopped: cannot write {self.path}: {_reason(exc)}; the run goes on")
 

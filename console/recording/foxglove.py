@@ -1,0 +1,396 @@
+"""Foxglove-native channels of a Frame: what Foxglove's 3D, Image, Plot and Log panels draw (REFERENCE.md §13).
+
+:class:`FoxgloveEncoder` turns each :class:`~swarmdeck.console.runtime.frame.Frame`
+into messages of Foxglove's well-known schemas, built and serialised by the
+official ``foxglove-sdk`` (``foxglove.messages``; the schemas are the SDK's own
+``get_schema()`` protobuf descriptors, never copied text). The recorder writes
+them beside its own ``/swarmdeck/frame`` channel on its background writer
+thread; :mod:`swarmdeck.console.web.foxglove_live` serves the same messages over
+the Foxglove WebSocket protocol. Topics (:data:`TOPICS`):
+
+========================  ==========================  ==============================================
+topic                     schema                      content (frame ``arena``: x right, y up, m)
+========================  ==========================  ==============================================
+``/foxglove/robots``      ``foxglove.SceneUpdate``    entity ``arena`` (the boundary, a line loop) and
+                                                      entity ``robots``: one disc (cylinder, ⌀ 0.11 m) and
+                                                      one heading arrow per robot, coloured by state like
+                                                      the console (blue; orange when the barrier changed
+                                                      the command; red e-stop; slate paused; grey unseen),
+                                                      ids as text
+``/foxglove/cells``       ``foxglove.SceneUpdate``    Voronoi edges (a line list) of the coverage state
+``/foxglove/barrier``     ``foxglove.SceneUpdate``    active barrier pairs between look-ahead points, a
+                                                      line list coloured by h (red h ≤ 0 → yellow)
+``/foxglove/contacts``    ``foxglove.SceneUpdate``    touch contacts as spheres
+``/foxglove/poses``       ``foxglove.PosesInFrame``   robot poses [x, y, θ] in ``arena``
+``/foxglove/density``     ``foxglove.Grid``           φ(q, t) on a grid (float32 field ``phi``), every
+                                                      ``density_period`` s
+``/foxglove/camera``      ``foxglove.CompressedImage``  the rectified overhead picture (JPEG), every
+                                                      ``camera_period`` s when a camera runs
+``/foxglove/tf``          ``foxglove.FrameTransforms``  ``world → arena`` (identity) and ``arena → camera``
+                                                      (overhead, looking down)
+``/foxglove/log``         ``foxglove.Log``            frame events (info), alerts when they appear
+                                                      (warning) and clear (info), operator actions
+``/swarmdeck/metrics``    JSON (``swarmdeck.Metrics``)  plottable scalars: min distance, wall clearance,
+                                                      H, mean ‖p − c‖, tick time, solver time, …
+========================  ==========================  ==============================================
+
+The SDK builds messages from Python objects, so building the robots' scene is a
+list comprehension over robots (≈ 8 µs per robot; measured in
+``bench/bench_foxglove.py``): it runs on the recorder's writer thread or the
+live bridge's thread, never on the control loop's.
+"""
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Iterator
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from swarmdeck.console.runtime.frame import Frame
+
+TOPIC_ROBOTS = "/foxglove/robots"
+TOPIC_CELLS = "/foxglove/cells"
+TOPIC_BARRIER = "/foxglove/barrier"
+TOPIC_CONTACTS = "/foxglove/contacts"
+TOPIC_POSES = "/foxglove/poses"
+TOPIC_DENSITY = "/foxglove/density"
+TOPIC_CAMERA = "/foxglove/camera"
+TOPIC_TF = "/foxglove/tf"
+TOPIC_LOG = "/foxglove/log"
+TOPIC_METRICS = "/swarmdeck/metrics"
+
+ARENA_FRAME = "arena"
+WORLD_FRAME = "world"
+CAMERA_FRAME = "camera"
+
+#: topic -> Foxglove schema (message class name in ``foxglove.messages``; None: the JSON metrics schema)
+TOPICS: dict[str, str | None] = {
+    TOPIC_ROBOTS: "SceneUpdate", TOPIC_CELLS: "SceneUpdate", TOPIC_BARRIER: "SceneUpdate",
+    TOPIC_CONTACTS: "SceneUpdate", TOPIC_POSES: "PosesInFrame", TOPIC_DENSITY: "Grid",
+    TOPIC_CAMERA: "CompressedImage", TOPIC_TF: "FrameTransforms", TOPIC_LOG: "Log", TOPIC_METRICS: None,
+}
+
+#: The plottable fields of ``/swarmdeck/metrics`` (units in the names); null when not defined this tick.
+METRIC_FIELDS: dict[str, str] = {
+    "t": "recording clock, s",
+    "tick": "tick index",
+    "min_distance_m": "smallest distance between look-ahead points, m",
+    "safety_distance_m": "barrier safety distance D_s, m",
+    "min_wall_clearance_m": "smallest clearance to the arena walls, m",
+    "n_active": "active barrier constraints",
+    "robots_changed": "robots whose command the filter changed by more than 1 mm/s",
+    "max_intervention_mps": "largest change the filter made to a command, m/s",
+    "solve_time_ms": "barrier QP solve time, ms",
+    "cost_H": "locational coverage cost H",
+    "mean_centroid_distance_m": "mean distance robot to cell centroid, m",
+    "tick_time_ms": "control-loop work per tick, ms",
+}
+
+METRICS_SCHEMA: dict[str, Any] = {
+    "$schema": "https://json-schema.org/draft/2020-12/schema",
+    "title": "swarmdeck.Metrics",
+    "description": "Plottable per-tick scalars of the swarmdeck console (null when not defined this tick).",
+    "type": "object",
+    "required": list(METRIC_FIELDS),
+    "properties": {k: {"type": ["number", "null"], "description": d} for k, d in METRIC_FIELDS.items()},
+}
+
+
+@dataclass(frozen=True)
+class FoxgloveConfig:
+    """What the Foxglove channels carry.
+
+    density_period / camera_period: s of recorded time between density grids / camera pictures
+    (0: every frame). density_cell: grid cell size, m. camera_quality: JPEG quality 1–100.
+    camera_height: height of the ``camera`` frame above the arena centre, m. labels: draw robot ids.
+    """
+
+    density_period: float = 0.2
+    density_cell: float = 0.05
+    camera_period: float = 0.5
+    camera_quality: int = 75
+    camera_height: float = 2.5
+    labels: bool = True
+
+    def __post_init__(self) -> None:
+        for name in ("density_period", "camera_period"):
+            v = getattr(self, name)
+            if not (isinstance(v, (int, float)) and math.isfinite(v) and v >= 0):
+                raise ValueError(f"{name} must be a finite number of seconds >= 0, got {v!r}")
+        for name in ("density_cell", "camera_height"):
+            v = getattr(self, name)
+            if not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):
+                raise ValueError(f"{name} must be a finite number > 0 m, got {v!r}")
+        if not (isinstance(self.camera_quality, int) and 1 <= self.camera_quality <= 100):
+            raise ValueError(f"camera_quality must be an int in [1, 100], got {self.camera_quality!r}")
+
+
+@dataclass(frozen=True)
+class ChannelSpec:
+    """One channel as MCAP and the WebSocket protocol declare it."""
+
+    topic: str
+    schema_name: str
+    schema_encoding: str
+    schema_data: bytes
+    message_encoding: str
+
+
+def channel_specs() -> list[ChannelSpec]:
+    """The channels of :data:`TOPICS`, with the SDK's schemas (protobuf descriptors) and the metrics JSON Schema."""
+    import foxglove.messages as fm
+
+    from swarmdeck.console.recording.recorder import encode_json
+
+    out = []
+    for topic, cls in TOPICS.items():
+        if cls is None:
+            out.append(ChannelSpec(topic, METRICS_SCHEMA["title"], "jsonschema", encode_json(METRICS_SCHEMA), "json"))
+        else:
+            s = getattr(fm, cls).get_schema()
+            out.append(ChannelSpec(topic, s.name, s.encoding, bytes(s.data), s.encoding))
+    return out
+
+
+def _num(x: float) -> float | None:
+    x = float(x)
+    return x if math.isfinite(x) else None
+
+
+class FoxgloveEncoder:
+    """Frames → ``(topic, log_time_ns, bytes)`` messages of :data:`TOPICS`. Not thread-safe: one per writer.
+
+    Args:
+        bounds: the arena rectangle (x_min, x_max, y_min, y_max), m.
+        robot_radius: disc radius, m.
+        config: :class:`FoxgloveConfig`.
+        image_provider: ``image_ref -> (RGB image (H, W, 3) row 0 at y_max, bounds) | None`` (the
+            camera source's ``image``), or None when no camera runs.
+    """
+
+    def __init__(self, bounds: tuple[float, float, float, float] = (-1.6, 1.6, -1.0, 1.0),
+                 robot_radius: float = 0.055, config: FoxgloveConfig | None = None,
+                 image_provider: Callable[[str], Any] | None = None) -> None:
+        import foxglove.messages as fm
+
+        self.fm = fm
+        self.config = config or FoxgloveConfig()
+        self.bounds = tuple(float(b) for b in bounds)
+        self.radius = float(robot_radius)
+        self.image_provider = image_provider
+        self._alerts: frozenset[str] = frozenset()
+        self._next_density = -math.inf
+        self._next_camera = -math.inf
+        self._image_ref: str | None = None
+        self._grid_key: tuple[float, ...] | None = None
+        self._grid_pts: NDArray[np.float64] | None = None
+        from swarmdeck.console.recording.recorder import encode_json
+
+        self._json = encode_json
+
+    # ------------------------------------------------------------------ helpers
+    def _ts(self, ns: int) -> Any:
+        return self.fm.Timestamp(ns // 1_000_000_000, ns % 1_000_000_000)
+
+    def _color(self, rgb: Any, a: float = 1.0) -> Any:
+        return self.fm.Color(r=float(rgb[0]) / 255.0, g=float(rgb[1]) / 255.0, b=float(rgb[2]) / 255.0, a=a)
+
+    def _line_list(self, segs: NDArray[np.float64], z: float, thickness: float, color: Any,
+                   colors: list[Any] | None = None) -> Any:
+        """A LINE_LIST primitive from (K, 2, 2) segments (m) at height z."""
+        fm = self.fm
+        flat = np.asarray(segs, dtype=float).reshape(-1, 2).tolist()
+        return fm.LinePrimitive(type=fm.LinePrimitiveLineType.LineList, thickness=thickness, scale_invariant=False,
+                                points=[fm.Point3(x=x, y=y, z=z) for x, y in flat], color=color,
+                                colors=colors or [])
+
+    def _entity(self, ns: int, eid: str, **prims: Any) -> Any:
+        return self.fm.SceneEntity(timestamp=self._ts(ns), frame_id=ARENA_FRAME, id=eid, **prims)
+
+    def _scene(self, *entities: Any) -> bytes:
+        return self.fm.SceneUpdate(entities=list(entities)).encode()
+
+    # ------------------------------------------------------------------ channels
+    def robots(self, frame: Frame, ns: int) -> bytes:
+        """SceneUpdate: the arena boundary and the robots (discs, heading arrows, id labels)."""
+        from swarmdeck.console.web.scene import robot_colors
+
+        fm = self.fm
+        x0, x1, y0, y1 = self.bounds
+        border = fm.LinePrimitive(type=fm.LinePrimitiveLineType.LineLoop, thickness=0.01,
+                                  points=[fm.Point3(x=x, y=y, z=0.0) for x, y in ((x0, y0), (x1, y0), (x1, y1), (x0, y1))],
+                                  color=fm.Color(r=0.2, g=0.2, b=0.2, a=1.0))
+        p = frame.poses
+        xs, ys = p[:, 0].tolist(), p[:, 1].tolist()
+        half = 0.5 * p[:, 2]
+        qz, qw = np.sin(half).tolist(), np.cos(half).tolist()
+        cols = [self._color(c) for c in robot_colors(frame)]
+        r = self.radius
+        disc = fm.Vector3(x=2 * r, y=2 * r, z=0.03)
+        cyl = [fm.CylinderPrimitive(pose=fm.Pose(position=fm.Vector3(x=x, y=y, z=0.015),
+                                                 orientation=fm.Quaternion(z=z, w=w)),
+                                    size=disc, bottom_scale=1.0, top_scale=1.0, color=c)
+               for x, y, z, w, c in zip(xs, ys, qz, qw, cols)]
+        white = fm.Color(r=1.0, g=1.0, b=1.0, a=1.0)
+        arrows = [fm.ArrowPrimitive(pose=fm.Pose(position=fm.Vector3(x=x, y=y, z=0.035),
+                                                 orientation=fm.Quaternion(z=z, w=w)),
+                                    shaft_length=0.8 * r, shaft_diameter=0.2 * r, head_length=0.5 * r,
+                                    head_diameter=0.5 * r, color=white)
+                  for x, y, z, w in zip(xs, ys, qz, qw)]
+        texts = []
+        if self.config.labels:
+            ink = fm.Color(r=0.05, g=0.05, b=0.05, a=1.0)
+            texts = [fm.TextPrimitive(pose=fm.Pose(position=fm.Vector3(x=x, y=y + 1.4 * r, z=0.05)),
+                                      billboard=True, font_size=14.0, scale_invariant=True, color=ink, text=str(i))
+                     for x, y, i in zip(xs, ys, frame.ids.tolist())]
+        return self._scene(self._entity(ns, "arena", lines=[border]),
+                           self._entity(ns, "robots", cylinders=cyl, arrows=arrows, texts=texts))
+
+    def cells(self, frame: Frame, ns: int) -> bytes:
+        """SceneUpdate: the Voronoi edges (empty entity when there is no coverage state)."""
+        cov = frame.coverage
+        lines = []
+        if cov is not None and len(cov.edges):
+            lines = [self._line_list(cov.edges, 0.002, 0.006, self.fm.Color(r=0.3, g=0.3, b=0.35, a=1.0))]
+        return self._scene(self._entity(ns, "cells", lines=lines))
+
+    def barrier(self, frame: Frame, ns: int) -> bytes:
+        """SceneUpdate: active barrier pairs between look-ahead points, coloured by h."""
+        from swarmdeck.console.web.scene import h_colors
+
+        b = frame.barrier
+        lines = []
+        if b is not None and len(b.active_pairs) and int(b.active_pairs.max()) < frame.n:
+            pts = frame.points
+            pairs = b.active_pairs
+            segs = np.stack((pts[pairs[:, 0]], pts[pairs[:, 1]]), axis=1)
+            colors = [self._color(c) for c in h_colors(b.active_h, b.safety_distance).reshape(-1, 3)]
+            lines = [self._line_list(segs, 0.04, 0.012, self._color((230, 40, 20)), colors)]
+        return self._scene(self._entity(ns, "barrier", lines=lines))
+
+    def contacts(self, frame: Frame, ns: int) -> bytes:
+        """SceneUpdate: touch contacts as spheres (⌀ 6 cm)."""
+        fm = self.fm
+        size = fm.Vector3(x=0.06, y=0.06, z=0.06)
+        col = fm.Color(r=0.8, g=0.1, b=0.7, a=0.8)
+        spheres = [fm.SpherePrimitive(pose=fm.Pose(position=fm.Vector3(x=x, y=y, z=0.03)), size=size, color=col)
+                   for x, y in frame.contacts.positions.tolist()]
+        return self._scene(self._entity(ns, "contacts", spheres=spheres))
+
+    def poses(self, frame: Frame, ns: int) -> bytes:
+        """PosesInFrame: [x, y, θ] of every robot in ``arena``."""
+        fm = self.fm
+        p = frame.poses
+        half = 0.5 * p[:, 2]
+        poses = [fm.Pose(position=fm.Vector3(x=x, y=y), orientation=fm.Quaternion(z=z, w=w))
+                 for x, y, z, w in zip(p[:, 0].tolist(), p[:, 1].tolist(), np.sin(half).tolist(), np.cos(half).tolist())]
+        return fm.PosesInFrame(timestamp=self._ts(ns), frame_id=ARENA_FRAME, poses=poses).encode()
+
+    def density(self, frame: Frame, ns: int) -> bytes | None:
+        """Grid of φ (float32 ``phi``, row-major from (x_min, y_min), rows along +y), or None without a density."""
+        if frame.density is None:
+            return None
+        fm = self.fm
+        x0, x1, y0, y1 = self.bounds
+        cell = self.config.density_cell
+        w, h = max(1, int(round((x1 - x0) / cell))), max(1, int(round((y1 - y0) / cell)))
+        dx, dy = (x1 - x0) / w, (y1 - y0) / h
+        key = (x0, x1, y0, y1, cell)
+        if self._grid_key != key:
+            gx, gy = np.meshgrid(x0 + (np.arange(w) + 0.5) * dx, y0 + (np.arange(h) + 0.5) * dy)
+            self._grid_pts, self._grid_key = np.stack((gx, gy), axis=-1), key
+        phi = np.asarray(frame.density.evaluate(self._grid_pts), dtype="<f4")
+        return fm.Grid(timestamp=self._ts(ns), frame_id=ARENA_FRAME,
+                       pose=fm.Pose(position=fm.Vector3(x=x0, y=y0, z=-0.002), orientation=fm.Quaternion(w=1.0)),
+                       column_count=w, cell_size=fm.Vector2(x=dx, y=dy), row_stride=4 * w, cell_stride=4,
+                       fields=[fm.PackedElementField(name="phi", offset=0,
+                                                     type=fm.PackedElementFieldNumericType.Float32)],
+                       data=phi.tobytes()).encode()
+
+    def camera(self, frame: Frame, ns: int) -> bytes | None:
+        """CompressedImage (JPEG) of the frame's camera picture, or None when there is none."""
+        if self.image_provider is None or frame.image_ref is None:
+            return None
+        got = self.image_provider(frame.image_ref)
+        if got is None:
+            return None
+        import cv2
+
+        img = np.ascontiguousarray(np.asarray(got[0], dtype=np.uint8)[..., ::-1])  # RGB -> BGR for OpenCV
+        ok, buf = cv2.imencode(".jpg", img, [cv2.IMWRITE_JPEG_QUALITY, self.config.camera_quality])
+        if not ok:
+            return None
+        return self.fm.CompressedImage(timestamp=self._ts(ns), frame_id=CAMERA_FRAME, data=buf.tobytes(),
+                                       format="jpeg").encode()
+
+    def transforms(self, ns: int) -> bytes:
+        """FrameTransforms: world → arena (identity), arena → camera (above the centre, looking down: 180° about x)."""
+        fm = self.fm
+        x0, x1, y0, y1 = self.bounds
+        ts = self._ts(ns)
+        return fm.FrameTransforms(transforms=[
+            fm.FrameTransform(timestamp=ts, parent_frame_id=WORLD_FRAME, child_frame_id=ARENA_FRAME,
+                              translation=fm.Vector3(), rotation=fm.Quaternion(w=1.0)),
+            fm.FrameTransform(timestamp=ts, parent_frame_id=ARENA_FRAME, child_frame_id=CAMERA_FRAME,
+                              translation=fm.Vector3(x=(x0 + x1) / 2, y=(y0 + y1) / 2, z=self.config.camera_height),
+                              rotation=fm.Quaternion(x=1.0, w=0.0)),
+        ]).encode()
+
+    def log(self, ns: int, text: str, level: str = "info", name: str = "swarmdeck") -> bytes:
+        """Log message (level "debug" | "info" | "warning" | "error")."""
+        lv = {"debug": self.fm.LogLevel.Debug, "info": self.fm.LogLevel.Info, "warning": self.fm.LogLevel.Warning,
+              "error": self.fm.LogLevel.Error}[level]
+        return self.fm.Log(timestamp=self._ts(ns), level=lv, message=str(text), name=name).encode()
+
+    def metrics(self, frame: Frame, t: float) -> bytes:
+        """The plottable scalars of :data:`METRIC_FIELDS` as JSON."""
+        b, cov = frame.barrier, frame.coverage
+        inter = b.intervention if b is not None else np.zeros(0)
+        total = frame.timing.get("total")
+        out = {
+            "t": _num(t), "tick": frame.tick,
+            "min_distance_m": _num(b.min_distance) if b is not None else None,
+            "safety_distance_m": _num(b.safety_distance) if b is not None else None,
+            "min_wall_clearance_m": _num(b.min_wall_clearance) if b is not None else None,
+            "n_active": b.n_active if b is not None else None,
+            "robots_changed": int(np.count_nonzero(inter > 1e-3)) if b is not None else None,
+            "max_intervention_mps": _num(inter.max()) if len(inter) else None,
+            "solve_time_ms": _num(1e3 * b.solve_time_s) if b is not None else None,
+            "cost_H": _num(cov.cost_H) if cov is not None else None,
+            "mean_centroid_distance_m": _num(cov.mean_centroid_distance) if cov is not None else None,
+            "tick_time_ms": _num(1e3 * total) if total is not None else None,
+        }
+        return self._json(out)
+
+    # ------------------------------------------------------------------ one frame
+    def encode(self, frame: Frame, ns: int, t: float) -> Iterator[tuple[str, int, bytes]]:
+        """Every message of ``frame`` logged at ``ns`` (Unix ns); ``t`` its recording time, s."""
+        yield TOPIC_TF, ns, self.transforms(ns)
+        yield TOPIC_ROBOTS, ns, self.robots(frame, ns)
+        yield TOPIC_POSES, ns, self.poses(frame, ns)
+        yield TOPIC_CELLS, ns, self.cells(frame, ns)
+        yield TOPIC_BARRIER, ns, self.barrier(frame, ns)
+        yield TOPIC_CONTACTS, ns, self.contacts(frame, ns)
+        yield TOPIC_METRICS, ns, self.metrics(frame, t)
+        if frame.density is not None and frame.time >= self._next_density:
+            data = self.density(frame, ns)
+            if data is not None:
+                yield TOPIC_DENSITY, ns, data
+            self._next_density = frame.time + self.config.density_period
+        if frame.image_ref is not None and frame.image_ref != self._image_ref and frame.time >= self._next_camera:
+            data = self.camera(frame, ns)
+            if data is not None:
+                self._image_ref = frame.image_ref
+                self._next_camera = frame.time + self.config.camera_period
+                yield TOPIC_CAMERA, ns, data
+        for text in frame.events:
+            yield TOPIC_LOG, ns, self.log(ns, text)
+        alerts = frozenset(frame.alerts)
+        for text in sorted(alerts - self._alerts):
+            yield TOPIC_LOG, ns, self.log(ns, text, "warning")
+        for text in sorted(self._alerts - alerts):
+            yield TOPIC_LOG, ns, self.log(ns, f"cleared: {text}")
+        self._alerts = alerts
