@@ -1,0 +1,81 @@
+"""Per-robot observations (vectorised over robots).
+
+Row i of :func:`observe` (float32), with ``k`` = number of neighbours observed:
+
+=========================  =====  ============================================================
+part                       size   content (m, rad; arena frame)
+=========================  =====  ============================================================
+own pose                   4      x_i, y_i, cos θ_i, sin θ_i
+neighbours                 2k     p_j − p_i of the k nearest robots, nearest first (look-ahead
+                                  points); zeros beyond N − 1 robots
+walls                      4      x_i − x_min, x_max − x_i, y_i − y_min, y_max − y_i
+task                       0 / 2  formation: g_i − p_i (own slot); others: nothing
+density (optional)         9      φ at p_i + (dx, dy), dx, dy ∈ {−s, 0, s}, divided by max φ
+=========================  =====  ============================================================
+"""
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+FloatArray = NDArray[np.float64]
+
+DENSITY_OFFSETS = np.array([(dx, dy) for dy in (-1.0, 0.0, 1.0) for dx in (-1.0, 0.0, 1.0)])
+
+
+def nearest_neighbours(points: FloatArray, k: int) -> NDArray[np.intp]:
+    """(N, k) indices of each point's k nearest other points, nearest first (k ≤ N − 1)."""
+    n = len(points)
+    if k <= 0 or n < 2:
+        return np.zeros((n, 0), dtype=np.intp)
+    d2 = np.sum((points[:, None, :] - points[None, :, :]) ** 2, axis=-1)
+    np.fill_diagonal(d2, np.inf)
+    idx = np.argpartition(d2, k - 1, axis=1)[:, :k] if k < n - 1 else np.argsort(d2, axis=1)[:, :k]
+    order = np.argsort(np.take_along_axis(d2, idx, axis=1), axis=1, kind="stable")
+    return np.take_along_axis(idx, order, axis=1)
+
+
+def observation_size(k: int, task: str, density: bool) -> int:
+    """Length of one robot's observation."""
+    return 4 + 2 * k + 4 + (2 if task == "formation" else 0) + (9 if density else 0)
+
+
+def observe(poses: FloatArray, points: FloatArray, bounds: tuple[float, float, float, float], k: int,
+            slots: FloatArray | None = None, density: Any = None, density_step: float = 0.15,
+            density_scale: float = 1.0) -> NDArray[np.float32]:
+    """(N, D) observations (table in the module docstring); ``k`` neighbours (padded with zeros when N − 1 < k)."""
+    n = len(poses)
+    x0, x1, y0, y1 = bounds
+    parts = [poses[:, :2], np.cos(poses[:, 2:3]), np.sin(poses[:, 2:3])]
+    rel = np.zeros((n, k, 2))
+    kk = min(k, n - 1)
+    if kk > 0:
+        idx = nearest_neighbours(points, kk)
+        rel[:, :kk] = points[idx] - points[:, None, :]
+    parts.append(rel.reshape(n, 2 * k))
+    parts.append(np.column_stack((points[:, 0] - x0, x1 - points[:, 0], points[:, 1] - y0, y1 - points[:, 1])))
+    if slots is not None:
+        parts.append(slots - points)
+    if density is not None:
+        q = points[:, None, :] + density_step * DENSITY_OFFSETS[None, :, :]
+        parts.append(np.asarray(density.evaluate(q), dtype=float) / density_scale)
+    return np.concatenate(parts, axis=1).astype(np.float32)
+
+
+def observation_bounds(k: int, task: str, density: bool, bounds: tuple[float, float, float, float]
+                       ) -> tuple[NDArray[np.float32], NDArray[np.float32]]:
+    """(low, high) of one observation: positions within the arena, differences within its diagonal."""
+    x0, x1, y0, y1 = bounds
+    span = float(np.hypot(x1 - x0, y1 - y0))
+    m = max(abs(x0), abs(x1), abs(y0), abs(y1))
+    lo = [-m, -m, -1.0, -1.0] + [-span] * (2 * k) + [-span] * 4
+    hi = [m, m, 1.0, 1.0] + [span] * (2 * k) + [span] * 4
+    if task == "formation":
+        lo += [-2 * span] * 2
+        hi += [2 * span] * 2
+    if density:
+        lo += [0.0] * 9
+        hi += [1.0] * 9
+    return np.asarray(lo, dtype=np.float32), np.asarray(hi, dtype=np.float32)
