@@ -54,6 +54,7 @@ class RunResult:
     error: str | None = None  # formatted traceback of the script's own exception
     error_line: str | None = None  # the same in one line: "script.py:12 (in f): ValueError: …"
     returned: Any = None
+    notes: list[str] = field(default_factory=list)  # compatibility provided for the script (e.g. np.mat)
 
     @property
     def ok(self) -> bool:
@@ -126,7 +127,8 @@ def run_experiment(
                     rps = _mentions_rps(source) and importlib.util.find_spec("rps") is None
                 sys.path.insert(0, str(path.parent.resolve()))
                 try:
-                    with rps_aliases() if rps else contextlib.nullcontext():
+                    with rps_aliases() if rps else contextlib.nullcontext([]) as notes:
+                        result.notes.extend(notes)
                         namespace = runpy.run_path(str(path), run_name="__swarmdeck_experiment__")
                         fn = namespace.get("experiment")
                         if callable(fn):

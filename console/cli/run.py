@@ -26,10 +26,12 @@ def main(args: argparse.Namespace) -> int:
     result = run_headless(args.script, args, rps=args.rps)
     if args.json:
         print(json.dumps({"reports": [r.to_dict() for r in result.reports], "error": result.error,
-                          "error_line": result.error_line}, indent=2))
+                          "error_line": result.error_line, "notes": result.notes}, indent=2))
     else:
         for report in result.reports:
             print(report)
+        for note in result.notes:
+            print(f"note: {note}")
         if isinstance(result.returned, dict):
             for key, value in result.returned.items():
                 print(f"{key}: {value}")

@@ -2,7 +2,8 @@
 
 ``swarmdeck run --rps script.py`` makes ``import rps.robotarium`` and
 ``from rps.utilities.… import …`` resolve to these modules for the run only
-(nothing named ``rps`` is installed, so a real rps is never shadowed). The
+(nothing named ``rps`` is installed, so a real rps is never shadowed), and
+provides ``np.mat`` under numpy 2 for that run only. The
 arrays are rps's ``(3, N)`` / ``(2, N)`` columns; the robots underneath are a
 :class:`swarmdeck.devices.Arena`, so every command still goes through
 swarmdeck's safety filter, wheel limits and validation — without rps's
@@ -25,18 +26,35 @@ MODULES = (
 )
 
 
+NP_MAT_NOTE = ("numpy 2 has no np.mat: provided as np.asmatrix while this rps script ran "
+               "(rps scripts written for numpy 1 use it for initial conditions)")
+
+
 @contextmanager
-def rps_aliases() -> Iterator[None]:
-    """Within the block, ``rps`` and ``rps.*`` import these facade modules."""
+def rps_aliases() -> Iterator[list[str]]:
+    """Within the block, ``rps`` and ``rps.*`` import these facade modules.
+
+    Also the numpy 1 API rps scripts rely on: ``np.mat`` (removed in numpy 2) is
+    ``np.asmatrix`` within the block only. Yields a list of notes on what was provided.
+    """
     import importlib
 
+    import numpy as np
+
+    notes: list[str] = []
     saved = {k: v for k, v in sys.modules.items() if k == "rps" or k.startswith("rps.")}
+    add_mat = not hasattr(np, "mat")
     try:
         sys.modules["rps"] = sys.modules[__name__]
         for name in MODULES:
             sys.modules[f"rps.{name}"] = importlib.import_module(f"{__name__}.{name}")
-        yield
+        if add_mat:
+            np.mat = np.asmatrix  # type: ignore[attr-defined]
+            notes.append(NP_MAT_NOTE)
+        yield notes
     finally:
+        if add_mat and getattr(np, "mat", None) is np.asmatrix:
+            del np.mat  # type: ignore[attr-defined]
         for k in [k for k in sys.modules if k == "rps" or k.startswith("rps.")]:
             del sys.modules[k]
         sys.modules.update(saved)

@@ -1,6 +1,8 @@
 """``rps.robotarium.Robotarium`` on top of :class:`swarmdeck.devices.Arena`."""
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
@@ -36,6 +38,31 @@ class Robotarium:
         self.boundaries = [x0, y0, x1 - x0, y1 - y0]  # rps: [x_min, y_min, width, height]
         self._velocities = np.zeros((2, self.number_of_robots))
         self._checked_poses = False
+        # the robot's constants under rps's names (REFERENCE.md §1)
+        robot = self._arena.params
+        self.robot_diameter = robot.diameter
+        self.robot_radius = robot.radius
+        self.wheel_radius = robot.wheel_radius
+        self.base_length = robot.axle_length
+        self.max_linear_velocity = robot.max_speed
+        self.max_wheel_velocity = robot.max_wheel_speed
+        self.max_angular_velocity = robot.max_angular_speed
+        self._figure: Any = None
+
+    @property
+    def figure(self) -> Any:
+        """rps's matplotlib figure, headless here (see :mod:`swarmdeck.devices.rps.figure`)."""
+        if self._figure is None:
+            from swarmdeck.devices.rps.figure import arena_figure
+
+            self._figure = arena_figure(tuple(self.boundaries))
+        return self._figure[0]
+
+    @property
+    def axes(self) -> Any:
+        """rps's axes: plotting calls (``scatter``, ``text``, ``imshow``, …) work and are not shown."""
+        self.figure  # noqa: B018 - creates it
+        return self._figure[1]
 
     @property
     def arena(self) -> Arena:

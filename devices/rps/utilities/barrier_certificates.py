@@ -70,3 +70,51 @@ def create_unicycle_barrier_certificate_with_boundary(barrier_gain: float = 100,
                                                       boundary_points=np.array([-1.6, 1.6, -1.0, 1.0])):
     """As :func:`create_unicycle_barrier_certificate`, with the arena walls."""
     return _uni(barrier_gain, safety_radius, projection_distance, magnitude_limit, _boundary(boundary_points))
+
+
+def _unicycle_dd(barrier_gain, safety_radius, projection_distance, wheel_vel_limit, base_length, wheel_radius,
+                 disturbance, bounds):
+    from swarmdeck.safety import UnicycleParams, UnicycleSafetyFilter
+
+    if not (np.isfinite(disturbance) and disturbance >= 0):
+        raise ValueError(f"disturbance must be a finite number >= 0 rad/s, got {disturbance!r}")
+    flt = UnicycleSafetyFilter(
+        BarrierConfig(safety_distance=safety_radius, gamma=barrier_gain, bounds=bounds),
+        UnicycleParams(wheel_radius=wheel_radius, axle_length=base_length, max_wheel_speed=wheel_vel_limit,
+                       lookahead=projection_distance))
+
+    def f(dxu, x, obstacles=np.empty(0)):
+        dxu = np.asarray(dxu, dtype=float)
+        obs = np.asarray(obstacles, dtype=float)
+        v, w, _ = flt.filter(np.asarray(x, dtype=float).T, dxu[0], dxu[1],
+                             obs.reshape(2, -1).T if obs.size else None)
+        return np.vstack((v, w))
+
+    return f
+
+
+def create_unicycle_differential_drive_barrier_certificate(max_num_obstacle_points: int = 100, max_num_robots: int = 30,
+                                                           disturbance: float = 5, wheel_vel_limit: float = 12.5,
+                                                           base_length: float = 0.105, wheel_radius: float = 0.016,
+                                                           projection_distance: float = 0.05, barrier_gain: float = 150,
+                                                           safety_radius: float = 0.17):
+    """f(dxu (2, N), x (3, N), obstacles (2, M) = none) → safe (2, N) [v; ω] within the wheel limits.
+
+    swarmdeck's unicycle barrier: the QP on the look-ahead points (D_s = ``safety_radius``) with each
+    robot's four wheel-limit rows |ω_R|, |ω_L| ≤ ``wheel_vel_limit``, obstacles as fixed points.
+    rps's preallocation sizes (``max_num_*``) are not limits here. rps tightens each row by the
+    worst wheel-speed ``disturbance``; swarmdeck certifies the nominal model instead (the value is
+    checked, not used), and ``swarmdeck run`` filters the robots' commands again in any case.
+    """
+    return _unicycle_dd(barrier_gain, safety_radius, projection_distance, wheel_vel_limit, base_length, wheel_radius,
+                        disturbance, _OPEN)
+
+
+def create_unicycle_differential_drive_barrier_certificate_with_boundary(
+        max_num_obstacle_points: int = 100, max_num_robots: int = 30, disturbance: float = 5,
+        wheel_vel_limit: float = 12.5, base_length: float = 0.105, wheel_radius: float = 0.016,
+        projection_distance: float = 0.05, barrier_gain: float = 150, safety_radius: float = 0.17,
+        boundary_points=np.array([-1.6, 1.6, -1.0, 1.0])):
+    """As :func:`create_unicycle_differential_drive_barrier_certificate`, with the arena walls."""
+    return _unicycle_dd(barrier_gain, safety_radius, projection_distance, wheel_vel_limit, base_length, wheel_radius,
+                        disturbance, _boundary(boundary_points))

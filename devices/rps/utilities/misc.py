@@ -33,3 +33,19 @@ def determine_marker_size(robotarium, marker_size_meters: float) -> float:
 def determine_font_size(robotarium, font_height_meters: float) -> float:
     """rps sizes matplotlib fonts; there is no figure here, so the height in metres is returned."""
     return float(font_height_meters)
+
+
+def __getattr__(name: str):
+    """``plt`` (``from rps.utilities.misc import *`` gives it to rps scripts): matplotlib's pyplot on a
+    headless backend, loaded on first use so scripts that never plot do not pay for it."""
+    if name == "plt":
+        from swarmdeck.devices.rps.figure import pyplot
+
+        return pyplot()
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
+# rps's misc does `import numpy as np` and `import matplotlib.pyplot as plt`, and scripts get both
+# from `from rps.utilities.misc import *` (some rps examples never import numpy themselves).
+__all__ = ["at_pose", "at_position", "determine_font_size", "determine_marker_size", "generate_initial_conditions",
+           "np", "plt"]

@@ -6,24 +6,20 @@ import numpy as np
 from swarmdeck.core.kinematics import lookahead_points, si_to_unicycle, unicycle_to_si
 
 
-def _heading_map(dxi, poses, linear_velocity_gain: float, angular_velocity_limit: float, backwards: bool) -> np.ndarray:
+def _heading_map(dxi, poses, linear_velocity_gain: float, angular_velocity_limit: float) -> np.ndarray:
     """rps's heading-based single-integrator → unicycle map, (2, N) from dxi (2, N) at poses (3, N).
 
-    v = k (cos θ u_x + sin θ u_y); with u_⊥ = −sin θ u_x + cos θ u_y, ω = ω_max·(2/π)·atan2(u_⊥, v)
-    (forward only) or ω_max·(2/π)·atan(u_⊥ / v) (backwards allowed; ω = 0 where v = 0).
+    v = k (cos θ u_x + sin θ u_y); with u_⊥ = −sin θ u_x + cos θ u_y, ω = ω_max·(2/π)·atan2(u_⊥, v).
     """
     dxi = np.asarray(dxi, dtype=float)
     poses = np.asarray(poses, dtype=float)
     a = np.cos(poses[2])
     b = np.sin(poses[2])
     dxu = np.zeros((2, dxi.shape[1]))
-    dxu[0] = linear_velocity_gain * (a * dxi[0] + b * dxi[1])
-    perp = -b * dxi[0] + a * dxi[1]
-    if backwards:
-        angle = np.arctan(np.divide(perp, dxu[0], out=np.zeros_like(dxu[0]), where=dxu[0] != 0))
-    else:
-        angle = np.arctan2(perp, dxu[0])
-    dxu[1] = angular_velocity_limit * angle / (np.pi / 2)
+    # "+ 0.0" turns −0.0 into +0.0: a zero command must give ω = 0, not atan2(0, −0) = π
+    dxu[0] = linear_velocity_gain * (a * dxi[0] + b * dxi[1]) + 0.0
+    perp = -b * dxi[0] + a * dxi[1] + 0.0
+    dxu[1] = angular_velocity_limit * np.arctan2(perp, dxu[0]) / (np.pi / 2)
     return dxu
 
 
@@ -31,16 +27,31 @@ def create_si_to_uni_dynamics(linear_velocity_gain: float = 1, angular_velocity_
     """rps's heading-based map: v = k‖u‖cos φ, ω = ω_max·2/π·atan2(sin φ, cos φ) (φ: angle of u to θ)."""
 
     def si_to_uni_dyn(dxi, poses):
-        return _heading_map(dxi, poses, linear_velocity_gain, angular_velocity_limit, backwards=False)
+        return _heading_map(dxi, poses, linear_velocity_gain, angular_velocity_limit)
 
     return si_to_uni_dyn
 
 
 def create_si_to_uni_dynamics_with_backwards_motion(linear_velocity_gain: float = 1, angular_velocity_limit: float = np.pi):
-    """As :func:`create_si_to_uni_dynamics`, driving backwards when the target is behind."""
+    """As :func:`create_si_to_uni_dynamics`, driving backwards when the target is behind (as rps).
+
+    Where u points within ±90° of the heading θ the forward map applies; otherwise the map is
+    applied to the reversed heading θ + π and v is negated, so the robot reverses with its rear
+    turning towards u. Both branches use atan2 (as rps): an ``atan(u_⊥ / v)`` version keeps ω
+    small when v is small and left robots hovering ~6 cm from their goals (rps's own
+    ``si_go_to_point.py`` never finished).
+    """
 
     def si_to_uni_dyn(dxi, poses):
-        return _heading_map(dxi, poses, linear_velocity_gain, angular_velocity_limit, backwards=True)
+        dxi = np.asarray(dxi, dtype=float)
+        poses = np.asarray(poses, dtype=float)
+        error = np.arctan2(dxi[1], dxi[0]) - poses[2]
+        error = np.arctan2(np.sin(error), np.cos(error))
+        forward = (error > -np.pi / 2) & (error < np.pi / 2)
+        heading = np.where(forward, poses[2], poses[2] + np.pi)
+        dxu = _heading_map(dxi, np.vstack((poses[:2], heading)), linear_velocity_gain, angular_velocity_limit)
+        dxu[0] = np.where(forward, dxu[0], -dxu[0])
+        return dxu
 
     return si_to_uni_dyn
 
