@@ -55,6 +55,7 @@ class RunResult:
     error_line: str | None = None  # the same in one line: "script.py:12 (in f): ValueError: …"
     returned: Any = None
     notes: list[str] = field(default_factory=list)  # compatibility provided for the script (e.g. np.mat)
+    interrupted: bool = False  # Ctrl-C (or SIGTERM) ended the run; the reports cover what ran
 
     @property
     def ok(self) -> bool:
@@ -141,6 +142,10 @@ def run_experiment(
                     sys.path.remove(str(path.parent.resolve()))
         except ExperimentFinished:
             pass
+        except KeyboardInterrupt:  # the user stopped the run: stop the robots, keep the reports
+            result.interrupted = True
+            for arena in result.arenas:
+                arena.stop()
         except SystemExit as exc:  # sys.exit() in a script ends the run, not swarmdeck
             if exc.code not in (None, 0):
                 result.error = f"the script called sys.exit({exc.code!r})"
@@ -160,16 +165,23 @@ def run_experiment(
 
 
 def progress_bar(total_time: float | None) -> tuple[Callable[[Arena], None] | None, Callable[[], None]]:
-    """An ``on_step`` callback drawing a tqdm bar on stderr when it is a terminal (else None)."""
-    if total_time is None or not sys.stderr.isatty():
+    """An ``on_step`` callback drawing a tqdm bar on stderr when it is a terminal (else None).
+
+    With a ``total_time`` (s) a bar to it; without one (a run until the script ends or Ctrl-C) a
+    counter of simulated seconds with the simulation rate, so an open-ended run shows it is alive.
+    """
+    if not sys.stderr.isatty():
         return None, lambda: None
     from tqdm import tqdm
 
-    bar = tqdm(total=round(total_time, 3), unit="s", desc="simulating", file=sys.stderr, leave=False)
+    total = None if total_time is None else round(total_time, 3)
+    desc = "simulating" if total is not None else "simulating (Ctrl-C stops and prints the report)"
+    bar = tqdm(total=total, unit="s", desc=desc, file=sys.stderr, leave=False,
+               bar_format=None if total is not None else "{desc}: {n:.1f} s simulated [{elapsed}, {rate_fmt}]")
     state = {"t": 0.0}
 
     def on_step(arena: Arena) -> None:
-        t = min(arena.time, total_time)
+        t = arena.time if total_time is None else min(arena.time, total_time)
         bar.update(round(t - state["t"], 3))
         state["t"] = t
 

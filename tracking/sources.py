@@ -300,6 +300,25 @@ class ImageFolderSource:
         self.status = f"image folder {self.folder.name}: closed"
 
 
+def check_device(index: int) -> None:
+    """:class:`CameraError` unless webcam ``index`` opens now (OpenCV's own warnings silenced).
+
+    :class:`OpenCVCamera` keeps retrying a camera that fails during a run; a camera that is not
+    there at start is a mistake in the command line, said in one line.
+    """
+    level = cv2.utils.logging.getLogLevel()
+    cv2.utils.logging.setLogLevel(cv2.utils.logging.LOG_LEVEL_SILENT)
+    try:
+        cap = cv2.VideoCapture(index)
+        opened = cap.isOpened()
+        cap.release()
+    finally:
+        cv2.utils.logging.setLogLevel(level)
+    if not opened:
+        raise CameraError(f"camera {index}: no camera with that index can be opened (is it connected, "
+                          f"is /dev/video{index} readable, is another program using it?)")
+
+
 def open_source(spec: str | int, *, paced: bool = True, get_poses: Callable[[float], np.ndarray] | None = None,
                 ids: list[int] | None = None, size: tuple[int, int] | None = None,
                 **synthetic_kw: object) -> CameraSource:
@@ -315,6 +334,7 @@ def open_source(spec: str | int, *, paced: bool = True, get_poses: Callable[[flo
 
     w, h = size if size is not None else (None, None)
     if isinstance(spec, int) or (isinstance(spec, str) and spec.strip().isdigit()):
+        check_device(int(spec))
         return OpenCVCamera(int(spec), width=w, height=h)
     s = str(spec).strip()
     if s == "synthetic":

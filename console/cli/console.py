@@ -72,6 +72,7 @@ def main(args: argparse.Namespace) -> int:
 
     if args.record and args.no_record:
         raise UsageError("--record and --no-record exclude each other")
+    _check_address(host, port)
     try:  # check the behaviour (name, script) before opening anything
         make_behaviour(config.behaviour, config.behaviour_params, config.bounds, config.max_speed,
                        config.safety.safety_distance)
@@ -132,13 +133,17 @@ def main(args: argparse.Namespace) -> int:
         bridge.start()
         print(f"swarmdeck console: Foxglove live at {bridge.url} (import `swarmdeck foxglove-layout`)", flush=True)
     app.start()
+    if port and app.port != port:
+        print(f"swarmdeck console: port {port} is in use; serving on port {app.port} instead", file=sys.stderr)
     print(f"swarmdeck console: {app.url}  ({config.n_robots} robots, {loop.behaviour_name}; Ctrl-C to stop)",
           flush=True)
+    restore = _stop_on_signals()
     try:
         app.wait(args.duration)
     except KeyboardInterrupt:
         print("swarmdeck console: stopping (robots stopped)", file=sys.stderr)
     finally:
+        restore()
         frame = loop.latest
         app.close()
         if bridge is not None:
@@ -151,6 +156,52 @@ def main(args: argparse.Namespace) -> int:
         print(f"ran {frame.tick + 1} ticks, t = {frame.run_time:.1f} s; "
               f"min distance {b.min_distance:.3f} m" if b is not None else "")
     return 0
+
+
+def _stop_on_signals():
+    """SIGTERM (systemd, docker, most supervisors) and SIGHUP (the terminal closed) stop the console as
+    Ctrl-C does: robots stopped, recording closed with its summary. Returns a function restoring
+    the previous handlers."""
+    import signal
+
+    def interrupt(signum, frame):  # noqa: ARG001 - signal handler signature
+        raise KeyboardInterrupt(signal.Signals(signum).name)
+
+    saved = {sig: signal.signal(sig, interrupt) for sig in (signal.SIGTERM, signal.SIGHUP)}
+
+    def restore() -> None:
+        for sig, handler in saved.items():
+            signal.signal(sig, handler)
+
+    return restore
+
+
+def _check_address(host: str, port: int) -> None:
+    """UsageError (one line) unless ``host`` is an address of this machine the console can bind.
+
+    A host this machine does not have made the web server retry for a long time before; a busy
+    port is fine here (the server moves to the next free port and the console says so). Only a
+    local bind is attempted: nothing is sent anywhere.
+    """
+    import errno
+    import socket
+
+    try:
+        family, kind, proto, _, address = socket.getaddrinfo(host, port, type=socket.SOCK_STREAM,
+                                                             flags=socket.AI_PASSIVE)[0]
+    except (socket.gaierror, UnicodeError) as exc:
+        raise UsageError(f"--host {host}: not a known name or address ({exc})") from None
+    with socket.socket(family, kind, proto) as probe:
+        probe.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
+        try:
+            probe.bind(address)
+        except OSError as exc:
+            if exc.errno == errno.EADDRINUSE:
+                return
+            if exc.errno == errno.EADDRNOTAVAIL:
+                raise UsageError(f"--host {host}: not an address of this machine (use 127.0.0.1, 0.0.0.0 "
+                                 f"or one of this machine's addresses)") from None
+            raise UsageError(f"cannot serve on {host}:{port}: {exc.strerror or exc}") from None
 
 
 def _robots(config, camera: str | None, robots_via: str | None):

@@ -3,6 +3,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import sys
 
 NAME = "run"
 HELP = "run an experiment script headless on the simulated arena and print its report"
@@ -26,7 +27,8 @@ def main(args: argparse.Namespace) -> int:
     result = run_headless(args.script, args, rps=args.rps)
     if args.json:
         print(json.dumps({"reports": [r.to_dict() for r in result.reports], "error": result.error,
-                          "error_line": result.error_line, "notes": result.notes}, indent=2))
+                          "error_line": result.error_line, "notes": result.notes,
+                          "interrupted": result.interrupted}, indent=2))
     else:
         for report in result.reports:
             print(report)
@@ -35,5 +37,8 @@ def main(args: argparse.Namespace) -> int:
         if isinstance(result.returned, dict):
             for key, value in result.returned.items():
                 print(f"{key}: {value}")
+    if result.interrupted:
+        print("swarmdeck run: interrupted (robots stopped); the report covers the run so far", file=sys.stderr)
+        return 130
     raise_if_failed(result)
     return 0
