@@ -129,7 +129,7 @@ def run_experiment(
                 sys.path.insert(0, str(path.parent.resolve()))
                 try:
                     with rps_aliases() if rps else contextlib.nullcontext([]) as notes:
-                        result.notes.extend(notes)
+                        result.notes = notes  # the facade adds to it while the script runs
                         namespace = runpy.run_path(str(path), run_name="__swarmdeck_experiment__")
                         fn = namespace.get("experiment")
                         if callable(fn):

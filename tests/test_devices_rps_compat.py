@@ -32,6 +32,7 @@ def test_backwards_motion_go_to_point_finishes_and_np_mat_is_provided_for_the_ru
 def test_differential_drive_barrier_and_plotting_on_r_axes():
     result = run_experiment(DATA / "dd_barriers_with_plotting.py", duration=CAP, seed=1)
     _finished(result)
+    assert NP_MAT_NOTE not in result.notes  # this script never used np.mat
 
 
 def test_backwards_map_reverses_towards_a_target_behind():

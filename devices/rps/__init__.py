@@ -26,8 +26,8 @@ MODULES = (
 )
 
 
-NP_MAT_NOTE = ("numpy 2 has no np.mat: provided as np.asmatrix while this rps script ran "
-               "(rps scripts written for numpy 1 use it for initial conditions)")
+NP_MAT_NOTE = ("the script used np.mat, which numpy 2 removed: it was provided as np.asmatrix for this "
+               "run only (rps scripts written for numpy 1 use it for initial conditions)")
 
 
 @contextmanager
@@ -35,7 +35,8 @@ def rps_aliases() -> Iterator[list[str]]:
     """Within the block, ``rps`` and ``rps.*`` import these facade modules.
 
     Also the numpy 1 API rps scripts rely on: ``np.mat`` (removed in numpy 2) is
-    ``np.asmatrix`` within the block only. Yields a list of notes on what was provided.
+    ``np.asmatrix`` within the block only. Yields a list that receives a note when the
+    script used it.
     """
     import importlib
 
@@ -49,11 +50,19 @@ def rps_aliases() -> Iterator[list[str]]:
         for name in MODULES:
             sys.modules[f"rps.{name}"] = importlib.import_module(f"{__name__}.{name}")
         if add_mat:
-            np.mat = np.asmatrix  # type: ignore[attr-defined]
-            notes.append(NP_MAT_NOTE)
+            def mat(data, dtype=None):
+                import warnings
+
+                if NP_MAT_NOTE not in notes:
+                    notes.append(NP_MAT_NOTE)
+                with warnings.catch_warnings():  # the note says it once; numpy would warn on every call
+                    warnings.simplefilter("ignore", PendingDeprecationWarning)
+                    return np.asmatrix(data, dtype)
+
+            np.mat = mat  # type: ignore[attr-defined]
         yield notes
     finally:
-        if add_mat and getattr(np, "mat", None) is np.asmatrix:
+        if add_mat and getattr(np, "mat", None) is mat:
             del np.mat  # type: ignore[attr-defined]
         for k in [k for k in sys.modules if k == "rps" or k.startswith("rps.")]:
             del sys.modules[k]
