@@ -208,9 +208,11 @@ class ConsoleGui:
             self.notify(f"script not loaded: {exc}", getattr(event, "client", None))
             return
         opts = tuple(o for o in self.behaviour.options if not o.startswith("script:")) + (name,)
-        self.behaviour.options = opts
+        # Replacing the options drops the old script, the dropdown's value; viser then resets the
+        # value to the first option (coverage) and fires on_update: it must not reach the loop.
         self._reverting = True
         try:
+            self.behaviour.options = opts
             self.behaviour.value = name
         finally:
             self._reverting = False
