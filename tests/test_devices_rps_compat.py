@@ -35,16 +35,17 @@ def test_differential_drive_barrier_and_plotting_on_r_axes():
     assert NP_MAT_NOTE not in result.notes  # this script never used np.mat
 
 
-def test_backwards_map_reverses_towards_a_target_behind():
+def test_backwards_map_backs_off_and_turns_the_front_towards_a_target_behind():
     with rps_aliases():
         from rps.utilities.transformations import create_si_to_uni_dynamics_with_backwards_motion
 
         f = create_si_to_uni_dynamics_with_backwards_motion()
-    poses = np.array([[0.0, 0.0], [0.0, 0.0], [0.0, 0.0]])
-    dxu = f(np.array([[-0.1, 0.1], [0.01, 0.01]]), poses)  # robot 0: target behind; robot 1: ahead
+    poses = np.zeros((3, 3))
+    # robot 0: target behind and a little left; robot 1: ahead; robot 2: no command
+    dxu = f(np.array([[-0.1, 0.1, 0.0], [0.01, 0.01, 0.0]]), poses)
     assert dxu[0, 0] < 0 < dxu[0, 1]
-    # behind and slightly left: the rear (facing −x) turns left of −x, i.e. clockwise
-    assert dxu[1, 0] < 0 < dxu[1, 1]
+    assert dxu[1, 0] > 3.0  # atan2 near ±π: a fast turn (atan would give ω ≈ −0.3 rad/s)
+    assert dxu[0, 2] == 0.0 and dxu[1, 2] == 0.0  # a zero command neither drives nor turns
 
 
 def test_differential_drive_certificate_keeps_wheels_within_limits_and_robots_apart():

@@ -33,27 +33,12 @@ def create_si_to_uni_dynamics(linear_velocity_gain: float = 1, angular_velocity_
 
 
 def create_si_to_uni_dynamics_with_backwards_motion(linear_velocity_gain: float = 1, angular_velocity_limit: float = np.pi):
-    """As :func:`create_si_to_uni_dynamics`, driving backwards when the target is behind (as rps).
-
-    Where u points within ±90° of the heading θ the forward map applies; otherwise the map is
-    applied to the reversed heading θ + π and v is negated, so the robot reverses with its rear
-    turning towards u. Both branches use atan2 (as rps): an ``atan(u_⊥ / v)`` version keeps ω
-    small when v is small and left robots hovering ~6 cm from their goals (rps's own
-    ``si_go_to_point.py`` never finished).
+    """rps's "backwards motion" map, which is rps's heading map: v = k (cos θ u_x + sin θ u_y) is
+    negative when u points behind the robot (it backs off) while ω = ω_max·(2/π)·atan2(u_⊥, v) turns
+    the front towards u. An ``atan(u_⊥ / v)`` version turns far less when v is small and left robots
+    hovering ~6 cm from their goals (rps's own ``si_go_to_point.py`` never finished under swarmdeck).
     """
-
-    def si_to_uni_dyn(dxi, poses):
-        dxi = np.asarray(dxi, dtype=float)
-        poses = np.asarray(poses, dtype=float)
-        error = np.arctan2(dxi[1], dxi[0]) - poses[2]
-        error = np.arctan2(np.sin(error), np.cos(error))
-        forward = (error > -np.pi / 2) & (error < np.pi / 2)
-        heading = np.where(forward, poses[2], poses[2] + np.pi)
-        dxu = _heading_map(dxi, np.vstack((poses[:2], heading)), linear_velocity_gain, angular_velocity_limit)
-        dxu[0] = np.where(forward, dxu[0], -dxu[0])
-        return dxu
-
-    return si_to_uni_dyn
+    return create_si_to_uni_dynamics(linear_velocity_gain, angular_velocity_limit)
 
 
 def create_si_to_uni_mapping(projection_distance: float = 0.05, angular_velocity_limit: float = np.pi):
