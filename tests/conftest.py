@@ -1,8 +1,34 @@
-"""Shared pytest fixtures for swarmdeck's suites."""
+"""Shared pytest fixtures for swarmdeck's suites, and the hypothesis profiles.
+
+Hypothesis profiles: ``ci`` (loaded when the ``CI`` environment variable is set,
+or with ``HYPOTHESIS_PROFILE=ci``) is deterministic — derandomized example
+generation, no example database (nothing carried between runs or machines), no
+deadline (the shared CI cores make timings noisy). ``dev`` (the default) searches
+randomly and keeps the local database so a failure found once is replayed first.
+"""
 from __future__ import annotations
+
+import os
 
 import numpy as np
 import pytest
+from hypothesis import settings
+
+settings.register_profile("ci", derandomize=True, database=None, deadline=None, print_blob=True)
+settings.register_profile("dev", deadline=None)
+
+
+def hypothesis_profile(environ: dict) -> str:
+    """The profile for an environment: ``HYPOTHESIS_PROFILE`` if set, else ``ci``
+    when ``CI`` is set (to anything but "", "0" or "false"), else ``dev``."""
+    explicit = environ.get("HYPOTHESIS_PROFILE")
+    if explicit:
+        return explicit
+    ci = environ.get("CI", "").strip().lower()
+    return "ci" if ci not in ("", "0", "false", "no") else "dev"
+
+
+settings.load_profile(hypothesis_profile(os.environ))
 
 
 @pytest.fixture
