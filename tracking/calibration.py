@@ -16,7 +16,7 @@ import numpy as np
 
 from swarmdeck.tracking.camera_model import PinholeCamera
 from swarmdeck.tracking.jsonfile import read_json_object, write_json
-from swarmdeck.tracking.raster import dictionary
+from swarmdeck.tracking.dictionaries import canonical_dictionary, dictionary
 
 
 class CalibrationError(ValueError):
@@ -106,6 +106,10 @@ class CharucoSpec:
     dictionary: str = "DICT_5X5_100"
 
     def __post_init__(self) -> None:
+        try:
+            object.__setattr__(self, "dictionary", canonical_dictionary(self.dictionary))
+        except ValueError as exc:
+            raise CalibrationError(f"ChArUco board dictionary: {exc}") from None
         if not all(isinstance(v, (int, np.integer)) and v >= 3 for v in (self.squares_x, self.squares_y)):
             raise CalibrationError(f"a ChArUco board needs at least 3x3 squares, got {self.squares_x}x{self.squares_y}")
         for name in ("square_length", "marker_length"):

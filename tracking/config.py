@@ -17,7 +17,7 @@ import numpy as np
 from swarmdeck.tracking.calibration import CalibrationError, CameraCalibration
 from swarmdeck.tracking.jsonfile import read_json_object, write_json
 from swarmdeck.tracking.markers import DEFAULT_REFERENCES, ReferenceMarker
-from swarmdeck.tracking.raster import DICTIONARIES
+from swarmdeck.tracking.dictionaries import canonical_dictionary
 
 
 class ConfigError(ValueError):
@@ -28,7 +28,8 @@ class ConfigError(ValueError):
 class TrackerConfig:
     """Everything the tracker needs to know about the arena and the camera.
 
-    dictionary: ArUco dictionary of all tags. references: surveyed reference markers (ids
+    dictionary: marker dictionary of all tags: any predefined OpenCV ArUco dictionary or
+    AprilTag family, case-insensitive (stored by its canonical name, e.g. DICT_APRILTAG_36h11). references: surveyed reference markers (ids
     never used by robots). tag_height / reference_height: heights (m) of robot tags and of the
     reference markers above the floor; their difference is corrected as parallax. stale_after_s:
     a robot not seen for longer is stale (0.1 s: the Robotarium's monitor zeroes robots whose
@@ -56,8 +57,10 @@ class TrackerConfig:
     threshold_windows: tuple[int, int, int] = (7, 17, 10)
 
     def __post_init__(self) -> None:
-        if self.dictionary not in DICTIONARIES:
-            raise ConfigError(f"dictionary must be one of {sorted(DICTIONARIES)}, got {self.dictionary!r}")
+        try:
+            object.__setattr__(self, "dictionary", canonical_dictionary(self.dictionary))
+        except ValueError as exc:
+            raise ConfigError(f"dictionary: {exc}") from None
         if not (0 < self.tag_size < 1):
             raise ConfigError(f"tag_size must be in (0, 1) m, got {self.tag_size}")
         if not (np.isfinite(self.stale_after_s) and self.stale_after_s > 0):

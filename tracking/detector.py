@@ -13,7 +13,7 @@ import cv2
 import numpy as np
 
 from swarmdeck.tracking.markers import ReferenceMarker, reference_corners
-from swarmdeck.tracking.raster import dictionary
+from swarmdeck.tracking.dictionaries import dictionary
 
 
 @dataclass(frozen=True, eq=False)

@@ -8,20 +8,7 @@ from __future__ import annotations
 import cv2
 import numpy as np
 
-DICTIONARIES = {
-    "DICT_4X4_50": cv2.aruco.DICT_4X4_50,
-    "DICT_4X4_100": cv2.aruco.DICT_4X4_100,
-    "DICT_5X5_100": cv2.aruco.DICT_5X5_100,
-    "DICT_6X6_250": cv2.aruco.DICT_6X6_250,
-}
-
-
-def dictionary(name: str) -> cv2.aruco.Dictionary:
-    """The predefined ArUco dictionary called ``name`` (e.g. "DICT_4X4_50")."""
-    if name not in DICTIONARIES:
-        raise ValueError(f"unknown ArUco dictionary {name!r}; expected one of {sorted(DICTIONARIES)}")
-    return cv2.aruco.getPredefinedDictionary(DICTIONARIES[name])
-
+from swarmdeck.tracking.dictionaries import dictionary
 
 def marker_image(dict_name: str, marker_id: int, px_per_bit: int = 24) -> np.ndarray:
     """(S, S) uint8 printed marker incl. its 1-bit black border, S = (bits + 2)·px_per_bit."""

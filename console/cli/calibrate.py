@@ -35,7 +35,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     cam.add_argument("--squares", default="7x5", help="board squares, COLSxROWS (default 7x5)")
     cam.add_argument("--square-length", type=float, default=0.04, help="square side in m (default 0.04)")
     cam.add_argument("--marker-length", type=float, default=0.03, help="marker side in m (default 0.03)")
-    cam.add_argument("--dictionary", default="DICT_5X5_100", help="board dictionary (default DICT_5X5_100)")
+    cam.add_argument("--dictionary", default="DICT_5X5_100", help="board dictionary: any OpenCV ArUco dictionary or AprilTag family, case-insensitive (default DICT_5X5_100)")
     cam.add_argument("--write-board", type=Path, metavar="PNG", help="write a printable board image and exit")
     cam.add_argument("--write-synthetic", type=Path, metavar="DIR",
                      help="render N synthetic board views (see --views) into DIR and exit")
