@@ -22,9 +22,9 @@ from typing import Protocol, runtime_checkable
 import cv2
 import numpy as np
 
+from swarmdeck.tracking.imageread import IMAGE_SUFFIXES, ImageReadError, decoded_to_rgb, read_image
 from swarmdeck.tracking.types import CameraFrame
 
-IMAGE_SUFFIXES = (".png", ".jpg", ".jpeg", ".bmp", ".tif", ".tiff", ".webp")
 
 
 class CameraError(ValueError):
@@ -43,19 +43,6 @@ class CameraSource(Protocol):
     def read(self, now: float) -> CameraFrame | None: ...
 
     def close(self) -> None: ...
-
-
-def to_rgb(image: np.ndarray) -> np.ndarray | None:
-    """BGR / BGRA / grey uint8 image from OpenCV → RGB uint8 (None if unusable)."""
-    if not isinstance(image, np.ndarray) or image.dtype != np.uint8:
-        return None
-    if image.ndim == 2:
-        return cv2.cvtColor(image, cv2.COLOR_GRAY2RGB)
-    if image.ndim == 3 and image.shape[2] == 3:
-        return cv2.cvtColor(image, cv2.COLOR_BGR2RGB)
-    if image.ndim == 3 and image.shape[2] == 4:
-        return cv2.cvtColor(image, cv2.COLOR_BGRA2RGB)
-    return None
 
 
 class OpenCVCamera:
@@ -118,7 +105,7 @@ class OpenCVCamera:
             ok, img = cap.read()
             stamp = self._clock()
             wall = time.monotonic()
-            rgb = to_rgb(img) if ok else None
+            rgb = decoded_to_rgb(img) if ok else None
             if rgb is None:
                 self.failures += 1
                 self.status = f"camera {self.device}: read failed, reopening"
@@ -239,7 +226,7 @@ class VideoFileSource:
                 return None
         self._pos += 1
         self._last = want
-        rgb = to_rgb(img)
+        rgb = decoded_to_rgb(img)
         if rgb is None:
             self.status = f"video {self.path.name}: unsupported frame format"
             return None
@@ -255,7 +242,9 @@ class VideoFileSource:
 
 class ImageFolderSource:
     """The images of a folder in name order, looped; paced at ``fps`` or one per read.
-    Unreadable images are skipped with a status message and counted."""
+    Images are read by :func:`~swarmdeck.tracking.imageread.read_image` (any depth, EXIF
+    orientation applied), as ``swarmdeck calibrate`` reads them. Unreadable images are
+    skipped with a status message and counted."""
 
     def __init__(self, folder: str | Path, paced: bool = False, fps: float = 30.0, loop: bool = True) -> None:
         self.folder = Path(folder)
@@ -288,10 +277,12 @@ class ImageFolderSource:
             self.status = f"image folder {self.folder.name}: end"
             return None
         path = self.files[want % len(self.files)]
-        rgb = to_rgb(cv2.imread(str(path), cv2.IMREAD_UNCHANGED))
-        if rgb is None:
+        try:
+            rgb = read_image(path)
+        except ImageReadError as exc:
             self.unreadable += 1
-            self.status = f"image folder {self.folder.name}: cannot read {path.name} ({self.unreadable} unreadable)"
+            self.status = (f"image folder {self.folder.name}: cannot read {path.name}: {exc} "
+                           f"({self.unreadable} unreadable)")
             return None
         return CameraFrame(rgb, float(now), want, time.monotonic())
 

@@ -109,15 +109,14 @@ def _camera(args: argparse.Namespace) -> int:
         raise UsageError("give --images DIR (or --write-board / --write-synthetic)")
     if not args.images.is_dir():
         raise UsageError(f"--images {args.images} is not a folder")
-    from swarmdeck.tracking.sources import IMAGE_SUFFIXES
+    from swarmdeck.tracking.imageread import IMAGE_SUFFIXES, ImageReadError, read_image
     files = sorted(p for p in args.images.iterdir() if p.suffix.lower() in IMAGE_SUFFIXES)
     images = []
     for p in files:
-        img = cv2.imread(str(p), cv2.IMREAD_GRAYSCALE)
-        if img is None:
-            print(f"skipping unreadable {p.name}")
-            continue
-        images.append(img)
+        try:
+            images.append(cv2.cvtColor(read_image(p), cv2.COLOR_RGB2GRAY))
+        except ImageReadError as exc:
+            print(f"skipping unreadable {p.name}: {exc}")
     try:
         cal = calibrate_charuco(images, spec)
     except CalibrationError as exc:
@@ -180,10 +179,11 @@ def _arena(args: argparse.Namespace) -> int:
     if args.image is not None:
         if not args.image.is_file():
             raise UsageError(f"no such image {args.image}")
-        bgr = cv2.imread(str(args.image), cv2.IMREAD_COLOR)
-        if bgr is None:
-            raise UsageError(f"cannot read image {args.image}")
-        image = cv2.cvtColor(bgr, cv2.COLOR_BGR2RGB)
+        from swarmdeck.tracking.imageread import ImageReadError, read_image
+        try:
+            image = read_image(args.image)
+        except ImageReadError as exc:
+            raise UsageError(f"cannot read image {exc}") from None
     else:
         image = _grab(args.camera, args.timeout)
     err = check_image(image, None if cal is None else cal.image_size)
