@@ -67,6 +67,7 @@ class Tracker:
         self._centre: np.ndarray | None = None
         self._update_centre()
         self.last_detections = Detections(np.zeros(0, int), np.zeros((0, 4, 2)))
+        self._unplaced = np.zeros(0, dtype=int)  # robot ids in the last frame that had no homography
         self.last_fit: HomographyFit | None = None
         self.last: TrackedPoses = self._snapshot(float("nan"), np.zeros(len(self._ids), bool), "no frame yet")
         self.counters = {"frames": 0, "bad_frames": 0, "rejected_homographies": 0, "duplicate_frames": 0}
@@ -118,6 +119,7 @@ class Tracker:
             err = f"frame stamp {stamp!r} is not a finite number of seconds"
         if err is not None:
             self.counters["bad_frames"] += 1
+            self._unplaced = np.zeros(0, dtype=int)
             now = stamp if isinstance(stamp, (int, float)) and math.isfinite(stamp) else self.last.frame_stamp
             self.last = self._snapshot(now, np.zeros(len(self._ids), bool), f"bad frame: {err}")
             return self.last
@@ -171,15 +173,25 @@ class Tracker:
             seen_ids = new_ids
         elif new_ids.size:
             self._merge(new_ids, None, stamp)
+        # robot markers in this frame that got no pose: no homography to place them with
+        unplaced = np.unique(new_ids) if self._H is None else np.zeros(0, dtype=int)
+        self._unplaced = unplaced
         seen = np.isin(self._ids, seen_ids)
-        parts = [h_status, f"{int(seen.sum())}/{len(self._ids)} robots seen"]
+        parts = [h_status]
+        if unplaced.size:
+            parts.append(f"robot markers {_id_list(unplaced)} seen but not placed: no homography yet")
+        parts.append(f"{int(seen.sum())}/{len(self._ids)} robots seen")
         tp = self._snapshot(stamp, seen, "", tuple(int(i) for i in dup))
         if tp.stale.any():
             st = np.flatnonzero(tp.stale)
             ages = stamp - self._stamps[st]
+            ids_st = self._ids[st]
+            in_frame = np.isin(ids_st, unplaced)
             parts.append("stale: " + ", ".join(
-                f"{int(i)} ({a:.1f} s)" if math.isfinite(a) else f"{int(i)} (never seen)"
-                for i, a in zip(self._ids[st][:8], ages[:8])) + (f", … ({len(st)} in all)" if len(st) > 8 else ""))
+                f"{int(i)} ({a:.1f} s)" if math.isfinite(a) else
+                f"{int(i)} ({'in view, no homography' if f else 'never seen'})"
+                for i, a, f in zip(ids_st[:8], ages[:8], in_frame[:8]))
+                + (f", … ({len(st)} in all)" if len(st) > 8 else ""))
         if dup.size:
             parts.append(f"duplicate ids (ignored this frame): {_id_list(dup)}")
         if parallax_note:
@@ -213,6 +225,7 @@ class Tracker:
             "homography_reason": "" if fit is None else fit.reason,
             "reference_rms_mm": None if fit is None or not math.isfinite(fit.rms_m) else fit.rms_m * 1000,
             "robots_seen": int(self.last.seen.sum()),
+            "robots_unplaced": int(len(self._unplaced)),
             "robots_stale": int(self.last.stale.sum()),
             "duplicate_ids": list(self.last.duplicate_ids),
             **self.counters,
