@@ -47,6 +47,14 @@ class BarrierConfig:
         (last tick's active rows, or the rows û violates) has at most this many rows;
         larger, degenerate working sets go to clarabel directly (measured faster).
     clarabel_max_iter, clarabel_tol: clarabel's max_iter and tol_gap_abs/rel/tol_feas.
+    mode: ``"centralised"`` (one QP over all robots), ``"distributed"`` (every robot
+        solves its own QP on half of each pair row, REFERENCE.md §12,
+        :mod:`safety.distributed`) or ``"auto"`` (distributed above ``distributed_above`` robots).
+    distributed_above: robot count above which "auto" filters distributed (from
+        ``bench/bench_safety.py``: where the centralised filter stops holding a 33 ms tick).
+    sensing_radius: distributed mode: each robot sees the neighbours within this
+        distance (m); None → ``neighbour_radius()``. Refused when smaller than the
+        distance at which a pair row can bind (``pair_bind_distance()``).
     """
 
     safety_distance: float = 0.17
@@ -65,6 +73,9 @@ class BarrierConfig:
     active_set_max_rows: int = 100
     clarabel_max_iter: int = 100
     clarabel_tol: float = 1e-9
+    mode: Literal["centralised", "distributed", "auto"] = "centralised"
+    distributed_above: int = 200
+    sensing_radius: float | None = None
 
     def __post_init__(self) -> None:
         checks = [
@@ -82,6 +93,9 @@ class BarrierConfig:
             (self.clarabel_max_iter >= 1, "clarabel_max_iter must be >= 1"),
             (0 < self.clarabel_tol < 1e-3, "clarabel_tol must be in (0, 1e-3)"),
             (len(self.bounds) == 4, "bounds must be (x_min, x_max, y_min, y_max)"),
+            (self.mode in ("centralised", "distributed", "auto"),
+             "mode must be 'centralised', 'distributed' or 'auto'"),
+            (self.distributed_above >= 0, "distributed_above must be >= 0"),
         ]
         for ok, message in checks:
             if not ok:
@@ -94,6 +108,19 @@ class BarrierConfig:
             raise ValueError(
                 f"BarrierConfig: bounds {self.bounds} leave no room inside the wall margin {m} m"
             )
+        if self.sensing_radius is not None and self.mode != "centralised":
+            need = self.pair_bind_distance()
+            if not self.sensing_radius >= need:
+                raise ValueError(
+                    f"BarrierConfig: sensing_radius {self.sensing_radius} m is too small for the "
+                    f"distributed filter: at max_speed {self.max_speed} m/s with gamma {self.gamma} "
+                    f"({self.class_k} κ) a pair row can bind up to {need:.3f} m apart, and a robot "
+                    f"that cannot see such a neighbour cannot hold its half of the row"
+                )
+
+    def distributed_for(self, n: int) -> bool:
+        """Whether N robots are filtered by the distributed filter under this config's ``mode``."""
+        return self.mode == "distributed" or (self.mode == "auto" and n > self.distributed_above)
 
     @classmethod
     def from_dict(cls, data: dict) -> "BarrierConfig":
@@ -150,7 +177,10 @@ class BarrierConfig:
     def _radii(self) -> tuple[float, float]:
         # computed once per config (the bisection is not free at 30 Hz)
         wall = self.margin + self.wall_bind_clearance() + self.max_speed * self.dt
-        return self.pair_bind_distance() + 2 * self.max_speed * self.dt, wall
+        pair = self.pair_bind_distance() + 2 * self.max_speed * self.dt
+        if self.sensing_radius is not None and self.mode != "centralised":
+            pair = float(self.sensing_radius)  # rows for exactly the neighbours a robot senses
+        return pair, wall
 
     def neighbour_radius(self) -> float:
         """k-d tree radius (m): binding distance plus 2·v_max·dt for the next tick."""

@@ -37,6 +37,7 @@ from .active_set import solve_active_set
 from .config import BarrierConfig
 from .constraints import LIMIT, OBSTACLE, PAIR, Rows, barrier_rows
 from .diagnostics import BarrierDiagnostics
+from .distributed import filter_distributed
 from .qp_clarabel import solve_qp
 
 _ACTIVE_TOL = 1e-7  # m/s: a row within this of its bound counts as active in clarabel answers
@@ -159,6 +160,8 @@ class SafetyFilter:
         rows = barrier_rows(P, cfg, O, tree)
         if extra is not None and extra.m:
             rows = Rows.concat([rows, extra])
+        if cfg.distributed_for(n):
+            return self._solve_distributed(P, U, O, rows, max_speed, t0)
         unsafe = (rows.h < 0) & (rows.kind != LIMIT)
         n_unsafe = int(unsafe.sum())
         recovering = cfg.recovery and n_unsafe > 0
@@ -248,6 +251,21 @@ class SafetyFilter:
         speed = 0 if max_speed is None else int(np.sum(np.linalg.norm(qp.u, axis=1) >= max_speed - _ACTIVE_TOL))
         return _Solved(qp.u, rows.lhs(qp.u) >= rows.b - _ACTIVE_TOL, speed, "clarabel",
                        iterations + qp.iterations)
+
+    def _solve_distributed(self, P, U, O, rows: Rows, max_speed: float | None, t0: float
+                           ) -> tuple[np.ndarray, BarrierDiagnostics]:
+        """Every robot's own QP on half of each pair row (``safety.distributed``, REFERENCE.md §12)."""
+        res = filter_distributed(rows, U, max_speed, self.config)
+        n = P.shape[0]
+        if not res.ok:
+            return self.fail_stop(n, U, f"distributed: {res.reason}", t0, rows.m)
+        n_unsafe = int(np.sum((rows.h < 0) & (rows.kind != LIMIT)))
+        was_safe = bool(np.array_equal(res.u, U))
+        status = "nominal safe" if was_safe else "optimal per robot"
+        if n_unsafe:
+            status += f" (recovering {n_unsafe} unsafe rows, {res.n_fallback} robots holding)"
+        return res.u, self._diag(True, status, t0, rows, P, U, res.u, O, res.active, res.n_speed, was_safe,
+                                 "distributed", 0, 0, n_unsafe)
 
     def _remember(self, rows: Rows, active: np.ndarray, n: int, n_obs: int) -> None:
         self._warm_keys = np.sort(rows.key[active])
