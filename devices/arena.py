@@ -61,6 +61,9 @@ class RunDefaults:
     safety: bool = True
     on_create: Any = None  # callable(Arena) -> None, lets the runner find the script's arena
     on_step: Any = None  # callable(Arena) -> None after every step (progress display)
+    # callable(n_robots, initial_conditions, config, params) -> RobotBackend for Arenas built
+    # without a backend (the sandbox's child: robots on the other side of a pipe); None: simulated
+    backend_factory: Any = None
 
 
 RUN_DEFAULTS: contextvars.ContextVar[RunDefaults] = contextvars.ContextVar("swarmdeck_run_defaults", default=RunDefaults())
@@ -141,7 +144,8 @@ class Arena:
                 initial_conditions = check_poses(initial_conditions)
             elif number_of_robots is None:
                 number_of_robots = 6
-            backend = SimulatedArena(number_of_robots, initial_conditions, config=config, params=self.params)
+            make = defaults.backend_factory if defaults.backend_factory is not None else SimulatedArena
+            backend = make(number_of_robots, initial_conditions, config=config, params=self.params)
         self.backend = backend
         self.n = int(backend.n_robots)
         self.ell = self.params.lookahead

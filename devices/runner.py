@@ -106,15 +106,18 @@ def run_experiment(
     safety: bool = True,
     on_step: Callable[[Arena], None] | None = None,
     rps: bool | None = None,
+    backend_factory: Callable[..., Any] | None = None,
 ) -> RunResult:
     """Run a script file (or an ``experiment(arena)`` callable) and return its :class:`RunResult`.
 
     ``rps``: make ``import rps…`` resolve to swarmdeck's rps facade for this run;
     None (default) does so when the script mentions rps and no real rps is installed.
+    ``backend_factory``: builds the robots of Arenas the script creates (see
+    :class:`~swarmdeck.devices.arena.RunDefaults`); None: the simulated arena.
     """
     result = RunResult()
     defaults = RunDefaults(n_robots=n_robots, duration=duration, seed=seed, safety=safety,
-                           on_create=result.arenas.append, on_step=on_step)
+                           on_create=result.arenas.append, on_step=on_step, backend_factory=backend_factory)
     token = RUN_DEFAULTS.set(defaults)
     script = None if callable(target) else str(target)
     try:

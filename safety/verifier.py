@@ -81,6 +81,91 @@ class VerificationReport:
         }
 
 
+def step_contacts(x: np.ndarray, u: np.ndarray, dt: float, contact_distance: float
+                  ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Contacts of discs at ``x`` (N, 2) moving with velocities ``u`` (N, 2) for one step of ``dt`` s.
+
+    Broad phase by k-d tree on swept discs, narrow phase :func:`first_contact_times`.
+    Returns ``pairs`` (K, 2) with i < j, contact times ``t`` (K,) in [0, dt], approach speeds
+    ``vn`` (K,) along the contact normal (m/s, ≥ 0), and ``t_stop`` (N,): the time each robot
+    may move before its first contact (dt for robots without one; non-penetration).
+    """
+    n = x.shape[0]
+    t_stop = np.full(n, float(dt))
+    empty = np.empty((0, 2), dtype=np.int64)
+    if n < 2:
+        return empty, np.empty(0), np.empty(0), t_stop
+    step_len = np.linalg.norm(u, axis=1) * dt
+    radius = contact_distance + 2 * float(step_len.max())
+    pairs = cKDTree(x).query_pairs(radius + 1e-12, output_type="ndarray")
+    if not pairs.size:
+        return empty, np.empty(0), np.empty(0), t_stop
+    pairs = np.sort(pairs, axis=1)
+    pairs = pairs[np.lexsort((pairs[:, 1], pairs[:, 0]))]  # a fixed order, whatever the tree's
+    i, j = pairs[:, 0], pairs[:, 1]
+    r0 = x[i] - x[j]
+    vr = u[i] - u[j]
+    t = first_contact_times(r0, vr, contact_distance, dt)
+    hit = np.isfinite(t)
+    i, j, t, r0, vr = i[hit], j[hit], t[hit], r0[hit], vr[hit]
+    normal = r0 / np.maximum(np.linalg.norm(r0, axis=1), 1e-12)[:, None]
+    vn = np.maximum(0.0, -np.einsum("kd,kd->k", normal, vr))
+    np.minimum.at(t_stop, i, t)
+    np.minimum.at(t_stop, j, t)
+    return np.column_stack((i, j)).astype(np.int64), t, vn, t_stop
+
+
+@dataclass
+class ContactLog:
+    """Running contact statistics of one run (REFERENCE.md §4): feed it :func:`step_contacts` results."""
+
+    n_robots: int
+    dt: float
+    contacts: list[Contact] = field(default_factory=list)
+    per_robot: np.ndarray = field(default=None)  # type: ignore[assignment]
+    total_vn: float = 0.0
+    steps: int = 0
+    durations: list[int] = field(default_factory=list)
+    running: dict[tuple[int, int], int] = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        if self.per_robot is None:
+            self.per_robot = np.zeros(self.n_robots, dtype=np.int64)
+
+    def add_step(self, pairs: np.ndarray, t: np.ndarray, vn: np.ndarray) -> None:
+        """Record one step's contacts (from :func:`step_contacts`)."""
+        k = self.steps
+        touching: set[tuple[int, int]] = set()
+        for (a, b), tc, v in zip(pairs.tolist(), t.tolist(), vn.tolist()):  # contacts only, usually none
+            self.contacts.append(Contact(k, k * self.dt + float(tc), int(a), int(b), float(v)))
+            self.total_vn += float(v)
+            touching.add((int(a), int(b)))
+        if len(pairs):
+            np.add.at(self.per_robot, pairs.ravel(), 1)
+        for key in list(self.running):
+            if key not in touching:
+                self.durations.append(self.running.pop(key))
+        for key in touching:
+            self.running[key] = self.running.get(key, 0) + 1
+        self.steps += 1
+
+    def score(self, v_max: float) -> float:
+        """S = 1 − Σ v_n / (N · steps · v_max), clipped to [0, 1]."""
+        s = 1.0 - self.total_vn / (max(self.n_robots, 1) * max(self.steps, 1) * v_max)
+        return float(np.clip(s, 0.0, 1.0))
+
+    def report(self, v_max: float, final_positions: np.ndarray) -> "VerificationReport":
+        durations = self.durations + list(self.running.values())
+        contacts = self.contacts
+        return VerificationReport(
+            score=self.score(v_max), steps=self.steps, n_robots=self.n_robots, contacts=tuple(contacts),
+            contacts_per_robot=self.per_robot.copy(),
+            mean_approach_speed=float(np.mean([c.approach_speed for c in contacts])) if contacts else 0.0,
+            mean_contact_duration_s=float(np.mean(durations)) * self.dt if durations else 0.0,
+            first_contact_time=contacts[0].time if contacts else None, final_positions=final_positions,
+        )
+
+
 def verify(x0: np.ndarray, controller: Callable[[np.ndarray, float], np.ndarray], steps: int,
            dt: float = 0.033, contact_distance: float = 0.11, v_max: float = 0.2) -> VerificationReport:
     """Run ``controller(x (N, 2), t) -> u (N, 2)`` from x0 for ``steps`` steps and score it.
@@ -89,50 +174,12 @@ def verify(x0: np.ndarray, controller: Callable[[np.ndarray, float], np.ndarray]
     verify the filtered loop). Speeds above v_max are scaled down to v_max.
     """
     x = np.array(x0, dtype=float)
-    n = x.shape[0]
-    contacts: list[Contact] = []
-    per_robot = np.zeros(n, dtype=np.int64)
-    in_contact = np.zeros((0, 2), dtype=np.int64)
-    durations: list[int] = []
-    running: dict[tuple[int, int], int] = {}
-    total_vn = 0.0
+    log = ContactLog(x.shape[0], dt)
     for k in range(steps):
         u = np.asarray(controller(x.copy(), k * dt), dtype=float)
         speed = np.linalg.norm(u, axis=1)
         u = u * np.minimum(1.0, v_max / np.maximum(speed, 1e-300))[:, None]
-        step_len = np.linalg.norm(u, axis=1) * dt
-        t_stop = np.full(n, dt)
-        touching: set[tuple[int, int]] = set()
-        if n >= 2:
-            radius = contact_distance + 2 * float(step_len.max())
-            pairs = cKDTree(x).query_pairs(radius + 1e-12, output_type="ndarray")
-            if pairs.size:
-                i, j = pairs[:, 0], pairs[:, 1]
-                r0 = x[i] - x[j]
-                vr = u[i] - u[j]
-                t = first_contact_times(r0, vr, contact_distance, dt)
-                hit = np.isfinite(t)
-                for a, b, tc, rr, vv in zip(i[hit], j[hit], t[hit], r0[hit], vr[hit]):
-                    normal = rr / max(float(np.linalg.norm(rr)), 1e-12)
-                    vn = max(0.0, -float(normal @ vv))
-                    contacts.append(Contact(k, k * dt + float(tc), int(min(a, b)), int(max(a, b)), vn))
-                    per_robot[[a, b]] += 1
-                    total_vn += vn
-                    t_stop[a] = min(t_stop[a], tc)
-                    t_stop[b] = min(t_stop[b], tc)
-                    touching.add((int(min(a, b)), int(max(a, b))))
-        for key in list(running):
-            if key not in touching:
-                durations.append(running.pop(key))
-        for key in touching:
-            running[key] = running.get(key, 0) + 1
+        pairs, t, vn, t_stop = step_contacts(x, u, dt, contact_distance)
+        log.add_step(pairs, t, vn)
         x = x + u * t_stop[:, None]
-    durations.extend(running.values())
-    score = 1.0 - total_vn / (max(n, 1) * max(steps, 1) * v_max)
-    return VerificationReport(
-        score=float(np.clip(score, 0.0, 1.0)), steps=steps, n_robots=n, contacts=tuple(contacts),
-        contacts_per_robot=per_robot,
-        mean_approach_speed=float(np.mean([c.approach_speed for c in contacts])) if contacts else 0.0,
-        mean_contact_duration_s=float(np.mean(durations)) * dt if durations else 0.0,
-        first_contact_time=contacts[0].time if contacts else None, final_positions=x,
-    )
+    return log.report(v_max, x)

@@ -1,0 +1,9 @@
+"""Verification runs, the sandbox for user code, and the executors that scale them out.
+
+* :mod:`.verification` — ``verify(scripts, config, executor) -> VerificationReport``, verdicts, the JSON report.
+* :mod:`.sandbox` — ``run_sandboxed``: the user's script in a jailed child, poses and commands over a pipe.
+* :mod:`.confinement` — ``SandboxLimits``, the bubblewrap jail, ``probe()`` (can this machine confine?).
+* :mod:`.plant` — the trusted side's robots: ``ArenaPlant``, ``VerificationRobots`` (disturbances, contacts).
+* :mod:`.executors` — ``SerialExecutor``, ``LocalPoolExecutor``, ``RayExecutor``.
+* :mod:`.report_html` — the self-contained HTML report.
+"""

@@ -1,0 +1,136 @@
+"""How a sandboxed child is confined: resource limits and the Linux-namespace jail.
+
+The jail is Debian's bubblewrap (REFERENCE.md §11): a new network namespace
+(only its own loopback: the host's services, 127.0.0.1 included, are out of
+reach), new pid/ipc/uts namespaces, and a filesystem built from read-only binds
+of what Python needs (the interpreter, its libraries, the installed packages,
+swarmdeck's own modules) plus the script's folder read-only and a private
+scratch directory, the only writable place. When swarmdeck runs as root, the
+child drops to a uid of its own before user code runs (so RLIMIT_NPROC bounds a
+fork bomb: the kernel never enforces it for uid 0). Where bubblewrap is missing
+or the kernel refuses namespaces, :func:`probe` says why and untrusted code is
+refused unless the caller passes ``trusted=True``.
+"""
+from __future__ import annotations
+
+import functools
+import os
+import shutil
+import subprocess
+import sys
+import sysconfig
+from dataclasses import dataclass
+from pathlib import Path
+
+
+@dataclass(frozen=True)
+class SandboxLimits:
+    """Per-child limits. Times in seconds, sizes in bytes.
+
+    Attributes:
+        cpu_s: RLIMIT_CPU, CPU seconds of the child (SIGXCPU/SIGKILL past it).
+        wall_s: wall-clock limit of a whole run (the child is killed past it).
+        startup_s: wall time allowed from start until the script has built its Arena
+            (imports and top-level code).
+        tick_s: per-tick compute budget: wall time from sending poses to receiving commands.
+            A tick that overruns stops the robots for that tick.
+        max_overruns: that many overrun ticks in a row end the run.
+        address_space: RLIMIT_AS.
+        open_files: RLIMIT_NOFILE.
+        processes: RLIMIT_NPROC (processes and threads of the child's uid).
+        file_size: RLIMIT_FSIZE (largest file the child may write in its scratch dir).
+        log_bytes: bytes of the child's stdout/stderr kept (the rest is counted, not kept).
+    """
+
+    cpu_s: int = 300
+    wall_s: float = 600.0
+    startup_s: float = 30.0
+    tick_s: float = 1.0
+    max_overruns: int = 5
+    address_space: int = 2 << 30
+    open_files: int = 64
+    processes: int = 32
+    file_size: int = 16 << 20
+    log_bytes: int = 64 << 10
+
+    def __post_init__(self) -> None:
+        for name in ("cpu_s", "wall_s", "startup_s", "tick_s", "max_overruns", "address_space", "open_files",
+                     "processes", "file_size", "log_bytes"):
+            value = getattr(self, name)
+            if not (isinstance(value, (int, float)) and value > 0):
+                raise ValueError(f"SandboxLimits.{name} must be > 0, got {value!r}")
+
+    def rlimits(self) -> dict[str, int]:
+        """The setrlimit values the child applies to itself (names of :mod:`resource` constants)."""
+        return {"RLIMIT_CPU": int(self.cpu_s), "RLIMIT_AS": int(self.address_space),
+                "RLIMIT_NOFILE": int(self.open_files), "RLIMIT_NPROC": int(self.processes),
+                "RLIMIT_FSIZE": int(self.file_size), "RLIMIT_CORE": 0}
+
+
+class ConfinementUnavailable(RuntimeError):
+    """This machine cannot confine a child (the message says why); untrusted code is refused."""
+
+
+@functools.lru_cache(maxsize=1)
+def probe() -> str | None:
+    """None when bubblewrap can build the jail here, else the reason it cannot (cached)."""
+    bwrap = shutil.which("bwrap")
+    if bwrap is None:
+        return "bubblewrap (bwrap) is not installed (Debian: apt-get install bubblewrap)"
+    try:
+        out = subprocess.run([bwrap, "--ro-bind", "/", "/", "--unshare-net", "--unshare-pid", "--die-with-parent",
+                              "true"], capture_output=True, timeout=20, check=False)
+    except (OSError, subprocess.TimeoutExpired) as exc:
+        return f"bwrap could not start: {exc}"
+    if out.returncode != 0:
+        return f"bwrap cannot create namespaces here: {out.stderr.decode(errors='replace').strip()[:200]}"
+    return None
+
+
+def sandbox_uid() -> int | None:
+    """A uid of the child's own when running as root (so RLIMIT_NPROC applies), else None."""
+    if os.geteuid() != 0:
+        return None
+    return 200000 + os.getpid() % 100000
+
+
+def _visible_paths(script_dir: Path) -> list[tuple[str, Path]]:
+    """(kind, path) binds of the jail: what Python and swarmdeck need, read-only."""
+    import swarmdeck.console
+    import swarmdeck.core
+    import swarmdeck.coverage
+    import swarmdeck.devices
+    import swarmdeck.safety
+
+    roots = {Path("/usr")}
+    roots |= {p for p in map(Path, ("/lib", "/lib64", "/bin", "/lib32", "/libx32")) if p.exists() and not p.is_symlink()}
+    roots |= {Path(sys.prefix), Path(sys.base_prefix), Path(sys.executable).resolve().parent.parent}
+    for key in ("stdlib", "platstdlib", "purelib", "platlib"):
+        roots.add(Path(sysconfig.get_paths()[key]))
+    for module in (swarmdeck.console, swarmdeck.core, swarmdeck.coverage, swarmdeck.devices, swarmdeck.safety):
+        roots.add(Path(module.__file__).resolve().parent)  # editable installs live outside site-packages
+    binds = [("ro", p.resolve()) for p in sorted(roots) if p.exists()]
+    # drop paths inside another bound path
+    kept = [(k, p) for k, p in binds if not any(p != q and p.is_relative_to(q) for _, q in binds)]
+    kept.append(("ro", script_dir.resolve()))
+    return kept
+
+
+def bwrap_command(child_argv: list[str], script_dir: Path, scratch: Path) -> list[str]:
+    """The bubblewrap command line running ``child_argv`` in the jail (scratch writable)."""
+    argv = [shutil.which("bwrap") or "bwrap", "--unshare-net", "--unshare-pid", "--unshare-ipc", "--unshare-uts",
+            "--die-with-parent", "--new-session", "--proc", "/proc", "--dev", "/dev", "--tmpfs", "/tmp"]
+    made: set[Path] = {Path("/"), Path("/proc"), Path("/dev"), Path("/tmp")}
+    for link in map(Path, ("/lib", "/lib64", "/bin", "/sbin", "/lib32", "/libx32")):
+        if link.is_symlink():  # merged /usr (Debian 12): /lib -> usr/lib
+            argv += ["--symlink", os.readlink(link), str(link)]
+            made.add(link)
+    for kind, path in _visible_paths(script_dir) + [("rw", scratch.resolve())]:
+        for parent in reversed(path.parents):  # parents first, world-traversable (bwrap makes them 0700)
+            if parent not in made:
+                argv += ["--perms", "0755", "--dir", str(parent)]
+                made.add(parent)
+        argv += ["--ro-bind" if kind == "ro" else "--bind", str(path), str(path)]
+        made.add(path)
+    argv += ["--chdir", str(scratch.resolve()), "--"]
+    return argv + child_argv

@@ -1,0 +1,115 @@
+"""Where verification runs execute: in this process, on a local process pool, or on a Ray cluster.
+
+An executor runs independent :class:`~swarmdeck.console.jobs.verification.RunTask`\\ s
+with :func:`~swarmdeck.console.jobs.verification.run_task` and returns their
+results in task order, whatever order they finished in, so every executor gives
+the same report. ``run(tasks, on_done, cancelled)`` calls ``on_done(index,
+result, finished_count)`` as runs finish and stops starting runs once
+``cancelled()`` is true (results of runs never started are None). Each run's
+sandbox is built inside the worker, so Ray workers confine user code too.
+"""
+from __future__ import annotations
+
+import multiprocessing
+import os
+from collections.abc import Callable, Sequence
+from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
+from typing import Any
+
+from swarmdeck.console.jobs.verification import RunTask, run_task
+
+OnDone = Callable[[int, dict[str, Any], int], None]
+
+
+class SerialExecutor:
+    """Every run one after the other in this process (each still in its own sandboxed child)."""
+
+    name = "serial"
+
+    def run(self, tasks: Sequence[RunTask], on_done: OnDone, cancelled: Callable[[], bool]) -> list[dict | None]:
+        results: list[dict | None] = [None] * len(tasks)
+        for k, task in enumerate(tasks):
+            if cancelled():
+                break
+            results[k] = run_task(task)
+            on_done(k, results[k], k + 1)
+        return results
+
+
+class LocalPoolExecutor:
+    """A pool of ``workers`` local processes (default: the number of cores); no service needed."""
+
+    name = "local"
+
+    def __init__(self, workers: int | None = None) -> None:
+        if workers is not None and (isinstance(workers, bool) or not isinstance(workers, int) or workers < 1):
+            raise ValueError(f"workers must be a positive integer, got {workers!r}")
+        self.workers = workers or os.cpu_count() or 1
+
+    def run(self, tasks: Sequence[RunTask], on_done: OnDone, cancelled: Callable[[], bool]) -> list[dict | None]:
+        results: list[dict | None] = [None] * len(tasks)
+        if not tasks:
+            return results
+        context = multiprocessing.get_context("spawn")  # no fork of a threaded caller (the portal)
+        with ProcessPoolExecutor(max_workers=min(self.workers, len(tasks)), mp_context=context) as pool:
+            pending: dict[Future, int] = {pool.submit(run_task, t): k for k, t in enumerate(tasks)}
+            finished = 0
+            while pending:
+                done, _ = wait(pending, timeout=0.5, return_when=FIRST_COMPLETED)
+                for future in done:
+                    k = pending.pop(future)
+                    if future.cancelled():
+                        continue
+                    results[k] = future.result()
+                    finished += 1
+                    on_done(k, results[k], finished)
+                if cancelled():  # running tasks see the cancel file and stop within a tick
+                    for future in pending:
+                        future.cancel()
+        return results
+
+
+class RayExecutor:
+    """The same tasks on a Ray cluster: ``address`` "auto" (a running cluster), "local" (start one
+    here with ``num_cpus``) or ``ray://host:port``. Needs ``pip install 'swarmdeck[ray]'`` and
+    swarmdeck installed on every node."""
+
+    name = "ray"
+
+    def __init__(self, address: str = "auto", num_cpus: int | None = None) -> None:
+        try:
+            import ray
+        except ImportError as exc:
+            raise RuntimeError("Ray is not installed: pip install 'swarmdeck[ray]'") from exc
+        self.ray = ray
+        self.address, self.num_cpus = address, num_cpus
+
+    def _connect(self) -> None:
+        ray = self.ray
+        if ray.is_initialized():
+            return
+        kwargs: dict[str, Any] = {"include_dashboard": False, "log_to_driver": False, "configure_logging": False}
+        if self.address == "local":
+            ray.init(num_cpus=self.num_cpus, **kwargs)
+        else:
+            ray.init(address=self.address, **kwargs)
+
+    def run(self, tasks: Sequence[RunTask], on_done: OnDone, cancelled: Callable[[], bool]) -> list[dict | None]:
+        ray = self.ray
+        self._connect()
+        remote = ray.remote(num_cpus=1, max_retries=0)(run_task)
+        refs = {remote.remote(t): k for k, t in enumerate(tasks)}
+        results: list[dict | None] = [None] * len(tasks)
+        finished = 0
+        while refs:
+            if cancelled():
+                for ref in refs:
+                    ray.cancel(ref, force=True)
+                break
+            done, _ = ray.wait(list(refs), num_returns=1, timeout=0.5)
+            for ref in done:
+                k = refs.pop(ref)
+                results[k] = ray.get(ref)
+                finished += 1
+                on_done(k, results[k], finished)
+        return results

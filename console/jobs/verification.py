@@ -1,0 +1,325 @@
+"""Simulation-based verification of untrusted experiment scripts (paper §IV-A, REFERENCE.md §2, §4).
+
+For each script, ``runs`` simulated runs from randomised initial conditions with
+the disturbances of a real arena (:class:`~swarmdeck.console.jobs.plant.Disturbances`),
+each run twice in the sandbox:
+
+* **raw** — no barrier: measures the safety score S and the contacts (first
+  contact time, approach speeds, contact durations, counts per robot);
+* **wrapped** — the barrier on, as the experiment will run: must end without
+  error, without any contact, and pass the Robotarium verifier's acceptance
+  rules (more than 100 steps with robots too close or outside, simulated time
+  above 1.5 × declared, N different from declared: rejected).
+
+Verdicts: ``rejected`` (with the reasons), ``accepted`` (runs with the barrier),
+``accepted, may bypass the barrier`` (every raw run clean, S ≥ the threshold in
+every raw run, and no contact at all). Every run is a pure function of the
+script, the config and its index (:func:`run_task`), so any executor gives the
+same report, bit for bit. The report's JSON schema is
+``verification_report.schema.json`` beside this module (versioned by ``schema``).
+"""
+from __future__ import annotations
+
+import hashlib
+import math
+import os
+import shutil
+import stat
+import tempfile
+from collections.abc import Callable, Sequence
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from swarmdeck.console.jobs.confinement import SandboxLimits
+from swarmdeck.console.jobs.plant import ArenaPlant, Disturbances, VerificationRobots
+from swarmdeck.console.jobs.sandbox import run_sandboxed
+from swarmdeck.devices.arena import Arena
+from swarmdeck.devices.initial_conditions import random_initial_poses
+from swarmdeck.devices.simulator import ArenaConfig, SimulatedArena
+from swarmdeck.devices.validation import ValidationRules
+
+SCHEMA = "swarmdeck.verification/1"
+REJECTED, ACCEPTED, BYPASS = "rejected", "accepted", "accepted, may bypass the barrier"
+MAX_SCRIPT_BYTES = 1 << 20
+SERIES_POINTS = 200  # minimum-distance samples kept per run in the report
+
+
+@dataclass(frozen=True)
+class VerificationConfig:
+    """What a verification runs and how it decides.
+
+    Attributes:
+        n_robots: declared N (None: what the script builds; an Arena built without a count gets 6).
+        duration: declared duration, s; every run ends there.
+        runs: runs per script (each raw and wrapped).
+        seed: base seed; run i uses the seed sequence (seed, i) for its initial conditions and disturbances.
+        bypass_threshold: S every raw run must reach (with no contact at all) to bypass the barrier.
+        disturbances: pose noise, latency, dropped commands.
+        limits: the sandbox's limits per run.
+        rules: the Robotarium verifier's thresholds.
+        trusted: run scripts unconfined where this machine cannot confine them.
+        rps: resolve ``import rps`` to swarmdeck's facade (None: when the script imports rps).
+    """
+
+    n_robots: int | None = None
+    duration: float = 30.0
+    runs: int = 8
+    seed: int = 0
+    bypass_threshold: float = 0.99
+    disturbances: Disturbances = field(default_factory=Disturbances)
+    limits: SandboxLimits = field(default_factory=SandboxLimits)
+    rules: ValidationRules = field(default_factory=ValidationRules)
+    trusted: bool = False
+    rps: bool | None = None
+
+    def __post_init__(self) -> None:
+        if self.n_robots is not None and (isinstance(self.n_robots, bool) or not isinstance(self.n_robots, int) or self.n_robots < 1):
+            raise ValueError(f"n_robots must be a positive integer, got {self.n_robots!r}")
+        if not (isinstance(self.duration, (int, float)) and math.isfinite(self.duration) and self.duration > 0):
+            raise ValueError(f"duration must be a finite number of seconds > 0, got {self.duration!r}")
+        if isinstance(self.runs, bool) or not isinstance(self.runs, int) or self.runs < 1:
+            raise ValueError(f"runs must be a positive integer, got {self.runs!r}")
+        if isinstance(self.seed, bool) or not isinstance(self.seed, int) or self.seed < 0:
+            raise ValueError(f"seed must be a non-negative integer, got {self.seed!r}")
+        if not 0 <= self.bypass_threshold <= 1:
+            raise ValueError(f"bypass_threshold must be in [0, 1], got {self.bypass_threshold!r}")
+
+    def to_dict(self) -> dict:
+        return {"n_robots": self.n_robots, "duration": float(self.duration), "runs": self.runs, "seed": self.seed,
+                "bypass_threshold": float(self.bypass_threshold), "disturbances": self.disturbances.to_dict(),
+                "limits": asdict(self.limits), "rules": asdict(self.rules), "trusted": self.trusted}
+
+
+@dataclass(frozen=True)
+class RunTask:
+    """One sandboxed run: the script's text travels with the task (so remote workers need no shared disk)."""
+
+    script_name: str
+    source: bytes
+    config: VerificationConfig
+    index: int
+    mode: str  # "raw" or "wrapped"
+    cancel_path: str | None = None  # the run stops when this file exists
+
+
+def load_script(path: str | Path) -> tuple[str, bytes]:
+    """(file name, bytes) of a script to verify; ValueError naming what is wrong."""
+    p = Path(path)
+    if not p.is_file():
+        raise ValueError(f"script {str(p)!r} does not exist or is not a file")
+    if p.suffix != ".py":
+        raise ValueError(f"script {str(p)!r} must be a Python file (.py); archives are not accepted")
+    size = p.stat().st_size
+    if size > MAX_SCRIPT_BYTES:
+        raise ValueError(f"script {str(p)!r} is {size} bytes, more than the limit of {MAX_SCRIPT_BYTES}")
+    return p.name, p.read_bytes()
+
+
+def _series(values: list[float]) -> list[float]:
+    if len(values) <= SERIES_POINTS:
+        return [round(v, 6) for v in values]
+    idx = np.linspace(0, len(values) - 1, SERIES_POINTS).round().astype(int)
+    return [round(values[i], 6) for i in idx]
+
+
+def run_task(task: RunTask) -> dict[str, Any]:
+    """Run one task in the sandbox and summarise it as a JSON-ready dict (the same on any executor)."""
+    cfg = task.config
+    seeds = np.random.SeedSequence(cfg.seed, spawn_key=(task.index,)).spawn(2)
+    arena_config = ArenaConfig(seed=None)
+    rules = cfg.rules
+
+    def make_plant(n: int, initial: np.ndarray | None) -> ArenaPlant:
+        poses = initial if initial is not None else random_initial_poses(n, arena_config.bounds, rng=np.random.default_rng(seeds[0]))
+        sim = SimulatedArena(n, poses, config=arena_config, rules=rules)
+        robots = VerificationRobots(sim, cfg.disturbances, np.random.default_rng(seeds[1]), contact_distance=sim.params.diameter)
+        return ArenaPlant(Arena(backend=robots, config=arena_config, safety=task.mode == "wrapped", duration=cfg.duration))
+
+    folder = Path(tempfile.mkdtemp(prefix="swarmdeck-script-"))
+    try:
+        os.chmod(folder, 0o755)
+        script = folder / task.script_name
+        script.write_bytes(task.source)
+        os.chmod(script, stat.S_IRUSR | stat.S_IWUSR | stat.S_IRGRP | stat.S_IROTH)
+        cancelled = (lambda: os.path.exists(task.cancel_path)) if task.cancel_path else None
+        outcome = run_sandboxed(script, make_plant, n_robots=cfg.n_robots, duration=cfg.duration, rps=cfg.rps,
+                                limits=cfg.limits, trusted=cfg.trusted, cancelled=cancelled)
+    finally:
+        shutil.rmtree(folder, ignore_errors=True)
+    result: dict[str, Any] = {
+        "index": task.index, "mode": task.mode, "ended_by": outcome.ended_by, "error": outcome.error_line,
+        "n_robots": outcome.n_robots, "ticks": outcome.ticks, "overruns": outcome.overruns,
+        "log": outcome.log[-4000:], "log_bytes": outcome.log_bytes,
+    }
+    plant = outcome.plant
+    if plant is None:
+        result.update(time=0.0, safety_score=None, contacts=None, min_distance=None, min_distance_series=[],
+                      contact_points=[], validation=None, safety_filter=None, rule_violations=[])
+        return result
+    robots: VerificationRobots = plant.arena.backend
+    contacts = robots.contacts.report(plant.arena.params.max_speed, robots.true_poses[:, :2])
+    report = plant.arena.report().to_dict()
+    result.update(
+        time=round(plant.arena.time, 9),
+        safety_score=contacts.score,
+        contacts={"count": len(contacts.contacts), "first_time": contacts.first_contact_time,
+                  "mean_approach_speed": contacts.mean_approach_speed,
+                  "mean_duration_s": contacts.mean_contact_duration_s,
+                  "per_robot": [int(c) for c in contacts.contacts_per_robot]},
+        min_distance=min(robots.min_distance) if robots.min_distance else None,
+        min_distance_series=_series(robots.min_distance),
+        contact_points=[[round(t, 6), round(x, 6), round(y, 6)] for t, x, y in robots.contact_points[:50]],
+        validation=report["validation"], safety_filter=report["safety"],
+        rule_violations=robots.report.verdict(cfg.duration, rules),
+    )
+    return result
+
+
+def _run_reasons(run: dict[str, Any], cfg: VerificationConfig) -> list[str]:
+    """Why this run fails the acceptance rules (empty: it passes)."""
+    reasons = []
+    if run["error"] is not None:
+        reasons.append(run["error"])
+    if cfg.n_robots is not None and run["n_robots"] is not None and run["n_robots"] != cfg.n_robots:
+        reasons.append(f"the script uses {run['n_robots']} robots but declares {cfg.n_robots}")
+    reasons.extend(run.get("rule_violations") or [])
+    if run["mode"] == "wrapped" and run["contacts"] and run["contacts"]["count"]:
+        reasons.append(f"robots touched {run['contacts']['count']} times with the barrier on")
+    return reasons
+
+
+def _grouped(pairs: list[tuple[int, str]]) -> list[str]:
+    """'reason (runs 0, 2)' lines, in order of first appearance."""
+    by_reason: dict[str, list[int]] = {}
+    for index, reason in pairs:
+        by_reason.setdefault(reason, []).append(index)
+    return [f"{reason} (run{'s' if len(ix) > 1 else ''} {', '.join(map(str, ix))})" for reason, ix in by_reason.items()]
+
+
+def script_verdict(name: str, source: bytes, runs: Sequence[dict[str, Any]], cfg: VerificationConfig) -> dict[str, Any]:
+    """The verdict of one script from its raw and wrapped runs (ordered by index)."""
+    wrapped = [r for r in runs if r["mode"] == "wrapped"]
+    raw = [r for r in runs if r["mode"] == "raw"]
+    reasons = _grouped([(r["index"], why) for r in wrapped for why in _run_reasons(r, cfg)])
+    scores = [r["safety_score"] for r in raw if r["safety_score"] is not None]
+    score = float(np.mean(scores)) if scores else None
+    no_bypass: list[str] = []
+    if not reasons:
+        no_bypass = _grouped([(r["index"], why) for r in raw for why in _run_reasons(r, cfg)])
+        low = [r["index"] for r in raw if r["safety_score"] is None or r["safety_score"] < cfg.bypass_threshold]
+        touched = sum(r["contacts"]["count"] for r in raw if r["contacts"])
+        if low:
+            no_bypass.append(f"S below {cfg.bypass_threshold:g} without the barrier in runs {', '.join(map(str, low))}")
+        if touched:
+            no_bypass.append(f"{touched} contacts without the barrier")
+    verdict = REJECTED if reasons else (BYPASS if not no_bypass else ACCEPTED)
+    spread = None
+    if len(scores) >= 2:
+        half = 1.96 * float(np.std(scores, ddof=1)) / math.sqrt(len(scores))
+        spread = [max(0.0, score - half), min(1.0, score + half)]
+    return {
+        "script": name, "sha256": hashlib.sha256(source).hexdigest(), "verdict": verdict,
+        "safety_score": score, "safety_score_min": min(scores) if scores else None, "safety_score_ci95": spread,
+        "reasons": reasons, "bypass_refused_because": no_bypass if verdict == ACCEPTED else [],
+        "runs": list(runs),
+    }
+
+
+@dataclass
+class VerificationReport:
+    """The outcome of :func:`verify`: one entry per script and the overall verdict."""
+
+    config: VerificationConfig
+    scripts: list[dict[str, Any]]
+    executor: str = "serial"
+
+    @property
+    def verdict(self) -> str:
+        """The worst verdict over the scripts."""
+        order = [REJECTED, ACCEPTED, BYPASS]
+        return min((s["verdict"] for s in self.scripts), key=order.index)
+
+    @property
+    def safety_score(self) -> float | None:
+        """The lowest mean S over the scripts."""
+        scores = [s["safety_score"] for s in self.scripts if s["safety_score"] is not None]
+        return min(scores) if scores else None
+
+    @property
+    def accepted(self) -> bool:
+        return self.verdict != REJECTED
+
+    def to_dict(self) -> dict[str, Any]:
+        """The JSON report (schema ``swarmdeck.verification/1``; no timings, so equal runs give equal JSON)."""
+        return {"schema": SCHEMA, "verdict": self.verdict, "safety_score": self.safety_score,
+                "reasons": [f"{s['script']}: {r}" for s in self.scripts for r in s["reasons"]],
+                "config": self.config.to_dict(), "scripts": self.scripts}
+
+
+class VerificationCancelled(Exception):
+    """:func:`verify` was cancelled before every run finished."""
+
+
+@dataclass(frozen=True)
+class Progress:
+    """Passed to the progress callback after each finished run."""
+
+    done: int
+    total: int
+    script: str
+    index: int
+    mode: str
+
+
+def verify(scripts: Sequence[str | Path], config: VerificationConfig = VerificationConfig(),
+           executor: Any = None, *, on_progress: Callable[[Progress], None] | None = None,
+           cancel: Any = None) -> VerificationReport:
+    """Verify ``scripts`` under ``config`` on ``executor`` (default: a local process pool).
+
+    ``on_progress(Progress)`` is called after each run; ``cancel`` is a
+    :class:`threading.Event` (or anything with ``is_set()``): once set, runs not yet finished
+    are stopped and :class:`VerificationCancelled` is raised. ValueError for a script that
+    cannot be read; :class:`~swarmdeck.console.jobs.confinement.ConfinementUnavailable` when
+    this machine cannot confine untrusted code and ``config.trusted`` is False.
+    """
+    from swarmdeck.console.jobs.confinement import ConfinementUnavailable, probe
+    from swarmdeck.console.jobs.executors import LocalPoolExecutor
+
+    loaded = [load_script(s) for s in scripts]
+    if not loaded:
+        raise ValueError("no script to verify")
+    reason = probe()
+    if reason is not None and not config.trusted:
+        raise ConfinementUnavailable(f"cannot confine untrusted code on this machine: {reason}; "
+                                     "pass --trusted to run it unconfined")
+    executor = executor if executor is not None else LocalPoolExecutor()
+    cancel_dir = Path(tempfile.mkdtemp(prefix="swarmdeck-cancel-"))
+    cancel_path = str(cancel_dir / "cancel")
+    tasks = [RunTask(name, source, config, i, mode, cancel_path)
+             for name, source in loaded for i in range(config.runs) for mode in ("raw", "wrapped")]
+
+    def done(k: int, result: dict[str, Any], finished: int) -> None:
+        if on_progress is not None:
+            t = tasks[k]
+            on_progress(Progress(finished, len(tasks), t.script_name, t.index, t.mode))
+
+    def cancelled() -> bool:
+        if cancel is not None and cancel.is_set():
+            Path(cancel_path).touch()
+            return True
+        return False
+
+    try:
+        results = executor.run(tasks, done, cancelled)
+    finally:
+        shutil.rmtree(cancel_dir, ignore_errors=True)
+    if cancelled() or any(r is None or r["ended_by"] == "cancelled" for r in results):
+        raise VerificationCancelled("verification was cancelled")
+    reports = []
+    for s, (name, source) in enumerate(loaded):
+        runs = results[s * 2 * config.runs : (s + 1) * 2 * config.runs]
+        reports.append(script_verdict(name, source, runs, config))
+    return VerificationReport(config, reports, getattr(executor, "name", type(executor).__name__))
