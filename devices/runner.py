@@ -107,6 +107,7 @@ def run_experiment(
     on_step: Callable[[Arena], None] | None = None,
     rps: bool | None = None,
     backend_factory: Callable[..., Any] | None = None,
+    on_create: Callable[[Arena], None] | None = None,
 ) -> RunResult:
     """Run a script file (or an ``experiment(arena)`` callable) and return its :class:`RunResult`.
 
@@ -114,10 +115,17 @@ def run_experiment(
     None (default) does so when the script mentions rps and no real rps is installed.
     ``backend_factory``: builds the robots of Arenas the script creates (see
     :class:`~swarmdeck.devices.arena.RunDefaults`); None: the simulated arena.
+    ``on_create``: called with every Arena the run builds.
     """
     result = RunResult()
+
+    def created(arena: Arena) -> None:
+        result.arenas.append(arena)
+        if on_create is not None:
+            on_create(arena)
+
     defaults = RunDefaults(n_robots=n_robots, duration=duration, seed=seed, safety=safety,
-                           on_create=result.arenas.append, on_step=on_step, backend_factory=backend_factory)
+                           on_create=created, on_step=on_step, backend_factory=backend_factory)
     token = RUN_DEFAULTS.set(defaults)
     script = None if callable(target) else str(target)
     try:

@@ -34,6 +34,7 @@ class Link:
         self.reader = FrameReader(in_fd)
         self.out_fd = out_fd
         self.arenas = 0
+        self.arena: Any = None  # the script's Arena, once built
 
     def send(self, message: dict[str, Any]) -> None:
         write_frame(self.out_fd, message)
@@ -72,8 +73,10 @@ class PipeRobots:
         return self._time
 
     def step(self, v: ArrayLike, w: ArrayLike) -> NDArray[np.float64]:
+        # "invalid": robot-steps whose non-finite commands the script's own Arena stopped so far
+        invalid = int(getattr(self.link.arena, "invalid_commands", 0))
         self.link.send({"t": "cmd", "k": self._k, "v": pack(np.asarray(v, dtype=float).reshape(-1)),
-                        "w": pack(np.asarray(w, dtype=float).reshape(-1))})
+                        "w": pack(np.asarray(w, dtype=float).reshape(-1)), "invalid": invalid})
         self._take(self.link.receive())
         return self._poses.copy()
 
@@ -103,6 +106,7 @@ def main(argv: list[str]) -> int:
         os.chdir(scratch)
         os.environ.update(HOME=scratch, TMPDIR=scratch)
     _confine(start)
+    link.send({"t": "ready"})
     error: str | None = None
     error_line: str | None = None
     try:
@@ -110,6 +114,7 @@ def main(argv: list[str]) -> int:
             start["script"], n_robots=start.get("n_robots"), duration=start.get("duration"), seed=None,
             safety=False, rps=start.get("rps"),
             backend_factory=lambda n, ic, config, params: PipeRobots(link, n, ic, config=config, params=params),
+            on_create=lambda arena: setattr(link, "arena", arena),
         )
         error, error_line = result.error, result.error_line
     except (ScriptError, RunnerArenaError) as exc:

@@ -30,8 +30,10 @@ class SandboxLimits:
     Attributes:
         cpu_s: RLIMIT_CPU, CPU seconds of the child (SIGXCPU/SIGKILL past it).
         wall_s: wall-clock limit of a whole run (the child is killed past it).
-        startup_s: wall time allowed from start until the script has built its Arena
-            (imports and top-level code).
+        boot_s: wall time allowed for the child to load swarmdeck and confine itself (not the
+            script's time: a loaded machine can take seconds here).
+        startup_s: wall time allowed from then until the script has built its Arena
+            (its imports and top-level code).
         tick_s: per-tick compute budget: wall time from sending poses to receiving commands.
             A tick that overruns stops the robots for that tick.
         max_overruns: that many overrun ticks in a row end the run.
@@ -44,6 +46,7 @@ class SandboxLimits:
 
     cpu_s: int = 300
     wall_s: float = 600.0
+    boot_s: float = 120.0
     startup_s: float = 30.0
     tick_s: float = 1.0
     max_overruns: int = 5
@@ -54,7 +57,7 @@ class SandboxLimits:
     log_bytes: int = 64 << 10
 
     def __post_init__(self) -> None:
-        for name in ("cpu_s", "wall_s", "startup_s", "tick_s", "max_overruns", "address_space", "open_files",
+        for name in ("cpu_s", "wall_s", "boot_s", "startup_s", "tick_s", "max_overruns", "address_space", "open_files",
                      "processes", "file_size", "log_bytes"):
             value = getattr(self, name)
             if not (isinstance(value, (int, float)) and value > 0):

@@ -12,8 +12,10 @@ Messages, parent → child:
     ``{"t": "poses", "k": tick, "time": s, "poses": bytes}`` the poses the script sees;
     ``{"t": "end", "reason": str}`` the run is over (the script's next step ends it).
 Child → parent:
+    ``{"t": "ready"}`` swarmdeck's side of the child is loaded and confined; the script starts now;
     ``{"t": "arena", "n": N, "initial": bytes | None, "duration": s | None}`` the script built its Arena;
-    ``{"t": "cmd", "k": tick, "v": bytes, "w": bytes}`` unicycle commands for the poses of tick k;
+    ``{"t": "cmd", "k": tick, "v": bytes, "w": bytes, "invalid": count}`` unicycle commands for the
+    poses of tick k; ``invalid``: robot-steps whose NaN/inf commands the script's Arena stopped so far;
     ``{"t": "done", "error": str | None, "error_line": str | None}`` the script finished.
 """
 from __future__ import annotations
@@ -46,7 +48,7 @@ def decode(body: bytes) -> dict[str, Any]:
     """The message in a frame body; ProtocolError unless it is a map with a string ``t``."""
     try:
         message = _decoder.decode(body)
-    except msgspec.DecodeError as exc:
+    except (msgspec.DecodeError, ValueError, RecursionError) as exc:  # UnicodeDecodeError is a ValueError
         raise ProtocolError(f"undecodable frame ({len(body)} bytes): {exc}") from exc
     if not isinstance(message, dict) or not isinstance(message.get("t"), str):
         raise ProtocolError(f"frame is not a message with a type: {str(message)[:80]!r}")

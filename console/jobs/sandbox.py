@@ -63,7 +63,8 @@ class SandboxOutcome:
     """How a sandboxed run ended.
 
     ``ended_by``: ``"script"`` (returned or exited), ``"duration"`` (declared duration over),
-    ``"error"`` (the script raised or could not be loaded), ``"startup"`` (no Arena within
+    ``"error"`` (the script raised or could not be loaded), ``"boot"`` (the child did not load
+    within ``boot_s``), ``"startup"`` (no Arena within
     ``startup_s``), ``"overruns"`` (per-tick budget missed ``max_overruns`` times in a row),
     ``"wall"`` (wall-time limit), ``"crash"`` (the child died: a resource limit, a signal),
     ``"protocol"`` (the child sent something invalid), ``"arena"`` (the Arena it asked for was
@@ -76,6 +77,7 @@ class SandboxOutcome:
     n_robots: int | None = None
     ticks: int = 0
     overruns: int = 0
+    script_invalid: int = 0  # robot-steps the script's own Arena stopped for NaN/inf commands (it says)
     log: str = ""
     log_bytes: int = 0
     plant: Any = field(default=None, repr=False)
@@ -195,6 +197,7 @@ def run_sandboxed(
     script: str | Path,
     make_plant: PlantFactory,
     *,
+    source: bytes | None = None,
     n_robots: int | None = None,
     duration: float | None = None,
     rps: bool | None = None,
@@ -204,17 +207,30 @@ def run_sandboxed(
 ) -> SandboxOutcome:
     """Run ``script`` in a jailed child against the plant ``make_plant(n, initial_poses)`` builds.
 
+    The child sees a copy of the script (``source``, or the file's bytes) alone in a folder of
+    its own, read-only: nothing beside the script on this machine (single-file scripts).
+
     ``n_robots``/``duration``: what an Arena built without arguments gets (declared values).
     ``trusted``: run without the namespace jail when this machine cannot build one (resource
     limits still apply); otherwise :class:`ConfinementUnavailable` is raised.
     """
-    script = Path(script).resolve()
+    name = Path(script).name
+    if source is None:
+        try:
+            source = Path(script).read_bytes()
+        except OSError as exc:
+            raise ValueError(f"cannot read the script {str(script)!r}: {exc}") from exc
     reason = probe()
     if reason is not None and not trusted:
         raise ConfinementUnavailable(f"cannot confine untrusted code on this machine: {reason}; "
                                      "pass --trusted to run it unconfined")
     scratch = Path(tempfile.mkdtemp(prefix="swarmdeck-scratch-"))
-    uid = sandbox_uid()
+    folder = Path(tempfile.mkdtemp(prefix="swarmdeck-script-"))
+    os.chmod(folder, 0o755)
+    script = folder / name
+    script.write_bytes(source)
+    os.chmod(script, 0o644)
+    uid = sandbox_uid() if reason is None else None  # unconfined, the child keeps our uid (and our files)
     if uid is not None:
         os.chown(scratch, uid, uid)
     outcome = SandboxOutcome()
@@ -231,6 +247,7 @@ def run_sandboxed(
         child.send({"t": "start", "script": str(script), "n_robots": n_robots, "duration": duration, "rps": rps,
                     "rlimits": limits.rlimits(), "uid": uid, "scratch": str(scratch)})
         plant: Plant | None = None
+        ready: float | None = None  # when the child reported it is loaded and confined
         outstanding = False  # poses sent, commands not yet received
         consecutive = 0
         while True:
@@ -241,8 +258,10 @@ def run_sandboxed(
             if now >= wall_deadline:
                 end("wall", f"the script exceeded the wall-time limit of {limits.wall_s:g} s")
                 break
-            if plant is None:
-                deadline = min(started + limits.startup_s, wall_deadline)
+            if ready is None:
+                deadline = min(started + limits.boot_s, wall_deadline)
+            elif plant is None:
+                deadline = min(ready + limits.startup_s, wall_deadline)
             else:
                 deadline = min(now + limits.tick_s, wall_deadline)
             try:
@@ -256,6 +275,9 @@ def run_sandboxed(
             if message is None:
                 if time.monotonic() >= wall_deadline:
                     continue  # reported at the top of the loop
+                if ready is None:
+                    end("boot", f"the sandbox did not start within {limits.boot_s:g} s")
+                    break
                 if plant is None:
                     end("startup", f"the script did not build its Arena within {limits.startup_s:g} s "
                                    "(an endless loop at import time?)")
@@ -281,7 +303,10 @@ def run_sandboxed(
                     else:
                         end("script", None)
                     break
-                if kind == "arena" and plant is None:
+                if kind == "ready" and ready is None:
+                    ready = time.monotonic()
+                    continue
+                if kind == "arena" and plant is None and ready is not None:
                     n = message.get("n")
                     if not isinstance(n, int) or n < 1:
                         raise ProtocolError(f"'arena' message: n must be a positive integer, got {n!r}")
@@ -298,6 +323,9 @@ def run_sandboxed(
                     if message.get("k") != outcome.ticks:
                         outstanding = False  # commands for stale poses (after an overrun): dropped
                     else:
+                        invalid = message.get("invalid", 0)
+                        if isinstance(invalid, int) and invalid >= 0:
+                            outcome.script_invalid = max(outcome.script_invalid, invalid)
                         v = floats(message, "v", (plant.n,))
                         w = floats(message, "w", (plant.n,))
                         plant.apply(v, w)
@@ -326,4 +354,5 @@ def run_sandboxed(
         drain.join(timeout=5)
         outcome.log, outcome.log_bytes = drain.text(), drain.total
         shutil.rmtree(scratch, ignore_errors=True)
+        shutil.rmtree(folder, ignore_errors=True)
     return outcome

@@ -24,8 +24,8 @@ import hashlib
 import math
 import os
 import shutil
-import stat
 import tempfile
+import threading
 from collections.abc import Callable, Sequence
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
@@ -138,17 +138,10 @@ def run_task(task: RunTask) -> dict[str, Any]:
         robots = VerificationRobots(sim, cfg.disturbances, np.random.default_rng(seeds[1]), contact_distance=sim.params.diameter)
         return ArenaPlant(Arena(backend=robots, config=arena_config, safety=task.mode == "wrapped", duration=cfg.duration))
 
-    folder = Path(tempfile.mkdtemp(prefix="swarmdeck-script-"))
-    try:
-        os.chmod(folder, 0o755)
-        script = folder / task.script_name
-        script.write_bytes(task.source)
-        os.chmod(script, stat.S_IRUSR | stat.S_IWUSR | stat.S_IRGRP | stat.S_IROTH)
-        cancelled = (lambda: os.path.exists(task.cancel_path)) if task.cancel_path else None
-        outcome = run_sandboxed(script, make_plant, n_robots=cfg.n_robots, duration=cfg.duration, rps=cfg.rps,
-                                limits=cfg.limits, trusted=cfg.trusted, cancelled=cancelled)
-    finally:
-        shutil.rmtree(folder, ignore_errors=True)
+    cancelled = (lambda: os.path.exists(task.cancel_path)) if task.cancel_path else None
+    outcome = run_sandboxed(task.script_name, make_plant, source=task.source, n_robots=cfg.n_robots,
+                            duration=cfg.duration, rps=cfg.rps, limits=cfg.limits, trusted=cfg.trusted,
+                            cancelled=cancelled)
     result: dict[str, Any] = {
         "index": task.index, "mode": task.mode, "ended_by": outcome.ended_by, "error": outcome.error_line,
         "n_robots": outcome.n_robots, "ticks": outcome.ticks, "overruns": outcome.overruns,
@@ -157,7 +150,8 @@ def run_task(task: RunTask) -> dict[str, Any]:
     plant = outcome.plant
     if plant is None:
         result.update(time=0.0, safety_score=None, contacts=None, min_distance=None, min_distance_series=[],
-                      contact_points=[], validation=None, safety_filter=None, rule_violations=[])
+                      contact_points=[], validation=None, safety_filter=None, invalid_commands=0,
+                      rule_violations=[])
         return result
     robots: VerificationRobots = plant.arena.backend
     contacts = robots.contacts.report(plant.arena.params.max_speed, robots.true_poses[:, :2])
@@ -172,7 +166,7 @@ def run_task(task: RunTask) -> dict[str, Any]:
         min_distance=min(robots.min_distance) if robots.min_distance else None,
         min_distance_series=_series(robots.min_distance),
         contact_points=[[round(t, 6), round(x, 6), round(y, 6)] for t, x, y in robots.contact_points[:50]],
-        validation=report["validation"], safety_filter=report["safety"],
+        validation=report["validation"], safety_filter=report["safety"], invalid_commands=report["invalid_commands"] + outcome.script_invalid,
         rule_violations=robots.report.verdict(cfg.duration, rules),
     )
     return result
@@ -186,6 +180,8 @@ def _run_reasons(run: dict[str, Any], cfg: VerificationConfig) -> list[str]:
     if cfg.n_robots is not None and run["n_robots"] is not None and run["n_robots"] != cfg.n_robots:
         reasons.append(f"the script uses {run['n_robots']} robots but declares {cfg.n_robots}")
     reasons.extend(run.get("rule_violations") or [])
+    if run["safety_filter"] is not None and run["invalid_commands"]:
+        reasons.append(f"the script sent {run['invalid_commands']} non-finite (NaN/inf) robot commands (robots stopped)")
     if run["mode"] == "wrapped" and run["contacts"] and run["contacts"]["count"]:
         reasons.append(f"robots touched {run['contacts']['count']} times with the barrier on")
     return reasons
@@ -308,15 +304,25 @@ def verify(scripts: Sequence[str | Path], config: VerificationConfig = Verificat
 
     def cancelled() -> bool:
         if cancel is not None and cancel.is_set():
-            Path(cancel_path).touch()
+            Path(cancel_path).touch()  # runs under way (in any worker on this machine) stop at their next tick
             return True
         return False
 
+    stop_watching = threading.Event()
+
+    def watch() -> None:
+        while not stop_watching.wait(0.1) and not cancelled():
+            pass
+
+    watcher = threading.Thread(target=watch, daemon=True)
+    watcher.start()
     try:
         results = executor.run(tasks, done, cancelled)
     finally:
+        stop_watching.set()
+        watcher.join()
         shutil.rmtree(cancel_dir, ignore_errors=True)
-    if cancelled() or any(r is None or r["ended_by"] == "cancelled" for r in results):
+    if (cancel is not None and cancel.is_set()) or any(r is None or r["ended_by"] == "cancelled" for r in results):
         raise VerificationCancelled("verification was cancelled")
     reports = []
     for s, (name, source) in enumerate(loaded):

@@ -1,0 +1,88 @@
+"""`swarmdeck verify`: exit status 0/1/2, the JSON report against its schema, the HTML report, refusals."""
+import json
+from pathlib import Path
+
+import jsonschema
+import pytest
+
+import swarmdeck.console.jobs as jobs
+from swarmdeck.console.cli import main
+from swarmdeck.console.jobs import confinement
+from swarmdeck.console.jobs.confinement import ConfinementUnavailable, probe
+
+SCHEMA = json.loads((Path(jobs.__file__).parent / "verification_report.schema.json").read_text())
+SPIN = "import numpy as np\ndef experiment(arena):\n    while True:\n        arena.set_unicycle(np.zeros(arena.n), np.ones(arena.n))\n        arena.step()\n"
+CRASH = "def experiment(arena):\n    arena.step()\n    raise KeyError('oops')\n"
+confined = pytest.mark.skipif(probe() is not None, reason=f"no confinement here: {probe()}")
+
+
+def args(*scripts, extra=()):
+    return ["verify", *map(str, scripts), "--robots", "2", "--duration", "0.5", "--runs", "1", "--workers", "1", *extra]
+
+
+@confined
+def test_accepted_exits_0_with_a_schema_valid_json_report_and_an_html_report(tmp_path, capsys):
+    script = tmp_path / "spin.py"
+    script.write_text(SPIN)
+    html = tmp_path / "report.html"
+    assert main(args(script, extra=("--json", "--html", str(html)))) == 0
+    report = json.loads(capsys.readouterr().out)
+    jsonschema.validate(report, SCHEMA)
+    assert report["verdict"] == "accepted, may bypass the barrier" and report["safety_score"] == 1.0
+    page = html.read_text()
+    assert page.startswith("<!DOCTYPE html>") and "<svg" in page and "accepted, may bypass the barrier" in page
+    assert "<script" not in page and "http" not in page.replace("http://www.w3.org", "")  # self-contained
+
+
+@confined
+def test_rejected_exits_1_and_names_the_scripts_line(tmp_path, capsys):
+    script = tmp_path / "crash.py"
+    script.write_text(CRASH)
+    assert main(args(script)) == 1
+    out = capsys.readouterr().out
+    assert "crash.py: rejected" in out and "crash.py:3 (in experiment): KeyError: 'oops'" in out
+
+
+@pytest.mark.parametrize("extra,message", [
+    (("--runs", "0"), "--runs must be >= 1"),
+    (("--duration", "-1"), "--duration must be"),
+    (("--seed", "-3"), "--seed must be"),
+    (("--workers", "0"), "--workers must be >= 1"),
+    (("--bypass-threshold", "2"), "bypass_threshold must be in [0, 1]"),
+])
+def test_usage_errors_are_one_line_and_exit_2(tmp_path, capsys, extra, message):
+    script = tmp_path / "spin.py"
+    script.write_text(SPIN)
+    assert main(args(script, extra=extra)) == 2
+    err = capsys.readouterr().err
+    assert len(err.strip().splitlines()) == 1 and message in err
+
+
+def test_a_missing_script_or_an_archive_exits_2(tmp_path, capsys):
+    assert main(args(tmp_path / "nope.py")) == 2
+    assert "does not exist" in capsys.readouterr().err
+    archive = tmp_path / "bomb.zip"
+    archive.write_bytes(b"PK\x05\x06" + b"\0" * 18)
+    assert main(args(archive)) == 2
+    assert "archives are not accepted" in capsys.readouterr().err
+
+
+def test_without_confinement_untrusted_code_is_refused_unless_trusted(tmp_path, capsys, monkeypatch):
+    script = tmp_path / "spin.py"
+    script.write_text(SPIN)
+    monkeypatch.setattr(confinement.shutil, "which", lambda name: None)  # a machine without bubblewrap
+    probe.cache_clear()
+    try:
+        assert probe() is not None and "bubblewrap" in probe()
+        assert main(args(script)) == 2
+        err = capsys.readouterr().err
+        assert "cannot confine untrusted code" in err and "--trusted" in err
+        from swarmdeck.console.jobs.executors import SerialExecutor
+        from swarmdeck.console.jobs.verification import VerificationConfig, verify
+
+        with pytest.raises(ConfinementUnavailable):
+            verify([script], VerificationConfig(n_robots=2, duration=0.5, runs=1), SerialExecutor())
+        report = verify([script], VerificationConfig(n_robots=2, duration=0.5, runs=1, trusted=True), SerialExecutor())
+        assert report.verdict == "accepted, may bypass the barrier" and report.to_dict()["config"]["trusted"] is True
+    finally:
+        probe.cache_clear()
