@@ -73,6 +73,8 @@ def main(args: argparse.Namespace) -> int:
         raise UsageError(str(exc)) from exc
     except ConnectionError as exc:
         raise UsageError(f"cannot reach the Ray cluster at {args.ray!r}: {exc}") from exc
+    except RuntimeError as exc:  # an executor's infrastructure failed (a Ray worker, a pool process)
+        raise UsageError(str(exc)) from exc
     finally:
         close()
     data = report.to_dict()

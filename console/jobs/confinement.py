@@ -22,6 +22,8 @@ import sysconfig
 from dataclasses import dataclass
 from pathlib import Path
 
+from swarmdeck.core.checks import require_positive
+
 
 @dataclass(frozen=True)
 class SandboxLimits:
@@ -57,11 +59,8 @@ class SandboxLimits:
     log_bytes: int = 64 << 10
 
     def __post_init__(self) -> None:
-        for name in ("cpu_s", "wall_s", "boot_s", "startup_s", "tick_s", "max_overruns", "address_space", "open_files",
-                     "processes", "file_size", "log_bytes"):
-            value = getattr(self, name)
-            if not (isinstance(value, (int, float)) and value > 0):
-                raise ValueError(f"SandboxLimits.{name} must be > 0, got {value!r}")
+        require_positive(self, ("cpu_s", "wall_s", "boot_s", "startup_s", "tick_s", "max_overruns", "address_space",
+                                "open_files", "processes", "file_size", "log_bytes"))
 
     def rlimits(self) -> dict[str, int]:
         """The setrlimit values the child applies to itself (names of :mod:`resource` constants)."""
@@ -95,6 +94,46 @@ def sandbox_uid() -> int | None:
     if os.geteuid() != 0:
         return None
     return 200000 + os.getpid() % 100000
+
+
+def processes_of(uid: int) -> list[int]:
+    """Pids of live processes whose real uid is ``uid`` (from /proc/PID/status)."""
+    pids = []
+    for entry in os.listdir("/proc"):
+        if not entry.isdigit():
+            continue
+        try:
+            with open(f"/proc/{entry}/status", encoding="ascii", errors="replace") as f:
+                for line in f:
+                    if line.startswith("Uid:"):
+                        if int(line.split()[1]) == uid:
+                            pids.append(int(entry))
+                        break
+        except (FileNotFoundError, ProcessLookupError, PermissionError, ValueError):
+            continue
+    return pids
+
+
+def kill_all_of(uid: int, timeout: float = 10.0) -> list[int]:
+    """SIGKILL every process of ``uid`` until none is left (or ``timeout`` s); returns the survivors.
+
+    The jail's pid namespace dies with its first process, but asynchronously; this makes the
+    end of a run synchronous, so no process of a finished run can touch the next one.
+    """
+    import signal
+    import time
+
+    deadline = time.monotonic() + timeout
+    while True:
+        pids = processes_of(uid)
+        if not pids or time.monotonic() > deadline:
+            return pids
+        for pid in pids:
+            try:
+                os.kill(pid, signal.SIGKILL)
+            except (ProcessLookupError, PermissionError):
+                pass
+        time.sleep(0.01)
 
 
 def _visible_paths(script_dir: Path) -> list[tuple[str, Path]]:

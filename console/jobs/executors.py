@@ -109,7 +109,12 @@ class RayExecutor:
             done, _ = ray.wait(list(refs), num_returns=1, timeout=0.5)
             for ref in done:
                 k = refs.pop(ref)
-                results[k] = ray.get(ref)
+                try:
+                    results[k] = ray.get(ref)
+                except ray.exceptions.RayError as exc:  # e.g. a node without bubblewrap: infrastructure, not a verdict
+                    for other in refs:
+                        ray.cancel(other, force=True)
+                    raise RuntimeError(f"a Ray worker could not run the verification: {exc}") from exc
                 finished += 1
                 on_done(k, results[k], finished)
         return results

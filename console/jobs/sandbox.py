@@ -34,6 +34,7 @@ from swarmdeck.console.jobs.confinement import (
     ConfinementUnavailable,
     SandboxLimits,
     bwrap_command,
+    kill_all_of,
     probe,
     sandbox_uid,
 )
@@ -160,7 +161,7 @@ class _Child:
             if ready and not self.reader.feed():
                 self.eof = True
 
-    def kill(self) -> None:
+    def kill(self, uid: int | None) -> None:
         try:
             os.killpg(self.proc.pid, signal.SIGKILL)  # the whole session: bwrap and all it started
         except (ProcessLookupError, PermissionError):
@@ -170,6 +171,8 @@ class _Child:
         except ProcessLookupError:
             pass
         self.proc.wait()
+        if uid is not None:
+            kill_all_of(uid)
         for fd in (self.to_child, self.from_child):
             try:
                 os.close(fd)
@@ -350,7 +353,7 @@ def run_sandboxed(
                 child.send({"t": "poses", "k": outcome.ticks, "time": t, "poses": pack(poses)})
                 outstanding = True
     finally:
-        child.kill()
+        child.kill(uid)
         drain.join(timeout=5)
         outcome.log, outcome.log_bytes = drain.text(), drain.total
         shutil.rmtree(scratch, ignore_errors=True)
