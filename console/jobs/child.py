@@ -122,7 +122,10 @@ def main(argv: list[str]) -> int:
     except EOFError:
         return 0  # the trusted side ended the run and closed the pipe
     try:
-        link.send({"t": "done", "error": error, "error_line": error_line})
+        import resource
+
+        usage = resource.getrusage(resource.RUSAGE_SELF)
+        link.send({"t": "done", "error": error, "error_line": error_line, "cpu_s": usage.ru_utime + usage.ru_stime})
     except OSError:
         pass
     return 0

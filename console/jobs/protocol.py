@@ -16,7 +16,8 @@ Child → parent:
     ``{"t": "arena", "n": N, "initial": bytes | None, "duration": s | None}`` the script built its Arena;
     ``{"t": "cmd", "k": tick, "v": bytes, "w": bytes, "invalid": count}`` unicycle commands for the
     poses of tick k; ``invalid``: robot-steps whose NaN/inf commands the script's Arena stopped so far;
-    ``{"t": "done", "error": str | None, "error_line": str | None}`` the script finished.
+    ``{"t": "done", "error": str | None, "error_line": str | None, "cpu_s": s}`` the script finished
+    (``cpu_s``: the child's own CPU time, as it reports it: informational only).
 """
 from __future__ import annotations
 

@@ -78,6 +78,7 @@ class SandboxOutcome:
     n_robots: int | None = None
     ticks: int = 0
     overruns: int = 0
+    child_cpu_s: float | None = None  # the child's CPU time as it reported it (informational, untrusted)
     script_invalid: int = 0  # robot-steps the script's own Arena stopped for NaN/inf commands (it says)
     log: str = ""
     log_bytes: int = 0
@@ -146,6 +147,14 @@ class _Child:
         except (BrokenPipeError, OSError):
             return False
 
+    def send_closed(self) -> None:
+        """Close our writing end: a child blocked reading sees the end of the file."""
+        try:
+            os.close(self.to_child)
+        except OSError:
+            pass
+        self.to_child = -1
+
     def receive(self, deadline: float) -> dict[str, Any] | None:
         """The next message, or None at the deadline; EOFError when the child closed its end."""
         while True:
@@ -161,7 +170,14 @@ class _Child:
             if ready and not self.reader.feed():
                 self.eof = True
 
-    def kill(self, uid: int | None) -> None:
+    def kill(self, uid: int | None, grace: float = 0.0) -> None:
+        """End the child: after ``grace`` s to exit by itself (a clean end), SIGKILL to all of it."""
+        self.send_closed()
+        if grace > 0:
+            try:
+                self.proc.wait(timeout=grace)
+            except subprocess.TimeoutExpired:
+                pass
         try:
             os.killpg(self.proc.pid, signal.SIGKILL)  # the whole session: bwrap and all it started
         except (ProcessLookupError, PermissionError):
@@ -173,11 +189,10 @@ class _Child:
         self.proc.wait()
         if uid is not None:
             kill_all_of(uid)
-        for fd in (self.to_child, self.from_child):
-            try:
-                os.close(fd)
-            except OSError:
-                pass
+        try:
+            os.close(self.from_child)
+        except OSError:
+            pass
 
 
 def _exit_reason(proc: subprocess.Popen) -> str:
@@ -194,6 +209,12 @@ def _exit_reason(proc: subprocess.Popen) -> str:
     hint = {"SIGXCPU": " (CPU time limit)", "SIGKILL": " (killed: a resource limit)",
             "SIGXFSZ": " (file size limit)", "SIGSEGV": " (crashed)"}.get(name, "")
     return f"the script's process was killed by {name}{hint}"
+
+
+def _note_cpu(outcome: SandboxOutcome, message: dict[str, Any]) -> None:
+    cpu = message.get("cpu_s")
+    if isinstance(cpu, float) and np.isfinite(cpu) and cpu >= 0:
+        outcome.child_cpu_s = cpu
 
 
 def run_sandboxed(
@@ -300,6 +321,7 @@ def run_sandboxed(
             kind = message["t"]
             try:
                 if kind == "done":
+                    _note_cpu(outcome, message)
                     error, line = message.get("error"), message.get("error_line")
                     if error is not None or line is not None:
                         end("error", str(line or error)[:2000], str(error or line)[:20000])
@@ -343,7 +365,9 @@ def run_sandboxed(
             if plant.finished():
                 child.send({"t": "end", "reason": "declared duration is over"})
                 try:
-                    child.receive(min(time.monotonic() + limits.tick_s, wall_deadline))
+                    last = child.receive(min(time.monotonic() + limits.tick_s, wall_deadline))
+                    if last is not None and last.get("t") == "done":
+                        _note_cpu(outcome, last)
                 except (EOFError, ProtocolError):
                     pass
                 end("duration", None)
@@ -353,7 +377,8 @@ def run_sandboxed(
                 child.send({"t": "poses", "k": outcome.ticks, "time": t, "poses": pack(poses)})
                 outstanding = True
     finally:
-        child.kill(uid)
+        clean = outcome.ended_by in ("script", "duration", "error")  # the child exits by itself (its CPU time is counted)
+        child.kill(uid, grace=2.0 if clean else 0.0)
         drain.join(timeout=5)
         outcome.log, outcome.log_bytes = drain.text(), drain.total
         shutil.rmtree(scratch, ignore_errors=True)
