@@ -1,14 +1,17 @@
 """Benchmark of swarmdeck.inputs: TUIO parse/assembly throughput and latency
 from datagram to updated density.
 
-    /work/venv/bin/python bench/bench_inputs.py
+    .venv/bin/python bench/bench_inputs.py
 
 Prints a markdown table. Ten-finger TUIO 1.1 2Dcur bundles (source, alive, 10 set,
 fseq; 784 bytes) with moving fingers. Rows: python-osc ``OscBundle`` parse alone
 (the baseline, same process), ``parse_datagram`` (structural checks + python-osc),
 ``InputSource.feed`` (parse + TUIO assembly + calibrated contacts + events), and
 ``feed`` + ``poll``. Latency: ``feed`` → ``poll`` → ``ContactDensity.update`` →
-``.at(t)`` per datagram. Medians over repeats of CPU time (time.process_time: the VM is shared); one thread.
+``.at(t)`` per datagram. Heavy traffic (issue 14 §8–9): per-datagram feed cost of the
+report's heavy datagram and of a finger flood, and one poll after 1200 one-shot senders,
+as ratios to feeding a ten-finger bundle. Medians over repeats of CPU time
+(time.process_time: the VM is shared); one thread.
 """
 from __future__ import annotations
 
@@ -126,6 +129,8 @@ def main() -> int:
     wmed = statistics.median(wall_sorted)
     wp99 = wall_sorted[int(0.99 * len(wall_sorted))]
 
+    heavy_rows = heavy_traffic(data[0], peer)
+
     cpu = "unknown"
     try:
         for line in open("/proc/cpuinfo"):
@@ -147,7 +152,72 @@ def main() -> int:
     print("| --- | ---: | ---: |")
     print(f"| datagram → updated density, CPU (feed + poll + update + at) | {med * 1e6:.0f} µs | {p99 * 1e6:.0f} µs |")
     print(f"| sendto on loopback → listener thread → poll → density, wall | {wmed * 1e6:.0f} µs | {wp99 * 1e6:.0f} µs |")
+    print()
+    print("| heavy traffic (issue 14 §8–9) | CPU µs, median | ratio to a ten-finger feed | work |")
+    print("| --- | ---: | ---: | --- |")
+    for name, sec, base_s, work in heavy_rows:
+        print(f"| {name} | {sec * 1e6:,.0f} | {sec / base_s:.1f} | {work} |")
     return 0
+
+
+def _median_cpu(fn, repeats: int = 7) -> float:
+    out = []
+    for _ in range(repeats):
+        t0 = time.process_time()
+        fn()
+        out.append(time.process_time() - t0)
+    return statistics.median(out)
+
+
+def heavy_traffic(ten_finger: bytes, peer: tuple) -> list[tuple[str, float, float, str]]:
+    """Per-datagram feed cost of the report's heavy datagram (ALIVE of 10 000 ids +
+    200 SETs, rejected before decoding) and of a 200-new-finger flood (decoded, 64
+    kept), and the cost of one poll — the console tick's input stage — after 1200
+    one-shot senders with 256 contacts held; baseline: feeding a ten-finger bundle."""
+    ids = list(range(10_000))
+    heavy = ob.tuio_bundle("2Dcur", ids, ob.cursor_sets([(i, 0.5, 0.5) for i in ids[:200]]), fseq=1)
+    floods = [ob.tuio_bundle("2Dcur", list(range(200 * k, 200 * k + 200)),
+                             ob.cursor_sets([(i, 0.3, 0.3) for i in range(200 * k, 200 * k + 200)]), fseq=k + 1)
+              for k in range(4)]
+    n = 200
+
+    def feed_many(datagrams, peers=False):
+        src = InputSource()
+
+        def run():
+            for k in range(n):
+                src.feed(datagrams[k % len(datagrams)], (f"10.0.{k // 250}.{k % 250}", 1) if peers else peer,
+                         k * 1e-3)
+        return run, src
+
+    run, _ = feed_many([ten_finger])
+    base = _median_cpu(run) / n
+    run, src_h = feed_many([heavy])
+    t_heavy = _median_cpu(run) / n
+    run, src_f = feed_many(floods, peers=True)
+    t_flood = _median_cpu(run) / n
+    wf = src_f.work()
+    # the tick's input stage: poll after 1200 one-shot senders (each: garbage + a finger)
+    src_p = InputSource()
+    good = ob.tuio_bundle("2Dcur", [1], ob.cursor_sets([(1, 0.5, 0.5)]), fseq=1)
+    for k in range(1200):
+        p = (f"10.1.{k // 250}.{k % 250}", 1)
+        src_p.feed(b"garbage!", p, k * 1e-4)
+        src_p.feed(good, p, k * 1e-4)
+    polls = []
+    for _ in range(15):
+        t0 = time.process_time()
+        snap = src_p.poll(0.12)
+        polls.append(time.process_time() - t0)
+    wp = src_p.work()
+    return [
+        ("feed: the heavy datagram (61 kB, 10 000 ALIVE ids + 200 SETs)", t_heavy, base,
+         f"rejected before decoding; {src_h.work().arguments_decoded} arguments decoded"),
+        ("feed: a flood of 200 new fingers (12 kB, 1805 arguments)", t_flood, base,
+         f"{wf.contacts} contacts held (64 per source, 256 in all); the other fingers dropped and counted"),
+        ("poll (the tick's input stage) after 1200 one-shot senders", statistics.median(polls), base,
+         f"{len(snap.contacts)} contacts, {len(snap.health)} health records, {wp.sources_tracked} sources tracked"),
+    ]
 
 
 if __name__ == "__main__":

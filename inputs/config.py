@@ -10,6 +10,8 @@ Example (``swarmdeck.toml``)::
     port = 3333
     host = "0.0.0.0"                      # accept a phone/tablet on the LAN
     timeout = 1.0                         # s of silence before its contacts are lost
+    max_contacts_per_source = 64          # limits (defaults shown) a tablet never reaches
+    max_contacts = 256
     calibration = { flip_y = false, rotation_deg = 0, scale = [1, 1], offset = [0, 0] }
 
     [[inputs.listeners]]                  # a Leap through ManosOsc (port 7110)
@@ -61,6 +63,21 @@ class ListenerConfig:
         max_datagram: bytes; larger datagrams are rejected and counted.
         future_tolerance: s a bundle timetag may lead the wall clock before it is
             counted as a ``future_timetag`` quirk (it is never waited for).
+        max_osc_arguments: decode budget of one datagram: each OSC message counts one
+            plus its arguments; a datagram over it is rejected (``too_many_arguments``)
+            before it is decoded. 2048 holds a 64-finger blob frame twice over.
+        max_contacts_per_source: contacts one source may hold; further fingers of a
+            frame are dropped and counted (``too_many_contacts``), contacts it already
+            has are kept first.
+        max_contacts: contacts of all sources of this listener together (same counting).
+        max_events: contact events kept between two polls; older ones are dropped and
+            counted (``events_dropped`` in the listener's totals).
+        forget_after: s of silence after which a source without contacts is forgotten
+            (its health entry and decoder state; its counts stay in the listener's
+            lifetime totals). At least ``timeout`` is used.
+        max_reported_sources: sources a poll reports (those with contacts first, then
+            the most recently heard), besides the listener's totals entry and one
+            ``N more sources`` entry — the bound on what every console Frame carries.
     """
 
     name: str = "tuio"
@@ -74,6 +91,12 @@ class ListenerConfig:
     timeout: float = 1.0
     max_datagram: int = 65536
     future_tolerance: float = 0.5
+    max_osc_arguments: int = 2048
+    max_contacts_per_source: int = 64
+    max_contacts: int = 256
+    max_events: int = 1024
+    forget_after: float = 30.0
+    max_reported_sources: int = 16
 
     def __post_init__(self) -> None:
         if self.transport not in ("udp", "tcp"):
@@ -84,6 +107,16 @@ class ListenerConfig:
             raise ConfigError(f"listener {self.name!r}: timeout must be a positive number of seconds, got {self.timeout!r}")
         if not (isinstance(self.max_datagram, int) and 16 <= self.max_datagram <= 65536):
             raise ConfigError(f"listener {self.name!r}: max_datagram must be an int in 16..65536, got {self.max_datagram!r}")
+        for key, lo, hi in (("max_osc_arguments", 16, 1 << 20), ("max_contacts_per_source", 1, 1 << 16),
+                            ("max_contacts", 1, 1 << 20), ("max_events", 1, 1 << 20),
+                            ("max_reported_sources", 1, 4096)):
+            v = getattr(self, key)
+            if not (type(v) is int and lo <= v <= hi):
+                raise ConfigError(f"listener {self.name!r}: {key} must be an int in {lo}..{hi}, got {v!r}")
+        if not (isinstance(self.forget_after, (int, float)) and math.isfinite(self.forget_after)
+                and self.forget_after > 0):
+            raise ConfigError(f"listener {self.name!r}: forget_after must be a positive number of seconds, "
+                              f"got {self.forget_after!r}")
 
     @classmethod
     def from_preset(cls, preset: str, **overrides) -> "ListenerConfig":

@@ -139,3 +139,27 @@ class InputSnapshot:
         if not self.contacts:
             return np.zeros((0, 2))
         return np.array([c.position for c in self.contacts], dtype=float)
+
+
+@dataclass(frozen=True)
+class InputWork:
+    """Lifetime work counters of one listener — deterministic measures of what
+    ``feed`` and ``poll`` cost (the bounds of issue 14 §8–9 are on these).
+
+    ``datagrams``: fed; ``arguments_decoded``: OSC messages + arguments handed to
+    the decoder (each datagram at most ``max_osc_arguments``); ``contacts``: held
+    now; ``contacts_dropped``: fingers refused by the contact limits; ``events``:
+    contact events made; ``events_dropped``: of those, dropped before a poll took
+    them; ``sources_tracked``: health entries held now; ``sources_forgotten``:
+    entries forgotten (idle or evicted).
+    """
+
+    datagrams: int
+    arguments_decoded: int
+    contacts: int
+    contacts_dropped: int
+    events: int
+    events_dropped: int
+    sources_tracked: int
+    sources_forgotten: int
+

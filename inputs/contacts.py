@@ -24,11 +24,14 @@ from .calibration import Calibration
 from .contact import Contact, ContactEvent, SourceHealth
 from .frames import SourceFrame
 
-MAX_EVENTS = 10_000
 #: Most sources (health entries, contact sources) kept; beyond it the least
-#: recently seen ones without contacts are forgotten (ephemeral peers such as
-#: reconnecting TCP tablets or one-shot senders would otherwise pile up).
+#: recently heard ones are forgotten (ephemeral peers such as reconnecting TCP
+#: tablets or one-shot senders would otherwise pile up).
 MAX_SOURCES = 1024
+#: Receive times kept per source for its rate (a flood shows as >= this many per window).
+RATE_SAMPLES = 256
+#: Longest ``last_error`` kept (a hostile datagram's repr must not fill a page).
+MAX_DETAIL = 200
 
 
 class _Health:
@@ -36,61 +39,137 @@ class _Health:
 
     def __init__(self, kind: str) -> None:
         self.kind = kind
-        self.times: deque = deque()
+        self.times: deque = deque(maxlen=RATE_SAMPLES)
         self.datagrams = 0
         self.last_seen = -math.inf
         self.errors: dict[str, int] = {}
         self.warnings: dict[str, int] = {}
         self.last_error: str | None = None
 
+    def rate(self, now: float, window: float) -> float:
+        lim = now - window
+        return sum(1 for x in self.times if lim < x <= now) / window
+
 
 class HealthBook:
-    """Counters per source name. Implements the decoders' ``Problems`` protocol."""
+    """Counters per source name, and the listener's lifetime totals. Implements the
+    decoders' ``Problems`` protocol.
 
-    def __init__(self, rate_window: float = 1.0) -> None:
+    Entries are kept in order of last activity; :meth:`expire` forgets those silent
+    for longer than ``forget_after`` (O(forgotten): the oldest are at the front).
+    Every error and warning is also added to the totals, which are never forgotten.
+    """
+
+    def __init__(self, rate_window: float = 1.0, forget_after: float = 30.0, name: str = "listener",
+                 max_sources: int = MAX_SOURCES) -> None:
         self._rate_window = rate_window
+        self._forget_after = float(forget_after)
+        self._max_sources = max_sources
         self._entries: dict[str, _Health] = {}
+        self.name = name
+        self._totals = _Health("listener")
+        self.forgotten = 0
+
+    def __len__(self) -> int:
+        return len(self._entries)
 
     def _get(self, name: str, kind: str) -> _Health:
         h = self._entries.get(name)
         if h is None:
-            if len(self._entries) >= MAX_SOURCES:
-                oldest = min(self._entries, key=lambda n: self._entries[n].last_seen)
-                del self._entries[oldest]
+            if len(self._entries) >= self._max_sources:  # forget the least recently heard
+                del self._entries[next(iter(self._entries))]
+                self.forgotten += 1
             h = self._entries[name] = _Health(kind)
         return h
 
+    def datagram(self, t: float) -> None:
+        """Count one datagram received by the listener at ``t`` (the totals' rate)."""
+        tot = self._totals
+        tot.datagrams += 1
+        tot.last_seen = t
+        tot.times.append(t)
+
     def seen(self, name: str, kind: str, t: float) -> None:
         """Count one datagram for ``name`` received at ``t``."""
-        h = self._get(name, kind)
+        h = self._entries.pop(name, None)  # re-insert: most recently heard last
+        if h is None:
+            h = self._get(name, kind)
+        else:
+            self._entries[name] = h
         h.datagrams += 1
         h.last_seen = t
-        times = h.times
-        times.append(t)
-        lim = t - self._rate_window
-        while times and times[0] <= lim:
-            times.popleft()
+        h.times.append(t)
 
-    def error(self, name: str, kind: str, reason: str, detail: str) -> None:
-        """Count rejected input."""
-        h = self._get(name, kind)
-        h.errors[reason] = h.errors.get(reason, 0) + 1
-        h.last_error = detail
+    def error(self, name: str, kind: str, reason: str, detail: str, n: int = 1) -> None:
+        """Count ``n`` rejected inputs (the listener's own name counts only in the totals)."""
+        detail = detail if len(detail) <= MAX_DETAIL else detail[:MAX_DETAIL - 1] + "…"
+        tot = self._totals
+        tot.errors[reason] = tot.errors.get(reason, 0) + n
+        tot.last_error = detail
+        if name != self.name:
+            h = self._get(name, kind)
+            h.errors[reason] = h.errors.get(reason, 0) + n
+            h.last_error = detail
 
-    def warn(self, name: str, kind: str, reason: str) -> None:
-        """Count accepted input with a quirk."""
-        h = self._get(name, kind)
-        h.warnings[reason] = h.warnings.get(reason, 0) + 1
+    def warn(self, name: str, kind: str, reason: str, n: int = 1) -> None:
+        """Count ``n`` accepted inputs with a quirk."""
+        tot = self._totals
+        tot.warnings[reason] = tot.warnings.get(reason, 0) + n
+        if name != self.name:
+            h = self._get(name, kind)
+            h.warnings[reason] = h.warnings.get(reason, 0) + n
 
-    def snapshot(self, now: float, contacts: dict[str, int], lost: set[str]) -> tuple[SourceHealth, ...]:
-        """Frozen health records, sorted by name."""
-        out = []
-        lim = now - self._rate_window
-        for name in sorted(self._entries):
-            h = self._entries[name]
-            rate = sum(1 for x in h.times if lim < x <= now) / self._rate_window
-            out.append(SourceHealth(name, h.kind, rate, h.last_seen, h.datagrams, contacts.get(name, 0),
-                                    name in lost, dict(h.errors), dict(h.warnings), h.last_error))
+    def expire(self, now: float, keep: Callable[[str], bool]) -> list[str]:
+        """Forget entries silent for longer than ``forget_after`` as of ``now``
+        unless ``keep(name)`` (a source that still has contacts); their names.
+        Walks from the least recently heard and stops at the first recent one."""
+        lim = now - self._forget_after
+        entries = self._entries
+        gone, kept = [], []
+        for name, h in entries.items():
+            if h.last_seen >= lim:
+                break
+            (kept if keep(name) else gone).append(name)
+        for name in gone:
+            del entries[name]
+        for name in kept:  # still has contacts: to the back, looked at again later
+            entries[name] = entries.pop(name)
+        self.forgotten += len(gone)
+        return gone
+
+    def _record(self, name: str, h: _Health, now: float, contacts: int, lost: bool) -> SourceHealth:
+        return SourceHealth(name, h.kind, h.rate(now, self._rate_window), h.last_seen, h.datagrams, contacts,
+                            lost, dict(h.errors), dict(h.warnings), h.last_error)
+
+    def totals(self, now: float, contacts: int, **extra: int) -> SourceHealth:
+        """The listener's lifetime totals as one record (kind ``"listener"``): all
+        datagrams, every error and warning by reason, ``extra`` counters as warnings."""
+        h = self._totals
+        rec = self._record(self.name, h, now, contacts, False)
+        rec.warnings.update({k: v for k, v in extra.items() if v})
+        return rec
+
+    def snapshot(self, now: float, contacts: dict[str, int], lost: set[str] | Callable[[str], bool],
+                 limit: int | None = None) -> tuple[SourceHealth, ...]:
+        """Frozen health records sorted by name: all, or at most ``limit`` — the
+        sources in ``contacts`` first, then the most recently heard — plus one
+        ``"<name>: N more sources"`` record (kind ``"more"``) when some are left out."""
+        is_lost = lost.__contains__ if isinstance(lost, (set, frozenset)) else lost
+        entries = self._entries
+        if limit is None or len(entries) <= limit:
+            names = list(entries)
+        else:
+            names = [n for n in contacts if n in entries][:limit]
+            chosen = set(names)
+            for n in reversed(entries):
+                if len(names) >= limit:
+                    break
+                if n not in chosen:
+                    names.append(n)
+        out = [self._record(n, entries[n], now, contacts.get(n, 0), is_lost(n)) for n in sorted(names)]
+        hidden = len(entries) - len(names)
+        if hidden:
+            out.append(SourceHealth(f"{self.name}: {hidden} more sources", "more", 0.0, -math.inf, 0, 0, False))
         return tuple(out)
 
 
@@ -110,15 +189,18 @@ def _contact(name: str, sid: int, st: tuple) -> Contact:
     return c
 
 
+def _affine(cal: Calibration) -> tuple:
+    """``(a (4,), b (2,), area_scale)`` of a calibration as plain floats."""
+    a, b = cal.matrix()
+    return tuple(float(v) for v in a.ravel()), (float(b[0]), float(b[1])), cal.area_scale()
+
+
 class _Source:
     __slots__ = ("name", "a", "b", "area_scale", "last_seen", "lost", "presence_timeout", "states")
 
-    def __init__(self, name: str, cal: Calibration) -> None:
+    def __init__(self, name: str, affine: tuple) -> None:
         self.name = name
-        a, b = cal.matrix()
-        self.a = tuple(float(v) for v in a.ravel())
-        self.b = (float(b[0]), float(b[1]))
-        self.area_scale = cal.area_scale()
+        self.a, self.b, self.area_scale = affine
         self.last_seen = -math.inf
         self.lost = False
         self.presence_timeout: float | None = None
@@ -134,11 +216,19 @@ class ContactTable:
         on_lost: called with the name of a source that was just lost.
         velocity_smoothing: weight of the newest finite-difference velocity (0..1].
         max_speed: m/s cap on finite-difference velocities.
+        max_per_source, max_total: contacts one source / all sources may hold; new
+            fingers beyond them are dropped and counted on ``problems`` as
+            ``too_many_contacts`` (a frame's missing fingers are removed first, so a
+            source replacing its fingers keeps its share).
+        max_events: events kept between drains (older ones dropped and counted).
+        forget_after: s after which a lost source is forgotten.
+        problems: where dropped contacts are counted (``error(name, kind, reason, detail, n)``).
     """
 
     def __init__(self, calibration_for: Callable[[str], Calibration], timeout: float = 1.0,
                  on_lost: Callable[[str], None] | None = None, velocity_smoothing: float = 0.5,
-                 max_speed: float = 5.0) -> None:
+                 max_speed: float = 5.0, max_per_source: int = 64, max_total: int = 256,
+                 max_events: int = 1024, forget_after: float = 30.0, problems=None) -> None:
         if not timeout > 0:
             raise ValueError(f"timeout must be > 0 s, got {timeout}")
         if not 0 < velocity_smoothing <= 1:
@@ -148,9 +238,17 @@ class ContactTable:
         self._on_lost = on_lost
         self._alpha = float(velocity_smoothing)
         self._max_speed = float(max_speed)
+        self._max_per_source = int(max_per_source)
+        self._max_total = int(max_total)
+        self._forget_after = max(float(forget_after), self._timeout)
+        self._problems = problems
         self._sources: dict[str, _Source] = {}
+        self._affines: dict[int, tuple] = {}  # id(calibration) -> (calibration, its affine map)
+        self._n = 0  # contacts of all sources
         # raw events (kind, source, id, t, state|None), materialised on drain
-        self._events: deque[tuple] = deque(maxlen=MAX_EVENTS)
+        self._events: deque[tuple] = deque(maxlen=int(max_events))
+        self.events_total = 0
+        self.events_dropped = 0
         self._cache: tuple[Contact, ...] | None = ()
         self._objects: dict[int, tuple] = {}  # id(state) -> (state, Contact)
 
@@ -159,34 +257,66 @@ class ContactTable:
         """Seconds of silence before a source is lost."""
         return self._timeout
 
+    def __len__(self) -> int:
+        """Number of current contacts (all sources)."""
+        return self._n
+
+    def _push(self, ev: tuple) -> None:
+        events = self._events
+        if len(events) == events.maxlen:
+            self.events_dropped += 1
+        events.append(ev)
+        self.events_total += 1
+
     def apply(self, frame: SourceFrame, t: float) -> None:
         """Apply one committed frame received at ``t``."""
-        src = self._sources.get(frame.source)
+        sources = self._sources
+        src = sources.pop(frame.source, None)
         if src is None:
-            if len(self._sources) >= MAX_SOURCES:
-                idle = [n for n, x in self._sources.items() if not x.states]
-                if idle:
-                    del self._sources[min(idle, key=lambda n: self._sources[n].last_seen)]
-            src = self._sources[frame.source] = _Source(frame.source, self._cal_for(frame.source))
+            if len(sources) >= MAX_SOURCES:  # forget the least recently heard without contacts
+                for n, x in sources.items():  # at most max_total + 1 steps: few sources have contacts
+                    if not x.states:
+                        del sources[n]
+                        break
+            cal = self._cal_for(frame.source)
+            affine = self._affines.get(id(cal))
+            if affine is None or affine[0] is not cal:
+                affine = self._affines[id(cal)] = (cal, _affine(cal))
+            src = _Source(frame.source, affine[1])
+        sources[frame.source] = src  # most recently heard last
         src.last_seen = t
         src.lost = False
         src.presence_timeout = frame.presence_timeout
-        push = self._events.append
+        push = self._push
         name = src.name
         states = src.states
+        points = frame.points
         if frame.restart:
             for sid, st in states.items():
                 push(("up", name, sid, t, st))
+            self._n -= len(states)
             states.clear()
+        if frame.complete and states:  # ids missing from a complete frame are gone: first
+            gone = [sid for sid in states if sid not in points]
+            for sid in gone:
+                push(("up", name, sid, t, states.pop(sid)))
+            self._n -= len(gone)
         a00, a01, a10, a11 = src.a
         b0, b1 = src.b
         alpha = self._alpha
-        points = frame.points
+        room = min(self._max_per_source - len(states), self._max_total - self._n)
+        dropped = 0
         for sid, e in points.items():
+            old = states.get(sid)
+            if old is None:
+                if room <= 0:
+                    dropped += 1
+                    continue
+                room -= 1
+                self._n += 1
             x, y, vx, vy, area, press, kind, cls = e
             px = a00 * x + a01 * y + b0
             py = a10 * x + a11 * y + b1
-            old = states.get(sid)
             if vx == vx and (vx != 0.0 or vy != 0.0):
                 wx = a00 * vx + a01 * vy
                 wy = a10 * vx + a11 * vy
@@ -212,21 +342,29 @@ class ContactTable:
                 if old[_PX] != px or old[_PY] != py or old[_VX] != wx or old[_VY] != wy:
                     push(("move", name, sid, t, st))
             states[sid] = st
-        if frame.complete and len(states) > len(points):  # states ⊇ frame ids here
-            for sid in [s for s in states if s not in points]:
-                push(("up", name, sid, t, states.pop(sid)))
+        if dropped and self._problems is not None:
+            full = len(states) >= self._max_per_source
+            self._problems.error(name, frame.kind, "too_many_contacts",
+                                 f"{dropped} new contact(s) dropped: the limit of "
+                                 + (f"{self._max_per_source} contacts per source" if full else
+                                    f"{self._max_total} contacts in total") + " was reached", dropped)
         self._cache = None  # states were replaced (last_seen) even when nothing moved
 
     def expire(self, now: float) -> None:
         """End contacts of sources silent for longer than the timeout and points
-        past their presence timeout, as of ``now``."""
-        push = self._events.append
+        past their presence timeout, as of ``now``; forget sources lost for longer
+        than ``forget_after``."""
+        push = self._push
+        forget = []
         for src in self._sources.values():
             if src.lost:
+                if now - src.last_seen > self._forget_after:
+                    forget.append(src.name)
                 continue
             if now - src.last_seen > self._timeout:
                 for sid, st in src.states.items():
                     push(("lost", src.name, sid, now, st))
+                self._n -= len(src.states)
                 src.states.clear()
                 src.lost = True
                 push(("source_lost", src.name, None, now, None))
@@ -239,7 +377,10 @@ class ContactTable:
                 for sid in gone:
                     push(("up", src.name, sid, now, src.states.pop(sid)))
                 if gone:
+                    self._n -= len(gone)
                     self._cache = None
+        for name in forget:
+            del self._sources[name]
 
     def _materialise(self, name: str, sid: int, st: tuple) -> Contact:
         # one Contact object per state tuple, shared by contacts() and events
@@ -257,7 +398,7 @@ class ContactTable:
         return self._cache
 
     def drain_events(self) -> list[ContactEvent]:
-        """Events since the previous call (oldest first; at most 10 000 kept)."""
+        """Events since the previous call (oldest first; at most ``max_events`` kept)."""
         out = [ContactEvent(k, name, sid, t, None if st is None else self._materialise(name, sid, st))
                for k, name, sid, t, st in self._events]
         self._events.clear()
@@ -270,8 +411,13 @@ class ContactTable:
             self._objects = {k: v for k, v in self._objects.items() if k in live}
 
     def counts(self) -> dict[str, int]:
-        """Number of contacts per source name."""
-        return {n: len(s.states) for n, s in self._sources.items()}
+        """Number of contacts per source name, for the sources that have some."""
+        return {n: len(s.states) for n, s in self._sources.items() if s.states}
+
+    def is_lost(self, name: str) -> bool:
+        """Whether the source ``name`` is currently lost."""
+        s = self._sources.get(name)
+        return s is not None and s.lost
 
     def lost(self) -> set[str]:
         """Names of sources currently lost."""

@@ -21,7 +21,7 @@ from collections.abc import Callable
 
 from .calibration import Calibration
 from .config import ListenerConfig
-from .contact import Contact, InputSnapshot, SourceHealth
+from .contact import Contact, InputSnapshot, InputWork, SourceHealth
 from .contacts import ContactTable, HealthBook
 from .oscparse import MalformedDatagram, parse_datagram
 from .pointstream import PointStreamDecoder
@@ -44,6 +44,29 @@ def peer_name(transport: str, peer: object) -> str:
     return s if "://" in s else f"{transport}://{s}"
 
 
+def sender_name(transport: str, peer: object) -> str:
+    """The sending host without its port: ``"udp://10.0.0.2"`` from ``("10.0.0.2",
+    50000)`` or ``"udp://10.0.0.2:50000"`` (IPv6 hosts in brackets).
+
+    Input state is keyed by this, not by the UDP/TCP port: every ``oscsend`` run and
+    every TCP reconnect comes from a new port but is the same sender. TUIO sources
+    are further told apart by their ``source`` string."""
+    if isinstance(peer, (tuple, list)) and len(peer) >= 2:
+        scheme, host = transport, str(peer[0])
+    else:
+        s = str(peer)
+        scheme, _, rest = s.partition("://") if "://" in s else (transport, "", s)
+        if rest.startswith("["):
+            host = rest[:rest.index("]") + 1] if "]" in rest else rest
+        elif rest.count(":") == 1:
+            host = rest.rsplit(":", 1)[0]
+        else:
+            host = rest
+    if ":" in host and not host.startswith("["):
+        host = f"[{host}]"
+    return f"{scheme}://{host}"
+
+
 class InputSource:
     """Datagrams in; contacts, events and health out. No sockets.
 
@@ -60,11 +83,16 @@ class InputSource:
         self.on_datagram = on_datagram
         self._wallclock = wallclock
         self._lock = threading.Lock()
-        self._health = HealthBook()
+        cfg = self.config
+        forget_after = max(cfg.forget_after, cfg.timeout)
+        self._health = HealthBook(forget_after=forget_after, name=f"listener {cfg.name}")
         self._peer_names: dict = {}
-        self._tuio = TuioAssembler(self._health) if self.config.tuio else None
-        self._points = PointStreamDecoder(self.config.streams, self._health)
-        self._table = ContactTable(self._calibration_for, self.config.timeout, on_lost=self._forget)
+        self._tuio = TuioAssembler(self._health, max_contacts=cfg.max_contacts_per_source) if cfg.tuio else None
+        self._points = PointStreamDecoder(cfg.streams, self._health)
+        self._table = ContactTable(self._calibration_for, cfg.timeout, on_lost=self._forget,
+                                   max_per_source=cfg.max_contacts_per_source, max_total=cfg.max_contacts,
+                                   max_events=cfg.max_events, forget_after=forget_after, problems=self._health)
+        self._arguments_decoded = 0
 
     @property
     def name(self) -> str:
@@ -93,12 +121,12 @@ class InputSource:
             t = float(t)
         except (TypeError, ValueError) as exc:
             with self._lock:
-                self._health.error(peer_name(transport, peer), "peer", "bad_feed",
+                self._health.error(sender_name(transport, peer), "peer", "bad_feed",
                                    f"feed() needs bytes and a time in s: {exc}")
             return
         if not math.isfinite(t):
             with self._lock:
-                self._health.error(peer_name(transport, peer), "peer", "bad_feed",
+                self._health.error(sender_name(transport, peer), "peer", "bad_feed",
                                    f"feed() receive time must be finite, got {t}")
             return
         with self._lock:
@@ -108,7 +136,7 @@ class InputSource:
         key = (transport, peer) if isinstance(peer, (tuple, str)) else None
         pname = self._peer_names.get(key) if key is not None else None
         if pname is None:
-            pname = peer_name(transport, peer)
+            pname = sender_name(transport, peer)
             if key is not None:
                 if len(self._peer_names) > 4096:
                     self._peer_names.clear()
@@ -120,12 +148,14 @@ class InputSource:
                 hook(data, peer, transport, t)
             except Exception as exc:  # a recorder bug must not stop input
                 health.error(pname, "peer", "hook_error", f"on_datagram hook raised {type(exc).__name__}: {exc}")
+        health.datagram(t)
         health.seen(pname, "peer", t)
         try:
-            parsed = parse_datagram(data, self.config.max_datagram)
+            parsed = parse_datagram(data, self.config.max_datagram, self.config.max_osc_arguments)
         except MalformedDatagram as exc:
             health.error(pname, "peer", exc.reason, str(exc))
             return
+        self._arguments_decoded += parsed.cost
         try:
             if len(data) > BIG_DATAGRAM:
                 health.warn(pname, "peer", "over_8KiB")
@@ -150,13 +180,29 @@ class InputSource:
             health.error(pname, "peer", "internal_error", f"{type(exc).__name__}: {exc}")
 
     # ------------------------------------------------------------------ data out
+    def _expire(self, now: float) -> dict[str, int]:
+        """Expire contacts, forget idle sources (and their decoder state); the
+        contact counts of the sources that have some."""
+        self._table.expire(now)
+        counts = self._table.counts()
+        for name in self._health.expire(now, counts.__contains__):
+            self._forget(name)
+        return counts
+
+    def _totals(self, now: float) -> SourceHealth:
+        return self._health.totals(now, len(self._table), events_dropped=self._table.events_dropped,
+                                   sources_forgotten=self._health.forgotten)
+
     def poll(self, now: float) -> InputSnapshot:
-        """Expire silent sources as of ``now``, then return the contacts, the
-        events since the previous poll and the health of every source."""
+        """Expire silent sources and forget idle ones as of ``now``, then return the
+        contacts, the events since the previous poll and the health: the listener's
+        lifetime totals (kind ``"listener"``) and at most ``max_reported_sources``
+        sources (plus one ``"N more sources"`` record when some are left out)."""
         with self._lock:
-            self._table.expire(now)
+            counts = self._expire(now)
+            health = self._health.snapshot(now, counts, self._table.is_lost, self.config.max_reported_sources)
             return InputSnapshot(now, self._table.contacts(), tuple(self._table.drain_events()),
-                                 self._health.snapshot(now, self._table.counts(), self._table.lost()))
+                                 (self._totals(now),) + health)
 
     def contacts(self) -> tuple[Contact, ...]:
         """Current contacts (without expiring or draining events)."""
@@ -164,9 +210,18 @@ class InputSource:
             return self._table.contacts()
 
     def health(self, now: float) -> tuple[SourceHealth, ...]:
-        """Health of every source as of ``now`` (without expiring)."""
+        """The listener's totals and the health of every source it holds, as of
+        ``now`` (without expiring; unlike :meth:`poll`, not capped)."""
         with self._lock:
-            return self._health.snapshot(now, self._table.counts(), self._table.lost())
+            return (self._totals(now),) + self._health.snapshot(now, self._table.counts(), self._table.is_lost)
+
+    def work(self) -> InputWork:
+        """Lifetime work counters (see :class:`InputWork`)."""
+        with self._lock:
+            tot = self._health.totals(0.0, 0)
+            return InputWork(tot.datagrams, self._arguments_decoded, len(self._table),
+                             tot.errors.get("too_many_contacts", 0), self._table.events_total,
+                             self._table.events_dropped, len(self._health), self._health.forgotten)
 
     def poll_time(self, now: float) -> float:
         """The time to poll this source at: ``now`` for the socket-free core (its
@@ -180,7 +235,7 @@ class InputSource:
         skew = clock() - now
         if abs(skew) > CLOCK_TOLERANCE:
             with self._lock:
-                self._health.error(peer_name(transport, address), "listener", "clock_mismatch",
+                self._health.error(self._health.name, "listener", "clock_mismatch",
                                    f"poll(now={now:.3f}) is {skew:+.3f} s off this listener's receive clock; "
                                    "build the listener/hub with clock= the loop's clock")
 
@@ -231,6 +286,8 @@ class UdpListener(InputSource):
         sock.settimeout(0.05)
         self._sock = sock
         self.address = sock.getsockname()[:2]
+        with self._lock:
+            self._health.name = f"listener {self.config.name} {peer_name(self.config.transport, self.address)}"
         self._stop.clear()
         self._thread = threading.Thread(target=self._run, name=f"swarmdeck-udp-{self.address[1]}", daemon=True)
         self._thread.start()
@@ -248,7 +305,7 @@ class UdpListener(InputSource):
                 if self._stop.is_set():
                     break
                 with self._lock:
-                    self._health.error(peer_name("udp", self.address), "peer", "socket_error", str(exc))
+                    self._health.error(self._health.name, "listener", "socket_error", str(exc))
                 self._stop.wait(0.05)
                 continue
             self.feed(data, addr, self._clock(), "udp")
@@ -309,6 +366,8 @@ class TcpListener(InputSource):
         sock.settimeout(0.05)
         self._sock = sock
         self.address = sock.getsockname()[:2]
+        with self._lock:
+            self._health.name = f"listener {self.config.name} {peer_name(self.config.transport, self.address)}"
         self._stop.clear()
         th = threading.Thread(target=self._accept, name=f"swarmdeck-tcp-{self.address[1]}", daemon=True)
         self._threads.append(th)
@@ -337,7 +396,7 @@ class TcpListener(InputSource):
 
     def _read(self, conn: socket.socket, addr: tuple) -> None:
         buf = bytearray()
-        pname = peer_name("tcp", addr)
+        pname = sender_name("tcp", addr)
         limit = self.config.max_datagram
         try:
             while not self._stop.is_set():

@@ -15,30 +15,74 @@ from .contact import InputSnapshot
 from .hub import InputHub
 
 
+#: Rows of the page: sources and contacts beyond these are summarised in one line each.
+MAX_SOURCE_ROWS = 20
+MAX_CONTACT_ROWS = 20
+WIDTH = 150  # longest line; longer texts (a hostile sender's error details) are cut
+
+
 def _counts(d: dict[str, int]) -> str:
     return ", ".join(f"{k} {v}" for k, v in sorted(d.items())) or "-"
 
 
-def render(snap: InputSnapshot, listeners: tuple[str, ...] = (), t0: float = 0.0) -> str:
-    """A plain-text page describing ``snap``: every source's health, then every
-    contact; the header shows ``snap.t - t0`` (time since the monitor started)."""
-    lines = [f"swarmdeck inputs monitor   t={snap.t - t0:.1f} s   listening: {', '.join(listeners) or '-'}", ""]
-    lines.append(f"{'source':<48} {'kind':<6} {'rate/s':>7} {'age s':>6} {'cont':>4}  state   errors / warnings")
-    if not snap.health:
-        lines.append("  (nothing received yet — is the sender pointed at this host and port?)")
-    for h in snap.health:
-        age = snap.t - h.last_seen if math.isfinite(h.last_seen) else math.inf
-        state = "LOST" if h.lost else ("ok" if age < 1.0 else "quiet")
-        lines.append(f"{h.name[:48]:<48} {h.kind:<6} {h.rate_hz:>7.1f} {age:>6.1f} {h.contacts:>4}  {state:<6}  "
-                     f"E: {_counts(h.errors)} | W: {_counts(h.warnings)}")
+_CONTROL = {c: " " for c in [*range(32), 127]}
+
+
+def _cut(text: str, width: int = WIDTH) -> str:
+    text = text.translate(_CONTROL)  # no line breaks or terminal escapes from a sender
+    return text if len(text) <= width else text[:width - 1] + "…"
+
+
+def _row(h, now: float) -> str:
+    age = now - h.last_seen if math.isfinite(h.last_seen) else math.inf
+    state = "LOST" if h.lost else ("ok" if age < 1.0 else "quiet")
+    return _cut(f"{h.name[:48]:<48} {h.kind:<8} {h.rate_hz:>7.1f} {age:>6.1f} {h.contacts:>4}  {state:<6}  "
+                f"E: {_counts(h.errors)} | W: {_counts(h.warnings)}")
+
+
+def render(snap: InputSnapshot, listeners: tuple[str, ...] = (), t0: float = 0.0,
+           max_sources: int = MAX_SOURCE_ROWS, max_contacts: int = MAX_CONTACT_ROWS) -> str:
+    """A plain-text page describing ``snap``: each listener's lifetime totals, then at
+    most ``max_sources`` sources (those with contacts first, then the most recently
+    heard) and ``max_contacts`` contacts, the rest summarised; the header shows
+    ``snap.t - t0`` (time since the monitor started). At most ~60 lines of at most
+    ``WIDTH`` characters whatever arrived."""
+    now = snap.t
+    lines = [_cut(f"swarmdeck inputs monitor   t={now - t0:.1f} s   listening: {', '.join(listeners) or '-'}"), ""]
+    lines.append(f"{'source':<48} {'kind':<8} {'rate/s':>7} {'age s':>6} {'cont':>4}  state   errors / warnings")
+    totals = [h for h in snap.health if h.kind == "listener"]
+    sources = [h for h in snap.health if h.kind not in ("listener", "more")]
+    not_reported = sum(int(h.name.rsplit(": ", 1)[-1].split()[0]) for h in snap.health if h.kind == "more")
+    for h in totals:
+        lines.append(_row(h, now))
         if h.last_error:
-            lines.append(f"{'':<10}last error: {h.last_error}")
+            lines.append(_cut(f"{'':<10}last error: {h.last_error}"))
+    if not sources and not any(h.datagrams for h in totals):
+        lines.append("  (nothing received yet — is the sender pointed at this host and port?)")
+    sources.sort(key=lambda h: (h.contacts == 0, -h.last_seen))
+    for h in sorted(sources[:max_sources], key=lambda h: h.name):
+        lines.append(_row(h, now))
+        if h.last_error:
+            lines.append(_cut(f"{'':<10}last error: {h.last_error}"))
+    hidden = len(sources) - min(len(sources), max_sources) + not_reported
+    if hidden:
+        lines.append(f"  … {hidden} more sources not shown (the listener totals above count all their "
+                     "datagrams, errors and warnings)")
     lines.append("")
     lines.append(f"contacts ({len(snap.contacts)}):")
-    for c in snap.contacts:
+    for c in snap.contacts[:max_contacts]:
         extra = f" size {c.size:.3f} m" if c.size is not None else ""
-        lines.append(f"  {c.source[-40:]:<40} id {c.id:<5} {c.kind:<7} x {c.position[0]:+.3f} y {c.position[1]:+.3f} m"
-                     f"  v {c.velocity[0]:+.2f} {c.velocity[1]:+.2f} m/s{extra}")
+        lines.append(_cut(f"  {c.source[-40:]:<40} id {c.id:<5} {c.kind:<7} x {c.position[0]:+.3f} "
+                          f"y {c.position[1]:+.3f} m  v {c.velocity[0]:+.2f} {c.velocity[1]:+.2f} m/s{extra}"))
+    rest = snap.contacts[max_contacts:]
+    if rest:
+        per: dict[str, int] = {}
+        for c in rest:
+            per[c.source] = per.get(c.source, 0) + 1
+        top = sorted(per.items(), key=lambda kv: -kv[1])[:5]
+        lines.append(_cut(f"  … {len(rest)} more contacts (by source: "
+                          + ", ".join(f"{name.split('://', 1)[-1][-28:]} {n}" for name, n in top)
+                          + (f", … {len(per) - 5} more sources" if len(per) > 5 else "") + ")"))
     return "\n".join(lines)
 
 

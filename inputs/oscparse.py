@@ -28,7 +28,8 @@ _MAX_DEPTH = 8
 class MalformedDatagram(ValueError):
     """A datagram that is not valid OSC. ``reason`` is a short counter key
     (``empty``, ``too_large``, ``unaligned``, ``not_osc``, ``bad_bundle``,
-    ``bad_message``, ``unknown_type``, ``parse_error``); ``str(exc)`` explains it."""
+    ``bad_message``, ``unknown_type``, ``too_many_arguments``, ``parse_error``);
+    ``str(exc)`` explains it."""
 
     def __init__(self, reason: str, detail: str) -> None:
         super().__init__(f"{reason}: {detail}")
@@ -40,15 +41,17 @@ class MalformedDatagram(ValueError):
 class ParsedDatagram:
     """``messages``: ``[(address, params), ...]`` in datagram order; ``timetag``:
     the latest bundle timetag in Unix seconds, ``None`` for unbundled messages and
-    immediate bundles."""
+    immediate bundles; ``cost``: messages + their type tags (the decode work)."""
 
     messages: list
     timetag: float | None
+    cost: int = 0
 
 
-def _check_message(data: bytes, start: int, end: int) -> None:
+def _check_message(data: bytes, start: int, end: int) -> int:
     """Structural check of one message ``data[start:end]``: address, then a type
-    tag string of known tags (an absent type tag string is legal OSC 1.0)."""
+    tag string of known tags (an absent type tag string is legal OSC 1.0).
+    Returns its decode cost: 1 + the number of type tags."""
     if data[start:start + 1] != b"/":
         raise MalformedDatagram("bad_message", f"element at byte {start} does not start with '/' (got {data[start:start + 8]!r})")
     nul = data.find(b"\x00", start, end)
@@ -56,7 +59,7 @@ def _check_message(data: bytes, start: int, end: int) -> None:
         raise MalformedDatagram("bad_message", f"address at byte {start} is not NUL-terminated")
     tag_start = start + ((nul - start) // 4 + 1) * 4
     if tag_start >= end:
-        return
+        return 1
     if data[tag_start:tag_start + 1] != b",":
         raise MalformedDatagram("bad_message", f"type tag string at byte {tag_start} does not start with ','")
     tag_end = data.find(b"\x00", tag_start, end)
@@ -65,11 +68,13 @@ def _check_message(data: bytes, start: int, end: int) -> None:
     bad = data[tag_start + 1:tag_end].translate(None, KNOWN_TAGS)
     if bad:
         raise MalformedDatagram("unknown_type", f"unsupported OSC type tag(s) {bad.decode('latin-1')!r}; supported: {KNOWN_TAGS.decode()}")
+    return tag_end - tag_start
 
 
-def _check_bundle(data: bytes, start: int, end: int, depth: int) -> None:
+def _check_bundle(data: bytes, start: int, end: int, depth: int) -> int:
     """Walk a bundle's element sizes (each > 0, a multiple of 4 and within the
-    bundle) and check each message's address and type tags (inlined for speed)."""
+    bundle) and check each message's address and type tags (inlined for speed).
+    Returns the decode cost of its messages (1 + type tags each)."""
     if depth > _MAX_DEPTH:
         raise MalformedDatagram("bad_bundle", f"bundles nested deeper than {_MAX_DEPTH}")
     i = start + 16
@@ -77,6 +82,7 @@ def _check_bundle(data: bytes, start: int, end: int, depth: int) -> None:
         raise MalformedDatagram("bad_bundle", f"bundle at byte {start} is shorter than its 16-byte header")
     unpack = _INT.unpack_from
     find = data.find
+    cost = 0
     while i < end:
         if i + 4 > end:
             raise MalformedDatagram("bad_bundle", f"element size at byte {i} is truncated")
@@ -91,14 +97,17 @@ def _check_bundle(data: bytes, start: int, end: int, depth: int) -> None:
             if comma >= 0:
                 nul = find(b"\x00", comma, stop)
                 if nul < 0 or data[comma - 1] != 0 or data[comma + 1:nul].translate(None, KNOWN_TAGS):
-                    _check_message(data, i, stop)  # slow path: precise error
+                    cost += _check_message(data, i, stop)  # slow path: precise error
+                else:
+                    cost += nul - comma
             else:
-                _check_message(data, i, stop)
+                cost += _check_message(data, i, stop)
         elif data.startswith(BUNDLE_PREFIX, i):
-            _check_bundle(data, i, stop, depth + 1)
+            cost += _check_bundle(data, i, stop, depth + 1)
         else:
             raise MalformedDatagram("bad_message", f"element at byte {i} is neither a message ('/') nor a bundle (got {data[i:i + 8]!r})")
         i = stop
+    return cost
 
 
 def _direct_fields_work() -> bool:
@@ -131,8 +140,17 @@ def _flatten(bundle: osc_bundle.OscBundle, out: list, stamps: list) -> None:
             _flatten(item, out, stamps)
 
 
-def parse_datagram(data: bytes, max_bytes: int = 65536) -> ParsedDatagram:
-    """Parse a whole OSC datagram (bundle or single message).
+def _check_cost(cost: int, max_arguments: int | None) -> None:
+    if max_arguments is not None and cost > max_arguments:
+        raise MalformedDatagram("too_many_arguments",
+                                f"datagram holds {cost} OSC messages and arguments, more than the limit of "
+                                f"{max_arguments} per datagram (max_osc_arguments); not decoded")
+
+
+def parse_datagram(data: bytes, max_bytes: int = 65536, max_arguments: int | None = None) -> ParsedDatagram:
+    """Parse a whole OSC datagram (bundle or single message). ``max_arguments``
+    bounds the decode work: a datagram whose messages + type tags exceed it is
+    rejected by the structural walk, before python-osc decodes anything.
 
     Raises:
         MalformedDatagram: with a reason key and a message naming what was wrong.
@@ -146,15 +164,17 @@ def parse_datagram(data: bytes, max_bytes: int = 65536) -> ParsedDatagram:
         raise MalformedDatagram("unaligned", f"datagram length {n} is not a multiple of 4 (OSC packets are 4-byte aligned)")
     try:
         if data.startswith(BUNDLE_PREFIX):
-            _check_bundle(data, 0, n, 0)
+            cost = _check_bundle(data, 0, n, 0)
+            _check_cost(cost, max_arguments)
             out: list = []
             stamps: list = []
             _flatten(osc_bundle.OscBundle(data), out, stamps)
-            return ParsedDatagram(out, max(stamps) if stamps else None)
+            return ParsedDatagram(out, max(stamps) if stamps else None, cost)
         if data[:1] == b"/":
-            _check_message(data, 0, n)
+            cost = _check_message(data, 0, n)
+            _check_cost(cost, max_arguments)
             m = osc_message.OscMessage(data)
-            return ParsedDatagram([(m.address, m.params)], None)
+            return ParsedDatagram([(m.address, m.params)], None, cost)
     except MalformedDatagram:
         raise
     except (osc_bundle.ParseError, osc_message.ParseError, osc_types.ParseError) as exc:

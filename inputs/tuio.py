@@ -31,7 +31,7 @@ from datetime import datetime
 from .frames import AREA, KIND, NAN, Problems, SourceFrame
 
 RESTART_GAP = 100
-MAX_GROUPS = 1024  # (peer, source) groups kept; beyond it empty ones are forgotten
+MAX_GROUPS = 1024  # (sender, source) groups kept; beyond it the least recently used is forgotten
 TUIO2_LATE_WINDOW = 1.0
 _NUM = (int, float)
 
@@ -100,10 +100,12 @@ class TuioAssembler:
     Not thread-safe (the owning listener serialises datagrams).
     """
 
-    def __init__(self, problems: Problems, restart_gap: int = RESTART_GAP) -> None:
+    def __init__(self, problems: Problems, restart_gap: int = RESTART_GAP, max_contacts: int = 64) -> None:
         self._problems = problems
         self._restart_gap = restart_gap
+        self._max = int(max_contacts)
         self._groups: dict[tuple, _Group] = {}
+        self._by_name: dict[str, tuple] = {}  # group name -> key (forget in O(1))
         self._peer = ""
         self._source = ""
         self._bufs: dict[tuple, _Buffer] = {}
@@ -140,8 +142,9 @@ class TuioAssembler:
     def forget(self, name: str) -> None:
         """Drop the state of the source called ``name`` (after it was lost), so
         a sender that comes back with lower frame numbers is not taken as late."""
-        for key in [k for k, g in self._groups.items() if g.name == name]:
-            del self._groups[key]
+        key = self._by_name.pop(name, None)
+        if key is not None:
+            self._groups.pop(key, None)
 
     def message(self, address: str, p: list) -> None:
         """Handle one ``/tuio/...`` or ``/tuio2/...`` message of the current datagram."""
@@ -178,19 +181,21 @@ class TuioAssembler:
     # ------------------------------------------------------------------ names
     def _group(self, version: int, source: str) -> _Group:
         key = (self._peer, version, source)
-        g = self._groups.get(key)
-        if g is None:
-            if len(self._groups) >= MAX_GROUPS:  # forget the oldest group without entities
-                for k, old in self._groups.items():
-                    if not any(st.entities for st in old.profiles.values()) and old not in self._dirty.values():
-                        del self._groups[k]
-                        break
-            if version == 1:
-                name = f"{self._peer}/{source}" if source else f"{self._peer}/tuio"
-            else:
-                name = f"{self._peer}/tuio2/{source}" if source else f"{self._peer}/tuio2"
-            g = _Group(name, "tuio" if version == 1 else "tuio2")
-            self._groups[key] = g
+        groups = self._groups
+        g = groups.pop(key, None)
+        if g is not None:  # most recently used last: the oldest are evicted first
+            groups[key] = g
+            return g
+        if len(groups) >= MAX_GROUPS:  # O(1): forget the least recently used group
+            old_key = next(iter(groups))
+            self._by_name.pop(groups.pop(old_key).name, None)
+        if version == 1:
+            name = f"{self._peer}/{source}" if source else f"{self._peer}/tuio"
+        else:
+            name = f"{self._peer}/tuio2/{source}" if source else f"{self._peer}/tuio2"
+        g = _Group(name, "tuio" if version == 1 else "tuio2")
+        groups[key] = g
+        self._by_name[name] = key
         return g
 
     def _err(self, version: int, source: str, reason: str, detail: str) -> None:
@@ -319,12 +324,33 @@ class TuioAssembler:
                 new[sid] = e
         if sets and any(sid not in alive for sid in sets):
             self._problems.warn(g.name, g.kind, "set_not_alive")
-        st.entities = new
+        st.entities = self._cap(g, new, old)
         self._dirty[(self._peer, g.kind, g.name)] = g
 
+    def _cap(self, g: _Group, new: dict, old: dict) -> dict:
+        """At most ``max_contacts`` entities per profile: those already held first,
+        then new ones in ALIVE order; the rest are dropped and counted."""
+        if len(new) <= self._max:
+            return new
+        keep = [sid for sid in new if sid in old][:self._max]
+        room = self._max - len(keep)
+        keep_set = set(keep)
+        keep += [sid for sid in new if sid not in keep_set][:room]
+        dropped = len(new) - len(keep)
+        self._problems.error(g.name, g.kind, "too_many_contacts",
+                             f"{dropped} contact(s) dropped: the limit of {self._max} contacts per source "
+                             f"(max_contacts_per_source) was reached", dropped)
+        keep_set = set(keep)
+        return {sid: e for sid, e in new.items() if sid in keep_set}
+
     def _merge(self, g: _Group, kind: str) -> dict:
+        """One entity per session id over the profiles of ``g``. A blob/bounds with
+        the id of a cursor/object/pointer/token sizes it; a cursor and an object (or
+        a pointer and a token) with one id are a sender bug (session ids are unique
+        per source): the first profile's entity stays, the clash is counted."""
         order = _ORDER_1 if kind == "tuio" else _ORDER_2
         merged: dict = {}
+        first: dict = {}  # sid -> profile that made the contact
         hovering: set = set()
         for prof in order:
             st = g.profiles.get(prof)
@@ -339,8 +365,14 @@ class TuioAssembler:
                 m = merged.get(sid)
                 if m is None:
                     merged[sid] = e
-                elif e[KIND] in ("blob", "bounds") and e[AREA] == e[AREA]:
-                    merged[sid] = m[:AREA] + (e[AREA],) + m[AREA + 1:]
+                    first[sid] = prof
+                elif e[KIND] in ("blob", "bounds"):
+                    if e[AREA] == e[AREA]:
+                        merged[sid] = m[:AREA] + (e[AREA],) + m[AREA + 1:]
+                else:
+                    self._problems.error(g.name, g.kind, "id_clash",
+                                         f"{prof} session {sid} is also a {first[sid]} session of this source; "
+                                         f"the {e[KIND]} is dropped (TUIO session ids are unique per source)")
         return merged
 
     # ------------------------------------------------------------------ TUIO 2.0
@@ -459,5 +491,5 @@ class TuioAssembler:
                     e = old.get(sid)
                 if e is not None:
                     new[sid] = e
-        st.entities = new
+        st.entities = self._cap(g, new, old)
         self._dirty[(self._peer, g.kind, g.name)] = g

@@ -56,8 +56,8 @@ def test_oscsend_single_messages_make_a_contact(listener):
         subprocess.run(["oscsend", "127.0.0.1", port, "/tuio/2Dcur", *args], check=True, timeout=10)
     snap = wait_for(lambda: (s := lst.poll(clock.t)).contacts and s)
     (c,) = snap.contacts
-    # each oscsend is its own datagram with its own (ephemeral) source port, so the
-    # SET arrives from a peer that never sent ALIVE: it is taken as it comes
+    # each oscsend is its own datagram from its own (ephemeral) port; state is kept
+    # per sending host and source string, so the four make one frame of one finger
     assert c.id == 3 and c.kind == "cursor"
     np.testing.assert_allclose(c.position, CAL.to_arena(np.array([[0.25, 0.75]]))[0], atol=1e-6)
     assert not any(h.errors for h in snap.health)

@@ -18,7 +18,7 @@ def test_page_shows_sources_rates_contacts_and_errors():
                ("10.0.0.2", 40000), 0.1 * k)
     b.feed(b"junk", ("10.0.0.9", 1), 0.5)
     page = render(hub.poll(0.95), ("udp://127.0.0.1:3333",))
-    assert "udp://10.0.0.2:40000/TuioPad@10.0.0.2" in page
+    assert "udp://10.0.0.2/TuioPad@10.0.0.2" in page
     assert "not_osc 1" in page and "last error" in page
     assert "id 3" in page and "x +0.000 y +0.000 m" in page
     assert " 10.0 " in page  # 10 frames within the last second

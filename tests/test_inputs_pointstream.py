@@ -44,7 +44,7 @@ def test_leap_osc_finger_positions():
     snap = src.poll(0.0)
     (c,) = snap.contacts
     np.testing.assert_allclose(c.position, [-1.6, -1.0], atol=1e-9)
-    assert c.source == "udp://127.0.0.1:7000/leap-osc"
+    assert c.source == "udp://127.0.0.1/leap-osc"
     (peer,) = [h for h in snap.health if h.kind == "peer"]
     assert peer.warnings == {"unmatched_address": 1}
 

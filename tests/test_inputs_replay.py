@@ -66,7 +66,7 @@ def test_replay_helper_and_time_offset():
                src, time_offset=10.0)
     assert n == 1
     (c,) = src.poll(11.0).contacts
-    assert c.first_seen == 11.0 and c.source == "udp://h:1/tuio"
+    assert c.first_seen == 11.0 and c.source == "udp://h/tuio"
 
 
 def test_bad_jsonl_line_is_named(tmp_path):

@@ -73,14 +73,16 @@ def test_python_osc_sender_moves_contacts_through_a_real_udp_socket(udp):
     assert snap.contacts == () and ("source_lost", None) in [(e.kind, e.id) for e in snap.events]
 
 
-def test_datagram_over_8_kib_is_received_whole(udp):
-    lst, clock = udp
-    pts = [(s, (s % 20) / 20, (s // 20) / 20, ) for s in range(260)]
-    data = ob.tuio_bundle("2Dcur", [p[0] for p in pts], ob.cursor_sets(pts), fseq=3, source="big@1")
-    assert len(data) > 12_000
-    sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
-    sock.sendto(data, ("127.0.0.1", lst.address[1]))
-    snap = wait_for(lambda: (s := lst.poll(clock.t)).contacts and s)
+def test_datagram_over_8_kib_is_received_whole():
+    clock = VirtualClock()
+    cfg = ListenerConfig(port=0, max_osc_arguments=4096, max_contacts_per_source=300, max_contacts=300)
+    with UdpListener(cfg, clock=clock) as lst:
+        pts = [(s, (s % 20) / 20, (s // 20) / 20, ) for s in range(260)]
+        data = ob.tuio_bundle("2Dcur", [p[0] for p in pts], ob.cursor_sets(pts), fseq=3, source="big@1")
+        assert len(data) > 12_000
+        sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+        sock.sendto(data, ("127.0.0.1", lst.address[1]))
+        snap = wait_for(lambda: (s := lst.poll(clock.t)).contacts and s)
     assert len(snap.contacts) == 260
     (peer,) = [h for h in snap.health if h.kind == "peer"]
     assert peer.warnings == {"over_8KiB": 1}
@@ -132,7 +134,7 @@ def test_tcp_length_framing_split_and_coalesced_packets():
             snap = wait_for(lambda: (s := lst.poll(clock.t)).contacts and s.contacts[0].position[0] > -0.7 and s)
         np.testing.assert_allclose(snap.contacts[0].position, [0.3 * 3.2 - 1.6, 0.0], atol=1e-6)
         assert [e.kind for e in snap.events] == ["down", "move", "move"]
-        assert snap.contacts[0].source.startswith("tcp://127.0.0.1:")
+        assert snap.contacts[0].source == "tcp://127.0.0.1/tcp@1"  # the sender host, not its port
         with socket.create_connection(lst.address) as c:  # a bogus length closes that connection
             c.sendall(struct.pack(">I", 0x7FFFFFFF) + b"x" * 8)
             wait_for(lambda: any(h.errors.get("bad_frame_length") for h in lst.health(clock.t)))
@@ -146,8 +148,9 @@ def test_hub_merges_two_listeners_and_port_in_use_is_a_clear_error():
                     UdpListener(ListenerConfig(port=0, name="second"), clock=clock)], clock=clock)
     with hub:
         socks = [s.address for s in hub.sources]
-        for k, addr in enumerate(socks):
-            socket.socket(socket.AF_INET, socket.SOCK_DGRAM).sendto(ob.tuio_bundle("2Dcur", [1], ob.cursor_sets([(1, 0.2 + 0.5 * k, 0.5)]), fseq=1), addr)
+        for k, addr in enumerate(socks):  # two senders on this host, told apart by their source strings
+            socket.socket(socket.AF_INET, socket.SOCK_DGRAM).sendto(ob.tuio_bundle(
+                "2Dcur", [1], ob.cursor_sets([(1, 0.2 + 0.5 * k, 0.5)]), fseq=1, source=f"pad{k}"), addr)
         events = []
         def both():
             s = hub.poll()
@@ -179,4 +182,4 @@ def test_hub_polls_listeners_on_their_own_clock_so_timeouts_survive_a_clock_mix_
     clock.t = 101.2  # the tablet went silent 1.2 s ago on the receive clock
     snap = hub.poll(0.033)
     assert snap.contacts == () and ("source_lost", None) in [(e.kind, e.id) for e in snap.events]
-    assert not [h for h in snap.health if h.kind == "listener"]  # no clock_mismatch via the hub
+    assert not [h for h in snap.health if h.errors.get("clock_mismatch")]  # none via the hub

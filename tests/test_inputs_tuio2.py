@@ -45,7 +45,7 @@ def test_pointer_token_and_bounds_become_contacts():
     snap = src.poll(0.0)
     by = {c.id: c for c in snap.contacts}
     assert {i: (c.kind, c.class_id) for i, c in by.items()} == {1: ("pointer", 1), 2: ("token", 17), 3: ("bounds", None)}
-    assert by[1].source == "udp://10.0.0.7:3333/tuio2/REAC:0@0x80000001"
+    assert by[1].source == "udp://10.0.0.7/tuio2/REAC:0@0x80000001"
     np.testing.assert_allclose(by[1].velocity, [1.6, 0.0], atol=1e-6)
     np.testing.assert_allclose(by[2].velocity, [0.0, 0.0])  # no velocity tail and no motion yet
     np.testing.assert_allclose(by[3].position, arena(0.75, 0.75), atol=1e-6)

@@ -79,7 +79,7 @@ def test_reactivision_objects_with_plain_source_string():
     sets = [(11, 4, 0.25, 0.25, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0), (12, 4, 0.75, 0.5, 2.0, 0.1, 0.0, 0.0, 0.0, 0.0)]
     src.feed(ob.tuio_bundle("2Dobj", [11, 12], sets, fseq=1, source="reacTIVision"), ("127.0.0.1", 3334), 0.0)
     snap = src.poll(0.0)
-    assert {c.source for c in snap.contacts} == {"udp://127.0.0.1:3334/reacTIVision"}
+    assert {c.source for c in snap.contacts} == {"udp://127.0.0.1/reacTIVision"}
     assert {(c.id, c.kind, c.class_id) for c in snap.contacts} == {(11, "object", 4), (12, "object", 4)}
     c12 = [c for c in snap.contacts if c.id == 12][0]
     np.testing.assert_allclose(c12.velocity, [0.1 * 3.2, 0.0], atol=1e-6)  # X = 0.1 axis/s, y-down → arena
