@@ -1,7 +1,9 @@
 """TUIO 1.1 (``/tuio/2Dcur|2Dobj|2Dblb``) and TUIO 2.0 (``/tuio2/frm ptr tok bnd alv``)
 frame assembly (REFERENCE.md §6, notes/tuio.md §1–3).
 
-TUIO 1.1: per *(peer, source string, profile)* the ALIVE and SET messages are
+TUIO 1.1: per *(sending host, source string, profile)* — not per port: one-shot
+senders (oscsend) and reconnecting TCP tablets use a new port each time, as the
+reference client keys by the source string — the ALIVE and SET messages are
 buffered and committed at FSEQ, or at the end of the datagram for senders that
 omit FSEQ (python-tuio sends one bundle for all profiles with a single FSEQ on
 2Dcur). The late-frame rule of the reference clients applies per key: a frame
@@ -12,12 +14,12 @@ Equal FSEQ is normal (one large frame split into several bundles, each with the
 full ALIVE). SETs for ids absent from the frame's ALIVE are ignored; an ALIVE
 id with no SET yet is not a contact until its first SET.
 
-The profiles of one *(peer, source)* form one contact source: session ids are
+The profiles of one *(host, source)* form one contact source: session ids are
 shared across profiles, and a blob whose session id is a cursor's (TuioPad)
 gives that cursor its size instead of being a second finger.
 
 TUIO 2.0: frames open with ``/tuio2/frm f_id time dim source`` and close with
-``/tuio2/alv``; state per *(peer, frm source)*; a frame is late when
+``/tuio2/alv``; state per *(host, frm source)*; a frame is late when
 ``0 < f_id < last`` and its FRM time is less than 1 s after the last frame's
 (without usable times: the 1.1 restart gap). ``f_id`` 0 is never late. ``ptr``
 ≈ 2Dcur (negative pressure = hovering, not a contact), ``tok`` ≈ 2Dobj, ``bnd`` ≈
@@ -95,7 +97,7 @@ def _timetag_seconds(v) -> float | None:
 class TuioAssembler:
     """Stateful TUIO 1.1 + 2.0 frame assembly for one listener.
 
-    Use: ``begin(peer_name)``, then ``message(address, params)`` for each message
+    Use: ``begin(sender_name)`` (the sending host, e.g. ``"udp://10.0.0.2"``), then ``message(address, params)`` for each message
     of the datagram in order, then ``end()`` → committed :class:`SourceFrame` s.
     Not thread-safe (the owning listener serialises datagrams).
     """
@@ -141,7 +143,8 @@ class TuioAssembler:
 
     def forget(self, name: str) -> None:
         """Drop the state of the source called ``name`` (after it was lost), so
-        a sender that comes back with lower frame numbers is not taken as late."""
+        a sender that comes back with lower frame numbers is not taken as late
+        (also when it was idle and forgotten)."""
         key = self._by_name.pop(name, None)
         if key is not None:
             self._groups.pop(key, None)
