@@ -97,8 +97,9 @@ def _timetag_seconds(v) -> float | None:
 class TuioAssembler:
     """Stateful TUIO 1.1 + 2.0 frame assembly for one listener.
 
-    Use: ``begin(sender_name)`` (the sending host, e.g. ``"udp://10.0.0.2"``), then ``message(address, params)`` for each message
-    of the datagram in order, then ``end()`` → committed :class:`SourceFrame` s.
+    Use: ``begin(sender)`` (the sending host, e.g. ``"udp://10.0.0.2"``), then
+    ``message(address, params)`` for each message of the datagram in order, then
+    ``end()`` → committed :class:`SourceFrame` s.
     Not thread-safe (the owning listener serialises datagrams).
     """
 
@@ -117,7 +118,7 @@ class TuioAssembler:
 
     # ------------------------------------------------------------------ datagram
     def begin(self, peer: str) -> None:
-        """Start a datagram from ``peer`` (e.g. ``"udp://10.0.0.2:50000"``)."""
+        """Start a datagram from ``peer``, the sending host (e.g. ``"udp://10.0.0.2"``)."""
         self._peer = peer
         self._source = ""
         self._bufs = {}
