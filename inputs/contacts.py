@@ -46,6 +46,16 @@ class _Health:
         self.warnings: dict[str, int] = {}
         self.last_error: str | None = None
 
+    def heard(self, t: float, window: float) -> None:
+        """One datagram at ``t``: count it, keep its time while within ``window``."""
+        self.datagrams += 1
+        self.last_seen = t
+        times = self.times
+        times.append(t)
+        lim = t - window
+        while times[0] <= lim:
+            times.popleft()
+
     def rate(self, now: float, window: float) -> float:
         lim = now - window
         return sum(1 for x in self.times if lim < x <= now) / window
@@ -84,10 +94,7 @@ class HealthBook:
 
     def datagram(self, t: float) -> None:
         """Count one datagram received by the listener at ``t`` (the totals' rate)."""
-        tot = self._totals
-        tot.datagrams += 1
-        tot.last_seen = t
-        tot.times.append(t)
+        self._totals.heard(t, self._rate_window)
 
     def seen(self, name: str, kind: str, t: float) -> None:
         """Count one datagram for ``name`` received at ``t``."""
@@ -96,9 +103,7 @@ class HealthBook:
             h = self._get(name, kind)
         else:
             self._entries[name] = h
-        h.datagrams += 1
-        h.last_seen = t
-        h.times.append(t)
+        h.heard(t, self._rate_window)
 
     def error(self, name: str, kind: str, reason: str, detail: str, n: int = 1) -> None:
         """Count ``n`` rejected inputs (the listener's own name counts only in the totals)."""
