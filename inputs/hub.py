@@ -101,7 +101,9 @@ class InputHub:
     @staticmethod
     def _dedupe(contacts) -> tuple[Contact, ...]:
         """One contact per ``(source, id)``: a sender that reaches two listeners
-        (reacTIVision can send to several ports) is the same finger; keep the newest."""
+        (reacTIVision can send to several ports) is the same finger; keep the newest.
+        Sources are named by sending host and TUIO source string, so two senders on
+        one host without source strings are one sender here too (as within a listener)."""
         out: dict = {}
         for c in contacts:
             old = out.get(c.key)
