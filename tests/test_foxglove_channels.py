@@ -136,7 +136,7 @@ def test_density_grid_holds_phi_at_cell_centres(session):
     grid, msg = _decoded(by_topic, TOPIC_DENSITY, 0)
     w = grid.column_count
     h = len(grid.data) // grid.row_stride
-    assert (w, h) == (64, 40) and grid.cell_stride == 4 and grid.fields[0].name == "phi"
+    assert (w, h) == (32, 20) and grid.cell_stride == 4 and grid.fields[0].name == "phi"  # 0.1 m cells
     phi = np.frombuffer(grid.data, dtype="<f4").reshape(h, w)
     x = -1.6 + (np.arange(w) + 0.5) * grid.cell_size.x
     y = -1.0 + (np.arange(h) + 0.5) * grid.cell_size.y
@@ -144,7 +144,7 @@ def test_density_grid_holds_phi_at_cell_centres(session):
     expect = frames[0].density.evaluate(np.stack((gx, gy), axis=-1))
     assert np.allclose(phi, expect, rtol=1e-6)
     assert (grid.pose.position.x, grid.pose.position.y) == (-1.6, -1.0)
-    # one grid per density_period (0.2 s) of recorded time, not one per frame
+    # one grid per density_period (0.25 s) of recorded time, not one per frame
     assert 1 <= len(by_topic[TOPIC_DENSITY]) < len(frames)
 
 

@@ -22,8 +22,8 @@ topic                     schema                      content (frame ``arena``: 
                                                       line list coloured by h (red h ≤ 0 → yellow)
 ``/foxglove/contacts``    ``foxglove.SceneUpdate``    touch contacts as spheres
 ``/foxglove/poses``       ``foxglove.PosesInFrame``   robot poses [x, y, θ] in ``arena``
-``/foxglove/density``     ``foxglove.Grid``           φ(q, t) on a grid (float32 field ``phi``), every
-                                                      ``density_period`` s
+``/foxglove/density``     ``foxglove.Grid``           φ(q, t) on a 0.1 m grid (float32 field ``phi``; the
+                                                      layout interpolates), every ``density_period`` s
 ``/foxglove/camera``      ``foxglove.CompressedImage``  the rectified overhead picture (JPEG), every
                                                       ``camera_period`` s when a camera runs
 ``/foxglove/tf``          ``foxglove.FrameTransforms``  ``world → arena`` (identity) and ``arena → camera``
@@ -108,8 +108,8 @@ class FoxgloveConfig:
     camera_height: height of the ``camera`` frame above the arena centre, m. labels: draw robot ids.
     """
 
-    density_period: float = 0.2
-    density_cell: float = 0.05
+    density_period: float = 0.25
+    density_cell: float = 0.1
     camera_period: float = 0.5
     camera_quality: int = 75
     camera_height: float = 2.5
