@@ -35,7 +35,7 @@ topic                     schema                      content (frame ``arena``: 
 ========================  ==========================  ==============================================
 
 The SDK builds messages from Python objects, so building the robots' scene is a
-list comprehension over robots (≈ 8 µs per robot; measured in
+list comprehension over robots (≈ 20 µs per robot; measured in
 ``bench/bench_foxglove.py``): it runs on the recorder's writer thread or the
 live bridge's thread, never on the control loop's.
 """
