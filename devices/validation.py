@@ -48,7 +48,12 @@ def colliding_pairs(poses: ArrayLike, rules: ValidationRules = ValidationRules()
     if p.shape[0] < 2:
         return np.empty((0, 2), dtype=np.intp)
     shifted = p[:, :2] + rules.collision_shift * np.column_stack((np.cos(p[:, 2]), np.sin(p[:, 2])))
-    return cKDTree(shifted).query_pairs(rules.collision_distance, output_type="ndarray").astype(np.intp)
+    # Chebyshev candidates, then the exact distance by hypot: the Euclidean k-d tree squares
+    # coordinates and raises for finite positions beyond ~1e154 m
+    cand = cKDTree(shifted).query_pairs(rules.collision_distance, p=np.inf, output_type="ndarray")
+    e = shifted[cand[:, 0]] - shifted[cand[:, 1]]
+    close = np.hypot(e[:, 0], e[:, 1]) <= rules.collision_distance
+    return cand[close][np.lexsort((cand[close][:, 1], cand[close][:, 0]))].astype(np.intp)
 
 
 @dataclass

@@ -15,11 +15,27 @@ needs ``γ·dt ≤ 1`` (e.g. γ ≤ 30 at dt = 0.033 s).
 from __future__ import annotations
 
 import math
+import numbers
 from dataclasses import dataclass, fields
 from functools import cached_property
 from typing import Literal
 
 DEFAULT_BOUNDS: tuple[float, float, float, float] = (-1.6, 1.6, -1.0, 1.0)
+
+
+def _real(owner, name: str, value, lower: float | None = None, strict: bool = False,
+          upper: float | None = None) -> None:
+    """Refuse a setting that is not a finite real number in range (ValueError naming it)."""
+    cls = type(owner).__name__
+    if isinstance(value, bool) or not isinstance(value, numbers.Real):
+        raise ValueError(f"{cls}: {name} must be a number, got {value!r}")
+    if not math.isfinite(value):
+        raise ValueError(f"{cls}: {name} must be finite, got {value!r}")
+    if lower is not None and (value <= lower if strict else value < lower):
+        raise ValueError(f"{cls}: {name} must be {'>' if strict else '>='} {lower:g}, got {value!r}")
+    if upper is not None and value >= upper:
+        raise ValueError(f"{cls}: {name} must be < {upper:g}, got {value!r}")
+
 
 
 @dataclass(frozen=True)
@@ -78,32 +94,40 @@ class BarrierConfig:
     sensing_radius: float | None = None
 
     def __post_init__(self) -> None:
+        # every gain, distance and speed finite and in range: TOML can say inf and nan, and an
+        # infinite gain turns a row bound into inf·0 = NaN, which a QP silently drops
+        positive = ("safety_distance", "gamma", "max_speed", "wall_gain", "recovery_weight")
+        for name in positive:
+            _real(self, name, getattr(self, name), lower=0.0, strict=True)
+        for name in ("dt", "recovery_speed"):
+            _real(self, name, getattr(self, name), lower=0.0, strict=False)
+        if self.wall_margin is not None:
+            _real(self, "wall_margin", self.wall_margin, lower=0.0, strict=False)
+        if self.sensing_radius is not None:
+            _real(self, "sensing_radius", self.sensing_radius, lower=0.0, strict=True)
+        _real(self, "clarabel_tol", self.clarabel_tol, lower=0.0, strict=True, upper=1e-3)
+        for name, lower in (("max_active_set_iterations", 1), ("active_set_max_rows", 0), ("clarabel_max_iter", 1),
+                            ("distributed_above", 0)):
+            value = getattr(self, name)
+            if isinstance(value, bool) or not isinstance(value, numbers.Integral) or value < lower:
+                raise ValueError(f"BarrierConfig: {name} must be an integer >= {lower}, got {value!r}")
+        if not isinstance(self.recovery, bool):
+            raise ValueError(f"BarrierConfig: recovery must be true or false, got {self.recovery!r}")
         checks = [
-            (self.safety_distance > 0, "safety_distance must be > 0 m"),
-            (self.gamma > 0, "gamma must be > 0"),
             (self.class_k in ("cubic", "linear"), "class_k must be 'cubic' or 'linear'"),
-            (self.max_speed > 0, "max_speed must be > 0 m/s"),
-            (self.wall_gain > 0, "wall_gain must be > 0"),
-            (self.dt >= 0, "dt must be >= 0 s"),
-            (self.recovery_speed >= 0, "recovery_speed must be >= 0 m/s"),
-            (self.recovery_weight > 0, "recovery_weight must be > 0"),
             (self.solver in ("auto", "clarabel"), "solver must be 'auto' or 'clarabel'"),
-            (self.max_active_set_iterations >= 1, "max_active_set_iterations must be >= 1"),
-            (self.active_set_max_rows >= 0, "active_set_max_rows must be >= 0"),
-            (self.clarabel_max_iter >= 1, "clarabel_max_iter must be >= 1"),
-            (0 < self.clarabel_tol < 1e-3, "clarabel_tol must be in (0, 1e-3)"),
-            (len(self.bounds) == 4, "bounds must be (x_min, x_max, y_min, y_max)"),
+            (isinstance(self.bounds, (tuple, list)) and len(self.bounds) == 4,
+             "bounds must be (x_min, x_max, y_min, y_max)"),
             (self.mode in ("centralised", "distributed", "auto"),
              "mode must be 'centralised', 'distributed' or 'auto'"),
-            (self.distributed_above >= 0, "distributed_above must be >= 0"),
         ]
         for ok, message in checks:
             if not ok:
                 raise ValueError(f"BarrierConfig: {message}")
+        for v in self.bounds:
+            _real(self, "bounds", v)
         x_min, x_max, y_min, y_max = (float(v) for v in self.bounds)
         m = self.margin
-        if not all(math.isfinite(v) for v in (x_min, x_max, y_min, y_max)):
-            raise ValueError("BarrierConfig: bounds must be finite")
         if m < 0 or x_max - x_min <= 2 * m or y_max - y_min <= 2 * m:
             raise ValueError(
                 f"BarrierConfig: bounds {self.bounds} leave no room inside the wall margin {m} m"
@@ -211,8 +235,7 @@ class UnicycleParams:
 
     def __post_init__(self) -> None:
         for name in ("wheel_radius", "axle_length", "max_wheel_speed", "lookahead"):
-            if not getattr(self, name) > 0:
-                raise ValueError(f"UnicycleParams: {name} must be > 0")
+            _real(self, name, getattr(self, name), lower=0.0, strict=True)
 
     @property
     def max_linear_speed(self) -> float:

@@ -35,12 +35,16 @@ from scipy.spatial import cKDTree
 
 from .active_set import solve_active_set
 from .config import BarrierConfig
-from .constraints import LIMIT, OBSTACLE, PAIR, Rows, barrier_rows
+from .constraints import LIMIT, OBSTACLE, PAIR, WALL, Rows, barrier_rows
 from .diagnostics import BarrierDiagnostics
 from .distributed import filter_distributed
 from .qp_clarabel import solve_qp
 
 _ACTIVE_TOL = 1e-7  # m/s: a row within this of its bound counts as active in clarabel answers
+# m: controlled points and obstacles farther than this from the origin are not positions (a
+# tracking or units error); beyond ~1e154 m squared distances overflow and the k-d tree raises
+MAX_COORDINATE = 1e6
+_KIND_NAMES = {PAIR: "pair", WALL: "wall", OBSTACLE: "obstacle", LIMIT: "limit"}
 
 
 class InputError(ValueError):
@@ -129,6 +133,16 @@ class SafetyFilter:
             return self.fail_stop(robot_count(points, nominal), nominal, f"invalid input: {exc}", t0)
         return self.solve(P, U, O, None, self.config.max_speed, t0)
 
+    @staticmethod
+    def coordinate_problem(P: np.ndarray, O: np.ndarray | None) -> str | None:
+        """Why the positions cannot be filtered (|coordinate| > MAX_COORDINATE), or None."""
+        for name, arr in (("points", P), ("obstacles", O)):
+            if arr is not None and arr.size and float(np.max(np.abs(arr))) > MAX_COORDINATE:
+                bad = np.flatnonzero(np.max(np.abs(arr), axis=1) > MAX_COORDINATE)
+                return (f"{name} coordinates beyond ±{MAX_COORDINATE:g} m in rows {bad[:10].tolist()} "
+                        "(not a position: tracking or units error)")
+        return None
+
     # ------------------------------------------------------------ for subclasses
     def fail_stop(self, n: int, nominal, reason: str, t0: float, n_constraints: int = 0
                   ) -> tuple[np.ndarray, BarrierDiagnostics]:
@@ -156,10 +170,22 @@ class SafetyFilter:
         if n == 0:
             return np.zeros((0, 2)), self._diag(True, "no robots", t0, Rows.empty(), P, U, U, O,
                                                 np.zeros(0, bool), 0, True, "pass-through", 0, 0, 0)
-        tree = cKDTree(P)
-        rows = barrier_rows(P, cfg, O, tree)
+        problem = self.coordinate_problem(P, O)
+        if problem is not None:
+            return self.fail_stop(n, U, problem, t0)
+        try:
+            with np.errstate(over="ignore", invalid="ignore"):
+                rows = barrier_rows(P, cfg, O, cKDTree(P))
+        except (ValueError, FloatingPointError, OverflowError) as exc:  # never out of the filter
+            return self.fail_stop(n, U, f"cannot build the barrier rows: {exc}", t0)
         if extra is not None and extra.m:
             rows = Rows.concat([rows, extra])
+        if not np.all(np.isfinite(rows.b)):
+            # an overflowing bound (inf) or inf·0 (NaN) would silently drop its row from the QP
+            bad = ~np.isfinite(rows.b)
+            kinds = sorted({_KIND_NAMES[int(k)] for k in np.unique(rows.kind[bad])})
+            return self.fail_stop(n, U, f"non-finite bound in {int(bad.sum())} {'/'.join(kinds)} row(s) "
+                                  "(gains too large for these positions)", t0, rows.m)
         if cfg.distributed_for(n):
             return self._solve_distributed(P, U, O, rows, max_speed, t0)
         unsafe = (rows.h < 0) & (rows.kind != LIMIT)
