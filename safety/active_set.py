@@ -40,6 +40,7 @@ _RIDGE = 1e-11
 _AGGRESSIVE_ITERS = 8  # drop every negative multiplier at once, then switch to Lawson–Hanson steps
 _NEWTON_STEPS = 15
 _EYE = np.eye(2)
+FEAS_TOL = 1e-10  # m/s: a certified answer meets every row to this
 
 
 @dataclass(frozen=True)
@@ -63,6 +64,28 @@ def _project(w: np.ndarray, vmax: float) -> tuple[np.ndarray, np.ndarray, np.nda
     if over.any():
         u[over] *= (vmax / norms)[:, None]
     return u, over, norms
+
+
+def clip_speed(u: np.ndarray, vmax: float) -> np.ndarray:
+    """u (N, 2) with every robot's speed scaled onto ‖u_i‖ ≤ v_max *exactly* in floating point.
+
+    Robots within the bound are returned bit for bit (a new array either way); the
+    radial projection alone can land one ulp outside, so those are nudged inwards.
+    """
+    out = np.array(u, dtype=float, copy=True)
+    if not np.isfinite(vmax):
+        return out
+    limit = vmax * vmax
+    s2 = np.einsum("kd,kd->k", out, out)
+    over = np.flatnonzero(s2 > limit)
+    if over.size:
+        out[over] *= (vmax / np.sqrt(s2[over]))[:, None]
+        for _ in range(8):
+            still = over[np.einsum("kd,kd->k", out[over], out[over]) > limit]
+            if not still.size:
+                break
+            out[still] *= 1.0 - 4.0 * np.finfo(float).eps
+    return out
 
 
 def _dense_spd_solve(G: np.ndarray, rhs: np.ndarray) -> np.ndarray | None:
@@ -150,7 +173,7 @@ def _newton_discs(work: _Working, uh: np.ndarray, vmax: float, lam0: np.ndarray
 
 def solve_active_set(rows: Rows, nominal: np.ndarray, max_speed: float | None,
                      warm: np.ndarray | None = None, max_iter: int = 40,
-                     feas_tol: float = 1e-10) -> ActiveSetResult:
+                     feas_tol: float = FEAS_TOL) -> ActiveSetResult:
     """Solve the barrier QP for nominal (N, 2) from working set ``warm`` ((m,) bool or None)."""
     n = nominal.shape[0]
     m = rows.m
@@ -186,12 +209,9 @@ def solve_active_set(rows: Rows, nominal: np.ndarray, max_speed: float | None,
             if float(np.max(np.abs(eq[lam > 0]), initial=0.0)) > 1e-8:
                 return None
         speed = np.einsum("kd,kd->k", u, u)
-        over = speed > vmax * vmax
         if np.any(speed > (vmax * (1 + 1e-9)) ** 2):
             return None
-        if over.any():  # rounding only
-            u = u.copy()
-            u[over] *= (vmax / np.sqrt(speed[over]))[:, None]
+        u = clip_speed(u, vmax)  # rounding only
         return ActiveSetResult(u, True, "certified", W & (lam_rows > 0),
                                speed >= vmax * vmax * (1 - 1e-9), it)
 

@@ -52,9 +52,16 @@ class BarrierConfig:
     dt: control period in s; widens the neighbour radius by 2·v_max·dt so the
         candidate set also covers the next tick (REFERENCE.md §1: 0.033).
     recovery: robots already inside the unsafe set (h < 0) get separating
-        commands (hard "no further approach" rows plus soft separation at
-        ``recovery_speed``); False keeps the plain rows, which can be infeasible.
-    recovery_speed: separation speed (m/s) aimed for along each violated row.
+        commands: a row with h < 0 keeps its plain barrier bound (with the cubic κ it
+        already demands separation, and the answer is the Robotarium's), except that
+        *deep* overlaps — pairs/obstacles closer than D_s − recovery_depth, points more
+        than recovery_depth beyond the wall margin — demand exactly ``recovery_speed``
+        (and no row demands more). If those rows are jointly infeasible, hard "no further
+        approach" rows plus soft separation targets are used. False keeps the plain
+        rows, which can be infeasible.
+    recovery_speed: separation speed (m/s) demanded along each deep overlap's row.
+    recovery_depth: overlap (m) beyond which a row is deep; 0.03 puts the line at 0.14 m
+        for D_s = 0.17, just beyond the rps validator's 0.135 m collision distance.
     recovery_weight: penalty weight of the soft separation rows relative to ‖u − û‖².
     solver: ``"auto"`` (pass-through check, active set certified by KKT, clarabel
         fallback) or ``"clarabel"`` (always the interior-point solver).
@@ -83,6 +90,7 @@ class BarrierConfig:
     dt: float = 0.033
     recovery: bool = True
     recovery_speed: float = 0.05
+    recovery_depth: float = 0.03
     recovery_weight: float = 1e4
     solver: Literal["auto", "clarabel"] = "auto"
     max_active_set_iterations: int = 15
@@ -99,7 +107,7 @@ class BarrierConfig:
         positive = ("safety_distance", "gamma", "max_speed", "wall_gain", "recovery_weight")
         for name in positive:
             _real(self, name, getattr(self, name), lower=0.0, strict=True)
-        for name in ("dt", "recovery_speed"):
+        for name in ("dt", "recovery_speed", "recovery_depth"):
             _real(self, name, getattr(self, name), lower=0.0, strict=False)
         if self.wall_margin is not None:
             _real(self, "wall_margin", self.wall_margin, lower=0.0, strict=False)
@@ -126,6 +134,8 @@ class BarrierConfig:
                 raise ValueError(f"BarrierConfig: {message}")
         for v in self.bounds:
             _real(self, "bounds", v)
+        if self.recovery_depth >= self.safety_distance:
+            raise ValueError("BarrierConfig: recovery_depth must be < safety_distance")
         x_min, x_max, y_min, y_max = (float(v) for v in self.bounds)
         m = self.margin
         if m < 0 or x_max - x_min <= 2 * m or y_max - y_min <= 2 * m:
@@ -173,6 +183,12 @@ class BarrierConfig:
     def margin(self) -> float:
         """Wall margin in m (``wall_margin`` or D_s/2)."""
         return self.safety_distance / 2 if self.wall_margin is None else float(self.wall_margin)
+
+    def deep_overlap(self, h, kind_is_wall):
+        """(m,) bool: rows whose h (pairs/obstacles m², walls m) is a deep overlap (see ``recovery_depth``)."""
+        d = self.safety_distance - self.recovery_depth
+        return (h < 0) & (((h < -self.recovery_depth) & kind_is_wall)
+                          | ((h < d * d - self.safety_distance**2) & ~kind_is_wall))
 
     def kappa(self, h):
         """Class-K function κ(h) (elementwise, keeps the sign of h)."""

@@ -25,6 +25,7 @@ and ``diag.ok`` is False with the reason in ``diag.status``.
 """
 from __future__ import annotations
 
+import dataclasses
 import time
 from dataclasses import dataclass
 
@@ -33,7 +34,7 @@ import scipy.sparse as sp
 from scipy.sparse.csgraph import connected_components
 from scipy.spatial import cKDTree
 
-from .active_set import solve_active_set
+from .active_set import FEAS_TOL, clip_speed, solve_active_set
 from .config import BarrierConfig
 from .constraints import LIMIT, OBSTACLE, PAIR, WALL, Rows, barrier_rows
 from .diagnostics import BarrierDiagnostics
@@ -44,6 +45,8 @@ _ACTIVE_TOL = 1e-7  # m/s: a row within this of its bound counts as active in cl
 # m: controlled points and obstacles farther than this from the origin are not positions (a
 # tracking or units error); beyond ~1e154 m squared distances overflow and the k-d tree raises
 MAX_COORDINATE = 1e6
+_PASS_TOL = FEAS_TOL  # m/s: a row counts as met within the certification's tolerance (so answers are fixed points)
+_CLARABEL_FEAS = 1e-7  # m/s: an interior-point answer violating a row by more than this is refused
 _KIND_NAMES = {PAIR: "pair", WALL: "wall", OBSTACLE: "obstacle", LIMIT: "limit"}
 
 
@@ -191,64 +194,70 @@ class SafetyFilter:
         unsafe = (rows.h < 0) & (rows.kind != LIMIT)
         n_unsafe = int(unsafe.sum())
         recovering = cfg.recovery and n_unsafe > 0
-        # recovery: rows with h < 0 aim at separating at recovery_speed (m/s, rows are normalised)
-        b_target = np.where(unsafe, -cfg.recovery_speed, rows.b) if recovering else rows.b
+        plain = rows
+        if recovering:
+            # rows with h < 0 keep their plain barrier bound (with the cubic κ it already demands
+            # separation; the answer is the plain QP's), capped at recovery_speed; deep overlaps
+            # demand recovery_speed exactly, so they end in a bounded time. Only when those rows
+            # are jointly infeasible does the soft form run (BarrierConfig.recovery)
+            deep = unsafe & cfg.deep_overlap(rows.h, rows.kind == WALL)
+            b = np.where(unsafe, np.maximum(rows.b, -cfg.recovery_speed), rows.b)
+            rows = dataclasses.replace(rows, b=np.where(deep, -cfg.recovery_speed, b))
 
         # pass-through: û satisfies every row and speed bound → u* = û exactly
-        lhs_nom = rows.lhs(U)
-        speed_ok = True if max_speed is None else bool(np.all(np.einsum("kd,kd->k", U, U) <= max_speed**2))
-        if speed_ok and bool(np.all(lhs_nom <= b_target)):
+        if self._satisfies(rows, U, max_speed):
             self._remember(rows, np.zeros(rows.m, bool), n, n_obs)
             return U.copy(), self._diag(True, "nominal safe", t0, rows, P, U, U, O, np.zeros(rows.m, bool),
                                         0, True, "pass-through", 0, 0, n_unsafe)
 
         n_clusters = 0
-        if recovering:
+        if recovering:  # clusters with unsafe rows are solved apart (their QP may be infeasible)
             n_clusters, labels = self._clusters(rows, n)
-            bad_clusters = np.unique(labels[rows.i[unsafe]])
-            in_bad = np.isin(labels, bad_clusters)
+            in_bad = np.isin(labels, np.unique(labels[rows.i[unsafe]]))
         else:
             in_bad = np.zeros(n, dtype=bool)
         u = np.zeros((n, 2))
         active = np.zeros(rows.m, dtype=bool)
-        methods, iterations, n_speed = [], 0, 0
-        if in_bad.any():
-            sub, keep = restrict(rows, in_bad, n)
-            sub_unsafe = unsafe[keep]
-            soft = np.flatnonzero(sub_unsafe)
-            b_hard = np.where(sub_unsafe, np.maximum(sub.b, 0.0), sub.b)
-            res = solve_qp(sub, U[in_bad], max_speed, b_hard=b_hard, soft=soft,
-                           b_soft=b_target[keep][soft], soft_weight=cfg.recovery_weight,
-                           max_iter=cfg.clarabel_max_iter, tol=cfg.clarabel_tol)
-            if not res.ok:
-                return self.fail_stop(n, U, f"{res.reason} (recovering {n_unsafe} unsafe rows)", t0, rows.m)
-            u[in_bad] = res.u
-            active[keep] = sub.lhs(res.u) >= b_hard - _ACTIVE_TOL
-            methods.append("clarabel")
-            iterations += res.iterations
-        good = ~in_bad
-        if good.any():
-            if in_bad.any():
-                sub, keep = restrict(rows, good, n)
-            else:
+        methods, iterations, n_speed, soft_used = [], 0, 0, False
+        for part in (in_bad, ~in_bad):
+            if not part.any():
+                continue
+            if part.all():
                 sub, keep = rows, np.ones(rows.m, dtype=bool)
-            solved = self._solve_plain(sub, U[good], max_speed, n, n_obs, keep, rows)
+            else:
+                sub, keep = restrict(rows, part, n)
+            solved = self._solve_plain(sub, U[part], max_speed, n, n_obs)
+            if isinstance(solved, str) and part is in_bad and solved.startswith("infeasible"):
+                solved = self._solve_soft(restrict(plain, part, n)[0] if not part.all() else plain,
+                                          unsafe[keep], U[part], max_speed)
+                soft_used = True
             if isinstance(solved, str):
-                return self.fail_stop(n, U, solved, t0, rows.m)
-            u[good] = solved.u
+                detail = f" (recovering {n_unsafe} unsafe rows)" if recovering else ""
+                return self.fail_stop(n, U, solved + detail, t0, rows.m)
+            u[part] = solved.u
             active[keep] = solved.active
             methods.append(solved.method)
             iterations += solved.iterations
-            n_speed = solved.n_speed
+            n_speed += solved.n_speed
         self._remember(rows, active, n, n_obs)
         method = methods[0] if len(methods) == 1 else "mixed"
-        status = f"optimal (recovering {n_unsafe} unsafe rows)" if recovering else "optimal"
+        status = "optimal"
+        if recovering:
+            status = f"optimal (recovering {n_unsafe} unsafe rows{', soft separation' if soft_used else ''})"
         return u, self._diag(True, status, t0, rows, P, U, u, O, active, n_speed, False, method,
                              iterations, n_clusters, n_unsafe)
 
     # ---------------------------------------------------------------- helpers
-    def _solve_plain(self, rows: Rows, U: np.ndarray, max_speed: float | None, n: int, n_obs: int,
-                     keep: np.ndarray, all_rows: Rows) -> _Solved | str:
+    @staticmethod
+    def _satisfies(rows: Rows, U: np.ndarray, max_speed: float | None) -> bool:
+        """û meets every row (to _PASS_TOL) and every speed bound (exactly)."""
+        if max_speed is not None and not bool(np.all(np.einsum("kd,kd->k", U, U) <= max_speed**2)):
+            return False
+        return bool(np.all(rows.lhs(U) <= rows.b + _PASS_TOL))
+
+    def _solve_plain(self, rows: Rows, U: np.ndarray, max_speed: float | None, n: int, n_obs: int
+                     ) -> _Solved | str:
+        """Exact QP on hard rows: warm active set (certified), else clarabel (polished), with retries."""
         cfg = self.config
         iterations = 0
         if cfg.solver == "auto":
@@ -274,9 +283,66 @@ class SafetyFilter:
             qp = retry if retry.ok else qp
         if not qp.ok:
             return qp.reason
-        speed = 0 if max_speed is None else int(np.sum(np.linalg.norm(qp.u, axis=1) >= max_speed - _ACTIVE_TOL))
-        return _Solved(qp.u, rows.lhs(qp.u) >= rows.b - _ACTIVE_TOL, speed, "clarabel",
-                       iterations + qp.iterations)
+        return self._finish_clarabel(rows, U, qp.u, max_speed, iterations + qp.iterations)
+
+    def _finish_clarabel(self, rows: Rows, U: np.ndarray, u: np.ndarray, max_speed: float | None,
+                         iterations: int) -> _Solved | str:
+        """Make an interior-point answer exact where possible.
+
+        "auto": the active set started from clarabel's active rows usually certifies the exact
+        optimum in one or two iterations (KKT checked). Otherwise clarabel's answer is kept,
+        projected onto the speed discs, and robots with no row near its bound and a nominal
+        inside the disc get their nominal back bit for bit (the exact optimum leaves them alone).
+        """
+        cfg = self.config
+        near = rows.lhs(u) >= rows.b - _ACTIVE_TOL
+        if cfg.solver == "auto":
+            res = solve_active_set(rows, U, max_speed, near, cfg.max_active_set_iterations)
+            iterations += res.iterations
+            if res.ok:
+                return _Solved(res.u, res.active, int(res.speed_active.sum()), "clarabel+active-set", iterations)
+        vmax = np.inf if max_speed is None else float(max_speed)
+        out = clip_speed(u, vmax)
+        touched = np.zeros(U.shape[0], dtype=bool)
+        touched[rows.i[near]] = True
+        touched[rows.jj[near]] = True
+        free = ~touched & (np.einsum("kd,kd->k", U, U) < (vmax - _ACTIVE_TOL) ** 2)
+        if free.any():
+            trial = out.copy()
+            trial[free] = U[free]
+            if np.all(rows.lhs(trial) <= np.maximum(rows.b, rows.lhs(out))):
+                out = trial
+        viol = float(np.max(rows.lhs(out) - rows.b, initial=0.0))
+        if viol > _CLARABEL_FEAS:
+            return f"solver answer violates a row by {viol:.2e} m/s"
+        speed = 0 if max_speed is None else int(np.sum(np.linalg.norm(out, axis=1) >= max_speed - _ACTIVE_TOL))
+        return _Solved(out, rows.lhs(out) >= rows.b - _ACTIVE_TOL, speed, "clarabel", iterations)
+
+    def _solve_soft(self, rows: Rows, unsafe: np.ndarray, U: np.ndarray, max_speed: float | None
+                    ) -> _Solved | str:
+        """Recovery when the capped plain rows are infeasible: hard "no further approach" rows
+        (b = max(b, 0), always feasible: u = 0 meets them) and slack-penalised separation
+        targets at the capped bound, by clarabel, retried at a 10× looser tolerance."""
+        cfg = self.config
+        soft = np.flatnonzero(unsafe)
+        b_hard = np.where(unsafe, np.maximum(rows.b, 0.0), rows.b)
+        b_soft = np.maximum(rows.b[soft], -cfg.recovery_speed)
+        iterations = 0
+        for tol in (cfg.clarabel_tol, 10 * cfg.clarabel_tol):
+            res = solve_qp(rows, U, max_speed, b_hard=b_hard, soft=soft, b_soft=b_soft,
+                           soft_weight=cfg.recovery_weight, max_iter=cfg.clarabel_max_iter, tol=tol)
+            iterations += res.iterations
+            if res.ok:
+                break
+        if not res.ok:
+            return res.reason
+        hard = dataclasses.replace(rows, b=b_hard)
+        out = clip_speed(res.u, np.inf if max_speed is None else float(max_speed))
+        viol = float(np.max(hard.lhs(out) - b_hard, initial=0.0))
+        if viol > _CLARABEL_FEAS:
+            return f"solver answer violates a row by {viol:.2e} m/s"
+        speed = 0 if max_speed is None else int(np.sum(np.linalg.norm(out, axis=1) >= max_speed - _ACTIVE_TOL))
+        return _Solved(out, hard.lhs(out) >= b_hard - _ACTIVE_TOL, speed, "clarabel", iterations)
 
     def _solve_distributed(self, P, U, O, rows: Rows, max_speed: float | None, t0: float
                            ) -> tuple[np.ndarray, BarrierDiagnostics]:
