@@ -9,15 +9,19 @@ in stages, cheapest first:
 
 1. validate the input (shapes, finiteness) — anything wrong stops the robots;
 2. build only the rows that can bind (k-d tree, ``constraints.py``);
-3. **pass-through**: if û satisfies every row and every speed bound, return a
-   copy of û (bit-for-bit): the filter never perturbs a safe command;
-4. robots already inside the unsafe set (h < 0) and the clusters (connected
-   components of the row graph) they belong to are solved by clarabel with
-   hard "no further approach" rows and slack-penalised separation targets;
-5. every other robot goes to the active-set solver, warm-started from the
-   previous tick's active rows and certified by the KKT conditions, when the
-   starting working set is small (``BarrierConfig.active_set_max_rows``);
-   clarabel solves large working sets and whatever the active set cannot certify.
+3. **pass-through**: if û satisfies every row (to the certification tolerance, 1e-10 m/s)
+   and every speed bound, return a copy of û (bit-for-bit): the filter never perturbs a
+   safe command, and every answer is a fixed point;
+4. robots already inside the unsafe set (h < 0): their rows keep the plain barrier bound
+   (the answer is then the plain QP's, as with the Robotarium's barrier), except that deep
+   overlaps (``BarrierConfig.recovery_depth``) demand ``recovery_speed``; the clusters
+   (connected components of the row graph) holding them are solved apart, and only if
+   their rows are infeasible by the soft form ("no further approach" + separation targets);
+5. everything is solved exactly: the active-set solver, warm-started from the previous
+   tick's active rows and certified by the KKT conditions, when the starting working set
+   is small (``BarrierConfig.active_set_max_rows``); otherwise clarabel, whose answer is
+   polished by the active set from clarabel's active rows (certified), or else projected
+   onto the speed discs with robots no row touches given their nominal exactly.
 
 Every solver status is checked. On any failure (infeasible, iteration limit,
 numerical trouble, NaN/inf or malformed input) every robot gets a zero command
