@@ -51,7 +51,7 @@ def test_config_file_sets_everything(tmp_path) -> None:
 
 
 @pytest.mark.parametrize("body, message", [
-    ("[console]\nrobots = -3\n", "n_robots"),
+    ("[console]\nrobots = -3\n", "[console] robots"),
     ("[console]\nspeed = 3\n", "unknown key(s) ['speed'] in [console]"),
     ("[safety]\ngamma = 1e6\n", "[safety]: gamma"),
     ("[behaviour]\nlaw = 'magic'\n", "law"),

@@ -13,6 +13,7 @@ from swarmdeck.console.runtime.loop import ControlLoop, DensityParams, LoopConfi
 def make_loop(**kw) -> ControlLoop:
     kw.setdefault("seed", 7)
     kw.setdefault("n_robots", 8)
+    kw.setdefault("script_budget", 0.5)  # scripts here return at once; the budget has its own tests
     return ControlLoop(LoopConfig(**kw))
 
 

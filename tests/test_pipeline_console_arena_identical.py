@@ -44,7 +44,7 @@ def ring(n: int = 6) -> np.ndarray:
 def console(tmp_path, robots, source=None) -> ControlLoop:
     script = tmp_path / "nominal.py"
     script.write_text(NOMINAL)
-    return ControlLoop(LoopConfig(n_robots=robots.n_robots, behaviour=f"script:{script}"),
+    return ControlLoop(LoopConfig(n_robots=robots.n_robots, behaviour=f"script:{script}", script_budget=0.5),
                        source=source if source is not None else robots, sink=robots)
 
 

@@ -23,6 +23,7 @@ from typing import Any, Protocol
 import numpy as np
 from numpy.typing import NDArray
 
+from swarmdeck.console.runtime.deadline import DeadlineCaller
 from swarmdeck.coverage.graphs import complete_laplacian, rigid_formation
 from swarmdeck.coverage.group import consensus, formation_control
 from swarmdeck.devices.controllers import si_position_controller
@@ -206,16 +207,31 @@ class Script:
 
     ``poses`` is a fresh ``(N, 3)`` copy, ``t`` the run time in s. Whatever the
     function raises or returns is checked by the loop: robots stop, the
-    console shows the message, the loop keeps running.
+    console shows the message, the loop keeps running. The function runs on a
+    worker thread with a deadline of ``budget`` s per tick
+    (:class:`~swarmdeck.console.runtime.deadline.DeadlineCaller`): a call that
+    takes longer is abandoned for the tick (TickBudgetExceeded: robots stop), and
+    while it still runs every later tick is abandoned at once.
     """
 
-    def __init__(self, path: str | Path) -> None:
+    def __init__(self, path: str | Path, budget: float = 0.0165) -> None:
         self.path = Path(path)
         self.name = f"script:{path}"
         self.func = load_script(self.path)
+        self.budget = float(budget)
+        self.caller = DeadlineCaller(f"swarmdeck-script-{self.path.name}")
 
     def __call__(self, tick: TickInput) -> tuple[Any, None]:
-        return self.func(np.array(tick.poses), float(tick.t)), None
+        return self.caller.call(self.func, np.array(tick.poses), float(tick.t), budget=self.budget), None
+
+    def health(self) -> str:
+        """The console's health line: ticks abandoned to the budget, and whether a call still hangs."""
+        c = self.caller
+        line = f"budget {self.budget * 1e3:.0f} ms, {c.abandoned} ticks abandoned"
+        return line + (" (a call is still running)" if c.busy else "")
+
+    def close(self) -> None:
+        self.caller.close()
 
 
 def load_script(path: Path) -> Callable[..., Any]:
@@ -240,8 +256,9 @@ def load_script(path: Path) -> Callable[..., Any]:
 
 
 def make_behaviour(name: str, params: BehaviourParams, bounds: tuple[float, float, float, float],
-                   max_speed: float, safety_distance: float) -> Behaviour:
-    """The behaviour called ``name`` (see the module docstring); BehaviourError for unknown names."""
+                   max_speed: float, safety_distance: float, *, script_budget: float = 0.0165) -> Behaviour:
+    """The behaviour called ``name`` (see the module docstring); BehaviourError for unknown names.
+    ``script_budget``: s a ``script:`` behaviour may take per tick (:class:`Script`)."""
     if name == "coverage":
         return Coverage(params, bounds, max_speed, safety_distance)
     if name == "rendezvous":
@@ -254,5 +271,5 @@ def make_behaviour(name: str, params: BehaviourParams, bounds: tuple[float, floa
         path = name[len("script:"):]
         if not path:
             raise BehaviourError("script: needs a path, e.g. --behaviour script:my_behaviour.py")
-        return Script(path)
+        return Script(path, script_budget)
     raise BehaviourError(f"unknown behaviour {name!r}: use one of {', '.join(BUILTIN)} or script:PATH")

@@ -3,7 +3,8 @@
 Tables (every key optional; defaults from REFERENCE.md)::
 
     [console]   host = "127.0.0.1", port = 8080, robots = 12, behaviour = "coverage",
-                seed = 1, dt = 0.033, max_speed = 0.2, bounds = [-1.6, 1.6, -1.0, 1.0]
+                seed = 1, dt = 0.033, max_speed = 0.2, bounds = [-1.6, 1.6, -1.0, 1.0],
+                script_budget = dt / 2 (s a script: behaviour may take per tick)
     [behaviour] kappa, law, gain, formation_edge, formation_gain, goals = [[x, y], ...],
                 goal_centre = [x, y]
     [safety]    enabled, safety_distance, gamma, class_k
@@ -23,7 +24,10 @@ from swarmdeck.console.runtime.behaviours import BehaviourParams
 from swarmdeck.console.runtime.loop import DensityParams, LoopConfig, SafetyParams
 
 TABLES = ("console", "behaviour", "safety", "density", "inputs")
-CONSOLE_KEYS = ("host", "port", "robots", "behaviour", "seed", "dt", "max_speed", "bounds")
+CONSOLE_KEYS = ("host", "port", "robots", "behaviour", "seed", "dt", "max_speed", "bounds", "script_budget")
+# [console] key -> LoopConfig field (errors name the key, not the field)
+LOOP_KEYS = {"robots": "n_robots", "behaviour": "behaviour", "seed": "seed", "dt": "dt", "max_speed": "max_speed",
+             "bounds": "bounds", "script_budget": "script_budget"}
 
 
 class ConfigFileError(ValueError):
@@ -85,11 +89,17 @@ def load_settings(path: str | Path) -> ConsoleSettings:
     sp = _build(SafetyParams, _table(doc, "safety", p), "safety", p, {"gamma": float, "safety_distance": float})
     dp = _build(DensityParams, _table(doc, "density", p), "density", p)
     loop_kw: dict[str, Any] = {"behaviour_params": bp, "safety": sp, "density": dp}
+    for key, target in LOOP_KEYS.items():  # one key at a time, so the error names the key written
+        if key not in con:
+            continue
+        try:
+            value = tuple(float(b) for b in con[key]) if key == "bounds" else con[key]
+            LoopConfig(**{target: value})
+        except (TypeError, ValueError) as exc:
+            message = str(exc).replace(target, key) if target != key else str(exc)
+            raise ConfigFileError(f"{p}: [console] {key} = {con[key]!r}: {message}") from None
+        loop_kw[target] = value
     try:
-        for key, target in (("robots", "n_robots"), ("behaviour", "behaviour"), ("seed", "seed"), ("dt", "dt"),
-                            ("max_speed", "max_speed"), ("bounds", "bounds")):
-            if key in con:
-                loop_kw[target] = tuple(float(b) for b in con[key]) if key == "bounds" else con[key]
         loop = LoopConfig(**loop_kw)
     except (TypeError, ValueError) as exc:
         raise ConfigFileError(f"{p}: [console]: {exc}") from None

@@ -116,6 +116,14 @@ class LoopConfig:
     behaviour_params: BehaviourParams = field(default_factory=BehaviourParams)
     safety: SafetyParams = field(default_factory=SafetyParams)
     density: DensityParams = field(default_factory=DensityParams)
+    script_budget: float | None = None
+
+    @property
+    def script_budget_s(self) -> float:
+        """How long a tick waits for a ``script:`` behaviour, s: ``script_budget``, or half of ``dt``
+        (the other half is the loop's own work). A script that takes longer is abandoned for the tick
+        (robots stopped; :mod:`swarmdeck.console.runtime.deadline`)."""
+        return 0.5 * self.dt if self.script_budget is None else float(self.script_budget)
 
     def __post_init__(self) -> None:
         if isinstance(self.n_robots, bool) or not isinstance(self.n_robots, int) or not 1 <= self.n_robots <= 200:
@@ -125,6 +133,9 @@ class LoopConfig:
         if not (math.isfinite(self.max_speed) and 0 < self.max_speed <= 1.0):
             raise ValueError(f"max_speed must be in (0, 1] m/s, got {self.max_speed!r}")
         ArenaConfig(bounds=self.bounds, dt=self.dt)  # validates bounds
+        b = self.script_budget
+        if b is not None and (isinstance(b, bool) or not isinstance(b, (int, float)) or not 0 < b <= 0.5):
+            raise ValueError(f"script_budget must be in (0, 0.5] s, got {b!r}")
 
 
 class ConsoleDensity:
@@ -168,6 +179,13 @@ def _checked(sensed: Any) -> SensedPoses:
         poses = np.where(finite[:, None], poses, 0.0)
         seen = seen & finite
     return SensedPoses(ids, poses, seen)
+
+
+def _close_behaviour(b: Behaviour) -> None:
+    """Release what a replaced behaviour holds (a script's worker thread, once idle)."""
+    close = getattr(b, "close", None)
+    if close is not None:
+        close()
 
 
 class _Stage:
@@ -247,7 +265,8 @@ class ControlLoop:
 
     # ------------------------------------------------------------------ construction helpers
     def _make_behaviour(self, name: str, params: BehaviourParams, safety: SafetyParams) -> Behaviour:
-        return make_behaviour(name, params, self.config.bounds, self.config.max_speed, safety.safety_distance)
+        return make_behaviour(name, params, self.config.bounds, self.config.max_speed, safety.safety_distance,
+                              script_budget=self.config.script_budget_s)
 
     def _make_filter(self, p: SafetyParams) -> Any:
         """The unicycle barrier: the QP on the look-ahead points plus each robot's four wheel-limit
@@ -326,9 +345,10 @@ class ControlLoop:
         """Switch behaviour; raises BehaviourError (nothing changes) for an unknown name or a bad script."""
         b = self._make_behaviour(name, self._behaviour_params, self._safety_params)
         with self._lock:
-            self._behaviour = b
+            old, self._behaviour = self._behaviour, b
             self._alerts.pop("behaviour", None)
             self._post(f"behaviour: {b.name}")
+        _close_behaviour(old)
 
     def set_params(self, **changes: Any) -> BehaviourParams:
         """Change behaviour parameters (see BehaviourParams); BehaviourError/ValueError for bad values."""
@@ -540,6 +560,9 @@ class ControlLoop:
         """One line per port and per registered health function (a failing one shows its error)."""
         with self._lock:
             fns = [("robots", self.source.health)]
+            script_health = getattr(self._behaviour, "health", None)
+            if script_health is not None:
+                fns.append(("script", script_health))
             if self.source is not self.sink:
                 fns.append(("commands", self.sink.health))
             fns += list(self._health_fns.items())
