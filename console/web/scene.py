@@ -9,7 +9,8 @@ in the tick index resets them) and the geometry caches that depend on N.
 
 Layers (``LAYERS``), each toggleable with :meth:`ArenaScene.set_layer`:
 camera (the rectified overhead image of the Frame's ``image_ref``, when an
-image provider is given), grid, density heat map, Voronoi edges, filled cells, centroids, robots,
+image provider is given; the density heat map is then drawn translucent over
+it), grid, density heat map, Voronoi edges, filled cells, centroids, robots,
 labels, nominal arrows, safe arrows, barrier pairs, safety discs, trails,
 contacts. Colours: robots blue; robots whose command the barrier changed
 orange; stopped (emergency stop) red; paused slate; not seen grey.
@@ -62,7 +63,7 @@ class SceneStyle:
     trail_every: int = 3  # ticks between trail samples
     disc_segments: int = 20
     label_offset: float = 0.07
-    label_step: float = 0.01  # m a robot moves before its label is moved
+    overlay_alpha: tuple[float, float] = (0.15, 0.6)  # heat map opacity over the camera picture, φ = 0 … max φ
 
 
 def robot_mesh(radius: float) -> tuple[NDArray[np.float32], NDArray[np.uint32]]:
@@ -77,8 +78,13 @@ def robot_mesh(radius: float) -> tuple[NDArray[np.float32], NDArray[np.uint32]]:
     return verts, faces
 
 
-def heatmap(density: Any, bounds: tuple[float, float, float, float], px_per_m: float) -> NDArray[np.uint8]:
-    """RGB image (H, W, 3) of φ over the arena, row 0 at y_max, colour-mapped by φ / max φ."""
+def heatmap(density: Any, bounds: tuple[float, float, float, float], px_per_m: float,
+            alpha: tuple[float, float] | None = None) -> NDArray[np.uint8]:
+    """RGB image (H, W, 3) of φ over the arena, row 0 at y_max, colour-mapped by φ / max φ.
+
+    With ``alpha = (lo, hi)`` (opacities in [0, 1]): RGBA (H, W, 4) with opacity rising linearly
+    from ``lo`` at φ = 0 to ``hi`` at max φ, to lay over the camera picture.
+    """
     x0, x1, y0, y1 = bounds
     w = max(2, int(round((x1 - x0) * px_per_m)))
     h = max(2, int(round((y1 - y0) * px_per_m)))
@@ -88,7 +94,10 @@ def heatmap(density: Any, bounds: tuple[float, float, float, float], px_per_m: f
     phi = density.evaluate(np.stack((gx, gy), axis=-1))
     top = float(phi.max())
     idx = np.zeros(phi.shape, dtype=np.intp) if top <= 0 else np.clip(phi / top * 255.0, 0, 255).astype(np.intp)
-    return LUT[idx]
+    if alpha is None:
+        return LUT[idx]
+    a = np.round(255.0 * (alpha[0] + (alpha[1] - alpha[0]) * idx / 255.0)).astype(np.uint8)
+    return np.concatenate((LUT[idx], a[:, :, None]), axis=2)
 
 
 def _segments_2d(a: NDArray[np.float64], b: NDArray[np.float64], z: float) -> NDArray[np.float32]:
@@ -182,7 +191,9 @@ class ArenaScene:
                                       cell_color=(215, 215, 215), section_color=(170, 170, 170),
                                       position=(cx, cy, -0.004), shadow_opacity=0.0)
         blank = np.full((8, 8, 3), 250, dtype=np.uint8)
-        self._h["density"] = sc.add_image("/density", blank, render_width=w, render_height=h, format="jpeg",
+        # format "auto": JPEG for the opaque heat map, PNG (keeps alpha) for the translucent one over the
+        # camera picture, which lies below it (z = -0.012)
+        self._h["density"] = sc.add_image("/density", blank, render_width=w, render_height=h, format="auto",
                                           jpeg_quality=90, position=(cx, cy, -0.01), wxyz=(0.0, 1.0, 0.0, 0.0),
                                           cast_shadow=False, receive_shadow=False)
         self._h["voronoi"] = sc.add_line_segments("/voronoi", _EMPTY_SEG, (60, 60, 60), thickness=0.006)
@@ -266,9 +277,9 @@ class ArenaScene:
             h.batched_wxyzs = _yaw_wxyz(poses[:, 2])
             h.batched_colors = robot_colors(frame)
         if v["labels"]:
-            # One message per label: only move labels whose robot moved more than label_step since
-            # the label was last placed (cheap at N = 100; a label lags its robot by < label_step).
-            moved = np.flatnonzero(np.linalg.norm(poses[:, :2] - self._label_xy, axis=1) > st.label_step)
+            # One message per label, in the same atomic update as the robots: every label whose robot
+            # moved at all is moved to it (a "moved enough" threshold left labels trailing their robots).
+            moved = np.flatnonzero(np.any(poses[:, :2] != self._label_xy, axis=1))
             for i in moved:
                 self._labels[i].position = (float(poses[i, 0]), float(poses[i, 1]) + st.label_offset, 0.02)
             self._label_xy[moved] = poses[moved, :2]
@@ -276,7 +287,9 @@ class ArenaScene:
                 and frame.image_ref != self._image_ref:
             self._draw_camera(frame.image_ref)
         if v["density"] and frame.density is not None:
-            self._h["density"].image = heatmap(frame.density, self.bounds, st.heatmap_px_per_m)
+            over_camera = v["camera"] and self._h.get("camera") is not None
+            self._h["density"].image = heatmap(frame.density, self.bounds, st.heatmap_px_per_m,
+                                               st.overlay_alpha if over_camera else None)
         cov = frame.coverage
         if v["voronoi"]:
             if cov is not None and len(cov.edges):
@@ -318,7 +331,8 @@ class ArenaScene:
             self._h["contacts"].points = cp
 
     def _draw_camera(self, ref: str) -> None:
-        """The overhead image (RGB, row 0 at y_max, covering its bounds) just above the heat map."""
+        """The overhead image (RGB, row 0 at y_max, covering its bounds) just below the heat map, which
+        is then drawn translucent over it."""
         got = self.image_provider(ref)
         if got is None:
             return
@@ -328,7 +342,7 @@ class ArenaScene:
         if h is None:
             self._h["camera"] = self.scene.add_image(
                 "/camera", np.asarray(img), render_width=x1 - x0, render_height=y1 - y0, format="jpeg",
-                jpeg_quality=80, position=((x0 + x1) / 2, (y0 + y1) / 2, -0.008), wxyz=(0.0, 1.0, 0.0, 0.0),
+                jpeg_quality=80, position=((x0 + x1) / 2, (y0 + y1) / 2, -0.012), wxyz=(0.0, 1.0, 0.0, 0.0),
                 cast_shadow=False, receive_shadow=False, visible=self.visible["camera"])
         else:
             h.image = np.asarray(img)
