@@ -62,7 +62,8 @@ class SimulatedRobots:
 
     def health(self) -> str:
         rep = self.sim.report
-        return f"sim t={self.sim.time:.1f} s, collision steps {rep.steps_with_collision}"
+        # the simulator's own clock: it stands still while paused, so it is labelled apart from session t
+        return f"simulator clock {self.sim.time:.1f} s, collision steps {rep.steps_with_collision}"
 
     def close(self) -> None:
         """Nothing to release."""

@@ -8,7 +8,8 @@ import os
 from swarmdeck.console.cli import UsageError
 
 NAME = "info"
-HELP = "summarise a recorded session (start, duration, robots, channels, damage)"
+HELP = ("summarise a recorded session (start, duration, robots, channels, damage); event times are "
+        "session time, s since the first frame, as `play --start` and the player's timeline take them")
 ORDER = 62
 
 
@@ -31,7 +32,7 @@ def summarise(path: str) -> dict:
         counts = rec.message_counts()
         events = []
         for e in rec.events():
-            events.append(f"{e.t:.3f} s [{e.kind}] {e.text}")
+            events.append(f"{e.t:.3f} s [{e.kind}] {e.text}")  # session time: `play --start` seeks there
             if len(events) >= 10:
                 break
         n_datagrams = counts.get(TOPIC_DATAGRAM, 0)
@@ -86,6 +87,8 @@ def main(args: argparse.Namespace) -> int:
     print(f"  format      recording {s['recording_format']}, frame {s['frame_format']}, written by {s['writer']}")
     for w in s["warnings"]:
         print(f"  warning     {w}")
+    if s["first_events"]:
+        print("  events      (t = session time, s since the first frame: `swarmdeck play FILE --start t`)")
     for e in s["first_events"]:
         print(f"  event       {e}")
     if result is not None:

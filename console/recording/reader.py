@@ -11,8 +11,10 @@ undecodable) are skipped and listed in :attr:`Recording.warnings`.
 Seeking (:meth:`Recording.frame_at`) bisects the chunk index by time and
 decodes one small chunk (a few hundred ms of data), so it costs the same on a
 one-hour file as on a one-minute one. Times in this API are seconds since the
-recording's first frame ("recording time"); ``Frame.time`` keeps the loop's
-clock.
+recording's first frame ("recording time", which is the console's session time
+when the recording started with the console: the one time base a user sees and
+seeks to, see :mod:`swarmdeck.console.runtime.loop`); ``Frame.time``,
+``RecordedEvent.console_t`` and ``RecordedDatagram.t`` keep the loop's clock.
 """
 from __future__ import annotations
 
@@ -87,11 +89,13 @@ class RecordedDatagram:
 
 @dataclass(frozen=True)
 class RecordedEvent:
-    """``t`` s console time, ``kind`` ("operator", "frame", "recorder", …), ``text``."""
+    """``t``: recording time, s since the first frame (session time: what ``swarmdeck play`` seeks
+    to); ``kind`` ("operator", "frame", "recorder", …); ``text``; ``console_t``: the loop's clock, s."""
 
     t: float
     kind: str
     text: str
+    console_t: float = float("nan")
 
 
 def _read_head(f: Any, pos: int, size: int) -> tuple[int, int] | None:
@@ -526,7 +530,7 @@ class Recording:
         for ns, data in self._messages(TOPIC_EVENT, start, end):
             try:
                 d = json.loads(data)
-                yield RecordedEvent(float(d["t"]), str(d["kind"]), str(d["text"]))
+                yield RecordedEvent(self.rel(ns), str(d["kind"]), str(d["text"]), float(d["t"]))
             except (ValueError, KeyError, TypeError):
                 continue
 

@@ -28,6 +28,16 @@ raises is counted in :attr:`ControlLoop.errors`, raises a visible alert in the
 Frame (cleared when the stage next succeeds), and — for sense, control and
 safety — every robot gets zero for that tick; the loop keeps running.
 
+Clocks. The one time base a user sees and seeks to is *session time*: seconds
+since the session's first Frame (``Frame.time − ControlLoop.time_origin``). The
+panel's status line ``t``, its plots' x axis and its alert times, ``swarmdeck
+info``'s event times and ``swarmdeck play``'s timeline (``--start``) are all in
+it (a recording starts with the console, so recording time is session time).
+The others are labelled where they appear: ``Frame.time`` is the loop's clock
+(monotonic, arbitrary origin; input datagrams are stamped with it); ``run t``
+(``Frame.run_time``) is the behaviours' time, which stops while paused; the
+simulator's health line shows its own clock, which also stops while paused.
+
 Operator commands (:meth:`run`, :meth:`pause`, :meth:`step`, :meth:`estop`,
 behaviour and parameter changes, density bumps) are thread-safe and take
 effect at the start of the next tick. The emergency stop zeroes every command
@@ -252,6 +262,7 @@ class ControlLoop:
         self._steps = 0
         self._tick = 0
         self._run_time = 0.0
+        self._time_origin: float | None = None
         self._alerts: dict[str, str] = {}
         self._events: list[str] = []
         self._listeners: list[FrameListener] = []
@@ -297,6 +308,12 @@ class ControlLoop:
     def run_time(self) -> float:
         """Behaviour time, s: advances by dt only on ticks with motion."""
         return self._run_time
+
+    @property
+    def time_origin(self) -> float | None:
+        """The loop clock at the first tick (``Frame.time`` of the first Frame), s; None before it.
+        Session time = ``Frame.time − time_origin`` (see the module docstring, "Clocks")."""
+        return self._time_origin
 
     @property
     def pending_steps(self) -> int:
@@ -482,6 +499,8 @@ class ControlLoop:
                 self._steps -= 1
             run_state, density_params = self.run_state, self.density.params
         now = self._clock() if self._clock is not None else self._tick * self.config.dt
+        if self._time_origin is None:
+            self._time_origin = now
 
         # 1. sense: this tick's poses (if the source fails: the last poses, nobody seen)
         with self._stage("source", "pose source failed") as sense:

@@ -23,6 +23,7 @@ from swarmdeck.console.runtime.loop import ControlLoop
 from swarmdeck.console.web.scene import LAYERS, ArenaScene
 
 PLOT_WINDOW = 300  # samples kept in the live plots
+RECENT = 5  # alerts and notices listed (with their session times) under the status line
 
 
 def ray_to_floor(origin: Any, direction: Any) -> tuple[float, float] | None:
@@ -58,9 +59,9 @@ class ConsoleGui:
                                           ("t", "dmin", "ds", "active", "H", "mpc", "tick_ms", "solve_ms")}
         self._last_gui_update = 0.0
         self._last_tick_time: float | None = None
-        self._t0: float | None = None
         self._rate = 0.0
         self.messages: deque[str] = deque(maxlen=6)
+        self.recent: deque[tuple[float, str]] = deque(maxlen=RECENT)  # (session t s, text), newest last
 
         gui.configure_theme(show_share_button=False, control_width="large", dark_mode=False,
                             brand_color=(40, 100, 200))
@@ -149,22 +150,22 @@ class ConsoleGui:
             empty = (np.zeros(1), np.zeros(1))
             self.plot_dist = gui.add_uplot(
                 (np.zeros(1), np.zeros(1), np.zeros(1)),
-                ({"label": "t (s)"}, {"label": "min distance (m)", "stroke": "#1f77b4", "width": 2},
+                ({"label": "t (s, session)"}, {"label": "min distance (m)", "stroke": "#1f77b4", "width": 2},
                  {"label": "D_s", "stroke": "#d62728", "width": 1, "dash": [6, 4]}),
                 title="Minimum distance vs D_s", aspect=2.0, scales={"x": {"time": False}})
             self.plot_active = gui.add_uplot(
-                empty, ({"label": "t (s)"}, {"label": "active constraints", "stroke": "#ff7f0e", "width": 2}),
+                empty, ({"label": "t (s, session)"}, {"label": "active constraints", "stroke": "#ff7f0e", "width": 2}),
                 title="Active barrier constraints", aspect=2.5, scales={"x": {"time": False}})
             self.plot_H = gui.add_uplot(
                 (np.zeros(1), np.zeros(1), np.zeros(1)),
-                ({"label": "t (s)"}, {"label": "H", "stroke": "#2ca02c", "width": 2, "scale": "H"},
+                ({"label": "t (s, session)"}, {"label": "H", "stroke": "#2ca02c", "width": 2, "scale": "H"},
                  {"label": "mean ‖p−c‖ (m)", "stroke": "#9467bd", "width": 2, "scale": "m"}),
                 title="Coverage cost H(t) and mean ‖p − c‖", aspect=2.0,
                 scales={"x": {"time": False}, "H": {"auto": True}, "m": {"auto": True}},
                 axes=({}, {"scale": "H"}, {"scale": "m", "side": 1}))
             self.plot_tick = gui.add_uplot(
                 (np.zeros(1), np.zeros(1), np.zeros(1)),
-                ({"label": "t (s)"}, {"label": "tick (ms)", "stroke": "#17becf", "width": 2},
+                ({"label": "t (s, session)"}, {"label": "tick (ms)", "stroke": "#17becf", "width": 2},
                  {"label": "barrier solve (ms)", "stroke": "#8c564b", "width": 1}),
                 title="Tick time", aspect=2.5, scales={"x": {"time": False}})
 
@@ -376,11 +377,18 @@ class ConsoleGui:
         with self._lock:  # the viewer thread reads the series while the loop thread appends
             self._append(frame, b, c)
 
+    def session_time(self, frame: Frame) -> float:
+        """s since the session's first Frame: the one time base of the panel, ``swarmdeck info`` and
+        ``swarmdeck play`` (module docstring of :mod:`swarmdeck.console.runtime.loop`, "Clocks")."""
+        origin = self.loop.time_origin
+        return frame.time - (frame.time if origin is None else origin)
+
     def _append(self, frame: Frame, b: Any, c: Any) -> None:
         s = self._series
-        if self._t0 is None:
-            self._t0 = frame.time
-        s["t"].append(frame.time - self._t0)  # seconds since the panel saw its first frame
+        t = self.session_time(frame)
+        s["t"].append(t)
+        for text in frame.events:
+            self.recent.append((t, text))
         s["dmin"].append(b.min_distance if b is not None and math.isfinite(b.min_distance) else math.nan)
         s["ds"].append(frame.params.get("safety_distance", math.nan))
         s["active"].append(b.n_active if b is not None else 0)
@@ -404,13 +412,20 @@ class ConsoleGui:
             self.plot_tick.data = (s["t"], s["tick_ms"], s["solve_ms"])
         self.status.content = self.status_line(frame)
         self._sync_widgets(frame)
+        self.alerts.content = self.alert_text(frame)
+
+    def alert_text(self, frame: Frame) -> str:
+        """The alerts standing now (⚠), then the last :data:`RECENT` alerts and notices with their
+        session times (older ones drop off, so nothing piles up under the status line)."""
         alerts = list(frame.alerts)
         if frame.coverage is not None and frame.coverage.packing_warning:
             alerts.append(f"packing: {frame.coverage.packing_warning}")
         text = "\n".join(f"- ⚠ {a}" for a in alerts)
-        if self.messages:
-            text += ("\n\n" if text else "") + "\n".join(f"- {m}" for m in list(self.messages)[-3:])
-        self.alerts.content = text
+        with self._lock:
+            recent = list(self.recent)
+        if recent:
+            text += ("\n\n" if text else "") + "\n".join(f"- {t:.1f} s · {m}" for t, m in recent)
+        return text
 
     def _sync_widgets(self, frame: Frame) -> None:
         """Widgets follow changes made elsewhere (another tab's script, the API, a config file)."""
@@ -431,13 +446,16 @@ class ConsoleGui:
             self._reverting = False
 
     def status_line(self, frame: Frame) -> str:
-        """The status text: state, tick rate, solver time, robots, input sources and their health."""
+        """The status text: state, session time t and run time, tick rate, solver time, robots, input
+        sources and their health."""
         b = frame.barrier
         state = {"running": "RUNNING", "paused": "PAUSED", "estop": "**EMERGENCY STOP**"}[frame.run_state]
+        t, run_t = self.session_time(frame), frame.run_time
         solve = f"{1e3 * b.solve_time_s:.1f} ms" if b is not None and b.enabled else "off"
         dmin = f"{b.min_distance:.3f} m" if b is not None and math.isfinite(b.min_distance) else "–"
         lines = [
-            f"**{state}** · {frame.behaviour} · N = {frame.n} · t = {frame.run_time:.1f} s",
+            f"**{state}** · {frame.behaviour} · N = {frame.n} · t = {t:.1f} s · run t = {run_t:.1f} s "
+            "(behaviour clock, stops while paused)",
             f"{self._rate:.1f} ticks/s · tick {1e3 * frame.timing.get('total', 0.0):.1f} ms · barrier {solve}"
             f" · active {b.n_active if b is not None else 0} · min dist {dmin}",
         ]

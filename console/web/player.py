@@ -227,7 +227,7 @@ class PlayerApp:
         self.status = gui.add_markdown("")
         dt = max(first.dt, 1e-3)
         with gui.add_folder("Timeline"):
-            self.slider = gui.add_slider("Time (s)", min=0.0, max=max(self.player.duration, dt), step=dt,
+            self.slider = gui.add_slider("t (s, session)", min=0.0, max=max(self.player.duration, dt), step=dt,
                                          initial_value=0.0)
             self.play_button = gui.add_button("Play", icon=None)
             self.back_button = gui.add_button("◀ Step")
@@ -247,16 +247,16 @@ class PlayerApp:
         with gui.add_folder("Plots"):
             self.plot_dist = gui.add_uplot(
                 (np.zeros(1), np.zeros(1), np.zeros(1)),
-                ({"label": "t (s)"}, {"label": "min distance (m)", "stroke": "#1f77b4", "width": 2},
+                ({"label": "t (s, session)"}, {"label": "min distance (m)", "stroke": "#1f77b4", "width": 2},
                  {"label": "D_s (m)", "stroke": "#d62728", "width": 1, "dash": [6, 4]}),
                 title="Minimum distance vs D_s", aspect=2.0, scales={"x": {"time": False}})
             self.plot_active = gui.add_uplot(
                 (np.zeros(1), np.zeros(1)),
-                ({"label": "t (s)"}, {"label": "active constraints", "stroke": "#ff7f0e", "width": 2}),
+                ({"label": "t (s, session)"}, {"label": "active constraints", "stroke": "#ff7f0e", "width": 2}),
                 title="Active barrier constraints", aspect=2.5, scales={"x": {"time": False}})
             self.plot_H = gui.add_uplot(
                 (np.zeros(1), np.zeros(1)),
-                ({"label": "t (s)"}, {"label": "H", "stroke": "#2ca02c", "width": 2}),
+                ({"label": "t (s, session)"}, {"label": "H", "stroke": "#2ca02c", "width": 2}),
                 title="Coverage cost H(t)", aspect=2.0, scales={"x": {"time": False}})
         self.events = gui.add_markdown("")
         self.slider.on_update(lambda _e: self._on_slider())
@@ -344,8 +344,9 @@ class PlayerApp:
         self.plot_active.data = tuple(np.asarray(s[k], dtype=float) for k in ("t", "active"))
         self.plot_H.data = tuple(np.asarray(s[k], dtype=float) for k in ("t", "H"))
         state = "playing" if p.playing else "paused"
-        self.status.content = (f"**{state}** {p.rate:g}x · t = {p.frame_time:.2f} / {p.duration:.2f} s · "
-                               f"tick {frame.tick} · {frame.n} robots · {frame.behaviour} · {frame.run_state}")
+        self.status.content = (f"**{state}** {p.rate:g}x · t = {p.frame_time:.2f} / {p.duration:.2f} s "
+                               f"(session) · run t = {frame.run_time:.1f} s · tick {frame.tick} · {frame.n} robots · "
+                               f"{frame.behaviour} · {frame.run_state}")
         notes = list(frame.events) + list(frame.alerts)
         self.events.content = "\n".join(f"- {n}" for n in notes[-6:])
 
