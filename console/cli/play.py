@@ -15,7 +15,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("file", help="a .mcap recording (see `swarmdeck sessions`)")
     parser.add_argument("--host", default="127.0.0.1", help="interface to listen on (default 127.0.0.1)")
     parser.add_argument("--port", type=int, default=8080, help="port (default 8080; 0 = any free port)")
-    parser.add_argument("--start", type=float, default=0.0, metavar="S", help="start S s after the first frame")
+    parser.add_argument("--start", type=float, default=0.0, metavar="S", help="start at session time S s (s since the first frame: the times `swarmdeck info` lists)")
     parser.add_argument("--rate", type=float, default=1.0, help="playback rate 0.1–4 (default 1)")
     parser.add_argument("--loop", action="store_true", help="loop playback")
     parser.add_argument("--paused", action="store_true", help="open paused at --start")
