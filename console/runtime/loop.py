@@ -719,8 +719,9 @@ class ControlLoop:
             self._thread = None
 
     def close(self) -> None:
-        """Stop the thread, stop the robots, close the sink and the inputs."""
+        """Stop the thread, stop the robots, close the sink, the inputs and the behaviour (a script's worker)."""
         self.stop()
+        _close_behaviour(self._behaviour)
         try:
             self.sink.close()
         finally:
