@@ -5,6 +5,8 @@ asserted is counts of abandoned ticks and waits, never how long anything took.
 """
 from __future__ import annotations
 
+import sys
+
 import numpy as np
 import pytest
 
@@ -70,7 +72,9 @@ def test_deadline_caller_returns_results_and_reraises_errors() -> None:
     assert caller.call(lambda a, b: a + b, 2, 3, budget=10.0) == 5
     with pytest.raises(KeyError, match="nope"):
         caller.call(lambda: {}["nope"], budget=10.0)
-    assert caller.abandoned == 0 and caller.calls == 2 and not caller.busy
+    with pytest.raises(RuntimeError, match="SystemExit"):  # a script's sys.exit() never ends the loop
+        caller.call(sys.exit, 3, budget=10.0)
+    assert caller.abandoned == 0 and caller.calls == 3 and not caller.busy
     caller.close()
     with pytest.raises(RuntimeError, match="closed"):
         caller.call(lambda: 1, budget=1.0)

@@ -66,7 +66,8 @@ class DeadlineCaller:
             return self._running is not None or self._pending is not None
 
     def call(self, fn: Callable[..., Any], *args: Any, budget: float) -> Any:
-        """``fn(*args)`` on the worker thread; its result, or its exception re-raised.
+        """``fn(*args)`` on the worker thread; its result, or its exception re-raised (a BaseException
+        such as SystemExit as a RuntimeError naming it).
 
         Raises TickBudgetExceeded if it does not return within ``budget`` s (the
         call goes on running; see the module docstring) or if an earlier abandoned
@@ -92,8 +93,10 @@ class DeadlineCaller:
                     job.abandoned = True  # its late result will be discarded
                     raise TickBudgetExceeded(f"did not return within its tick budget of {budget * 1e3:.0f} ms; "
                                              "tick abandoned")
-        if job.error is not None:
+        if isinstance(job.error, Exception):
             raise job.error
+        if job.error is not None:  # SystemExit, KeyboardInterrupt from user code must not end the caller
+            raise RuntimeError(f"raised {type(job.error).__name__}: {job.error}") from job.error
         return job.result
 
     def wait_idle(self, timeout: float | None = None) -> bool:
