@@ -94,3 +94,18 @@ def test_deadline_caller_abandons_without_waiting_while_a_call_hangs() -> None:
     gate.set()
     assert caller.wait_idle(10.0) and caller.late == 1 and not caller.busy
     assert caller.call(lambda: 7, budget=10.0) == 7
+
+
+def test_an_idle_worker_ends_with_its_behaviour(tmp_path) -> None:
+    import gc
+
+    path = tmp_path / "quick.py"
+    path.write_text(HANGING.replace("t > 0.05", "False"))
+    loop = ControlLoop(LoopConfig(n_robots=3, seed=1, behaviour=f"script:{path}", script_budget=0.5))
+    loop.tick()
+    worker = loop._behaviour.caller._thread
+    assert worker is not None and worker.is_alive()
+    loop.set_behaviour("coverage")  # the old script is closed and dropped
+    gc.collect()
+    worker.join(10.0)
+    assert not worker.is_alive()

@@ -15,6 +15,7 @@ from __future__ import annotations
 import importlib.util
 import math
 import sys
+import weakref
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
@@ -220,6 +221,7 @@ class Script:
         self.func = load_script(self.path)
         self.budget = float(budget)
         self.caller = DeadlineCaller(f"swarmdeck-script-{self.path.name}")
+        weakref.finalize(self, self.caller.close)  # an idle worker ends with its behaviour
 
     def __call__(self, tick: TickInput) -> tuple[Any, None]:
         return self.caller.call(self.func, np.array(tick.poses), float(tick.t), budget=self.budget), None
