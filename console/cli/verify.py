@@ -16,6 +16,8 @@ ORDER = 25
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.epilog = ("verdicts: rejected | accepted (runs with the barrier) | accepted, may bypass the barrier. "
+                     "exit status: 0 accepted, 1 rejected, 2 usage or infrastructure error.")
     parser.add_argument("scripts", nargs="+", metavar="SCRIPT", help="experiment scripts (experiment(arena) or rps style)")
     parser.add_argument("--robots", type=int, default=None, metavar="N", help="declared number of robots (default: the script's)")
     parser.add_argument("--duration", type=float, default=30.0, metavar="S", help="declared duration in simulated seconds (default 30)")
