@@ -1,6 +1,7 @@
 """Benchmark: verification throughput and the sandbox's overhead (issue 15).
 
-Run: ``.venv/bin/python bench/bench_verify.py [--duration 60] [--runs 8] [--robots 20] [--repeats 3] [--no-ray]``
+Run: ``.venv/bin/python bench/bench_verify.py [--duration 60] [--runs 8] [--robots 20] [--repeats 3] [--no-ray]
+[--overhead-only]``
 (prints markdown tables).
 
 * Throughput: ``verify`` of one 20-robot, 60 s (simulated) experiment with 8 runs (each raw and
@@ -86,6 +87,7 @@ def main() -> None:
     parser.add_argument("--robots", type=int, default=20)
     parser.add_argument("--repeats", type=int, default=3)
     parser.add_argument("--no-ray", action="store_true")
+    parser.add_argument("--overhead-only", action="store_true", help="skip the throughput table")
     args = parser.parse_args()
     folder = Path(tempfile.mkdtemp())
     script = folder / "circle_swap.py"
@@ -96,6 +98,8 @@ def main() -> None:
     print(f"\n| run ({args.robots} robots, {args.duration:g} s, barrier on) | CPU s (median of {args.repeats}) |\n| --- | ---: |")
     print(f"| in-process | {inproc:.2f} |\n| sandboxed (jail + child + pipe) | {sandboxed:.2f} |")
     print(f"| overhead | {100 * (sandboxed / inproc - 1):+.1f} % |")
+    if args.overhead_only:
+        return
     config = VerificationConfig(n_robots=args.robots, duration=args.duration, runs=args.runs, seed=0)
     rows = [("local pool, 1 worker", LocalPoolExecutor(1)), ("local pool, 2 workers", LocalPoolExecutor(2))]
     if not args.no_ray:

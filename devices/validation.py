@@ -12,7 +12,6 @@ from dataclasses import dataclass, field
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-from scipy.spatial import cKDTree
 
 Bounds = tuple[float, float, float, float]
 
@@ -44,6 +43,8 @@ def out_of_bounds(poses: ArrayLike, bounds: Bounds) -> NDArray[np.bool_]:
 
 def colliding_pairs(poses: ArrayLike, rules: ValidationRules = ValidationRules()) -> NDArray[np.intp]:
     """``(K, 2)`` index pairs ``i < j`` that collide by the rps test."""
+    from scipy.spatial import cKDTree  # here, not at import: a sandboxed script's process never needs scipy
+
     p = np.asarray(poses, dtype=float)
     if p.shape[0] < 2:
         return np.empty((0, 2), dtype=np.intp)
