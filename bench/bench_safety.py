@@ -16,6 +16,9 @@ drifting), median over ticks 2…20 (warm-started active set); *pruned clarabel*
 = the same pruned rows solved by clarabel every call (``solver="clarabel"``);
 *all pairs* = the plain dense formulation (``safety.reference``), the in-process
 baseline; ratio = all pairs / cold.
+
+``--closed-loop``: issue 18 item 1 only — the warm-started filter over a closed loop against,
+on every tick, cold clarabel on the same pruned rows and a cold exact solve (same process).
 """
 from __future__ import annotations
 
@@ -86,15 +89,63 @@ def bench(n: int, scenes: int, ticks: int, baseline: bool, rng: np.random.Genera
                 methods=dict(methods), fails=fails, arena=cfg.bounds)
 
 
+def closed_loop(n: int, ticks: int, rng: np.random.Generator) -> dict:
+    """Issue 18 item 1: one filter over ``ticks`` closed-loop ticks (warm-started) against, on
+    every tick's same points and nominal, cold clarabel on the same pruned rows
+    (``solver="clarabel"``, fresh filter) and a cold exact solve (fresh ``"auto"`` filter)."""
+    cfg = config_for(n)
+    x, nominal = grid_scene(n, rng, cfg, pitch=PITCH)
+    ang = np.arctan2(nominal[:, 1], nominal[:, 0])
+    speed = np.linalg.norm(nominal, axis=1)
+    warm = SafetyFilter(cfg)
+    t_warm, t_clarabel, t_cold, diff = [], [], [], 0.0
+    methods = collections.Counter()
+    for k in range(ticks):
+        nom = np.stack([np.cos(ang), np.sin(ang)], axis=1) * speed[:, None]
+        t, (u, diag) = timed(warm.filter, x, nom)
+        tc, (_, dc) = timed(SafetyFilter(dataclasses.replace(cfg, solver="clarabel")).filter, x, nom)
+        te, (ue, de) = timed(SafetyFilter(cfg).filter, x, nom)
+        assert diag.ok and dc.ok and de.ok, (diag.status, dc.status, de.status)
+        if k:  # tick 0 is a cold start for every filter
+            t_warm.append(t)
+            t_clarabel.append(tc)
+            t_cold.append(te)
+            methods[diag.method] += 1
+            diff = max(diff, float(np.abs(u - ue).max()))
+        x = x + u * cfg.dt
+        ang = ang + rng.normal(0, 0.1, n)
+    med = lambda v: 1e3 * float(np.median(v))
+    return dict(n=n, warm=med(t_warm), clarabel=med(t_clarabel), cold=med(t_cold), diff=diff,
+                methods=dict(methods))
+
+
+def main_closed_loop(args: argparse.Namespace, rng: np.random.Generator) -> None:
+    print("| N | closed-loop ms (warm) | cold clarabel, same rows, ms | cold exact (auto) ms | "
+          "ratio clarabel / warm | max ‖warm − cold‖ m/s | closed-loop methods |")
+    print("| --- | --- | --- | --- | --- | --- | --- |")
+    for n, ticks in ((20, 60), (100, 60), (200, 40), (500, 20), (1000, 12)):
+        if args.quick:
+            ticks = max(6, ticks // 3)
+        r = closed_loop(n, ticks, rng)
+        methods = ", ".join(f"{k} {v}" for k, v in sorted(r["methods"].items()))
+        print(f"| {n} | {r['warm']:.2f} | {r['clarabel']:.2f} | {r['cold']:.2f} | "
+              f"{r['clarabel'] / r['warm']:.2f} | {r['diff']:.1e} | {methods} |", flush=True)
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--quick", action="store_true", help="fewer scenes")
     ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--closed-loop", action="store_true",
+                    help="only the closed-loop warm start against cold clarabel (issue 18 item 1)")
     args = ap.parse_args()
     rng = np.random.default_rng(args.seed)
     cpu = next((l.split(":", 1)[1].strip() for l in open("/proc/cpuinfo") if l.startswith("model name")), "?")
     print(f"# bench_safety  {time.strftime('%Y-%m-%d %H:%M UTC', time.gmtime())}  nproc={os.cpu_count()}  "
           f"cpu={cpu}  python={platform.python_version()}  load={os.getloadavg()[0]:.1f}\n")
+    if args.closed_loop:
+        main_closed_loop(args, rng)
+        return
     print("| N | arena (m) | cold ms | closed-loop ms | pruned clarabel ms | all pairs ms | ratio all pairs / cold | cold methods |")
     print("| --- | --- | --- | --- | --- | --- | --- | --- |")
     plan = [(10, 40, 20, True), (20, 40, 20, True), (50, 30, 20, True), (100, 20, 20, True),

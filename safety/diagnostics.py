@@ -28,7 +28,8 @@ class BarrierDiagnostics:
     distance of a controlled point to the arena boundary, m (negative outside).
     intervention (N,): ‖u*_i − û_i‖ in m/s. nominal_was_safe: û satisfied every
     row, so u* = û exactly.
-    method: "pass-through", "active-set", "clarabel", "clarabel+active-set" (polished), "mixed" or "fail-stop".
+    method: "pass-through", "active-set", "warm active-set" (from the previous tick's active
+    rows), "clarabel", "clarabel+active-set" (polished), "mixed" or "fail-stop".
     iterations: active-set iterations (+ clarabel's). n_clusters: connected
     components of the candidate-row graph, computed only when some robots are
     inside the unsafe set (their clusters are solved apart); 0 otherwise. n_unsafe: rows with h < 0 (robots

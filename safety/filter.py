@@ -19,7 +19,7 @@ in stages, cheapest first:
    their rows are infeasible by the soft form ("no further approach" + separation targets);
 5. everything is solved exactly: the active-set solver, warm-started from the previous
    tick's active rows and certified by the KKT conditions, when the starting working set
-   is small (``BarrierConfig.active_set_max_rows``); otherwise clarabel, whose answer is
+   is small (``BarrierConfig.active_set_max_rows``, ``warm_max_rows`` in closed loop); otherwise clarabel, whose answer is
    polished by the active set from clarabel's active rows (certified), or else projected
    onto the speed discs with robots no row touches given their nominal exactly.
 
@@ -268,12 +268,16 @@ class SafetyFilter:
             warm = None
             if self._warm_shape == (n, n_obs) and self._warm_keys.size:
                 warm = np.isin(rows.key, self._warm_keys, assume_unique=True)
-            start = int(warm.sum()) if warm is not None and warm.any() else int(np.sum(rows.lhs(U) > rows.b))
-            if start <= cfg.active_set_max_rows:
+            closed_loop = warm is not None and bool(warm.any())
+            if closed_loop:  # the previous tick's active rows: few iterations while they are few
+                start, limit, method = int(warm.sum()), cfg.warm_max_rows, "warm active-set"
+            else:
+                start, limit, method = int(np.sum(rows.lhs(U) > rows.b)), cfg.active_set_max_rows, "active-set"
+            if start <= limit:
                 res = solve_active_set(rows, U, max_speed, warm, cfg.max_active_set_iterations)
                 iterations += res.iterations
                 if res.ok:
-                    return _Solved(res.u, res.active, int(res.speed_active.sum()), "active-set", iterations)
+                    return _Solved(res.u, res.active, int(res.speed_active.sum()), method, iterations)
         qp = solve_qp(rows, U, max_speed, max_iter=cfg.clarabel_max_iter, tol=cfg.clarabel_tol)
         if not qp.ok and not qp.reason.startswith("infeasible"):
             # numerical trouble at the tight tolerance: a longer cold active-set run (certified),
