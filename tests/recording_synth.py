@@ -60,6 +60,14 @@ def simulated_frames(n_robots: int = 6, n_ticks: int = 100, dt: float = 0.033, s
         sim.step(v, w)
 
 
+def as_recorded(frame: Frame) -> Frame:
+    """``frame`` as a recording holds it: through the recorder's codec (exact poses and commands,
+    float32 nominal, derived safe command and geometry)."""
+    from swarmdeck.console.recording.codec import decode_frame, encode_frame
+
+    return decode_frame(encode_frame(frame))
+
+
 def retimed(frame: Frame, tick: int, time: float) -> Frame:
     """The same frame content at another tick/time (to build long files cheaply)."""
     return dataclasses.replace(frame, tick=tick, time=time, run_time=time)

@@ -6,6 +6,7 @@ import json
 import pytest
 
 from swarmdeck.console.cli import main
+from swarmdeck.console.recording.schemas import RECORDING_FORMAT
 from recording_synth import write_synthetic_session
 
 
@@ -36,7 +37,7 @@ def test_info_json(sessions, capsys):
     assert main(["info", str(sessions / "b.mcap"), "--json"]) == 0
     s = json.loads(capsys.readouterr().out)
     assert s["frames"] == 40 and s["robots"] == list(range(7)) and s["closed_cleanly"]
-    assert s["config"] == {"source": "synthetic", "seed": 0} and s["recording_format"] == 1
+    assert s["config"] == {"source": "synthetic", "seed": 0} and s["recording_format"] == RECORDING_FORMAT
 
 
 def test_info_on_a_foreign_file_says_why(sessions, capsys):

@@ -9,7 +9,7 @@ from mcap.writer import Writer
 
 from swarmdeck.console.recording.recorder import Recorder, RecorderConfig
 from swarmdeck.console.recording.reader import RecordingError, open_recording
-from recording_synth import simulated_frames
+from recording_synth import as_recorded, simulated_frames
 
 
 @pytest.fixture(scope="module")
@@ -43,7 +43,7 @@ def _frames_in(chunks, frames):
 def test_truncated_anywhere_after_the_metadata_plays_a_prefix(tmp_path, clean):
     path, frames, chunks = clean
     data = path.read_bytes()
-    want = [f.to_dict() for f in frames]
+    want = [as_recorded(f).to_dict() for f in frames]
     first_chunk = chunks[0].chunk_start_offset
     cuts = sorted({first_chunk, *range(first_chunk + 1, len(data), max(1, (len(data) - first_chunk) // 17)),
                    len(data) - 1})
@@ -89,7 +89,7 @@ def test_a_corrupted_chunk_is_skipped_and_the_rest_plays(tmp_path, clean, summar
         assert r.damaged and any(str(c.chunk_start_offset) in w for w in r.warnings)
         lost = _frames_in(chunks[: k + 1], frames) - _frames_in(chunks[:k], frames)
         assert lost > 0
-        kept = [f.to_dict() for f in frames]
+        kept = [as_recorded(f).to_dict() for f in frames]
         before = _frames_in(chunks[:k], frames)
         assert got == kept[:before] + kept[before + lost:]
 
@@ -106,7 +106,7 @@ def test_a_broken_record_length_stops_the_scan_there(tmp_path, clean):
     p.write_bytes(bytes(data))
     with open_recording(p) as r:
         got = _dicts(r)
-        assert got == [f.to_dict() for f in frames[: _frames_in(chunks[:k], frames)]]
+        assert got == [as_recorded(f).to_dict() for f in frames[: _frames_in(chunks[:k], frames)]]
         assert any(f"byte {off}" in w for w in r.warnings)
 
 
@@ -127,7 +127,7 @@ def test_foreign_and_newer_files_are_refused_clearly(tmp_path):
     cases = [
         ("ros.mcap", "ros2", {"recording_format": 1}, "another tool .*ros2"),
         ("nometa.mcap", "swarmdeck", None, "no 'swarmdeck' metadata"),
-        ("newer.mcap", "swarmdeck", {"recording_format": 2, "frame_format": 1}, "format 2 by a newer swarmdeck"),
+        ("newer.mcap", "swarmdeck", {"recording_format": 3, "frame_format": 1}, "format 3 by a newer swarmdeck"),
         ("newframe.mcap", "swarmdeck", {"recording_format": 1, "frame_format": 7}, "frames in format 7"),
     ]
     for name, profile, meta, msg in cases:
@@ -162,4 +162,4 @@ def test_a_garbled_summary_falls_back_to_scanning(tmp_path, clean):
     p.write_bytes(bytes(data))
     with open_recording(p) as r:
         assert not r.indexed and r.warnings
-        assert _dicts(r) == [f.to_dict() for f in frames]
+        assert _dicts(r) == [as_recorded(f).to_dict() for f in frames]

@@ -14,7 +14,7 @@ from swarmdeck.console.recording.export_csv import ROBOT_COLUMNS, export_csv
 from swarmdeck.console.recording.export_html import export_html
 from swarmdeck.console.recording.recorder import Recorder
 from swarmdeck.console.recording.reader import open_recording
-from recording_synth import simulated_frames
+from recording_synth import as_recorded, simulated_frames
 
 
 @pytest.fixture(scope="module")
@@ -36,7 +36,8 @@ def test_csv_has_every_robot_at_every_frame_exactly(tmp_path, recorded):
     assert open(robots_csv).readline().strip().split(",") == list(ROBOT_COLUMNS)
     assert rows.shape == (len(frames) * 5, len(ROBOT_COLUMNS))
     col = {c: i for i, c in enumerate(ROBOT_COLUMNS)}
-    want = np.concatenate([np.column_stack((f.poses, f.v, f.w, f.nominal, f.safe)) for f in frames])
+    want = np.concatenate([np.column_stack((f.poses, f.v, f.w, g.nominal, g.safe))
+                           for f, g in zip(frames, map(as_recorded, frames))])  # poses, v, w exact
     got = rows[:, [col[c] for c in ("x", "y", "theta", "v", "w", "nominal_x", "nominal_y", "safe_x", "safe_y")]]
     assert np.array_equal(got, want)  # 17 significant digits: exact doubles
     assert np.array_equal(rows[:, col["id"]], np.tile(np.arange(5), len(frames)))

@@ -4,10 +4,12 @@ from __future__ import annotations
 import json
 
 import jsonschema
+import pytest
 from mcap.reader import make_reader
 
 from swarmdeck.console.recording.recorder import Recorder, RecorderConfig
-from swarmdeck.console.recording.schemas import CHANNELS, PROFILE
+from swarmdeck.console.recording.codec import frame_message
+from swarmdeck.console.recording.schemas import CHANNELS, FRAME_SCHEMA_V1, PROFILE, RECORDING_FORMAT
 from recording_synth import simulated_frames
 
 
@@ -27,7 +29,7 @@ def test_mcap_reader_and_json_schemas(tmp_path):
         assert summary is not None and len(summary.chunk_indexes) >= 2
         assert all(ci.compression == "zstd" for ci in summary.chunk_indexes)
         meta = {m.name: m.metadata for m in reader.iter_metadata()}
-        assert json.loads(meta["swarmdeck"]["recording_format"]) == 1
+        assert json.loads(meta["swarmdeck"]["recording_format"]) == RECORDING_FORMAT == 2
         counts: dict[str, int] = {}
         validators = {}
         for schema, channel, message in reader.iter_messages():
@@ -47,12 +49,15 @@ def test_mcap_reader_and_json_schemas(tmp_path):
 
 def test_schema_rejects_a_malformed_frame():
     schema = CHANNELS["/swarmdeck/frame"][1]
-    frame = next(simulated_frames(n_robots=3, n_ticks=1)).to_dict()
+    f = next(simulated_frames(n_robots=3, n_ticks=1))
+    frame = frame_message(f)
     jsonschema.validate(frame, schema)
-    bad = dict(frame, poses=[[0.0, 0.0]] * 3)  # (N, 2) instead of (N, 3)
-    try:
-        jsonschema.validate(bad, schema)
-    except jsonschema.ValidationError:
-        pass
-    else:
-        raise AssertionError("a (N, 2) pose array must not validate")
+    for bad in (dict(frame, poses=f.poses.tolist()),  # a plain list where the binary array belongs
+                dict(frame, poses={**frame["poses"], "nd": ">f8"})):  # big-endian
+        with pytest.raises(jsonschema.ValidationError):
+            jsonschema.validate(bad, schema)
+    # format 1 (Frame.to_dict) keeps its own schema
+    old = f.to_dict()
+    jsonschema.validate(old, FRAME_SCHEMA_V1)
+    with pytest.raises(jsonschema.ValidationError):
+        jsonschema.validate(dict(old, poses=[[0.0, 0.0]] * 3), FRAME_SCHEMA_V1)  # (N, 2) instead of (N, 3)

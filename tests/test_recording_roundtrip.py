@@ -10,7 +10,8 @@ import pytest
 from swarmdeck.console.runtime.frame import BarrierFrame
 from swarmdeck.console.recording.recorder import Recorder, RecorderConfig
 from swarmdeck.console.recording.reader import open_recording
-from recording_synth import simulated_frames
+from swarmdeck.console.recording.codec import CODEC_FORMAT
+from recording_synth import as_recorded, simulated_frames
 
 
 @pytest.fixture(scope="module")
@@ -41,7 +42,9 @@ def test_every_frame_reads_back_equal(tmp_path, frames, compression):
     with open_recording(path) as r:
         assert r.indexed and not r.warnings and r.n_chunks > 1
         got = list(r.frames())
-        assert [f.to_dict() for _, f in got] == [f.to_dict() for f in frames]
+        assert [f.to_dict() for _, f in got] == [as_recorded(f).to_dict() for f in frames]
+        for (_, g), f in zip(got, frames):  # poses and the commands sent: bit for bit
+            assert np.array_equal(g.poses, f.poses) and np.array_equal(g.v, f.v) and np.array_equal(g.w, f.w)
         # recording time is the frame clock relative to the first frame (ns resolution)
         assert all(abs(t - (f.time - frames[0].time)) < 2e-9 for t, f in got)
         dgs = list(r.datagrams())
@@ -54,7 +57,7 @@ def test_every_frame_reads_back_equal(tmp_path, frames, compression):
         assert frame_events == [e for f in frames for e in f.events]
         cfg = r.config()
         assert cfg["robots"] == list(range(7)) and cfg["config"] == {"note": "round trip"}
-        assert cfg["frame_format"] == 1 and "numpy" in cfg["versions"]
+        assert cfg["frame_format"] == CODEC_FORMAT and "numpy" in cfg["versions"]
         assert r.count_frames() == len(frames)
 
 

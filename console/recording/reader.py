@@ -31,7 +31,8 @@ from itertools import accumulate
 from pathlib import Path
 from typing import Any
 
-from swarmdeck.console.runtime.frame import FRAME_FORMAT, Frame
+from swarmdeck.console.runtime.frame import Frame
+from swarmdeck.console.recording.codec import CODEC_FORMAT, decode_frame
 from swarmdeck.console.recording.schemas import (
     METADATA_NAME, PROFILE, RECORDING_FORMAT, TOPIC_CONFIG, TOPIC_DATAGRAM, TOPIC_EVENT, TOPIC_FRAME,
 )
@@ -43,23 +44,6 @@ _MAX_OPCODE = 0x0F
 _REC = struct.Struct("<BQ")
 
 
-def _json_decoder() -> Any:
-    try:
-        import msgspec
-
-        dec = msgspec.json.Decoder()
-
-        def loads(data: bytes) -> Any:
-            try:
-                return dec.decode(data)
-            except msgspec.DecodeError as exc:
-                raise ValueError(f"not JSON: {exc}") from None
-        return loads
-    except ImportError:  # pragma: no cover - msgspec comes with viser
-        return json.loads
-
-
-_loads = _json_decoder()
 
 
 class RecordingError(Exception):
@@ -228,9 +212,9 @@ class Recording:
             raise RecordingError(f"{self.path} was recorded in format {fmt} by a newer swarmdeck "
                                  f"({self.library}); this swarmdeck reads format {RECORDING_FORMAT}: upgrade to play it")
         ffmt = self.metadata.get("frame_format")
-        if isinstance(ffmt, int) and ffmt > FRAME_FORMAT:
+        if isinstance(ffmt, int) and ffmt > CODEC_FORMAT:
             raise RecordingError(f"{self.path} holds frames in format {ffmt} from a newer swarmdeck "
-                                 f"({self.library}); this swarmdeck reads frame format {FRAME_FORMAT}: upgrade to play it")
+                                 f"({self.library}); this swarmdeck reads frame formats up to {CODEC_FORMAT}: upgrade to play it")
         if not self._index_from_summary():
             self._index_by_scan(pos)
         # File order is write order: frames are in time order across chunks. Chunk start times can
@@ -376,7 +360,7 @@ class Recording:
         frames = []
         for ns, data in self._chunk_messages(i).get(TOPIC_FRAME, []):
             try:
-                frames.append((ns, Frame.from_dict(_loads(data))))
+                frames.append((ns, decode_frame(data)))
             except (ValueError, TypeError) as exc:
                 msg = f"undecodable frame at log time {ns} skipped: {exc}"
                 if len(self.warnings) < 100 and msg not in self.warnings:

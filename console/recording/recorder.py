@@ -1,7 +1,8 @@
 """The session recorder: Frames, raw input datagrams and events into an MCAP file.
 
 The loop thread only *enqueues* (an append under a lock, a few µs); a
-background writer thread serialises (``Frame.to_dict`` → JSON) and writes
+background writer thread serialises (:func:`~swarmdeck.console.recording.codec.encode_frame`:
+compact JSON with binary per-robot arrays) and writes
 chunked, zstd-compressed MCAP (format in
 :mod:`swarmdeck.console.recording.schemas`). It closes the current chunk every
 ``flush_interval`` seconds of wall time or of recorded time, whichever comes
@@ -42,7 +43,8 @@ from pathlib import Path
 from typing import Any, BinaryIO
 
 from swarmdeck.console.recording.foxglove import TOPIC_LOG, FoxgloveConfig, FoxgloveEncoder, channel_specs
-from swarmdeck.console.runtime.frame import FRAME_FORMAT, Frame
+from swarmdeck.console.runtime.frame import Frame
+from swarmdeck.console.recording.codec import CODEC_FORMAT, encode_frame, encode_json
 from swarmdeck.console.recording.schemas import (
     CHANNELS, METADATA_NAME, PROFILE, RECORDING_FORMAT, TOPIC_CONFIG, TOPIC_DATAGRAM, TOPIC_EVENT, TOPIC_FRAME,
 )
@@ -140,20 +142,7 @@ def _compression(name: str) -> Any:
     return CompressionType.NONE
 
 
-def _json_encoder() -> Callable[[Any], bytes]:
-    """Compact strict JSON: msgspec (8x faster than ``json`` on a 100-robot frame) when importable."""
-    try:
-        import msgspec
-
-        enc = msgspec.json.Encoder()
-        return enc.encode
-    except ImportError:  # pragma: no cover - msgspec comes with viser
-        return lambda obj: json.dumps(obj, separators=(",", ":"), allow_nan=False).encode("utf-8")
-
-
-_json = _json_encoder()
-#: Compact strict JSON bytes of a JSON-able object, as the recorder writes messages.
-encode_json: Callable[[Any], bytes] = _json
+_json = encode_json  # compact strict JSON (msgspec), from the codec
 
 
 class Recorder:
@@ -278,7 +267,7 @@ class Recorder:
         w.start(profile=PROFILE, library=f"swarmdeck {swarmdeck_version}")
         meta = {
             "recording_format": RECORDING_FORMAT,
-            "frame_format": FRAME_FORMAT,
+            "frame_format": CODEC_FORMAT,
             "created": _dt.datetime.fromtimestamp(self._start_ns / 1e9, _dt.timezone.utc).isoformat(),
             "start_unix_ns": self._start_ns,
             "versions": software_versions(),
@@ -304,7 +293,7 @@ class Recorder:
 
     def _write_config(self, first_t: float, frame: Frame | None) -> None:
         cfg = {
-            "recording_format": RECORDING_FORMAT, "frame_format": FRAME_FORMAT,
+            "recording_format": RECORDING_FORMAT, "frame_format": CODEC_FORMAT,
             "created": _dt.datetime.fromtimestamp(self._start_ns / 1e9, _dt.timezone.utc).isoformat(),
             "start_unix_ns": self._start_ns, "time_origin": first_t,
             "robots": list(self._meta.get("robots", frame.ids.tolist() if frame is not None else [])),
@@ -315,9 +304,10 @@ class Recorder:
         }
         self._add(TOPIC_CONFIG, first_t, cfg)
 
-    def _add(self, topic: str, t: float, payload: dict[str, Any]) -> None:
+    def _add(self, topic: str, t: float, payload: dict[str, Any] | bytes) -> None:
         ns = self._log_ns(t)
-        self._writer.add_message(self._channels[topic], log_time=ns, data=_json(payload), publish_time=ns)
+        data = payload if isinstance(payload, bytes) else _json(payload)
+        self._writer.add_message(self._channels[topic], log_time=ns, data=data, publish_time=ns)
 
     def _write_item(self, item: tuple[Any, ...]) -> None:
         kind = item[0]
@@ -326,7 +316,7 @@ class Recorder:
             self._write_config(float(t0), item[1] if kind == "f" else None)
         if kind == "f":
             frame: Frame = item[1]
-            self._add(TOPIC_FRAME, frame.time, frame.to_dict())
+            self._add(TOPIC_FRAME, frame.time, encode_frame(frame))
             for text in frame.events:
                 self._add(TOPIC_EVENT, frame.time, {"t": frame.time, "kind": "frame", "text": text})
             self._counts["frames"] += 1

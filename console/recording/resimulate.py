@@ -28,6 +28,7 @@ from typing import Any
 import numpy as np
 
 from swarmdeck.console.runtime.frame import Frame
+from swarmdeck.console.recording.codec import CODEC_FORMAT, decode_frame, encode_frame
 from swarmdeck.console.recording.reader import RecordedDatagram, Recording
 
 #: Frame keys not compared: wall-clock measurements and free-text messages.
@@ -232,6 +233,7 @@ def resimulate(recording: Recording, *, max_frames: int | None = None) -> Iterat
                                  initial_poses=first.poses)
     loop = ControlLoop(loop_cfg, source=robots, sink=robots, inputs=hub,
                        contact_density=ContactDensity(inputs_cfg.density), clock=lambda: now[0])
+    compact = recording.metadata.get("frame_format") == CODEC_FORMAT
     datagrams = iter(recording.datagrams())
     pending = next(datagrams, None)
     frames = recording.frames()
@@ -247,7 +249,9 @@ def resimulate(recording: Recording, *, max_frames: int | None = None) -> Iterat
                 _route(sources, names, pending).feed(pending.data, pending.peer, pending.t, pending.transport)
                 pending = next(datagrams, None)
             _apply_operator_actions(loop, prev, frame, None if nxt is None else nxt[1])
-            yield frame, loop.tick()
+            sim = loop.tick()
+            # compare at the recording's precision: the new frame as it would have been recorded
+            yield frame, (decode_frame(encode_frame(sim)) if compact else sim)
             prev, cur = frame, nxt
             count += 1
     finally:

@@ -10,7 +10,8 @@ Foxglove shows them):
 ==========================  ===============================================
 topic                       message
 ==========================  ===============================================
-``/swarmdeck/frame``        ``Frame.to_dict()`` (console/runtime/frame.py), one per tick
+``/swarmdeck/frame``        one per tick: ``codec.encode_frame`` (format 2, compact: binary
+                            per-robot arrays); format-1 files hold ``Frame.to_dict()``
 ``/swarmdeck/datagram``     one raw input datagram: ``{t, data (base64), peer, transport, listener}``
 ``/swarmdeck/config``       the run's configuration and metadata, once at the start
 ``/swarmdeck/event``        ``{t, kind, text}`` operator actions, frame events, recorder notices
@@ -26,7 +27,8 @@ from typing import Any
 
 PROFILE = "swarmdeck"
 #: Version of the container layout (topics, metadata keys). Readers refuse newer files.
-RECORDING_FORMAT = 1
+#: 2: frames in the compact frame format 2 (``codec.py``); 1: frames as ``Frame.to_dict()`` (still read).
+RECORDING_FORMAT = 2
 METADATA_NAME = "swarmdeck"
 
 TOPIC_FRAME = "/swarmdeck/frame"
@@ -48,7 +50,7 @@ def _arr(items: dict[str, Any], length: int | None = None) -> dict[str, Any]:
 _VEC2 = _arr(_NUM, 2)
 _MAP_SCALARS = {"type": "object", "additionalProperties": {"type": ["number", "string", "boolean", "null"]}}
 
-FRAME_SCHEMA: dict[str, Any] = {
+FRAME_SCHEMA_V1: dict[str, Any] = {
     "$schema": "https://json-schema.org/draft/2020-12/schema",
     "title": "swarmdeck.Frame",
     "description": "One control tick of the swarmdeck console (console/runtime/frame.py). Units m, s, rad.",
@@ -100,6 +102,47 @@ FRAME_SCHEMA: dict[str, Any] = {
         "health": {"type": "object", "additionalProperties": {"type": "string"}},
         "timing": {"type": "object", "additionalProperties": _NUM},
         "image_ref": {"type": ["string", "null"]},
+    },
+}
+
+_ND: dict[str, Any] = {
+    "type": "object", "required": ["nd", "shape", "b64"],
+    "description": "binary array: little-endian numpy dtype, shape, base64 of the byte-shuffled bytes "
+                   "(all bytes 0 of the elements, then all bytes 1, …)",
+    "properties": {"nd": {"enum": ["<f8", "<f4", "<f2", "<i8", "<i4", "<i2", "|b1"]}, "shape": _arr({"type": "integer", "minimum": 0}),
+                   "b64": {"type": "string", "contentEncoding": "base64"}},
+}
+
+FRAME_SCHEMA: dict[str, Any] = {
+    "$schema": "https://json-schema.org/draft/2020-12/schema",
+    "title": "swarmdeck.Frame",
+    "description": "One control tick of the swarmdeck console, frame format 2 (console/recording/codec.py): "
+                   "per-robot arrays binary; safe, intervention, active_h and the coverage geometry derived "
+                   "on reading. Units m, s, rad.",
+    "type": "object",
+    "required": ["format", "tick", "time", "dt", "bounds", "lookahead", "ids", "poses", "seen",
+                 "nominal_minus_safe", "v", "w", "barrier", "coverage", "density", "contacts",
+                 "behaviour", "run_state"],
+    "properties": {
+        **{k: v for k, v in FRAME_SCHEMA_V1["properties"].items()
+           if k not in ("ids", "poses", "seen", "nominal", "safe", "v", "w", "barrier", "coverage")},
+        "format": {"const": 2},
+        "ids": _ND, "poses": _ND, "seen": _ND, "nominal_minus_safe": _ND, "v": _ND, "w": _ND,
+        "barrier": {"oneOf": [{"type": "null"}, {
+            "type": "object", "required": ["enabled", "ok", "status", "active_pairs", "intervention", "safety_distance"],
+            "properties": {
+                "enabled": {"type": "boolean"}, "ok": {"type": "boolean"}, "status": {"type": "string"},
+                "solve_time_s": _NUM, "n_constraints": _INT, "n_active": _INT, "active_pairs": _ND,
+                "intervention": _ND,
+                "min_distance": _NUM, "min_wall_clearance": _NUM, "nominal_was_safe": {"type": "boolean"},
+                "safety_distance": _NUM,
+            }}]},
+        "coverage": {"oneOf": [{"type": "null"}, {
+            "type": "object", "required": ["cost_H", "mean_centroid_distance", "geometry"],
+            "properties": {
+                "cost_H": _NUM, "mean_centroid_distance": _NUM, "packing_warning": {"type": ["string", "null"]},
+                "geometry": {"enum": ["derived", "none"]}, "centroids": _ND, "masses": _ND,
+            }}]},
     },
 }
 

@@ -1,0 +1,294 @@
+"""Frame ⇄ message bytes: the one place that knows how a Frame is written to a recording.
+
+``encode_frame(frame) -> bytes`` is what the recorder writes on ``/swarmdeck/frame``;
+``decode_frame(data) -> Frame`` reads it back, for every frame format ever written.
+Other writers (Foxglove channels, exports, recovery tools) call these two.
+
+Frame format 2 (recording format 2) — compact
+---------------------------------------------
+A JSON object (message encoding ``json``), :meth:`Frame.to_dict`'s layout with
+``"format": 2`` and these changes:
+
+* per-robot arrays are **binary**: an object ``{"nd": dtype, "shape": [...],
+  "b64": base64}`` where dtype is a little-endian numpy type string (``"<f8"``,
+  ``"<f4"``, ``"<i8"``, ``"|b1"``) and the bytes are the array's little-endian
+  bytes *byte-shuffled* (all bytes 0 of every element, then all bytes 1, …: the
+  high bytes of similar numbers sit together and compress well). Read with
+  ``np.frombuffer(b, "u1").reshape(itemsize, -1).T.copy().view(dtype).reshape(shape)``.
+* exact float64 (bit for bit): ``poses``, ``v``, ``w`` — what re-simulation and
+  replay need; everything else is for display and is compared at the precision below.
+* derived on reading instead of stored: ``safe`` = ṗ = M(θ)[v, ω] (REFERENCE.md §1:
+  the look-ahead velocity of the command sent) and the coverage geometry (``edges``, ``neighbours``, cells) —
+  the bounded Voronoi diagram of the look-ahead points (``swarmdeck.coverage``),
+  recomputed from the poses when ``coverage.geometry`` is ``"derived"``.
+  the centroids and masses are the cell moments of that diagram under the frame's
+  density snapshot, recomputed with the same code (stored as float64 only when there is
+  no diagram), and ``barrier.active_h`` = ‖p_i − p_j‖² − D_s² of the ``active_pairs``
+  (int16, int32 beyond 32 767 robots). ``nominal`` is stored as float16
+  ``nominal_minus_safe`` (zero where neither the wheel limits nor the barrier changed
+  the command; error ≤ 5e-4 of that difference), ``barrier.intervention`` float16.
+  ``timing`` is rounded to 1 µs.
+
+Frame format 1 (recording format 1): ``Frame.to_dict()`` as plain JSON, every
+float with 17 digits; still read.
+"""
+from __future__ import annotations
+
+import base64
+from collections.abc import Mapping
+from typing import Any
+
+import numpy as np
+
+from swarmdeck.console.runtime.frame import (FRAME_FORMAT, BarrierFrame, CoverageFrame, Frame, _dec_float,
+                                             _enc_float)
+from swarmdeck.core.kinematics import unicycle_to_si
+
+#: The frame format this module writes (``Frame.to_dict`` is format 1).
+CODEC_FORMAT = 2
+#: Frame formats :func:`decode_frame` reads.
+READABLE_FORMATS = (FRAME_FORMAT, CODEC_FORMAT)
+
+
+def _json_codec() -> tuple[Any, Any]:
+    try:
+        import msgspec
+
+        enc = msgspec.json.Encoder()
+        dec = msgspec.json.Decoder()
+
+        def loads(data: bytes) -> Any:
+            try:
+                return dec.decode(data)
+            except msgspec.DecodeError as exc:
+                raise ValueError(f"not JSON: {exc}") from None
+        return enc.encode, loads
+    except ImportError:  # pragma: no cover - msgspec comes with viser
+        import json
+
+        return (lambda obj: json.dumps(obj, separators=(",", ":"), allow_nan=False).encode("utf-8"),
+                json.loads)
+
+
+#: Compact strict JSON bytes of a JSON-able object; and its inverse (ValueError on bad JSON).
+encode_json, decode_json = _json_codec()
+
+
+# ---------------------------------------------------------------------------- binary arrays
+def pack_array(a: np.ndarray, dtype: str) -> dict[str, Any]:
+    """``{"nd", "shape", "b64"}``: ``a`` cast to the little-endian ``dtype``, byte-shuffled, base64."""
+    arr = np.ascontiguousarray(a, dtype=np.dtype(dtype))
+    size = arr.dtype.itemsize
+    raw = arr.view(np.uint8).reshape(-1, size).T.tobytes() if size > 1 and arr.size else arr.tobytes()
+    return {"nd": arr.dtype.str, "shape": list(arr.shape), "b64": base64.b64encode(raw).decode("ascii")}
+
+
+def unpack_array(obj: Any, name: str) -> np.ndarray:
+    """Inverse of :func:`pack_array`; ValueError naming ``name`` for malformed data."""
+    if not isinstance(obj, Mapping) or not {"nd", "shape", "b64"} <= set(obj):
+        raise ValueError(f"frame field {name!r} must be a binary array object {{nd, shape, b64}}")
+    try:
+        dt = np.dtype(str(obj["nd"]))
+        shape = tuple(int(s) for s in obj["shape"])
+        raw = base64.b64decode(obj["b64"], validate=True)
+    except (TypeError, ValueError) as exc:
+        raise ValueError(f"frame field {name!r}: bad binary array: {exc}") from None
+    if dt.kind not in "fiub" or dt.byteorder == ">":
+        raise ValueError(f"frame field {name!r}: unsupported dtype {obj['nd']!r}")
+    count = int(np.prod(shape))
+    if len(raw) != count * dt.itemsize:
+        raise ValueError(f"frame field {name!r}: {len(raw)} bytes for shape {shape} of {dt.str}")
+    b = np.frombuffer(raw, dtype=np.uint8)
+    if dt.itemsize > 1 and count:
+        b = b.reshape(dt.itemsize, count).T
+    return np.ascontiguousarray(b).view(dt).reshape(shape)
+
+
+# ---------------------------------------------------------------------------- encode
+def frame_message(frame: Frame) -> dict[str, Any]:
+    """The format-2 message of ``frame`` as a JSON-able dict (see the module docstring)."""
+    d = _scalars(frame)
+    d["format"] = CODEC_FORMAT
+    d["ids"] = pack_array(frame.ids, "<i8")
+    d["poses"] = pack_array(frame.poses, "<f8")
+    d["seen"] = pack_array(frame.seen, "|b1")
+    # nominal as float16 offsets from the derived safe command: zero where nothing changed it
+    delta = frame.nominal - derived_safe(frame.poses, frame.v, frame.w, frame.lookahead)
+    delta[np.abs(delta) < 1e-12] = 0.0
+    d["nominal_minus_safe"] = pack_array(delta, "<f2")
+    d["v"] = pack_array(frame.v, "<f8")
+    d["w"] = pack_array(frame.w, "<f8")
+    b = frame.barrier
+    if b is not None:
+        bd = _barrier_scalars(b)
+        bd["active_pairs"] = pack_array(b.active_pairs, "<i2" if frame.n <= 32767 else "<i4")
+        bd["intervention"] = pack_array(b.intervention, "<f2")
+        d["barrier"] = bd
+    c = frame.coverage
+    if c is not None:
+        derived = bool(len(c.cell_vertices)) and frame.density is not None
+        cov = {"cost_H": _enc_float(c.cost_H), "mean_centroid_distance": _enc_float(c.mean_centroid_distance),
+               "packing_warning": c.packing_warning, "geometry": "derived" if derived else "none"}
+        if not derived:  # no diagram to recompute (coverage failed this tick): store what there is
+            cov["centroids"] = pack_array(c.centroids, "<f8")
+            cov["masses"] = pack_array(c.masses, "<f8")
+        d["coverage"] = cov
+    return d
+
+
+def encode_frame(frame: Frame) -> bytes:
+    """The bytes the recorder writes for ``frame`` (frame format 2, JSON with binary arrays)."""
+    return encode_json(frame_message(frame))
+
+
+_BIG = ("ids", "poses", "seen", "nominal", "nominal_minus_safe", "safe", "v", "w", "barrier", "coverage")
+
+
+def active_h(poses: np.ndarray, pairs: np.ndarray, lookahead: float, safety_distance: float) -> np.ndarray:
+    """Barrier values h = ‖p_i − p_j‖² − D_s² (m²) of robot pairs (K, 2) at their look-ahead points."""
+    from swarmdeck.core.kinematics import lookahead_points
+
+    if not len(pairs):
+        return np.zeros(0)
+    p = lookahead_points(poses, lookahead)
+    e = p[pairs[:, 0]] - p[pairs[:, 1]]
+    d = np.sqrt(np.einsum("kd,kd->k", e, e))
+    return d * d - safety_distance**2
+
+
+def derived_safe(poses: np.ndarray, v: np.ndarray, w: np.ndarray, lookahead: float) -> np.ndarray:
+    """The look-ahead point velocity (N, 2) m/s of the command sent: ṗ = M(θ)[v, ω] (REFERENCE.md §1)."""
+    return unicycle_to_si(poses, v, w, lookahead) if len(poses) else np.zeros((0, 2))
+
+
+def _scalars(frame: Frame) -> dict[str, Any]:
+    """Frame.to_dict() without the per-robot arrays (those are packed by :func:`frame_message`)."""
+    stripped = Frame(tick=frame.tick, time=frame.time, poses=np.empty((0, 3)), ids=np.empty(0, dtype=np.int64),
+                     nominal=np.empty((0, 2)), safe=np.empty((0, 2)), v=np.empty(0), w=np.empty(0),
+                     dt=frame.dt, run_time=frame.run_time, bounds=frame.bounds, lookahead=frame.lookahead,
+                     density=frame.density, contacts=frame.contacts, behaviour=frame.behaviour,
+                     run_state=frame.run_state, params=frame.params, events=frame.events, alerts=frame.alerts,
+                     health=frame.health, timing=frame.timing, image_ref=frame.image_ref)
+    d = stripped.to_dict()
+    d["timing"] = {k: (round(v, 6) if isinstance(v, float) else v) for k, v in d["timing"].items()}
+    for k in _BIG:
+        d.pop(k, None)
+    return d
+
+
+def _barrier_scalars(b: BarrierFrame) -> dict[str, Any]:
+    d = BarrierFrame(enabled=b.enabled, ok=b.ok, status=b.status, solve_time_s=b.solve_time_s,
+                     n_constraints=b.n_constraints, n_active=b.n_active, min_distance=b.min_distance,
+                     min_wall_clearance=b.min_wall_clearance, nominal_was_safe=b.nominal_was_safe,
+                     safety_distance=b.safety_distance).to_dict()
+    for k in ("active_pairs", "active_h", "intervention"):
+        d.pop(k)  # packed binary by frame_message (active_h is derived on reading)
+    return d
+
+
+# ---------------------------------------------------------------------------- decode
+def decode_frame(data: bytes | Mapping[str, Any]) -> Frame:
+    """A Frame from message bytes (or the decoded JSON object) of any readable frame format.
+
+    Raises ValueError naming what is wrong for malformed data or an unknown format.
+    """
+    d = decode_json(data) if isinstance(data, (bytes, bytearray, memoryview)) else data
+    if not isinstance(d, Mapping):
+        raise ValueError(f"a frame must be a JSON object, got {type(d).__name__}")
+    fmt = d.get("format")
+    if fmt == FRAME_FORMAT:
+        return Frame.from_dict(d)
+    if fmt != CODEC_FORMAT:
+        raise ValueError(f"unsupported frame format {fmt!r} (this swarmdeck reads formats {list(READABLE_FORMATS)})")
+    try:
+        return _decode_v2(d)
+    except KeyError as exc:
+        raise ValueError(f"frame is missing field {exc.args[0]!r}") from None
+
+
+def _decode_v2(d: Mapping[str, Any]) -> Frame:
+    poses = unpack_array(d["poses"], "poses").astype(float)
+    if poses.ndim != 2 or poses.shape[1] != 3:
+        raise ValueError(f"frame field 'poses' must have shape (n,3), got {poses.shape}")
+    v = unpack_array(d["v"], "v").astype(float)
+    w = unpack_array(d["w"], "w").astype(float)
+    n = poses.shape[0]
+    if v.shape != (n,) or w.shape != (n,):
+        raise ValueError(f"frame fields 'v', 'w' must have shape ({n},), got {v.shape} and {w.shape}")
+    lookahead = _dec_float(d["lookahead"])
+    safe = derived_safe(poses, v, w, lookahead)
+    delta = unpack_array(d["nominal_minus_safe"], "nominal_minus_safe").astype(float)
+    if delta.shape != (n, 2):
+        raise ValueError(f"frame field 'nominal_minus_safe' must have shape ({n}, 2), got {delta.shape}")
+    nominal = safe + delta
+    base = dict(d)
+    for k in _BIG:
+        base.pop(k, None)
+    base.update({"format": FRAME_FORMAT, "ids": [], "poses": [], "seen": [], "nominal": [], "safe": [],
+                 "v": [], "w": [], "barrier": None, "coverage": None})
+    shell = Frame.from_dict(base)  # every scalar field, checked as in format 1
+    barrier = None
+    if d.get("barrier") is not None:
+        bd = dict(d["barrier"])
+        pairs = unpack_array(bd.pop("active_pairs"), "barrier.active_pairs").astype(np.int64)
+        pairs = pairs.reshape(-1, 2)
+        if pairs.size and (pairs.min() < 0 or pairs.max() >= n):
+            raise ValueError(f"frame field 'barrier.active_pairs' names robots outside 0..{n - 1}")
+        h = active_h(poses, pairs, lookahead, _dec_float(bd["safety_distance"]))
+        inter = unpack_array(bd.pop("intervention"), "barrier.intervention").astype(float)
+        barrier = BarrierFrame.from_dict({**bd, "active_pairs": pairs.tolist(), "active_h": h.tolist(),
+                                          "intervention": inter.tolist()})
+    coverage = None
+    if d.get("coverage") is not None:
+        coverage = _decode_coverage(d["coverage"], poses, shell, lookahead)
+    return Frame(
+        tick=shell.tick, time=shell.time, run_time=shell.run_time, dt=shell.dt, bounds=shell.bounds,
+        lookahead=lookahead, poses=poses, ids=unpack_array(d["ids"], "ids").astype(np.int64),
+        seen=unpack_array(d["seen"], "seen").astype(bool), nominal=nominal, safe=safe, v=v, w=w,
+        barrier=barrier, coverage=coverage, density=shell.density, contacts=shell.contacts,
+        behaviour=shell.behaviour, run_state=shell.run_state, params=shell.params, events=shell.events,
+        alerts=shell.alerts, health=shell.health, timing=shell.timing, image_ref=shell.image_ref,
+    )
+
+
+def _decode_coverage(cd: Mapping[str, Any], poses: np.ndarray, shell: Frame, lookahead: float) -> CoverageFrame:
+    scalars = dict(cost_H=_dec_float(cd["cost_H"]), mean_centroid_distance=_dec_float(cd["mean_centroid_distance"]),
+                   packing_warning=cd.get("packing_warning"))
+    if cd.get("geometry") == "derived" and len(poses) and shell.density is not None:
+        derived = coverage_geometry(poses, shell.bounds, lookahead, shell.density)
+        if derived is not None:
+            return CoverageFrame(**derived, **scalars)
+    if "centroids" in cd:
+        return CoverageFrame(centroids=unpack_array(cd["centroids"], "coverage.centroids").astype(float),
+                             masses=unpack_array(cd["masses"], "coverage.masses").astype(float),
+                             edges=np.zeros((0, 2, 2)), neighbours=np.zeros((0, 2), dtype=np.int64), **scalars)
+    n = len(poses)
+    return CoverageFrame(centroids=np.zeros((n, 2)), masses=np.zeros(n), edges=np.zeros((0, 2, 2)),
+                         neighbours=np.zeros((0, 2), dtype=np.int64), **scalars)
+
+
+def coverage_geometry(poses: np.ndarray, bounds: tuple[float, float, float, float], lookahead: float,
+                      density: Any) -> dict[str, np.ndarray] | None:
+    """What the coverage behaviour computed from the poses, recomputed with the same code
+    (``swarmdeck.coverage``: pre-conditioned look-ahead points, bounded Voronoi diagram, cell
+    moments of the density snapshot with the default quadrature): centroids (N, 2), masses (N,),
+    edges (E, 2, 2), neighbours (E, 2), cell_vertices (V, 2), cell_offsets (N + 1,). None when
+    the diagram cannot be built."""
+    from swarmdeck.core.kinematics import lookahead_points
+    from swarmdeck.coverage import CoverageConfig, bounded_voronoi, cell_moments, precondition_positions
+
+    try:
+        pts, _ = precondition_positions(lookahead_points(poses, lookahead), bounds)
+        vor = bounded_voronoi(pts, bounds)
+        mom = cell_moments(vor, density, CoverageConfig(bounds=bounds).quadrature)
+        cells = vor.polygons()
+    except Exception:  # noqa: BLE001 - a degenerate diagram: nothing to draw, never a failed read
+        return None
+    verts = np.concatenate([np.asarray(c, dtype=float).reshape(-1, 2) for c in cells]) if cells else np.zeros((0, 2))
+    return dict(centroids=mom.centroids, masses=mom.masses, edges=vor.edge_segments(),
+                neighbours=np.asarray(vor.edge_pairs, dtype=np.int64), cell_vertices=verts,
+                cell_offsets=np.concatenate(([0], np.cumsum([len(c) for c in cells]))).astype(np.int64))
+
+
+__all__ = ["CODEC_FORMAT", "READABLE_FORMATS", "encode_frame", "decode_frame", "frame_message", "pack_array",
+           "unpack_array", "coverage_geometry", "derived_safe", "encode_json", "decode_json"]
