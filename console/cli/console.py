@@ -16,7 +16,11 @@ ORDER = 1
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--host", default=None, help="interface to bind (default 127.0.0.1: this machine only)")
     parser.add_argument("--port", type=int, default=None, help="TCP port (default 8080; 0 picks a free one)")
-    parser.add_argument("--robots", type=int, default=None, metavar="N", help="number of simulated robots (default 12)")
+    parser.add_argument("--robots", type=int, default=None, metavar="N",
+                        help="number of simulated robots (default 12; as many as fit the arena, e.g. 1000 "
+                             "with --arena 10x6: the barrier goes distributed above 200)")
+    parser.add_argument("--arena", default=None, metavar="WxH",
+                        help="arena size in metres, centred on the origin (default 3.2x2)")
     parser.add_argument("--behaviour", "--behavior", default=None,
                         help="coverage (default) | rendezvous | formation | goto | script:PATH "
                              "(PATH defines behaviour(poses, t) -> (N, 2) velocities in m/s)")
@@ -57,6 +61,13 @@ def main(args: argparse.Namespace) -> int:
         changes["behaviour"] = args.behaviour
     if args.seed is not None:
         changes["seed"] = args.seed
+    if args.arena is not None:
+        from swarmdeck.console.runtime.config import arena_bounds
+
+        try:
+            changes["bounds"] = arena_bounds(args.arena)
+        except ValueError as exc:
+            raise UsageError(f"--arena: {exc}") from None
     try:
         config = replace(settings.loop, **changes)
     except ValueError as exc:

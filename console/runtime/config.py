@@ -5,9 +5,10 @@ Tables (every key optional; defaults from REFERENCE.md)::
     [console]   host = "127.0.0.1", port = 8080, robots = 12, behaviour = "coverage",
                 seed = 1, dt = 0.033, max_speed = 0.2, bounds = [-1.6, 1.6, -1.0, 1.0],
                 script_budget = dt / 2 (s a script: behaviour may take per tick)
+                (or arena = "10x6" instead of bounds: a W x H m arena centred on the origin)
     [behaviour] kappa, law, gain, formation_edge, formation_gain, goals = [[x, y], ...],
                 goal_centre = [x, y]
-    [safety]    enabled, safety_distance, gamma, class_k
+    [safety]    enabled, safety_distance, gamma, class_k, mode ("auto" | "centralised" | "distributed")
     [density]   moving, radius, period, sigma, weight, floor, bump_sigma, bump_weight
     [inputs]    see swarmdeck.inputs.InputConfig (listeners, density, bounds)
 
@@ -24,10 +25,24 @@ from swarmdeck.console.runtime.behaviours import BehaviourParams
 from swarmdeck.console.runtime.loop import DensityParams, LoopConfig, SafetyParams
 
 TABLES = ("console", "behaviour", "safety", "density", "inputs")
-CONSOLE_KEYS = ("host", "port", "robots", "behaviour", "seed", "dt", "max_speed", "bounds", "script_budget")
+CONSOLE_KEYS = ("host", "port", "robots", "behaviour", "seed", "dt", "max_speed", "bounds", "script_budget",
+                "arena")
 # [console] key -> LoopConfig field (errors name the key, not the field)
 LOOP_KEYS = {"robots": "n_robots", "behaviour": "behaviour", "seed": "seed", "dt": "dt", "max_speed": "max_speed",
              "bounds": "bounds", "script_budget": "script_budget"}
+
+
+def arena_bounds(spec: str) -> tuple[float, float, float, float]:
+    """Bounds (x_min, x_max, y_min, y_max) of a ``"WxH"`` arena in m centred on the origin, e.g.
+    ``"10x6"`` → (−5, 5, −3, 3); ``×`` works too. ValueError naming the spec otherwise."""
+    parts = str(spec).lower().replace("×", "x").split("x")
+    try:
+        w, h = (float(v) for v in parts)
+    except ValueError:
+        raise ValueError(f"arena must be WIDTHxHEIGHT in metres, e.g. 10x6, got {spec!r}") from None
+    if not (0 < w < 1e4 and 0 < h < 1e4):
+        raise ValueError(f"arena sides must be positive metres, got {spec!r}")
+    return (-w / 2, w / 2, -h / 2, h / 2)
 
 
 class ConfigFileError(ValueError):
@@ -100,6 +115,10 @@ def load_settings(path: str | Path) -> ConsoleSettings:
             raise ConfigFileError(f"{p}: [console] {key} = {con[key]!r}: {message}") from None
         loop_kw[target] = value
     try:
+        if "arena" in con:
+            if "bounds" in con:
+                raise ValueError("give arena or bounds, not both")
+            loop_kw["bounds"] = arena_bounds(con["arena"])
         loop = LoopConfig(**loop_kw)
     except (TypeError, ValueError) as exc:
         raise ConfigFileError(f"{p}: [console]: {exc}") from None

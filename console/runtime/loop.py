@@ -74,12 +74,14 @@ FrameListener = Callable[[Frame], None]
 
 @dataclass(frozen=True)
 class SafetyParams:
-    """The barrier filter as the operator sets it: on/off, D_s (m, 0.11–0.4), γ (1–1000), class-K."""
+    """The barrier filter as the operator sets it: on/off, D_s (m, 0.11–0.4), γ (1–1000), class-K, and
+    ``mode``: "centralised", "distributed" or "auto" (distributed above 200 robots; ``swarmdeck.safety``)."""
 
     enabled: bool = True
     safety_distance: float = 0.17
     gamma: float = 100.0
     class_k: str = "cubic"
+    mode: str = "auto"
 
     def __post_init__(self) -> None:
         if not (math.isfinite(self.safety_distance) and 0.11 <= self.safety_distance <= 0.4):
@@ -88,6 +90,8 @@ class SafetyParams:
             raise ValueError(f"gamma must be in [1, 1000], got {self.gamma!r}")
         if self.class_k not in ("cubic", "linear"):
             raise ValueError(f"class_k must be 'cubic' or 'linear', got {self.class_k!r}")
+        if self.mode not in ("centralised", "distributed", "auto"):
+            raise ValueError(f"mode must be 'centralised', 'distributed' or 'auto', got {self.mode!r}")
 
 
 @dataclass(frozen=True)
@@ -136,8 +140,9 @@ class LoopConfig:
         return 0.5 * self.dt if self.script_budget is None else float(self.script_budget)
 
     def __post_init__(self) -> None:
-        if isinstance(self.n_robots, bool) or not isinstance(self.n_robots, int) or not 1 <= self.n_robots <= 200:
-            raise ValueError(f"n_robots must be an integer in [1, 200], got {self.n_robots!r}")
+        # no upper bound here: how many fit depends on the arena (the initial layout names the maximum)
+        if isinstance(self.n_robots, bool) or not isinstance(self.n_robots, int) or self.n_robots < 1:
+            raise ValueError(f"n_robots must be an integer >= 1, got {self.n_robots!r}")
         if not (math.isfinite(self.dt) and 0.005 <= self.dt <= 0.5):
             raise ValueError(f"dt must be in [0.005, 0.5] s, got {self.dt!r}")
         if not (math.isfinite(self.max_speed) and 0 < self.max_speed <= 1.0):
@@ -284,7 +289,7 @@ class ControlLoop:
         rows, so the certified command is one the wheels can execute (no saturation afterwards)."""
         cfg = self.config
         return barrier_filter(self.robot, cfg.bounds, cfg.dt, safety_distance=p.safety_distance, gamma=p.gamma,
-                              class_k=p.class_k, max_speed=cfg.max_speed)
+                              class_k=p.class_k, max_speed=cfg.max_speed, mode=p.mode)
 
     # ------------------------------------------------------------------ operator commands (thread-safe)
     @property
@@ -657,7 +662,7 @@ class ControlLoop:
         params = {
             "kappa": bp.kappa, "law": bp.law, "gain": bp.gain, "formation_edge": bp.formation_edge,
             "formation_gain": bp.formation_gain, "safety_enabled": sp.enabled, "safety_distance": sp.safety_distance,
-            "gamma": sp.gamma, "class_k": sp.class_k, "moving_density": density_params.moving,
+            "gamma": sp.gamma, "class_k": sp.class_k, "barrier_mode": sp.mode, "moving_density": density_params.moving,
             "max_speed": self.config.max_speed,
         }
         timing = {name: b - a for name, a, b in zip(("sense", "inputs", "control", "safety", "actuate"),

@@ -12,7 +12,10 @@ camera (the rectified overhead image of the Frame's ``image_ref``, when an
 image provider is given; the density heat map is then drawn translucent over
 it), grid, density heat map, Voronoi edges, filled cells, centroids, robots,
 labels, nominal arrows, safe arrows, barrier pairs, safety discs, trails,
-contacts. Colours: robots blue; robots whose command the barrier changed
+contacts. It scales to a thousand robots: robots are one batched mesh and the
+Voronoi edges one line-segment node whatever N; labels exist only up to
+``SceneStyle.max_labels`` robots and the per-robot glyphs (arrows, safety discs,
+trails) only up to ``max_glyphs``; the heat map keeps under ``heatmap_max_px`` pixels. Colours: robots blue; robots whose command the barrier changed
 orange; stopped (emergency stop) red; paused slate; not seen grey.
 """
 from __future__ import annotations
@@ -42,6 +45,7 @@ UNSEEN = np.array([160, 160, 160], dtype=np.uint8)
 # Heat map colours (low → high φ): near-white → light orange → red-orange.
 _LUT_STOPS = np.array([[250, 250, 246], [254, 227, 180], [253, 174, 97], [227, 74, 51]], dtype=float)
 _EMPTY_SEG = np.array([[[0.0, 0.0, -5.0], [0.0, 0.0, -5.0]]], dtype=np.float32)
+_PER_ROBOT_GLYPHS = frozenset({"nominal", "safe", "discs", "trails"})  # hidden above SceneStyle.max_glyphs robots
 
 
 def _lut() -> NDArray[np.uint8]:
@@ -64,6 +68,9 @@ class SceneStyle:
     disc_segments: int = 20
     label_offset: float = 0.07
     overlay_alpha: tuple[float, float] = (0.15, 0.6)  # heat map opacity over the camera picture, φ = 0 … max φ
+    max_labels: int = 100  # robot labels (one scene node each) only up to this many robots
+    max_glyphs: int = 300  # per-robot arrows, safety discs and trails only up to this many robots
+    heatmap_max_px: int = 40_000  # the heat map's resolution drops on large arenas to stay under this
 
 
 def robot_mesh(radius: float) -> tuple[NDArray[np.float32], NDArray[np.uint32]]:
@@ -158,6 +165,7 @@ class ArenaScene:
         self.robot_radius = robot_radius
         self.visible = {name: name not in DEFAULT_OFF for name in LAYERS}
         self._n = -1
+        self._many = False
         self._labels: list[Any] = []
         self._last_tick: int | None = None
         self._trail: NDArray[np.float64] | None = None
@@ -231,7 +239,10 @@ class ArenaScene:
                          font_size_mode="screen", font_screen_scale=0.8, anchor="center-center",
                          visible=self.visible["labels"])
             for i, p in zip(frame.ids, frame.poses)
-        ]
+        ] if n <= self.style.max_labels else []  # a thousand label nodes would swamp the browser
+        self._many = n > self.style.max_glyphs
+        for name in ("nominal", "safe", "discs", "trails"):  # per-robot glyphs: only for small swarms
+            self._apply_visibility(name)
         self._label_xy = frame.poses[:, :2].copy()
         self._n = n
         self._trail = None
@@ -245,7 +256,7 @@ class ArenaScene:
             return
         h = self._h.get(name)
         if h is not None:
-            h.visible = self.visible[name]
+            h.visible = self.visible[name] and not (self._many and name in _PER_ROBOT_GLYPHS)
 
     def set_layer(self, name: str, visible: bool) -> None:
         """Show or hide one layer (``LAYERS``); ValueError for unknown names."""
@@ -288,7 +299,9 @@ class ArenaScene:
             self._draw_camera(frame.image_ref)
         if v["density"] and frame.density is not None:
             over_camera = v["camera"] and self._h.get("camera") is not None
-            self._h["density"].image = heatmap(frame.density, self.bounds, st.heatmap_px_per_m,
+            x0, x1, y0, y1 = self.bounds
+            px_per_m = min(st.heatmap_px_per_m, math.sqrt(st.heatmap_max_px / ((x1 - x0) * (y1 - y0))))
+            self._h["density"].image = heatmap(frame.density, self.bounds, px_per_m,
                                                st.overlay_alpha if over_camera else None)
         cov = frame.coverage
         if v["voronoi"]:
@@ -306,9 +319,10 @@ class ArenaScene:
             self._h["centroids"].points = cp
         if v["cells"]:
             self._draw_cells(frame)
-        if v["nominal"]:
+        glyphs = not self._many
+        if v["nominal"] and glyphs:
             self._h["nominal"].points = self._arrows(pts, frame.nominal, 0.02)
-        if v["safe"]:
+        if v["safe"] and glyphs:
             self._h["safe"].points = self._arrows(pts, frame.safe, 0.025)
         b = frame.barrier
         if v["barrier"]:
@@ -320,7 +334,7 @@ class ArenaScene:
             else:
                 h.points = _EMPTY_SEG
                 h.colors = np.array([230, 40, 20], dtype=np.uint8)
-        if v["discs"]:
+        if v["discs"] and glyphs:
             d_s = b.safety_distance if b is not None else 0.17
             self._h["discs"].points = self._discs(pts, 0.5 * d_s)
         self._update_trails(frame)  # accumulates even while hidden, so showing trails is instant
@@ -380,7 +394,7 @@ class ArenaScene:
             self._trail[-1] = xy
         else:
             return
-        if not self.visible["trails"]:
+        if not self.visible["trails"] or self._many:
             return
         tr = self._trail  # (L, N, 2), oldest first
         a = tr[:-1].transpose(1, 0, 2).reshape(-1, 2)
