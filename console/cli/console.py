@@ -146,10 +146,10 @@ def main(args: argparse.Namespace) -> int:
     app.start()
     if port and app.port != port:
         print(f"swarmdeck console: port {port} is in use; serving on port {app.port} instead", file=sys.stderr)
-    print(f"swarmdeck console: {app.url}  ({config.n_robots} robots, {loop.behaviour_name}; Ctrl-C to stop)",
-          flush=True)
-    restore = _stop_on_signals()
+    restore = _stop_on_signals()  # before the URL line: whoever reads it may signal at once
     try:
+        print(f"swarmdeck console: {app.url}  ({config.n_robots} robots, {loop.behaviour_name}; Ctrl-C to stop)",
+              flush=True)
         app.wait(args.duration)
     except KeyboardInterrupt:
         print("swarmdeck console: stopping (robots stopped)", file=sys.stderr)
