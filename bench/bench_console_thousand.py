@@ -4,7 +4,7 @@ Run: ``.venv/bin/python bench/bench_console_thousand.py`` (a few minutes).
 
 Real ``ControlLoop`` ticks (simulated robots, coverage on the moving density, the barrier in
 "auto" mode: distributed above 200 robots) on arenas that hold N at the console's layout spacing
-(3.2 × 2, 6 × 4, 10 × 6 m). Per tick, medians over the measured ticks: *tick* = ``loop.tick()``,
+(3.2 × 2, 8 × 5, 10 × 6 m). Per tick, medians over the measured ticks: *tick* = ``loop.tick()``,
 *scene* = ``ArenaScene.draw`` of that frame into a viser server (what the viewer thread does),
 *record* = the recorder's writer-thread CPU per frame (``Recorder`` with its defaults, the
 Foxglove channels included, writing the same frames afterwards). CPU = process CPU time
@@ -31,7 +31,7 @@ from swarmdeck.console.runtime.config import arena_bounds  # noqa: E402
 from swarmdeck.console.runtime.loop import ControlLoop, LoopConfig, SafetyParams  # noqa: E402
 from swarmdeck.console.web.scene import ArenaScene  # noqa: E402
 
-ARENAS = {100: "3.2x2", 500: "6x4", 1000: "10x6"}
+ARENAS = {100: "3.2x2", 500: "8x5", 1000: "10x6"}
 
 
 def measure(n: int, mode: str, ticks: int, with_scene: bool) -> dict:

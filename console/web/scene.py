@@ -287,7 +287,7 @@ class ArenaScene:
             h.batched_positions = np.column_stack((poses[:, :2], np.full(frame.n, 0.01))).astype(np.float32)
             h.batched_wxyzs = _yaw_wxyz(poses[:, 2])
             h.batched_colors = robot_colors(frame)
-        if v["labels"]:
+        if v["labels"] and self._labels:  # no labels above SceneStyle.max_labels robots
             # One message per label, in the same atomic update as the robots: every label whose robot
             # moved at all is moved to it (a "moved enough" threshold left labels trailing their robots).
             moved = np.flatnonzero(np.any(poses[:, :2] != self._label_xy, axis=1))
