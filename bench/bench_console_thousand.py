@@ -82,9 +82,9 @@ def main() -> int:
     print("| N | arena (m) | barrier | tick CPU ms | tick wall ms | scene CPU ms | record CPU ms | "
           "loop budget ms | ticks/s (1 / budget) |")
     print("| ---: | --- | --- | ---: | ---: | ---: | ---: | ---: | ---: |")
-    for n, ticks in ((100, 40), (500, 25), (1000, 25)):
+    for n, ticks in ((100, 23), (500, 13), (1000, 13)):
         for mode in ("auto", "centralised"):
-            r = measure(n, mode, ticks if mode == "auto" else max(8, ticks // 3), with_scene=mode == "auto")
+            r = measure(n, mode, ticks if mode == "auto" else 8, with_scene=mode == "auto")
             budget = r["tick_cpu"] + (0 if r["scene_cpu"] != r["scene_cpu"] else r["scene_cpu"]) + r["rec_cpu"]
             label = "auto (distributed)" if mode == "auto" and n > 200 else mode
             scene = "—" if r["scene_cpu"] != r["scene_cpu"] else f"{1e3 * r['scene_cpu']:.1f}"
