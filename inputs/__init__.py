@@ -7,7 +7,7 @@ See ``hub.py`` for how the console constructs and polls the listeners.
 from .calibration import Calibration
 from .capture import Capture, Datagram, read_jsonl, replay, write_jsonl
 from .config import ConfigError, InputConfig, ListenerConfig
-from .contact import Contact, ContactEvent, InputSnapshot, SourceHealth
+from .contact import Contact, ContactEvent, InputSnapshot, InputWork, SourceHealth
 from .density import ContactDensity, DensityConfig
 from .hub import InputHub
 from .listener import InputSource, TcpListener, UdpListener, make_listener
@@ -16,7 +16,7 @@ from .pointstream import PRESETS, PointStreamConfig
 
 __all__ = [
     "Calibration", "Capture", "ConfigError", "Contact", "ContactDensity", "ContactEvent", "Datagram",
-    "DensityConfig", "InputConfig", "InputHub", "InputSnapshot", "InputSource", "ListenerConfig",
+    "DensityConfig", "InputConfig", "InputHub", "InputSnapshot", "InputSource", "InputWork", "ListenerConfig",
     "MalformedDatagram", "PRESETS", "PointStreamConfig", "SourceHealth", "TcpListener", "UdpListener",
     "make_listener", "parse_datagram", "read_jsonl", "replay", "write_jsonl",
 ]
