@@ -19,7 +19,8 @@ from swarmdeck.coverage.densities import (AnalyticDensity, Bump, Constant, Fixed
 from swarmdeck.coverage.density import Density, GaussianMixture
 from swarmdeck.coverage.image import image_density, letter_image
 from swarmdeck.coverage.jacobian import EdgeOptions, centroid_jacobian
-from swarmdeck.coverage.laws import LAWS, parse_law, saturate
+from swarmdeck.core.kinematics import saturate
+from swarmdeck.coverage.laws import LAWS, parse_law
 from swarmdeck.coverage.packing import packing_warning, predicted_spacing
 from swarmdeck.coverage.quadrature import CellMoments, QuadratureOptions, cell_moments
 from swarmdeck.coverage.raster import raster_moments

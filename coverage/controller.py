@@ -21,11 +21,12 @@ from scipy.spatial import QhullError
 
 from swarmdeck.coverage.density import Density, GaussianMixture
 from swarmdeck.coverage.jacobian import EdgeOptions, centroid_jacobian
-from swarmdeck.coverage.laws import law_command, parse_law, saturate
+from swarmdeck.core.bounds import DEFAULT_BOUNDS, Bounds, check_bounds
+from swarmdeck.core.kinematics import saturate
+from swarmdeck.coverage.laws import law_command, parse_law
 from swarmdeck.coverage.packing import packing_warning
 from swarmdeck.coverage.quadrature import QuadratureOptions, cell_moments
-from swarmdeck.coverage.voronoi import (DEFAULT_BOUNDS, bounded_voronoi, check_bounds,
-                                        precondition_positions)
+from swarmdeck.coverage.voronoi import bounded_voronoi, precondition_positions
 
 __all__ = ["CoverageConfig", "CoverageState", "CoverageController", "coverage_tick"]
 
@@ -45,7 +46,7 @@ class CoverageConfig:
     law: str = "tvd-d1"
     kappa: float = 1.0
     max_speed: float | None = 0.2
-    bounds: tuple[float, float, float, float] = DEFAULT_BOUNDS
+    bounds: Bounds = DEFAULT_BOUNDS
     hops: int = 2
     allow_centralised: bool = False
     safety_distance: float = 0.17

@@ -16,6 +16,8 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import NDArray
 
+from swarmdeck.core.smooth import smoothstep
+from swarmdeck.core.bounds import DEFAULT_BOUNDS, Bounds
 from swarmdeck.coverage.density import GaussianMixture
 
 __all__ = ["Constant", "Sine", "Pulse", "Fixed", "Orbit", "Lissajous", "Linear", "Bump",
@@ -54,15 +56,6 @@ class Sine:
         return (self.mean + self.amplitude * np.sin(arg), self.amplitude * w * np.cos(arg))
 
 
-def _smoothstep(x: float) -> tuple[float, float]:
-    """s(x) = 3x² − 2x³ on [0, 1] (clamped) and s'(x)."""
-    if x <= 0.0:
-        return 0.0, 0.0
-    if x >= 1.0:
-        return 1.0, 0.0
-    return 3 * x * x - 2 * x ** 3, 6 * x - 6 * x * x
-
-
 @dataclass(frozen=True)
 class Pulse:
     """level · s((t − t_on)/ramp) · (1 − s((t − t_off)/ramp)): fades in over ``ramp`` seconds from
@@ -86,11 +79,11 @@ class Pulse:
     def __call__(self, t: float) -> tuple[float, float]:
         if self.period is not None:
             t = t % self.period
-        a, da = _smoothstep((t - self.t_on) / self.ramp)
-        b, db = _smoothstep((t - self.t_off) / self.ramp) if np.isfinite(self.t_off) else (0.0, 0.0)
+        a, da = smoothstep((t - self.t_on) / self.ramp)
+        b, db = smoothstep((t - self.t_off) / self.ramp) if np.isfinite(self.t_off) else (0.0, 0.0)
         val = self.level * a * (1.0 - b)
         rate = self.level * (da * (1.0 - b) - a * db) / self.ramp
-        return val, rate
+        return float(val), float(rate)
 
 
 # ---------------------------------------------------------------- trajectories
@@ -232,7 +225,7 @@ def s1_density() -> AnalyticDensity:
     return AnalyticDensity(0.05, (Bump(Orbit((0.0, 0.0), 0.6, 20.0), Constant(0.4), Constant(1.0)),))
 
 
-def moving_density(bounds: tuple[float, float, float, float] = (-1.6, 1.6, -1.0, 1.0)
+def moving_density(bounds: Bounds = DEFAULT_BOUNDS
                    ) -> AnalyticDensity:
     """Demo density: one bump orbiting, one breathing on a Lissajous path, one elongated bump
     that rocks back and forth and fades in and out every 16 s, all scaled to ``bounds``."""

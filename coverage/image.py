@@ -14,6 +14,7 @@ import cv2
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from swarmdeck.core.bounds import DEFAULT_BOUNDS, Bounds
 from swarmdeck.coverage.density import GaussianMixture
 
 __all__ = ["image_density", "letter_image", "load_grey"]
@@ -50,7 +51,7 @@ def letter_image(text: str = "R", height: int = 200, width: int = 320) -> NDArra
 
 
 def image_density(image: str | Path | ArrayLike,
-                  bounds: tuple[float, float, float, float] = (-1.6, 1.6, -1.0, 1.0),
+                  bounds: Bounds = DEFAULT_BOUNDS,
                   floor: float = 0.05, columns: int = 16, invert: bool = True,
                   threshold: float = 0.02) -> GaussianMixture:
     """Density from a grey image: a path, or an array (H, W) of grey values (uint8 0–255 or

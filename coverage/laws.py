@@ -52,21 +52,6 @@ def parse_law(law: str, hops: int = 2) -> tuple[str, int]:
                      "or tvd-d<k> (k >= 1)")
 
 
-def saturate(u: ArrayLike, max_speed: float | None) -> NDArray[np.float64]:
-    """Scale each robot's velocity (N, 2) [m/s] down to norm ≤ ``max_speed`` (direction kept).
-
-    ``None`` or inf leaves u unchanged. Non-finite rows become zero. Returns a new array.
-    """
-    v = np.array(u, dtype=float)
-    bad = ~np.all(np.isfinite(v), axis=1)
-    v[bad] = 0.0
-    if max_speed is None or not np.isfinite(max_speed):
-        return v
-    speed = np.hypot(v[:, 0], v[:, 1])
-    scale = np.minimum(1.0, max_speed / np.maximum(speed, 1e-300))
-    return v * scale[:, None]
-
-
 def law_command(family: str, k: int, kappa: float, positions: NDArray[np.float64],
                 centroids: NDArray[np.float64], dc_dt: NDArray[np.float64],
                 jacobian: sp.sparray | None) -> NDArray[np.float64]:

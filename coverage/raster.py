@@ -10,6 +10,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 from scipy.spatial import cKDTree
 
+from swarmdeck.core.bounds import DEFAULT_BOUNDS, Bounds
 from swarmdeck.coverage.density import GaussianMixture
 from swarmdeck.coverage.quadrature import CellMoments
 
@@ -17,7 +18,7 @@ __all__ = ["raster_moments"]
 
 
 def raster_moments(points: ArrayLike, density: GaussianMixture,
-                   bounds: tuple[float, float, float, float] = (-1.6, 1.6, -1.0, 1.0),
+                   bounds: Bounds = DEFAULT_BOUNDS,
                    h: float = 0.005) -> CellMoments:
     """Midpoint-rule moments on a grid of spacing ≈ h [m] labelled by the nearest robot."""
     p = np.asarray(points, dtype=float)

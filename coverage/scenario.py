@@ -12,10 +12,12 @@ from dataclasses import dataclass, replace
 import numpy as np
 from numpy.typing import NDArray
 
+from swarmdeck.core.bounds import DEFAULT_BOUNDS
 from swarmdeck.coverage.controller import CoverageConfig
 from swarmdeck.coverage.densities import s1_density
 from swarmdeck.coverage.jacobian import centroid_jacobian
-from swarmdeck.coverage.laws import law_command, parse_law, saturate
+from swarmdeck.core.kinematics import saturate
+from swarmdeck.coverage.laws import law_command, parse_law
 from swarmdeck.coverage.quadrature import QuadratureOptions, cell_moments
 from swarmdeck.coverage.voronoi import bounded_voronoi
 
@@ -33,7 +35,7 @@ S1_REFERENCE: dict[str, tuple[float, float]] = {
 S1_T0 = {"H": 0.159274, "mass": 1.306659, "c": (-1.04205, -0.62228),
          "dc_dt": (-0.0043961, -0.00083564)}
 
-S1_BOUNDS = (-1.6, 1.6, -1.0, 1.0)
+S1_BOUNDS = DEFAULT_BOUNDS
 S1_DT = 0.033
 S1_STEPS = 1212
 

@@ -24,25 +24,16 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.spatial import Delaunay, QhullError, cKDTree
 
-__all__ = ["BoundedVoronoi", "bounded_voronoi", "precondition_positions", "check_bounds",
-           "DEFAULT_BOUNDS"]
+from swarmdeck.core.bounds import DEFAULT_BOUNDS, Bounds, check_bounds
 
-DEFAULT_BOUNDS: tuple[float, float, float, float] = (-1.6, 1.6, -1.0, 1.0)
+__all__ = ["BoundedVoronoi", "bounded_voronoi", "precondition_positions"]
+
 _GOLDEN_ANGLE = np.pi * (3.0 - np.sqrt(5.0))
-
-
-def check_bounds(bounds: ArrayLike) -> tuple[float, float, float, float]:
-    """Validate ``(x_min, x_max, y_min, y_max)`` [m]; returns it as a tuple of floats."""
-    b = np.asarray(bounds, dtype=float)
-    if b.shape != (4,) or not np.all(np.isfinite(b)) or b[0] >= b[1] or b[2] >= b[3]:
-        raise ValueError(f"bounds must be (x_min, x_max, y_min, y_max) with x_min < x_max and "
-                         f"y_min < y_max, got {bounds!r}")
-    return (float(b[0]), float(b[1]), float(b[2]), float(b[3]))
 
 
 def precondition_positions(
     positions: ArrayLike,
-    bounds: tuple[float, float, float, float] = DEFAULT_BOUNDS,
+    bounds: Bounds = DEFAULT_BOUNDS,
     wall_margin: float = 1e-6,
     min_separation: float = 1e-3,
 ) -> tuple[NDArray[np.float64], int]:
@@ -261,7 +252,7 @@ def _diagram(points: NDArray[np.float64], bounds: tuple[float, float, float, flo
 
 
 def bounded_voronoi(points: ArrayLike,
-                    bounds: tuple[float, float, float, float] = DEFAULT_BOUNDS) -> BoundedVoronoi:
+                    bounds: Bounds = DEFAULT_BOUNDS) -> BoundedVoronoi:
     """Bounded Voronoi diagram of ``points`` (N, 2) [m] strictly inside ``bounds``.
 
     Call :func:`precondition_positions` first for raw robot positions. The result is checked:

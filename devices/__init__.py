@@ -1,4 +1,5 @@
-"""swarmdeck.devices: the GRITSBot model, the simulated arena and the experiment API.
+"""swarmdeck.devices: the simulated arena and the experiment API (the GRITSBot's model is
+:mod:`swarmdeck.core.kinematics`, re-exported here for experiments).
 
 The :class:`Arena` is what experiments program against, at any abstraction
 level of the paper (wheel speeds, unicycle, single integrator, go-to-goal,
@@ -12,20 +13,21 @@ from swarmdeck.devices.controllers import (
     at_position,
     clf_unicycle_pose_controller,
     clf_unicycle_position_controller,
-    saturate_norm,
     si_position_controller,
 )
-from swarmdeck.devices.gritsbot import (
+from swarmdeck.devices.gritsbot import unicycle_step, wrap_angle
+from swarmdeck.devices.initial_conditions import max_robots, random_initial_poses
+from swarmdeck.core.kinematics import (
     GritsBotParams,
     limit_unicycle,
-    unicycle_step,
+    lookahead_points,
+    saturate,
+    si_to_unicycle,
+    unicycle_to_si,
     unicycle_to_wheels,
     wheel_scale,
     wheels_to_unicycle,
-    wrap_angle,
 )
-from swarmdeck.devices.initial_conditions import max_robots, random_initial_poses
-from swarmdeck.core.kinematics import lookahead_points, si_to_unicycle, unicycle_to_si
 from swarmdeck.devices.simulator import ArenaConfig, SimulatedArena
 from swarmdeck.devices.validation import ValidationReport, ValidationRules, colliding_pairs, out_of_bounds
 
@@ -56,6 +58,6 @@ __all__ = [*_LAZY,
     "RobotBackend", "RunDefaults", "RUN_DEFAULTS", "SimulatedArena", "ValidationReport", "ValidationRules",
     "at_pose", "at_position", "clf_unicycle_pose_controller", "clf_unicycle_position_controller",
     "colliding_pairs", "limit_unicycle", "lookahead_points", "max_robots", "out_of_bounds",
-    "random_initial_poses", "saturate_norm", "si_position_controller", "si_to_unicycle", "unicycle_step",
+    "random_initial_poses", "saturate", "si_position_controller", "si_to_unicycle", "unicycle_step",
     "unicycle_to_si", "unicycle_to_wheels", "wheel_scale", "wheels_to_unicycle", "wrap_angle",
 ]

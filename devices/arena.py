@@ -32,8 +32,7 @@ from swarmdeck.devices.controllers import (
     clf_unicycle_position_controller,
     si_position_controller,
 )
-from swarmdeck.devices.gritsbot import GritsBotParams, wheels_to_unicycle
-from swarmdeck.core.kinematics import lookahead_points, unicycle_to_si
+from swarmdeck.core.kinematics import GritsBotParams, lookahead_points, unicycle_to_si, wheels_to_unicycle
 from swarmdeck.devices.pipeline import barrier_filter, certify
 from swarmdeck.devices.simulator import ArenaConfig, SimulatedArena, check_poses
 

@@ -14,7 +14,7 @@ from typing import Protocol, runtime_checkable
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from swarmdeck.devices.gritsbot import GritsBotParams
+from swarmdeck.core.kinematics import GritsBotParams
 
 
 @runtime_checkable

@@ -13,18 +13,10 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from swarmdeck.core.kinematics import saturate, si_to_unicycle
 from swarmdeck.devices.gritsbot import wrap_angle
-from swarmdeck.core.kinematics import si_to_unicycle
 
 FloatArray = NDArray[np.float64]
-
-
-def saturate_norm(u: ArrayLike, limit: float) -> FloatArray:
-    """Scale each row of ``u`` (N, 2) down so that its norm is at most ``limit`` (a new array)."""
-    u = np.asarray(u, dtype=float)
-    n = np.linalg.norm(u, axis=1)
-    scale = np.where(n > limit, limit / np.maximum(n, 1e-300), 1.0)
-    return u * scale[:, None]
 
 
 def si_position_controller(
@@ -36,7 +28,7 @@ def si_position_controller(
     """
     positions = np.asarray(positions, dtype=float)
     goals = np.asarray(goals, dtype=float)
-    return saturate_norm(gain * (goals - positions), speed_limit)
+    return saturate(gain * (goals - positions), speed_limit)
 
 
 def clf_unicycle_position_controller(
@@ -135,7 +127,7 @@ class HybridPoseController:
         turn = ~approach & (np.abs(heading_err) > self.rotation_error)
         # As in rps: the centre's position error is used as the look-ahead point's velocity,
         # whose equilibrium puts the centre (not the look-ahead point) on the goal.
-        u = saturate_norm(goals[:, :2] - poses[:, :2], self.speed_limit)
+        u = saturate(goals[:, :2] - poses[:, :2], self.speed_limit)
         v_app, w_app = si_to_unicycle(poses, u, self.lookahead)
         v = np.where(approach, v_app, 0.0)
         w = np.where(approach, w_app, np.where(turn, self.angular_gain * heading_err, 0.0))

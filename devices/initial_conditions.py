@@ -11,7 +11,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
-Bounds = tuple[float, float, float, float]
+from swarmdeck.core.bounds import DEFAULT_BOUNDS, Bounds
 
 
 def lattice_sites(bounds: Bounds, spacing: float, wall_margin: float) -> NDArray[np.float64]:
@@ -36,7 +36,7 @@ def lattice_sites(bounds: Bounds, spacing: float, wall_margin: float) -> NDArray
 
 
 def max_robots(
-    bounds: Bounds = (-1.6, 1.6, -1.0, 1.0), spacing: float = 0.245, min_separation: float = 0.23, wall_margin: float = 0.13
+    bounds: Bounds = DEFAULT_BOUNDS, spacing: float = 0.245, min_separation: float = 0.23, wall_margin: float = 0.13
 ) -> int:
     """The largest N :func:`random_initial_poses` can place with these settings."""
     return int(len(lattice_sites(bounds, spacing, wall_margin + (spacing - min_separation) / 2.0)))
@@ -44,7 +44,7 @@ def max_robots(
 
 def random_initial_poses(
     n: int,
-    bounds: Bounds = (-1.6, 1.6, -1.0, 1.0),
+    bounds: Bounds = DEFAULT_BOUNDS,
     *,
     spacing: float = 0.245,
     min_separation: float = 0.23,

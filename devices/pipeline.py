@@ -37,8 +37,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from swarmdeck.core.kinematics import lookahead_points, si_to_unicycle, unicycle_to_si
-from swarmdeck.devices.gritsbot import GritsBotParams, limit_unicycle
+from swarmdeck.core.kinematics import GritsBotParams, limit_unicycle, lookahead_points, si_to_unicycle, unicycle_to_si
 
 FloatArray = NDArray[np.float64]
 BoolArray = NDArray[np.bool_]
@@ -85,11 +84,9 @@ def barrier_filter(robot: GritsBotParams, bounds: tuple[float, float, float, flo
     ``barrier``: further :class:`~swarmdeck.safety.BarrierConfig` fields (``safety_distance``,
     ``gamma``, ``class_k``, ``max_speed``); their defaults are REFERENCE.md's.
     """
-    from swarmdeck.safety import BarrierConfig, UnicycleParams, UnicycleSafetyFilter  # devices -> safety (one way)
+    from swarmdeck.safety import BarrierConfig, UnicycleSafetyFilter  # devices -> safety (one way)
 
-    params = UnicycleParams(wheel_radius=robot.wheel_radius, axle_length=robot.axle_length,
-                            max_wheel_speed=robot.max_wheel_speed, lookahead=robot.lookahead)
-    return UnicycleSafetyFilter(BarrierConfig(bounds=bounds, dt=dt, **barrier), params)
+    return UnicycleSafetyFilter(BarrierConfig(bounds=bounds, dt=dt, **barrier), robot)
 
 
 def is_unicycle_filter(filt: Any) -> bool:

@@ -1,7 +1,7 @@
 """The Robotarium's constants under the names rps uses (REFERENCE.md §1)."""
 import numpy as np
 
-from swarmdeck.devices.gritsbot import GritsBotParams
+from swarmdeck.core.kinematics import GritsBotParams
 
 _P = GritsBotParams()
 time_step = 0.033

@@ -13,7 +13,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from swarmdeck.core.ports import SensedPoses
-from swarmdeck.devices.gritsbot import GritsBotParams
+from swarmdeck.core.kinematics import GritsBotParams
 from swarmdeck.devices.initial_conditions import max_robots, random_initial_poses
 from swarmdeck.devices.simulator import ArenaConfig, SimulatedArena
 

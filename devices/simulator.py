@@ -13,12 +13,12 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from swarmdeck.core.bounds import DEFAULT_BOUNDS, Bounds, check_bounds
 from swarmdeck.devices.clock import RealTimePacer, VirtualClock
-from swarmdeck.devices.gritsbot import GritsBotParams, limit_unicycle, unicycle_step, wrap_angle
+from swarmdeck.core.kinematics import GritsBotParams, limit_unicycle
+from swarmdeck.devices.gritsbot import unicycle_step, wrap_angle
 from swarmdeck.devices.initial_conditions import random_initial_poses
 from swarmdeck.devices.validation import ValidationReport, ValidationRules
-
-Bounds = tuple[float, float, float, float]
 
 
 @dataclass(frozen=True)
@@ -32,15 +32,13 @@ class ArenaConfig:
         seed: seed for random initial conditions (None: fresh entropy).
     """
 
-    bounds: Bounds = (-1.6, 1.6, -1.0, 1.0)
+    bounds: Bounds = DEFAULT_BOUNDS
     dt: float = 0.033
     real_time: bool = False
     seed: int | None = None
 
     def __post_init__(self) -> None:
-        x0, x1, y0, y1 = (float(b) for b in self.bounds)
-        if not all(np.isfinite([x0, x1, y0, y1])) or not (x1 > x0 and y1 > y0):
-            raise ValueError(f"ArenaConfig.bounds must be finite (x_min < x_max, y_min < y_max), got {self.bounds!r}")
+        check_bounds(self.bounds, "ArenaConfig.bounds")
         if not (np.isfinite(self.dt) and 0 < self.dt <= 1.0):
             raise ValueError(f"ArenaConfig.dt must be in (0, 1] s, got {self.dt!r}")
 

@@ -13,7 +13,8 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-Bounds = tuple[float, float, float, float]
+from swarmdeck.core.bounds import Bounds
+from swarmdeck.core.kinematics import lookahead_points
 
 
 @dataclass(frozen=True)
@@ -48,7 +49,7 @@ def colliding_pairs(poses: ArrayLike, rules: ValidationRules = ValidationRules()
     p = np.asarray(poses, dtype=float)
     if p.shape[0] < 2:
         return np.empty((0, 2), dtype=np.intp)
-    shifted = p[:, :2] + rules.collision_shift * np.column_stack((np.cos(p[:, 2]), np.sin(p[:, 2])))
+    shifted = lookahead_points(p, rules.collision_shift)  # rps shifts each centre ahead along its heading
     # Chebyshev candidates, then the exact distance by hypot: the Euclidean k-d tree squares
     # coordinates and raises for finite positions beyond ~1e154 m
     cand = cKDTree(shifted).query_pairs(rules.collision_distance, p=np.inf, output_type="ndarray")

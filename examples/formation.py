@@ -11,7 +11,7 @@ import numpy as np
 
 from swarmdeck.coverage.graphs import rigid_formation
 from swarmdeck.coverage.group import formation_control, formation_errors
-from swarmdeck.devices import Arena, saturate_norm
+from swarmdeck.devices import Arena, saturate
 
 
 def experiment(arena: Arena, edge_length: float = 0.4, alpha: float = 4.0) -> dict:
@@ -25,7 +25,7 @@ def experiment(arena: Arena, edge_length: float = 0.4, alpha: float = 4.0) -> di
     end = arena.duration if arena.duration is not None else 40.0
     while arena.time < end - 1e-9:
         p = arena.positions()
-        arena.set_velocities(saturate_norm(formation_control(p, edges, distances, alpha), arena.params.max_speed))
+        arena.set_velocities(saturate(formation_control(p, edges, distances, alpha), arena.params.max_speed))
         arena.step()
     errors = formation_errors(arena.positions(), edges, distances)
     return {"largest edge-length error (m)": float(errors.max()), "mean edge-length error (m)": float(errors.mean())}

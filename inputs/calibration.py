@@ -19,8 +19,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-DEFAULT_BOUNDS: tuple[float, float, float, float] = (-1.6, 1.6, -1.0, 1.0)
-
+from swarmdeck.core.bounds import DEFAULT_BOUNDS, Bounds, check_bounds
 
 @dataclass(frozen=True)
 class Calibration:
@@ -39,12 +38,10 @@ class Calibration:
     rotation: float = 0.0
     scale: tuple[float, float] = (1.0, 1.0)
     offset: tuple[float, float] = (0.0, 0.0)
-    bounds: tuple[float, float, float, float] = DEFAULT_BOUNDS
+    bounds: Bounds = DEFAULT_BOUNDS
 
     def __post_init__(self) -> None:
-        x0, x1, y0, y1 = (float(b) for b in self.bounds)
-        if not (x1 > x0 and y1 > y0) or not all(map(math.isfinite, (x0, x1, y0, y1))):
-            raise ValueError(f"calibration bounds must be (x_min, x_max, y_min, y_max) with min < max, got {self.bounds}")
+        check_bounds(self.bounds, "calibration bounds")
         vals = (self.rotation, *self.scale, *self.offset)
         if len(self.scale) != 2 or len(self.offset) != 2 or not all(map(math.isfinite, vals)):
             raise ValueError(f"calibration scale and offset must be pairs of finite numbers, got scale={self.scale} offset={self.offset}")

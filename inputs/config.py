@@ -35,7 +35,8 @@ import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from .calibration import DEFAULT_BOUNDS, Calibration
+from swarmdeck.core.bounds import DEFAULT_BOUNDS, Bounds, check_bounds
+from .calibration import Calibration
 from .density import DensityConfig
 from .pointstream import PRESETS, PointStreamConfig
 
@@ -170,7 +171,7 @@ class InputConfig:
 
     listeners: tuple[ListenerConfig, ...] = (ListenerConfig(),)
     density: DensityConfig = field(default_factory=DensityConfig)
-    bounds: tuple[float, float, float, float] = DEFAULT_BOUNDS
+    bounds: Bounds = DEFAULT_BOUNDS
 
     @classmethod
     def from_dict(cls, d: dict) -> "InputConfig":
@@ -180,12 +181,7 @@ class InputConfig:
         extra = set(d) - {"listeners", "density", "bounds"}
         if extra:
             raise ConfigError(f"unknown [inputs] keys {sorted(extra)}; expected listeners, density, bounds")
-        try:
-            bounds = tuple(float(v) for v in d.get("bounds", DEFAULT_BOUNDS))
-        except (TypeError, ValueError):
-            raise ConfigError(f"[inputs] bounds must be 4 numbers (x_min, x_max, y_min, y_max), got {d['bounds']!r}") from None
-        if len(bounds) != 4 or not (bounds[0] < bounds[1] and bounds[2] < bounds[3]):
-            raise ConfigError(f"[inputs] bounds must be (x_min, x_max, y_min, y_max) with min < max, got {bounds}")
+        bounds = check_bounds(d.get("bounds", DEFAULT_BOUNDS), "[inputs] bounds", ConfigError)
         raw = d.get("listeners", [{}])
         if not isinstance(raw, list):
             raise ConfigError("[inputs] listeners must be an array of tables ([[inputs.listeners]])")

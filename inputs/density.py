@@ -30,6 +30,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from swarmdeck.core.smooth import inverse_smoothstep, smoothstep
 from swarmdeck.coverage import GaussianMixture
 
 from .contact import Contact
@@ -86,18 +87,6 @@ class DensityConfig:
         if extra:
             raise ValueError(f"unknown density keys {sorted(extra)}; expected some of {sorted(known)}")
         return cls(**d)
-
-
-def smoothstep(u: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """S(u) = 3u² − 2u³ on u clipped to [0, 1] and dS/du (0 outside (0, 1))."""
-    uc = np.clip(u, 0.0, 1.0)
-    return uc * uc * (3.0 - 2.0 * uc), 6.0 * uc * (1.0 - uc)
-
-
-def _inverse_smoothstep(f: float) -> float:
-    """u in [0, 1] with S(u) = f."""
-    f = min(max(f, 0.0), 1.0)
-    return 0.5 - math.sin(math.asin(1.0 - 2.0 * f) / 3.0)
 
 
 class _Bump:
@@ -160,7 +149,7 @@ class ContactDensity:
                 continue
             if b.t_up < math.inf:  # came back while fading out: fade in from the current level
                 f = self._fade(b, t)
-                b.t_down = t - _inverse_smoothstep(f) * cfg.fade
+                b.t_down = t - inverse_smoothstep(f) * cfg.fade
                 b.t_up = math.inf
                 live += 1
             b.p, b.v, b.t_ref = p, v, float(t)
@@ -173,7 +162,7 @@ class ContactDensity:
                 b.v = np.zeros(2)
                 b.t_ref = t
                 # fade out from the current level (continuous weight if still fading in)
-                b.t_up = t - _inverse_smoothstep(1.0 - f) * cfg.fade
+                b.t_up = t - inverse_smoothstep(1.0 - f) * cfg.fade
                 b.t_down = -math.inf
                 # keep the weight continuous: w = W·f before, W·(1 − S(u)) after
             elif t - b.t_up >= cfg.fade:

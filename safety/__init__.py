@@ -6,17 +6,13 @@ for single-integrator controlled points (look-ahead points), and
 for unicycle robots with wheel limits (REFERENCE.md §3, paper §IV-B);
 ``verify(x0, controller, steps)`` scores a closed loop by simulation (REFERENCE.md §4).
 """
-from .config import BarrierConfig, UnicycleParams
+from swarmdeck.core.kinematics import UnicycleParams
+
+from .config import BarrierConfig
 from .diagnostics import BarrierDiagnostics
 from .filter import SafetyFilter
 from .verifier import VerificationReport, verify
-from .unicycle import (
-    UnicycleSafetyFilter,
-    lookahead_points,
-    si_to_unicycle,
-    unicycle_to_si,
-    wheel_speeds,
-)
+from .unicycle import UnicycleSafetyFilter
 
 __all__ = [
     "BarrierConfig",
@@ -26,8 +22,4 @@ __all__ = [
     "UnicycleSafetyFilter",
     "VerificationReport",
     "verify",
-    "lookahead_points",
-    "si_to_unicycle",
-    "unicycle_to_si",
-    "wheel_speeds",
 ]

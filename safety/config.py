@@ -20,7 +20,7 @@ from dataclasses import dataclass, fields
 from functools import cached_property
 from typing import Literal
 
-DEFAULT_BOUNDS: tuple[float, float, float, float] = (-1.6, 1.6, -1.0, 1.0)
+from swarmdeck.core.bounds import DEFAULT_BOUNDS, Bounds
 
 
 def _real(owner, name: str, value, lower: float | None = None, strict: bool = False,
@@ -35,7 +35,6 @@ def _real(owner, name: str, value, lower: float | None = None, strict: bool = Fa
         raise ValueError(f"{cls}: {name} must be {'>' if strict else '>='} {lower:g}, got {value!r}")
     if upper is not None and value >= upper:
         raise ValueError(f"{cls}: {name} must be < {upper:g}, got {value!r}")
-
 
 
 @dataclass(frozen=True)
@@ -89,7 +88,7 @@ class BarrierConfig:
     gamma: float = 100.0
     class_k: Literal["cubic", "linear"] = "cubic"
     max_speed: float = 0.2
-    bounds: tuple[float, float, float, float] = DEFAULT_BOUNDS
+    bounds: Bounds = DEFAULT_BOUNDS
     wall_margin: float | None = None
     wall_gain: float = 0.4
     dt: float = 0.033
@@ -241,26 +240,3 @@ class BarrierConfig:
     def wall_radius(self) -> float:
         """Distance from a wall (m) within which its row is built."""
         return self._radii[1]
-
-
-@dataclass(frozen=True)
-class UnicycleParams:
-    """Differential-drive robot constants (GRITSBot, REFERENCE.md §1).
-
-    Kept here so that safety imports nothing from devices. wheel_radius and
-    axle_length in m, max_wheel_speed in rad/s, lookahead ℓ in m.
-    """
-
-    wheel_radius: float = 0.016
-    axle_length: float = 0.105
-    max_wheel_speed: float = 12.5
-    lookahead: float = 0.03
-
-    def __post_init__(self) -> None:
-        for name in ("wheel_radius", "axle_length", "max_wheel_speed", "lookahead"):
-            _real(self, name, getattr(self, name), lower=0.0, strict=True)
-
-    @property
-    def max_linear_speed(self) -> float:
-        """Forward speed with both wheels at the limit, m/s (0.2 for the GRITSBot)."""
-        return self.wheel_radius * self.max_wheel_speed

@@ -1,9 +1,8 @@
 """Unicycle barrier: the single-integrator QP on the look-ahead points, within wheel limits.
 
 For poses (x, y, θ) the controlled point is p = (x + ℓ cos θ, y + ℓ sin θ)
-(REFERENCE.md §1, Olfati-Saber). Its velocity is ṗ = M(θ)[v, ω]ᵀ with
-M = [[cos θ, −ℓ sin θ], [sin θ, ℓ cos θ]], inverted by v = cos θ u_x + sin θ u_y,
-ω = (−sin θ u_x + cos θ u_y)/ℓ. The barrier rows of :mod:`constraints` act on
+(REFERENCE.md §1, Olfati-Saber; the map and its inverse are in
+:mod:`swarmdeck.core.kinematics`). The barrier rows of :mod:`constraints` act on
 p with the filter's D_s (the default 0.17 m = Ø 0.11 + 2ℓ keeps the bodies
 apart: each centre lies within ℓ of its point). Instead of a speed disc, each
 robot gets the four wheel-limit rows |ω_R|, |ω_L| ≤ ω_max with
@@ -17,34 +16,12 @@ import time
 
 import numpy as np
 
-from .config import BarrierConfig, UnicycleParams
+from swarmdeck.core.kinematics import UnicycleParams, lookahead_points, si_to_unicycle, unicycle_to_si, unicycle_to_wheels
+
+from .config import BarrierConfig
 from .constraints import LIMIT, Rows
 from .diagnostics import BarrierDiagnostics
 from .filter import InputError, SafetyFilter, as_points, robot_count
-
-
-def lookahead_points(poses: np.ndarray, lookahead: float) -> np.ndarray:
-    """Look-ahead points (N, 2) of poses (N, 3)."""
-    th = poses[:, 2]
-    return poses[:, :2] + lookahead * np.stack([np.cos(th), np.sin(th)], axis=1)
-
-
-def unicycle_to_si(poses: np.ndarray, v: np.ndarray, w: np.ndarray, lookahead: float) -> np.ndarray:
-    """Look-ahead point velocities (N, 2) m/s for unicycle commands v (N,) m/s, ω (N,) rad/s."""
-    c, s = np.cos(poses[:, 2]), np.sin(poses[:, 2])
-    return np.stack([c * v - lookahead * s * w, s * v + lookahead * c * w], axis=1)
-
-
-def si_to_unicycle(poses: np.ndarray, u: np.ndarray, lookahead: float) -> tuple[np.ndarray, np.ndarray]:
-    """Inverse of :func:`unicycle_to_si`: (v (N,), ω (N,)) for point velocities u (N, 2)."""
-    c, s = np.cos(poses[:, 2]), np.sin(poses[:, 2])
-    return c * u[:, 0] + s * u[:, 1], (-s * u[:, 0] + c * u[:, 1]) / lookahead
-
-
-def wheel_speeds(v: np.ndarray, w: np.ndarray, params: UnicycleParams) -> tuple[np.ndarray, np.ndarray]:
-    """Right and left wheel speeds (rad/s): ω_R,L = (2v ± Lω)/(2r)."""
-    r, L = params.wheel_radius, params.axle_length
-    return (2 * v + L * w) / (2 * r), (2 * v - L * w) / (2 * r)
 
 
 def wheel_limit_rows(poses: np.ndarray, params: UnicycleParams, n_obs: int = 0) -> Rows:
@@ -118,7 +95,7 @@ class UnicycleSafetyFilter:
             return V.copy(), Wc.copy(), diag
         vs, ws = si_to_unicycle(X, u, ell)
         # the rows hold to 1e-8 m/s; remove that rounding so the wheels never exceed the limit
-        wr, wl = wheel_speeds(vs, ws, self.params)
+        wr, wl = unicycle_to_wheels(vs, ws, self.params)
         peak = np.maximum(np.abs(wr), np.abs(wl))
         scale = np.minimum(1.0, self.params.max_wheel_speed / np.maximum(peak, 1e-300))
         # robots the QP left alone get their own command back bit for bit, not its round trip

@@ -6,7 +6,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from swarmdeck.devices.net.firmware import BatteryParams, FirmwareParams, FleetState
-from swarmdeck.devices.gritsbot import GritsBotParams, unicycle_step
+from swarmdeck.core.kinematics import GritsBotParams
+from swarmdeck.devices.gritsbot import unicycle_step
 
 
 def straight_fleet(n: int = 1) -> FleetState:
@@ -59,7 +60,7 @@ def test_piecewise_motion_matches_closed_form(gaps, speeds, turns, period):
         tau = min(nxt - tc, 0.5)
         v, w = speeds[k], turns[k]
         # wheel limits scale (v, w) uniformly
-        from swarmdeck.devices.gritsbot import limit_unicycle
+        from swarmdeck.core.kinematics import limit_unicycle
 
         lv, lw, _ = limit_unicycle(np.array([v]), np.array([w]), params)
         expected = unicycle_step(expected, lv * tau, lw * tau, 1.0)

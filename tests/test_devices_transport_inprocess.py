@@ -4,7 +4,7 @@ from __future__ import annotations
 import numpy as np
 
 from swarmdeck.devices import Arena, ArenaConfig, RobotBackend, SimulatedArena
-from swarmdeck.devices.gritsbot import unicycle_to_wheels
+from swarmdeck.core.kinematics import unicycle_to_wheels
 from swarmdeck.devices.net.transport import PoseFeed, RobotTransport
 from swarmdeck.devices.net.transport_backend import TransportBackend
 from swarmdeck.devices.net.transport_inprocess import InProcessTransport

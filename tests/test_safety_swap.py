@@ -5,7 +5,8 @@ import numpy as np
 import pytest
 from scipy.spatial.distance import pdist
 
-from swarmdeck.safety import BarrierConfig, SafetyFilter, UnicycleSafetyFilter, lookahead_points
+from swarmdeck.core.kinematics import lookahead_points
+from swarmdeck.safety import BarrierConfig, SafetyFilter, UnicycleSafetyFilter
 
 DT = 0.033
 START = np.array([[-0.8, 0.0], [0.8, 0.0], [0.0, -0.7], [0.0, 0.7]])

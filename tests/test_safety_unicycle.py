@@ -5,8 +5,8 @@ import numpy as np
 from hypothesis import given, settings, strategies as st
 from scipy.spatial.distance import pdist
 
-from swarmdeck.safety import (UnicycleParams, UnicycleSafetyFilter, lookahead_points, si_to_unicycle,
-                              unicycle_to_si, wheel_speeds)
+from swarmdeck.core.kinematics import lookahead_points, si_to_unicycle, unicycle_to_si, unicycle_to_wheels
+from swarmdeck.safety import UnicycleParams, UnicycleSafetyFilter
 from swarmdeck.safety.scenes import grid_scene
 
 
@@ -21,7 +21,7 @@ def test_wheel_limits_respected(n: int, seed: int, gain: float) -> None:
     w = rng.uniform(-4.0, 4.0, n) * gain
     vs, ws, diag = f.filter(poses, v, w)
     assert diag.ok, diag.status
-    wr, wl = wheel_speeds(vs, ws, f.params)
+    wr, wl = unicycle_to_wheels(vs, ws, f.params)
     assert np.all(np.abs(wr) <= f.params.max_wheel_speed + 1e-9)
     assert np.all(np.abs(wl) <= f.params.max_wheel_speed + 1e-9)
 
@@ -41,7 +41,7 @@ def test_wheel_overspeed_is_projected() -> None:
     f = UnicycleSafetyFilter()
     vs, ws, diag = f.filter(np.array([[0.0, 0.0, 0.0]]), np.array([0.0]), np.array([10.0]))
     assert diag.ok and not diag.nominal_was_safe
-    wr, wl = wheel_speeds(vs, ws, f.params)
+    wr, wl = unicycle_to_wheels(vs, ws, f.params)
     np.testing.assert_allclose(max(abs(wr[0]), abs(wl[0])), f.params.max_wheel_speed, rtol=1e-6)
 
 

@@ -14,6 +14,7 @@ from pathlib import Path
 
 import numpy as np
 
+from swarmdeck.core.bounds import DEFAULT_BOUNDS, Bounds
 from swarmdeck.tracking.calibration import CalibrationError, CameraCalibration
 from swarmdeck.tracking.jsonfile import read_json_object, write_json
 from swarmdeck.tracking.markers import DEFAULT_REFERENCES, ReferenceMarker
@@ -53,7 +54,7 @@ class TrackerConfig:
     camera_position: tuple[float, float, float] | None = None
     fallback_homography: tuple[tuple[float, ...], ...] | None = None
     calibration: CameraCalibration | None = None
-    bounds: tuple[float, float, float, float] = (-1.6, 1.6, -1.0, 1.0)
+    bounds: Bounds = DEFAULT_BOUNDS
     threshold_windows: tuple[int, int, int] = (7, 17, 10)
 
     def __post_init__(self) -> None:

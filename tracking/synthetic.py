@@ -19,6 +19,7 @@ from dataclasses import dataclass, field
 import cv2
 import numpy as np
 
+from swarmdeck.core.bounds import DEFAULT_BOUNDS, Bounds
 from swarmdeck.tracking.calibration import CharucoSpec
 from swarmdeck.tracking.camera_model import PinholeCamera, overhead_camera
 from swarmdeck.tracking.markers import DEFAULT_REFERENCES, ReferenceMarker, marker_corners
@@ -52,7 +53,7 @@ class SyntheticCameraConfig:
     distortion: tuple[float, ...] = (-0.10, 0.03, 0.0004, -0.0003, 0.0)
     dictionary: str = "DICT_4X4_50"
     references: tuple[ReferenceMarker, ...] = DEFAULT_REFERENCES
-    bounds: tuple[float, float, float, float] = (-1.6, 1.6, -1.0, 1.0)
+    bounds: Bounds = DEFAULT_BOUNDS
     tag_size: float = 0.08
     plate_scale: float = 1.3
     tag_height: float = 0.06
@@ -385,7 +386,7 @@ class SyntheticCamera:
         self.status = "synthetic camera closed"
 
 
-def random_poses(n: int, rng: np.random.Generator, bounds: tuple[float, float, float, float] = (-1.6, 1.6, -1.0, 1.0),
+def random_poses(n: int, rng: np.random.Generator, bounds: Bounds = DEFAULT_BOUNDS,
                  min_distance: float = 0.2, margin: float = 0.1, max_tries: int = 200) -> np.ndarray:
     """(n, 3) random poses inside ``bounds`` (shrunk by ``margin``) with centres at least
     ``min_distance`` apart (dart throwing; raises ValueError when they do not fit)."""
@@ -451,7 +452,7 @@ def charuco_views(camera: PinholeCamera, spec: CharucoSpec, n_views: int, rng: n
 
 
 def density_image(evaluate: Callable[[np.ndarray], np.ndarray],
-                  bounds: tuple[float, float, float, float] = (-1.6, 1.6, -1.0, 1.0),
+                  bounds: Bounds = DEFAULT_BOUNDS,
                   shape: tuple[int, int] = (100, 160), rgb: tuple[int, int, int] = (255, 120, 20)) -> np.ndarray:
     """Rasterise a density for the synthetic projector: ``evaluate(q (M, 2)) -> φ (M,)`` (e.g.
     ``GaussianMixture.evaluate``) on a ``shape`` (rows, cols) grid of pixel centres over

@@ -16,6 +16,7 @@ import time
 
 import numpy as np
 
+from swarmdeck.core.bounds import DEFAULT_BOUNDS
 from swarmdeck.console.cli import UsageError
 
 NAME = "robots"
@@ -55,7 +56,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--seed", type=int, default=0, help="seed of the random start poses (default %(default)s)")
     parser.add_argument("--layout", type=int, default=None,
                         help="place robots as row <id> of a layout for this many robots (share it between fleets)")
-    parser.add_argument("--bounds", type=float, nargs=4, default=(-1.6, 1.6, -1.0, 1.0),
+    parser.add_argument("--bounds", type=float, nargs=4, default=DEFAULT_BOUNDS,
                         metavar=("XMIN", "XMAX", "YMIN", "YMAX"), help="arena rectangle, m (default: Robotarium)")
     parser.add_argument("--qos", type=int, choices=(0, 1), default=0, help="MQTT QoS (default %(default)s)")
     parser.add_argument("--mqtt-version", choices=("3.1.1", "5"), default="3.1.1", help="MQTT protocol version")

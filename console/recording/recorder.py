@@ -42,6 +42,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, BinaryIO
 
+from swarmdeck.core.bounds import DEFAULT_BOUNDS
 from swarmdeck.console.recording.foxglove import TOPIC_LOG, FoxgloveConfig, FoxgloveEncoder, channel_specs
 from swarmdeck.console.runtime.frame import Frame
 from swarmdeck.console.recording.codec import CODEC_FORMAT, encode_frame, encode_json
@@ -297,7 +298,7 @@ class Recorder:
             "created": _dt.datetime.fromtimestamp(self._start_ns / 1e9, _dt.timezone.utc).isoformat(),
             "start_unix_ns": self._start_ns, "time_origin": first_t,
             "robots": list(self._meta.get("robots", frame.ids.tolist() if frame is not None else [])),
-            "bounds": list(self._meta.get("bounds", frame.bounds if frame is not None else (-1.6, 1.6, -1.0, 1.0))),
+            "bounds": list(self._meta.get("bounds", frame.bounds if frame is not None else DEFAULT_BOUNDS)),
             "versions": software_versions(),
             "config": dict(self._meta.get("config", {})),
             **{k: v for k, v in self._meta.items() if k not in ("robots", "bounds", "config")},

@@ -27,6 +27,7 @@ from typing import Any
 
 import numpy as np
 
+from swarmdeck.core.bounds import DEFAULT_BOUNDS
 from swarmdeck.console.runtime.frame import Frame
 from swarmdeck.console.recording.codec import CODEC_FORMAT, decode_frame, encode_frame
 from swarmdeck.console.recording.reader import RecordedDatagram, Recording
@@ -62,7 +63,7 @@ def loop_config_from_dict(d: Mapping[str, Any]) -> Any:
         kw["behaviour_params"] = BehaviourParams(**bp)
         kw["safety"] = SafetyParams(**dict(kw.pop("safety", {}) or {}))
         kw["density"] = DensityParams(**dict(kw.pop("density", {}) or {}))
-        kw["bounds"] = tuple(float(b) for b in kw.get("bounds", (-1.6, 1.6, -1.0, 1.0)))
+        kw["bounds"] = tuple(float(b) for b in kw.get("bounds", DEFAULT_BOUNDS))
         return LoopConfig(**kw)
     except TypeError as exc:
         raise ValueError(f"recorded loop configuration is not a LoopConfig: {exc}") from None

@@ -16,6 +16,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import ArrayLike
 
+from swarmdeck.core.smooth import smoothstep
 from swarmdeck.coverage.density import GaussianMixture
 
 
@@ -48,12 +49,6 @@ class MovingBump:
         mu = self.radius * np.array([[math.cos(a), math.sin(a)]])
         mu_dot = self.radius * om * np.array([[-math.sin(a), math.cos(a)]])
         return GaussianMixture(self.floor, mu=mu, sigma=[self.sigma], weight=[self.weight], mu_dot=mu_dot)
-
-
-def _smoothstep(x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """s(x) = 3x² − 2x³ on [0, 1] (clamped) and its derivative."""
-    x = np.clip(x, 0.0, 1.0)
-    return x * x * (3.0 - 2.0 * x), 6.0 * x * (1.0 - x)
 
 
 @dataclass
@@ -183,10 +178,10 @@ class BumpSet:
             w = np.array([b.weight for b in bumps])
             born = np.array([b.born for b in bumps])
             dying = np.array([np.nan if b.dying_since is None else b.dying_since for b in bumps])
-        s_in, ds_in = _smoothstep((t - born) / self.ramp)
+        s_in, ds_in = smoothstep((t - born) / self.ramp)
         ds_in = np.where((t - born) / self.ramp < 1.0, ds_in, 0.0)
         out = np.where(np.isnan(dying), 0.0, (t - np.nan_to_num(dying)) / self.ramp)
-        s_out, ds_out = _smoothstep(1.0 - out)
+        s_out, ds_out = smoothstep(1.0 - out)
         ds_out = np.where(np.isnan(dying), 0.0, ds_out)
         scale = s_in * s_out
         rate = (ds_in * s_out - s_in * ds_out) / self.ramp

@@ -62,6 +62,8 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from swarmdeck.core.bounds import DEFAULT_BOUNDS, Bounds
+from swarmdeck.core.kinematics import lookahead_points
 from swarmdeck.coverage.density import GaussianMixture
 
 FRAME_FORMAT = 1
@@ -352,7 +354,7 @@ class Frame:
     w: FloatArray
     dt: float = 0.033
     run_time: float = 0.0
-    bounds: tuple[float, float, float, float] = (-1.6, 1.6, -1.0, 1.0)
+    bounds: Bounds = DEFAULT_BOUNDS
     lookahead: float = 0.03
     seen: NDArray[np.bool_] | None = None
     barrier: BarrierFrame | None = None
@@ -407,9 +409,7 @@ class Frame:
     @property
     def points(self) -> FloatArray:
         """Controlled (look-ahead) points ``(N, 2)``: p = (x + ℓ cos θ, y + ℓ sin θ)."""
-        th = self.poses[:, 2]
-        return np.column_stack((self.poses[:, 0] + self.lookahead * np.cos(th),
-                                self.poses[:, 1] + self.lookahead * np.sin(th)))
+        return lookahead_points(self.poses, self.lookahead)
 
     @property
     def stopped(self) -> bool:

@@ -63,12 +63,13 @@ from swarmdeck.console.runtime.density import BumpSet, MovingBump, merge_mixture
 from swarmdeck.console.runtime.frame import BarrierFrame, ContactsFrame, CoverageFrame, Frame
 from swarmdeck.core.ports import CommandSink, PoseSource, SensedPoses
 from swarmdeck.coverage.density import GaussianMixture
-from swarmdeck.devices import ArenaConfig, GritsBotParams, lookahead_points, saturate_norm
+from swarmdeck.core.bounds import DEFAULT_BOUNDS, Bounds
+from swarmdeck.core.kinematics import GritsBotParams, lookahead_points, saturate
+from swarmdeck.devices import ArenaConfig
 from swarmdeck.devices.clock import RealTimePacer
 from swarmdeck.devices.pipeline import Certified, barrier_filter, certify
 from swarmdeck.devices.simulated_robots import SimulatedRobots
 
-Bounds = tuple[float, float, float, float]
 FrameListener = Callable[[Frame], None]
 
 
@@ -123,7 +124,7 @@ class LoopConfig:
 
     n_robots: int = 12
     dt: float = 0.033
-    bounds: Bounds = (-1.6, 1.6, -1.0, 1.0)
+    bounds: Bounds = DEFAULT_BOUNDS
     seed: int | None = None
     behaviour: str = "coverage"
     max_speed: float = 0.2
@@ -531,7 +532,7 @@ class ControlLoop:
         with self._stage("behaviour", f"{behaviour.name} failed") as control:
             nominal, coverage = self._control(behaviour, control, poses, points, ids)
         nominal[~seen] = 0.0
-        nominal = saturate_norm(nominal, self.config.max_speed)
+        nominal = saturate(nominal, self.config.max_speed)
         marks.append(time.perf_counter())
 
         # 4. safety and actuation: the pipeline Arena.step uses too (look-ahead map, wheel limits, barrier)

@@ -28,6 +28,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from swarmdeck.core.bounds import DEFAULT_BOUNDS, Bounds
 from swarmdeck.console.runtime.frame import Frame
 
 LAYERS: tuple[str, ...] = (
@@ -153,7 +154,7 @@ class ArenaScene:
         style: sizes and sampling.
     """
 
-    def __init__(self, server: Any, bounds: tuple[float, float, float, float] = (-1.6, 1.6, -1.0, 1.0),
+    def __init__(self, server: Any, bounds: Bounds = DEFAULT_BOUNDS,
                  robot_radius: float = 0.055, style: SceneStyle | None = None,
                  image_provider: Callable[[str], Any] | None = None) -> None:
         self.server = server

@@ -23,7 +23,8 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from swarmdeck.core.checks import require_positive
-from swarmdeck.devices.gritsbot import GritsBotParams, limit_unicycle, unicycle_step, unicycle_to_wheels
+from swarmdeck.core.kinematics import GritsBotParams, limit_unicycle, unicycle_to_wheels
+from swarmdeck.devices.gritsbot import unicycle_step
 
 FloatArray = NDArray[np.float64]
 

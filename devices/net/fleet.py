@@ -21,7 +21,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from swarmdeck.devices.net.firmware import BatteryParams, FirmwareParams, FleetState
-from swarmdeck.devices.gritsbot import GritsBotParams
+from swarmdeck.core.kinematics import GritsBotParams
 from swarmdeck.devices.net.mqtt_config import MqttConfig
 from swarmdeck.devices.net.link import MqttLink
 from swarmdeck.devices.net.wire import WireError, decode_command, encode_poses, encode_status

@@ -24,7 +24,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from swarmdeck.devices.clock import RealTimePacer
-from swarmdeck.devices.gritsbot import GritsBotParams, limit_unicycle
+from swarmdeck.core.kinematics import GritsBotParams, limit_unicycle
 from swarmdeck.devices.net.mqtt_config import parse_broker_url
 from swarmdeck.devices.net.streamer import CommandStreamer, StreamerConfig
 from swarmdeck.devices.net.transport import PoseFeed, RobotTransport

@@ -13,7 +13,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from swarmdeck.devices.net.firmware import BatteryParams
-from swarmdeck.devices.gritsbot import unicycle_to_wheels
+from swarmdeck.core.kinematics import unicycle_to_wheels
 from swarmdeck.devices.simulator import SimulatedArena
 from swarmdeck.devices.net.transport import (
     LINK_OK,

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from swarmdeck.core.bounds import DEFAULT_BOUNDS
 from swarmdeck.core.kinematics import lookahead_points, si_to_unicycle, unicycle_to_si
 from swarmdeck.safety import BarrierConfig, SafetyFilter
 
@@ -40,7 +41,7 @@ def create_single_integrator_barrier_certificate(barrier_gain: float = 100, safe
 
 def create_single_integrator_barrier_certificate_with_boundary(barrier_gain: float = 100, safety_radius: float = 0.17,
                                                                magnitude_limit: float = 0.2,
-                                                               boundary_points=np.array([-1.6, 1.6, -1.0, 1.0])):
+                                                               boundary_points=np.array(DEFAULT_BOUNDS)):
     """f(dxi (2, N), x (2, N)) → safe (2, N), with the arena walls."""
     return _si(barrier_gain, safety_radius, magnitude_limit, _boundary(boundary_points))
 
@@ -67,7 +68,7 @@ def create_unicycle_barrier_certificate(barrier_gain: float = 100, safety_radius
 
 def create_unicycle_barrier_certificate_with_boundary(barrier_gain: float = 100, safety_radius: float = 0.12,
                                                       projection_distance: float = 0.05, magnitude_limit: float = 0.2,
-                                                      boundary_points=np.array([-1.6, 1.6, -1.0, 1.0])):
+                                                      boundary_points=np.array(DEFAULT_BOUNDS)):
     """As :func:`create_unicycle_barrier_certificate`, with the arena walls."""
     return _uni(barrier_gain, safety_radius, projection_distance, magnitude_limit, _boundary(boundary_points))
 

@@ -2,7 +2,8 @@
 import numpy as np
 from hypothesis import given, settings, strategies as st
 
-from swarmdeck.devices import lookahead_points, si_to_unicycle, unicycle_step, unicycle_to_si
+from swarmdeck.core.kinematics import lookahead_points, si_to_unicycle, unicycle_to_si
+from swarmdeck.devices.gritsbot import unicycle_step
 
 
 @settings(max_examples=100, deadline=None)

@@ -3,7 +3,7 @@ import numpy as np
 from hypothesis import given, settings, strategies as st
 from hypothesis.extra.numpy import arrays
 
-from swarmdeck.devices import GritsBotParams, limit_unicycle, unicycle_to_wheels, wheels_to_unicycle
+from swarmdeck.core.kinematics import GritsBotParams, limit_unicycle, unicycle_to_wheels, wheels_to_unicycle
 
 P = GritsBotParams()
 speeds = arrays(np.float64, 20, elements=st.floats(-5, 5, allow_nan=False))
