@@ -9,7 +9,8 @@ Densities: :class:`GaussianMixture` (snapshot with analytic φ_t, isotropic or a
 own: ``precondition_positions``, ``bounded_voronoi``, ``cell_moments``, ``centroid_jacobian``,
 ``raster_moments`` (test oracle), ``predicted_spacing``/``packing_warning``; laws in
 :mod:`swarmdeck.coverage.laws`; scenario S1 in :mod:`swarmdeck.coverage.scenario`.
-Group behaviours (consensus, formation): :mod:`swarmdeck.coverage.group`, ``.graphs``.
+Group behaviours (consensus, formation): :mod:`swarmdeck.coverage.group`; their interaction graphs
+are in :mod:`swarmdeck.core.graphs` (shared with the rps facade).
 """
 from swarmdeck.coverage.controller import (CoverageConfig, CoverageController, CoverageState,
                                            coverage_tick)

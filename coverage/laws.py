@@ -1,4 +1,4 @@
-"""Coverage laws and speed saturation (REFERENCE.md §5, notes/coverage.md §1.5).
+"""Coverage laws (REFERENCE.md §5, notes/coverage.md §1.5); the speed limit is :func:`swarmdeck.core.kinematics.saturate`.
 
 With b = κ(c − p) + ∂c/∂t and J = ∂c/∂p (2N × 2N, acting on flattened (N, 2) arrays):
 
@@ -24,9 +24,9 @@ import warnings
 import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import NDArray
 
-__all__ = ["LAWS", "parse_law", "law_command", "saturate"]
+__all__ = ["LAWS", "parse_law", "law_command"]
 
 LAWS: tuple[str, ...] = ("lloyd", "lloyd-ff", "tvd-d1", "tvd-dk", "tvd-c")
 

@@ -9,7 +9,7 @@ hexagon with 0.4 m sides — up to rotation, translation and reflection.
 """
 import numpy as np
 
-from swarmdeck.coverage.graphs import rigid_formation
+from swarmdeck.core.graphs import rigid_formation
 from swarmdeck.coverage.group import formation_control, formation_errors
 from swarmdeck.devices import Arena, saturate
 

@@ -12,7 +12,7 @@ cluster radius and the centroid's drift).
 """
 import numpy as np
 
-from swarmdeck.coverage.graphs import cycle_laplacian
+from swarmdeck.core.graphs import cycle_laplacian
 from swarmdeck.coverage.group import consensus
 from swarmdeck.devices import Arena
 

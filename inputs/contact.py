@@ -2,7 +2,7 @@
 
 A *contact* is one finger, object, blob or tracked hand point on an operator's
 input surface, already mapped into the arena frame (metres, origin at the arena
-centre, x right, y up; see HELPERS.md conventions). Every source (TUIO 1.1,
+centre, x right, y up; DESIGN.md "Conventions"). Every source (TUIO 1.1,
 TUIO 2.0, generic OSC point streams) produces the same :class:`Contact`.
 """
 from __future__ import annotations

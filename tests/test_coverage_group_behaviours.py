@@ -2,7 +2,7 @@
 import numpy as np
 import pytest
 
-from swarmdeck.coverage.graphs import (
+from swarmdeck.core.graphs import (
     complete_laplacian,
     cycle_laplacian,
     delta_disk_laplacian,

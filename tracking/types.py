@@ -1,6 +1,6 @@
 """Value types that cross the tracking boundary: camera frames and tracked poses.
 
-Contract (HELPERS.md, issue 9): camera sources yield :class:`CameraFrame`; the tracker turns a
+Contract (issue 9): camera sources yield :class:`CameraFrame`; the tracker turns a
 frame into :class:`TrackedPoses` ``(ids, poses, seen, stamps, status)``. Extra fields here have
 defaults so the contract's positional form keeps working.
 """

@@ -1,9 +1,9 @@
-"""rps.utilities.graph names over :mod:`swarmdeck.coverage.graphs` (inputs are never modified)."""
+"""rps.utilities.graph names over :mod:`swarmdeck.core.graphs` (inputs are never modified)."""
 from __future__ import annotations
 
 import numpy as np
 
-from swarmdeck.coverage.graphs import (
+from swarmdeck.core.graphs import (
     complete_laplacian,
     cycle_laplacian,
     delta_disk_neighbors as _delta_disk_neighbors,

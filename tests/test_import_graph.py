@@ -1,0 +1,102 @@
+"""The dependency rules of DESIGN.md hold for every import, at module level or inside a function.
+
+core imports no other swarmdeck package; safety, coverage and tracking import only core; inputs
+imports coverage and core; devices imports safety and core; examples import anything but the
+console; only the console imports the console. Imports are read with ``ast`` from the source
+folders named in pyproject.toml, so lazy imports (inside functions, ``importlib.import_module``
+with a literal name) count too.
+"""
+from __future__ import annotations
+
+import ast
+import tomllib
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+
+ALLOWED: dict[str, set[str]] = {
+    "core": set(),
+    "safety": {"core"},
+    "coverage": {"core"},
+    "tracking": {"core"},
+    "inputs": {"coverage", "core"},
+    "devices": {"safety", "core"},
+    "examples": {"core", "safety", "coverage", "tracking", "inputs", "devices"},
+    "console": {"core", "safety", "coverage", "tracking", "inputs", "devices", "examples"},
+}
+
+
+def packages() -> dict[str, Path]:
+    """Top-level swarmdeck subpackage → its folder, from pyproject.toml's package-dir."""
+    dirs = tomllib.loads((ROOT / "pyproject.toml").read_text())["tool"]["setuptools"]["package-dir"]
+    return {name.split(".")[1]: ROOT / folder for name, folder in dirs.items() if name.count(".") == 1}
+
+
+def imported_modules(source: str, module: str, is_package: bool) -> list[tuple[int, str]]:
+    """(line, absolute module name) of every import in ``source`` of module ``module``."""
+    found: list[tuple[int, str]] = []
+    here = module.split(".") if is_package else module.split(".")[:-1]
+    for node in ast.walk(ast.parse(source)):
+        if isinstance(node, ast.Import):
+            found += [(node.lineno, alias.name) for alias in node.names]
+        elif isinstance(node, ast.ImportFrom):
+            if node.level:
+                base = ".".join(here[: len(here) - node.level + 1])
+                name = f"{base}.{node.module}" if node.module else base
+            else:
+                name = node.module or ""
+            found.append((node.lineno, name))
+            if node.module is None or node.level:  # `from . import x`: x may be a subpackage
+                found += [(node.lineno, f"{name}.{alias.name}") for alias in node.names]
+        elif isinstance(node, ast.Call) and node.args and isinstance(node.args[0], ast.Constant):
+            func = node.func
+            fname = func.attr if isinstance(func, ast.Attribute) else getattr(func, "id", "")
+            if fname in ("import_module", "__import__") and isinstance(node.args[0].value, str):
+                found.append((node.lineno, node.args[0].value))
+    return found
+
+
+def violations(pkg: str, folder: Path) -> list[str]:
+    out = []
+    for path in sorted(folder.rglob("*.py")):
+        rel = path.relative_to(folder).with_suffix("")
+        parts = [p for p in rel.parts if p != "__init__"]
+        module = ".".join(["swarmdeck", pkg, *parts])
+        for line, name in imported_modules(path.read_text(encoding="utf-8"), module, rel.name == "__init__"):
+            bits = name.split(".")
+            if bits[0] in packages() and bits[0] != pkg:
+                out.append(f"{path.relative_to(folder.parent)}:{line} imports bare top-level {name!r} (use swarmdeck.{name})")
+            if bits[0] != "swarmdeck" or len(bits) < 2 or bits[1] == pkg:
+                continue
+            if bits[1] not in ALLOWED[pkg]:
+                out.append(f"{path.relative_to(folder.parent)}:{line}: {pkg} imports {name}")
+    return out
+
+
+def test_every_package_has_a_rule() -> None:
+    assert set(packages()) == set(ALLOWED)
+
+
+def test_no_package_imports_one_above_it() -> None:
+    found = [v for pkg, folder in packages().items() for v in violations(pkg, folder)]
+    assert not found, "imports against DESIGN.md's dependency rules:\n" + "\n".join(found)
+
+
+def test_lazy_and_relative_imports_are_seen(tmp_path: Path) -> None:
+    src = (
+        "from . import unicycle\n"
+        "def f():\n"
+        "    from swarmdeck.devices import Arena\n"
+        "    import swarmdeck.console.runtime\n"
+        "    importlib.import_module('swarmdeck.inputs')\n"
+        "    from ..core import kinematics\n"
+    )
+    names = {n for _, n in imported_modules(src, "swarmdeck.safety.sub.mod", False)}
+    assert names == {"swarmdeck.safety.sub", "swarmdeck.safety.sub.unicycle", "swarmdeck.devices",
+                     "swarmdeck.console.runtime", "swarmdeck.inputs", "swarmdeck.safety.core",
+                     "swarmdeck.safety.core.kinematics"}
+    (tmp_path / "sub").mkdir()
+    (tmp_path / "sub" / "mod.py").write_text(src)
+    found = violations("safety", tmp_path)
+    assert len(found) == 3 and all(f"{tmp_path.name}/sub/mod.py" in v for v in found)
+    assert any("safety imports swarmdeck.devices" in v for v in found)
