@@ -11,7 +11,8 @@ Example::
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, field, fields
+from collections.abc import Mapping
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
@@ -22,6 +23,8 @@ from scipy.spatial import QhullError
 from swarmdeck.coverage.density import Density, GaussianMixture
 from swarmdeck.coverage.jacobian import EdgeOptions, centroid_jacobian
 from swarmdeck.core.bounds import DEFAULT_BOUNDS, Bounds, check_bounds
+from swarmdeck.core.checks import require_in_range
+from swarmdeck.core.config import from_mapping
 from swarmdeck.core.kinematics import saturate
 from swarmdeck.coverage.laws import law_command, parse_law
 from swarmdeck.coverage.packing import packing_warning
@@ -62,13 +65,11 @@ class CoverageConfig:
             raise ValueError("law 'tvd-c' inverts I - dc/dp, which is ill-conditioned away from a "
                              "CVT (it has commanded 4e3 m/s); it is a reference only: set "
                              "allow_centralised=True to use it")
-        if not (np.isfinite(self.kappa) and self.kappa > 0):
-            raise ValueError(f"kappa must be a finite number > 0, got {self.kappa!r}")
+        require_in_range(self.kappa, "kappa", 0.0, lo_open=True)
         if self.max_speed is not None and not (self.max_speed > 0):
             raise ValueError(f"max_speed must be > 0 or None, got {self.max_speed!r}")
         object.__setattr__(self, "bounds", check_bounds(self.bounds))
-        if not (self.safety_distance >= 0):
-            raise ValueError(f"safety_distance must be >= 0, got {self.safety_distance!r}")
+        require_in_range(self.safety_distance, "safety_distance", 0.0, unit="m")
         if not (0 < self.wall_margin < 0.01 and 0 <= self.min_separation < 0.1):
             raise ValueError("need 0 < wall_margin < 0.01 m and 0 <= min_separation < 0.1 m")
         if int(self.packing_every) < 1:
@@ -78,27 +79,12 @@ class CoverageConfig:
     def from_dict(cls, data: dict[str, Any]) -> "CoverageConfig":
         """Build from a plain dict (e.g. a TOML table); ``quadrature`` and ``edges`` may be
         nested tables. Raises ValueError naming unknown keys or bad values."""
-        if not isinstance(data, dict):
-            raise ValueError(f"coverage config must be a table/dict, got {type(data).__name__}")
-        known = {f.name for f in fields(cls)}
-        extra = sorted(set(data) - known)
-        if extra:
-            raise ValueError(f"unknown coverage config keys {extra}; known: {sorted(known)}")
-        kw = dict(data)
-        for key, typ in (("quadrature", QuadratureOptions), ("edges", EdgeOptions)):
-            if isinstance(kw.get(key), dict):
-                sub = kw[key]
-                known_sub = {f.name for f in fields(typ)}
-                bad = sorted(set(sub) - known_sub)
-                if bad:
-                    raise ValueError(f"unknown coverage.{key} keys {bad}; known: {sorted(known_sub)}")
-                kw[key] = typ(**sub)
-        if "bounds" in kw:
-            kw["bounds"] = tuple(kw["bounds"])
-        try:
-            return cls(**kw)
-        except TypeError as exc:
-            raise ValueError(f"bad coverage config: {exc}") from exc
+        def table(typ: type, key: str):
+            return lambda sub: from_mapping(typ, sub, f"coverage.{key}") if isinstance(sub, Mapping) else sub
+
+        return from_mapping(cls, data, "coverage config", error=ValueError, wrap="bad {what}: {message}",
+                            convert={"quadrature": table(QuadratureOptions, "quadrature"),
+                                     "edges": table(EdgeOptions, "edges"), "bounds": tuple})
 
 
 @dataclass(frozen=True)

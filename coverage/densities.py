@@ -16,6 +16,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import NDArray
 
+from swarmdeck.core.checks import require_in_range
 from swarmdeck.core.smooth import smoothstep
 from swarmdeck.core.bounds import DEFAULT_BOUNDS, Bounds
 from swarmdeck.coverage.density import GaussianMixture
@@ -47,8 +48,7 @@ class Sine:
     phase: float = 0.0
 
     def __post_init__(self) -> None:
-        if not self.period > 0:
-            raise ValueError(f"period must be > 0, got {self.period!r}")
+        require_in_range(self.period, "period", 0.0, lo_open=True)
 
     def __call__(self, t: float) -> tuple[float, float]:
         w = _TWO_PI / self.period
@@ -69,10 +69,8 @@ class Pulse:
     period: float | None = None
 
     def __post_init__(self) -> None:
-        if not self.ramp > 0:
-            raise ValueError(f"ramp must be > 0, got {self.ramp!r}")
-        if self.level < 0:
-            raise ValueError(f"level must be >= 0, got {self.level!r}")
+        require_in_range(self.ramp, "ramp", 0.0, lo_open=True)
+        require_in_range(self.level, "level", 0.0)
         if self.period is not None and not self.period > 0:
             raise ValueError(f"period must be > 0 or None, got {self.period!r}")
 
@@ -163,8 +161,7 @@ class Bump:
     angle: Constant | Sine | Pulse = Constant(0.0)
 
     def __post_init__(self) -> None:
-        if not (np.isfinite(self.aspect) and self.aspect > 0):
-            raise ValueError(f"aspect must be > 0, got {self.aspect!r}")
+        require_in_range(self.aspect, "aspect", 0.0, lo_open=True)
 
     @property
     def isotropic(self) -> bool:

@@ -18,6 +18,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
+from swarmdeck.core.checks import in_range
 from swarmdeck.coverage.density import GaussianMixture
 from swarmdeck.coverage.voronoi import BoundedVoronoi
 
@@ -36,7 +37,7 @@ class QuadratureOptions:
     min_level: int = 0
 
     def __post_init__(self) -> None:
-        if not (self.resolution > 0 and self.reach > 0):
+        if not (in_range(self.resolution, 0.0, lo_open=True) and in_range(self.reach, 0.0, lo_open=True)):
             raise ValueError("resolution and reach must be > 0")
         if not (0 <= self.min_level <= self.max_level <= 8):
             raise ValueError("need 0 <= min_level <= max_level <= 8")

@@ -2,7 +2,7 @@
 
 This is the hardware stand-in. It knows nothing about controllers or safety:
 it takes unicycle commands ``(v, ω)``, applies the wheel limits (one uniform
-scale per robot, :func:`~swarmdeck.devices.gritsbot.limit_unicycle`), stops any
+scale per robot, :func:`~swarmdeck.core.kinematics.limit_unicycle`), stops any
 robot whose command is not finite, integrates the exact unicycle step and
 counts boundary, collision and actuator errors the way rps does.
 """
@@ -13,6 +13,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from swarmdeck.core.checks import require_in_range
 from swarmdeck.core.bounds import DEFAULT_BOUNDS, Bounds, check_bounds
 from swarmdeck.devices.clock import RealTimePacer, VirtualClock
 from swarmdeck.core.kinematics import GritsBotParams, limit_unicycle
@@ -39,8 +40,7 @@ class ArenaConfig:
 
     def __post_init__(self) -> None:
         check_bounds(self.bounds, "ArenaConfig.bounds")
-        if not (np.isfinite(self.dt) and 0 < self.dt <= 1.0):
-            raise ValueError(f"ArenaConfig.dt must be in (0, 1] s, got {self.dt!r}")
+        require_in_range(self.dt, "ArenaConfig.dt", 0.0, 1.0, unit="s", lo_open=True)
 
     @property
     def width(self) -> float:

@@ -19,6 +19,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from swarmdeck.core.config import check_keys, field_names
 from swarmdeck.core.bounds import DEFAULT_BOUNDS, Bounds, check_bounds
 
 @dataclass(frozen=True)
@@ -79,13 +80,8 @@ class Calibration:
     @classmethod
     def from_dict(cls, d: dict, bounds: tuple[float, float, float, float] | None = None) -> "Calibration":
         """Build from a config mapping (keys as the attributes); unknown keys are an error."""
-        if not isinstance(d, dict):
-            raise ValueError(f"calibration must be a table/dict, got {type(d).__name__}")
-        known = {"flip_x", "flip_y", "rotation", "rotation_deg", "scale", "offset", "bounds"}
-        extra = set(d) - known
-        if extra:
-            raise ValueError(f"unknown calibration keys {sorted(extra)}; expected some of {sorted(known)}")
-        kw = {k: v for k, v in d.items() if k != "rotation_deg"}
+        kw = check_keys(d, field_names(cls) | {"rotation_deg"}, "calibration", error=ValueError)
+        kw.pop("rotation_deg", None)
         if "rotation_deg" in d:
             kw["rotation"] = math.radians(float(d["rotation_deg"]))
         if isinstance(kw.get("scale"), (int, float)):

@@ -29,20 +29,15 @@ Without an ``[inputs]`` table there is one UDP TUIO listener on 127.0.0.1:3333.
 """
 from __future__ import annotations
 
-import dataclasses
-import math
-import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
 
 from swarmdeck.core.bounds import DEFAULT_BOUNDS, Bounds, check_bounds
+from swarmdeck.core.checks import in_range
+from swarmdeck.core.config import ConfigError, check_keys, field_names, read_toml
 from .calibration import Calibration
 from .density import DensityConfig
 from .pointstream import PRESETS, PointStreamConfig
-
-
-class ConfigError(ValueError):
-    """A configuration value that is missing, unknown or out of range."""
 
 
 @dataclass(frozen=True)
@@ -102,11 +97,11 @@ class ListenerConfig:
     def __post_init__(self) -> None:
         if self.transport not in ("udp", "tcp"):
             raise ConfigError(f"listener {self.name!r}: transport must be 'udp' or 'tcp', got {self.transport!r}")
-        if not (isinstance(self.port, int) and 0 <= self.port <= 65535):
+        if not in_range(self.port, 0, 65535, integer=True):
             raise ConfigError(f"listener {self.name!r}: port must be an int in 0..65535, got {self.port!r}")
-        if not (isinstance(self.timeout, (int, float)) and math.isfinite(self.timeout) and self.timeout > 0):
+        if not in_range(self.timeout, 0.0, lo_open=True):
             raise ConfigError(f"listener {self.name!r}: timeout must be a positive number of seconds, got {self.timeout!r}")
-        if not (isinstance(self.max_datagram, int) and 16 <= self.max_datagram <= 65536):
+        if not in_range(self.max_datagram, 16, 65536, integer=True):
             raise ConfigError(f"listener {self.name!r}: max_datagram must be an int in 16..65536, got {self.max_datagram!r}")
         for key, lo, hi in (("max_osc_arguments", 16, 1 << 20), ("max_contacts_per_source", 1, 1 << 16),
                             ("max_contacts", 1, 1 << 20), ("max_events", 1, 1 << 20),
@@ -136,13 +131,7 @@ class ListenerConfig:
     @classmethod
     def from_dict(cls, d: dict, bounds: tuple[float, float, float, float] | None = None) -> "ListenerConfig":
         """Build from a mapping (a ``[[inputs.listeners]]`` TOML table)."""
-        if not isinstance(d, dict):
-            raise ConfigError(f"a listener must be a table/dict, got {type(d).__name__}")
-        known = {f.name for f in dataclasses.fields(cls)} | {"preset"}
-        extra = set(d) - known
-        if extra:
-            raise ConfigError(f"unknown listener keys {sorted(extra)}; expected some of {sorted(known)}")
-        kw = dict(d)
+        kw = check_keys(d, field_names(cls) | {"preset"}, "listener")
         preset = kw.pop("preset", None)
         try:
             if "calibration" in kw:
@@ -176,11 +165,7 @@ class InputConfig:
     @classmethod
     def from_dict(cls, d: dict) -> "InputConfig":
         """Build from the ``[inputs]`` mapping; unknown keys are an error."""
-        if not isinstance(d, dict):
-            raise ConfigError(f"[inputs] must be a table/dict, got {type(d).__name__}")
-        extra = set(d) - {"listeners", "density", "bounds"}
-        if extra:
-            raise ConfigError(f"unknown [inputs] keys {sorted(extra)}; expected listeners, density, bounds")
+        check_keys(d, ("listeners", "density", "bounds"), "[inputs]")
         bounds = check_bounds(d.get("bounds", DEFAULT_BOUNDS), "[inputs] bounds", ConfigError)
         raw = d.get("listeners", [{}])
         if not isinstance(raw, list):
@@ -195,11 +180,4 @@ class InputConfig:
     @classmethod
     def load_toml(cls, path: str | Path, section: str = "inputs") -> "InputConfig":
         """Read ``[section]`` of a TOML file (defaults if the table is absent)."""
-        try:
-            with open(path, "rb") as f:
-                doc = tomllib.load(f)
-        except OSError as exc:
-            raise ConfigError(f"cannot read {path}: {exc.strerror}") from None
-        except tomllib.TOMLDecodeError as exc:
-            raise ConfigError(f"{path} is not valid TOML: {exc}") from None
-        return cls.from_dict(doc.get(section, {}))
+        return cls.from_dict(read_toml(path).get(section, {}))

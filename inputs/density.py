@@ -30,6 +30,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from swarmdeck.core.checks import in_range, require_in_range
+from swarmdeck.core.config import check_keys, field_names
 from swarmdeck.core.smooth import inverse_smoothstep, smoothstep
 from swarmdeck.coverage import GaussianMixture
 
@@ -66,27 +68,20 @@ class DensityConfig:
     def __post_init__(self) -> None:
         for k in ("weight", "sigma", "fade", "sigma_min", "sigma_max", "pinch_gain"):
             v = getattr(self, k)
-            if not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):
+            if not in_range(v, 0.0, lo_open=True):
                 raise ValueError(f"density {k} must be a positive number, got {v!r}")
-        if not (math.isfinite(self.floor) and self.floor > 0):
+        if not in_range(self.floor, 0.0, lo_open=True):
             raise ValueError(f"density floor must be > 0 (keeps every Voronoi cell's mass positive), got {self.floor!r}")
-        if not (0 <= self.extrapolate < math.inf):
-            raise ValueError(f"density extrapolate must be >= 0 s, got {self.extrapolate!r}")
+        require_in_range(self.extrapolate, "density extrapolate", 0.0, unit="s")
         if self.sigma_min > self.sigma_max:
             raise ValueError(f"density sigma_min {self.sigma_min} exceeds sigma_max {self.sigma_max}")
-        if not (isinstance(self.max_bumps, int) and self.max_bumps >= 1):
+        if not in_range(self.max_bumps, 1, integer=True):
             raise ValueError(f"density max_bumps must be an int >= 1, got {self.max_bumps!r}")
 
     @classmethod
     def from_dict(cls, d: dict) -> "DensityConfig":
         """Build from a mapping (``[inputs.density]``); unknown keys are an error."""
-        if not isinstance(d, dict):
-            raise ValueError(f"density settings must be a table/dict, got {type(d).__name__}")
-        known = set(cls.__dataclass_fields__)
-        extra = set(d) - known
-        if extra:
-            raise ValueError(f"unknown density keys {sorted(extra)}; expected some of {sorted(known)}")
-        return cls(**d)
+        return cls(**check_keys(d, field_names(cls), "density", error=ValueError))
 
 
 class _Bump:

@@ -22,6 +22,8 @@ import re
 from dataclasses import dataclass, field
 from types import MappingProxyType
 
+from swarmdeck.core.config import check_keys, field_names
+
 from .frames import NAN, Problems, SourceFrame
 
 _NUM = (int, float)
@@ -98,12 +100,7 @@ class PointStreamConfig:
     @classmethod
     def from_dict(cls, d: dict) -> "PointStreamConfig":
         """Build from a config mapping; unknown keys are an error."""
-        known = {"name", "address", "x_arg", "y_arg", "id_fields", "scale", "x_range", "y_range",
-                 "flip_x", "flip_y", "presence_timeout", "port"}
-        extra = set(d) - known
-        if extra:
-            raise ValueError(f"unknown point stream keys {sorted(extra)}; expected some of {sorted(known)}")
-        kw = dict(d)
+        kw = check_keys(d, field_names(cls), "point stream", error=ValueError)
         for k in ("x_range", "y_range"):
             if k in kw:
                 kw[k] = tuple(float(v) for v in kw[k])

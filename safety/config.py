@@ -21,6 +21,7 @@ from functools import cached_property
 from typing import Literal
 
 from swarmdeck.core.bounds import DEFAULT_BOUNDS, Bounds
+from swarmdeck.core.config import floats, from_mapping
 
 
 def _real(owner, name: str, value, lower: float | None = None, strict: bool = False,
@@ -165,19 +166,8 @@ class BarrierConfig:
     @classmethod
     def from_dict(cls, data: dict) -> "BarrierConfig":
         """Build from a plain mapping (e.g. a TOML ``[safety]`` table); unknown keys are refused."""
-        if not isinstance(data, dict):
-            raise ValueError(f"BarrierConfig: expected a table of settings, got {type(data).__name__}")
-        known = {f.name for f in fields(cls)}
-        unknown = sorted(set(data) - known)
-        if unknown:
-            raise ValueError(f"BarrierConfig: unknown setting(s) {unknown}; known: {sorted(known)}")
-        values = dict(data)
-        if "bounds" in values:
-            try:
-                values["bounds"] = tuple(float(v) for v in values["bounds"])
-            except (TypeError, ValueError):
-                raise ValueError(f"BarrierConfig: bounds must be 4 numbers, got {data['bounds']!r}") from None
-        return cls(**values)
+        return from_mapping(cls, data, "BarrierConfig", error=ValueError, convert={"bounds": floats},
+                            template="{what}: unknown setting(s) {unknown}; known: {known}")
 
     def to_dict(self) -> dict:
         """Plain dict of the settings (JSON/TOML-able)."""

@@ -14,15 +14,13 @@ from pathlib import Path
 
 import numpy as np
 
+from swarmdeck.core.checks import in_range
+from swarmdeck.core.config import ConfigError, check_keys, field_names
 from swarmdeck.core.bounds import DEFAULT_BOUNDS, Bounds
 from swarmdeck.tracking.calibration import CalibrationError, CameraCalibration
 from swarmdeck.tracking.jsonfile import read_json_object, write_json
 from swarmdeck.tracking.markers import DEFAULT_REFERENCES, ReferenceMarker
 from swarmdeck.tracking.dictionaries import canonical_dictionary
-
-
-class ConfigError(ValueError):
-    """A tracker configuration value or file is unusable (message names the field)."""
 
 
 @dataclass(frozen=True, eq=False)
@@ -62,19 +60,19 @@ class TrackerConfig:
             object.__setattr__(self, "dictionary", canonical_dictionary(self.dictionary))
         except ValueError as exc:
             raise ConfigError(f"dictionary: {exc}") from None
-        if not (0 < self.tag_size < 1):
+        if not in_range(self.tag_size, 0.0, 1.0, lo_open=True, hi_open=True):
             raise ConfigError(f"tag_size must be in (0, 1) m, got {self.tag_size}")
-        if not (np.isfinite(self.stale_after_s) and self.stale_after_s > 0):
+        if not in_range(self.stale_after_s, 0.0, lo_open=True):
             raise ConfigError(f"stale_after_s must be a finite number > 0 s, got {self.stale_after_s}")
         for name in ("tag_height", "reference_height"):  # NaN here would make every pose NaN
             v = getattr(self, name)
-            if not (np.isfinite(v) and 0 <= v < 10):
+            if not in_range(v, 0.0, 10.0, hi_open=True):
                 raise ConfigError(f"{name} must be a height in [0, 10) m above the floor, got {v}")
         for name in ("max_reference_rms_m", "max_anisotropy"):
             v = getattr(self, name)
-            if not (np.isfinite(v) and v > 0):
+            if not in_range(v, 0.0, lo_open=True):
                 raise ConfigError(f"{name} must be a finite number > 0, got {v}")
-        if not (1 <= self.min_references):
+        if not in_range(self.min_references, 1, integer=True):
             raise ConfigError(f"min_references must be >= 1, got {self.min_references}")
         ids = [r.id for r in self.references]
         if len(set(ids)) != len(ids):
@@ -110,11 +108,7 @@ class TrackerConfig:
     @staticmethod
     def from_dict(d: dict) -> "TrackerConfig":
         """Parse the JSON form; unknown keys and bad values raise :class:`ConfigError`."""
-        known = {f.name for f in fields(TrackerConfig)}
-        unknown = set(d) - known
-        if unknown:
-            raise ConfigError(f"unknown tracker config key(s) {sorted(unknown)}; known: {sorted(known)}")
-        kw = dict(d)
+        kw = check_keys(d, field_names(TrackerConfig), "tracker config")
         try:
             if "references" in kw:
                 kw["references"] = tuple(ReferenceMarker(int(r["id"]), float(r["x"]), float(r["y"]),

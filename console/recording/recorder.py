@@ -43,6 +43,7 @@ from pathlib import Path
 from typing import Any, BinaryIO
 
 from swarmdeck.core.bounds import DEFAULT_BOUNDS
+from swarmdeck.core.checks import require_in_range
 from swarmdeck.console.recording.foxglove import TOPIC_LOG, FoxgloveConfig, FoxgloveEncoder, channel_specs
 from swarmdeck.console.runtime.frame import Frame
 from swarmdeck.console.recording.codec import CODEC_FORMAT, encode_frame, encode_json
@@ -72,10 +73,8 @@ class RecorderConfig:
     foxglove: bool = True
 
     def __post_init__(self) -> None:
-        if not (isinstance(self.queue_size, int) and self.queue_size >= 1):
-            raise ValueError(f"queue_size must be an int >= 1, got {self.queue_size!r}")
-        if not (self.flush_interval > 0):
-            raise ValueError(f"flush_interval must be > 0 s, got {self.flush_interval!r}")
+        require_in_range(self.queue_size, "queue_size", 1, integer=True)
+        require_in_range(self.flush_interval, "flush_interval", 0.0, unit="s", lo_open=True)
         if self.compression not in ("zstd", "lz4", "none"):
             raise ValueError(f"compression must be 'zstd', 'lz4' or 'none', got {self.compression!r}")
 

@@ -25,7 +25,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from swarmdeck.console.runtime.deadline import DeadlineCaller
-from swarmdeck.coverage.graphs import complete_laplacian, rigid_formation
+from swarmdeck.core.checks import require_in_range
+from swarmdeck.core.graphs import complete_laplacian, rigid_formation
 from swarmdeck.coverage.group import consensus, formation_control
 from swarmdeck.devices.controllers import si_position_controller
 
@@ -62,9 +63,7 @@ class BehaviourParams:
     def __post_init__(self) -> None:
         checks = (("kappa", 0.1, 5.0), ("gain", 0.1, 5.0), ("formation_edge", 0.2, 1.0), ("formation_gain", 0.5, 50.0))
         for name, lo, hi in checks:
-            v = getattr(self, name)
-            if not (isinstance(v, (int, float)) and math.isfinite(v) and lo <= v <= hi):
-                raise BehaviourError(f"{name} must be in [{lo}, {hi}], got {v!r}")
+            require_in_range(getattr(self, name), name, lo, hi, error=BehaviourError)
         if self.law not in LAWS:
             raise BehaviourError(f"law must be one of {', '.join(LAWS)}, got {self.law!r}")
         if self.goal_centre is not None:

@@ -16,12 +16,13 @@ Unknown tables or keys and values out of range are errors naming the table and k
 """
 from __future__ import annotations
 
-import tomllib
-from dataclasses import dataclass, fields
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 from swarmdeck.console.runtime.behaviours import BehaviourParams
+from swarmdeck.core.checks import in_range
+from swarmdeck.core.config import ConfigError, check_keys, floats, from_mapping, read_toml
 from swarmdeck.console.runtime.loop import DensityParams, LoopConfig, SafetyParams
 
 TABLES = ("console", "behaviour", "safety", "density", "inputs")
@@ -45,8 +46,10 @@ def arena_bounds(spec: str) -> tuple[float, float, float, float]:
     return (-w / 2, w / 2, -h / 2, h / 2)
 
 
-class ConfigFileError(ValueError):
+class ConfigFileError(ConfigError):
     """A configuration file that cannot be used; the message names the file, table and key."""
+
+_UNKNOWN = "unknown key(s) {unknown} in {what}; expected some of {known}"
 
 
 @dataclass(frozen=True)
@@ -59,56 +62,29 @@ class ConsoleSettings:
     inputs: dict | None = None
 
 
-def _table(doc: dict, name: str, path: Path) -> dict:
-    t = doc.get(name, {})
-    if not isinstance(t, dict):
-        raise ConfigFileError(f"{path}: [{name}] must be a table")
-    return t
-
-
-def _build(cls: type, table: dict, name: str, path: Path, convert: dict[str, Any] | None = None) -> Any:
-    known = {f.name for f in fields(cls)}
-    extra = set(table) - known
-    if extra:
-        raise ConfigFileError(f"{path}: unknown key(s) {sorted(extra)} in [{name}]; expected some of {sorted(known)}")
-    kw = dict(table)
-    try:
-        for key, fn in (convert or {}).items():
-            if key in kw:
-                kw[key] = fn(kw[key])
-        return cls(**kw)
-    except (TypeError, ValueError) as exc:
-        raise ConfigFileError(f"{path}: [{name}]: {exc}") from None
+def _build(cls: type, doc: dict, name: str, path: Path, convert: dict[str, Any] | None = None) -> Any:
+    return from_mapping(cls, doc.get(name, {}), f"[{name}]", convert=convert, error=ConfigFileError,
+                        template=_UNKNOWN, source=path)
 
 
 def load_settings(path: str | Path) -> ConsoleSettings:
     """Read and validate a console configuration file."""
     p = Path(path)
-    try:
-        with open(p, "rb") as f:
-            doc = tomllib.load(f)
-    except OSError as exc:
-        raise ConfigFileError(f"cannot read config file {p}: {exc.strerror}") from None
-    except tomllib.TOMLDecodeError as exc:
-        raise ConfigFileError(f"{p} is not valid TOML: {exc}") from None
-    extra = set(doc) - set(TABLES)
-    if extra:
-        raise ConfigFileError(f"{p}: unknown table(s) {sorted(extra)}; expected some of {list(TABLES)}")
-    con = _table(doc, "console", p)
-    bad = set(con) - set(CONSOLE_KEYS)
-    if bad:
-        raise ConfigFileError(f"{p}: unknown key(s) {sorted(bad)} in [console]; expected some of {list(CONSOLE_KEYS)}")
-    goals = lambda g: tuple(tuple(float(c) for c in row) for row in g)  # noqa: E731
-    bp = _build(BehaviourParams, _table(doc, "behaviour", p), "behaviour", p,
-                {"goals": goals, "goal_centre": lambda c: tuple(float(v) for v in c)})
-    sp = _build(SafetyParams, _table(doc, "safety", p), "safety", p, {"gamma": float, "safety_distance": float})
-    dp = _build(DensityParams, _table(doc, "density", p), "density", p)
+    doc = read_toml(p, ConfigFileError)
+    check_keys(doc, TABLES, "the file", error=ConfigFileError, source=p,
+               template="unknown table(s) {unknown}; expected some of {known}")
+    con = check_keys(doc.get("console", {}), CONSOLE_KEYS, "[console]", error=ConfigFileError, template=_UNKNOWN,
+                     source=p)
+    goals = lambda g: tuple(floats(row) for row in g)  # noqa: E731
+    bp = _build(BehaviourParams, doc, "behaviour", p, {"goals": goals, "goal_centre": floats})
+    sp = _build(SafetyParams, doc, "safety", p, {"gamma": float, "safety_distance": float})
+    dp = _build(DensityParams, doc, "density", p)
     loop_kw: dict[str, Any] = {"behaviour_params": bp, "safety": sp, "density": dp}
     for key, target in LOOP_KEYS.items():  # one key at a time, so the error names the key written
         if key not in con:
             continue
         try:
-            value = tuple(float(b) for b in con[key]) if key == "bounds" else con[key]
+            value = floats(con[key]) if key == "bounds" else con[key]
             LoopConfig(**{target: value})
         except (TypeError, ValueError) as exc:
             message = str(exc).replace(target, key) if target != key else str(exc)
@@ -126,7 +102,7 @@ def load_settings(path: str | Path) -> ConsoleSettings:
     port = con.get("port", 8080)
     if not isinstance(host, str) or not host:
         raise ConfigFileError(f"{p}: [console] host must be a non-empty string, got {host!r}")
-    if isinstance(port, bool) or not isinstance(port, int) or not 0 <= port <= 65535:
+    if not in_range(port, 0, 65535, integer=True):
         raise ConfigFileError(f"{p}: [console] port must be an integer in [0, 65535], got {port!r}")
     inputs = doc.get("inputs")
     if inputs is not None and not isinstance(inputs, dict):

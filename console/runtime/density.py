@@ -16,6 +16,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import ArrayLike
 
+from swarmdeck.core.checks import require_in_range
 from swarmdeck.core.smooth import smoothstep
 from swarmdeck.coverage.density import GaussianMixture
 
@@ -36,11 +37,9 @@ class MovingBump:
 
     def __post_init__(self) -> None:
         for name in ("sigma", "period"):
-            if not (math.isfinite(getattr(self, name)) and getattr(self, name) > 0):
-                raise ValueError(f"moving density {name} must be > 0, got {getattr(self, name)!r}")
+            require_in_range(getattr(self, name), f"moving density {name}", 0.0, lo_open=True)
         for name in ("radius", "weight", "floor"):
-            if not (math.isfinite(getattr(self, name)) and getattr(self, name) >= 0):
-                raise ValueError(f"moving density {name} must be >= 0, got {getattr(self, name)!r}")
+            require_in_range(getattr(self, name), f"moving density {name}", 0.0)
 
     def at(self, t: float) -> GaussianMixture:
         """Snapshot at time t [s] with exact μ̇."""
@@ -89,12 +88,8 @@ class BumpSet:
     _lock: threading.Lock = field(default_factory=threading.Lock, repr=False)
 
     def _check(self, sigma: float, weight: float) -> None:
-        lo, hi = self.sigma_range
-        if not (math.isfinite(sigma) and lo <= sigma <= hi):
-            raise ValueError(f"bump sigma must be in [{lo}, {hi}] m, got {sigma!r}")
-        lo, hi = self.weight_range
-        if not (math.isfinite(weight) and lo <= weight <= hi):
-            raise ValueError(f"bump weight must be in [{lo}, {hi}], got {weight!r}")
+        require_in_range(sigma, "bump sigma", *self.sigma_range, unit="m")
+        require_in_range(weight, "bump weight", *self.weight_range)
 
     def add(self, mu: ArrayLike, sigma: float, weight: float, t: float) -> int:
         """Add a bump at ``mu`` (2,) m; returns its id. ValueError for bad values or too many bumps."""

@@ -64,6 +64,7 @@ from swarmdeck.console.runtime.frame import BarrierFrame, ContactsFrame, Coverag
 from swarmdeck.core.ports import CommandSink, PoseSource, SensedPoses
 from swarmdeck.coverage.density import GaussianMixture
 from swarmdeck.core.bounds import DEFAULT_BOUNDS, Bounds
+from swarmdeck.core.checks import in_range, require_in_range
 from swarmdeck.core.kinematics import GritsBotParams, lookahead_points, saturate
 from swarmdeck.devices import ArenaConfig
 from swarmdeck.devices.clock import RealTimePacer
@@ -85,10 +86,8 @@ class SafetyParams:
     mode: str = "auto"
 
     def __post_init__(self) -> None:
-        if not (math.isfinite(self.safety_distance) and 0.11 <= self.safety_distance <= 0.4):
-            raise ValueError(f"safety_distance (D_s) must be in [0.11, 0.4] m, got {self.safety_distance!r}")
-        if not (math.isfinite(self.gamma) and 1.0 <= self.gamma <= 1000.0):
-            raise ValueError(f"gamma must be in [1, 1000], got {self.gamma!r}")
+        require_in_range(self.safety_distance, "safety_distance (D_s)", 0.11, 0.4, unit="m")
+        require_in_range(self.gamma, "gamma", 1.0, 1000.0)
         if self.class_k not in ("cubic", "linear"):
             raise ValueError(f"class_k must be 'cubic' or 'linear', got {self.class_k!r}")
         if self.mode not in ("centralised", "distributed", "auto"):
@@ -110,12 +109,10 @@ class DensityParams:
 
     def __post_init__(self) -> None:
         MovingBump(self.radius, self.period, self.sigma, self.weight, self.floor)  # validates
-        if not self.floor > 0:
+        if not in_range(self.floor, 0.0, lo_open=True):
             raise ValueError(f"density floor must be > 0 (keeps every cell's mass positive), got {self.floor!r}")
-        if not (0.05 <= self.bump_sigma <= 1.0):
-            raise ValueError(f"bump_sigma must be in [0.05, 1.0] m, got {self.bump_sigma!r}")
-        if not (0.0 <= self.bump_weight <= 5.0):
-            raise ValueError(f"bump_weight must be in [0, 5], got {self.bump_weight!r}")
+        require_in_range(self.bump_sigma, "bump_sigma", 0.05, 1.0, unit="m")
+        require_in_range(self.bump_weight, "bump_weight", 0.0, 5.0)
 
 
 @dataclass(frozen=True)
@@ -142,12 +139,9 @@ class LoopConfig:
 
     def __post_init__(self) -> None:
         # no upper bound here: how many fit depends on the arena (the initial layout names the maximum)
-        if isinstance(self.n_robots, bool) or not isinstance(self.n_robots, int) or self.n_robots < 1:
-            raise ValueError(f"n_robots must be an integer >= 1, got {self.n_robots!r}")
-        if not (math.isfinite(self.dt) and 0.005 <= self.dt <= 0.5):
-            raise ValueError(f"dt must be in [0.005, 0.5] s, got {self.dt!r}")
-        if not (math.isfinite(self.max_speed) and 0 < self.max_speed <= 1.0):
-            raise ValueError(f"max_speed must be in (0, 1] m/s, got {self.max_speed!r}")
+        require_in_range(self.n_robots, "n_robots", 1, integer=True)
+        require_in_range(self.dt, "dt", 0.005, 0.5, unit="s")
+        require_in_range(self.max_speed, "max_speed", 0.0, 1.0, unit="m/s", lo_open=True)
         ArenaConfig(bounds=self.bounds, dt=self.dt)  # validates bounds
         b = self.script_budget
         if b is not None and (isinstance(b, bool) or not isinstance(b, (int, float)) or not 0 < b <= 0.5):

@@ -10,7 +10,7 @@ with the monotonic clock. REFERENCE.md §9 / notes/robotarium.md §4.3:
   the robot brakes to zero — modelled exactly: a command received at t_c moves
   the robot on [t_c, t_c + 0.5 s] and not a moment longer, whatever the loop jitter;
 * wheel limits by one uniform scale per robot
-  (:func:`~swarmdeck.devices.gritsbot.limit_unicycle`), exact unicycle arcs
+  (:func:`~swarmdeck.core.kinematics.limit_unicycle`), exact unicycle arcs
   (:func:`~swarmdeck.devices.gritsbot.unicycle_step`);
 * a battery whose voltage falls linearly with the charge drawn:
   I = I_idle + k·(|ω_R| + |ω_L|) while driving, I_idle otherwise.
@@ -22,7 +22,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from swarmdeck.core.checks import require_positive
+from swarmdeck.core.checks import in_range, require_positive
 from swarmdeck.core.kinematics import GritsBotParams, limit_unicycle, unicycle_to_wheels
 from swarmdeck.devices.gritsbot import unicycle_step
 
@@ -49,7 +49,7 @@ class FirmwareParams:
 
     def __post_init__(self) -> None:
         require_positive(self, ("command_timeout", "loop_period", "status_period", "pose_period"), "seconds")
-        if not (0 <= self.pose_decimals <= 6):
+        if not in_range(self.pose_decimals, 0, 6, integer=True):
             raise ValueError(f"FirmwareParams.pose_decimals must be 0..6, got {self.pose_decimals!r}")
 
 

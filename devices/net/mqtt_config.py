@@ -12,6 +12,8 @@ from __future__ import annotations
 from dataclasses import dataclass, field, replace
 from urllib.parse import unquote, urlsplit
 
+from swarmdeck.core.checks import in_range
+
 COMMAND_ROOT = "matlab_api"
 POSE_TOPIC = "overhead_tracker/all_robot_pose_data"
 STATUS_LEAF = "status"
@@ -53,7 +55,7 @@ class MqttConfig:
     def __post_init__(self) -> None:
         if not self.host:
             raise ValueError("MqttConfig.host must not be empty")
-        if not (isinstance(self.port, int) and 0 < self.port < 65536):
+        if not in_range(self.port, 1, 65535, integer=True):
             raise ValueError(f"MqttConfig.port must be an integer in 1..65535, got {self.port!r}")
         if self.qos not in (0, 1):
             raise ValueError(f"MqttConfig.qos must be 0 or 1 (QoS 2 only adds latency to a stream), got {self.qos!r}")
@@ -61,9 +63,9 @@ class MqttConfig:
             raise ValueError(f"MqttConfig.protocol must be '3.1.1' or '5', got {self.protocol!r}")
         if any(c in self.prefix for c in "+#"):
             raise ValueError(f"MqttConfig.prefix must not contain MQTT wildcards + or #, got {self.prefix!r}")
-        if not (1 <= self.keepalive <= 3600):
+        if not in_range(self.keepalive, 1, 3600):
             raise ValueError(f"MqttConfig.keepalive must be 1..3600 s, got {self.keepalive!r}")
-        if not (0 < self.reconnect_min <= self.reconnect_max):
+        if not (in_range(self.reconnect_min, 0.0, lo_open=True) and in_range(self.reconnect_max, self.reconnect_min)):
             raise ValueError(
                 f"MqttConfig needs 0 < reconnect_min <= reconnect_max, got {self.reconnect_min!r}, {self.reconnect_max!r}"
             )
