@@ -39,6 +39,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from swarmdeck.core.bounds import DEFAULT_BOUNDS, Bounds
 from swarmdeck.envs.observations import observation_bounds, observation_size, observe
 from swarmdeck.envs.tasks import (
     TASKS, coverage_cells, coverage_reward, formation_reward, formation_slots, rendezvous_reward,
@@ -71,7 +72,7 @@ class EnvConfig:
     density_obs: bool = False
     safety: bool = True
     max_steps: int = 600
-    bounds: tuple[float, float, float, float] = (-1.6, 1.6, -1.0, 1.0)
+    bounds: Bounds = DEFAULT_BOUNDS
     dt: float = 0.033
     formation_radius: float = 0.6
     n_bumps: int = 2

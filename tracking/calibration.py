@@ -14,6 +14,7 @@ from pathlib import Path
 import cv2
 import numpy as np
 
+from swarmdeck.core.checks import in_range
 from swarmdeck.tracking.camera_model import PinholeCamera
 from swarmdeck.tracking.jsonfile import read_json_object, write_json
 from swarmdeck.tracking.dictionaries import canonical_dictionary, dictionary
@@ -110,11 +111,11 @@ class CharucoSpec:
             object.__setattr__(self, "dictionary", canonical_dictionary(self.dictionary))
         except ValueError as exc:
             raise CalibrationError(f"ChArUco board dictionary: {exc}") from None
-        if not all(isinstance(v, (int, np.integer)) and v >= 3 for v in (self.squares_x, self.squares_y)):
+        if not all(in_range(v, 3, integer=True) for v in (self.squares_x, self.squares_y)):
             raise CalibrationError(f"a ChArUco board needs at least 3x3 squares, got {self.squares_x}x{self.squares_y}")
         for name in ("square_length", "marker_length"):
             v = getattr(self, name)
-            if not (isinstance(v, (int, float, np.floating)) and np.isfinite(v) and v > 0):
+            if not in_range(v, 0.0, lo_open=True):
                 raise CalibrationError(f"{name} must be a finite length > 0 m, got {v!r}")
         if self.marker_length >= self.square_length:
             raise CalibrationError(f"marker_length ({self.marker_length} m) must be smaller than "

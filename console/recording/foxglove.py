@@ -49,6 +49,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from swarmdeck.core.bounds import DEFAULT_BOUNDS, Bounds
 from swarmdeck.console.runtime.frame import Frame
 
 TOPIC_ROBOTS = "/foxglove/robots"
@@ -171,7 +172,7 @@ class FoxgloveEncoder:
             camera source's ``image``), or None when no camera runs.
     """
 
-    def __init__(self, bounds: tuple[float, float, float, float] = (-1.6, 1.6, -1.0, 1.0),
+    def __init__(self, bounds: Bounds = DEFAULT_BOUNDS,
                  robot_radius: float = 0.055, config: FoxgloveConfig | None = None,
                  image_provider: Callable[[str], Any] | None = None) -> None:
         import foxglove.messages as fm

@@ -342,7 +342,7 @@ class Recorder:
             return
         try:
             if self._foxglove is None:
-                bounds = self._meta.get("bounds", frame.bounds if frame is not None else (-1.6, 1.6, -1.0, 1.0))
+                bounds = self._meta.get("bounds", frame.bounds if frame is not None else DEFAULT_BOUNDS)
                 self._foxglove = FoxgloveEncoder(tuple(bounds), config=self._foxglove_config,
                                                  image_provider=self._image_provider)
             ns = self._log_ns(frame.time if frame is not None else t)

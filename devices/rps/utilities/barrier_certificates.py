@@ -115,7 +115,7 @@ def create_unicycle_differential_drive_barrier_certificate_with_boundary(
         max_num_obstacle_points: int = 100, max_num_robots: int = 30, disturbance: float = 5,
         wheel_vel_limit: float = 12.5, base_length: float = 0.105, wheel_radius: float = 0.016,
         projection_distance: float = 0.05, barrier_gain: float = 150, safety_radius: float = 0.17,
-        boundary_points=np.array([-1.6, 1.6, -1.0, 1.0])):
+        boundary_points=np.array(DEFAULT_BOUNDS)):
     """As :func:`create_unicycle_differential_drive_barrier_certificate`, with the arena walls."""
     return _unicycle_dd(barrier_gain, safety_radius, projection_distance, wheel_vel_limit, base_length, wheel_radius,
                         disturbance, _boundary(boundary_points))
