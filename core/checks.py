@@ -17,7 +17,9 @@ def in_range(x: object, lo: float = -math.inf, hi: float = math.inf, *, lo_open:
     """True if ``x`` is a finite real number (an int with ``integer``; never a bool) in the interval
     from ``lo`` to ``hi`` (closed unless ``lo_open``/``hi_open``). NaN and inf are never in range."""
     kind = numbers.Integral if integer else numbers.Real
-    if isinstance(x, bool) or not isinstance(x, kind) or not math.isfinite(x):
+    if isinstance(x, bool) or not isinstance(x, kind):
+        return False
+    if not isinstance(x, numbers.Integral) and not math.isfinite(x):  # ints are finite (and may not fit a float)
         return False
     return bool((x > lo if lo_open else x >= lo) and (x < hi if hi_open else x <= hi))
 

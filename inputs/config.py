@@ -109,8 +109,7 @@ class ListenerConfig:
             v = getattr(self, key)
             if not (type(v) is int and lo <= v <= hi):
                 raise ConfigError(f"listener {self.name!r}: {key} must be an int in {lo}..{hi}, got {v!r}")
-        if not (isinstance(self.forget_after, (int, float)) and math.isfinite(self.forget_after)
-                and self.forget_after > 0):
+        if not in_range(self.forget_after, 0.0, lo_open=True):
             raise ConfigError(f"listener {self.name!r}: forget_after must be a positive number of seconds, "
                               f"got {self.forget_after!r}")
 

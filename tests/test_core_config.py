@@ -74,6 +74,7 @@ def test_in_range_refuses_nan_inf_bool_and_text(x, ok):
 
 def test_integer_ranges():
     assert in_range(np.int64(3), 1, 200, integer=True) and not in_range(3.0, 1, 200, integer=True)
+    assert in_range(10**400, 0, integer=True) and not in_range(10**400, 0, 10**6, integer=True)
     with pytest.raises(ValueError, match=r"^n_robots must be an integer in \[1, 200\], got -3$"):
         require_in_range(-3, "n_robots", 1, 200, integer=True)
     with pytest.raises(ValueError, match=r"^dt must be >= 0 s, got nan$"):

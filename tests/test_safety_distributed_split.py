@@ -16,7 +16,7 @@ from swarmdeck.safety.constraints import barrier_rows
 from swarmdeck.safety.distributed import split_rows
 from swarmdeck.safety.scenes import grid_scene
 from swarmdeck.safety.unicycle import wheel_limit_rows
-from swarmdeck.safety.config import UnicycleParams
+from swarmdeck.core.kinematics import UnicycleParams
 from swarmdeck.safety.constraints import Rows
 
 

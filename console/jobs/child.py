@@ -22,7 +22,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from swarmdeck.console.jobs.protocol import FrameReader, floats, pack, write_frame
 from swarmdeck.devices.arena import ExperimentFinished
-from swarmdeck.devices.gritsbot import GritsBotParams
+from swarmdeck.core.kinematics import GritsBotParams
 from swarmdeck.devices.runner import ScriptError, RunnerArenaError, run_experiment
 from swarmdeck.devices.simulator import ArenaConfig
 

@@ -19,7 +19,8 @@ from numpy.typing import ArrayLike, NDArray
 from scipy.spatial import cKDTree
 
 from swarmdeck.devices.arena import Arena
-from swarmdeck.devices.gritsbot import GritsBotParams, limit_unicycle, wrap_angle
+from swarmdeck.core.kinematics import GritsBotParams, limit_unicycle, unicycle_to_si
+from swarmdeck.devices.gritsbot import wrap_angle
 from swarmdeck.devices.simulator import SimulatedArena
 from swarmdeck.devices.validation import ValidationReport
 from swarmdeck.safety.verifier import ContactLog, step_contacts
@@ -121,7 +122,7 @@ class VerificationRobots:
         self._applied = (v, w)
         poses = self.sim.poses
         centres = poses[:, :2]
-        u = v[:, None] * np.column_stack((np.cos(poses[:, 2]), np.sin(poses[:, 2])))
+        u = unicycle_to_si(poses, v, w, 0.0)  # velocity of the centre (look-ahead ℓ = 0)
         dt = self.sim.config.dt
         pairs, t, vn, t_stop = step_contacts(centres, u, dt, self.contact_distance)
         if len(pairs) and len(self.contact_points) < 200:

@@ -9,6 +9,8 @@ from __future__ import annotations
 import html
 from typing import Any
 
+from swarmdeck.core.bounds import DEFAULT_BOUNDS, Bounds
+
 COLOURS = ("#1f77b4", "#d62728", "#2ca02c", "#ff7f0e", "#9467bd", "#8c564b", "#e377c2", "#17becf")
 CONTACT_DISTANCE = 0.11  # m, robot diameter (REFERENCE.md §1)
 
@@ -58,7 +60,7 @@ def _distance_plot(runs: list[dict[str, Any]], duration: float, width: int = 520
     return "".join(parts)
 
 
-def _arena_plot(runs: list[dict[str, Any]], bounds: tuple[float, float, float, float] = (-1.6, 1.6, -1.0, 1.0),
+def _arena_plot(runs: list[dict[str, Any]], bounds: Bounds = DEFAULT_BOUNDS,
                 scale: float = 160.0) -> str:
     x0, x1, y0, y1 = bounds
     w, h = (x1 - x0) * scale, (y1 - y0) * scale

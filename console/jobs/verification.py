@@ -34,6 +34,7 @@ from typing import Any
 import numpy as np
 
 from swarmdeck.console.jobs.confinement import SandboxLimits
+from swarmdeck.core.checks import in_range
 from swarmdeck.console.jobs.plant import ArenaPlant, Disturbances, VerificationRobots
 from swarmdeck.console.jobs.sandbox import run_sandboxed
 from swarmdeck.devices.arena import Arena
@@ -76,15 +77,15 @@ class VerificationConfig:
     rps: bool | None = None
 
     def __post_init__(self) -> None:
-        if self.n_robots is not None and (isinstance(self.n_robots, bool) or not isinstance(self.n_robots, int) or self.n_robots < 1):
+        if self.n_robots is not None and not in_range(self.n_robots, 1, integer=True):
             raise ValueError(f"n_robots must be a positive integer, got {self.n_robots!r}")
-        if not (isinstance(self.duration, (int, float)) and math.isfinite(self.duration) and self.duration > 0):
+        if not in_range(self.duration, 0.0, lo_open=True):
             raise ValueError(f"duration must be a finite number of seconds > 0, got {self.duration!r}")
-        if isinstance(self.runs, bool) or not isinstance(self.runs, int) or self.runs < 1:
+        if not in_range(self.runs, 1, integer=True):
             raise ValueError(f"runs must be a positive integer, got {self.runs!r}")
-        if isinstance(self.seed, bool) or not isinstance(self.seed, int) or self.seed < 0:
+        if not in_range(self.seed, 0, integer=True):
             raise ValueError(f"seed must be a non-negative integer, got {self.seed!r}")
-        if not 0 <= self.bypass_threshold <= 1:
+        if not in_range(self.bypass_threshold, 0.0, 1.0):
             raise ValueError(f"bypass_threshold must be in [0, 1], got {self.bypass_threshold!r}")
 
     def to_dict(self) -> dict:
