@@ -14,8 +14,8 @@ import numpy as np
 from hypothesis import given, settings, strategies as st
 from scipy.spatial.distance import pdist
 
-from swarmdeck.safety import (BarrierConfig, SafetyFilter, UnicycleParams, UnicycleSafetyFilter,
-                              lookahead_points, si_to_unicycle)
+from swarmdeck.core.kinematics import lookahead_points, si_to_unicycle
+from swarmdeck.safety import BarrierConfig, SafetyFilter, UnicycleParams, UnicycleSafetyFilter
 from swarmdeck.safety.constraints import barrier_rows
 from swarmdeck.safety.scenes import arena_for, grid_scene
 
