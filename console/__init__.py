@@ -13,5 +13,7 @@ Public API (import from the submodules; this package imports nothing so the CLI 
   ``swarmdeck.devices.simulated_robots.SimulatedRobots``.
 * :mod:`swarmdeck.console.web.scene` — ``ArenaScene.draw(frame)``: the viser scene as a function of Frames.
 * :mod:`swarmdeck.console.web.gui`, :mod:`swarmdeck.console.web.app` — the control panel and ``ConsoleApp``.
+* :mod:`swarmdeck.console.web.plots` — the Plots panel, one drawing code for live and playback
+  (:mod:`swarmdeck.console.web.player`).
 * ``swarmdeck console`` (:mod:`swarmdeck.console.cli.console`) starts it all.
 """

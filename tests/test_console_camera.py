@@ -48,6 +48,6 @@ def test_camera_image_is_drawn_under_the_robots() -> None:
         assert f.image_ref == "camera:0"
         scene.draw(f)
         img, bounds = src.image(f.image_ref)
-        assert scene._h["camera"] is not None and img.shape[2] == 3 and bounds == cfg.bounds
+        assert scene.nodes.camera is not None and img.shape[2] == 3 and bounds == cfg.bounds
     finally:
         server.stop()

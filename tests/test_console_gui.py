@@ -113,11 +113,11 @@ def test_bumps_add_edit_remove(console) -> None:
 def test_layer_toggles(console) -> None:
     _, scene, gui = console
     gui.layers["voronoi"].value = False
-    assert scene.visible["voronoi"] is False and scene._h["voronoi"].visible is False
+    assert scene.visible["voronoi"] is False and scene.nodes.voronoi.visible is False
     gui.layers["voronoi"].value = True
-    assert scene._h["voronoi"].visible is True
+    assert scene.nodes.voronoi.visible is True
     gui.layers["labels"].value = False
-    assert all(not lab.visible for lab in scene._labels)
+    assert all(not lab.visible for lab in scene.nodes.labels)
 
 
 def test_status_line_and_alerts(console) -> None:

@@ -37,29 +37,29 @@ def test_handles_follow_the_frame(scene) -> None:
     for f in frames:
         scene.draw(f)
     f = frames[-1]
-    np.testing.assert_allclose(scene._h["robots"].batched_positions[:, :2], f.poses[:, :2], atol=1e-6)
-    yaw = 2 * np.arctan2(scene._h["robots"].batched_wxyzs[:, 3], scene._h["robots"].batched_wxyzs[:, 0])
+    np.testing.assert_allclose(scene.nodes.robots.batched_positions[:, :2], f.poses[:, :2], atol=1e-6)
+    yaw = 2 * np.arctan2(scene.nodes.robots.batched_wxyzs[:, 3], scene.nodes.robots.batched_wxyzs[:, 0])
     np.testing.assert_allclose(np.angle(np.exp(1j * (yaw - f.poses[:, 2]))), 0.0, atol=1e-5)
-    assert scene._h["voronoi"].points.shape == (len(f.coverage.edges), 2, 3)
-    np.testing.assert_allclose(scene._h["voronoi"].points[:, :, :2], f.coverage.edges, atol=1e-6)
-    np.testing.assert_allclose(scene._h["centroids"].points[:, :2], f.coverage.centroids, atol=1e-6)
-    np.testing.assert_allclose(scene._h["safe"].points[:, 0, :2], f.points, atol=1e-6)
-    assert scene._h["discs"].points.shape == (f.n * scene.style.disc_segments, 2, 3)
-    assert [lab.text for lab in scene._labels] == [str(i) for i in f.ids]
+    assert scene.nodes.voronoi.points.shape == (len(f.coverage.edges), 2, 3)
+    np.testing.assert_allclose(scene.nodes.voronoi.points[:, :, :2], f.coverage.edges, atol=1e-6)
+    np.testing.assert_allclose(scene.nodes.centroids.points[:, :2], f.coverage.centroids, atol=1e-6)
+    np.testing.assert_allclose(scene.nodes.safe.points[:, 0, :2], f.points, atol=1e-6)
+    assert scene.nodes.discs.points.shape == (f.n * scene.style.disc_segments, 2, 3)
+    assert [lab.text for lab in scene.nodes.labels] == [str(i) for i in f.ids]
 
 
 def test_recorded_frames_draw_the_same(scene) -> None:
     f = _frames(ticks=3)[-1]
     g = Frame.from_dict(json.loads(json.dumps(f.to_dict())))
     scene.draw(g)
-    np.testing.assert_allclose(scene._h["robots"].batched_positions[:, :2], f.poses[:, :2], atol=1e-6)
+    np.testing.assert_allclose(scene.nodes.robots.batched_positions[:, :2], f.poses[:, :2], atol=1e-6)
 
 
 def test_robot_count_change_rebuilds_robots(scene) -> None:
     scene.draw(_frames(n_robots=4, ticks=1)[0])
-    assert len(scene._labels) == 4
+    assert len(scene.nodes.labels) == 4
     scene.draw(_frames(n_robots=9, ticks=1)[0])
-    assert len(scene._labels) == 9 and scene._h["robots"].batched_positions.shape == (9, 3)
+    assert len(scene.nodes.labels) == 9 and scene.nodes.robots.batched_positions.shape == (9, 3)
 
 
 def test_barrier_pairs_and_colours(scene) -> None:
@@ -67,7 +67,7 @@ def test_barrier_pairs_and_colours(scene) -> None:
     f = next(fr for fr in (loop.tick() for _ in range(400)) if fr.barrier.n_active > 0 and len(fr.barrier.active_pairs))
     scene.draw(f)
     pairs = f.barrier.active_pairs
-    np.testing.assert_allclose(scene._h["barrier"].points[:, 0, :2], f.points[pairs[:, 0]], atol=1e-6)
+    np.testing.assert_allclose(scene.nodes.barrier.points[:, 0, :2], f.points[pairs[:, 0]], atol=1e-6)
     cols = robot_colors(f)
     changed = f.barrier.intervention > 1e-3
     assert changed.any() and np.all(cols[changed] == (255, 140, 0))

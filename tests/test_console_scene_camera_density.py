@@ -37,7 +37,7 @@ def test_density_lies_over_the_camera_picture_and_lets_it_through(server) -> Non
     scene = ArenaScene(server, BOUNDS, image_provider=_camera)
     for f in _frames():
         scene.draw(f)
-    cam, dens = scene._h["camera"], scene._h["density"]
+    cam, dens = scene.nodes.camera, scene.nodes.density
     assert cam is not None and cam.visible and dens.visible
     assert dens.position[2] > cam.position[2]  # drawn above the picture
     img = dens.image
@@ -53,11 +53,11 @@ def test_without_a_camera_picture_the_heat_map_stays_opaque(server) -> None:
     scene.draw(frames[0])
     scene.set_layer("camera", False)
     scene.draw(frames[1])
-    assert scene._h["density"].image.shape[2] == 3
+    assert scene.nodes.density.image.shape[2] == 3
     scene.set_layer("camera", True)
     scene.draw(frames[2])
-    assert scene._h["density"].image.shape[2] == 4
+    assert scene.nodes.density.image.shape[2] == 4
     server.scene.reset()
     plain = ArenaScene(server, BOUNDS)  # simulation: no camera at all
     plain.draw(frames[0])
-    assert plain._h["density"].image.shape[2] == 3
+    assert plain.nodes.density.image.shape[2] == 3

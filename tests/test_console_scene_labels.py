@@ -18,10 +18,10 @@ def test_labels_sit_on_their_robots_after_every_draw() -> None:
         for _ in range(12):
             f = loop.tick()
             scene.draw(f)
-            label_xy = np.array([lab.position[:2] for lab in scene._labels], dtype=float)
+            label_xy = np.array([lab.position[:2] for lab in scene.nodes.labels], dtype=float)
             expected = f.poses[:, :2] + [0.0, scene.style.label_offset]
             np.testing.assert_allclose(label_xy, expected, atol=1e-6)
-            robots_xy = scene._h["robots"].batched_positions[:, :2]
+            robots_xy = scene.nodes.robots.batched_positions[:, :2]
             np.testing.assert_allclose(label_xy - [0.0, scene.style.label_offset], robots_xy, atol=1e-6)
             if prev is not None:
                 moved = max(moved, float(np.abs(f.poses[:, :2] - prev).max()))

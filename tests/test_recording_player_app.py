@@ -27,9 +27,9 @@ def test_slider_seeks_and_the_scene_draws_that_frame(app):
     drawn = app.scene.frames_drawn
     app.slider.value = 7.0  # what a browser sends when the user drags the timeline
     assert app.player.frame.tick == 212 and app.scene.frames_drawn == drawn + 1
-    robots = app.scene._h["robots"]
+    robots = app.scene.nodes.robots
     np.testing.assert_allclose(robots.batched_positions[:, :2], app.player.frame.poses[:, :2], atol=1e-6)
-    t = app.plot_dist.data[0]
+    t = app.plots.dist.data[0]
     assert t[-1] == pytest.approx(app.player.frame_time) and t[0] == pytest.approx(7.0 - PLOT_BACKFILL, abs=0.04)
     assert "tick 212" in app.status.content
 

@@ -70,7 +70,7 @@ def test_the_live_panel_shows_session_time_and_labels_run_time(tmp_path) -> None
         assert loop.time_origin == frames[0].time
         assert f"t = {session:.1f} s" in gui.status.content
         assert f"run t = {last.run_time:.1f} s" in gui.status.content and session > last.run_time + 0.3
-        x = gui.plot_dist.data[0]
+        x = gui.plots.dist.data[0]
         assert abs(x[0]) < 1e-9 and abs(x[-1] - session) < 1e-9
         # the alert list under the status line gives each alert its session time
         stop_t = next(f for f in frames if "EMERGENCY STOP" in f.events).time - frames[0].time

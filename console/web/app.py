@@ -10,18 +10,19 @@ from __future__ import annotations
 
 import threading
 import time
-from typing import Any
+from collections.abc import Callable
 
 from swarmdeck.console.runtime.frame import Frame
-from swarmdeck.console.web.gui import ConsoleGui
 from swarmdeck.console.runtime.loop import ControlLoop
+from swarmdeck.console.web.gui import ConsoleGui
 from swarmdeck.console.web.scene import ArenaScene
 
 
 class FrameViewer:
     """Draws the newest Frame on its own thread (latest-frame-wins)."""
 
-    def __init__(self, scene: ArenaScene, gui: ConsoleGui | None = None, on_error: Any = None) -> None:
+    def __init__(self, scene: ArenaScene, gui: ConsoleGui | None = None,
+                 on_error: Callable[[str], None] | None = None) -> None:
         self.scene, self.gui = scene, gui
         self._pending: Frame | None = None
         self._lock = threading.Lock()
@@ -95,7 +96,7 @@ class ConsoleApp:
         import viser
 
         self.loop = loop
-        self.server = viser.ViserServer(host=host, port=port, verbose=verbose)
+        self.server: viser.ViserServer = viser.ViserServer(host=host, port=port, verbose=verbose)
         self.scene = ArenaScene(self.server, loop.config.bounds, robot_radius=loop.robot.radius,
                                 image_provider=getattr(loop.source, "image", None))
         self.gui = ConsoleGui(self.server, loop, self.scene)

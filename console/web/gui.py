@@ -13,20 +13,25 @@ import math
 import threading
 import time
 from collections import deque
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from swarmdeck.console.runtime.behaviours import BUILTIN, LAWS
 from swarmdeck.console.runtime.frame import Frame
 from swarmdeck.console.runtime.loop import ControlLoop
+from swarmdeck.console.web.plots import PlotHistory, PlotsPanel
 from swarmdeck.console.web.scene import LAYERS, ArenaScene
 
-PLOT_WINDOW = 300  # samples kept in the live plots
 RECENT = 5  # alerts and notices listed (with their session times) under the status line
 
+if TYPE_CHECKING:
+    import viser
+    from viser._gui_handles import GuiModalHandle  # not re-exported by viser 1.1
 
-def ray_to_floor(origin: Any, direction: Any) -> tuple[float, float] | None:
+
+def ray_to_floor(origin: ArrayLike, direction: ArrayLike) -> tuple[float, float] | None:
     """Intersect a click ray with the floor z = 0; None when it does not hit it."""
     o = np.asarray(origin, dtype=float)
     d = np.asarray(direction, dtype=float)
@@ -43,20 +48,19 @@ class ConsoleGui:
     """Builds the panel on ``server.gui`` and keeps it in step with the loop's Frames.
 
     Args:
-        server: a ``viser.ViserServer``.
+        server: the viser server whose ``gui`` and ``scene`` the panel uses.
         loop: the control loop to command.
         scene: the arena scene (for layer toggles).
     """
 
-    def __init__(self, server: Any, loop: ControlLoop, scene: ArenaScene) -> None:
+    def __init__(self, server: viser.ViserServer, loop: ControlLoop, scene: ArenaScene) -> None:
         self.server, self.loop, self.scene = server, loop, scene
         gui = server.gui
-        self.gui = gui
+        self.gui: viser.GuiApi = gui
         self._lock = threading.Lock()
         self._reverting = False
-        self._bump_handles: dict[int, Any] = {}
-        self._series: dict[str, deque] = {k: deque(maxlen=PLOT_WINDOW) for k in
-                                          ("t", "dmin", "ds", "active", "H", "mpc", "tick_ms", "solve_ms")}
+        self._bump_handles: dict[int, viser.TransformControlsHandle] = {}
+        self.history = PlotHistory()
         self._last_gui_update = 0.0
         self._last_tick_time: float | None = None
         self._rate = 0.0
@@ -116,9 +120,9 @@ class ConsoleGui:
         self.gamma.on_update(lambda _: self._set_safety(gamma=float(self.gamma.value)))
         self.d_s.on_update(lambda _: self._set_safety(safety_distance=float(self.d_s.value)))
         self.class_k.on_update(lambda _: self._set_safety(class_k=str(self.class_k.value)))
-        self.confirm_off = None
-        self.cancel_off = None
-        self._modal = None
+        self.confirm_off: viser.GuiButtonHandle | None = None
+        self.cancel_off: viser.GuiButtonHandle | None = None
+        self._modal: GuiModalHandle | None = None
 
         dp = loop.density.params
         with gui.add_folder("Density"):
@@ -146,31 +150,10 @@ class ConsoleGui:
         for name, box in self.layers.items():
             box.on_update(lambda _, name=name, box=box: self.scene.set_layer(name, bool(box.value)))
 
-        with gui.add_folder("Plots"):
-            empty = (np.zeros(1), np.zeros(1))
-            self.plot_dist = gui.add_uplot(
-                (np.zeros(1), np.zeros(1), np.zeros(1)),
-                ({"label": "t (s, session)"}, {"label": "min distance (m)", "stroke": "#1f77b4", "width": 2},
-                 {"label": "D_s", "stroke": "#d62728", "width": 1, "dash": [6, 4]}),
-                title="Minimum distance vs D_s", aspect=2.0, scales={"x": {"time": False}})
-            self.plot_active = gui.add_uplot(
-                empty, ({"label": "t (s, session)"}, {"label": "active constraints", "stroke": "#ff7f0e", "width": 2}),
-                title="Active barrier constraints", aspect=2.5, scales={"x": {"time": False}})
-            self.plot_H = gui.add_uplot(
-                (np.zeros(1), np.zeros(1), np.zeros(1)),
-                ({"label": "t (s, session)"}, {"label": "H", "stroke": "#2ca02c", "width": 2, "scale": "H"},
-                 {"label": "mean ‖p−c‖ (m)", "stroke": "#9467bd", "width": 2, "scale": "m"}),
-                title="Coverage cost H(t) and mean ‖p − c‖", aspect=2.0,
-                scales={"x": {"time": False}, "H": {"auto": True}, "m": {"auto": True}},
-                axes=({}, {"scale": "H"}, {"scale": "m", "side": 1}))
-            self.plot_tick = gui.add_uplot(
-                (np.zeros(1), np.zeros(1), np.zeros(1)),
-                ({"label": "t (s, session)"}, {"label": "tick (ms)", "stroke": "#17becf", "width": 2},
-                 {"label": "barrier solve (ms)", "stroke": "#8c564b", "width": 1}),
-                title="Tick time", aspect=2.5, scales={"x": {"time": False}})
+        self.plots = PlotsPanel(gui)
 
     # ------------------------------------------------------------------ helpers
-    def notify(self, text: str, client: Any = None, error: bool = True) -> None:
+    def notify(self, text: str, client: viser.ClientHandle | None = None, error: bool = True) -> None:
         """Show a message in the panel (and as a notification to the tab that caused it)."""
         self.messages.append(text)
         self.loop.post(text)
@@ -192,7 +175,7 @@ class ConsoleGui:
         except ValueError as exc:
             self.notify(f"barrier not changed: {exc}")
 
-    def _on_behaviour(self, event: Any) -> None:
+    def _on_behaviour(self, event: viser.GuiEvent) -> None:
         if self._reverting:
             return
         try:
@@ -200,7 +183,7 @@ class ConsoleGui:
         except ValueError as exc:
             self.notify(f"behaviour not changed: {exc}", getattr(event, "client", None))
 
-    def _on_load_script(self, event: Any) -> None:
+    def _on_load_script(self, event: viser.GuiEvent) -> None:
         path = str(self.script_path.value).strip()
         name = f"script:{path}"
         try:
@@ -218,7 +201,7 @@ class ConsoleGui:
         finally:
             self._reverting = False
 
-    def _on_barrier_toggle(self, event: Any) -> None:
+    def _on_barrier_toggle(self, event: viser.GuiEvent) -> None:
         if self._reverting:
             return
         if self.barrier_on.value:
@@ -257,7 +240,7 @@ class ConsoleGui:
             finally:
                 self._reverting = False
 
-    def _on_top_view(self, event: Any) -> None:
+    def _on_top_view(self, event: viser.GuiEvent) -> None:
         client = getattr(event, "client", None)
         if client is None:
             return
@@ -269,7 +252,7 @@ class ConsoleGui:
         client.camera.up_direction = cam.up
 
     # ------------------------------------------------------------------ bumps
-    def _on_scene_click(self, event: Any) -> None:
+    def _on_scene_click(self, event: viser.SceneClickEvent) -> None:
         if not self.click_adds.value:
             return
         hit = ray_to_floor(event.ray_origin, event.ray_direction)
@@ -277,12 +260,12 @@ class ConsoleGui:
             return
         self.add_bump(hit, getattr(event, "client", None))
 
-    def _on_shift_click(self, event: Any) -> None:
+    def _on_shift_click(self, event: viser.SceneClickEvent) -> None:
         hit = ray_to_floor(event.ray_origin, event.ray_direction)
         if hit is not None:
             self.go_to(hit, getattr(event, "client", None))
 
-    def go_to(self, xy: tuple[float, float], client: Any = None) -> None:
+    def go_to(self, xy: tuple[float, float], client: viser.ClientHandle | None = None) -> None:
         """Shift-click: switch to ``goto`` with the robots gathering around ``xy`` (m)."""
         x0, x1, y0, y1 = self.loop.config.bounds
         if not (x0 <= xy[0] <= x1 and y0 <= xy[1] <= y1):
@@ -295,7 +278,7 @@ class ConsoleGui:
         except ValueError as exc:
             self.notify(f"goal not set: {exc}", client)
 
-    def add_bump(self, xy: tuple[float, float], client: Any = None) -> int | None:
+    def add_bump(self, xy: tuple[float, float], client: viser.ClientHandle | None = None) -> int | None:
         """Add a bump at ``xy`` (m) with the panel's σ and weight, with a drag handle."""
         try:
             bid = self.loop.add_bump(xy, float(self.bump_sigma.value), float(self.bump_weight.value))
@@ -324,7 +307,7 @@ class ConsoleGui:
         v = str(self.bump_select.value)
         return int(v.split()[1]) if v.startswith("bump ") else None
 
-    def _on_bump_select(self, _: Any) -> None:
+    def _on_bump_select(self, _: viser.GuiEvent) -> None:
         bid = self.selected_bump()
         b = self.loop.bumps.get(bid) if bid is not None else None
         if b is None:
@@ -373,9 +356,10 @@ class ConsoleGui:
             inst = 1.0 / (frame.time - self._last_tick_time)
             self._rate = inst if self._rate == 0 else 0.9 * self._rate + 0.1 * inst
         self._last_tick_time = frame.time
-        b, c = frame.barrier, frame.coverage
-        with self._lock:  # the viewer thread reads the series while the loop thread appends
-            self._append(frame, b, c)
+        t = self.session_time(frame)
+        for text in frame.events:
+            self.recent.append((t, text))
+        self.history.add(t, frame)
 
     def session_time(self, frame: Frame) -> float:
         """s since the session's first Frame: the one time base of the panel, ``swarmdeck info`` and
@@ -383,33 +367,13 @@ class ConsoleGui:
         origin = self.loop.time_origin
         return frame.time - (frame.time if origin is None else origin)
 
-    def _append(self, frame: Frame, b: Any, c: Any) -> None:
-        s = self._series
-        t = self.session_time(frame)
-        s["t"].append(t)
-        for text in frame.events:
-            self.recent.append((t, text))
-        s["dmin"].append(b.min_distance if b is not None and math.isfinite(b.min_distance) else math.nan)
-        s["ds"].append(frame.params.get("safety_distance", math.nan))
-        s["active"].append(b.n_active if b is not None else 0)
-        s["H"].append(c.cost_H if c is not None else math.nan)
-        s["mpc"].append(c.mean_centroid_distance if c is not None else math.nan)
-        s["tick_ms"].append(1e3 * frame.timing.get("total", math.nan))
-        s["solve_ms"].append(1e3 * b.solve_time_s if b is not None else math.nan)
-
     def update(self, frame: Frame, force: bool = False, period: float = 0.25) -> None:
         """Refresh plots and the status line at most every ``period`` s (wall time)."""
         now = time.monotonic()
         if not force and now - self._last_gui_update < period:
             return
         self._last_gui_update = now
-        with self._lock:
-            s = {k: np.asarray(v, dtype=float) for k, v in self._series.items()}
-        if len(s["t"]) >= 2:
-            self.plot_dist.data = (s["t"], s["dmin"], s["ds"])
-            self.plot_active.data = (s["t"], s["active"])
-            self.plot_H.data = (s["t"], s["H"], s["mpc"])
-            self.plot_tick.data = (s["t"], s["tick_ms"], s["solve_ms"])
+        self.plots.show(self.history)
         self.status.content = self.status_line(frame)
         self._sync_widgets(frame)
         self.alerts.content = self.alert_text(frame)

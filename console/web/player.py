@@ -17,13 +17,10 @@ from __future__ import annotations
 import math
 import threading
 import time
-from collections import deque
 from collections.abc import Callable
 
-import numpy as np
-
-from swarmdeck.console.runtime.frame import Frame
 from swarmdeck.console.recording.reader import Recording
+from swarmdeck.console.runtime.frame import Frame
 
 RATE_MIN, RATE_MAX = 0.1, 4.0
 RATES: tuple[float, ...] = (0.1, 0.25, 0.5, 1.0, 2.0, 4.0)
@@ -204,21 +201,22 @@ class PlayerApp:
 
     def __init__(self, recording: Recording, host: str = "127.0.0.1", port: int = 8080,
                  clock: Callable[[], float] = time.monotonic) -> None:
-        import viser
+        import viser  # here, not at the top: the timeline (Player) works without the browser side
 
+        from swarmdeck.console.web.plots import PlotHistory, PlotsPanel
         from swarmdeck.console.web.scene import LAYERS, ArenaScene
 
         self.player = Player(recording, clock)
         self.recording = recording
         first = recording.first_frame
         assert first is not None
-        self.server = viser.ViserServer(host=host, port=port, verbose=False)
-        self.scene = ArenaScene(self.server, bounds=first.bounds)
+        self.server: viser.ViserServer = viser.ViserServer(host=host, port=port, verbose=False)
+        self.scene: ArenaScene = ArenaScene(self.server, bounds=first.bounds)
         self._syncing = False
         self._draw_lock = threading.RLock()
         self._stop = threading.Event()
         self._thread: threading.Thread | None = None
-        self._series: dict[str, deque] = {k: deque(maxlen=600) for k in ("t", "dmin", "ds", "H", "active")}
+        self.history: PlotHistory = PlotHistory()
         self._drawn_version = -1
         gui = self.server.gui
         gui.configure_theme(show_share_button=False, control_width="large", dark_mode=False,
@@ -239,25 +237,12 @@ class PlayerApp:
             self.clear_button = gui.add_button("Clear A/B")
             self.range_text = gui.add_markdown("A/B: whole recording")
         with gui.add_folder("Layers", expand_by_default=False):
-            self._layer_boxes = {}
+            self._layer_boxes: dict[str, viser.GuiCheckboxHandle] = {}
             for name in LAYERS:
                 box = gui.add_checkbox(name, initial_value=self.scene.visible[name])
                 box.on_update(lambda _e, n=name, b=box: self._on_layer(n, b.value))
                 self._layer_boxes[name] = box
-        with gui.add_folder("Plots"):
-            self.plot_dist = gui.add_uplot(
-                (np.zeros(1), np.zeros(1), np.zeros(1)),
-                ({"label": "t (s, session)"}, {"label": "min distance (m)", "stroke": "#1f77b4", "width": 2},
-                 {"label": "D_s (m)", "stroke": "#d62728", "width": 1, "dash": [6, 4]}),
-                title="Minimum distance vs D_s", aspect=2.0, scales={"x": {"time": False}})
-            self.plot_active = gui.add_uplot(
-                (np.zeros(1), np.zeros(1)),
-                ({"label": "t (s, session)"}, {"label": "active constraints", "stroke": "#ff7f0e", "width": 2}),
-                title="Active barrier constraints", aspect=2.5, scales={"x": {"time": False}})
-            self.plot_H = gui.add_uplot(
-                (np.zeros(1), np.zeros(1)),
-                ({"label": "t (s, session)"}, {"label": "H", "stroke": "#2ca02c", "width": 2}),
-                title="Coverage cost H(t)", aspect=2.0, scales={"x": {"time": False}})
+        self.plots: PlotsPanel = PlotsPanel(gui)
         self.events = gui.add_markdown("")
         self.slider.on_update(lambda _e: self._on_slider())
         self.play_button.on_click(lambda _e: self._on_play())
@@ -302,19 +287,6 @@ class PlayerApp:
         self.range_text.content = ("A/B: whole recording" if self.player.a is None and self.player.b is None
                                    else f"A/B: {a:.2f} s – {b:.2f} s")
 
-    def _sample(self, t: float, frame: Frame) -> None:
-        s = self._series
-        s["t"].append(t)
-        b = frame.barrier
-        s["dmin"].append(b.min_distance if b is not None and math.isfinite(b.min_distance) else float("nan"))
-        s["ds"].append(b.safety_distance if b is not None else 0.17)
-        s["active"].append(float(b.n_active) if b is not None else float("nan"))
-        s["H"].append(frame.coverage.cost_H if frame.coverage is not None else float("nan"))
-
-    def _reset_series(self) -> None:
-        for d in self._series.values():
-            d.clear()
-
     # ------------------------------------------------------------------ drawing
     def refresh(self, force: bool = False) -> None:
         """Draw the player's frame if it changed, move the slider, update status and plots."""
@@ -334,15 +306,13 @@ class PlayerApp:
             self.slider.value = round(p.frame_time, 6)
         finally:
             self._syncing = False
-        s = self._series
-        if s["t"] and not 0.0 < p.frame_time - s["t"][-1] <= 1.0:  # a jump: plot the seconds before it
-            self._reset_series()
+        hist, last = self.history, self.history.last_time
+        if last is not None and not 0.0 < p.frame_time - last <= 1.0:  # a jump: plot the seconds before it
+            hist.clear()
             for t, f in self.recording.frames(max(0.0, p.frame_time - PLOT_BACKFILL), p.frame_time):
-                self._sample(t, f)
-        self._sample(p.frame_time, frame)
-        self.plot_dist.data = tuple(np.asarray(s[k], dtype=float) for k in ("t", "dmin", "ds"))
-        self.plot_active.data = tuple(np.asarray(s[k], dtype=float) for k in ("t", "active"))
-        self.plot_H.data = tuple(np.asarray(s[k], dtype=float) for k in ("t", "H"))
+                hist.add(t, f)
+        hist.add(p.frame_time, frame)
+        self.plots.show(hist)
         state = "playing" if p.playing else "paused"
         self.status.content = (f"**{state}** {p.rate:g}x · t = {p.frame_time:.2f} / {p.duration:.2f} s "
                                f"(session) · run t = {frame.run_time:.1f} s · tick {frame.tick} · {frame.n} robots · "

@@ -22,14 +22,22 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from dataclasses import dataclass
-from typing import Any
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
-from numpy.typing import NDArray
+from numpy.typing import ArrayLike, NDArray
 
 from swarmdeck.core.bounds import DEFAULT_BOUNDS, Bounds
 from swarmdeck.console.runtime.frame import Frame
+
+if TYPE_CHECKING:
+    import viser
+
+    from swarmdeck.coverage.density import GaussianMixture
+
+ImageProvider = Callable[[str], "tuple[ArrayLike, Bounds] | None"]
+"""Maps a Frame's ``image_ref`` to (RGB image (H, W, 3), its bounds (x0, x1, y0, y1) m), or None."""
 
 LAYERS: tuple[str, ...] = (
     "camera", "grid", "density", "voronoi", "cells", "centroids", "robots", "labels", "nominal", "safe",
@@ -86,7 +94,7 @@ def robot_mesh(radius: float) -> tuple[NDArray[np.float32], NDArray[np.uint32]]:
     return verts, faces
 
 
-def heatmap(density: Any, bounds: tuple[float, float, float, float], px_per_m: float,
+def heatmap(density: GaussianMixture, bounds: Bounds, px_per_m: float,
             alpha: tuple[float, float] | None = None) -> NDArray[np.uint8]:
     """RGB image (H, W, 3) of φ over the arena, row 0 at y_max, colour-mapped by φ / max φ.
 
@@ -144,34 +152,59 @@ def h_colors(h: NDArray[np.float64], d_s: float) -> NDArray[np.uint8]:
     return np.repeat(c[:, None, :], 2, axis=1)
 
 
+@dataclass
+class SceneNodes:
+    """The scene nodes the :class:`ArenaScene` updates, one field per layer (``LAYERS``; ``grid`` is the
+    floor grid, ``boundary`` the arena outline). ``robots`` exists from the first Frame on; ``cells``
+    only while that layer is shown and a Frame has cells; ``camera`` from the first camera image."""
+
+    boundary: viser.LineSegmentsHandle
+    grid: viser.GridHandle
+    density: viser.ImageHandle
+    voronoi: viser.LineSegmentsHandle
+    centroids: viser.PointCloudHandle
+    trails: viser.LineSegmentsHandle
+    discs: viser.LineSegmentsHandle
+    barrier: viser.LineSegmentsHandle
+    nominal: viser.ArrowsHandle
+    safe: viser.ArrowsHandle
+    contacts: viser.PointCloudHandle
+    robots: viser.BatchedMeshHandle | None = None
+    cells: viser.GlbHandle | None = None
+    camera: viser.ImageHandle | None = None
+    labels: list[viser.LabelHandle] = field(default_factory=list)
+
+    def layer(self, name: str) -> viser.SceneNodeHandle | None:
+        """The node of layer ``name`` (None while it has none; ``labels`` is a list: not here)."""
+        return getattr(self, name)
+
+
 class ArenaScene:
     """Draw Frames into ``server.scene`` (shared by every browser tab). See the module docstring.
 
     Args:
-        server: a ``viser.ViserServer``.
+        server: the viser server whose ``scene`` is drawn into.
         bounds: the arena rectangle (x_min, x_max, y_min, y_max), m.
         robot_radius: body radius for the robot glyph, m.
         style: sizes and sampling.
     """
 
-    def __init__(self, server: Any, bounds: Bounds = DEFAULT_BOUNDS,
+    def __init__(self, server: viser.ViserServer, bounds: Bounds = DEFAULT_BOUNDS,
                  robot_radius: float = 0.055, style: SceneStyle | None = None,
-                 image_provider: Callable[[str], Any] | None = None) -> None:
+                 image_provider: ImageProvider | None = None) -> None:
         self.server = server
         self.image_provider = image_provider
         self._image_ref: str | None = None
         self.scene = server.scene
-        self.bounds = tuple(float(b) for b in bounds)
+        self.bounds: Bounds = tuple(float(b) for b in bounds)  # type: ignore[assignment]
         self.style = style or SceneStyle()
         self.robot_radius = robot_radius
         self.visible = {name: name not in DEFAULT_OFF for name in LAYERS}
         self._n = -1
         self._many = False
-        self._labels: list[Any] = []
         self._last_tick: int | None = None
         self._trail: NDArray[np.float64] | None = None
         self._trail_count = 0
-        self._h: dict[str, Any] = {}
         self.frames_drawn = 0
         self._setup_static()
 
@@ -193,35 +226,36 @@ class ArenaScene:
         cam.position = (cx + 0.24 * view_h, cy, 0.5 * view_h / math.tan(fov / 2))
         cam.up = (0.0, 1.0, 0.0)
         corners = np.array([[x0, y0], [x1, y0], [x1, y1], [x0, y1]])
-        self._h["boundary"] = sc.add_line_segments(
+        boundary = sc.add_line_segments(
             "/arena/boundary", _segments_2d(corners, np.roll(corners, -1, axis=0), 0.004), (40, 40, 40),
             thickness=0.015)
-        self._h["grid"] = sc.add_grid("/arena/grid", width=w, height=h, plane="xy", cell_size=0.1, section_size=0.5,
-                                      cell_color=(215, 215, 215), section_color=(170, 170, 170),
-                                      position=(cx, cy, -0.004), shadow_opacity=0.0)
+        grid = sc.add_grid("/arena/grid", width=w, height=h, plane="xy", cell_size=0.1, section_size=0.5,
+                           cell_color=(215, 215, 215), section_color=(170, 170, 170),
+                           position=(cx, cy, -0.004), shadow_opacity=0.0)
         blank = np.full((8, 8, 3), 250, dtype=np.uint8)
         # format "auto": JPEG for the opaque heat map, PNG (keeps alpha) for the translucent one over the
         # camera picture, which lies below it (z = -0.012)
-        self._h["density"] = sc.add_image("/density", blank, render_width=w, render_height=h, format="auto",
-                                          jpeg_quality=90, position=(cx, cy, -0.01), wxyz=(0.0, 1.0, 0.0, 0.0),
-                                          cast_shadow=False, receive_shadow=False)
-        self._h["voronoi"] = sc.add_line_segments("/voronoi", _EMPTY_SEG, (60, 60, 60), thickness=0.006)
-        self._h["cells"] = None
-        self._h["camera"] = None
-        self._h["centroids"] = sc.add_point_cloud("/centroids", np.zeros((1, 3), np.float32) - [0, 0, 5],
-                                                  (200, 30, 60), point_size=0.035, point_shape="diamond",
-                                                  precision="float32")
-        self._h["trails"] = sc.add_line_segments("/trails", _EMPTY_SEG, (120, 160, 220), thickness=0.006)
-        self._h["discs"] = sc.add_line_segments("/discs", _EMPTY_SEG, (120, 120, 120), thickness=0.004)
-        self._h["barrier"] = sc.add_line_segments("/barrier", _EMPTY_SEG, (230, 40, 20), thickness=0.014)
+        density_image = sc.add_image("/density", blank, render_width=w, render_height=h, format="auto",
+                                     jpeg_quality=90, position=(cx, cy, -0.01), wxyz=(0.0, 1.0, 0.0, 0.0),
+                                     cast_shadow=False, receive_shadow=False)
+        voronoi = sc.add_line_segments("/voronoi", _EMPTY_SEG, (60, 60, 60), thickness=0.006)
+        centroids = sc.add_point_cloud("/centroids", np.zeros((1, 3), np.float32) - [0, 0, 5],
+                                       (200, 30, 60), point_size=0.035, point_shape="diamond",
+                                       precision="float32")
+        trails = sc.add_line_segments("/trails", _EMPTY_SEG, (120, 160, 220), thickness=0.006)
+        discs = sc.add_line_segments("/discs", _EMPTY_SEG, (120, 120, 120), thickness=0.004)
+        barrier = sc.add_line_segments("/barrier", _EMPTY_SEG, (230, 40, 20), thickness=0.014)
         stub = np.array([[[0, 0, -5], [0.001, 0, -5]]], dtype=np.float32)
-        self._h["nominal"] = sc.add_arrows("/arrows/nominal", stub, (130, 130, 130), shaft_radius=0.006,
-                                           head_radius=0.016, head_length=0.03)
-        self._h["safe"] = sc.add_arrows("/arrows/safe", stub, (20, 150, 60), shaft_radius=0.007,
-                                        head_radius=0.018, head_length=0.03)
-        self._h["contacts"] = sc.add_point_cloud("/contacts", np.zeros((1, 3), np.float32) - [0, 0, 5],
-                                                 (200, 0, 200), point_size=0.07, point_shape="circle",
-                                                 precision="float32")
+        nominal = sc.add_arrows("/arrows/nominal", stub, (130, 130, 130), shaft_radius=0.006,
+                                head_radius=0.016, head_length=0.03)
+        safe = sc.add_arrows("/arrows/safe", stub, (20, 150, 60), shaft_radius=0.007,
+                             head_radius=0.018, head_length=0.03)
+        contacts = sc.add_point_cloud("/contacts", np.zeros((1, 3), np.float32) - [0, 0, 5],
+                                      (200, 0, 200), point_size=0.07, point_shape="circle",
+                                      precision="float32")
+        self.nodes = SceneNodes(boundary=boundary, grid=grid, density=density_image, voronoi=voronoi,
+                                centroids=centroids, trails=trails, discs=discs, barrier=barrier,
+                                nominal=nominal, safe=safe, contacts=contacts)
         for name in LAYERS:
             self._apply_visibility(name)
 
@@ -230,12 +264,12 @@ class ArenaScene:
         sc = self.scene
         verts, faces = robot_mesh(self.robot_radius)
         pos = np.column_stack((frame.poses[:, :2], np.full(n, 0.01))).astype(np.float32)
-        self._h["robots"] = sc.add_batched_meshes_simple(
+        self.nodes.robots = sc.add_batched_meshes_simple(
             "/robots", verts, faces, batched_wxyzs=_yaw_wxyz(frame.poses[:, 2]), batched_positions=pos,
             batched_colors=robot_colors(frame), flat_shading=True, cast_shadow=False, receive_shadow=False)
-        for lab in self._labels:
+        for lab in self.nodes.labels:
             lab.remove()
-        self._labels = [
+        self.nodes.labels = [
             sc.add_label(f"/labels/r{int(i)}", str(int(i)), position=(float(p[0]), float(p[1]) + self.style.label_offset, 0.02),
                          font_size_mode="screen", font_screen_scale=0.8, anchor="center-center",
                          visible=self.visible["labels"])
@@ -252,10 +286,10 @@ class ArenaScene:
     # ------------------------------------------------------------------ layers
     def _apply_visibility(self, name: str) -> None:
         if name == "labels":
-            for lab in self._labels:
+            for lab in self.nodes.labels:
                 lab.visible = self.visible["labels"]
             return
-        h = self._h.get(name)
+        h = self.nodes.layer(name)
         if h is not None:
             h.visible = self.visible[name] and not (self._many and name in _PER_ROBOT_GLYPHS)
 
@@ -264,9 +298,9 @@ class ArenaScene:
         if name not in LAYERS:
             raise ValueError(f"unknown layer {name!r}; layers are {', '.join(LAYERS)}")
         self.visible[name] = bool(visible)
-        if name == "cells" and not visible and self._h.get("cells") is not None:
-            self._h["cells"].remove()
-            self._h["cells"] = None
+        if name == "cells" and not visible and self.nodes.cells is not None:
+            self.nodes.cells.remove()
+            self.nodes.cells = None
         self._apply_visibility(name)
 
     # ------------------------------------------------------------------ drawing
@@ -284,25 +318,26 @@ class ArenaScene:
         pts = frame.points
         poses = frame.poses
         if v["robots"]:
-            h = self._h["robots"]
-            h.batched_positions = np.column_stack((poses[:, :2], np.full(frame.n, 0.01))).astype(np.float32)
-            h.batched_wxyzs = _yaw_wxyz(poses[:, 2])
-            h.batched_colors = robot_colors(frame)
-        if v["labels"] and self._labels:  # no labels above SceneStyle.max_labels robots
+            robots = self.nodes.robots
+            assert robots is not None  # made by _setup_robots above
+            robots.batched_positions = np.column_stack((poses[:, :2], np.full(frame.n, 0.01))).astype(np.float32)
+            robots.batched_wxyzs = _yaw_wxyz(poses[:, 2])
+            robots.batched_colors = robot_colors(frame)
+        if v["labels"] and self.nodes.labels:  # no labels above SceneStyle.max_labels robots
             # One message per label, in the same atomic update as the robots: every label whose robot
             # moved at all is moved to it (a "moved enough" threshold left labels trailing their robots).
             moved = np.flatnonzero(np.any(poses[:, :2] != self._label_xy, axis=1))
             for i in moved:
-                self._labels[i].position = (float(poses[i, 0]), float(poses[i, 1]) + st.label_offset, 0.02)
+                self.nodes.labels[i].position = (float(poses[i, 0]), float(poses[i, 1]) + st.label_offset, 0.02)
             self._label_xy[moved] = poses[moved, :2]
         if v["camera"] and frame.image_ref is not None and self.image_provider is not None \
                 and frame.image_ref != self._image_ref:
             self._draw_camera(frame.image_ref)
         if v["density"] and frame.density is not None:
-            over_camera = v["camera"] and self._h.get("camera") is not None
+            over_camera = v["camera"] and self.nodes.camera is not None
             x0, x1, y0, y1 = self.bounds
             px_per_m = min(st.heatmap_px_per_m, math.sqrt(st.heatmap_max_px / ((x1 - x0) * (y1 - y0))))
-            self._h["density"].image = heatmap(frame.density, self.bounds, px_per_m,
+            self.nodes.density.image = heatmap(frame.density, self.bounds, px_per_m,
                                                st.overlay_alpha if over_camera else None)
         cov = frame.coverage
         if v["voronoi"]:
@@ -312,50 +347,50 @@ class ArenaScene:
                 segs[:, :, 2] = 0.003
             else:
                 segs = _EMPTY_SEG
-            self._h["voronoi"].points = segs
+            self.nodes.voronoi.points = segs
         if v["centroids"]:
             c = cov.centroids if cov is not None else np.zeros((0, 2))
             cp = np.column_stack((c, np.full(len(c), 0.006))).astype(np.float32) if len(c) else \
                 np.array([[0, 0, -5]], dtype=np.float32)
-            self._h["centroids"].points = cp
+            self.nodes.centroids.points = cp
         if v["cells"]:
             self._draw_cells(frame)
         glyphs = not self._many
         if v["nominal"] and glyphs:
-            self._h["nominal"].points = self._arrows(pts, frame.nominal, 0.02)
+            self.nodes.nominal.points = self._arrows(pts, frame.nominal, 0.02)
         if v["safe"] and glyphs:
-            self._h["safe"].points = self._arrows(pts, frame.safe, 0.025)
+            self.nodes.safe.points = self._arrows(pts, frame.safe, 0.025)
         b = frame.barrier
         if v["barrier"]:
-            h = self._h["barrier"]
+            pair_lines = self.nodes.barrier
             if b is not None and len(b.active_pairs) and b.active_pairs.max() < frame.n:
                 pairs = b.active_pairs
-                h.points = _segments_2d(pts[pairs[:, 0]], pts[pairs[:, 1]], 0.008)
-                h.colors = h_colors(b.active_h, b.safety_distance)
+                pair_lines.points = _segments_2d(pts[pairs[:, 0]], pts[pairs[:, 1]], 0.008)
+                pair_lines.colors = h_colors(b.active_h, b.safety_distance)
             else:
-                h.points = _EMPTY_SEG
-                h.colors = np.array([230, 40, 20], dtype=np.uint8)
+                pair_lines.points = _EMPTY_SEG
+                pair_lines.colors = np.array([230, 40, 20], dtype=np.uint8)
         if v["discs"] and glyphs:
             d_s = b.safety_distance if b is not None else 0.17
-            self._h["discs"].points = self._discs(pts, 0.5 * d_s)
+            self.nodes.discs.points = self._discs(pts, 0.5 * d_s)
         self._update_trails(frame)  # accumulates even while hidden, so showing trails is instant
         if v["contacts"]:
             c = frame.contacts.positions
             cp = np.column_stack((c, np.full(len(c), 0.012))).astype(np.float32) if len(c) else \
                 np.array([[0, 0, -5]], dtype=np.float32)
-            self._h["contacts"].points = cp
+            self.nodes.contacts.points = cp
 
     def _draw_camera(self, ref: str) -> None:
         """The overhead image (RGB, row 0 at y_max, covering its bounds) just below the heat map, which
         is then drawn translucent over it."""
-        got = self.image_provider(ref)
+        got = None if self.image_provider is None else self.image_provider(ref)
         if got is None:
             return
         img, (x0, x1, y0, y1) = got
         self._image_ref = ref
-        h = self._h.get("camera")
+        h = self.nodes.camera
         if h is None:
-            self._h["camera"] = self.scene.add_image(
+            self.nodes.camera = self.scene.add_image(
                 "/camera", np.asarray(img), render_width=x1 - x0, render_height=y1 - y0, format="jpeg",
                 jpeg_quality=80, position=((x0 + x1) / 2, (y0 + y1) / 2, -0.012), wxyz=(0.0, 1.0, 0.0, 0.0),
                 cast_shadow=False, receive_shadow=False, visible=self.visible["camera"])
@@ -400,22 +435,22 @@ class ArenaScene:
         tr = self._trail  # (L, N, 2), oldest first
         a = tr[:-1].transpose(1, 0, 2).reshape(-1, 2)
         b = tr[1:].transpose(1, 0, 2).reshape(-1, 2)
-        h = self._h["trails"]
+        h = self.nodes.trails
         if self._trail_colors is None:
             fade = np.linspace(0.0, 1.0, L - 1)
-            c = (np.array([235, 240, 250])[None] * (1 - fade[:, None]) + np.array([70, 120, 210])[None] * fade[:, None])
-            c = np.tile(c, (frame.n, 1)).astype(np.uint8)
+            ramp = (np.array([235, 240, 250])[None] * (1 - fade[:, None]) + np.array([70, 120, 210])[None] * fade[:, None])
+            c = np.tile(ramp, (frame.n, 1)).astype(np.uint8)
             self._trail_colors = np.repeat(c[:, None, :], 2, axis=1)
         h.points = _segments_2d(a, b, 0.001)
         h.colors = self._trail_colors
 
     def _draw_cells(self, frame: Frame) -> None:
         cov = frame.coverage
-        old = self._h.get("cells")
+        old = self.nodes.cells
         if cov is None or len(cov.cell_offsets) < 2:
             if old is not None:
                 old.remove()
-                self._h["cells"] = None
+                self.nodes.cells = None
             return
         import trimesh
 
@@ -431,4 +466,4 @@ class ArenaScene:
         shade = (np.array([200, 220, 255])[None] * (1 - m[:, None]) + np.array([60, 110, 220])[None] * m[:, None])
         face_colors = np.column_stack((shade[cell_of], np.full(len(cell_of), 90))).astype(np.uint8)
         mesh = trimesh.Trimesh(vertices=verts, faces=faces, face_colors=face_colors, process=False)
-        self._h["cells"] = self.scene.add_mesh_trimesh("/cells", mesh)
+        self.nodes.cells = self.scene.add_mesh_trimesh("/cells", mesh)
