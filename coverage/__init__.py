@@ -3,7 +3,8 @@
     ctrl = CoverageController(CoverageConfig(law="tvd-d1"), density)   # any Density: .at(t)
     nominal, state = ctrl(positions, t)      # (N, 2) m/s → safety filter; CoverageState
 
-Densities: :class:`GaussianMixture` (snapshot with analytic φ_t, isotropic or anisotropic bumps),
+Densities: :class:`GaussianMixture` (snapshot with analytic φ_t, isotropic or anisotropic bumps;
+``merge_mixtures`` adds the bumps of several),
 :class:`AnalyticDensity` of :class:`Bump` s that move/grow/fade/rotate (``s1_density``,
 ``moving_density``), ``image_density`` (grey image → static mixture). Numerics, usable on their
 own: ``precondition_positions``, ``bounded_voronoi``, ``cell_moments``, ``centroid_jacobian``,
@@ -17,7 +18,7 @@ from swarmdeck.coverage.controller import (CoverageConfig, CoverageController, C
 from swarmdeck.coverage.densities import (AnalyticDensity, Bump, Constant, Fixed, Linear,
                                           Lissajous, Orbit, Pulse, Sine, moving_density,
                                           s1_density)
-from swarmdeck.coverage.density import Density, GaussianMixture
+from swarmdeck.coverage.density import Density, GaussianMixture, merge_mixtures
 from swarmdeck.coverage.image import image_density, letter_image
 from swarmdeck.coverage.jacobian import EdgeOptions, centroid_jacobian
 from swarmdeck.core.kinematics import saturate
@@ -32,6 +33,6 @@ __all__ = [
     "CoverageController", "CoverageState", "Density", "EdgeOptions", "Fixed", "GaussianMixture",
     "LAWS", "Linear", "Lissajous", "Orbit", "Pulse", "QuadratureOptions", "Sine",
     "bounded_voronoi", "cell_moments", "centroid_jacobian", "coverage_tick", "image_density",
-    "letter_image", "moving_density", "packing_warning", "parse_law", "precondition_positions",
-    "predicted_spacing", "raster_moments", "s1_density", "saturate",
+    "letter_image", "merge_mixtures", "moving_density", "packing_warning", "parse_law",
+    "precondition_positions", "predicted_spacing", "raster_moments", "s1_density", "saturate",
 ]

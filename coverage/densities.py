@@ -216,10 +216,21 @@ class AnalyticDensity:
                                cov=cov, cov_dot=cov_dot)
 
 
-def s1_density() -> AnalyticDensity:
-    """Scenario S1 (REFERENCE.md §5): φ = 0.05 + exp(−‖q − μ(t)‖²/(2·0.4²)),
-    μ(t) = 0.6 (cos(2πt/20), sin(2πt/20))."""
-    return AnalyticDensity(0.05, (Bump(Orbit((0.0, 0.0), 0.6, 20.0), Constant(0.4), Constant(1.0)),))
+def s1_density(radius: float = 0.6, period: float = 20.0, sigma: float = 0.4, weight: float = 1.0,
+               floor: float = 0.05) -> AnalyticDensity:
+    """Scenario S1 (REFERENCE.md §5): φ = floor + weight · exp(−‖q − μ(t)‖²/(2σ²)),
+    μ(t) = radius · (cos(2πt/period), sin(2πt/period)); by default 0.05, 1, σ = 0.4 m, 0.6 m, 20 s.
+
+    The console's circling bump is this density with the operator's parameters (m, s).
+    ValueError naming the parameter for σ or period ≤ 0 and for a negative radius, weight or floor.
+    """
+    for name, value in (("sigma", sigma), ("period", period)):
+        if not (np.isfinite(value) and value > 0):
+            raise ValueError(f"moving density {name} must be > 0, got {value!r}")
+    for name, value in (("radius", radius), ("weight", weight), ("floor", floor)):
+        if not (np.isfinite(value) and value >= 0):
+            raise ValueError(f"moving density {name} must be >= 0, got {value!r}")
+    return AnalyticDensity(floor, (Bump(Orbit((0.0, 0.0), radius, period), Constant(sigma), Constant(weight)),))
 
 
 def moving_density(bounds: Bounds = DEFAULT_BOUNDS

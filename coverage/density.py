@@ -14,12 +14,13 @@ scale: the coverage laws are invariant to scaling φ, the cost H is not), deriva
 """
 from __future__ import annotations
 
+from collections.abc import Iterable
 from typing import Any, Protocol, runtime_checkable
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-__all__ = ["Density", "GaussianMixture"]
+__all__ = ["Density", "GaussianMixture", "merge_mixtures"]
 
 
 @runtime_checkable
@@ -309,3 +310,24 @@ class GaussianMixture:
     def __repr__(self) -> str:
         return (f"GaussianMixture(floor={self.floor}, K={self.n_bumps}, "
                 f"sigma_min={self.sigma_min:.4g})")
+
+
+def merge_mixtures(parts: Iterable[GaussianMixture | None], floor: float) -> GaussianMixture:
+    """One snapshot holding every bump of ``parts`` (Nones and empty snapshots skipped) over ``floor``.
+
+    The parts' own floors are not added: φ = floor + Σ_parts Σ_k g_k, and φ_t the sum of the
+    parts' φ_t (each bump keeps its μ̇, σ̇/Σ̇, ẇ). Isotropic when every part is; otherwise every
+    bump is written as a covariance. With no bumps at all: the constant ``floor``.
+    """
+    ps = [p for p in parts if p is not None and p.n_bumps > 0]
+    if not ps:
+        return GaussianMixture(floor)
+    mu = np.concatenate([p.mu for p in ps])
+    w = np.concatenate([p.weight for p in ps])
+    mu_dot = np.concatenate([p.mu_dot for p in ps])
+    w_dot = np.concatenate([p.weight_dot for p in ps])
+    if all(p.isotropic for p in ps):
+        return GaussianMixture(floor, mu=mu, sigma=np.concatenate([p.sigma for p in ps]), weight=w,
+                               mu_dot=mu_dot, sigma_dot=np.concatenate([p.sigma_dot for p in ps]), weight_dot=w_dot)
+    return GaussianMixture(floor, mu=mu, weight=w, mu_dot=mu_dot, weight_dot=w_dot,
+                           cov=np.concatenate([p.cov for p in ps]), cov_dot=np.concatenate([p.cov_dot for p in ps]))

@@ -29,6 +29,7 @@ from collections.abc import Iterable
 from dataclasses import dataclass
 
 import numpy as np
+from numpy.typing import ArrayLike, NDArray
 
 from swarmdeck.core.checks import in_range, require_in_range
 from swarmdeck.core.config import check_keys, field_names
@@ -84,6 +85,33 @@ class DensityConfig:
         return cls(**check_keys(d, field_names(cls), "density", error=ValueError))
 
 
+def fade(t: float, t_down: ArrayLike, t_up: ArrayLike, duration: float) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """Fade factors of bumps that appear at ``t_down`` and disappear from ``t_up`` (s; arrays (K,)).
+
+    f = S((t − t_down)/T) · (1 − S((t − t_up)/T)) with T = ``duration`` s and S the smoothstep, and
+    its exact rate ḟ (1/s). ``t_up = inf``: not going; ``t_down = −inf``: fully in. Returns (f, ḟ), (K,).
+    Used by :class:`ContactDensity` and by anything else whose bumps fade (the console's painted bumps).
+    """
+    with np.errstate(invalid="ignore"):
+        s_in, ds_in = smoothstep((t - np.asarray(t_down, dtype=float)) / duration)
+        s_o, ds_o = smoothstep((t - np.asarray(t_up, dtype=float)) / duration)
+    s_out = 1.0 - s_o
+    return s_in * s_out, (ds_in * s_out - s_in * ds_o) / duration
+
+
+def extrapolate(p: ArrayLike, v: ArrayLike, t_ref: ArrayLike, t: float,
+                horizon: float) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """Centres (K, 2) m seen at ``p`` moving at ``v`` (K, 2) m/s at times ``t_ref`` (K,) s, at time ``t``.
+
+    μ = p + v · clip(t − t_ref, 0, h), μ̇ = v while 0 ≤ t − t_ref < h, else 0 (h = ``horizon`` s):
+    a contact keeps moving along its last velocity for at most h, then holds. Returns (μ, μ̇).
+    """
+    v = np.asarray(v, dtype=float)
+    dt = t - np.asarray(t_ref, dtype=float)
+    moving = (dt >= 0.0) & (dt < horizon)
+    return np.asarray(p, dtype=float) + v * np.clip(dt, 0.0, horizon)[:, None], v * moving[:, None]
+
+
 class _Bump:
     __slots__ = ("source", "p", "v", "t_ref", "t_down", "t_up")
 
@@ -114,13 +142,10 @@ class ContactDensity:
         return len(self._bumps)
 
     def _fade(self, b: _Bump, t: float) -> float:
-        T = self.config.fade
-        s_in = smoothstep(np.array((t - b.t_down) / T))[0]
-        s_out = 1.0 - smoothstep(np.array((t - b.t_up) / T))[0] if b.t_up < math.inf else 1.0
-        return float(s_in * s_out)
+        return float(fade(t, [b.t_down], [b.t_up], self.config.fade)[0][0])
 
     def _mu(self, b: _Bump, t: float) -> np.ndarray:
-        return b.p + b.v * min(max(t - b.t_ref, 0.0), self.config.extrapolate)
+        return extrapolate(b.p[None], b.v[None], [b.t_ref], t, self.config.extrapolate)[0][0]
 
     def update(self, contacts: Iterable[Contact], t: float) -> None:
         """Take the current contacts at time ``t`` (s): new ones start fading in,
@@ -175,18 +200,8 @@ class ContactDensity:
         t_ref = np.array([b.t_ref for b in bumps])
         t_down = np.array([b.t_down for b in bumps])
         t_up = np.array([b.t_up for b in bumps])
-        h = cfg.extrapolate
-        dt = t - t_ref
-        moving = ((dt >= 0.0) & (dt < h)).astype(float)
-        mu = p + v * np.clip(dt, 0.0, h)[:, None]
-        mu_dot = v * moving[:, None]
-        T = cfg.fade
-        with np.errstate(invalid="ignore"):
-            s_in, ds_in = smoothstep((t - t_down) / T)
-            s_o, ds_o = smoothstep((t - t_up) / T)
-        s_out, ds_out = 1.0 - s_o, -ds_o
-        f = s_in * s_out
-        f_dot = (ds_in * s_out + s_in * ds_out) / T
+        mu, mu_dot = extrapolate(p, v, t_ref, t, cfg.extrapolate)
+        f, f_dot = fade(t, t_down, t_up, cfg.fade)
         weight = cfg.weight * f
         weight_dot = cfg.weight * f_dot
         sigma = np.full(k, cfg.sigma)

@@ -1,6 +1,7 @@
-"""The console's densities: the circling bump, painted bumps (ramps, drags) and their merge.
+"""The console's densities: the circling bump (S1 with parameters), painted bumps (ramps, drags).
 
-The analytic φ_t each snapshot reports must match central finite differences of φ in time.
+The analytic φ_t each snapshot reports must match central finite differences of φ in time, and a
+painted bump fades exactly as a touch contact does (one fade, owned by swarmdeck.inputs).
 """
 from __future__ import annotations
 
@@ -9,8 +10,10 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from swarmdeck.console.runtime.density import BumpSet, MovingBump, merge_mixtures
-from swarmdeck.coverage import GaussianMixture
+from swarmdeck.console.runtime.density import BumpSet
+from swarmdeck.console.runtime.loop import DensityParams
+from swarmdeck.coverage import s1_density
+from swarmdeck.inputs import Contact, ContactDensity, DensityConfig
 
 Q = np.array([[0.0, 0.0], [0.5, -0.3], [-1.2, 0.7], [1.0, 0.5]])
 
@@ -22,9 +25,40 @@ def fd_phi_t(snapshot_at, t: float, h: float = 1e-5) -> np.ndarray:
 @settings(deadline=None, max_examples=20)
 @given(t=st.floats(0.0, 40.0))
 def test_moving_bump_phi_t_matches_finite_differences(t: float) -> None:
-    m = MovingBump()
+    p = DensityParams()
+    m = s1_density(p.radius, p.period, p.sigma, p.weight, p.floor)
     np.testing.assert_allclose(m.at(t).evaluate_dt(Q), fd_phi_t(m.at, t), rtol=1e-5, atol=1e-8)
     np.testing.assert_allclose(np.linalg.norm(m.at(t).mu[0]), 0.6)
+    wide = s1_density(radius=0.3, period=5.0, sigma=0.2, weight=2.0, floor=0.1).at(t)
+    np.testing.assert_allclose(wide.evaluate(wide.mu), 2.1)
+    np.testing.assert_allclose(np.linalg.norm(wide.mu_dot[0]), 0.3 * 2 * np.pi / 5.0)
+
+
+def test_bad_circling_bump_values_are_named() -> None:
+    with pytest.raises(ValueError, match="moving density sigma must be > 0"):
+        DensityParams(sigma=0.0)
+    with pytest.raises(ValueError, match="moving density radius must be >= 0"):
+        DensityParams(radius=-0.1)
+
+
+@settings(deadline=None, max_examples=30)
+@given(t=st.floats(0.0, 3.0), up=st.floats(0.6, 2.0))
+def test_a_painted_bump_fades_like_a_touch(t: float, up: float) -> None:
+    """Put down at 0 s, lifted/removed at ``up`` s (after the fade-in): the same weight and rate."""
+    cfg = DensityConfig(weight=1.5, sigma=0.3, fade=0.4)
+    touch = ContactDensity(cfg)
+    touch.update([Contact("tuio", 1, np.array([0.2, 0.1]), np.zeros(2))], 0.0)
+    if t >= up:  # a contact density is told about the lift when it happens (it is read forward in time)
+        touch.update([], up)
+    bumps = BumpSet(ramp=cfg.fade)
+    bid = bumps.add((0.2, 0.1), cfg.sigma, cfg.weight, t=0.0)
+    bumps.remove(bid, up)
+    painted, touched = bumps.snapshot(t), touch.at(t)
+    if t - up >= cfg.fade:
+        assert painted is None
+        return
+    np.testing.assert_allclose(painted.weight, touched.weight, atol=1e-12)
+    np.testing.assert_allclose(painted.weight_dot, touched.weight_dot, atol=1e-12)
 
 
 @settings(deadline=None, max_examples=20)
@@ -77,16 +111,3 @@ def test_bad_bump_values_are_named() -> None:
     bumps.add((0, 0), 0.3, 1.0, 0.0)
     with pytest.raises(ValueError, match="at most 1"):
         bumps.add((0, 0), 0.3, 1.0, 0.0)
-
-
-def test_merge_keeps_every_bump_and_the_given_floor() -> None:
-    a = GaussianMixture(0.3, mu=[[0.0, 0.0]], sigma=[0.2], weight=[1.0], mu_dot=[[0.1, 0.0]])
-    b = GaussianMixture(0.7, mu=[[1.0, 0.0], [0.0, 1.0]], sigma=[0.3, 0.4], weight=[2.0, 0.5])
-    m = merge_mixtures([a, None, b], floor=0.05)
-    assert m.n_bumps == 3 and m.floor == 0.05
-    np.testing.assert_allclose(m.evaluate(Q), a.evaluate(Q) + b.evaluate(Q) - 0.3 - 0.7 + 0.05)
-    np.testing.assert_allclose(m.evaluate_dt(Q), a.evaluate_dt(Q) + b.evaluate_dt(Q))
-    aniso = GaussianMixture(0.1, mu=[[0.5, 0.5]], weight=[1.0], cov=[[[0.04, 0.01], [0.01, 0.09]]])
-    m2 = merge_mixtures([a, aniso], floor=0.05)
-    np.testing.assert_allclose(m2.evaluate(Q), a.evaluate(Q) + aniso.evaluate(Q) - 0.3 - 0.1 + 0.05)
-    assert merge_mixtures([None], floor=0.05).n_bumps == 0

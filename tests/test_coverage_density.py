@@ -9,7 +9,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from swarmdeck.coverage import (AnalyticDensity, Bump, Constant, Density, Fixed, GaussianMixture,
-                                Linear, Lissajous, Orbit, Pulse, Sine, moving_density, s1_density)
+                                Linear, Lissajous, Orbit, Pulse, Sine, merge_mixtures, moving_density,
+                                s1_density)
 
 
 def _fd_dt(density: Density, q: np.ndarray, t: float, h: float = 1e-5) -> np.ndarray:
@@ -185,3 +186,17 @@ def test_profiles_reject_bad_parameters():
     negative.at(1.0)
     with pytest.raises(ValueError, match="bump 0: weight"):
         negative.at(3.0)  # w = 0.5 − 1.0 < 0
+
+
+def test_merge_keeps_every_bump_and_the_given_floor() -> None:
+    q = np.array([[0.0, 0.0], [0.5, -0.3], [-1.2, 0.7], [1.0, 0.5]])
+    a = GaussianMixture(0.3, mu=[[0.0, 0.0]], sigma=[0.2], weight=[1.0], mu_dot=[[0.1, 0.0]])
+    b = GaussianMixture(0.7, mu=[[1.0, 0.0], [0.0, 1.0]], sigma=[0.3, 0.4], weight=[2.0, 0.5])
+    m = merge_mixtures([a, None, b], floor=0.05)
+    assert m.n_bumps == 3 and m.floor == 0.05
+    np.testing.assert_allclose(m.evaluate(q), a.evaluate(q) + b.evaluate(q) - 0.3 - 0.7 + 0.05)
+    np.testing.assert_allclose(m.evaluate_dt(q), a.evaluate_dt(q) + b.evaluate_dt(q))
+    aniso = GaussianMixture(0.1, mu=[[0.5, 0.5]], weight=[1.0], cov=[[[0.04, 0.01], [0.01, 0.09]]])
+    m2 = merge_mixtures([a, aniso], floor=0.05)
+    np.testing.assert_allclose(m2.evaluate(q), a.evaluate(q) + aniso.evaluate(q) - 0.3 - 0.1 + 0.05)
+    assert merge_mixtures([None], floor=0.05).n_bumps == 0

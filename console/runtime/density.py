@@ -1,53 +1,24 @@
-"""The console's density φ(·, t): a moving bump, bumps painted in the browser, input contacts, merged.
+"""Bumps the operator paints in the browser: a thread-safe set with ids, drags and fades.
 
-:class:`MovingBump` is a *Density* (``.at(t) -> GaussianMixture``, see
-:mod:`swarmdeck.coverage.density`); :meth:`BumpSet.snapshot` gives the painted
-bumps at a time (or None). :func:`merge_mixtures` concatenates the bumps of several snapshots into one
-snapshot (floors are not added: the merged floor is the given one), so the
-coverage controller sees one φ and one analytic φ_t.
+The density mathematics lives below the console: the circling bump is
+:func:`swarmdeck.coverage.s1_density` with the operator's parameters, snapshots are
+merged by :func:`swarmdeck.coverage.merge_mixtures`, and painted bumps fade in and
+out and follow a drag exactly as touch contacts do (:func:`swarmdeck.inputs.density.fade`,
+:func:`swarmdeck.inputs.density.extrapolate`). What is the console's own is the
+editing: ids, per-bump σ and weight, drags from any browser tab, removal.
 """
 from __future__ import annotations
 
 import math
 import threading
-from collections.abc import Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
 from numpy.typing import ArrayLike
 
 from swarmdeck.core.checks import require_in_range
-from swarmdeck.core.smooth import smoothstep
 from swarmdeck.coverage.density import GaussianMixture
-
-
-@dataclass(frozen=True)
-class MovingBump:
-    """One Gaussian bump circling the arena centre (REFERENCE.md §5, scenario S1).
-
-    φ = floor + weight · exp(−‖q − μ(t)‖² / (2σ²)), μ(t) = radius·(cos(2πt/period), sin(2πt/period)).
-    Units: m, s. ``weight`` in the same arbitrary unit as the floor.
-    """
-
-    radius: float = 0.6
-    period: float = 20.0
-    sigma: float = 0.4
-    weight: float = 1.0
-    floor: float = 0.05
-
-    def __post_init__(self) -> None:
-        for name in ("sigma", "period"):
-            require_in_range(getattr(self, name), f"moving density {name}", 0.0, lo_open=True)
-        for name in ("radius", "weight", "floor"):
-            require_in_range(getattr(self, name), f"moving density {name}", 0.0)
-
-    def at(self, t: float) -> GaussianMixture:
-        """Snapshot at time t [s] with exact μ̇."""
-        a = 2.0 * math.pi * t / self.period
-        om = 2.0 * math.pi / self.period
-        mu = self.radius * np.array([[math.cos(a), math.sin(a)]])
-        mu_dot = self.radius * om * np.array([[-math.sin(a), math.cos(a)]])
-        return GaussianMixture(self.floor, mu=mu, sigma=[self.sigma], weight=[self.weight], mu_dot=mu_dot)
+from swarmdeck.inputs import density as touch  # the fades and drags of touch contacts
 
 
 @dataclass
@@ -168,39 +139,11 @@ class BumpSet:
                 return None
             mu = np.array([b.mu for b in bumps])
             vel = np.array([b.velocity for b in bumps])
-            since = np.array([np.nan if b.moved_at is None else t - b.moved_at for b in bumps])
+            moved = np.array([math.inf if b.moved_at is None else b.moved_at for b in bumps])  # inf: hold
             sigma = np.array([b.sigma for b in bumps])
             w = np.array([b.weight for b in bumps])
             born = np.array([b.born for b in bumps])
-            dying = np.array([np.nan if b.dying_since is None else b.dying_since for b in bumps])
-        s_in, ds_in = smoothstep((t - born) / self.ramp)
-        ds_in = np.where((t - born) / self.ramp < 1.0, ds_in, 0.0)
-        out = np.where(np.isnan(dying), 0.0, (t - np.nan_to_num(dying)) / self.ramp)
-        s_out, ds_out = smoothstep(1.0 - out)
-        ds_out = np.where(np.isnan(dying), 0.0, ds_out)
-        scale = s_in * s_out
-        rate = (ds_in * s_out - s_in * ds_out) / self.ramp
-        since = np.nan_to_num(since, nan=np.inf)
-        moving = (since >= 0.0) & (since < self.extrapolate)
-        mu = mu + vel * np.clip(since, 0.0, self.extrapolate)[:, None] * np.isfinite(since)[:, None]
-        return GaussianMixture(floor, mu=mu, sigma=sigma, weight=w * scale, weight_dot=w * rate,
-                               mu_dot=vel * moving[:, None])
-
-
-def merge_mixtures(parts: Sequence[GaussianMixture | None], floor: float) -> GaussianMixture:
-    """One snapshot holding every bump of ``parts`` (Nones skipped) over the given floor.
-
-    Isotropic when every part is; otherwise all bumps are written as covariances.
-    """
-    ps = [p for p in parts if p is not None and p.n_bumps > 0]
-    if not ps:
-        return GaussianMixture(floor)
-    mu = np.concatenate([p.mu for p in ps])
-    w = np.concatenate([p.weight for p in ps])
-    mu_dot = np.concatenate([p.mu_dot for p in ps])
-    w_dot = np.concatenate([p.weight_dot for p in ps])
-    if all(p.isotropic for p in ps):
-        return GaussianMixture(floor, mu=mu, sigma=np.concatenate([p.sigma for p in ps]), weight=w,
-                               mu_dot=mu_dot, sigma_dot=np.concatenate([p.sigma_dot for p in ps]), weight_dot=w_dot)
-    return GaussianMixture(floor, mu=mu, weight=w, mu_dot=mu_dot, weight_dot=w_dot,
-                           cov=np.concatenate([p.cov for p in ps]), cov_dot=np.concatenate([p.cov_dot for p in ps]))
+            dying = np.array([math.inf if b.dying_since is None else b.dying_since for b in bumps])
+        scale, rate = touch.fade(t, born, dying, self.ramp)
+        mu, mu_dot = touch.extrapolate(mu, vel, moved, t, self.extrapolate)
+        return GaussianMixture(floor, mu=mu, sigma=sigma, weight=w * scale, weight_dot=w * rate, mu_dot=mu_dot)

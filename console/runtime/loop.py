@@ -59,10 +59,11 @@ from numpy.typing import NDArray
 from scipy.spatial import cKDTree
 
 from swarmdeck.console.runtime.behaviours import Behaviour, BehaviourError, BehaviourParams, TickInput, make_behaviour
-from swarmdeck.console.runtime.density import BumpSet, MovingBump, merge_mixtures
+from swarmdeck.console.runtime.density import BumpSet
 from swarmdeck.console.runtime.frame import BarrierFrame, ContactsFrame, CoverageFrame, Frame
 from swarmdeck.core.ports import CommandSink, PoseSource, SensedPoses
-from swarmdeck.coverage.density import GaussianMixture
+from swarmdeck.coverage.densities import s1_density
+from swarmdeck.coverage.density import GaussianMixture, merge_mixtures
 from swarmdeck.core.bounds import DEFAULT_BOUNDS, Bounds
 from swarmdeck.core.checks import in_range, require_in_range
 from swarmdeck.core.kinematics import GritsBotParams, lookahead_points, saturate
@@ -108,7 +109,7 @@ class DensityParams:
     bump_weight: float = 1.0
 
     def __post_init__(self) -> None:
-        MovingBump(self.radius, self.period, self.sigma, self.weight, self.floor)  # validates
+        s1_density(self.radius, self.period, self.sigma, self.weight, self.floor)  # validates
         if not in_range(self.floor, 0.0, lo_open=True):
             raise ValueError(f"density floor must be > 0 (keeps every cell's mass positive), got {self.floor!r}")
         require_in_range(self.bump_sigma, "bump_sigma", 0.05, 1.0, unit="m")
@@ -157,7 +158,7 @@ class ConsoleDensity:
 
     def __init__(self, params: DensityParams, bumps: BumpSet) -> None:
         self.params = params
-        self.moving = MovingBump(params.radius, params.period, params.sigma, params.weight, params.floor)
+        self.moving = s1_density(params.radius, params.period, params.sigma, params.weight, params.floor)
         self.bumps = bumps
         self.contacts: GaussianMixture | None = None
         self._cache: tuple[Any, GaussianMixture] | None = None
