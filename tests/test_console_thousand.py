@@ -46,17 +46,17 @@ def test_scene_scales(run) -> None:
         big = ArenaScene(server, ARENA)
         for f in run[-3:]:  # the first draw builds the robots, later ones move them
             big.draw(f)
-        assert big._labels == [] and not big._h["nominal"].visible and not big._h["trails"].visible
-        assert big._h["robots"].batched_positions.shape == (1000, 3)
-        assert big._h["voronoi"].points.shape == (len(run[-1].coverage.edges), 2, 3)
-        img = big._h["density"].image
+        assert big.nodes.labels == [] and not big.nodes.nominal.visible and not big.nodes.trails.visible
+        assert big.nodes.robots.batched_positions.shape == (1000, 3)
+        assert big.nodes.voronoi.points.shape == (len(run[-1].coverage.edges), 2, 3)
+        img = big.nodes.density.image
         assert img.shape[0] * img.shape[1] <= big.style.heatmap_max_px
         server.scene.reset()
         loop = ControlLoop(LoopConfig(n_robots=12, seed=1))
         small = ArenaScene(server)
         small.draw(loop.tick())
         loop.close()
-        assert len(small._labels) == 12 and small._h["nominal"].visible
+        assert len(small.nodes.labels) == 12 and small.nodes.nominal.visible
     finally:
         server.stop()
 
