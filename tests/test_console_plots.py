@@ -58,7 +58,9 @@ def test_playback_charts_what_the_live_console_charted(live_and_recorded) -> Non
         assert len(t_live) == len(frames)
         np.testing.assert_allclose(t_play, t_live, atol=1e-6)  # recording time is stored in ns
         for a, b in zip(y_play, y_live):
-            np.testing.assert_array_equal(a, b)  # NaN gaps in the same places
+            np.testing.assert_array_equal(np.isnan(a), np.isnan(b))  # NaN gaps in the same places
+            # recordings keep display numbers at a display precision (timing to 1 µs = 1e-3 ms)
+            np.testing.assert_allclose(a, b, rtol=0, atol=1e-3, equal_nan=True)
 
 
 def test_the_series_hold_what_the_frames_say(live_and_recorded) -> None:
