@@ -168,5 +168,6 @@ def saturate(u: ArrayLike, limit: float | None) -> FloatArray:
     if limit is None or not np.isfinite(limit):
         return out
     speed = np.hypot(out[:, 0], out[:, 1])
-    scale = np.minimum(1.0, limit / np.maximum(speed, 1e-300))
+    fast = speed > limit  # only these are scaled (speed > 0 there): slower rows pass bit for bit
+    scale = np.divide(limit, speed, out=np.ones_like(speed), where=fast)
     return out * scale[:, None]

@@ -4,7 +4,7 @@ The defect this pins: devices' ``saturate_norm`` let a NaN row through (NaN > li
 its scale was 1) while coverage's ``saturate`` zeroed it; an inf row became NaN (inf · 0).
 """
 import numpy as np
-from hypothesis import given, settings, strategies as st
+from hypothesis import example, given, settings, strategies as st
 from hypothesis.extra.numpy import arrays
 
 from swarmdeck.core.kinematics import saturate
@@ -12,6 +12,7 @@ from swarmdeck.core.kinematics import saturate
 
 @settings(max_examples=100, deadline=None)
 @given(arrays(np.float64, (12, 2), elements=st.floats(-10, 10)), st.floats(0.0, 2.0))
+@example(np.array([[1.11253693e-308, 0.0]] + [[0.0, 0.0]] * 11), 1e-307)  # a subnormal speed under the limit
 def test_norm_bounded_direction_kept(u, limit):
     s = saturate(u, limit)
     speed = np.hypot(u[:, 0], u[:, 1])

@@ -26,7 +26,10 @@ def test_ctrl_c_prints_the_report_and_exits_130(tmp_path) -> None:
     proc = subprocess.Popen(
         [sys.executable, "-c", "import sys; from swarmdeck.console.cli import main; sys.exit(main())",
          "run", str(script), "--robots", "4", "--seed", "2", "--json"],
-        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+        # a test runner's worker may ignore SIGINT, and a child inherits that (Python then installs no
+        # Ctrl-C handler): give the child the terminal's default, as a user's shell does
+        preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
     try:
         assert proc.stdout.readline().strip() == "running"
         os.kill(proc.pid, signal.SIGINT)
