@@ -1,63 +1,59 @@
-"""Synthetic sessions: Frames of a real simulated coverage run, for tests, benchmarks and demos.
+"""Synthetic sessions for tests and benchmarks: Frames of the console's own loop on a virtual clock.
 
-:func:`simulated_frames` drives the simulated arena (``swarmdeck.devices``) with
-the coverage controller (``swarmdeck.coverage``) on a virtual clock and yields one
-:class:`Frame` per tick, filled the way the console loop fills it (poses,
-nominal and sent commands, coverage state with cells and H, density, events).
-:func:`write_synthetic_session` records such a run to an MCAP file
-(``swarmdeck sessions``/``play`` can then be tried without running the console).
+:func:`simulated_frames` runs the real :meth:`ControlLoop.tick
+<swarmdeck.console.runtime.loop.ControlLoop.tick>` on simulated robots — sense,
+inputs, behaviour, the one safety+actuation pipeline, send — so its Frames are
+exactly what the console records: barrier diagnostics, coverage state with
+cells and H, the density, contacts from a TUIO finger fed through the real
+parser, operator notes as events. :func:`write_synthetic_session` records such
+a run to an MCAP file (``swarmdeck sessions``/``play`` can then be tried
+without running the console). :func:`retimed` builds long files cheaply.
 """
 from __future__ import annotations
 
 import dataclasses
+import math
 import os
 from collections.abc import Iterator
 
-import numpy as np
+from swarmdeck.console.runtime.frame import Frame
 
-from swarmdeck.console.runtime.frame import BarrierFrame, ContactsFrame, CoverageFrame, Frame
+# The finger's input source: one TUIO listener (never bound: datagrams are fed to it directly).
+INPUTS = {"listeners": [{"name": "table", "timeout": 0.3}]}
 
 
 def simulated_frames(n_robots: int = 6, n_ticks: int = 100, dt: float = 0.033, seed: int = 0,
                      t0: float = 0.0, coverage: bool = True) -> Iterator[Frame]:
-    """``n_ticks`` Frames of a coverage run of ``n_robots`` robots (virtual clock from ``t0`` s, period ``dt``).
+    """``n_ticks`` Frames of :meth:`ControlLoop.tick` with ``n_robots`` simulated robots (seeded by
+    ``seed``), the barrier on, on a virtual clock from ``t0`` s with period ``dt`` s.
 
-    With ``coverage=False`` the robots rotate in place-ish (cheap, for long synthetic files).
+    ``coverage=True``: the coverage behaviour on the console's circling bump (frames carry cells,
+    centroids and H); ``False``: rendezvous (cheaper, for long files). Every third tick a TUIO
+    finger circling near the centre is fed to the loop's input source (contacts and a contact
+    bump in the Frames); tick ``k`` with ``k % 50 == 25`` carries the event ``"tick k: operator note"``.
     """
-    from swarmdeck.coverage import GaussianMixture
-    from swarmdeck.coverage.controller import CoverageConfig, CoverageController
-    from swarmdeck.core.kinematics import lookahead_points, si_to_unicycle
-    from swarmdeck.devices.simulator import ArenaConfig, SimulatedArena
+    from swarmdeck.console.runtime.loop import ControlLoop, LoopConfig
+    from swarmdeck.inputs import InputConfig, InputHub, InputSource
+    from swarmdeck.inputs.oscbuild import cursor_sets, tuio_bundle
 
-    ell = 0.03
-    bounds = (-1.6, 1.6, -1.0, 1.0)
-    sim = SimulatedArena(n_robots=n_robots, config=ArenaConfig(bounds=bounds, dt=dt, seed=seed))
-    density = GaussianMixture(floor=0.05, mu=np.array([[0.5, 0.2], [-0.6, -0.3]]), sigma=np.array([0.3, 0.25]),
-                              weight=np.array([1.0, 0.7]))
-    ctrl = CoverageController(CoverageConfig(bounds=bounds), density) if coverage else None
-    ids = np.arange(n_robots)
-    rng = np.random.default_rng(seed)
-    for k in range(n_ticks):
-        poses = sim.poses
-        t = t0 + k * dt
-        if ctrl is not None:
-            nominal, state = ctrl(lookahead_points(poses, ell), k * dt)
-            cov = CoverageFrame.from_state(state)
-        else:
-            nominal = 0.05 * rng.standard_normal((n_robots, 2))
-            cov = None
-        safe = nominal
-        v, w = si_to_unicycle(poses, safe, ell)
-        events = (f"tick {k}: operator note",) if k % 50 == 25 else ()
-        contacts = ContactsFrame(sources=("tuio:sim",), ids=[1], positions=[[0.1 * np.cos(t), 0.1 * np.sin(t)]],
-                                 velocities=[[0.0, 0.0]]) if k % 3 == 0 else ContactsFrame()
-        yield Frame(tick=k, time=t, run_time=k * dt, dt=dt, poses=poses, ids=ids, nominal=nominal, safe=safe,
-                    v=v, w=w, bounds=bounds, lookahead=ell,
-                    barrier=BarrierFrame(enabled=False, intervention=np.zeros(n_robots)),
-                    coverage=cov, density=density if coverage else None, contacts=contacts,
-                    behaviour="coverage", params={"kappa": 1.0, "law": "tvd-d1"}, events=events,
-                    health={"simulator": "ok"}, timing={"total": 0.001})
-        sim.step(v, w)
+    config = LoopConfig(n_robots=n_robots, dt=dt, seed=seed, behaviour="coverage" if coverage else "rendezvous")
+    inputs = InputConfig.from_dict(INPUTS)
+    finger = InputSource(inputs.listeners[0])
+    now = [t0]
+    loop = ControlLoop(config, inputs=InputHub([finger], config=inputs), clock=lambda: now[0])
+    try:
+        for k in range(n_ticks):
+            now[0] = t0 + k * dt
+            if k % 50 == 25:
+                loop.post(f"tick {k}: operator note")
+            yield loop.tick()
+            if k % 3 == 0:  # normalised surface coordinates; arrives between ticks on the loop's clock
+                a = 0.5 * now[0]
+                x, y = 0.5 + 0.1 * math.cos(a), 0.5 + 0.1 * math.sin(a)
+                finger.feed(tuio_bundle("2Dcur", [1], cursor_sets([(1, x, y)]), fseq=k), ("10.0.0.5", 3333),
+                            now[0] + 0.3 * dt)
+    finally:
+        loop.close()
 
 
 def as_recorded(frame: Frame) -> Frame:

@@ -8,8 +8,8 @@ robot-steps are changed). The earlier scene (16 robots on the demo density) chan
 """
 from __future__ import annotations
 
-from swarmdeck.console.cli.examples.coverage import coverage_experiment
 from swarmdeck.coverage import AnalyticDensity, Bump, Constant, Orbit
+from swarmdeck.examples.coverage import coverage_experiment
 from swarmdeck.devices import Arena, ArenaConfig
 
 N = 30

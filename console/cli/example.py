@@ -4,8 +4,11 @@ from __future__ import annotations
 import argparse
 import importlib
 import pkgutil
+from collections.abc import Callable
+from typing import Any
 
 from swarmdeck.console.cli import examples as _examples
+from swarmdeck.console.cli.run import raise_if_failed, run_headless
 
 NAME = "example"
 HELP = "run a built-in example (rendezvous, formation, coverage, ...) and print its results"
@@ -25,3 +28,17 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def main(args: argparse.Namespace) -> int:
     return int(args._example_main(args) or 0)
+
+
+def run_example(experiment: Callable[..., Any], args: argparse.Namespace, min_robots: int = 1, what: str = "") -> int:
+    """Run ``experiment(arena)`` headless on the simulated arena; print the report and its results.
+
+    ``min_robots``: the fewest robots the example works with (``what`` names it in the error).
+    """
+    result = run_headless(experiment, args, min_robots, what)
+    for report in result.reports:
+        print(report)
+    for name, value in (result.returned or {}).items():
+        print(f"{name}: {value:.4f}" if isinstance(value, float) else f"{name}: {value}")
+    raise_if_failed(result)
+    return 0

@@ -1,12 +1,11 @@
-"""Coverage control of a time-varying density (TVD-D1 by default) on the simulated arena.
+"""``swarmdeck example coverage``: the coverage example on the simulated arena (see examples/coverage.py).
 
     swarmdeck example coverage [--robots N] [--density moving|image:PATH|letter:TEXT]
                                [--duration S] [--law tvd-d1] [--kappa K] [--no-safety]
     swarmdeck example coverage --s1          # scenario S1 of REFERENCE.md §5, all laws
 
-The controller gives nominal single-integrator velocities for the robots' look-ahead points;
-the arena's safety filter (on by default) makes them collision-free; the H(t) summary shows the
-locational cost (for the mass-normalised density) and the mean distance to the centroids.
+This module is the command line only: choosing the density and the law, and printing the H(t)
+summary; the experiment itself is :func:`swarmdeck.examples.coverage.coverage_experiment`.
 """
 from __future__ import annotations
 
@@ -16,9 +15,9 @@ from typing import Any
 import numpy as np
 
 from swarmdeck.console.cli import UsageError
-from swarmdeck.console.cli.examples._common import add_run_arguments, check_run_arguments, raise_if_failed, run_headless
-from swarmdeck.coverage import (CoverageConfig, CoverageController, Density, image_density,
-                                letter_image, moving_density)
+from swarmdeck.console.cli.run import add_run_arguments, check_run_arguments, raise_if_failed, run_headless
+from swarmdeck.coverage import CoverageConfig, Density, image_density, letter_image, moving_density
+from swarmdeck.examples.coverage import coverage_experiment
 
 NAME = "coverage"
 HELP = "coverage control of a moving density (TVD-D1) through the safety filter; --s1 prints the S1 table"
@@ -50,35 +49,6 @@ def make_density(spec: str, bounds: tuple[float, float, float, float]) -> Densit
     except ValueError as exc:
         raise UsageError(f"--density {spec}: {exc}") from exc
     raise UsageError(f"--density must be moving, image:PATH or letter:TEXT, got {spec!r}")
-
-
-def coverage_experiment(arena: Any, density: Density, law: str = "tvd-d1",
-                        kappa: float = 1.0) -> dict[str, Any]:
-    """Run coverage on ``arena`` (a :class:`swarmdeck.devices.Arena`) until its duration is over.
-
-    Returns the series ``t``, ``H`` (normalised cost), ``distance`` (mean ‖p − c‖), the
-    ``warnings`` seen and the number of ticks whose coverage step failed (robots stopped).
-    """
-    safety_distance = getattr(getattr(arena.safety, "config", None), "safety_distance", 0.17)
-    cfg = CoverageConfig(law=law, kappa=kappa, max_speed=arena.params.max_speed,
-                         bounds=tuple(arena.config.bounds), safety_distance=safety_distance)
-    ctrl = CoverageController(cfg, density)
-    end = arena.duration if arena.duration is not None else 30.0
-    ts, hs, ds, warnings, failures = [], [], [], [], 0
-    while arena.time < end - 1e-9:
-        u, state = ctrl(arena.positions(), arena.time)
-        if state.ok:
-            ts.append(state.t)
-            hs.append(state.cost_H_normalised)
-            ds.append(state.mean_centroid_distance)
-        else:
-            failures += 1
-        if state.packing_warning and state.packing_warning not in warnings:
-            warnings.append(state.packing_warning)
-        arena.set_velocities(u)
-        arena.step()
-    return {"t": np.array(ts), "H": np.array(hs), "distance": np.array(ds),
-            "warnings": warnings, "failures": failures}
 
 
 def _summary(res: dict[str, Any], rows: int) -> list[str]:

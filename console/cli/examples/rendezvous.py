@@ -3,7 +3,8 @@ from __future__ import annotations
 
 import argparse
 
-from swarmdeck.console.cli.examples._common import add_run_arguments, run_example
+from swarmdeck.console.cli.example import run_example
+from swarmdeck.console.cli.run import add_run_arguments
 from swarmdeck.examples import rendezvous as _example
 
 NAME = "rendezvous"
