@@ -49,7 +49,7 @@ def _progress(total_runs: int):  # type: ignore[no-untyped-def]
 
 def main(args: argparse.Namespace) -> int:
     from swarmdeck.console.cli import UsageError
-    from swarmdeck.console.cli.examples._common import check_run_arguments
+    from swarmdeck.console.cli.run import check_run_arguments
     from swarmdeck.console.jobs.confinement import ConfinementUnavailable, SandboxLimits
     from swarmdeck.console.jobs.executors import LocalPoolExecutor, RayExecutor
     from swarmdeck.console.jobs.report_html import render_html
