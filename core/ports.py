@@ -5,7 +5,10 @@ camera, GRITSBots over MQTT, the in-process transport):
 
 * :class:`SensedPoses` — one reading: ids ``(N,)``, poses ``(N, 3)``
   ``[x, y, θ]`` (m, rad), ``seen`` ``(N,)`` (a fresh pose this tick; robots not
-  seen get zero commands and are fixed obstacles of the barrier).
+  seen get zero commands and are fixed obstacles of the barrier), and, where the
+  source knows them, ``is_virtual`` ``(N,)`` (simulated beside physical robots,
+  ``devices.virtual_robots``), ``battery`` ``(N,)`` V (NaN: unknown) and
+  ``charging`` ``(N,)`` (REFERENCE.md §9 ``batt_volt``/``charge_status``).
 * :class:`PoseSource` — what the control loop reads once per tick:
   ``read(now) -> SensedPoses``, ``health() -> str``, ``name``. Implemented by
   ``devices.simulated_robots.SimulatedRobots`` (the simulator's truth),
@@ -42,11 +45,16 @@ from numpy.typing import NDArray
 
 @dataclass(frozen=True)
 class SensedPoses:
-    """One reading: ids (N,) int, poses (N, 3) [x, y, θ] (m, rad), seen (N,) bool (fresh this tick)."""
+    """One reading: ids (N,) int, poses (N, 3) [x, y, θ] (m, rad), seen (N,) bool (fresh this tick);
+    optional is_virtual (N,) bool (None: all physical), battery (N,) V (None or NaN: unknown) and
+    charging (N,) bool (None: unknown)."""
 
     ids: NDArray[np.int64]
     poses: NDArray[np.float64]
     seen: NDArray[np.bool_]
+    is_virtual: NDArray[np.bool_] | None = None
+    battery: NDArray[np.float64] | None = None
+    charging: NDArray[np.bool_] | None = None
 
 
 @runtime_checkable

@@ -181,6 +181,14 @@ class Arena:
         """Robot ids ``0 … N−1``."""
         return np.arange(self.n)
 
+    @property
+    def is_virtual(self) -> NDArray[np.bool_]:
+        """``(N,)`` bool: robots simulated beside the physical ones (a
+        :class:`~swarmdeck.devices.virtual_robots.MixedBackend`); all False otherwise. The only way
+        user code can tell them apart: the safety filter treats every robot alike."""
+        mask = getattr(self.backend, "is_virtual", None)
+        return np.zeros(self.n, dtype=bool) if mask is None else np.array(mask, dtype=bool)
+
     def poses(self) -> FloatArray:
         """Current poses ``(N, 3)`` ``[x, y, θ]`` (a fresh copy every call)."""
         return self.backend.poses

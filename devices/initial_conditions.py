@@ -50,12 +50,16 @@ def random_initial_poses(
     min_separation: float = 0.23,
     wall_margin: float = 0.13,
     rng: np.random.Generator | int | None = None,
+    avoid: NDArray[np.float64] | None = None,
 ) -> NDArray[np.float64]:
     """``(n, 3)`` random poses, pairwise at least ``min_separation`` apart (m).
 
     The default separation 0.23 m keeps the look-ahead points (ℓ = 0.03 m) at
     least D_s = 0.17 m apart whatever the headings, so the safety barrier starts
-    in its safe set.
+    in its safe set. ``avoid`` ``(M, 2)`` (m): robots already on the floor (e.g. the
+    physical ones beside which virtual robots are placed); every new robot is at
+    least ``min_separation`` from each of them too (the maximum then counts only the
+    lattice sites left free).
 
     Raises:
         ValueError: ``n`` < 1, ``min_separation`` > ``spacing``, or more robots than fit
@@ -70,6 +74,12 @@ def random_initial_poses(
     rng = np.random.default_rng(rng)
     jr = (spacing - min_separation) / 2.0  # jitter radius: keeps pairs >= min_separation apart
     sites = lattice_sites(bounds, spacing, wall_margin + jr)
+    if avoid is not None and len(sites):
+        others = np.asarray(avoid, dtype=float).reshape(-1, 2)
+        others = others[np.all(np.isfinite(others), axis=1)]
+        if len(others):
+            d = np.linalg.norm(sites[:, None, :] - others[None, :, :], axis=2).min(axis=1)
+            sites = sites[d >= min_separation + jr]  # any jitter keeps >= min_separation
     if n > len(sites):
         x0, x1, y0, y1 = bounds
         raise ValueError(

@@ -35,6 +35,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--robots-via", default=None, metavar="URL",
                         help="drive GRITSBots over MQTT instead of simulating them, e.g. mqtt://127.0.0.1:1883 "
                              "(try `swarmdeck robots --broker URL` for a simulated fleet)")
+    parser.add_argument("--virtual", type=int, default=None, metavar="K",
+                        help="add K virtual robots, simulated in the console beside the physical ones (--robots-via, "
+                             "or the simulation standing in for them): the barrier makes every robot avoid every "
+                             "other; the scene draws virtual robots pale and ringed; recordings mark them")
     parser.add_argument("--record", default=None, metavar="PATH",
                         help="record the session to PATH (MCAP; default sessions/<UTC time>.mcap)")
     parser.add_argument("--no-record", action="store_true", help="do not record the session")
@@ -80,6 +84,8 @@ def main(args: argparse.Namespace) -> int:
         raise UsageError(f"--foxglove port must be in [0, 65535], got {args.foxglove}")
     if args.duration is not None and not args.duration > 0:
         raise UsageError(f"--duration must be > 0 s, got {args.duration}")
+    if args.virtual is not None and args.virtual < 1:
+        raise UsageError(f"--virtual must be a number of robots >= 1, got {args.virtual}")
 
     if args.record and args.no_record:
         raise UsageError("--record and --no-record exclude each other")
@@ -90,7 +96,7 @@ def main(args: argparse.Namespace) -> int:
     except BehaviourError as exc:
         raise UsageError(str(exc)) from None
     try:
-        source, sink = _robots(config, args.camera, args.robots_via)
+        source, sink = _robots(config, args.camera, args.robots_via, args.virtual)
     except (ValueError, OSError) as exc:
         raise UsageError(str(exc)) from None
     rec = None
@@ -98,7 +104,8 @@ def main(args: argparse.Namespace) -> int:
         from swarmdeck.devices.net.mqtt_config import redact_url  # never record a broker password
 
         source_name = args.camera or (redact_url(args.robots_via) if args.robots_via else "simulation")
-        rec = _recorder(args.record, config, settings.inputs, source_name, getattr(source, "image", None))
+        rec = _recorder(args.record, config, settings.inputs, source_name, getattr(source, "image", None),
+                        virtual=args.virtual or 0)
     hub = None
     if not args.no_inputs:
         hub = _start_inputs(settings.inputs, rec)
@@ -148,8 +155,9 @@ def main(args: argparse.Namespace) -> int:
         print(f"swarmdeck console: port {port} is in use; serving on port {app.port} instead", file=sys.stderr)
     restore = _stop_on_signals()  # before the URL line: whoever reads it may signal at once
     try:
-        print(f"swarmdeck console: {app.url}  ({config.n_robots} robots, {loop.behaviour_name}; Ctrl-C to stop)",
-              flush=True)
+        virtual = f" + {args.virtual} virtual" if args.virtual else ""
+        print(f"swarmdeck console: {app.url}  ({config.n_robots}{virtual} robots, {loop.behaviour_name}; "
+              "Ctrl-C to stop)", flush=True)
         app.wait(args.duration)
     except KeyboardInterrupt:
         print("swarmdeck console: stopping (robots stopped)", file=sys.stderr)
@@ -215,9 +223,10 @@ def _check_address(host: str, port: int) -> None:
             raise UsageError(f"cannot serve on {host}:{port}: {exc.strerror or exc}") from None
 
 
-def _robots(config, camera: str | None, robots_via: str | None):
+def _robots(config, camera: str | None, robots_via: str | None, virtual: int | None = None):
     """(pose source, command sink): simulation by default, MQTT robots with --robots-via, camera poses
-    with --camera. Raises ValueError/OSError naming what could not be opened."""
+    with --camera, plus ``virtual`` virtual robots simulated here (one ``MixedRobots`` as both ports).
+    Raises ValueError/OSError naming what could not be opened."""
     import numpy as np
 
     from swarmdeck.console.runtime.hardware import camera_source, mqtt_robots
@@ -238,16 +247,29 @@ def _robots(config, camera: str | None, robots_via: str | None):
         except Exception:
             sink.close()
             raise
+    if virtual:
+        from swarmdeck.devices.virtual_robots import MixedRobots
+
+        try:
+            mixed = MixedRobots.add_virtual(source, sink, virtual,
+                                            ArenaConfig(bounds=config.bounds, dt=config.dt, seed=config.seed))
+        except Exception:
+            sink.close()
+            raise
+        return mixed, mixed
     return source, sink
 
 
-def _recorder(path: str | None, config, inputs_table: dict | None, source: str, image_provider=None):
+def _recorder(path: str | None, config, inputs_table: dict | None, source: str, image_provider=None,
+              virtual: int = 0):
     """The session recorder (MCAP), writing in the background; never raises into the run. ``image_provider``
-    (the camera source's ``image``) feeds the Foxglove camera channel."""
+    (the camera source's ``image``) feeds the Foxglove camera channel; ``virtual``: how many virtual robots
+    (each Frame's ``is_virtual`` says which)."""
     from swarmdeck.console.recording.recorder import Recorder, default_path
     from swarmdeck.console.recording.resimulate import session_metadata
 
-    return Recorder(path or default_path(), session_metadata(config, inputs_table, source=source),
+    extra = {"virtual_robots": int(virtual)} if virtual else {}
+    return Recorder(path or default_path(), session_metadata(config, inputs_table, source=source, **extra),
                     image_provider=image_provider)
 
 

@@ -28,6 +28,9 @@ A JSON object (message encoding ``json``), :meth:`Frame.to_dict`'s layout with
   ``nominal_minus_safe`` (zero where neither the wheel limits nor the barrier changed
   the command; error ≤ 5e-4 of that difference), ``barrier.intervention`` float16.
   ``timing`` is rounded to 1 µs.
+* the fleet's per-robot state, each only when it says something (as in
+  :meth:`Frame.fleet_dict`; absent in older recordings, which read as all physical,
+  battery unknown, not charging): ``is_virtual`` bool, ``battery`` float32 V, ``charging`` bool.
 
 Frame format 1 (recording format 1): ``Frame.to_dict()`` as plain JSON, every
 float with 17 digits; still read.
@@ -112,6 +115,12 @@ def frame_message(frame: Frame) -> dict[str, Any]:
     d["ids"] = pack_array(frame.ids, "<i8")
     d["poses"] = pack_array(frame.poses, "<f8")
     d["seen"] = pack_array(frame.seen, "|b1")
+    if frame.is_virtual.any():
+        d["is_virtual"] = pack_array(frame.is_virtual, "|b1")
+    if np.isfinite(frame.battery).any():
+        d["battery"] = pack_array(frame.battery, "<f4")
+    if frame.charging.any():
+        d["charging"] = pack_array(frame.charging, "|b1")
     # nominal as float16 offsets from the derived safe command: zero where nothing changed it
     delta = frame.nominal - derived_safe(frame.poses, frame.v, frame.w, frame.lookahead)
     delta[np.abs(delta) < 1e-12] = 0.0
@@ -141,7 +150,9 @@ def encode_frame(frame: Frame) -> bytes:
     return encode_json(frame_message(frame))
 
 
-_BIG = ("ids", "poses", "seen", "nominal", "nominal_minus_safe", "safe", "v", "w", "barrier", "coverage")
+_BIG = ("ids", "poses", "seen", "nominal", "nominal_minus_safe", "safe", "v", "w", "barrier", "coverage",
+        "is_virtual", "battery", "charging")
+_FLEET = (("is_virtual", bool), ("battery", float), ("charging", bool))
 
 
 def active_h(poses: np.ndarray, pairs: np.ndarray, lookahead: float, safety_distance: float) -> np.ndarray:
@@ -241,13 +252,20 @@ def _decode_v2(d: Mapping[str, Any]) -> Frame:
     coverage = None
     if d.get("coverage") is not None:
         coverage = _decode_coverage(d["coverage"], poses, shell, lookahead)
+    fleet = {}
+    for name, dtype in _FLEET:
+        if d.get(name) is not None:
+            arr = unpack_array(d[name], name).astype(dtype)
+            if arr.shape != (n,):
+                raise ValueError(f"frame field {name!r} must have shape ({n},), got {arr.shape}")
+            fleet[name] = arr
     return Frame(
         tick=shell.tick, time=shell.time, run_time=shell.run_time, dt=shell.dt, bounds=shell.bounds,
         lookahead=lookahead, poses=poses, ids=unpack_array(d["ids"], "ids").astype(np.int64),
         seen=unpack_array(d["seen"], "seen").astype(bool), nominal=nominal, safe=safe, v=v, w=w,
         barrier=barrier, coverage=coverage, density=shell.density, contacts=shell.contacts,
         behaviour=shell.behaviour, run_state=shell.run_state, params=shell.params, events=shell.events,
-        alerts=shell.alerts, health=shell.health, timing=shell.timing, image_ref=shell.image_ref,
+        alerts=shell.alerts, health=shell.health, timing=shell.timing, image_ref=shell.image_ref, **fleet,
     )
 
 

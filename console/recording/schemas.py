@@ -102,6 +102,9 @@ FRAME_SCHEMA_V1: dict[str, Any] = {
         "health": {"type": "object", "additionalProperties": {"type": "string"}},
         "timing": {"type": "object", "additionalProperties": _NUM},
         "image_ref": {"type": ["string", "null"]},
+        "is_virtual": _arr({"type": "boolean"}),
+        "battery": _arr(_NUM),
+        "charging": _arr({"type": "boolean"}),
     },
 }
 
@@ -128,6 +131,7 @@ FRAME_SCHEMA: dict[str, Any] = {
            if k not in ("ids", "poses", "seen", "nominal", "safe", "v", "w", "barrier", "coverage")},
         "format": {"const": 2},
         "ids": _ND, "poses": _ND, "seen": _ND, "nominal_minus_safe": _ND, "v": _ND, "w": _ND,
+        "is_virtual": _ND, "battery": _ND, "charging": _ND,
         "barrier": {"oneOf": [{"type": "null"}, {
             "type": "object", "required": ["enabled", "ok", "status", "active_pairs", "intervention", "safety_distance"],
             "properties": {

@@ -47,6 +47,10 @@ active barrier pairs, B density bumps, C contacts)::
     health        {source name: str} input sources / transport and their state
     timing        {stage: float s} sense, inputs, control, safety, actuate, total
     image_ref     str | null, reference to the camera image of this tick
+    is_virtual    (N,) bool, robot simulated beside the physical ones (``devices.virtual_robots``);
+                  written only when some robot is virtual, absent (all physical) in older recordings
+    battery       (N,) V battery voltage (NaN: unknown); written only when some robot reports one
+    charging      (N,) bool, robot on a charger; written only when some robot is charging
 
 The browser GUI's editing state (bump handles, plots) is not part of a Frame;
 the density the loop used is.
@@ -369,6 +373,9 @@ class Frame:
     health: Mapping[str, str] = field(default_factory=dict)
     timing: Mapping[str, float] = field(default_factory=dict)
     image_ref: str | None = None
+    is_virtual: NDArray[np.bool_] | None = None
+    battery: FloatArray | None = None
+    charging: NDArray[np.bool_] | None = None
 
     def __post_init__(self) -> None:
         _set(self, "tick", int(self.tick))
@@ -390,6 +397,12 @@ class Frame:
             _set(self, name, arr)
         seen = np.ones(n, dtype=bool) if self.seen is None else self.seen
         _set(self, "seen", _ro(seen, bool, (), "seen"))
+        for name, dt, default in (("is_virtual", bool, False), ("battery", float, math.nan), ("charging", bool, False)):
+            value = getattr(self, name)
+            arr = _ro(np.full(n, default, dtype=dt) if value is None else value, dt, (), name)
+            if len(arr) != n:
+                raise ValueError(f"frame field {name!r} has {len(arr)} rows but there are {n} poses")
+            _set(self, name, arr)
         if self.run_state not in RUN_STATES:
             raise ValueError(f"run_state must be one of {RUN_STATES}, got {self.run_state!r}")
         if self.density is not None and not isinstance(self.density, GaussianMixture):
@@ -445,7 +458,21 @@ class Frame:
             "health": dict(self.health),
             "timing": _enc_map(self.timing),
             "image_ref": self.image_ref,
+            **self.fleet_dict(),
         }
+
+    def fleet_dict(self) -> dict[str, Any]:
+        """``is_virtual``, ``battery``, ``charging`` as JSON lists, each only when it says something
+        (some robot virtual, some battery known, some robot charging): older readers and recordings
+        without them read as all physical, battery unknown, not charging."""
+        out: dict[str, Any] = {}
+        if self.is_virtual.any():
+            out["is_virtual"] = self.is_virtual.tolist()
+        if np.isfinite(self.battery).any():
+            out["battery"] = _enc_array(self.battery)
+        if self.charging.any():
+            out["charging"] = self.charging.tolist()
+        return out
 
     @classmethod
     def from_dict(cls, d: Mapping[str, Any]) -> "Frame":
@@ -477,6 +504,9 @@ class Frame:
                 health=d.get("health", {}),
                 timing={k: _dec_float(v) for k, v in d.get("timing", {}).items()},
                 image_ref=d.get("image_ref"),
+                is_virtual=None if d.get("is_virtual") is None else _dec_array(d["is_virtual"], bool, (), "is_virtual"),
+                battery=None if d.get("battery") is None else _dec_array(d["battery"], float, (), "battery"),
+                charging=None if d.get("charging") is None else _dec_array(d["charging"], bool, (), "charging"),
             )
         except KeyError as exc:
             raise ValueError(f"frame is missing field {exc.args[0]!r}") from None

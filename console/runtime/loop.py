@@ -189,7 +189,15 @@ def _checked(sensed: Any) -> SensedPoses:
     if not finite.all():
         poses = np.where(finite[:, None], poses, 0.0)
         seen = seen & finite
-    return SensedPoses(ids, poses, seen)
+    extra = {}
+    for name, dtype in (("is_virtual", bool), ("battery", float), ("charging", bool)):
+        value = getattr(sensed, name, None)
+        if value is not None:
+            arr = np.asarray(value, dtype=dtype).reshape(-1)
+            if arr.shape != (n,):
+                raise ValueError(f"pose source gave {name} {arr.shape} for {n} robots; expected ({n},)")
+            extra[name] = arr
+    return SensedPoses(ids, poses, seen, **extra)
 
 
 def _close_behaviour(b: Behaviour) -> None:
@@ -574,7 +582,7 @@ class ControlLoop:
         if prev is None:
             assert error is not None
             raise error
-        return SensedPoses(prev.ids, prev.poses, np.zeros(len(prev.ids), dtype=bool))
+        return replace(prev, seen=np.zeros(len(prev.ids), dtype=bool))
 
     def _health(self) -> dict[str, str]:
         """One line per port and per registered health function (a failing one shows its error)."""
@@ -671,6 +679,7 @@ class ControlLoop:
             safe=safe, v=v, w=w, barrier=barrier, coverage=coverage, density=snapshot, contacts=contacts,
             behaviour=behaviour, run_state=run_state, params=params, events=events, alerts=alerts, health=health,
             timing=timing, image_ref=image_ref if isinstance(image_ref, str) else None,
+            is_virtual=sensed.is_virtual, battery=sensed.battery, charging=sensed.charging,
         )
 
     def _publish(self, frame: Frame) -> None:

@@ -12,11 +12,13 @@ camera (the rectified overhead image of the Frame's ``image_ref``, when an
 image provider is given; the density heat map is then drawn translucent over
 it), grid, density heat map, Voronoi edges, filled cells, centroids, robots,
 labels, nominal arrows, safe arrows, barrier pairs, safety discs, trails,
-contacts. It scales to a thousand robots: robots are one batched mesh and the
+contacts, virtual (a dashed violet ring around each virtual robot, which is
+also drawn pale). It scales to a thousand robots: robots are one batched mesh and the
 Voronoi edges one line-segment node whatever N; labels exist only up to
 ``SceneStyle.max_labels`` robots and the per-robot glyphs (arrows, safety discs,
 trails) only up to ``max_glyphs``; the heat map keeps under ``heatmap_max_px`` pixels. Colours: robots blue; robots whose command the barrier changed
-orange; stopped (emergency stop) red; paused slate; not seen grey.
+orange; stopped (emergency stop) red; paused slate; not seen grey; virtual robots
+the same colours blended 55 % toward white.
 """
 from __future__ import annotations
 
@@ -41,7 +43,7 @@ ImageProvider = Callable[[str], "tuple[ArrayLike, Bounds] | None"]
 
 LAYERS: tuple[str, ...] = (
     "camera", "grid", "density", "voronoi", "cells", "centroids", "robots", "labels", "nominal", "safe",
-    "barrier", "discs", "trails", "contacts",
+    "barrier", "discs", "trails", "contacts", "virtual",
 )
 DEFAULT_OFF = frozenset({"cells"})
 
@@ -50,6 +52,8 @@ CHANGED = np.array([255, 140, 0], dtype=np.uint8)
 STOPPED = np.array([210, 30, 30], dtype=np.uint8)
 PAUSED = np.array([90, 110, 140], dtype=np.uint8)
 UNSEEN = np.array([160, 160, 160], dtype=np.uint8)
+VIRTUAL_RING = (120, 60, 200)
+VIRTUAL_PALE = 0.55  # virtual robots' colours are blended this much toward white
 
 # Heat map colours (low → high φ): near-white → light orange → red-orange.
 _LUT_STOPS = np.array([[250, 250, 246], [254, 227, 180], [253, 174, 97], [227, 74, 51]], dtype=float)
@@ -142,6 +146,9 @@ def robot_colors(frame: Frame) -> NDArray[np.uint8]:
     elif frame.run_state == "paused":
         cols[:] = PAUSED
     cols[~frame.seen] = UNSEEN
+    virtual = frame.is_virtual
+    if virtual.any():
+        cols[virtual] = np.round(cols[virtual] * (1.0 - VIRTUAL_PALE) + 255.0 * VIRTUAL_PALE).astype(np.uint8)
     return cols
 
 
@@ -169,6 +176,7 @@ class SceneNodes:
     nominal: viser.ArrowsHandle
     safe: viser.ArrowsHandle
     contacts: viser.PointCloudHandle
+    virtual: viser.LineSegmentsHandle
     robots: viser.BatchedMeshHandle | None = None
     cells: viser.GlbHandle | None = None
     camera: viser.ImageHandle | None = None
@@ -253,9 +261,10 @@ class ArenaScene:
         contacts = sc.add_point_cloud("/contacts", np.zeros((1, 3), np.float32) - [0, 0, 5],
                                       (200, 0, 200), point_size=0.07, point_shape="circle",
                                       precision="float32")
+        virtual = sc.add_line_segments("/virtual", _EMPTY_SEG, VIRTUAL_RING, thickness=0.008)
         self.nodes = SceneNodes(boundary=boundary, grid=grid, density=density_image, voronoi=voronoi,
                                 centroids=centroids, trails=trails, discs=discs, barrier=barrier,
-                                nominal=nominal, safe=safe, contacts=contacts)
+                                nominal=nominal, safe=safe, contacts=contacts, virtual=virtual)
         for name in LAYERS:
             self._apply_visibility(name)
 
@@ -374,6 +383,8 @@ class ArenaScene:
             d_s = b.safety_distance if b is not None else 0.17
             self.nodes.discs.points = self._discs(pts, 0.5 * d_s)
         self._update_trails(frame)  # accumulates even while hidden, so showing trails is instant
+        if v["virtual"]:
+            self.nodes.virtual.points = self._virtual_rings(poses[frame.is_virtual, :2])
         if v["contacts"]:
             c = frame.contacts.positions
             cp = np.column_stack((c, np.full(len(c), 0.012))).astype(np.float32) if len(c) else \
@@ -407,6 +418,15 @@ class ArenaScene:
         if tiny.all():
             out[:, :, 2] = -5.0
         return out
+
+    def _virtual_rings(self, centres: NDArray[np.float64]) -> NDArray[np.float32]:
+        """Dashed rings (every other of 16 arcs) at 1.35 robot radii around the virtual robots ``(K, 2)``."""
+        a = np.linspace(0, 2 * np.pi, 17)[:-1]
+        r = 1.35 * self.robot_radius
+        ring = r * np.column_stack((np.cos(a), np.sin(a)))
+        p = centres[:, None, :] + ring[None, ::2, :]  # dash starts
+        q = centres[:, None, :] + ring[None, 1::2, :]  # dash ends
+        return _segments_2d(p.reshape(-1, 2), q.reshape(-1, 2), 0.012)
 
     def _discs(self, centres: NDArray[np.float64], r: float) -> NDArray[np.float32]:
         k = self.style.disc_segments
