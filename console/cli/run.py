@@ -34,6 +34,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                              "swarmdeck keeps the simulator and the safety filter")
     parser.add_argument("--trusted", action="store_true",
                         help="with --sandbox: run unconfined (resource limits only) where this machine cannot confine")
+    parser.add_argument("--entry", default=None, metavar="FILE",
+                        help="with --sandbox and a directory SCRIPT: the file to run, relative to it (default main.py); "
+                             "sibling modules are importable")
 
 
 def _run_sandboxed(args: argparse.Namespace) -> int:
@@ -51,7 +54,7 @@ def _run_sandboxed(args: argparse.Namespace) -> int:
                                 duration=args.duration))
 
     try:
-        outcome = run_sandboxed(args.script, make_plant, n_robots=args.robots, duration=args.duration, rps=args.rps,
+        outcome = run_sandboxed(args.script, make_plant, entry=args.entry, n_robots=args.robots, duration=args.duration, rps=args.rps,
                                 trusted=args.trusted)
     except (ConfinementUnavailable, ValueError) as exc:
         raise UsageError(str(exc)) from exc
@@ -70,6 +73,8 @@ def _run_sandboxed(args: argparse.Namespace) -> int:
 
 
 def main(args: argparse.Namespace) -> int:
+    if args.entry is not None and not args.sandbox:
+        raise UsageError("--entry needs --sandbox (a directory of files runs in the sandbox)")
     if args.sandbox:
         return _run_sandboxed(args)
     result = run_headless(args.script, args, rps=args.rps)

@@ -18,7 +18,11 @@ ORDER = 25
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.epilog = ("verdicts: rejected | accepted (runs with the barrier) | accepted, may bypass the barrier. "
                      "exit status: 0 accepted, 1 rejected, 2 usage or infrastructure error.")
-    parser.add_argument("scripts", nargs="+", metavar="SCRIPT", help="experiment scripts (experiment(arena) or rps style)")
+    parser.add_argument("scripts", nargs="+", metavar="SCRIPT",
+                        help="experiment scripts (experiment(arena) or rps style): .py files, or directories run from "
+                             "their --entry file with sibling modules importable")
+    parser.add_argument("--entry", default=None, metavar="FILE",
+                        help="for a directory SCRIPT: the file to run, relative to it (default main.py)")
     parser.add_argument("--robots", type=int, default=None, metavar="N", help="declared number of robots (default: the script's)")
     parser.add_argument("--duration", type=float, default=30.0, metavar="S", help="declared duration in simulated seconds (default 30)")
     parser.add_argument("--runs", type=int, default=8, metavar="K", help="runs per script, each without and with the barrier (default 8)")
@@ -70,7 +74,7 @@ def main(args: argparse.Namespace) -> int:
         raise UsageError(str(exc)) from exc
     on_progress, close = _progress(2 * args.runs * len(args.scripts))
     try:
-        report = verify(args.scripts, config, executor, on_progress=on_progress)
+        report = verify(args.scripts, config, executor, on_progress=on_progress, entry=args.entry)
     except (ValueError, ConfinementUnavailable) as exc:
         raise UsageError(str(exc)) from exc
     except ConnectionError as exc:

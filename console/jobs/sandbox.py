@@ -3,13 +3,39 @@
 The user's script runs in :mod:`swarmdeck.console.jobs.child`, inside the jail
 of :mod:`swarmdeck.console.jobs.confinement`. This module owns the loop: each
 tick it sends the poses the script may see and waits — at most the per-tick
-budget — for the script's unicycle commands, then hands them to the
-:class:`Plant` (the simulator with the safety filter, later the real robots).
-A tick whose commands do not arrive in time stops the robots for that tick;
+budget — for the script's commands, then hands them to the :class:`Plant`
+(the simulator with the safety filter, later the real robots). A tick whose
+commands do not arrive in time stops the robots for that tick;
 ``max_overruns`` such ticks in a row end the run. Whatever the child does (dies,
 hangs, floods its output, sends garbage), the run ends with a
 :class:`SandboxOutcome` naming the reason, and the child and everything it
 started are killed.
+
+API (for the portal and other callers)::
+
+    from swarmdeck.console.jobs.bundle import ScriptBundle
+    from swarmdeck.console.jobs.sandbox import run_sandboxed
+    from swarmdeck.console.jobs.verification import VerificationConfig, verify
+
+    # one file, as before
+    outcome = run_sandboxed("my_script.py", make_plant, n_robots=6, duration=30.0)
+    # a folder (e.g. an extracted .zip): entry file relative to it, sibling modules importable
+    outcome = run_sandboxed("upload_dir/", make_plant, entry="main.py", n_robots=6, duration=30.0)
+    # files in memory (nothing of the upload touches a path of ours until the jail's own copy)
+    bundle = ScriptBundle.from_files({"main.py": b"...", "lib/helpers.py": b"..."}, entry="main.py")
+    outcome = run_sandboxed(bundle, make_plant, n_robots=6, duration=30.0)
+    # verification takes the same three kinds of script
+    report = verify([bundle], VerificationConfig(n_robots=6, duration=30.0))   # or verify(["dir/"], cfg, entry="main.py")
+
+``make_plant(n, initial_poses_or_None) -> Plant`` builds the trusted side's robots
+once the script asked for its Arena (raise ValueError to refuse it: the run ends
+with ``ended_by == "arena"``). The files are copied into a fresh folder that the
+jail binds read-only; the script's working directory is a private scratch folder
+(the only writable place, deleted afterwards). Bundle limits and the checks on
+file names (relative paths only, no symlinks): :mod:`swarmdeck.console.jobs.bundle`;
+invalid bundles raise ValueError naming the problem. Where this machine cannot
+confine code, :class:`~swarmdeck.console.jobs.confinement.ConfinementUnavailable`
+is raised unless ``trusted=True``.
 """
 from __future__ import annotations
 
@@ -30,6 +56,7 @@ from typing import Any, Protocol
 import numpy as np
 from numpy.typing import NDArray
 
+from swarmdeck.console.jobs.bundle import ScriptBundle
 from swarmdeck.console.jobs.confinement import (
     ConfinementUnavailable,
     SandboxLimits,
@@ -218,10 +245,11 @@ def _note_cpu(outcome: SandboxOutcome, message: dict[str, Any]) -> None:
 
 
 def run_sandboxed(
-    script: str | Path,
+    script: str | Path | ScriptBundle,
     make_plant: PlantFactory,
     *,
     source: bytes | None = None,
+    entry: str | None = None,
     n_robots: int | None = None,
     duration: float | None = None,
     rps: bool | None = None,
@@ -231,17 +259,24 @@ def run_sandboxed(
 ) -> SandboxOutcome:
     """Run ``script`` in a jailed child against the plant ``make_plant(n, initial_poses)`` builds.
 
-    The child sees a copy of the script (``source``, or the file's bytes) alone in a folder of
-    its own, read-only: nothing beside the script on this machine (single-file scripts).
+    ``script``: a ``.py`` file; a directory with its ``entry`` file (default ``main.py``);
+    or a :class:`~swarmdeck.console.jobs.bundle.ScriptBundle`. ``source``: the bytes of a
+    single-file script (then ``script`` only names it). The child sees a copy of the files
+    alone in a fresh folder of its own, read-only, with that folder first on ``sys.path``
+    (sibling modules import); nothing else of this machine's files but what Python needs.
+    ValueError when the script cannot be read or the bundle is invalid.
 
     ``n_robots``/``duration``: what an Arena built without arguments gets (declared values).
     ``trusted``: run without the namespace jail when this machine cannot build one (resource
     limits still apply); otherwise :class:`ConfinementUnavailable` is raised.
     """
-    name = Path(script).name
-    if source is None:
+    if isinstance(script, ScriptBundle):
+        bundle = script
+    elif source is not None:
+        bundle = ScriptBundle.single(Path(script).name, source)
+    else:
         try:
-            source = Path(script).read_bytes()
+            bundle = ScriptBundle.from_path(script, entry)
         except OSError as exc:
             raise ValueError(f"cannot read the script {str(script)!r}: {exc}") from exc
     reason = probe()
@@ -251,14 +286,12 @@ def run_sandboxed(
     scratch = Path(tempfile.mkdtemp(prefix="swarmdeck-scratch-"))
     folder = Path(tempfile.mkdtemp(prefix="swarmdeck-script-"))
     os.chmod(folder, 0o755)
-    script = folder / name
-    script.write_bytes(source)
-    os.chmod(script, 0o644)
+    script = bundle.write_to(folder)
     uid = sandbox_uid() if reason is None else None  # unconfined, the child keeps our uid (and our files)
     if uid is not None:
         os.chown(scratch, uid, uid)
     outcome = SandboxOutcome()
-    child = _Child(script.parent, scratch, confined=reason is None)
+    child = _Child(folder, scratch, confined=reason is None)
     drain = _LogDrain(child.proc.stdout, limits.log_bytes)
     drain.start()
     started = time.monotonic()

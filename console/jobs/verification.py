@@ -20,7 +20,6 @@ same report, bit for bit. The report's JSON schema is
 """
 from __future__ import annotations
 
-import hashlib
 import math
 import os
 import shutil
@@ -33,6 +32,7 @@ from typing import Any
 
 import numpy as np
 
+from swarmdeck.console.jobs.bundle import ScriptBundle
 from swarmdeck.console.jobs.confinement import SandboxLimits
 from swarmdeck.core.checks import in_range
 from swarmdeck.console.jobs.plant import ArenaPlant, Disturbances, VerificationRobots
@@ -44,7 +44,6 @@ from swarmdeck.devices.validation import ValidationRules
 
 SCHEMA = "swarmdeck.verification/1"
 REJECTED, ACCEPTED, BYPASS = "rejected", "accepted", "accepted, may bypass the barrier"
-MAX_SCRIPT_BYTES = 1 << 20
 SERIES_POINTS = 200  # minimum-distance samples kept per run in the report
 
 
@@ -98,25 +97,22 @@ class VerificationConfig:
 class RunTask:
     """One sandboxed run: the script's text travels with the task (so remote workers need no shared disk)."""
 
-    script_name: str
-    source: bytes
+    bundle: ScriptBundle
     config: VerificationConfig
     index: int
     mode: str  # "raw" or "wrapped"
     cancel_path: str | None = None  # the run stops when this file exists
 
 
-def load_script(path: str | Path) -> tuple[str, bytes]:
-    """(file name, bytes) of a script to verify; ValueError naming what is wrong."""
-    p = Path(path)
-    if not p.is_file():
-        raise ValueError(f"script {str(p)!r} does not exist or is not a file")
-    if p.suffix != ".py":
-        raise ValueError(f"script {str(p)!r} must be a Python file (.py); archives are not accepted")
-    size = p.stat().st_size
-    if size > MAX_SCRIPT_BYTES:
-        raise ValueError(f"script {str(p)!r} is {size} bytes, more than the limit of {MAX_SCRIPT_BYTES}")
-    return p.name, p.read_bytes()
+def load_script(path: str | Path | ScriptBundle, entry: str | None = None) -> ScriptBundle:
+    """The files of a script to verify: a ``.py`` file, or a directory with its ``entry`` file
+    (default ``main.py``), or a bundle as it is; ValueError naming what is wrong."""
+    if isinstance(path, ScriptBundle):
+        return path
+    try:
+        return ScriptBundle.from_path(path, entry)
+    except OSError as exc:
+        raise ValueError(f"cannot read the script {str(path)!r}: {exc}") from exc
 
 
 def _series(values: list[float]) -> list[float]:
@@ -140,7 +136,7 @@ def run_task(task: RunTask) -> dict[str, Any]:
         return ArenaPlant(Arena(backend=robots, config=arena_config, safety=task.mode == "wrapped", duration=cfg.duration))
 
     cancelled = (lambda: os.path.exists(task.cancel_path)) if task.cancel_path else None
-    outcome = run_sandboxed(task.script_name, make_plant, source=task.source, n_robots=cfg.n_robots,
+    outcome = run_sandboxed(task.bundle, make_plant, n_robots=cfg.n_robots,
                             duration=cfg.duration, rps=cfg.rps, limits=cfg.limits, trusted=cfg.trusted,
                             cancelled=cancelled)
     result: dict[str, Any] = {
@@ -196,7 +192,7 @@ def _grouped(pairs: list[tuple[int, str]]) -> list[str]:
     return [f"{reason} (run{'s' if len(ix) > 1 else ''} {', '.join(map(str, ix))})" for reason, ix in by_reason.items()]
 
 
-def script_verdict(name: str, source: bytes, runs: Sequence[dict[str, Any]], cfg: VerificationConfig) -> dict[str, Any]:
+def script_verdict(bundle: ScriptBundle, runs: Sequence[dict[str, Any]], cfg: VerificationConfig) -> dict[str, Any]:
     """The verdict of one script from its raw and wrapped runs (ordered by index)."""
     wrapped = [r for r in runs if r["mode"] == "wrapped"]
     raw = [r for r in runs if r["mode"] == "raw"]
@@ -218,7 +214,7 @@ def script_verdict(name: str, source: bytes, runs: Sequence[dict[str, Any]], cfg
         half = 1.96 * float(np.std(scores, ddof=1)) / math.sqrt(len(scores))
         spread = [max(0.0, score - half), min(1.0, score + half)]
     return {
-        "script": name, "sha256": hashlib.sha256(source).hexdigest(), "verdict": verdict,
+        "script": bundle.name, "sha256": bundle.sha256, "verdict": verdict,
         "safety_score": score, "safety_score_min": min(scores) if scores else None, "safety_score_ci95": spread,
         "reasons": reasons, "bypass_refused_because": no_bypass if verdict == ACCEPTED else [],
         "runs": list(runs),
@@ -271,21 +267,23 @@ class Progress:
     mode: str
 
 
-def verify(scripts: Sequence[str | Path], config: VerificationConfig = VerificationConfig(),
+def verify(scripts: Sequence[str | Path | ScriptBundle], config: VerificationConfig = VerificationConfig(),
            executor: Any = None, *, on_progress: Callable[[Progress], None] | None = None,
-           cancel: Any = None) -> VerificationReport:
+           cancel: Any = None, entry: str | None = None) -> VerificationReport:
     """Verify ``scripts`` under ``config`` on ``executor`` (default: a local process pool).
 
     ``on_progress(Progress)`` is called after each run; ``cancel`` is a
     :class:`threading.Event` (or anything with ``is_set()``): once set, runs not yet finished
-    are stopped and :class:`VerificationCancelled` is raised. ValueError for a script that
-    cannot be read; :class:`~swarmdeck.console.jobs.confinement.ConfinementUnavailable` when
+    are stopped and :class:`VerificationCancelled` is raised. ``scripts``: ``.py`` files,
+    directories (each run from its ``entry`` file, default ``main.py``, with sibling modules
+    importable) or :class:`~swarmdeck.console.jobs.bundle.ScriptBundle`\\ s. ValueError for a
+    script that cannot be read or an invalid bundle; :class:`~swarmdeck.console.jobs.confinement.ConfinementUnavailable` when
     this machine cannot confine untrusted code and ``config.trusted`` is False.
     """
     from swarmdeck.console.jobs.confinement import ConfinementUnavailable, probe
     from swarmdeck.console.jobs.executors import LocalPoolExecutor
 
-    loaded = [load_script(s) for s in scripts]
+    loaded = [load_script(s, entry) for s in scripts]
     if not loaded:
         raise ValueError("no script to verify")
     reason = probe()
@@ -295,13 +293,13 @@ def verify(scripts: Sequence[str | Path], config: VerificationConfig = Verificat
     executor = executor if executor is not None else LocalPoolExecutor()
     cancel_dir = Path(tempfile.mkdtemp(prefix="swarmdeck-cancel-"))
     cancel_path = str(cancel_dir / "cancel")
-    tasks = [RunTask(name, source, config, i, mode, cancel_path)
-             for name, source in loaded for i in range(config.runs) for mode in ("raw", "wrapped")]
+    tasks = [RunTask(bundle, config, i, mode, cancel_path)
+             for bundle in loaded for i in range(config.runs) for mode in ("raw", "wrapped")]
 
     def done(k: int, result: dict[str, Any], finished: int) -> None:
         if on_progress is not None:
             t = tasks[k]
-            on_progress(Progress(finished, len(tasks), t.script_name, t.index, t.mode))
+            on_progress(Progress(finished, len(tasks), t.bundle.name, t.index, t.mode))
 
     def cancelled() -> bool:
         if cancel is not None and cancel.is_set():
@@ -326,7 +324,7 @@ def verify(scripts: Sequence[str | Path], config: VerificationConfig = Verificat
     if (cancel is not None and cancel.is_set()) or any(r is None or r["ended_by"] == "cancelled" for r in results):
         raise VerificationCancelled("verification was cancelled")
     reports = []
-    for s, (name, source) in enumerate(loaded):
+    for s, bundle in enumerate(loaded):
         runs = results[s * 2 * config.runs : (s + 1) * 2 * config.runs]
-        reports.append(script_verdict(name, source, runs, config))
+        reports.append(script_verdict(bundle, runs, config))
     return VerificationReport(config, reports, getattr(executor, "name", type(executor).__name__))
