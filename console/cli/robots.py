@@ -78,7 +78,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def main(args: argparse.Namespace) -> int:
-    from swarmdeck.devices.net.firmware import BatteryParams, FirmwareParams
+    from swarmdeck.devices.fleet.battery import BatteryParams
+    from swarmdeck.devices.net.firmware import FirmwareParams
     from swarmdeck.devices.net.fleet import FleetNode
     from swarmdeck.devices.initial_conditions import random_initial_poses
     from swarmdeck.devices.net.mqtt_config import parse_broker_url

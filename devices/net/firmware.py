@@ -12,8 +12,8 @@ with the monotonic clock. REFERENCE.md §9 / notes/robotarium.md §4.3:
 * wheel limits by one uniform scale per robot
   (:func:`~swarmdeck.core.kinematics.limit_unicycle`), exact unicycle arcs
   (:func:`~swarmdeck.devices.gritsbot.unicycle_step`);
-* a battery whose voltage falls linearly with the charge drawn:
-  I = I_idle + k·(|ω_R| + |ω_L|) while driving, I_idle otherwise.
+* the battery of :mod:`swarmdeck.devices.fleet.battery` (voltage linear in the charge drawn,
+  I = I_idle + k·(|ω_R| + |ω_L|) while driving, I_idle otherwise).
 """
 from __future__ import annotations
 
@@ -24,6 +24,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from swarmdeck.core.checks import in_range, require_positive
 from swarmdeck.core.kinematics import GritsBotParams, limit_unicycle, unicycle_to_wheels
+from swarmdeck.devices.fleet.battery import BatteryParams, discharge
 from swarmdeck.devices.gritsbot import unicycle_step
 
 FloatArray = NDArray[np.float64]
@@ -51,35 +52,6 @@ class FirmwareParams:
         require_positive(self, ("command_timeout", "loop_period", "status_period", "pose_period"), "seconds")
         if not in_range(self.pose_decimals, 0, 6, integer=True):
             raise ValueError(f"FirmwareParams.pose_decimals must be 0..6, got {self.pose_decimals!r}")
-
-
-@dataclass(frozen=True)
-class BatteryParams:
-    """A one-cell LiPo with a linear voltage-versus-charge curve.
-
-    Attributes:
-        full_voltage, empty_voltage: V at 100 % and 0 % charge.
-        capacity_ah: usable capacity, Ah.
-        idle_current: A drawn by the computer and radio at all times.
-        motor_current_per_wheel_speed: A per rad/s of wheel speed, summed over both wheels.
-    """
-
-    full_voltage: float = 4.2
-    empty_voltage: float = 3.3
-    capacity_ah: float = 1.0
-    idle_current: float = 0.25
-    motor_current_per_wheel_speed: float = 0.02
-
-    def __post_init__(self) -> None:
-        if not (0 < self.empty_voltage < self.full_voltage):
-            raise ValueError(f"BatteryParams needs 0 < empty_voltage < full_voltage, got {self.empty_voltage}, {self.full_voltage}")
-        require_positive(self, ("capacity_ah",), "Ah")
-        require_positive(self, ("idle_current", "motor_current_per_wheel_speed"), allow_zero=True)
-
-    def voltage(self, charge: ArrayLike) -> FloatArray:
-        """Terminal voltage for state of charge ``charge`` ∈ [0, 1], V."""
-        c = np.clip(np.asarray(charge, dtype=float), 0.0, 1.0)
-        return self.empty_voltage + (self.full_voltage - self.empty_voltage) * c
 
 
 class FleetState:
@@ -188,7 +160,7 @@ class FleetState:
         amp_s = b.idle_current * (t_now - t0) + b.motor_current_per_wheel_speed * (
             (np.abs(r1) + np.abs(l1)) * live1 + (np.abs(r2) + np.abs(l2)) * live2
         )
-        self.charge = np.clip(self.charge - amp_s / (3600.0 * b.capacity_ah), 0.0, 1.0)
+        self.charge = discharge(self.charge, amp_s, b)
         # the pending command is now in force
         h = self.has_pend
         self.cur_v = np.where(h, self.pend_v, self.cur_v)

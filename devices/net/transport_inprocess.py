@@ -5,15 +5,14 @@ their command, robots not named get zero (a robot nobody commands stands
 still, as after the firmware's 500 ms brake), and the
 :class:`~swarmdeck.devices.simulator.SimulatedArena` steps once on its virtual
 clock — so a run is exactly reproducible. Battery voltages follow the same
-model as the networked fleet (:class:`~swarmdeck.devices.net.firmware.BatteryParams`).
+model as the networked fleet (:mod:`swarmdeck.devices.fleet.battery`).
 """
 from __future__ import annotations
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from swarmdeck.devices.net.firmware import BatteryParams
-from swarmdeck.core.kinematics import unicycle_to_wheels
+from swarmdeck.devices.fleet.battery import BatteryParams, battery_step
 from swarmdeck.devices.simulator import SimulatedArena
 from swarmdeck.devices.net.transport import (
     LINK_OK,
@@ -74,10 +73,7 @@ class InProcessTransport:
         self.arena.step(v_full, w_full)
         dt = self.arena.time - t0
         av, aw = self.arena.applied
-        right, left = unicycle_to_wheels(av, aw, self.arena.params)
-        b = self.battery
-        amp_s = (b.idle_current + b.motor_current_per_wheel_speed * (np.abs(right) + np.abs(left))) * dt
-        self._charge = np.clip(self._charge - amp_s / (3600.0 * b.capacity_ah), 0.0, 1.0)
+        self._charge = battery_step(self._charge, dt, av, aw, np.zeros(n, dtype=bool), self.arena.params, self.battery)
         self._last_cmd[sel] = self.arena.time
         self.counters.add("commands_sent", n=len(sel))
         return ok
