@@ -47,7 +47,7 @@ def test_info_on_a_foreign_file_says_why(sessions, capsys):
 
 def test_export_needs_a_target_and_writes_csv(sessions, tmp_path, capsys):
     assert main(["export", str(sessions / "a.mcap")]) == 2
-    assert "--csv DIR and/or --html" in capsys.readouterr().err
+    assert "say what to export: --csv DIR, --html OUT.html and/or --video OUT.mp4" in capsys.readouterr().err
     assert main(["export", str(sessions / "a.mcap"), "--csv", str(tmp_path / "out")]) == 0
     assert (tmp_path / "out" / "robots.csv").exists() and "wrote 20 frames" in capsys.readouterr().out
 

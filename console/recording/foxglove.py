@@ -161,6 +161,48 @@ def _num(x: float) -> float | None:
     return x if math.isfinite(x) else None
 
 
+def _varint(buf: bytes, p: int) -> tuple[int, int]:
+    """(value, next position) of the protobuf varint at ``p``; ValueError when it runs past the end."""
+    value = shift = 0
+    while True:
+        if p >= len(buf) or shift > 63:
+            raise ValueError("truncated varint")
+        b = buf[p]
+        p += 1
+        value |= (b & 0x7F) << shift
+        shift += 7
+        if not b & 0x80:
+            return value, p
+
+
+def decode_compressed_image(data: bytes) -> tuple[str, bytes]:
+    """(format, image bytes) of a ``foxglove.CompressedImage`` message as :meth:`FoxgloveEncoder.camera`
+    writes it (protobuf fields 2 ``data``, 3 ``format``; the SDK encodes but does not decode).
+    ValueError when the message is malformed."""
+    p, fmt, image = 0, "", b""
+    while p < len(data):
+        key, p = _varint(data, p)
+        field_no, wire = key >> 3, key & 7
+        if wire == 0:
+            _, p = _varint(data, p)
+        elif wire == 2:
+            n, p = _varint(data, p)
+            if p + n > len(data):
+                raise ValueError("field runs past the end of the message")
+            if field_no == 2:
+                image = data[p:p + n]
+            elif field_no == 3:
+                fmt = data[p:p + n].decode("utf-8", "replace")
+            p += n
+        elif wire in (1, 5):
+            p += 8 if wire == 1 else 4
+        else:
+            raise ValueError(f"unsupported protobuf wire type {wire}")
+    if p != len(data):
+        raise ValueError("field runs past the end of the message")
+    return fmt, image
+
+
 class FoxgloveEncoder:
     """Frames → ``(topic, log_time_ns, bytes)`` messages of :data:`TOPICS`. Not thread-safe: one per writer.
 

@@ -518,6 +518,19 @@ class Recording:
             except (ValueError, KeyError, TypeError):
                 continue
 
+    def camera_pictures(self, start: float | None = None, end: float | None = None) -> Iterator[tuple[float, bytes]]:
+        """``(recording time s, JPEG bytes)`` of the overhead camera pictures in [start, end) s (the Foxglove
+        camera channel; none when no camera ran or the file predates it). Undecodable ones are skipped."""
+        from swarmdeck.console.recording.foxglove import TOPIC_CAMERA, decode_compressed_image
+
+        for ns, data in self._messages(TOPIC_CAMERA, start, end):
+            try:
+                _, image = decode_compressed_image(data)
+            except ValueError:
+                continue
+            if image:
+                yield self.rel(ns), image
+
     def config(self) -> dict[str, Any]:
         """The run's configuration message (falls back to the metadata record)."""
         for _, data in self._messages(TOPIC_CONFIG, None, None):
