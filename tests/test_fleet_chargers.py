@@ -64,3 +64,12 @@ def test_a_layout_for_a_larger_floor_is_unreachable_in_a_smaller_arena():
 def test_bad_layouts_are_refused(kwargs):
     with pytest.raises(ValueError):
         ChargerLayout(**kwargs)
+
+
+def test_docked_slot_names_the_slot_a_robot_backs_onto_and_minus_one_otherwise():
+    layout = ChargerLayout()
+    docks = layout.dock_poses()
+    poses = np.vstack((docks[[3, 40]], docks[7] + [0.05, 0.0, 0.0], docks[9] + [0.0, 0.0, np.pi],
+                       [[0.0, 0.0, 0.0], [np.nan, 0.0, 0.0]]))
+    poses[1, :2] += 0.01  # within the 2 cm tolerance
+    assert layout.docked_slot(poses).tolist() == [3, 40, -1, -1, -1, -1]

@@ -107,6 +107,26 @@ class ChargerLayout:
         p[:, 1] += self.approach_distance * np.sin(p[:, 2])
         return p
 
+    def docked_slot(self, poses: NDArray[np.float64], position_tolerance: float = 0.02,
+                    heading_tolerance: float = 0.35) -> NDArray[np.intp]:
+        """``(N,)`` the slot each robot of ``poses`` ``(N, 3)`` is docked on, −1 for none: its centre
+        within ``position_tolerance`` m of the slot's dock pose and its heading within
+        ``heading_tolerance`` rad of the slot's (its back on the strip, the prongs touching)."""
+        p = np.asarray(poses, dtype=float).reshape(-1, 3)
+        docks = self._table[0]
+        out = np.full(len(p), -1, dtype=np.intp)
+        if not len(docks) or not len(p):
+            return out
+        from scipy.spatial import cKDTree
+
+        finite = np.all(np.isfinite(p), axis=1)
+        d, k = cKDTree(docks[:, :2]).query(np.where(finite[:, None], p[:, :2], 1e9))
+        k = np.minimum(k, len(docks) - 1)
+        heading = np.abs(np.angle(np.exp(1j * (p[:, 2] - docks[k, 2]))))
+        ok = finite & (d <= position_tolerance) & (np.where(finite, heading, np.inf) <= heading_tolerance)
+        out[ok] = k[ok]
+        return out
+
     def check_reachable(self, bounds: Bounds, safety_distance: float, lookahead: float, radius: float) -> None:
         """Raise ValueError naming the first unreachable slot for robots of body ``radius`` m whose
         look-ahead points (``lookahead`` m ahead) must stay ``safety_distance`` m apart in arena ``bounds``.
