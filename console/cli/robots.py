@@ -71,6 +71,14 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--pose-rate", type=float, default=30.0, help="ground-truth pose messages per second")
     parser.add_argument("--pose-decimals", type=int, default=3, help="rounding of published poses (tracker: 2, Vicon: 3)")
     parser.add_argument("--battery-ah", type=float, default=1.0, help="battery capacity, Ah")
+    parser.add_argument("--charge", type=float, default=1.0, metavar="Q",
+                        help="initial state of charge in [0, 1] (default %(default)s)")
+    parser.add_argument("--start", choices=("random", "docked"), default="random",
+                        help="start poses: random on the floor (default) or docked on the charging strips "
+                             "(robot id k on slot k)")
+    parser.add_argument("--no-chargers", action="store_true",
+                        help="no charging strips: robots only drain (default: strips along the walls; robots "
+                             "docked on a slot charge and report charge_status true)")
     parser.add_argument("--duration", type=float, default=None, help="exit after this many seconds (default: run until stopped)")
     parser.add_argument("--trace", default=None, help="append '<recv time> <id> <v> <w>' per received command to this file")
     parser.add_argument("--name", default=None, help="node name in status messages (default fleet-<host>-<pid>)")
@@ -79,6 +87,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def main(args: argparse.Namespace) -> int:
     from swarmdeck.devices.fleet.battery import BatteryParams
+    from swarmdeck.devices.fleet.chargers import ChargerLayout
     from swarmdeck.devices.net.firmware import FirmwareParams
     from swarmdeck.devices.net.fleet import FleetNode
     from swarmdeck.devices.initial_conditions import random_initial_poses
@@ -99,6 +108,10 @@ def main(args: argparse.Namespace) -> int:
         raise UsageError(f"--seed must be a non-negative integer, got {args.seed}")
     if args.duration is not None and not (np.isfinite(args.duration) and args.duration > 0):
         raise UsageError(f"--duration must be a finite number of seconds > 0, got {args.duration}")
+    if not 0.0 <= args.charge <= 1.0:
+        raise UsageError(f"--charge must be a state of charge in [0, 1], got {args.charge}")
+    if args.start == "docked" and args.no_chargers:
+        raise UsageError("--start docked needs the charging strips (drop --no-chargers)")
     try:
         cfg = parse_broker_url(
             args.broker, qos=args.qos, protocol=args.mqtt_version, prefix=args.prefix, username=args.username,
@@ -108,7 +121,15 @@ def main(args: argparse.Namespace) -> int:
         firmware = FirmwareParams(command_timeout=args.timeout, pose_period=1.0 / args.pose_rate,
                                   pose_decimals=args.pose_decimals)
         battery = BatteryParams(capacity_ah=args.battery_ah)
-        poses = random_initial_poses(layout, tuple(args.bounds), rng=args.seed)[ids]
+        chargers = None if args.no_chargers else ChargerLayout(bounds=tuple(args.bounds))
+        if args.start == "docked":
+            docks = chargers.dock_poses()
+            if ids.max() >= len(docks):
+                raise ValueError(f"--start docked: robot id {int(ids.max())} has no charger slot (the strips have "
+                                 f"{len(docks)} slots, ids 0..{len(docks) - 1})")
+            poses = docks[ids]
+        else:
+            poses = random_initial_poses(layout, tuple(args.bounds), rng=args.seed)[ids]
     except ValueError as exc:
         raise UsageError(str(exc)) from None
     try:
@@ -116,7 +137,8 @@ def main(args: argparse.Namespace) -> int:
     except OSError as exc:
         raise UsageError(f"--trace {args.trace}: cannot open for appending: {exc.strerror or exc}") from None
     try:
-        node = FleetNode(cfg, ids, poses, firmware=firmware, battery=battery, name=args.name, trace=trace)
+        node = FleetNode(cfg, ids, poses, firmware=firmware, battery=battery, name=args.name, trace=trace,
+                         chargers=chargers, charge=args.charge)
     except ValueError as exc:  # e.g. unreadable TLS files
         if trace is not None:
             trace.close()
@@ -145,7 +167,8 @@ def main(args: argparse.Namespace) -> int:
                 c = node.counters.snapshot()
                 print(f"[robots] {node.link.state}; {moving}/{len(ids)} moving; commands "
                       f"{int(snap['commands_received'].sum())}; brakes {int(snap['timeouts'].sum())}; "
-                      f"battery min {node.state.battery_voltage().min():.2f} V"
+                      f"battery min {node.state.battery_voltage().min():.2f} V, "
+                      f"{int(node.state.charging().sum())} charging"
                       + (f"; problems {c}" if any(k not in ('reconnects',) for k in c) else ""), flush=True)
     except KeyboardInterrupt:
         pass

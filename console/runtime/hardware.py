@@ -48,9 +48,7 @@ class NetworkPoseSource:
         self.name = "robots' pose topic"
 
     def read(self, now: float) -> SensedPoses:
-        r = self.robots.read()
-        return SensedPoses(np.asarray(r.ids, dtype=np.int64), np.asarray(r.poses, dtype=float),
-                           np.asarray(r.seen, dtype=bool))
+        return self.robots.read()
 
     def truth(self, now: float) -> NDArray[np.float64]:
         """Latest reported poses (N, 3) of the robots under control (for the synthetic camera)."""

@@ -11,7 +11,9 @@ draws on its own thread, so a slow browser never slows the loop).
 The tick reads top to bottom as its stages:
 
 1. **sense** — the pose source's ``(ids, poses, seen)``; rows with a non-finite
-   pose are not seen;
+   pose are not seen; robots that report a battery below
+   :attr:`ControlLoop.battery_watch` ``.warn_below`` (and are not charging) raise the
+   "battery low" alert naming them (:mod:`swarmdeck.console.runtime.batteries`);
 2. **inputs** — contacts from the input hub become density bumps; the density
    snapshot the behaviours see; one health line per port;
 3. **control** — the behaviour's nominal look-ahead velocities ``(N, 2)``
@@ -58,6 +60,7 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.spatial import cKDTree
 
+from swarmdeck.console.runtime.batteries import BatteryWatch, low_battery_alert
 from swarmdeck.console.runtime.behaviours import Behaviour, BehaviourError, BehaviourParams, TickInput, make_behaviour
 from swarmdeck.console.runtime.density import BumpSet
 from swarmdeck.console.runtime.frame import BarrierFrame, ContactsFrame, CoverageFrame, Frame
@@ -282,6 +285,7 @@ class ControlLoop:
         self._thread: threading.Thread | None = None
         self._stop = threading.Event()
         self.overruns = 0
+        self.battery_watch = BatteryWatch()
 
     # ------------------------------------------------------------------ construction helpers
     def _make_behaviour(self, name: str, params: BehaviourParams, safety: SafetyParams) -> Behaviour:
@@ -518,6 +522,12 @@ class ControlLoop:
             sensed = self._nobody_seen(sense.error)
         ids, poses, seen = sensed.ids, sensed.poses, sensed.seen
         n, points = len(ids), lookahead_points(poses, self.robot.lookahead)
+        with self._stage("battery", "battery check failed", stops=False) as batteries:
+            if sensed.battery is not None:  # robots that report their battery: warn when one runs low
+                low = low_battery_alert(ids, sensed.battery, sensed.charging if sensed.charging is not None
+                                        else np.zeros(n, dtype=bool), self.battery_watch)
+                if low is not None:
+                    batteries.warn(low)
         marks.append(time.perf_counter())
 
         # 2. inputs: contacts -> density bumps; the density snapshot behaviours see; health lines

@@ -1,5 +1,5 @@
 """The console's control panel (viser GUI): run/pause/step, emergency stop, behaviour and
-barrier parameters, density bumps, layer toggles, live plots and the status line.
+barrier parameters, density bumps, layer toggles, live plots, the robots' batteries and the status line.
 
 Every widget lives on ``server.gui`` (shared by all tabs). Callbacks only call
 the thread-safe :class:`~swarmdeck.console.runtime.loop.ControlLoop` API, so they take
@@ -21,6 +21,7 @@ from numpy.typing import ArrayLike
 from swarmdeck.console.runtime.behaviours import BUILTIN, LAWS
 from swarmdeck.console.runtime.frame import Frame
 from swarmdeck.console.runtime.loop import ControlLoop
+from swarmdeck.console.web.battery_panel import BatteryPanel
 from swarmdeck.console.web.plots import PlotHistory, PlotsPanel
 from swarmdeck.console.web.scene import LAYERS, ArenaScene
 
@@ -151,6 +152,7 @@ class ConsoleGui:
             box.on_update(lambda _, name=name, box=box: self.scene.set_layer(name, bool(box.value)))
 
         self.plots = PlotsPanel(gui)
+        self.batteries = BatteryPanel(gui, loop.battery_watch)
 
     # ------------------------------------------------------------------ helpers
     def notify(self, text: str, client: viser.ClientHandle | None = None, error: bool = True) -> None:
@@ -374,6 +376,7 @@ class ConsoleGui:
             return
         self._last_gui_update = now
         self.plots.show(self.history)
+        self.batteries.show(frame)
         self.status.content = self.status_line(frame)
         self._sync_widgets(frame)
         self.alerts.content = self.alert_text(frame)

@@ -203,6 +203,7 @@ class PlayerApp:
                  clock: Callable[[], float] = time.monotonic) -> None:
         import viser  # here, not at the top: the timeline (Player) works without the browser side
 
+        from swarmdeck.console.web.battery_panel import BatteryPanel
         from swarmdeck.console.web.plots import PlotHistory, PlotsPanel
         from swarmdeck.console.web.scene import LAYERS, ArenaScene
 
@@ -243,6 +244,7 @@ class PlayerApp:
                 box.on_update(lambda _e, n=name, b=box: self._on_layer(n, b.value))
                 self._layer_boxes[name] = box
         self.plots: PlotsPanel = PlotsPanel(gui)
+        self.batteries = BatteryPanel(gui)
         self.events = gui.add_markdown("")
         self.slider.on_update(lambda _e: self._on_slider())
         self.play_button.on_click(lambda _e: self._on_play())
@@ -313,6 +315,7 @@ class PlayerApp:
                 hist.add(t, f)
         hist.add(p.frame_time, frame)
         self.plots.show(hist)
+        self.batteries.show(frame)
         state = "playing" if p.playing else "paused"
         self.status.content = (f"**{state}** {p.rate:g}x · t = {p.frame_time:.2f} / {p.duration:.2f} s "
                                f"(session) · run t = {frame.run_time:.1f} s · tick {frame.tick} · {frame.n} robots · "

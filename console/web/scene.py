@@ -13,7 +13,9 @@ image provider is given; the density heat map is then drawn translucent over
 it), grid, density heat map, Voronoi edges, filled cells, centroids, robots,
 labels, nominal arrows, safe arrows, barrier pairs, safety discs, trails,
 contacts, virtual (a dashed violet ring around each virtual robot, which is
-also drawn pale). It scales to a thousand robots: robots are one batched mesh and the
+also drawn pale), battery (a bar under each robot that reports its battery: its
+length the state of charge, green/amber/red by level, blue while charging, on a
+grey full-length track; :mod:`swarmdeck.console.runtime.batteries`). It scales to a thousand robots: robots are one batched mesh and the
 Voronoi edges one line-segment node whatever N; labels exist only up to
 ``SceneStyle.max_labels`` robots and the per-robot glyphs (arrows, safety discs,
 trails) only up to ``max_glyphs``; the heat map keeps under ``heatmap_max_px`` pixels. Colours: robots blue; robots whose command the barrier changed
@@ -43,7 +45,7 @@ ImageProvider = Callable[[str], "tuple[ArrayLike, Bounds] | None"]
 
 LAYERS: tuple[str, ...] = (
     "camera", "grid", "density", "voronoi", "cells", "centroids", "robots", "labels", "nominal", "safe",
-    "barrier", "discs", "trails", "contacts", "virtual",
+    "barrier", "discs", "trails", "contacts", "virtual", "battery",
 )
 DEFAULT_OFF = frozenset({"cells"})
 
@@ -53,6 +55,10 @@ STOPPED = np.array([210, 30, 30], dtype=np.uint8)
 PAUSED = np.array([90, 110, 140], dtype=np.uint8)
 UNSEEN = np.array([160, 160, 160], dtype=np.uint8)
 VIRTUAL_RING = (120, 60, 200)
+#: bar colours by battery level (LEVELS of console.runtime.batteries: unknown, low, fair, good, charging)
+BATTERY_COLORS = np.array([[160, 160, 160], [220, 30, 30], [235, 160, 20], [40, 170, 60], [40, 120, 230]],
+                          dtype=np.uint8)
+BATTERY_TRACK = np.array([200, 200, 200], dtype=np.uint8)
 VIRTUAL_PALE = 0.55  # virtual robots' colours are blended this much toward white
 
 # Heat map colours (low → high φ): near-white → light orange → red-orange.
@@ -152,6 +158,25 @@ def robot_colors(frame: Frame) -> NDArray[np.uint8]:
     return cols
 
 
+def battery_bars(frame: Frame, robot_radius: float) -> tuple[NDArray[np.float32], NDArray[np.uint8]]:
+    """Battery bars of the robots reporting one (K of them): segments (2K, 2, 3) — a grey track of
+    2.2 robot radii, then the level bar from its left end, as long as the state of charge —
+    and their colours (2K, 2, 3) (:data:`BATTERY_COLORS`). A hidden stub when nobody reports."""
+    from swarmdeck.console.runtime.batteries import battery_levels
+
+    q, level = battery_levels(frame.battery, frame.charging)
+    known = np.flatnonzero(~np.isnan(q))
+    if not len(known):
+        return _EMPTY_SEG, np.repeat(BATTERY_TRACK[None, None], 2, axis=1)
+    half = 1.1 * robot_radius
+    left = frame.poses[known, :2] + np.array([-half, -1.6 * robot_radius])
+    track_end = left + [2 * half, 0.0]
+    fill_end = left + np.column_stack((2 * half * np.maximum(q[known], 0.04), np.zeros(len(known))))
+    segs = np.concatenate((_segments_2d(left, track_end, 0.013), _segments_2d(left, fill_end, 0.014)))
+    cols = np.concatenate((np.tile(BATTERY_TRACK, (len(known), 1)), BATTERY_COLORS[level[known]]))
+    return segs, np.repeat(cols[:, None, :], 2, axis=1)
+
+
 def h_colors(h: NDArray[np.float64], d_s: float) -> NDArray[np.uint8]:
     """(K, 2, 3) colours for active pairs by barrier value h (m²): red at h ≤ 0 → yellow at h ≥ 0.1."""
     s = np.clip(np.asarray(h, dtype=float) / 0.1, 0.0, 1.0)
@@ -177,6 +202,7 @@ class SceneNodes:
     safe: viser.ArrowsHandle
     contacts: viser.PointCloudHandle
     virtual: viser.LineSegmentsHandle
+    battery: viser.LineSegmentsHandle
     robots: viser.BatchedMeshHandle | None = None
     cells: viser.GlbHandle | None = None
     camera: viser.ImageHandle | None = None
@@ -262,9 +288,10 @@ class ArenaScene:
                                       (200, 0, 200), point_size=0.07, point_shape="circle",
                                       precision="float32")
         virtual = sc.add_line_segments("/virtual", _EMPTY_SEG, VIRTUAL_RING, thickness=0.008)
+        battery = sc.add_line_segments("/battery", _EMPTY_SEG, BATTERY_TRACK, thickness=0.018)
         self.nodes = SceneNodes(boundary=boundary, grid=grid, density=density_image, voronoi=voronoi,
                                 centroids=centroids, trails=trails, discs=discs, barrier=barrier,
-                                nominal=nominal, safe=safe, contacts=contacts, virtual=virtual)
+                                nominal=nominal, safe=safe, contacts=contacts, virtual=virtual, battery=battery)
         for name in LAYERS:
             self._apply_visibility(name)
 
@@ -385,6 +412,9 @@ class ArenaScene:
         self._update_trails(frame)  # accumulates even while hidden, so showing trails is instant
         if v["virtual"]:
             self.nodes.virtual.points = self._virtual_rings(poses[frame.is_virtual, :2])
+        if v["battery"]:
+            segs, cols = battery_bars(frame, self.robot_radius)
+            self.nodes.battery.points, self.nodes.battery.colors = segs, cols
         if v["contacts"]:
             c = frame.contacts.positions
             cp = np.column_stack((c, np.full(len(c), 0.012))).astype(np.float32) if len(c) else \

@@ -109,7 +109,8 @@ class NetworkRobots:
 
     # ---------------------------------------------------------------- pose source
     def read(self, now: float | None = None) -> SensedPoses:
-        """Robots under control (not missing/duplicated) with their last known poses and freshness.
+        """Robots under control (not missing/duplicated) with their last known poses and freshness,
+        and their last reported battery voltage (NaN: none yet) and charging state.
 
         ``now`` (the loop's clock) is accepted for the PoseSource protocol and not used:
         freshness is judged on this transport's own monotonic clock.
@@ -121,7 +122,8 @@ class NetworkRobots:
         known = np.all(np.isfinite(poses), axis=1)
         ids, poses, stamps = ids[known], poses[known], stamps[known]
         seen = (self.clock() - stamps) <= self.streamer.config.pose_timeout
-        return SensedPoses(ids.astype(np.int64), poses, seen)
+        battery, charging = self.transport.status().robots.battery_of(ids)
+        return SensedPoses(ids.astype(np.int64), poses, seen, battery=battery, charging=charging)
 
     def obstacles(self) -> NDArray[np.float64]:
         """``(M, 2)`` last known centres of robots excluded from control (fixed obstacles), m."""

@@ -13,7 +13,9 @@ with the monotonic clock. REFERENCE.md §9 / notes/robotarium.md §4.3:
   (:func:`~swarmdeck.core.kinematics.limit_unicycle`), exact unicycle arcs
   (:func:`~swarmdeck.devices.gritsbot.unicycle_step`);
 * the battery of :mod:`swarmdeck.devices.fleet.battery` (voltage linear in the charge drawn,
-  I = I_idle + k·(|ω_R| + |ω_L|) while driving, I_idle otherwise).
+  I = I_idle + k·(|ω_R| + |ω_L|) while driving, I_idle otherwise); a robot docked on a slot of
+  the charging strips (``chargers``, :meth:`ChargerLayout.docked_slot`) charges instead (CC-CV,
+  :func:`~swarmdeck.devices.fleet.battery.recharge`) and reports ``charge_status`` true.
 """
 from __future__ import annotations
 
@@ -24,7 +26,8 @@ from numpy.typing import ArrayLike, NDArray
 
 from swarmdeck.core.checks import in_range, require_positive
 from swarmdeck.core.kinematics import GritsBotParams, limit_unicycle, unicycle_to_wheels
-from swarmdeck.devices.fleet.battery import BatteryParams, discharge
+from swarmdeck.devices.fleet.battery import BatteryParams, discharge, recharge
+from swarmdeck.devices.fleet.chargers import ChargerLayout
 from swarmdeck.devices.gritsbot import unicycle_step
 
 FloatArray = NDArray[np.float64]
@@ -63,6 +66,7 @@ class FleetState:
         t0: start time on the caller's clock, s.
         firmware, battery, params: models.
         charge: initial state of charge ``(N,)`` or scalar in [0, 1].
+        chargers: the arena's charging strips (None: no chargers, robots only drain).
     """
 
     def __init__(
@@ -75,6 +79,7 @@ class FleetState:
         battery: BatteryParams = BatteryParams(),
         params: GritsBotParams = GritsBotParams(),
         charge: ArrayLike = 1.0,
+        chargers: ChargerLayout | None = None,
     ) -> None:
         self.ids = np.asarray(ids, dtype=np.intp).reshape(-1).copy()
         n = len(self.ids)
@@ -87,6 +92,10 @@ class FleetState:
         self.t = float(t0)
         self.poses = p.copy()
         self.charge = np.broadcast_to(np.asarray(charge, dtype=float), (n,)).copy()
+        if not np.all((self.charge >= 0.0) & (self.charge <= 1.0)):
+            raise ValueError(f"charge must be in [0, 1], got {self.charge.tolist()}")
+        self.chargers = chargers
+        self.docked = self._docked()
         self._index = {int(i): k for k, i in enumerate(self.ids)}
         # command in force: values, receive time (−inf: never)
         self.cur_v = np.zeros(n)
@@ -160,7 +169,11 @@ class FleetState:
         amp_s = b.idle_current * (t_now - t0) + b.motor_current_per_wheel_speed * (
             (np.abs(r1) + np.abs(l1)) * live1 + (np.abs(r2) + np.abs(l2)) * live2
         )
-        self.charge = discharge(self.charge, amp_s, b)
+        # on a charger for the whole interval when docked at both ends (a robot driving off stops charging)
+        docked_before = self.docked
+        self.docked = self._docked()
+        on_strip = docked_before & self.docked
+        self.charge = np.where(on_strip, recharge(self.charge, t_now - t0, b), discharge(self.charge, amp_s, b))
         # the pending command is now in force
         h = self.has_pend
         self.cur_v = np.where(h, self.pend_v, self.cur_v)
@@ -184,5 +197,10 @@ class FleetState:
         return self.battery.voltage(self.charge)
 
     def charging(self) -> NDArray[np.bool_]:
-        """No chargers in the simulated arena: always False."""
-        return np.zeros(self.n, dtype=bool)
+        """``(N,)`` robots on a charger slot (``charge_status`` on the wire)."""
+        return self.docked.copy()
+
+    def _docked(self) -> NDArray[np.bool_]:
+        if self.chargers is None:
+            return np.zeros(self.n, dtype=bool)
+        return self.chargers.docked_slot(self.poses) >= 0

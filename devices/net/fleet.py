@@ -2,8 +2,9 @@
 
 Subscribes like the GRITSBot X firmware (``matlab_api/<id>`` for each of its
 robots), keeps only the newest command per robot, integrates the unicycle
-model every firmware loop (16 ms), brakes after 500 ms without commands, and
-publishes ``<id>/status`` every second and ground-truth poses on
+model every firmware loop (16 ms), brakes after 500 ms without commands, drains
+the batteries of robots off the chargers and charges those docked on a slot of
+the charging strips, and publishes ``<id>/status`` (``batt_volt``, ``charge_status``) every second and ground-truth poses on
 ``overhead_tracker/all_robot_pose_data`` at the tracker rate, which the console
 can use in place of a camera. ``swarmdeck robots`` runs one in its own process;
 several, on several machines with distinct ids, can share one broker.
@@ -20,6 +21,7 @@ from typing import IO
 import numpy as np
 from numpy.typing import ArrayLike
 
+from swarmdeck.devices.fleet.chargers import ChargerLayout
 from swarmdeck.devices.net.firmware import BatteryParams, FirmwareParams, FleetState
 from swarmdeck.core.kinematics import GritsBotParams
 from swarmdeck.devices.net.mqtt_config import MqttConfig
@@ -40,6 +42,9 @@ class FleetNode:
         trace: optional text stream; one line ``"<recv_time> <id> <v> <w>"`` per command
             received (monotonic clock), for latency measurements.
         clock: monotonic clock.
+        chargers: the arena's charging strips: robots docked on a slot charge and report
+            ``charge_status`` true (None: no chargers).
+        charge: initial state of charge, ``(N,)`` or scalar in [0, 1].
     """
 
     def __init__(
@@ -54,12 +59,15 @@ class FleetNode:
         name: str | None = None,
         trace: IO[str] | None = None,
         clock: Callable[[], float] = time.monotonic,
+        chargers: ChargerLayout | None = None,
+        charge: ArrayLike = 1.0,
     ) -> None:
         self.config = config
         self.clock = clock
         self.name = name or f"fleet-{socket.gethostname()}-{os.getpid()}"
         self.counters = Counters()
-        self.state = FleetState(ids, poses, clock(), firmware=firmware, battery=battery, params=params)
+        self.state = FleetState(ids, poses, clock(), firmware=firmware, battery=battery, params=params,
+                                charge=charge, chargers=chargers)
         self.firmware = firmware
         self._lock = threading.Lock()
         self._trace = trace
@@ -195,6 +203,8 @@ class FleetNode:
                 "last_command_time": self.state.cur_t.copy(),
                 "timeouts": self.state.timeouts.copy(),
                 "commands_received": np.asarray(self._received, dtype=np.int64),
+                "charge": self.state.charge.copy(),
+                "charging": self.state.charging(),
             }
 
     def stop(self) -> None:

@@ -96,6 +96,17 @@ class RobotStatusTable:
     status_age: FloatArray
     link: tuple[str, ...]
 
+    def battery_of(self, ids: ArrayLike) -> tuple[FloatArray, NDArray[np.bool_]]:
+        """Battery voltages ``(K,)`` V and charging flags ``(K,)`` of ``ids`` (NaN / False for robots
+        this table does not hold)."""
+        want = np.asarray(ids, dtype=np.intp).reshape(-1)
+        volts, charging = np.full(len(want), np.nan), np.zeros(len(want), dtype=bool)
+        if len(self.ids) and len(want):
+            pos = np.minimum(np.searchsorted(self.ids, want), len(self.ids) - 1)
+            hit = self.ids[pos] == want
+            volts[hit], charging[hit] = self.battery_voltage[pos[hit]], self.charging[pos[hit]]
+        return volts, charging
+
     @staticmethod
     def empty() -> "RobotStatusTable":
         return RobotStatusTable(np.empty(0, dtype=np.intp), np.empty(0), np.zeros(0, bool), np.empty(0), np.empty(0), ())
