@@ -373,7 +373,10 @@ class ControlLoop:
 
     def set_behaviour(self, name: str) -> None:
         """Switch behaviour; raises BehaviourError (nothing changes) for an unknown name or a bad script."""
-        b = self._make_behaviour(name, self._behaviour_params, self._safety_params)
+        self.use_behaviour(self._make_behaviour(name, self._behaviour_params, self._safety_params))
+
+    def use_behaviour(self, b: Behaviour) -> None:
+        """Switch to a ready-made behaviour object (e.g. the portal's sandboxed-script commands)."""
         with self._lock:
             old, self._behaviour = self._behaviour, b
             self._alerts.pop("behaviour", None)

@@ -1,0 +1,150 @@
+"""``swarmdeck server``: the lab's remote-access service (HTTP API, verification workers, arena runner)."""
+from __future__ import annotations
+
+import argparse
+import sys
+
+from swarmdeck.console.cli import UsageError
+
+NAME = "server"
+HELP = "start the lab's remote-access service: accounts, submissions, verification, the arena runner, results"
+ORDER = 70
+DEFAULT_DATA = "swarmdeck-data"
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.epilog = ("Add accounts with `swarmdeck users add NAME --role researcher|operator --data DIR`. "
+                     "API documentation: http://HOST:PORT/docs.")
+    parser.add_argument("--data", default=DEFAULT_DATA, metavar="DIR",
+                        help=f"data folder: database and every job's files (default ./{DEFAULT_DATA})")
+    parser.add_argument("--host", default="127.0.0.1", help="interface to bind (default 127.0.0.1: this machine only)")
+    parser.add_argument("--port", type=int, default=8000, help="TCP port (default 8000; 0 picks a free one)")
+    parser.add_argument("--robots", type=int, default=12, metavar="N",
+                        help="robots the arena has: simulated ones, or the MQTT fleet's ids 0..N-1 (default 12)")
+    parser.add_argument("--robots-via", default=None, metavar="URL",
+                        help="drive GRITSBots over MQTT instead of simulating them, e.g. mqtt://127.0.0.1:1883")
+    parser.add_argument("--fast", action="store_true",
+                        help="simulated arena: run jobs as fast as they compute instead of in real time (tests, benchmarks)")
+    parser.add_argument("--workers", type=int, default=None, metavar="W",
+                        help="local verification worker processes (default: number of cores)")
+    parser.add_argument("--ray", default=None, metavar="ADDRESS",
+                        help="verify on a Ray cluster ('auto', 'local' or ray://HOST:PORT); needs swarmdeck[ray]")
+    parser.add_argument("--verify-runs", type=int, default=4, metavar="K",
+                        help="verification runs per job, each without and with the barrier (default 4)")
+    parser.add_argument("--max-duration", type=float, default=600.0, metavar="S",
+                        help="longest experiment a researcher may declare, s (default 600)")
+    parser.add_argument("--max-upload", type=int, default=4 << 20, metavar="BYTES",
+                        help="largest upload accepted, bytes (default 4 MiB)")
+    parser.add_argument("--grace", type=float, default=15.0, metavar="S",
+                        help="a run's time limit is its declared duration plus S seconds (default 15)")
+    parser.add_argument("--seed", type=int, default=None, help="seed of the simulated arena's initial poses")
+    parser.add_argument("--trusted", action="store_true",
+                        help="run scripts unconfined where this machine cannot confine them (bubblewrap missing)")
+    parser.add_argument("--log-level", default="warning", choices=("critical", "error", "warning", "info", "debug"),
+                        help="uvicorn's log level (default warning)")
+
+
+def check_arguments(args: argparse.Namespace) -> None:
+    if not 0 <= args.port <= 65535:
+        raise UsageError(f"--port must be in [0, 65535], got {args.port}")
+    if args.robots < 1:
+        raise UsageError(f"--robots must be >= 1, got {args.robots}")
+    if args.workers is not None and args.workers < 1:
+        raise UsageError(f"--workers must be >= 1, got {args.workers}")
+    if args.verify_runs < 1:
+        raise UsageError(f"--verify-runs must be >= 1, got {args.verify_runs}")
+    if not args.max_duration > 0:
+        raise UsageError(f"--max-duration must be > 0 s, got {args.max_duration}")
+    if args.max_upload < 1024:
+        raise UsageError(f"--max-upload must be at least 1024 bytes, got {args.max_upload}")
+    if not args.grace > 0:
+        raise UsageError(f"--grace must be > 0 s, got {args.grace}")
+    if args.fast and args.robots_via:
+        raise UsageError("--fast is for the simulated arena: networked robots run in real time")
+    if args.robots_via is not None:
+        from swarmdeck.devices.net.mqtt_config import parse_broker_url
+
+        try:
+            parse_broker_url(args.robots_via)
+        except ValueError as exc:
+            raise UsageError(f"--robots-via: {exc}") from None
+
+
+def main(args: argparse.Namespace) -> int:
+    check_arguments(args)
+    from swarmdeck.console.jobs.confinement import probe
+    from swarmdeck.console.portal.app import bind, create_app, uvicorn_server
+    from swarmdeck.console.portal.db import SchemaError
+    from swarmdeck.console.portal.livefeed import LiveFeed
+    from swarmdeck.console.portal.runner import ArenaRunner, ArenaSettings
+    from swarmdeck.console.portal.service import PortalConfig, PortalService
+    from swarmdeck.console.portal.submission import Limits
+    from swarmdeck.console.portal.workers import VerificationWorkers, make_executor
+    from swarmdeck.devices.initial_conditions import max_robots
+
+    reason = probe()
+    if reason is not None and not args.trusted:
+        raise UsageError(f"cannot confine untrusted code on this machine: {reason}; install bubblewrap "
+                         "or pass --trusted")
+    fleet = args.robots if args.robots_via else min(args.robots, max_robots())
+    if fleet < args.robots:
+        raise UsageError(f"--robots {args.robots}: at most {fleet} robots fit the arena")
+    config = PortalConfig(data=args.data, limits=Limits(fleet=fleet, max_duration=args.max_duration,
+                                                        max_upload_bytes=args.max_upload),
+                          verify_runs=args.verify_runs, grace_s=args.grace, trusted=args.trusted)
+    try:
+        executor = make_executor(args.workers, args.ray)
+    except (ValueError, RuntimeError) as exc:
+        raise UsageError(str(exc)) from None
+    try:
+        service = PortalService(config)
+    except (SchemaError, OSError) as exc:
+        raise UsageError(f"cannot open the data folder {args.data!r}: {exc}") from None
+    import sqlite3
+
+    live = LiveFeed()
+    runner = ArenaRunner(service, ArenaSettings(robots_via=args.robots_via, fleet=fleet, fast=args.fast,
+                                                seed=args.seed), live)
+    try:
+        interrupted = runner.recover()
+    except sqlite3.DatabaseError as exc:
+        raise UsageError(f"the database in {args.data!r} is damaged: {exc}") from None
+    for job_id in interrupted:
+        print(f"swarmdeck server: job {job_id} was on the arena when the server stopped: interrupted "
+              "(partial recording kept)", file=sys.stderr)
+    service.arena = runner
+    try:
+        sock = bind(args.host, args.port)
+    except OSError as exc:
+        raise UsageError(f"cannot serve on {args.host}:{args.port}: {exc.strerror or exc}") from None
+    workers = VerificationWorkers(service, executor).start()
+    runner.start()
+    app = create_app(service, live=live)
+    server = uvicorn_server(app, log_level=args.log_level)
+    host = f"[{args.host}]" if ":" in args.host else args.host
+    arena = args.robots_via and f"MQTT robots 0..{fleet - 1} via {_redacted(args.robots_via)}" or \
+        f"{fleet} simulated robots{' (fast)' if args.fast else ''}"
+    print(f"swarmdeck server: http://{host}:{sock.getsockname()[1]}  ({arena}; data in {args.data}; "
+          "API docs at /docs; Ctrl-C to stop)", flush=True)
+    import signal
+
+    # uvicorn stops on SIGINT/SIGTERM and then re-raises the signal to the handler it found: make that a
+    # no-op, so the shutdown below (runner: robots stopped; workers; database) always runs and we exit 0.
+    saved = {sig: signal.signal(sig, lambda signum, frame: None) for sig in (signal.SIGINT, signal.SIGTERM)}
+    try:
+        server.run(sockets=[sock])
+    finally:
+        for sig, handler in saved.items():
+            signal.signal(sig, handler)
+        runner.stop()
+        workers.stop()
+        sock.close()
+        service.close()
+        print("swarmdeck server: stopped (robots stopped)", file=sys.stderr)
+    return 0
+
+
+def _redacted(url: str) -> str:
+    from swarmdeck.devices.net.mqtt_config import redact_url
+
+    return redact_url(url)

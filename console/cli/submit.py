@@ -1,0 +1,76 @@
+"""``swarmdeck submit SCRIPT``: send an experiment to the lab's portal (verified, queued, run on the arena)."""
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from pathlib import Path
+
+from swarmdeck.console.cli import UsageError
+from swarmdeck.console.cli._client import add_client_arguments, client, fail, job_line
+
+NAME = "submit"
+HELP = "submit an experiment script (.py or .zip) to the lab's portal; --wait follows it to the end"
+ORDER = 72
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.epilog = ("The manifest is JSON: {\"name\", \"robots\", \"duration\", \"initial_poses\"?, \"no_barrier\"?}; "
+                     "--robots/--duration/--name/--no-barrier build or override it. Exit status: 0 submitted "
+                     "(with --wait: the job is done), 1 a server error or (with --wait) the job did not end done, "
+                     "2 usage.")
+    parser.add_argument("script", metavar="SCRIPT", help="the experiment (.py), or a .zip with it (and manifest.json)")
+    parser.add_argument("--manifest", default=None, metavar="M", help="the manifest (JSON file)")
+    parser.add_argument("--name", default=None, help="the experiment's name (default: the script's file name)")
+    parser.add_argument("--robots", type=int, default=None, metavar="N", help="robots the experiment uses")
+    parser.add_argument("--duration", type=float, default=None, metavar="S", help="declared duration, s")
+    parser.add_argument("--no-barrier", action="store_true",
+                        help="ask to run without the safety barrier (granted only if verification allows it)")
+    parser.add_argument("--wait", action="store_true", help="follow the job until it ends (states on stderr)")
+    add_client_arguments(parser)
+
+
+def manifest_from(args: argparse.Namespace) -> dict | None:
+    manifest: dict = {}
+    if args.manifest:
+        try:
+            manifest = json.loads(Path(args.manifest).read_text(encoding="utf-8"))
+        except OSError as exc:
+            raise UsageError(f"cannot read the manifest {args.manifest!r}: {exc.strerror or exc}") from None
+        except ValueError as exc:
+            raise UsageError(f"the manifest {args.manifest!r} is not valid JSON: {exc}") from None
+        if not isinstance(manifest, dict):
+            raise UsageError(f"the manifest {args.manifest!r} must hold a JSON object")
+    for key, value in (("robots", args.robots), ("duration", args.duration), ("name", args.name)):
+        if value is not None:
+            manifest[key] = value
+    if args.no_barrier:
+        manifest["no_barrier"] = True
+    if not manifest and args.script.lower().endswith(".zip"):
+        return None  # the archive's manifest.json
+    manifest.setdefault("name", Path(args.script).stem)
+    return manifest
+
+
+def main(args: argparse.Namespace) -> int:
+    from swarmdeck.console.portal.client import ClientError
+
+    if not Path(args.script).is_file():
+        raise UsageError(f"script {args.script!r} does not exist or is not a file")
+    manifest = manifest_from(args)
+    if manifest is not None and ("robots" not in manifest or "duration" not in manifest):
+        raise UsageError("say how many robots and for how long: --robots N --duration S (or --manifest M)")
+    with client(args) as c:
+        try:
+            job = c.submit(args.script, manifest)
+            if not args.json:
+                print(f"submitted job {job['id']}: {job['state']}")
+            if args.wait:
+                job = c.wait(job["id"], on_state=lambda j: print(job_line(j), file=sys.stderr))
+        except ClientError as exc:
+            return fail(NAME, exc, args.json)
+    if args.json:
+        print(json.dumps(job))
+    elif args.wait:
+        print(f"job {job['id']}: {job['state']}" + (f" ({job['reason']})" if job.get("reason") else ""))
+    return 0 if not args.wait or job["state"] == "done" else 1

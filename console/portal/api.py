@@ -1,0 +1,215 @@
+"""The JSON API under ``/api``: thin routes over :class:`~.service.PortalService`.
+
+Authentication (:func:`authenticate`): ``Authorization: Bearer TOKEN``, or the
+web session cookie ``swarmdeck_session`` (set by ``POST /api/session``;
+HttpOnly, SameSite=Strict) — cookie-authenticated requests that change
+anything must also send the session's CSRF token as ``X-CSRF-Token``.
+Every request looks the token or session up again, so a disabled account is
+refused from its next request on.
+
+Errors: every one is a 4xx with ``{"error": message, "field": name}``
+(:mod:`.errors`), counted in the app's :class:`~.errors.RejectionCounter`
+(``GET /api/operator/stats``).
+
+Routes (researchers see only their own jobs; other ids are 404):
+
+* ``GET /api/health`` (no auth) · ``GET /api/me`` · ``POST/DELETE /api/session``
+* ``POST /api/jobs`` (multipart: file ``script`` (.py/.zip), field ``manifest`` (JSON)) → 201 job
+* ``GET /api/jobs`` · ``GET /api/jobs/{id}`` · ``POST /api/jobs/{id}/cancel``
+* ``GET /api/jobs/{id}/report`` · ``GET /api/jobs/{id}/files`` · ``GET /api/jobs/{id}/files/{name}``
+* operators: ``POST /api/operator/jobs/{id}/{approve|hold|release|cancel}``,
+  ``POST /api/operator/jobs/{id}/move`` ``{"position": k}``,
+  ``POST /api/operator/jobs/{id}/barrier`` ``{"forbid": bool}``,
+  ``GET/PUT /api/operator/settings`` ``{"manual_approval": bool}``,
+  ``GET /api/operator/arena``, ``POST /api/operator/estop``, ``POST /api/operator/release``,
+  ``GET /api/operator/audit``, ``GET /api/operator/stats``.
+"""
+from __future__ import annotations
+
+import hmac
+from typing import Any
+
+from fastapi import APIRouter, Body, Depends, Request, Response
+from fastapi.responses import FileResponse
+from starlette.concurrency import run_in_threadpool
+from starlette.datastructures import UploadFile
+
+from swarmdeck.console.portal.accounts import User
+from swarmdeck.console.portal.errors import BadInput, Forbidden, RejectionCounter, Unauthorized
+from swarmdeck.console.portal.service import PortalService
+
+SESSION_COOKIE = "swarmdeck_session"
+CSRF_HEADER = "x-csrf-token"
+SAFE_METHODS = ("GET", "HEAD", "OPTIONS")
+
+UPLOAD_SCHEMA = {
+    "requestBody": {
+        "required": True,
+        "content": {"multipart/form-data": {"schema": {
+            "type": "object", "required": ["script"],
+            "properties": {
+                "script": {"type": "string", "format": "binary", "description": "the script (.py) or a .zip"},
+                "manifest": {"type": "string", "description": 'JSON: {"name", "robots", "duration", '
+                             '"initial_poses"?, "no_barrier"?, "entry"?} (optional for a .zip with manifest.json)'},
+            }}}},
+    }
+}
+
+
+def authenticate(service: PortalService, request: Request) -> User:
+    """The user of a request (Bearer token, or session cookie + CSRF header for changes); Unauthorized/Forbidden."""
+    header = request.headers.get("authorization")
+    if header is not None:
+        scheme, _, token = header.partition(" ")
+        if scheme.lower() != "bearer" or not token.strip():
+            raise Unauthorized("use the header 'Authorization: Bearer TOKEN'", "Authorization")
+        return service.accounts.user_for_token(token.strip())
+    sid = request.cookies.get(SESSION_COOKIE)
+    if sid:
+        session = service.accounts.session(sid)
+        if request.method not in SAFE_METHODS and not hmac.compare_digest(
+                request.headers.get(CSRF_HEADER, "").encode(), session.csrf.encode()):
+            raise Forbidden("missing or wrong X-CSRF-Token header for a signed-in change", "X-CSRF-Token")
+        return session.user
+    raise Unauthorized("not signed in: send 'Authorization: Bearer TOKEN'", "Authorization")
+
+
+def api_router(service: PortalService, counter: RejectionCounter, *, max_upload_bytes: int) -> APIRouter:
+    """The ``/api`` routes on ``service``."""
+    router = APIRouter(prefix="/api")
+
+    def user(request: Request) -> User:
+        return authenticate(service, request)
+
+    @router.get("/health", tags=["service"])
+    def health() -> dict[str, Any]:
+        """Liveness (no authentication)."""
+        return {"ok": True}
+
+    @router.get("/me", tags=["accounts"])
+    def me(request: Request, u: User = Depends(user)) -> dict[str, Any]:
+        """Who the token or session belongs to (with the session's CSRF token when signed in by cookie)."""
+        out = u.to_dict()
+        sid = request.cookies.get(SESSION_COOKIE)
+        if sid and "authorization" not in request.headers:
+            out["csrf"] = service.accounts.session(sid).csrf
+        return out
+
+    @router.post("/session", tags=["accounts"])
+    def sign_in(request: Request, response: Response, token: str = Body(..., embed=True)) -> dict[str, Any]:
+        """Sign in with an access token: sets the HttpOnly, SameSite=Strict session cookie; returns the CSRF token."""
+        client = request.client.host if request.client else "?"
+        session = service.accounts.sign_in(token, client)
+        response.set_cookie(SESSION_COOKIE, session.id, max_age=int(service.accounts.session_s), httponly=True,
+                            samesite="strict", secure=request.url.scheme == "https", path="/")
+        return {"user": session.user.to_dict(), "csrf": session.csrf, "expires": session.expires}
+
+    @router.delete("/session", tags=["accounts"])
+    def sign_out(request: Request, response: Response) -> dict[str, Any]:
+        sid = request.cookies.get(SESSION_COOKIE)
+        if sid:
+            service.accounts.sign_out(sid)
+        response.delete_cookie(SESSION_COOKIE, path="/")
+        return {"ok": True}
+
+    @router.post("/jobs", status_code=201, tags=["jobs"], openapi_extra=UPLOAD_SCHEMA)
+    async def submit(request: Request, u: User = Depends(user)) -> dict[str, Any]:
+        """Submit a script (multipart file ``script``) with its ``manifest`` (JSON text): the new job, ``queued``."""
+        form = await request.form(max_files=1, max_fields=4, max_part_size=max_upload_bytes)
+        try:
+            script, manifest = form.get("script"), form.get("manifest")
+            if not isinstance(script, UploadFile):
+                raise BadInput("send the script as the multipart file field 'script'", "script")
+            if manifest is not None and not isinstance(manifest, str):
+                raise BadInput("the manifest is a form field holding JSON text, not a file", "manifest")
+            data = await script.read(max_upload_bytes + 1)
+            return await run_in_threadpool(service.submit, u, script.filename, data, manifest)
+        finally:
+            await form.close()
+
+    @router.get("/jobs", tags=["jobs"])
+    def jobs(mine: bool = False, u: User = Depends(user)) -> list[dict[str, Any]]:
+        """Your jobs, newest first (operators: everyone's, unless ``mine``)."""
+        return service.jobs(u, mine=mine)
+
+    @router.get("/jobs/{job_id}", tags=["jobs"])
+    def job(job_id: int, u: User = Depends(user)) -> dict[str, Any]:
+        return service.job(u, job_id)
+
+    @router.post("/jobs/{job_id}/cancel", tags=["jobs"])
+    def cancel(job_id: int, u: User = Depends(user)) -> dict[str, Any]:
+        return service.cancel(u, job_id)
+
+    @router.get("/jobs/{job_id}/report", tags=["jobs"])
+    def report(job_id: int, u: User = Depends(user)) -> dict[str, Any]:
+        """The verification report (schema swarmdeck.verification/1)."""
+        return service.report(u, job_id)
+
+    @router.get("/jobs/{job_id}/files", tags=["results"])
+    def files(job_id: int, u: User = Depends(user)) -> list[dict[str, Any]]:
+        """The job's result files: recording, CSV, HTML replay, script log, reports."""
+        return service.files(u, job_id)
+
+    @router.get("/jobs/{job_id}/files/{name}", tags=["results"])
+    def download(job_id: int, name: str, u: User = Depends(user)) -> FileResponse:
+        path = service.file_path(u, job_id, name)
+        return FileResponse(path, filename=f"job{job_id}-{name}")
+
+    # ------------------------------------------------------------------ operators
+    @router.post("/operator/jobs/{job_id}/{action}", tags=["operator"])
+    def operator_action(job_id: int, action: str, u: User = Depends(user),
+                        body: dict[str, Any] | None = Body(default=None)) -> dict[str, Any]:
+        """``approve``, ``hold``, ``release``, ``cancel``; ``move`` with ``{"position": k}``; ``barrier`` with
+        ``{"forbid": bool}``. 409 when the job is not in a state that allows it (e.g. another operator was first)."""
+        simple = {"approve": service.approve, "hold": service.hold, "release": service.release,
+                  "cancel": service.operator_cancel}
+        if action in simple:
+            return simple[action](u, job_id)
+        if action == "move":
+            return service.move(u, job_id, _key(body, "position"))
+        if action == "barrier":
+            return service.forbid_barrier(u, job_id, _key(body, "forbid"))
+        raise BadInput(f"unknown action {action!r}: approve, hold, release, cancel, move, barrier", "action")
+
+    @router.get("/operator/settings", tags=["operator"])
+    def get_settings(u: User = Depends(user)) -> dict[str, Any]:
+        if not u.is_operator:
+            raise Forbidden("this needs an operator account", "Authorization")
+        return service.settings()
+
+    @router.put("/operator/settings", tags=["operator"])
+    def put_settings(body: dict[str, Any] = Body(...), u: User = Depends(user)) -> dict[str, Any]:
+        """``{"manual_approval": bool}``."""
+        return service.set_manual_approval(u, _key(body, "manual_approval"))
+
+    @router.get("/operator/arena", tags=["operator"])
+    def arena(u: User = Depends(user)) -> dict[str, Any]:
+        return service.arena_state(u)
+
+    @router.post("/operator/estop", tags=["operator"])
+    def estop(u: User = Depends(user)) -> dict[str, Any]:
+        """Emergency stop: robots stop now, the running job ends, the arena stays stopped until released."""
+        return service.emergency_stop(u)
+
+    @router.post("/operator/release", tags=["operator"])
+    def release(u: User = Depends(user)) -> dict[str, Any]:
+        return service.release_arena(u)
+
+    @router.get("/operator/audit", tags=["operator"])
+    def audit(limit: int = 200, u: User = Depends(user)) -> list[dict[str, Any]]:
+        return service.audit_log(u, max(1, min(limit, 10000)))
+
+    @router.get("/operator/stats", tags=["operator"])
+    def stats(u: User = Depends(user)) -> dict[str, Any]:
+        """Counts of rejected requests by status and field."""
+        if not u.is_operator:
+            raise Forbidden("this needs an operator account", "Authorization")
+        return {"rejected": counter.snapshot()}
+
+    return router
+
+
+def _key(body: dict[str, Any] | None, key: str) -> Any:
+    if not isinstance(body, dict) or key not in body:
+        raise BadInput(f"send a JSON body with {key!r}", key)
+    return body[key]

@@ -1,0 +1,249 @@
+"""The portal's SQLite database: one file ``DIR/portal.sqlite3``, WAL, foreign keys, versioned schema.
+
+* **Connections**: one per thread (:class:`Database` keeps them in a
+  ``threading.local``), each with ``journal_mode=WAL``, ``foreign_keys=ON``,
+  ``busy_timeout`` and ``synchronous=NORMAL`` (WAL: a power cut loses at most the
+  last transactions, never corrupts the file). Autocommit mode: reads see the
+  newest committed state; every change runs in :meth:`Database.transaction`
+  (``BEGIN IMMEDIATE`` … ``COMMIT``, rolled back on any exception), so a killed
+  server leaves each change either whole or absent.
+* **Schema**: ``schema_version`` holds the version; :data:`MIGRATIONS` are
+  applied in order on start, each in its own transaction together with the new
+  version number. A database newer than this code is refused
+  (:class:`SchemaError`).
+* **Jobs' state machine** (:data:`TRANSITIONS`): ``queued → verifying →
+  rejected | approved → waiting → setting up → running → done | failed |
+  cancelled | interrupted``, plus ``held`` (an operator's hold of a queued,
+  approved or waiting job; released back to the state it came from). Every
+  transition is one conditional ``UPDATE … WHERE id = ? AND state IN (…)``
+  (:meth:`Database.transition`): of two operators acting on one job at once,
+  exactly one changes it, the other gets :class:`TransitionConflict` naming the
+  state the job is in now.
+"""
+from __future__ import annotations
+
+import sqlite3
+import threading
+import time
+from collections.abc import Iterator
+from contextlib import contextmanager
+from pathlib import Path
+from typing import Any
+
+FILENAME = "portal.sqlite3"
+
+STATES = ("queued", "verifying", "rejected", "approved", "waiting", "setting up", "running", "done", "failed",
+          "cancelled", "interrupted", "held")
+FINAL = ("rejected", "done", "failed", "cancelled", "interrupted")
+ACTIVE = ("setting up", "running")  # the job is on the arena
+#: state -> the states it may move to.
+TRANSITIONS: dict[str, tuple[str, ...]] = {
+    "queued": ("verifying", "cancelled", "held"),
+    "verifying": ("rejected", "approved", "queued", "cancelled"),  # -> queued: a worker stopped mid-way (restart)
+    "approved": ("waiting", "cancelled", "held"),
+    "waiting": ("setting up", "cancelled", "held"),
+    "held": ("queued", "approved", "waiting", "cancelled"),
+    "setting up": ("running", "failed", "cancelled", "interrupted"),
+    "running": ("done", "failed", "cancelled", "interrupted"),
+}
+
+MIGRATIONS: tuple[str, ...] = (
+    # 1: accounts, sessions, sign-in attempts, jobs, audit log, settings
+    """
+    CREATE TABLE users (
+        id INTEGER PRIMARY KEY,
+        name TEXT NOT NULL UNIQUE,
+        role TEXT NOT NULL CHECK (role IN ('researcher', 'operator')),
+        disabled INTEGER NOT NULL DEFAULT 0,
+        created REAL NOT NULL
+    );
+    CREATE TABLE tokens (
+        id INTEGER PRIMARY KEY,
+        user_id INTEGER NOT NULL REFERENCES users(id),
+        hash TEXT NOT NULL UNIQUE,
+        created REAL NOT NULL
+    );
+    CREATE TABLE sessions (
+        hash TEXT PRIMARY KEY,
+        user_id INTEGER NOT NULL REFERENCES users(id),
+        csrf TEXT NOT NULL,
+        created REAL NOT NULL,
+        expires REAL NOT NULL
+    );
+    CREATE TABLE signin_failures (
+        client TEXT NOT NULL,
+        t REAL NOT NULL
+    );
+    CREATE INDEX signin_failures_client ON signin_failures (client, t);
+    CREATE TABLE jobs (
+        id INTEGER PRIMARY KEY,
+        user_id INTEGER NOT NULL REFERENCES users(id),
+        name TEXT NOT NULL,
+        state TEXT NOT NULL,
+        held_from TEXT,
+        kind TEXT NOT NULL CHECK (kind IN ('py', 'zip')),
+        script_name TEXT NOT NULL,
+        entry TEXT NOT NULL,
+        n_robots INTEGER NOT NULL,
+        duration REAL NOT NULL,
+        initial_poses TEXT,
+        request_no_barrier INTEGER NOT NULL DEFAULT 0,
+        barrier_forbidden INTEGER NOT NULL DEFAULT 0,
+        verdict TEXT,
+        safety_score REAL,
+        bypass INTEGER,
+        reason TEXT,
+        priority REAL NOT NULL,
+        created REAL NOT NULL,
+        updated REAL NOT NULL,
+        started REAL,
+        ended REAL
+    );
+    CREATE INDEX jobs_state ON jobs (state, priority, id);
+    CREATE INDEX jobs_user ON jobs (user_id, id);
+    CREATE TABLE audit (
+        id INTEGER PRIMARY KEY,
+        t REAL NOT NULL,
+        user_id INTEGER REFERENCES users(id),
+        action TEXT NOT NULL,
+        job_id INTEGER REFERENCES jobs(id),
+        detail TEXT NOT NULL DEFAULT ''
+    );
+    CREATE TABLE settings (
+        key TEXT PRIMARY KEY,
+        value TEXT NOT NULL
+    );
+    """,
+)
+
+
+class SchemaError(RuntimeError):
+    """The database file was written by a newer swarmdeck (or is not a portal database)."""
+
+
+class TransitionConflict(Exception):
+    """A conditional job transition changed nothing: the job is not in a state that allows it.
+
+    ``state`` is the job's state now (None: no such job)."""
+
+    def __init__(self, job_id: int, target: str, state: str | None) -> None:
+        self.job_id, self.target, self.state = job_id, target, state
+        now = "does not exist" if state is None else f"is {state}"
+        super().__init__(f"job {job_id} {now}: it cannot become {target}")
+
+
+class Database:
+    """The portal's database file (see the module docstring). Thread-safe: one connection per thread."""
+
+    def __init__(self, directory: str | Path, *, busy_timeout_s: float = 10.0) -> None:
+        self.directory = Path(directory)
+        self.directory.mkdir(parents=True, exist_ok=True)
+        self.path = self.directory / FILENAME
+        self.busy_timeout_s = float(busy_timeout_s)
+        self._local = threading.local()
+        self._all: list[sqlite3.Connection] = []
+        self._all_lock = threading.Lock()
+        self.migrate()
+
+    # ------------------------------------------------------------------ connections
+    def connection(self) -> sqlite3.Connection:
+        """This thread's connection (autocommit; rows as :class:`sqlite3.Row`)."""
+        conn = getattr(self._local, "conn", None)
+        if conn is None:
+            conn = sqlite3.connect(self.path, timeout=self.busy_timeout_s, isolation_level=None,
+                                   check_same_thread=False)
+            conn.row_factory = sqlite3.Row
+            conn.execute("PRAGMA journal_mode=WAL")
+            conn.execute("PRAGMA foreign_keys=ON")
+            conn.execute(f"PRAGMA busy_timeout={int(self.busy_timeout_s * 1000)}")
+            conn.execute("PRAGMA synchronous=NORMAL")
+            self._local.conn = conn
+            with self._all_lock:
+                self._all.append(conn)
+        return conn
+
+    @contextmanager
+    def transaction(self) -> Iterator[sqlite3.Connection]:
+        """``BEGIN IMMEDIATE`` … ``COMMIT`` (``ROLLBACK`` on any exception): one whole change."""
+        conn = self.connection()
+        conn.execute("BEGIN IMMEDIATE")
+        try:
+            yield conn
+        except BaseException:
+            conn.execute("ROLLBACK")
+            raise
+        conn.execute("COMMIT")
+
+    def query(self, sql: str, params: tuple[Any, ...] | dict[str, Any] = ()) -> list[sqlite3.Row]:
+        return self.connection().execute(sql, params).fetchall()
+
+    def query_one(self, sql: str, params: tuple[Any, ...] | dict[str, Any] = ()) -> sqlite3.Row | None:
+        return self.connection().execute(sql, params).fetchone()
+
+    def close(self) -> None:
+        """Close every thread's connection (the service is shutting down)."""
+        with self._all_lock:
+            conns, self._all = self._all, []
+        for conn in conns:
+            try:
+                conn.close()
+            except sqlite3.Error:
+                pass
+        self._local = threading.local()
+
+    # ------------------------------------------------------------------ schema
+    @property
+    def version(self) -> int:
+        row = self.query_one("SELECT version FROM schema_version")
+        return 0 if row is None else int(row["version"])
+
+    def migrate(self) -> int:
+        """Apply the migrations this file has not had, in order, each in one transaction; the version."""
+        conn = self.connection()
+        conn.execute("CREATE TABLE IF NOT EXISTS schema_version (version INTEGER NOT NULL)")
+        current = self.version
+        if current > len(MIGRATIONS):
+            raise SchemaError(f"{self.path} has schema version {current}, newer than this swarmdeck "
+                              f"({len(MIGRATIONS)}): upgrade swarmdeck")
+        for version in range(current + 1, len(MIGRATIONS) + 1):
+            with self.transaction() as tx:
+                for statement in MIGRATIONS[version - 1].split(";"):
+                    if statement.strip():
+                        tx.execute(statement)
+                tx.execute("DELETE FROM schema_version")
+                tx.execute("INSERT INTO schema_version (version) VALUES (?)", (version,))
+        return self.version
+
+    def check(self) -> str:
+        """SQLite's own integrity check: ``"ok"`` for an intact file."""
+        return str(self.query_one("PRAGMA integrity_check")[0])
+
+    # ------------------------------------------------------------------ jobs' state machine
+    def transition(self, tx: sqlite3.Connection, job_id: int, target: str, *, sources: tuple[str, ...] | None = None,
+                   **columns: Any) -> None:
+        """Move job ``job_id`` to ``target`` inside ``tx`` if it is in one of ``sources`` (default: every
+        state :data:`TRANSITIONS` allows to reach ``target``), setting ``columns`` too; else
+        :class:`TransitionConflict` (the caller's transaction rolls back)."""
+        if target not in STATES:
+            raise ValueError(f"unknown job state {target!r}")
+        allowed = tuple(s for s, targets in TRANSITIONS.items() if target in targets)
+        sources = allowed if sources is None else tuple(s for s in sources if s in allowed)
+        if not sources:
+            raise ValueError(f"no state may move to {target!r}")
+        sets = ", ".join(["state = ?", "updated = ?"] + [f"{name} = ?" for name in columns])
+        marks = ", ".join("?" * len(sources))
+        cur = tx.execute(f"UPDATE jobs SET {sets} WHERE id = ? AND state IN ({marks})",
+                         (target, time.time(), *columns.values(), job_id, *sources))
+        if cur.rowcount != 1:
+            row = tx.execute("SELECT state FROM jobs WHERE id = ?", (job_id,)).fetchone()
+            raise TransitionConflict(job_id, target, None if row is None else row["state"])
+
+    # ------------------------------------------------------------------ settings
+    def setting(self, key: str, default: str) -> str:
+        row = self.query_one("SELECT value FROM settings WHERE key = ?", (key,))
+        return default if row is None else str(row["value"])
+
+    @staticmethod
+    def set_setting(tx: sqlite3.Connection, key: str, value: str) -> None:
+        tx.execute("INSERT INTO settings (key, value) VALUES (?, ?) "
+                   "ON CONFLICT(key) DO UPDATE SET value = excluded.value", (key, value))

@@ -1,0 +1,375 @@
+"""The arena runner: one job at a time on the arena, through the console's runtime, the user's code in the sandbox.
+
+For each job the service hands over (``waiting → setting up``):
+
+1. **Robots**: simulated (``ArenaSettings.robots_via`` None: a fresh
+   :class:`~swarmdeck.devices.simulated_robots.SimulatedRobots` with the
+   manifest's initial poses, or random ones) or the MQTT fleet
+   (``mqtt://…``, :func:`swarmdeck.console.runtime.hardware.mqtt_robots`, robot
+   ids ``0 … N-1``; with initial poses in the manifest the robots first drive
+   there with the barrier on, the ``goto`` behaviour).
+2. **Runtime**: a :class:`~swarmdeck.console.runtime.loop.ControlLoop` — the
+   same tick pipeline, safety filter (``devices.pipeline.certify``) and
+   recorder as ``swarmdeck console`` — whose behaviour is
+   :class:`SandboxCommands`: the script's unicycle commands of this tick, mapped
+   to the look-ahead velocities the loop certifies (the look-ahead map is
+   invertible, so without the barrier and within the limits the robots get the
+   script's commands unchanged). The barrier is off only when
+   :meth:`~.service.PortalService.bypass_allowed` said so at claim time.
+3. **Script**: :func:`swarmdeck.console.jobs.sandbox.run_sandboxed` with
+   :class:`LoopPlant` as its plant: each sandbox tick is one loop tick, paced
+   in real time (MQTT robots always; the simulated arena unless ``fast``). The
+   time limit is the declared duration plus ``grace_s``; a cancel or an
+   emergency stop ends the run within a tick (the e-stop zeroes the robots'
+   commands first).
+4. **Data** in ``DIR/jobs/<id>/``: ``recording.mcap`` (written while it runs),
+   ``script.log``, ``run.json`` (how it ended), and when it ends ``robots.csv``,
+   ``frames.csv`` and ``replay.html``. Every Frame is also published to the
+   :class:`~.livefeed.LiveFeed`.
+5. The loop is closed (robots stopped, the MQTT connection closed) before the
+   next job starts.
+
+On start (:meth:`ArenaRunner.recover`), jobs the previous server left on the
+arena are ``interrupted`` and their partial recordings are recovered with
+:func:`swarmdeck.console.recording.recover.recover` into ``recording.mcap``
+(the damaged original is kept as ``recording.partial.mcap``).
+"""
+from __future__ import annotations
+
+import json
+import threading
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from swarmdeck.console.jobs.confinement import ConfinementUnavailable, SandboxLimits
+from swarmdeck.console.jobs.sandbox import SandboxOutcome, run_sandboxed
+from swarmdeck.console.portal.livefeed import LiveFeed
+from swarmdeck.console.portal.service import PortalService
+from swarmdeck.console.runtime.behaviours import TickInput
+from swarmdeck.console.runtime.loop import ControlLoop, LoopConfig, SafetyParams
+from swarmdeck.core.bounds import DEFAULT_BOUNDS, Bounds
+from swarmdeck.core.kinematics import unicycle_to_si
+from swarmdeck.devices.clock import RealTimePacer
+
+ENDED_OK = ("script", "duration")
+
+
+@dataclass(frozen=True)
+class ArenaSettings:
+    """The arena the runner drives.
+
+    Attributes:
+        robots_via: ``mqtt://HOST:PORT`` for networked robots; None: the simulated arena.
+        fleet: robots the arena has (the most a job may use).
+        bounds: the floor, m.
+        dt: control period, s.
+        fast: simulated arena only: tick as fast as it computes instead of in real time.
+        seed: seed of the simulated arena's random initial poses (None: fresh).
+        setup_s: networked robots: longest drive to the initial poses, s.
+    """
+
+    robots_via: str | None = None
+    fleet: int = 12
+    bounds: Bounds = DEFAULT_BOUNDS
+    dt: float = 0.033
+    fast: bool = False
+    seed: int | None = None
+    setup_s: float = 60.0
+
+    @property
+    def real_time(self) -> bool:
+        return self.robots_via is not None or not self.fast
+
+
+class SandboxCommands:
+    """The loop behaviour that plays the sandboxed script's commands: unicycle (v, ω) → look-ahead velocities.
+
+    ``set(v, w)`` (arrays (N,), or None: the script missed the tick → zero) before each tick.
+    """
+
+    name = "script (sandboxed)"
+
+    def __init__(self, lookahead: float) -> None:
+        self.lookahead = float(lookahead)
+        self._vw: tuple[NDArray[np.float64], NDArray[np.float64]] | None = None
+
+    def set(self, v: NDArray[np.float64] | None, w: NDArray[np.float64] | None) -> None:
+        self._vw = None if v is None or w is None else (np.asarray(v, dtype=float), np.asarray(w, dtype=float))
+
+    def __call__(self, tick: TickInput) -> tuple[NDArray[np.float64], None]:
+        if self._vw is None or len(self._vw[0]) != len(tick.poses):
+            return np.zeros((len(tick.poses), 2)), None
+        return unicycle_to_si(tick.poses, self._vw[0], self._vw[1], self.lookahead), None
+
+
+class LoopPlant:
+    """The sandbox's :class:`~swarmdeck.console.jobs.sandbox.Plant` on a ControlLoop: one apply = one loop tick.
+
+    The script sees the loop's newest poses and its run time (s since the run started; it stops
+    while the loop is e-stopped); the run is finished at the declared duration (a cancel or an
+    e-stop ends it through the sandbox's ``cancelled``).
+    """
+
+    def __init__(self, loop: ControlLoop, commands: SandboxCommands, duration: float,
+                 pacer: RealTimePacer | None) -> None:
+        self.loop, self.commands, self.duration, self.pacer = loop, commands, duration, pacer
+        self.n = loop.config.n_robots
+
+    def observe(self) -> tuple[float, NDArray[np.float64]]:
+        frame = self.loop.latest
+        return self.loop.run_time, (frame.poses.copy() if frame is not None else np.zeros((self.n, 3)))
+
+    def apply(self, v: NDArray[np.float64] | None, w: NDArray[np.float64] | None) -> None:
+        self.commands.set(v, w)
+        self.loop.tick()
+        if self.pacer is not None:
+            self.pacer.wait()
+
+    def finished(self) -> bool:
+        return self.loop.run_time >= self.duration - 1e-9
+
+
+class ArenaRunner:
+    """The thread that runs waiting jobs on the arena, one at a time (module docstring).
+
+    ``emergency_stop()`` and ``cancel(job_id)`` are called by the service (any thread).
+    """
+
+    def __init__(self, service: PortalService, settings: ArenaSettings, live: LiveFeed | None = None, *,
+                 poll_s: float = 1.0) -> None:
+        self.service, self.settings = service, settings
+        self.live = live if live is not None else LiveFeed()
+        self.poll_s = float(poll_s)
+        self._stop = threading.Event()
+        self._lock = threading.Lock()
+        self._thread: threading.Thread | None = None
+        self._job: int | None = None
+        self._end_job = threading.Event()  # the current job must end now (cancel, e-stop, shutdown)
+        self._loop: ControlLoop | None = None
+        self.runs = 0
+        self.frame_listeners: list[Callable[[Any], None]] = []  # e.g. the operator's viser console
+
+    # ------------------------------------------------------------------ control (any thread)
+    def start(self) -> "ArenaRunner":
+        self._thread = threading.Thread(target=self._run, name="swarmdeck-portal-arena", daemon=True)
+        self._thread.start()
+        return self
+
+    def stop(self, timeout: float = 15.0) -> None:
+        """End the current job (robots stopped) and the thread."""
+        self._stop.set()
+        self._end_job.set()
+        self.service.notify()
+        if self._thread is not None:
+            self._thread.join(timeout)
+
+    def emergency_stop(self) -> None:
+        with self._lock:
+            loop = self._loop
+            if self._job is not None:
+                self._end_job.set()
+        if loop is not None:
+            loop.estop()  # the next tick's commands are zero
+
+    def cancel(self, job_id: int) -> None:
+        with self._lock:
+            if self._job == int(job_id):
+                self._end_job.set()
+
+    @property
+    def current_job(self) -> int | None:
+        return self._job
+
+    # ------------------------------------------------------------------ the thread
+    def _run(self) -> None:
+        while not self._stop.is_set():
+            job = self.service.claim_for_arena()
+            if job is None:
+                self.service.wait_for_change(self.poll_s)
+                continue
+            try:
+                self.run_job(job)
+            except Exception as exc:  # noqa: BLE001 - never let the arena thread die: the job fails, say why
+                self.service.finish_run(int(job["id"]), "failed", f"the arena runner failed: {type(exc).__name__}: {exc}")
+
+    def recover(self) -> list[int]:
+        """Mark jobs left on the arena ``interrupted`` and recover their partial recordings; their ids."""
+        from swarmdeck.console.recording.recover import RecoveryError, recover
+
+        ids = self.service.recover_on_start()
+        for job_id in ids:
+            folder = self.service.job_dir(job_id)
+            partial, out = folder / "recording.partial.mcap", folder / "recording.mcap"
+            if not out.is_file():
+                continue
+            out.replace(partial)
+            try:
+                report = recover(partial, out)
+                note = report.summary()
+            except (RecoveryError, OSError) as exc:
+                note = f"the partial recording could not be recovered: {exc}"
+            _write_json(folder / "run.json", {"ended_by": "interrupted", "recovery": note})
+            if out.is_file():
+                self._exports(folder)
+        return ids
+
+    def run_job(self, job: dict[str, Any]) -> str:
+        """Run one claimed job to its end; its final state."""
+        job_id, folder = int(job["id"]), self.service.job_dir(int(job["id"]))
+        self._end_job.clear()
+        with self._lock:
+            self._job = job_id
+        try:
+            return self._run_job(job_id, job, folder)
+        finally:
+            with self._lock:
+                self._job, self._loop = None, None
+
+    def _run_job(self, job_id: int, job: dict[str, Any], folder: Path) -> str:
+        try:
+            outcome, note = self._sandboxed(job, folder)
+        except ConfinementUnavailable as exc:
+            outcome, note = None, str(exc)
+        finally:
+            with self._lock:
+                self._loop = None
+            self.live.clear()
+        if outcome is None:
+            state, reason = "failed", note
+        elif outcome.ended_by in ENDED_OK:
+            state, reason = "done", note
+        elif outcome.ended_by == "cancelled":
+            state, reason = "cancelled", "cancelled"
+        else:
+            state, reason = "failed", outcome.error_line
+        summary = {"ended_by": None if outcome is None else outcome.ended_by,
+                   "error": reason if state == "failed" else None,
+                   "ticks": None if outcome is None else outcome.ticks,
+                   "overruns": None if outcome is None else outcome.overruns, "note": note}
+        _write_json(folder / "run.json", summary)
+        if outcome is not None:
+            (folder / "script.log").write_text(outcome.log, encoding="utf-8")
+        if (folder / "recording.mcap").is_file():
+            self._exports(folder)
+        self.runs += 1
+        return self.service.finish_run(job_id, state, reason)
+
+    def _sandboxed(self, job: dict[str, Any], folder: Path) -> tuple[SandboxOutcome | None, str | None]:
+        from swarmdeck.console.recording.recorder import Recorder
+        from swarmdeck.console.recording.resimulate import session_metadata
+        from swarmdeck.devices.net.mqtt_config import redact_url
+
+        s, cfg = self.settings, self.service.config
+        n, duration = int(job["robots"]), float(job["duration"])
+        initial = None if job["initial_poses"] is None else np.asarray(job["initial_poses"], dtype=float)
+        bypass = bool(job["bypass"])
+        loop_config = LoopConfig(n_robots=n, dt=s.dt, bounds=s.bounds, seed=s.seed, behaviour="rendezvous",
+                                 safety=SafetyParams(enabled=True))
+        state: dict[str, Any] = {"loop": None, "recorder": None}
+        notes: list[str] = []
+
+        def stopped() -> bool:
+            return self._end_job.is_set()
+
+        def make_plant(n_script: int, script_initial: NDArray[np.float64] | None) -> LoopPlant:
+            if n_script != n:
+                raise ValueError(f"the script asks for {n_script} robots but the manifest declares {n}")
+            poses = initial if initial is not None else script_initial
+            loop = self._build_loop(loop_config, poses, notes)
+            with self._lock:
+                self._loop = loop
+            state["loop"] = loop
+            source = redact_url(s.robots_via) if s.robots_via else "simulation"
+            rec = Recorder(folder / "recording.mcap", session_metadata(loop_config, None, source=source,
+                                                                      job=int(job["id"]), bypass=bypass))
+            state["recorder"] = rec
+            loop.subscribe(rec.write_frame)
+            loop.subscribe(lambda frame: self.live.publish(int(job["id"]), frame))
+            for listener in self.frame_listeners:
+                loop.subscribe(listener)
+            commands = SandboxCommands(loop.robot.lookahead)
+            loop.use_behaviour(commands)
+            if bypass:
+                loop.set_safety(enabled=False)
+                loop.post("barrier bypassed: verification allowed it and the manifest asked for it")
+            if not self.service.mark_running(int(job["id"])):
+                self._end_job.set()
+            loop.pause()
+            loop.tick()  # the starting poses, recorded; robots hold still
+            loop.run()
+            return LoopPlant(loop, commands, duration, RealTimePacer(s.dt) if s.real_time else None)
+
+        limits = SandboxLimits(tick_s=cfg.tick_budget_s, wall_s=duration + cfg.grace_s)
+        try:
+            outcome = run_sandboxed(self.service.script_path(job), make_plant, n_robots=n, duration=duration,
+                                    limits=limits, trusted=cfg.trusted, cancelled=stopped)
+        finally:
+            loop = state["loop"]
+            if loop is not None:
+                loop.close()  # robots stopped, MQTT disconnected
+            if state["recorder"] is not None:
+                state["recorder"].close()
+        return outcome, "; ".join(notes) or None
+
+    def _build_loop(self, config: LoopConfig, poses: NDArray[np.float64] | None, notes: list[str]) -> ControlLoop:
+        """The ControlLoop on this arena's robots (simulated at ``poses``, or the MQTT fleet driven there)."""
+        s = self.settings
+        clock = time.monotonic if s.real_time else None
+        if s.robots_via is None:
+            from swarmdeck.devices import ArenaConfig
+            from swarmdeck.devices.simulated_robots import SimulatedRobots
+
+            sim = SimulatedRobots(config.n_robots, ArenaConfig(bounds=config.bounds, dt=config.dt, seed=config.seed),
+                                  initial_poses=poses)
+            return ControlLoop(config, source=sim, sink=sim, clock=clock)
+        from swarmdeck.console.runtime.hardware import mqtt_robots
+
+        sink, source = mqtt_robots(s.robots_via, np.arange(config.n_robots, dtype=np.int64))
+        loop = ControlLoop(config, source=source, sink=sink, clock=clock)
+        if poses is not None:
+            notes.append(self._drive_to(loop, poses))
+        return loop
+
+    def _drive_to(self, loop: ControlLoop, poses: NDArray[np.float64]) -> str:
+        """Setting up networked robots: go to the initial positions (barrier on), at most ``setup_s``."""
+        goals = tuple((float(x), float(y)) for x, y, _ in poses)
+        loop.set_params(goals=goals)
+        loop.set_behaviour("goto")
+        pacer = RealTimePacer(loop.config.dt)
+        deadline = time.monotonic() + self.settings.setup_s
+        while time.monotonic() < deadline and not self._end_job.is_set():
+            frame = loop.tick()
+            if np.all(np.hypot(*(frame.poses[:, :2] - np.asarray(goals)).T) < 0.05):
+                return "robots at their initial positions"
+            pacer.wait()
+        return "robots did not all reach their initial positions in time"
+
+    def _exports(self, folder: Path) -> None:
+        """CSV and HTML replay from the job's recording (problems are noted in run.json, never raised)."""
+        from swarmdeck.console.recording.export_csv import export_csv
+        from swarmdeck.console.recording.export_html import export_html
+        from swarmdeck.console.recording.reader import RecordingError, open_recording
+
+        try:
+            with open_recording(folder / "recording.mcap") as rec:
+                if rec.empty:
+                    return
+                export_csv(rec, folder)
+                export_html(rec, folder / "replay.html")
+        except (RecordingError, OSError, ValueError) as exc:
+            run = folder / "run.json"
+            data = json.loads(run.read_text()) if run.is_file() else {}
+            data["export_error"] = f"{type(exc).__name__}: {exc}"
+            _write_json(run, data)
+
+
+def _write_json(path: Path, data: dict[str, Any]) -> None:
+    tmp = path.with_suffix(".tmp")
+    tmp.write_text(json.dumps(data, indent=1))
+    tmp.replace(path)

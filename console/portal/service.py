@@ -1,0 +1,503 @@
+"""The portal's rules, in one place: submissions, who sees what, the queue, operator actions, the arena's latch.
+
+The HTTP routes (:mod:`.api`, and the pages) are thin: each calls one method
+of :class:`PortalService` with the signed-in :class:`~.accounts.User` and turns
+its :class:`~.errors.PortalError` into a JSON error. The verification workers
+(:mod:`.workers`) and the arena runner (:mod:`.runner`) move jobs through the
+state machine of :mod:`.db` with the ``claim_*``/``finish_*`` methods here.
+
+Rules:
+
+* **Visibility**: a researcher sees, cancels and downloads only their own jobs;
+  any other job id is :class:`~.errors.NotFound` (404), exactly as a job that
+  does not exist. Operators see every job.
+* **Submission** (:meth:`PortalService.submit`): the manifest and upload checks
+  of :mod:`.submission`; the job's files go to ``DIR/jobs/<id>/`` under names
+  the portal chooses (``script.py``, or ``src/<checked member names>``); the job
+  starts ``queued``.
+* **Approval**: verified jobs go ``approved → waiting`` at once unless an
+  operator switched manual approval on (:meth:`PortalService.set_manual_approval`);
+  then an operator approves each (``approved → waiting``). Switching it off
+  releases the approved jobs.
+* **Queue order**: ``waiting`` jobs run by ``priority`` then id;
+  :meth:`PortalService.move` puts a job at a position.
+* **Barrier bypass**: a run goes without the barrier only if verification
+  said "may bypass", the manifest asked for it (``no_barrier``) and no operator
+  forbade it (:meth:`PortalService.forbid_barrier`) — :meth:`PortalService.bypass_allowed`.
+* **Emergency stop** (:meth:`PortalService.emergency_stop`): the arena runner
+  stops the robots now and ends the running job (``cancelled``, reason "emergency
+  stop"); the arena stays stopped (no job starts) until an operator releases it
+  (:meth:`PortalService.release_arena`). The latch is in the database, so it
+  survives a restart.
+* Every operator action is in the audit log, committed with the change itself.
+
+Result files (:meth:`PortalService.files`): a fixed list of names
+(:data:`RESULT_FILES`) under the job's folder; a download names one of them,
+never a path.
+"""
+from __future__ import annotations
+
+import json
+import shutil
+import threading
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Protocol
+
+from swarmdeck.console.portal.accounts import Accounts, User
+from swarmdeck.console.portal.db import ACTIVE, FINAL, Database, TransitionConflict
+from swarmdeck.console.portal.errors import BadInput, Conflict, Forbidden, NotFound
+from swarmdeck.console.portal.submission import Limits, Manifest, Upload, check_upload, parse_manifest
+
+#: result files a job may have, name -> what it is (the pages engineer adds "video.mp4" here).
+RESULT_FILES: dict[str, str] = {
+    "recording.mcap": "the run's MCAP recording (swarmdeck play / Foxglove)",
+    "recording.partial.mcap": "the recording as the interrupted run left it (before recovery)",
+    "robots.csv": "poses and commands per robot per frame (CSV)",
+    "frames.csv": "one row per frame (CSV)",
+    "replay.html": "standalone 3D replay (open in a browser)",
+    "video.mp4": "top-down video of the run",
+    "script.log": "the script's output (stdout and stderr)",
+    "report.json": "the verification report (JSON)",
+    "report.html": "the verification report (HTML)",
+    "run.json": "how the run ended (JSON)",
+    "manifest.json": "the manifest as accepted",
+}
+BYPASS_VERDICT = "accepted, may bypass the barrier"
+
+
+class ArenaControl(Protocol):
+    """What the service asks of the arena runner (:class:`~.runner.ArenaRunner`)."""
+
+    def emergency_stop(self) -> None: ...
+
+    def cancel(self, job_id: int) -> None: ...
+
+
+@dataclass(frozen=True)
+class PortalConfig:
+    """The service's settings.
+
+    Attributes:
+        data: the data folder (database, ``jobs/<id>/``).
+        limits: what a submission may be (fleet size, maximum duration, upload sizes).
+        verify_runs: verification runs per job (each without and with the barrier).
+        verify_seed: base seed of verification (job i uses ``verify_seed + i``).
+        tick_budget_s: the script's per-tick compute budget, wall s (verification and arena).
+        grace_s: the arena run's time limit is the declared duration plus this, s.
+        trusted: run scripts unconfined where this machine cannot confine them.
+    """
+
+    data: Path
+    limits: Limits = field(default_factory=Limits)
+    verify_runs: int = 4
+    verify_seed: int = 0
+    tick_budget_s: float = 1.0
+    grace_s: float = 15.0
+    trusted: bool = False
+
+
+def _job_dict(row: Any, position: int | None = None) -> dict[str, Any]:
+    poses = row["initial_poses"]
+    return {
+        "id": row["id"], "name": row["name"], "owner": row["owner"], "state": row["state"],
+        "held_from": row["held_from"], "kind": row["kind"], "script": row["script_name"], "entry": row["entry"],
+        "robots": row["n_robots"], "duration": row["duration"],
+        "initial_poses": None if poses is None else json.loads(poses),
+        "request_no_barrier": bool(row["request_no_barrier"]), "barrier_forbidden": bool(row["barrier_forbidden"]),
+        "verdict": row["verdict"], "safety_score": row["safety_score"],
+        "bypass": None if row["bypass"] is None else bool(row["bypass"]), "reason": row["reason"],
+        "position": position, "created": row["created"], "updated": row["updated"], "started": row["started"],
+        "ended": row["ended"],
+    }
+
+
+JOB_SELECT = "SELECT j.*, u.name AS owner FROM jobs j JOIN users u ON u.id = j.user_id"
+
+
+class PortalService:
+    """The rules (module docstring) over the :class:`Database` and :class:`Accounts`."""
+
+    def __init__(self, config: PortalConfig, *, db: Database | None = None, accounts: Accounts | None = None) -> None:
+        self.config = config
+        self.data = Path(config.data)
+        self.db = db if db is not None else Database(self.data)
+        self.accounts = accounts if accounts is not None else Accounts(self.db)
+        (self.data / "jobs").mkdir(parents=True, exist_ok=True)
+        self.changed = threading.Condition()  # notified after every change workers/runner/live views wait on
+        self.arena: ArenaControl | None = None
+
+    # ------------------------------------------------------------------ helpers
+    def job_dir(self, job_id: int) -> Path:
+        return self.data / "jobs" / str(int(job_id))
+
+    def notify(self) -> None:
+        with self.changed:
+            self.changed.notify_all()
+
+    def wait_for_change(self, timeout: float) -> None:
+        """Block until something changed (or ``timeout`` s passed; other processes' changes are seen by polling)."""
+        with self.changed:
+            self.changed.wait(timeout)
+
+    def _row(self, job_id: int) -> Any:
+        return self.db.query_one(f"{JOB_SELECT} WHERE j.id = ?", (int(job_id),))
+
+    def _visible_row(self, user: User, job_id: int) -> Any:
+        row = self._row(job_id)
+        if row is None or (not user.is_operator and row["user_id"] != user.id):
+            raise NotFound(f"no job {job_id}", "job")
+        return row
+
+    def _queue_positions(self) -> dict[int, int]:
+        rows = self.db.query("SELECT id FROM jobs WHERE state = 'waiting' ORDER BY priority, id")
+        return {int(r["id"]): k for k, r in enumerate(rows)}
+
+    @staticmethod
+    def _require_operator(user: User) -> None:
+        if not user.is_operator:
+            raise Forbidden("this needs an operator account", "Authorization")
+
+    # ------------------------------------------------------------------ researchers
+    def submit(self, user: User, filename: str | None, data: bytes, manifest: Any = None) -> dict[str, Any]:
+        """Check and store a submission; the new job (``queued``). ``manifest``: JSON text or object, or None
+        to use ``manifest.json`` from inside a ``.zip``."""
+        upload = check_upload(filename, data, self.config.limits)
+        if manifest is None or (isinstance(manifest, str) and not manifest.strip()):
+            if upload.manifest is None:
+                raise BadInput("send a manifest (name, robots, duration) with the script", "manifest")
+            manifest = upload.manifest
+        m = parse_manifest(manifest, self.config.limits)
+        entry = self._entry(m, upload)
+        now = time.time()
+        with self.db.transaction() as tx:
+            top = tx.execute("SELECT COALESCE(MAX(priority), 0) FROM jobs").fetchone()[0]
+            job_id = tx.execute(
+                "INSERT INTO jobs (user_id, name, state, kind, script_name, entry, n_robots, duration, initial_poses, "
+                "request_no_barrier, priority, created, updated) VALUES (?, ?, 'queued', ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)",
+                (user.id, m.name, upload.kind, upload.display_name, entry, m.robots, m.duration,
+                 None if m.initial_poses is None else json.dumps(m.initial_poses), int(m.no_barrier), top + 1,
+                 now, now)).lastrowid
+            self._store(int(job_id), upload, m)  # inside the transaction: no job row without its files
+        self.notify()
+        return self.job(user, int(job_id))
+
+    @staticmethod
+    def _entry(m: Manifest, upload: Upload) -> str:
+        if upload.kind == "py":
+            return "script.py"
+        entry = m.entry or upload.entry
+        if entry not in upload.files:
+            raise BadInput(f"the entry {entry!r} is not in the archive", "entry")
+        return entry
+
+    def _store(self, job_id: int, upload: Upload, m: Manifest) -> None:
+        folder = self.job_dir(job_id)
+        if folder.exists():  # a leftover of a transaction that rolled back
+            shutil.rmtree(folder)
+        folder.mkdir(parents=True)
+        if upload.kind == "py":
+            (folder / "script.py").write_bytes(upload.files["script.py"])
+        else:
+            src = (folder / "src").resolve()
+            for name, content in upload.files.items():
+                target = (src / name).resolve()
+                if not target.is_relative_to(src):  # checked names cannot escape; belt and braces
+                    raise BadInput(f"archive member {name!r} escapes the job's folder", "script")
+                target.parent.mkdir(parents=True, exist_ok=True)
+                target.write_bytes(content)
+        (folder / "manifest.json").write_text(json.dumps(m.to_dict(), indent=2))
+
+    def script_path(self, job: dict[str, Any]) -> Path:
+        """The file the sandbox runs for ``job``."""
+        folder = self.job_dir(job["id"])
+        return folder / "script.py" if job["kind"] == "py" else folder / "src" / job["entry"]
+
+    def jobs(self, user: User, *, mine: bool = False) -> list[dict[str, Any]]:
+        """A researcher's own jobs; an operator's view of all jobs (``mine``: only their own). Newest first."""
+        positions = self._queue_positions()
+        if user.is_operator and not mine:
+            rows = self.db.query(f"{JOB_SELECT} ORDER BY j.id DESC")
+        else:
+            rows = self.db.query(f"{JOB_SELECT} WHERE j.user_id = ? ORDER BY j.id DESC", (user.id,))
+        return [_job_dict(r, positions.get(int(r["id"]))) for r in rows]
+
+    def job(self, user: User, job_id: int) -> dict[str, Any]:
+        row = self._visible_row(user, job_id)
+        return _job_dict(row, self._queue_positions().get(int(row["id"])))
+
+    def cancel(self, user: User, job_id: int) -> dict[str, Any]:
+        """Cancel a job that has not ended (its owner, or an operator); 409 if it has ended."""
+        row = self._visible_row(user, job_id)
+        with self.db.transaction() as tx:
+            try:
+                self.db.transition(tx, int(job_id), "cancelled", ended=time.time(),
+                                   reason=f"cancelled by {user.name}")
+            except TransitionConflict as exc:
+                raise Conflict(str(exc), "job") from None
+            if user.is_operator and row["user_id"] != user.id:
+                self.accounts.audit(user, "cancel", int(job_id), tx=tx)
+        if row["state"] in ACTIVE and self.arena is not None:
+            self.arena.cancel(int(job_id))
+        self.notify()
+        return self.job(user, job_id)
+
+    def report(self, user: User, job_id: int) -> dict[str, Any]:
+        """The verification report (JSON) of a job; 404 until verification has finished."""
+        self._visible_row(user, job_id)
+        path = self.job_dir(job_id) / "report.json"
+        if not path.is_file():
+            raise NotFound(f"job {job_id} has no verification report yet", "job")
+        return json.loads(path.read_text())
+
+    def files(self, user: User, job_id: int) -> list[dict[str, Any]]:
+        """The job's result files that exist: ``{"name", "bytes", "what"}``."""
+        self._visible_row(user, job_id)
+        folder = self.job_dir(job_id)
+        return [{"name": name, "bytes": (folder / name).stat().st_size, "what": what}
+                for name, what in RESULT_FILES.items() if (folder / name).is_file()]
+
+    def file_path(self, user: User, job_id: int, name: str) -> Path:
+        """The path of result file ``name`` of the job (one of :data:`RESULT_FILES`); 404 otherwise."""
+        self._visible_row(user, job_id)
+        if name not in RESULT_FILES:
+            raise NotFound(f"no result file called {name[:100]!r}", "name")
+        path = self.job_dir(job_id) / name
+        if not path.is_file():
+            raise NotFound(f"job {job_id} has no {name} (yet)", "name")
+        return path
+
+    # ------------------------------------------------------------------ operators
+    def _operator_transition(self, user: User, job_id: int, target: str, action: str,
+                             sources: tuple[str, ...] | None = None, detail: str = "", **columns: Any) -> dict:
+        self._require_operator(user)
+        self._visible_row(user, job_id)
+        with self.db.transaction() as tx:
+            try:
+                self.db.transition(tx, int(job_id), target, sources=sources, **columns)
+            except TransitionConflict as exc:
+                raise Conflict(str(exc), "job") from None
+            self.accounts.audit(user, action, int(job_id), detail, tx=tx)
+        self.notify()
+        return self.job(user, job_id)
+
+    def approve(self, user: User, job_id: int) -> dict[str, Any]:
+        """Manual approval: ``approved → waiting``."""
+        return self._operator_transition(user, job_id, "waiting", "approve", sources=("approved",))
+
+    def hold(self, user: User, job_id: int) -> dict[str, Any]:
+        """Hold a queued, approved or waiting job (it keeps its place; :meth:`release` puts it back)."""
+        self._require_operator(user)
+        row = self._visible_row(user, job_id)
+        return self._operator_transition(user, job_id, "held", "hold", held_from=row["state"])
+
+    def release(self, user: User, job_id: int) -> dict[str, Any]:
+        """Release a held job to the state it was held in."""
+        self._require_operator(user)
+        row = self._visible_row(user, job_id)
+        if row["state"] != "held":
+            raise Conflict(f"job {job_id} is {row['state']}, not held", "job")
+        back = row["held_from"] or "queued"
+        return self._operator_transition(user, job_id, back, "release", sources=("held",), held_from=None)
+
+    def operator_cancel(self, user: User, job_id: int) -> dict[str, Any]:
+        self._require_operator(user)
+        return self.cancel(user, job_id)
+
+    def move(self, user: User, job_id: int, position: int) -> dict[str, Any]:
+        """Put a waiting job at ``position`` (0: next) of the arena queue."""
+        self._require_operator(user)
+        self._visible_row(user, job_id)
+        if isinstance(position, bool) or not isinstance(position, int) or position < 0:
+            raise BadInput(f"position must be an integer >= 0, got {position!r}", "position")
+        with self.db.transaction() as tx:
+            ids = [int(r["id"]) for r in tx.execute("SELECT id FROM jobs WHERE state = 'waiting' "
+                                                    "ORDER BY priority, id").fetchall()]
+            if int(job_id) not in ids:
+                state = tx.execute("SELECT state FROM jobs WHERE id = ?", (job_id,)).fetchone()["state"]
+                raise Conflict(f"job {job_id} is {state}: only waiting jobs can be reordered", "job")
+            ids.remove(int(job_id))
+            ids.insert(min(position, len(ids)), int(job_id))
+            base = tx.execute("SELECT COALESCE(MIN(priority), 0) FROM jobs WHERE state = 'waiting'").fetchone()[0]
+            for k, jid in enumerate(ids):
+                tx.execute("UPDATE jobs SET priority = ? WHERE id = ?", (base + k * 1e-3, jid))
+            self.accounts.audit(user, "move", int(job_id), f"to position {min(position, len(ids) - 1)}", tx=tx)
+        self.notify()
+        return self.job(user, job_id)
+
+    def forbid_barrier(self, user: User, job_id: int, forbid: bool) -> dict[str, Any]:
+        """Forbid (or allow again) running this job without the barrier; refused once it is on the arena."""
+        self._require_operator(user)
+        self._visible_row(user, job_id)
+        if not isinstance(forbid, bool):
+            raise BadInput(f"forbid must be true or false, got {forbid!r}", "forbid")
+        with self.db.transaction() as tx:
+            cur = tx.execute("UPDATE jobs SET barrier_forbidden = ?, updated = ? WHERE id = ? AND state NOT IN "
+                             f"({', '.join('?' * len(ACTIVE + FINAL))})",
+                             (int(forbid), time.time(), job_id, *ACTIVE, *FINAL))
+            if cur.rowcount != 1:
+                state = tx.execute("SELECT state FROM jobs WHERE id = ?", (job_id,)).fetchone()["state"]
+                raise Conflict(f"job {job_id} is {state}: the barrier can no longer be changed", "job")
+            self.accounts.audit(user, "forbid barrier bypass" if forbid else "allow barrier bypass", int(job_id), tx=tx)
+        return self.job(user, job_id)
+
+    @property
+    def manual_approval(self) -> bool:
+        return self.db.setting("manual_approval", "0") == "1"
+
+    def set_manual_approval(self, user: User, on: bool) -> dict[str, Any]:
+        """Switch manual approval; switching it off sends every approved job to the arena queue."""
+        self._require_operator(user)
+        if not isinstance(on, bool):
+            raise BadInput(f"manual_approval must be true or false, got {on!r}", "manual_approval")
+        with self.db.transaction() as tx:
+            self.db.set_setting(tx, "manual_approval", "1" if on else "0")
+            if not on:
+                tx.execute("UPDATE jobs SET state = 'waiting', updated = ? WHERE state = 'approved'", (time.time(),))
+            self.accounts.audit(user, "manual approval on" if on else "manual approval off", tx=tx)
+        self.notify()
+        return self.settings()
+
+    def settings(self) -> dict[str, Any]:
+        return {"manual_approval": self.manual_approval}
+
+    @property
+    def arena_stopped(self) -> bool:
+        return self.db.setting("arena_stopped", "0") == "1"
+
+    def emergency_stop(self, user: User) -> dict[str, Any]:
+        """Stop the robots now, end the running job, latch the arena stopped (see the module docstring)."""
+        self._require_operator(user)
+        with self.db.transaction() as tx:
+            self.db.set_setting(tx, "arena_stopped", "1")
+            active = tx.execute(f"SELECT id FROM jobs WHERE state IN ({', '.join('?' * len(ACTIVE))})",
+                                ACTIVE).fetchall()
+            for r in active:
+                self.db.transition(tx, int(r["id"]), "cancelled", ended=time.time(),
+                                   reason=f"emergency stop by operator {user.name}")
+            self.accounts.audit(user, "emergency stop", None if not active else int(active[0]["id"]), tx=tx)
+        if self.arena is not None:
+            self.arena.emergency_stop()
+        self.notify()
+        return self.arena_state(user)
+
+    def release_arena(self, user: User) -> dict[str, Any]:
+        """Release the emergency stop: the arena takes the next waiting job."""
+        self._require_operator(user)
+        with self.db.transaction() as tx:
+            if self.db.setting("arena_stopped", "0") != "1":
+                raise Conflict("the arena is not stopped", "arena")
+            self.db.set_setting(tx, "arena_stopped", "0")
+            self.accounts.audit(user, "release emergency stop", tx=tx)
+        self.notify()
+        return self.arena_state(user)
+
+    def arena_state(self, user: User) -> dict[str, Any]:
+        """``{"stopped", "manual_approval", "running": job|None, "queue": [waiting jobs in order]}``."""
+        self._require_operator(user)
+        running = self.db.query_one(f"{JOB_SELECT} WHERE j.state IN ('setting up', 'running') ORDER BY j.id LIMIT 1")
+        queue = self.db.query(f"{JOB_SELECT} WHERE j.state = 'waiting' ORDER BY j.priority, j.id")
+        return {"stopped": self.arena_stopped, "manual_approval": self.manual_approval,
+                "running": None if running is None else _job_dict(running),
+                "queue": [_job_dict(r, k) for k, r in enumerate(queue)]}
+
+    def audit_log(self, user: User, limit: int = 200) -> list[dict[str, Any]]:
+        self._require_operator(user)
+        return self.accounts.audit_log(limit)
+
+    # ------------------------------------------------------------------ workers and runner
+    def claim_for_verification(self) -> dict[str, Any] | None:
+        """The oldest queued job, now ``verifying`` (None when there is none)."""
+        with self.db.transaction() as tx:
+            row = tx.execute("SELECT id FROM jobs WHERE state = 'queued' ORDER BY id LIMIT 1").fetchone()
+            if row is None:
+                return None
+            self.db.transition(tx, int(row["id"]), "verifying", sources=("queued",))
+        self.notify()
+        return _job_dict(self._row(int(row["id"])))
+
+    def finish_verification(self, job_id: int, verdict: str, safety_score: float | None,
+                            reasons: list[str]) -> None:
+        """Record the verdict: ``rejected``, or ``approved`` (then ``waiting`` unless manual approval is on).
+        A job cancelled meanwhile stays cancelled."""
+        accepted = verdict != "rejected"
+        with self.db.transaction() as tx:
+            try:
+                self.db.transition(tx, job_id, "approved" if accepted else "rejected", sources=("verifying",),
+                                   verdict=verdict, safety_score=safety_score,
+                                   reason=None if accepted else "; ".join(reasons)[:4000],
+                                   ended=None if accepted else time.time())
+            except TransitionConflict:
+                return
+            if accepted and self.db.setting("manual_approval", "0") != "1":
+                self.db.transition(tx, job_id, "waiting", sources=("approved",))
+        self.notify()
+
+    def fail_verification(self, job_id: int, reason: str) -> None:
+        """Verification could not run (infrastructure): the job is ``rejected`` with the reason."""
+        self.finish_verification(job_id, "rejected", None, [f"verification could not run: {reason}"])
+
+    def verifying_cancelled(self, job_id: int) -> bool:
+        row = self.db.query_one("SELECT state FROM jobs WHERE id = ?", (job_id,))
+        return row is None or row["state"] != "verifying"
+
+    def bypass_allowed(self, job: dict[str, Any]) -> bool:
+        return job["verdict"] == BYPASS_VERDICT and job["request_no_barrier"] and not job["barrier_forbidden"]
+
+    def claim_for_arena(self) -> dict[str, Any] | None:
+        """The first waiting job, now ``setting up`` — None when there is none or the arena is stopped."""
+        with self.db.transaction() as tx:
+            if self.db.setting("arena_stopped", "0") == "1":
+                return None
+            row = tx.execute("SELECT id FROM jobs WHERE state = 'waiting' ORDER BY priority, id LIMIT 1").fetchone()
+            if row is None:
+                return None
+            job = _job_dict(tx.execute(f"{JOB_SELECT} WHERE j.id = ?", (row["id"],)).fetchone())
+            bypass = self.bypass_allowed(job)
+            self.db.transition(tx, int(row["id"]), "setting up", sources=("waiting",), started=time.time(),
+                               bypass=int(bypass))
+        self.notify()
+        return _job_dict(self._row(int(row["id"])))
+
+    def mark_running(self, job_id: int) -> bool:
+        """``setting up → running``; False if the job was cancelled (or e-stopped) meanwhile."""
+        with self.db.transaction() as tx:
+            try:
+                self.db.transition(tx, job_id, "running", sources=("setting up",))
+            except TransitionConflict:
+                return False
+        self.notify()
+        return True
+
+    def finish_run(self, job_id: int, state: str, reason: str | None) -> str:
+        """End a run (``done``/``failed``/``cancelled``) unless it already ended (cancelled, e-stopped):
+        the job's final state."""
+        with self.db.transaction() as tx:
+            try:
+                self.db.transition(tx, job_id, state, sources=ACTIVE, ended=time.time(), reason=reason)
+            except TransitionConflict as exc:
+                return str(exc.state)
+        self.notify()
+        return state
+
+    def job_state(self, job_id: int) -> str | None:
+        row = self.db.query_one("SELECT state FROM jobs WHERE id = ?", (int(job_id),))
+        return None if row is None else str(row["state"])
+
+    def recover_on_start(self) -> list[int]:
+        """After a restart: jobs found on the arena become ``interrupted`` (their ids are returned, for the
+        runner to recover their recordings); jobs found ``verifying`` go back to ``queued``."""
+        with self.db.transaction() as tx:
+            ids = [int(r["id"]) for r in tx.execute(
+                f"SELECT id FROM jobs WHERE state IN ({', '.join('?' * len(ACTIVE))})", ACTIVE).fetchall()]
+            for jid in ids:
+                self.db.transition(tx, jid, "interrupted", sources=ACTIVE, ended=time.time(),
+                                   reason="the server stopped during the run (partial recording kept)")
+            for r in tx.execute("SELECT id FROM jobs WHERE state = 'verifying'").fetchall():
+                self.db.transition(tx, int(r["id"]), "queued", sources=("verifying",))
+        return ids
+
+    def close(self) -> None:
+        self.db.close()
+

@@ -1,0 +1,245 @@
+"""What a researcher submits: the experiment manifest and the script upload, checked before anything is stored.
+
+**Manifest** (JSON object; :func:`parse_manifest`): ``name`` (1-100 printable
+characters), ``robots`` (integer N, 1 … the arena's fleet), ``duration``
+(seconds, > 0 and at most the configured maximum), optional ``initial_poses``
+(N rows ``[x, y, θ]`` in m, rad: checked by ``devices.simulator.check_poses``,
+inside the arena and pairwise at least ``MIN_SEPARATION`` apart), optional
+``no_barrier`` (bool: the request to run without the barrier, granted only if
+verification allows it and no operator forbids it), optional ``entry`` (the
+script inside a ``.zip``). Unknown keys are refused. Every error is a
+:class:`~swarmdeck.console.portal.errors.BadInput` naming the key.
+
+**Upload** (:func:`check_upload`): a ``.py`` (UTF-8 text, at most
+``verification.MAX_SCRIPT_BYTES``) or a ``.zip`` holding the script and,
+optionally, ``manifest.json``. Archives are read in memory, never extracted by
+name: members with absolute names, ``..``, backslashes, drive letters, names
+outside ``[A-Za-z0-9_.-]`` per component or starting with a dot, symbolic links,
+duplicates, more than ``max_members`` members, a member larger than
+``max_member_bytes`` (checked on the bytes actually inflated, not the size the
+archive claims) or more than ``max_total_bytes`` in all are refused. The
+uploaded file's own name is used only for its suffix and is displayed
+sanitised; the job's files live under names the portal chooses.
+
+Multi-file archives: the sandbox runs single files today, so an archive must
+hold exactly one ``.py`` file (its entry) until the directory sandbox lands.
+"""
+from __future__ import annotations
+
+import io
+import json
+import math
+import re
+import stat
+import zipfile
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+from scipy.spatial.distance import pdist
+
+from swarmdeck.console.jobs.verification import MAX_SCRIPT_BYTES
+from swarmdeck.console.portal.errors import BadInput, TooLarge, Unsupported
+from swarmdeck.core.bounds import DEFAULT_BOUNDS, Bounds
+from swarmdeck.devices.simulator import check_poses
+
+MANIFEST_KEYS = ("name", "robots", "duration", "initial_poses", "no_barrier", "entry")
+MIN_SEPARATION = 0.23  # m between initial centres: the look-ahead points start outside D_s (devices.initial_conditions)
+COMPONENT_RE = re.compile(r"^[A-Za-z0-9_][A-Za-z0-9_.-]{0,99}$")
+MANIFEST_NAME = "manifest.json"
+
+
+@dataclass(frozen=True)
+class Limits:
+    """What a submission may be. Sizes in bytes, times in s."""
+
+    fleet: int = 12
+    bounds: Bounds = DEFAULT_BOUNDS
+    max_duration: float = 600.0
+    max_upload_bytes: int = 4 << 20
+    max_members: int = 64
+    max_member_bytes: int = MAX_SCRIPT_BYTES
+    max_total_bytes: int = 4 << 20
+
+
+@dataclass(frozen=True)
+class Manifest:
+    name: str
+    robots: int
+    duration: float
+    initial_poses: tuple[tuple[float, float, float], ...] | None = None
+    no_barrier: bool = False
+    entry: str | None = None
+
+    def to_dict(self) -> dict[str, Any]:
+        d: dict[str, Any] = {"name": self.name, "robots": self.robots, "duration": self.duration,
+                             "no_barrier": self.no_barrier}
+        if self.initial_poses is not None:
+            d["initial_poses"] = [list(p) for p in self.initial_poses]
+        if self.entry is not None:
+            d["entry"] = self.entry
+        return d
+
+
+@dataclass(frozen=True)
+class Upload:
+    """A checked upload: ``kind`` "py" or "zip", ``files`` relative name -> bytes, ``entry`` the script to run."""
+
+    kind: str
+    display_name: str
+    files: dict[str, bytes] = field(default_factory=dict)
+    entry: str = "script.py"
+    manifest: dict[str, Any] | None = None  # manifest.json from inside an archive, if any
+
+
+def display_name(filename: str | None) -> str:
+    """The uploaded name for display only: its last component, characters outside ``[A-Za-z0-9_.-]`` replaced."""
+    base = re.split(r"[\\/]", filename or "")[-1]
+    clean = re.sub(r"[^A-Za-z0-9_.-]", "_", base)[-100:].lstrip(".")
+    return clean or "script"
+
+
+def parse_manifest(data: Any, limits: Limits) -> Manifest:
+    """The manifest from a JSON text (or an already parsed object); :class:`BadInput` naming the key."""
+    if isinstance(data, (str, bytes)):
+        try:
+            data = json.loads(data)
+        except (ValueError, UnicodeDecodeError) as exc:
+            raise BadInput(f"the manifest is not valid JSON: {exc}", "manifest") from None
+    if not isinstance(data, dict):
+        raise BadInput(f"the manifest must be a JSON object, got {type(data).__name__}", "manifest")
+    unknown = sorted(set(data) - set(MANIFEST_KEYS))
+    if unknown:
+        raise BadInput(f"unknown manifest key {unknown[0]!r} (known: {', '.join(MANIFEST_KEYS)})", unknown[0])
+    for key in ("name", "robots", "duration"):
+        if key not in data:
+            raise BadInput(f"the manifest needs {key!r}", key)
+    name = data["name"]
+    if not isinstance(name, str) or not 1 <= len(name.strip()) <= 100 or not name.isprintable():
+        raise BadInput("name must be 1-100 printable characters", "name")
+    robots = data["robots"]
+    if isinstance(robots, bool) or not isinstance(robots, int):
+        raise BadInput(f"robots must be an integer, got {robots!r}", "robots")
+    if not 1 <= robots <= limits.fleet:
+        raise BadInput(f"robots must be between 1 and {limits.fleet} (the robots this arena has), got {robots}",
+                       "robots")
+    duration = data["duration"]
+    if isinstance(duration, bool) or not isinstance(duration, (int, float)) or not math.isfinite(duration):
+        raise BadInput(f"duration must be a number of seconds, got {duration!r}", "duration")
+    if not 0 < duration <= limits.max_duration:
+        raise BadInput(f"duration must be > 0 and at most {limits.max_duration:g} s, got {duration:g}", "duration")
+    no_barrier = data.get("no_barrier", False)
+    if not isinstance(no_barrier, bool):
+        raise BadInput(f"no_barrier must be true or false, got {no_barrier!r}", "no_barrier")
+    entry = data.get("entry")
+    if entry is not None and (not isinstance(entry, str) or not _safe_name(entry) or not entry.endswith(".py")):
+        raise BadInput("entry must be the relative name of a .py file in the archive", "entry")
+    poses = data.get("initial_poses")
+    checked = None if poses is None else _initial_poses(poses, robots, limits.bounds)
+    return Manifest(name.strip(), robots, float(duration), checked, no_barrier, entry)
+
+
+def _initial_poses(poses: Any, n: int, bounds: Bounds) -> tuple[tuple[float, float, float], ...]:
+    try:
+        arr = np.asarray(poses, dtype=float)  # JSON has no int/float distinction: 0 means 0.0 here
+    except (TypeError, ValueError):
+        raise BadInput("initial_poses must be a list of [x, y, theta] number triples", "initial_poses") from None
+    try:
+        arr = check_poses(arr, "initial_poses", n)
+    except ValueError as exc:
+        raise BadInput(str(exc), "initial_poses") from None
+    x0, x1, y0, y1 = bounds
+    outside = np.flatnonzero((arr[:, 0] < x0) | (arr[:, 0] > x1) | (arr[:, 1] < y0) | (arr[:, 1] > y1))
+    if len(outside):
+        raise BadInput(f"initial pose {int(outside[0])} is outside the arena {tuple(bounds)}", "initial_poses")
+    if n >= 2 and pdist(arr[:, :2]).min() < MIN_SEPARATION:
+        raise BadInput(f"initial positions must be at least {MIN_SEPARATION} m apart", "initial_poses")
+    return tuple((float(x), float(y), float(t)) for x, y, t in arr)
+
+
+def _safe_name(name: str) -> bool:
+    parts = name.split("/")
+    return all(COMPONENT_RE.match(p) for p in parts) and len(parts) <= 8
+
+
+def check_upload(filename: str | None, data: bytes, limits: Limits) -> Upload:
+    """The checked upload (see the module docstring); BadInput / TooLarge / Unsupported naming ``script``."""
+    shown = display_name(filename)
+    if len(data) > limits.max_upload_bytes:
+        raise TooLarge(f"the upload is {len(data)} bytes, more than the limit of {limits.max_upload_bytes}", "script")
+    suffix = shown.lower().rsplit(".", 1)[-1] if "." in shown else ""
+    if suffix == "py":
+        if len(data) > MAX_SCRIPT_BYTES:
+            raise TooLarge(f"a script may be at most {MAX_SCRIPT_BYTES} bytes, this one is {len(data)}", "script")
+        _text(data, "script")
+        return Upload("py", shown, {"script.py": data}, "script.py")
+    if suffix == "zip":
+        return _check_zip(shown, data, limits)
+    raise Unsupported("upload a Python script (.py) or a .zip archive holding one", "script")
+
+
+def _text(data: bytes, field_name: str) -> str:
+    if b"\x00" in data:
+        raise BadInput("the script is not text (it holds NUL bytes)", field_name)
+    try:
+        return data.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        raise BadInput(f"the script is not UTF-8 text: {exc}", field_name) from None
+
+
+def _check_zip(shown: str, data: bytes, limits: Limits) -> Upload:
+    try:
+        archive = zipfile.ZipFile(io.BytesIO(data))
+        infos = archive.infolist()
+    except (zipfile.BadZipFile, ValueError, EOFError) as exc:
+        raise BadInput(f"the archive cannot be read as a zip file: {exc}", "script") from None
+    if len(infos) > limits.max_members:
+        raise TooLarge(f"the archive has {len(infos)} members, more than {limits.max_members}", "script")
+    files: dict[str, bytes] = {}
+    total = 0
+    for info in infos:
+        name = info.filename
+        if info.is_dir():
+            continue
+        if (name.startswith("/") or "\\" in name or ":" in name or any(p in ("", ".", "..") for p in name.split("/"))
+                or not _safe_name(name)):
+            raise BadInput(f"archive member {name[:120]!r}: only plain relative names are allowed "
+                           "(no absolute paths, '..', backslashes or unusual characters)", "script")
+        mode = info.external_attr >> 16
+        if stat.S_IFMT(mode) not in (0, stat.S_IFREG):  # 0: no type recorded (Windows tools, zipfile.writestr)
+            raise BadInput(f"archive member {name!r} is a link or a special file", "script")
+        if name in files:
+            raise BadInput(f"archive member {name!r} appears twice", "script")
+        if info.file_size > limits.max_member_bytes:
+            raise TooLarge(f"archive member {name!r} is {info.file_size} bytes, more than {limits.max_member_bytes}",
+                           "script")
+        try:
+            with archive.open(info) as member:
+                content = member.read(limits.max_member_bytes + 1)
+        except (zipfile.BadZipFile, RuntimeError, OSError, NotImplementedError, EOFError) as exc:
+            raise BadInput(f"archive member {name!r} cannot be read: {exc}", "script") from None
+        if len(content) > limits.max_member_bytes:
+            raise TooLarge(f"archive member {name!r} inflates to more than {limits.max_member_bytes} bytes", "script")
+        total += len(content)
+        if total > limits.max_total_bytes:
+            raise TooLarge(f"the archive inflates to more than {limits.max_total_bytes} bytes", "script")
+        files[name] = content
+    manifest = None
+    if MANIFEST_NAME in files:
+        try:
+            manifest = json.loads(files.pop(MANIFEST_NAME).decode("utf-8"))
+        except (ValueError, UnicodeDecodeError) as exc:
+            raise BadInput(f"{MANIFEST_NAME} in the archive is not valid JSON: {exc}", "manifest") from None
+    scripts = sorted(n for n in files if n.endswith(".py"))
+    if not scripts:
+        raise BadInput("the archive holds no .py script", "script")
+    entry = manifest.get("entry") if isinstance(manifest, dict) else None
+    entry = entry if isinstance(entry, str) else ("main.py" if "main.py" in files else scripts[0])
+    if entry not in files:
+        raise BadInput(f"the entry {entry!r} is not in the archive", "entry")
+    if len(scripts) > 1:
+        raise BadInput("this server runs single-file scripts: the archive must hold exactly one .py file "
+                       f"(it has {len(scripts)})", "script")
+    for name in scripts:
+        _text(files[name], "script")
+    return Upload("zip", shown, files, entry, manifest)

@@ -1,0 +1,100 @@
+"""Verification workers: queued jobs → ``verifying`` → ``rejected`` | ``approved`` (then ``waiting``).
+
+One thread (:class:`VerificationWorkers`) claims the oldest queued job and
+verifies it with :func:`swarmdeck.console.jobs.verification.verify` on the
+executor (``--workers W``: a local process pool of W; ``--ray ADDRESS``: a Ray
+cluster), which runs the job's runs in parallel. The report goes to
+``DIR/jobs/<id>/report.json`` and ``report.html``, the verdict to the job. A job
+cancelled while it verifies stops within a tick of each run (the verification's
+cancel event). Infrastructure failures (no confinement, a Ray worker lost) reject
+the job with the reason, and the worker goes on with the next one.
+"""
+from __future__ import annotations
+
+import json
+import threading
+from typing import Any
+
+from swarmdeck.console.jobs.confinement import ConfinementUnavailable, SandboxLimits
+from swarmdeck.console.jobs.report_html import render_html
+from swarmdeck.console.jobs.verification import VerificationCancelled, VerificationConfig, verify
+from swarmdeck.console.portal.service import PortalService
+
+
+def make_executor(workers: int | None = None, ray: str | None = None) -> Any:
+    """The verification executor: a Ray cluster at ``ray``, else a local pool of ``workers`` processes."""
+    from swarmdeck.console.jobs.executors import LocalPoolExecutor, RayExecutor
+
+    return RayExecutor(ray) if ray else LocalPoolExecutor(workers)
+
+
+class VerificationWorkers:
+    """The thread that verifies queued jobs one after another (each job's runs in parallel on the executor)."""
+
+    def __init__(self, service: PortalService, executor: Any, *, poll_s: float = 1.0) -> None:
+        self.service, self.executor, self.poll_s = service, executor, float(poll_s)
+        self._stop = threading.Event()
+        self._thread: threading.Thread | None = None
+        self.verified = 0
+        self.errors = 0
+
+    def start(self) -> "VerificationWorkers":
+        self._thread = threading.Thread(target=self._run, name="swarmdeck-portal-verify", daemon=True)
+        self._thread.start()
+        return self
+
+    def stop(self, timeout: float = 10.0) -> None:
+        self._stop.set()
+        self.service.notify()
+        if self._thread is not None:
+            self._thread.join(timeout)
+
+    def _run(self) -> None:
+        while not self._stop.is_set():
+            job = self.service.claim_for_verification()
+            if job is None:
+                self.service.wait_for_change(self.poll_s)
+                continue
+            self.verify_job(job)
+
+    def config_for(self, job: dict[str, Any]) -> VerificationConfig:
+        cfg = self.service.config
+        return VerificationConfig(n_robots=job["robots"], duration=job["duration"], runs=cfg.verify_runs,
+                                  seed=cfg.verify_seed + int(job["id"]), trusted=cfg.trusted,
+                                  limits=SandboxLimits(tick_s=cfg.tick_budget_s,
+                                                       wall_s=max(600.0, 20 * job["duration"])))
+
+    def verify_job(self, job: dict[str, Any]) -> None:
+        """Verify one claimed job and record the verdict (never raises)."""
+        service, job_id = self.service, int(job["id"])
+        cancel = threading.Event()
+        stop_watch = threading.Event()
+
+        def watch() -> None:  # the job cancelled (or the service stopping) cancels the verification
+            while not stop_watch.wait(0.2):
+                if self._stop.is_set() or service.verifying_cancelled(job_id):
+                    cancel.set()
+                    return
+
+        watcher = threading.Thread(target=watch, daemon=True)
+        watcher.start()
+        try:
+            report = verify([service.script_path(job)], self.config_for(job), self.executor, cancel=cancel)
+        except VerificationCancelled:
+            return  # cancelled: the job is already cancelled (or requeued on restart)
+        except (ValueError, ConfinementUnavailable, RuntimeError, ConnectionError, OSError) as exc:
+            self.errors += 1
+            service.fail_verification(job_id, str(exc))
+            return
+        finally:
+            stop_watch.set()
+            watcher.join()
+        data = report.to_dict()
+        folder = service.job_dir(job_id)
+        (folder / "report.json").write_text(json.dumps(data, indent=1))
+        try:
+            (folder / "report.html").write_text(render_html(data), encoding="utf-8")
+        except Exception:  # noqa: BLE001 - the HTML is a convenience; the JSON is the report
+            self.errors += 1
+        self.verified += 1
+        service.finish_verification(job_id, report.verdict, report.safety_score, data["reasons"])

@@ -1,0 +1,101 @@
+"""The arena runner behind the API: the running job's Frames on the LiveFeed, a researcher's cancel and an
+operator's emergency stop end it at once (the arena then stays stopped until released), and the barrier is
+bypassed only when verification allowed it, the manifest asked and no operator forbade it."""
+import json
+
+import pytest
+from portal_fixtures import SPIN, portal, wait_for_state  # noqa: F401
+from mqtt_broker import wait_until
+
+from swarmdeck.console.jobs.confinement import probe
+from swarmdeck.console.portal.runner import ArenaRunner, ArenaSettings
+from swarmdeck.console.recording.reader import open_recording
+
+pytestmark = pytest.mark.skipif(probe() is not None, reason=f"no confinement here: {probe()}")
+
+
+@pytest.fixture
+def arena(portal):
+    runner = ArenaRunner(portal.service, ArenaSettings(fleet=6, seed=4), poll_s=0.2)  # real time
+    portal.service.arena = runner
+    runner.start()
+    yield runner
+    runner.stop()
+
+
+def verified(portal, who, verdict="accepted", **kwargs):
+    """Submit and move the job to `waiting` as a verification with ``verdict`` would."""
+    svc = portal.service
+    jid = portal.submit(who, **kwargs).json()["id"]
+    with svc.db.transaction() as tx:
+        svc.db.transition(tx, jid, "verifying")
+        svc.db.transition(tx, jid, "approved", verdict=verdict)
+        svc.db.transition(tx, jid, "waiting")
+    svc.notify()
+    return jid
+
+
+def frames_of(portal, jid):
+    with open_recording(portal.service.job_dir(jid) / "recording.mcap") as rec:
+        return [f for _, f in rec.frames()]
+
+
+def test_an_emergency_stop_ends_the_run_and_holds_the_arena_until_released(portal, arena):
+    long = verified(portal, "alice", duration=30.0)
+    nxt = verified(portal, "bob", duration=0.3)
+    with portal.client("alice") as c:
+        wait_for_state(c, long, ("running",))
+    seq, job, frame = wait_until(lambda: (x := arena.live.latest()) and x[2] is not None and x[2].tick > 3 and x,
+                                 what="live frames")
+    assert job == long and frame.poses.shape == (2, 3)
+    with portal.client("op1") as op:
+        state = op.post("/api/operator/estop").json()
+        assert state["stopped"] is True
+        wait_until(lambda: arena.current_job is None, what="the run to end")
+        job = op.get(f"/api/jobs/{long}").json()
+        assert job["state"] == "cancelled" and job["reason"] == "emergency stop by operator op1"
+        assert portal.service.job_state(nxt) == "waiting"  # the arena stays stopped
+        assert op.post("/api/operator/estop").json()["running"] is None
+        assert [e["action"] for e in op.get("/api/operator/audit").json()][:2] == ["emergency stop", "emergency stop"]
+        assert arena.live.latest()[1] is None
+        frames = frames_of(portal, long)
+        assert frames[-1].run_time < 29 and json.loads(
+            (portal.service.job_dir(long) / "run.json").read_text())["ended_by"] == "cancelled"
+        assert op.post("/api/operator/release").json()["stopped"] is False
+        assert op.post("/api/operator/release").status_code == 409
+    with portal.client("bob") as c:
+        assert wait_for_state(c, nxt, ("done",))["bypass"] is False
+
+
+def test_a_researcher_cancels_a_running_job(portal, arena):
+    jid = verified(portal, "alice", duration=30.0)
+    with portal.client("alice") as c:
+        wait_for_state(c, jid, ("running",))
+        wait_until(lambda: arena.live.latest()[2] is not None, what="a live frame")
+        assert c.post(f"/api/jobs/{jid}/cancel").json()["state"] == "cancelled"
+        wait_until(lambda: arena.current_job is None, what="the run to end")
+        names = {f["name"] for f in c.get(f"/api/jobs/{jid}/files").json()}
+        assert {"recording.mcap", "robots.csv", "replay.html", "run.json", "script.log"} <= names
+    assert 0 < frames_of(portal, jid)[-1].run_time < 29
+
+
+def test_the_barrier_is_bypassed_only_when_everyone_agrees(portal, arena):
+    bypass = "accepted, may bypass the barrier"
+    with portal.client("op1") as op:
+        forbidden = portal.submit("alice", duration=0.3, no_barrier=True).json()["id"]
+        assert op.post(f"/api/operator/jobs/{forbidden}/barrier", json={"forbid": True}).json()["barrier_forbidden"]
+    cases = {verified(portal, "alice", bypass, duration=0.3, no_barrier=True): False,  # everyone agrees
+             verified(portal, "alice", bypass, duration=0.3): True,  # the manifest did not ask
+             verified(portal, "alice", "accepted", duration=0.3, no_barrier=True): True}  # verification said no
+    svc = portal.service
+    with svc.db.transaction() as tx:  # the operator forbade it
+        svc.db.transition(tx, forbidden, "verifying")
+        svc.db.transition(tx, forbidden, "approved", verdict=bypass)
+        svc.db.transition(tx, forbidden, "waiting")
+    svc.notify()
+    cases[forbidden] = True
+    with portal.client("alice") as c:
+        for jid, barrier_on in cases.items():
+            job = wait_for_state(c, jid, ("done",))
+            assert job["bypass"] is (not barrier_on)
+            assert {f.params["safety_enabled"] for f in frames_of(portal, jid)} == {barrier_on}
