@@ -75,7 +75,6 @@ def zip_bytes(members, links=()):
     ({"a\\..\\evil.py": SPIN}, (), 422, "only plain relative names"),
     ({"main.py": SPIN}, (("link.py", "/etc/passwd"),), 422, "'link.py' is a link"),
     ({"main.py": SPIN, "big.bin": b"\0" * (2 << 20)}, (), 413, "more than 1048576"),  # a zip bomb
-    ({"main.py": SPIN, "helper.py": "x = 1\n"}, (), 422, "exactly one .py"),
     ({"data.txt": "x"}, (), 422, "no .py script"),
 ])
 def test_bad_archives_are_refused_and_nothing_is_written(shared, members, links, status, words):
@@ -83,6 +82,14 @@ def test_bad_archives_are_refused_and_nothing_is_written(shared, members, links,
     assert got == status and body["field"] == "script" and words in body["error"], body
     assert not list(shared.service.data.parent.rglob("evil.py")) and not list((shared.service.data / "jobs").iterdir())
     assert shared.service.db.query("SELECT * FROM jobs") == []
+
+
+def test_an_archive_with_several_scripts_needs_its_entry_named(shared):
+    data = zip_bytes({"a.py": SPIN, "b.py": "x = 1\n"})
+    got, body = post(shared, source=data, filename="job.zip")
+    assert got == 422 and body["field"] == "entry" and "name the one to run" in body["error"]
+    got, body = post(shared, source=data, filename="job.zip", entry="c.py")
+    assert got == 422 and body["field"] == "entry" and "'c.py' is not in the archive" in body["error"]
 
 
 def test_a_zip_with_its_manifest_inside_is_accepted(portal):

@@ -48,3 +48,19 @@ def test_verified_jobs_queue_for_the_arena_unless_an_operator_approves_each(port
         r = op.post(f"/api/operator/jobs/{second}/move", json={"position": -1})
         assert r.status_code == 422 and r.json()["field"] == "position"
     assert svc.db.check() == "ok"
+
+
+def test_a_multi_file_archive_is_verified_from_its_entry_with_its_modules(portal, workers):
+    import io
+    import zipfile
+
+    buf = io.BytesIO()
+    with zipfile.ZipFile(buf, "w") as z:
+        z.writestr("run.py", "from lib.moves import experiment\n")
+        z.writestr("lib/__init__.py", "")
+        z.writestr("lib/moves.py", SPIN)
+    r = portal.submit("alice", source=buf.getvalue(), filename="multi.zip", duration=0.5, entry="run.py")
+    assert r.status_code == 201, r.text
+    with portal.client("alice") as c:
+        job = wait_for_state(c, r.json()["id"], ("waiting", "rejected"), timeout=60)
+    assert job["state"] == "waiting" and job["entry"] == "run.py", job

@@ -307,7 +307,8 @@ class ArenaRunner:
 
         limits = SandboxLimits(tick_s=cfg.tick_budget_s, wall_s=duration + cfg.grace_s)
         try:
-            outcome = run_sandboxed(self.service.script_path(job), make_plant, n_robots=n, duration=duration,
+            script, entry = self.service.script(job)
+            outcome = run_sandboxed(script, make_plant, entry=entry, n_robots=n, duration=duration,
                                     limits=limits, trusted=cfg.trusted, cancelled=stopped)
         finally:
             loop = state["loop"]

@@ -45,10 +45,11 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Protocol
 
+from swarmdeck.console.jobs.bundle import ScriptBundle
 from swarmdeck.console.portal.accounts import Accounts, User
 from swarmdeck.console.portal.db import ACTIVE, FINAL, Database, TransitionConflict
 from swarmdeck.console.portal.errors import BadInput, Conflict, Forbidden, NotFound
-from swarmdeck.console.portal.submission import Limits, Manifest, Upload, check_upload, parse_manifest
+from swarmdeck.console.portal.submission import Limits, Manifest, Upload, check_bundle, check_upload, parse_manifest
 
 #: result files a job may have, name -> what it is (the pages engineer adds "video.mp4" here).
 RESULT_FILES: dict[str, str] = {
@@ -179,7 +180,7 @@ class PortalService:
                 (user.id, m.name, upload.kind, upload.display_name, entry, m.robots, m.duration,
                  None if m.initial_poses is None else json.dumps(m.initial_poses), int(m.no_barrier), top + 1,
                  now, now)).lastrowid
-            self._store(int(job_id), upload, m)  # inside the transaction: no job row without its files
+            self._store(int(job_id), upload, m, entry)  # inside the transaction: no job row without its files
         self.notify()
         return self.job(user, int(job_id))
 
@@ -188,11 +189,10 @@ class PortalService:
         if upload.kind == "py":
             return "script.py"
         entry = m.entry or upload.entry
-        if entry not in upload.files:
-            raise BadInput(f"the entry {entry!r} is not in the archive", "entry")
-        return entry
+        check_bundle(upload.files, entry)
+        return str(entry)
 
-    def _store(self, job_id: int, upload: Upload, m: Manifest) -> None:
+    def _store(self, job_id: int, upload: Upload, m: Manifest, entry: str) -> None:
         folder = self.job_dir(job_id)
         if folder.exists():  # a leftover of a transaction that rolled back
             shutil.rmtree(folder)
@@ -200,19 +200,14 @@ class PortalService:
         if upload.kind == "py":
             (folder / "script.py").write_bytes(upload.files["script.py"])
         else:
-            src = (folder / "src").resolve()
-            for name, content in upload.files.items():
-                target = (src / name).resolve()
-                if not target.is_relative_to(src):  # checked names cannot escape; belt and braces
-                    raise BadInput(f"archive member {name!r} escapes the job's folder", "script")
-                target.parent.mkdir(parents=True, exist_ok=True)
-                target.write_bytes(content)
+            (folder / "src").mkdir()
+            ScriptBundle.from_files(upload.files, entry).write_to(folder / "src")
         (folder / "manifest.json").write_text(json.dumps(m.to_dict(), indent=2))
 
-    def script_path(self, job: dict[str, Any]) -> Path:
-        """The file the sandbox runs for ``job``."""
+    def script(self, job: dict[str, Any]) -> tuple[Path, str | None]:
+        """What the sandbox runs for ``job``: ``(script.py, None)``, or ``(the archive's folder, its entry)``."""
         folder = self.job_dir(job["id"])
-        return folder / "script.py" if job["kind"] == "py" else folder / "src" / job["entry"]
+        return (folder / "script.py", None) if job["kind"] == "py" else (folder / "src", job["entry"])
 
     def jobs(self, user: User, *, mine: bool = False) -> list[dict[str, Any]]:
         """A researcher's own jobs; an operator's view of all jobs (``mine``: only their own). Newest first."""

@@ -11,7 +11,7 @@ script inside a ``.zip``). Unknown keys are refused. Every error is a
 :class:`~swarmdeck.console.portal.errors.BadInput` naming the key.
 
 **Upload** (:func:`check_upload`): a ``.py`` (UTF-8 text, at most
-``verification.MAX_SCRIPT_BYTES``) or a ``.zip`` holding the script and,
+``bundle.MAX_BYTES``) or a ``.zip`` holding the script and,
 optionally, ``manifest.json``. Archives are read in memory, never extracted by
 name: members with absolute names, ``..``, backslashes, drive letters, names
 outside ``[A-Za-z0-9_.-]`` per component or starting with a dot, symbolic links,
@@ -21,8 +21,9 @@ archive claims) or more than ``max_total_bytes`` in all are refused. The
 uploaded file's own name is used only for its suffix and is displayed
 sanitised; the job's files live under names the portal chooses.
 
-Multi-file archives: the sandbox runs single files today, so an archive must
-hold exactly one ``.py`` file (its entry) until the directory sandbox lands.
+Archives become a :class:`~swarmdeck.console.jobs.bundle.ScriptBundle` (its
+checks and limits apply too): the entry script (manifest ``entry``, else
+``main.py``, else the only ``.py`` file) runs with its sibling modules importable.
 """
 from __future__ import annotations
 
@@ -38,7 +39,7 @@ from typing import Any
 import numpy as np
 from scipy.spatial.distance import pdist
 
-from swarmdeck.console.jobs.verification import MAX_SCRIPT_BYTES
+from swarmdeck.console.jobs.bundle import MAX_BYTES, ScriptBundle
 from swarmdeck.console.portal.errors import BadInput, TooLarge, Unsupported
 from swarmdeck.core.bounds import DEFAULT_BOUNDS, Bounds
 from swarmdeck.devices.simulator import check_poses
@@ -58,7 +59,7 @@ class Limits:
     max_duration: float = 600.0
     max_upload_bytes: int = 4 << 20
     max_members: int = 64
-    max_member_bytes: int = MAX_SCRIPT_BYTES
+    max_member_bytes: int = 1 << 20
     max_total_bytes: int = 4 << 20
 
 
@@ -83,12 +84,13 @@ class Manifest:
 
 @dataclass(frozen=True)
 class Upload:
-    """A checked upload: ``kind`` "py" or "zip", ``files`` relative name -> bytes, ``entry`` the script to run."""
+    """A checked upload: ``kind`` "py" or "zip", ``files`` relative name -> bytes, ``entry`` the script to run
+    (None: an archive whose entry the manifest must name)."""
 
     kind: str
     display_name: str
     files: dict[str, bytes] = field(default_factory=dict)
-    entry: str = "script.py"
+    entry: str | None = "script.py"
     manifest: dict[str, Any] | None = None  # manifest.json from inside an archive, if any
 
 
@@ -169,8 +171,8 @@ def check_upload(filename: str | None, data: bytes, limits: Limits) -> Upload:
         raise TooLarge(f"the upload is {len(data)} bytes, more than the limit of {limits.max_upload_bytes}", "script")
     suffix = shown.lower().rsplit(".", 1)[-1] if "." in shown else ""
     if suffix == "py":
-        if len(data) > MAX_SCRIPT_BYTES:
-            raise TooLarge(f"a script may be at most {MAX_SCRIPT_BYTES} bytes, this one is {len(data)}", "script")
+        if len(data) > MAX_BYTES:
+            raise TooLarge(f"a script may be at most {MAX_BYTES} bytes, this one is {len(data)}", "script")
         _text(data, "script")
         return Upload("py", shown, {"script.py": data}, "script.py")
     if suffix == "zip":
@@ -234,12 +236,21 @@ def _check_zip(shown: str, data: bytes, limits: Limits) -> Upload:
     if not scripts:
         raise BadInput("the archive holds no .py script", "script")
     entry = manifest.get("entry") if isinstance(manifest, dict) else None
-    entry = entry if isinstance(entry, str) else ("main.py" if "main.py" in files else scripts[0])
-    if entry not in files:
-        raise BadInput(f"the entry {entry!r} is not in the archive", "entry")
-    if len(scripts) > 1:
-        raise BadInput("this server runs single-file scripts: the archive must hold exactly one .py file "
-                       f"(it has {len(scripts)})", "script")
+    if not isinstance(entry, str):  # None: the manifest sent beside the archive must name it
+        entry = "main.py" if "main.py" in files else (scripts[0] if len(scripts) == 1 else None)
     for name in scripts:
         _text(files[name], "script")
     return Upload("zip", shown, files, entry, manifest)
+
+
+def check_bundle(files: dict[str, bytes], entry: str | None) -> ScriptBundle:
+    """The sandbox's own checks on an archive's files and entry (BadInput naming ``entry`` or ``script``)."""
+    if entry is None:
+        raise BadInput("the archive holds several .py files and no main.py: name the one to run in the "
+                       "manifest's 'entry'", "entry")
+    if entry not in files:
+        raise BadInput(f"the entry {entry!r} is not in the archive", "entry")
+    try:
+        return ScriptBundle.from_files(files, entry)
+    except ValueError as exc:
+        raise BadInput(str(exc), "script") from None

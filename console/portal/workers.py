@@ -79,7 +79,8 @@ class VerificationWorkers:
         watcher = threading.Thread(target=watch, daemon=True)
         watcher.start()
         try:
-            report = verify([service.script_path(job)], self.config_for(job), self.executor, cancel=cancel)
+            script, entry = service.script(job)
+            report = verify([script], self.config_for(job), self.executor, cancel=cancel, entry=entry)
         except VerificationCancelled:
             return  # cancelled: the job is already cancelled (or requeued on restart)
         except (ValueError, ConfinementUnavailable, RuntimeError, ConnectionError, OSError) as exc:
