@@ -99,3 +99,18 @@ def test_the_barrier_is_bypassed_only_when_everyone_agrees(portal, arena):
             job = wait_for_state(c, jid, ("done",))
             assert job["bypass"] is (not barrier_on)
             assert {f.params["safety_enabled"] for f in frames_of(portal, jid)} == {barrier_on}
+
+
+def test_the_operators_view_draws_the_running_job(portal, arena):
+    from swarmdeck.console.portal.operator_view import OperatorView
+
+    view = OperatorView(port=0)
+    arena.frame_listeners.append(view.offer)
+    try:
+        jid = verified(portal, "alice", duration=0.5)
+        with portal.client("alice") as c:
+            wait_for_state(c, jid, ("done",))
+        wait_until(lambda: view.viewer.drawn > 0, what="a drawn frame")
+        assert view.viewer.errors == 0 and view.url.startswith("http://127.0.0.1:")
+    finally:
+        view.close()

@@ -40,6 +40,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--seed", type=int, default=None, help="seed of the simulated arena's initial poses")
     parser.add_argument("--trusted", action="store_true",
                         help="run scripts unconfined where this machine cannot confine them (bubblewrap missing)")
+    parser.add_argument("--console-port", type=int, default=None, metavar="P",
+                        help="also show the running job in the operator's viser view on port P (on --host)")
     parser.add_argument("--log-level", default="warning", choices=("critical", "error", "warning", "info", "debug"),
                         help="uvicorn's log level (default warning)")
 
@@ -59,6 +61,8 @@ def check_arguments(args: argparse.Namespace) -> None:
         raise UsageError(f"--max-upload must be at least 1024 bytes, got {args.max_upload}")
     if not args.grace > 0:
         raise UsageError(f"--grace must be > 0 s, got {args.grace}")
+    if args.console_port is not None and not 0 <= args.console_port <= 65535:
+        raise UsageError(f"--console-port must be in [0, 65535], got {args.console_port}")
     if args.fast and args.robots_via:
         raise UsageError("--fast is for the simulated arena: networked robots run in real time")
     if args.robots_via is not None:
@@ -117,6 +121,17 @@ def main(args: argparse.Namespace) -> int:
         sock = bind(args.host, args.port)
     except OSError as exc:
         raise UsageError(f"cannot serve on {args.host}:{args.port}: {exc.strerror or exc}") from None
+    view = None
+    if args.console_port is not None:
+        from swarmdeck.console.portal.operator_view import OperatorView
+
+        try:
+            view = OperatorView(args.host, args.console_port)
+        except OSError as exc:
+            sock.close()
+            raise UsageError(f"--console-port {args.console_port}: {exc.strerror or exc}") from None
+        runner.frame_listeners.append(view.offer)
+        print(f"swarmdeck server: operator view at {view.url}", flush=True)
     workers = VerificationWorkers(service, executor).start()
     runner.start()
     app = create_app(service, live=live)
@@ -138,6 +153,8 @@ def main(args: argparse.Namespace) -> int:
             signal.signal(sig, handler)
         runner.stop()
         workers.stop()
+        if view is not None:
+            view.close()
         sock.close()
         service.close()
         print("swarmdeck server: stopped (robots stopped)", file=sys.stderr)

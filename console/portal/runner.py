@@ -24,8 +24,11 @@ For each job the service hands over (``waiting → setting up``):
    commands first).
 4. **Data** in ``DIR/jobs/<id>/``: ``recording.mcap`` (written while it runs),
    ``script.log``, ``run.json`` (how it ended), and when it ends ``robots.csv``,
-   ``frames.csv`` and ``replay.html``. Every Frame is also published to the
-   :class:`~.livefeed.LiveFeed`.
+   ``frames.csv`` and ``replay.html``, then whatever each of
+   :attr:`ArenaRunner.exporters` (``exporter(folder)``, e.g. the MP4 video) writes
+   there (list the file in :data:`~.service.RESULT_FILES`). Every Frame is also
+   published to the :class:`~.livefeed.LiveFeed` and handed to each of
+   :attr:`ArenaRunner.frame_listeners` (on the loop thread: only hand it over).
 5. The loop is closed (robots stopped, the MQTT connection closed) before the
    next job starts.
 
@@ -154,6 +157,7 @@ class ArenaRunner:
         self._loop: ControlLoop | None = None
         self.runs = 0
         self.frame_listeners: list[Callable[[Any], None]] = []  # e.g. the operator's viser console
+        self.exporters: list[Callable[[Path], None]] = []  # more exports when a job ends (e.g. the MP4 video)
 
     # ------------------------------------------------------------------ control (any thread)
     def start(self) -> "ArenaRunner":
@@ -355,7 +359,7 @@ class ArenaRunner:
         """CSV and HTML replay from the job's recording (problems are noted in run.json, never raised)."""
         from swarmdeck.console.recording.export_csv import export_csv
         from swarmdeck.console.recording.export_html import export_html
-        from swarmdeck.console.recording.reader import RecordingError, open_recording
+        from swarmdeck.console.recording.reader import open_recording
 
         try:
             with open_recording(folder / "recording.mcap") as rec:
@@ -363,7 +367,9 @@ class ArenaRunner:
                     return
                 export_csv(rec, folder)
                 export_html(rec, folder / "replay.html")
-        except (RecordingError, OSError, ValueError) as exc:
+            for exporter in self.exporters:
+                exporter(folder)
+        except Exception as exc:  # noqa: BLE001 - an export never takes the arena down; run.json says what failed
             run = folder / "run.json"
             data = json.loads(run.read_text()) if run.is_file() else {}
             data["export_error"] = f"{type(exc).__name__}: {exc}"

@@ -288,12 +288,15 @@ class PortalService:
         return self._operator_transition(user, job_id, "held", "hold", held_from=row["state"])
 
     def release(self, user: User, job_id: int) -> dict[str, Any]:
-        """Release a held job to the state it was held in."""
+        """Release a held job to the state it was held in (an approved one to ``waiting`` if manual approval
+        is off by now)."""
         self._require_operator(user)
         row = self._visible_row(user, job_id)
         if row["state"] != "held":
             raise Conflict(f"job {job_id} is {row['state']}, not held", "job")
         back = row["held_from"] or "queued"
+        if back == "approved" and not self.manual_approval:
+            back = "waiting"  # manual approval was switched off while it was held
         return self._operator_transition(user, job_id, back, "release", sources=("held",), held_from=None)
 
     def operator_cancel(self, user: User, job_id: int) -> dict[str, Any]:

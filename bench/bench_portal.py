@@ -1,0 +1,174 @@
+"""Benchmark: the remote-access portal — submission → verdict latency, jobs per hour, and job-status API throughput.
+
+Run: ``.venv/bin/python bench/bench_portal.py [--jobs 3] [--seconds 10]`` (prints markdown tables).
+
+1. **Pipeline** (in this process: service, verification workers on a local pool of 2 processes, the arena
+   runner on the simulated arena in ``--fast`` mode, i.e. as fast as it computes): ``--jobs`` jobs of 12
+   robots and 30 s (a rendezvous script), submitted at once. Per job: submission → verdict (queued →
+   verifying → approved, verification with the server's default 4 runs each without and with the
+   barrier), the arena's setup (sandbox boot until the first tick), the run itself, and the
+   ending (closing the recording, CSV and HTML exports). Jobs per hour: measured (``--fast``) and,
+   for the real-time arena, ``3600 / (30 s + setup + ending)`` — the arena is the bottleneck as long
+   as verification of the next job finishes within a run, which the table shows.
+2. **API**: ``swarmdeck server`` in its own process (real uvicorn on loopback); 50 concurrent
+   clients (one ``httpx.AsyncClient`` each, keep-alive) for ``--seconds`` s against
+   ``GET /api/jobs/{id}`` (Bearer token: token lookup, job row, queue position) and, in the same run,
+   the static ``GET /api/health`` as the baseline. Requests/s and latency percentiles.
+   Targets (issue 16): ≥ 500 requests/s, p99 ≤ 50 ms.
+"""
+from __future__ import annotations
+
+import argparse
+import asyncio
+import json
+import os
+import platform
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import httpx
+
+RENDEZVOUS = """
+def experiment(arena):
+    while True:
+        p = arena.positions()
+        arena.set_velocities(-0.5 * (p - p.mean(axis=0)))
+        arena.step()
+"""
+CLI = [sys.executable, "-c", "import sys; from swarmdeck.console.cli import main; sys.exit(main())"]
+
+
+def pipeline(n_jobs: int, workdir: Path) -> list[dict]:
+    from swarmdeck.console.jobs.executors import LocalPoolExecutor
+    from swarmdeck.console.portal.runner import ArenaRunner, ArenaSettings
+    from swarmdeck.console.portal.service import PortalConfig, PortalService
+    from swarmdeck.console.portal.workers import VerificationWorkers
+
+    service = PortalService(PortalConfig(data=workdir / "pipeline"))
+    user, _ = service.accounts.add_user("bench", "researcher")
+    workers = VerificationWorkers(service, LocalPoolExecutor(2), poll_s=0.05).start()
+    runner = ArenaRunner(service, ArenaSettings(fleet=12, fast=True, seed=1), poll_s=0.05).start()
+    service.arena = runner
+    marks: dict[int, dict[str, float]] = {}
+    t0 = time.monotonic()
+    ids = []
+    for k in range(n_jobs):
+        job = service.submit(user, "rendezvous.py", RENDEZVOUS.encode(),
+                             json.dumps({"name": f"bench {k}", "robots": 12, "duration": 30.0}))
+        ids.append(job["id"])
+        marks[job["id"]] = {"submitted": time.monotonic()}
+    while True:
+        states = {jid: service.job_state(jid) for jid in ids}
+        now = time.monotonic()
+        for jid, state in states.items():
+            marks[jid].setdefault(state, now)
+        if all(s in ("done", "failed", "rejected", "cancelled") for s in states.values()):
+            break
+        time.sleep(0.01)
+    total = time.monotonic() - t0
+    workers.stop()
+    runner.stop()
+    rows = []
+    for jid in ids:
+        job = service.job(user, jid)
+        m = marks[jid]
+        verdict_at = m.get("waiting", m.get("approved", m.get("rejected")))
+        run = json.loads((service.job_dir(jid) / "run.json").read_text())
+        rows.append({"id": jid, "state": job["state"], "verdict": job["verdict"],
+                     "verdict_s": verdict_at - m["submitted"],
+                     "verifying_s": verdict_at - m.get("verifying", verdict_at),
+                     "setup_s": m.get("running", now) - m.get("setting up", now),
+                     "run_and_end_s": job["ended"] - job["started"] - (m.get("running", now) - m.get("setting up", now)),
+                     "ticks": run.get("ticks")})
+    service.close()
+    print(f"\npipeline: {n_jobs} jobs in {total:.1f} s wall ({3600 * n_jobs / total:.0f} jobs/hour, --fast)")
+    return rows
+
+
+async def _clients(url: str, path: str, token: str, clients: int, seconds: float) -> tuple[int, list[float], int]:
+    latencies: list[float] = []
+    errors = 0
+    stop = time.monotonic() + seconds
+    limits = httpx.Limits(max_connections=1, max_keepalive_connections=1)
+
+    async def one() -> None:
+        nonlocal errors
+        async with httpx.AsyncClient(base_url=url, headers={"Authorization": f"Bearer {token}"}, limits=limits,
+                                     timeout=30) as c:
+            while time.monotonic() < stop:
+                t = time.perf_counter()
+                r = await c.get(path)
+                latencies.append(time.perf_counter() - t)
+                if r.status_code != 200:
+                    errors += 1
+
+    await asyncio.gather(*(one() for _ in range(clients)))
+    return len(latencies), latencies, errors
+
+
+def api(workdir: Path, seconds: float, clients: int = 50) -> list[dict]:
+    data = workdir / "api"
+    out = subprocess.run([*CLI, "users", "add", "bench", "--role", "researcher", "--data", str(data)],
+                         capture_output=True, text=True, check=True).stdout
+    token = out.strip().splitlines()[-1]
+    server = subprocess.Popen([*CLI, "server", "--data", str(data), "--port", "0", "--fast"],
+                              stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+    try:
+        url = ""
+        for line in server.stdout:
+            if line.startswith("swarmdeck server: http://"):
+                url = line.split()[2]
+                break
+        with httpx.Client(base_url=url, headers={"Authorization": f"Bearer {token}"}) as c:
+            r = c.post("/api/jobs", files={"script": ("x.py", b"x = 1\n")},
+                       data={"manifest": json.dumps({"name": "status", "robots": 2, "duration": 1})})
+            jid = r.json()["id"]
+        rows = []
+        for name, path in (("static /api/health (baseline)", "/api/health"), ("job status /api/jobs/{id}",
+                                                                               f"/api/jobs/{jid}")):
+            asyncio.run(_clients(url, path, token, clients, 1.0))  # warm-up
+            t = time.monotonic()
+            n, lat, errors = asyncio.run(_clients(url, path, token, clients, seconds))
+            wall = time.monotonic() - t
+            lat.sort()
+            rows.append({"endpoint": name, "requests": n, "errors": errors, "rps": n / wall,
+                         "p50_ms": 1e3 * statistics.median(lat), "p99_ms": 1e3 * lat[int(0.99 * (len(lat) - 1))]})
+        return rows
+    finally:
+        server.terminate()
+        server.wait(timeout=30)
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser()
+    parser.add_argument("--jobs", type=int, default=3)
+    parser.add_argument("--seconds", type=float, default=10.0)
+    args = parser.parse_args()
+    print(f"machine: {platform.processor() or platform.machine()}, {os.cpu_count()} cores, Python "
+          f"{platform.python_version()}, load average {os.getloadavg()[0]:.1f}")
+    with tempfile.TemporaryDirectory() as tmp:
+        work = Path(tmp)
+        rows = api(work, args.seconds)
+        print("\n| endpoint | requests/s | p50 ms | p99 ms | errors | ratio to baseline |")
+        print("| --- | ---: | ---: | ---: | ---: | ---: |")
+        for r in rows:
+            print(f"| {r['endpoint']} | {r['rps']:.0f} | {r['p50_ms']:.1f} | {r['p99_ms']:.1f} | {r['errors']} | "
+                  f"{r['rps'] / rows[0]['rps']:.2f} |")
+        jobs = pipeline(args.jobs, work)
+        print("\n| job | verdict | submission → verdict s | of which verifying s | setup s | run + ending s (--fast) |")
+        print("| ---: | --- | ---: | ---: | ---: | ---: |")
+        for j in jobs:
+            print(f"| {j['id']} | {j['verdict']} | {j['verdict_s']:.1f} | {j['verifying_s']:.1f} | {j['setup_s']:.2f} "
+                  f"| {j['run_and_end_s']:.1f} |")
+        setup = statistics.median(j["setup_s"] for j in jobs)
+        verifying = statistics.median(j["verifying_s"] for j in jobs)
+        print(f"\nmedian verification {verifying:.1f} s per job; median setup {setup:.2f} s; real-time arena: "
+              f"at most {3600 / (30 + setup):.0f} jobs/hour (30 s runs + setup; ending overlaps nothing)")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,41 @@
+"""The operator's viser view of the arena (``swarmdeck server --console-port P``): the running job, live.
+
+The console's own scene (:class:`~swarmdeck.console.web.scene.ArenaScene`) drawn by
+its :class:`~swarmdeck.console.web.app.FrameViewer` (latest-frame-wins on its own
+thread, so a slow browser never slows the arena), fed with every Frame of the
+job the runner is running (:attr:`~.runner.ArenaRunner.frame_listeners`). It shows;
+it does not steer: the emergency stop and the queue are the portal's operator API.
+"""
+from __future__ import annotations
+
+from typing import Any
+
+from swarmdeck.console.web.app import FrameViewer
+from swarmdeck.console.web.scene import ArenaScene
+from swarmdeck.core.bounds import DEFAULT_BOUNDS, Bounds
+from swarmdeck.core.kinematics import GritsBotParams
+
+
+class OperatorView:
+    """A viser server on ``host:port`` showing each Frame :meth:`offer` is given; :meth:`close`."""
+
+    def __init__(self, host: str = "127.0.0.1", port: int = 8080, bounds: Bounds = DEFAULT_BOUNDS) -> None:
+        import viser
+
+        self.server = viser.ViserServer(host=host, port=port, verbose=False)
+        self.scene = ArenaScene(self.server, bounds, robot_radius=GritsBotParams().radius)
+        self.viewer = FrameViewer(self.scene).start()
+        self.host = host
+
+    @property
+    def url(self) -> str:
+        host = "127.0.0.1" if self.host in ("0.0.0.0", "") else self.host
+        return f"http://{host}:{int(self.server.get_port())}"
+
+    def offer(self, frame: Any) -> None:
+        """Called on the arena's loop thread: hands the Frame to the drawing thread."""
+        self.viewer.offer(frame)
+
+    def close(self) -> None:
+        self.viewer.stop()
+        self.server.stop()
