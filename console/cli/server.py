@@ -101,8 +101,13 @@ def main(args: argparse.Namespace) -> int:
     except (ValueError, RuntimeError) as exc:
         raise UsageError(str(exc)) from None
     try:
+        sock = bind(args.host, args.port)
+    except OSError as exc:
+        raise UsageError(f"cannot serve on {args.host}:{args.port}: {exc.strerror or exc}") from None
+    try:
         service = PortalService(config)
     except (SchemaError, OSError) as exc:
+        sock.close()
         raise UsageError(f"cannot open the data folder {args.data!r}: {exc}") from None
     import sqlite3
 
@@ -112,15 +117,13 @@ def main(args: argparse.Namespace) -> int:
     try:
         interrupted = runner.recover()
     except sqlite3.DatabaseError as exc:
+        sock.close()
+        service.close()
         raise UsageError(f"the database in {args.data!r} is damaged: {exc}") from None
     for job_id in interrupted:
         print(f"swarmdeck server: job {job_id} was on the arena when the server stopped: interrupted "
               "(partial recording kept)", file=sys.stderr)
     service.arena = runner
-    try:
-        sock = bind(args.host, args.port)
-    except OSError as exc:
-        raise UsageError(f"cannot serve on {args.host}:{args.port}: {exc.strerror or exc}") from None
     view = None
     if args.console_port is not None:
         from swarmdeck.console.portal.operator_view import OperatorView
@@ -129,6 +132,7 @@ def main(args: argparse.Namespace) -> int:
             view = OperatorView(args.host, args.console_port)
         except OSError as exc:
             sock.close()
+            service.close()
             raise UsageError(f"--console-port {args.console_port}: {exc.strerror or exc}") from None
         runner.frame_listeners.append(view.offer)
         print(f"swarmdeck server: operator view at {view.url}", flush=True)
