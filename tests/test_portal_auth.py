@@ -104,3 +104,12 @@ def test_the_database_holds_no_token_in_clear(portal):
     assert raw and not any(t.encode() in raw for t in portal.tokens.values())
     with httpx.Client(base_url=portal.url) as c:  # and the tokens work
         assert c.get("/api/me", headers={"Authorization": f"Bearer {portal.tokens['op2']}"}).json()["role"] == "operator"
+
+
+def test_the_openapi_page_documents_the_api(portal):
+    with portal.client(None) as c:
+        assert c.get("/docs").status_code == 200
+        spec = c.get("/openapi.json").json()
+    assert {"/api/jobs", "/api/jobs/{job_id}", "/api/operator/estop"} <= set(spec["paths"])
+    upload = spec["paths"]["/api/jobs"]["post"]["requestBody"]["content"]["multipart/form-data"]["schema"]
+    assert set(upload["properties"]) == {"script", "manifest"}
