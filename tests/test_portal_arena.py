@@ -71,7 +71,7 @@ def test_a_researcher_cancels_a_running_job(portal, arena):
     jid = verified(portal, "alice", duration=30.0)
     with portal.client("alice") as c:
         wait_for_state(c, jid, ("running",))
-        wait_until(lambda: arena.live.latest()[2] is not None, what="a live frame")
+        wait_until(lambda: (f := arena.live.latest()[2]) is not None and f.tick > 3, what="live frames")
         assert c.post(f"/api/jobs/{jid}/cancel").json()["state"] == "cancelled"
         wait_until(lambda: arena.current_job is None, what="the run to end")
         names = {f["name"] for f in c.get(f"/api/jobs/{jid}/files").json()}
