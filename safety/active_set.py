@@ -26,6 +26,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+import scipy.linalg as sla
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
@@ -45,7 +46,8 @@ FEAS_TOL = 1e-10  # m/s: a certified answer meets every row to this
 
 @dataclass(frozen=True)
 class ActiveSetResult:
-    """u (N, 2); ok; reason; active (m,) rows with a positive multiplier; speed_active (N,); iterations."""
+    """u (N, 2); ok; reason; active (m,) rows with a positive multiplier; speed_active (N,); iterations;
+    multipliers (m,) the rows' λ (m/s, zero off the active rows; zeros when not ok)."""
 
     u: np.ndarray
     ok: bool
@@ -53,6 +55,7 @@ class ActiveSetResult:
     active: np.ndarray
     speed_active: np.ndarray
     iterations: int
+    multipliers: np.ndarray
 
 
 def _project(w: np.ndarray, vmax: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -89,8 +92,16 @@ def clip_speed(u: np.ndarray, vmax: float) -> np.ndarray:
 
 
 def _dense_spd_solve(G: np.ndarray, rhs: np.ndarray) -> np.ndarray | None:
-    """Solve (G + ridge·I) x = rhs for a small dense Gram matrix (LAPACK, little call overhead)."""
+    """Solve (G + ridge·I) x = rhs for a small dense Gram matrix (LAPACK, little call overhead).
+
+    Cholesky (half the work of LU); a Gram matrix that is not numerically positive definite
+    (dependent rows beyond what the ridge covers) goes through LU.
+    """
     G[np.diag_indices_from(G)] += _RIDGE
+    try:
+        return sla.cho_solve(sla.cho_factor(G, lower=True, check_finite=False), rhs, check_finite=False)
+    except np.linalg.LinAlgError:
+        pass
     try:
         return np.linalg.solve(G, rhs)
     except np.linalg.LinAlgError:
@@ -199,7 +210,7 @@ def solve_active_set(rows: Rows, nominal: np.ndarray, max_speed: float | None,
     lam_cut = np.zeros(n)
 
     def fail(reason: str, it: int) -> ActiveSetResult:
-        return ActiveSetResult(np.zeros((n, 2)), False, reason, W, cut, it)
+        return ActiveSetResult(np.zeros((n, 2)), False, reason, W, cut, it, np.zeros(m))
 
     def certify(u: np.ndarray, work: _Working | None, lam: np.ndarray, it: int) -> ActiveSetResult | None:
         if np.any(rows.lhs(u) - rows.b > feas_tol):
@@ -213,7 +224,7 @@ def solve_active_set(rows: Rows, nominal: np.ndarray, max_speed: float | None,
             return None
         u = clip_speed(u, vmax)  # rounding only
         return ActiveSetResult(u, True, "certified", W & (lam_rows > 0),
-                               speed >= vmax * vmax * (1 - 1e-9), it)
+                               speed >= vmax * vmax * (1 - 1e-9), it, np.where(W, lam_rows, 0.0))
 
     for it in range(1, max_iter + 1):
         aggressive = it <= _AGGRESSIVE_ITERS

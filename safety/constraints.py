@@ -100,12 +100,11 @@ def pair_rows(points: np.ndarray, cfg: BarrierConfig, tree: cKDTree | None = Non
     pairs = tree.query_pairs(cfg.neighbour_radius(), output_type="ndarray")
     if pairs.shape[0] == 0:
         return Rows.empty()
-    pairs = pairs[np.lexsort((pairs[:, 1], pairs[:, 0]))]
-    i = pairs[:, 0].astype(np.int64)
-    j = pairs[:, 1].astype(np.int64)
+    # rows in key order (i, then j; query_pairs gives i < j): one sort of int64 keys
+    key = np.sort(pairs[:, 0].astype(np.int64) * n_robots + pairs[:, 1])
+    i, j = np.divmod(key, n_robots)
     e = points[i] - points[j]
     d = np.sqrt(np.einsum("kd,kd->k", e, e))
-    key = i * n_robots + j
     n = _unit_or_fallback(e, d, key)
     h = d * d - cfg.safety_distance**2
     b = cfg.gamma * cfg.kappa(h) / (2.0 * np.maximum(d, 1e-12))

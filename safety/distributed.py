@@ -122,9 +122,10 @@ def _line_optima(A: np.ndarray, B: np.ndarray, U: np.ndarray, kidx: np.ndarray, 
     Bk = B[rs, kidx]
     Pk = np.stack([-Ak[..., 1], Ak[..., 0]], axis=-1)  # a_k⊥
     tp = np.einsum("shd,sd->sh", Pk, U)
-    both = np.concatenate([Pk, Ak], axis=1) @ np.swapaxes(A, 1, 2)  # (S, 2H, K): a_lᵀa_k⊥, a_lᵀa_k
-    c = both[:, :H]
-    rhs = B[:, None, :] - Bk[:, :, None] * both[:, H:]
+    # (S, H, K): a_lᵀa_k⊥ and a_lᵀa_k, written out (a batched matmul of 2-vectors costs a call per robot)
+    Ax, Ay = A[:, None, :, 0], A[:, None, :, 1]
+    c = Pk[..., 0, None] * Ax + Pk[..., 1, None] * Ay
+    rhs = B[:, None, :] - Bk[:, :, None] * (Ak[..., 0, None] * Ax + Ak[..., 1, None] * Ay)
     pos, neg = c > _DET_TOL, c < -_DET_TOL
     with np.errstate(divide="ignore", invalid="ignore"):
         bound = rhs / c
@@ -214,7 +215,9 @@ def solve_small_qps(owner: np.ndarray, a: np.ndarray, b: np.ndarray, nominal: np
     s = robots.size
     slot_of = np.full(n, -1, dtype=np.int64)
     slot_of[robots] = np.arange(s)
-    idx = idx[np.argsort(owner[idx], kind="stable")]
+    # group by robot: a stable argsort of 16-bit keys is numpy's radix sort (≈ 10× the merge sort)
+    keys = owner[idx].astype(np.uint16) if n <= np.iinfo(np.uint16).max else owner[idx]
+    idx = idx[np.argsort(keys, kind="stable")]
     slot = slot_of[owner[idx]]
     counts = np.bincount(slot, minlength=s)
     K = int(counts.max(initial=0))
