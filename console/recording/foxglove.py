@@ -38,6 +38,14 @@ The SDK builds messages from Python objects, so building the robots' scene is a
 list comprehension over robots (≈ 20 µs per robot; measured in
 ``bench/bench_foxglove.py``): it runs on the recorder's writer thread or the
 live bridge's thread, never on the control loop's.
+
+Thinning at large N (:class:`FoxgloveConfig`): the per-robot channels (``/foxglove/robots``,
+``/foxglove/poses``, ``/foxglove/cells``, ``/foxglove/barrier``) carry at most ``robot_rate``
+robots per second of recorded time: with N robots they are written every ``N / robot_rate`` s
+(:meth:`FoxgloveConfig.scene_period`; every frame up to 100 robots at 30 Hz, 3 per second at
+N = 1000), and the id labels only up to ``max_labels`` robots (as in the console's scene). The
+other channels — transforms, contacts, metrics, log, density, camera — keep their rates.
+``/swarmdeck/frame`` always has every frame (the full state; Foxglove plays it as raw messages).
 """
 from __future__ import annotations
 
@@ -107,6 +115,11 @@ class FoxgloveConfig:
     density_period / camera_period: s of recorded time between density grids / camera pictures
     (0: every frame). density_cell: grid cell size, m. camera_quality: JPEG quality 1–100.
     camera_height: height of the ``camera`` frame above the arena centre, m. labels: draw robot ids.
+    robot_rate: robots per second of recorded time the per-robot scene channels may carry (robots,
+        poses, cells, barrier): with N robots they are written every N / robot_rate s (0: every
+        frame). The default keeps 30 Hz up to 100 robots and writes 3 scenes per second at N = 1000
+        (bench/RESULTS.md, "foxglove": ≈ 12 ms of writer CPU and 40 kB per scene at N = 1000).
+    max_labels: id labels only up to this many robots (the console's scene draws them up to 100 too).
     """
 
     density_period: float = 0.25
@@ -115,16 +128,24 @@ class FoxgloveConfig:
     camera_quality: int = 75
     camera_height: float = 2.5
     labels: bool = True
+    robot_rate: float = 3000.0
+    max_labels: int = 100
+
+    def scene_period(self, n: int) -> float:
+        """s of recorded time between the per-robot scene messages of N robots (0: every frame)."""
+        return n / self.robot_rate if self.robot_rate > 0 else 0.0
 
     def __post_init__(self) -> None:
-        for name in ("density_period", "camera_period"):
+        for name in ("density_period", "camera_period", "robot_rate"):
             v = getattr(self, name)
             if not (isinstance(v, (int, float)) and math.isfinite(v) and v >= 0):
-                raise ValueError(f"{name} must be a finite number of seconds >= 0, got {v!r}")
+                raise ValueError(f"{name} must be a finite number >= 0, got {v!r}")
         for name in ("density_cell", "camera_height"):
             v = getattr(self, name)
             if not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):
                 raise ValueError(f"{name} must be a finite number > 0 m, got {v!r}")
+        if isinstance(self.max_labels, bool) or not isinstance(self.max_labels, int) or self.max_labels < 0:
+            raise ValueError(f"max_labels must be an int >= 0, got {self.max_labels!r}")
         if not (isinstance(self.camera_quality, int) and 1 <= self.camera_quality <= 100):
             raise ValueError(f"camera_quality must be an int in [1, 100], got {self.camera_quality!r}")
 
@@ -227,6 +248,8 @@ class FoxgloveEncoder:
         self._alerts: frozenset[str] = frozenset()
         self._next_density = -math.inf
         self._next_camera = -math.inf
+        self._next_scene = -math.inf
+        self._scene_period = 0.0
         self._image_ref: str | None = None
         self._grid_key: tuple[float, ...] | None = None
         self._grid_pts: NDArray[np.float64] | None = None
@@ -284,7 +307,7 @@ class FoxgloveEncoder:
                                     head_diameter=0.5 * r, color=white)
                   for x, y, z, w in zip(xs, ys, qz, qw)]
         texts = []
-        if self.config.labels:
+        if self.config.labels and frame.n <= self.config.max_labels:
             ink = fm.Color(r=0.05, g=0.05, b=0.05, a=1.0)
             texts = [fm.TextPrimitive(pose=fm.Pose(position=fm.Vector3(x=x, y=y + 1.4 * r, z=0.05)),
                                       billboard=True, font_size=14.0, scale_invariant=True, color=ink, text=str(i))
@@ -412,10 +435,15 @@ class FoxgloveEncoder:
     def encode(self, frame: Frame, ns: int, t: float) -> Iterator[tuple[str, int, bytes]]:
         """Every message of ``frame`` logged at ``ns`` (Unix ns); ``t`` its recording time, s."""
         yield TOPIC_TF, ns, self.transforms(ns)
-        yield TOPIC_ROBOTS, ns, self.robots(frame, ns)
-        yield TOPIC_POSES, ns, self.poses(frame, ns)
-        yield TOPIC_CELLS, ns, self.cells(frame, ns)
-        yield TOPIC_BARRIER, ns, self.barrier(frame, ns)
+        # per-robot channels at most every scene_period(N) s; half a frame of slack so that a period
+        # of one frame period is every frame despite rounding of the frame times
+        if frame.time + 0.5 * frame.dt >= self._next_scene or frame.time < self._next_scene - 2 * self._scene_period:
+            self._scene_period = self.config.scene_period(frame.n)
+            self._next_scene = frame.time + self._scene_period
+            yield TOPIC_ROBOTS, ns, self.robots(frame, ns)
+            yield TOPIC_POSES, ns, self.poses(frame, ns)
+            yield TOPIC_CELLS, ns, self.cells(frame, ns)
+            yield TOPIC_BARRIER, ns, self.barrier(frame, ns)
         yield TOPIC_CONTACTS, ns, self.contacts(frame, ns)
         yield TOPIC_METRICS, ns, self.metrics(frame, t)
         if frame.density is not None and frame.time >= self._next_density:
