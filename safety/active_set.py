@@ -156,7 +156,8 @@ class _Working:
             return _dense_spd_solve(G.toarray(), rhs)
         G = (G + _RIDGE * sp.identity(w, format="csr")).tocsc()
         try:
-            return spla.splu(G, permc_spec="MMD_AT_PLUS_A").solve(rhs)
+            # symmetric mode (diagonal pivots, the ordering of G + Gᵀ): half the time of the default
+            return spla.splu(G, permc_spec="MMD_AT_PLUS_A", options={"SymmetricMode": True}).solve(rhs)
         except RuntimeError:  # exactly singular
             return None
 

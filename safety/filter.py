@@ -46,6 +46,9 @@ from .distributed import filter_distributed
 from .qp_clarabel import solve_qp
 
 _ACTIVE_TOL = 1e-7  # m/s: a row within this of its bound counts as active in clarabel answers
+# closed loop, pruned clarabel: speed cones only for robots whose nominal speed is at least this
+# fraction of v_max (a robot pushed beyond the bound otherwise is caught by the certified polish)
+_WARM_DISC_FRACTION = 0.8
 # m: controlled points and obstacles farther than this from the origin are not positions (a
 # tracking or units error); beyond ~1e154 m squared distances overflow and the k-d tree raises
 MAX_COORDINATE = 1e6
@@ -116,11 +119,13 @@ class SafetyFilter:
     def __init__(self, config: BarrierConfig | None = None) -> None:
         self.config = BarrierConfig() if config is None else config
         self._warm_keys = np.zeros(0, dtype=np.int64)
+        self._near_keys = np.zeros(0, dtype=np.int64)
         self._warm_shape: tuple[int, int] = (-1, -1)
 
     def reset(self) -> None:
         """Forget the warm start."""
         self._warm_keys = np.zeros(0, dtype=np.int64)
+        self._near_keys = np.zeros(0, dtype=np.int64)
         self._warm_shape = (-1, -1)
 
     # ------------------------------------------------------------------ public
@@ -210,7 +215,7 @@ class SafetyFilter:
 
         # pass-through: û satisfies every row and speed bound → u* = û exactly
         if self._satisfies(rows, U, max_speed):
-            self._remember(rows, np.zeros(rows.m, bool), n, n_obs)
+            self._remember(rows, np.zeros(rows.m, bool), n, n_obs, U)
             return U.copy(), self._diag(True, "nominal safe", t0, rows, P, U, U, O, np.zeros(rows.m, bool),
                                         0, True, "pass-through", 0, 0, n_unsafe)
 
@@ -243,7 +248,7 @@ class SafetyFilter:
             methods.append(solved.method)
             iterations += solved.iterations
             n_speed += solved.n_speed
-        self._remember(rows, active, n, n_obs)
+        self._remember(rows, active, n, n_obs, u)
         method = methods[0] if len(methods) == 1 else "mixed"
         status = "optimal"
         if recovering:
@@ -278,6 +283,10 @@ class SafetyFilter:
                 iterations += res.iterations
                 if res.ok:
                     return _Solved(res.u, res.active, int(res.speed_active.sum()), method, iterations)
+            elif closed_loop and self._near_keys.size:
+                solved = self._solve_pruned(rows, U, max_speed)
+                if solved is not None:
+                    return solved
         qp = solve_qp(rows, U, max_speed, max_iter=cfg.clarabel_max_iter, tol=cfg.clarabel_tol)
         if not qp.ok and not qp.reason.startswith("infeasible"):
             # numerical trouble at the tight tolerance: a longer cold active-set run (certified),
@@ -292,6 +301,28 @@ class SafetyFilter:
         if not qp.ok:
             return qp.reason
         return self._finish_clarabel(rows, U, qp.u, max_speed, iterations + qp.iterations)
+
+    def _solve_pruned(self, rows: Rows, U: np.ndarray, max_speed: float | None) -> _Solved | None:
+        """Closed loop beyond ``warm_max_rows``: clarabel on the rows that were within ``warm_slack``
+        of their bound last tick (and those û violates), speed cones only for robots whose nominal is
+        near the bound, then the active set from its active rows on *all* rows (certified: KKT, every
+        row, every speed bound). None when either step fails: the caller solves everything cold."""
+        cfg = self.config
+        at = np.minimum(np.searchsorted(self._near_keys, rows.key), self._near_keys.size - 1)
+        keep = (self._near_keys[at] == rows.key) | (rows.lhs(U) > rows.b)
+        discs = None
+        if max_speed is not None:
+            discs = np.einsum("kd,kd->k", U, U) >= (_WARM_DISC_FRACTION * max_speed) ** 2
+        qp = solve_qp(rows.select(keep), U, max_speed, max_iter=cfg.clarabel_max_iter, tol=cfg.clarabel_tol,
+                      discs=discs)
+        if not qp.ok:
+            return None
+        near = rows.lhs(qp.u) >= rows.b - _ACTIVE_TOL
+        res = solve_active_set(rows, U, max_speed, near, cfg.max_active_set_iterations)
+        if not res.ok:
+            return None
+        return _Solved(res.u, res.active, int(res.speed_active.sum()), "warm clarabel+active-set",
+                       qp.iterations + res.iterations)
 
     def _finish_clarabel(self, rows: Rows, U: np.ndarray, u: np.ndarray, max_speed: float | None,
                          iterations: int) -> _Solved | str:
@@ -367,8 +398,13 @@ class SafetyFilter:
         return res.u, self._diag(True, status, t0, rows, P, U, res.u, O, res.active, res.n_speed, was_safe,
                                  "distributed", 0, 0, n_unsafe)
 
-    def _remember(self, rows: Rows, active: np.ndarray, n: int, n_obs: int) -> None:
+    def _remember(self, rows: Rows, active: np.ndarray, n: int, n_obs: int, u: np.ndarray) -> None:
+        """Keep the active rows' keys for the next tick's warm start and, when they are too many for
+        the warm active set, the keys of every row within ``warm_slack`` of its bound at ``u``."""
         self._warm_keys = np.sort(rows.key[active])
+        self._near_keys = np.zeros(0, dtype=np.int64)
+        if self._warm_keys.size > self.config.warm_max_rows:
+            self._near_keys = np.sort(rows.key[rows.lhs(u) >= rows.b - self.config.warm_slack])
         self._warm_shape = (n, n_obs)
 
     @staticmethod

@@ -62,11 +62,12 @@ def _row_triplets(rows: Rows, row_offset: int) -> tuple[np.ndarray, np.ndarray, 
 def solve_qp(rows: Rows, nominal: np.ndarray, max_speed: float | None, *,
              b_hard: np.ndarray | None = None, soft: np.ndarray | None = None,
              b_soft: np.ndarray | None = None, soft_weight: float = 100.0,
-             max_iter: int = 100, tol: float = 1e-9) -> QPResult:
+             max_iter: int = 100, tol: float = 1e-9, discs: np.ndarray | None = None) -> QPResult:
     """Solve the barrier QP for nominal (N, 2) m/s.
 
     rows: the linear rows; b_hard: their bounds (default rows.b); soft: indices
-    of rows that also get a slack-penalised target b_soft (m/s).
+    of rows that also get a slack-penalised target b_soft (m/s); discs: (N,) bool robots
+    that get the speed cone (default all, when max_speed is given).
     """
     n = nominal.shape[0]
     nv = 2 * n
@@ -97,17 +98,21 @@ def solve_qp(rows: Rows, nominal: np.ndarray, max_speed: float | None, *,
     cones: list = []
     if n_lin:
         cones.append(clarabel.NonnegativeConeT(n_lin))
+    coned = np.zeros(0, dtype=np.int64)
     if max_speed is not None:
-        # s = b − A x = [v_max, u_x, u_y] ∈ SOC(3) for every robot
-        base = n_lin + 3 * np.arange(n)
+        coned = np.arange(n) if discs is None else np.flatnonzero(discs)
+    nc = coned.size
+    if nc:
+        # s = b − A x = [v_max, u_x, u_y] ∈ SOC(3) for every robot with a disc
+        base = n_lin + 3 * np.arange(nc)
         parts_r += [base + 1, base + 2]
-        parts_c += [2 * np.arange(n), 2 * np.arange(n) + 1]
-        parts_v += [-np.ones(n), -np.ones(n)]
-        soc_b = np.zeros((n, 3))
+        parts_c += [2 * coned, 2 * coned + 1]
+        parts_v += [-np.ones(nc), -np.ones(nc)]
+        soc_b = np.zeros((nc, 3))
         soc_b[:, 0] = max_speed
         b_parts.append(soc_b.reshape(-1))
-        cones += [clarabel.SecondOrderConeT(3)] * n
-    n_con = n_lin + (3 * n if max_speed is not None else 0)
+        cones += [clarabel.SecondOrderConeT(3)] * nc
+    n_con = n_lin + 3 * nc
     if n_con == 0:
         return QPResult(nominal.copy(), True, "unconstrained", 0)
     A = sp.csc_matrix(

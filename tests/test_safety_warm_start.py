@@ -11,12 +11,15 @@ import pytest
 
 from swarmdeck.safety import BarrierConfig, SafetyFilter
 from swarmdeck.safety.constraints import barrier_rows
-from swarmdeck.safety.scenes import grid_scene
+from swarmdeck.safety.scenes import arena_for, grid_scene
 
 
-@pytest.mark.parametrize("n,ticks", [(30, 25), (100, 12)])
-def test_warm_answers_equal_cold_solves_over_a_closed_loop(n: int, ticks: int) -> None:
-    cfg = BarrierConfig()
+@pytest.mark.parametrize("n,ticks,path", [(30, 25, "warm active-set"), (100, 12, "warm active-set"),
+                                          (300, 8, "warm clarabel+active-set")])
+def test_warm_answers_equal_cold_solves_over_a_closed_loop(n: int, ticks: int, path: str) -> None:
+    """N ≤ 100: the active set from last tick's active rows; N = 300 (≈ 800 active rows, beyond
+    ``warm_max_rows``): clarabel on the rows near their bound last tick, finished on all rows."""
+    cfg = BarrierConfig() if n <= 100 else BarrierConfig(bounds=arena_for(n, 0.188))
     rng = np.random.default_rng(n)
     x, nominal = grid_scene(n, rng, cfg, pitch=0.188)
     ang = np.arctan2(nominal[:, 1], nominal[:, 0])
@@ -35,7 +38,7 @@ def test_warm_answers_equal_cold_solves_over_a_closed_loop(n: int, ticks: int) -
         methods.append(diag.method)
         x = x + u * cfg.dt
         ang = ang + rng.normal(0, 0.1, n)
-    assert methods.count("warm active-set") >= ticks // 2, methods  # the warm start is really used
+    assert methods.count(path) >= ticks // 2, methods  # the warm start is really used
 
 
 def test_warm_start_forgotten_when_the_robots_change() -> None:
