@@ -46,8 +46,7 @@ FEAS_TOL = 1e-10  # m/s: a certified answer meets every row to this
 
 @dataclass(frozen=True)
 class ActiveSetResult:
-    """u (N, 2); ok; reason; active (m,) rows with a positive multiplier; speed_active (N,); iterations;
-    multipliers (m,) the rows' λ (m/s, zero off the active rows; zeros when not ok)."""
+    """u (N, 2); ok; reason; active (m,) rows with a positive multiplier; speed_active (N,); iterations."""
 
     u: np.ndarray
     ok: bool
@@ -55,7 +54,6 @@ class ActiveSetResult:
     active: np.ndarray
     speed_active: np.ndarray
     iterations: int
-    multipliers: np.ndarray
 
 
 def _project(w: np.ndarray, vmax: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -211,7 +209,7 @@ def solve_active_set(rows: Rows, nominal: np.ndarray, max_speed: float | None,
     lam_cut = np.zeros(n)
 
     def fail(reason: str, it: int) -> ActiveSetResult:
-        return ActiveSetResult(np.zeros((n, 2)), False, reason, W, cut, it, np.zeros(m))
+        return ActiveSetResult(np.zeros((n, 2)), False, reason, W, cut, it)
 
     def certify(u: np.ndarray, work: _Working | None, lam: np.ndarray, it: int) -> ActiveSetResult | None:
         if np.any(rows.lhs(u) - rows.b > feas_tol):
@@ -225,7 +223,7 @@ def solve_active_set(rows: Rows, nominal: np.ndarray, max_speed: float | None,
             return None
         u = clip_speed(u, vmax)  # rounding only
         return ActiveSetResult(u, True, "certified", W & (lam_rows > 0),
-                               speed >= vmax * vmax * (1 - 1e-9), it, np.where(W, lam_rows, 0.0))
+                               speed >= vmax * vmax * (1 - 1e-9), it)
 
     for it in range(1, max_iter + 1):
         aggressive = it <= _AGGRESSIVE_ITERS
