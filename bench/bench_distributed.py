@@ -1,6 +1,6 @@
 """Benchmark of the distributed barrier (issue 18 item 2): per-robot QPs vs the centralised QP.
 
-Run: ``.venv/bin/python bench/bench_distributed.py [--quick]`` (BLAS pinned to one thread).
+Run: ``.venv/bin/python bench/bench_distributed.py [--quick] [--sizes 100,1000]`` (BLAS pinned to one thread).
 
 Same dense random scenes as ``bench_safety.py`` (REFERENCE.md §3: a random 80 % of a
 jittered grid of pitch 0.188 m, random nominal directions, speeds U(0, v_max); N ≤ 100
@@ -95,6 +95,8 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--quick", action="store_true", help="fewer scenes")
     ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--sizes", type=lambda v: {int(x) for x in v.split(",")}, default=None,
+                    help="only these robot counts, e.g. 100,1000")
     args = ap.parse_args()
     rng = np.random.default_rng(args.seed)
     cpu = next((l.split(":", 1)[1].strip() for l in open("/proc/cpuinfo") if l.startswith("model name")), "?")
@@ -104,8 +106,10 @@ def main() -> None:
           "centralised (default) cold ms | distributed closed-loop ms | centralised closed-loop ms | "
           "invasiveness distributed / optimum | violated pair rows |")
     print("| ---: | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |")
-    plan = [(20, 20, 20), (100, 10, 20), (200, 6, 20), (300, 5, 20), (500, 4, 20), (1000, 3, 20)]
+    plan = [(20, 20, 20), (100, 10, 20), (200, 6, 20), (300, 5, 20), (500, 4, 20), (1000, 8, 20)]
     for n, scenes, ticks in plan:
+        if args.sizes is not None and n not in args.sizes:
+            continue
         if args.quick:
             scenes = max(1, scenes // 3)
         r = bench(n, scenes, ticks, rng)
