@@ -48,7 +48,7 @@ from typing import Any, Protocol
 from swarmdeck.console.jobs.bundle import ScriptBundle
 from swarmdeck.console.portal.accounts import Accounts, User
 from swarmdeck.console.portal.db import ACTIVE, FINAL, Database, TransitionConflict
-from swarmdeck.console.portal.errors import BadInput, Conflict, Forbidden, NotFound
+from swarmdeck.console.portal.errors import BadInput, Conflict, Forbidden, NotFound, Unavailable
 from swarmdeck.console.portal.submission import Limits, Manifest, Upload, check_bundle, check_upload, parse_manifest
 
 #: result files a job may have, name -> what it is (the pages engineer adds "video.mp4" here).
@@ -128,6 +128,7 @@ class PortalService:
         (self.data / "jobs").mkdir(parents=True, exist_ok=True)
         self.changed = threading.Condition()  # notified after every change workers/runner/live views wait on
         self.arena: ArenaControl | None = None
+        self._video_lock = threading.Lock()  # videos are made one at a time (video())
 
     # ------------------------------------------------------------------ helpers
     def job_dir(self, job_id: int) -> Path:
@@ -254,7 +255,10 @@ class PortalService:
                 for name, what in RESULT_FILES.items() if (folder / name).is_file()]
 
     def file_path(self, user: User, job_id: int, name: str) -> Path:
-        """The path of result file ``name`` of the job (one of :data:`RESULT_FILES`); 404 otherwise."""
+        """The path of result file ``name`` of the job (one of :data:`RESULT_FILES`); 404 otherwise.
+        ``video.mp4`` is made from the recording on its first request (:meth:`video`)."""
+        if name == "video.mp4":
+            return self.video(user, job_id)
         self._visible_row(user, job_id)
         if name not in RESULT_FILES:
             raise NotFound(f"no result file called {name[:100]!r}", "name")
@@ -262,6 +266,30 @@ class PortalService:
         if not path.is_file():
             raise NotFound(f"job {job_id} has no {name} (yet)", "name")
         return path
+
+    def video(self, user: User, job_id: int) -> Path:
+        """The job's ``video.mp4`` (top-down, H.264), rendered from its recording on the first request
+        (:func:`~swarmdeck.console.recording.export_video.export_video`, one at a time) and kept; 404 while
+        the job is not over or has no recording, 503 when it cannot be made."""
+        from swarmdeck.console.recording.export_video import VideoExportError, export_video
+        from swarmdeck.console.recording.reader import RecordingError, open_recording
+
+        row = self._visible_row(user, job_id)
+        folder = self.job_dir(job_id)
+        out, recording = folder / "video.mp4", folder / "recording.mcap"
+        if out.is_file():
+            return out
+        if row["state"] not in FINAL or not recording.is_file():
+            raise NotFound(f"job {job_id} has no video (yet): it is made from the recording once the run is over",
+                           "name")
+        with self._video_lock:
+            if not out.is_file():
+                try:
+                    with open_recording(recording) as rec:
+                        export_video(rec, out)
+                except (RecordingError, VideoExportError, OSError) as exc:
+                    raise Unavailable(f"the video of job {job_id} could not be made: {exc}", "name") from None
+        return out
 
     # ------------------------------------------------------------------ operators
     def _operator_transition(self, user: User, job_id: int, target: str, action: str,
