@@ -29,6 +29,7 @@ from fastapi.responses import JSONResponse, RedirectResponse
 from starlette.exceptions import HTTPException as StarletteHTTPException
 from starlette.types import ASGIApp, Message, Receive, Scope, Send
 
+from swarmdeck.console.portal import pages
 from swarmdeck.console.portal.api import api_router
 from swarmdeck.console.portal.errors import PortalError, RejectionCounter, TooLarge
 from swarmdeck.console.portal.livefeed import LiveFeed
@@ -118,7 +119,7 @@ def create_app(service: PortalService, *, live: LiveFeed | None = None,
     app.include_router(api_router(service, counter, max_upload_bytes=limit))
 
     # PAGES: the HTML pages and the live view (console/portal/pages.py) are included here:
-    #     app.include_router(pages.router(service, app.state.live))
+    app.include_router(pages.router(service, app.state.live))
 
     @app.get("/", include_in_schema=False)
     def root() -> RedirectResponse:

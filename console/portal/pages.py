@@ -1,0 +1,461 @@
+"""The portal's web pages: sign-in, the researcher's upload, jobs, job page with the live view, the operator's pages.
+
+:func:`router` gives the routes :func:`~swarmdeck.console.portal.app.create_app`
+includes. Pages are rendered on the server (Jinja2 templates in ``templates/``,
+autoescaped); ``static/`` holds the stylesheet and three small vanilla scripts
+(no CDN, no inline script: the Content-Security-Policy allows only this origin).
+Every page calls one :class:`~swarmdeck.console.portal.service.PortalService`
+method, as the JSON API does, so the rules (who sees what, the state machine,
+the audit log) live in one place.
+
+=======================================  =============================================================
+``GET /``                                your jobs (researchers), the operator page (operators), or sign-in
+``GET|POST /signin``, ``POST /signout``  the access token → a session (the API's cookie: HttpOnly,
+                                         SameSite=Strict, Secure over https); failed sign-ins are
+                                         rate-limited by the service
+``GET /jobs``                            your jobs and their states (refreshed every 2 s)
+``GET|POST /submit``                     upload a script (.py or .zip) with the manifest's fields
+``GET /jobs/{id}``                       state, verdict, the verification report, the live view while it
+                                         runs, downloads, cancel (``POST /jobs/{id}/cancel``)
+``GET /jobs/{id}/report``                the verification report page (``console/jobs/report_html.py``)
+``GET /jobs/{id}/live``                  the live view's stream (Server-Sent Events): the runner's
+                                         LiveFeed as :func:`~.live.scene_message` JSON, at most 10 a second;
+                                         only the job's owner and operators
+``GET /jobs/{id}/files/{name}``          downloads; ``video.mp4`` is rendered on the first request
+``GET /operator``                        queue (approve, hold, release, reorder, cancel), arena state,
+                                         EMERGENCY STOP, manual-approval switch (``POST /operator/...``)
+``GET /operator/audit``                  the audit log
+=======================================  =============================================================
+
+Security: every page but sign-in needs the session cookie (else it redirects to
+``/signin``; the live stream answers 401/404). Every form carries a CSRF token
+— the session's, or for the sign-in form a one-time value in its own
+HttpOnly cookie — and a POST without the right one is refused (403) before
+anything is done. A job of somebody else is "not found", as in the API. Bad
+input on a form comes back as the same page with the message (4xx), never a 500.
+"""
+from __future__ import annotations
+
+import asyncio
+import hmac
+import json
+import secrets
+import time
+from pathlib import Path
+from typing import Any
+
+from fastapi import APIRouter, Request
+from fastapi.responses import FileResponse, HTMLResponse, RedirectResponse, Response, StreamingResponse
+from jinja2 import Environment, FileSystemLoader, select_autoescape
+from starlette.concurrency import run_in_threadpool
+from starlette.datastructures import FormData, UploadFile
+
+from swarmdeck.console.portal.accounts import Session
+from swarmdeck.console.portal.api import SESSION_COOKIE
+from swarmdeck.console.portal.db import ACTIVE, FINAL
+from swarmdeck.console.portal.errors import BadInput, PortalError, Unauthorized
+from swarmdeck.console.portal.live import scene_message
+from swarmdeck.console.portal.livefeed import LiveFeed
+from swarmdeck.console.portal.service import RESULT_FILES, PortalService
+
+HERE = Path(__file__).resolve().parent
+STATIC = {"portal.css": "text/css", "live.js": "text/javascript", "refresh.js": "text/javascript",
+          "forms.js": "text/javascript"}
+SIGNIN_COOKIE = "swarmdeck_signin"
+LIVE_PERIOD = 0.1  # s: the live view gets at most 10 Frames a second (the newest at each send)
+CHECK_PERIOD = 1.0  # s: the live stream re-checks the session and the job's state this often
+CSP = ("default-src 'self'; img-src 'self' data:; style-src 'self'; script-src 'self'; frame-src 'self'; "
+       "connect-src 'self'; frame-ancestors 'self'; form-action 'self'; base-uri 'none'")
+REPORT_CSP = "default-src 'none'; style-src 'unsafe-inline'; img-src data:; frame-ancestors 'self'"
+#: the video is listed among the downloads once the run has ended and left a recording (made on first request)
+VIDEO = "video.mp4"
+
+
+def _templates() -> Environment:
+    env = Environment(loader=FileSystemLoader(str(HERE / "templates")), autoescape=select_autoescape(default=True),
+                      trim_blocks=True, lstrip_blocks=True)
+    env.filters["when"] = lambda t: "" if t is None else time.strftime("%Y-%m-%d %H:%M:%S", time.localtime(t))
+    env.filters["size"] = lambda n: f"{n / 1e6:.1f} MB" if n >= 1e5 else f"{n / 1e3:.1f} kB"
+    return env
+
+
+def router(service: PortalService, live: LiveFeed) -> APIRouter:
+    """The pages on ``service``; the live view reads ``live`` (the arena runner's LiveFeed)."""
+    env = _templates()
+    r = APIRouter(include_in_schema=False)
+
+    # ------------------------------------------------------------------ helpers
+    def page(request: Request, name: str, session: Session | None, status: int = 200, **ctx: Any) -> HTMLResponse:
+        html = env.get_template(name).render(user=None if session is None else session.user,
+                                             csrf="" if session is None else session.csrf, **ctx)
+        return HTMLResponse(html, status_code=status, headers={"Content-Security-Policy": CSP,
+                                                               "Cache-Control": "no-store",
+                                                               "X-Content-Type-Options": "nosniff",
+                                                               "Referrer-Policy": "same-origin"})
+
+    def session_of(request: Request) -> Session | None:
+        sid = request.cookies.get(SESSION_COOKIE)
+        if not sid:
+            return None
+        try:
+            return service.accounts.session(sid)
+        except Unauthorized:
+            return None
+
+    def to_signin() -> RedirectResponse:
+        return RedirectResponse("/signin", status_code=303)
+
+    def refused(request: Request, session: Session | None, message: str, status: int) -> HTMLResponse:
+        return page(request, "message.html", session, status=status, title="Refused", message=message)
+
+    async def checked_form(request: Request, session: Session) -> FormData | HTMLResponse:
+        """The POSTed form when its CSRF token is the session's; else the refusal page (403)."""
+        form = await request.form(max_files=1, max_fields=16,
+                                  max_part_size=service.config.limits.max_upload_bytes)
+        token = form.get("csrf")
+        if not isinstance(token, str) or not hmac.compare_digest(token.encode(), session.csrf.encode()):
+            await form.close()
+            return refused(request, session, "refused: this form's CSRF token is missing or wrong — reload the page "
+                                              "and try again", 403)
+        return form
+
+    # ------------------------------------------------------------------ sign-in
+    @r.get("/")
+    def home(request: Request) -> Response:
+        s = session_of(request)
+        if s is None:
+            return to_signin()
+        return RedirectResponse("/operator" if s.user.is_operator else "/jobs", status_code=303)
+
+    def signin_page(request: Request, message: str | None = None, status: int = 200) -> HTMLResponse:
+        nonce = secrets.token_urlsafe(24)
+        resp = page(request, "signin.html", None, status=status, nonce=nonce, message=message)
+        resp.set_cookie(SIGNIN_COOKIE, nonce, max_age=3600, httponly=True, samesite="strict",
+                        secure=request.url.scheme == "https", path="/signin")
+        return resp
+
+    @r.get("/signin")
+    def signin_form(request: Request) -> HTMLResponse:
+        return signin_page(request)
+
+    @r.post("/signin")
+    async def signin(request: Request) -> Response:
+        form = await request.form(max_files=0, max_fields=4)
+        nonce, cookie = form.get("csrf"), request.cookies.get(SIGNIN_COOKIE)
+        if not isinstance(nonce, str) or not cookie or not hmac.compare_digest(nonce.encode(), cookie.encode()):
+            return signin_page(request, "refused: the sign-in form's CSRF token is missing or wrong — try again "
+                                        "from this page", 403)
+        token = form.get("token")
+        client = request.client.host if request.client else "?"
+        try:
+            s = await run_in_threadpool(service.accounts.sign_in, str(token or "").strip(), client)
+        except PortalError as exc:
+            return signin_page(request, exc.message, exc.status)
+        resp = RedirectResponse("/operator" if s.user.is_operator else "/jobs", status_code=303)
+        resp.set_cookie(SESSION_COOKIE, s.id, max_age=int(service.accounts.session_s), httponly=True,
+                        samesite="strict", secure=request.url.scheme == "https", path="/")
+        resp.delete_cookie(SIGNIN_COOKIE, path="/signin")
+        return resp
+
+    @r.post("/signout")
+    async def signout(request: Request) -> Response:
+        s = session_of(request)
+        if s is None:
+            return to_signin()
+        form = await checked_form(request, s)
+        if isinstance(form, Response):
+            return form
+        service.accounts.sign_out(s.id)
+        resp = to_signin()
+        resp.delete_cookie(SESSION_COOKIE, path="/")
+        return resp
+
+    # ------------------------------------------------------------------ researchers
+    @r.get("/jobs")
+    def jobs(request: Request) -> Response:
+        s = session_of(request)
+        if s is None:
+            return to_signin()
+        return page(request, "jobs.html", s, jobs=service.jobs(s.user, mine=True))
+
+    def submit_page(request: Request, s: Session, status: int = 200, message: str | None = None,
+                    field: str | None = None, values: dict[str, Any] | None = None) -> HTMLResponse:
+        limits = service.config.limits
+        return page(request, "submit.html", s, status=status, message=message, field=field, values=values or {},
+                    fleet=limits.fleet, max_duration=limits.max_duration, max_bytes=limits.max_upload_bytes)
+
+    @r.get("/submit")
+    def submit_form(request: Request) -> Response:
+        s = session_of(request)
+        if s is None:
+            return to_signin()
+        return submit_page(request, s)
+
+    @r.post("/submit")
+    async def submit(request: Request) -> Response:
+        s = session_of(request)
+        if s is None:
+            return to_signin()
+        form = await checked_form(request, s)
+        if isinstance(form, Response):
+            return form
+        values = {k: form.get(k) for k in ("name", "robots", "duration", "initial_poses")
+                  if isinstance(form.get(k), str)}
+        values["no_barrier"] = form.get("no_barrier") == "on"
+        try:
+            script = form.get("script")
+            if not isinstance(script, UploadFile) or not script.filename:
+                raise BadInput("choose the script to upload (.py, or a .zip)", "script")
+            data = await script.read(service.config.limits.max_upload_bytes + 1)
+            manifest = manifest_from_form(values, script.filename)
+            job = await run_in_threadpool(service.submit, s.user, script.filename, data, manifest)
+        except PortalError as exc:
+            return submit_page(request, s, exc.status, exc.message, exc.field, values)
+        finally:
+            await form.close()
+        return RedirectResponse(f"/jobs/{job['id']}", status_code=303)
+
+    @r.get("/jobs/{job_id}")
+    def job_page(request: Request, job_id: int) -> Response:
+        s = session_of(request)
+        if s is None:
+            return to_signin()
+        try:
+            job = service.job(s.user, job_id)
+            files = service.files(s.user, job_id)
+        except PortalError as exc:
+            return refused(request, s, exc.message, exc.status)
+        try:
+            report = service.report(s.user, job_id)
+        except PortalError:
+            report = None
+        names = {f["name"] for f in files}
+        if VIDEO not in names and job["state"] in FINAL and "recording.mcap" in names:
+            files.append({"name": VIDEO, "bytes": None, "what": RESULT_FILES[VIDEO] + " (made when first downloaded)"})
+        return page(request, "job.html", s, job=job, files=files, report=report,
+                    live=job["state"] in ACTIVE, final=job["state"] in FINAL)
+
+    @r.post("/jobs/{job_id}/cancel")
+    async def cancel(request: Request, job_id: int) -> Response:
+        s = session_of(request)
+        if s is None:
+            return to_signin()
+        form = await checked_form(request, s)
+        if isinstance(form, Response):
+            return form
+        try:
+            await run_in_threadpool(service.cancel, s.user, job_id)
+        except PortalError as exc:
+            return refused(request, s, exc.message, exc.status)
+        return RedirectResponse(f"/jobs/{job_id}", status_code=303)
+
+    @r.get("/jobs/{job_id}/report")
+    def report_page(request: Request, job_id: int) -> Response:
+        from swarmdeck.console.jobs.report_html import render_html
+
+        s = session_of(request)
+        if s is None:
+            return to_signin()
+        try:
+            report = service.report(s.user, job_id)
+        except PortalError as exc:
+            return refused(request, s, exc.message, exc.status)
+        return HTMLResponse(render_html(report), headers={"Content-Security-Policy": REPORT_CSP,
+                                                          "Cache-Control": "no-store"})
+
+    @r.get("/jobs/{job_id}/files/{name}")
+    async def download(request: Request, job_id: int, name: str) -> Response:
+        s = session_of(request)
+        if s is None:
+            return to_signin()
+        try:
+            path = await run_in_threadpool(service.file_path, s.user, job_id, name)  # video.mp4: made now if need be
+        except PortalError as exc:
+            return refused(request, s, exc.message, exc.status)
+        return FileResponse(path, filename=f"job{job_id}-{name}")
+
+    @r.get("/jobs/{job_id}/live")
+    async def live_stream(request: Request, job_id: int) -> Response:
+        s = session_of(request)
+        if s is None:
+            return Response("not signed in", status_code=401, media_type="text/plain")
+        try:
+            job = service.job(s.user, job_id)
+        except PortalError as exc:
+            return Response(exc.message, status_code=exc.status, media_type="text/plain")
+        return StreamingResponse(live_events(request, s, job_id, job["state"]), media_type="text/event-stream",
+                                 headers={"Cache-Control": "no-store", "X-Accel-Buffering": "no"})
+
+    async def live_events(request: Request, s: Session, job_id: int, state: str):  # noqa: ANN202 - async gen
+        """The stream: ``frame`` events (scene messages, the newest Frame at most every LIVE_PERIOD s),
+        ``state`` events (``{"state", "final"}`` on change); it ends when the job has ended or the session does."""
+        seq, sent_state, checked = -1, None, 0.0
+        while True:
+            now = time.monotonic()
+            if now - checked >= CHECK_PERIOD or sent_state is None:
+                checked = now
+                try:
+                    await run_in_threadpool(service.accounts.session, s.id)  # signed out or disabled: stop
+                except Unauthorized:
+                    yield _sse("state", {"state": state, "final": True, "message": "signed out"})
+                    return
+                state = await run_in_threadpool(service.job_state, job_id) or state
+                if state != sent_state:
+                    sent_state = state
+                    yield _sse("state", {"state": state, "final": state in FINAL})
+                if state in FINAL:
+                    return
+            if await request.is_disconnected():
+                return
+            new, running, frame = await run_in_threadpool(live.wait_newer, seq, CHECK_PERIOD)
+            if new == seq:
+                yield ": idle\n\n"
+                continue
+            seq = new
+            if running == job_id and frame is not None:
+                yield _sse("frame", scene_message(frame, seq))
+            await asyncio.sleep(max(0.0, LIVE_PERIOD - (time.monotonic() - now)))
+
+    # ------------------------------------------------------------------ operators
+    def operator_page(request: Request, s: Session, status: int = 200, message: str | None = None) -> HTMLResponse:
+        everyone = service.jobs(s.user)
+        arena = service.arena_state(s.user)
+        running = arena["running"] or {}
+        sig = "|".join([str(arena["stopped"]).lower(), str(arena["manual_approval"]).lower(),
+                        str(running.get("id", "")), str(running.get("state", "")),
+                        ",".join(str(j["id"]) for j in arena["queue"]),
+                        ",".join(f"{j['id']}:{j['state']}" for j in everyone)])  # as refresh.js sums it up
+        return page(request, "operator.html", s, status=status, message=message, arena=arena, sig=sig,
+                    approve=[j for j in everyone if j["state"] == "approved"],
+                    held=[j for j in everyone if j["state"] == "held"],
+                    jobs=everyone[:100])
+
+    @r.get("/operator")
+    def operator(request: Request) -> Response:
+        s = session_of(request)
+        if s is None:
+            return to_signin()
+        if not s.user.is_operator:
+            return refused(request, s, "this page is for operators", 403)
+        return operator_page(request, s)
+
+    async def operator_post(request: Request, act: Any) -> Response:
+        s = session_of(request)
+        if s is None:
+            return to_signin()
+        form = await checked_form(request, s)
+        if isinstance(form, Response):
+            return form
+        try:
+            await run_in_threadpool(act, s, form)
+        except PortalError as exc:
+            return operator_page(request, s, exc.status, exc.message)
+        return RedirectResponse("/operator", status_code=303)
+
+    @r.post("/operator/jobs/{job_id}/{action}")
+    async def operator_action(request: Request, job_id: int, action: str) -> Response:
+        def act(s: Session, form: FormData) -> None:
+            u = s.user
+            simple = {"approve": service.approve, "hold": service.hold, "release": service.release,
+                      "cancel": service.operator_cancel}
+            if action in simple:
+                simple[action](u, job_id)
+            elif action in ("up", "down", "top"):
+                position = service.job(u, job_id)["position"]
+                if position is None:
+                    raise BadInput(f"job {job_id} is not waiting in the queue", "job")
+                service.move(u, job_id, {"up": max(0, position - 1), "down": position + 1, "top": 0}[action])
+            else:
+                raise BadInput(f"unknown action {action[:40]!r}", "action")
+
+        return await operator_post(request, act)
+
+    @r.post("/operator/estop")
+    async def estop(request: Request) -> Response:
+        return await operator_post(request, lambda s, form: service.emergency_stop(s.user))
+
+    @r.post("/operator/release")
+    async def release(request: Request) -> Response:
+        return await operator_post(request, lambda s, form: service.release_arena(s.user))
+
+    @r.post("/operator/approval")
+    async def approval(request: Request) -> Response:
+        def act(s: Session, form: FormData) -> None:
+            value = form.get("manual")
+            if value not in ("on", "off"):
+                raise BadInput("manual approval is 'on' or 'off'", "manual")
+            service.set_manual_approval(s.user, value == "on")
+
+        return await operator_post(request, act)
+
+    @r.get("/operator/audit")
+    def audit(request: Request) -> Response:
+        s = session_of(request)
+        if s is None:
+            return to_signin()
+        try:
+            entries = service.audit_log(s.user, 500)
+        except PortalError as exc:
+            return refused(request, s, exc.message, exc.status)
+        return page(request, "audit.html", s, entries=entries)
+
+    # ------------------------------------------------------------------ static files
+    @r.get("/static/{name}")
+    def static(name: str) -> Response:
+        if name not in STATIC:
+            return Response("not found", status_code=404, media_type="text/plain")
+        return FileResponse(HERE / "static" / name, media_type=STATIC[name],
+                            headers={"Cache-Control": "no-cache", "X-Content-Type-Options": "nosniff"})
+
+    return r
+
+
+def _sse(event: str, data: Any) -> str:
+    return f"event: {event}\ndata: {json.dumps(data, separators=(',', ':'))}\n\n"
+
+
+def manifest_from_form(values: dict[str, Any], filename: str | None) -> dict[str, Any] | None:
+    """The manifest object from the upload form's fields (the service checks it and names the bad field).
+
+    Numbers are converted when they parse and passed on as typed otherwise (the service then says what is
+    wrong with them). Initial poses: one robot per line, ``x y θ`` (m, m, rad; commas allowed). A .zip with
+    every field empty uses its own ``manifest.json`` (None).
+    """
+    text = {k: str(values.get(k) or "").strip() for k in ("name", "robots", "duration", "initial_poses")}
+    if (filename or "").lower().endswith(".zip") and not any(text.values()) and not values.get("no_barrier"):
+        return None
+    m: dict[str, Any] = {"name": text["name"], "robots": _number(text["robots"], int),
+                         "duration": _number(text["duration"], float), "no_barrier": bool(values.get("no_barrier"))}
+    if not text["name"]:
+        raise BadInput("give the experiment a name", "name")
+    if text["initial_poses"]:
+        m["initial_poses"] = _poses(text["initial_poses"])
+    return m
+
+
+def _number(text: str, kind: type) -> Any:
+    if not text:
+        return None
+    try:
+        return kind(text)
+    except ValueError:
+        try:
+            return float(text) if kind is int else text  # "2.5" robots: the service says it must be an integer
+        except ValueError:
+            return text
+
+
+def _poses(text: str) -> list[list[float]]:
+    rows = []
+    for k, line in enumerate(ln for ln in text.splitlines() if ln.strip()):
+        parts = line.replace(",", " ").split()
+        try:
+            row = [float(p) for p in parts]
+        except ValueError:
+            raise BadInput(f"initial poses, line {k + 1}: {line.strip()[:60]!r} is not three numbers x y θ",
+                           "initial_poses") from None
+        if len(row) != 3:
+            raise BadInput(f"initial poses, line {k + 1}: give three numbers x y θ (m, m, rad), got {len(row)}",
+                           "initial_poses")
+        rows.append(row)
+    return rows

@@ -1,0 +1,47 @@
+// Keeps pages current without a framework: the jobs table updates its state cells in place; the job page and
+// the operator page reload when what they show has changed (never while a form is being sent).
+"use strict";
+(() => {
+  const PERIOD = 1500;
+  let sending = false;
+  document.addEventListener("submit", () => { sending = true; }, true);
+  const get = async (url) => {
+    const r = await fetch(url, { credentials: "same-origin", cache: "no-store" });
+    if (r.status === 401) { location.href = "/signin"; return null; }
+    return r.ok ? r.json() : null;
+  };
+  const every = (fn) => {
+    const tick = async () => { if (!sending) { try { await fn(); } catch (e) { /* offline: try again */ } } setTimeout(tick, PERIOD); };
+    setTimeout(tick, PERIOD);
+  };
+  document.addEventListener("DOMContentLoaded", () => {
+    const table = document.querySelector("table[data-refresh]");
+    if (table) every(async () => {
+      const jobs = await get(table.dataset.refresh);
+      if (!jobs) return;
+      for (const j of jobs) {
+        const row = table.querySelector(`tr[data-job="${j.id}"]`);
+        if (!row) { location.reload(); return; }
+        const state = row.querySelector('[data-field="state"]');
+        if (state.textContent !== j.state) {
+          state.textContent = j.state;
+          state.className = "state state-" + j.state.replace(/ /g, "-");
+        }
+        row.querySelector('[data-field="verdict"]').textContent = j.verdict || "";
+      }
+    });
+    const job = document.getElementById("job");
+    if (job) every(async () => {
+      const j = await get(job.dataset.jobUrl);
+      if (j && (j.state !== job.dataset.state || (j.verdict || "") !== job.dataset.verdict)) location.reload();
+    });
+    const arena = document.getElementById("arena");
+    if (arena) every(async () => {
+      const [a, jobs] = await Promise.all([get(arena.dataset.arenaUrl), get("/api/jobs")]);
+      if (!a || !jobs) return;
+      const sig = [a.stopped, a.manual_approval, (a.running || {}).id, (a.running || {}).state,
+                   a.queue.map((j) => j.id).join(","), jobs.map((j) => `${j.id}:${j.state}`).join(",")].join("|");
+      if (arena.dataset.sig !== sig) location.reload();  // data-sig: the same summary, made by the server
+    });
+  });
+})();
