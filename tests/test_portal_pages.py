@@ -212,3 +212,14 @@ def test_operator_forms_act_and_are_audited(portal):
     alice, _ = sign_in(portal, "alice")
     assert alice.get("/operator").status_code == 403 and alice.get("/operator/audit").status_code == 403
     assert alice.post("/operator/estop", data={"csrf": alice.get("/api/me").json()["csrf"]}).status_code == 403
+
+
+def test_an_account_disabled_mid_session_is_signed_out_at_its_next_request(portal):
+    alice, csrf = sign_in(portal, "alice")
+    jid = portal.submit("alice").json()["id"]
+    assert alice.get("/jobs").status_code == 200
+    portal.service.accounts.disable("alice")
+    for r in (alice.get("/jobs"), alice.get(f"/jobs/{jid}"), upload(alice, csrf, GOOD)):
+        assert r.status_code == 303 and r.headers["location"] == "/signin"
+    assert alice.get(f"/jobs/{jid}/live").status_code == 401
+    assert len(portal.service.jobs(portal.service.accounts.user_named("op1"))) == 1  # nothing was submitted

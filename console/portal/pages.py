@@ -233,7 +233,7 @@ def router(service: PortalService, live: LiveFeed) -> APIRouter:
         if VIDEO not in names and job["state"] in FINAL and "recording.mcap" in names:
             files.append({"name": VIDEO, "bytes": None, "what": RESULT_FILES[VIDEO] + " (made when first downloaded)"})
         return page(request, "job.html", s, job=job, files=files, report=report,
-                    live=job["state"] in ACTIVE, final=job["state"] in FINAL)
+                    live=job["state"] in ACTIVE, final=job["state"] in FINAL, live_states=ACTIVE, final_states=FINAL)
 
     @r.post("/jobs/{job_id}/cancel")
     async def cancel(request: Request, job_id: int) -> Response:

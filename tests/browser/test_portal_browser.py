@@ -77,7 +77,7 @@ def test_a_researcher_uploads_sees_the_verdict_watches_it_run_and_downloads_the_
     page.set_input_files("#script", str(script))
     page.fill("#name", "spin in place")
     page.fill("#robots", "3")
-    page.fill("#duration", "4")
+    page.fill("#duration", "6")
     page.click("#submit-form button[type=submit]")
     page.wait_for_url("**/jobs/*")
     jid = int(page.url.rsplit("/", 1)[1])

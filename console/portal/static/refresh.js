@@ -32,8 +32,17 @@
     });
     const job = document.getElementById("job");
     if (job) every(async () => {
+      // reload when the page would show other things (the verdict, the live view, the downloads); a job going
+      // from "setting up" to "running" keeps its live view and only changes the state shown
       const j = await get(job.dataset.jobUrl);
-      if (j && (j.state !== job.dataset.state || (j.verdict || "") !== job.dataset.verdict)) location.reload();
+      if (!j || j.state === job.dataset.state) return;
+      const kind = (state) => (job.dataset.liveStates.split(",").includes(state) ? "live"
+        : job.dataset.finalStates.split(",").includes(state) ? "final" : "waiting");
+      if (kind(j.state) !== kind(job.dataset.state) || (j.verdict || "") !== job.dataset.verdict) { location.reload(); return; }
+      job.dataset.state = j.state;
+      const shown = document.getElementById("state");
+      shown.textContent = j.state;
+      shown.className = "state state-" + j.state.replace(/ /g, "-");
     });
     const arena = document.getElementById("arena");
     if (arena) every(async () => {
