@@ -4,16 +4,24 @@ Run: ``.venv/bin/python bench/bench_verify.py [--duration 60] [--runs 8] [--robo
 [--overhead-only]``
 (prints markdown tables).
 
+* Sandbox overhead: the same script and the same trusted Arena (barrier on), once in-process
+  (``run_experiment``) and once in the jail (``run_sandboxed``), alternately, ``--repeats`` times;
+  CPU seconds of **every** process a run uses, median over the repeats; overhead =
+  sandboxed / in-process − 1. Target: ≤ 10 % of a 60 s run's CPU.
+
+  - ``unshare`` jail: this process (``getrusage`` self: the trusted loop, barrier, simulator,
+    pipe) + the jail's processes (the script's process, the jail's init and process A, measured
+    by A outside the jail with ``getrusage`` of everything it waited for) + the fork server's
+    CPU during the run (the forks; ``/proc/PID/stat``). The fork server's own start-up (Python,
+    numpy, swarmdeck: once per worker process, shared by all its runs) is shown on its own row.
+  - ``bwrap`` jail: this process + the child's own CPU (it reports it at its end; the jail's
+    init does not pass it up through wait) + this process's waited-for children (bwrap).
+
 * Throughput: ``verify`` of one 20-robot, 60 s (simulated) experiment with 8 runs (each raw and
   wrapped: 16 sandboxed runs) on a local pool of 1 and of 2 workers and on Ray (a local cluster
   started with ``num_cpus=2``, its start-up not counted); verifications per minute (wall) and the
-  ratio to 1 worker. Target: 2 workers ≥ 1.8× one.
-* Sandbox overhead: the same script and the same trusted Arena (barrier on), once in-process
-  (``run_experiment``) and once in the jail (``run_sandboxed``): CPU seconds of this process
-  (``getrusage``; for the sandboxed run plus the child's own CPU time, which it reports at its end:
-  the jail's init does not pass it up through wait), median over ``--repeats``;
-  overhead = sandboxed / in-process − 1.
-  Target: ≤ 10 % of a 60 s run's CPU.
+  ratio to 1 worker. Target: 2 workers ≥ 1.8× one. The load average before and after each row is
+  printed: the ratio only means something on an otherwise idle machine.
 """
 from __future__ import annotations
 
@@ -30,10 +38,12 @@ import tempfile  # noqa: E402
 import time  # noqa: E402
 from pathlib import Path  # noqa: E402
 
+from swarmdeck.console.jobs.confinement import JailConfig, choose_jail  # noqa: E402
 from swarmdeck.console.jobs.executors import LocalPoolExecutor, RayExecutor  # noqa: E402
 from swarmdeck.console.jobs.plant import ArenaPlant  # noqa: E402
 from swarmdeck.console.jobs.sandbox import run_sandboxed  # noqa: E402
 from swarmdeck.console.jobs.verification import VerificationConfig, verify  # noqa: E402
+from swarmdeck.console.jobs.zygote import shared_fork_server  # noqa: E402
 from swarmdeck.devices.arena import Arena  # noqa: E402
 from swarmdeck.devices.runner import run_experiment  # noqa: E402
 from swarmdeck.devices.simulator import ArenaConfig  # noqa: E402
@@ -52,10 +62,14 @@ def experiment(arena):
 '''
 
 
-def cpu_now() -> float:
+def cpu_self() -> float:
     me = resource.getrusage(resource.RUSAGE_SELF)
+    return me.ru_utime + me.ru_stime
+
+
+def cpu_children() -> float:
     kids = resource.getrusage(resource.RUSAGE_CHILDREN)
-    return me.ru_utime + me.ru_stime + kids.ru_utime + kids.ru_stime
+    return kids.ru_utime + kids.ru_stime
 
 
 def throughput(script: Path, config: VerificationConfig, executor) -> float:  # type: ignore[no-untyped-def]
@@ -64,20 +78,33 @@ def throughput(script: Path, config: VerificationConfig, executor) -> float:  # 
     return 60.0 / (time.perf_counter() - start)
 
 
-def overhead(script: Path, robots: int, duration: float, repeats: int) -> tuple[float, float]:
-    inproc, sandboxed = [], []
+def sandboxed_cpu(script: Path, robots: int, duration: float, seed: int, jail: str) -> float:
+    config = ArenaConfig(seed=seed)
+    server = shared_fork_server() if jail == "unshare" else None
+    server_before = server.cpu_s() if server else 0.0
+    me, kids = cpu_self(), cpu_children()
+    out = run_sandboxed(script, lambda n, ic: ArenaPlant(Arena(n, initial_conditions=ic, config=config, duration=duration)),
+                        n_robots=robots, duration=duration, jail=JailConfig(order=(jail,)))
+    assert out.ok and out.child_cpu_s is not None and out.jail == jail, out.error
+    total = cpu_self() - me + out.child_cpu_s
+    total += (server.cpu_s() - server_before) if server else cpu_children() - kids
+    return total
+
+
+def overhead(script: Path, robots: int, duration: float, repeats: int, jails: list[str]) -> dict[str, float]:
+    runs: dict[str, list[float]] = {"in-process": [], **{j: [] for j in jails}}
     for k in range(repeats):
-        c = cpu_now()
+        c = cpu_self()
         direct = run_experiment(script, n_robots=robots, duration=duration, seed=k)
         assert direct.ok, direct.error
-        inproc.append(cpu_now() - c)
-        config = ArenaConfig(seed=k)
-        c = cpu_now()
-        out = run_sandboxed(script, lambda n, ic: ArenaPlant(Arena(n, initial_conditions=ic, config=config, duration=duration)),
-                            n_robots=robots, duration=duration)
-        assert out.ok and out.child_cpu_s is not None, out.error
-        sandboxed.append(cpu_now() - c + out.child_cpu_s)
-    return statistics.median(inproc), statistics.median(sandboxed)
+        runs["in-process"].append(cpu_self() - c)
+        for jail in jails:
+            runs[jail].append(sandboxed_cpu(script, robots, duration, k, jail))
+    return {name: statistics.median(values) for name, values in runs.items()}
+
+
+def load() -> str:
+    return "/".join(f"{x:.1f}" for x in os.getloadavg())
 
 
 def main() -> None:
@@ -88,16 +115,27 @@ def main() -> None:
     parser.add_argument("--repeats", type=int, default=3)
     parser.add_argument("--no-ray", action="store_true")
     parser.add_argument("--overhead-only", action="store_true", help="skip the throughput table")
+    parser.add_argument("--throughput-only", action="store_true", help="skip the overhead table")
     args = parser.parse_args()
     folder = Path(tempfile.mkdtemp())
     script = folder / "circle_swap.py"
     script.write_text(SCRIPT)
     print(f"machine: {platform.machine()}, {os.cpu_count()} cores, Python {platform.python_version()}, "
-          f"load average {os.getloadavg()[0]:.1f}")
-    inproc, sandboxed = overhead(script, args.robots, args.duration, args.repeats)
-    print(f"\n| run ({args.robots} robots, {args.duration:g} s, barrier on) | CPU s (median of {args.repeats}) |\n| --- | ---: |")
-    print(f"| in-process | {inproc:.2f} |\n| sandboxed (jail + child + pipe) | {sandboxed:.2f} |")
-    print(f"| overhead | {100 * (sandboxed / inproc - 1):+.1f} % |")
+          f"load average (1/5/15 min) {load()}")
+    if not args.throughput_only:
+        jails = [j for j in ("unshare", "bwrap") if choose_jail(JailConfig(order=(j,)))[0] == j]
+        startup = shared_fork_server().startup_cpu_s if "unshare" in jails else None
+        medians = overhead(script, args.robots, args.duration, args.repeats, jails)
+        base = medians["in-process"]
+        print(f"\n| run ({args.robots} robots, {args.duration:g} s, barrier on) | CPU s, all processes "
+              f"(median of {args.repeats}) | overhead |\n| --- | ---: | ---: |")
+        print(f"| in-process | {base:.3f} | — |")
+        for jail in jails:
+            print(f"| sandboxed, {jail} jail | {medians[jail]:.3f} | {100 * (medians[jail] / base - 1):+.1f} % |")
+        if startup is not None:
+            print(f"| (fork server start-up, once per worker process) | {startup:.3f} | "
+                  f"{100 * startup / base:+.1f} % of one run |")
+        print(f"\nload average after: {load()}")
     if args.overhead_only:
         return
     config = VerificationConfig(n_robots=args.robots, duration=args.duration, runs=args.runs, seed=0)
@@ -107,12 +145,14 @@ def main() -> None:
 
         ray.init(num_cpus=2, include_dashboard=False, log_to_driver=False)
         rows.append(("Ray (local cluster, num_cpus=2)", RayExecutor("auto")))
-    print(f"\n| executor | verifications / min ({args.runs} runs × raw+wrapped) | ratio to 1 worker |\n| --- | ---: | ---: |")
-    base = None
+    print(f"\n| executor | verifications / min ({args.runs} runs × raw+wrapped) | ratio to 1 worker | load before | load after |"
+          "\n| --- | ---: | ---: | --- | --- |")
+    base_rate = None
     for name, executor in rows:
+        before = load()
         rate = throughput(script, config, executor)
-        base = base or rate
-        print(f"| {name} | {rate:.3f} | {rate / base:.2f}x |", flush=True)
+        base_rate = base_rate or rate
+        print(f"| {name} | {rate:.3f} | {rate / base_rate:.2f}x | {before} | {load()} |", flush=True)
 
 
 if __name__ == "__main__":

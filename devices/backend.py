@@ -33,4 +33,8 @@ class RobotBackend(Protocol):
         """Seconds since the start of the run on this backend's clock."""
 
     def step(self, v: ArrayLike, w: ArrayLike) -> NDArray[np.float64]:
-        """Apply ``(v, ω)`` for one period and return the new poses."""
+        """Apply ``(v, ω)`` for one period and return the new poses.
+
+        (A backend may instead define ``step_nominal(nominal)`` taking the nominal look-ahead
+        velocities ``(N, 2)`` before any limit or filter: :meth:`Arena.step` then hands them over
+        as they are — for robots whose commands are certified elsewhere, as a sandboxed script's are.)"""

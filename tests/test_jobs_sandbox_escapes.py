@@ -6,34 +6,44 @@ import textwrap
 import numpy as np
 import pytest
 
-from swarmdeck.console.jobs.confinement import SandboxLimits, probe, processes_of, sandbox_uid
+from swarmdeck.console.jobs.confinement import JAILS, JailConfig, SandboxLimits, choose_jail, processes_of, sandbox_uid
 from swarmdeck.console.jobs.plant import ArenaPlant
 from swarmdeck.console.jobs.sandbox import run_sandboxed
 from swarmdeck.devices.arena import Arena
 from swarmdeck.devices.simulator import ArenaConfig
 
-pytestmark = pytest.mark.skipif(probe() is not None, reason=f"no confinement here: {probe()}")
 
 
 def plant(n, initial):
     return ArenaPlant(Arena(n, initial_conditions=initial, config=ArenaConfig(seed=1), duration=0.2))
 
 
-def run(tmp_path, body, limits=SandboxLimits(), name="user"):
-    folder = tmp_path / name
-    folder.mkdir(exist_ok=True)
-    script = folder / "script.py"
-    script.write_text(textwrap.dedent(body))
-    return run_sandboxed(script, plant, n_robots=2, duration=0.2, limits=limits)
+@pytest.fixture(params=JAILS)
+def run(request, tmp_path):
+    """Runs a script body in the jail named by the parameter (each escape is tried in both jails)."""
+    jail = JailConfig(order=(request.param,))
+    if choose_jail(jail)[0] is None:
+        pytest.skip(f"no {request.param} jail here: {choose_jail(jail)[1]}")
+
+    def go(body, limits=SandboxLimits(), name="user"):
+        folder = tmp_path / name
+        folder.mkdir(exist_ok=True)
+        script = folder / "script.py"
+        script.write_text(textwrap.dedent(body))
+        out = run_sandboxed(script, plant, n_robots=2, duration=0.2, limits=limits, jail=jail)
+        assert out.jail == request.param
+        return out
+
+    return go
 
 
-def test_no_connection_reaches_the_hosts_loopback(tmp_path):
+def test_no_connection_reaches_the_hosts_loopback(run, tmp_path):
     server = socket.socket()
     server.bind(("127.0.0.1", 0))
     server.listen(4)
     server.setblocking(False)
     port = server.getsockname()[1]
-    out = run(tmp_path, f"""
+    out = run(f"""
         import socket
         try:
             socket.create_connection(("127.0.0.1", {port}), timeout=2)
@@ -50,7 +60,7 @@ def test_no_connection_reaches_the_hosts_loopback(tmp_path):
     server.close()
 
 
-def test_files_outside_the_script_folder_are_invisible_and_nothing_outside_scratch_is_writable(tmp_path):
+def test_files_outside_the_script_folder_are_invisible_and_nothing_outside_scratch_is_writable(run, tmp_path):
     lab = tmp_path / "lab"
     lab.mkdir()
     secret = lab / "secret.txt"
@@ -58,7 +68,7 @@ def test_files_outside_the_script_folder_are_invisible_and_nothing_outside_scrat
     os.chmod(lab, 0o755)
     os.chmod(secret, 0o644)  # readable by anyone on the host: only the jail hides it
     repo_file = os.path.abspath("pyproject.toml")
-    out = run(tmp_path, f"""
+    out = run(f"""
         import os
         for path in ({str(secret)!r}, {repo_file!r}, "/etc/passwd"):
             try:
@@ -87,8 +97,8 @@ def test_files_outside_the_script_folder_are_invisible_and_nothing_outside_scrat
     assert not os.path.exists("/usr/dropped.txt")
 
 
-def test_killing_the_parent_fails_and_the_run_reports_it(tmp_path):
-    out = run(tmp_path, f"""
+def test_killing_the_parent_fails_and_the_run_reports_it(run, tmp_path):
+    out = run(f"""
         import os, signal
         def experiment(arena):
             os.kill({os.getpid()}, signal.SIGKILL)
@@ -96,8 +106,8 @@ def test_killing_the_parent_fails_and_the_run_reports_it(tmp_path):
     assert out.ended_by == "error" and "ProcessLookupError" in out.error_line  # another pid namespace
 
 
-def test_a_fork_bomb_ends_the_run_and_leaves_no_process(tmp_path):
-    out = run(tmp_path, """
+def test_a_fork_bomb_ends_the_run_and_leaves_no_process(run, tmp_path):
+    out = run("""
         import os
         def experiment(arena):
             while True:
@@ -109,16 +119,16 @@ def test_a_fork_bomb_ends_the_run_and_leaves_no_process(tmp_path):
         assert processes_of(uid) == []
 
 
-def test_allocating_10_gb_is_a_memory_error_not_a_swarmdeck_crash(tmp_path):
-    out = run(tmp_path, """
+def test_allocating_10_gb_is_a_memory_error_not_a_swarmdeck_crash(run, tmp_path):
+    out = run("""
         def experiment(arena):
             block = bytearray(10 << 30)
     """)
     assert out.ended_by == "error" and "MemoryError" in out.error_line and "script.py:3" in out.error_line
 
 
-def test_printing_100_mb_keeps_a_truncated_log(tmp_path):
-    out = run(tmp_path, """
+def test_printing_100_mb_keeps_a_truncated_log(run, tmp_path):
+    out = run("""
         import sys
         chunk = "x" * (1 << 20)
         for _ in range(100):
@@ -131,13 +141,13 @@ def test_printing_100_mb_keeps_a_truncated_log(tmp_path):
     assert len(out.log) < 4096 + 200 and "log truncated" in out.log
 
 
-def test_an_endless_loop_at_import_ends_at_the_startup_limit(tmp_path):
-    out = run(tmp_path, "while True:\n    pass\n", SandboxLimits(startup_s=2.0))
+def test_an_endless_loop_at_import_ends_at_the_startup_limit(run, tmp_path):
+    out = run("while True:\n    pass\n", SandboxLimits(startup_s=2.0))
     assert out.ended_by == "startup" and "import time" in out.error_line
 
 
 @pytest.mark.parametrize("where", ["tick", "experiment"])
-def test_an_endless_loop_in_a_tick_stops_the_robots_then_ends_the_run(tmp_path, where):
+def test_an_endless_loop_in_a_tick_stops_the_robots_then_ends_the_run(run, where):
     body = {"tick": """
         import numpy as np
         def experiment(arena):
@@ -151,7 +161,7 @@ def test_an_endless_loop_in_a_tick_stops_the_robots_then_ends_the_run(tmp_path, 
             while True:
                 pass
     """}[where]
-    out = run(tmp_path, body, SandboxLimits(tick_s=0.3, max_overruns=3))
+    out = run(body, SandboxLimits(tick_s=0.3, max_overruns=3))
     assert out.ended_by == "overruns" and "per-tick compute budget" in out.error_line
     assert out.overruns == 3
     arena = out.plant.arena

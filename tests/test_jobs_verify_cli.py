@@ -70,10 +70,12 @@ def test_a_missing_script_or_an_archive_exits_2(tmp_path, capsys):
 def test_without_confinement_untrusted_code_is_refused_unless_trusted(tmp_path, capsys, monkeypatch):
     script = tmp_path / "spin.py"
     script.write_text(SPIN)
-    monkeypatch.setattr(confinement.shutil, "which", lambda name: None)  # a machine without bubblewrap
-    probe.cache_clear()
+    # a machine without bubblewrap and without namespaces
+    monkeypatch.setattr(confinement.shutil, "which", lambda name: None)
+    monkeypatch.setattr(confinement, "probe_unshare", lambda: "Linux namespaces are not available here: EPERM")
+    confinement.probe_bwrap.cache_clear()
     try:
-        assert probe() is not None and "bubblewrap" in probe()
+        assert probe() is not None and "bubblewrap" in probe() and "namespaces" in probe()
         assert main(args(script)) == 2
         err = capsys.readouterr().err
         assert "cannot confine untrusted code" in err and "--trusted" in err
@@ -85,4 +87,4 @@ def test_without_confinement_untrusted_code_is_refused_unless_trusted(tmp_path, 
         report = verify([script], VerificationConfig(n_robots=2, duration=0.5, runs=1, trusted=True), SerialExecutor())
         assert report.verdict == "accepted, may bypass the barrier" and report.to_dict()["config"]["trusted"] is True
     finally:
-        probe.cache_clear()
+        confinement.probe_bwrap.cache_clear()

@@ -34,13 +34,15 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                              "swarmdeck keeps the simulator and the safety filter")
     parser.add_argument("--trusted", action="store_true",
                         help="with --sandbox: run unconfined (resource limits only) where this machine cannot confine")
+    parser.add_argument("--jail", choices=("unshare", "bwrap"), default=None,
+                        help="with --sandbox: confine with this jail only (default: unshare, then bubblewrap)")
     parser.add_argument("--entry", default=None, metavar="FILE",
                         help="with --sandbox and a directory SCRIPT: the file to run, relative to it (default main.py); "
                              "sibling modules are importable")
 
 
 def _run_sandboxed(args: argparse.Namespace) -> int:
-    from swarmdeck.console.jobs.confinement import ConfinementUnavailable
+    from swarmdeck.console.jobs.confinement import ConfinementUnavailable, JailConfig
     from swarmdeck.console.jobs.plant import ArenaPlant
     from swarmdeck.console.jobs.sandbox import run_sandboxed
     from swarmdeck.devices.arena import Arena
@@ -55,7 +57,7 @@ def _run_sandboxed(args: argparse.Namespace) -> int:
 
     try:
         outcome = run_sandboxed(args.script, make_plant, entry=args.entry, n_robots=args.robots, duration=args.duration, rps=args.rps,
-                                trusted=args.trusted)
+                                trusted=args.trusted, jail=JailConfig(order=(args.jail,)) if args.jail else JailConfig())
     except (ConfinementUnavailable, ValueError) as exc:
         raise UsageError(str(exc)) from exc
     if outcome.log:

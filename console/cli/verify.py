@@ -35,7 +35,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--tick-budget", type=float, default=1.0, metavar="S",
                         help="per-tick compute budget of the script, wall seconds (default 1.0)")
     parser.add_argument("--trusted", action="store_true",
-                        help="run the scripts unconfined where this machine cannot confine them (bubblewrap missing)")
+                        help="run the scripts unconfined where this machine cannot confine them (no jail works)")
+    parser.add_argument("--jail", choices=("unshare", "bwrap"), default=None,
+                        help="confine with this jail only (default: unshare — Linux namespaces around a pre-loaded "
+                             "fork server — then bubblewrap)")
     parser.add_argument("--rps", action=argparse.BooleanOptionalAction, default=None,
                         help="resolve `import rps...` to swarmdeck's rps facade (default: when the script imports rps)")
     parser.add_argument("--json", action="store_true", help="print the JSON report (schema swarmdeck.verification/1)")
@@ -54,7 +57,7 @@ def _progress(total_runs: int):  # type: ignore[no-untyped-def]
 def main(args: argparse.Namespace) -> int:
     from swarmdeck.console.cli import UsageError
     from swarmdeck.console.cli.run import check_run_arguments
-    from swarmdeck.console.jobs.confinement import ConfinementUnavailable, SandboxLimits
+    from swarmdeck.console.jobs.confinement import ConfinementUnavailable, JailConfig, SandboxLimits
     from swarmdeck.console.jobs.executors import LocalPoolExecutor, RayExecutor
     from swarmdeck.console.jobs.report_html import render_html
     from swarmdeck.console.jobs.verification import REJECTED, VerificationConfig, verify
@@ -68,7 +71,7 @@ def main(args: argparse.Namespace) -> int:
         limits = SandboxLimits(tick_s=args.tick_budget, wall_s=max(600.0, 20 * args.duration))
         config = VerificationConfig(n_robots=args.robots, duration=args.duration, runs=args.runs, seed=args.seed,
                                     bypass_threshold=args.bypass_threshold, limits=limits, trusted=args.trusted,
-                                    rps=args.rps)
+                                    rps=args.rps, jail=JailConfig(order=(args.jail,)) if args.jail else JailConfig())
         executor = RayExecutor(args.ray) if args.ray else LocalPoolExecutor(args.workers)
     except (ValueError, RuntimeError) as exc:
         raise UsageError(str(exc)) from exc

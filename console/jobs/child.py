@@ -1,15 +1,17 @@
 """The sandboxed side: runs a user's script with robots that live on the other side of a pipe.
 
-Started by :mod:`swarmdeck.console.jobs.sandbox` as
-``python -m swarmdeck.console.jobs.child IN_FD OUT_FD`` (inside the jail). It
+Forked by the fork server (:mod:`swarmdeck.console.jobs.zygote`) inside its ``unshare``
+jail, or started by :mod:`swarmdeck.console.jobs.sandbox` as
+``python -m swarmdeck.console.jobs.child IN_FD OUT_FD`` inside bubblewrap. It
 reads the ``start`` message, applies its resource limits, drops to its own uid
 (when started as root), and runs the script with
 :func:`swarmdeck.devices.runner.run_experiment`: both ``experiment(arena)``
 scripts and unmodified rps scripts work, because every Arena the script builds
 (directly or through the rps ``Robotarium``) gets :class:`PipeRobots` as its
-robots. The child's Arena runs without a safety filter: the trusted side owns
-the simulator (or the robots), the filter, the validation and the recording, and
-treats everything this process sends as untrusted.
+robots. The child's Arena computes the script's nominal velocities and hands them
+over as they are: the trusted side owns the simulator (or the robots), the wheel
+limits, the filter, the validation and the recording, and treats everything this
+process sends as untrusted.
 """
 from __future__ import annotations
 
@@ -20,9 +22,10 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from swarmdeck.console.jobs.protocol import FrameReader, floats, pack, write_frame
+from swarmdeck.console.jobs.protocol import MESSAGE, FrameReader, decode, encode_commands, pack, write_frame
+from swarmdeck.console.jobs.protocol import poses as read_poses
 from swarmdeck.devices.arena import ExperimentFinished
-from swarmdeck.core.kinematics import GritsBotParams
+from swarmdeck.core.kinematics import GritsBotParams, unicycle_to_si
 from swarmdeck.devices.runner import ScriptError, RunnerArenaError, run_experiment
 from swarmdeck.devices.simulator import ArenaConfig
 
@@ -34,17 +37,26 @@ class Link:
         self.reader = FrameReader(in_fd)
         self.out_fd = out_fd
         self.arenas = 0
-        self.arena: Any = None  # the script's Arena, once built
 
-    def send(self, message: dict[str, Any]) -> None:
-        write_frame(self.out_fd, message)
+    def send(self, frame: bytes | dict[str, Any]) -> None:
+        write_frame(self.out_fd, frame)
 
-    def receive(self) -> dict[str, Any]:
+    def receive(self) -> tuple[bytes, bytes]:
         return self.reader.read_blocking()
+
+    def message(self) -> dict[str, Any]:
+        kind, body = self.receive()
+        if kind != MESSAGE:
+            raise RuntimeError(f"the trusted side sent a {kind!r} frame where a message was expected")
+        return decode(body)
 
 
 class PipeRobots:
-    """A :class:`~swarmdeck.devices.backend.RobotBackend` whose robots are on the trusted side."""
+    """A :class:`~swarmdeck.devices.backend.RobotBackend` whose robots are on the trusted side.
+
+    The Arena hands it the nominal look-ahead velocities (:meth:`step_nominal`) before any
+    wheel limit or filter: those run once, on the trusted side, as in an in-process run.
+    """
 
     def __init__(self, link: Link, n_robots: int | None, initial_poses: ArrayLike | None, *,
                  config: ArenaConfig, params: GritsBotParams) -> None:
@@ -55,14 +67,16 @@ class PipeRobots:
         n = int(ic.shape[0]) if ic is not None else int(n_robots)
         self.link, self.n_robots, self.params, self.config = link, n, params, config
         link.send({"t": "arena", "n": n, "initial": None if ic is None else pack(ic)})
-        self._take(link.receive())
+        self._take()
 
-    def _take(self, message: dict[str, Any]) -> None:
-        if message["t"] == "end":
-            raise ExperimentFinished(str(message.get("reason", "the run is over")))
-        self._k = int(message["k"])
-        self._time = float(message["time"])
-        self._poses = floats(message, "poses", (self.n_robots, 3))
+    def _take(self) -> None:
+        kind, body = self.link.receive()
+        if kind == MESSAGE:
+            message = decode(body)
+            if message["t"] == "end":
+                raise ExperimentFinished(str(message.get("reason", "the run is over")))
+            raise RuntimeError(f"unexpected message from the trusted side: {message['t']!r}")
+        self._k, self._time, self._poses = read_poses(body, self.n_robots)
 
     @property
     def poses(self) -> NDArray[np.float64]:
@@ -72,13 +86,17 @@ class PipeRobots:
     def time(self) -> float:
         return self._time
 
-    def step(self, v: ArrayLike, w: ArrayLike) -> NDArray[np.float64]:
-        # "invalid": robot-steps whose non-finite commands the script's own Arena stopped so far
-        invalid = int(getattr(self.link.arena, "invalid_commands", 0))
-        self.link.send({"t": "cmd", "k": self._k, "v": pack(np.asarray(v, dtype=float).reshape(-1)),
-                        "w": pack(np.asarray(w, dtype=float).reshape(-1)), "invalid": invalid})
-        self._take(self.link.receive())
+    def step_nominal(self, nominal: NDArray[np.float64]) -> NDArray[np.float64]:
+        """Send the nominal ``(N, 2)`` for the current poses; returns the next poses."""
+        self.link.send(encode_commands(self._k, nominal))
+        self._take()
         return self._poses.copy()
+
+    def step(self, v: ArrayLike, w: ArrayLike) -> NDArray[np.float64]:
+        """Unicycle commands (for callers without the nominal): sent as the velocities they give."""
+        u = unicycle_to_si(self._poses, np.asarray(v, dtype=float).reshape(-1), np.asarray(w, dtype=float).reshape(-1),
+                           self.params.lookahead)
+        return self.step_nominal(u)
 
 
 def _confine(start: dict[str, Any]) -> None:
@@ -91,6 +109,10 @@ def _confine(start: dict[str, Any]) -> None:
             resource.setrlimit(which, (value, value + 5))  # SIGXCPU at the soft limit, SIGKILL at the hard
         else:
             resource.setrlimit(which, (value, value))
+    if sys.platform == "linux":  # no setuid binary can give the script privileges back
+        import ctypes
+
+        ctypes.CDLL(None).prctl(38, ctypes.c_ulong(1), ctypes.c_ulong(0), ctypes.c_ulong(0), ctypes.c_ulong(0))
     uid = start.get("uid")
     if uid is not None:
         os.setgroups([])
@@ -100,7 +122,7 @@ def _confine(start: dict[str, Any]) -> None:
 
 def main(argv: list[str]) -> int:
     link = Link(int(argv[0]), int(argv[1]))
-    start = link.receive()
+    start = link.message()
     scratch = start.get("scratch")
     if scratch:
         os.chdir(scratch)
@@ -114,7 +136,6 @@ def main(argv: list[str]) -> int:
             start["script"], n_robots=start.get("n_robots"), duration=start.get("duration"), seed=None,
             safety=False, rps=start.get("rps"),
             backend_factory=lambda n, ic, config, params: PipeRobots(link, n, ic, config=config, params=params),
-            on_create=lambda arena: setattr(link, "arena", arena),
         )
         error, error_line = result.error, result.error_line
     except (ScriptError, RunnerArenaError) as exc:

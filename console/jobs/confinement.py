@@ -1,15 +1,24 @@
 """How a sandboxed child is confined: resource limits and the Linux-namespace jail.
 
-The jail is Debian's bubblewrap (REFERENCE.md §11): a new network namespace
+Two jails build the same thing (REFERENCE.md §11): a new network namespace
 (only its own loopback: the host's services, 127.0.0.1 included, are out of
-reach), new pid/ipc/uts namespaces, and a filesystem built from read-only binds
-of what Python needs (the interpreter, its libraries, the installed packages,
-swarmdeck's own modules) plus the script's folder read-only and a private
-scratch directory, the only writable place. When swarmdeck runs as root, the
-child drops to a uid of its own before user code runs (so RLIMIT_NPROC bounds a
-fork bomb: the kernel never enforces it for uid 0). Where bubblewrap is missing
-or the kernel refuses namespaces, :func:`probe` says why and untrusted code is
-refused unless the caller passes ``trusted=True``.
+reach), new pid/ipc/uts/mount namespaces, and a filesystem built from read-only
+binds of what Python needs (the interpreter, its libraries, the installed
+packages, swarmdeck's own modules, :func:`jail_layout`) plus the script's folder
+read-only and a private scratch directory, the only writable place:
+
+* ``"unshare"`` — the namespaces made with the kernel's calls, as ``unshare(1)``
+  does, around a fork of a pre-imported fork server
+  (:mod:`swarmdeck.console.jobs.namespaces`, :mod:`swarmdeck.console.jobs.zygote`):
+  no Python start-up per run. Needs root or unprivileged user namespaces.
+* ``"bwrap"`` — Debian's bubblewrap, a new Python process per run.
+
+:class:`JailConfig` says which to try in which order (default: ``unshare``, then
+``bwrap``); :func:`choose_jail` picks the first that works here and otherwise says
+why none does — then untrusted code is refused unless the caller passes
+``trusted=True``. When swarmdeck runs as root, the child drops to a uid of its
+own before user code runs (so RLIMIT_NPROC bounds a fork bomb: the kernel never
+enforces it for uid 0), and sets no_new_privs.
 """
 from __future__ import annotations
 
@@ -73,20 +82,69 @@ class ConfinementUnavailable(RuntimeError):
     """This machine cannot confine a child (the message says why); untrusted code is refused."""
 
 
-@functools.lru_cache(maxsize=1)
-def probe() -> str | None:
+JAILS = ("unshare", "bwrap")
+
+
+@dataclass(frozen=True)
+class JailConfig:
+    """Which jails to use, in order of preference; the first that works on this machine wins.
+
+    Attributes:
+        order: names from :data:`JAILS`.
+        bwrap: the bubblewrap executable (a name on PATH or a path).
+    """
+
+    order: tuple[str, ...] = JAILS
+    bwrap: str = "bwrap"
+
+    def __post_init__(self) -> None:
+        order = tuple(self.order) if isinstance(self.order, (list, tuple)) else (self.order,)
+        if not order or any(j not in JAILS for j in order) or len(set(order)) != len(order):
+            raise ValueError(f"jail order must name some of {', '.join(JAILS)} once each, got {self.order!r}")
+        object.__setattr__(self, "order", order)
+
+
+@functools.lru_cache(maxsize=8)
+def probe_bwrap(bwrap: str = "bwrap") -> str | None:
     """None when bubblewrap can build the jail here, else the reason it cannot (cached)."""
-    bwrap = shutil.which("bwrap")
-    if bwrap is None:
-        return "bubblewrap (bwrap) is not installed (Debian: apt-get install bubblewrap)"
+    exe = shutil.which(bwrap)
+    if exe is None:
+        return f"bubblewrap ({bwrap}) is not installed (Debian: apt-get install bubblewrap)"
     try:
-        out = subprocess.run([bwrap, "--ro-bind", "/", "/", "--unshare-net", "--unshare-pid", "--die-with-parent",
+        out = subprocess.run([exe, "--ro-bind", "/", "/", "--unshare-net", "--unshare-pid", "--die-with-parent",
                               "true"], capture_output=True, timeout=20, check=False)
     except (OSError, subprocess.TimeoutExpired) as exc:
         return f"bwrap could not start: {exc}"
     if out.returncode != 0:
         return f"bwrap cannot create namespaces here: {out.stderr.decode(errors='replace').strip()[:200]}"
     return None
+
+
+def probe_unshare() -> str | None:
+    """None when the fork server can build ``unshare`` jails here, else the reason it cannot."""
+    from swarmdeck.console.jobs.zygote import ForkServerError, shared_fork_server
+
+    try:
+        reason = shared_fork_server().unavailable
+    except ForkServerError as exc:
+        return str(exc)
+    return None if reason is None else f"Linux namespaces are not available here: {reason}"
+
+
+def choose_jail(config: JailConfig = JailConfig()) -> tuple[str | None, str | None]:
+    """(the first jail of ``config.order`` that works here, None) or (None, why none does)."""
+    reasons = []
+    for jail in config.order:
+        reason = probe_unshare() if jail == "unshare" else probe_bwrap(config.bwrap)
+        if reason is None:
+            return jail, None
+        reasons.append(f"{jail}: {reason}")
+    return None, "; ".join(reasons)
+
+
+def probe(config: JailConfig = JailConfig()) -> str | None:
+    """None when some jail of ``config`` works here, else why none does."""
+    return choose_jail(config)[1]
 
 
 def sandbox_uid() -> int | None:
@@ -136,8 +194,9 @@ def kill_all_of(uid: int, timeout: float = 10.0) -> list[int]:
         time.sleep(0.01)
 
 
-def _visible_paths(script_dir: Path) -> list[tuple[str, Path]]:
-    """(kind, path) binds of the jail: what Python and swarmdeck need, read-only."""
+@functools.lru_cache(maxsize=1)
+def _system_paths() -> tuple[Path, ...]:
+    """What Python and swarmdeck need, read-only (computed once: sysconfig and resolving are slow)."""
     import swarmdeck.console
     import swarmdeck.core
     import swarmdeck.coverage
@@ -151,23 +210,36 @@ def _visible_paths(script_dir: Path) -> list[tuple[str, Path]]:
         roots.add(Path(sysconfig.get_paths()[key]))
     for module in (swarmdeck.console, swarmdeck.core, swarmdeck.coverage, swarmdeck.devices, swarmdeck.safety):
         roots.add(Path(module.__file__).resolve().parent)  # editable installs live outside site-packages
-    binds = [("ro", p.resolve()) for p in sorted(roots) if p.exists()]
+    paths = [p.resolve() for p in sorted(roots) if p.exists()]
     # drop paths inside another bound path
-    kept = [(k, p) for k, p in binds if not any(p != q and p.is_relative_to(q) for _, q in binds)]
-    kept.append(("ro", script_dir.resolve()))
-    return kept
+    return tuple(p for p in paths if not any(p != q and p.is_relative_to(q) for q in paths))
 
 
-def bwrap_command(child_argv: list[str], script_dir: Path, scratch: Path) -> list[str]:
+def _visible_paths(script_dir: Path) -> list[tuple[str, Path]]:
+    """(kind, path) binds of the jail: what Python and swarmdeck need, and the script's folder, read-only."""
+    return [("ro", p) for p in _system_paths()] + [("ro", script_dir.resolve())]
+
+
+_MERGED_USR_LINKS = ("/lib", "/lib64", "/bin", "/sbin", "/lib32", "/libx32")
+
+
+def jail_layout(script_dir: Path, scratch: Path) -> tuple[list[tuple[str, Path]], list[tuple[str, Path]]]:
+    """What the jail's filesystem holds: binds ``("ro" | "rw", path)`` (each at its own path; the
+    scratch folder the only "rw" one) and symlinks ``(target, path)`` (merged /usr: /lib -> usr/lib)."""
+    symlinks = [(os.readlink(link), link) for link in map(Path, _MERGED_USR_LINKS) if link.is_symlink()]
+    return _visible_paths(script_dir) + [("rw", scratch.resolve())], symlinks
+
+
+def bwrap_command(child_argv: list[str], script_dir: Path, scratch: Path, bwrap: str = "bwrap") -> list[str]:
     """The bubblewrap command line running ``child_argv`` in the jail (scratch writable)."""
-    argv = [shutil.which("bwrap") or "bwrap", "--unshare-net", "--unshare-pid", "--unshare-ipc", "--unshare-uts",
+    argv = [shutil.which(bwrap) or bwrap, "--unshare-net", "--unshare-pid", "--unshare-ipc", "--unshare-uts",
             "--die-with-parent", "--new-session", "--proc", "/proc", "--dev", "/dev", "--tmpfs", "/tmp"]
     made: set[Path] = {Path("/"), Path("/proc"), Path("/dev"), Path("/tmp")}
-    for link in map(Path, ("/lib", "/lib64", "/bin", "/sbin", "/lib32", "/libx32")):
-        if link.is_symlink():  # merged /usr (Debian 12): /lib -> usr/lib
-            argv += ["--symlink", os.readlink(link), str(link)]
-            made.add(link)
-    for kind, path in _visible_paths(script_dir) + [("rw", scratch.resolve())]:
+    binds, symlinks = jail_layout(script_dir, scratch)
+    for target, link in symlinks:
+        argv += ["--symlink", target, str(link)]
+        made.add(link)
+    for kind, path in binds:
         for parent in reversed(path.parents):  # parents first, world-traversable (bwrap makes them 0700)
             if parent not in made:
                 argv += ["--perms", "0755", "--dir", str(parent)]

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import multiprocessing
 import os
+import queue
 from collections.abc import Callable, Sequence
 from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
 from typing import Any
@@ -36,22 +37,49 @@ class SerialExecutor:
         return results
 
 
+def _pin_worker(cpus: Any) -> None:
+    """Pool initializer: this worker process — and the fork server and jails it starts — runs on one core."""
+    try:
+        cpu = cpus.get(timeout=5)
+    except queue.Empty:
+        return
+    try:
+        os.sched_setaffinity(0, {cpu})
+    except OSError:
+        pass
+
+
 class LocalPoolExecutor:
-    """A pool of ``workers`` local processes (default: the number of cores); no service needed."""
+    """A pool of ``workers`` local processes (default: the number of cores); no service needed.
+
+    ``pin``: each worker runs on a core of its own (worker k on core k mod cores), with the
+    sandboxed script it drives. The trusted loop and the script take turns every tick, so
+    sharing one core keeps both processes' caches warm and their wake-ups local, and two
+    workers never fight over one core (bench/RESULTS.md "verification").
+    """
 
     name = "local"
 
-    def __init__(self, workers: int | None = None) -> None:
+    def __init__(self, workers: int | None = None, pin: bool = True) -> None:
         if workers is not None and (isinstance(workers, bool) or not isinstance(workers, int) or workers < 1):
             raise ValueError(f"workers must be a positive integer, got {workers!r}")
         self.workers = workers or os.cpu_count() or 1
+        self.pin = pin
 
     def run(self, tasks: Sequence[RunTask], on_done: OnDone, cancelled: Callable[[], bool]) -> list[dict | None]:
         results: list[dict | None] = [None] * len(tasks)
         if not tasks:
             return results
         context = multiprocessing.get_context("spawn")  # no fork of a threaded caller (the portal)
-        with ProcessPoolExecutor(max_workers=min(self.workers, len(tasks)), mp_context=context) as pool:
+        workers = min(self.workers, len(tasks))
+        extra: dict[str, Any] = {}
+        if self.pin and hasattr(os, "sched_getaffinity"):
+            cores = sorted(os.sched_getaffinity(0))
+            cpus = context.Queue()
+            for k in range(workers):
+                cpus.put(cores[k % len(cores)])
+            extra = {"initializer": _pin_worker, "initargs": (cpus,)}
+        with ProcessPoolExecutor(max_workers=workers, mp_context=context, **extra) as pool:
             pending: dict[Future, int] = {pool.submit(run_task, t): k for k, t in enumerate(tasks)}
             finished = 0
             while pending:

@@ -149,11 +149,13 @@ class ArenaPlant:
     def observe(self) -> tuple[float, NDArray[np.float64]]:
         return self.arena.time, self.arena.poses()
 
-    def apply(self, v: NDArray[np.float64] | None, w: NDArray[np.float64] | None) -> None:
-        if v is None or w is None:
+    def apply(self, nominal: NDArray[np.float64] | None) -> None:
+        """One tick: the script's nominal look-ahead velocities (N, 2) through this Arena's pipeline
+        (wheel limits, barrier when on; NaN/inf rows stopped and counted); None: stop."""
+        if nominal is None:
             self.arena.stop()
         else:
-            self.arena.set_unicycle(v, w)
+            self.arena.set_velocities(nominal)
         self.arena.step()
 
     def finished(self) -> bool:

@@ -1,21 +1,28 @@
 """The pipe protocol between the trusted side and a sandboxed script (one exchange per tick).
 
-Frames are a 4-byte little-endian length and a msgpack map (msgspec). Arrays
-travel as raw little-endian float64 bytes with their shape implied by the
-message (``poses``: N × 3, ``v``/``w``: N). The trusted side decodes everything
-the child sends with :func:`decode` and :func:`floats`, which check sizes,
+A frame is a 4-byte little-endian length, a kind byte and a body. The two
+frames of every tick are fixed binary layouts — no encoder, one ``os.write``
+each, the arrays as raw little-endian float64:
+
+* ``P`` poses, parent → child: tick ``k`` (int64), time (float64, s), poses N × 3;
+* ``C`` commands, child → parent: tick ``k`` (int64), the nominal single-integrator
+  velocities of the look-ahead points N × 2 (m/s; the trusted side certifies them:
+  wheel limits, barrier, NaN/inf rows stopped and counted).
+
+Everything else (once a run) is a ``M`` frame holding a msgpack map (msgspec).
+The trusted side decodes everything the child sends with :meth:`FrameReader.next`,
+:func:`commands`, :func:`decode` and :func:`floats`, which check sizes, kinds,
 types and shapes, so a child that writes garbage gets a clear
 :class:`ProtocolError`, never a crash of the parent.
 
 Messages, parent → child:
     ``{"t": "start", ...}`` the run's settings (see :mod:`.child`);
-    ``{"t": "poses", "k": tick, "time": s, "poses": bytes}`` the poses the script sees;
+    ``P`` frames: the poses the script sees;
     ``{"t": "end", "reason": str}`` the run is over (the script's next step ends it).
 Child → parent:
     ``{"t": "ready"}`` swarmdeck's side of the child is loaded and confined; the script starts now;
-    ``{"t": "arena", "n": N, "initial": bytes | None, "duration": s | None}`` the script built its Arena;
-    ``{"t": "cmd", "k": tick, "v": bytes, "w": bytes, "invalid": count}`` unicycle commands for the
-    poses of tick k; ``invalid``: robot-steps whose NaN/inf commands the script's Arena stopped so far;
+    ``{"t": "arena", "n": N, "initial": bytes | None}`` the script built its Arena;
+    ``C`` frames: commands for the poses of tick k;
     ``{"t": "done", "error": str | None, "error_line": str | None, "cpu_s": s}`` the script finished
     (``cpu_s``: the child's own CPU time, as it reports it: informational only).
 """
@@ -31,8 +38,11 @@ from numpy.typing import NDArray
 
 MAX_FRAME = 1 << 20  # bytes; 50 robots' poses are 1.2 kB
 _HEADER = struct.Struct("<I")
+_POSES = struct.Struct("<Icqd")  # length, kind, k, time
+_COMMANDS = struct.Struct("<Icq")  # length, kind, k
 _encoder = msgspec.msgpack.Encoder()
 _decoder = msgspec.msgpack.Decoder()
+MESSAGE, POSES, COMMANDS = b"M", b"P", b"C"
 
 
 class ProtocolError(Exception):
@@ -40,13 +50,25 @@ class ProtocolError(Exception):
 
 
 def encode(message: dict[str, Any]) -> bytes:
-    """One frame: length header and msgpack body."""
+    """One ``M`` frame: length header, kind and msgpack body."""
     body = _encoder.encode(message)
-    return _HEADER.pack(len(body)) + body
+    return _HEADER.pack(len(body) + 1) + MESSAGE + body
+
+
+def encode_poses(k: int, time: float, poses: NDArray[np.float64]) -> bytes:
+    """One ``P`` frame: tick ``k``, ``time`` s, ``poses`` (N, 3)."""
+    data = np.ascontiguousarray(poses, dtype="<f8").tobytes()
+    return _POSES.pack(len(data) + 17, POSES, k, time) + data
+
+
+def encode_commands(k: int, nominal: NDArray[np.float64]) -> bytes:
+    """One ``C`` frame: tick ``k``, nominal look-ahead velocities (N, 2)."""
+    data = np.ascontiguousarray(nominal, dtype="<f8").tobytes()
+    return _COMMANDS.pack(len(data) + 9, COMMANDS, k) + data
 
 
 def decode(body: bytes) -> dict[str, Any]:
-    """The message in a frame body; ProtocolError unless it is a map with a string ``t``."""
+    """The message in an ``M`` frame's body; ProtocolError unless it is a map with a string ``t``."""
     try:
         message = _decoder.decode(body)
     except (msgspec.DecodeError, ValueError, RecursionError) as exc:  # UnicodeDecodeError is a ValueError
@@ -54,6 +76,22 @@ def decode(body: bytes) -> dict[str, Any]:
     if not isinstance(message, dict) or not isinstance(message.get("t"), str):
         raise ProtocolError(f"frame is not a message with a type: {str(message)[:80]!r}")
     return message
+
+
+def poses(body: bytes, n: int) -> tuple[int, float, NDArray[np.float64]]:
+    """(k, time, poses (n, 3)) of a ``P`` body; ProtocolError on a wrong size."""
+    if len(body) != 16 + 24 * n:
+        raise ProtocolError(f"poses frame of {len(body)} bytes, expected {16 + 24 * n} for {n} robots")
+    k, time = struct.unpack_from("<qd", body)
+    return k, time, np.frombuffer(body, dtype="<f8", offset=16).reshape(n, 3).astype(np.float64)
+
+
+def commands(body: bytes, n: int) -> tuple[int, NDArray[np.float64]]:
+    """(k, nominal (n, 2)) of a ``C`` body; ProtocolError on a wrong size."""
+    if len(body) != 8 + 16 * n:
+        raise ProtocolError(f"commands frame of {len(body)} bytes, expected {8 + 16 * n} for {n} robots")
+    (k,) = struct.unpack_from("<q", body)
+    return k, np.frombuffer(body, dtype="<f8", offset=8).reshape(n, 2).astype(np.float64)
 
 
 def pack(array: NDArray[np.float64]) -> bytes:
@@ -72,9 +110,9 @@ def floats(message: dict[str, Any], key: str, shape: tuple[int, ...]) -> NDArray
     return np.frombuffer(raw, dtype="<f8").reshape(shape).astype(np.float64)
 
 
-def write_frame(fd: int, message: dict[str, Any]) -> None:
-    """Write one whole frame to a blocking file descriptor."""
-    view = memoryview(encode(message))
+def write_frame(fd: int, frame: bytes | dict[str, Any]) -> None:
+    """Write one whole frame (encoded bytes, or a message to encode) to a blocking file descriptor."""
+    view = memoryview(frame if isinstance(frame, bytes) else encode(frame))
     while view:
         written = os.write(fd, view)
         view = view[written:]
@@ -95,24 +133,28 @@ class FrameReader:
         self._buffer += chunk
         return True
 
-    def next(self) -> dict[str, Any] | None:
-        """The next complete message, or None if the buffer holds no whole frame yet."""
-        if len(self._buffer) < _HEADER.size:
+    def next(self) -> tuple[bytes, bytes] | None:
+        """(kind, body) of the next complete frame, or None if the buffer holds no whole frame yet."""
+        buffer = self._buffer
+        if len(buffer) < 5:
             return None
-        (length,) = _HEADER.unpack_from(self._buffer)
-        if length > MAX_FRAME:
-            raise ProtocolError(f"frame of {length} bytes exceeds the limit of {MAX_FRAME}")
-        if len(self._buffer) < _HEADER.size + length:
+        (length,) = _HEADER.unpack_from(buffer)
+        if length > MAX_FRAME or length < 1:
+            raise ProtocolError(f"frame of {length} bytes is outside 1..{MAX_FRAME}")
+        end = 4 + length
+        if len(buffer) < end:
             return None
-        body = bytes(self._buffer[_HEADER.size : _HEADER.size + length])
-        del self._buffer[: _HEADER.size + length]
-        return decode(body)
+        kind, body = bytes(buffer[4:5]), bytes(buffer[5:end])
+        del buffer[:end]
+        if kind not in (MESSAGE, POSES, COMMANDS):
+            raise ProtocolError(f"unknown frame kind {kind!r}")
+        return kind, body
 
-    def read_blocking(self) -> dict[str, Any]:
-        """The next message, blocking; EOFError when the other side closed the pipe."""
+    def read_blocking(self) -> tuple[bytes, bytes]:
+        """The next frame, blocking; EOFError when the other side closed the pipe."""
         while True:
-            message = self.next()
-            if message is not None:
-                return message
+            frame = self.next()
+            if frame is not None:
+                return frame
             if not self.feed():
                 raise EOFError("the other side closed the pipe")

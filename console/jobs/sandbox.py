@@ -1,10 +1,15 @@
 """The trusted side of a sandboxed run: start the jailed child, exchange poses and commands per tick.
 
-The user's script runs in :mod:`swarmdeck.console.jobs.child`, inside the jail
-of :mod:`swarmdeck.console.jobs.confinement`. This module owns the loop: each
-tick it sends the poses the script may see and waits — at most the per-tick
-budget — for the script's commands, then hands them to the :class:`Plant`
-(the simulator with the safety filter, later the real robots). A tick whose
+The user's script runs in :mod:`swarmdeck.console.jobs.child`, inside a jail
+chosen by :class:`~swarmdeck.console.jobs.confinement.JailConfig`: by default
+``unshare`` — a fresh set of Linux namespaces around a fork of the worker's
+pre-imported fork server (:mod:`swarmdeck.console.jobs.zygote`), no Python start-up
+per run — else bubblewrap (a new Python per run); where neither works, untrusted
+code is refused. This module owns the loop: each tick it sends the poses the
+script may see (one binary frame) and waits — at most the per-tick budget — for
+the script's nominal velocities (one binary frame), then hands them to the
+:class:`Plant` (the simulator with the wheel limits and the safety filter, later
+the real robots). A tick whose
 commands do not arrive in time stops the robots for that tick;
 ``max_overruns`` such ticks in a row end the run. Whatever the child does (dies,
 hangs, floods its output, sends garbage), the run ends with a
@@ -53,31 +58,46 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Protocol
 
+import msgspec
 import numpy as np
 from numpy.typing import NDArray
 
 from swarmdeck.console.jobs.bundle import ScriptBundle
 from swarmdeck.console.jobs.confinement import (
     ConfinementUnavailable,
+    JailConfig,
     SandboxLimits,
     bwrap_command,
+    choose_jail,
+    jail_layout,
     kill_all_of,
-    probe,
     sandbox_uid,
 )
-from swarmdeck.console.jobs.protocol import FrameReader, ProtocolError, floats, pack, write_frame
+from swarmdeck.console.jobs.protocol import (
+    COMMANDS,
+    MESSAGE,
+    FrameReader,
+    ProtocolError,
+    commands,
+    decode,
+    encode_poses,
+    floats,
+    write_frame,
+)
+from swarmdeck.console.jobs.zygote import CHILD_ENV, ForkServerError, shared_fork_server
 
 
 class Plant(Protocol):
-    """What the trusted loop drives: the simulator (or robots) behind the safety filter."""
+    """What the trusted loop drives: the simulator (or robots) behind the wheel limits and the safety filter."""
 
     n: int
 
     def observe(self) -> tuple[float, NDArray[np.float64]]:
         """(time s, poses (N, 3)) the script may see now."""
 
-    def apply(self, v: NDArray[np.float64] | None, w: NDArray[np.float64] | None) -> None:
-        """One tick with the script's unicycle commands (N,) each; None: the script missed the tick (stop)."""
+    def apply(self, nominal: NDArray[np.float64] | None) -> None:
+        """One tick with the script's nominal look-ahead velocities (N, 2), m/s (rows may be NaN: the
+        plant stops those robots); None: the script missed the tick (stop)."""
 
     def finished(self) -> bool:
         """True when the run's declared duration is over."""
@@ -97,6 +117,9 @@ class SandboxOutcome:
     ``"wall"`` (wall-time limit), ``"crash"`` (the child died: a resource limit, a signal),
     ``"protocol"`` (the child sent something invalid), ``"arena"`` (the Arena it asked for was
     refused), ``"cancelled"``. ``error_line``: the reason in one line (None for clean ends).
+    ``jail``: "unshare", "bwrap" or None (unconfined, ``trusted``). ``child_cpu_s``: CPU time of
+    the sandboxed processes — measured by the jail's trusted process A with the ``unshare`` jail,
+    else as the script's process reported it (informational, untrusted).
     """
 
     ended_by: str = "script"
@@ -105,8 +128,8 @@ class SandboxOutcome:
     n_robots: int | None = None
     ticks: int = 0
     overruns: int = 0
-    child_cpu_s: float | None = None  # the child's CPU time as it reported it (informational, untrusted)
-    script_invalid: int = 0  # robot-steps the script's own Arena stopped for NaN/inf commands (it says)
+    child_cpu_s: float | None = None
+    jail: str | None = None
     log: str = ""
     log_bytes: int = 0
     plant: Any = field(default=None, repr=False)
@@ -117,26 +140,29 @@ class SandboxOutcome:
 
 
 class _LogDrain(threading.Thread):
-    """Reads the child's stdout+stderr to the end, keeping the first ``limit`` bytes."""
+    """Reads the child's stdout+stderr (a pipe) to the end, keeping the first ``limit`` bytes."""
 
-    def __init__(self, stream: Any, limit: int) -> None:
+    def __init__(self, fd: int, limit: int) -> None:
         super().__init__(daemon=True)
-        self.stream, self.limit = stream, limit
+        self.fd, self.limit = fd, limit
         self.kept = bytearray()
         self.total = 0
 
     def run(self) -> None:
-        while True:
-            try:
-                chunk = self.stream.read1(1 << 16)
-            except (OSError, ValueError):
-                return
-            if not chunk:
-                return
-            self.total += len(chunk)
-            room = self.limit - len(self.kept)
-            if room > 0:
-                self.kept += chunk[:room]
+        try:
+            while True:
+                try:
+                    chunk = os.read(self.fd, 1 << 16)
+                except OSError:
+                    return
+                if not chunk:
+                    return
+                self.total += len(chunk)
+                room = self.limit - len(self.kept)
+                if room > 0:
+                    self.kept += chunk[:room]
+        finally:
+            os.close(self.fd)
 
     def text(self) -> str:
         text = self.kept.decode("utf-8", errors="replace")
@@ -145,66 +171,23 @@ class _LogDrain(threading.Thread):
         return text
 
 
-class _Child:
-    """The jailed process and both ends of its pipes."""
+class _Started:
+    """A child started as a new program (bubblewrap, or unconfined): a Popen."""
 
-    def __init__(self, script_dir: Path, scratch: Path, confined: bool) -> None:
-        to_child_r, self.to_child = os.pipe()
-        self.from_child, from_child_w = os.pipe()
-        argv = [sys.executable, "-s", "-m", "swarmdeck.console.jobs.child", str(to_child_r), str(from_child_w)]
-        if confined:
-            argv = bwrap_command(argv, script_dir, scratch)
-        env = {"PATH": "/usr/bin:/bin", "LANG": "C.UTF-8", "HOME": str(scratch), "TMPDIR": str(scratch),
-               "PYTHONHASHSEED": "0", "PYTHONDONTWRITEBYTECODE": "1", "PYTHONUNBUFFERED": "1",
-               "OPENBLAS_NUM_THREADS": "1", "OMP_NUM_THREADS": "1", "MKL_NUM_THREADS": "1"}
+    def __init__(self, argv: list[str], in_fd: int, out_fd: int, log_fd: int, scratch: Path) -> None:
+        env = dict(CHILD_ENV, HOME=str(scratch), TMPDIR=str(scratch))
+        self.proc = subprocess.Popen(argv, stdin=subprocess.DEVNULL, stdout=log_fd, stderr=log_fd,
+                                     pass_fds=(in_fd, out_fd), env=env, cwd=str(scratch), start_new_session=True)
+        self.error: str | None = None
+        self.cpu_s: float | None = None
+
+    def wait(self, timeout: float) -> int | None:
         try:
-            self.proc = subprocess.Popen(argv, stdin=subprocess.DEVNULL, stdout=subprocess.PIPE,
-                                         stderr=subprocess.STDOUT, pass_fds=(to_child_r, from_child_w), env=env,
-                                         cwd=str(scratch), start_new_session=True)
-        finally:
-            os.close(to_child_r)
-            os.close(from_child_w)
-        self.reader = FrameReader(self.from_child)
-        self.eof = False
+            return self.proc.wait(timeout=timeout)
+        except subprocess.TimeoutExpired:
+            return None
 
-    def send(self, message: dict[str, Any]) -> bool:
-        try:
-            write_frame(self.to_child, message)
-            return True
-        except (BrokenPipeError, OSError):
-            return False
-
-    def send_closed(self) -> None:
-        """Close our writing end: a child blocked reading sees the end of the file."""
-        try:
-            os.close(self.to_child)
-        except OSError:
-            pass
-        self.to_child = -1
-
-    def receive(self, deadline: float) -> dict[str, Any] | None:
-        """The next message, or None at the deadline; EOFError when the child closed its end."""
-        while True:
-            message = self.reader.next()
-            if message is not None:
-                return message
-            if self.eof:
-                raise EOFError
-            timeout = deadline - time.monotonic()
-            if timeout <= 0:
-                return None
-            ready, _, _ = select.select([self.from_child], [], [], timeout)
-            if ready and not self.reader.feed():
-                self.eof = True
-
-    def kill(self, uid: int | None, grace: float = 0.0) -> None:
-        """End the child: after ``grace`` s to exit by itself (a clean end), SIGKILL to all of it."""
-        self.send_closed()
-        if grace > 0:
-            try:
-                self.proc.wait(timeout=grace)
-            except subprocess.TimeoutExpired:
-                pass
+    def kill(self) -> None:
         try:
             os.killpg(self.proc.pid, signal.SIGKILL)  # the whole session: bwrap and all it started
         except (ProcessLookupError, PermissionError):
@@ -214,23 +197,151 @@ class _Child:
         except ProcessLookupError:
             pass
         self.proc.wait()
-        if uid is not None:
-            kill_all_of(uid)
+
+
+class _Forked:
+    """A child forked by the fork server into a fresh ``unshare`` jail; process A reports how it ended."""
+
+    def __init__(self, root: Path, binds: list, symlinks: list, fds: tuple[int, int, int]) -> None:
+        self.status_fd, status_w = os.pipe()
+        try:
+            self.pid = shared_fork_server().spawn(root, binds, symlinks, (*fds, status_w))
+        except BaseException:
+            os.close(self.status_fd)
+            raise
+        finally:
+            os.close(status_w)
+        self.status: dict[str, Any] | None = None
+        self._data = b""
+
+    def _read_status(self, timeout: float) -> bool:
+        """Read A's report until the pipe closes (A ended) or ``timeout``; True once it closed."""
+        deadline = time.monotonic() + timeout
+        while self.status is None:
+            left = deadline - time.monotonic()
+            ready, _, _ = select.select([self.status_fd], [], [], max(0.0, left))
+            if not ready:
+                return False
+            chunk = os.read(self.status_fd, 1 << 12)
+            if chunk:
+                self._data += chunk
+                continue
+            try:
+                status = msgspec.msgpack.decode(self._data) if self._data else {}
+            except msgspec.DecodeError:
+                status = {}
+            self.status = status if isinstance(status, dict) else {}
+        return True
+
+    @property
+    def error(self) -> str | None:
+        return None if self.status is None else self.status.get("error")
+
+    @property
+    def cpu_s(self) -> float | None:
+        cpu = None if self.status is None else self.status.get("cpu_s")
+        return float(cpu) if isinstance(cpu, (int, float)) else None
+
+    def wait(self, timeout: float) -> int | None:
+        if not self._read_status(timeout):
+            return None
+        code = self.status.get("code") if self.status else None
+        return code if isinstance(code, int) else -signal.SIGKILL
+
+    def kill(self) -> None:
+        if self.status is None and not self._read_status(0.0):
+            try:
+                os.killpg(self.pid, signal.SIGKILL)  # A, the jail's init and the script: the namespace dies with its init
+            except (ProcessLookupError, PermissionError):
+                pass
+            self._read_status(10.0)
+        os.close(self.status_fd)
+
+
+class _Child:
+    """The jailed process and the trusted side's ends of its pipes."""
+
+    def __init__(self, jail: str | None, jail_config: JailConfig, folder: Path, scratch: Path,
+                 root: Path | None) -> None:
+        to_child_r, self.to_child = os.pipe()
+        self.from_child, from_child_w = os.pipe()
+        self.log, log_w = os.pipe()
+        try:
+            if jail == "unshare":
+                binds, symlinks = jail_layout(folder, scratch)
+                self.process: _Started | _Forked = _Forked(root, binds, symlinks, (to_child_r, from_child_w, log_w))
+            else:
+                argv = [sys.executable, "-s", "-m", "swarmdeck.console.jobs.child", str(to_child_r), str(from_child_w)]
+                if jail == "bwrap":
+                    argv = bwrap_command(argv, folder, scratch, jail_config.bwrap)
+                self.process = _Started(argv, to_child_r, from_child_w, log_w, scratch)
+        except BaseException:
+            for fd in (self.to_child, self.from_child, self.log):
+                os.close(fd)
+            raise
+        finally:
+            for fd in (to_child_r, from_child_w, log_w):
+                os.close(fd)
+        self.reader = FrameReader(self.from_child)
+        self.poll = select.poll()
+        self.poll.register(self.from_child, select.POLLIN)
+        self.eof = False
+
+    def send(self, frame: bytes | dict[str, Any]) -> bool:
+        try:
+            write_frame(self.to_child, frame)
+            return True
+        except (BrokenPipeError, OSError):
+            return False
+
+    def send_closed(self) -> None:
+        """Close our writing end: a child blocked reading sees the end of the file."""
+        if self.to_child >= 0:
+            try:
+                os.close(self.to_child)
+            except OSError:
+                pass
+        self.to_child = -1
+
+    def receive(self, deadline: float) -> tuple[bytes, bytes] | None:
+        """(kind, body) of the next frame, or None at the deadline; EOFError when the child closed its end."""
+        while True:
+            frame = self.reader.next()
+            if frame is not None:
+                return frame
+            if self.eof:
+                raise EOFError
+            timeout = deadline - time.monotonic()
+            if timeout <= 0:
+                return None
+            if self.poll.poll(timeout * 1000.0) and not self.reader.feed():
+                self.eof = True
+
+    def kill(self, uid: int | None, grace: float = 0.0) -> None:
+        """End the child: after ``grace`` s to exit by itself (a clean end), SIGKILL to all of it."""
+        self.send_closed()
+        if grace > 0:
+            self.process.wait(grace)
+        self.process.kill()
+        if uid is not None and not (isinstance(self.process, _Forked) and self.process.status):
+            kill_all_of(uid)  # (an unshare jail that reported its end is empty: the kernel ends a pid
+            # namespace's init only after every other process in it is gone)
         try:
             os.close(self.from_child)
         except OSError:
             pass
 
 
-def _exit_reason(proc: subprocess.Popen) -> str:
-    try:
-        code = proc.wait(timeout=5)
-    except subprocess.TimeoutExpired:
+def _exit_reason(process: _Started | _Forked) -> str:
+    code = process.wait(5.0)
+    if process.error:
+        return process.error
+    if code is None:
         return "the script's process stopped answering"
     if code < 0:
         name = signal.Signals(-code).name
     elif code > 128 and code - 128 in signal.Signals._value2member_map_:
-        name = signal.Signals(code - 128).name  # bwrap reports its child's signal as 128 + n
+        name = signal.Signals(code - 128).name  # the jail's init reports its child's signal as 128 + n
     else:
         return f"the script's process ended unexpectedly (exit status {code})"
     hint = {"SIGXCPU": " (CPU time limit)", "SIGKILL": " (killed: a resource limit)",
@@ -256,6 +367,7 @@ def run_sandboxed(
     limits: SandboxLimits = SandboxLimits(),
     trusted: bool = False,
     cancelled: Callable[[], bool] | None = None,
+    jail: JailConfig = JailConfig(),
 ) -> SandboxOutcome:
     """Run ``script`` in a jailed child against the plant ``make_plant(n, initial_poses)`` builds.
 
@@ -267,8 +379,9 @@ def run_sandboxed(
     ValueError when the script cannot be read or the bundle is invalid.
 
     ``n_robots``/``duration``: what an Arena built without arguments gets (declared values).
-    ``trusted``: run without the namespace jail when this machine cannot build one (resource
-    limits still apply); otherwise :class:`ConfinementUnavailable` is raised.
+    ``jail``: which jails to try, in order (default: ``unshare``, then bubblewrap).
+    ``trusted``: run without a jail when none works here (resource limits still apply);
+    otherwise :class:`ConfinementUnavailable` is raised.
     """
     if isinstance(script, ScriptBundle):
         bundle = script
@@ -279,20 +392,38 @@ def run_sandboxed(
             bundle = ScriptBundle.from_path(script, entry)
         except OSError as exc:
             raise ValueError(f"cannot read the script {str(script)!r}: {exc}") from exc
-    reason = probe()
-    if reason is not None and not trusted:
+    chosen, reason = choose_jail(jail)
+    if chosen is None and not trusted:
         raise ConfinementUnavailable(f"cannot confine untrusted code on this machine: {reason}; "
                                      "pass --trusted to run it unconfined")
     scratch = Path(tempfile.mkdtemp(prefix="swarmdeck-scratch-"))
     folder = Path(tempfile.mkdtemp(prefix="swarmdeck-script-"))
-    os.chmod(folder, 0o755)
-    script = bundle.write_to(folder)
-    uid = sandbox_uid() if reason is None else None  # unconfined, the child keeps our uid (and our files)
-    if uid is not None:
-        os.chown(scratch, uid, uid)
-    outcome = SandboxOutcome()
-    child = _Child(folder, scratch, confined=reason is None)
-    drain = _LogDrain(child.proc.stdout, limits.log_bytes)
+    root = Path(tempfile.mkdtemp(prefix="swarmdeck-root-")) if chosen == "unshare" else None
+    try:
+        os.chmod(folder, 0o755)
+        script = bundle.write_to(folder)
+        uid = sandbox_uid() if chosen is not None else None  # unconfined, the child keeps our uid (and our files)
+        if uid is not None:
+            os.chown(scratch, uid, uid)
+        try:
+            child = _Child(chosen, jail, folder, scratch, root)
+        except ForkServerError as exc:
+            raise ConfinementUnavailable(str(exc)) from exc
+        return _loop(child, script, scratch, uid, make_plant, n_robots=n_robots, duration=duration, rps=rps,
+                     limits=limits, cancelled=cancelled, jail=chosen)
+    finally:
+        shutil.rmtree(scratch, ignore_errors=True)
+        shutil.rmtree(folder, ignore_errors=True)
+        if root is not None:
+            shutil.rmtree(root, ignore_errors=True)
+
+
+def _loop(child: _Child, script: Path, scratch: Path, uid: int | None, make_plant: PlantFactory, *,
+          n_robots: int | None, duration: float | None, rps: bool | None, limits: SandboxLimits,
+          cancelled: Callable[[], bool] | None, jail: str | None) -> SandboxOutcome:
+    """The run: the child's start-up, then one exchange per tick until it ends (see the module docstring)."""
+    outcome = SandboxOutcome(jail=jail)
+    drain = _LogDrain(child.log, limits.log_bytes)
     drain.start()
     started = time.monotonic()
     wall_deadline = started + limits.wall_s
@@ -307,8 +438,10 @@ def run_sandboxed(
         ready: float | None = None  # when the child reported it is loaded and confined
         outstanding = False  # poses sent, commands not yet received
         consecutive = 0
+        rounds = 0
         while True:
-            if cancelled is not None and cancelled():
+            rounds += 1
+            if cancelled is not None and rounds % 16 == 1 and cancelled():  # checked every 16 exchanges
                 end("cancelled", "the run was cancelled")
                 break
             now = time.monotonic()
@@ -322,14 +455,14 @@ def run_sandboxed(
             else:
                 deadline = min(now + limits.tick_s, wall_deadline)
             try:
-                message = child.receive(deadline)
+                frame = child.receive(deadline)
             except EOFError:
-                end("crash", _exit_reason(child.proc))
+                end("crash", _exit_reason(child.process))
                 break
             except ProtocolError as exc:
                 end("protocol", f"the script's process broke the protocol: {exc}")
                 break
-            if message is None:
+            if frame is None:
                 if time.monotonic() >= wall_deadline:
                     continue  # reported at the top of the loop
                 if ready is None:
@@ -341,7 +474,7 @@ def run_sandboxed(
                     break
                 outcome.overruns += 1
                 consecutive += 1
-                plant.apply(None, None)
+                plant.apply(None)
                 outcome.ticks += 1
                 if consecutive >= limits.max_overruns:
                     end("overruns", f"the script overran its per-tick compute budget of {limits.tick_s:g} s "
@@ -351,20 +484,37 @@ def run_sandboxed(
                     end("duration", None)
                     break
                 continue
-            kind = message["t"]
+            kind, body = frame
             try:
-                if kind == "done":
-                    _note_cpu(outcome, message)
-                    error, line = message.get("error"), message.get("error_line")
-                    if error is not None or line is not None:
-                        end("error", str(line or error)[:2000], str(error or line)[:20000])
+                if kind == COMMANDS:
+                    if plant is None or not outstanding:
+                        raise ProtocolError("commands sent before the poses they answer")
+                    k, nominal = commands(body, plant.n)
+                    if k != outcome.ticks:
+                        outstanding = False  # commands for stale poses (after an overrun): dropped
                     else:
-                        end("script", None)
-                    break
-                if kind == "ready" and ready is None:
-                    ready = time.monotonic()
-                    continue
-                if kind == "arena" and plant is None and ready is not None:
+                        plant.apply(nominal)
+                        outcome.ticks += 1
+                        consecutive = 0
+                        outstanding = False
+                elif kind != MESSAGE:
+                    raise ProtocolError(f"unexpected {kind!r} frame")
+                else:
+                    message = decode(body)
+                    t = message["t"]
+                    if t == "done":
+                        _note_cpu(outcome, message)
+                        error, line = message.get("error"), message.get("error_line")
+                        if error is not None or line is not None:
+                            end("error", str(line or error)[:2000], str(error or line)[:20000])
+                        else:
+                            end("script", None)
+                        break
+                    if t == "ready" and ready is None:
+                        ready = time.monotonic()
+                        continue
+                    if t != "arena" or plant is not None or ready is None:
+                        raise ProtocolError(f"unexpected {t!r} message")
                     n = message.get("n")
                     if not isinstance(n, int) or n < 1:
                         raise ProtocolError(f"'arena' message: n must be a positive integer, got {n!r}")
@@ -377,21 +527,6 @@ def run_sandboxed(
                         end("arena", f"the Arena the script asked for was refused: {exc}")
                         break
                     outcome.plant = plant
-                elif kind == "cmd" and plant is not None and outstanding:
-                    if message.get("k") != outcome.ticks:
-                        outstanding = False  # commands for stale poses (after an overrun): dropped
-                    else:
-                        invalid = message.get("invalid", 0)
-                        if isinstance(invalid, int) and invalid >= 0:
-                            outcome.script_invalid = max(outcome.script_invalid, invalid)
-                        v = floats(message, "v", (plant.n,))
-                        w = floats(message, "w", (plant.n,))
-                        plant.apply(v, w)
-                        outcome.ticks += 1
-                        consecutive = 0
-                        outstanding = False
-                else:
-                    raise ProtocolError(f"unexpected {kind!r} message")
             except ProtocolError as exc:
                 end("protocol", f"the script's process broke the protocol: {exc}")
                 break
@@ -399,21 +534,23 @@ def run_sandboxed(
                 child.send({"t": "end", "reason": "declared duration is over"})
                 try:
                     last = child.receive(min(time.monotonic() + limits.tick_s, wall_deadline))
-                    if last is not None and last.get("t") == "done":
-                        _note_cpu(outcome, last)
+                    if last is not None and last[0] == MESSAGE:
+                        message = decode(last[1])
+                        if message.get("t") == "done":
+                            _note_cpu(outcome, message)
                 except (EOFError, ProtocolError):
                     pass
                 end("duration", None)
                 break
             if not outstanding:
-                t, poses = plant.observe()
-                child.send({"t": "poses", "k": outcome.ticks, "time": t, "poses": pack(poses)})
+                t_now, poses = plant.observe()
+                child.send(encode_poses(outcome.ticks, t_now, poses))
                 outstanding = True
     finally:
         clean = outcome.ended_by in ("script", "duration", "error")  # the child exits by itself (its CPU time is counted)
         child.kill(uid, grace=2.0 if clean else 0.0)
+        if child.process.cpu_s is not None:
+            outcome.child_cpu_s = child.process.cpu_s  # measured outside the jail: every process in it
         drain.join(timeout=5)
         outcome.log, outcome.log_bytes = drain.text(), drain.total
-        shutil.rmtree(scratch, ignore_errors=True)
-        shutil.rmtree(folder, ignore_errors=True)
     return outcome

@@ -33,7 +33,7 @@ from typing import Any
 import numpy as np
 
 from swarmdeck.console.jobs.bundle import ScriptBundle
-from swarmdeck.console.jobs.confinement import SandboxLimits
+from swarmdeck.console.jobs.confinement import JailConfig, SandboxLimits
 from swarmdeck.core.checks import in_range
 from swarmdeck.console.jobs.plant import ArenaPlant, Disturbances, VerificationRobots
 from swarmdeck.console.jobs.sandbox import run_sandboxed
@@ -61,6 +61,7 @@ class VerificationConfig:
         limits: the sandbox's limits per run.
         rules: the Robotarium verifier's thresholds.
         trusted: run scripts unconfined where this machine cannot confine them.
+        jail: which jails to try, in order (unshare, then bubblewrap).
         rps: resolve ``import rps`` to swarmdeck's facade (None: when the script imports rps).
     """
 
@@ -74,6 +75,7 @@ class VerificationConfig:
     rules: ValidationRules = field(default_factory=ValidationRules)
     trusted: bool = False
     rps: bool | None = None
+    jail: JailConfig = field(default_factory=JailConfig)
 
     def __post_init__(self) -> None:
         if self.n_robots is not None and not in_range(self.n_robots, 1, integer=True):
@@ -90,7 +92,8 @@ class VerificationConfig:
     def to_dict(self) -> dict:
         return {"n_robots": self.n_robots, "duration": float(self.duration), "runs": self.runs, "seed": self.seed,
                 "bypass_threshold": float(self.bypass_threshold), "disturbances": self.disturbances.to_dict(),
-                "limits": asdict(self.limits), "rules": asdict(self.rules), "trusted": self.trusted}
+                "limits": asdict(self.limits), "rules": asdict(self.rules), "trusted": self.trusted,
+                "jail": list(self.jail.order)}
 
 
 @dataclass(frozen=True)
@@ -137,7 +140,7 @@ def run_task(task: RunTask) -> dict[str, Any]:
 
     cancelled = (lambda: os.path.exists(task.cancel_path)) if task.cancel_path else None
     outcome = run_sandboxed(task.bundle, make_plant, n_robots=cfg.n_robots,
-                            duration=cfg.duration, rps=cfg.rps, limits=cfg.limits, trusted=cfg.trusted,
+                            duration=cfg.duration, rps=cfg.rps, limits=cfg.limits, trusted=cfg.trusted, jail=cfg.jail,
                             cancelled=cancelled)
     result: dict[str, Any] = {
         "index": task.index, "mode": task.mode, "ended_by": outcome.ended_by, "error": outcome.error_line,
@@ -163,7 +166,7 @@ def run_task(task: RunTask) -> dict[str, Any]:
         min_distance=min(robots.min_distance) if robots.min_distance else None,
         min_distance_series=_series(robots.min_distance),
         contact_points=[[round(t, 6), round(x, 6), round(y, 6)] for t, x, y in robots.contact_points[:50]],
-        validation=report["validation"], safety_filter=report["safety"], invalid_commands=report["invalid_commands"] + outcome.script_invalid,
+        validation=report["validation"], safety_filter=report["safety"], invalid_commands=report["invalid_commands"],
         rule_violations=robots.report.verdict(cfg.duration, rules),
     )
     return result
@@ -286,7 +289,7 @@ def verify(scripts: Sequence[str | Path | ScriptBundle], config: VerificationCon
     loaded = [load_script(s, entry) for s in scripts]
     if not loaded:
         raise ValueError("no script to verify")
-    reason = probe()
+    reason = probe(config.jail)
     if reason is not None and not config.trusted:
         raise ConfinementUnavailable(f"cannot confine untrusted code on this machine: {reason}; "
                                      "pass --trusted to run it unconfined")
