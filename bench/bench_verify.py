@@ -7,7 +7,9 @@ Run: ``.venv/bin/python bench/bench_verify.py [--duration 60] [--runs 8] [--robo
 * Sandbox overhead: the same script and the same trusted Arena (barrier on), once in-process
   (``run_experiment``) and once in the jail (``run_sandboxed``), alternately, ``--repeats`` times;
   CPU seconds of **every** process a run uses, median over the repeats; overhead =
-  sandboxed / in-process − 1. Target: ≤ 10 % of a 60 s run's CPU.
+  sandboxed / in-process − 1. Target: ≤ 10 % of a 60 s run's CPU. This process (and so the
+  fork server and the jails it starts) runs on one core, as a verification pool worker does
+  (``LocalPoolExecutor(pin=True)``); ``--no-pin`` lets the scheduler place them.
 
   - ``unshare`` jail: this process (``getrusage`` self: the trusted loop, barrier, simulator,
     pipe) + the jail's processes (the script's process, the jail's init and process A, measured
@@ -116,6 +118,7 @@ def main() -> None:
     parser.add_argument("--no-ray", action="store_true")
     parser.add_argument("--overhead-only", action="store_true", help="skip the throughput table")
     parser.add_argument("--throughput-only", action="store_true", help="skip the overhead table")
+    parser.add_argument("--no-pin", action="store_true", help="overhead: do not pin this process to one core")
     args = parser.parse_args()
     folder = Path(tempfile.mkdtemp())
     script = folder / "circle_swap.py"
@@ -123,6 +126,9 @@ def main() -> None:
     print(f"machine: {platform.machine()}, {os.cpu_count()} cores, Python {platform.python_version()}, "
           f"load average (1/5/15 min) {load()}")
     if not args.throughput_only:
+        everywhere = os.sched_getaffinity(0)
+        if not args.no_pin:
+            os.sched_setaffinity(0, {max(everywhere)})
         jails = [j for j in ("unshare", "bwrap") if choose_jail(JailConfig(order=(j,)))[0] == j]
         startup = shared_fork_server().startup_cpu_s if "unshare" in jails else None
         medians = overhead(script, args.robots, args.duration, args.repeats, jails)
@@ -135,7 +141,8 @@ def main() -> None:
         if startup is not None:
             print(f"| (fork server start-up, once per worker process) | {startup:.3f} | "
                   f"{100 * startup / base:+.1f} % of one run |")
-        print(f"\nload average after: {load()}")
+        print(f"\n{'unpinned' if args.no_pin else 'pinned to one core'}; load average after: {load()}")
+        os.sched_setaffinity(0, everywhere)
     if args.overhead_only:
         return
     config = VerificationConfig(n_robots=args.robots, duration=args.duration, runs=args.runs, seed=0)

@@ -26,6 +26,7 @@ The run's status pipe gets one msgpack map when the jail's init ends:
 """
 from __future__ import annotations
 
+import fcntl
 import functools
 import os
 import select
@@ -150,7 +151,7 @@ def _send_status(fd: int, status: dict[str, Any]) -> None:
 
 def _keep_only(fds: dict[int, int]) -> None:
     """Make the file descriptors ``fds`` (target → source) the only open ones besides 0-2."""
-    moved = {target: os.dup(source) for target, source in fds.items()}  # above every target first
+    moved = {target: fcntl.fcntl(source, fcntl.F_DUPFD, 64) for target, source in fds.items()}  # above every target first
     for target, temporary in moved.items():
         os.dup2(temporary, target, inheritable=True)
     os.closerange(max(fds, default=2) + 1, os.sysconf("SC_OPEN_MAX"))
