@@ -11,10 +11,10 @@ For each job the service hands over (``waiting → setting up``):
 2. **Runtime**: a :class:`~swarmdeck.console.runtime.loop.ControlLoop` — the
    same tick pipeline, safety filter (``devices.pipeline.certify``) and
    recorder as ``swarmdeck console`` — whose behaviour is
-   :class:`SandboxCommands`: the script's unicycle commands of this tick, mapped
-   to the look-ahead velocities the loop certifies (the look-ahead map is
-   invertible, so without the barrier and within the limits the robots get the
-   script's commands unchanged). The barrier is off only when
+   :class:`SandboxCommands`: the script's nominal look-ahead velocities of this
+   tick, as the sandbox hands them over, which the loop certifies (so without
+   the barrier and within the limits the robots get the script's commands
+   unchanged). The barrier is off only when
    :meth:`~.service.PortalService.bypass_allowed` said so at claim time.
 3. **Script**: :func:`swarmdeck.console.jobs.sandbox.run_sandboxed` with
    :class:`LoopPlant` as its plant: each sandbox tick is one loop tick, paced
@@ -57,7 +57,6 @@ from swarmdeck.console.portal.service import PortalService
 from swarmdeck.console.runtime.behaviours import TickInput
 from swarmdeck.console.runtime.loop import ControlLoop, LoopConfig, SafetyParams
 from swarmdeck.core.bounds import DEFAULT_BOUNDS, Bounds
-from swarmdeck.core.kinematics import unicycle_to_si
 from swarmdeck.devices.clock import RealTimePacer
 
 ENDED_OK = ("script", "duration")
@@ -91,24 +90,23 @@ class ArenaSettings:
 
 
 class SandboxCommands:
-    """The loop behaviour that plays the sandboxed script's commands: unicycle (v, ω) → look-ahead velocities.
+    """The loop behaviour that plays the sandboxed script's commands: its nominal look-ahead velocities.
 
-    ``set(v, w)`` (arrays (N,), or None: the script missed the tick → zero) before each tick.
+    ``set(nominal)`` (array (N, 2), m/s, or None: the script missed the tick → zero) before each tick.
     """
 
     name = "script (sandboxed)"
 
-    def __init__(self, lookahead: float) -> None:
-        self.lookahead = float(lookahead)
-        self._vw: tuple[NDArray[np.float64], NDArray[np.float64]] | None = None
+    def __init__(self) -> None:
+        self._nominal: NDArray[np.float64] | None = None
 
-    def set(self, v: NDArray[np.float64] | None, w: NDArray[np.float64] | None) -> None:
-        self._vw = None if v is None or w is None else (np.asarray(v, dtype=float), np.asarray(w, dtype=float))
+    def set(self, nominal: NDArray[np.float64] | None) -> None:
+        self._nominal = None if nominal is None else np.asarray(nominal, dtype=float)
 
     def __call__(self, tick: TickInput) -> tuple[NDArray[np.float64], None]:
-        if self._vw is None or len(self._vw[0]) != len(tick.poses):
+        if self._nominal is None or self._nominal.shape != (len(tick.poses), 2):
             return np.zeros((len(tick.poses), 2)), None
-        return unicycle_to_si(tick.poses, self._vw[0], self._vw[1], self.lookahead), None
+        return self._nominal.copy(), None
 
 
 class LoopPlant:
@@ -128,8 +126,8 @@ class LoopPlant:
         frame = self.loop.latest
         return self.loop.run_time, (frame.poses.copy() if frame is not None else np.zeros((self.n, 3)))
 
-    def apply(self, v: NDArray[np.float64] | None, w: NDArray[np.float64] | None) -> None:
-        self.commands.set(v, w)
+    def apply(self, nominal: NDArray[np.float64] | None) -> None:
+        self.commands.set(nominal)
         self.loop.tick()
         if self.pacer is not None:
             self.pacer.wait()
@@ -297,7 +295,7 @@ class ArenaRunner:
             loop.subscribe(lambda frame: self.live.publish(int(job["id"]), frame))
             for listener in self.frame_listeners:
                 loop.subscribe(listener)
-            commands = SandboxCommands(loop.robot.lookahead)
+            commands = SandboxCommands()
             loop.use_behaviour(commands)
             if bypass:
                 loop.set_safety(enabled=False)
