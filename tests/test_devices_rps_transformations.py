@@ -1,6 +1,6 @@
 """rps.utilities.transformations facade: rps's closed forms, inputs never modified."""
 import numpy as np
-from hypothesis import given, settings
+from hypothesis import example, given, settings
 from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 
@@ -13,14 +13,16 @@ finite = st.floats(-1.0, 1.0, allow_nan=False)
 
 @settings(max_examples=50, deadline=None)
 @given(dxi=arrays(float, (2, 4), elements=finite), th=arrays(float, (4,), elements=st.floats(-3.2, 3.2)))
+@example(dxi=np.array([[-5e-324, 0.0, 0.0, 0.0], [0.0, 0.0, 0.0, 0.0]]), th=np.zeros(4))  # 0.5·v underflows to −0.0
 def test_heading_maps_match_rps(dxi, th):
     poses = np.vstack((np.zeros((2, 4)), th))
     keep = dxi.copy(), poses.copy()
     v = np.cos(th) * dxi[0] + np.sin(th) * dxi[1]
     perp = -np.sin(th) * dxi[0] + np.cos(th) * dxi[1]
     fwd = create_si_to_uni_dynamics(0.5, 2.0)(dxi, poses)
-    v, perp = v + 0.0, perp + 0.0  # a zero command turns nowhere (rps: atan2(0, -0.0) = π)
-    assert np.allclose(fwd, [0.5 * v, 2.0 * np.arctan2(perp, 0.5 * v) / (np.pi / 2)])
+    # a zero command turns nowhere (rps: atan2(0, -0.0) = π): signed zeros dropped after the gain
+    fv, v, perp = 0.5 * v + 0.0, v + 0.0, perp + 0.0
+    assert np.allclose(fwd, [fv, 2.0 * np.arctan2(perp, fv) / (np.pi / 2)])
     back = create_si_to_uni_dynamics_with_backwards_motion()(dxi, poses)  # rps: the same heading map
     assert np.allclose(back, [v, np.pi * np.arctan2(perp, v) / (np.pi / 2)])
     assert np.array_equal(dxi, keep[0]) and np.array_equal(poses, keep[1])
