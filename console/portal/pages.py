@@ -19,7 +19,7 @@ the audit log) live in one place.
                                          runs, downloads, cancel (``POST /jobs/{id}/cancel``)
 ``GET /jobs/{id}/report``                the verification report page (``console/jobs/report_html.py``)
 ``GET /jobs/{id}/live``                  the live view's stream (Server-Sent Events): the runner's
-                                         LiveFeed as :func:`~.live.scene_message` JSON, at most 10 a second;
+                                         LiveFeed as :func:`~.live.scene_message` JSON, 10 a second at most;
                                          only the job's owner and operators
 ``GET /jobs/{id}/files/{name}``          downloads; ``video.mp4`` is rendered on the first request
 ``GET /operator``                        queue (approve, hold, release, reorder, cancel), arena state,
@@ -39,6 +39,7 @@ from __future__ import annotations
 import asyncio
 import hmac
 import json
+import math
 import secrets
 import time
 from pathlib import Path
@@ -286,13 +287,22 @@ def router(service: PortalService, live: LiveFeed) -> APIRouter:
         return StreamingResponse(live_events(request, s, job_id, job["state"]), media_type="text/event-stream",
                                  headers={"Cache-Control": "no-store", "X-Accel-Buffering": "no"})
 
+    shared: dict[str, Any] = {"seq": None, "text": ""}  # the newest frame event, made once for every viewer
+
+    def frame_event(seq: int, frame: Any) -> str:
+        if shared["seq"] != seq:
+            shared["seq"], shared["text"] = seq, _sse("frame", scene_message(frame, seq))
+        return str(shared["text"])
+
     async def live_events(request: Request, s: Session, job_id: int, state: str):  # noqa: ANN202 - async gen
-        """The stream: ``frame`` events (scene messages, the newest Frame at most every LIVE_PERIOD s),
-        ``state`` events (``{"state", "final"}`` on change); it ends when the job has ended or the session does."""
-        seq, sent_state, checked = -1, None, 0.0
+        """The stream: ``frame`` events (scene messages of the newest Frame, looked at every LIVE_PERIOD s: the
+        Frames in between are skipped), ``state`` events (``{"state", "final"}`` on change); it ends when the job
+        has ended or the session has. The feed is polled without blocking, so a watcher holds no worker thread
+        (the API's routes share the thread pool)."""
+        seq, sent_state, checked, idle = -1, None, -math.inf, 0
         while True:
             now = time.monotonic()
-            if now - checked >= CHECK_PERIOD or sent_state is None:
+            if now - checked >= CHECK_PERIOD:
                 checked = now
                 try:
                     await run_in_threadpool(service.accounts.session, s.id)  # signed out or disabled: stop
@@ -305,15 +315,14 @@ def router(service: PortalService, live: LiveFeed) -> APIRouter:
                     yield _sse("state", {"state": state, "final": state in FINAL})
                 if state in FINAL:
                     return
-            if await request.is_disconnected():
-                return
-            new, running, frame = await run_in_threadpool(live.wait_newer, seq, CHECK_PERIOD)
-            if new == seq:
+            new, running, frame = live.latest()
+            if new != seq and running == job_id and frame is not None:
+                yield frame_event(new, frame)
+                idle = 0
+            elif (idle := idle + 1) * LIVE_PERIOD >= 15.0:  # a comment now and then keeps proxies from closing it
                 yield ": idle\n\n"
-                continue
+                idle = 0
             seq = new
-            if running == job_id and frame is not None:
-                yield _sse("frame", scene_message(frame, seq))
             await asyncio.sleep(max(0.0, LIVE_PERIOD - (time.monotonic() - now)))
 
     # ------------------------------------------------------------------ operators
