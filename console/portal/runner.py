@@ -258,7 +258,11 @@ class ArenaRunner:
         if outcome is not None:
             (folder / "script.log").write_text(outcome.log, encoding="utf-8")
         if (folder / "recording.mcap").is_file():
+            t = time.monotonic()
             self._exports(folder)
+            summary = json.loads((folder / "run.json").read_text())
+            summary["exports_s"] = round(time.monotonic() - t, 3)
+            _write_json(folder / "run.json", summary)
         self.runs += 1
         return self.service.finish_run(job_id, state, reason)
 
