@@ -1,5 +1,7 @@
 """The arena runner on networked robots: a job runs on `swarmdeck robots` (its own process) over a real mosquitto,
-through the same loop, barrier and recorder, and the robots are stopped when it ends."""
+through the same loop, barrier and recorder, and the robots are stopped when it ends; a job with initial poses
+first drives the robots there."""
+import json
 import subprocess
 import sys
 
@@ -49,6 +51,23 @@ def test_a_job_runs_on_the_mqtt_fleet_and_leaves_the_robots_stopped(portal, mosq
         b = wait_until(lambda: (p := watcher.latest_poses()) and p.stamps.min() > a.stamps.max() + 0.3 and p,
                        what="fresh poses 0.3 s later")
         assert np.allclose(a.poses, b.poses, atol=1e-3), (a.poses, b.poses)
+        # a job with initial poses: the robots first drive there (barrier on), then the script starts
+        start = b.poses[:2].copy()
+        goals = start[:, :2] - 0.15 * np.sign(start[:, :2])  # 0.15 m towards the middle, separation kept
+        initial = [[float(x), float(y), 0.0] for x, y in goals]
+        jid = portal.submit("alice", robots=2, duration=0.5, initial_poses=initial).json()["id"]
+        with svc.db.transaction() as tx:
+            svc.db.transition(tx, jid, "verifying")
+            svc.db.transition(tx, jid, "approved", verdict="accepted")
+            svc.db.transition(tx, jid, "waiting")
+        svc.notify()
+        with portal.client("alice") as c:
+            job = wait_for_state(c, jid, ("done", "failed"), timeout=90)
+        run = json.loads((svc.job_dir(jid) / "run.json").read_text())
+        assert job["state"] == "done" and run["note"] == "robots at their initial positions", (job, run)
+        with open_recording(svc.job_dir(jid) / "recording.mcap") as rec:
+            first = next(f for _, f in rec.frames())
+        assert np.all(np.hypot(*(first.poses[:, :2] - goals).T) < 0.06), (first.poses, goals)
     finally:
         watcher.close()
         runner.stop()
