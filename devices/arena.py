@@ -63,6 +63,8 @@ class RunDefaults:
     # callable(n_robots, initial_conditions, config, params) -> RobotBackend for Arenas built
     # without a backend (the sandbox's child: robots on the other side of a pipe); None: simulated
     backend_factory: Any = None
+    # start simulated Arenas docked on the chargers and set them up first (swarmdeck run --from-docks)
+    from_docks: bool = False
 
 
 RUN_DEFAULTS: contextvars.ContextVar[RunDefaults] = contextvars.ContextVar("swarmdeck_run_defaults", default=RunDefaults())
@@ -100,6 +102,14 @@ class Arena:
             with ``filter(points, nominal, obstacles=None)``.
         duration: declared duration, s; :meth:`step` raises :class:`ExperimentFinished` after it.
         backend: robots to drive; a :class:`SimulatedArena` when omitted.
+        from_docks: start the simulated robots docked on the chargers and set them up to
+            ``initial_conditions`` (given, or random as rps generates them) before the first step,
+            as the paper's back end does (:mod:`swarmdeck.devices.fleet`); or a
+            :class:`~swarmdeck.devices.fleet.manager.FleetManager` whose robots to use (its other
+            robots stay docked and are obstacles for the safety filter). :attr:`fleet` is the fleet
+            (None otherwise), :meth:`return_to_chargers` docks the robots after the experiment.
+            Setup errors (poses outside the arena or too close, too few charged robots, a setup
+            that does not finish) raise and leave the robots stopped.
 
     Example::
 
@@ -121,8 +131,11 @@ class Arena:
         safety: bool | CommandFilter | None = None,
         duration: float | None = None,
         backend: RobotBackend | None = None,
+        from_docks: Any = None,
     ) -> None:
         defaults = RUN_DEFAULTS.get()
+        if from_docks is None:
+            from_docks = defaults.from_docks and backend is None and defaults.backend_factory is None
         if number_of_robots is None:
             number_of_robots = defaults.n_robots
         if duration is None:
@@ -136,6 +149,11 @@ class Arena:
         if duration is not None and not (np.isfinite(duration) and duration > 0):
             raise ValueError(f"duration must be a positive number of seconds, got {duration!r}")
         self.duration = duration
+        self.fleet: Any = None
+        if from_docks is not False and from_docks is not None:
+            if backend is not None:
+                raise ValueError("from_docks sets up simulated robots: it does not combine with a backend")
+            backend = self._set_up_from_docks(from_docks, number_of_robots, initial_conditions, config)
         if backend is None:
             if number_of_robots is not None and not isinstance(number_of_robots, (int, np.integer)):
                 raise ValueError(f"number_of_robots must be an integer, got {number_of_robots!r}")
@@ -169,6 +187,33 @@ class Arena:
         self._on_step = defaults.on_step
         if defaults.on_create is not None:
             defaults.on_create(self)
+
+    def _set_up_from_docks(self, from_docks: Any, n: int | None, initial: ArrayLike | None,
+                           config: ArenaConfig) -> RobotBackend:
+        """The fleet's robots set up at the start poses; their experiment view is the backend."""
+        from swarmdeck.devices.fleet.manager import FleetManager
+        from swarmdeck.devices.initial_conditions import random_initial_poses
+
+        if initial is not None:
+            poses = check_poses(initial)
+        else:
+            if n is None:
+                n = 6
+            if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 1:
+                raise ValueError(f"number_of_robots must be a positive integer, got {n!r}")
+            poses = random_initial_poses(int(n), config.bounds, rng=config.seed)
+        fleet = from_docks if isinstance(from_docks, FleetManager) else FleetManager(len(poses), config=config,
+                                                                                      params=self.params)
+        self.fleet = fleet
+        fleet.setup(poses)
+        return fleet.experiment()
+
+    def return_to_chargers(self) -> Any:
+        """Dock the robots on free charger slots after the experiment (Arenas made ``from_docks``);
+        returns the fleet's :class:`~swarmdeck.devices.fleet.setup.ManeuverReport`."""
+        if self.fleet is None:
+            raise RuntimeError("this Arena did not start from the chargers (from_docks): there is nothing to return")
+        return self.fleet.return_to_chargers()
 
     # ------------------------------------------------------------------ sensing
     @property
@@ -414,7 +459,7 @@ class Arena:
             if self._on_step is not None:
                 self._on_step(self)
             return new_poses
-        cert = certify(poses, nominal, self.params, self.safety)
+        cert = certify(poses, nominal, self.params, self.safety, obstacles=getattr(self.backend, "obstacles", None))
         if cert.invalid.any():
             self.invalid_commands += int(cert.invalid.sum())
             self.events.append(f"t={self.time:.3f}: non-finite command for robot(s) "
@@ -441,7 +486,9 @@ class Arena:
     def report(self) -> "ArenaReport":
         """What happened so far: validation counts, safety filter statistics, invalid commands."""
         validation = getattr(self.backend, "report", None)
-        return ArenaReport(self.n, self.time, validation, self.safety_stats, self.invalid_commands, self.safety is not None)
+        fleet = None if self.fleet is None else fleet_summary(self.fleet)
+        return ArenaReport(self.n, self.time, validation, self.safety_stats, self.invalid_commands, self.safety is not None,
+                           fleet)
 
     def call_at_scripts_end(self) -> None:
         """Print the report (rps compatibility)."""
@@ -458,9 +505,10 @@ class ArenaReport:
     safety: SafetyStats
     invalid_commands: int
     safety_enabled: bool
+    fleet: dict | None = None  # setup and return from the chargers (Arenas made from_docks)
 
     def to_dict(self) -> dict:
-        return {
+        out = {
             "n_robots": self.n_robots,
             "time": self.time,
             "validation": self.validation.to_dict() if self.validation is not None else None,
@@ -475,6 +523,9 @@ class ArenaReport:
             },
             "invalid_commands": self.invalid_commands,
         }
+        if self.fleet is not None:
+            out["fleet"] = self.fleet
+        return out
 
     def __str__(self) -> str:
         lines = ["swarmdeck run report"]
@@ -492,4 +543,29 @@ class ArenaReport:
             )
         else:
             lines.append("safety filter: OFF")
+        if self.fleet is not None:
+            lines.append(describe_fleet(self.fleet))
         return "\n".join(lines)
+
+
+def fleet_summary(fleet: Any) -> dict:
+    """JSON-able account of a fleet's setup and return (``FleetManager.last_setup/last_return``)."""
+    setup = fleet.last_setup.to_dict() if fleet.last_setup is not None else None
+    ret = fleet.last_return.to_dict() if fleet.last_return is not None else None
+    return {"setup": setup, "return": ret, "collisions": int(fleet.sim.report.steps_with_collision),
+            "ready": bool(fleet.ready()), "robots": int(fleet.n_robots)}
+
+
+def describe_fleet(summary: dict) -> str:
+    """The fleet's lines of a run report: setup and return times, largest pose error, collisions."""
+    s, r = summary["setup"], summary["return"]
+    text = "fleet: "
+    if s is not None:
+        text += (f"set up from the chargers in {s['sim_time']:.1f} s simulated ({s['wall_time']:.1f} s wall), "
+                 f"largest pose error {s['max_position_error'] * 100:.1f} cm / {s['max_heading_error_deg']:.1f} deg, "
+                 f"{s['escapes']} deadlock escapes")
+    text += ("; not returned" if r is None else
+             f"; returned to the chargers in {r['sim_time']:.1f} s simulated ({r['wall_time']:.1f} s wall)"
+             + ("" if r["ok"] else " (FAILED)"))
+    return text + f"; collisions {summary['collisions']} steps; {'ready' if summary['ready'] else 'NOT ready'}"
+

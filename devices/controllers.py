@@ -98,6 +98,7 @@ class HybridPoseController:
         position_epsilon: hysteresis band, m.
         rotation_error: turning ends within this heading error, rad.
         lookahead: ℓ, m.
+        gain: look-ahead point velocity per m of position error, 1/s (rps: 1).
     """
 
     speed_limit: float = 0.15
@@ -106,6 +107,7 @@ class HybridPoseController:
     position_epsilon: float = 0.01
     rotation_error: float = 0.05
     lookahead: float = 0.03
+    gain: float = 1.0
     _approach: NDArray[np.bool_] | None = field(default=None, repr=False)
 
     def reset(self) -> None:
@@ -127,7 +129,7 @@ class HybridPoseController:
         turn = ~approach & (np.abs(heading_err) > self.rotation_error)
         # As in rps: the centre's position error is used as the look-ahead point's velocity,
         # whose equilibrium puts the centre (not the look-ahead point) on the goal.
-        u = saturate(goals[:, :2] - poses[:, :2], self.speed_limit)
+        u = saturate(self.gain * (goals[:, :2] - poses[:, :2]), self.speed_limit)
         v_app, w_app = si_to_unicycle(poses, u, self.lookahead)
         v = np.where(approach, v_app, 0.0)
         w = np.where(approach, w_app, np.where(turn, self.angular_gain * heading_err, 0.0))

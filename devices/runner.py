@@ -108,6 +108,7 @@ def run_experiment(
     rps: bool | None = None,
     backend_factory: Callable[..., Any] | None = None,
     on_create: Callable[[Arena], None] | None = None,
+    from_docks: bool = False,
 ) -> RunResult:
     """Run a script file (or an ``experiment(arena)`` callable) and return its :class:`RunResult`.
 
@@ -116,6 +117,9 @@ def run_experiment(
     ``backend_factory``: builds the robots of Arenas the script creates (see
     :class:`~swarmdeck.devices.arena.RunDefaults`); None: the simulated arena.
     ``on_create``: called with every Arena the run builds.
+    ``from_docks``: the simulated robots start docked on the chargers, are set up to the script's
+    initial poses before its first step and are returned to the chargers after it (also when it
+    failed: they are stopped first); a return that does not finish is added to ``notes``.
     """
     result = RunResult()
 
@@ -125,7 +129,8 @@ def run_experiment(
             on_create(arena)
 
     defaults = RunDefaults(n_robots=n_robots, duration=duration, seed=seed, safety=safety,
-                           on_create=created, on_step=on_step, backend_factory=backend_factory)
+                           on_create=created, on_step=on_step, backend_factory=backend_factory,
+                           from_docks=from_docks)
     token = RUN_DEFAULTS.set(defaults)
     script = None if callable(target) else str(target)
     try:
@@ -171,8 +176,22 @@ def run_experiment(
                 arena.stop()
     finally:
         RUN_DEFAULTS.reset(token)
+    _return_fleets(result)
     result.reports = [a.report() for a in result.arenas]
     return result
+
+
+def _return_fleets(result: RunResult) -> None:
+    """Dock the robots of every Arena that started from the chargers (after the script, safely)."""
+    from swarmdeck.devices.fleet.setup import SetupFailed
+
+    for arena in result.arenas:
+        if arena.fleet is None or arena.fleet.assignment is None:
+            continue
+        try:
+            arena.return_to_chargers()
+        except SetupFailed as exc:
+            result.notes.append(f"return to the chargers failed: {exc}")
 
 
 def progress_bar(total_time: float | None) -> tuple[Callable[[Arena], None] | None, Callable[[], None]]:

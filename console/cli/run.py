@@ -26,6 +26,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--duration", type=float, default=None, metavar="S", help="stop after S simulated seconds")
     parser.add_argument("--seed", type=int, default=None, help="seed for random initial conditions")
     parser.add_argument("--no-safety", action="store_true", help="run without the barrier-certificate safety filter")
+    parser.add_argument("--from-docks", action="store_true",
+                        help="start the simulated robots docked on the chargers along the walls, set them up to the "
+                             "script's initial poses, run, and return them to the chargers; the report says how long "
+                             "setup and return took, the largest start-pose error and the collisions")
     parser.add_argument("--json", action="store_true", help="print the report as JSON")
     parser.add_argument("--rps", action=argparse.BooleanOptionalAction, default=None,
                         help="resolve `import rps...` to swarmdeck's rps facade (default: when the script imports rps and no rps is installed)")
@@ -78,8 +82,10 @@ def main(args: argparse.Namespace) -> int:
     if args.entry is not None and not args.sandbox:
         raise UsageError("--entry needs --sandbox (a directory of files runs in the sandbox)")
     if args.sandbox:
+        if args.from_docks:
+            raise UsageError("--from-docks does not combine with --sandbox yet")
         return _run_sandboxed(args)
-    result = run_headless(args.script, args, rps=args.rps)
+    result = run_headless(args.script, args, rps=args.rps, from_docks=args.from_docks)
     if args.json:
         print(json.dumps({"reports": [r.to_dict() for r in result.reports], "error": result.error,
                           "error_line": result.error_line, "notes": result.notes,

@@ -43,6 +43,8 @@ class ChargerLayout:
             0.055 m: the body touches the strip; the default leaves 5 mm for the prongs).
         approach_distance: distance from the dock, straight into the arena, of the pose a
             robot reverses from when it docks (and reaches first when it undocks), m.
+        approach_stagger: every second slot along a wall has its approach pose this much further
+            in, m, so robots lining up in front of neighbouring slots (0.18 m apart) have room to turn.
         corner_clearance: no slot centre closer than this to a corner along its wall, m.
     """
 
@@ -51,26 +53,28 @@ class ChargerLayout:
     slot_spacing: float = 0.18
     dock_depth: float = 0.06
     approach_distance: float = 0.2
+    approach_stagger: float = 0.2
     corner_clearance: float = 0.25
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "bounds", check_bounds(self.bounds, "ChargerLayout.bounds"))
         object.__setattr__(self, "walls", tuple(self.walls))
         require_positive(self, ("slot_spacing", "dock_depth", "approach_distance"), "m")
-        require_positive(self, ("corner_clearance",), "m", allow_zero=True)
+        require_positive(self, ("corner_clearance", "approach_stagger"), "m", allow_zero=True)
         unknown = [w for w in self.walls if w not in WALLS]
         if unknown or len(set(self.walls)) != len(self.walls):
             raise ValueError(f"ChargerLayout.walls must be distinct names from {WALLS}, got {self.walls!r}")
         x0, x1, y0, y1 = self.bounds
-        if self.dock_depth + self.approach_distance >= min(x1 - x0, y1 - y0) / 2:
-            raise ValueError(f"ChargerLayout: dock_depth + approach_distance ({self.dock_depth + self.approach_distance} m) "
+        reach = self.dock_depth + self.approach_distance + self.approach_stagger
+        if reach >= min(x1 - x0, y1 - y0) / 2:
+            raise ValueError(f"ChargerLayout: dock_depth + approach_distance + approach_stagger ({reach:g} m) "
                              f"reaches past the middle of the {x1 - x0:g} m x {y1 - y0:g} m arena")
 
     @cached_property
-    def _table(self) -> tuple[FloatArray, NDArray[np.intp]]:
+    def _table(self) -> tuple[FloatArray, NDArray[np.intp], NDArray[np.intp]]:
         x0, x1, y0, y1 = self.bounds
         d, s, c = self.dock_depth, self.slot_spacing, self.corner_clearance
-        poses, walls = [], []
+        poses, walls, rank = [], [], []
         for name in self.walls:  # at most 4 walls, once per layout
             k = WALLS.index(name)
             lo, hi = (x0, x1) if k < 2 else (y0, y1)
@@ -83,9 +87,10 @@ class ChargerLayout:
             xy = np.column_stack((along, np.full(count, fixed))) if k < 2 else np.column_stack((np.full(count, fixed), along))
             poses.append(np.column_stack((xy, np.full(count, _INWARD[k]))))
             walls.append(np.full(count, k, dtype=np.intp))
+            rank.append(np.arange(count))
         if not poses:
-            return np.empty((0, 3)), np.empty(0, dtype=np.intp)
-        return np.vstack(poses), np.concatenate(walls)
+            return np.empty((0, 3)), np.empty(0, dtype=np.intp), np.empty(0, dtype=np.intp)
+        return np.vstack(poses), np.concatenate(walls), np.concatenate(rank)
 
     @property
     def n_slots(self) -> int:
@@ -101,10 +106,12 @@ class ChargerLayout:
         return self._table[1].copy()
 
     def approach_poses(self) -> FloatArray:
-        """``(M, 3)`` poses ``approach_distance`` m straight in from each dock, same heading."""
+        """``(M, 3)`` poses straight in from each dock, same heading: ``approach_distance`` m, plus
+        ``approach_stagger`` m for every second slot along a wall."""
         p = self.dock_poses()
-        p[:, 0] += self.approach_distance * np.cos(p[:, 2])
-        p[:, 1] += self.approach_distance * np.sin(p[:, 2])
+        dist = self.approach_distance + self.approach_stagger * (self._table[2] % 2)
+        p[:, 0] += dist * np.cos(p[:, 2])
+        p[:, 1] += dist * np.sin(p[:, 2])
         return p
 
     def docked_slot(self, poses: NDArray[np.float64], position_tolerance: float = 0.02,
@@ -127,14 +134,38 @@ class ChargerLayout:
         out[ok] = k[ok]
         return out
 
+    def dock_blocks(self, lookahead: float = 0.03, safety_distance: float = 0.17) -> NDArray[np.bool_]:
+        """``(M, M)``: ``[a, b]`` is True when a robot docked on slot a blocks slot b — its look-ahead
+        point lies within ``safety_distance`` (+ 5 mm) of the path of b's look-ahead point from b's
+        approach pose to its dock (near a corner). Slot b must then be filled before slot a.
+        Neighbours on one wall dock in parallel lanes and never block each other."""
+        d0, a0 = self.dock_poses(), self.approach_poses()
+        head = np.column_stack((np.cos(d0[:, 2]), np.sin(d0[:, 2])))
+        dock_pt, app_pt = d0[:, :2] + lookahead * head, a0[:, :2] + lookahead * head
+        seg = app_pt - dock_pt  # (M, 2) lane of each slot's point
+        rel = dock_pt[:, None, :] - dock_pt[None, :, :]  # [a, b]: a's docked point relative to b's lane start
+        t = np.clip(np.einsum("abd,bd->ab", rel, seg) / np.einsum("bd,bd->b", seg, seg)[None, :], 0.0, 1.0)
+        near = rel - t[..., None] * seg[None, :, :]
+        out = np.hypot(near[..., 0], near[..., 1]) < safety_distance + 0.005
+        walls = self.slot_walls()
+        return out & (walls[:, None] != walls[None, :])
+
+    def approaches_clash(self, clearance: float = 0.25) -> NDArray[np.bool_]:
+        """``(M, M)`` symmetric: slots on different walls (at a corner) whose approach poses are closer
+        than ``clearance`` m — two robots cannot wait there at once, so they dock one after the other."""
+        a = self.approach_poses()[:, :2]
+        d = np.hypot(*(a[:, None, :] - a[None, :, :]).transpose(2, 0, 1))
+        walls = self.slot_walls()
+        return (d < clearance) & (walls[:, None] != walls[None, :])
+
     def check_reachable(self, bounds: Bounds, safety_distance: float, lookahead: float, radius: float) -> None:
         """Raise ValueError naming the first unreachable slot for robots of body ``radius`` m whose
         look-ahead points (``lookahead`` m ahead) must stay ``safety_distance`` m apart in arena ``bounds``.
 
         A slot is unreachable when its dock lies outside the arena or the robot body would cross a wall
-        there (``dock_depth`` < ``radius``), when docked neighbours' look-ahead points would be closer than
-        ``safety_distance`` (``slot_spacing`` too small), or when two slots on adjacent walls are so close
-        at a corner that their docked robots would be.
+        there (``dock_depth`` < ``radius``), when two slots at a corner block each other's way in
+        (:meth:`dock_blocks` both ways), or when docked robots' look-ahead points would be closer than
+        ``safety_distance`` (``slot_spacing`` too small, or slots on adjacent walls too close at a corner).
         """
         if self.dock_depth < radius:
             raise ValueError(f"charger slots are unreachable: dock_depth {self.dock_depth} m is less than the robot "
@@ -149,6 +180,12 @@ class ChargerLayout:
             k = int(np.flatnonzero(out)[0])
             raise ValueError(f"charger slot {k} at ({docks[k, 0]:.3f}, {docks[k, 1]:.3f}) m is unreachable: "
                              f"it lies outside the arena {tuple(bounds)}")
+        blocks = self.dock_blocks(lookahead, safety_distance)
+        mutual = np.argwhere(np.triu(blocks & blocks.T))
+        if len(mutual):
+            i, j = (int(v) for v in mutual[0])
+            raise ValueError(f"charger slots {i} and {j} are unreachable together: a robot docked on either blocks "
+                             f"the way onto the other (raise corner_clearance)")
         pts = docks[:, :2] + lookahead * np.column_stack((np.cos(docks[:, 2]), np.sin(docks[:, 2])))
         if len(pts) > 1:
             from scipy.spatial import cKDTree

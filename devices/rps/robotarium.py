@@ -15,11 +15,13 @@ class Robotarium:
 
     Args (as rps): number_of_robots (−1: the runner's ``--robots`` or 6),
     show_figure (ignored: use ``swarmdeck console`` to watch), sim_in_real_time
-    (pace steps at 0.033 s of wall time), initial_conditions ((3, N) floats).
+    (pace steps at 0.033 s of wall time), initial_conditions ((3, N) floats); swarmdeck's
+    ``from_docks=True`` (or ``swarmdeck run --from-docks``) starts the robots on the chargers and
+    sets them up to the initial conditions before the first step, as the Robotarium's back end does.
     """
 
     def __init__(self, number_of_robots: int = -1, show_figure: bool = True, sim_in_real_time: bool = True,
-                 initial_conditions: ArrayLike = np.array([])) -> None:
+                 initial_conditions: ArrayLike = np.array([]), *, from_docks: bool | None = None) -> None:
         ic = np.asarray(initial_conditions)
         defaults = RUN_DEFAULTS.get()
         n = None if number_of_robots is None or number_of_robots < 0 else int(number_of_robots)
@@ -30,7 +32,7 @@ class Robotarium:
                 raise ValueError(f"initial_conditions has {ic.shape[1]} columns but number_of_robots is {n}")
         real_time = bool(sim_in_real_time) and defaults.on_create is None  # never pace under `swarmdeck run`
         config = ArenaConfig(real_time=real_time, seed=defaults.seed)
-        self._arena = Arena(n, initial_conditions=ic.T if ic.size else None, config=config)
+        self._arena = Arena(n, initial_conditions=ic.T if ic.size else None, config=config, from_docks=from_docks)
         self.number_of_robots = self._arena.n
         self.show_figure = show_figure
         self.time_step = config.dt

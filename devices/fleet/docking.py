@@ -1,0 +1,89 @@
+"""Returning robots to free charger slots (paper §III-C "Charging": robots back onto the strips).
+
+:func:`choose_slots` gives each returning robot a free slot (the least total distance to the
+slots' approach poses, a linear assignment); :func:`return_maneuver` builds the
+:class:`~swarmdeck.devices.fleet.maneuver.Maneuver` that drives each robot to its slot's
+approach pose and then reverses it straight onto the strip, under the same barrier and deadlock
+escape as the setup (robots nearer their slot go first). :meth:`ChargerLayout.docked_slot` says which
+robots sit on a slot.
+"""
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from swarmdeck.core.kinematics import GritsBotParams
+from swarmdeck.devices.fleet.chargers import ChargerLayout
+from swarmdeck.devices.fleet.maneuver import Maneuver, ManeuverParams
+
+FloatArray = NDArray[np.float64]
+IntArray = NDArray[np.intp]
+
+
+def choose_slots(positions: ArrayLike, free: ArrayLike, layout: ChargerLayout) -> IntArray:
+    """``(K,)`` slot index for each of K robots at ``positions`` ``(K, 2)`` m, among the ``free`` slots:
+    the least total distance to the slots' approach poses, corner slots (:meth:`ChargerLayout.dock_blocks`)
+    only when the others are taken.
+
+    Raises:
+        ValueError: fewer free reachable slots than robots (the message says how many of each).
+    """
+    from scipy.optimize import linear_sum_assignment
+
+    p = np.asarray(positions, dtype=float).reshape(-1, 2)
+    free = np.asarray(free, dtype=np.intp).reshape(-1)
+    occupied = np.setdiff1d(np.arange(layout.n_slots), free)
+    if len(occupied):  # a free slot whose way in a docked robot blocks cannot be reached
+        free = free[~layout.dock_blocks()[np.ix_(occupied, free)].any(axis=0)]
+    if len(free) < len(p):
+        raise ValueError(f"{len(p)} robots must return but only {len(free)} charger slots are free and reachable "
+                         f"(the layout has {layout.n_slots})")
+    app = layout.approach_poses()[free, :2]
+    blocks = layout.dock_blocks() | layout.approaches_clash()
+    corner = (blocks.any(axis=0) | blocks.any(axis=1))[free]
+    # corner slots (docked in a set order) only when the others are taken: 2 m more cost each
+    cost = np.hypot(*(p[:, None, :] - app[None, :, :]).transpose(2, 0, 1)) + 2.0 * corner[None, :]
+    r, c = linear_sum_assignment(cost)
+    out = np.empty(len(p), dtype=np.intp)
+    out[r] = free[c]
+    return out
+
+
+def return_maneuver(poses: ArrayLike, slots: ArrayLike, layout: ChargerLayout,
+                    robot: GritsBotParams = GritsBotParams(), params: ManeuverParams = ManeuverParams(),
+                    hold_distance: float = 0.4) -> Maneuver:
+    """The maneuver that docks robots at ``poses`` ``(K, 3)`` on ``slots`` ``(K,)`` (approach, then reverse).
+
+    Priorities: the robot nearest its approach pose goes first (it is soonest out of the way). At a
+    corner, a robot whose docked body would block another's way in (:meth:`ChargerLayout.dock_blocks`),
+    or whose approach pose clashes with a higher-priority robot's (:meth:`ChargerLayout.approaches_clash`),
+    waits ``hold_distance`` m from its approach pose towards the middle of the arena until the other has docked.
+    """
+    p = np.asarray(poses, dtype=float).reshape(-1, 3)
+    slots = np.asarray(slots, dtype=np.intp).reshape(-1)
+    k = len(p)
+    docks, app = layout.dock_poses()[slots], layout.approach_poses()[slots]
+    dist = np.hypot(*(p[:, :2] - app[:, :2]).T)
+    # a slot whose docked robot blocks another's way in goes after it (level: longest such chain)
+    blocks_all = layout.dock_blocks(robot.lookahead)
+    level = np.zeros(layout.n_slots)
+    for _ in range(layout.n_slots):  # converges within the longest chain (1 on the default layout)
+        new = np.maximum(level, np.max(np.where(blocks_all, level[None, :] + 1, 0), axis=1))
+        if np.array_equal(new, level):
+            break
+        level = new
+    # one total order, so waiting never goes round in a circle: lower level first, then the nearest
+    priority = np.empty(k)
+    priority[np.lexsort((np.arange(k), dist, level[slots]))] = np.arange(k, 0, -1)
+    # robot a waits while robot b, which goes first, still has to dock on a slot that a's docked
+    # robot would block or whose approach pose clashes with a's
+    conflict = (blocks_all | blocks_all.T | layout.approaches_clash())[np.ix_(slots, slots)]
+    blocks = conflict & (priority[:, None] < priority[None, :])
+    # waiting robots stand back towards the middle of the arena, clear of the other slots' approaches
+    x0, x1, y0, y1 = layout.bounds
+    towards = np.array([(x0 + x1) / 2, (y0 + y1) / 2]) - app[:, :2]
+    hold = app.copy()
+    hold[:, :2] += hold_distance * towards / np.maximum(np.hypot(towards[:, 0], towards[:, 1]), 1e-9)[:, None]
+    return Maneuver(docks, layout.bounds, robot, params, priority=priority, reverse=np.ones(k, dtype=bool),
+                    approach=app, wait_for=np.argwhere(blocks), hold=hold)
+

@@ -1,0 +1,296 @@
+"""The fleet between experiments: robots on the chargers, assigned, set up, driven, returned.
+
+:class:`FleetManager` ties the fleet's pieces together over a simulated arena that holds every
+robot of the fleet (paper §III-A: the back end "assigns charged robots, sets them up to the
+experiment's initial conditions, and returns them to the chargers afterwards"; REFERENCE.md §11):
+
+1. the robots start docked on charger slots (:class:`~swarmdeck.devices.fleet.chargers.ChargerLayout`)
+   and charge there (:mod:`~swarmdeck.devices.fleet.battery`);
+2. :meth:`FleetManager.setup` assigns N charged, healthy robots to experiment ids 0…N−1
+   (:func:`~swarmdeck.devices.fleet.assignment.assign`), checks the start poses
+   (:func:`~swarmdeck.devices.fleet.setup.check_start_poses`) and drives the robots there under
+   the barrier with the deadlock escape (:func:`~swarmdeck.devices.fleet.setup.drive`);
+3. :meth:`FleetManager.experiment` is the experiment's view: N robots with ids 0…N−1 (a
+   :class:`~swarmdeck.devices.backend.RobotBackend`, what :class:`~swarmdeck.devices.Arena`
+   drives), whose ``obstacles`` are the look-ahead points of the robots that stayed docked;
+4. :meth:`FleetManager.return_to_chargers` docks every robot that is off its charger on a free
+   slot; :meth:`FleetManager.ready` is True when every robot is docked or assigned.
+
+The fleet's own maneuvers use a barrier with the paper's linear class-K function
+(κ(h) = h, γ = 20, γ·dt ≤ 1 keeps the discrete loop safe, REFERENCE.md §3 and
+:mod:`swarmdeck.safety.config`): rps's cubic κ lets two robots parked 0.24 m apart approach
+each other at ~10⁻⁵ m/s, which would stall the last centimetres of a setup for minutes.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from swarmdeck.core.kinematics import GritsBotParams, limit_unicycle, lookahead_points
+from swarmdeck.devices.fleet.assignment import Assignment, AssignmentPolicy, assign
+from swarmdeck.devices.fleet.battery import BatteryParams, battery_step, recharge
+from swarmdeck.devices.fleet.chargers import ChargerLayout
+from swarmdeck.devices.fleet.docking import choose_slots, return_maneuver
+from swarmdeck.devices.fleet.maneuver import Maneuver, ManeuverParams
+from swarmdeck.devices.fleet.setup import ManeuverReport, check_start_poses, drive
+from swarmdeck.devices.pipeline import barrier_filter
+from swarmdeck.devices.simulator import ArenaConfig, SimulatedArena
+from swarmdeck.devices.validation import ValidationReport
+
+FloatArray = NDArray[np.float64]
+IntArray = NDArray[np.intp]
+
+
+@dataclass(frozen=True)
+class FleetConfig:
+    """How the fleet is kept (defaults: the 3.2 × 2 m arena, GRITSBots, REFERENCE.md §1).
+
+    Attributes:
+        layout: the charging strips and their slots (its bounds must be the arena's).
+        battery: the battery model.
+        policy: which robots may take part (charge, tracking, firmware).
+        maneuver: tolerances, gains and the deadlock escape of setup and return.
+        safety_distance: D_s between look-ahead points during setup and return, m.
+        gamma: barrier gain of the fleet's maneuvers (linear κ; γ·dt ≤ 1).
+        time_limit_base, time_limit_per_robot: a setup or return of N robots fails after
+            base + N · per_robot simulated s.
+    """
+
+    layout: ChargerLayout = field(default_factory=ChargerLayout)
+    battery: BatteryParams = field(default_factory=BatteryParams)
+    policy: AssignmentPolicy = field(default_factory=AssignmentPolicy)
+    maneuver: ManeuverParams = field(default_factory=ManeuverParams)
+    safety_distance: float = 0.17
+    gamma: float = 20.0
+    time_limit_base: float = 60.0
+    time_limit_per_robot: float = 2.0
+
+    def time_limit(self, n: int) -> float:
+        """Simulated s a setup or return of ``n`` robots may take."""
+        return self.time_limit_base + n * self.time_limit_per_robot
+
+
+class FleetManager:
+    """A simulated fleet of M robots on the chargers of an arena (module docstring).
+
+    Args:
+        n_robots: M (default: one robot per charger slot).
+        config: the arena (bounds, period); its ``seed`` picks the slots when M < slots.
+        fleet: charger layout, battery, policy, maneuver settings.
+        params: the robot model.
+        charge: initial state of charge, scalar or ``(M,)`` in [0, 1] (NaN: unknown).
+        slots: ``(M,)`` the slot each robot starts on (default: all slots, or a random subset).
+    """
+
+    def __init__(self, n_robots: int | None = None, *, config: ArenaConfig | None = None,
+                 fleet: FleetConfig | None = None, params: GritsBotParams | None = None,
+                 charge: ArrayLike = 1.0, slots: ArrayLike | None = None) -> None:
+        self.config = config if config is not None else ArenaConfig()
+        self.fleet = fleet if fleet is not None else FleetConfig(layout=ChargerLayout(bounds=self.config.bounds))
+        self.params = params if params is not None else GritsBotParams()
+        layout = self.fleet.layout
+        if tuple(layout.bounds) != tuple(self.config.bounds):
+            raise ValueError(f"the charger layout is for the arena {layout.bounds}, not {self.config.bounds}")
+        layout.check_reachable(self.config.bounds, self.fleet.safety_distance, self.params.lookahead, self.params.radius)
+        m_slots = layout.n_slots
+        if slots is None:
+            m = m_slots if n_robots is None else int(n_robots)
+            if not 1 <= m <= m_slots:
+                raise ValueError(f"a fleet of {m} robots needs 1..{m_slots} charger slots (the layout has {m_slots})")
+            rng = np.random.default_rng(self.config.seed)
+            slots = np.arange(m_slots) if m == m_slots else np.sort(rng.choice(m_slots, m, replace=False))
+        slots = np.asarray(slots, dtype=np.intp).reshape(-1)
+        if len(np.unique(slots)) != len(slots) or np.any((slots < 0) | (slots >= m_slots)):
+            raise ValueError(f"slots must be distinct slot indices 0..{m_slots - 1}, got {slots.tolist()}")
+        if n_robots is not None and len(slots) != n_robots:
+            raise ValueError(f"{n_robots} robots but {len(slots)} slots given")
+        self.sim = SimulatedArena(initial_poses=layout.dock_poses()[slots], config=self.config, params=self.params)
+        m = self.sim.n_robots
+        self.ids = np.arange(m, dtype=np.intp)
+        self.charge = np.broadcast_to(np.asarray(charge, dtype=float), (m,)).copy()
+        self.slot = slots.copy()  # (M,) slot each robot is docked on, −1 while away
+        self.assignment: Assignment | None = None
+        self.filter = barrier_filter(self.params, self.config.bounds, self.config.dt, class_k="linear",
+                                     gamma=self.fleet.gamma, safety_distance=self.fleet.safety_distance)
+        self.experiment_end: float | None = None  # fleet time the last experiment ended (return began)
+        self.last_setup: ManeuverReport | None = None
+        self.last_return: ManeuverReport | None = None
+
+    # ------------------------------------------------------------------ state
+    @property
+    def n_robots(self) -> int:
+        """M, robots in the fleet."""
+        return int(self.sim.n_robots)
+
+    @property
+    def time(self) -> float:
+        """Simulated s since the fleet was created."""
+        return float(self.sim.time)
+
+    def poses(self) -> FloatArray:
+        """``(M, 3)`` poses of every robot (a copy)."""
+        return self.sim.poses
+
+    def docked(self) -> NDArray[np.bool_]:
+        """``(M,)`` robots on a charger slot."""
+        return self.slot >= 0
+
+    def ready(self) -> bool:
+        """Every robot is docked or assigned to an experiment (the arena can be left alone)."""
+        assigned = np.zeros(self.n_robots, dtype=bool)
+        if self.assignment is not None:
+            assigned[self.assignment.rows] = True
+        return bool(np.all(self.docked() | assigned))
+
+    def status(self) -> list[dict[str, Any]]:
+        """One JSON-able dict per robot: id, pose, charge, voltage, slot (−1: away), charging, experiment id."""
+        exp = np.full(self.n_robots, -1)
+        if self.assignment is not None:
+            exp[self.assignment.rows] = np.arange(self.assignment.n)
+        p, volts = self.poses(), self.fleet.battery.voltage(self.charge)
+        keys = ("id", "x", "y", "theta", "charge", "voltage", "slot", "charging", "experiment_id")
+        cols = (self.ids.tolist(), p[:, 0].tolist(), p[:, 1].tolist(), p[:, 2].tolist(), self.charge.tolist(),
+                volts.tolist(), self.slot.tolist(), self.docked().tolist(), exp.tolist())
+        return [dict(zip(keys, row)) for row in zip(*cols)]
+
+    def _battery(self, sim: SimulatedArena, v: FloatArray, w: FloatArray) -> None:
+        self.charge = battery_step(self.charge, sim.config.dt, v, w, self.docked(), self.params, self.fleet.battery)
+
+    def wait(self, seconds: float) -> None:
+        """Let ``seconds`` s pass between experiments with every robot standing still (docked ones charge)."""
+        idle = battery_step(self.charge, seconds, np.zeros(self.n_robots), np.zeros(self.n_robots),
+                            np.zeros(self.n_robots, dtype=bool), self.params, self.fleet.battery)
+        self.charge = np.where(self.docked(), recharge(self.charge, seconds, self.fleet.battery), idle)
+
+    # ------------------------------------------------------------------ setup
+    def setup(self, goals: ArrayLike, *, time_limit: float | None = None, pose_age: ArrayLike = 0.0,
+              status_age: ArrayLike = 0.0) -> ManeuverReport:
+        """Assign ``len(goals)`` robots and drive them to the start poses ``goals`` ``(N, 3)``.
+
+        ``pose_age``/``status_age`` ``(M,)`` s since tracking saw each robot / its firmware reported
+        (0 for the simulated fleet). Robots not assigned stay docked and are obstacles.
+
+        Raises:
+            AssignmentError: fewer charged, healthy robots than N (each robot left out named).
+            ValueError: a start pose outside the arena, too close to another or to a docked robot.
+            SetupFailed: the time limit passed (robots stopped; those not at their pose named).
+        """
+        if self.assignment is not None:
+            raise RuntimeError("the fleet is already set up for an experiment: return it to the chargers first")
+        check = dict(safety_distance=self.fleet.safety_distance)
+        g = check_start_poses(goals, self.config.bounds, self.params, **check)
+        a = assign(len(g), self.ids, self.charge, pose_age, status_age, positions=self.poses()[:, :2], goals=g,
+                   policy=self.fleet.policy)
+        idle_pts = lookahead_points(self.poses()[a.idle], self.params.lookahead)
+        names = [f"robot {int(self.ids[k])} docked on charger slot {int(self.slot[k])} (it stays there)" for k in a.idle]
+        goals_ok = check_start_poses(g, self.config.bounds, self.params, obstacles=idle_pts, obstacle_names=names,
+                                     **check)
+        man = Maneuver(goals_ok, self.config.bounds, self.params, self.fleet.maneuver)
+        self.assignment = a
+        self.experiment_end = None
+        self.slot[a.rows] = -1
+        limit = self.fleet.time_limit(len(g)) if time_limit is None else float(time_limit)
+        try:
+            report = drive(self.sim, man, a.rows, self.filter, time_limit=limit, labels=self.ids[a.rows],
+                           what="setup", on_step=self._battery)
+        finally:
+            self._settle()
+        self.last_setup = report
+        return report
+
+    def experiment(self) -> "FleetExperiment":
+        """The assigned robots as the experiment's robots 0…N−1 (after :meth:`setup`)."""
+        if self.assignment is None:
+            raise RuntimeError("no robots are assigned: call setup() first")
+        return FleetExperiment(self, self.assignment.rows)
+
+    # ------------------------------------------------------------------ return
+    def return_to_chargers(self, *, time_limit: float | None = None) -> ManeuverReport:
+        """Dock every robot that is off its charger on a free slot (nearest overall), safely.
+
+        Raises:
+            ValueError: more robots away than free slots.
+            SetupFailed: the time limit passed (robots stopped; those not docked named).
+        """
+        away = np.flatnonzero(self.slot < 0)
+        self.assignment = None
+        self.experiment_end = self.sim.time  # the experiment's clock stops here
+        if len(away) == 0:
+            return ManeuverReport(True, 0.0, 0.0, 0, 0.0, 0.0, 0)
+        layout = self.fleet.layout
+        free = np.setdiff1d(np.arange(layout.n_slots), self.slot[self.slot >= 0])
+        poses = self.poses()
+        slots = choose_slots(poses[away, :2], free, layout)
+        man = return_maneuver(poses[away], slots, layout, self.params, self.fleet.maneuver)
+        limit = self.fleet.time_limit(len(away)) if time_limit is None else float(time_limit)
+        try:
+            report = drive(self.sim, man, away, self.filter, time_limit=limit, labels=self.ids[away],
+                           what="return to the chargers", on_step=self._battery)
+        finally:
+            self._settle()
+        self.last_return = report
+        return report
+
+    def _settle(self) -> None:
+        """Robots found on a slot count as docked (and charge); the others as away."""
+        on = self.fleet.layout.docked_slot(self.poses(), position_tolerance=0.02, heading_tolerance=0.1)
+        assigned = np.zeros(self.n_robots, dtype=bool)
+        if self.assignment is not None:
+            assigned[self.assignment.rows] = True
+        self.slot = np.where(assigned, -1, on)
+
+
+class FleetExperiment:
+    """The experiment's robots 0…N−1: fleet rows ``rows`` of a :class:`FleetManager` (a RobotBackend).
+
+    ``time`` starts at 0 when the experiment starts; ``step(v, w)`` drives these robots (the others
+    hold still) and charges/drains the batteries; ``obstacles`` are the look-ahead points ``(M − N, 2)``
+    of the robots that stayed docked (for :func:`~swarmdeck.devices.pipeline.certify`);
+    ``report`` counts the experiment's own boundary, collision and actuator errors.
+    """
+
+    def __init__(self, fleet: FleetManager, rows: ArrayLike) -> None:
+        self.fleet = fleet
+        self.rows = np.asarray(rows, dtype=np.intp)
+        self.n_robots = int(len(self.rows))
+        self.params = fleet.params
+        self._t0 = fleet.sim.time
+        self.report = ValidationReport(self.n_robots)
+        others = np.setdiff1d(np.arange(fleet.n_robots), self.rows)
+        self._others = others
+
+    @property
+    def poses(self) -> FloatArray:
+        return self.fleet.sim.poses[self.rows]
+
+    @property
+    def time(self) -> float:
+        """s since the experiment started (stops when the fleet returns to the chargers)."""
+        end = self.fleet.experiment_end
+        return float((self.fleet.sim.time if end is None else end) - self._t0)
+
+    @property
+    def obstacles(self) -> FloatArray | None:
+        if len(self._others) == 0:
+            return None
+        return lookahead_points(self.fleet.sim.poses[self._others], self.params.lookahead)
+
+    def step(self, v: ArrayLike, w: ArrayLike) -> FloatArray:
+        v = np.asarray(v, dtype=float).reshape(-1)
+        w = np.asarray(w, dtype=float).reshape(-1)
+        if v.shape != (self.n_robots,) or w.shape != (self.n_robots,):
+            raise ValueError(f"v and w must each have shape ({self.n_robots},), got {v.shape} and {w.shape}")
+        sim, m = self.fleet.sim, self.fleet.n_robots
+        invalid = ~(np.isfinite(v) & np.isfinite(w))
+        _, _, saturated = limit_unicycle(np.where(invalid, 0.0, v), np.where(invalid, 0.0, w), self.params)
+        full_v, full_w = np.zeros(m), np.zeros(m)
+        full_v[self.rows], full_w[self.rows] = v, w
+        sim.step(full_v, full_w)
+        av, aw = sim.applied
+        self.fleet._battery(sim, av, aw)
+        poses = sim.poses[self.rows]
+        self.report.record(poses, sim.config.bounds, saturated, invalid, self.time)
+        return poses
