@@ -33,7 +33,10 @@ def test_docked_robots_back_onto_their_wall_and_approach_poses_lie_straight_ahea
     gap_back = np.select([walls == 0, walls == 1, walls == 2], [back[:, 1] - y0, y1 - back[:, 1], back[:, 0] - x0],
                          x1 - back[:, 0])
     assert np.all(gap_back < gap)
-    assert np.allclose(np.hypot(*(app[:, :2] - docks[:, :2]).T), layout.approach_distance)
+    dist = np.hypot(*(app[:, :2] - docks[:, :2]).T)
+    # every second slot along a wall has its approach pose further in (room to turn in front of the strip)
+    assert set(np.round(dist, 9)) == {layout.approach_distance, layout.approach_distance + layout.approach_stagger}
+    assert np.all(np.abs(np.diff(dist[walls == 0])) > 0.1)
     assert np.allclose(app[:, 2], docks[:, 2])
 
 
@@ -73,3 +76,13 @@ def test_docked_slot_names_the_slot_a_robot_backs_onto_and_minus_one_otherwise()
                        [[0.0, 0.0, 0.0], [np.nan, 0.0, 0.0]]))
     poses[1, :2] += 0.01  # within the 2 cm tolerance
     assert layout.docked_slot(poses).tolist() == [3, 40, -1, -1, -1, -1]
+
+def test_corner_slots_are_ordered_and_no_two_block_each_other():
+    layout = ChargerLayout()
+    blocks = layout.dock_blocks()
+    assert blocks.any() and not (blocks & blocks.T).any()
+    walls = layout.slot_walls()
+    a, b = np.nonzero(blocks)
+    assert np.all(walls[a] != walls[b])  # only at the corners
+    clash = layout.approaches_clash()
+    assert np.array_equal(clash, clash.T) and clash.any()

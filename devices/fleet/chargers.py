@@ -180,12 +180,6 @@ class ChargerLayout:
             k = int(np.flatnonzero(out)[0])
             raise ValueError(f"charger slot {k} at ({docks[k, 0]:.3f}, {docks[k, 1]:.3f}) m is unreachable: "
                              f"it lies outside the arena {tuple(bounds)}")
-        blocks = self.dock_blocks(lookahead, safety_distance)
-        mutual = np.argwhere(np.triu(blocks & blocks.T))
-        if len(mutual):
-            i, j = (int(v) for v in mutual[0])
-            raise ValueError(f"charger slots {i} and {j} are unreachable together: a robot docked on either blocks "
-                             f"the way onto the other (raise corner_clearance)")
         pts = docks[:, :2] + lookahead * np.column_stack((np.cos(docks[:, 2]), np.sin(docks[:, 2])))
         if len(pts) > 1:
             from scipy.spatial import cKDTree
@@ -197,3 +191,9 @@ class ChargerLayout:
                 raise ValueError(f"charger slots {i} and {j} are unreachable together: robots docked there would have "
                                  f"look-ahead points {gap:.3f} m apart, less than the safety distance {safety_distance} m "
                                  f"(raise slot_spacing or corner_clearance)")
+        blocks = self.dock_blocks(lookahead, safety_distance)
+        mutual = np.argwhere(np.triu(blocks & blocks.T))
+        if len(mutual):
+            i, j = (int(v) for v in mutual[0])
+            raise ValueError(f"charger slots {i} and {j} are unreachable together: a robot docked on either blocks "
+                             f"the way onto the other (raise corner_clearance)")
