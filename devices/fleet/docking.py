@@ -51,13 +51,16 @@ def choose_slots(positions: ArrayLike, free: ArrayLike, layout: ChargerLayout) -
 
 def return_maneuver(poses: ArrayLike, slots: ArrayLike, layout: ChargerLayout,
                     robot: GritsBotParams = GritsBotParams(), params: ManeuverParams = ManeuverParams(),
-                    hold_distance: float = 0.4) -> Maneuver:
+                    hold_distance: float = 0.4, max_active: int | None = None) -> Maneuver:
     """The maneuver that docks robots at ``poses`` ``(K, 3)`` on ``slots`` ``(K,)`` (approach, then reverse).
 
     Priorities: the robot nearest its approach pose goes first (it is soonest out of the way). At a
     corner, a robot whose docked body would block another's way in (:meth:`ChargerLayout.dock_blocks`),
     or whose approach pose clashes with a higher-priority robot's (:meth:`ChargerLayout.approaches_clash`),
     waits ``hold_distance`` m from its approach pose towards the middle of the arena until the other has docked.
+    At most ``max_active`` robots travel at once (the nearest first; the others stand where the
+    experiment left them), so the band along the walls does not crowd; default: all up to 30
+    robots, 20 above (measured: 30 robots return fastest all at once, 40 jam).
     """
     p = np.asarray(poses, dtype=float).reshape(-1, 3)
     slots = np.asarray(slots, dtype=np.intp).reshape(-1)
@@ -84,6 +87,8 @@ def return_maneuver(poses: ArrayLike, slots: ArrayLike, layout: ChargerLayout,
     towards = np.array([(x0 + x1) / 2, (y0 + y1) / 2]) - app[:, :2]
     hold = app.copy()
     hold[:, :2] += hold_distance * towards / np.maximum(np.hypot(towards[:, 0], towards[:, 1]), 1e-9)[:, None]
+    if max_active is None and k > 30:
+        max_active = 20
     return Maneuver(docks, layout.bounds, robot, params, priority=priority, reverse=np.ones(k, dtype=bool),
-                    approach=app, wait_for=np.argwhere(blocks), hold=hold)
+                    approach=app, wait_for=np.argwhere(blocks), hold=hold, max_active=max_active)
 

@@ -116,6 +116,8 @@ class Maneuver:
         wait_for: ``(P, 2)`` pairs ``(i, j)``: robot i waits at its ``hold`` pose until robot j is at
             its goal (docking robots whose lanes cross at a corner dock one after the other).
         hold: ``(N, 3)`` where a waiting robot waits.
+        max_active: at most this many robots move towards their goals at once, in priority order
+            (the others stand still until one arrives); None: all.
 
     Call :meth:`nominal` once per tick with the current poses and time; read :attr:`escapes`
     (perturbed goals handed out) and :attr:`escaped` (robots that needed one) afterwards.
@@ -124,7 +126,8 @@ class Maneuver:
     def __init__(self, goals: ArrayLike, bounds: Bounds = DEFAULT_BOUNDS, robot: GritsBotParams = GritsBotParams(),
                  params: ManeuverParams = ManeuverParams(), *, priority: ArrayLike | None = None,
                  reverse: ArrayLike | None = None, approach: ArrayLike | None = None,
-                 wait_for: ArrayLike | None = None, hold: ArrayLike | None = None) -> None:
+                 wait_for: ArrayLike | None = None, hold: ArrayLike | None = None,
+                 max_active: int | None = None) -> None:
         self.goals = np.array(goals, dtype=float)
         n = len(self.goals)
         if self.goals.shape != (n, 3) or not np.all(np.isfinite(self.goals)):
@@ -142,6 +145,9 @@ class Maneuver:
         self._wait_i, self._wait_j = pairs[:, 0], pairs[:, 1]
         self.hold = self.approach.copy() if hold is None else np.array(hold, dtype=float).reshape(n, 3)
         self._waiting = np.zeros(n, dtype=bool)
+        self.max_active = max_active
+        self._rank = np.empty(n, dtype=np.intp)
+        self._rank[np.lexsort((np.arange(n), -self.priority))] = np.arange(n)  # 0: highest priority
         self._hybrid = HybridPoseController(speed_limit=params.speed_limit,
                                             # hysteresis band [tol/3, tol]: a robot turning is within tol
                                             position_error=params.position_tolerance * 2 / 3,
@@ -202,8 +208,18 @@ class Maneuver:
         u = unicycle_to_si(p, v, w, ell)
         if self._docking.any():
             u = np.where(self._docking[:, None], self._dock_velocity(p), u)
-        self._watch(p, tgt, escaping, t)
-        return u
+        active = self._active(p) | escaping
+        self._watch(p, tgt, escaping, t, active)
+        return np.where(active[:, None], u, 0.0)
+
+    def _active(self, p: FloatArray) -> BoolArray:
+        """``(N,)`` robots allowed to move: all, or the ``max_active`` highest-priority ones not yet at their
+        goal (and every robot already at its goal, which holds it there)."""
+        if self.max_active is None:
+            return np.ones(self.n, dtype=bool)
+        done = self.at_goal(p)
+        pending_rank = np.cumsum(~done[np.argsort(self._rank)])[self._rank]  # 1-based among the pending
+        return done | (pending_rank <= self.max_active)
 
     # ------------------------------------------------------------------ docking
     def _dock_frame(self, p: FloatArray) -> tuple[FloatArray, FloatArray]:
@@ -230,13 +246,13 @@ class Maneuver:
         return unicycle_to_si(p, v, w, self.robot.lookahead)
 
     # ------------------------------------------------------------------ progress and escape
-    def _watch(self, p: FloatArray, tgt: FloatArray, escaping: BoolArray, t: float) -> None:
+    def _watch(self, p: FloatArray, tgt: FloatArray, escaping: BoolArray, t: float, active: BoolArray) -> None:
         prm = self.params
         aim = np.where(escaping[:, None], self._esc_goal, tgt[:, :2])
         err = np.hypot(*(p[:, :2] - aim).T) + 0.05 * np.abs(wrap_angle(p[:, 2] - tgt[:, 2])) * ~escaping
         done = self.at_goal(p) | (escaping & (np.hypot(*(p[:, :2] - aim).T) <= 2 * prm.position_tolerance))
         better = err < self._best - prm.progress
-        reset = better | done
+        reset = better | done | ~active  # robots told to stand still are not stuck
         self._best = np.where(reset, err, self._best)
         self._best_t = np.where(reset, t, self._best_t)
         self._attempts = np.where(self.at_goal(p), 0, self._attempts)
