@@ -25,11 +25,15 @@ Per robot, vectorised over robots:
   the arena fills before its edges). A stuck robot keeps its goal and every lower-priority robot
   within ``yield_radius`` m that is not already escaping gets a *perturbed goal* for
   ``escape_time`` s: ``escape_offset`` m along the stuck robot's line to its target and a
-  little off it (in a corridor: back out the way it came), clipped inside the arena; the higher-priority robot so gains ground at every
-  round, which is what makes every setup finish. A stuck robot with no lower-priority
-  neighbour steps sideways (alternating sides every two attempts) and a little back. Robots
-  reversing onto their charger slot keep to their lane and never yield. Offsets grow
-  with each attempt (up to 2×; a robot at its goal starts over). A perturbed goal expires after its time and the robot resumes.
+  little off it, clipped inside the arena, so the higher-priority robot gains ground every
+  round (head-on meetings in a gap and rings of robots come apart this way; a long corridor
+  one robot wide can still jam: the yielding robot turns across the lane). A stuck robot with
+  no lower-priority neighbour steps sideways (alternating sides every two attempts) and a
+  little back. Robots reversing onto their charger slot keep to their lane and never yield.
+  Offsets grow with each attempt (up to 2×; a robot at its goal starts over). A perturbed goal
+  expires after its time and the robot resumes;
+* **ordering** (return) — ``wait_for`` pairs keep a robot at its ``hold`` pose until another has
+  docked (corner slots), and ``max_active`` lets only the highest-priority robots move at once.
 
 Everything that runs each tick works on whole arrays (a k-d tree for neighbours), no per-robot
 Python loop. Units: m, s, rad; poses ``(N, 3)``.
