@@ -170,4 +170,12 @@ def saturate(u: ArrayLike, limit: float | None) -> FloatArray:
     speed = np.hypot(out[:, 0], out[:, 1])
     fast = speed > limit  # only these are scaled (speed > 0 there): slower rows pass bit for bit
     scale = np.divide(limit, speed, out=np.ones_like(speed), where=fast)
-    return out * scale[:, None]
+    out = out * scale[:, None]
+    # a subnormal limit leaves the scaled row a few units of the last place too long (subnormals
+    # carry fewer bits): step such components towards zero until the row is within the limit
+    for _ in range(8):  # a few ulps at most; bounded, over whole arrays
+        over = fast & (np.hypot(out[:, 0], out[:, 1]) > limit)
+        if not over.any():
+            break
+        out[over] = np.nextafter(out[over], 0.0)
+    return out

@@ -13,6 +13,7 @@ from swarmdeck.core.kinematics import saturate
 @settings(max_examples=100, deadline=None)
 @given(arrays(np.float64, (12, 2), elements=st.floats(-10, 10)), st.floats(0.0, 2.0))
 @example(np.array([[1.11253693e-308, 0.0]] + [[0.0, 0.0]] * 11), 1e-307)  # a subnormal speed under the limit
+@example(np.full((12, 2), 4.0), 2.2250738585e-313)  # a subnormal limit: the scaled rows came out 1 ulp too long
 def test_norm_bounded_direction_kept(u, limit):
     s = saturate(u, limit)
     speed = np.hypot(u[:, 0], u[:, 1])
