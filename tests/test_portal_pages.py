@@ -161,6 +161,7 @@ def test_a_scene_message_is_the_consoles_picture_of_the_frame():
     assert m["seq"] == 7 and m["run_state"] == "running" and m["bounds"] == list(frame.bounds)
     assert m["colours"] == ["#%02x%02x%02x" % tuple(c) for c in robot_colors(frame)]
     assert len(m["edges"]) == len(frame.coverage.edges) and m["density"].startswith("data:image/png;base64,")
+    assert m["virtual"] == [] and m["moved"] == np.flatnonzero(frame.barrier.intervention > 1e-3).tolist()
     json.dumps(m, allow_nan=False)
 
 

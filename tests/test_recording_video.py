@@ -214,3 +214,27 @@ def test_barrier_activity_is_drawn(recording):
     assert (np.abs(near - [255, 140, 0]).max(axis=1) < 50).any()
     rows, cols = _body_pixels(layout, frame)
     assert np.abs(img[rows[2], cols[2]].astype(int) - [255, 140, 0]).max() < 10
+
+
+def test_virtual_robots_are_pale_in_a_dashed_ring_as_in_the_console(recording):
+    from swarmdeck.console.recording.export_video import FrameRenderer
+    from swarmdeck.console.web.scene import VIRTUAL_RING
+
+    with open_recording(recording) as rec:
+        _, frame = rec.frame_at(0.5)
+    virtual = np.zeros(frame.n, dtype=bool)
+    virtual[1] = True
+    frame = dataclasses.replace(frame, is_virtual=virtual)
+    style = VideoStyle(width=640, height=400)
+    layout = VideoLayout.fit(frame.bounds, 640, 400)
+    img = FrameRenderer(layout, style).render(frame, 0.5)
+    rows, cols = _body_pixels(layout, frame)
+    want = robot_colors(frame).astype(int)
+    assert np.abs(img[rows, cols].astype(int) - want).max() < 10 and (want[1] > want[0]).all()  # paler
+    a = np.radians(11.25)  # the middle of the first dash
+    on = layout.to_px(frame.poses[1, :2] + 1.35 * style.robot_radius * np.cos(np.radians(11.25)) *
+                      np.array([np.cos(a), np.sin(a)]))
+    near = img[int(round(on[1])) - 1:int(round(on[1])) + 2, int(round(on[0])) - 1:int(round(on[0])) + 2]
+    assert (np.abs(near.reshape(-1, 3).astype(int) - VIRTUAL_RING).max(axis=1) < 40).any()
+    gap = layout.to_px(frame.poses[0, :2] + 1.35 * style.robot_radius * np.array([np.cos(a), np.sin(a)]))
+    assert np.abs(img[int(round(gap[1])), int(round(gap[0]))].astype(int) - VIRTUAL_RING).max() > 60  # robot 0: none

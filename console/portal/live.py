@@ -17,6 +17,7 @@ active pairs)::
     colours      (N,) "#rrggbb" by state (blue, orange: the filter changed the command, red: e-stop, …)
     points       (N, 2) look-ahead points
     moved        indices of the robots whose command the filter changed
+    virtual      indices of the virtual robots (simulated beside the physical ones: a dashed violet ring)
     edges        (E, 2, 2) Voronoi edges, or [] when the behaviour has no cells
     centroids    (N, 2) or []
     pairs        (K, 2) active barrier pairs (look-ahead point indices); pair_colours (K,) "#rrggbb" by h
@@ -80,6 +81,7 @@ def scene_message(frame: Frame, seq: int) -> dict[str, Any]:
         "bounds": list(frame.bounds), "ids": frame.ids.tolist(),
         "poses": np.round(frame.poses, 4).tolist(), "colours": _hex(robot_colors(frame)),
         "points": np.round(frame.points, 4).tolist(), "moved": moved,
+        "virtual": np.flatnonzero(frame.is_virtual).tolist(),
         "edges": np.round(cov.edges, 3).tolist() if cov is not None else [],
         "centroids": np.round(cov.centroids, 3).tolist() if cov is not None else [],
         "pairs": pairs.tolist(), "pair_colours": pair_colours, "barrier": barrier,

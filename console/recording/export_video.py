@@ -14,7 +14,7 @@ frames) and draws each sample with OpenCV on a numpy RGB image:
 - the robots as the console's teardrop (``scene.robot_mesh``: a disc with a nose
   along the heading) coloured by state (``scene.robot_colors``: blue, orange when
   the filter changed the command, red in an emergency stop, slate paused, grey
-  unseen), a white heading tick, and the id above (up to ``SceneStyle.max_labels``
+  unseen; virtual robots pale, in a dashed violet ring), a white heading tick, and the id above (up to ``SceneStyle.max_labels``
   robots), with the safety discs of radius D_s / 2 up to ``SceneStyle.max_glyphs``;
 - touch contacts (magenta dots);
 - a header with the recording time (s since the first frame, the time
@@ -50,7 +50,9 @@ from numpy.typing import NDArray
 from swarmdeck.core.bounds import Bounds
 from swarmdeck.console.recording.reader import Recording, RecordedEvent
 from swarmdeck.console.runtime.frame import Frame
-from swarmdeck.console.web.scene import LUT, SceneStyle, h_colors, heatmap, robot_colors, robot_mesh
+from swarmdeck.console.web.scene import (
+    LUT, VIRTUAL_RING, SceneStyle, h_colors, heatmap, robot_colors, robot_mesh,
+)
 
 #: H.264 encoders tried in this order (PyAV's wheels carry libx264).
 H264_ENCODERS = ("libx264", "libopenh264", "h264")
@@ -295,6 +297,13 @@ class FrameRenderer:
         for k, col in enumerate(uniq):  # a handful of state colours, not one call per robot
             cv2.fillPoly(img, list(fixed[which == k]), tuple(int(v) for v in col), cv2.LINE_AA, _SHIFT)
         cv2.polylines(img, list(lay.fixed(ticks)), False, (255, 255, 255), max(1, self.thick), cv2.LINE_AA, _SHIFT)
+        virtual = frame.is_virtual
+        if virtual.any():  # as the console: a dashed violet ring (every other of 16 arcs) at 1.35 radii
+            dash = 1.35 * self.style.robot_radius * self.unit_ring[::2]  # unit_ring has 16 points
+            ends = 1.35 * self.style.robot_radius * self.unit_ring[1::2]
+            c = poses[virtual, None, :2]
+            segs = np.stack(((c + dash[None]).reshape(-1, 2), (c + ends[None]).reshape(-1, 2)), axis=1)
+            cv2.polylines(img, list(lay.fixed(segs)), False, VIRTUAL_RING, max(1, self.thick), cv2.LINE_AA, _SHIFT)
         if frame.n <= self.scene_style.max_labels:
             self._ids(img, frame)
 

@@ -43,6 +43,9 @@ document.addEventListener("DOMContentLoaded", () => {
     const r = 0.055 * s;
     ctx.strokeStyle = "#ff8c00"; ctx.lineWidth = 2;  // robots whose command the filter changed
     for (const i of m.moved) { ctx.beginPath(); ctx.arc(X(m.poses[i][0]), Y(m.poses[i][1]), 1.7 * r, 0, 2 * Math.PI); ctx.stroke(); }
+    ctx.strokeStyle = "rgb(120,60,200)"; ctx.setLineDash([0.53 * r, 0.53 * r]);  // virtual robots, as the console
+    for (const i of m.virtual || []) { ctx.beginPath(); ctx.arc(X(m.poses[i][0]), Y(m.poses[i][1]), 1.35 * r, 0, 2 * Math.PI); ctx.stroke(); }
+    ctx.setLineDash([]);
     ctx.font = `${Math.max(10, Math.round(r * 1.1))}px system-ui, sans-serif`;
     ctx.textAlign = "center"; ctx.textBaseline = "bottom";
     m.poses.forEach(([x, y, th], i) => {
