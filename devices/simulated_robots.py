@@ -4,6 +4,11 @@
 :class:`~swarmdeck.core.ports.CommandSink` of a :class:`SimulatedArena` (no
 hardware): every robot is seen every tick, each ``send`` steps the simulation
 one period on its virtual clock, ``hold`` leaves it standing still.
+
+With ``chargers`` (a :class:`~swarmdeck.devices.fleet.chargers.ChargerLayout`) the robots have
+batteries, as the networked fleet does: robots docked on a slot charge, the others drain as
+they drive (:func:`~swarmdeck.devices.fleet.battery.battery_step`), and every reading carries
+their voltage and charging state; ``start_docked`` puts robot k on slot k.
 """
 from __future__ import annotations
 
@@ -14,6 +19,8 @@ from numpy.typing import NDArray
 
 from swarmdeck.core.ports import SensedPoses
 from swarmdeck.core.kinematics import GritsBotParams
+from swarmdeck.devices.fleet.battery import BatteryParams, battery_step
+from swarmdeck.devices.fleet.chargers import ChargerLayout
 from swarmdeck.devices.initial_conditions import max_robots, random_initial_poses
 from swarmdeck.devices.simulator import ArenaConfig, SimulatedArena
 
@@ -31,8 +38,16 @@ class SimulatedRobots:
     name = "simulation"
 
     def __init__(self, n_robots: int = 12, config: ArenaConfig | None = None, params: GritsBotParams | None = None,
-                 initial_poses: Any = None) -> None:
+                 initial_poses: Any = None, *, chargers: ChargerLayout | None = None, start_docked: bool = False,
+                 charge: Any = 1.0, battery: BatteryParams | None = None) -> None:
         cfg = config if config is not None else ArenaConfig()
+        if start_docked:
+            if chargers is None:
+                raise ValueError("SimulatedRobots: start_docked needs chargers")
+            docks = chargers.dock_poses()
+            if n_robots > len(docks):
+                raise ValueError(f"{n_robots} robots cannot start docked: the charging strips have {len(docks)} slots")
+            initial_poses = docks[:n_robots]
         if cfg.real_time:
             raise ValueError("SimulatedRobots: the console paces the loop itself; use ArenaConfig(real_time=False)")
         if initial_poses is None and n_robots > max_robots(cfg.bounds):
@@ -44,18 +59,39 @@ class SimulatedRobots:
                                   params=params if params is not None else GritsBotParams())
         self._ids = np.arange(self.sim.n_robots, dtype=np.int64)
         self._seen = np.ones(self.sim.n_robots, dtype=bool)
+        self.chargers = chargers
+        self.battery = battery if battery is not None else BatteryParams()
+        self.charge: NDArray[np.float64] | None = None
+        if chargers is not None:
+            self.charge = np.broadcast_to(np.asarray(charge, dtype=float), (self.sim.n_robots,)).copy()
+            if not np.all(((self.charge >= 0.0) & (self.charge <= 1.0)) | np.isnan(self.charge)):
+                raise ValueError(f"charge must be in [0, 1] (NaN: a battery that reads NaN), got {self.charge.tolist()}")
 
     @property
     def n_robots(self) -> int:
         return int(self.sim.n_robots)
 
+    def docked(self) -> NDArray[np.bool_]:
+        """``(N,)`` robots docked on a charger slot (all False without chargers)."""
+        if self.chargers is None:
+            return np.zeros(self.n_robots, dtype=bool)
+        return self.chargers.docked_slot(self.sim.poses) >= 0
+
     def read(self, now: float = 0.0) -> SensedPoses:
-        return SensedPoses(self._ids, self.sim.poses, self._seen)
+        if self.charge is None:
+            return SensedPoses(self._ids, self.sim.poses, self._seen)
+        return SensedPoses(self._ids, self.sim.poses, self._seen, battery=self.battery.voltage(self.charge),
+                           charging=self.docked())
 
     def send(self, ids: NDArray[np.int64], v: NDArray[np.float64], w: NDArray[np.float64]) -> None:
         if len(ids) != self.n_robots or np.any(np.asarray(ids) != self._ids):
             raise ValueError(f"simulation expects commands for ids 0..{self.n_robots - 1} in order")
+        docked = self.docked() if self.charge is not None else None
         self.sim.step(v, w)
+        if self.charge is not None:
+            av, aw = self.sim.applied
+            self.charge = battery_step(self.charge, self.sim.config.dt, av, aw, docked & self.docked(),
+                                       self.sim.params, self.battery)
 
     def hold(self) -> None:
         """Paused simulation: nothing moves and simulated time stands still."""

@@ -162,6 +162,8 @@ class MixedRobots:
     def __getattr__(self, name: str) -> Any:
         if name in _FORWARDED:
             return getattr(self.source, name)
+        if name == "robot_health":  # the physical robots' firmware reports (virtual ones have none)
+            return getattr(self.sink, name)
         raise AttributeError(f"{type(self).__name__} has no attribute {name!r}")
 
 

@@ -35,6 +35,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--robots-via", default=None, metavar="URL",
                         help="drive GRITSBots over MQTT instead of simulating them, e.g. mqtt://127.0.0.1:1883 "
                              "(try `swarmdeck robots --broker URL` for a simulated fleet)")
+    parser.add_argument("--start", choices=("random", "docked"), default="random",
+                        help="where the simulated robots start: random on the floor (default) or docked on the "
+                             "charging strips along the walls (robot k on slot k), with batteries that charge "
+                             "while docked and drain while driving (the panel's Fleet buttons set them up and "
+                             "return them)")
     parser.add_argument("--virtual", type=int, default=None, metavar="K",
                         help="add K virtual robots, simulated in the console beside the physical ones (--robots-via, "
                              "or the simulation standing in for them): the barrier makes every robot avoid every "
@@ -84,6 +89,9 @@ def main(args: argparse.Namespace) -> int:
         raise UsageError(f"--foxglove port must be in [0, 65535], got {args.foxglove}")
     if args.duration is not None and not args.duration > 0:
         raise UsageError(f"--duration must be > 0 s, got {args.duration}")
+    if args.start == "docked" and (args.robots_via or args.camera):
+        raise UsageError("--start docked places simulated robots; physical robots start where they are "
+                         "(`swarmdeck robots --start docked` for the simulated MQTT fleet)")
     if args.virtual is not None and args.virtual < 1:
         raise UsageError(f"--virtual must be a number of robots >= 1, got {args.virtual}")
 
@@ -96,7 +104,7 @@ def main(args: argparse.Namespace) -> int:
     except BehaviourError as exc:
         raise UsageError(str(exc)) from None
     try:
-        source, sink = _robots(config, args.camera, args.robots_via, args.virtual)
+        source, sink = _robots(config, args.camera, args.robots_via, args.virtual, docked=args.start == "docked")
     except (ValueError, OSError) as exc:
         raise UsageError(str(exc)) from None
     rec = None
@@ -223,7 +231,7 @@ def _check_address(host: str, port: int) -> None:
             raise UsageError(f"cannot serve on {host}:{port}: {exc.strerror or exc}") from None
 
 
-def _robots(config, camera: str | None, robots_via: str | None, virtual: int | None = None):
+def _robots(config, camera: str | None, robots_via: str | None, virtual: int | None = None, docked: bool = False):
     """(pose source, command sink): simulation by default, MQTT robots with --robots-via, camera poses
     with --camera, plus ``virtual`` virtual robots simulated here (one ``MixedRobots`` as both ports).
     Raises ValueError/OSError naming what could not be opened."""
@@ -238,7 +246,14 @@ def _robots(config, camera: str | None, robots_via: str | None, virtual: int | N
         sink, source = mqtt_robots(robots_via, ids)
         truth = source.truth
     else:
-        sim = SimulatedRobots(config.n_robots, ArenaConfig(bounds=config.bounds, dt=config.dt, seed=config.seed))
+        arena = ArenaConfig(bounds=config.bounds, dt=config.dt, seed=config.seed)
+        if docked:
+            from swarmdeck.devices.fleet.chargers import ChargerLayout
+
+            sim = SimulatedRobots(config.n_robots, arena, chargers=ChargerLayout(bounds=config.bounds),
+                                  start_docked=True)
+        else:
+            sim = SimulatedRobots(config.n_robots, arena)
         sink = source = sim
         truth = lambda now: sim.sim.poses  # noqa: E731
     if camera:

@@ -79,7 +79,8 @@ class BehaviourParams:
 @dataclass(frozen=True)
 class TickInput:
     """What a behaviour sees: poses (N, 3), look-ahead points (N, 2), run time t (s), the density
-    (any ``.at(t)`` object), the arena bounds and the speed limit (m/s)."""
+    (any ``.at(t)`` object), the arena bounds and the speed limit (m/s); the loop also gives the
+    robot ids (N,) and which robots have a fresh pose, seen (N,) (fleet upkeep uses them)."""
 
     poses: FloatArray
     points: FloatArray
@@ -87,9 +88,16 @@ class TickInput:
     density: Any
     bounds: tuple[float, float, float, float]
     max_speed: float
+    ids: NDArray[np.int64] | None = None
+    seen: NDArray[np.bool_] | None = None
 
 
 class Behaviour(Protocol):
+    """``name``; called once per tick. Optional: ``health() -> str`` (a line in the Frame's health,
+    under the behaviour's name), ``fixed(ids) -> (N,) bool`` (robots the barrier must treat as fixed
+    obstacles this tick: they get zero and are never pushed aside, e.g. robots docked on a charger),
+    ``close()``."""
+
     name: str
 
     def __call__(self, tick: TickInput) -> tuple[Any, Any | None]: ...

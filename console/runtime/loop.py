@@ -383,6 +383,17 @@ class ControlLoop:
             self._post(f"behaviour: {b.name}")
         _close_behaviour(old)
 
+    def use_behaviour(self, behaviour: Behaviour) -> None:
+        """Run a behaviour object built elsewhere (the fleet's set-up and return maneuvers,
+        :mod:`swarmdeck.console.runtime.fleet_upkeep`) from the next tick on, through the same
+        barrier pipeline; the one it replaces is closed."""
+        with self._lock:
+            old, self._behaviour = self._behaviour, behaviour
+            self._alerts.pop("behaviour", None)
+            self._post(f"behaviour: {behaviour.name}")
+        if old is not behaviour:
+            _close_behaviour(old)
+
     def set_params(self, **changes: Any) -> BehaviourParams:
         """Change behaviour parameters (see BehaviourParams); BehaviourError/ValueError for bad values."""
         try:
@@ -544,17 +555,20 @@ class ControlLoop:
         marks.append(time.perf_counter())
 
         # 3. control: the behaviour's nominal look-ahead velocities, within max_speed
-        nominal, coverage = np.zeros((n, 2)), None
+        nominal, coverage, movable = np.zeros((n, 2)), None, seen
         with self._stage("behaviour", f"{behaviour.name} failed") as control:
-            nominal, coverage = self._control(behaviour, control, poses, points, ids)
-        nominal[~seen] = 0.0
+            nominal, coverage = self._control(behaviour, control, poses, points, ids, seen)
+            fixed = getattr(behaviour, "fixed", None)
+            if fixed is not None:  # robots the behaviour holds in place: fixed obstacles of the barrier
+                movable = seen & ~np.asarray(fixed(ids), dtype=bool).reshape(n)
+        nominal[~movable] = 0.0
         nominal = saturate(nominal, self.config.max_speed)
         marks.append(time.perf_counter())
 
         # 4. safety and actuation: the pipeline Arena.step uses too (look-ahead map, wheel limits, barrier)
         cert = None
         with self._stage("safety", "safety filter failed") as safety:
-            cert, barrier = self._certify(filt if sp.enabled else None, sp, poses, points, nominal, seen, safety)
+            cert, barrier = self._certify(filt if sp.enabled else None, sp, poses, points, nominal, movable, safety)
         if cert is None or not active or sense.failed or control.failed:
             v, w, safe = np.zeros(n), np.zeros(n), np.zeros((n, 2))
         else:
@@ -601,9 +615,10 @@ class ControlLoop:
         """One line per port and per registered health function (a failing one shows its error)."""
         with self._lock:
             fns = [("robots", self.source.health)]
-            script_health = getattr(self._behaviour, "health", None)
-            if script_health is not None:
-                fns.append(("script", script_health))
+            behaviour_health = getattr(self._behaviour, "health", None)
+            if behaviour_health is not None:  # a script's worker, a fleet maneuver's progress
+                name = self._behaviour.name
+                fns.append(("script" if name.startswith("script:") else name, behaviour_health))
             if self.source is not self.sink:
                 fns.append(("commands", self.sink.health))
             fns += list(self._health_fns.items())
@@ -628,13 +643,13 @@ class ControlLoop:
         return contacts, mixture
 
     def _control(self, behaviour: Behaviour, stage: _Stage, poses: NDArray[np.float64], points: NDArray[np.float64],
-                 ids: NDArray[np.int64]) -> tuple[NDArray[np.float64], CoverageFrame | None]:
+                 ids: NDArray[np.int64], seen: NDArray[np.bool_]) -> tuple[NDArray[np.float64], CoverageFrame | None]:
         """The behaviour's (N, 2) velocities (non-finite rows zeroed and warned) and its coverage state."""
         n = len(ids)
         if n == 0:
             raise BehaviourError("no robots to control (none seen or all excluded)")
         raw, state = behaviour(TickInput(poses.copy(), points.copy(), self._run_time, self.density,
-                                         self.config.bounds, self.config.max_speed))
+                                         self.config.bounds, self.config.max_speed, ids.copy(), seen.copy()))
         arr = np.asarray(raw, dtype=float) if not isinstance(raw, np.ndarray) else raw.astype(float, copy=True)
         if arr.shape != (n, 2):
             raise BehaviourError(f"behaviour returned shape {arr.shape}, expected ({n}, 2) velocities in m/s")

@@ -1,5 +1,6 @@
 """The console's control panel (viser GUI): run/pause/step, emergency stop, behaviour and
-barrier parameters, density bumps, layer toggles, live plots, the robots' batteries and the status line.
+barrier parameters, density bumps, layer toggles, live plots, the robots' batteries, the fleet's set-up and
+return-to-chargers buttons and the status line.
 
 Every widget lives on ``server.gui`` (shared by all tabs). Callbacks only call
 the thread-safe :class:`~swarmdeck.console.runtime.loop.ControlLoop` API, so they take
@@ -22,6 +23,7 @@ from swarmdeck.console.runtime.behaviours import BUILTIN, LAWS
 from swarmdeck.console.runtime.frame import Frame
 from swarmdeck.console.runtime.loop import ControlLoop
 from swarmdeck.console.web.battery_panel import BatteryPanel
+from swarmdeck.console.web.fleet_panel import FleetPanel
 from swarmdeck.console.web.plots import PlotHistory, PlotsPanel
 from swarmdeck.console.web.scene import LAYERS, ArenaScene
 
@@ -153,6 +155,7 @@ class ConsoleGui:
 
         self.plots = PlotsPanel(gui)
         self.batteries = BatteryPanel(gui, loop.battery_watch)
+        self.fleet = FleetPanel(gui, loop, self.notify)
 
     # ------------------------------------------------------------------ helpers
     def notify(self, text: str, client: viser.ClientHandle | None = None, error: bool = True) -> None:
@@ -377,6 +380,7 @@ class ConsoleGui:
         self._last_gui_update = now
         self.plots.show(self.history)
         self.batteries.show(frame)
+        self.fleet.show(frame)
         self.status.content = self.status_line(frame)
         self._sync_widgets(frame)
         self.alerts.content = self.alert_text(frame)
