@@ -53,6 +53,17 @@ def test_bad_input_is_one_line(tmp_path, capsys, body, argv, message) -> None:
     assert message in err and len(err.strip().splitlines()) == 1 and "Traceback" not in err
 
 
+def test_console_starts_docked_robots_with_batteries(tmp_path, capsys) -> None:
+    from swarmdeck.console.recording.reader import open_recording
+
+    path = tmp_path / "docked.mcap"
+    assert main(["console", "--port", "0", "--duration", "0.3", "--robots", "3", "--start", "docked", "--no-inputs",
+                 "--behaviour", "rendezvous", "--record", str(path)]) == 0
+    with open_recording(path) as r:
+        first = next(f for _, f in r.frames())
+    assert first.charging.all() and (first.battery > 4.19).all()
+
+
 @pytest.mark.parametrize("argv, message", [
     (["fleet", "status"], "--robots-via mqtt://HOST:PORT or --simulated N"),
     (["fleet", "setup", "--simulated", "2"], "setup needs POSES.csv"),
@@ -60,6 +71,9 @@ def test_bad_input_is_one_line(tmp_path, capsys, body, argv, message) -> None:
     (["fleet", "status", "--simulated", "2", "--ids", "1"], "--ids applies to dock only"),
     (["fleet", "status", "--simulated", "2", "--charge", "1.5"], "--charge must be"),
     (["fleet", "dock", "--simulated", "2", "--ids", "7"], "no robot(s) [7] in the arena"),
+    (["console", "--start", "docked", "--robots-via", "mqtt://127.0.0.1:1", "--no-inputs"],
+     "physical robots start where they are"),
+    (["console", "--start", "docked", "--robots", "60", "--no-inputs", "--no-record"], "the charging strips have 50"),
 ])
 def test_usage_errors(capsys, argv, message) -> None:
     assert main(argv) == 2

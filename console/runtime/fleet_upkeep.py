@@ -110,6 +110,19 @@ class FleetView:
         return np.where(self.is_virtual | (np.isnan(q) & none_report), 1.0, q)
 
 
+def rows_of(ids: ArrayLike, want: ArrayLike) -> tuple[NDArray[np.intp], NDArray[np.bool_]]:
+    """Rows ``(K,)`` of the robot ids ``want`` in ``ids`` ``(N,)`` and whether each is there (rows of
+    missing ids are 0, not to be used)."""
+    ids = np.asarray(ids, dtype=np.int64).reshape(-1)
+    want = np.asarray(want, dtype=np.int64).reshape(-1)
+    if not len(ids):
+        return np.zeros(len(want), dtype=np.intp), np.zeros(len(want), dtype=bool)
+    order = np.argsort(ids)
+    rows = order[np.minimum(np.searchsorted(ids[order], want), len(ids) - 1)]
+    present = ids[rows] == want
+    return np.where(present, rows, 0).astype(np.intp), present
+
+
 class FleetManeuver:
     """Robots ``ids`` driven by a :class:`Maneuver` through the console loop (module docstring).
 
@@ -160,10 +173,7 @@ class FleetManeuver:
             self._last_seen[:] = tick.t
         t = tick.t - self._t0
         self.elapsed = t
-        order = np.argsort(ids)
-        at = np.minimum(np.searchsorted(ids[order], self.ids), max(n - 1, 0))
-        rows = order[at] if n else np.zeros(len(self.ids), dtype=np.intp)
-        present = ids[rows] == self.ids if n else np.zeros(len(self.ids), dtype=bool)
+        rows, present = rows_of(ids, self.ids)
         fresh = present & seen[rows]
         self._last_seen = np.where(fresh, tick.t, self._last_seen)
         lost = ~present | (tick.t - self._last_seen > self.config.lost_after)
@@ -369,8 +379,7 @@ def run_maneuver(loop: Any, maneuver: FleetManeuver, pace: Any = None, max_ticks
     loop.tick()  # every robot gets zero
     err, head = maneuver.final_errors if maneuver.final_errors is not None else (math.nan, math.nan)
     if maneuver.state != "done" and frame is not None and len(maneuver.ids):
-        rows = np.searchsorted(frame.ids, maneuver.ids, sorter=np.argsort(frame.ids))
-        rows = np.argsort(frame.ids)[np.minimum(rows, frame.n - 1)]
+        rows, _ = rows_of(frame.ids, maneuver.ids)
         g = maneuver.maneuver.goals
         err = float(np.hypot(*(frame.poses[rows, :2] - g[:, :2]).T).max())
         head = float(np.abs(wrap_angle(frame.poses[rows, 2] - g[:, 2])).max())
