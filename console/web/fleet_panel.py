@@ -85,12 +85,12 @@ class FleetPanel:
         return maneuver
 
     def show(self, frame: Frame) -> None:
-        """The status line: the running maneuver's progress, or how many robots are docked."""
+        """The status: the last maneuver's progress or outcome (while it is the loop's behaviour) and
+        how many robots are docked ("ready" when all are)."""
         m = self.maneuver
+        docked = int((self.chargers.docked_slot(frame.poses) >= 0).sum())
+        text = f"{docked}/{frame.n} robots docked" + (" · ready" if docked == frame.n else "")
         if m is not None and frame.behaviour == m.name:
-            text = m.message
-        else:
-            docked = int((self.chargers.docked_slot(frame.poses) >= 0).sum())
-            text = f"{docked}/{frame.n} robots docked" + (" · ready" if docked == frame.n else "")
+            text = f"{m.message}  \n{text}"
         if text != self.status.content:
             self.status.content = text
