@@ -62,10 +62,16 @@ class UpkeepConfig:
         policy: which robots may be assigned (charge ≥ ``min_charge``, tracked, firmware heard).
         maneuver: the pose controller's tolerances and the deadlock escape.
         battery: the battery model (voltage → state of charge).
+        class_k, gamma: the barrier's class-K function and gain while a maneuver runs (the
+            fleet's maneuvers are tuned for linear κ with γ = 20, γ·dt ≤ 1; the console's
+            cubic κ with γ = 100 holds robots backing onto a strip near the wall too hard);
+            the loop restores the operator's settings with the next behaviour.
     """
 
     time_limit: float = 180.0
     lost_after: float = 1.0
+    class_k: str = "linear"
+    gamma: float = 20.0
     policy: AssignmentPolicy = field(default_factory=AssignmentPolicy)
     maneuver: ManeuverParams = field(default_factory=ManeuverParams)
     battery: BatteryParams = field(default_factory=BatteryParams)
@@ -140,6 +146,7 @@ class FleetManeuver:
         if len(self.ids) != maneuver.n:
             raise ValueError(f"{name}: {len(self.ids)} robot ids for a maneuver of {maneuver.n} robots")
         self.maneuver, self.config = maneuver, config
+        self.barrier = {"class_k": config.class_k, "gamma": config.gamma}
         self.state = "running" if len(self.ids) else "done"
         self.message = f"{name}: nothing to do" if not len(self.ids) else f"{name}: starting"
         self._t0: float | None = None

@@ -286,6 +286,7 @@ class ControlLoop:
         self._stop = threading.Event()
         self.overruns = 0
         self.battery_watch = BatteryWatch()
+        self._operator_safety: SafetyParams | None = None  # kept while a behaviour runs its own barrier gains
 
     # ------------------------------------------------------------------ construction helpers
     def _make_behaviour(self, name: str, params: BehaviourParams, safety: SafetyParams) -> Behaviour:
@@ -376,23 +377,29 @@ class ControlLoop:
         self.use_behaviour(self._make_behaviour(name, self._behaviour_params, self._safety_params))
 
     def use_behaviour(self, b: Behaviour) -> None:
-        """Switch to a ready-made behaviour object (e.g. the portal's sandboxed-script commands)."""
+        """Switch to a ready-made behaviour object (e.g. the portal's sandboxed-script commands, the
+        fleet's set-up and return maneuvers of :mod:`swarmdeck.console.runtime.fleet_upkeep`) from the
+        next tick on, through the same barrier pipeline; the one it replaces is closed. A behaviour
+        with a ``barrier`` mapping (e.g. ``{"class_k": "linear", "gamma": 20.0}``: the gains its
+        maneuvers are made for) runs with those barrier settings; the operator's come back with the
+        next behaviour."""
         with self._lock:
             old, self._behaviour = self._behaviour, b
             self._alerts.pop("behaviour", None)
             self._post(f"behaviour: {b.name}")
-        _close_behaviour(old)
-
-    def use_behaviour(self, behaviour: Behaviour) -> None:
-        """Run a behaviour object built elsewhere (the fleet's set-up and return maneuvers,
-        :mod:`swarmdeck.console.runtime.fleet_upkeep`) from the next tick on, through the same
-        barrier pipeline; the one it replaces is closed."""
-        with self._lock:
-            old, self._behaviour = self._behaviour, behaviour
-            self._alerts.pop("behaviour", None)
-            self._post(f"behaviour: {behaviour.name}")
-        if old is not behaviour:
+        self._behaviour_barrier(getattr(b, "barrier", None))
+        if old is not b:
             _close_behaviour(old)
+
+    def _behaviour_barrier(self, barrier: Any) -> None:
+        """Apply a behaviour's own barrier settings (keeping the operator's), or restore the operator's."""
+        if barrier:
+            if self._operator_safety is None:
+                self._operator_safety = self._safety_params
+            self.set_safety(**dict(barrier))
+        elif self._operator_safety is not None:
+            saved, self._operator_safety = self._operator_safety, None
+            self.set_safety(class_k=saved.class_k, gamma=saved.gamma)
 
     def set_params(self, **changes: Any) -> BehaviourParams:
         """Change behaviour parameters (see BehaviourParams); BehaviourError/ValueError for bad values."""
