@@ -46,7 +46,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--seed", type=int, default=None, help="--simulated: seed of the random start poses")
     parser.add_argument("--ids", default=None, metavar="LIST", help="dock: only these robot ids, e.g. 3,5-7")
     parser.add_argument("--time-limit", type=float, default=None, metavar="S",
-                        help="fail (robots stopped) after this many s (default 180)")
+                        help="fail (robots stopped) after this many s (default: 60 s + 2 s per robot)")
     parser.add_argument("--wait", type=float, default=3.0, metavar="S",
                         help="--robots-via: s to listen for robots before acting (default %(default)s)")
     parser.add_argument("--json", action="store_true", help="print the result as JSON")
@@ -177,8 +177,7 @@ def _act(args: argparse.Namespace, loop: Any, pace: Any, frame: Any, goals: Any,
     view = fu.FleetView.of(frame, fu.status_ages(loop.sink, frame.ids, frame.is_virtual))
     try:
         if args.action == "setup":
-            maneuver = fu.set_up(view, goals, frame.bounds, chargers, loop.robot, loop.safety_params.safety_distance,
-                                 config)
+            maneuver = fu.set_up(view, goals, frame.bounds, chargers, loop.robot, config.fleet.safety_distance, config)
         else:
             maneuver = fu.return_to_chargers(view, frame.bounds, chargers, loop.robot, config, ids=ids)
     except ValueError as exc:

@@ -39,11 +39,12 @@ from swarmdeck.console.runtime.behaviours import BehaviourError, TickInput
 from swarmdeck.core.bounds import Bounds
 from swarmdeck.core.checks import require_positive
 from swarmdeck.core.kinematics import GritsBotParams
-from swarmdeck.devices.fleet.assignment import AssignmentPolicy, assign
+from swarmdeck.devices.fleet.assignment import assign
 from swarmdeck.devices.fleet.battery import BatteryParams, charge_from_voltage
 from swarmdeck.devices.fleet.chargers import ChargerLayout
 from swarmdeck.devices.fleet.docking import choose_slots, return_maneuver
-from swarmdeck.devices.fleet.maneuver import Maneuver, ManeuverParams
+from swarmdeck.devices.fleet.maneuver import Maneuver
+from swarmdeck.devices.fleet.manager import FleetConfig
 from swarmdeck.devices.fleet.setup import ACCEPT_HEADING, ACCEPT_POSITION, check_start_poses
 from swarmdeck.devices.gritsbot import wrap_angle
 from swarmdeck.devices.initial_conditions import random_initial_poses
@@ -57,27 +58,33 @@ class UpkeepConfig:
     """Limits of the console's set-up and return.
 
     Attributes:
-        time_limit: a maneuver not finished after this many s of run time fails (robots stopped).
+        fleet: the fleet's settings (:class:`~swarmdeck.devices.fleet.manager.FleetConfig`): the
+            battery model, which robots may be assigned (charge ≥ ``min_charge``, tracked, firmware
+            heard), the maneuvers' tolerances and deadlock escape, their barrier gain γ (linear κ:
+            the maneuvers are tuned for it; the console's cubic κ with γ = 100 holds robots backing
+            onto a strip near the wall too hard) and their time limit, base + N · per robot s. Its
+            ``layout`` is not used: the console's charging strips follow its arena.
+        time_limit: overrides the fleet's time limit, s of run time (None: the fleet's for N robots).
         lost_after: a moving robot without a fresh pose for this many s stops the maneuver.
-        policy: which robots may be assigned (charge ≥ ``min_charge``, tracked, firmware heard).
-        maneuver: the pose controller's tolerances and the deadlock escape.
-        battery: the battery model (voltage → state of charge).
-        class_k, gamma: the barrier's class-K function and gain while a maneuver runs (the
-            fleet's maneuvers are tuned for linear κ with γ = 20, γ·dt ≤ 1; the console's
-            cubic κ with γ = 100 holds robots backing onto a strip near the wall too hard);
-            the loop restores the operator's settings with the next behaviour.
     """
 
-    time_limit: float = 180.0
+    fleet: FleetConfig = field(default_factory=FleetConfig)
+    time_limit: float | None = None
     lost_after: float = 1.0
-    class_k: str = "linear"
-    gamma: float = 20.0
-    policy: AssignmentPolicy = field(default_factory=AssignmentPolicy)
-    maneuver: ManeuverParams = field(default_factory=ManeuverParams)
-    battery: BatteryParams = field(default_factory=BatteryParams)
 
     def __post_init__(self) -> None:
-        require_positive(self, ("time_limit", "lost_after"), "s")
+        require_positive(self, ("lost_after",), "s")
+        if self.time_limit is not None:
+            require_positive(self, ("time_limit",), "s")
+
+    def limit(self, n: int) -> float:
+        """The time limit of a maneuver of ``n`` robots, s."""
+        return self.fleet.time_limit(n) if self.time_limit is None else float(self.time_limit)
+
+    @property
+    def barrier(self) -> dict[str, Any]:
+        """The barrier settings a maneuver runs with (``ControlLoop.use_behaviour``)."""
+        return {"class_k": "linear", "gamma": self.fleet.gamma, "safety_distance": self.fleet.safety_distance}
 
 
 @dataclass(frozen=True)
@@ -146,7 +153,8 @@ class FleetManeuver:
         if len(self.ids) != maneuver.n:
             raise ValueError(f"{name}: {len(self.ids)} robot ids for a maneuver of {maneuver.n} robots")
         self.maneuver, self.config = maneuver, config
-        self.barrier = {"class_k": config.class_k, "gamma": config.gamma}
+        self.barrier = config.barrier
+        self.time_limit = config.limit(len(self.ids))
         self.state = "running" if len(self.ids) else "done"
         self.message = f"{name}: nothing to do" if not len(self.ids) else f"{name}: starting"
         self._t0: float | None = None
@@ -202,12 +210,12 @@ class FleetManeuver:
                             f"{100 * err:.1f} cm, {math.degrees(head):.1f}°)"
                             + (f"; deadlock escape used by {escaped}" if escaped else ""))
             return u, None
-        if t > self.config.time_limit:
+        if t > self.time_limit:
             g = self.maneuver.goals
             err = np.hypot(*(poses[:, :2] - g[:, :2]).T)
             off = ", ".join(f"robot {int(i)} {100 * e:.1f} cm away" for i, e in zip(self.ids[~self.at_goal],
                                                                                     err[~self.at_goal]))
-            self._fail(f"{self.name} did not finish within {self.config.time_limit:g} s: {off}; every robot stopped")
+            self._fail(f"{self.name} did not finish within {self.time_limit:g} s: {off}; every robot stopped")
         u[rows] = self.maneuver.nominal(poses, t)
         self.message = (f"{self.name}: {int(self.at_goal.sum())}/{len(self.ids)} robots at their poses, "
                         f"{t:.1f} s" + (f", {self.maneuver.escapes} escape(s)" if self.maneuver.escapes else ""))
@@ -293,13 +301,13 @@ def set_up(view: FleetView, goals: ArrayLike, bounds: Bounds, chargers: ChargerL
     if n > len(view.ids):
         raise ValueError(f"{n} start poses but only {len(view.ids)} robots in the arena")
     pose_age = np.where(view.seen, 0.0, np.inf)
-    a = assign(n, view.ids, view.charge(config.battery), pose_age, view.status_age, positions=view.poses[:, :2],
-               goals=goals_arr, policy=config.policy)
+    a = assign(n, view.ids, view.charge(config.fleet.battery), pose_age, view.status_age, positions=view.poses[:, :2],
+               goals=goals_arr, policy=config.fleet.policy)
     idle = a.idle
     if len(idle):  # the start poses must keep clear of the robots that stay where they are
         check_start_poses(goals_arr, bounds, robot, safety_distance=safety_distance, obstacles=view.poses[idle, :2],
                           obstacle_names=[f"robot {int(i)} (staying)" for i in view.ids[idle]])
-    maneuver = Maneuver(goals_arr, bounds, robot, config.maneuver)
+    maneuver = Maneuver(goals_arr, bounds, robot, config.fleet.maneuver)
     return FleetManeuver(SET_UP, view.ids[a.rows], maneuver, config)
 
 
@@ -322,12 +330,12 @@ def return_to_chargers(view: FleetView, bounds: Bounds, chargers: ChargerLayout,
         return FleetManeuver(RETURN, view.ids[rows], _empty_maneuver(bounds, robot, config), config)
     free = np.setdiff1d(np.arange(chargers.n_slots), slot[slot >= 0])
     slots = choose_slots(view.poses[rows, :2], free, chargers)  # ValueError when too few are free
-    maneuver = return_maneuver(view.poses[rows], slots, chargers, robot, config.maneuver)
+    maneuver = return_maneuver(view.poses[rows], slots, chargers, robot, config.fleet.maneuver)
     return FleetManeuver(RETURN, view.ids[rows], maneuver, config)
 
 
 def _empty_maneuver(bounds: Bounds, robot: GritsBotParams, config: UpkeepConfig) -> Maneuver:
-    return Maneuver(np.empty((0, 3)), bounds, robot, config.maneuver)
+    return Maneuver(np.empty((0, 3)), bounds, robot, config.fleet.maneuver)
 
 
 __all__ = ["ACCEPT_HEADING", "ACCEPT_POSITION", "FleetManeuver", "FleetView", "RETURN", "SET_UP", "UpkeepConfig",

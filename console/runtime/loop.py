@@ -399,7 +399,7 @@ class ControlLoop:
             self.set_safety(**dict(barrier))
         elif self._operator_safety is not None:
             saved, self._operator_safety = self._operator_safety, None
-            self.set_safety(class_k=saved.class_k, gamma=saved.gamma)
+            self.set_safety(class_k=saved.class_k, gamma=saved.gamma, safety_distance=saved.safety_distance)
 
     def set_params(self, **changes: Any) -> BehaviourParams:
         """Change behaviour parameters (see BehaviourParams); BehaviourError/ValueError for bad values."""

@@ -59,9 +59,8 @@ class FleetPanel:
         try:
             frame, view = self._view()
             goals = read_poses_csv(path) if path else random_start_poses(frame.n, frame.bounds, self.chargers)
-            sp = self.loop.safety_params
-            maneuver = set_up(view, goals, frame.bounds, self.chargers, self.loop.robot, sp.safety_distance,
-                              self.config)
+            maneuver = set_up(view, goals, frame.bounds, self.chargers, self.loop.robot,
+                              self.config.fleet.safety_distance, self.config)
         except ValueError as exc:
             self.notify(f"set up not started: {exc}", client)
             return None
