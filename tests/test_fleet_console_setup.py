@@ -83,3 +83,14 @@ def test_a_setup_that_cannot_finish_stops_the_robots_and_names_them():
     frame = loop.tick()
     assert frame.stopped and any("did not finish" in a for a in frame.alerts)
     loop.close()
+
+
+def test_mqtt_robots_without_a_battery_reading_are_never_assigned_simulated_ones_count_as_full():
+    loop = ControlLoop(LoopConfig(n_robots=3, seed=2))  # a plain simulation: no battery model
+    frame = loop.tick()
+    loop.close()
+    one = [[0.0, 0.0, 0.0]]
+    assert len(fu.set_up(fu.FleetView.of(frame), one, frame.bounds, CHARGERS).ids) == 1
+    # the same robots as MQTT robots (firmware heard from just now) that never sent a valid batt_volt
+    with pytest.raises(AssignmentError, match=r"robot 0: battery reads NaN; robot 1: battery reads NaN"):
+        fu.set_up(fu.FleetView.of(frame, np.zeros(3)), one, frame.bounds, CHARGERS)

@@ -93,7 +93,8 @@ class FleetView:
 
     ids ``(M,)``, poses ``(M, 3)``, seen ``(M,)``, battery ``(M,)`` V (NaN: unknown),
     charging ``(M,)``, is_virtual ``(M,)``; ``status_age`` ``(M,)`` s since each robot's firmware
-    last reported (0 for robots without firmware: simulated, virtual).
+    last reported (0 for robots without firmware: simulated, virtual); ``firmware`` ``(M,)`` the
+    robots that have firmware reporting their battery (the MQTT robots).
     """
 
     ids: NDArray[np.int64]
@@ -103,24 +104,28 @@ class FleetView:
     charging: NDArray[np.bool_]
     is_virtual: NDArray[np.bool_]
     status_age: FloatArray
+    firmware: NDArray[np.bool_]
 
     @classmethod
     def of(cls, frame: Any, status_age: ArrayLike | None = None) -> "FleetView":
-        """From a Frame (or anything with its per-robot fields)."""
+        """From a Frame (or anything with its per-robot fields); ``status_age`` None: robots without
+        firmware reports (simulated)."""
         n = len(frame.ids)
+        virtual = np.asarray(frame.is_virtual, dtype=bool)
+        firmware = np.zeros(n, dtype=bool) if status_age is None else ~virtual
         age = np.zeros(n) if status_age is None else np.asarray(status_age, dtype=float).reshape(n)
         return cls(np.asarray(frame.ids, dtype=np.int64), np.asarray(frame.poses, dtype=float),
                    np.asarray(frame.seen, dtype=bool), np.asarray(frame.battery, dtype=float),
-                   np.asarray(frame.charging, dtype=bool), np.asarray(frame.is_virtual, dtype=bool), age)
+                   np.asarray(frame.charging, dtype=bool), virtual, age, firmware)
 
     def charge(self, battery: BatteryParams) -> FloatArray:
-        """State of charge ``(M,)``: from the voltage; robots that cannot have a battery reading
-        (virtual ones, and every robot when none reports one: a plain simulation) count as full;
-        a physical robot with no valid reading among robots that report is NaN (never assigned)."""
+        """State of charge ``(M,)`` from the voltage. Robots that cannot report a battery count as full:
+        virtual ones, and simulated robots when none of them has a battery model. A robot with firmware
+        (MQTT), or among robots that report, with no valid reading is NaN: never assigned ("battery
+        reads NaN")."""
         q = charge_from_voltage(self.battery, battery)
-        reports = ~np.isnan(q) & ~self.is_virtual
-        none_report = not reports.any()
-        return np.where(self.is_virtual | (np.isnan(q) & none_report), 1.0, q)
+        some_report = bool((~np.isnan(q) & ~self.is_virtual).any())
+        return np.where(self.is_virtual | (~self.firmware & np.isnan(q) & (not some_report)), 1.0, q)
 
 
 def rows_of(ids: ArrayLike, want: ArrayLike) -> tuple[NDArray[np.intp], NDArray[np.bool_]]:
@@ -143,8 +148,7 @@ class FleetManeuver:
         name: ``"set up"`` or ``"return to chargers"`` (the Frame's behaviour).
         ids: ``(K,)`` robot ids of the moving robots, in the maneuver's row order.
         maneuver: goals and controller.
-        config: time limit, lost-robot timeout.
-        docked_ids: robots that are docked and stay so (named in messages only).
+        config: time limit, lost-robot timeout, barrier gains.
     """
 
     def __init__(self, name: str, ids: ArrayLike, maneuver: Maneuver, config: UpkeepConfig = UpkeepConfig()) -> None:
@@ -226,13 +230,14 @@ class FleetManeuver:
         raise BehaviourError(message)
 
 
-def status_ages(sink: Any, view_ids: ArrayLike, is_virtual: ArrayLike) -> FloatArray:
+def status_ages(sink: Any, view_ids: ArrayLike, is_virtual: ArrayLike) -> FloatArray | None:
     """``(M,)`` s since each robot's firmware last reported (the sink's ``robot_health()``, as
-    ``NetworkRobots`` gives it; inf: never), 0 for robots without firmware (simulated, virtual)."""
+    ``NetworkRobots`` gives it; inf: never), 0 for virtual robots; None when the robots have no
+    firmware (a simulation)."""
     ids = np.asarray(view_ids, dtype=np.int64).reshape(-1)
     health = getattr(sink, "robot_health", None)
     if health is None:
-        return np.zeros(len(ids))
+        return None
     table = health()
     ages = np.array([(table.get(str(int(i))) or {}).get("status_age") for i in ids.tolist()], dtype=object)
     out = np.array([np.inf if a is None else float(a) for a in ages.tolist()], dtype=float)
