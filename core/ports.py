@@ -87,3 +87,16 @@ class CommandSink(Protocol):
 
     def close(self) -> None:
         """Stop the robots and release resources."""
+
+
+def close_ports(source: PoseSource, sink: CommandSink) -> None:
+    """Close the sink (robots stopped first), then the source unless it is the same object.
+
+    A source without ``close`` is left alone; the source is closed even when closing the sink raises.
+    """
+    try:
+        sink.close()
+    finally:
+        close_source = getattr(source, "close", None)
+        if source is not sink and close_source is not None:
+            close_source()

@@ -32,7 +32,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from swarmdeck.core.bounds import Bounds
 from swarmdeck.core.kinematics import GritsBotParams
-from swarmdeck.core.ports import CommandSink, PoseSource, SensedPoses
+from swarmdeck.core.ports import CommandSink, PoseSource, SensedPoses, close_ports
 from swarmdeck.devices.backend import RobotBackend
 from swarmdeck.devices.initial_conditions import random_initial_poses
 from swarmdeck.devices.simulated_robots import SimulatedRobots
@@ -152,11 +152,8 @@ class MixedRobots:
     def close(self) -> None:
         """Stop and release the physical robots (sink, then a separate source) and the simulation."""
         try:
-            self.sink.close()
+            close_ports(self.source, self.sink)
         finally:
-            close_source = getattr(self.source, "close", None)
-            if self.source is not self.sink and close_source is not None:
-                close_source()
             self.virtual.close()
 
     def __getattr__(self, name: str) -> Any:

@@ -64,7 +64,7 @@ from swarmdeck.console.runtime.batteries import BatteryWatch, low_battery_alert
 from swarmdeck.console.runtime.behaviours import Behaviour, BehaviourError, BehaviourParams, TickInput, make_behaviour
 from swarmdeck.console.runtime.density import BumpSet
 from swarmdeck.console.runtime.frame import BarrierFrame, ContactsFrame, CoverageFrame, Frame
-from swarmdeck.core.ports import CommandSink, PoseSource, SensedPoses
+from swarmdeck.core.ports import CommandSink, PoseSource, SensedPoses, close_ports
 from swarmdeck.coverage.densities import s1_density
 from swarmdeck.coverage.density import GaussianMixture, merge_mixtures
 from swarmdeck.core.bounds import DEFAULT_BOUNDS, Bounds
@@ -768,10 +768,7 @@ class ControlLoop:
         self.stop()
         _close_behaviour(self._behaviour)
         try:
-            self.sink.close()
+            close_ports(self.source, self.sink)
         finally:
-            close_source = getattr(self.source, "close", None)
-            if self.source is not self.sink and close_source is not None:
-                close_source()
             if self.inputs is not None:
                 self.inputs.close()
