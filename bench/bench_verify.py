@@ -16,6 +16,8 @@ Run: ``.venv/bin/python bench/bench_verify.py [--duration 60] [--runs 8] [--robo
     by A outside the jail with ``getrusage`` of everything it waited for) + the fork server's
     CPU during the run (the forks; ``/proc/PID/stat``). The fork server's own start-up (Python,
     numpy, swarmdeck: once per worker process, shared by all its runs) is shown on its own row.
+  - floor: the in-process run plus one pipe round trip per tick to a process that only echoes
+    (both processes' CPU): what two processes taking turns every tick cost with no sandbox code.
   - ``bwrap`` jail: this process + the child's own CPU (it reports it at its end; the jail's
     init does not pass it up through wait) + this process's waited-for children (bwrap).
 
@@ -93,13 +95,41 @@ def sandboxed_cpu(script: Path, robots: int, duration: float, seed: int, jail: s
     return total
 
 
+def echo_floor(script: Path, robots: int, duration: float, seed: int) -> float:
+    """CPU of the in-process run plus one pipe round trip per tick to a process that only echoes:
+    the cost of two processes taking turns every tick, with no sandbox code at all."""
+    to_r, to_w = os.pipe()
+    back_r, back_w = os.pipe()
+    kids, me = cpu_children(), cpu_self()
+    pid = os.fork()
+    if pid == 0:  # the echo: reads a poses-sized frame, answers with a commands-sized one
+        os.close(to_w)
+        while os.read(to_r, 4096):
+            os.write(back_w, bytes(333))
+        os._exit(0)
+    frame = bytes(497)
+
+    def hop(arena: Arena) -> None:
+        os.write(to_w, frame)
+        os.read(back_r, 4096)
+
+    direct = run_experiment(script, n_robots=robots, duration=duration, seed=seed, on_step=hop)
+    assert direct.ok, direct.error
+    os.close(to_w)
+    os.waitpid(pid, 0)
+    for fd in (to_r, back_r, back_w):
+        os.close(fd)
+    return cpu_self() - me + cpu_children() - kids
+
+
 def overhead(script: Path, robots: int, duration: float, repeats: int, jails: list[str]) -> dict[str, float]:
-    runs: dict[str, list[float]] = {"in-process": [], **{j: [] for j in jails}}
+    runs: dict[str, list[float]] = {"in-process": [], "echo": [], **{j: [] for j in jails}}
     for k in range(repeats):
         c = cpu_self()
         direct = run_experiment(script, n_robots=robots, duration=duration, seed=k)
         assert direct.ok, direct.error
         runs["in-process"].append(cpu_self() - c)
+        runs["echo"].append(echo_floor(script, robots, duration, k))
         for jail in jails:
             runs[jail].append(sandboxed_cpu(script, robots, duration, k, jail))
     return {name: statistics.median(values) for name, values in runs.items()}
@@ -136,6 +166,8 @@ def main() -> None:
         print(f"\n| run ({args.robots} robots, {args.duration:g} s, barrier on) | CPU s, all processes "
               f"(median of {args.repeats}) | overhead |\n| --- | ---: | ---: |")
         print(f"| in-process | {base:.3f} | — |")
+        print(f"| in-process + a per-tick pipe round trip to an echo process (the floor of any two-process split) | "
+              f"{medians['echo']:.3f} | {100 * (medians['echo'] / base - 1):+.1f} % |")
         for jail in jails:
             print(f"| sandboxed, {jail} jail | {medians[jail]:.3f} | {100 * (medians[jail] / base - 1):+.1f} % |")
         if startup is not None:
