@@ -6,7 +6,9 @@ Import into a test module with ``from portal_fixtures import portal  # noqa: F40
 """
 from __future__ import annotations
 
+import os
 import queue
+import signal
 import subprocess
 import sys
 import threading
@@ -82,8 +84,10 @@ class ServerProcess:
     """``swarmdeck server`` in its own process; ``url`` once it printed its address."""
 
     def __init__(self, data: Path, *extra: str, timeout: float = 60.0) -> None:
+        # its own process group, so that stop() can end the verification pool's workers a kill -9 orphaned
         self.proc = subprocess.Popen([*CLI, "server", "--data", str(data), "--port", "0", *extra],
-                                     stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+                                     stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
+                                     start_new_session=True)
         self.lines: queue.Queue[str] = queue.Queue()
         self.output: list[str] = []
         threading.Thread(target=self._read, daemon=True).start()
@@ -111,6 +115,10 @@ class ServerProcess:
             except subprocess.TimeoutExpired:
                 self.proc.kill()
                 self.proc.wait()
+        try:  # what the server started and did not end (its pool's workers after a kill -9), as a service manager would
+            os.killpg(self.proc.pid, signal.SIGKILL)
+        except ProcessLookupError:
+            pass
         return self.proc.returncode
 
 
