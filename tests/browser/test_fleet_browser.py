@@ -5,10 +5,10 @@ browser's scene tree and page text), never on timings."""
 from __future__ import annotations
 
 import os
-import time
 
 import numpy as np
 import pytest
+from mqtt_broker import wait_until
 
 CHROMIUM = "/usr/bin/chromium"
 ARGS = ["--no-sandbox", "--enable-unsafe-swiftshader", "--use-angle=swiftshader",
@@ -21,15 +21,6 @@ pytestmark = [
 ]
 
 GOALS = np.array([[-0.95, -0.45, 0.0], [-0.55, -0.5, 1.57]])
-
-
-def wait_until(cond, timeout: float = 15.0) -> None:
-    """Poll a condition on server-side state (bounded; not a sleep for correctness)."""
-    deadline = time.monotonic() + timeout
-    while not cond():
-        if time.monotonic() > deadline:
-            raise AssertionError("condition not reached within the timeout")
-        time.sleep(0.05)
 
 
 @pytest.fixture(scope="module")
@@ -79,7 +70,7 @@ def test_set_up_button_brings_charged_robots_to_the_start_poses(page, console, t
     box = page.locator("div.mantine-Flex-root", has=page.get_by_text("Start poses CSV", exact=True)).locator("input")
     box.fill(str(path))
     box.press("Enter")
-    wait_until(lambda: console.gui.fleet.poses_path.value == str(path))
+    wait_until(lambda: console.gui.fleet.poses_path.value == str(path), 15)
     page.get_by_role("button", name="Set up", exact=True).click()
     wait_until(lambda: console.gui.fleet.maneuver is not None and console.gui.fleet.maneuver.state != "running", 180)
     m = console.gui.fleet.maneuver
@@ -101,5 +92,5 @@ def test_return_button_docks_every_robot(page, console) -> None:
     assert m.state == "done", m.message
     frame = console.loop.latest
     assert (ChargerLayout().docked_slot(frame.poses) >= 0).all()
-    wait_until(lambda: console.loop.latest.charging.all())
+    wait_until(lambda: console.loop.latest.charging.all(), 15)
     page.get_by_text("4/4 robots docked · ready").wait_for(timeout=20000)
