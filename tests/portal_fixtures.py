@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import os
 import queue
+import re
 import signal
 import subprocess
 import sys
@@ -59,6 +60,18 @@ class Portal:
         body = {"manifest": json.dumps(manifest(**kwargs))} if data is None else data
         with self.client(who) as c:
             return c.post("/api/jobs", files={"script": (filename, source)}, data=body)
+
+
+CSRF = re.compile(r'name="csrf" value="([^"]*)"')
+
+
+def sign_in(portal: Portal, who: str) -> tuple[httpx.Client, str]:
+    """A browser-like client signed in through the sign-in form; (client, the session's CSRF token)."""
+    c = httpx.Client(base_url=portal.url, timeout=30)
+    nonce = CSRF.search(c.get("/signin").text).group(1)
+    r = c.post("/signin", data={"csrf": nonce, "token": portal.tokens[who]})
+    assert r.status_code == 303, r.text
+    return c, c.get("/api/me").json()["csrf"]
 
 
 def make_portal(tmp_path: Path, **limits) -> Portal:

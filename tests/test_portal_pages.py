@@ -11,23 +11,13 @@ import av
 import httpx
 import numpy as np
 import pytest
-from portal_fixtures import SPIN, manifest, portal  # noqa: F401
+from portal_fixtures import CSRF, SPIN, manifest, portal, sign_in  # noqa: F401
 
 from swarmdeck.console.portal.live import scene_message
 from swarmdeck.console.recording.export_video import video_frame_count
 from swarmdeck.console.web.scene import robot_colors
 from recording_synth import simulated_frames, write_synthetic_session
 
-CSRF = re.compile(r'name="csrf" value="([^"]*)"')
-
-
-def sign_in(portal, who: str) -> tuple[httpx.Client, str]:
-    """A browser-like client signed in through the sign-in form; (client, the session's CSRF token)."""
-    c = httpx.Client(base_url=portal.url, timeout=30)
-    nonce = CSRF.search(c.get("/signin").text).group(1)
-    r = c.post("/signin", data={"csrf": nonce, "token": portal.tokens[who]})
-    assert r.status_code == 303, r.text
-    return c, c.get("/api/me").json()["csrf"]
 
 
 def upload(c: httpx.Client, csrf: str | None, fields: dict, filename: str = "spin.py", source: str = SPIN):

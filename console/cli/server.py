@@ -20,7 +20,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--host", default="127.0.0.1", help="interface to bind (default 127.0.0.1: this machine only)")
     parser.add_argument("--port", type=int, default=8000, help="TCP port (default 8000; 0 picks a free one)")
     parser.add_argument("--robots", type=int, default=12, metavar="N",
-                        help="robots the arena has: simulated ones, or the MQTT fleet's ids 0..N-1 (default 12)")
+                        help="robots the arena has, docked on its charging strips at start (at most one per charger "
+                             "slot, 50): simulated ones, or the MQTT fleet's ids 0..N-1 (default 12). Each job gets "
+                             "charged robots set up at its start poses; afterwards they return to the chargers")
     parser.add_argument("--robots-via", default=None, metavar="URL",
                         help="drive GRITSBots over MQTT instead of simulating them, e.g. mqtt://127.0.0.1:1883")
     parser.add_argument("--fast", action="store_true",
@@ -84,15 +86,15 @@ def main(args: argparse.Namespace) -> int:
     from swarmdeck.console.portal.service import PortalConfig, PortalService
     from swarmdeck.console.portal.submission import Limits
     from swarmdeck.console.portal.workers import VerificationWorkers, make_executor
-    from swarmdeck.devices.initial_conditions import max_robots
+    from swarmdeck.devices.fleet.chargers import ChargerLayout
 
     reason = probe()
     if reason is not None and not args.trusted:
         raise UsageError(f"cannot confine untrusted code on this machine: {reason}; install bubblewrap "
                          "or pass --trusted")
-    fleet = args.robots if args.robots_via else min(args.robots, max_robots())
+    fleet = min(args.robots, ChargerLayout().n_slots)
     if fleet < args.robots:
-        raise UsageError(f"--robots {args.robots}: at most {fleet} robots fit the arena")
+        raise UsageError(f"--robots {args.robots}: the arena's charging strips have {fleet} slots (one robot each)")
     config = PortalConfig(data=args.data, limits=Limits(fleet=fleet, max_duration=args.max_duration,
                                                         max_upload_bytes=args.max_upload),
                           verify_runs=args.verify_runs, grace_s=args.grace, trusted=args.trusted)
@@ -142,7 +144,7 @@ def main(args: argparse.Namespace) -> int:
     server = uvicorn_server(app, log_level=args.log_level)
     host = f"[{args.host}]" if ":" in args.host else args.host
     arena = args.robots_via and f"MQTT robots 0..{fleet - 1} via {_redacted(args.robots_via)}" or \
-        f"{fleet} simulated robots{' (fast)' if args.fast else ''}"
+        f"{fleet} simulated robots docked on the chargers{' (fast)' if args.fast else ''}"
     print(f"swarmdeck server: http://{host}:{sock.getsockname()[1]}  ({arena}; data in {args.data}; "
           "API docs at /docs; Ctrl-C to stop)", flush=True)
     import signal

@@ -2,12 +2,18 @@
 
 For each job the service hands over (``waiting → setting up``):
 
-1. **Robots**: simulated (``ArenaSettings.robots_via`` None: a fresh
-   :class:`~swarmdeck.devices.simulated_robots.SimulatedRobots` with the
-   manifest's initial poses, or random ones) or the MQTT fleet
-   (``mqtt://…``, :func:`swarmdeck.console.runtime.hardware.mqtt_robots`, robot
-   ids ``0 … N-1``; with initial poses in the manifest the robots first drive
-   there with the barrier on, the ``goto`` behaviour).
+1. **Robots** (:class:`~.arena_fleet.ArenaFleet`, the arena's one fleet of
+   ``ArenaSettings.fleet`` = M robots, simulated or the MQTT fleet's ids 0…M−1, docked on
+   the chargers): a job is claimed only when N charged, healthy robots can be
+   assigned — otherwise it stays ``waiting`` and its ``reason`` says which robots
+   are not ready and why (they charge on the strips; the job starts when they
+   are). The assigned robots are set up at the job's start poses (the manifest's,
+   else the script's initial conditions, else random valid ones) under the
+   barrier; the job then runs on them as robots 0…N−1
+   (:class:`~swarmdeck.console.runtime.assigned_robots.AssignedRobots`), the
+   docked robots fixed obstacles of its barrier. A set-up that fails (time limit,
+   lost robot, a start pose on a docked robot) stops the robots and fails the job
+   naming them.
 2. **Runtime**: a :class:`~swarmdeck.console.runtime.loop.ControlLoop` — the
    same tick pipeline, safety filter (``devices.pipeline.certify``) and
    recorder as ``swarmdeck console`` — whose behaviour is
@@ -29,8 +35,13 @@ For each job the service hands over (``waiting → setting up``):
    there (list the file in :data:`~.service.RESULT_FILES`). Every Frame is also
    published to the :class:`~.livefeed.LiveFeed` and handed to each of
    :attr:`ArenaRunner.frame_listeners` (on the loop thread: only hand it over).
-5. The loop is closed (robots stopped, the MQTT connection closed) before the
-   next job starts.
+5. The loop is closed (robots stopped) and every robot returns to the chargers
+   before ``run.json`` is written (its ``setup`` and ``return``: seconds, largest
+   pose error, fleet ids, deadlock escapes, collisions). A return that fails stops
+   the robots and latches the arena "needs operator" (stopped, the robots named)
+   until an operator releases it; after an emergency stop the robots stay where
+   they stopped until the release, then return. Between jobs docked simulated
+   robots charge for the wall time that passes (:meth:`.ArenaFleet.idle`).
 
 On start (:meth:`ArenaRunner.recover`), jobs the previous server left on the
 arena are ``interrupted`` and their partial recordings are recovered with
@@ -43,7 +54,7 @@ import json
 import threading
 import time
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
@@ -52,9 +63,11 @@ from numpy.typing import NDArray
 
 from swarmdeck.console.jobs.confinement import ConfinementUnavailable, SandboxLimits
 from swarmdeck.console.jobs.sandbox import SandboxOutcome, run_sandboxed
+from swarmdeck.console.portal.arena_fleet import ArenaFleet
 from swarmdeck.console.portal.livefeed import LiveFeed
 from swarmdeck.console.portal.service import PortalService
 from swarmdeck.console.runtime.behaviours import TickInput
+from swarmdeck.console.runtime.fleet_upkeep import UpkeepConfig, UpkeepResult
 from swarmdeck.console.runtime.loop import ControlLoop, LoopConfig, SafetyParams
 from swarmdeck.core.bounds import DEFAULT_BOUNDS, Bounds
 from swarmdeck.devices.clock import RealTimePacer
@@ -72,8 +85,9 @@ class ArenaSettings:
         bounds: the floor, m.
         dt: control period, s.
         fast: simulated arena only: tick as fast as it computes instead of in real time.
-        seed: seed of the simulated arena's random initial poses (None: fresh).
-        setup_s: networked robots: longest drive to the initial poses, s.
+        seed: seed of the simulated arena's random start poses (None: fresh).
+        charge: the simulated robots' state of charge when the server starts, scalar or one per robot.
+        upkeep: set-up and return limits, which robots may be assigned (``min_charge``).
     """
 
     robots_via: str | None = None
@@ -82,7 +96,8 @@ class ArenaSettings:
     dt: float = 0.033
     fast: bool = False
     seed: int | None = None
-    setup_s: float = 60.0
+    charge: float | tuple[float, ...] = 1.0
+    upkeep: UpkeepConfig = field(default_factory=UpkeepConfig)
 
     @property
     def real_time(self) -> bool:
@@ -156,6 +171,12 @@ class ArenaRunner:
         self.runs = 0
         self.frame_listeners: list[Callable[[Any], None]] = []  # e.g. the operator's viser console
         self.exporters: list[Callable[[Path], None]] = []  # more exports when a job ends (e.g. the MP4 video)
+        self.fleet = ArenaFleet(settings.fleet, settings.bounds, settings.dt, robots_via=settings.robots_via,
+                                seed=settings.seed, charge=np.asarray(settings.charge, dtype=float),
+                                config=settings.upkeep)
+        self._halt = threading.Event()  # fleet maneuvers must stop now (emergency stop, shutdown)
+        self._idle_mark = time.monotonic()  # wall time the simulated fleet has charged up to
+        self._upkeep: dict[str, Any] = {}  # the current job's set-up and return, for run.json
 
     # ------------------------------------------------------------------ control (any thread)
     def start(self) -> "ArenaRunner":
@@ -167,11 +188,14 @@ class ArenaRunner:
         """End the current job (robots stopped) and the thread."""
         self._stop.set()
         self._end_job.set()
+        self._halt.set()
         self.service.notify()
         if self._thread is not None:
             self._thread.join(timeout)
+        self.fleet.close()
 
     def emergency_stop(self) -> None:
+        self._halt.set()
         with self._lock:
             loop = self._loop
             if self._job is not None:
@@ -188,10 +212,18 @@ class ArenaRunner:
     def current_job(self) -> int | None:
         return self._job
 
+    def fleet_status(self) -> dict[str, Any]:
+        """The fleet table (:meth:`.ArenaFleet.status`): each robot docked/charging/assigned/away, its charge."""
+        return self.fleet.status()
+
     # ------------------------------------------------------------------ the thread
     def _run(self) -> None:
         while not self._stop.is_set():
-            job = self.service.claim_for_arena()
+            try:
+                self._between_jobs()
+            except Exception as exc:  # noqa: BLE001 - never let the arena thread die: the operator is told
+                self.service.arena_needs_operator(f"the fleet's upkeep failed: {type(exc).__name__}: {exc}")
+            job = self.service.claim_for_arena(self._admit)
             if job is None:
                 self.service.wait_for_change(self.poll_s)
                 continue
@@ -199,6 +231,65 @@ class ArenaRunner:
                 self.run_job(job)
             except Exception as exc:  # noqa: BLE001 - never let the arena thread die: the job fails, say why
                 self.service.finish_run(int(job["id"]), "failed", f"the arena runner failed: {type(exc).__name__}: {exc}")
+            self._idle_mark = time.monotonic()
+
+    # ------------------------------------------------------------------ the fleet between and around jobs
+    def _admit(self, job: dict[str, Any]) -> str | None:
+        """None when the job's N robots can be assigned now; else why it waits (the robots named)."""
+        why = self.fleet.shortfall(int(job["robots"]))
+        return None if why is None else f"waiting for robots: {why}"
+
+    def _between_jobs(self) -> None:
+        """Docked simulated robots charge for the wall time since the last call; robots left on the floor
+        (after an emergency stop was released, a failed set-up, a restart) return to the chargers."""
+        now = time.monotonic()
+        self.fleet.idle(now - self._idle_mark)
+        self._idle_mark = now
+        if self.service.arena_stopped:
+            return
+        try:
+            away = self.fleet.away()
+        except ValueError:
+            return  # the fleet cannot be reached: fleet.error says so on the operator's page
+        if away:
+            self._return_fleet("before the next job")
+
+    def _hold_loop(self, loop: ControlLoop | None) -> None:
+        """The loop a fleet maneuver runs on, for the emergency stop (None: the maneuver is over)."""
+        with self._lock:
+            self._loop = loop
+
+    def _set_up(self, job_id: int, poses: NDArray[np.float64]) -> Any:
+        """Assign and set up the job's robots at ``poses``; their ports (robots 0…N−1). ValueError naming
+        the robots or poses when that fails (the robots are stopped)."""
+        t = time.monotonic()
+        try:
+            result, ports = self.fleet.set_up(job_id, poses, stop=self._end_job.is_set, on_loop=self._hold_loop)
+        except ValueError as exc:
+            self._upkeep["setup"] = {"ok": False, "message": str(exc), "robots": []}
+            raise ValueError(f"set-up refused: {exc}") from None
+        self._upkeep["setup"] = _report(result, time.monotonic() - t)
+        if ports is None:
+            raise ValueError(f"set-up failed: {result.message}")
+        return ports
+
+    def _return_fleet(self, when: str) -> dict[str, Any]:
+        """Every robot on the floor back to the chargers (unless the arena is stopped); a failure latches
+        the arena "needs operator" with the robots named. The return's report."""
+        self._halt.clear()  # cleared before the check: an emergency stop from now on halts the return
+        if self.service.arena_stopped or self._stop.is_set():
+            return {"ok": False, "message": "not returned: the arena is stopped (emergency stop); the robots "
+                                            "return to the chargers when an operator releases it", "robots": []}
+        t = time.monotonic()
+        try:
+            result = self.fleet.return_all(stop=self._halt.is_set, on_loop=self._hold_loop)
+        except ValueError as exc:
+            report: dict[str, Any] = {"ok": False, "message": str(exc), "robots": []}
+        else:
+            report = _report(result, time.monotonic() - t)
+        if not report["ok"] and not self._halt.is_set():
+            self.service.arena_needs_operator(f"return to the chargers {when} failed: {report['message']}")
+        return report
 
     def recover(self) -> list[int]:
         """Mark jobs left on the arena ``interrupted`` and recover their partial recordings; their ids."""
@@ -225,6 +316,7 @@ class ArenaRunner:
         """Run one claimed job to its end; its final state."""
         job_id, folder = int(job["id"]), self.service.job_dir(int(job["id"]))
         self._end_job.clear()
+        self._upkeep = {}
         with self._lock:
             self._job = job_id
         try:
@@ -253,7 +345,7 @@ class ArenaRunner:
         summary = {"ended_by": None if outcome is None else outcome.ended_by,
                    "error": reason if state == "failed" else None,
                    "ticks": None if outcome is None else outcome.ticks,
-                   "overruns": None if outcome is None else outcome.overruns, "note": note}
+                   "overruns": None if outcome is None else outcome.overruns, "note": note, **self._upkeep}
         _write_json(folder / "run.json", summary)
         if outcome is not None:
             (folder / "script.log").write_text(outcome.log, encoding="utf-8")
@@ -277,7 +369,7 @@ class ArenaRunner:
         bypass = bool(job["bypass"])
         loop_config = LoopConfig(n_robots=n, dt=s.dt, bounds=s.bounds, seed=s.seed, behaviour="rendezvous",
                                  safety=SafetyParams(enabled=True))
-        state: dict[str, Any] = {"loop": None, "recorder": None}
+        state: dict[str, Any] = {"loop": None, "recorder": None, "setup_failed": None}
         notes: list[str] = []
 
         def stopped() -> bool:
@@ -287,13 +379,24 @@ class ArenaRunner:
             if n_script != n:
                 raise ValueError(f"the script asks for {n_script} robots but the manifest declares {n}")
             poses = initial if initial is not None else script_initial
-            loop = self._build_loop(loop_config, poses, notes)
+            if poses is None:
+                poses = self.fleet.start_poses(n)
+            try:
+                robots = self._set_up(int(job["id"]), np.asarray(poses, dtype=float))
+            except ValueError as exc:
+                state["setup_failed"] = str(exc)
+                raise
+            notes.append(self._upkeep["setup"]["message"])
+            loop = ControlLoop(loop_config, source=robots, sink=robots, clock=time.monotonic if s.real_time else None)
             with self._lock:
                 self._loop = loop
             state["loop"] = loop
             source = redact_url(s.robots_via) if s.robots_via else "simulation"
+            fleet_ids = robots.fleet_ids.tolist()
             rec = Recorder(folder / "recording.mcap", session_metadata(loop_config, None, source=source,
-                                                                      job=int(job["id"]), bypass=bypass))
+                                                                      job=int(job["id"]), bypass=bypass,
+                                                                      fleet_ids=fleet_ids))
+            loop.post(f"robots 0..{n - 1} are the fleet's robots {', '.join(map(str, fleet_ids))}")
             state["recorder"] = rec
             loop.subscribe(rec.write_frame)
             loop.subscribe(lambda frame: self.live.publish(int(job["id"]), frame))
@@ -311,7 +414,8 @@ class ArenaRunner:
             loop.run()
             return LoopPlant(loop, commands, duration, RealTimePacer(s.dt) if s.real_time else None)
 
-        limits = SandboxLimits(tick_s=cfg.tick_budget_s, wall_s=duration + cfg.grace_s)
+        # the wall-time limit covers the set-up too (its own time limit; the script waits for it)
+        limits = SandboxLimits(tick_s=cfg.tick_budget_s, wall_s=duration + cfg.grace_s + s.upkeep.limit(n))
         try:
             script, entry = self.service.script(job)
             outcome = run_sandboxed(script, make_plant, entry=entry, n_robots=n, duration=duration,
@@ -319,43 +423,15 @@ class ArenaRunner:
         finally:
             loop = state["loop"]
             if loop is not None:
-                loop.close()  # robots stopped, MQTT disconnected
+                loop.close()  # robots stopped (the fleet's ports stay open)
             if state["recorder"] is not None:
                 state["recorder"].close()
+            with self._lock:
+                self._loop = None
+            self._upkeep["return"] = self._return_fleet(f"after job {int(job['id'])}")
+        if state["setup_failed"] is not None:
+            return None, state["setup_failed"]
         return outcome, "; ".join(notes) or None
-
-    def _build_loop(self, config: LoopConfig, poses: NDArray[np.float64] | None, notes: list[str]) -> ControlLoop:
-        """The ControlLoop on this arena's robots (simulated at ``poses``, or the MQTT fleet driven there)."""
-        s = self.settings
-        clock = time.monotonic if s.real_time else None
-        if s.robots_via is None:
-            from swarmdeck.devices import ArenaConfig
-            from swarmdeck.devices.simulated_robots import SimulatedRobots
-
-            sim = SimulatedRobots(config.n_robots, ArenaConfig(bounds=config.bounds, dt=config.dt, seed=config.seed),
-                                  initial_poses=poses)
-            return ControlLoop(config, source=sim, sink=sim, clock=clock)
-        from swarmdeck.console.runtime.hardware import mqtt_robots
-
-        sink, source = mqtt_robots(s.robots_via, np.arange(config.n_robots, dtype=np.int64))
-        loop = ControlLoop(config, source=source, sink=sink, clock=clock)
-        if poses is not None:
-            notes.append(self._drive_to(loop, poses))
-        return loop
-
-    def _drive_to(self, loop: ControlLoop, poses: NDArray[np.float64]) -> str:
-        """Setting up networked robots: go to the initial positions (barrier on), at most ``setup_s``."""
-        goals = tuple((float(x), float(y)) for x, y, _ in poses)
-        loop.set_params(goals=goals)
-        loop.set_behaviour("goto")
-        pacer = RealTimePacer(loop.config.dt)
-        deadline = time.monotonic() + self.settings.setup_s
-        while time.monotonic() < deadline and not self._end_job.is_set():
-            frame = loop.tick()
-            if np.all(np.hypot(*(frame.poses[:, :2] - np.asarray(goals)).T) < 0.05):
-                return "robots at their initial positions"
-            pacer.wait()
-        return "robots did not all reach their initial positions in time"
 
     def _exports(self, folder: Path) -> None:
         """CSV and HTML replay from the job's recording (problems are noted in run.json, never raised)."""
@@ -376,6 +452,12 @@ class ArenaRunner:
             data = json.loads(run.read_text()) if run.is_file() else {}
             data["export_error"] = f"{type(exc).__name__}: {exc}"
             _write_json(run, data)
+
+
+def _report(result: UpkeepResult, wall_s: float) -> dict[str, Any]:
+    """A set-up's or return's entry in run.json: ok, robots (fleet ids), seconds (the maneuver's own time),
+    wall_s, largest position/heading error, collisions, deadlock escapes, message."""
+    return {**result.to_dict(), "wall_s": round(wall_s, 3)}
 
 
 def _write_json(path: Path, data: dict[str, Any]) -> None:

@@ -41,6 +41,7 @@ import json
 import shutil
 import threading
 import time
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Protocol
@@ -415,18 +416,23 @@ class PortalService:
             if self.db.setting("arena_stopped", "0") != "1":
                 raise Conflict("the arena is not stopped", "arena")
             self.db.set_setting(tx, "arena_stopped", "0")
+            self.db.set_setting(tx, "arena_attention", "")
             self.accounts.audit(user, "release emergency stop", tx=tx)
         self.notify()
         return self.arena_state(user)
 
     def arena_state(self, user: User) -> dict[str, Any]:
-        """``{"stopped", "manual_approval", "running": job|None, "queue": [waiting jobs in order]}``."""
+        """``{"stopped", "needs_operator": why|None, "manual_approval", "running": job|None, "queue": [waiting
+        jobs in order], "fleet": the fleet table|None}`` (the fleet: :meth:`.ArenaFleet.status`)."""
         self._require_operator(user)
         running = self.db.query_one(f"{JOB_SELECT} WHERE j.state IN ('setting up', 'running') ORDER BY j.id LIMIT 1")
         queue = self.db.query(f"{JOB_SELECT} WHERE j.state = 'waiting' ORDER BY j.priority, j.id")
-        return {"stopped": self.arena_stopped, "manual_approval": self.manual_approval,
+        fleet_status = getattr(self.arena, "fleet_status", None)
+        return {"stopped": self.arena_stopped, "needs_operator": self.db.setting("arena_attention", "") or None,
+                "manual_approval": self.manual_approval,
                 "running": None if running is None else _job_dict(running),
-                "queue": [_job_dict(r, k) for k, r in enumerate(queue)]}
+                "queue": [_job_dict(r, k) for k, r in enumerate(queue)],
+                "fleet": None if fleet_status is None else fleet_status()}
 
     def audit_log(self, user: User, limit: int = 200) -> list[dict[str, Any]]:
         self._require_operator(user)
@@ -471,20 +477,54 @@ class PortalService:
     def bypass_allowed(self, job: dict[str, Any]) -> bool:
         return job["verdict"] == BYPASS_VERDICT and job["request_no_barrier"] and not job["barrier_forbidden"]
 
-    def claim_for_arena(self) -> dict[str, Any] | None:
-        """The first waiting job, now ``setting up`` — None when there is none or the arena is stopped."""
+    def claim_for_arena(self, admit: Callable[[dict[str, Any]], str | None] | None = None) -> dict[str, Any] | None:
+        """The first waiting job, now ``setting up`` — None when there is none or the arena is stopped.
+
+        ``admit(job)`` (the arena: are N charged robots free?) returns None to go ahead, or why the job
+        must wait: it stays first in the queue, ``waiting``, with that ``reason`` (jobs run in queue order:
+        a smaller job behind it does not overtake it). ``admit`` runs outside the database transaction.
+        """
+        first = f"{JOB_SELECT} WHERE j.state = 'waiting' ORDER BY j.priority, j.id LIMIT 1"
+        if admit is not None:
+            if self.arena_stopped:
+                return None
+            row = self.db.query_one(first)
+            if row is None:
+                return None
+            why = admit(_job_dict(row))
+            if why is not None:
+                self._waiting_reason(int(row["id"]), why[:4000])
+                return None
+            admitted = int(row["id"])
         with self.db.transaction() as tx:
             if self.db.setting("arena_stopped", "0") == "1":
                 return None
-            row = tx.execute("SELECT id FROM jobs WHERE state = 'waiting' ORDER BY priority, id LIMIT 1").fetchone()
-            if row is None:
-                return None
-            job = _job_dict(tx.execute(f"{JOB_SELECT} WHERE j.id = ?", (row["id"],)).fetchone())
+            row = tx.execute(first).fetchone()
+            if row is None or (admit is not None and int(row["id"]) != admitted):
+                return None  # the queue changed meanwhile: the arena asks again
+            job = _job_dict(row)
             bypass = self.bypass_allowed(job)
             self.db.transition(tx, int(row["id"]), "setting up", sources=("waiting",), started=time.time(),
-                               bypass=int(bypass))
+                               bypass=int(bypass), reason=None)
         self.notify()
         return _job_dict(self._row(int(row["id"])))
+
+    def _waiting_reason(self, job_id: int, reason: str) -> None:
+        """Say why a waiting job does not start yet (shown with the job; cleared when it is claimed)."""
+        with self.db.transaction() as tx:
+            cur = tx.execute("UPDATE jobs SET reason = ? WHERE id = ? AND state = 'waiting' AND "
+                             "COALESCE(reason, '') != ?", (reason, job_id, reason))
+        if cur.rowcount:
+            self.notify()
+
+    def arena_needs_operator(self, message: str) -> None:
+        """The arena cannot look after itself (a return to the chargers failed): it stops (no job starts,
+        as after an emergency stop) and ``message`` (the robots named) is shown to operators until one
+        releases it (:meth:`release_arena`)."""
+        with self.db.transaction() as tx:
+            self.db.set_setting(tx, "arena_stopped", "1")
+            self.db.set_setting(tx, "arena_attention", message[:4000])
+        self.notify()
 
     def mark_running(self, job_id: int) -> bool:
         """``setting up → running``; False if the job was cancelled (or e-stopped) meanwhile."""

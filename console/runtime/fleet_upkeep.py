@@ -28,6 +28,7 @@ from __future__ import annotations
 import csv
 import io
 import math
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -378,9 +379,11 @@ class UpkeepResult:
                 "collisions": self.collisions, "escapes": self.escapes, "message": self.message}
 
 
-def run_maneuver(loop: Any, maneuver: FleetManeuver, pace: Any = None, max_ticks: int | None = None) -> UpkeepResult:
+def run_maneuver(loop: Any, maneuver: FleetManeuver, pace: Any = None, max_ticks: int | None = None,
+                 stop: Callable[[], bool] | None = None) -> UpkeepResult:
     """Run ``maneuver`` on ``loop`` (a ControlLoop, the same safety pipeline as the console) tick by
-    tick until it is done or has failed (its time limit, a lost robot); ``pace()`` is called after each
+    tick until it is done or has failed (its time limit, a lost robot) or ``stop()`` says so (a cancel,
+    an emergency stop: the result is not ok and says it was stopped); ``pace()`` is called after each
     tick (a real-time pacer for real robots; None: as fast as the simulation goes). The robots are
     stopped at the end either way (one zero command)."""
     from swarmdeck.devices.validation import colliding_pairs
@@ -389,7 +392,11 @@ def run_maneuver(loop: Any, maneuver: FleetManeuver, pace: Any = None, max_ticks
     loop.run()
     collisions, ticks = 0, 0
     frame = loop.latest
+    stopped = False
     while maneuver.state == "running" and (max_ticks is None or ticks < max_ticks):
+        if stop is not None and stop():
+            stopped = True
+            break
         frame = loop.tick()
         collisions += bool(len(colliding_pairs(frame.poses)))
         ticks += 1
@@ -403,5 +410,6 @@ def run_maneuver(loop: Any, maneuver: FleetManeuver, pace: Any = None, max_ticks
         g = maneuver.maneuver.goals
         err = float(np.hypot(*(frame.poses[rows, :2] - g[:, :2]).T).max())
         head = float(np.abs(wrap_angle(frame.poses[rows, 2] - g[:, 2])).max())
+    message = f"{maneuver.name} stopped before it finished ({maneuver.message})" if stopped else maneuver.message
     return UpkeepResult(maneuver.state == "done", tuple(int(i) for i in maneuver.ids), maneuver.elapsed, err, head,
-                        collisions, int(maneuver.maneuver.escapes), maneuver.message)
+                        collisions, int(maneuver.maneuver.escapes), message)

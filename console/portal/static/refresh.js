@@ -50,7 +50,18 @@
       if (!a || !jobs) return;
       const sig = [a.stopped, a.manual_approval, (a.running || {}).id, (a.running || {}).state,
                    a.queue.map((j) => j.id).join(","), jobs.map((j) => `${j.id}:${j.state}`).join(",")].join("|");
-      if (arena.dataset.sig !== sig) location.reload();  // data-sig: the same summary, made by the server
+      if (arena.dataset.sig !== sig) { location.reload(); return; }  // data-sig: the same summary, made by the server
+      const fleet = document.getElementById("fleet");
+      for (const r of (a.fleet && fleet ? a.fleet.robots : [])) {  // the fleet table: states and charges in place
+        const row = fleet.querySelector(`tr[data-robot="${r.id}"]`);
+        if (!row) continue;
+        row.querySelector('[data-field="state"]').textContent = r.state + (r.job !== null ? ` to job ${r.job}` : "");
+        row.querySelector('[data-field="charge"]').textContent = r.charge !== null ? `${Math.round(100 * r.charge)} %` : "unknown";
+        row.querySelector('[data-field="slot"]').textContent = r.slot !== null ? r.slot : "floor";
+      }
+      const ready = document.getElementById("fleet-ready");
+      if (ready && a.fleet) ready.firstChild.textContent = a.fleet.ready
+        ? "Arena ready: every robot is docked or assigned to a job." : "Arena NOT ready: robots are away from the chargers.";
     });
   });
 })();
