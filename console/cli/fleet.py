@@ -1,7 +1,8 @@
 """``swarmdeck fleet status|dock|setup POSES.csv|release``: the operator's view of the fleet and its upkeep.
 
 The robots are the arena's (``--robots-via mqtt://…``: GRITSBots or ``swarmdeck robots``) or a
-simulated arena (``--simulated N``). ``dock``, ``setup`` and ``release`` drive them through the
+simulated arena (``--simulated N``). ``status --server URL`` asks the lab's portal (``swarmdeck server``,
+an operator token) instead: its fleet table, with the robots assigned to the running job. ``dock``, ``setup`` and ``release`` drive them through the
 console's control loop and its safety pipeline (:mod:`swarmdeck.console.runtime.fleet_upkeep`).
 """
 from __future__ import annotations
@@ -36,6 +37,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     where = parser.add_mutually_exclusive_group()
     where.add_argument("--robots-via", default=None, metavar="URL",
                        help="the arena's robots over MQTT, e.g. mqtt://127.0.0.1:1883")
+    where.add_argument("--server", default=None, metavar="URL",
+                       help="status only: the fleet of the lab's portal (swarmdeck server), with the robots "
+                            "assigned to the running job; needs an operator token (--token or $SWARMDECK_TOKEN)")
     where.add_argument("--simulated", type=int, default=None, metavar="N",
                        help="a simulated arena of N robots instead (docked at start for status/setup, on the floor "
                             "for dock/release unless --start says otherwise)")
@@ -49,6 +53,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="fail (robots stopped) after this many s (default: 60 s + 2 s per robot)")
     parser.add_argument("--wait", type=float, default=3.0, metavar="S",
                         help="--robots-via: s to listen for robots before acting (default %(default)s)")
+    parser.add_argument("--token", default=None, help="--server: an operator's access token (default: $SWARMDECK_TOKEN)")
     parser.add_argument("--json", action="store_true", help="print the result as JSON")
 
 
@@ -59,8 +64,15 @@ def main(args: argparse.Namespace) -> int:
         raise UsageError("setup needs POSES.csv (one 'x, y, theta' line per robot)")
     if args.action != "setup" and args.poses is not None:
         raise UsageError(f"{args.action} takes no POSES.csv")
+    if args.server is not None:
+        if args.action != "status":
+            raise UsageError(f"{args.action} through --server: the portal's arena sets up and returns its robots "
+                             "itself between jobs (use --robots-via on the arena's machine when no server runs)")
+        return _server_status(args)
+    if args.token is not None:
+        raise UsageError("--token goes with --server")
     if args.robots_via is None and args.simulated is None:
-        raise UsageError("name the robots: --robots-via mqtt://HOST:PORT or --simulated N")
+        raise UsageError("name the robots: --robots-via mqtt://HOST:PORT, --simulated N or --server URL")
     if args.simulated is not None and args.simulated < 1:
         raise UsageError(f"--simulated must be a number of robots >= 1, got {args.simulated}")
     if not 0.0 <= args.charge <= 1.0:
@@ -125,6 +137,34 @@ def _open(args: argparse.Namespace) -> tuple[Any, Any]:
     loop = ControlLoop(cfg, source=NetworkPoseSource(robots), sink=robots, clock=time.monotonic)
     loop.pause()
     return loop, RealTimePacer(cfg.dt).wait
+
+
+def _server_status(args: argparse.Namespace) -> int:
+    """``status --server URL``: the portal's fleet table (docked, charging, assigned to job X, away)."""
+    from swarmdeck.console.cli._client import client, fail
+    from swarmdeck.console.portal.client import ClientError
+
+    try:
+        with client(args) as c:
+            arena = c.arena()
+    except ClientError as exc:
+        return fail("fleet", exc, args.json)
+    fleet = arena.get("fleet") or {"robots": [], "ready": False, "docked": 0, "size": 0, "error": None}
+    if args.json:
+        print(json.dumps({**fleet, "stopped": arena.get("stopped"), "needs_operator": arena.get("needs_operator")},
+                         indent=1))
+        return 0
+    print(f"{'robot':>5}  {'state':<18}  {'charge':>6}  {'docked':>9}")
+    for r in fleet["robots"]:
+        state = r["state"] + (f" to job {r['job']}" if r.get("job") is not None else "")
+        charge = f"{r['charge']:.0%}" if r.get("charge") is not None else "–"
+        docked = f"slot {r['slot']}" if r.get("slot") is not None else "floor"
+        print(f"{r['id']:>5}  {state:<18}  {charge:>6}  {docked:>9}")
+    ready = "arena ready" if fleet["ready"] else "arena NOT ready"
+    print(f"{fleet['docked']}/{fleet['size']} docked · {ready}" + (f" · {fleet['error']}" if fleet.get("error") else ""))
+    if arena.get("needs_operator"):
+        print(f"NEEDS AN OPERATOR: {arena['needs_operator']}")
+    return 0
 
 
 def _status(loop: Any, frame: Any) -> list[dict[str, Any]]:

@@ -64,6 +64,10 @@ class PortalClient:
         with open(path, "rb") as f:
             return self._call("POST", "/api/jobs", files={"script": (path.name, f)}, data=data).json()
 
+    def arena(self) -> dict[str, Any]:
+        """The arena as operators see it (operator token): stopped, needs_operator, running, queue, fleet."""
+        return self._call("GET", "/api/operator/arena").json()
+
     def jobs(self) -> list[dict[str, Any]]:
         return self._call("GET", "/api/jobs").json()
 
