@@ -72,7 +72,7 @@ def main(args: argparse.Namespace) -> int:
     if args.token is not None:
         raise UsageError("--token goes with --server")
     if args.robots_via is None and args.simulated is None:
-        raise UsageError("name the robots: --robots-via mqtt://HOST:PORT, --simulated N or --server URL")
+        raise UsageError("name the robots: --server URL, --robots-via mqtt://HOST:PORT or --simulated N")
     if args.simulated is not None and args.simulated < 1:
         raise UsageError(f"--simulated must be a number of robots >= 1, got {args.simulated}")
     if not 0.0 <= args.charge <= 1.0:

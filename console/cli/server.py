@@ -94,7 +94,7 @@ def main(args: argparse.Namespace) -> int:
                          "or pass --trusted")
     fleet = min(args.robots, ChargerLayout().n_slots)
     if fleet < args.robots:
-        raise UsageError(f"--robots {args.robots}: the arena's charging strips have {fleet} slots (one robot each)")
+        raise UsageError(f"--robots {args.robots}: at most {fleet} robots, one per slot of the arena's charging strips")
     config = PortalConfig(data=args.data, limits=Limits(fleet=fleet, max_duration=args.max_duration,
                                                         max_upload_bytes=args.max_upload),
                           verify_runs=args.verify_runs, grace_s=args.grace, trusted=args.trusted)
