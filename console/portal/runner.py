@@ -319,6 +319,8 @@ class ArenaRunner:
         self._upkeep = {}
         with self._lock:
             self._job = job_id
+        if self.service.job_state(job_id) not in ("setting up", "running"):
+            self._end_job.set()  # cancelled or e-stopped between the claim and here: nothing moves
         try:
             return self._run_job(job_id, job, folder)
         finally:
