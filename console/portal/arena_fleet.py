@@ -97,6 +97,7 @@ class ArenaFleet:
         self._reading: SensedPoses | None = None
         self._assigned: dict[int, int] = {}  # fleet id -> job id
         self.error: str | None = None  # why the networked fleet cannot be reached (None: fine)
+        self.frame_listeners: list[Callable[[Any], None]] = []  # also shown the maneuvers' Frames (the operator's view)
         self._starts = 0
 
     @property
@@ -154,6 +155,8 @@ class ArenaFleet:
         loop = ControlLoop(cfg, source=source, sink=sink, clock=time.monotonic if self.real_time else None,
                            robot=self.robot)
         loop.subscribe(self._note_frame)
+        for listener in self.frame_listeners:
+            loop.subscribe(listener)
         loop.pause()
         return loop, (RealTimePacer(self.dt).wait if self.real_time else None)
 
@@ -211,11 +214,15 @@ class ArenaFleet:
             return result, None
         return result, AssignedRobots(source, sink, result.robots, self.robot.lookahead, on_read=self._note)
 
+    def end_assignment(self) -> None:
+        """The job is over: its robots are no longer assigned (they are ``away`` until they dock)."""
+        with self._lock:
+            self._assigned = {}
+
     def return_all(self, *, stop: Callable[[], bool], on_loop: LoopHook) -> fu.UpkeepResult:
         """Every robot on the floor to a free charger slot; the assignment ends. Raises ValueError when
         there are fewer free slots than robots on the floor, or the fleet cannot be reached."""
-        with self._lock:
-            self._assigned = {}
+        self.end_assignment()
         loop, pace = self._loop()
         _, sink = self.ports()
         frame = loop.tick()

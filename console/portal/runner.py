@@ -174,6 +174,7 @@ class ArenaRunner:
         self.fleet = ArenaFleet(settings.fleet, settings.bounds, settings.dt, robots_via=settings.robots_via,
                                 seed=settings.seed, charge=np.asarray(settings.charge, dtype=float),
                                 config=settings.upkeep)
+        self.fleet.frame_listeners = self.frame_listeners  # the operator's view sees set-ups and returns too
         self._halt = threading.Event()  # fleet maneuvers must stop now (emergency stop, shutdown)
         self._idle_mark = time.monotonic()  # wall time the simulated fleet has charged up to
         self._upkeep: dict[str, Any] = {}  # the current job's set-up and return, for run.json
@@ -430,6 +431,7 @@ class ArenaRunner:
                 state["recorder"].close()
             with self._lock:
                 self._loop = None
+            self.fleet.end_assignment()
             self._upkeep["return"] = self._return_fleet(f"after job {int(job['id'])}")
         if state["setup_failed"] is not None:
             return None, state["setup_failed"]

@@ -118,10 +118,21 @@ def test_an_operator_approves_and_stops_the_arena_and_a_form_without_csrf_is_ref
     refused = op.request.post(f"{lab.url}/operator/estop", form={"csrf": "forged"}, max_redirects=0)
     assert refused.status == 403 and "CSRF token is missing or wrong" in refused.text()
     assert not lab.service.arena_stopped and lab.service.job_state(jid) == "running"
+    errors = []
+    op.on("pageerror", lambda exc: errors.append(str(exc)))
     op.goto(f"{lab.url}/operator")
     op.wait_for_selector(f"#arena-state a[href='/jobs/{jid}']")
+    # the fleet table: the job's two robots assigned to it, the other four docked; the arena ready
+    assert op.locator(f"#fleet td[data-field=state]:text-is('assigned to job {jid}')").count() == 2
+    assert op.locator("#fleet td[data-field=state]:text-matches('^(docked|charging)$')").count() == 4
+    assert op.inner_text("#fleet-ready").startswith("Arena ready")
     op.click("#estop")
     op.wait_for_selector("#arena-state:text('STOPPED')")
+    # stopped where they were: the two robots are away from the chargers (they return on release)
+    op.wait_for_function("() => document.querySelectorAll('#fleet td[data-field=state]').length === 6 && "
+                         "[...document.querySelectorAll('#fleet td[data-field=state]')]"
+                         ".filter((td) => td.textContent === 'away').length === 2", timeout=30_000)
+    assert op.inner_text("#fleet-ready").startswith("Arena NOT ready") and not errors, errors
     op.screenshot(path=str(ARTIFACTS / "portal-operator-estop.png"), full_page=True)
     with lab.client("alice") as c:
         job = wait_for_state(c, jid, ("cancelled",))
