@@ -25,7 +25,8 @@ For each job the service hands over (``waiting → setting up``):
 3. **Script**: :func:`swarmdeck.console.jobs.sandbox.run_sandboxed` with
    :class:`LoopPlant` as its plant: each sandbox tick is one loop tick, paced
    in real time (MQTT robots always; the simulated arena unless ``fast``). The
-   time limit is the declared duration plus ``grace_s``; a cancel or an
+   time limit is the declared duration plus ``grace_s`` plus the set-up's own
+   time limit (the script waits while its robots are set up); a cancel or an
    emergency stop ends the run within a tick (the e-stop zeroes the robots'
    commands first).
 4. **Data** in ``DIR/jobs/<id>/``: ``recording.mcap`` (written while it runs),
