@@ -78,6 +78,11 @@ def test_two_jobs_start_at_their_poses_with_charged_robots_and_end_docked(portal
             assert meta["config"]["fleet_ids"] == setup["robots"]
             used |= set(setup["robots"])
         assert 1 not in used  # the low battery is never assigned
+        browser, _ = sign_in(portal, "alice")
+        page = browser.get(f"/jobs/{a}").text
+        browser.close()
+        assert "Set up at the start poses in" in page and "Returned to the chargers in" in page
+        assert "0 collisions" in page
         status = runner.fleet_status()
         assert status["ready"] and status["docked"] == 5 and status["assigned"] == {}
         assert {r["state"] for r in status["robots"]} <= {"docked", "charging"}

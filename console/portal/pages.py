@@ -233,7 +233,8 @@ def router(service: PortalService, live: LiveFeed) -> APIRouter:
         names = {f["name"] for f in files}
         if VIDEO not in names and job["state"] in FINAL and "recording.mcap" in names:
             files.append({"name": VIDEO, "bytes": None, "what": RESULT_FILES[VIDEO] + " (made when first downloaded)"})
-        return page(request, "job.html", s, job=job, files=files, report=report,
+        run = service.run_summary(s.user, job_id) if job["state"] in FINAL else None
+        return page(request, "job.html", s, job=job, files=files, report=report, run=run,
                     live=job["state"] in ACTIVE, final=job["state"] in FINAL, live_states=ACTIVE, final_states=FINAL)
 
     @r.post("/jobs/{job_id}/cancel")

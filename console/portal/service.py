@@ -248,6 +248,16 @@ class PortalService:
             raise NotFound(f"job {job_id} has no verification report yet", "job")
         return json.loads(path.read_text())
 
+    def run_summary(self, user: User, job_id: int) -> dict[str, Any] | None:
+        """How the arena run went (``run.json``: how it ended, the robots' set-up and return), None before
+        it ended (or when the file cannot be read)."""
+        self._visible_row(user, job_id)
+        try:
+            data = json.loads((self.job_dir(job_id) / "run.json").read_text())
+        except (OSError, ValueError):
+            return None
+        return data if isinstance(data, dict) else None
+
     def files(self, user: User, job_id: int) -> list[dict[str, Any]]:
         """The job's result files that exist: ``{"name", "bytes", "what"}``."""
         self._visible_row(user, job_id)
