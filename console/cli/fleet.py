@@ -158,7 +158,7 @@ def _server_status(args: argparse.Namespace) -> int:
     for r in fleet["robots"]:
         state = r["state"] + (f" to job {r['job']}" if r.get("job") is not None else "")
         charge = f"{r['charge']:.0%}" if r.get("charge") is not None else "–"
-        docked = f"slot {r['slot']}" if r.get("slot") is not None else "floor"
+        docked = f"slot {r['slot']}" if r.get("slot") is not None else ("–" if r["state"] == "missing" else "floor")
         print(f"{r['id']:>5}  {state:<18}  {charge:>6}  {docked:>9}")
     ready = "arena ready" if fleet["ready"] else "arena NOT ready"
     print(f"{fleet['docked']}/{fleet['size']} docked · {ready}" + (f" · {fleet['error']}" if fleet.get("error") else ""))

@@ -11,7 +11,7 @@ operator can leave the arena alone. :class:`ArenaFleet` is that for the portal's
 * **networked** (``robots_via="mqtt://…"``): the MQTT fleet's robot ids 0…M−1
   (:class:`~swarmdeck.devices.net.console_robots.NetworkRobots`, connected when first needed and
   kept; GRITSBots or ``swarmdeck robots --start docked --charge``), whose firmware reports battery
-  and charging.
+  and charging. A robot that never reports is listed as missing and never assigned; the others work.
 
 Both go through the same steps, each a
 :class:`~swarmdeck.console.runtime.fleet_upkeep.FleetManeuver` run by
@@ -118,15 +118,36 @@ class ArenaFleet:
         if self.sim is not None:
             return self.sim, self.sim
         if self._net is None:
-            from swarmdeck.console.runtime.hardware import mqtt_robots
-
             try:
-                self._net = mqtt_robots(self.robots_via, self.ids, wait_for_poses=self.wait_for_poses)
+                self._net = self._connect()
             except (ValueError, OSError) as exc:
                 self.error = f"cannot reach the robots: {exc}"
                 raise ValueError(self.error) from None
             self.error = None
         return self._net[1], self._net[0]
+
+    def _connect(self) -> tuple[Any, Any]:
+        """The networked fleet's ports once at least one robot sent a pose (ValueError: none within
+        ``wait_for_poses`` s). Robots that have not (yet) reported are left out of readings and never
+        assigned: one silent robot does not keep the arena from working (the table lists it as missing)."""
+        from swarmdeck.console.runtime.hardware import NetworkPoseSource
+        from swarmdeck.devices.net.console_robots import NetworkRobots
+        from swarmdeck.devices.net.mqtt_config import parse_broker_url, redact_url
+        from swarmdeck.devices.net.transport_mqtt import MqttTransport
+
+        url = str(self.robots_via)
+        transport = MqttTransport(parse_broker_url(url), ids=self.ids).start()
+        deadline = time.monotonic() + self.wait_for_poses
+        while not len(transport.latest_poses().ids):
+            if time.monotonic() > deadline:
+                state = transport.status().state
+                transport.close()
+                raise ValueError(f"no pose from any of the robots 0..{self.n_robots - 1} on {redact_url(url)} "
+                                 f"within {self.wait_for_poses:g} s ({state}); are the robots (or `swarmdeck robots "
+                                 "--start docked --charge`) running?")
+            time.sleep(0.02)
+        robots = NetworkRobots(transport, self.ids, name=f"mqtt {redact_url(url)}")
+        return robots, NetworkPoseSource(robots)
 
     def close(self) -> None:
         """Disconnect the networked fleet (robots commanded zero first); nothing for a simulation."""
@@ -184,7 +205,9 @@ class ArenaFleet:
             assign(int(n), view.ids, view.charge(self.config.fleet.battery), np.where(view.seen, 0.0, np.inf),
                    view.status_age, policy=self.config.fleet.policy)
         except AssignmentError as exc:
-            return str(exc)
+            missing = np.setdiff1d(self.ids, view.ids)
+            return str(exc) + (f"; never heard from robot(s) {', '.join(map(str, missing.tolist()))}"
+                               if len(missing) else "")
         return None
 
     def start_poses(self, n: int) -> NDArray[np.float64]:
@@ -256,7 +279,7 @@ class ArenaFleet:
     # ------------------------------------------------------------------ the table (any thread)
     def status(self) -> dict[str, Any]:
         """``{"robots": [rows], "ready", "docked", "assigned": {id: job}, "error"}``; each row ``id``, ``state``
-        (docked | charging | assigned | away | not seen), ``job`` (assigned), ``charge`` ∈ [0, 1] or None,
+        (docked | charging | assigned | away | not seen | missing: never heard from), ``job`` (assigned), ``charge`` ∈ [0, 1] or None,
         ``voltage`` V or None, ``slot`` or None, ``x``, ``y``, ``theta``."""
         with self._lock:
             reading, assigned = self._reading, dict(self._assigned)
@@ -283,7 +306,11 @@ class ArenaFleet:
                          "slot": int(slot[k]) if slot[k] >= 0 else None,
                          "x": float(reading.poses[k, 0]), "y": float(reading.poses[k, 1]),
                          "theta": float(reading.poses[k, 2])})
+        for rid in np.setdiff1d(self.ids, reading.ids).tolist():  # never heard of (networked fleet)
+            rows.append({"id": int(rid), "state": "missing", "job": None, "charge": None, "voltage": None,
+                         "slot": None, "x": None, "y": None, "theta": None})
+        rows.sort(key=lambda r: r["id"])
         docked = sum(r["slot"] is not None and r["job"] is None for r in rows)
-        ready = len(rows) == self.n_robots and all(r["state"] in ("docked", "charging", "assigned") for r in rows)
+        ready = all(r["state"] in ("docked", "charging", "assigned") for r in rows)
         return {"robots": rows, "ready": ready, "docked": docked, "assigned": {str(k): v for k, v in assigned.items()},
                 "error": self.error, "size": self.n_robots}

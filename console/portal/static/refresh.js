@@ -57,7 +57,7 @@
         if (!row) continue;
         row.querySelector('[data-field="state"]').textContent = r.state + (r.job !== null ? ` to job ${r.job}` : "");
         row.querySelector('[data-field="charge"]').textContent = r.charge !== null ? `${Math.round(100 * r.charge)} %` : "unknown";
-        row.querySelector('[data-field="slot"]').textContent = r.slot !== null ? r.slot : "floor";
+        row.querySelector('[data-field="slot"]').textContent = r.slot !== null ? r.slot : (r.state === "missing" ? "–" : "floor");
       }
       const ready = document.getElementById("fleet-ready");
       if (ready && a.fleet) ready.firstChild.textContent = a.fleet.ready
