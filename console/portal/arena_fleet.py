@@ -127,9 +127,10 @@ class ArenaFleet:
         return self._net[1], self._net[0]
 
     def _connect(self) -> tuple[Any, Any]:
-        """The networked fleet's ports once at least one robot sent a pose (ValueError: none within
-        ``wait_for_poses`` s). Robots that have not (yet) reported are left out of readings and never
-        assigned: one silent robot does not keep the arena from working (the table lists it as missing)."""
+        """The networked fleet's ports once every robot sent a pose, or at least one did within
+        ``wait_for_poses`` s (ValueError: none did). Robots that have not (yet) reported are left out of
+        readings and never assigned: one silent robot does not keep the arena from working (the table
+        lists it as missing)."""
         from swarmdeck.console.runtime.hardware import NetworkPoseSource
         from swarmdeck.devices.net.console_robots import NetworkRobots
         from swarmdeck.devices.net.mqtt_config import parse_broker_url, redact_url
@@ -138,7 +139,9 @@ class ArenaFleet:
         url = str(self.robots_via)
         transport = MqttTransport(parse_broker_url(url), ids=self.ids).start()
         deadline = time.monotonic() + self.wait_for_poses
-        while not len(transport.latest_poses().ids):
+        while len(heard := transport.latest_poses().ids) < self.n_robots:  # every robot, or as many as report in time
+            if time.monotonic() > deadline and len(heard):
+                break
             if time.monotonic() > deadline:
                 state = transport.status().state
                 transport.close()
@@ -278,9 +281,9 @@ class ArenaFleet:
 
     # ------------------------------------------------------------------ the table (any thread)
     def status(self) -> dict[str, Any]:
-        """``{"robots": [rows], "ready", "docked", "assigned": {id: job}, "error"}``; each row ``id``, ``state``
-        (docked | charging | assigned | away | not seen | missing: never heard from), ``job`` (assigned), ``charge`` ∈ [0, 1] or None,
-        ``voltage`` V or None, ``slot`` or None, ``x``, ``y``, ``theta``."""
+        """``{"robots": [rows], "ready", "docked", "size", "assigned": {id: job}, "error"}``; each row ``id``,
+        ``state`` (docked | charging | assigned | away | not seen | missing: never heard from), ``job``
+        (assigned), ``charge`` ∈ [0, 1] or None, ``voltage`` V or None, ``slot`` or None, ``x``, ``y``, ``theta``."""
         with self._lock:
             reading, assigned = self._reading, dict(self._assigned)
         if reading is None:
