@@ -51,8 +51,38 @@ def choose_slots(positions: ArrayLike, free: ArrayLike, layout: ChargerLayout) -
 
 def return_maneuver(poses: ArrayLike, slots: ArrayLike, layout: ChargerLayout,
                     robot: GritsBotParams = GritsBotParams(), params: ManeuverParams = ManeuverParams(),
-                    hold_distance: float = 0.4, max_active: int | None = None) -> Maneuver:
-    """The maneuver that docks robots at ``poses`` ``(K, 3)`` on ``slots`` ``(K,)`` (approach, then reverse).
+                    hold_distance: float = 0.4, max_active: int | None = None, *,
+                    occupied: ArrayLike | None = None, retrace: bool = True, safety_distance: float = 0.17,
+                    gamma: float = 20.0, dt: float = 0.033) -> Maneuver:
+    """The maneuver that docks robots at ``poses`` ``(K, 3)`` on ``slots`` ``(K,)``.
+
+    By default (``retrace``) the setup from ``slots`` to ``poses`` is planned under the fleet's
+    barrier (``safety_distance``, linear κ with ``gamma``, period ``dt``; ``occupied``: slots whose
+    robots stay docked, default :func:`~swarmdeck.devices.fleet.retrace.phantom_slots`) and played
+    backwards (:class:`~swarmdeck.devices.fleet.retrace.RetraceManeuver`): a full arena docks every
+    robot. When that plan does not finish, or with ``retrace=False``, the staged maneuver below.
+    """
+    p = np.asarray(poses, dtype=float).reshape(-1, 3)
+    slots = np.asarray(slots, dtype=np.intp).reshape(-1)
+    if retrace and len(p):
+        from swarmdeck.devices.fleet.retrace import RetraceManeuver, plan_retrace
+        from swarmdeck.devices.fleet.setup import SetupFailed
+
+        try:
+            plan = plan_retrace(p, slots, layout, robot, params, occupied=occupied, safety_distance=safety_distance,
+                                gamma=gamma, dt=dt)
+        except SetupFailed:
+            pass  # the staged maneuver below
+        else:
+            return RetraceManeuver(plan, slots, layout, robot, params)
+    return staged_return_maneuver(p, slots, layout, robot, params, hold_distance, max_active)
+
+
+def staged_return_maneuver(poses: ArrayLike, slots: ArrayLike, layout: ChargerLayout,
+                           robot: GritsBotParams = GritsBotParams(), params: ManeuverParams = ManeuverParams(),
+                           hold_distance: float = 0.4, max_active: int | None = None) -> Maneuver:
+    """Docking robots at ``poses`` ``(K, 3)`` on ``slots`` ``(K,)`` directly: approach, then reverse
+    (reliable up to about 30 robots; a full arena jams — :func:`return_maneuver` retraces a plan instead).
 
     Priorities: the robot nearest its approach pose goes first (it is soonest out of the way). At a
     corner, a robot whose docked body would block another's way in (:meth:`ChargerLayout.dock_blocks`),

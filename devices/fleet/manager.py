@@ -224,7 +224,9 @@ class FleetManager:
         free = np.setdiff1d(np.arange(layout.n_slots), self.slot[self.slot >= 0])
         poses = self.poses()
         slots = choose_slots(poses[away, :2], free, layout)
-        man = return_maneuver(poses[away], slots, layout, self.params, self.fleet.maneuver)
+        man = return_maneuver(poses[away], slots, layout, self.params, self.fleet.maneuver,
+                              occupied=self.slot[self.slot >= 0], safety_distance=self.fleet.safety_distance,
+                              gamma=self.fleet.gamma, dt=self.config.dt)
         limit = self.fleet.time_limit(len(away)) if time_limit is None else float(time_limit)
         try:
             report = drive(self.sim, man, away, self.filter, time_limit=limit, labels=self.ids[away],
