@@ -1,4 +1,5 @@
-"""Deadlock escape: a head-on meeting in a narrow gap and a ring of robots each blocked by the next both finish."""
+"""Deadlock escape: a head-on meeting in a narrow gap or a one-lane corridor, and a ring of robots each blocked by
+the next, all finish (the gap's and the corridor's walls are standing robots: fixed obstacles of the barrier)."""
 import numpy as np
 import pytest
 
@@ -28,6 +29,18 @@ def gap_scene():
     return np.vstack((start, wall)), goals, [0, 1]
 
 
+def corridor_scene(length=0.72, half_width=0.2):
+    """A corridor one robot wide between two rows of standing robots; two robots meet head-on inside it and
+    must swap ends (one has to back out of the whole corridor)."""
+    xs = np.arange(-length / 2, length / 2 + 1e-9, 0.18)
+    top = np.column_stack((xs, np.full_like(xs, half_width), np.full_like(xs, np.pi / 2)))
+    bottom = np.column_stack((xs, np.full_like(xs, -half_width), np.full_like(xs, -np.pi / 2)))
+    end = length / 2 + 0.3
+    start = np.array([[-end, 0.0, 0.0], [end, 0.0, np.pi]])
+    goals = np.array([[end, 0.0, 0.0], [-end, 0.0, np.pi]])
+    return np.vstack((start, top, bottom)), goals, [0, 1]
+
+
 def ring_scene(k=4, radius=0.4):
     """Robots on a ring, each going to the opposite side: they meet in the middle, each blocked by the next."""
     ang = np.arange(k) * 2 * np.pi / k
@@ -35,13 +48,26 @@ def ring_scene(k=4, radius=0.4):
     return ring, np.roll(ring, k // 2, axis=0), list(range(k))
 
 
-@pytest.mark.parametrize("scene", [gap_scene, ring_scene])
+@pytest.mark.parametrize("scene", [gap_scene, corridor_scene, ring_scene])
 def test_deadlocks_escape_and_finish_without_collision(scene):
     poses, goals, rows = scene()
     report, sim = run(poses, goals, rows)
     assert report.ok and report.escapes > 0 and report.escaped
     assert sim.report.steps_with_collision == 0
     assert report.max_position_error <= 0.02 and report.max_heading_error <= np.deg2rad(5)
+    walls = np.setdiff1d(np.arange(len(poses)), rows)
+    assert np.array_equal(sim.poses[walls], poses[walls])  # the walls never moved
+
+
+def test_the_corridor_is_one_robot_wide():
+    poses, _, rows = corridor_scene()
+    from swarmdeck.core.kinematics import lookahead_points
+
+    walls = lookahead_points(np.delete(poses, rows, axis=0), ROBOT.lookahead)
+    # a robot on the corridor's centre line clears the walls' look-ahead points (D_s = 0.17 m) …
+    assert np.min(np.abs(walls[:, 1])) >= 0.17
+    # … but the band its look-ahead point may use is narrower than D_s: two robots cannot pass side by side
+    assert 2 * (np.min(np.abs(walls[:, 1])) - 0.17) < 0.17
 
 
 def test_without_the_escape_the_ring_stays_stuck():

@@ -33,10 +33,11 @@ def test_setup_from_random_docks_to_random_start_poses_always_finishes(n, seed):
     assert_at_start(*set_up(n, seed))
 
 
-def test_fifty_robots_from_every_charger_to_random_start_poses():
-    fleet, goals, report = set_up(50, 7)
+@pytest.mark.parametrize("n, seed", [(50, 7), (50, 11), (35, 3)])
+def test_a_full_or_crowded_arena_from_the_chargers_to_random_start_poses(n, seed):
+    fleet, goals, report = set_up(n, seed)
     assert_at_start(fleet, goals, report)
-    assert fleet.ready() and not fleet.docked().any()
+    assert fleet.ready() and fleet.docked().sum() == 0
 
 
 def test_robots_left_on_the_chargers_are_obstacles_and_start_poses_near_them_are_refused():
