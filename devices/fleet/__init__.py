@@ -6,6 +6,7 @@
 * :mod:`.maneuver` — nominal commands to goal poses with the deadlock escape (setup and return);
 * :mod:`.setup` — start-pose checks and driving a maneuver under the barrier (:func:`drive`);
 * :mod:`.docking` — free charger slots for returning robots and the docking maneuver;
+* :mod:`.retrace` — the return as the setup played backwards (a full arena docks every robot);
 * :mod:`.manager` — :class:`FleetManager`, the fleet between experiments over a simulated arena.
 """
 from swarmdeck.devices.fleet.assignment import Assignment, AssignmentError, AssignmentPolicy, assign, eligibility

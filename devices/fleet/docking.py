@@ -1,7 +1,10 @@
 """Returning robots to free charger slots (paper §III-C "Charging": robots back onto the strips).
 
 :func:`choose_slots` gives each returning robot a free slot (the least total distance to the
-slots' approach poses, a linear assignment); :func:`return_maneuver` builds the
+slots' approach poses, a linear assignment); :func:`return_maneuver` builds the maneuver that
+docks them: the setup from the slots to the robots' poses played backwards
+(:mod:`~swarmdeck.devices.fleet.retrace`; a full arena docks every robot), or, when that plan
+cannot be made, :func:`staged_return_maneuver` — the
 :class:`~swarmdeck.devices.fleet.maneuver.Maneuver` that drives each robot to its slot's
 approach pose and then reverses it straight onto the strip, under the same barrier and deadlock
 escape as the setup (robots nearer their slot go first). :meth:`ChargerLayout.docked_slot` says which
