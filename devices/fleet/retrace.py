@@ -187,6 +187,16 @@ class RetraceManeuver(Maneuver):
         self._paused_since: float | None = None
         self._handed_over = plan.steps == 0
 
+    def _hand_over(self, p: FloatArray) -> None:
+        """The docking logic takes over: robots in their slot's lane (on its line, between the dock and
+        a little past the approach pose, facing into the arena) back in; the others first drive to their
+        approach pose."""
+        along, lateral = self._dock_frame(p)
+        reach = np.hypot(*(self.approach[:, :2] - self.goals[:, :2]).T) + 0.05
+        facing = np.abs(wrap_angle(p[:, 2] - self.goals[:, 2])) <= 0.3
+        self._docking = (np.abs(lateral) <= 0.02) & (along >= -0.02) & (along <= reach) & facing
+        self._handed_over = True
+
     @property
     def replaying(self) -> bool:
         return not self._handed_over
@@ -221,7 +231,7 @@ class RetraceManeuver(Maneuver):
         if moving.any() or self._paused_since is None:
             self._paused_since = None if moving.any() else t
         if np.all(self._s >= s_max) or (self._paused_since is not None and t - self._paused_since > g.give_up):
-            self._handed_over = True
+            self._hand_over(p)
             return super().nominal(p, t)
         ref, vr, wr = self.reference()
         c, s = np.cos(p[:, 2]), np.sin(p[:, 2])
