@@ -55,7 +55,7 @@ class RetraceGains:
         lag_start: the reference clock slows once a robot is this far from its reference, m …
         lag_stop: … and stops at this distance, m (heading errors count ``heading_weight`` m per rad).
         window: no robot's reference runs more than this ahead of the slowest one's, s.
-        give_up: after the clock has stood still this many s, the docking logic takes over, s.
+        give_up: after every robot's clock has stood still this many s, the docking logic takes over, s.
     """
 
     k_x: float = 3.0
@@ -71,7 +71,8 @@ class RetraceGains:
     def __post_init__(self) -> None:
         from swarmdeck.core.checks import require_positive
 
-        require_positive(self, ("k_x", "k_y", "k_theta", "k_0", "lag_start", "lag_stop", "heading_weight", "give_up", "window"))
+        require_positive(self, ("k_x", "k_y", "k_theta", "k_0", "lag_start", "lag_stop", "heading_weight", "give_up",
+                                "window"))
         if self.lag_stop <= self.lag_start:
             raise ValueError(f"RetraceGains: lag_stop ({self.lag_stop}) must exceed lag_start ({self.lag_start})")
 
