@@ -336,7 +336,9 @@ def return_to_chargers(view: FleetView, bounds: Bounds, chargers: ChargerLayout,
         return FleetManeuver(RETURN, view.ids[rows], _empty_maneuver(bounds, robot, config), config)
     free = np.setdiff1d(np.arange(chargers.n_slots), slot[slot >= 0])
     slots = choose_slots(view.poses[rows, :2], free, chargers)  # ValueError when too few are free
-    maneuver = return_maneuver(view.poses[rows], slots, chargers, robot, config.fleet.maneuver)
+    fleet = config.fleet  # the plan keeps the operator's D_s and γ; robots staying docked hold their slots
+    maneuver = return_maneuver(view.poses[rows], slots, chargers, robot, fleet.maneuver, occupied=slot[slot >= 0],
+                               safety_distance=fleet.safety_distance, gamma=fleet.gamma)
     return FleetManeuver(RETURN, view.ids[rows], maneuver, config)
 
 
