@@ -25,7 +25,7 @@ def test_fleet_status_through_the_server_shows_the_assigned_robots(portal, capsy
     runner.start()
     try:
         svc = portal.service
-        jid = portal.submit("alice", source=SPIN, robots=2, duration=30.0).json()["id"]
+        jid = portal.submit("alice", source=SPIN, robots=2, duration=60.0).json()["id"]  # cancelled long before
         with svc.db.transaction() as tx:
             svc.db.transition(tx, jid, "verifying")
             svc.db.transition(tx, jid, "approved", verdict="accepted")

@@ -154,7 +154,8 @@ def test_setup_and_return_that_cannot_finish_stop_the_robots_and_call_the_operat
             assert "NEEDS AN OPERATOR" in page and "Arena NOT ready" in page
             nxt = waiting(portal, "bob", robots=1, duration=0.2)
             assert portal.service.job_state(nxt) == "waiting"  # the arena takes no job
-            assert op.post("/api/operator/release").json()["needs_operator"] is None
+            assert op.post("/api/operator/release").status_code == 200
+            assert op.get("/api/operator/audit").json()[0]["action"] == "release emergency stop"
             # released: the arena tries the return again (and, with the same 1 s limit, calls again)
             wait_until(lambda: op.get("/api/operator/arena").json()["needs_operator"], what="needs operator again")
             assert portal.service.job_state(nxt) == "waiting"

@@ -277,7 +277,8 @@ class ArenaFleet:
         sim = self.sim
         if sim is None or sim.charge is None or not seconds > 0:
             return
-        sim.charge = np.where(sim.docked(), recharge(sim.charge, seconds, sim.battery), sim.charge)
+        with self._lock:  # one update at a time (the arena thread, or a test standing in for the hours)
+            sim.charge = np.where(sim.docked(), recharge(sim.charge, seconds, sim.battery), sim.charge)
 
     # ------------------------------------------------------------------ the table (any thread)
     def status(self) -> dict[str, Any]:
