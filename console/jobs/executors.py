@@ -37,8 +37,15 @@ class SerialExecutor:
         return results
 
 
-def _pin_worker(cpus: Any) -> None:
-    """Pool initializer: this worker process — and the fork server and jails it starts — runs on one core."""
+def _init_worker(parent: int, cpus: Any) -> None:
+    """Pool initializer: the worker dies with the process that started the pool (also when that one is
+    kill -9'd: its fork server and jails follow, see :mod:`.zygote`); with ``cpus`` (a queue of core
+    numbers), it — and the fork server and jails it starts — runs on one core."""
+    from swarmdeck.console.jobs.namespaces import die_with_parent
+
+    die_with_parent(parent)
+    if cpus is None:
+        return
     try:
         cpu = cpus.get(timeout=5)
     except queue.Empty:
@@ -52,7 +59,8 @@ def _pin_worker(cpus: Any) -> None:
 class LocalPoolExecutor:
     """A pool of ``workers`` local processes (default: the number of cores); no service needed.
 
-    ``pin``: each worker runs on a core of its own (worker k on core k mod cores), with the
+    The workers end with the process that started them, even when it is kill -9'd (``PR_SET_PDEATHSIG``;
+    a pool lives inside one :meth:`run` call, in the calling thread). ``pin``: each worker runs on a core of its own (worker k on core k mod cores), with the
     sandboxed script it drives. The trusted loop and the script take turns every tick, so
     sharing one core keeps both processes' caches warm and their wake-ups local, and two
     workers never fight over one core (bench/RESULTS.md "verification").
@@ -72,14 +80,14 @@ class LocalPoolExecutor:
             return results
         context = multiprocessing.get_context("spawn")  # no fork of a threaded caller (the portal)
         workers = min(self.workers, len(tasks))
-        extra: dict[str, Any] = {}
+        cpus = None
         if self.pin and hasattr(os, "sched_getaffinity"):
             cores = sorted(os.sched_getaffinity(0))
             cpus = context.Queue()
             for k in range(workers):
                 cpus.put(cores[k % len(cores)])
-            extra = {"initializer": _pin_worker, "initargs": (cpus,)}
-        with ProcessPoolExecutor(max_workers=workers, mp_context=context, **extra) as pool:
+        with ProcessPoolExecutor(max_workers=workers, mp_context=context, initializer=_init_worker,
+                                 initargs=(os.getpid(), cpus)) as pool:
             pending: dict[Future, int] = {pool.submit(run_task, t): k for k, t in enumerate(tasks)}
             finished = 0
             while pending:

@@ -27,6 +27,7 @@ import ctypes
 import functools
 import os
 import platform
+import signal
 from pathlib import Path
 
 CLONE_NEWNS = 0x00020000
@@ -67,6 +68,18 @@ def _mount(source: str | None, target: str | Path, fstype: str | None, flags: in
 def prctl(option: int, value: int) -> None:
     _check(_libc().prctl(option, ctypes.c_ulong(value), ctypes.c_ulong(0), ctypes.c_ulong(0), ctypes.c_ulong(0)),
            f"prctl({option})")
+
+
+def die_with_parent(parent_pid: int, sig: int = signal.SIGKILL) -> None:
+    """This process gets ``sig`` when its parent ``parent_pid`` ends (``PR_SET_PDEATHSIG``), even by kill -9.
+
+    If the parent already ended before the request took effect (this process was re-parented), the
+    signal is raised now. Linux sends it when the parent *thread* that started this process ends: call
+    it only in processes whose starting thread outlives them (a pool created and joined by one thread).
+    """
+    prctl(PR_SET_PDEATHSIG, int(sig))
+    if os.getppid() != int(parent_pid):
+        os.kill(os.getpid(), int(sig))
 
 
 def unshare_all() -> None:
