@@ -1,6 +1,8 @@
 """The arena runner behind the API: the running job's Frames on the LiveFeed, a researcher's cancel and an
-operator's emergency stop end it at once (the arena then stays stopped until released), and the barrier is
+operator's emergency stop end it at once (the arena then stays stopped until released; the stop is in the
+recording and its exports), and the barrier is
 bypassed only when verification allowed it, the manifest asked and no operator forbade it."""
+import csv
 import json
 
 import pytest
@@ -61,6 +63,14 @@ def test_an_emergency_stop_ends_the_run_and_holds_the_arena_until_released(porta
         frames = frames_of(portal, long)
         assert frames[-1].run_time < 29 and json.loads(
             (portal.service.job_dir(long) / "run.json").read_text())["ended_by"] == "cancelled"
+        # the stop is in the recording: its last tick is e-stopped with zero commands, the event recorded
+        assert frames[-1].run_state == "estop" and not frames[-1].v.any() and not frames[-1].w.any()
+        assert any("EMERGENCY STOP" in f.events for f in frames)
+        assert wait_until(lambda: op.get(f"/api/jobs/{long}").json()["exports"] != "writing", timeout=120,
+                          what="the exports") and op.get(f"/api/jobs/{long}").json()["exports"] == "ready"
+        with open(portal.service.job_dir(long) / "frames.csv") as f:  # and so in its exports
+            rows = list(csv.DictReader(f))
+        assert rows[-1]["run_state"] == "estop" and "EMERGENCY STOP" in " ".join(r["events"] for r in rows)
         assert op.post("/api/operator/release").json()["stopped"] is False
         assert op.post("/api/operator/release").status_code == 409
     with portal.client("bob") as c:
@@ -74,8 +84,9 @@ def test_a_researcher_cancels_a_running_job(portal, arena):
         wait_until(lambda: (f := arena.live.latest()[2]) is not None and f.tick > 3, what="live frames")
         assert c.post(f"/api/jobs/{jid}/cancel").json()["state"] == "cancelled"
         wait_until(lambda: arena.current_job is None, what="the run to end")
+        wait_until(lambda: c.get(f"/api/jobs/{jid}").json()["exports"] == "ready", timeout=120, what="the exports")
         names = {f["name"] for f in c.get(f"/api/jobs/{jid}/files").json()}
-        assert {"recording.mcap", "robots.csv", "replay.html", "run.json", "script.log"} <= names
+        assert {"recording.mcap", "robots.csv", "replay.html", "video.mp4", "run.json", "script.log"} <= names
     assert 0 < frames_of(portal, jid)[-1].run_time < 29
 
 

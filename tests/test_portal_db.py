@@ -21,6 +21,22 @@ def test_a_new_file_is_migrated_in_wal_mode_and_reopening_keeps_the_data(tmp_pat
     assert [u.name for u in Accounts(again).users()] == ["alice"]
 
 
+def test_a_version_1_file_gains_the_exports_column_and_keeps_its_jobs(tmp_path):
+    conn = sqlite3.connect(tmp_path / "portal.sqlite3")  # as the first portal left it
+    conn.executescript(MIGRATIONS[0])
+    conn.executescript("CREATE TABLE schema_version (version INTEGER NOT NULL); INSERT INTO schema_version VALUES (1);"
+                       "INSERT INTO users (name, role, created) VALUES ('alice', 'researcher', 0);"
+                       "INSERT INTO jobs (user_id, name, state, kind, script_name, entry, n_robots, duration, priority,"
+                       " created, updated) VALUES (1, 'old', 'done', 'py', 'a.py', 'script.py', 2, 1.0, 1, 0, 0);")
+    conn.close()
+    db = Database(tmp_path)
+    assert db.version == len(MIGRATIONS) == 2 and db.check() == "ok"
+    row = db.query_one("SELECT name, state, exports FROM jobs")
+    assert tuple(row) == ("old", "done", None)
+    with pytest.raises(sqlite3.IntegrityError), db.transaction() as tx:
+        tx.execute("UPDATE jobs SET exports = 'sometime'")
+
+
 def test_a_file_from_a_newer_swarmdeck_is_refused(tmp_path):
     Database(tmp_path).close()
     conn = sqlite3.connect(tmp_path / "portal.sqlite3")

@@ -8,6 +8,7 @@ import time
 
 import httpx
 import pytest
+from mqtt_broker import wait_until
 from portal_fixtures import SPIN, add_user, manifest, start_server, wait_for_state
 
 from swarmdeck.console.jobs.confinement import probe
@@ -49,6 +50,9 @@ def test_kill_9_during_a_run_then_restart(tmp_path):
         c = httpx.Client(base_url=server.url, headers={"Authorization": f"Bearer {token}"}, timeout=30)
         job = c.get(f"/api/jobs/{running}").json()
         assert job["state"] == "interrupted" and "partial recording kept" in job["reason"]
+        assert wait_until(lambda: c.get(f"/api/jobs/{running}").json()["exports"] != "writing", timeout=120,
+                          what="the exports of the recovered recording") and \
+            c.get(f"/api/jobs/{running}").json()["exports"] == "ready"
         names = {f["name"] for f in c.get(f"/api/jobs/{running}/files").json()}
         assert {"recording.mcap", "recording.partial.mcap", "robots.csv", "run.json"} <= names
         got = c.get(f"/api/jobs/{running}/files/recording.mcap")

@@ -38,9 +38,10 @@ def test_submit_verify_run_and_download_the_data(tmp_path, capsys, monkeypatch):
         assert code == 0 and [(j["id"], j["state"]) for j in json.loads(out)] == [(job["id"], "done")]
         code, out, _ = cli(capsys, "results", str(job["id"]), "-o", str(tmp_path / "out"), "--json",
                            "--server", server.url)
-        files = {f["name"] for f in json.loads(out)["files"]}
-        assert code == 0 and {"recording.mcap", "robots.csv", "frames.csv", "replay.html", "script.log",
-                              "report.json", "run.json"} <= files
+        files = {f["name"] for f in json.loads(out)["files"]}  # `results` waited for the exports
+        assert code == 0 and json.loads(out)["exports"] == "ready" and {
+            "recording.mcap", "robots.csv", "frames.csv", "replay.html", "video.mp4", "script.log", "report.json",
+            "run.json"} <= files
         with open_recording(tmp_path / "out" / "recording.mcap") as rec:
             frames = [frame for _, frame in rec.frames()]
         assert len(frames) >= 55 and frames[-1].poses.shape == (3, 3)  # 2 s at 33 ms
@@ -57,7 +58,8 @@ def test_submit_verify_run_and_download_the_data(tmp_path, capsys, monkeypatch):
         assert code == 1 and "HTTP 401" in err
     finally:
         assert server.stop() == 0
-    assert "stopped (robots stopped)" in "".join(server.output)
+    log = "".join(server.output)
+    assert "stopped (robots stopped)" in log and "viser" not in log  # no banner of the replay's export
 
 
 def test_client_usage_errors_exit_2(tmp_path, capsys, monkeypatch):

@@ -114,3 +114,14 @@ class PortalClient:
             if deadline is not None and time.monotonic() > deadline:
                 raise ClientError(0, f"job {job_id} is still {job['state']} after {timeout:g} s")
             time.sleep(poll_s)
+
+    def wait_exports(self, job_id: int, *, poll_s: float = 1.0, timeout: float | None = None) -> dict[str, Any]:
+        """Poll until the job's exports are no longer being written (``exports`` not ``"writing"``); the job."""
+        deadline = None if timeout is None else time.monotonic() + timeout
+        while True:
+            job = self.job(job_id)
+            if job.get("exports") != "writing":
+                return job
+            if deadline is not None and time.monotonic() > deadline:
+                raise ClientError(0, f"job {job_id}'s exports are still being written after {timeout:g} s")
+            time.sleep(poll_s)

@@ -114,6 +114,11 @@ MIGRATIONS: tuple[str, ...] = (
         value TEXT NOT NULL
     );
     """,
+    # 2: where a job's exports (CSV, HTML replay, video) are: NULL (none), writing, ready, failed
+    """
+    ALTER TABLE jobs ADD COLUMN exports TEXT CHECK (exports IN ('writing', 'ready', 'failed'));
+    CREATE INDEX jobs_exports ON jobs (exports) WHERE exports = 'writing';
+    """,
 )
 
 

@@ -21,7 +21,8 @@ the audit log) live in one place.
 ``GET /jobs/{id}/live``                  the live view's stream (Server-Sent Events): the runner's
                                          LiveFeed as :func:`~.live.scene_message` JSON, 10 a second at most;
                                          only the job's owner and operators
-``GET /jobs/{id}/files/{name}``          downloads; ``video.mp4`` is rendered on the first request
+``GET /jobs/{id}/files/{name}``          downloads (exports appear as they are written; ``video.mp4``, if the
+                                         exports did not write it, is rendered on the first request)
 ``GET /operator``                        queue (approve, hold, release, reorder, cancel), arena state,
                                          EMERGENCY STOP, manual-approval switch (``POST /operator/...``)
 ``GET /operator/audit``                  the audit log
@@ -68,7 +69,8 @@ CHECK_PERIOD = 1.0  # s: the live stream re-checks the session and the job's sta
 CSP = ("default-src 'self'; img-src 'self' data:; style-src 'self'; script-src 'self'; frame-src 'self'; "
        "connect-src 'self'; frame-ancestors 'self'; form-action 'self'; base-uri 'none'")
 REPORT_CSP = "default-src 'none'; style-src 'unsafe-inline'; img-src data:; frame-ancestors 'self'"
-#: the video is listed among the downloads once the run has ended and left a recording (made on first request)
+#: the video is written with the exports; if they did not (older jobs, a failure), it is listed once the run has
+#: ended and left a recording, and made on its first request
 VIDEO = "video.mp4"
 
 
@@ -231,7 +233,7 @@ def router(service: PortalService, live: LiveFeed) -> APIRouter:
         except PortalError:
             report = None
         names = {f["name"] for f in files}
-        if VIDEO not in names and job["state"] in FINAL and "recording.mcap" in names:
+        if VIDEO not in names and job["state"] in FINAL and "recording.mcap" in names and job["exports"] != "writing":
             files.append({"name": VIDEO, "bytes": None, "what": RESULT_FILES[VIDEO] + " (made when first downloaded)"})
         run = service.run_summary(s.user, job_id) if job["state"] in FINAL else None
         return page(request, "job.html", s, job=job, files=files, report=report, run=run,

@@ -30,10 +30,13 @@ For each job the service hands over (``waiting → setting up``):
    emergency stop ends the run within a tick (the e-stop zeroes the robots'
    commands first).
 4. **Data** in ``DIR/jobs/<id>/``: ``recording.mcap`` (written while it runs),
-   ``script.log``, ``run.json`` (how it ended), and when it ends ``robots.csv``,
-   ``frames.csv`` and ``replay.html``, then whatever each of
-   :attr:`ArenaRunner.exporters` (``exporter(folder)``, e.g. the MP4 video) writes
-   there (list the file in :data:`~.service.RESULT_FILES`). Every Frame is also
+   ``script.log``, ``run.json`` (how it ended); then the exports (``robots.csv``,
+   ``frames.csv``, ``replay.html``, ``video.mp4``) are handed to
+   :attr:`ArenaRunner.exports` (:class:`~.exports.JobExports`, a child process) and
+   the next job starts at once; the job's ``exports`` field says when they are
+   ready. An emergency stop is in the recording: the stopped tick (zero commands,
+   ``run_state`` "estop", the event "EMERGENCY STOP") is recorded before the
+   loop closes. Every Frame is also
    published to the :class:`~.livefeed.LiveFeed` and handed to each of
    :attr:`ArenaRunner.frame_listeners` (on the loop thread: only hand it over).
 5. The loop is closed (robots stopped) and every robot returns to the chargers
@@ -47,7 +50,8 @@ For each job the service hands over (``waiting → setting up``):
 On start (:meth:`ArenaRunner.recover`), jobs the previous server left on the
 arena are ``interrupted`` and their partial recordings are recovered with
 :func:`swarmdeck.console.recording.recover.recover` into ``recording.mcap``
-(the damaged original is kept as ``recording.partial.mcap``).
+(the damaged original is kept as ``recording.partial.mcap``), then exported;
+exports the previous server left unfinished are written again.
 """
 from __future__ import annotations
 
@@ -65,6 +69,7 @@ from numpy.typing import NDArray
 from swarmdeck.console.jobs.confinement import ConfinementUnavailable, SandboxLimits
 from swarmdeck.console.jobs.sandbox import SandboxOutcome, run_sandboxed
 from swarmdeck.console.portal.arena_fleet import ArenaFleet
+from swarmdeck.console.portal.exports import JobExports
 from swarmdeck.console.portal.livefeed import LiveFeed
 from swarmdeck.console.portal.service import PortalService
 from swarmdeck.console.runtime.behaviours import TickInput
@@ -171,7 +176,7 @@ class ArenaRunner:
         self._loop: ControlLoop | None = None
         self.runs = 0
         self.frame_listeners: list[Callable[[Any], None]] = []  # e.g. the operator's viser console
-        self.exporters: list[Callable[[Path], None]] = []  # more exports when a job ends (e.g. the MP4 video)
+        self.exports = JobExports(service)  # CSV, replay, video of ended jobs, in a child process
         self.fleet = ArenaFleet(settings.fleet, settings.bounds, settings.dt, robots_via=settings.robots_via,
                                 seed=settings.seed, charge=np.asarray(settings.charge, dtype=float),
                                 config=settings.upkeep)
@@ -195,6 +200,7 @@ class ArenaRunner:
         if self._thread is not None:
             self._thread.join(timeout)
         self.fleet.close()
+        self.exports.stop()
 
     def emergency_stop(self) -> None:
         self._halt.set()
@@ -298,6 +304,7 @@ class ArenaRunner:
         from swarmdeck.console.recording.recover import RecoveryError, recover
 
         ids = self.service.recover_on_start()
+        self.exports.resume()
         for job_id in ids:
             folder = self.service.job_dir(job_id)
             partial, out = folder / "recording.partial.mcap", folder / "recording.mcap"
@@ -311,7 +318,7 @@ class ArenaRunner:
                 note = f"the partial recording could not be recovered: {exc}"
             _write_json(folder / "run.json", {"ended_by": "interrupted", "recovery": note})
             if out.is_file():
-                self._exports(folder)
+                self.exports.submit(job_id)
         return ids
 
     def run_job(self, job: dict[str, Any]) -> str:
@@ -354,11 +361,7 @@ class ArenaRunner:
         if outcome is not None:
             (folder / "script.log").write_text(outcome.log, encoding="utf-8")
         if (folder / "recording.mcap").is_file():
-            t = time.monotonic()
-            self._exports(folder)
-            summary = json.loads((folder / "run.json").read_text())
-            summary["exports_s"] = round(time.monotonic() - t, 3)
-            _write_json(folder / "run.json", summary)
+            self.exports.submit(job_id)  # written in the background: the next job starts now
         self.runs += 1
         return self.service.finish_run(job_id, state, reason)
 
@@ -427,6 +430,7 @@ class ArenaRunner:
         finally:
             loop = state["loop"]
             if loop is not None:
+                _record_stop(loop)
                 loop.close()  # robots stopped (the fleet's ports stay open)
             if state["recorder"] is not None:
                 state["recorder"].close()
@@ -438,25 +442,13 @@ class ArenaRunner:
             return None, state["setup_failed"]
         return outcome, "; ".join(notes) or None
 
-    def _exports(self, folder: Path) -> None:
-        """CSV and HTML replay from the job's recording (problems are noted in run.json, never raised)."""
-        from swarmdeck.console.recording.export_csv import export_csv
-        from swarmdeck.console.recording.export_html import export_html
-        from swarmdeck.console.recording.reader import open_recording
 
-        try:
-            with open_recording(folder / "recording.mcap") as rec:
-                if rec.empty:
-                    return
-                export_csv(rec, folder)
-                export_html(rec, folder / "replay.html")
-            for exporter in self.exporters:
-                exporter(folder)
-        except Exception as exc:  # noqa: BLE001 - an export never takes the arena down; run.json says what failed
-            run = folder / "run.json"
-            data = json.loads(run.read_text()) if run.is_file() else {}
-            data["export_error"] = f"{type(exc).__name__}: {exc}"
-            _write_json(run, data)
+def _record_stop(loop: ControlLoop) -> None:
+    """An emergency stop the run ended on before the loop ticked again: one more tick (its commands are zero),
+    so that the recording, its exports and the replay show the stop ("estop" run state, "EMERGENCY STOP")."""
+    latest = loop.latest
+    if loop.run_state == "estop" and (latest is None or latest.run_state != "estop"):
+        loop.tick()
 
 
 def _report(result: UpkeepResult, wall_s: float) -> dict[str, Any]:

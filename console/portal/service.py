@@ -50,9 +50,10 @@ from swarmdeck.console.jobs.bundle import ScriptBundle
 from swarmdeck.console.portal.accounts import Accounts, User
 from swarmdeck.console.portal.db import ACTIVE, FINAL, Database, TransitionConflict
 from swarmdeck.console.portal.errors import BadInput, Conflict, Forbidden, NotFound, Unavailable
+from swarmdeck.console.portal.exports import EXPORT_FILES
 from swarmdeck.console.portal.submission import Limits, Manifest, Upload, check_bundle, check_upload, parse_manifest
 
-#: result files a job may have, name -> what it is (the pages engineer adds "video.mp4" here).
+#: result files a job may have, name -> what it is (the exports, :mod:`.exports`, write four of them after the run).
 RESULT_FILES: dict[str, str] = {
     "recording.mcap": "the run's MCAP recording (swarmdeck play / Foxglove)",
     "recording.partial.mcap": "the recording as the interrupted run left it (before recovery)",
@@ -111,7 +112,7 @@ def _job_dict(row: Any, position: int | None = None) -> dict[str, Any]:
         "verdict": row["verdict"], "safety_score": row["safety_score"],
         "bypass": None if row["bypass"] is None else bool(row["bypass"]), "reason": row["reason"],
         "position": position, "created": row["created"], "updated": row["updated"], "started": row["started"],
-        "ended": row["ended"],
+        "ended": row["ended"], "exports": row["exports"],
     }
 
 
@@ -270,16 +271,19 @@ class PortalService:
         ``video.mp4`` is made from the recording on its first request (:meth:`video`)."""
         if name == "video.mp4":
             return self.video(user, job_id)
-        self._visible_row(user, job_id)
+        row = self._visible_row(user, job_id)
         if name not in RESULT_FILES:
             raise NotFound(f"no result file called {name[:100]!r}", "name")
         path = self.job_dir(job_id) / name
         if not path.is_file():
+            if row["exports"] == "writing" and name in EXPORT_FILES:
+                raise Unavailable(f"job {job_id}'s exports are still being written: {name} is not ready yet", "name")
             raise NotFound(f"job {job_id} has no {name} (yet)", "name")
         return path
 
     def video(self, user: User, job_id: int) -> Path:
-        """The job's ``video.mp4`` (top-down, H.264), rendered from its recording on the first request
+        """The job's ``video.mp4`` (top-down, H.264): written with the job's exports (:mod:`.exports`; 503
+        while they are being written); if they did not write it, rendered from its recording on the first request
         (:func:`~swarmdeck.console.recording.export_video.export_video`, one at a time) and kept; 404 while
         the job is not over or has no recording, 503 when it cannot be made."""
         from swarmdeck.console.recording.export_video import VideoExportError, export_video
@@ -290,6 +294,9 @@ class PortalService:
         out, recording = folder / "video.mp4", folder / "recording.mcap"
         if out.is_file():
             return out
+        if row["exports"] == "writing":
+            raise Unavailable(f"job {job_id}'s exports are still being written: the video follows the CSV and "
+                              "the replay", "name")
         if row["state"] not in FINAL or not recording.is_file():
             raise NotFound(f"job {job_id} has no video (yet): it is made from the recording once the run is over",
                            "name")
@@ -556,6 +563,16 @@ class PortalService:
                 return str(exc.state)
         self.notify()
         return state
+
+    def set_exports(self, job_id: int, state: str) -> None:
+        """Where the job's exports are: ``"writing"``, ``"ready"`` or ``"failed"`` (:mod:`.exports`)."""
+        with self.db.transaction() as tx:
+            tx.execute("UPDATE jobs SET exports = ? WHERE id = ?", (state, int(job_id)))
+        self.notify()
+
+    def exports_in(self, state: str) -> list[int]:
+        """The ids of the jobs whose exports are in ``state``, oldest first."""
+        return [int(r["id"]) for r in self.db.query("SELECT id FROM jobs WHERE exports = ? ORDER BY id", (state,))]
 
     def job_state(self, job_id: int) -> str | None:
         row = self.db.query_one("SELECT state FROM jobs WHERE id = ?", (int(job_id),))

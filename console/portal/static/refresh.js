@@ -35,7 +35,13 @@
       // reload when the page would show other things (the verdict, the live view, the downloads); a job going
       // from "setting up" to "running" keeps its live view and only changes the state shown
       const j = await get(job.dataset.jobUrl);
-      if (!j || j.state === job.dataset.state) return;
+      if (!j) return;
+      if ((j.exports || "") !== job.dataset.exports) { location.reload(); return; }  // exports ready (or failed)
+      if (j.exports === "writing") {  // the downloads appear one after another
+        const files = await get(job.dataset.jobUrl + "/files");
+        if (files && files.length !== Number(job.dataset.files)) { location.reload(); return; }
+      }
+      if (j.state === job.dataset.state) return;
       const kind = (state) => (job.dataset.liveStates.split(",").includes(state) ? "live"
         : job.dataset.finalStates.split(",").includes(state) ? "final" : "waiting");
       if (kind(j.state) !== kind(job.dataset.state) || (j.verdict || "") !== job.dataset.verdict) { location.reload(); return; }
