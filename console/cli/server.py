@@ -39,6 +39,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="largest upload accepted, bytes (default 4 MiB)")
     parser.add_argument("--grace", type=float, default=15.0, metavar="S",
                         help="a run's time limit is its declared duration plus S seconds (default 15)")
+    parser.add_argument("--tick-budget", type=float, default=None, metavar="S",
+                        help="real-time arena: a script's commands for a tick are due within S seconds of its poses, "
+                             "else the robots stop for that tick; 1 s of late ticks in a row ends the run (default: "
+                             "one control period, 0.033 s). Verification and --fast allow 1 s per tick")
     parser.add_argument("--seed", type=int, default=None, help="seed of the simulated arena's initial poses")
     parser.add_argument("--trusted", action="store_true",
                         help="run scripts unconfined where this machine cannot confine them (bubblewrap missing)")
@@ -63,6 +67,8 @@ def check_arguments(args: argparse.Namespace) -> None:
         raise UsageError(f"--max-upload must be at least 1024 bytes, got {args.max_upload}")
     if not args.grace > 0:
         raise UsageError(f"--grace must be > 0 s, got {args.grace}")
+    if args.tick_budget is not None and not 0 < args.tick_budget <= 10:
+        raise UsageError(f"--tick-budget must be in (0, 10] s, got {args.tick_budget}")
     if args.console_port is not None and not 0 <= args.console_port <= 65535:
         raise UsageError(f"--console-port must be in [0, 65535], got {args.console_port}")
     if args.fast and args.robots_via:
@@ -97,7 +103,8 @@ def main(args: argparse.Namespace) -> int:
         raise UsageError(f"--robots {args.robots}: at most {fleet} robots, one per slot of the arena's charging strips")
     config = PortalConfig(data=args.data, limits=Limits(fleet=fleet, max_duration=args.max_duration,
                                                         max_upload_bytes=args.max_upload),
-                          verify_runs=args.verify_runs, grace_s=args.grace, trusted=args.trusted)
+                          verify_runs=args.verify_runs, grace_s=args.grace, trusted=args.trusted,
+                          arena_tick_budget_s=args.tick_budget)
     try:
         executor = make_executor(args.workers, args.ray)
     except (ValueError, RuntimeError) as exc:

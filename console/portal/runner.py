@@ -24,7 +24,11 @@ For each job the service hands over (``waiting → setting up``):
    :meth:`~.service.PortalService.bypass_allowed` said so at claim time.
 3. **Script**: :func:`swarmdeck.console.jobs.sandbox.run_sandboxed` with
    :class:`LoopPlant` as its plant: each sandbox tick is one loop tick, paced
-   in real time (MQTT robots always; the simulated arena unless ``fast``). The
+   in real time (MQTT robots always; the simulated arena unless ``fast``). On the
+   real-time arena the script's commands for a tick are due within
+   :meth:`~.service.PortalConfig.arena_budget` (one control period, 33 ms, by
+   default): a late tick stops the robots for that tick, 1 s of late ticks in a
+   row ends the run (``overruns``). The
    time limit is the declared duration plus ``grace_s`` plus the set-up's own
    time limit (the script waits while its robots are set up); a cancel or an
    emergency stop ends the run within a tick (the e-stop zeroes the robots'
@@ -422,7 +426,9 @@ class ArenaRunner:
             return LoopPlant(loop, commands, duration, RealTimePacer(s.dt) if s.real_time else None)
 
         # the wall-time limit covers the set-up too (its own time limit; the script waits for it)
-        limits = SandboxLimits(tick_s=cfg.tick_budget_s, wall_s=duration + cfg.grace_s + s.upkeep.limit(n))
+        tick_s, overruns = cfg.arena_budget(s.dt, s.real_time)  # real time: one control period by default
+        limits = SandboxLimits(tick_s=tick_s, max_overruns=overruns,
+                               wall_s=duration + cfg.grace_s + s.upkeep.limit(n))
         try:
             script, entry = self.service.script(job)
             outcome = run_sandboxed(script, make_plant, entry=entry, n_robots=n, duration=duration,

@@ -38,6 +38,7 @@ never a path.
 from __future__ import annotations
 
 import json
+import math
 import shutil
 import threading
 import time
@@ -47,6 +48,7 @@ from pathlib import Path
 from typing import Any, Protocol
 
 from swarmdeck.console.jobs.bundle import ScriptBundle
+from swarmdeck.console.jobs.confinement import SandboxLimits
 from swarmdeck.console.portal.accounts import Accounts, User
 from swarmdeck.console.portal.db import ACTIVE, FINAL, Database, TransitionConflict
 from swarmdeck.console.portal.errors import BadInput, Conflict, Forbidden, NotFound, Unavailable
@@ -87,7 +89,13 @@ class PortalConfig:
         limits: what a submission may be (fleet size, maximum duration, upload sizes).
         verify_runs: verification runs per job (each without and with the barrier).
         verify_seed: base seed of verification (job i uses ``verify_seed + i``).
-        tick_budget_s: the script's per-tick compute budget, wall s (verification and arena).
+        tick_budget_s: the script's per-tick compute budget in verification (and on the ``--fast`` simulated
+            arena, where nothing waits in real time), wall s.
+        arena_tick_budget_s: the script's per-tick compute budget on the real-time arena, wall s (None: one
+            control period, 0.033 s — the script's commands for a tick are due before the next tick, as in the
+            paper's 30 Hz loop). A tick without them stops the robots for that tick (zero commands).
+        arena_overrun_s: on the real-time arena, missed ticks in a row for this long (s of control periods)
+            end the run (``overruns``); a few missed ticks only stop the robots for those ticks.
         grace_s: the arena run's time limit is the declared duration plus this, s.
         trusted: run scripts unconfined where this machine cannot confine them.
     """
@@ -97,8 +105,18 @@ class PortalConfig:
     verify_runs: int = 4
     verify_seed: int = 0
     tick_budget_s: float = 1.0
+    arena_tick_budget_s: float | None = None
+    arena_overrun_s: float = 1.0
     grace_s: float = 15.0
     trusted: bool = False
+
+    def arena_budget(self, dt: float, real_time: bool) -> tuple[float, int]:
+        """(per-tick compute budget s, missed ticks in a row that end the run) of a script on the arena with
+        control period ``dt`` s (see the attributes)."""
+        if not real_time:
+            return self.tick_budget_s, SandboxLimits().max_overruns
+        budget = float(dt) if self.arena_tick_budget_s is None else float(self.arena_tick_budget_s)
+        return budget, max(1, math.ceil(self.arena_overrun_s / budget - 1e-9))
 
 
 def _job_dict(row: Any, position: int | None = None) -> dict[str, Any]:

@@ -92,6 +92,8 @@ def test_a_researcher_uploads_sees_the_verdict_watches_it_run_and_downloads_the_
     assert later != first["poses"]  # the robots turned (and crept) between two drawn Frames
     page.screenshot(path=str(ARTIFACTS / "portal-live-view.png"))
     page.wait_for_selector("#state:text('done')", timeout=120_000)
+    # the exports are written after the run: the page lists them as they appear, then reloads once they are ready
+    page.wait_for_selector("#job[data-exports='ready'] ~ ul.files a[data-file='video.mp4']", timeout=180_000)
     page.screenshot(path=str(ARTIFACTS / "portal-job-done.png"), full_page=True)
     with page.expect_download() as dl:
         page.click("a[data-file='recording.mcap']")
