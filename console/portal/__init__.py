@@ -7,6 +7,7 @@
 * :mod:`.service` — ``PortalService``: every rule (visibility, queue, approval, emergency stop, results).
 * :mod:`.workers` — verification workers (local pool or Ray) moving jobs to rejected | approved.
 * :mod:`.runner` — the arena runner: one job at a time through the console's ControlLoop, sandboxed script.
+* :mod:`.exports` — ``JobExports``: an ended job's CSV, HTML replay and video, in a child process.
 * :mod:`.livefeed` — ``LiveFeed``: the running job's newest Frame for the live view.
 * :mod:`.api` — the JSON API under /api; :mod:`.app` — ``create_app(service, live=...)``, uvicorn helpers.
 * :mod:`.client` — the HTTP client the ``submit``/``jobs``/``results``/``cancel`` commands use.
