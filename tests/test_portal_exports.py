@@ -4,16 +4,18 @@ export a stopped server left unfinished is written on the next start, and stoppi
 without leaving a partial file among the results."""
 import csv
 import json
+from pathlib import Path
 
 import av
 import pytest
 from mqtt_broker import wait_until
-from portal_fixtures import portal, wait_for_state  # noqa: F401
+from portal_fixtures import SPIN, manifest, portal, wait_for_state  # noqa: F401
 from recording_synth import write_synthetic_session
 
 from swarmdeck.console.jobs.confinement import probe
 from swarmdeck.console.portal.exports import JobExports
 from swarmdeck.console.portal.runner import ArenaRunner, ArenaSettings
+from swarmdeck.console.portal.service import PortalConfig, PortalService
 
 confined = pytest.mark.skipif(probe() is not None, reason=f"no confinement here: {probe()}")
 
@@ -111,3 +113,21 @@ def test_stopping_kills_the_export_and_leaves_no_partial_file(portal):
     assert child.poll() is not None and not exports._thread.is_alive()  # killed, not waited for
     assert svc.exports_in("writing") == [jid]  # redone on the next start
     assert not (folder / "video.mp4").exists()  # a video cut short stays in .exports/, cleared on the next start
+
+
+def test_a_data_folder_given_as_a_relative_path_is_exported(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)  # `swarmdeck server` defaults to ./swarmdeck-data
+    svc = PortalService(PortalConfig(data=Path("lab")))
+    try:
+        user, _ = svc.accounts.add_user("alice", "researcher")
+        jid = svc.submit(user, "spin.py", SPIN.encode(), json.dumps(manifest()))["id"]
+        write_synthetic_session(svc.job_dir(jid) / "recording.mcap", n_robots=2, seconds=0.5, dt=0.05)
+        exports = JobExports(svc, video=False)
+        try:
+            exports.submit(jid)
+            assert exports.wait_idle(240)
+        finally:
+            exports.stop()
+        assert svc.job(user, jid)["exports"] == "ready" and (tmp_path / "lab" / "jobs" / str(jid) / "robots.csv").is_file()
+    finally:
+        svc.close()

@@ -199,7 +199,7 @@ class JobExports:
         if not (folder / "recording.mcap").is_file():
             self._finish(job_id, {"files": [], "errors": ["the job has no recording"]}, 0.0)
             return
-        command = [sys.executable, "-m", "swarmdeck.console.portal.exports", str(folder),
+        command = [sys.executable, "-m", "swarmdeck.console.portal.exports", str(folder.resolve()),
                    "--parent", str(os.getpid())] + ([] if self.video else ["--no-video"])
         t = time.monotonic()
         with self._lock:
