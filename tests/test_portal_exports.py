@@ -12,6 +12,7 @@ from mqtt_broker import wait_until
 from portal_fixtures import SPIN, manifest, portal, wait_for_state  # noqa: F401
 from recording_synth import write_synthetic_session
 
+from swarmdeck.console.cli import main
 from swarmdeck.console.jobs.confinement import probe
 from swarmdeck.console.portal.exports import JobExports
 from swarmdeck.console.portal.runner import ArenaRunner, ArenaSettings
@@ -35,7 +36,7 @@ def run_json(portal, jid):
 
 
 @confined
-def test_the_next_job_runs_while_the_exports_wait_and_a_restart_writes_them(portal):
+def test_the_next_job_runs_while_the_exports_wait_and_a_restart_writes_them(portal, tmp_path, capsys):
     svc = portal.service
     runner = ArenaRunner(svc, ArenaSettings(fleet=6, fast=True, seed=3), poll_s=0.05)
     runner.exports.stop()  # exports never get written by this server: as if they took forever
@@ -55,6 +56,13 @@ def test_the_next_job_runs_while_the_exports_wait_and_a_restart_writes_them(port
             r = c.get(f"/api/jobs/{ids[0]}/files/robots.csv")
             assert r.status_code == 503 and "still being written" in r.json()["error"]
             assert c.get(f"/api/jobs/{ids[0]}/files/video.mp4").status_code == 503
+        client = ["--server", portal.url, "--token", portal.tokens["alice"]]
+        code = main(["results", str(ids[0]), "-o", str(tmp_path / "now"), "--no-wait", "--json", *client])
+        out, err = capsys.readouterr()
+        assert code == 0 and "exports still being written" in err and json.loads(out)["exports"] == "writing"
+        assert "recording.mcap" in {f["name"] for f in json.loads(out)["files"]}
+        code = main(["results", str(ids[0]), "-o", str(tmp_path / "later"), "--timeout", "0.2", *client])
+        assert code == 1 and "still being written after 0.2 s" in capsys.readouterr().err
     finally:
         runner.stop()
     exports = JobExports(svc)  # the next start: unfinished exports are written again
