@@ -65,9 +65,10 @@ def mqtt_robots(url: str, ids: NDArray[np.int64], wait_for_poses: float = 5.0) -
     Raises ValueError for a malformed URL or robots that sent no pose within ``wait_for_poses`` s.
     """
     from swarmdeck.devices.net.console_robots import NetworkRobots
+    from swarmdeck.devices.net.mqtt_config import redact_url
 
     robots = NetworkRobots.connect(url, ids=ids, wait_for_poses=wait_for_poses)
-    robots.name = f"mqtt {url}"
+    robots.name = f"mqtt {redact_url(url)}"  # shown in status lines, logs and recordings
     return robots, NetworkPoseSource(robots)
 
 
