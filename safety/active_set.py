@@ -46,7 +46,8 @@ FEAS_TOL = 1e-10  # m/s: a certified answer meets every row to this
 
 @dataclass(frozen=True)
 class ActiveSetResult:
-    """u (N, 2); ok; reason; active (m,) rows with a positive multiplier; speed_active (N,); iterations."""
+    """u (N, 2); ok; reason; active (m,) rows with a positive multiplier; speed_active (N,); iterations;
+    multipliers (m,) the rows' λ ≥ 0 of a certified answer (None otherwise)."""
 
     u: np.ndarray
     ok: bool
@@ -54,6 +55,7 @@ class ActiveSetResult:
     active: np.ndarray
     speed_active: np.ndarray
     iterations: int
+    multipliers: np.ndarray | None = None
 
 
 def _project(w: np.ndarray, vmax: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -222,8 +224,9 @@ def solve_active_set(rows: Rows, nominal: np.ndarray, max_speed: float | None,
         if np.any(speed > (vmax * (1 + 1e-9)) ** 2):
             return None
         u = clip_speed(u, vmax)  # rounding only
-        return ActiveSetResult(u, True, "certified", W & (lam_rows > 0),
-                               speed >= vmax * vmax * (1 - 1e-9), it)
+        held = W & (lam_rows > 0)
+        return ActiveSetResult(u, True, "certified", held, speed >= vmax * vmax * (1 - 1e-9), it,
+                               np.where(held, lam_rows, 0.0))
 
     for it in range(1, max_iter + 1):
         aggressive = it <= _AGGRESSIVE_ITERS

@@ -78,6 +78,12 @@ class BarrierConfig:
         that were within this many m/s of their bound at the previous tick's answer (plus those
         the nominal violates), and the certified active set finishes on all rows (KKT checked; any
         failure solves everything cold). 0.01 m/s keeps ≈ 1/3 of the rows at N = 1000.
+    warm_dual_sweeps: in closed loop, at most this many sweeps of the compiled dual coordinate
+        ascent (:mod:`safety.dual_ascent`) started from the previous tick's multipliers predict the
+        active rows, and the certified active set starts from them (≤ ``warm_dual_iterations``
+        iterations); if it does not certify, the paths above run. 0 turns the prediction off (it is
+        off anyway when numba cannot be imported).
+    warm_dual_iterations: active-set iterations allowed after the dual-ascent prediction.
     clarabel_max_iter, clarabel_tol: clarabel's max_iter and tol_gap_abs/rel/tol_feas.
     mode: ``"centralised"`` (one QP over all robots), ``"distributed"`` (every robot
         solves its own QP on half of each pair row, REFERENCE.md §12,
@@ -106,6 +112,8 @@ class BarrierConfig:
     active_set_max_rows: int = 100
     warm_max_rows: int = 300
     warm_slack: float = 0.01
+    warm_dual_sweeps: int = 200
+    warm_dual_iterations: int = 4
     clarabel_max_iter: int = 100
     clarabel_tol: float = 1e-9
     mode: Literal["centralised", "distributed", "auto"] = "centralised"
@@ -126,7 +134,7 @@ class BarrierConfig:
             _real(self, "sensing_radius", self.sensing_radius, lower=0.0, strict=True)
         _real(self, "clarabel_tol", self.clarabel_tol, lower=0.0, strict=True, upper=1e-3)
         for name, lower in (("max_active_set_iterations", 1), ("active_set_max_rows", 0), ("warm_max_rows", 0),
-                            ("clarabel_max_iter", 1),
+                            ("warm_dual_sweeps", 0), ("warm_dual_iterations", 1), ("clarabel_max_iter", 1),
                             ("distributed_above", 0)):
             value = getattr(self, name)
             if isinstance(value, bool) or not isinstance(value, numbers.Integral) or value < lower:

@@ -38,6 +38,7 @@ import scipy.sparse as sp
 from scipy.sparse.csgraph import connected_components
 from scipy.spatial import cKDTree
 
+from . import dual_ascent
 from .active_set import FEAS_TOL, clip_speed, solve_active_set
 from .config import BarrierConfig
 from .constraints import LIMIT, OBSTACLE, PAIR, WALL, Rows, barrier_rows
@@ -106,12 +107,13 @@ class _Solved:
     n_speed: int
     method: str
     iterations: int
+    lam: np.ndarray | None = None  # (m,) the rows' multipliers when the solver certified them
 
 
 class SafetyFilter:
     """Barrier-certificate filter for single-integrator controlled points.
 
-    Holds only the warm start (the previous tick's active rows); call
+    Holds only the warm start (the previous tick's active rows and their multipliers); call
     :meth:`reset` when the robot set changes meaning (it is also reset
     automatically when N or the obstacle count changes, and after a failure).
     """
@@ -121,12 +123,22 @@ class SafetyFilter:
         self._warm_keys = np.zeros(0, dtype=np.int64)
         self._near_keys = np.zeros(0, dtype=np.int64)
         self._warm_shape: tuple[int, int] = (-1, -1)
+        self._lam_keys = np.zeros(0, dtype=np.int64)
+        self._lam = np.zeros(0)
+        if self._dual_enabled():
+            dual_ascent.warm_up()  # numba's compile (or cache load) here, never in a tick
+
+    def _dual_enabled(self) -> bool:
+        cfg = self.config
+        return cfg.solver == "auto" and cfg.warm_dual_sweeps > 0 and dual_ascent.AVAILABLE
 
     def reset(self) -> None:
         """Forget the warm start."""
         self._warm_keys = np.zeros(0, dtype=np.int64)
         self._near_keys = np.zeros(0, dtype=np.int64)
         self._warm_shape = (-1, -1)
+        self._lam_keys = np.zeros(0, dtype=np.int64)
+        self._lam = np.zeros(0)
 
     # ------------------------------------------------------------------ public
     def filter(self, points, nominal, obstacles=None) -> tuple[np.ndarray, BarrierDiagnostics]:
@@ -227,6 +239,7 @@ class SafetyFilter:
             in_bad = np.zeros(n, dtype=bool)
         u = np.zeros((n, 2))
         active = np.zeros(rows.m, dtype=bool)
+        lam = np.zeros(rows.m)
         methods, iterations, n_speed, soft_used = [], 0, 0, False
         for part in (in_bad, ~in_bad):
             if not part.any():
@@ -245,10 +258,12 @@ class SafetyFilter:
                 return self.fail_stop(n, U, solved + detail, t0, rows.m)
             u[part] = solved.u
             active[keep] = solved.active
+            if solved.lam is not None:
+                lam[keep] = solved.lam
             methods.append(solved.method)
             iterations += solved.iterations
             n_speed += solved.n_speed
-        self._remember(rows, active, n, n_obs, u)
+        self._remember(rows, active, n, n_obs, u, lam)
         method = methods[0] if len(methods) == 1 else "mixed"
         status = "optimal"
         if recovering:
@@ -274,6 +289,10 @@ class SafetyFilter:
             if self._warm_shape == (n, n_obs) and self._warm_keys.size:
                 warm = np.isin(rows.key, self._warm_keys, assume_unique=True)
             closed_loop = warm is not None and bool(warm.any())
+            if closed_loop and self._dual_enabled():
+                solved = self._solve_dual(rows, U, max_speed)
+                if solved is not None:
+                    return solved
             if closed_loop:  # the previous tick's active rows: few iterations while they are few
                 start, limit, method = int(warm.sum()), cfg.warm_max_rows, "warm active-set"
             else:
@@ -282,7 +301,8 @@ class SafetyFilter:
                 res = solve_active_set(rows, U, max_speed, warm, cfg.max_active_set_iterations)
                 iterations += res.iterations
                 if res.ok:
-                    return _Solved(res.u, res.active, int(res.speed_active.sum()), method, iterations)
+                    return _Solved(res.u, res.active, int(res.speed_active.sum()), method, iterations,
+                                   res.multipliers)
             elif closed_loop and self._near_keys.size:
                 solved = self._solve_pruned(rows, U, max_speed)
                 if solved is not None:
@@ -295,7 +315,8 @@ class SafetyFilter:
                 res = solve_active_set(rows, U, max_speed, None, 4 * cfg.max_active_set_iterations)
                 iterations += res.iterations
                 if res.ok:
-                    return _Solved(res.u, res.active, int(res.speed_active.sum()), "active-set", iterations)
+                    return _Solved(res.u, res.active, int(res.speed_active.sum()), "active-set", iterations,
+                                   res.multipliers)
             retry = solve_qp(rows, U, max_speed, max_iter=cfg.clarabel_max_iter, tol=10 * cfg.clarabel_tol)
             qp = retry if retry.ok else qp
         if not qp.ok:
@@ -322,7 +343,24 @@ class SafetyFilter:
         if not res.ok:
             return None
         return _Solved(res.u, res.active, int(res.speed_active.sum()), "warm clarabel+active-set",
-                       qp.iterations + res.iterations)
+                       qp.iterations + res.iterations, res.multipliers)
+
+    def _solve_dual(self, rows: Rows, U: np.ndarray, max_speed: float | None) -> _Solved | None:
+        """Closed loop: the compiled dual coordinate ascent from last tick's multipliers (by row key)
+        predicts the active rows; the active set from them certifies the exact optimum (KKT, every
+        row, every speed bound) within ``warm_dual_iterations``. None otherwise (the caller goes on)."""
+        cfg = self.config
+        lam0 = np.zeros(rows.m)
+        if self._lam_keys.size:
+            at = np.minimum(np.searchsorted(self._lam_keys, rows.key), self._lam_keys.size - 1)
+            hit = self._lam_keys[at] == rows.key
+            lam0[hit] = self._lam[at[hit]]
+        guess = dual_ascent.ascend(rows, U, max_speed, lam0, cfg.warm_dual_sweeps)
+        res = solve_active_set(rows, U, max_speed, guess.predicted, cfg.warm_dual_iterations)
+        if not res.ok:
+            return None
+        return _Solved(res.u, res.active, int(res.speed_active.sum()), "warm dual+active-set",
+                       res.iterations, res.multipliers)
 
     def _finish_clarabel(self, rows: Rows, U: np.ndarray, u: np.ndarray, max_speed: float | None,
                          iterations: int) -> _Solved | str:
@@ -339,7 +377,8 @@ class SafetyFilter:
             res = solve_active_set(rows, U, max_speed, near, cfg.max_active_set_iterations)
             iterations += res.iterations
             if res.ok:
-                return _Solved(res.u, res.active, int(res.speed_active.sum()), "clarabel+active-set", iterations)
+                return _Solved(res.u, res.active, int(res.speed_active.sum()), "clarabel+active-set", iterations,
+                               res.multipliers)
         vmax = np.inf if max_speed is None else float(max_speed)
         out = clip_speed(u, vmax)
         touched = np.zeros(U.shape[0], dtype=bool)
@@ -398,10 +437,16 @@ class SafetyFilter:
         return res.u, self._diag(True, status, t0, rows, P, U, res.u, O, res.active, res.n_speed, was_safe,
                                  "distributed", 0, 0, n_unsafe)
 
-    def _remember(self, rows: Rows, active: np.ndarray, n: int, n_obs: int, u: np.ndarray) -> None:
-        """Keep the active rows' keys for the next tick's warm start and, when they are too many for
-        the warm active set, the keys of every row within ``warm_slack`` of its bound at ``u``."""
+    def _remember(self, rows: Rows, active: np.ndarray, n: int, n_obs: int, u: np.ndarray,
+                  lam: np.ndarray | None = None) -> None:
+        """Keep the active rows' keys (and their multipliers, (m,) ``lam``) for the next tick's warm
+        start and, when they are too many for the warm active set, the keys of every row within
+        ``warm_slack`` of its bound at ``u``."""
         self._warm_keys = np.sort(rows.key[active])
+        held = np.flatnonzero(lam > 0) if lam is not None else np.zeros(0, dtype=np.int64)
+        order = np.argsort(rows.key[held])
+        self._lam_keys = rows.key[held][order]
+        self._lam = lam[held][order] if lam is not None else np.zeros(0)
         self._near_keys = np.zeros(0, dtype=np.int64)
         if self._warm_keys.size > self.config.warm_max_rows:
             self._near_keys = np.sort(rows.key[rows.lhs(u) >= rows.b - self.config.warm_slack])

@@ -1,8 +1,11 @@
 """Closed-loop warm start (issue 18, item 1): answers identical (≤ 1e-9) to cold solves.
 
-The filter keeps the previous tick's active rows and starts the active set from them (up to
-``BarrierConfig.warm_max_rows`` rows); every warm answer is still certified (KKT, every row,
-speed bound) and must equal a fresh filter's answer on the same points and nominal.
+The filter keeps the previous tick's active rows and multipliers. By default the compiled dual
+coordinate ascent (``safety.dual_ascent``) started from those multipliers predicts the active rows
+and the certified active set starts from them; without it (``warm_dual_sweeps=0``, or no numba)
+the active set starts from last tick's active rows (up to ``BarrierConfig.warm_max_rows`` rows),
+beyond that clarabel solves the rows near their bound. Every warm answer is still certified (KKT,
+every row, speed bound) and must equal a fresh filter's answer on the same points and nominal.
 """
 from __future__ import annotations
 
@@ -13,13 +16,11 @@ from swarmdeck.safety import BarrierConfig, SafetyFilter
 from swarmdeck.safety.constraints import barrier_rows
 from swarmdeck.safety.scenes import arena_for, grid_scene
 
+DUAL = "warm dual+active-set"
 
-@pytest.mark.parametrize("n,ticks,path", [(30, 25, "warm active-set"), (100, 12, "warm active-set"),
-                                          (300, 8, "warm clarabel+active-set")])
-def test_warm_answers_equal_cold_solves_over_a_closed_loop(n: int, ticks: int, path: str) -> None:
-    """N ≤ 100: the active set from last tick's active rows; N = 300 (≈ 800 active rows, beyond
-    ``warm_max_rows``): clarabel on the rows near their bound last tick, finished on all rows."""
-    cfg = BarrierConfig() if n <= 100 else BarrierConfig(bounds=arena_for(n, 0.188))
+
+def closed_loop_methods(n: int, ticks: int, cfg: BarrierConfig) -> list[str]:
+    """Run one filter over a closed loop, checking every tick against a fresh filter; its methods."""
     rng = np.random.default_rng(n)
     x, nominal = grid_scene(n, rng, cfg, pitch=0.188)
     ang = np.arctan2(nominal[:, 1], nominal[:, 0])
@@ -38,7 +39,34 @@ def test_warm_answers_equal_cold_solves_over_a_closed_loop(n: int, ticks: int, p
         methods.append(diag.method)
         x = x + u * cfg.dt
         ang = ang + rng.normal(0, 0.1, n)
+    return methods
+
+
+def config(n: int, **kw) -> BarrierConfig:
+    return BarrierConfig(**kw) if n <= 100 else BarrierConfig(bounds=arena_for(n, 0.188), **kw)
+
+
+@pytest.mark.parametrize("n,ticks,path", [(30, 25, "warm active-set"), (100, 12, "warm active-set"),
+                                          (300, 8, "warm clarabel+active-set")])
+def test_uncompiled_warm_answers_equal_cold_solves(n: int, ticks: int, path: str) -> None:
+    """Without the dual-ascent prediction: N ≤ 100 the active set from last tick's active rows;
+    N = 300 (≈ 800 active rows, beyond ``warm_max_rows``): clarabel on the rows near their bound
+    last tick, finished on all rows."""
+    methods = closed_loop_methods(n, ticks, config(n, warm_dual_sweeps=0))
     assert methods.count(path) >= ticks // 2, methods  # the warm start is really used
+
+
+@pytest.mark.parametrize("n,ticks", [(30, 25), (100, 12), (300, 8)])
+def test_dual_ascent_warm_answers_equal_cold_solves(n: int, ticks: int) -> None:
+    methods = closed_loop_methods(n, ticks, config(n))
+    assert methods.count(DUAL) >= ticks // 2, methods
+
+
+def test_a_failed_prediction_falls_back_to_the_other_paths() -> None:
+    """One sweep and one active-set iteration cannot certify these ticks: the filter goes on to
+    the uncompiled warm paths, and the answers are still the cold ones."""
+    methods = closed_loop_methods(100, 6, config(100, warm_dual_sweeps=1, warm_dual_iterations=1))
+    assert "warm active-set" in methods, methods
 
 
 def test_warm_start_forgotten_when_the_robots_change() -> None:
@@ -48,5 +76,5 @@ def test_warm_start_forgotten_when_the_robots_change() -> None:
     f.filter(x, nominal)
     u, diag = f.filter(x[:30], nominal[:30])  # other robots: no warm start from the 40
     cold, _ = SafetyFilter(cfg).filter(x[:30], nominal[:30])
-    assert diag.ok and diag.method != "warm active-set"
+    assert diag.ok and diag.method not in ("warm active-set", DUAL)
     np.testing.assert_allclose(u, cold, rtol=0, atol=1e-9)
