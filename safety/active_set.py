@@ -30,6 +30,8 @@ import scipy.linalg as sla
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
+from .compiled import AVAILABLE as _COMPILED
+from .compiled import gram_dense
 from .constraints import Rows
 
 _DENSE_ROWS = 400  # dense Cholesky of the Gram matrix up to this many working rows
@@ -135,6 +137,13 @@ class _Working:
         small, by sparse LU beyond.
         """
         w, n = self.ai.shape[0], self.n
+        if _COMPILED and w <= _DENSE_ROWS:  # compiled: per robot, independent of N
+            use_j = J is not None
+            Jc = np.ascontiguousarray(J, dtype=float) if use_j else np.zeros((n, 2, 2))
+            G = gram_dense(np.ascontiguousarray(self.ai, dtype=np.int64), np.ascontiguousarray(self.aj, dtype=np.int64),
+                           np.ascontiguousarray(self.aci, dtype=float), np.ascontiguousarray(self.acj, dtype=float),
+                           Jc, use_j)
+            return _dense_spd_solve(G, rhs)
         if w * 2 * n <= _DIRECT_LIMIT:  # small: dense A_W straight from the rows
             Ad = np.zeros((w, n, 2))
             r = np.arange(w)

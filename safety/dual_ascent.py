@@ -13,8 +13,8 @@ method started from last tick's rows needs many Gram factorisations. Its answer 
 used as the command: the rows it predicts start the certified active set
 (``active_set.solve_active_set``), which returns an exact, KKT-checked optimum or nothing.
 
-The sweeps are compiled by numba (``cache=True``; :func:`warm_up` compiles or loads them once
-per process, outside any tick). Without an importable numba, :data:`AVAILABLE` is False and
+The sweeps are compiled by numba (``safety.compiled``; :func:`warm_up` compiles or loads them
+once per process, outside any tick). Without an importable numba, :data:`AVAILABLE` is False and
 the filter keeps its uncompiled paths.
 """
 from __future__ import annotations
@@ -23,25 +23,15 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .compiled import AVAILABLE, jit, warm_up_gram
 from .constraints import Rows
-
-try:  # numba is a dependency; a broken install must not take the filter down with it
-    import numba as _numba
-except Exception:  # noqa: BLE001 - ImportError, or a shadowed module numba imports at load
-    _numba = None
-
-AVAILABLE = _numba is not None
 OMEGA = 1.8  # over-relaxation of the coordinate steps (measured: ≈ 2× fewer sweeps than ω = 1)
 RESTRICT_SLACK = 3e-3  # m/s: between full sweeps, only rows with λ > 0 or within this of their bound
 FULL_EVERY = 20  # a full sweep over every row after this many restricted ones
 PREDICT_TOL = 1e-7  # m/s: a row this close to its bound at the ascent's u joins the predicted set
 
 
-def _jit(fn):
-    return _numba.njit(cache=True, nogil=True)(fn) if AVAILABLE else fn
-
-
-@_jit
+@jit
 def _project_robot(w, u, r, vmax):  # pragma: no cover - compiled
     s = w[r, 0] * w[r, 0] + w[r, 1] * w[r, 1]
     if s > vmax * vmax:
@@ -53,7 +43,7 @@ def _project_robot(w, u, r, vmax):  # pragma: no cover - compiled
         u[r, 1] = w[r, 1]
 
 
-@_jit
+@jit
 def _sweep(idx, ri, rj, ci, cj, b, inv_norm2, lam, w, u, vmax, omega, resid):  # pragma: no cover
     """One Gauss–Seidel pass over rows ``idx``; returns the largest complementarity residual."""
     worst = 0.0
@@ -82,7 +72,7 @@ def _sweep(idx, ri, rj, ci, cj, b, inv_norm2, lam, w, u, vmax, omega, resid):  #
     return worst
 
 
-@_jit
+@jit
 def _ascend(ri, rj, ci, cj, b, nominal, vmax, lam0, max_sweeps, tol, omega, slack, every):  # pragma: no cover
     m = b.shape[0]
     n = nominal.shape[0]
@@ -133,7 +123,7 @@ class DualAscent:
 
 
 def ascend(rows: Rows, nominal: np.ndarray, max_speed: float | None, lam0: np.ndarray,
-           max_sweeps: int, tol: float = 1e-8) -> DualAscent:
+           max_sweeps: int, tol: float = 1e-5) -> DualAscent:
     """Dual coordinate ascent from multipliers ``lam0`` ((m,) ≥ 0, e.g. last tick's by row key).
 
     rows: the barrier rows; nominal (N, 2) m/s; max_speed m/s or None. Requires :data:`AVAILABLE`.
@@ -142,7 +132,8 @@ def ascend(rows: Rows, nominal: np.ndarray, max_speed: float | None, lam0: np.nd
         raise RuntimeError("dual ascent needs numba, which is not importable")
     vmax = np.inf if max_speed is None else float(max_speed)
     lam, u, sweeps, worst = _ascend(
-        rows.i, rows.jj, np.ascontiguousarray(rows.ci, dtype=float), np.ascontiguousarray(rows.cj, dtype=float),
+        np.ascontiguousarray(rows.i, dtype=np.int64), np.ascontiguousarray(rows.jj, dtype=np.int64),
+        np.ascontiguousarray(rows.ci, dtype=float), np.ascontiguousarray(rows.cj, dtype=float),
         np.ascontiguousarray(rows.b, dtype=float), np.ascontiguousarray(nominal, dtype=float), vmax,
         np.ascontiguousarray(lam0, dtype=float), int(max_sweeps), float(tol), OMEGA, RESTRICT_SLACK, FULL_EVERY)
     predicted = (lam > 0.0) | (rows.lhs(u) > rows.b - PREDICT_TOL)
@@ -154,6 +145,7 @@ def warm_up() -> None:
     later calls cost microseconds. A no-op without numba."""
     if not AVAILABLE:
         return
+    warm_up_gram()
     rows = Rows(np.array([0]), np.array([1]), np.array([[-1.0, 0.0]]), np.array([[1.0, 0.0]]),
                 np.array([0.0]), np.array([0.0]), np.array([0], dtype=np.int8), np.array([1]))
     ascend(rows, np.array([[0.1, 0.0], [-0.1, 0.0]]), 0.2, np.zeros(1), 4)

@@ -125,7 +125,7 @@ class SafetyFilter:
         self._warm_shape: tuple[int, int] = (-1, -1)
         self._lam_keys = np.zeros(0, dtype=np.int64)
         self._lam = np.zeros(0)
-        if self._dual_enabled():
+        if self.config.solver == "auto":
             dual_ascent.warm_up()  # numba's compile (or cache load) here, never in a tick
 
     def _dual_enabled(self) -> bool:
