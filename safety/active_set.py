@@ -194,8 +194,15 @@ def _newton_discs(work: _Working, uh: np.ndarray, vmax: float, lam0: np.ndarray
 
 def solve_active_set(rows: Rows, nominal: np.ndarray, max_speed: float | None,
                      warm: np.ndarray | None = None, max_iter: int = 40,
-                     feas_tol: float = FEAS_TOL) -> ActiveSetResult:
-    """Solve the barrier QP for nominal (N, 2) from working set ``warm`` ((m,) bool or None)."""
+                     feas_tol: float = FEAS_TOL, multipliers: np.ndarray | None = None) -> ActiveSetResult:
+    """Solve the barrier QP for nominal (N, 2) from working set ``warm`` ((m,) bool or None).
+
+    ``multipliers`` ((m,) ≥ 0, e.g. a dual ascent's, positive on ``warm``): a dual-feasible start.
+    Rows then leave the working set by Lawson–Hanson steps from it from the first iteration (the
+    row whose multiplier reaches zero first — a wrongly predicted row has a small one), never by
+    dropping every negative multiplier at once, which on degenerate working sets (dependent rows,
+    non-unique multipliers) also drops rows that belong.
+    """
     n = nominal.shape[0]
     m = rows.m
     uh = nominal
@@ -216,7 +223,8 @@ def solve_active_set(rows: Rows, nominal: np.ndarray, max_speed: float | None,
     # speed cuts join after the first solve, in the direction of the answer (û's is often poor)
     cut = np.zeros(n, dtype=bool)
     normals = np.zeros((n, 2))
-    lam_rows = np.zeros(m)
+    lam_rows = np.zeros(m) if multipliers is None else np.where(W, multipliers, 0.0)
+    first_aggressive = 0 if multipliers is not None else _AGGRESSIVE_ITERS
     lam_cut = np.zeros(n)
 
     def fail(reason: str, it: int) -> ActiveSetResult:
@@ -238,7 +246,7 @@ def solve_active_set(rows: Rows, nominal: np.ndarray, max_speed: float | None,
                                np.where(held, lam_rows, 0.0))
 
     for it in range(1, max_iter + 1):
-        aggressive = it <= _AGGRESSIVE_ITERS
+        aggressive = it <= first_aggressive
         while True:
             idx = np.flatnonzero(W)
             cidx = np.flatnonzero(cut)

@@ -356,7 +356,8 @@ class SafetyFilter:
             hit = self._lam_keys[at] == rows.key
             lam0[hit] = self._lam[at[hit]]
         guess = dual_ascent.ascend(rows, U, max_speed, lam0, cfg.warm_dual_sweeps)
-        res = solve_active_set(rows, U, max_speed, guess.predicted, cfg.warm_dual_iterations)
+        res = solve_active_set(rows, U, max_speed, guess.predicted, cfg.warm_dual_iterations,
+                               multipliers=guess.lam)
         if not res.ok:
             return None
         return _Solved(res.u, res.active, int(res.speed_active.sum()), "warm dual+active-set",
