@@ -18,7 +18,8 @@ drifting), median over ticks 2…20 (warm-started active set); *pruned clarabel*
 baseline; ratio = all pairs / cold.
 
 ``--closed-loop``: issue 18 item 1 only — the warm-started filter over a closed loop against,
-on every tick, cold clarabel on the same pruned rows and a cold exact solve (same process).
+on every tick, cold clarabel on the same pruned rows and a cold exact solve (same process), and
+a second closed-loop filter without the dual-ascent prediction (``warm_dual_sweeps=0``).
 """
 from __future__ import annotations
 
@@ -98,37 +99,40 @@ def closed_loop(n: int, ticks: int, rng: np.random.Generator) -> dict:
     ang = np.arctan2(nominal[:, 1], nominal[:, 0])
     speed = np.linalg.norm(nominal, axis=1)
     warm = SafetyFilter(cfg)
-    t_warm, t_clarabel, t_cold, diff = [], [], [], 0.0
+    no_dual = SafetyFilter(dataclasses.replace(cfg, warm_dual_sweeps=0))  # the warm paths before the ascent
+    t_warm, t_clarabel, t_cold, t_no_dual, diff = [], [], [], [], 0.0
     methods = collections.Counter()
     for k in range(ticks):
         nom = np.stack([np.cos(ang), np.sin(ang)], axis=1) * speed[:, None]
         t, (u, diag) = timed(warm.filter, x, nom)
         tc, (_, dc) = timed(SafetyFilter(dataclasses.replace(cfg, solver="clarabel")).filter, x, nom)
         te, (ue, de) = timed(SafetyFilter(cfg).filter, x, nom)
-        assert diag.ok and dc.ok and de.ok, (diag.status, dc.status, de.status)
+        tn, (un, dn) = timed(no_dual.filter, x, nom)
+        assert diag.ok and dc.ok and de.ok and dn.ok, (diag.status, dc.status, de.status, dn.status)
         if k:  # tick 0 is a cold start for every filter
             t_warm.append(t)
             t_clarabel.append(tc)
             t_cold.append(te)
+            t_no_dual.append(tn)
             methods[diag.method] += 1
-            diff = max(diff, float(np.abs(u - ue).max()))
+            diff = max(diff, float(np.abs(u - ue).max()), float(np.abs(un - ue).max()))
         x = x + u * cfg.dt
         ang = ang + rng.normal(0, 0.1, n)
     med = lambda v: 1e3 * float(np.median(v))
-    return dict(n=n, warm=med(t_warm), clarabel=med(t_clarabel), cold=med(t_cold), diff=diff,
+    return dict(n=n, warm=med(t_warm), clarabel=med(t_clarabel), cold=med(t_cold), no_dual=med(t_no_dual), diff=diff,
                 methods=dict(methods))
 
 
 def main_closed_loop(args: argparse.Namespace, rng: np.random.Generator) -> None:
     print("| N | closed-loop ms (warm) | cold clarabel, same rows, ms | cold exact (auto) ms | "
-          "ratio clarabel / warm | max ‖warm − cold‖ m/s | closed-loop methods |")
-    print("| --- | --- | --- | --- | --- | --- | --- |")
+          "warm without the dual ascent ms | ratio clarabel / warm | max ‖warm − cold‖ m/s | closed-loop methods |")
+    print("| --- | --- | --- | --- | --- | --- | --- | --- |")
     for n, ticks in ((20, 60), (100, 60), (200, 40), (500, 20), (1000, 12)):
         if args.quick:
             ticks = max(6, ticks // 3)
         r = closed_loop(n, ticks, rng)
         methods = ", ".join(f"{k} {v}" for k, v in sorted(r["methods"].items()))
-        print(f"| {n} | {r['warm']:.2f} | {r['clarabel']:.2f} | {r['cold']:.2f} | "
+        print(f"| {n} | {r['warm']:.2f} | {r['clarabel']:.2f} | {r['cold']:.2f} | {r['no_dual']:.2f} | "
               f"{r['clarabel'] / r['warm']:.2f} | {r['diff']:.1e} | {methods} |", flush=True)
 
 

@@ -21,7 +21,8 @@ def test_non_finite_setting_refused(name: str, value: float) -> None:
 
 
 @pytest.mark.parametrize("kwargs", [dict(gamma="100"), dict(recovery="yes"), dict(max_active_set_iterations=2.5),
-                                    dict(wall_margin=-0.01), dict(max_speed=True), dict(active_set_max_rows=-1)])
+                                    dict(wall_margin=-0.01), dict(max_speed=True), dict(active_set_max_rows=-1),
+                                    dict(warm_dual_sweeps=-1), dict(warm_dual_iterations=0), dict(warm_dual_sweeps=1.5)])
 def test_mistyped_or_out_of_range_setting_refused(kwargs) -> None:
     with pytest.raises(ValueError, match="BarrierConfig"):
         BarrierConfig(**kwargs)
