@@ -17,9 +17,12 @@ in stages, cheapest first:
    overlaps (``BarrierConfig.recovery_depth``) demand ``recovery_speed``; the clusters
    (connected components of the row graph) holding them are solved apart, and only if
    their rows are infeasible by the soft form ("no further approach" + separation targets);
-5. everything is solved exactly: the active-set solver, warm-started from the previous
-   tick's active rows and certified by the KKT conditions, when the starting working set
-   is small (``BarrierConfig.active_set_max_rows``, ``warm_max_rows`` in closed loop); otherwise clarabel, whose answer is
+5. everything is solved exactly. In closed loop first: the compiled dual coordinate ascent
+   (``dual_ascent.py``) from the previous tick's multipliers predicts the active rows and the
+   active set certifies the optimum from them (KKT). Otherwise (or if that does not certify): the
+   active-set solver, warm-started from the previous tick's active rows and certified by the KKT
+   conditions, when the starting working set is small (``BarrierConfig.active_set_max_rows``,
+   ``warm_max_rows`` in closed loop); otherwise clarabel, whose answer is
    polished by the active set from clarabel's active rows (certified), or else projected
    onto the speed discs with robots no row touches given their nominal exactly.
 
