@@ -2,19 +2,46 @@
 
 numba is a dependency (pyproject), compiled with ``cache=True`` (the machine code is kept in
 ``__pycache__``; a process loads it in ≈ 0.5 s including numba's import, the first process
-compiles in ≈ 6 s). A broken numba (e.g. a module named ``coverage`` shadowing coverage.py when a
-script runs from the repository root) leaves :data:`AVAILABLE` False and the filter on its numpy
-paths: the same answers, slower.
+compiles in ≈ 6 s). A missing or broken numba leaves :data:`AVAILABLE` False and the filter on its numpy
+paths: answers equal to 1e-9 (not to the last bit: the Gram matrices are summed in another
+order), slower.
 """
 from __future__ import annotations
 
+import sys
+
 import numpy as np
 
-try:
-    import numba as _numba
-except Exception:  # noqa: BLE001 - ImportError, or a shadowed module numba imports at load
-    _numba = None
 
+def _import_numba():
+    """numba, or None. numba imports ``coverage`` (coverage.py) if it can; with the repository
+    root on sys.path (a script or Ray worker started there) that name is swarmdeck's own
+    ``coverage/`` package and numba's import fails — so it is retried with ``coverage`` hidden."""
+    try:
+        import numba
+        return numba
+    except ImportError:
+        return None
+    except Exception:  # noqa: BLE001 - the shadowed coverage: AttributeError inside numba's import
+        pass
+    for name in [m for m in sys.modules if m == "numba" or m.startswith("numba.")]:
+        del sys.modules[name]
+    missing = object()
+    saved = sys.modules.get("coverage", missing)
+    sys.modules["coverage"] = None  # `import coverage` raises ImportError: numba runs without it
+    try:
+        import numba
+        return numba
+    except Exception:  # noqa: BLE001 - any other breakage: the numpy paths
+        return None
+    finally:
+        if saved is missing:
+            del sys.modules["coverage"]
+        else:
+            sys.modules["coverage"] = saved
+
+
+_numba = _import_numba()
 AVAILABLE = _numba is not None
 
 

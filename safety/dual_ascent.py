@@ -28,7 +28,11 @@ from .constraints import Rows
 OMEGA = 1.8  # over-relaxation of the coordinate steps (measured: ≈ 2× fewer sweeps than ω = 1)
 RESTRICT_SLACK = 3e-3  # m/s: between full sweeps, only rows with λ > 0 or within this of their bound
 FULL_EVERY = 20  # a full sweep over every row after this many restricted ones
-PREDICT_TOL = 1e-7  # m/s: a row this close to its bound at the ascent's u joins the predicted set
+# rows whose multiplier exceeds this fraction of the largest (or that were held at the start and
+# still are) are predicted active: weakly active rows (at their bound with λ = 0, which the sweeps
+# nudge to ~1e-12) stay out, so the prediction from an optimum's own multipliers is that optimum's
+# active set and a second call on the same tick reproduces the answer to the last bit
+PREDICT_REL = 1e-9
 
 
 @jit
@@ -112,8 +116,8 @@ def _ascend(ri, rj, ci, cj, b, nominal, vmax, lam0, max_sweeps, tol, omega, slac
 
 @dataclass(frozen=True)
 class DualAscent:
-    """lam (m,) multipliers ≥ 0; u (N, 2) = Π_D(û − Aᵀλ); predicted (m,) bool rows likely at
-    equality; sweeps done; residual: the last full sweep's largest complementarity residual (m/s)."""
+    """lam (m,) multipliers ≥ 0; u (N, 2) = Π_D(û − Aᵀλ); predicted (m,) bool rows likely held
+    (λ > ``PREDICT_REL``·max λ, or λ > 0 where λ0 > 0); sweeps done; residual: the last full sweep's largest complementarity residual (m/s)."""
 
     lam: np.ndarray
     u: np.ndarray
@@ -136,7 +140,7 @@ def ascend(rows: Rows, nominal: np.ndarray, max_speed: float | None, lam0: np.nd
         np.ascontiguousarray(rows.ci, dtype=float), np.ascontiguousarray(rows.cj, dtype=float),
         np.ascontiguousarray(rows.b, dtype=float), np.ascontiguousarray(nominal, dtype=float), vmax,
         np.ascontiguousarray(lam0, dtype=float), int(max_sweeps), float(tol), OMEGA, RESTRICT_SLACK, FULL_EVERY)
-    predicted = (lam > 0.0) | (rows.lhs(u) > rows.b - PREDICT_TOL)
+    predicted = (lam > PREDICT_REL * float(np.max(lam, initial=0.0))) | ((lam0 > 0.0) & (lam > 0.0))
     return DualAscent(lam, u, predicted, int(sweeps), float(worst))
 
 

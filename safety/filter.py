@@ -363,6 +363,14 @@ class SafetyFilter:
                                multipliers=guess.lam)
         if not res.ok:
             return None
+        if not np.array_equal(res.active, guess.predicted):
+            # reproducible to the last bit whatever the warm history: the answer is the one the
+            # active set gives from the optimum's own active rows (as every other warm path and a
+            # second call on the same tick do), not one that depends on which wrong rows left when
+            again = solve_active_set(rows, U, max_speed, res.active, cfg.max_active_set_iterations)
+            if again.ok:
+                return _Solved(again.u, again.active, int(again.speed_active.sum()), "warm dual+active-set",
+                               res.iterations + again.iterations, again.multipliers)
         return _Solved(res.u, res.active, int(res.speed_active.sum()), "warm dual+active-set",
                        res.iterations, res.multipliers)
 
