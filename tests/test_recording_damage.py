@@ -127,7 +127,7 @@ def test_foreign_and_newer_files_are_refused_clearly(tmp_path):
     cases = [
         ("ros.mcap", "ros2", {"recording_format": 1}, "another tool .*ros2"),
         ("nometa.mcap", "swarmdeck", None, "no 'swarmdeck' metadata"),
-        ("newer.mcap", "swarmdeck", {"recording_format": 3, "frame_format": 1}, "format 3 by a newer swarmdeck"),
+        ("newer.mcap", "swarmdeck", {"recording_format": 4, "frame_format": 1}, "format 4 by a newer swarmdeck"),
         ("newframe.mcap", "swarmdeck", {"recording_format": 1, "frame_format": 7}, "frames in format 7"),
     ]
     for name, profile, meta, msg in cases:

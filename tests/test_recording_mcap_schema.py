@@ -29,7 +29,7 @@ def test_mcap_reader_and_json_schemas(tmp_path):
         assert summary is not None and len(summary.chunk_indexes) >= 2
         assert all(ci.compression == "zstd" for ci in summary.chunk_indexes)
         meta = {m.name: m.metadata for m in reader.iter_metadata()}
-        assert json.loads(meta["swarmdeck"]["recording_format"]) == RECORDING_FORMAT == 2
+        assert json.loads(meta["swarmdeck"]["recording_format"]) == RECORDING_FORMAT == 3
         counts: dict[str, int] = {}
         validators = {}
         for schema, channel, message in reader.iter_messages():

@@ -32,12 +32,42 @@ A JSON object (message encoding ``json``), :meth:`Frame.to_dict`'s layout with
   :meth:`Frame.fleet_dict`; absent in older recordings, which read as all physical,
   battery unknown, not charging): ``is_virtual`` bool, ``battery`` float32 V, ``charging`` bool.
 
+Frame format 3 (recording format 3) — format 2, predicted from the previous frame
+---------------------------------------------------------------------------------
+A format-2 message with ``"format": 3``, of one of two kinds:
+
+* a **keyframe** (no ``"pred"`` key): self-contained, exactly a format-2 message otherwise.
+* a **predicted frame**: ``"pred": {"ref": tick, "crc": crc32}`` — coded against the frame of
+  tick ``ref``, the one written just before it *in the same MCAP chunk*. Its exact fields
+  ``ids``, ``poses``, ``v``, ``w`` are ``"<u8"`` arrays (shapes unchanged) of residuals
+  r = zigzag(bits(x) − bits(x̂)): the little-endian IEEE-754 (two's complement for ids) bit
+  patterns as 64-bit integers, subtracted modulo 2⁶⁴, zigzagged (0, −1, 1, −2, … → 0, 1, 2,
+  3, …) so that a prediction off by a few ulps leaves only low bytes. The prediction x̂ of the
+  poses is the reference frame's poses moved by its (v, ω) over its ``dt``
+  (:func:`~swarmdeck.console.recording.prediction.predict_poses`: the simulator's unicycle
+  step in machine-independent arithmetic, so a simulated robot's residual is zero in all but
+  a few percent of the headings, a tracked robot's its measurement noise); of ``ids``, ``v``
+  and ``w`` the reference frame's values. The byte-shuffled planes of such residuals are almost
+  all zero bytes and compress to almost nothing in the chunk's zstd. ``crc`` is the CRC-32
+  (``zlib.crc32``) of the little-endian bytes of ``ids`` (int64), ``poses``, ``v``, ``w``
+  (float64) in that order: the decoder checks the bits it reconstructs. Everything else is as in
+  format 2 (and derived on reading from the reconstructed poses).
+
+The recorder writes a keyframe as the first frame of every chunk (it closes chunks itself:
+every ``flush_interval`` s of recorded or wall time and before ``chunk_size`` bytes) and after
+any gap (a tick that does not follow the previous frame's, a change in the robot count, a time
+that does not increase, a frame that could not be written); so every chunk decodes on its
+own, and seeking, recovery of a cut-off file and re-simulation never need an earlier chunk.
+:func:`decode_frame` takes the previous frame of the chunk (``previous=``) for a predicted
+frame and raises :class:`MissingReference` without it.
+
 Frame format 1 (recording format 1): ``Frame.to_dict()`` as plain JSON, every
 float with 17 digits; still read.
 """
 from __future__ import annotations
 
 import base64
+import zlib
 from collections.abc import Mapping
 from typing import Any
 
@@ -45,12 +75,18 @@ import numpy as np
 
 from swarmdeck.console.runtime.frame import (FRAME_FORMAT, BarrierFrame, CoverageFrame, Frame, _dec_float,
                                              _enc_float)
+from swarmdeck.console.recording.prediction import predict_poses
 from swarmdeck.core.kinematics import unicycle_to_si
 
-#: The frame format this module writes (``Frame.to_dict`` is format 1).
-CODEC_FORMAT = 2
+#: The frame format this module writes (``Frame.to_dict`` is format 1; format 2: keyframes only).
+CODEC_FORMAT = 3
+#: Frame format 2 (compact, every frame self-contained): still read.
+COMPACT_FORMAT = 2
 #: Frame formats :func:`decode_frame` reads.
-READABLE_FORMATS = (FRAME_FORMAT, CODEC_FORMAT)
+READABLE_FORMATS = (FRAME_FORMAT, COMPACT_FORMAT, CODEC_FORMAT)
+#: The exact per-robot fields of a frame with their little-endian types; a predicted frame
+#: stores them as residuals against the previous frame (module docstring).
+EXACT_FIELDS = (("ids", "<i8"), ("poses", "<f8"), ("v", "<f8"), ("w", "<f8"))
 
 
 def _json_codec() -> tuple[Any, Any]:
@@ -108,8 +144,10 @@ def unpack_array(obj: Any, name: str) -> np.ndarray:
 
 
 # ---------------------------------------------------------------------------- encode
-def frame_message(frame: Frame) -> dict[str, Any]:
-    """The format-2 message of ``frame`` as a JSON-able dict (see the module docstring)."""
+def frame_message(frame: Frame, previous: Frame | None = None) -> dict[str, Any]:
+    """The format-3 message of ``frame`` as a JSON-able dict (see the module docstring): a frame
+    predicted from ``previous`` (the frame written just before it in the same chunk) when given
+    and :func:`can_predict`, else a keyframe."""
     d = _scalars(frame)
     d["format"] = CODEC_FORMAT
     d["ids"] = pack_array(frame.ids, "<i8")
@@ -142,12 +180,57 @@ def frame_message(frame: Frame) -> dict[str, Any]:
             cov["centroids"] = pack_array(c.centroids, "<f8")
             cov["masses"] = pack_array(c.masses, "<f8")
         d["coverage"] = cov
+    if previous is not None and can_predict(frame, previous):
+        d["pred"] = {"ref": int(previous.tick), "crc": exact_crc(frame.ids, frame.poses, frame.v, frame.w)}
+        for name, dtype in EXACT_FIELDS:
+            d[name] = pack_array(_zigzag(_bits(getattr(frame, name), dtype) - _predicted_bits(previous, name)), "<u8")
     return d
 
 
-def encode_frame(frame: Frame) -> bytes:
-    """The bytes the recorder writes for ``frame`` (frame format 2, JSON with binary arrays)."""
-    return encode_json(frame_message(frame))
+def encode_frame(frame: Frame, previous: Frame | None = None) -> bytes:
+    """The bytes the recorder writes for ``frame`` (frame format 3, JSON with binary arrays): a
+    keyframe, or with ``previous`` (the frame written just before it in the same chunk) a frame
+    predicted from it."""
+    return encode_json(frame_message(frame, previous))
+
+
+def can_predict(frame: Frame, previous: Frame) -> bool:
+    """True when ``frame`` can be coded against ``previous``: the next tick, a later time, the
+    same number of robots."""
+    return (frame.tick == previous.tick + 1 and frame.time > previous.time and frame.n == previous.n
+            and all(np.shape(getattr(frame, k)) == np.shape(getattr(previous, k)) for k, _ in EXACT_FIELDS))
+
+
+def exact_crc(ids: np.ndarray, poses: np.ndarray, v: np.ndarray, w: np.ndarray) -> int:
+    """CRC-32 of the little-endian bytes of a frame's ids (int64), poses, v, w (float64), in that order."""
+    crc = 0
+    for a, (_, dtype) in zip((ids, poses, v, w), EXACT_FIELDS):
+        crc = zlib.crc32(np.ascontiguousarray(a, dtype=np.dtype(dtype)).tobytes(), crc)
+    return crc
+
+
+def _bits(a: np.ndarray, dtype: str) -> np.ndarray:
+    """The little-endian bit patterns of ``a`` as ``dtype`` (an 8-byte type), as uint64."""
+    return np.ascontiguousarray(a, dtype=np.dtype(dtype)).view("<u8")
+
+
+def _predicted_bits(previous: Frame, name: str) -> np.ndarray:
+    """Bit patterns (uint64) of the prediction of field ``name`` from the previous frame: the poses
+    moved by its (v, ω) over its dt, the other exact fields unchanged."""
+    if name == "poses":
+        return _bits(predict_poses(previous.poses, previous.v, previous.w, previous.dt), "<f8")
+    return _bits(getattr(previous, name), dict(EXACT_FIELDS)[name])
+
+
+def _zigzag(r: np.ndarray) -> np.ndarray:
+    """uint64 residuals (two's complement) → zigzag: 0, −1, 1, −2, … → 0, 1, 2, 3, …"""
+    s = r.view(np.int64)
+    return ((s << np.int64(1)) ^ (s >> np.int64(63))).view(np.uint64)
+
+
+def _unzigzag(z: np.ndarray) -> np.ndarray:
+    """Inverse of :func:`_zigzag` (uint64)."""
+    return (z >> np.uint64(1)) ^ (np.uint64(0) - (z & np.uint64(1)))
 
 
 _BIG = ("ids", "poses", "seen", "nominal", "nominal_minus_safe", "safe", "v", "w", "barrier", "coverage",
@@ -198,10 +281,17 @@ def _barrier_scalars(b: BarrierFrame) -> dict[str, Any]:
 
 
 # ---------------------------------------------------------------------------- decode
-def decode_frame(data: bytes | Mapping[str, Any]) -> Frame:
+class MissingReference(ValueError):
+    """A predicted frame (format 3) was read without the frame it is coded against."""
+
+
+def decode_frame(data: bytes | Mapping[str, Any], previous: Frame | None = None) -> Frame:
     """A Frame from message bytes (or the decoded JSON object) of any readable frame format.
 
-    Raises ValueError naming what is wrong for malformed data or an unknown format.
+    ``previous``: the frame decoded just before this one in the same chunk (a format-3 predicted
+    frame is coded against it; ignored for every other frame).
+    Raises ValueError naming what is wrong for malformed data or an unknown format;
+    :class:`MissingReference` (a ValueError) for a predicted frame without its reference frame.
     """
     d = decode_json(data) if isinstance(data, (bytes, bytearray, memoryview)) else data
     if not isinstance(d, Mapping):
@@ -209,20 +299,46 @@ def decode_frame(data: bytes | Mapping[str, Any]) -> Frame:
     fmt = d.get("format")
     if fmt == FRAME_FORMAT:
         return Frame.from_dict(d)
-    if fmt != CODEC_FORMAT:
+    if fmt not in (COMPACT_FORMAT, CODEC_FORMAT):
         raise ValueError(f"unsupported frame format {fmt!r} (this swarmdeck reads formats {list(READABLE_FORMATS)})")
     try:
-        return _decode_v2(d)
+        exact = _predicted_fields(d, previous) if fmt == CODEC_FORMAT and d.get("pred") is not None else {}
+        return _decode_v2(d, exact)
     except KeyError as exc:
         raise ValueError(f"frame is missing field {exc.args[0]!r}") from None
 
 
-def _decode_v2(d: Mapping[str, Any]) -> Frame:
-    poses = unpack_array(d["poses"], "poses").astype(float)
+def _predicted_fields(d: Mapping[str, Any], previous: Frame | None) -> dict[str, np.ndarray]:
+    """ids, poses, v, w of the predicted frame ``d``, reconstructed from ``previous`` and checked."""
+    pred = d["pred"]
+    ref, crc = (pred.get("ref"), pred.get("crc")) if isinstance(pred, Mapping) else (None, None)
+    if type(ref) is not int or type(crc) is not int:
+        raise ValueError("frame field 'pred' must be an object {ref: tick, crc: integer}")
+    if previous is None or previous.tick != ref:
+        have = "none" if previous is None else f"tick {previous.tick}"
+        raise MissingReference(f"frame of tick {d.get('tick')!r} is predicted from tick {ref}, "
+                               f"which was not read before it (previous frame: {have})")
+    out = {}
+    for name, dtype in EXACT_FIELDS:
+        r = unpack_array(d[name], name)
+        want = np.shape(getattr(previous, name))
+        if r.dtype != np.dtype("<u8") or r.shape != want:
+            raise ValueError(f"frame field {name!r}: residuals of type {r.dtype.str} shape {r.shape}, "
+                             f"expected <u8 of the reference frame's shape {want}")
+        bits = _unzigzag(r) + _predicted_bits(previous, name)
+        out[name] = bits.view(np.dtype(dtype)).astype(np.int64 if name == "ids" else np.float64)
+    if exact_crc(out["ids"], out["poses"], out["v"], out["w"]) != crc:
+        raise ValueError(f"frame of tick {d.get('tick')!r}: the poses and commands reconstructed from tick {ref} "
+                         "fail their checksum (a damaged message, or a prediction this machine computes differently)")
+    return out
+
+
+def _decode_v2(d: Mapping[str, Any], exact: Mapping[str, np.ndarray]) -> Frame:
+    poses = exact["poses"] if exact else unpack_array(d["poses"], "poses").astype(float)
     if poses.ndim != 2 or poses.shape[1] != 3:
         raise ValueError(f"frame field 'poses' must have shape (n,3), got {poses.shape}")
-    v = unpack_array(d["v"], "v").astype(float)
-    w = unpack_array(d["w"], "w").astype(float)
+    v = exact["v"] if exact else unpack_array(d["v"], "v").astype(float)
+    w = exact["w"] if exact else unpack_array(d["w"], "w").astype(float)
     n = poses.shape[0]
     if v.shape != (n,) or w.shape != (n,):
         raise ValueError(f"frame fields 'v', 'w' must have shape ({n},), got {v.shape} and {w.shape}")
@@ -233,7 +349,7 @@ def _decode_v2(d: Mapping[str, Any]) -> Frame:
         raise ValueError(f"frame field 'nominal_minus_safe' must have shape ({n}, 2), got {delta.shape}")
     nominal = safe + delta
     base = dict(d)
-    for k in _BIG:
+    for k in (*_BIG, "pred"):
         base.pop(k, None)
     base.update({"format": FRAME_FORMAT, "ids": [], "poses": [], "seen": [], "nominal": [], "safe": [],
                  "v": [], "w": [], "barrier": None, "coverage": None})
@@ -261,7 +377,7 @@ def _decode_v2(d: Mapping[str, Any]) -> Frame:
             fleet[name] = arr
     return Frame(
         tick=shell.tick, time=shell.time, run_time=shell.run_time, dt=shell.dt, bounds=shell.bounds,
-        lookahead=lookahead, poses=poses, ids=unpack_array(d["ids"], "ids").astype(np.int64),
+        lookahead=lookahead, poses=poses, ids=exact["ids"] if exact else unpack_array(d["ids"], "ids").astype(np.int64),
         seen=unpack_array(d["seen"], "seen").astype(bool), nominal=nominal, safe=safe, v=v, w=w,
         barrier=barrier, coverage=coverage, density=shell.density, contacts=shell.contacts,
         behaviour=shell.behaviour, run_state=shell.run_state, params=shell.params, events=shell.events,
@@ -308,5 +424,6 @@ def coverage_geometry(poses: np.ndarray, bounds: tuple[float, float, float, floa
                 cell_offsets=np.concatenate(([0], np.cumsum([len(c) for c in cells]))).astype(np.int64))
 
 
-__all__ = ["CODEC_FORMAT", "READABLE_FORMATS", "encode_frame", "decode_frame", "frame_message", "pack_array",
+__all__ = ["CODEC_FORMAT", "COMPACT_FORMAT", "READABLE_FORMATS", "EXACT_FIELDS", "MissingReference", "can_predict",
+           "exact_crc", "encode_frame", "decode_frame", "frame_message", "pack_array",
            "unpack_array", "coverage_geometry", "derived_safe", "encode_json", "decode_json"]

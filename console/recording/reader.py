@@ -10,7 +10,9 @@ undecodable) are skipped and listed in :attr:`Recording.warnings`.
 
 Seeking (:meth:`Recording.frame_at`) bisects the chunk index by time and
 decodes one small chunk (a few hundred ms of data), so it costs the same on a
-one-hour file as on a one-minute one. Times in this API are seconds since the
+one-hour file as on a one-minute one. Every chunk decodes on its own (frame
+format 3 starts each with a keyframe; the frames after it are predicted from
+the one before them in the chunk, see ``codec.py``). Times in this API are seconds since the
 recording's first frame ("recording time", which is the console's session time
 when the recording started with the console: the one time base a user sees and
 seeks to, see :mod:`swarmdeck.console.runtime.loop`); ``Frame.time``,
@@ -32,7 +34,7 @@ from pathlib import Path
 from typing import Any
 
 from swarmdeck.console.runtime.frame import Frame
-from swarmdeck.console.recording.codec import CODEC_FORMAT, decode_frame
+from swarmdeck.console.recording.codec import CODEC_FORMAT, MissingReference, decode_frame
 from swarmdeck.console.recording.schemas import (
     METADATA_NAME, PROFILE, RECORDING_FORMAT, TOPIC_CONFIG, TOPIC_DATAGRAM, TOPIC_EVENT, TOPIC_FRAME,
 )
@@ -357,17 +359,38 @@ class Recording:
         if hit is not None:
             self._frame_cache.move_to_end(i)
             return hit
-        frames = []
-        for ns, data in self._chunk_messages(i).get(TOPIC_FRAME, []):
-            try:
-                frames.append((ns, decode_frame(data)))
-            except (ValueError, TypeError) as exc:
-                msg = f"undecodable frame at log time {ns} skipped: {exc}"
-                if len(self.warnings) < 100 and msg not in self.warnings:
-                    self.warnings.append(msg)
+        frames = self._decode_chunk(i, look_back=True)
         self._frame_cache[i] = frames
         if len(self._frame_cache) > self._cache_size:
             self._frame_cache.popitem(last=False)
+        return frames
+
+    def _decode_chunk(self, i: int, look_back: bool) -> list[tuple[int, Frame]]:
+        """The frames of chunk ``i``, each format-3 predicted frame decoded from the one before it.
+        swarmdeck starts every chunk with a keyframe; in a file another tool re-chunked, the first
+        frames of a chunk may be predicted from the last frame of the chunk before: with
+        ``look_back`` that one is decoded (on its own, no further back) and used."""
+        frames: list[tuple[int, Frame]] = []
+        previous: Frame | None = None
+        tail: list[Frame | None] = []  # the chunk before's last frame, once looked up
+        for ns, data in self._chunk_messages(i).get(TOPIC_FRAME, []):
+            try:
+                try:
+                    previous = decode_frame(data, previous)
+                except MissingReference:
+                    if frames or previous is not None or not look_back or i == 0:
+                        raise
+                    if not tail:
+                        before = self._frame_cache.get(i - 1)
+                        before = self._decode_chunk(i - 1, look_back=False) if before is None else before
+                        tail.append(before[-1][1] if before else None)
+                    previous = decode_frame(data, tail[0])
+                frames.append((ns, previous))
+            except (ValueError, TypeError) as exc:
+                previous = None  # the frames predicted from this one are lost up to the next keyframe
+                msg = f"undecodable frame at log time {ns} skipped: {exc}"
+                if look_back and len(self.warnings) < 100 and msg not in self.warnings:
+                    self.warnings.append(msg)
         return frames
 
     def _find_first_frame(self) -> tuple[int, Frame] | None:

@@ -2,13 +2,16 @@
 
 The loop thread only *enqueues* (an append under a lock, a few µs); a
 background writer thread serialises (:func:`~swarmdeck.console.recording.codec.encode_frame`:
-compact JSON with binary per-robot arrays) and writes
+compact JSON with binary per-robot arrays, frame format 3) and writes
 chunked, zstd-compressed MCAP (format in
 :mod:`swarmdeck.console.recording.schemas`). It closes the current chunk every
 ``flush_interval`` seconds of wall time or of recorded time, whichever comes
-first: a crash or ``kill -9`` loses at most about that much (what was written
-sits in the OS page cache, which survives the process), and a seek decodes at
-most that much data, even in files written faster than real time.
+first, and before it grows past ``chunk_size`` bytes: a crash or ``kill -9`` loses at
+most about that much (what was written sits in the OS page cache, which survives the
+process), and a seek decodes at most that much data, even in files written faster than
+real time. The first frame of every chunk is a self-contained keyframe and the others are
+predicted from the frame before them in the same chunk (codec.py), so every chunk decodes on
+its own.
 
 The queue is bounded: when the disk cannot keep up, the *oldest* queued items
 are dropped and counted (``status().dropped``, and a recorder event in the
@@ -60,7 +63,7 @@ class RecorderConfig:
 
     queue_size: items (frames + datagrams + events) waiting for the writer; beyond it the oldest are dropped.
     flush_interval: s between chunk closes (bounds the data lost on a crash).
-    chunk_size: bytes; a chunk is also closed when it grows past this.
+    chunk_size: bytes; a chunk is also closed when it reaches this (after the item that got it there).
     compression: "zstd", "lz4" or "none" (falls back to what is importable).
     foxglove: also write Foxglove's native channels (``recording/foxglove.py``: scene, poses, density,
         camera, transforms, log, metrics), so Foxglove's panels draw the run without an extension.
@@ -189,6 +192,8 @@ class Recorder:
         self._foxglove: FoxgloveEncoder | None = None
         self._foxglove_errors = 0
         self._foxglove_error = ""
+        self._previous: Frame | None = None  # the frame written last in the open chunk (frames predict from it)
+        self._chunk_bytes = 0  # message bytes in the open chunk
         try:
             self._open()
         except Exception as exc:  # noqa: BLE001 - unwritable path, full disk, …: record nothing, run on
@@ -262,7 +267,8 @@ class Recorder:
 
         self.path.parent.mkdir(parents=True, exist_ok=True)
         self._file = self._opener(self.path)
-        w = Writer(self._file, chunk_size=self.config.chunk_size, compression=_compression(self.config.compression))
+        # chunks are closed only here (_close_chunk): each must start with a keyframe
+        w = Writer(self._file, chunk_size=1 << 62, compression=_compression(self.config.compression))
         swarmdeck_version = software_versions().get("swarmdeck", "0")
         w.start(profile=PROFILE, library=f"swarmdeck {swarmdeck_version}")
         meta = {
@@ -308,6 +314,14 @@ class Recorder:
         ns = self._log_ns(t)
         data = payload if isinstance(payload, bytes) else _json(payload)
         self._writer.add_message(self._channels[topic], log_time=ns, data=data, publish_time=ns)
+        self._chunk_bytes += len(data)
+
+    def _close_chunk(self) -> None:
+        """Write the open chunk (the next frame is a keyframe: no chunk depends on another)."""
+        self._writer.flush()
+        self._bytes = self._file.tell()
+        self._previous = None
+        self._chunk_bytes = 0
 
     def _write_item(self, item: tuple[Any, ...]) -> None:
         kind = item[0]
@@ -316,7 +330,8 @@ class Recorder:
             self._write_config(float(t0), item[1] if kind == "f" else None)
         if kind == "f":
             frame: Frame = item[1]
-            self._add(TOPIC_FRAME, frame.time, encode_frame(frame))
+            self._add(TOPIC_FRAME, frame.time, encode_frame(frame, self._previous))
+            self._previous = frame
             for text in frame.events:
                 self._add(TOPIC_EVENT, frame.time, {"t": frame.time, "kind": "frame", "text": text})
             self._counts["frames"] += 1
@@ -348,6 +363,7 @@ class Recorder:
             ns = self._log_ns(frame.time if frame is not None else t)
             for topic, at, data in messages(self._foxglove, ns):
                 self._writer.add_message(self._channels[topic], log_time=at, data=data, publish_time=at)
+                self._chunk_bytes += len(data)
         except Exception as exc:  # noqa: BLE001 - a drawing-side bug must not stop the recording
             self._foxglove_errors += 1
             if self._foxglove_errors == 1:
@@ -372,14 +388,15 @@ class Recorder:
                         self._write_item(item)
                     except (TypeError, ValueError, AttributeError) as exc:  # a malformed item: skip it, say so
                         self._message = f"recording to {self.path}; skipped an unwritable item: {exc}"
+                        self._previous = None  # a gap: the next frame is a keyframe
                         continue
                     last_t = item[1].time if item[0] == "f" else (item[4] if item[0] == "d" else item[1])
                     if not dirty:
                         chunk_t0 = last_t
                     dirty = True
-                    if last_t - chunk_t0 >= interval:  # a chunk never spans more than `interval` s of data
-                        self._writer.flush()
-                        self._bytes = self._file.tell()
+                    # a chunk never spans more than `interval` s of data, nor grows past chunk_size
+                    if last_t - chunk_t0 >= interval or self._chunk_bytes >= self.config.chunk_size:
+                        self._close_chunk()
                         last_flush, dirty = time.monotonic(), False
                 if dropped > reported_drops and self._origin is not None:
                     self._add(TOPIC_EVENT, last_t, {"t": last_t, "kind": "recorder",
@@ -387,8 +404,7 @@ class Recorder:
                     reported_drops = dropped
                 now = time.monotonic()
                 if dirty and (stopping or now - last_flush >= interval):
-                    self._writer.flush()
-                    self._bytes = self._file.tell()
+                    self._close_chunk()
                     last_flush, dirty = now, False
                 if stopping:
                     break

@@ -29,7 +29,7 @@ import numpy as np
 
 from swarmdeck.core.bounds import DEFAULT_BOUNDS
 from swarmdeck.console.runtime.frame import Frame
-from swarmdeck.console.recording.codec import CODEC_FORMAT, decode_frame, encode_frame
+from swarmdeck.console.recording.codec import CODEC_FORMAT, COMPACT_FORMAT, decode_frame, encode_frame
 from swarmdeck.console.recording.reader import RecordedDatagram, Recording
 
 #: Frame keys not compared: wall-clock measurements and free-text messages.
@@ -234,7 +234,7 @@ def resimulate(recording: Recording, *, max_frames: int | None = None) -> Iterat
                                  initial_poses=first.poses)
     loop = ControlLoop(loop_cfg, source=robots, sink=robots, inputs=hub,
                        contact_density=ContactDensity(inputs_cfg.density), clock=lambda: now[0])
-    compact = recording.metadata.get("frame_format") == CODEC_FORMAT
+    compact = recording.metadata.get("frame_format") in (COMPACT_FORMAT, CODEC_FORMAT)
     datagrams = iter(recording.datagrams())
     pending = next(datagrams, None)
     frames = recording.frames()

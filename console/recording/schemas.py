@@ -10,8 +10,10 @@ Foxglove shows them):
 ==========================  ===============================================
 topic                       message
 ==========================  ===============================================
-``/swarmdeck/frame``        one per tick: ``codec.encode_frame`` (format 2, compact: binary
-                            per-robot arrays); format-1 files hold ``Frame.to_dict()``
+``/swarmdeck/frame``        one per tick: ``codec.encode_frame`` (format 3: binary per-robot
+                            arrays; a keyframe first in every chunk, the others predicted from
+                            the frame before them); format-2 files hold self-contained frames
+                            only, format-1 files ``Frame.to_dict()``
 ``/swarmdeck/datagram``     one raw input datagram: ``{t, data (base64), peer, transport, listener}``
 ``/swarmdeck/config``       the run's configuration and metadata, once at the start
 ``/swarmdeck/event``        ``{t, kind, text}`` operator actions, frame events, recorder notices
@@ -27,8 +29,9 @@ from typing import Any
 
 PROFILE = "swarmdeck"
 #: Version of the container layout (topics, metadata keys). Readers refuse newer files.
-#: 2: frames in the compact frame format 2 (``codec.py``); 1: frames as ``Frame.to_dict()`` (still read).
-RECORDING_FORMAT = 2
+#: 3: frames in frame format 3 (``codec.py``: a keyframe first in every chunk, then frames predicted from the one before);
+#: 2: frames in the compact frame format 2; 1: frames as ``Frame.to_dict()`` (both still read).
+RECORDING_FORMAT = 3
 METADATA_NAME = "swarmdeck"
 
 TOPIC_FRAME = "/swarmdeck/frame"
@@ -112,16 +115,17 @@ _ND: dict[str, Any] = {
     "type": "object", "required": ["nd", "shape", "b64"],
     "description": "binary array: little-endian numpy dtype, shape, base64 of the byte-shuffled bytes "
                    "(all bytes 0 of the elements, then all bytes 1, …)",
-    "properties": {"nd": {"enum": ["<f8", "<f4", "<f2", "<i8", "<i4", "<i2", "|b1"]}, "shape": _arr({"type": "integer", "minimum": 0}),
+    "properties": {"nd": {"enum": ["<f8", "<f4", "<f2", "<i8", "<i4", "<i2", "|b1", "<u8"]}, "shape": _arr({"type": "integer", "minimum": 0}),
                    "b64": {"type": "string", "contentEncoding": "base64"}},
 }
 
 FRAME_SCHEMA: dict[str, Any] = {
     "$schema": "https://json-schema.org/draft/2020-12/schema",
     "title": "swarmdeck.Frame",
-    "description": "One control tick of the swarmdeck console, frame format 2 (console/recording/codec.py): "
-                   "per-robot arrays binary; safe, intervention, active_h and the coverage geometry derived "
-                   "on reading. Units m, s, rad.",
+    "description": "One control tick of the swarmdeck console, frame format 3 (console/recording/codec.py): "
+                   "per-robot arrays binary; safe, active_h and the coverage geometry derived "
+                   "on reading; with 'pred', ids, poses, v and w are residuals against their prediction from the "
+                   "frame of tick pred.ref, the one before it in the chunk (keyframes have no 'pred'). Units m, s, rad.",
     "type": "object",
     "required": ["format", "tick", "time", "dt", "bounds", "lookahead", "ids", "poses", "seen",
                  "nominal_minus_safe", "v", "w", "barrier", "coverage", "density", "contacts",
@@ -129,7 +133,9 @@ FRAME_SCHEMA: dict[str, Any] = {
     "properties": {
         **{k: v for k, v in FRAME_SCHEMA_V1["properties"].items()
            if k not in ("ids", "poses", "seen", "nominal", "safe", "v", "w", "barrier", "coverage")},
-        "format": {"const": 2},
+        "format": {"const": 3},
+        "pred": {"type": "object", "required": ["ref", "crc"],
+                 "properties": {"ref": _INT, "crc": {"type": "integer", "minimum": 0}}},
         "ids": _ND, "poses": _ND, "seen": _ND, "nominal_minus_safe": _ND, "v": _ND, "w": _ND,
         "is_virtual": _ND, "battery": _ND, "charging": _ND,
         "barrier": {"oneOf": [{"type": "null"}, {
