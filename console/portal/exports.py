@@ -60,10 +60,16 @@ def update_run_json(folder: Path, **fields: Any) -> dict[str, Any]:
     except (OSError, ValueError):
         data = {}
     data.update(fields)
+    write_run_json(folder, data)
+    return data
+
+
+def write_run_json(folder: Path, data: dict[str, Any]) -> None:
+    """Replace the job's ``run.json`` by ``data`` atomically (written aside, then renamed)."""
+    path = folder / "run.json"
     tmp = path.with_suffix(".tmp")
     tmp.write_text(json.dumps(data, indent=1))
     tmp.replace(path)
-    return data
 
 
 def write_exports(folder: Path, video: bool = True) -> dict[str, Any]:

@@ -59,7 +59,6 @@ exports the previous server left unfinished are written again.
 """
 from __future__ import annotations
 
-import json
 import threading
 import time
 from collections.abc import Callable
@@ -73,7 +72,7 @@ from numpy.typing import NDArray
 from swarmdeck.console.jobs.confinement import ConfinementUnavailable, SandboxLimits
 from swarmdeck.console.jobs.sandbox import SandboxOutcome, run_sandboxed
 from swarmdeck.console.portal.arena_fleet import ArenaFleet
-from swarmdeck.console.portal.exports import JobExports
+from swarmdeck.console.portal.exports import JobExports, write_run_json
 from swarmdeck.console.portal.livefeed import LiveFeed
 from swarmdeck.console.portal.service import PortalService
 from swarmdeck.console.runtime.behaviours import TickInput
@@ -320,7 +319,7 @@ class ArenaRunner:
                 note = report.summary()
             except (RecoveryError, OSError) as exc:
                 note = f"the partial recording could not be recovered: {exc}"
-            _write_json(folder / "run.json", {"ended_by": "interrupted", "recovery": note})
+            write_run_json(folder, {"ended_by": "interrupted", "recovery": note})
             if out.is_file():
                 self.exports.submit(job_id)
         return ids
@@ -361,7 +360,7 @@ class ArenaRunner:
                    "error": reason if state == "failed" else None,
                    "ticks": None if outcome is None else outcome.ticks,
                    "overruns": None if outcome is None else outcome.overruns, "note": note, **self._upkeep}
-        _write_json(folder / "run.json", summary)
+        write_run_json(folder, summary)
         if outcome is not None:
             (folder / "script.log").write_text(outcome.log, encoding="utf-8")
         if (folder / "recording.mcap").is_file():
@@ -461,9 +460,3 @@ def _report(result: UpkeepResult, wall_s: float) -> dict[str, Any]:
     """A set-up's or return's entry in run.json: ok, robots (fleet ids), seconds (the maneuver's own time),
     wall_s, largest position/heading error, collisions, deadlock escapes, message."""
     return {**result.to_dict(), "wall_s": round(wall_s, 3)}
-
-
-def _write_json(path: Path, data: dict[str, Any]) -> None:
-    tmp = path.with_suffix(".tmp")
-    tmp.write_text(json.dumps(data, indent=1))
-    tmp.replace(path)
