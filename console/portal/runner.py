@@ -231,10 +231,13 @@ class ArenaRunner:
     def _run(self) -> None:
         while not self._stop.is_set():
             try:
-                self._between_jobs()
+                tidy = self._between_jobs()
             except Exception as exc:  # noqa: BLE001 - never let the arena thread die: the operator is told
                 self.service.arena_needs_operator(f"the fleet's upkeep failed: {type(exc).__name__}: {exc}")
-            job = self.service.claim_for_arena(self._admit)
+                tidy = False
+            # a release landing after _between_jobs saw the arena stopped must not let a job start with robots
+            # still on the floor: only claim after a pass that found the arena running (and returned them)
+            job = self.service.claim_for_arena(self._admit) if tidy else None
             if job is None:
                 self.service.wait_for_change(self.poll_s)
                 continue
@@ -250,20 +253,22 @@ class ArenaRunner:
         why = self.fleet.shortfall(int(job["robots"]))
         return None if why is None else f"waiting for robots: {why}"
 
-    def _between_jobs(self) -> None:
+    def _between_jobs(self) -> bool:
         """Docked simulated robots charge for the wall time since the last call; robots left on the floor
-        (after an emergency stop was released, a failed set-up, a restart) return to the chargers."""
+        (after an emergency stop was released, a failed set-up, a restart) return to the chargers.
+        False when the arena is stopped (no job may be claimed on this pass)."""
         now = time.monotonic()
         self.fleet.idle(now - self._idle_mark)
         self._idle_mark = now
         if self.service.arena_stopped:
-            return
+            return False
         try:
             away = self.fleet.away()
         except ValueError:
-            return  # the fleet cannot be reached: fleet.error says so on the operator's page
+            return True  # the fleet cannot be reached: fleet.error says so; the job's admission names it
         if away:
-            self._return_fleet("before the next job")
+            return bool(self._return_fleet("before the next job")["ok"])
+        return True
 
     def _hold_loop(self, loop: ControlLoop | None) -> None:
         """The loop a fleet maneuver runs on, for the emergency stop (None: the maneuver is over)."""
