@@ -116,3 +116,21 @@ def test_without_a_cgroup_untrusted_code_is_refused_unless_the_operator_allows_i
     out = jail_run("def experiment(arena):\n    arena.step()\n", allow_no_cgroup=True)
     assert out.ok and out.cgroup is None
     assert len(out.unhardened) == 1 and out.unhardened[0].startswith("no cgroup")
+
+
+def test_cli_allow_no_cgroup_runs_and_warns(tmp_path, monkeypatch, capsys):
+    import json
+
+    from swarmdeck.console.cli import main
+
+    monkeypatch.setattr(cgroups, "_mounts", lambda: [])
+    script = tmp_path / "s.py"
+    script.write_text("def experiment(arena):\n    arena.step()\n")
+    base = ["run", "--sandbox", str(script), "--robots", "2", "--duration", "0.2", "--json"]
+    assert main(base) == 2
+    assert "--allow-no-cgroup" in capsys.readouterr().err
+    assert main([*base, "--allow-no-cgroup"]) == 0
+    captured = capsys.readouterr()
+    report = json.loads(captured.out[captured.out.index("{\n"):])
+    assert report["cgroup"] is None and report["unhardened"][0].startswith("no cgroup")
+    assert "warning: no cgroup" in captured.err

@@ -182,8 +182,20 @@ def choose_jail(config: JailConfig = JailConfig()) -> tuple[str | None, str | No
 
 
 def probe(config: JailConfig = JailConfig()) -> str | None:
-    """None when some jail of ``config`` works here, else why none does."""
-    return choose_jail(config)[1]
+    """None when this machine can confine untrusted code as ``config`` asks, else why not: no jail of
+    ``config`` works, the seccomp filter cannot be built, or no cgroup can be created for a run
+    (unless ``config.allow_no_cgroup``)."""
+    from swarmdeck.console.jobs import cgroups, seccomp
+
+    reason = choose_jail(config)[1]
+    if reason is not None:
+        return reason
+    reason = seccomp.probe()
+    if reason is not None:
+        return f"no seccomp filter: {reason}"
+    if not config.allow_no_cgroup and (reason := cgroups.probe()) is not None:
+        return f"{reason}; pass --allow-no-cgroup to run without a per-run limit of memory, processes and CPU"
+    return None
 
 
 def processes_of(uid: int) -> list[int]:
