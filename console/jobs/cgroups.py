@@ -236,7 +236,7 @@ class RunCgroup:
                     if time.monotonic() > deadline:
                         problems.append(f"{folder}: {exc.strerror}")
                         break
-                    time.sleep(0.005)
+                    time.sleep(0.001)
         return "; ".join(problems) or None
 
 

@@ -201,18 +201,22 @@ def probe(config: JailConfig = JailConfig()) -> str | None:
 def processes_of(uid: int) -> list[int]:
     """Pids of live processes whose real uid is ``uid`` (from /proc/PID/status)."""
     pids = []
+    wanted = f"\nUid:\t{int(uid)}\t".encode()
     for entry in os.listdir("/proc"):
         if not entry.isdigit():
             continue
         try:
-            with open(f"/proc/{entry}/status", encoding="ascii", errors="replace") as f:
-                for line in f:
-                    if line.startswith("Uid:"):
-                        if int(line.split()[1]) == uid:
-                            pids.append(int(entry))
-                        break
-        except (FileNotFoundError, ProcessLookupError, PermissionError, ValueError):
+            fd = os.open(f"/proc/{entry}/status", os.O_RDONLY)
+        except OSError:
             continue
+        try:
+            head = os.read(fd, 2048)  # Uid: is within the first ten lines
+        except OSError:
+            continue
+        finally:
+            os.close(fd)
+        if wanted in head:
+            pids.append(int(entry))
     return pids
 
 

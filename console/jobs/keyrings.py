@@ -6,7 +6,7 @@ Before any user code runs, the jail's first process joins a fresh anonymous sess
 keyring (:func:`join_session_keyring`); the seccomp filter then refuses ``keyctl``,
 ``add_key`` and ``request_key`` altogether (:mod:`swarmdeck.console.jobs.seccomp`).
 A run's uid is its own (:mod:`swarmdeck.console.jobs.uids`); after the run the trusted
-side empties and invalidates that uid's user and user-session keyrings
+side empties that uid's user and user-session keyrings
 (:func:`clear_user_keyrings`), which otherwise outlive every process of the uid.
 """
 from __future__ import annotations
@@ -16,7 +16,7 @@ import functools
 import os
 import platform
 
-KEYCTL_GET_KEYRING_ID, KEYCTL_JOIN_SESSION_KEYRING, KEYCTL_CLEAR, KEYCTL_READ, KEYCTL_INVALIDATE = 0, 1, 7, 11, 21
+KEYCTL_GET_KEYRING_ID, KEYCTL_JOIN_SESSION_KEYRING, KEYCTL_CLEAR, KEYCTL_READ = 0, 1, 7, 11
 KEY_SPEC_SESSION_KEYRING, KEY_SPEC_USER_KEYRING, KEY_SPEC_USER_SESSION_KEYRING = -3, -4, -5
 _SYS_KEYCTL = {"x86_64": 250, "aarch64": 219, "arm64": 219}
 
@@ -55,11 +55,13 @@ def uids_with_keys() -> set[int]:
 
 
 def clear_user_keyrings(uid: int) -> None:
-    """Empty and invalidate ``uid``'s user and user-session keyrings (as root; a no-op when the uid owns no key).
+    """Empty ``uid``'s user and user-session keyrings (as root; a no-op when the uid owns no key).
 
     A short-lived forked process takes the uid (the kernel resolves ``@u``/``@us`` from the
-    caller's uid) and clears both; invalidated keyrings are garbage-collected, so nothing a
-    run left there reaches a later holder of the uid. OSError when it could not.
+    caller's uid) and clears both: the keys they held lose their last link and are
+    garbage-collected, so nothing a run left there reaches a later holder of the uid. (They are
+    not invalidated: the kernel would then refuse every lookup of the uid's keyrings until its
+    garbage collector ran.) OSError when it could not.
     """
     if uid not in uids_with_keys():
         return  # (looking a user keyring up creates it: do not, when there is nothing to clear)
@@ -73,9 +75,7 @@ def clear_user_keyrings(uid: int) -> None:
             os.setresgid(uid, uid, uid)
             os.setresuid(uid, uid, uid)
             for spec in (KEY_SPEC_USER_SESSION_KEYRING, KEY_SPEC_USER_KEYRING):
-                serial = keyctl(KEYCTL_GET_KEYRING_ID, spec, 1)
-                keyctl(KEYCTL_CLEAR, serial)
-                keyctl(KEYCTL_INVALIDATE, serial)
+                keyctl(KEYCTL_CLEAR, keyctl(KEYCTL_GET_KEYRING_ID, spec, 1))
         except BaseException as exc:  # noqa: BLE001 - reported to the parent
             message = str(exc).encode(errors="replace")[:300] or b"failed"
         os.write(write, message)

@@ -541,9 +541,13 @@ def _run_sandboxed(bundle: ScriptBundle, make_plant: PlantFactory, *, n_robots: 
             outcome.ended_by, outcome.error_line, outcome.error = "memory", line, line
         return outcome
     finally:
-        if group is not None and (problem := group.remove()) is not None:
-            logging.getLogger(__name__).warning("the run's cgroup was not removed cleanly: %s", problem)
-        if uid is not None and hardening.run_uid and (problem := uids.release(uid)) is not None:
+        emptied = False
+        if group is not None:
+            problem = group.remove()
+            emptied = problem is None  # a removed group held no task: nothing of the run is left
+            if problem is not None:
+                logging.getLogger(__name__).warning("the run's cgroup was not removed cleanly: %s", problem)
+        if uid is not None and hardening.run_uid and (problem := uids.release(uid, processes_gone=emptied)):
             logging.getLogger(__name__).warning("uid %d is retired: %s", uid, problem)
         shutil.rmtree(scratch, ignore_errors=True)
         shutil.rmtree(folder, ignore_errors=True)

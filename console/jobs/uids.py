@@ -59,12 +59,17 @@ def allocate(state_dir: Path = STATE_DIR, attempts: int = 64) -> int:
     raise UidUnavailable(f"no free per-run uid found in {attempts} attempts")
 
 
-def release(uid: int, state_dir: Path = STATE_DIR) -> str | None:
+def release(uid: int, state_dir: Path = STATE_DIR, *, processes_gone: bool = False) -> str | None:
     """End every process of ``uid``, clear its keyrings, free its reservation; None, or what survived
-    (then the reservation stays and the uid is never used again)."""
+    (then the reservation stays and the uid is never used again).
+
+    ``processes_gone``: the caller knows no process of the uid is left (the run's cgroup, which
+    every process of the run was born into, was removed: the kernel refuses that while it holds
+    a task), so the scan of /proc is skipped.
+    """
     from swarmdeck.console.jobs.confinement import kill_all_of
 
-    survivors = kill_all_of(uid)
+    survivors = [] if processes_gone else kill_all_of(uid)
     if survivors:
         return f"processes {survivors} of uid {uid} survived the run"
     try:
