@@ -42,6 +42,7 @@ import subprocess
 import sys
 import threading
 import time
+from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
@@ -96,7 +97,7 @@ class ForkServer:
 
     def spawn(self, root: Path, binds: list[tuple[str, Path]], symlinks: list[tuple[str, Path]],
               fds: tuple[int, int, int, int], *, scratch: tuple[Path, str] | None = None,
-              cgroup: list[str] = (), keyring: bool = True) -> int:
+              cgroup: Sequence[str] = (), keyring: bool = True) -> int:
         """Fork a jailed child wired to ``fds`` (to_child_r, from_child_w, log_w, status_w); its pid (process A).
 
         ``scratch``: (path, tmpfs options) of the run's scratch tmpfs; ``cgroup``: the run's
