@@ -134,3 +134,15 @@ def test_cli_allow_no_cgroup_runs_and_warns(tmp_path, monkeypatch, capsys):
     report = json.loads(captured.out[captured.out.index("{\n"):])
     assert report["cgroup"] is None and report["unhardened"][0].startswith("no cgroup")
     assert "warning: no cgroup" in captured.err
+
+
+@needs_cgroup
+def test_a_missing_cpu_controller_is_named_and_the_run_still_has_its_memory_and_pids_limits(jail_run, monkeypatch):
+    if cgroups._layout()[0] != 1:
+        pytest.skip("mounts a hierarchy per controller only in cgroup v1")
+    real = cgroups._mounts()  # this machine without its cpu and cpuset hierarchies
+    monkeypatch.setattr(cgroups, "_mounts", lambda: [m for m in real if not {"cpu", "cpuset"} & m[2]])
+    out = jail_run(HOG.format(size=120 << 20), SandboxLimits(memory=256 << 20, tick_s=30.0))
+    assert out.ended_by == "memory" and out.cgroup in ("v1", "v2")
+    assert out.unhardened == ["the run's cgroup has no cpu or cpuset controller: its CPU time or cores are not "
+                              "limited as a whole"]

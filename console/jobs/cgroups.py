@@ -240,74 +240,78 @@ class RunCgroup:
         return "; ".join(problems) or None
 
 
-def _enable_controllers(folder: Path, controllers: list[str]) -> None:
-    """v2: let ``folder``'s children use ``controllers`` (enabled in every ancestor's subtree_control first)."""
-    chain = [folder, *folder.parents]
-    chain = [p for p in chain if p == CGROUP_ROOT or p.is_relative_to(CGROUP_ROOT)][::-1]
+def _enable(folder: Path, controller: str) -> None:
+    """v2: let ``folder``'s children use ``controller`` (enabled in every ancestor's subtree_control first)."""
+    chain = [p for p in [folder, *folder.parents] if p == CGROUP_ROOT or p.is_relative_to(CGROUP_ROOT)][::-1]
     for parent in chain:
         parent.mkdir(exist_ok=True)
-        enabled = set((parent / "cgroup.subtree_control").read_text().split())
-        wanted = [c for c in controllers if c not in enabled]
-        if wanted:
-            _write(parent / "cgroup.subtree_control", " ".join(f"+{c}" for c in wanted))
+        if controller not in (parent / "cgroup.subtree_control").read_text().split():
+            _write(parent / "cgroup.subtree_control", f"+{controller}")
 
 
 def create(limits: CgroupLimits, name: str | None = None) -> RunCgroup:
     """A new group for one run with ``limits`` applied, empty (a process joins by writing its pid
-    to each of :attr:`RunCgroup.procs_files`). CgroupUnavailable when it cannot be made here."""
+    to each of :attr:`RunCgroup.procs_files`). CgroupUnavailable when it cannot be made here.
+
+    ``memory`` and ``pids`` must work; ``cpu`` or ``cpuset`` that cannot be enabled or set
+    (e.g. v2's ``cpu`` with real-time tasks on the host) are left out and named in
+    :attr:`RunCgroup.missing`.
+    """
     version, parents = _layout()
     label = f"run-{name or os.getpid()}-{secrets.token_hex(4)}"
     folders: dict[str, Path] = {}
-    group = RunCgroup(version, folders, limits, tuple(c for c in OPTIONAL if c not in parents))
+    missing = [c for c in OPTIONAL if c not in parents]
     try:
-        if version == 2:
-            base = parents["memory"]
-            _enable_controllers(base, sorted(parents))
-            folder = base / label
-            folder.mkdir()
-            folders.update({c: folder for c in parents})
-        else:
-            for controller, parent in parents.items():
-                folder = parent / f"swarmdeck-{label}"
-                folder.mkdir()
+        for controller in (*REQUIRED, *(c for c in OPTIONAL if c in parents)):
+            try:
+                if version == 2:
+                    _enable(parents[controller], controller)
+                    folder = parents[controller] / label
+                    folder.mkdir(exist_ok=True)
+                else:
+                    folder = parents[controller] / f"swarmdeck-{label}"
+                    folder.mkdir()
                 folders[controller] = folder
-        _apply(group, parents)
+                _apply(version, controller, folder, parents[controller], limits)
+            except OSError:
+                if controller in REQUIRED:
+                    raise
+                missing.append(controller)
+                if version == 1 and controller in folders:
+                    folders.pop(controller).rmdir()
+                folders.pop(controller, None)
     except OSError as exc:
-        group.remove(timeout=1.0)
+        RunCgroup(version, folders, limits, ()).remove(timeout=1.0)
         raise CgroupUnavailable(f"cannot create the run's cgroup (v{version}): {exc}") from exc
-    return group
+    return RunCgroup(version, folders, limits, tuple(sorted(missing)))
 
 
-def _apply(group: RunCgroup, parents: dict[str, Path]) -> None:
-    limits, folders = group.limits, group.folders
-    quota = max(1000, int(round(limits.cpu_cores * CPU_PERIOD_US)))
-    cpus = ""
-    if "cpuset" in folders:
-        allowed = _cpus((parents["cpuset"] / ("cpuset.cpus.effective" if group.version == 2 else "cpuset.cpus")).read_text())
-        cpus = ",".join(map(str, sorted(set(limits.cpus) & allowed) or sorted(allowed)))
-    if group.version == 2:
-        folder = folders["memory"]
-        _write(folder / "memory.max", str(limits.memory))
-        if (folder / "memory.swap.max").exists():
-            _write(folder / "memory.swap.max", "0")
-        _write(folder / "memory.oom.group", "1")
+def _apply(version: int, controller: str, folder: Path, parent: Path, limits: CgroupLimits) -> None:
+    """Set ``controller``'s limits on the run's ``folder`` (``parent``: the folder it was made in)."""
+    if controller == "memory":
+        if version == 2:
+            _write(folder / "memory.max", str(limits.memory))
+            if (folder / "memory.swap.max").exists():
+                _write(folder / "memory.swap.max", "0")
+            _write(folder / "memory.oom.group", "1")
+        else:
+            _write(folder / "memory.limit_in_bytes", str(limits.memory))
+            if (folder / "memory.memsw.limit_in_bytes").exists():  # swap accounting on: no swap either
+                _write(folder / "memory.memsw.limit_in_bytes", str(limits.memory))
+    elif controller == "pids":
         _write(folder / "pids.max", str(limits.processes))
-        if "cpu" in folders:
+    elif controller == "cpu":
+        quota = max(1000, int(round(limits.cpu_cores * CPU_PERIOD_US)))
+        if version == 2:
             _write(folder / "cpu.max", f"{quota} {CPU_PERIOD_US}")
-        if cpus:
-            _write(folder / "cpuset.cpus", cpus)
-        return
-    memory = folders["memory"]
-    _write(memory / "memory.limit_in_bytes", str(limits.memory))
-    if (memory / "memory.memsw.limit_in_bytes").exists():
-        _write(memory / "memory.memsw.limit_in_bytes", str(limits.memory))
-    _write(folders["pids"] / "pids.max", str(limits.processes))
-    if "cpu" in folders:
-        _write(folders["cpu"] / "cpu.cfs_period_us", str(CPU_PERIOD_US))
-        _write(folders["cpu"] / "cpu.cfs_quota_us", str(quota))
-    if cpus:
-        _write(folders["cpuset"] / "cpuset.cpus", cpus)
-        _write(folders["cpuset"] / "cpuset.mems", (parents["cpuset"] / "cpuset.mems").read_text().strip())
+        else:
+            _write(folder / "cpu.cfs_period_us", str(CPU_PERIOD_US))
+            _write(folder / "cpu.cfs_quota_us", str(quota))
+    elif controller == "cpuset":
+        allowed = _cpus((parent / ("cpuset.cpus.effective" if version == 2 else "cpuset.cpus")).read_text())
+        _write(folder / "cpuset.cpus", ",".join(map(str, sorted(set(limits.cpus) & allowed) or sorted(allowed))))
+        if version == 1:  # v1 starts a group with no memory nodes: none of its tasks could run
+            _write(folder / "cpuset.mems", (parent / "cpuset.mems").read_text().strip())
 
 
 class OomGuard:

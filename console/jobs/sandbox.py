@@ -519,6 +519,9 @@ def _run_sandboxed(bundle: ScriptBundle, make_plant: PlantFactory, *, n_robots: 
                         f"cannot confine untrusted code on this machine: {exc}; pass --allow-no-cgroup to run it "
                         "without a per-run limit of memory, processes and CPU") from exc
                 unhardened.append(f"no cgroup (only per-process limits): {exc}")
+            if group is not None and group.missing:
+                unhardened.append(f"the run's cgroup has no {' or '.join(group.missing)} controller: "
+                                  "its CPU time or cores are not limited as a whole")
         tmpfs = None
         if chosen is not None and hardening.tmpfs:
             tmpfs = scratch_options(limits.scratch_bytes, limits.scratch_inodes, uid)
