@@ -146,3 +146,30 @@ def test_a_missing_cpu_controller_is_named_and_the_run_still_has_its_memory_and_
     assert out.ended_by == "memory" and out.cgroup in ("v1", "v2")
     assert out.unhardened == ["the run's cgroup has no cpu or cpuset controller: its CPU time or cores are not "
                               "limited as a whole"]
+
+
+@needs_cgroup
+def test_groups_left_by_a_killed_server_are_swept_but_live_ones_are_not():
+    limits = cgroups.CgroupLimits(memory=64 << 20, processes=4, cpu_cores=1.0, cpus=tuple(os.sched_getaffinity(0)))
+    stale, fresh, busy = (cgroups.create(limits, name) for name in ("stale", "fresh", "busy"))
+    sleeper = os.fork()
+    if sleeper == 0:  # pragma: no cover
+        import time
+
+        time.sleep(60)
+        os._exit(0)
+    try:
+        for path in busy.procs_files:
+            with open(path, "w") as f:
+                f.write(str(sleeper))
+        for group in (stale, busy):
+            for folder in set(group.folders.values()):
+                os.utime(folder, (1000.0, 1000.0))  # created long ago
+        removed = set(cgroups.sweep())
+        assert removed == set(stale.folders.values())
+        assert all(f.exists() for g in (fresh, busy) for f in g.folders.values())
+    finally:
+        os.kill(sleeper, 9)
+        os.waitpid(sleeper, 0)
+        for group in (stale, fresh, busy):
+            assert group.remove() is None

@@ -20,7 +20,8 @@ starts is inside), and the trusted side removes it after the run
 (:attr:`RunCgroup.missing` names those that were not). :class:`CgroupUnavailable` says
 why no group could be created (not root, no controller mounted, …): then the sandbox
 refuses untrusted code unless the operator allowed runs without one
-(:attr:`swarmdeck.console.jobs.confinement.JailConfig.allow_no_cgroup`).
+(:attr:`swarmdeck.console.jobs.confinement.JailConfig.allow_no_cgroup`). Groups left by a
+swarmdeck killed mid-run are removed by :func:`sweep` (the fork server runs it when it starts).
 """
 from __future__ import annotations
 
@@ -247,6 +248,31 @@ def _enable(folder: Path, controller: str) -> None:
         parent.mkdir(exist_ok=True)
         if controller not in (parent / "cgroup.subtree_control").read_text().split():
             _write(parent / "cgroup.subtree_control", f"+{controller}")
+
+
+STALE_S = 600.0
+"""A run's group older than this (s) and empty is a leftover of a process that died mid-run."""
+
+
+def sweep(min_age_s: float = STALE_S) -> list[Path]:
+    """Remove the empty run groups older than ``min_age_s`` (left by a swarmdeck that was killed
+    mid-run; the kernel refuses to remove a group that holds a process); the folders removed."""
+    try:
+        version, parents = _layout()
+    except CgroupUnavailable:
+        return []
+    pattern = "run-*" if version == 2 else "swarmdeck-run-*"
+    removed = []
+    now = time.time()
+    for parent in set(parents.values()):
+        for folder in parent.glob(pattern):
+            try:
+                if now - folder.stat().st_mtime > min_age_s:
+                    folder.rmdir()
+                    removed.append(folder)
+            except OSError:
+                continue
+    return removed
 
 
 def create(limits: CgroupLimits, name: str | None = None) -> RunCgroup:

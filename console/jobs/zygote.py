@@ -141,6 +141,9 @@ class ForkServer:
 
 @functools.lru_cache(maxsize=4)
 def _server_of(pid: int) -> ForkServer:
+    from swarmdeck.console.jobs.cgroups import sweep
+
+    sweep()  # once per worker process: the empty run groups a killed predecessor left behind
     return ForkServer()
 
 
