@@ -28,6 +28,13 @@ def _syscall() -> ctypes._CFuncPtr:
     return fn
 
 
+def warm() -> None:
+    """Resolve libc's ``syscall`` and this machine's architecture now (before a fork whose child calls
+    :func:`keyctl`)."""
+    _syscall()
+    platform.machine()
+
+
 def keyctl(operation: int, *args: int) -> int:
     """``keyctl(2)``: its result; OSError with the errno when it fails."""
     number = _SYS_KEYCTL.get(platform.machine())

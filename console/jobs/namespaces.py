@@ -54,6 +54,11 @@ def _libc() -> ctypes.CDLL:
     return ctypes.CDLL(None, use_errno=True)
 
 
+def warm() -> None:
+    """Load libc through ctypes now (before a fork whose child mounts)."""
+    _libc().mount, _libc().unshare  # noqa: B018 - resolving the symbols is the point
+
+
 def _check(result: int, what: str) -> None:
     if result != 0:
         errno = ctypes.get_errno()

@@ -77,7 +77,9 @@ from swarmdeck.console.jobs.confinement import (
     kill_all_of,
 )
 from swarmdeck.console.jobs.keyrings import join_session_keyring
+from swarmdeck.console.jobs.keyrings import warm as warm_keyctl
 from swarmdeck.console.jobs.namespaces import mount_scratch, private_mounts, scratch_options
+from swarmdeck.console.jobs.namespaces import warm as warm_mounts
 from swarmdeck.console.jobs.protocol import (
     COMMANDS,
     MESSAGE,
@@ -219,6 +221,8 @@ def _prepare_exec(setup: _Setup, scratch: Path) -> Callable[[], None] | None:
     if not (procs or keyring or tmpfs):
         return None
     target = str(scratch.resolve())
+    warm_keyctl()  # load libc through ctypes here: the forked child must not dlopen (another thread may hold its lock)
+    warm_mounts()
 
     def prepare() -> None:  # runs in the forked child before exec: system calls only
         cgroups.join(procs)
