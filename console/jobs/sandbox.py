@@ -35,12 +35,15 @@ API (for the portal and other callers)::
 ``make_plant(n, initial_poses_or_None) -> Plant`` builds the trusted side's robots
 once the script asked for its Arena (raise ValueError to refuse it: the run ends
 with ``ended_by == "arena"``). The files are copied into a fresh folder that the
-jail binds read-only; the script's working directory is a private scratch folder
-(the only writable place, deleted afterwards). Bundle limits and the checks on
+jail binds read-only; the script's working directory is a private scratch tmpfs
+(the only writable place, limited in bytes and files, gone with the jail). Bundle limits and the checks on
 file names (relative paths only, no symlinks): :mod:`swarmdeck.console.jobs.bundle`;
 invalid bundles raise ValueError naming the problem. Where this machine cannot
 confine code, :class:`~swarmdeck.console.jobs.confinement.ConfinementUnavailable`
-is raised unless ``trusted=True``.
+is raised unless ``trusted=True`` (or, for a missing cgroup, ``jail.allow_no_cgroup``).
+Around every confined run the trusted side reserves the run's uid, creates its cgroup
+and watches it for OOM kills, and afterwards removes the group, kills what is left of
+the uid and clears its keyrings (see :mod:`swarmdeck.console.jobs.confinement`).
 """
 from __future__ import annotations
 
