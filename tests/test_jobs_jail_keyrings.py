@@ -75,7 +75,7 @@ def test_an_inherited_session_keyring_can_be_neither_read_nor_added_to(tmp_path,
     script = tmp_path / "reader.py"
     script.write_text(textwrap.dedent(READER))
     done = subprocess.run([sys.executable, "-c", PLANTED, str(script), jail], capture_output=True, text=True,
-                          timeout=300, check=False)
+                          cwd=tmp_path, timeout=300, check=False)
     assert done.returncode == 0, done.stderr
     result = json.loads(done.stdout.strip().splitlines()[-1])
     assert result["ok"] and result["jail"] == jail, result["error"]

@@ -27,7 +27,8 @@ Everything is allowed except (each answered ``EPERM`` unless said otherwise):
   ``delete_module``, ``reboot``, ``swapon``, ``swapoff``, ``acct``, ``quotactl``,
   ``sethostname``, ``setdomainname``, ``syslog``, ``settimeofday``, ``clock_settime``,
   ``clock_adjtime``, ``adjtimex``, ``iopl``, ``ioperm``, ``vhangup``, ``uselib``,
-  ``lookup_dcookie``, ``personality`` (but the query ``personality(0xffffffff)``), and ``ioctl`` ``TIOCSTI`` / ``TIOCLINUX`` (typing into a terminal).
+  ``lookup_dcookie``, ``personality`` (but the query ``personality(0xffffffff)``), and
+  ``ioctl`` ``TIOCSTI`` / ``TIOCLINUX`` (typing into a terminal).
 
 System calls of another architecture (i386 through ``int 0x80``, x32) kill the process.
 Names libseccomp does not know on this architecture are skipped.
@@ -45,7 +46,7 @@ import platform
 SCMP_ACT_KILL_PROCESS = 0x80000000
 SCMP_ACT_ALLOW = 0x7FFF0000
 _SCMP_ACT_ERRNO = 0x00050000
-SCMP_CMP_NE, SCMP_CMP_EQ, SCMP_CMP_MASKED_EQ = 1, 4, 7
+SCMP_CMP_NE, SCMP_CMP_MASKED_EQ = 1, 7
 SCMP_FLTATR_ACT_BADARCH, SCMP_FLTATR_CTL_NNP = 2, 3
 _SYS_SECCOMP = {"x86_64": 317, "aarch64": 277, "arm64": 277}
 SECCOMP_SET_MODE_FILTER, SECCOMP_FILTER_FLAG_TSYNC = 1, 1
