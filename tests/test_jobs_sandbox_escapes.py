@@ -6,7 +6,7 @@ import textwrap
 import numpy as np
 import pytest
 
-from swarmdeck.console.jobs.confinement import JAILS, JailConfig, SandboxLimits, choose_jail, processes_of, sandbox_uid
+from swarmdeck.console.jobs.confinement import JAILS, JailConfig, SandboxLimits, choose_jail, processes_of
 from swarmdeck.console.jobs.plant import ArenaPlant
 from swarmdeck.console.jobs.sandbox import run_sandboxed
 from swarmdeck.devices.arena import Arena
@@ -114,9 +114,8 @@ def test_a_fork_bomb_ends_the_run_and_leaves_no_process(run, tmp_path):
                 os.fork()
     """, SandboxLimits(processes=16, tick_s=2.0, max_overruns=2))
     assert not out.ok
-    uid = sandbox_uid()
-    if uid is not None:  # root: the child had its own uid; none of its processes survived the run
-        assert processes_of(uid) == []
+    if out.uid is not None:  # root: the child had its own uid; none of its processes survived the run
+        assert processes_of(out.uid) == []
 
 
 def test_allocating_10_gb_is_a_memory_error_not_a_swarmdeck_crash(run, tmp_path):

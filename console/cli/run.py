@@ -38,6 +38,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                              "swarmdeck keeps the simulator and the safety filter")
     parser.add_argument("--trusted", action="store_true",
                         help="with --sandbox: run unconfined (resource limits only) where this machine cannot confine")
+    parser.add_argument("--allow-no-cgroup", action="store_true",
+                        help="with --sandbox: run even where no cgroup can be created for the run (not root, no "
+                             "memory/pids controller): then only per-process limits bound its memory, processes and CPU")
     parser.add_argument("--jail", choices=("unshare", "bwrap"), default=None,
                         help="with --sandbox: confine with this jail only (default: unshare, then bubblewrap)")
     parser.add_argument("--entry", default=None, metavar="FILE",
@@ -61,16 +64,20 @@ def _run_sandboxed(args: argparse.Namespace) -> int:
 
     try:
         outcome = run_sandboxed(args.script, make_plant, entry=args.entry, n_robots=args.robots, duration=args.duration, rps=args.rps,
-                                trusted=args.trusted, jail=JailConfig(order=(args.jail,)) if args.jail else JailConfig())
+                                trusted=args.trusted, jail=JailConfig(order=(args.jail,) if args.jail else JailConfig().order,
+                                                                     allow_no_cgroup=args.allow_no_cgroup))
     except (ConfinementUnavailable, ValueError) as exc:
         raise UsageError(str(exc)) from exc
     if outcome.log:
         print(outcome.log, end="" if outcome.log.endswith("\n") else "\n")
+    for line in outcome.unhardened:
+        print(f"swarmdeck run: warning: {line}", file=sys.stderr)
     report = outcome.plant.arena.report() if outcome.plant is not None else None
     if args.json:
         print(json.dumps({"reports": [report.to_dict()] if report else [], "error": outcome.error,
                           "error_line": outcome.error_line, "ended_by": outcome.ended_by,
-                          "overruns": outcome.overruns}, indent=2))
+                          "overruns": outcome.overruns, "cgroup": outcome.cgroup,
+                          "unhardened": outcome.unhardened}, indent=2))
     elif report is not None:
         print(report)
     if outcome.error_line:

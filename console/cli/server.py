@@ -46,6 +46,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--seed", type=int, default=None, help="seed of the simulated arena's initial poses")
     parser.add_argument("--trusted", action="store_true",
                         help="run scripts unconfined where this machine cannot confine them (bubblewrap missing)")
+    parser.add_argument("--allow-no-cgroup", action="store_true",
+                        help="run scripts even where no cgroup can be created per run (not root, no memory/pids "
+                             "controller): then only per-process limits bound a run's memory, processes and CPU")
     parser.add_argument("--console-port", type=int, default=None, metavar="P",
                         help="also show the running job in the operator's viser view on port P (on --host)")
     parser.add_argument("--log-level", default="warning", choices=("critical", "error", "warning", "info", "debug"),
@@ -84,7 +87,7 @@ def check_arguments(args: argparse.Namespace) -> None:
 
 def main(args: argparse.Namespace) -> int:
     check_arguments(args)
-    from swarmdeck.console.jobs.confinement import probe
+    from swarmdeck.console.jobs.confinement import JailConfig, probe
     from swarmdeck.console.portal.app import bind, create_app, uvicorn_server
     from swarmdeck.console.portal.db import SchemaError
     from swarmdeck.console.portal.livefeed import LiveFeed
@@ -94,7 +97,7 @@ def main(args: argparse.Namespace) -> int:
     from swarmdeck.console.portal.workers import VerificationWorkers, make_executor
     from swarmdeck.devices.fleet.chargers import ChargerLayout
 
-    reason = probe()
+    reason = probe(JailConfig(allow_no_cgroup=args.allow_no_cgroup))
     if reason is not None and not args.trusted:
         raise UsageError(f"cannot confine untrusted code on this machine: {reason}; install bubblewrap "
                          "or pass --trusted")
@@ -104,6 +107,7 @@ def main(args: argparse.Namespace) -> int:
     config = PortalConfig(data=args.data, limits=Limits(fleet=fleet, max_duration=args.max_duration,
                                                         max_upload_bytes=args.max_upload),
                           verify_runs=args.verify_runs, grace_s=args.grace, trusted=args.trusted,
+                          allow_no_cgroup=args.allow_no_cgroup,
                           arena_tick_budget_s=args.tick_budget)
     try:
         executor = make_executor(args.workers, args.ray)

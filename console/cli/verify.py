@@ -36,6 +36,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="per-tick compute budget of the script, wall seconds (default 1.0)")
     parser.add_argument("--trusted", action="store_true",
                         help="run the scripts unconfined where this machine cannot confine them (no jail works)")
+    parser.add_argument("--allow-no-cgroup", action="store_true",
+                        help="verify even where no cgroup can be created per run (not root, no memory/pids controller): "
+                             "then only per-process limits bound a run's memory, processes and CPU")
     parser.add_argument("--jail", choices=("unshare", "bwrap"), default=None,
                         help="confine with this jail only (default: unshare — Linux namespaces around a pre-loaded "
                              "fork server — then bubblewrap)")
@@ -71,7 +74,8 @@ def main(args: argparse.Namespace) -> int:
         limits = SandboxLimits(tick_s=args.tick_budget, wall_s=max(600.0, 20 * args.duration))
         config = VerificationConfig(n_robots=args.robots, duration=args.duration, runs=args.runs, seed=args.seed,
                                     bypass_threshold=args.bypass_threshold, limits=limits, trusted=args.trusted,
-                                    rps=args.rps, jail=JailConfig(order=(args.jail,)) if args.jail else JailConfig())
+                                    rps=args.rps, jail=JailConfig(order=(args.jail,) if args.jail else JailConfig().order,
+                                                                   allow_no_cgroup=args.allow_no_cgroup))
         executor = RayExecutor(args.ray) if args.ray else LocalPoolExecutor(args.workers)
     except (ValueError, RuntimeError) as exc:
         raise UsageError(str(exc)) from exc

@@ -2,7 +2,9 @@
 
 * :mod:`.verification` — ``verify(scripts, config, executor) -> VerificationReport``, verdicts, the JSON report.
 * :mod:`.sandbox` — ``run_sandboxed``: the user's script in a jailed child, poses and commands over a pipe.
-* :mod:`.confinement` — ``SandboxLimits``, the bubblewrap jail, ``probe()`` (can this machine confine?).
+* :mod:`.confinement` — ``SandboxLimits``, ``JailConfig``, the two jails, ``probe()`` (can this machine confine?);
+  the jail's parts: :mod:`.namespaces` and :mod:`.zygote` (the ``unshare`` jail), :mod:`.seccomp` (the filter),
+  :mod:`.keyrings`, :mod:`.uids` (a uid per run), :mod:`.cgroups` (a cgroup per run).
 * :mod:`.plant` — the trusted side's robots: ``ArenaPlant``, ``VerificationRobots`` (disturbances, contacts).
 * :mod:`.executors` — ``SerialExecutor``, ``LocalPoolExecutor``, ``RayExecutor``.
 * :mod:`.report_html` — the self-contained HTML report.

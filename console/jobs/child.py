@@ -3,8 +3,9 @@
 Forked by the fork server (:mod:`swarmdeck.console.jobs.zygote`) inside its ``unshare``
 jail, or started by :mod:`swarmdeck.console.jobs.sandbox` as
 ``python -m swarmdeck.console.jobs.child IN_FD OUT_FD`` inside bubblewrap. It
-reads the ``start`` message, applies its resource limits, drops to its own uid
-(when started as root), and runs the script with
+reads the ``start`` message, applies its resource limits, drops to its run's own uid
+(when started as root), loads the seccomp filter (:mod:`swarmdeck.console.jobs.seccomp`;
+bubblewrap has loaded it already), and runs the script with
 :func:`swarmdeck.devices.runner.run_experiment`: both ``experiment(arena)``
 scripts and unmodified rps scripts work, because every Arena the script builds
 (directly or through the rps ``Robotarium``) gets :class:`PipeRobots` as its
@@ -100,7 +101,8 @@ class PipeRobots:
 
 
 def _confine(start: dict[str, Any]) -> None:
-    """Limits first, then the uid: from here on nothing the script does can raise them again."""
+    """Limits first, then the uid, then the seccomp filter (when the ``start`` message asks for it:
+    bubblewrap loads it itself): from here on nothing the script does can undo them."""
     import resource
 
     for name, value in start.get("rlimits", {}).items():
@@ -118,6 +120,10 @@ def _confine(start: dict[str, Any]) -> None:
         os.setgroups([])
         os.setresgid(uid, uid, uid)
         os.setresuid(uid, uid, uid)
+    if start.get("seccomp"):
+        from swarmdeck.console.jobs.seccomp import filter_program, install
+
+        install(filter_program())
 
 
 def main(argv: list[str]) -> int:

@@ -1,11 +1,11 @@
-"""How a sandboxed child is confined: resource limits and the Linux-namespace jail.
+"""How a sandboxed child is confined: the Linux-namespace jail, the seccomp filter, the run's uid, cgroup and limits.
 
-Two jails build the same thing (REFERENCE.md §11): a new network namespace
+Two jails build the same thing (REFERENCE.md §11, §18): a new network namespace
 (only its own loopback: the host's services, 127.0.0.1 included, are out of
 reach), new pid/ipc/uts/mount namespaces, and a filesystem built from read-only
 binds of what Python needs (the interpreter, its libraries, the installed
 packages, swarmdeck's own modules, :func:`jail_layout`) plus the script's folder
-read-only and a private scratch directory, the only writable place:
+read-only and a private scratch folder, the only writable place:
 
 * ``"unshare"`` — the namespaces made with the kernel's calls, as ``unshare(1)``
   does, around a fork of a pre-imported fork server
@@ -13,12 +13,37 @@ read-only and a private scratch directory, the only writable place:
   no Python start-up per run. Needs root or unprivileged user namespaces.
 * ``"bwrap"`` — Debian's bubblewrap, a new Python process per run.
 
+Both jails add, before any user code runs (issue 24):
+
+* **a fresh anonymous session keyring** (keyrings are not namespaced: the script
+  would otherwise share the keyring of whoever started swarmdeck),
+  :mod:`swarmdeck.console.jobs.keyrings`;
+* **a seccomp filter** built with libseccomp (:mod:`swarmdeck.console.jobs.seccomp`):
+  no keyrings, no new namespaces (``unshare``, ``setns``, ``clone`` with ``CLONE_NEW*``,
+  ``clone3``), no mounts, no io_uring, bpf, perf_event_open, userfaultfd, ptrace,
+  process_vm_*, kexec or modules. bubblewrap loads it with ``--seccomp FD``; the
+  ``unshare`` jail's script process loads it itself after its uid drop. (bubblewrap's
+  ``--disable-userns`` needs ``--unshare-user``, which as root would map the script to
+  host uid 0: not used; the filter refuses every way into a new user namespace.)
+* **a uid of the run's own** when swarmdeck runs as root (:mod:`swarmdeck.console.jobs.uids`:
+  random in 2^20 … 2^31, reserved, never shared with a live holder; after the run all its
+  processes are killed and its user keyrings cleared), so RLIMIT_NPROC bounds a fork
+  bomb (the kernel never enforces it for uid 0), plus no_new_privs;
+* **a cgroup of the run's own** (:mod:`swarmdeck.console.jobs.cgroups`, v2 or v1): the
+  run's total memory without swap (:attr:`SandboxLimits.memory`; an OOM kill ends the run,
+  ``ended_by == "memory"``), processes (``pids.max``), CPU bandwidth and the cores it was
+  given (cpuset: widening its CPU affinity has no effect);
+* **scratch as a tmpfs of its own**, limited in bytes and inodes
+  (:attr:`SandboxLimits.scratch_bytes`, :attr:`SandboxLimits.scratch_inodes`): a full
+  scratch is ``ENOSPC`` for the script, nothing on the host's disk.
+
 :class:`JailConfig` says which to try in which order (default: ``unshare``, then
 ``bwrap``); :func:`choose_jail` picks the first that works here and otherwise says
 why none does — then untrusted code is refused unless the caller passes
-``trusted=True``. When swarmdeck runs as root, the child drops to a uid of its
-own before user code runs (so RLIMIT_NPROC bounds a fork bomb: the kernel never
-enforces it for uid 0), and sets no_new_privs.
+``trusted=True``. Where no cgroup can be created (not root, no controllers), untrusted
+code is likewise refused unless the operator passed ``allow_no_cgroup``
+(``--allow-no-cgroup``); the run's :class:`~swarmdeck.console.jobs.sandbox.SandboxOutcome`
+then says that it ran without one.
 """
 from __future__ import annotations
 
@@ -50,9 +75,14 @@ class SandboxLimits:
         max_overruns: that many overrun ticks in a row end the run.
         address_space: RLIMIT_AS.
         open_files: RLIMIT_NOFILE.
-        processes: RLIMIT_NPROC (processes and threads of the child's uid).
+        processes: RLIMIT_NPROC (processes and threads of the run's uid) and the run cgroup's
+            ``pids.max`` (plus the jail's own two processes).
         file_size: RLIMIT_FSIZE (largest file the child may write in its scratch dir).
         log_bytes: bytes of the child's stdout/stderr kept (the rest is counted, not kept).
+        memory: bytes of memory all the run's processes together may hold (its cgroup; no swap).
+        cpu_cores: CPU bandwidth of the whole run, in cores (its cgroup's quota).
+        scratch_bytes: size of the scratch tmpfs, bytes.
+        scratch_inodes: files and folders the scratch tmpfs can hold.
     """
 
     cpu_s: int = 300
@@ -66,10 +96,15 @@ class SandboxLimits:
     processes: int = 32
     file_size: int = 16 << 20
     log_bytes: int = 64 << 10
+    memory: int = 2 << 30
+    cpu_cores: float = 1.0
+    scratch_bytes: int = 64 << 20
+    scratch_inodes: int = 4096
 
     def __post_init__(self) -> None:
         require_positive(self, ("cpu_s", "wall_s", "boot_s", "startup_s", "tick_s", "max_overruns", "address_space",
-                                "open_files", "processes", "file_size", "log_bytes"))
+                                "open_files", "processes", "file_size", "log_bytes", "memory", "cpu_cores",
+                                "scratch_bytes", "scratch_inodes"))
 
     def rlimits(self) -> dict[str, int]:
         """The setrlimit values the child applies to itself (names of :mod:`resource` constants)."""
@@ -92,10 +127,14 @@ class JailConfig:
     Attributes:
         order: names from :data:`JAILS`.
         bwrap: the bubblewrap executable (a name on PATH or a path).
+        allow_no_cgroup: run untrusted code even where no cgroup can be created for the run
+            (then only the per-process resource limits bound its memory, processes and CPU).
+            An operator's choice (``--allow-no-cgroup``), never the default.
     """
 
     order: tuple[str, ...] = JAILS
     bwrap: str = "bwrap"
+    allow_no_cgroup: bool = False
 
     def __post_init__(self) -> None:
         order = tuple(self.order) if isinstance(self.order, (list, tuple)) else (self.order,)
@@ -143,32 +182,41 @@ def choose_jail(config: JailConfig = JailConfig()) -> tuple[str | None, str | No
 
 
 def probe(config: JailConfig = JailConfig()) -> str | None:
-    """None when some jail of ``config`` works here, else why none does."""
-    return choose_jail(config)[1]
+    """None when this machine can confine untrusted code as ``config`` asks, else why not: no jail of
+    ``config`` works, the seccomp filter cannot be built, or no cgroup can be created for a run
+    (unless ``config.allow_no_cgroup``)."""
+    from swarmdeck.console.jobs import cgroups, seccomp
 
-
-def sandbox_uid() -> int | None:
-    """A uid of the child's own when running as root (so RLIMIT_NPROC applies), else None."""
-    if os.geteuid() != 0:
-        return None
-    return 200000 + os.getpid() % 100000
+    reason = choose_jail(config)[1]
+    if reason is not None:
+        return reason
+    reason = seccomp.probe()
+    if reason is not None:
+        return f"no seccomp filter: {reason}"
+    if not config.allow_no_cgroup and (reason := cgroups.probe()) is not None:
+        return f"{reason}; pass --allow-no-cgroup to run without a per-run limit of memory, processes and CPU"
+    return None
 
 
 def processes_of(uid: int) -> list[int]:
     """Pids of live processes whose real uid is ``uid`` (from /proc/PID/status)."""
     pids = []
+    wanted = f"\nUid:\t{int(uid)}\t".encode()
     for entry in os.listdir("/proc"):
         if not entry.isdigit():
             continue
         try:
-            with open(f"/proc/{entry}/status", encoding="ascii", errors="replace") as f:
-                for line in f:
-                    if line.startswith("Uid:"):
-                        if int(line.split()[1]) == uid:
-                            pids.append(int(entry))
-                        break
-        except (FileNotFoundError, ProcessLookupError, PermissionError, ValueError):
+            fd = os.open(f"/proc/{entry}/status", os.O_RDONLY)
+        except OSError:
             continue
+        try:
+            head = os.read(fd, 2048)  # Uid: is within the first ten lines
+        except OSError:
+            continue
+        finally:
+            os.close(fd)
+        if wanted in head:
+            pids.append(int(entry))
     return pids
 
 
@@ -223,28 +271,46 @@ def _visible_paths(script_dir: Path) -> list[tuple[str, Path]]:
 _MERGED_USR_LINKS = ("/lib", "/lib64", "/bin", "/sbin", "/lib32", "/libx32")
 
 
-def jail_layout(script_dir: Path, scratch: Path) -> tuple[list[tuple[str, Path]], list[tuple[str, Path]]]:
-    """What the jail's filesystem holds: binds ``("ro" | "rw", path)`` (each at its own path; the
-    scratch folder the only "rw" one) and symlinks ``(target, path)`` (merged /usr: /lib -> usr/lib)."""
+def jail_layout(script_dir: Path, scratch: Path | None = None
+                ) -> tuple[list[tuple[str, Path]], list[tuple[str, Path]]]:
+    """What the jail's filesystem holds: binds ``("ro" | "rw", path)`` (each at its own path; a
+    host ``scratch`` folder, when given, the only "rw" one — else scratch is a tmpfs the jail
+    mounts itself) and symlinks ``(target, path)`` (merged /usr: /lib -> usr/lib)."""
     symlinks = [(os.readlink(link), link) for link in map(Path, _MERGED_USR_LINKS) if link.is_symlink()]
-    return _visible_paths(script_dir) + [("rw", scratch.resolve())], symlinks
+    rw = [] if scratch is None else [("rw", scratch.resolve())]
+    return _visible_paths(script_dir) + rw, symlinks
 
 
-def bwrap_command(child_argv: list[str], script_dir: Path, scratch: Path, bwrap: str = "bwrap") -> list[str]:
-    """The bubblewrap command line running ``child_argv`` in the jail (scratch writable)."""
+def bwrap_command(child_argv: list[str], script_dir: Path, scratch: Path, bwrap: str = "bwrap", *,
+                  seccomp_fd: int | None = None, scratch_size: int | None = None) -> list[str]:
+    """The bubblewrap command line running ``child_argv`` in the jail (scratch writable).
+
+    ``scratch`` is bound from the host's view at its own path (the trusted side mounts a
+    limited tmpfs there in bwrap's private mount namespace first, see
+    :mod:`swarmdeck.console.jobs.sandbox`) — or, with ``scratch_size``, is a tmpfs of that
+    many bytes bwrap makes itself (``--size``; no inode limit: for runs without root).
+    ``seccomp_fd``: a readable descriptor holding the filter's BPF (``--seccomp``).
+    """
     argv = [shutil.which(bwrap) or bwrap, "--unshare-net", "--unshare-pid", "--unshare-ipc", "--unshare-uts",
             "--die-with-parent", "--new-session", "--proc", "/proc", "--dev", "/dev", "--tmpfs", "/tmp"]
     made: set[Path] = {Path("/"), Path("/proc"), Path("/dev"), Path("/tmp")}
-    binds, symlinks = jail_layout(script_dir, scratch)
+    binds, symlinks = jail_layout(script_dir)
     for target, link in symlinks:
         argv += ["--symlink", target, str(link)]
         made.add(link)
-    for kind, path in binds:
+    scratch = scratch.resolve()
+    for kind, path in [*binds, ("scratch", scratch)]:
         for parent in reversed(path.parents):  # parents first, world-traversable (bwrap makes them 0700)
             if parent not in made:
                 argv += ["--perms", "0755", "--dir", str(parent)]
                 made.add(parent)
-        argv += ["--ro-bind" if kind == "ro" else "--bind", str(path), str(path)]
+        if kind == "scratch":
+            argv += (["--bind", str(path), str(path)] if scratch_size is None else
+                     ["--perms", "0700", "--size", str(int(scratch_size)), "--tmpfs", str(path)])
+        else:
+            argv += ["--ro-bind" if kind == "ro" else "--bind", str(path), str(path)]
         made.add(path)
-    argv += ["--chdir", str(scratch.resolve()), "--"]
+    if seccomp_fd is not None:
+        argv += ["--seccomp", str(seccomp_fd)]
+    argv += ["--chdir", str(scratch), "--"]
     return argv + child_argv

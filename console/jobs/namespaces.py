@@ -9,14 +9,15 @@ again. Per run, three processes:
   and pid namespaces (and a user namespace mapping our uid to 0 when not root) —
   then :func:`build_root`: a private tmpfs root holding read-only bind mounts of
   what Python and swarmdeck need, the script's folder read-only, the scratch
-  folder writable, and /dev's null, zero, full, random, urandom. A waits for B
+  folder (a size- and inode-limited tmpfs of its own), and /dev's null, zero, full,
+  random, urandom. Before that, A joins the run's cgroup and a fresh session keyring. A waits for B
   and reports its exit status and the CPU time of everything below it.
 * **B** (pid 1 of the new pid namespace, the jail's init): :func:`enter_root` —
   /proc of the new pid namespace, ``pivot_root`` into the new root, the old root
   detached, the root remounted read-only — then it forks C and reaps orphans
   until C ends; when B ends, the kernel kills everything left in the namespace.
-* **C** (pid 2): the script (resource limits and the uid drop are the child's own, see
-  :mod:`swarmdeck.console.jobs.child`).
+* **C** (pid 2): the script (resource limits, the uid drop and the seccomp filter are the
+  child's own, see :mod:`swarmdeck.console.jobs.child`).
 
 The network namespace has only a loopback that is down: nothing, not even the
 host's 127.0.0.1, is reachable. Needs root (or unprivileged user namespaces).
@@ -51,6 +52,11 @@ _KEEP = ((os.ST_NOSUID, MS_NOSUID), (os.ST_NODEV, MS_NODEV), (os.ST_NOEXEC, MS_N
 @functools.lru_cache(maxsize=1)
 def _libc() -> ctypes.CDLL:
     return ctypes.CDLL(None, use_errno=True)
+
+
+def warm() -> None:
+    """Load libc through ctypes now (before a fork whose child mounts)."""
+    _libc().mount, _libc().unshare  # noqa: B018 - resolving the symbols is the point
 
 
 def _check(result: int, what: str) -> None:
@@ -106,10 +112,31 @@ def _bind(source: Path, target: Path, read_only: bool, extra: int = 0) -> None:
         _mount(None, target, None, MS_BIND | MS_REMOUNT | (MS_RDONLY if read_only else 0) | extra | _kept_flags(source))
 
 
-def build_root(root: Path, binds: list[tuple[str, Path]], symlinks: list[tuple[str, Path]]) -> None:
+def scratch_options(size: int, inodes: int, uid: int | None) -> str:
+    """tmpfs mount options of a run's scratch: at most ``size`` bytes and ``inodes`` files and
+    folders, mode 0700, owned by ``uid`` (None: by whoever mounts it)."""
+    owner = "" if uid is None else f",uid={int(uid)},gid={int(uid)}"
+    return f"size={int(size)},nr_inodes={int(inodes)},mode=0700{owner}"
+
+
+def mount_scratch(target: str | Path, options: str) -> None:
+    """A fresh tmpfs (options from :func:`scratch_options`) at ``target``, no setuid files, no devices."""
+    _mount("tmpfs", target, "tmpfs", MS_NOSUID | MS_NODEV, options)
+
+
+def private_mounts() -> None:
+    """A mount namespace of this process's own, nothing in it propagating to the host's."""
+    _check(_libc().unshare(ctypes.c_int(CLONE_NEWNS)), "unshare(CLONE_NEWNS)")
+    _mount(None, "/", None, MS_REC | MS_PRIVATE)
+
+
+def build_root(root: Path, binds: list[tuple[str, Path]], symlinks: list[tuple[str, Path]],
+               scratch: tuple[Path, str] | None = None) -> None:
     """In the new mount namespace: a tmpfs at ``root`` (an empty directory) holding ``binds``
-    (``("ro" | "rw", absolute path)``, each at its own path), ``symlinks`` (target, link path)
-    and the /dev nodes of :data:`DEVICES`. Run in process A, after :func:`unshare_all`."""
+    (``("ro" | "rw", absolute path)``, each at its own path), ``symlinks`` (target, link path),
+    the /dev nodes of :data:`DEVICES` and, when ``scratch`` is ``(path, tmpfs options)``, a
+    size- and inode-limited tmpfs at that path (:func:`scratch_options`). Run in process A,
+    after :func:`unshare_all`."""
     _mount(None, "/", None, MS_REC | MS_PRIVATE)  # nothing we mount propagates to the host
     _mount("tmpfs", root, "tmpfs", MS_NOSUID | MS_NODEV, "mode=0755,size=1m")
     for target, link in symlinks:
@@ -118,6 +145,10 @@ def build_root(root: Path, binds: list[tuple[str, Path]], symlinks: list[tuple[s
         inside = root / path.relative_to("/")
         inside.mkdir(parents=True, exist_ok=True)
         _bind(path, inside, read_only=kind == "ro")
+    if scratch is not None:
+        inside = root / Path(scratch[0]).relative_to("/")
+        inside.mkdir(parents=True, exist_ok=True)
+        mount_scratch(inside, scratch[1])
     (root / "dev").mkdir(exist_ok=True)
     for name in DEVICES:
         node = root / "dev" / name

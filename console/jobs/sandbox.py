@@ -35,15 +35,20 @@ API (for the portal and other callers)::
 ``make_plant(n, initial_poses_or_None) -> Plant`` builds the trusted side's robots
 once the script asked for its Arena (raise ValueError to refuse it: the run ends
 with ``ended_by == "arena"``). The files are copied into a fresh folder that the
-jail binds read-only; the script's working directory is a private scratch folder
-(the only writable place, deleted afterwards). Bundle limits and the checks on
+jail binds read-only; the script's working directory is a private scratch tmpfs
+(the only writable place, limited in bytes and files, gone with the jail). Bundle limits and the checks on
 file names (relative paths only, no symlinks): :mod:`swarmdeck.console.jobs.bundle`;
 invalid bundles raise ValueError naming the problem. Where this machine cannot
 confine code, :class:`~swarmdeck.console.jobs.confinement.ConfinementUnavailable`
-is raised unless ``trusted=True``.
+is raised unless ``trusted=True`` (or, for a missing cgroup, ``jail.allow_no_cgroup``).
+Around every confined run the trusted side reserves the run's uid, creates its cgroup
+and watches it for OOM kills, and afterwards removes the group, kills what is left of
+the uid and clears its keyrings (see :mod:`swarmdeck.console.jobs.confinement`).
 """
 from __future__ import annotations
 
+import contextlib
+import logging
 import os
 import select
 import shutil
@@ -62,6 +67,8 @@ import msgspec
 import numpy as np
 from numpy.typing import NDArray
 
+from swarmdeck.console.jobs import cgroups, uids
+from swarmdeck.console.jobs import seccomp as seccomp_filter
 from swarmdeck.console.jobs.bundle import ScriptBundle
 from swarmdeck.console.jobs.confinement import (
     ConfinementUnavailable,
@@ -71,8 +78,11 @@ from swarmdeck.console.jobs.confinement import (
     choose_jail,
     jail_layout,
     kill_all_of,
-    sandbox_uid,
 )
+from swarmdeck.console.jobs.keyrings import join_session_keyring
+from swarmdeck.console.jobs.keyrings import warm as warm_keyctl
+from swarmdeck.console.jobs.namespaces import mount_scratch, private_mounts, scratch_options
+from swarmdeck.console.jobs.namespaces import warm as warm_mounts
 from swarmdeck.console.jobs.protocol import (
     COMMANDS,
     MESSAGE,
@@ -115,11 +125,15 @@ class SandboxOutcome:
     within ``boot_s``), ``"startup"`` (no Arena within
     ``startup_s``), ``"overruns"`` (per-tick budget missed ``max_overruns`` times in a row),
     ``"wall"`` (wall-time limit), ``"crash"`` (the child died: a resource limit, a signal),
+    ``"memory"`` (the run's processes together exceeded ``limits.memory``: the kernel killed them),
     ``"protocol"`` (the child sent something invalid), ``"arena"`` (the Arena it asked for was
     refused), ``"cancelled"``. ``error_line``: the reason in one line (None for clean ends).
     ``jail``: "unshare", "bwrap" or None (unconfined, ``trusted``). ``child_cpu_s``: CPU time of
     the sandboxed processes — measured by the jail's trusted process A with the ``unshare`` jail,
-    else as the script's process reported it (informational, untrusted).
+    else as the script's process reported it (informational, untrusted). ``uid``: the run's own uid
+    (None when swarmdeck is not root or the run was unconfined). ``cgroup``: ``"v1"`` or ``"v2"``,
+    the run's cgroup, or None when it ran without one (``unhardened`` says why).
+    ``unhardened``: what of the hardening this run went without, one line each (empty normally).
     """
 
     ended_by: str = "script"
@@ -130,6 +144,9 @@ class SandboxOutcome:
     overruns: int = 0
     child_cpu_s: float | None = None
     jail: str | None = None
+    uid: int | None = None
+    cgroup: str | None = None
+    unhardened: list[str] = field(default_factory=list)
     log: str = ""
     log_bytes: int = 0
     plant: Any = field(default=None, repr=False)
@@ -171,13 +188,69 @@ class _LogDrain(threading.Thread):
         return text
 
 
+@dataclass(frozen=True)
+class _Hardening:
+    """What a run adds to the jail (issue 24). Always all of it, except for the baseline of
+    bench/bench_sandbox_hardening.py, which passes :data:`_BASELINE` to :func:`_run_sandboxed`
+    directly: no option, config or argument of swarmdeck reaches this."""
+
+    seccomp: bool = True
+    keyring: bool = True
+    cgroup: bool = True
+    tmpfs: bool = True
+    run_uid: bool = True
+
+
+_FULL = _Hardening()
+_BASELINE = _Hardening(seccomp=False, keyring=False, cgroup=False, tmpfs=False, run_uid=False)
+
+
+@dataclass(frozen=True)
+class _Setup:
+    """One run's confinement, made by the trusted side before the child starts."""
+
+    hardening: _Hardening
+    uid: int | None
+    group: cgroups.RunCgroup | None
+    scratch_tmpfs: str | None  # tmpfs options of the scratch, None: a host folder bound read-write
+    scratch_bytes: int
+
+
+def _prepare_exec(setup: _Setup, scratch: Path) -> Callable[[], None] | None:
+    """What bubblewrap's process does before it starts (as root): join the run's cgroup, a fresh
+    session keyring, and a private mount namespace with the scratch tmpfs (bwrap binds it)."""
+    procs = setup.group.procs_files if setup.group is not None else []
+    keyring, tmpfs = setup.hardening.keyring, setup.scratch_tmpfs if os.geteuid() == 0 else None
+    if not (procs or keyring or tmpfs):
+        return None
+    target = str(scratch.resolve())
+    warm_keyctl()  # load libc through ctypes here: the forked child must not dlopen (another thread may hold its lock)
+    warm_mounts()
+
+    def prepare() -> None:  # runs in the forked child before exec: system calls only
+        cgroups.join(procs)
+        if keyring:
+            join_session_keyring()
+        if tmpfs is not None:
+            private_mounts()
+            mount_scratch(target, tmpfs)
+
+    return prepare
+
+
 class _Started:
     """A child started as a new program (bubblewrap, or unconfined): a Popen."""
 
-    def __init__(self, argv: list[str], in_fd: int, out_fd: int, log_fd: int, scratch: Path) -> None:
+    def __init__(self, argv: list[str], in_fd: int, out_fd: int, log_fd: int, scratch: Path, *,
+                 prepare: Callable[[], None] | None = None, extra_fds: tuple[int, ...] = ()) -> None:
         env = dict(CHILD_ENV, HOME=str(scratch), TMPDIR=str(scratch))
-        self.proc = subprocess.Popen(argv, stdin=subprocess.DEVNULL, stdout=log_fd, stderr=log_fd,
-                                     pass_fds=(in_fd, out_fd), env=env, cwd=str(scratch), start_new_session=True)
+        try:
+            self.proc = subprocess.Popen(argv, stdin=subprocess.DEVNULL, stdout=log_fd, stderr=log_fd,
+                                         pass_fds=(in_fd, out_fd, *extra_fds), env=env, cwd=str(scratch),
+                                         start_new_session=True, preexec_fn=prepare)
+        except subprocess.SubprocessError as exc:
+            raise ConfinementUnavailable(f"the jail could not be prepared (the run's cgroup, session keyring "
+                                         f"or scratch tmpfs): {exc}") from exc
         self.error: str | None = None
         self.cpu_s: float | None = None
 
@@ -202,10 +275,10 @@ class _Started:
 class _Forked:
     """A child forked by the fork server into a fresh ``unshare`` jail; process A reports how it ended."""
 
-    def __init__(self, root: Path, binds: list, symlinks: list, fds: tuple[int, int, int]) -> None:
+    def __init__(self, root: Path, binds: list, symlinks: list, fds: tuple[int, int, int], **spawn: Any) -> None:
         self.status_fd, status_w = os.pipe()
         try:
-            self.pid = shared_fork_server().spawn(root, binds, symlinks, (*fds, status_w))
+            self.pid = shared_fork_server().spawn(root, binds, symlinks, (*fds, status_w), **spawn)
         except BaseException:
             os.close(self.status_fd)
             raise
@@ -262,25 +335,43 @@ class _Child:
     """The jailed process and the trusted side's ends of its pipes."""
 
     def __init__(self, jail: str | None, jail_config: JailConfig, folder: Path, scratch: Path,
-                 root: Path | None) -> None:
+                 root: Path | None, setup: _Setup) -> None:
         to_child_r, self.to_child = os.pipe()
         self.from_child, from_child_w = os.pipe()
         self.log, log_w = os.pipe()
+        closing = [to_child_r, from_child_w, log_w]
         try:
+            tmpfs = setup.scratch_tmpfs
             if jail == "unshare":
-                binds, symlinks = jail_layout(folder, scratch)
-                self.process: _Started | _Forked = _Forked(root, binds, symlinks, (to_child_r, from_child_w, log_w))
+                binds, symlinks = jail_layout(folder, scratch if tmpfs is None else None)
+                self.process: _Started | _Forked = _Forked(
+                    root, binds, symlinks, (to_child_r, from_child_w, log_w),
+                    scratch=None if tmpfs is None else (scratch.resolve(), tmpfs),
+                    cgroup=setup.group.procs_files if setup.group is not None else [], keyring=setup.hardening.keyring)
             else:
                 argv = [sys.executable, "-s", "-m", "swarmdeck.console.jobs.child", str(to_child_r), str(from_child_w)]
+                extra: tuple[int, ...] = ()
                 if jail == "bwrap":
-                    argv = bwrap_command(argv, folder, scratch, jail_config.bwrap)
-                self.process = _Started(argv, to_child_r, from_child_w, log_w, scratch)
+                    seccomp_fd = None
+                    if setup.hardening.seccomp:
+                        seccomp_fd, seccomp_w = os.pipe()
+                        closing.append(seccomp_fd)
+                        try:
+                            os.write(seccomp_w, seccomp_filter.filter_program())  # < 1 KiB: fits the pipe
+                        finally:
+                            os.close(seccomp_w)
+                        extra = (seccomp_fd,)
+                    own_tmpfs = tmpfs is not None and os.geteuid() != 0  # no root: bwrap's tmpfs, size only
+                    argv = bwrap_command(argv, folder, scratch, jail_config.bwrap, seccomp_fd=seccomp_fd,
+                                         scratch_size=setup.scratch_bytes if own_tmpfs else None)
+                self.process = _Started(argv, to_child_r, from_child_w, log_w, scratch,
+                                        prepare=_prepare_exec(setup, scratch), extra_fds=extra)
         except BaseException:
             for fd in (self.to_child, self.from_child, self.log):
                 os.close(fd)
             raise
         finally:
-            for fd in (to_child_r, from_child_w, log_w):
+            for fd in closing:
                 os.close(fd)
         self.reader = FrameReader(self.from_child)
         self.poll = select.poll()
@@ -392,26 +483,82 @@ def run_sandboxed(
             bundle = ScriptBundle.from_path(script, entry)
         except OSError as exc:
             raise ValueError(f"cannot read the script {str(script)!r}: {exc}") from exc
+    return _run_sandboxed(bundle, make_plant, n_robots=n_robots, duration=duration, rps=rps, limits=limits,
+                          trusted=trusted, cancelled=cancelled, jail=jail, hardening=_FULL)
+
+
+def _run_sandboxed(bundle: ScriptBundle, make_plant: PlantFactory, *, n_robots: int | None, duration: float | None,
+                   rps: bool | None, limits: SandboxLimits, trusted: bool, cancelled: Callable[[], bool] | None,
+                   jail: JailConfig, hardening: _Hardening) -> SandboxOutcome:
+    """:func:`run_sandboxed` with ``hardening`` (always :data:`_FULL` there)."""
     chosen, reason = choose_jail(jail)
     if chosen is None and not trusted:
         raise ConfinementUnavailable(f"cannot confine untrusted code on this machine: {reason}; "
                                      "pass --trusted to run it unconfined")
+    if chosen is not None and hardening.seccomp and (problem := seccomp_filter.probe()) is not None:
+        raise ConfinementUnavailable(f"cannot confine untrusted code on this machine: no seccomp filter: {problem}")
+    unhardened: list[str] = []
     scratch = Path(tempfile.mkdtemp(prefix="swarmdeck-scratch-"))
     folder = Path(tempfile.mkdtemp(prefix="swarmdeck-script-"))
     root = Path(tempfile.mkdtemp(prefix="swarmdeck-root-")) if chosen == "unshare" else None
+    uid: int | None = None
+    group: cgroups.RunCgroup | None = None
     try:
         os.chmod(folder, 0o755)
         script = bundle.write_to(folder)
-        uid = sandbox_uid() if chosen is not None else None  # unconfined, the child keeps our uid (and our files)
-        if uid is not None:
+        if chosen is not None and os.geteuid() == 0:  # unconfined, the child keeps our uid (and our files)
+            if hardening.run_uid:
+                try:
+                    uid = uids.allocate()
+                except uids.UidUnavailable as exc:
+                    raise ConfinementUnavailable(f"cannot confine untrusted code on this machine: {exc}") from exc
+            else:
+                uid = 200000 + os.getpid() % 100000  # the bench's baseline: the jail before issue 24
             os.chown(scratch, uid, uid)
+        if hardening.cgroup:
+            try:
+                group = cgroups.create(cgroups.CgroupLimits(
+                    memory=limits.memory, processes=limits.processes + 2, cpu_cores=limits.cpu_cores,
+                    cpus=tuple(sorted(os.sched_getaffinity(0)))), name=None if uid is None else str(uid))
+            except cgroups.CgroupUnavailable as exc:
+                if chosen is not None and not (jail.allow_no_cgroup or trusted):
+                    raise ConfinementUnavailable(
+                        f"cannot confine untrusted code on this machine: {exc}; pass --allow-no-cgroup to run it "
+                        "without a per-run limit of memory, processes and CPU") from exc
+                unhardened.append(f"no cgroup (only per-process limits): {exc}")
+            if group is not None and group.missing:
+                unhardened.append(f"the run's cgroup has no {' or '.join(group.missing)} controller: "
+                                  "its CPU time or cores are not limited as a whole")
+        tmpfs = None
+        if chosen is not None and hardening.tmpfs:
+            tmpfs = scratch_options(limits.scratch_bytes, limits.scratch_inodes, uid)
+            if chosen == "bwrap" and os.geteuid() != 0:
+                unhardened.append("scratch has no inode limit (bubblewrap's --size without root)")
+        setup = _Setup(hardening, uid, group, tmpfs, limits.scratch_bytes)
         try:
-            child = _Child(chosen, jail, folder, scratch, root)
+            child = _Child(chosen, jail, folder, scratch, root, setup)
         except ForkServerError as exc:
             raise ConfinementUnavailable(str(exc)) from exc
-        return _loop(child, script, scratch, uid, make_plant, n_robots=n_robots, duration=duration, rps=rps,
-                     limits=limits, cancelled=cancelled, jail=chosen)
+        with cgroups.OomGuard(group) if group is not None else contextlib.nullcontext():
+            outcome = _loop(child, script, scratch, uid, make_plant, n_robots=n_robots, duration=duration, rps=rps,
+                            limits=limits, cancelled=cancelled, jail=chosen,
+                            seccomp=chosen == "unshare" and hardening.seccomp)
+        outcome.uid, outcome.unhardened = uid, unhardened
+        outcome.cgroup = None if group is None else f"v{group.version}"
+        if group is not None and group.oom_kills():
+            line = (f"the run exceeded its memory limit of {limits.memory / (1 << 20):g} MiB (all its processes "
+                    "together): the kernel killed it")
+            outcome.ended_by, outcome.error_line, outcome.error = "memory", line, line
+        return outcome
     finally:
+        emptied = False
+        if group is not None:
+            problem = group.remove()
+            emptied = problem is None  # a removed group held no task: nothing of the run is left
+            if problem is not None:
+                logging.getLogger(__name__).warning("the run's cgroup was not removed cleanly: %s", problem)
+        if uid is not None and hardening.run_uid and (problem := uids.release(uid, processes_gone=emptied)):
+            logging.getLogger(__name__).warning("uid %d is retired: %s", uid, problem)
         shutil.rmtree(scratch, ignore_errors=True)
         shutil.rmtree(folder, ignore_errors=True)
         if root is not None:
@@ -420,7 +567,7 @@ def run_sandboxed(
 
 def _loop(child: _Child, script: Path, scratch: Path, uid: int | None, make_plant: PlantFactory, *,
           n_robots: int | None, duration: float | None, rps: bool | None, limits: SandboxLimits,
-          cancelled: Callable[[], bool] | None, jail: str | None) -> SandboxOutcome:
+          cancelled: Callable[[], bool] | None, jail: str | None, seccomp: bool = False) -> SandboxOutcome:
     """The run: the child's start-up, then one exchange per tick until it ends (see the module docstring)."""
     outcome = SandboxOutcome(jail=jail)
     drain = _LogDrain(child.log, limits.log_bytes)
@@ -433,7 +580,7 @@ def _loop(child: _Child, script: Path, scratch: Path, uid: int | None, make_plan
 
     try:
         child.send({"t": "start", "script": str(script), "n_robots": n_robots, "duration": duration, "rps": rps,
-                    "rlimits": limits.rlimits(), "uid": uid, "scratch": str(scratch)})
+                    "rlimits": limits.rlimits(), "uid": uid, "scratch": str(scratch), "seccomp": seccomp})
         plant: Plant | None = None
         ready: float | None = None  # when the child reported it is loaded and confined
         outstanding = False  # poses sent, commands not yet received

@@ -93,7 +93,7 @@ class VerificationConfig:
         return {"n_robots": self.n_robots, "duration": float(self.duration), "runs": self.runs, "seed": self.seed,
                 "bypass_threshold": float(self.bypass_threshold), "disturbances": self.disturbances.to_dict(),
                 "limits": asdict(self.limits), "rules": asdict(self.rules), "trusted": self.trusted,
-                "jail": list(self.jail.order)}
+                "jail": list(self.jail.order), "allow_no_cgroup": self.jail.allow_no_cgroup}
 
 
 @dataclass(frozen=True)
@@ -146,6 +146,7 @@ def run_task(task: RunTask) -> dict[str, Any]:
         "index": task.index, "mode": task.mode, "ended_by": outcome.ended_by, "error": outcome.error_line,
         "n_robots": outcome.n_robots, "ticks": outcome.ticks, "overruns": outcome.overruns,
         "log": outcome.log[-4000:], "log_bytes": outcome.log_bytes,
+        "cgroup": outcome.cgroup, "unhardened": outcome.unhardened,
     }
     plant = outcome.plant
     if plant is None:

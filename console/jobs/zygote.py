@@ -16,8 +16,14 @@ ends when its control socket closes (the worker process ended), killing the
 runs it started. Requests over the socket (a ``SOCK_SEQPACKET`` pair; msgpack
 maps, the pipe ends passed as file descriptors)::
 
-    {"root": dir, "binds": [["ro"|"rw", path], ...], "symlinks": [[target, link], ...]}
+    {"root": dir, "binds": [["ro"|"rw", path], ...], "symlinks": [[target, link], ...],
+     "scratch": [path, tmpfs options] | None, "cgroup": [cgroup.procs file, ...], "keyring": bool}
         + fds (to_child_r, from_child_w, log_w, status_w)  ->  {"pid": A} | {"error": str}
+
+Process A joins the cgroup (its pid into each file) and, with ``keyring``, a fresh
+anonymous session keyring, before it builds the jail; the script's process loads the
+seccomp filter the zygote built once (:func:`swarmdeck.console.jobs.seccomp.filter_program`)
+when its ``start`` message asks it to.
 
 The run's status pipe gets one msgpack map when the jail's init ends:
 ``{"code": exit code of the script's process (128 + n when killed by signal n),
@@ -36,11 +42,14 @@ import subprocess
 import sys
 import threading
 import time
+from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
 import msgspec
 
+from swarmdeck.console.jobs.cgroups import join as join_cgroup
+from swarmdeck.console.jobs.keyrings import join_session_keyring
 from swarmdeck.console.jobs.namespaces import PR_SET_PDEATHSIG, build_root, enter_root, prctl, probe_in_child, unshare_all
 
 CHILD_ENV = {"PATH": "/usr/bin:/bin", "LANG": "C.UTF-8", "PYTHONHASHSEED": "0", "PYTHONDONTWRITEBYTECODE": "1",
@@ -87,10 +96,17 @@ class ForkServer:
         return self.proc.poll() is None and self.sock.fileno() >= 0
 
     def spawn(self, root: Path, binds: list[tuple[str, Path]], symlinks: list[tuple[str, Path]],
-              fds: tuple[int, int, int, int]) -> int:
-        """Fork a jailed child wired to ``fds`` (to_child_r, from_child_w, log_w, status_w); its pid (process A)."""
+              fds: tuple[int, int, int, int], *, scratch: tuple[Path, str] | None = None,
+              cgroup: Sequence[str] = (), keyring: bool = True) -> int:
+        """Fork a jailed child wired to ``fds`` (to_child_r, from_child_w, log_w, status_w); its pid (process A).
+
+        ``scratch``: (path, tmpfs options) of the run's scratch tmpfs; ``cgroup``: the run's
+        ``cgroup.procs`` files; ``keyring``: a fresh session keyring (see the module docstring).
+        """
         request = {"root": str(root), "binds": [[k, str(p)] for k, p in binds],
-                   "symlinks": [[t, str(p)] for t, p in symlinks]}
+                   "symlinks": [[t, str(p)] for t, p in symlinks],
+                   "scratch": None if scratch is None else [str(scratch[0]), scratch[1]],
+                   "cgroup": list(cgroup), "keyring": bool(keyring)}
         with self.lock:
             try:
                 socket.send_fds(self.sock, [msgspec.msgpack.encode(request)], list(fds))
@@ -125,6 +141,9 @@ class ForkServer:
 
 @functools.lru_cache(maxsize=4)
 def _server_of(pid: int) -> ForkServer:
+    from swarmdeck.console.jobs.cgroups import sweep
+
+    sweep()  # once per worker process: the empty run groups a killed predecessor left behind
     return ForkServer()
 
 
@@ -226,9 +245,14 @@ def _run_a(request: dict[str, Any], fds: list[int]) -> None:
         _keep_only({3: fds[0], 4: fds[1], 1: fds[2], 2: fds[2], 5: fds[3]})
         root = Path(request["root"])
         try:
+            join_cgroup(request.get("cgroup") or [])
+            if request.get("keyring"):
+                join_session_keyring()
             unshare_all()
+            scratch = request.get("scratch")
             build_root(root, [(k, Path(p)) for k, p in request["binds"]],
-                       [(t, Path(p)) for t, p in request["symlinks"]])
+                       [(t, Path(p)) for t, p in request["symlinks"]],
+                       None if scratch is None else (Path(scratch[0]), str(scratch[1])))
         except OSError as exc:
             _send_status(status_fd, {"error": f"the jail could not be built: {exc}"})
             os._exit(0)
@@ -257,6 +281,12 @@ def main(argv: list[str]) -> int:
 
     np.random.seed()  # the first seeding loads its machinery (about 20 ms): once here, not in every run
     np.random.default_rng()
+    from swarmdeck.console.jobs.seccomp import SeccompUnavailable, filter_program
+
+    try:
+        filter_program()  # built once here; every run's script process loads this copy
+    except SeccompUnavailable:
+        pass  # the trusted side probes it and refuses hardened runs (the message says why)
 
     import gc
 

@@ -98,6 +98,7 @@ class PortalConfig:
             end the run (``overruns``); a few missed ticks only stop the robots for those ticks.
         grace_s: the arena run's time limit is the declared duration plus this, s.
         trusted: run scripts unconfined where this machine cannot confine them.
+        allow_no_cgroup: run scripts even where no cgroup can be created per run (``--allow-no-cgroup``).
     """
 
     data: Path
@@ -109,6 +110,7 @@ class PortalConfig:
     arena_overrun_s: float = 1.0
     grace_s: float = 15.0
     trusted: bool = False
+    allow_no_cgroup: bool = False
 
     def arena_budget(self, dt: float, real_time: bool) -> tuple[float, int]:
         """(per-tick compute budget s, missed ticks in a row that end the run) of a script on the arena with

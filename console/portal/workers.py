@@ -15,7 +15,7 @@ import json
 import threading
 from typing import Any
 
-from swarmdeck.console.jobs.confinement import ConfinementUnavailable, SandboxLimits
+from swarmdeck.console.jobs.confinement import ConfinementUnavailable, JailConfig, SandboxLimits
 from swarmdeck.console.jobs.report_html import render_html
 from swarmdeck.console.jobs.verification import VerificationCancelled, VerificationConfig, verify
 from swarmdeck.console.portal.service import PortalService
@@ -61,6 +61,7 @@ class VerificationWorkers:
         cfg = self.service.config
         return VerificationConfig(n_robots=job["robots"], duration=job["duration"], runs=cfg.verify_runs,
                                   seed=cfg.verify_seed + int(job["id"]), trusted=cfg.trusted,
+                                  jail=JailConfig(allow_no_cgroup=cfg.allow_no_cgroup),
                                   limits=SandboxLimits(tick_s=cfg.tick_budget_s,
                                                        wall_s=max(600.0, 20 * job["duration"])))
 
