@@ -74,13 +74,15 @@ class VerificationConfig:
     """What a verification runs and how it decides.
 
     Attributes:
-        n_robots: declared N (None: what the script builds; an Arena built without a count gets 6).
+        n_robots: declared N: a script whose Arena asks for another count is refused at once (None: what
+            the script builds — at most what fits in the arena — and an Arena built without a count gets 6;
+            with ``initial_poses``, their count).
         duration: declared duration, s; every run ends there.
         runs: runs per script (each raw and wrapped).
         seed: base seed; run i uses the seed sequence (seed, i) for its initial conditions and disturbances.
         bypass_threshold: S every raw run must reach (with no contact at all) to bypass the barrier.
         disturbances: pose noise, latency, dropped commands.
-        limits: the sandbox's limits per run.
+        limits: the sandbox's limits per run (its ``wall_s`` is replaced by :attr:`run_wall_s`).
         rules: the Robotarium verifier's thresholds.
         trusted: run scripts unconfined where this machine cannot confine them.
         jail: which jails to try, in order (unshare, then bubblewrap).
