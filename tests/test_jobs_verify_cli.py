@@ -88,3 +88,49 @@ def test_without_confinement_untrusted_code_is_refused_unless_trusted(tmp_path, 
         assert report.verdict == "accepted, may bypass the barrier" and report.to_dict()["config"]["trusted"] is True
     finally:
         confinement.probe_bwrap.cache_clear()
+
+FORWARD = ("import numpy as np\ndef experiment(arena):\n    while True:\n"
+           "        arena.set_unicycle(np.full(arena.n, 0.08), np.zeros(arena.n))\n        arena.step()\n")
+
+
+@confined
+def test_verify_what_you_will_submit_from_its_manifest_or_a_poses_file(tmp_path, capsys):
+    script = tmp_path / "forward.py"
+    script.write_text(FORWARD)
+    manifest = tmp_path / "manifest.json"
+    manifest.write_text(json.dumps({"name": "head-on", "robots": 2, "duration": 1.0, "no_barrier": True,
+                                    "initial_poses": [[-0.115, 0, 0], [0.115, 0, 3.14159]]}))
+    assert main(["verify", str(script), "--manifest", str(manifest), "--runs", "1", "--json"]) == 0
+    report = json.loads(capsys.readouterr().out)
+    jsonschema.validate(report, SCHEMA)
+    assert report["verdict"] == "accepted" and report["config"]["n_robots"] == 2 and report["config"]["duration"] == 1.0
+    assert all(r["start_poses_from"] == "manifest" for r in report["scripts"][0]["runs"])
+    poses = tmp_path / "poses.csv"
+    poses.write_text("x,y,theta\n-0.5,0.5,0\n0.5,0.5,0\n0.0,-0.5,0\n")
+    assert main(["verify", str(script), "--initial-poses", str(poses), "--duration", "0.5", "--runs", "1",
+                 "--paced-runs", "0", "--json"]) == 0
+    report = json.loads(capsys.readouterr().out)
+    assert report["config"]["n_robots"] == 3 and report["config"]["initial_poses"][2] == [0.0, -0.5, 0.0]
+    assert all(r["start_poses_from"] == "manifest" and not r["paced"] for r in report["scripts"][0]["runs"])
+
+
+@pytest.mark.parametrize("manifest,poses,message", [
+    ({"name": "x", "robots": 2, "duration": 1, "initial_poses": [[0, 0, 0], [0.1, 0, 0]]}, None,
+     "poses 0 (0.000, 0.000) and 1 (0.100, 0.000) are 0.100 m apart"),
+    ({"name": "x", "robots": 2, "duration": 1, "colour": "red"}, None, "unknown manifest key 'colour'"),
+    (None, "0,0,0\n3,0,0\n", "pose 1 (3.000, 0.000, 0.000) is outside the arena"),
+    (None, "0,0\n", "expected 3 values x, y, theta"),
+])
+def test_bad_manifests_and_poses_files_exit_2_naming_what_is_wrong(tmp_path, capsys, manifest, poses, message):
+    script = tmp_path / "forward.py"
+    script.write_text(FORWARD)
+    extra = []
+    if manifest is not None:
+        (tmp_path / "m.json").write_text(json.dumps(manifest))
+        extra += ["--manifest", str(tmp_path / "m.json")]
+    if poses is not None:
+        (tmp_path / "p.csv").write_text(poses)
+        extra += ["--initial-poses", str(tmp_path / "p.csv"), "--robots", "2"]
+    assert main(["verify", str(script), "--runs", "1", *extra]) == 2
+    err = capsys.readouterr().err
+    assert len(err.strip().splitlines()) == 1 and message in err, err

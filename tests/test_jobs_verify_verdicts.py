@@ -62,7 +62,7 @@ def test_a_formation_that_never_collides_may_bypass_the_barrier(tmp_path):
     ("garbage", "def experiment(arena):\n    arena.set_velocities('fast')\n",
      "garbage.py:2 (in experiment): ValueError: velocities must be numeric"),
     ("fewer", "import rps.robotarium as robotarium\nr = robotarium.Robotarium(number_of_robots=19)\nr.step()\n",
-     "the script uses 19 robots but declares 20"),
+     "the script asks for 19 robots but the manifest declares 20"),
 ])
 def test_bad_scripts_are_rejected_with_the_reason(tmp_path, name, source, expected):
     n = 20 if name == "fewer" else 3

@@ -23,8 +23,26 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                              "their --entry file with sibling modules importable")
     parser.add_argument("--entry", default=None, metavar="FILE",
                         help="for a directory SCRIPT: the file to run, relative to it (default main.py)")
-    parser.add_argument("--robots", type=int, default=None, metavar="N", help="declared number of robots (default: the script's)")
-    parser.add_argument("--duration", type=float, default=30.0, metavar="S", help="declared duration in simulated seconds (default 30)")
+    parser.add_argument("--manifest", default=None, metavar="M",
+                        help="verify what you will submit: the manifest (JSON, as `swarmdeck submit --manifest` takes) "
+                             "gives robots, duration and initial_poses, checked as the portal checks them")
+    parser.add_argument("--robots", type=int, default=None, metavar="N",
+                        help="declared number of robots: a script whose Arena asks for another number is refused at "
+                             "once, as on the portal (default: the manifest's, else the script's own, at most what "
+                             "fits in the arena)")
+    parser.add_argument("--duration", type=float, default=None, metavar="S",
+                        help="declared duration in simulated seconds (default: the manifest's, else 30); each run's "
+                             "wall time is bounded by it (--wall-factor)")
+    parser.add_argument("--initial-poses", default=None, metavar="FILE",
+                        help="start poses as the arena will use them: CSV, one robot per line x,y,theta (m, m, rad); "
+                             "default: the manifest's, else the script's initial conditions, else random. Every run "
+                             "starts there plus a random set-up error within 2 cm and 5 degrees")
+    parser.add_argument("--wall-factor", type=float, default=4.0, metavar="F",
+                        help="wall-time budget of each run: 30 s start-up + F x the declared duration (default 4); a "
+                             "run that uses it up fails")
+    parser.add_argument("--paced-runs", type=int, default=1, metavar="K",
+                        help="raw runs that tick in real time (33 ms per tick) like the arena, so timing alone does "
+                             "not tell verification apart (default 1)")
     parser.add_argument("--runs", type=int, default=8, metavar="K", help="runs per script, each without and with the barrier (default 8)")
     parser.add_argument("--seed", type=int, default=0, help="base seed of the initial conditions and disturbances (default 0)")
     parser.add_argument("--workers", type=int, default=None, metavar="W", help="local worker processes (default: number of cores)")
@@ -48,6 +66,33 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--html", default=None, metavar="OUT.html", help="write the HTML report there")
 
 
+def _declared(args: argparse.Namespace) -> tuple[int | None, float, tuple | None, str]:
+    """(robots, duration, start poses, who declared the count) from --manifest, --robots, --duration and
+    --initial-poses (the options win over the manifest); UsageError naming what is wrong."""
+    from swarmdeck.console.cli import UsageError
+    from swarmdeck.console.cli.submit import manifest_from
+    from swarmdeck.console.portal.errors import BadInput
+    from swarmdeck.console.portal.submission import Limits, parse_manifest
+    from swarmdeck.console.runtime.fleet_upkeep import read_poses_csv
+
+    robots, duration, poses, declared_by = args.robots, args.duration, None, "--robots"
+    if args.manifest:
+        found = manifest_from(argparse.Namespace(manifest=args.manifest, robots=args.robots, duration=args.duration,
+                                                 name=None, no_barrier=False, script="verify"))
+        try:  # checked as the portal checks it (its fleet size and maximum duration aside)
+            m = parse_manifest(found, Limits(fleet=1 << 20, max_duration=float("inf")))
+        except BadInput as exc:
+            raise UsageError(f"the manifest {args.manifest!r}: {exc}") from None
+        robots, duration, poses = m.robots, m.duration, m.initial_poses
+        declared_by = "--robots" if args.robots is not None else "the manifest"
+    if args.initial_poses:
+        try:
+            poses = tuple(tuple(float(v) for v in row) for row in read_poses_csv(args.initial_poses))
+        except ValueError as exc:
+            raise UsageError(str(exc)) from None
+    return robots, 30.0 if duration is None else duration, poses, declared_by
+
+
 def _progress(total_runs: int):  # type: ignore[no-untyped-def]
     if not sys.stderr.isatty():
         return None, lambda: None
@@ -65,17 +110,20 @@ def main(args: argparse.Namespace) -> int:
     from swarmdeck.console.jobs.report_html import render_html
     from swarmdeck.console.jobs.verification import REJECTED, VerificationConfig, verify
 
-    check_run_arguments(args.robots, args.duration, seed=args.seed)
+    robots, duration, poses, declared_by = _declared(args)
+    check_run_arguments(robots, duration, seed=args.seed)
     if args.runs < 1:
         raise UsageError(f"--runs must be >= 1, got {args.runs}")
     if args.workers is not None and args.workers < 1:
         raise UsageError(f"--workers must be >= 1, got {args.workers}")
     try:
-        limits = SandboxLimits(tick_s=args.tick_budget, wall_s=max(600.0, 20 * args.duration))
-        config = VerificationConfig(n_robots=args.robots, duration=args.duration, runs=args.runs, seed=args.seed,
+        limits = SandboxLimits(tick_s=args.tick_budget)
+        config = VerificationConfig(n_robots=robots, duration=duration, runs=args.runs, seed=args.seed,
                                     bypass_threshold=args.bypass_threshold, limits=limits, trusted=args.trusted,
                                     rps=args.rps, jail=JailConfig(order=(args.jail,) if args.jail else JailConfig().order,
-                                                                   allow_no_cgroup=args.allow_no_cgroup))
+                                                                   allow_no_cgroup=args.allow_no_cgroup),
+                                    initial_poses=poses, declared_by=declared_by, wall_factor=args.wall_factor,
+                                    paced_runs=args.paced_runs)
         executor = RayExecutor(args.ray) if args.ray else LocalPoolExecutor(args.workers)
     except (ValueError, RuntimeError) as exc:
         raise UsageError(str(exc)) from exc

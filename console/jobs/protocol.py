@@ -22,7 +22,8 @@ Messages, parent → child:
 Child → parent:
     ``{"t": "ready"}`` swarmdeck's side of the child is loaded and confined; the script starts now;
     ``{"t": "arena", "n": N, "initial": bytes | None}`` the script built its Arena;
-    ``C`` frames: commands for the poses of tick k;
+    ``C`` frames: commands for the poses of tick k (one per ``P`` frame; a ``k`` other than the last ``P``
+    frame's is a missed tick for the trusted side: robots stopped, simulated time goes on);
     ``{"t": "done", "error": str | None, "error_line": str | None, "cpu_s": s}`` the script finished
     (``cpu_s``: the child's own CPU time, as it reports it: informational only).
 """

@@ -9,9 +9,12 @@ code is refused. This module owns the loop: each tick it sends the poses the
 script may see (one binary frame) and waits — at most the per-tick budget — for
 the script's nominal velocities (one binary frame), then hands them to the
 :class:`Plant` (the simulator with the wheel limits and the safety filter, later
-the real robots). A tick whose
-commands do not arrive in time stops the robots for that tick;
-``max_overruns`` such ticks in a row end the run. Whatever the child does (dies,
+the real robots). A missed tick — no answer within the budget, or an answer
+tagged with another tick's number (stale) — stops the robots for that tick and
+still advances the plant (simulated time goes on), counted in ``overruns``;
+``max_overruns`` such ticks in a row end the run, and the wall-time limit and a
+cancel are checked after every plant step, so nothing the script answers keeps
+a run from ending. Whatever the child does (dies,
 hangs, floods its output, sends garbage), the run ends with a
 :class:`SandboxOutcome` naming the reason, and the child and everything it
 started are killed.
@@ -584,16 +587,32 @@ def _loop(child: _Child, script: Path, scratch: Path, uid: int | None, make_plan
         plant: Plant | None = None
         ready: float | None = None  # when the child reported it is loaded and confined
         outstanding = False  # poses sent, commands not yet received
+        sent = -1  # the tick number of the poses last sent
         consecutive = 0
-        rounds = 0
-        while True:
-            rounds += 1
-            if cancelled is not None and rounds % 16 == 1 and cancelled():  # checked every 16 exchanges
+
+        def missed() -> bool:
+            """The script's answer for this tick is missing, late or stale: the robots stop for it and
+            simulated time advances (True: that was one too many in a row, the run is over)."""
+            nonlocal consecutive
+            outcome.overruns += 1
+            consecutive += 1
+            plant.apply(None)
+            outcome.ticks += 1
+            if consecutive >= limits.max_overruns:
+                end("overruns", f"the script missed its per-tick compute budget of {limits.tick_s:g} s in "
+                                f"{consecutive} ticks in a row (no answer in time, or an answer for another tick; "
+                                f"at t = {plant.observe()[0]:.2f} s)")
+                return True
+            return False
+
+        while True:  # the deadline and a cancel are checked after every plant step
+            if cancelled is not None and cancelled():
                 end("cancelled", "the run was cancelled")
                 break
             now = time.monotonic()
             if now >= wall_deadline:
-                end("wall", f"the script exceeded the wall-time limit of {limits.wall_s:g} s")
+                reached = "" if plant is None else f" (at t = {plant.observe()[0]:.2f} s simulated, {outcome.ticks} ticks)"
+                end("wall", f"the run used up its wall-time limit of {limits.wall_s:g} s{reached}")
                 break
             if ready is None:
                 deadline = min(started + limits.boot_s, wall_deadline)
@@ -619,13 +638,7 @@ def _loop(child: _Child, script: Path, scratch: Path, uid: int | None, make_plan
                     end("startup", f"the script did not build its Arena within {limits.startup_s:g} s "
                                    "(an endless loop at import time?)")
                     break
-                outcome.overruns += 1
-                consecutive += 1
-                plant.apply(None)
-                outcome.ticks += 1
-                if consecutive >= limits.max_overruns:
-                    end("overruns", f"the script overran its per-tick compute budget of {limits.tick_s:g} s "
-                                    f"in {consecutive} ticks in a row (at t = {plant.observe()[0]:.2f} s)")
+                if missed():
                     break
                 if plant.finished():
                     end("duration", None)
@@ -637,13 +650,16 @@ def _loop(child: _Child, script: Path, scratch: Path, uid: int | None, make_plan
                     if plant is None or not outstanding:
                         raise ProtocolError("commands sent before the poses they answer")
                     k, nominal = commands(body, plant.n)
-                    if k != outcome.ticks:
-                        outstanding = False  # commands for stale poses (after an overrun): dropped
+                    outstanding = False
+                    if k != sent:  # an answer for other poses than those sent: a missed tick
+                        if missed():
+                            break
+                    elif k != outcome.ticks:
+                        pass  # the late answer to poses whose tick was already counted missed: dropped
                     else:
                         plant.apply(nominal)
                         outcome.ticks += 1
                         consecutive = 0
-                        outstanding = False
                 elif kind != MESSAGE:
                     raise ProtocolError(f"unexpected {kind!r} frame")
                 else:
@@ -691,7 +707,8 @@ def _loop(child: _Child, script: Path, scratch: Path, uid: int | None, make_plan
                 break
             if not outstanding:
                 t_now, poses = plant.observe()
-                child.send(encode_poses(outcome.ticks, t_now, poses))
+                sent = outcome.ticks
+                child.send(encode_poses(sent, t_now, poses))
                 outstanding = True
     finally:
         clean = outcome.ended_by in ("script", "duration", "error")  # the child exits by itself (its CPU time is counted)

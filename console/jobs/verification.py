@@ -1,8 +1,7 @@
 """Simulation-based verification of untrusted experiment scripts (paper §IV-A, REFERENCE.md §2, §4).
 
-For each script, ``runs`` simulated runs from randomised initial conditions with
-the disturbances of a real arena (:class:`~swarmdeck.console.jobs.plant.Disturbances`),
-each run twice in the sandbox:
+For each script, ``runs`` simulated runs with the disturbances of a real arena
+(:class:`~swarmdeck.console.jobs.plant.Disturbances`), each run twice in the sandbox:
 
 * **raw** — no barrier: measures the safety score S and the contacts (first
   contact time, approach speeds, contact durations, counts per robot);
@@ -14,9 +13,31 @@ each run twice in the sandbox:
 Verdicts: ``rejected`` (with the reasons), ``accepted`` (runs with the barrier),
 ``accepted, may bypass the barrier`` (every raw run clean, S ≥ the threshold in
 every raw run, and no contact at all). Every run is a pure function of the
-script, the config and its index (:func:`run_task`), so any executor gives the
-same report, bit for bit. The report's JSON schema is
+script's commands, the config and its index (:func:`run_task`), so any executor
+gives the same report, bit for bit. The report's JSON schema is
 ``verification_report.schema.json`` beside this module (versioned by ``schema``).
+
+**What runs is what the arena will run.** The script's Arena must have the declared
+robot count (else it is refused at once, before anything is simulated), and every run
+starts from the arena's start poses — the manifest's ``initial_poses``, else the
+script's own initial conditions (checked like the manifest's), else random valid ones:
+one rule, :func:`~swarmdeck.console.jobs.start_poses.arena_start`, shared with the
+arena runner — plus a seeded set-up error within the fleet's tolerance (2 cm, 5°).
+
+**Nothing stalls it.** A missing, late or stale answer is a missed tick (robots stopped,
+simulated time goes on; :mod:`.sandbox`), and every run has a wall-time budget derived
+from the declared duration (:attr:`VerificationConfig.run_wall_s`: ``boot_s`` +
+``wall_factor`` × duration), so a job's verification takes at most
+``2 × runs × run_wall_s`` of worker time; a run that uses its budget up fails with that
+reason.
+
+**Pacing.** The first ``paced_runs`` raw runs tick in real time (one control period per
+tick, as on the arena) instead of as fast as they compute, so a script cannot tell
+verification from the arena by timing alone. Pacing changes when the script is asked,
+never what is simulated: the trusted side is a function of the commands, so the verdict
+of a script that behaves the same either way does not depend on the pacing. A script
+can still find other ways to tell them apart; what keeps the arena safe is the guard
+that watches every run without the barrier (docs/security.md), not this disguise.
 """
 from __future__ import annotations
 
@@ -26,7 +47,7 @@ import shutil
 import tempfile
 import threading
 from collections.abc import Callable, Sequence
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
@@ -37,6 +58,7 @@ from swarmdeck.console.jobs.confinement import JailConfig, SandboxLimits
 from swarmdeck.core.checks import in_range
 from swarmdeck.console.jobs.plant import ArenaPlant, Disturbances, VerificationRobots
 from swarmdeck.console.jobs.sandbox import run_sandboxed
+from swarmdeck.console.jobs.start_poses import arena_start, check_initial_poses, perturb
 from swarmdeck.devices.arena import Arena
 from swarmdeck.devices.initial_conditions import random_initial_poses
 from swarmdeck.devices.simulator import ArenaConfig, SimulatedArena
@@ -52,17 +74,27 @@ class VerificationConfig:
     """What a verification runs and how it decides.
 
     Attributes:
-        n_robots: declared N (None: what the script builds; an Arena built without a count gets 6).
+        n_robots: declared N: a script whose Arena asks for another count is refused at once (None: what
+            the script builds — at most what fits in the arena — and an Arena built without a count gets 6;
+            with ``initial_poses``, their count).
         duration: declared duration, s; every run ends there.
         runs: runs per script (each raw and wrapped).
         seed: base seed; run i uses the seed sequence (seed, i) for its initial conditions and disturbances.
         bypass_threshold: S every raw run must reach (with no contact at all) to bypass the barrier.
         disturbances: pose noise, latency, dropped commands.
-        limits: the sandbox's limits per run.
+        limits: the sandbox's limits per run (its ``wall_s`` is replaced by :attr:`run_wall_s`).
         rules: the Robotarium verifier's thresholds.
         trusted: run scripts unconfined where this machine cannot confine them.
         jail: which jails to try, in order (unshare, then bubblewrap).
         rps: resolve ``import rps`` to swarmdeck's facade (None: when the script imports rps).
+        initial_poses: the manifest's start poses ``(N, 3)`` [x, y, θ] (m, rad), as the arena will use
+            them (None: the script's initial conditions, else random ones).
+        declared_by: who declared ``n_robots``, for the refusal's message ("the manifest", "--robots").
+        wall_factor: wall s each run may take per declared simulated s (above 1: paced runs tick in
+            real time).
+        boot_s: wall s each run may take on top for its start-up (jail, imports, the script's top level).
+        paced_runs: raw runs (indices 0 … paced_runs − 1) that tick in real time, one control period
+            per tick, like the arena.
     """
 
     n_robots: int | None = None
@@ -76,6 +108,11 @@ class VerificationConfig:
     trusted: bool = False
     rps: bool | None = None
     jail: JailConfig = field(default_factory=JailConfig)
+    initial_poses: tuple[tuple[float, float, float], ...] | None = None
+    declared_by: str = "the manifest"
+    wall_factor: float = 4.0
+    boot_s: float = 30.0
+    paced_runs: int = 1
 
     def __post_init__(self) -> None:
         if self.n_robots is not None and not in_range(self.n_robots, 1, integer=True):
@@ -88,12 +125,41 @@ class VerificationConfig:
             raise ValueError(f"seed must be a non-negative integer, got {self.seed!r}")
         if not in_range(self.bypass_threshold, 0.0, 1.0):
             raise ValueError(f"bypass_threshold must be in [0, 1], got {self.bypass_threshold!r}")
+        if not in_range(self.wall_factor, 1.0, lo_open=True):
+            raise ValueError(f"wall_factor must be a number > 1 (wall s per simulated s), got {self.wall_factor!r}")
+        if not in_range(self.boot_s, 0.0, lo_open=True):
+            raise ValueError(f"boot_s must be a number of seconds > 0, got {self.boot_s!r}")
+        if not in_range(self.paced_runs, 0, integer=True):
+            raise ValueError(f"paced_runs must be a non-negative integer, got {self.paced_runs!r}")
+        if self.initial_poses is not None:
+            n = self.n_robots if self.n_robots is not None else len(self.initial_poses)
+            poses = check_initial_poses(self.initial_poses, n, ArenaConfig().bounds, "initial_poses")
+            object.__setattr__(self, "initial_poses", tuple((float(x), float(y), float(t)) for x, y, t in poses))
+            object.__setattr__(self, "n_robots", n)
+
+    @property
+    def run_wall_s(self) -> float:
+        """Wall-time budget of one sandboxed run, s: ``boot_s`` + ``wall_factor`` × ``duration``."""
+        return float(self.boot_s + self.wall_factor * self.duration)
+
+    def job_wall_s(self, scripts: int = 1) -> float:
+        """The most worker time a verification of ``scripts`` scripts can take, s (every run at its budget)."""
+        return 2 * self.runs * scripts * self.run_wall_s
+
+    @property
+    def run_limits(self) -> SandboxLimits:
+        """The sandbox limits of one run: ``limits`` with its wall time the run's budget."""
+        return replace(self.limits, wall_s=self.run_wall_s)
 
     def to_dict(self) -> dict:
         return {"n_robots": self.n_robots, "duration": float(self.duration), "runs": self.runs, "seed": self.seed,
                 "bypass_threshold": float(self.bypass_threshold), "disturbances": self.disturbances.to_dict(),
-                "limits": asdict(self.limits), "rules": asdict(self.rules), "trusted": self.trusted,
-                "jail": list(self.jail.order), "allow_no_cgroup": self.jail.allow_no_cgroup}
+                "limits": asdict(self.run_limits), "rules": asdict(self.rules), "trusted": self.trusted,
+                "jail": list(self.jail.order), "allow_no_cgroup": self.jail.allow_no_cgroup,
+                "initial_poses": None if self.initial_poses is None else [list(p) for p in self.initial_poses],
+                "paced_runs": self.paced_runs,
+                "wall_budget": {"factor": float(self.wall_factor), "boot_s": float(self.boot_s),
+                                "run_s": self.run_wall_s, "job_s": self.job_wall_s()}}
 
 
 @dataclass(frozen=True)
@@ -128,25 +194,41 @@ def _series(values: list[float]) -> list[float]:
 def run_task(task: RunTask) -> dict[str, Any]:
     """Run one task in the sandbox and summarise it as a JSON-ready dict (the same on any executor)."""
     cfg = task.config
-    seeds = np.random.SeedSequence(cfg.seed, spawn_key=(task.index,)).spawn(2)
-    arena_config = ArenaConfig(seed=None)
+    # (seed, index): 0 random start poses, 1 disturbances, 2 set-up error — raw and wrapped of one index alike
+    seeds = np.random.SeedSequence(cfg.seed, spawn_key=(task.index,)).spawn(3)
+    paced = task.mode == "raw" and task.index < cfg.paced_runs
+    arena_config = ArenaConfig(seed=None, real_time=paced)  # paced: each step waits for the next period
     rules = cfg.rules
+    start: dict[str, Any] = {}
+
+    def random_poses(n: int) -> np.ndarray:
+        return random_initial_poses(n, arena_config.bounds, rng=np.random.default_rng(seeds[0]))
 
     def make_plant(n: int, initial: np.ndarray | None) -> ArenaPlant:
-        poses = initial if initial is not None else random_initial_poses(n, arena_config.bounds, rng=np.random.default_rng(seeds[0]))
+        chosen = arena_start(n, cfg.n_robots, cfg.initial_poses, initial, random_poses, arena_config.bounds,
+                             declared_by=cfg.declared_by)
+        poses = perturb(chosen.poses, np.random.default_rng(seeds[2]))
+        start.update(source=chosen.source, poses=poses)
         sim = SimulatedArena(n, poses, config=arena_config, rules=rules)
         robots = VerificationRobots(sim, cfg.disturbances, np.random.default_rng(seeds[1]), contact_distance=sim.params.diameter)
         return ArenaPlant(Arena(backend=robots, config=arena_config, safety=task.mode == "wrapped", duration=cfg.duration))
 
     cancelled = (lambda: os.path.exists(task.cancel_path)) if task.cancel_path else None
     outcome = run_sandboxed(task.bundle, make_plant, n_robots=cfg.n_robots,
-                            duration=cfg.duration, rps=cfg.rps, limits=cfg.limits, trusted=cfg.trusted, jail=cfg.jail,
-                            cancelled=cancelled)
+                            duration=cfg.duration, rps=cfg.rps, limits=cfg.run_limits, trusted=cfg.trusted,
+                            jail=cfg.jail, cancelled=cancelled)
+    error = outcome.error_line
+    if outcome.ended_by == "wall":
+        reached = "" if outcome.plant is None else f" at t = {outcome.plant.arena.time:.2f} s of {cfg.duration:g} s"
+        error = (f"the run used up its verification budget of {cfg.run_wall_s:g} s wall time ({cfg.boot_s:g} s "
+                 f"start-up + {cfg.wall_factor:g} × the declared {cfg.duration:g} s){reached}: the script is too slow")
     result: dict[str, Any] = {
-        "index": task.index, "mode": task.mode, "ended_by": outcome.ended_by, "error": outcome.error_line,
+        "index": task.index, "mode": task.mode, "ended_by": outcome.ended_by, "error": error,
         "n_robots": outcome.n_robots, "ticks": outcome.ticks, "overruns": outcome.overruns,
-        "log": outcome.log[-4000:], "log_bytes": outcome.log_bytes,
+        "log": outcome.log[-4000:], "log_bytes": outcome.log_bytes, "paced": paced,
         "cgroup": outcome.cgroup, "unhardened": outcome.unhardened,
+        "start_poses_from": start.get("source"),
+        "start_poses": [[round(float(v), 6) for v in row] for row in start["poses"][:50]] if start else None,
     }
     plant = outcome.plant
     if plant is None:
@@ -178,8 +260,6 @@ def _run_reasons(run: dict[str, Any], cfg: VerificationConfig) -> list[str]:
     reasons = []
     if run["error"] is not None:
         reasons.append(run["error"])
-    if cfg.n_robots is not None and run["n_robots"] is not None and run["n_robots"] != cfg.n_robots:
-        reasons.append(f"the script uses {run['n_robots']} robots but declares {cfg.n_robots}")
     reasons.extend(run.get("rule_violations") or [])
     if run["safety_filter"] is not None and run["invalid_commands"]:
         reasons.append(f"the script sent {run['invalid_commands']} non-finite (NaN/inf) robot commands (robots stopped)")

@@ -8,8 +8,9 @@ For each job the service hands over (``waiting → setting up``):
    assigned — otherwise it stays ``waiting`` and its ``reason`` says which robots
    are not ready and why (they charge on the strips; the job starts when they
    are). The assigned robots are set up at the job's start poses (the manifest's,
-   else the script's initial conditions, else random valid ones) under the
-   barrier; the job then runs on them as robots 0…N−1
+   else the script's initial conditions, else random valid ones:
+   :func:`~swarmdeck.console.jobs.start_poses.arena_start`, the rule verification
+   uses too) under the barrier; the job then runs on them as robots 0…N−1
    (:class:`~swarmdeck.console.runtime.assigned_robots.AssignedRobots`), the
    docked robots fixed obstacles of its barrier. A set-up that fails (time limit,
    lost robot, a start pose on a docked robot) stops the robots and fails the job
@@ -71,6 +72,7 @@ from numpy.typing import NDArray
 
 from swarmdeck.console.jobs.confinement import ConfinementUnavailable, JailConfig, SandboxLimits
 from swarmdeck.console.jobs.sandbox import SandboxOutcome, run_sandboxed
+from swarmdeck.console.jobs.start_poses import arena_start
 from swarmdeck.console.portal.arena_fleet import ArenaFleet
 from swarmdeck.console.portal.exports import JobExports, write_run_json
 from swarmdeck.console.portal.livefeed import LiveFeed
@@ -391,11 +393,7 @@ class ArenaRunner:
             return self._end_job.is_set()
 
         def make_plant(n_script: int, script_initial: NDArray[np.float64] | None) -> LoopPlant:
-            if n_script != n:
-                raise ValueError(f"the script asks for {n_script} robots but the manifest declares {n}")
-            poses = initial if initial is not None else script_initial
-            if poses is None:
-                poses = self.fleet.start_poses(n)
+            poses = arena_start(n_script, n, initial, script_initial, self.fleet.start_poses, s.bounds).poses
             try:
                 robots = self._set_up(int(job["id"]), np.asarray(poses, dtype=float))
             except ValueError as exc:

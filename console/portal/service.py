@@ -20,7 +20,8 @@ Rules:
   then an operator approves each (``approved → waiting``). Switching it off
   releases the approved jobs.
 * **Queue order**: ``waiting`` jobs run by ``priority`` then id;
-  :meth:`PortalService.move` puts a job at a position.
+  :meth:`PortalService.move` puts a job at a position. Queued jobs are verified
+  round-robin across researchers (:meth:`PortalService.claim_for_verification`).
 * **Barrier bypass**: a run goes without the barrier only if verification
   said "may bypass", the manifest asked for it (``no_barrier``) and no operator
   forbade it (:meth:`PortalService.forbid_barrier`) — :meth:`PortalService.bypass_allowed`.
@@ -477,12 +478,18 @@ class PortalService:
 
     # ------------------------------------------------------------------ workers and runner
     def claim_for_verification(self) -> dict[str, Any] | None:
-        """The oldest queued job, now ``verifying`` (None when there is none)."""
+        """The next queued job, now ``verifying`` (None when there is none): round-robin over the owners
+        of queued jobs — the next owner (by user id) after the one served last, wrapping around — and that
+        owner's oldest queued job, so one researcher's many jobs never make another's wait behind them all.
+        The owner served last is kept in the database (``settings``), so the turn survives a restart."""
         with self.db.transaction() as tx:
-            row = tx.execute("SELECT id FROM jobs WHERE state = 'queued' ORDER BY id LIMIT 1").fetchone()
+            last = int(self.db.setting("verify_last_owner", "0"))
+            row = tx.execute("SELECT id, user_id FROM jobs WHERE state = 'queued' "
+                             "ORDER BY user_id <= ?, user_id, id LIMIT 1", (last,)).fetchone()
             if row is None:
                 return None
             self.db.transition(tx, int(row["id"]), "verifying", sources=("queued",))
+            self.db.set_setting(tx, "verify_last_owner", str(int(row["user_id"])))
         self.notify()
         return _job_dict(self._row(int(row["id"])))
 

@@ -3,8 +3,9 @@
 **Manifest** (JSON object; :func:`parse_manifest`): ``name`` (1-100 printable
 characters), ``robots`` (integer N, 1 … the arena's fleet), ``duration``
 (seconds, > 0 and at most the configured maximum), optional ``initial_poses``
-(N rows ``[x, y, θ]`` in m, rad: checked by ``devices.simulator.check_poses``,
-inside the arena and pairwise at least ``MIN_SEPARATION`` apart), optional
+(N rows ``[x, y, θ]`` in m, rad: checked by ``console.jobs.start_poses.check_initial_poses``,
+inside the arena and pairwise at least ``MIN_SEPARATION`` apart — the same check as a script's own
+initial conditions), optional
 ``no_barrier`` (bool: the request to run without the barrier, granted only if
 verification allows it and no operator forbids it), optional ``entry`` (the
 script inside a ``.zip``). Unknown keys are refused. Every error is a
@@ -37,15 +38,13 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
-from scipy.spatial.distance import pdist
 
 from swarmdeck.console.jobs.bundle import MAX_BYTES, ScriptBundle
+from swarmdeck.console.jobs.start_poses import check_initial_poses
 from swarmdeck.console.portal.errors import BadInput, TooLarge, Unsupported
 from swarmdeck.core.bounds import DEFAULT_BOUNDS, Bounds
-from swarmdeck.devices.simulator import check_poses
 
 MANIFEST_KEYS = ("name", "robots", "duration", "initial_poses", "no_barrier", "entry")
-MIN_SEPARATION = 0.23  # m between initial centres: the look-ahead points start outside D_s (devices.initial_conditions)
 COMPONENT_RE = re.compile(r"^[A-Za-z0-9_][A-Za-z0-9_.-]{0,99}$")
 MANIFEST_NAME = "manifest.json"
 
@@ -147,15 +146,9 @@ def _initial_poses(poses: Any, n: int, bounds: Bounds) -> tuple[tuple[float, flo
     except (TypeError, ValueError):
         raise BadInput("initial_poses must be a list of [x, y, theta] number triples", "initial_poses") from None
     try:
-        arr = check_poses(arr, "initial_poses", n)
+        arr = check_initial_poses(arr, n, bounds, "initial_poses")
     except ValueError as exc:
         raise BadInput(str(exc), "initial_poses") from None
-    x0, x1, y0, y1 = bounds
-    outside = np.flatnonzero((arr[:, 0] < x0) | (arr[:, 0] > x1) | (arr[:, 1] < y0) | (arr[:, 1] > y1))
-    if len(outside):
-        raise BadInput(f"initial pose {int(outside[0])} is outside the arena {tuple(bounds)}", "initial_poses")
-    if n >= 2 and pdist(arr[:, :2]).min() < MIN_SEPARATION:
-        raise BadInput(f"initial positions must be at least {MIN_SEPARATION} m apart", "initial_poses")
     return tuple((float(x), float(y), float(t)) for x, y, t in arr)
 
 

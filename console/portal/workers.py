@@ -1,7 +1,9 @@
 """Verification workers: queued jobs → ``verifying`` → ``rejected`` | ``approved`` (then ``waiting``).
 
-One thread (:class:`VerificationWorkers`) claims the oldest queued job and
-verifies it with :func:`swarmdeck.console.jobs.verification.verify` on the
+One thread (:class:`VerificationWorkers`) claims the next queued job (round-robin
+across researchers: :meth:`~.service.PortalService.claim_for_verification`) and
+verifies it — with the job's declared robot count and start poses, within a wall-time
+budget derived from its declared duration — with :func:`swarmdeck.console.jobs.verification.verify` on the
 executor (``--workers W``: a local process pool of W; ``--ray ADDRESS``: a Ray
 cluster), which runs the job's runs in parallel. The report goes to
 ``DIR/jobs/<id>/report.json`` and ``report.html``, the verdict to the job. A job
@@ -58,12 +60,15 @@ class VerificationWorkers:
             self.verify_job(job)
 
     def config_for(self, job: dict[str, Any]) -> VerificationConfig:
+        """The job's verification: its declared robots, duration and start poses (as the arena will run it);
+        each run's wall time is bounded by the declared duration (``VerificationConfig.run_wall_s``)."""
         cfg = self.service.config
+        poses = job.get("initial_poses")
         return VerificationConfig(n_robots=job["robots"], duration=job["duration"], runs=cfg.verify_runs,
                                   seed=cfg.verify_seed + int(job["id"]), trusted=cfg.trusted,
                                   jail=JailConfig(allow_no_cgroup=cfg.allow_no_cgroup),
-                                  limits=SandboxLimits(tick_s=cfg.tick_budget_s,
-                                                       wall_s=max(600.0, 20 * job["duration"])))
+                                  limits=SandboxLimits(tick_s=cfg.tick_budget_s),
+                                  initial_poses=None if poses is None else tuple(tuple(p) for p in poses))
 
     def verify_job(self, job: dict[str, Any]) -> None:
         """Verify one claimed job and record the verdict (never raises)."""
