@@ -28,16 +28,25 @@ The stages, for ``N`` robots:
 
 Exceptions raised by a filter propagate: the caller decides (the console loop
 counts them, alerts and stops the robots; an ``Arena`` script sees them).
+
+A run whose barrier an operator let it bypass goes through :func:`certify_bypassed` instead: the
+walls and obstacles stay hard (the same filter without pair rows), the full barrier watches in
+monitor mode, and :mod:`swarmdeck.safety.guard` says when the barrier must come back; :func:`brake`
+is its last resort (robots that would bring a pair closer than the guard distance stop).
 """
 from __future__ import annotations
 
 import dataclasses
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from swarmdeck.core.kinematics import GritsBotParams, limit_unicycle, lookahead_points, si_to_unicycle, unicycle_to_si
+from swarmdeck.devices.gritsbot import unicycle_step
+
+if TYPE_CHECKING:
+    from swarmdeck.safety.guard import GuardCheck, GuardConfig
 
 FloatArray = NDArray[np.float64]
 BoolArray = NDArray[np.bool_]
@@ -180,3 +189,72 @@ def _remap(diag: Any, idx: NDArray[np.intp], n: int) -> Any:
     keep = np.all((pairs >= 0) & (pairs < len(idx)), axis=1)  # pairs among robots (not obstacles)
     return dataclasses.replace(diag, active_pairs=idx[pairs[keep]], active_h=np.asarray(diag.active_h)[keep],
                                intervention=inter)
+
+
+def next_points(poses: ArrayLike, v: ArrayLike, w: ArrayLike, robot: GritsBotParams, dt: float) -> FloatArray:
+    """``(N, 2)`` look-ahead points after one period ``dt`` (s) of ``(v, ω)``: the simulator's exact arc
+    (:func:`~swarmdeck.devices.gritsbot.unicycle_step`), m."""
+    return lookahead_points(unicycle_step(poses, v, w, dt), robot.lookahead)
+
+
+def _fixed_points(poses: FloatArray, seen: BoolArray, obstacles: ArrayLike | None, ell: float) -> FloatArray:
+    """Points that do not move this tick: unseen robots' last look-ahead points and ``obstacles`` (M, 2), m."""
+    points = lookahead_points(poses[~seen], ell)
+    parts = [points[np.all(np.isfinite(points), axis=1)]]
+    if obstacles is not None:
+        parts.append(np.asarray(obstacles, dtype=float).reshape(-1, 2))
+    return np.concatenate(parts)
+
+
+def brake(cert: Certified, poses: ArrayLike, robot: GritsBotParams, dt: float, distance: float, *,
+          seen: ArrayLike | None = None, obstacles: ArrayLike | None = None) -> tuple[Certified, BoolArray]:
+    """The guard's last resort: ``cert`` with every robot stopped that would bring a pair of look-ahead
+    points closer than ``distance`` (m, and closer than they are) during the next ``dt`` (s)
+    (:func:`swarmdeck.safety.guard.brake`); and the ``(N,)`` robots stopped."""
+    poses = np.asarray(poses, dtype=float)
+    n = len(poses)
+    seen_mask = np.ones(n, dtype=bool) if seen is None else np.asarray(seen, dtype=bool).reshape(n)
+    stopped = np.zeros(n, dtype=bool)
+    idx = np.flatnonzero(seen_mask)
+    if len(idx) == 0:
+        return cert, stopped
+    ell = robot.lookahead
+    p0 = lookahead_points(poses[idx], ell)
+    p1 = next_points(poses[idx], cert.v[idx], cert.w[idx], robot, dt)
+    from swarmdeck.safety.guard import brake as guard_brake  # devices -> safety (one way)
+
+    stopped[idx] = guard_brake(p0, p1, distance, _fixed_points(poses, seen_mask, obstacles, ell))
+    if not stopped.any():
+        return cert, stopped
+    v, w = np.where(stopped, 0.0, cert.v), np.where(stopped, 0.0, cert.w)
+    safe = unicycle_to_si(np.where(seen_mask[:, None], poses, 0.0), v, w, ell)
+    return dataclasses.replace(cert, v=v, w=w, safe=safe), stopped
+
+
+def certify_bypassed(poses: ArrayLike, nominal: ArrayLike, robot: GritsBotParams, hard: Any, monitor: Any,
+                     guard: "GuardConfig", dt: float, *, seen: ArrayLike | None = None,
+                     obstacles: ArrayLike | None = None, names: ArrayLike | None = None
+                     ) -> tuple[Certified, Certified, "GuardCheck"]:
+    """One tick of a bypassed barrier (module docstring): ``(commands, the full barrier's answer, the guard's
+    verdict)``. The commands are ``hard``'s (walls and obstacles only) unless the guard trips, then the full
+    barrier's (``monitor``). Apply :func:`brake` to what is sent.
+
+    Args:
+        hard: the filter without pair rows (``BarrierConfig(pairs=False)``); monitor: the full barrier.
+        guard: guard distance and intervention threshold; dt: control period, s.
+        names: ``(N,)`` robot ids the guard's reason names (default 0…N−1).
+    """
+    from swarmdeck.safety.guard import check as guard_check
+
+    poses = np.asarray(poses, dtype=float)
+    n = len(poses)
+    seen_mask = np.ones(n, dtype=bool) if seen is None else np.asarray(seen, dtype=bool).reshape(n)
+    kept = certify(poses, nominal, robot, hard, seen=seen_mask, obstacles=obstacles)
+    full = certify(poses, nominal, robot, monitor, seen=seen_mask, obstacles=obstacles)
+    idx = np.flatnonzero(seen_mask)
+    p0 = lookahead_points(poses[idx], robot.lookahead)
+    p1 = next_points(poses[idx], kept.v[idx], kept.w[idx], robot, dt)
+    extra = np.linalg.norm(full.safe[idx] - kept.safe[idx], axis=1)
+    labels = np.arange(n) if names is None else np.asarray(names).reshape(n)
+    check = guard_check(guard, p0, p1, extra, full.ok, full.status, names=labels[idx])
+    return (full if check.trip else kept), full, check
