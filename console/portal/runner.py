@@ -106,7 +106,8 @@ class ArenaSettings:
         seed: seed of the simulated arena's random start poses (None: fresh).
         charge: the simulated robots' state of charge when the server starts, scalar or one per robot.
         upkeep: set-up and return limits, which robots may be assigned (``min_charge``).
-        guard: the guard of a bypassed barrier (guard distance, intervention threshold).
+        guard: the guard of a bypassed barrier (guard distance, intervention threshold); None runs a bypass without
+            it — for trusted tests only (contacts on purpose): no command-line option or file sets it.
     """
 
     robots_via: str | None = None
@@ -117,7 +118,7 @@ class ArenaSettings:
     seed: int | None = None
     charge: float | tuple[float, ...] = 1.0
     upkeep: UpkeepConfig = field(default_factory=UpkeepConfig)
-    guard: GuardConfig = field(default_factory=GuardConfig)
+    guard: GuardConfig | None = field(default_factory=GuardConfig)
 
     @property
     def real_time(self) -> bool:
