@@ -234,27 +234,45 @@ def brake(cert: Certified, poses: ArrayLike, robot: GritsBotParams, dt: float, d
 def certify_bypassed(poses: ArrayLike, nominal: ArrayLike, robot: GritsBotParams, hard: Any, monitor: Any,
                      guard: "GuardConfig", dt: float, *, seen: ArrayLike | None = None,
                      obstacles: ArrayLike | None = None, names: ArrayLike | None = None
-                     ) -> tuple[Certified, Certified, "GuardCheck"]:
-    """One tick of a bypassed barrier (module docstring): ``(commands, the full barrier's answer, the guard's
-    verdict)``. The commands are ``hard``'s (walls and obstacles only) unless the guard trips, then the full
-    barrier's (``monitor``). Apply :func:`brake` to what is sent.
+                     ) -> tuple[Certified, Certified, "GuardCheck", BoolArray]:
+    """One tick of a bypassed barrier (module docstring): ``(commands to send, the full barrier's answer, the
+    guard's verdict, (N,) robots the brake stopped)``. The commands are ``hard``'s (walls and obstacles only) unless
+    the guard trips, then the full barrier's (``monitor``); the brake is applied to them.
+
+    While no pair row of the full barrier is active its answer *is* the walls-and-obstacles answer (the pair rows'
+    multipliers are zero, so the same point is optimal without them; robots inside D_s keep the same modified
+    rows either way): ``hard`` is solved only on ticks where a pair row binds (or the soft recovery ran).
 
     Args:
         hard: the filter without pair rows (``BarrierConfig(pairs=False)``); monitor: the full barrier.
         guard: guard distance and intervention threshold; dt: control period, s.
         names: ``(N,)`` robot ids the guard's reason names (default 0…N−1).
     """
-    from swarmdeck.safety.guard import check as guard_check
+    from swarmdeck.safety.guard import assess
 
     poses = np.asarray(poses, dtype=float)
     n = len(poses)
     seen_mask = np.ones(n, dtype=bool) if seen is None else np.asarray(seen, dtype=bool).reshape(n)
-    kept = certify(poses, nominal, robot, hard, seen=seen_mask, obstacles=obstacles)
     full = certify(poses, nominal, robot, monitor, seen=seen_mask, obstacles=obstacles)
+    diag = full.diagnostics
+    pairs_bind = diag is not None and (len(getattr(diag, "active_pairs", ())) > 0
+                                       or "soft" in str(getattr(diag, "status", "")))  # the soft form: not the QP's optimum
+    kept = certify(poses, nominal, robot, hard, seen=seen_mask, obstacles=obstacles) if full.ok and pairs_bind else full
     idx = np.flatnonzero(seen_mask)
-    p0 = lookahead_points(poses[idx], robot.lookahead)
+    ell = robot.lookahead
+    p0 = lookahead_points(poses[idx], ell)
     p1 = next_points(poses[idx], kept.v[idx], kept.w[idx], robot, dt)
-    extra = np.linalg.norm(full.safe[idx] - kept.safe[idx], axis=1)
+    extra = np.zeros(len(idx)) if kept is full else np.linalg.norm(full.safe[idx] - kept.safe[idx], axis=1)
     labels = np.arange(n) if names is None else np.asarray(names).reshape(n)
-    check = guard_check(guard, p0, p1, extra, full.ok, full.status, names=labels[idx])
-    return (full if check.trip else kept), full, check
+    fixed = _fixed_points(poses, seen_mask, obstacles, ell)
+    verdict, stops = assess(guard, p0, p1, extra, fixed, full.ok, full.status, labels[idx])
+    if verdict.trip:
+        out, stopped = brake(full, poses, robot, dt, guard.guard_distance, seen=seen_mask, obstacles=obstacles)
+        return out, full, verdict, stopped
+    stopped = np.zeros(n, dtype=bool)
+    stopped[idx] = stops
+    if not stopped.any():
+        return kept, full, verdict, stopped
+    v, w = np.where(stopped, 0.0, kept.v), np.where(stopped, 0.0, kept.w)
+    safe = unicycle_to_si(np.where(seen_mask[:, None], poses, 0.0), v, w, ell)
+    return dataclasses.replace(kept, v=v, w=w, safe=safe), full, verdict, stopped

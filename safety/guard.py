@@ -93,16 +93,16 @@ def _candidates(p0: FloatArray, step: FloatArray, distance: float) -> IntArray:
     most the largest of ``step`` (k-d tree, radius ``distance`` + twice the largest displacement)."""
     if p0.shape[0] < 2:
         return np.zeros((0, 2), dtype=np.int64)
-    reach = float(np.sqrt(np.max(np.einsum("kd,kd->k", step, step))))
+    reach = float(np.sqrt(np.max(step[:, 0] * step[:, 0] + step[:, 1] * step[:, 1])))
     pairs = cKDTree(p0).query_pairs(distance + 2.0 * reach + TOLERANCE, output_type="ndarray")
-    return pairs.astype(np.int64).reshape(-1, 2)
+    return pairs.astype(np.int64, copy=False).reshape(-1, 2)
 
 
 def _closest(e0: FloatArray, de: FloatArray) -> FloatArray:
     """Closest approach over the tick of pairs whose offset goes linearly from ``e0`` to ``e0 + de`` (K, 2), m."""
-    dd = np.einsum("kd,kd->k", de, de)
-    s = np.clip(-np.einsum("kd,kd->k", e0, de) / np.where(dd > 0, dd, 1.0), 0.0, 1.0)
-    return np.linalg.norm(e0 + s[:, None] * de, axis=1)
+    dd = de[:, 0] * de[:, 0] + de[:, 1] * de[:, 1]
+    s = np.clip(-(e0[:, 0] * de[:, 0] + e0[:, 1] * de[:, 1]) / np.where(dd > 0, dd, 1.0), 0.0, 1.0)
+    return np.hypot(e0[:, 0] + s * de[:, 0], e0[:, 1] + s * de[:, 1])
 
 
 def approaches(p0: FloatArray, p1: FloatArray, distance: float) -> tuple[IntArray, FloatArray, FloatArray]:
@@ -120,6 +120,28 @@ def approaches(p0: FloatArray, p1: FloatArray, distance: float) -> tuple[IntArra
     return pairs[near], closest[near], np.linalg.norm(e0[near], axis=1)
 
 
+def _verdict(config: GuardConfig, pairs: IntArray, closest: FloatArray, intervention: FloatArray,
+             monitor_ok: bool, monitor_status: str, label: NDArray[np.integer]) -> GuardCheck:
+    """The trip rules (module docstring) on robot pairs ``pairs`` (K, 2) and their closest approaches (K,)."""
+    worst = float(np.max(intervention, initial=0.0))
+    if pairs.shape[0]:
+        k = int(np.argmin(closest))
+        near, pair = float(closest[k]), (int(label[pairs[k, 0]]), int(label[pairs[k, 1]]))
+    else:
+        near, pair = math.inf, (-1, -1)
+    reason = None
+    if not monitor_ok:
+        reason = f"the barrier could not be evaluated ({monitor_status})"
+    elif near < config.guard_distance - TOLERANCE:
+        reason = (f"robots {pair[0]} and {pair[1]} would come {near:.3f} m apart "
+                  f"(guard distance {config.guard_distance:g} m)")
+    elif worst > config.max_intervention:
+        robot = int(label[int(np.argmax(intervention))])
+        reason = (f"the barrier would have changed robot {robot}'s command by {worst:.3f} m/s "
+                  f"(threshold {config.max_intervention:g} m/s)")
+    return GuardCheck(reason is not None, reason, near, pair, worst)
+
+
 def check(config: GuardConfig, p0: FloatArray, p1: FloatArray, intervention: FloatArray,
           monitor_ok: bool = True, monitor_status: str = "", names: NDArray[np.integer] | None = None) -> GuardCheck:
     """Whether the bypass must be revoked this tick (module docstring).
@@ -133,23 +155,42 @@ def check(config: GuardConfig, p0: FloatArray, p1: FloatArray, intervention: Flo
     """
     label = np.arange(p0.shape[0]) if names is None else np.asarray(names).reshape(-1)
     pairs, closest, _ = approaches(p0, p1, config.guard_distance)
-    worst = float(np.max(intervention, initial=0.0))
-    if pairs.shape[0]:
-        k = int(np.argmin(closest))
-        near, pair = float(closest[k]), (int(label[pairs[k, 0]]), int(label[pairs[k, 1]]))
-    else:
-        near, pair = math.inf, (-1, -1)
-    reason = None
-    if not monitor_ok:
-        reason = f"the barrier could not be evaluated ({monitor_status})"
-    elif pairs.shape[0] and near < config.guard_distance - TOLERANCE:
-        reason = (f"robots {pair[0]} and {pair[1]} would come {near:.3f} m apart "
-                  f"(guard distance {config.guard_distance:g} m)")
-    elif worst > config.max_intervention:
-        robot = int(label[int(np.argmax(intervention))])
-        reason = (f"the barrier would have changed robot {robot}'s command by {worst:.3f} m/s "
-                  f"(threshold {config.max_intervention:g} m/s)")
-    return GuardCheck(reason is not None, reason, near, pair, worst)
+    return _verdict(config, pairs, closest, intervention, monitor_ok, monitor_status, label)
+
+
+class _Approaches:
+    """Robots ``p0 → p1`` (N) and fixed points (M) as one set; the candidate pairs of one k-d tree query."""
+
+    def __init__(self, p0: FloatArray, p1: FloatArray, distance: float, fixed: FloatArray | None) -> None:
+        self.n = p0.shape[0]
+        extra = None if fixed is None else np.asarray(fixed, dtype=float).reshape(-1, 2)
+        if extra is None or len(extra) == 0:
+            a0, self.step = p0, p1 - p0
+        else:
+            a0, self.step = np.concatenate([p0, extra]), np.concatenate([p1 - p0, np.zeros_like(extra)])
+        pairs = _candidates(a0, self.step, distance)  # every pair that could come that close, whoever stops
+        self.i, self.j = pairs[:, 0], pairs[:, 1]
+        self.e0 = a0[self.i] - a0[self.j]
+        self.closest = _closest(self.e0, self.step[self.i] - self.step[self.j])
+
+    def stops(self, distance: float) -> NDArray[np.bool_]:
+        """(N,) robots to stop so that no pair comes closer than ``distance`` nor than it is (see :func:`brake`)."""
+        stopped = np.zeros(self.n, dtype=bool)
+        if self.i.size == 0:
+            return stopped
+        bound = np.minimum(distance, np.hypot(self.e0[:, 0], self.e0[:, 1])) - TOLERANCE
+        moving = np.concatenate([np.ones(self.n, dtype=bool), np.zeros(len(self.step) - self.n, dtype=bool)])
+        closest = self.closest
+        for _ in range(self.n + 1):
+            bad = closest < bound
+            if not bad.any():
+                break
+            robots = np.concatenate([self.i[bad], self.j[bad]])
+            moving[robots] = False
+            stopped[robots[robots < self.n]] = True
+            step = np.where(moving[:, None], self.step, 0.0)
+            closest = _closest(self.e0, step[self.i] - step[self.j])
+        return stopped
 
 
 def brake(p0: FloatArray, p1: FloatArray, distance: float, fixed: FloatArray | None = None) -> NDArray[np.bool_]:
@@ -160,27 +201,21 @@ def brake(p0: FloatArray, p1: FloatArray, distance: float, fixed: FloatArray | N
     ``fixed``: ``(M, 2)`` points that do not move (docked robots, unseen robots). A stopped robot's point stays
     at ``p0``; robots are stopped until no moving robot takes part in an approach (at most N rounds, usually one).
     """
-    n = p0.shape[0]
-    extra = np.zeros((0, 2)) if fixed is None else np.asarray(fixed, dtype=float).reshape(-1, 2)
-    a0 = np.concatenate([p0, extra])
-    full = np.concatenate([p1 - p0, np.zeros_like(extra)])
-    stopped = np.zeros(n, dtype=bool)
-    pairs = _candidates(a0, full, distance)  # every pair that could come that close, whoever stops
-    if pairs.shape[0] == 0:
-        return stopped
-    i, j = pairs[:, 0], pairs[:, 1]
-    e0 = a0[i] - a0[j]
-    bound = np.minimum(distance, np.linalg.norm(e0, axis=1)) - TOLERANCE
-    moving = np.concatenate([np.ones(n, dtype=bool), np.zeros(len(extra), dtype=bool)])
-    for _ in range(n + 1):
-        step = np.where(moving[:, None], full, 0.0)
-        bad = _closest(e0, step[i] - step[j]) < bound
-        if not bad.any():
-            break
-        robots = np.concatenate([i[bad], j[bad]])
-        moving[robots] = False
-        stopped[robots[robots < n]] = True
-    return stopped
+    return _Approaches(p0, p1, distance, fixed).stops(distance)
 
 
-__all__ = ["GuardConfig", "GuardCheck", "approaches", "check", "brake", "TOLERANCE"]
+def assess(config: GuardConfig, p0: FloatArray, p1: FloatArray, intervention: FloatArray,
+           fixed: FloatArray | None = None, monitor_ok: bool = True, monitor_status: str = "",
+           names: NDArray[np.integer] | None = None) -> tuple[GuardCheck, NDArray[np.bool_]]:
+    """:func:`check` and :func:`brake` (at the guard distance) of the same tick from one k-d tree query: the
+    verdict, and the robots to stop if the commands that give ``p1`` are sent (the brake of a tripped tick must
+    be recomputed for the full barrier's commands)."""
+    label = np.arange(p0.shape[0]) if names is None else np.asarray(names).reshape(-1)
+    tick = _Approaches(p0, p1, config.guard_distance, fixed)
+    robots = (tick.j < tick.n) & (tick.closest < config.guard_distance)
+    pairs = np.column_stack((tick.i[robots], tick.j[robots]))
+    verdict = _verdict(config, pairs, tick.closest[robots], intervention, monitor_ok, monitor_status, label)
+    return verdict, tick.stops(config.guard_distance)
+
+
+__all__ = ["GuardConfig", "GuardCheck", "approaches", "assess", "check", "brake", "TOLERANCE"]

@@ -611,8 +611,8 @@ class ControlLoop:
             else:
                 cert, barrier = self._certify_guarded(filt, hard, self.guard, sp, ids, poses, points, nominal, movable,
                                                       safety)
-            if self._braking and self.guard is not None and cert is not None:
-                cert = self._brake(cert, poses, movable)
+            if sp.enabled and self._braking and self.guard is not None and cert is not None:
+                cert = self._brake(cert, poses, movable)  # after a bypass (a guarded tick brakes by itself)
         if cert is None or not active or sense.failed or control.failed:
             v, w, safe = np.zeros(n), np.zeros(n), np.zeros((n, 2))
         else:
@@ -741,9 +741,11 @@ class ControlLoop:
         """A tick with the barrier off and the guard on (module docstring, stage 4)."""
         n, d_s = len(poses), sp.safety_distance
         obstacles = getattr(self.sink, "obstacles", None)
-        cert, full, check = certify_bypassed(poses, nominal, self.robot, hard, filt, guard, self.config.dt, seen=seen,
-                                             obstacles=None if obstacles is None else obstacles(), names=ids)
+        cert, full, check, stopped = certify_bypassed(poses, nominal, self.robot, hard, filt, guard, self.config.dt,
+                                                      seen=seen, obstacles=None if obstacles is None else obstacles(),
+                                                      names=ids)
         self._braking = True
+        self._braked(stopped)
         if check.trip:
             self._revoke(check)
         diag = cert.diagnostics
@@ -781,13 +783,18 @@ class ControlLoop:
         obstacles = getattr(self.sink, "obstacles", None)
         out, stopped = brake(cert, poses, self.robot, self.config.dt, self.guard.guard_distance, seen=seen,
                              obstacles=None if obstacles is None else obstacles())
+        self._braked(stopped)
+        return out
+
+    def _braked(self, stopped: NDArray[np.bool_]) -> None:
+        """Count and alert the guard's brake (robots stopped this tick)."""
+        assert self.guard is not None
         if stopped.any():
             self.brakes += 1
         with self._lock:
             self._alert("brake", None if not stopped.any() else
                         f"guard: robots stopped that would come closer than {self.guard.guard_distance:g} m",
                         event=False)
-        return out
 
     def _frame(self, now: float, sensed: SensedPoses, points: NDArray[np.float64], nominal: NDArray[np.float64],
                safe: NDArray[np.float64], v: NDArray[np.float64], w: NDArray[np.float64], barrier: BarrierFrame,
