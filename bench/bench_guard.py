@@ -14,8 +14,9 @@ Per tick, CPU time of this thread (``time.thread_time``; robust to other load on
 * **barrier**: ``devices.pipeline.certify`` with the full unicycle barrier — what every run pays (with the barrier
   on it is the whole safety stage; during a bypass the guard evaluates it in monitor mode);
 * what the guard adds to it during a bypass (``devices.pipeline.certify_bypassed``):
-  - **walls**: ``certify`` with the same filter without pair rows, solved only on ticks where a pair row of the full
-    barrier binds (otherwise the full answer is the walls-and-obstacles answer),
+  - **walls**: ``certify`` with the same filter without pair rows, solved only for the robots of active pair rows of
+    the full barrier (the others' full answer is their walls-and-obstacles answer; nothing to solve on ticks where
+    no pair row binds),
   - **assess**: the prediction over the next tick (exact arc) and ``safety.guard.assess`` (trip rules and brake from
     one k-d tree query);
 * **brake**: after a revocation, ``devices.pipeline.brake`` on the barrier's commands every tick;
@@ -39,7 +40,7 @@ import numpy as np  # noqa: E402
 from swarmdeck.console.runtime.contacts import ContactWatch  # noqa: E402
 from swarmdeck.core.kinematics import GritsBotParams, lookahead_points  # noqa: E402
 from swarmdeck.devices.gritsbot import unicycle_step  # noqa: E402
-from swarmdeck.devices.pipeline import barrier_filter, brake, certify, next_points  # noqa: E402
+from swarmdeck.devices.pipeline import _without_pairs, barrier_filter, brake, certify, next_points  # noqa: E402
 from swarmdeck.safety import BarrierConfig  # noqa: E402
 from swarmdeck.safety.guard import GuardConfig, assess  # noqa: E402
 from swarmdeck.safety.scenes import arena_for, grid_scene  # noqa: E402
@@ -77,7 +78,7 @@ def run(n: int, ticks: int, scene: str, seed: int = 0) -> tuple[dict[str, np.nda
         cert = certify(poses, nominal, robot, full)
         t1 = clock()
         bind = len(cert.diagnostics.active_pairs) > 0 or "soft" in cert.diagnostics.status
-        kept = certify(poses, nominal, robot, walls) if bind else cert
+        kept = _without_pairs(cert, poses, nominal, robot, walls, seen, None)
         t2 = clock()
         p0, p1 = lookahead_points(poses, robot.lookahead), next_points(poses, kept.v, kept.w, robot, DT)
         extra = np.linalg.norm(cert.safe - kept.safe, axis=1) if bind else np.zeros(n)

@@ -43,7 +43,6 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from swarmdeck.core.kinematics import GritsBotParams, limit_unicycle, lookahead_points, si_to_unicycle, unicycle_to_si
-from swarmdeck.devices.gritsbot import unicycle_step
 
 if TYPE_CHECKING:
     from swarmdeck.safety.guard import GuardCheck, GuardConfig
@@ -192,9 +191,16 @@ def _remap(diag: Any, idx: NDArray[np.intp], n: int) -> Any:
 
 
 def next_points(poses: ArrayLike, v: ArrayLike, w: ArrayLike, robot: GritsBotParams, dt: float) -> FloatArray:
-    """``(N, 2)`` look-ahead points after one period ``dt`` (s) of ``(v, ω)``: the simulator's exact arc
-    (:func:`~swarmdeck.devices.gritsbot.unicycle_step`), m."""
-    return lookahead_points(unicycle_step(poses, v, w, dt), robot.lookahead)
+    """``(N, 2)`` look-ahead points after one period ``dt`` (s) of ``(v, ω)``, m: the exact arc the simulator drives
+    (:func:`~swarmdeck.devices.gritsbot.unicycle_step`; chord = v·dt·sinc(a/2) along the mean heading θ + a/2,
+    a = ω·dt), then ℓ ahead along the new heading."""
+    poses = np.asarray(poses, dtype=float)
+    a = np.asarray(w, dtype=float) * dt
+    half = poses[:, 2] + 0.5 * a
+    chord = np.asarray(v, dtype=float) * dt * np.sinc(a / (2 * np.pi))
+    end = poses[:, 2] + a
+    return np.column_stack((poses[:, 0] + chord * np.cos(half) + robot.lookahead * np.cos(end),
+                            poses[:, 1] + chord * np.sin(half) + robot.lookahead * np.sin(end)))
 
 
 def _fixed_points(poses: FloatArray, seen: BoolArray, obstacles: ArrayLike | None, ell: float) -> FloatArray:
@@ -239,9 +245,10 @@ def certify_bypassed(poses: ArrayLike, nominal: ArrayLike, robot: GritsBotParams
     guard's verdict, (N,) robots the brake stopped)``. The commands are ``hard``'s (walls and obstacles only) unless
     the guard trips, then the full barrier's (``monitor``); the brake is applied to them.
 
-    While no pair row of the full barrier is active its answer *is* the walls-and-obstacles answer (the pair rows'
-    multipliers are zero, so the same point is optimal without them; robots inside D_s keep the same modified
-    rows either way): ``hard`` is solved only on ticks where a pair row binds (or the soft recovery ran).
+    Without pair rows the QP falls apart into one small QP per robot, and a robot none of whose pair rows is active
+    in the full barrier has the same optimum in both (its pair rows' multipliers are zero): ``hard`` is solved only
+    for the robots of active pair rows (all seen robots when the full barrier needed its soft recovery form), the
+    others keep the full barrier's answer.
 
     Args:
         hard: the filter without pair rows (``BarrierConfig(pairs=False)``); monitor: the full barrier.
@@ -254,10 +261,7 @@ def certify_bypassed(poses: ArrayLike, nominal: ArrayLike, robot: GritsBotParams
     n = len(poses)
     seen_mask = np.ones(n, dtype=bool) if seen is None else np.asarray(seen, dtype=bool).reshape(n)
     full = certify(poses, nominal, robot, monitor, seen=seen_mask, obstacles=obstacles)
-    diag = full.diagnostics
-    pairs_bind = diag is not None and (len(getattr(diag, "active_pairs", ())) > 0
-                                       or "soft" in str(getattr(diag, "status", "")))  # the soft form: not the QP's optimum
-    kept = certify(poses, nominal, robot, hard, seen=seen_mask, obstacles=obstacles) if full.ok and pairs_bind else full
+    kept = _without_pairs(full, poses, nominal, robot, hard, seen_mask, obstacles) if full.ok else full
     idx = np.flatnonzero(seen_mask)
     ell = robot.lookahead
     p0 = lookahead_points(poses[idx], ell)
@@ -276,3 +280,55 @@ def certify_bypassed(poses: ArrayLike, nominal: ArrayLike, robot: GritsBotParams
     v, w = np.where(stopped, 0.0, kept.v), np.where(stopped, 0.0, kept.w)
     safe = unicycle_to_si(np.where(seen_mask[:, None], poses, 0.0), v, w, ell)
     return dataclasses.replace(kept, v=v, w=w, safe=safe), full, verdict, stopped
+
+
+def _without_pairs(full: Certified, poses: FloatArray, nominal: ArrayLike, robot: GritsBotParams, hard: Any,
+                   seen: BoolArray, obstacles: ArrayLike | None) -> Certified:
+    """The walls-and-obstacles answer from the full barrier's (see :func:`certify_bypassed`): ``hard`` on the robots
+    of active pair rows only, with the robots that are not seen and ``obstacles`` as its fixed points."""
+    diag = full.diagnostics
+    pairs = np.asarray(getattr(diag, "active_pairs", np.zeros((0, 2))), dtype=np.int64).reshape(-1, 2)
+    if "soft" in str(getattr(diag, "status", "")):  # the soft recovery form is not the QP's optimum: all of them
+        rows = np.flatnonzero(seen)
+    else:
+        rows = np.unique(pairs)
+    if rows.size == 0:
+        return full
+    ell = robot.lookahead
+    fixed = _fixed_points(poses, seen, obstacles, ell)
+    v, w = full.v.copy(), full.w.copy()
+    free = _no_rows(hard, lookahead_points(poses[rows], ell), fixed)
+    v[rows[free]], w[rows[free]] = full.v_nominal[rows[free]], full.w_nominal[rows[free]]  # nothing to change
+    rows = rows[~free]
+    if rows.size:
+        sub = certify(poses[rows], np.asarray(nominal, dtype=float)[rows], robot, hard,
+                      obstacles=fixed if len(fixed) else None)
+        if not sub.ok:
+            n = len(poses)
+            zero = np.zeros(n)
+            return dataclasses.replace(full, v=zero, w=zero, safe=np.zeros((n, 2)), ok=False, status=sub.status)
+        v[rows], w[rows] = sub.v, sub.w
+    safe = unicycle_to_si(np.where(seen[:, None], poses, 0.0), v, w, ell)
+    return dataclasses.replace(full, v=v, w=w, safe=safe)
+
+
+def _no_rows(filt: Any, points: FloatArray, fixed: FloatArray) -> BoolArray:
+    """``(K,)`` controlled points for which ``filt`` (a barrier without pair rows) builds no row but the wheel limits:
+    farther from every wall than its wall radius and from every fixed point than its neighbour radius
+    (``BarrierConfig.wall_radius``/``neighbour_radius``: beyond them no row can bind, so the filter is not built
+    there). Their wheel-limited nominal is the filter's answer. All False for a filter without that configuration."""
+    cfg = getattr(filt, "config", None)
+    if cfg is None or not hasattr(cfg, "wall_radius"):
+        return np.zeros(len(points), dtype=bool)
+    x0, x1, y0, y1 = cfg.bounds
+    m = cfg.margin
+    x, y = points[:, 0], points[:, 1]
+    clearance = np.minimum(np.minimum(x1 - m - x, x - x0 - m), np.minimum(y1 - m - y, y - y0 - m))
+    free = clearance > cfg.wall_radius() - m
+    if len(fixed) and free.any():
+        from scipy.spatial import cKDTree  # here, not at import (see devices.validation)
+
+        reach = cfg.neighbour_radius()
+        dist, _ = cKDTree(fixed).query(points, k=1, distance_upper_bound=reach)
+        free &= dist > reach
+    return free
