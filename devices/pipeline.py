@@ -205,6 +205,8 @@ def next_points(poses: ArrayLike, v: ArrayLike, w: ArrayLike, robot: GritsBotPar
 
 def _fixed_points(poses: FloatArray, seen: BoolArray, obstacles: ArrayLike | None, ell: float) -> FloatArray:
     """Points that do not move this tick: unseen robots' last look-ahead points and ``obstacles`` (M, 2), m."""
+    if obstacles is None and seen.all():
+        return np.zeros((0, 2))
     points = lookahead_points(poses[~seen], ell)
     parts = [points[np.all(np.isfinite(points), axis=1)]]
     if obstacles is not None:

@@ -123,7 +123,7 @@ def approaches(p0: FloatArray, p1: FloatArray, distance: float) -> tuple[IntArra
 def _verdict(config: GuardConfig, pairs: IntArray, closest: FloatArray, intervention: FloatArray,
              monitor_ok: bool, monitor_status: str, label: NDArray[np.integer]) -> GuardCheck:
     """The trip rules (module docstring) on robot pairs ``pairs`` (K, 2) and their closest approaches (K,)."""
-    worst = float(np.max(intervention, initial=0.0))
+    worst = float(intervention.max()) if intervention.size else 0.0
     if pairs.shape[0]:
         k = int(np.argmin(closest))
         near, pair = float(closest[k]), (int(label[pairs[k, 0]]), int(label[pairs[k, 1]]))
@@ -213,8 +213,12 @@ def assess(config: GuardConfig, p0: FloatArray, p1: FloatArray, intervention: Fl
     label = np.arange(p0.shape[0]) if names is None else np.asarray(names).reshape(-1)
     tick = _Approaches(p0, p1, config.guard_distance, fixed)
     robots = (tick.j < tick.n) & (tick.closest < config.guard_distance)
-    pairs = np.column_stack((tick.i[robots], tick.j[robots]))
-    verdict = _verdict(config, pairs, tick.closest[robots], intervention, monitor_ok, monitor_status, label)
+    if robots.any():
+        pairs, closest = np.column_stack((tick.i[robots], tick.j[robots])), tick.closest[robots]
+    else:
+        pairs, closest = np.zeros((0, 2), dtype=np.int64), np.zeros(0)
+    verdict = _verdict(config, pairs, closest, np.asarray(intervention, dtype=float), monitor_ok, monitor_status,
+                       label)
     return verdict, tick.stops(config.guard_distance)
 
 
