@@ -613,6 +613,9 @@ class ControlLoop:
                                                       safety)
             if sp.enabled and self._braking and self.guard is not None and cert is not None:
                 cert = self._brake(cert, poses, movable)  # after a bypass (a guarded tick brakes by itself)
+            if sp.enabled:
+                with self._lock:
+                    self._alert("guard", None)  # the barrier is on: nothing for the guard to watch
         if cert is None or not active or sense.failed or control.failed:
             v, w, safe = np.zeros(n), np.zeros(n), np.zeros((n, 2))
         else:
