@@ -19,9 +19,14 @@ never without protection. Every tick, on the trusted side (:func:`swarmdeck.devi
 * :func:`brake` then stops (zero command) every robot that would still bring a pair closer than the guard
   distance during the next tick (and closer than it is now): a robot standing still cannot approach, so
   with exact motion prediction no pair ever comes closer than the guard distance, whatever the script does.
+  It holds from the first bypassed tick to the end of the run, after a revocation too (the barrier's
+  discrete-time drift is a few 0.1 mm per tick). :func:`assess` gives the trip verdict and the brake of a
+  tick from one k-d tree query.
 
-Re-enabling rather than stopping: the barrier keeps the run going safely and the researcher still gets
-data; the brake is only the last resort for what the barrier lets drift.
+Re-enabling rather than stopping: verification's *wrapped* runs already showed the script runs with the
+barrier, so switching it back on puts the run in the mode that was verified; it goes on safely and the
+researcher still gets data (stopping would throw the run away for what may be one close pass). The brake
+is the last resort for what the barrier lets drift.
 
 The guard distance lies between contact (the rps test: centres 0.025 m ahead of the axle at most 0.135 m
 apart, REFERENCE.md §1) and D_s (0.17 m between look-ahead points ℓ = 0.03 m ahead): look-ahead points
