@@ -28,16 +28,24 @@ The stages, for ``N`` robots:
 
 Exceptions raised by a filter propagate: the caller decides (the console loop
 counts them, alerts and stops the robots; an ``Arena`` script sees them).
+
+A run whose barrier an operator let it bypass goes through :func:`certify_bypassed` instead: the
+walls and obstacles stay hard (the same filter without pair rows), the full barrier watches in
+monitor mode, and :mod:`swarmdeck.safety.guard` says when the barrier must come back; :func:`brake`
+is its last resort (robots that would bring a pair closer than the guard distance stop).
 """
 from __future__ import annotations
 
 import dataclasses
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from swarmdeck.core.kinematics import GritsBotParams, limit_unicycle, lookahead_points, si_to_unicycle, unicycle_to_si
+
+if TYPE_CHECKING:
+    from swarmdeck.safety.guard import GuardCheck, GuardConfig
 
 FloatArray = NDArray[np.float64]
 BoolArray = NDArray[np.bool_]
@@ -180,3 +188,149 @@ def _remap(diag: Any, idx: NDArray[np.intp], n: int) -> Any:
     keep = np.all((pairs >= 0) & (pairs < len(idx)), axis=1)  # pairs among robots (not obstacles)
     return dataclasses.replace(diag, active_pairs=idx[pairs[keep]], active_h=np.asarray(diag.active_h)[keep],
                                intervention=inter)
+
+
+def next_points(poses: ArrayLike, v: ArrayLike, w: ArrayLike, robot: GritsBotParams, dt: float) -> FloatArray:
+    """``(N, 2)`` look-ahead points after one period ``dt`` (s) of ``(v, ω)``, m: the exact arc the simulator drives
+    (:func:`~swarmdeck.devices.gritsbot.unicycle_step`; chord = v·dt·sinc(a/2) along the mean heading θ + a/2,
+    a = ω·dt), then ℓ ahead along the new heading."""
+    poses = np.asarray(poses, dtype=float)
+    a = np.asarray(w, dtype=float) * dt
+    half = poses[:, 2] + 0.5 * a
+    chord = np.asarray(v, dtype=float) * dt * np.sinc(a / (2 * np.pi))
+    end = poses[:, 2] + a
+    return np.column_stack((poses[:, 0] + chord * np.cos(half) + robot.lookahead * np.cos(end),
+                            poses[:, 1] + chord * np.sin(half) + robot.lookahead * np.sin(end)))
+
+
+def _fixed_points(poses: FloatArray, seen: BoolArray, obstacles: ArrayLike | None, ell: float) -> FloatArray:
+    """Points that do not move this tick: unseen robots' last look-ahead points and ``obstacles`` (M, 2), m."""
+    if obstacles is None and seen.all():
+        return np.zeros((0, 2))
+    points = lookahead_points(poses[~seen], ell)
+    parts = [points[np.all(np.isfinite(points), axis=1)]]
+    if obstacles is not None:
+        parts.append(np.asarray(obstacles, dtype=float).reshape(-1, 2))
+    return np.concatenate(parts)
+
+
+def brake(cert: Certified, poses: ArrayLike, robot: GritsBotParams, dt: float, distance: float, *,
+          seen: ArrayLike | None = None, obstacles: ArrayLike | None = None) -> tuple[Certified, BoolArray]:
+    """The guard's last resort: ``cert`` with every robot stopped that would bring a pair of look-ahead
+    points closer than ``distance`` (m, and closer than they are) during the next ``dt`` (s)
+    (:func:`swarmdeck.safety.guard.brake`); and the ``(N,)`` robots stopped."""
+    poses = np.asarray(poses, dtype=float)
+    n = len(poses)
+    seen_mask = np.ones(n, dtype=bool) if seen is None else np.asarray(seen, dtype=bool).reshape(n)
+    stopped = np.zeros(n, dtype=bool)
+    idx = np.flatnonzero(seen_mask)
+    if len(idx) == 0:
+        return cert, stopped
+    ell = robot.lookahead
+    p0 = lookahead_points(poses[idx], ell)
+    p1 = next_points(poses[idx], cert.v[idx], cert.w[idx], robot, dt)
+    from swarmdeck.safety.guard import brake as guard_brake  # devices -> safety (one way)
+
+    stopped[idx] = guard_brake(p0, p1, distance, _fixed_points(poses, seen_mask, obstacles, ell))
+    if not stopped.any():
+        return cert, stopped
+    v, w = np.where(stopped, 0.0, cert.v), np.where(stopped, 0.0, cert.w)
+    safe = unicycle_to_si(np.where(seen_mask[:, None], poses, 0.0), v, w, ell)
+    return dataclasses.replace(cert, v=v, w=w, safe=safe), stopped
+
+
+def certify_bypassed(poses: ArrayLike, nominal: ArrayLike, robot: GritsBotParams, hard: Any, monitor: Any,
+                     guard: "GuardConfig", dt: float, *, seen: ArrayLike | None = None,
+                     obstacles: ArrayLike | None = None, names: ArrayLike | None = None
+                     ) -> tuple[Certified, Certified, "GuardCheck", BoolArray]:
+    """One tick of a bypassed barrier (module docstring): ``(commands to send, the full barrier's answer, the
+    guard's verdict, (N,) robots the brake stopped)``. The commands are ``hard``'s (walls and obstacles only) unless
+    the guard trips, then the full barrier's (``monitor``); the brake is applied to them.
+
+    Without pair rows the QP falls apart into one small QP per robot, and a robot none of whose pair rows is active
+    in the full barrier has the same optimum in both (its pair rows' multipliers are zero): ``hard`` is solved only
+    for the robots of active pair rows (all seen robots when the full barrier needed its soft recovery form), the
+    others keep the full barrier's answer.
+
+    Args:
+        hard: the filter without pair rows (``BarrierConfig(pairs=False)``); monitor: the full barrier.
+        guard: guard distance and intervention threshold; dt: control period, s.
+        names: ``(N,)`` robot ids the guard's reason names (default 0…N−1).
+    """
+    from swarmdeck.safety.guard import assess
+
+    poses = np.asarray(poses, dtype=float)
+    n = len(poses)
+    seen_mask = np.ones(n, dtype=bool) if seen is None else np.asarray(seen, dtype=bool).reshape(n)
+    full = certify(poses, nominal, robot, monitor, seen=seen_mask, obstacles=obstacles)
+    kept = _without_pairs(full, poses, nominal, robot, hard, seen_mask, obstacles) if full.ok else full
+    idx = np.flatnonzero(seen_mask)
+    ell = robot.lookahead
+    p0 = lookahead_points(poses[idx], ell)
+    p1 = next_points(poses[idx], kept.v[idx], kept.w[idx], robot, dt)
+    extra = np.zeros(len(idx)) if kept is full else np.linalg.norm(full.safe[idx] - kept.safe[idx], axis=1)
+    labels = np.arange(n) if names is None else np.asarray(names).reshape(n)
+    fixed = _fixed_points(poses, seen_mask, obstacles, ell)
+    verdict, stops = assess(guard, p0, p1, extra, fixed, full.ok, full.status, labels[idx])
+    if verdict.trip:
+        out, stopped = brake(full, poses, robot, dt, guard.guard_distance, seen=seen_mask, obstacles=obstacles)
+        return out, full, verdict, stopped
+    stopped = np.zeros(n, dtype=bool)
+    stopped[idx] = stops
+    if not stopped.any():
+        return kept, full, verdict, stopped
+    v, w = np.where(stopped, 0.0, kept.v), np.where(stopped, 0.0, kept.w)
+    safe = unicycle_to_si(np.where(seen_mask[:, None], poses, 0.0), v, w, ell)
+    return dataclasses.replace(kept, v=v, w=w, safe=safe), full, verdict, stopped
+
+
+def _without_pairs(full: Certified, poses: FloatArray, nominal: ArrayLike, robot: GritsBotParams, hard: Any,
+                   seen: BoolArray, obstacles: ArrayLike | None) -> Certified:
+    """The walls-and-obstacles answer from the full barrier's (see :func:`certify_bypassed`): ``hard`` on the robots
+    of active pair rows only, with the robots that are not seen and ``obstacles`` as its fixed points."""
+    diag = full.diagnostics
+    pairs = np.asarray(getattr(diag, "active_pairs", np.zeros((0, 2))), dtype=np.int64).reshape(-1, 2)
+    if "soft" in str(getattr(diag, "status", "")):  # the soft recovery form is not the QP's optimum: all of them
+        rows = np.flatnonzero(seen)
+    else:
+        rows = np.unique(pairs)
+    if rows.size == 0:
+        return full
+    ell = robot.lookahead
+    fixed = _fixed_points(poses, seen, obstacles, ell)
+    v, w = full.v.copy(), full.w.copy()
+    free = _no_rows(hard, lookahead_points(poses[rows], ell), fixed)
+    v[rows[free]], w[rows[free]] = full.v_nominal[rows[free]], full.w_nominal[rows[free]]  # nothing to change
+    rows = rows[~free]
+    if rows.size:
+        sub = certify(poses[rows], np.asarray(nominal, dtype=float)[rows], robot, hard,
+                      obstacles=fixed if len(fixed) else None)
+        if not sub.ok:
+            n = len(poses)
+            zero = np.zeros(n)
+            return dataclasses.replace(full, v=zero, w=zero, safe=np.zeros((n, 2)), ok=False, status=sub.status)
+        v[rows], w[rows] = sub.v, sub.w
+    safe = unicycle_to_si(np.where(seen[:, None], poses, 0.0), v, w, ell)
+    return dataclasses.replace(full, v=v, w=w, safe=safe)
+
+
+def _no_rows(filt: Any, points: FloatArray, fixed: FloatArray) -> BoolArray:
+    """``(K,)`` controlled points for which ``filt`` (a barrier without pair rows) builds no row but the wheel limits:
+    farther from every wall than its wall radius and from every fixed point than its neighbour radius
+    (``BarrierConfig.wall_radius``/``neighbour_radius``: beyond them no row can bind, so the filter is not built
+    there). Their wheel-limited nominal is the filter's answer. All False for a filter without that configuration."""
+    cfg = getattr(filt, "config", None)
+    if cfg is None or not hasattr(cfg, "wall_radius"):
+        return np.zeros(len(points), dtype=bool)
+    x0, x1, y0, y1 = cfg.bounds
+    m = cfg.margin
+    x, y = points[:, 0], points[:, 1]
+    clearance = np.minimum(np.minimum(x1 - m - x, x - x0 - m), np.minimum(y1 - m - y, y - y0 - m))
+    free = clearance > cfg.wall_radius() - m
+    if len(fixed) and free.any():
+        from scipy.spatial import cKDTree  # here, not at import (see devices.validation)
+
+        reach = cfg.neighbour_radius()
+        dist, _ = cKDTree(fixed).query(points, k=1, distance_upper_bound=reach)
+        free &= dist > reach
+    return free

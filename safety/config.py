@@ -93,6 +93,8 @@ class BarrierConfig:
     sensing_radius: distributed mode: each robot sees the neighbours within this
         distance (m); None → ``neighbour_radius()``. Refused when smaller than the
         distance at which a pair row can bind (``pair_bind_distance()``).
+    pairs: False builds no pair rows: the filter keeps the walls and the fixed obstacles
+        (e.g. docked robots) only — the hard layer of a bypassed run (:mod:`safety.guard`).
     """
 
     safety_distance: float = 0.17
@@ -119,6 +121,7 @@ class BarrierConfig:
     mode: Literal["centralised", "distributed", "auto"] = "centralised"
     distributed_above: int = 200
     sensing_radius: float | None = None
+    pairs: bool = True
 
     def __post_init__(self) -> None:
         # every gain, distance and speed finite and in range: TOML can say inf and nan, and an
@@ -139,8 +142,9 @@ class BarrierConfig:
             value = getattr(self, name)
             if isinstance(value, bool) or not isinstance(value, numbers.Integral) or value < lower:
                 raise ValueError(f"BarrierConfig: {name} must be an integer >= {lower}, got {value!r}")
-        if not isinstance(self.recovery, bool):
-            raise ValueError(f"BarrierConfig: recovery must be true or false, got {self.recovery!r}")
+        for name in ("recovery", "pairs"):
+            if not isinstance(getattr(self, name), bool):
+                raise ValueError(f"BarrierConfig: {name} must be true or false, got {getattr(self, name)!r}")
         checks = [
             (self.class_k in ("cubic", "linear"), "class_k must be 'cubic' or 'linear'"),
             (self.solver in ("auto", "clarabel"), "solver must be 'auto' or 'clarabel'"),

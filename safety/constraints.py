@@ -170,11 +170,11 @@ def wall_rows(points: np.ndarray, cfg: BarrierConfig) -> Rows:
 
 def barrier_rows(points: np.ndarray, cfg: BarrierConfig, obstacles: np.ndarray | None = None,
                  tree: cKDTree | None = None) -> Rows:
-    """All candidate rows (pairs, walls, obstacles) for controlled points (N, 2)."""
+    """All candidate rows (pairs unless ``cfg.pairs`` is False, walls, obstacles) for controlled points (N, 2)."""
     if points.shape[0] == 0:
         return Rows.empty()
     tree = cKDTree(points) if tree is None else tree
-    parts = [pair_rows(points, cfg, tree), wall_rows(points, cfg)]
+    parts = ([pair_rows(points, cfg, tree)] if cfg.pairs else []) + [wall_rows(points, cfg)]
     if obstacles is not None and obstacles.shape[0]:
         parts.append(obstacle_rows(points, obstacles, cfg, tree))
     return Rows.concat(parts)

@@ -107,6 +107,17 @@ def test_safety_parameters_and_barrier_off() -> None:
     loop.set_safety(enabled=False)
     off = loop.tick()
     assert not off.barrier.enabled and "safety barrier OFF" in off.alerts
+    # the barrier is never off without the guard (safety.guard): rendezvous heads straight for the others, and
+    # the guard switches the barrier back on before any pair comes closer than the guard distance
+    frames = [loop.tick() for _ in range(150)]
+    assert len(loop.revocations) == 1 and loop.safety_params.enabled and frames[-1].barrier.enabled
+    assert sum(e.startswith("BARRIER BACK ON") for f in frames for e in f.events) == 1
+    assert min(f.barrier.min_distance for f in frames) >= 0.15 - 1e-9
+    # without the guard (a trusted-side hook only: ControlLoop(guard=None)) the nominal goes out unchanged
+    bare = ControlLoop(LoopConfig(seed=7, n_robots=8, behaviour="rendezvous"), guard=None)
+    bare.set_safety(enabled=False)
+    off = bare.tick()
+    assert not off.barrier.enabled and "safety barrier OFF" in off.alerts
     np.testing.assert_array_equal(off.safe, off.nominal)
 
 

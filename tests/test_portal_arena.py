@@ -1,7 +1,8 @@
 """The arena runner behind the API: the running job's Frames on the LiveFeed, a researcher's cancel and an
 operator's emergency stop end it at once (the arena then stays stopped until released; the stop is in the
 recording and its exports), and the barrier is
-bypassed only when verification allowed it, the manifest asked and no operator forbade it."""
+bypassed only when verification allowed it, the manifest asked, no operator forbade it and an operator approved
+that job's bypass."""
 import csv
 import json
 
@@ -25,14 +26,15 @@ def arena(portal):
     runner.stop()
 
 
-def verified(portal, who, verdict="accepted", **kwargs):
-    """Submit and move the job to `waiting` as a verification with ``verdict`` would."""
+def verified(portal, who, verdict="accepted", decision=None, **kwargs):
+    """Submit and move the job to `waiting` as a verification with ``verdict`` would (and an operator's
+    ``decision`` on its bypass)."""
     svc = portal.service
     jid = portal.submit(who, **kwargs).json()["id"]
     with svc.db.transaction() as tx:
         svc.db.transition(tx, jid, "verifying")
         svc.db.transition(tx, jid, "approved", verdict=verdict)
-        svc.db.transition(tx, jid, "waiting")
+        svc.db.transition(tx, jid, "waiting", bypass_decision=decision)
     svc.notify()
     return jid
 
@@ -95,7 +97,8 @@ def test_the_barrier_is_bypassed_only_when_everyone_agrees(portal, arena):
     with portal.client("op1") as op:
         forbidden = portal.submit("alice", duration=0.3, no_barrier=True).json()["id"]
         assert op.post(f"/api/operator/jobs/{forbidden}/barrier", json={"forbid": True}).json()["barrier_forbidden"]
-    cases = {verified(portal, "alice", bypass, duration=0.3, no_barrier=True): False,  # everyone agrees
+    cases = {verified(portal, "alice", bypass, "approved", duration=0.3, no_barrier=True): False,  # everyone agrees
+             verified(portal, "alice", bypass, duration=0.3, no_barrier=True): True,  # no operator approved it
              verified(portal, "alice", bypass, duration=0.3): True,  # the manifest did not ask
              verified(portal, "alice", "accepted", duration=0.3, no_barrier=True): True}  # verification said no
     svc = portal.service

@@ -16,6 +16,8 @@ from swarmdeck.console.cli import main
     (["--fast", "--robots-via", "mqtt://127.0.0.1:1883"], "--fast is for the simulated arena"),
     (["--robots-via", "http://x"], "--robots-via"),
     (["--console-port", "-2"], "--console-port must be in"),
+    (["--guard-distance", "0.3"], "--guard-distance must be in [0.05, 0.17] m"),
+    (["--guard-intervention", "nan"], "--guard-intervention must be in (0, 1]"),
     (["--host", "203.0.113.9", "--port", "0"], "cannot serve on 203.0.113.9"),
 ])
 def test_bad_options_exit_2_in_one_line(tmp_path, capsys, argv, words):

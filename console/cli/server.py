@@ -43,6 +43,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="real-time arena: a script's commands for a tick are due within S seconds of its poses, "
                              "else the robots stop for that tick; 1 s of late ticks in a row ends the run (default: "
                              "one control period, 0.033 s). Verification and --fast allow 1 s per tick")
+    parser.add_argument("--guard-distance", type=float, default=0.15, metavar="M",
+                        help="during a barrier bypass an operator approved, the barrier comes back the first time two "
+                             "robots' look-ahead points would come closer than M metres (default 0.15: between contact "
+                             "and the barrier's 0.17)")
+    parser.add_argument("--guard-intervention", type=float, default=0.1, metavar="MS",
+                        help="... or the barrier would have changed a command by more than MS m/s (default 0.1)")
     parser.add_argument("--seed", type=int, default=None, help="seed of the simulated arena's initial poses")
     parser.add_argument("--trusted", action="store_true",
                         help="run scripts unconfined where this machine cannot confine them (bubblewrap missing)")
@@ -72,6 +78,11 @@ def check_arguments(args: argparse.Namespace) -> None:
         raise UsageError(f"--grace must be > 0 s, got {args.grace}")
     if args.tick_budget is not None and not 0 < args.tick_budget <= 10:
         raise UsageError(f"--tick-budget must be in (0, 10] s, got {args.tick_budget}")
+    if not 0.05 <= args.guard_distance <= 0.17:
+        raise UsageError(f"--guard-distance must be in [0.05, 0.17] m (at most the barrier's D_s), "
+                         f"got {args.guard_distance}")
+    if not 0 < args.guard_intervention <= 1:
+        raise UsageError(f"--guard-intervention must be in (0, 1] m/s, got {args.guard_intervention}")
     if args.console_port is not None and not 0 <= args.console_port <= 65535:
         raise UsageError(f"--console-port must be in [0, 65535], got {args.console_port}")
     if args.fast and args.robots_via:
@@ -125,8 +136,11 @@ def main(args: argparse.Namespace) -> int:
     import sqlite3
 
     live = LiveFeed()
+    from swarmdeck.safety.guard import GuardConfig
+
+    guard = GuardConfig(guard_distance=args.guard_distance, max_intervention=args.guard_intervention)
     runner = ArenaRunner(service, ArenaSettings(robots_via=args.robots_via, fleet=fleet, fast=args.fast,
-                                                seed=args.seed), live)
+                                                seed=args.seed, guard=guard), live)
     try:
         interrupted = runner.recover()
     except sqlite3.DatabaseError as exc:

@@ -25,7 +25,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--robots", type=int, default=None, metavar="N", help="robots the experiment uses")
     parser.add_argument("--duration", type=float, default=None, metavar="S", help="declared duration, s")
     parser.add_argument("--no-barrier", action="store_true",
-                        help="ask to run without the safety barrier (granted only if verification allows it)")
+                        help="ask to run without the safety barrier: granted only if verification allows it and an "
+                             "operator approves this job's bypass (until then it waits); the walls, the docked robots "
+                             "and the guard stay on, and the barrier comes back if two robots get too close")
     parser.add_argument("--wait", action="store_true", help="follow the job until it ends (states on stderr)")
     add_client_arguments(parser)
 

@@ -20,6 +20,8 @@ Routes (researchers see only their own jobs; other ids are 404):
 * operators: ``POST /api/operator/jobs/{id}/{approve|hold|release|cancel}``,
   ``POST /api/operator/jobs/{id}/move`` ``{"position": k}``,
   ``POST /api/operator/jobs/{id}/barrier`` ``{"forbid": bool}``,
+  ``POST /api/operator/jobs/{id}/bypass`` ``{"approve": bool}`` (a job's barrier bypass: approve, or refuse → it runs
+  with the barrier),
   ``GET/PUT /api/operator/settings`` ``{"manual_approval": bool}``,
   ``GET /api/operator/arena``, ``POST /api/operator/estop``, ``POST /api/operator/release``,
   ``GET /api/operator/audit``, ``GET /api/operator/stats``.
@@ -162,7 +164,9 @@ def api_router(service: PortalService, counter: RejectionCounter, *, max_upload_
     def operator_action(job_id: int, action: str, u: User = Depends(user),
                         body: dict[str, Any] | None = Body(default=None)) -> dict[str, Any]:
         """``approve``, ``hold``, ``release``, ``cancel``; ``move`` with ``{"position": k}``; ``barrier`` with
-        ``{"forbid": bool}``. 409 when the job is not in a state that allows it (e.g. another operator was first)."""
+        ``{"forbid": bool}``; ``bypass`` with ``{"approve": bool}`` (the job's barrier bypass: approve it — the job runs
+        without the barrier, with the guard — or refuse it — the job runs with the barrier). 409 when the job is not in
+        a state that allows it (e.g. another operator was first)."""
         simple = {"approve": service.approve, "hold": service.hold, "release": service.release,
                   "cancel": service.operator_cancel}
         if action in simple:
@@ -171,7 +175,9 @@ def api_router(service: PortalService, counter: RejectionCounter, *, max_upload_
             return service.move(u, job_id, _key(body, "position"))
         if action == "barrier":
             return service.forbid_barrier(u, job_id, _key(body, "forbid"))
-        raise BadInput(f"unknown action {action!r}: approve, hold, release, cancel, move, barrier", "action")
+        if action == "bypass":
+            return service.decide_bypass(u, job_id, _key(body, "approve"))
+        raise BadInput(f"unknown action {action[:40]!r}: approve, hold, release, cancel, move, barrier, bypass", "action")
 
     @router.get("/operator/settings", tags=["operator"])
     def get_settings(u: User = Depends(user)) -> dict[str, Any]:

@@ -14,7 +14,10 @@
 * **Jobs' state machine** (:data:`TRANSITIONS`): ``queued → verifying →
   rejected | approved → waiting → setting up → running → done | failed |
   cancelled | interrupted``, plus ``held`` (an operator's hold of a queued,
-  approved or waiting job; released back to the state it came from). Every
+  approved or waiting job; released back to the state it came from). A job whose
+  verification said "may bypass the barrier" and whose manifest asked for it stays
+  ``approved`` until an operator approves or refuses that bypass (``bypass_decision``,
+  migration 3), whatever the manual-approval switch says. Every
   transition is one conditional ``UPDATE … WHERE id = ? AND state IN (…)``
   (:meth:`Database.transition`): of two operators acting on one job at once,
   exactly one changes it, the other gets :class:`TransitionConflict` naming the
@@ -118,6 +121,15 @@ MIGRATIONS: tuple[str, ...] = (
     """
     ALTER TABLE jobs ADD COLUMN exports TEXT CHECK (exports IN ('writing', 'ready', 'failed'));
     CREATE INDEX jobs_exports ON jobs (exports) WHERE exports = 'writing';
+    """,
+    # 3: an operator's decision on a job's barrier bypass: NULL (none yet), approved, refused. Jobs waiting for the
+    # arena with a bypass nobody approved go back to approved, to wait for that decision (they would run with the
+    # barrier otherwise, silently)
+    """
+    ALTER TABLE jobs ADD COLUMN bypass_decision TEXT CHECK (bypass_decision IN ('approved', 'refused'));
+    UPDATE jobs SET state = 'approved', reason = 'waiting for an operator to approve running without the barrier'
+        WHERE state = 'waiting' AND verdict = 'accepted, may bypass the barrier' AND request_no_barrier = 1
+        AND barrier_forbidden = 0
     """,
 )
 

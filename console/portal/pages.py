@@ -23,7 +23,8 @@ the audit log) live in one place.
                                          only the job's owner and operators
 ``GET /jobs/{id}/files/{name}``          downloads (exports appear as they are written; ``video.mp4``, if the
                                          exports did not write it, is rendered on the first request)
-``GET /operator``                        queue (approve, hold, release, reorder, cancel), arena state,
+``GET /operator``                        queue (approve, hold, release, reorder, cancel, approve or refuse a
+                                         job's barrier bypass beside its verdict, S and report), arena state,
                                          EMERGENCY STOP, manual-approval switch (``POST /operator/...``)
 ``GET /operator/audit``                  the audit log
 =======================================  =============================================================
@@ -336,7 +337,8 @@ def router(service: PortalService, live: LiveFeed) -> APIRouter:
         sig = "|".join([str(arena["stopped"]).lower(), str(arena["manual_approval"]).lower(),
                         str(running.get("id", "")), str(running.get("state", "")),
                         ",".join(str(j["id"]) for j in arena["queue"]),
-                        ",".join(f"{j['id']}:{j['state']}" for j in everyone)])  # as refresh.js sums it up
+                        ",".join(f"{j['id']}:{j['state']}" for j in everyone),
+                        str(len((arena["alerts"] or {}).get("messages", [])))])  # as refresh.js sums it up
         return page(request, "operator.html", s, status=status, message=message, arena=arena, sig=sig,
                     approve=[j for j in everyone if j["state"] == "approved"],
                     held=[j for j in everyone if j["state"] == "held"],
@@ -372,6 +374,8 @@ def router(service: PortalService, live: LiveFeed) -> APIRouter:
                       "cancel": service.operator_cancel}
             if action in simple:
                 simple[action](u, job_id)
+            elif action in ("bypass-approve", "bypass-refuse"):
+                service.decide_bypass(u, job_id, action == "bypass-approve")
             elif action in ("up", "down", "top"):
                 position = service.job(u, job_id)["position"]
                 if position is None:

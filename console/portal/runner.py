@@ -22,7 +22,15 @@ For each job the service hands over (``waiting → setting up``):
    tick, as the sandbox hands them over, which the loop certifies (so without
    the barrier and within the limits the robots get the script's commands
    unchanged). The barrier is off only when
-   :meth:`~.service.PortalService.bypass_allowed` said so at claim time.
+   :meth:`~.service.PortalService.bypass_allowed` said so at claim time (an operator
+   approved that job's bypass), and then the loop's **guard** (``ArenaSettings.guard``,
+   :mod:`swarmdeck.safety.guard`) keeps the walls and docked robots hard and switches the
+   barrier back on for the rest of the run the first time a pair would come closer than
+   the guard distance or the barrier would intervene by more than its threshold. Contacts
+   between robots are detected on every run. Both are events in the recording, alerts on
+   the operator page (:meth:`ArenaRunner.alerts`) and part of the result: ``run.json``'s
+   ``bypass`` (granted, revoked: when and why) and ``contacts`` (count, robots, episodes),
+   and the job's reason.
 3. **Script**: :func:`swarmdeck.console.jobs.sandbox.run_sandboxed` with
    :class:`LoopPlant` as its plant: each sandbox tick is one loop tick, paced
    in real time (MQTT robots always; the simulated arena unless ``fast``). On the
@@ -82,6 +90,7 @@ from swarmdeck.console.runtime.fleet_upkeep import UpkeepConfig, UpkeepResult
 from swarmdeck.console.runtime.loop import ControlLoop, LoopConfig, SafetyParams
 from swarmdeck.core.bounds import DEFAULT_BOUNDS, Bounds
 from swarmdeck.devices.clock import RealTimePacer
+from swarmdeck.safety.guard import GuardConfig
 
 ENDED_OK = ("script", "duration")
 
@@ -99,6 +108,8 @@ class ArenaSettings:
         seed: seed of the simulated arena's random start poses (None: fresh).
         charge: the simulated robots' state of charge when the server starts, scalar or one per robot.
         upkeep: set-up and return limits, which robots may be assigned (``min_charge``).
+        guard: the guard of a bypassed barrier (guard distance, intervention threshold); None runs a bypass without
+            it — for trusted tests only (contacts on purpose): no command-line option or file sets it.
     """
 
     robots_via: str | None = None
@@ -109,6 +120,7 @@ class ArenaSettings:
     seed: int | None = None
     charge: float | tuple[float, ...] = 1.0
     upkeep: UpkeepConfig = field(default_factory=UpkeepConfig)
+    guard: GuardConfig | None = field(default_factory=GuardConfig)
 
     @property
     def real_time(self) -> bool:
@@ -189,6 +201,8 @@ class ArenaRunner:
         self._halt = threading.Event()  # fleet maneuvers must stop now (emergency stop, shutdown)
         self._idle_mark = time.monotonic()  # wall time the simulated fleet has charged up to
         self._upkeep: dict[str, Any] = {}  # the current job's set-up and return, for run.json
+        self._safety: dict[str, Any] = {}  # the current job's bypass and contacts, for run.json
+        self._alerts: tuple[int | None, list[str]] = (None, [])  # the last job's guard and contact events
 
     # ------------------------------------------------------------------ control (any thread)
     def start(self) -> "ArenaRunner":
@@ -225,6 +239,11 @@ class ArenaRunner:
     def current_job(self) -> int | None:
         return self._job
 
+    def alerts(self) -> dict[str, Any]:
+        """The running (or last) job's guard and contact events, for the operator page: ``{"job", "messages"}``."""
+        job, messages = self._alerts
+        return {"job": job, "messages": list(messages[-50:])}
+
     def fleet_status(self) -> dict[str, Any]:
         """The fleet table (:meth:`.ArenaFleet.status`): each robot docked/charging/assigned/away, its charge."""
         return self.fleet.status()
@@ -250,6 +269,12 @@ class ArenaRunner:
             self._idle_mark = time.monotonic()
 
     # ------------------------------------------------------------------ the fleet between and around jobs
+    def _watch_events(self, frame: Any) -> None:
+        """On the loop thread: keep the frame's guard and contact events for the operator page."""
+        for event in frame.events:
+            if event.startswith(("BARRIER BACK ON", "CONTACT:")):
+                self._alerts[1].append(event)
+
     def _admit(self, job: dict[str, Any]) -> str | None:
         """None when the job's N robots can be assigned now; else why it waits (the robots named)."""
         why = self.fleet.shortfall(int(job["robots"]))
@@ -335,7 +360,8 @@ class ArenaRunner:
         """Run one claimed job to its end; its final state."""
         job_id, folder = int(job["id"]), self.service.job_dir(int(job["id"]))
         self._end_job.clear()
-        self._upkeep = {}
+        self._upkeep, self._safety = {}, {}
+        self._alerts = (job_id, [])
         with self._lock:
             self._job = job_id
         if self.service.job_state(job_id) not in ("setting up", "running"):
@@ -363,10 +389,14 @@ class ArenaRunner:
             state, reason = "cancelled", "cancelled"
         else:
             state, reason = "failed", outcome.error_line
+        said = _safety_note(self._safety)
+        if said:
+            reason = f"{reason}; {said}" if reason else said
         summary = {"ended_by": None if outcome is None else outcome.ended_by,
                    "error": reason if state == "failed" else None,
                    "ticks": None if outcome is None else outcome.ticks,
-                   "overruns": None if outcome is None else outcome.overruns, "note": note, **self._upkeep}
+                   "overruns": None if outcome is None else outcome.overruns, "note": note, **self._safety,
+                   **self._upkeep}
         write_run_json(folder, summary)
         if outcome is not None:
             (folder / "script.log").write_text(outcome.log, encoding="utf-8")
@@ -400,7 +430,8 @@ class ArenaRunner:
                 state["setup_failed"] = str(exc)
                 raise
             notes.append(self._upkeep["setup"]["message"])
-            loop = ControlLoop(loop_config, source=robots, sink=robots, clock=time.monotonic if s.real_time else None)
+            loop = ControlLoop(loop_config, source=robots, sink=robots, clock=time.monotonic if s.real_time else None,
+                               guard=s.guard)
             with self._lock:
                 self._loop = loop
             state["loop"] = loop
@@ -413,13 +444,15 @@ class ArenaRunner:
             state["recorder"] = rec
             loop.subscribe(rec.write_frame)
             loop.subscribe(lambda frame: self.live.publish(int(job["id"]), frame))
+            loop.subscribe(self._watch_events)
             for listener in self.frame_listeners:
                 loop.subscribe(listener)
             commands = SandboxCommands()
             loop.use_behaviour(commands)
             if bypass:
-                loop.set_safety(enabled=False)
-                loop.post("barrier bypassed: verification allowed it and the manifest asked for it")
+                loop.set_safety(enabled=False)  # the guard stays on (the loop's guard, set above)
+                loop.post("barrier bypassed: an operator approved it (verification allowed it, the manifest asked); "
+                          "the guard is on")
             if not self.service.mark_running(int(job["id"])):
                 self._end_job.set()
             loop.pause()
@@ -441,6 +474,7 @@ class ArenaRunner:
             if loop is not None:
                 _record_stop(loop)
                 loop.close()  # robots stopped (the fleet's ports stay open)
+                self._safety = _safety_report(loop, bypass)
             if state["recorder"] is not None:
                 state["recorder"].close()
             with self._lock:
@@ -450,6 +484,29 @@ class ArenaRunner:
         if state["setup_failed"] is not None:
             return None, state["setup_failed"]
         return outcome, "; ".join(notes) or None
+
+
+def _safety_report(loop: ControlLoop, bypass: bool) -> dict[str, Any]:
+    """run.json's ``bypass`` (granted; revoked: tick, t s of run time, why; brake: ticks the guard stopped robots)
+    and ``contacts`` (count, robots, episodes) of a finished run."""
+    revoked = loop.revocations[0] if loop.revocations else None
+    return {"bypass": {"granted": bypass, "revoked": revoked, "brake_ticks": loop.brakes,
+                       "guard": {"guard_distance": loop.guard.guard_distance if loop.guard else None,
+                                 "max_intervention": loop.guard.max_intervention if loop.guard else None}},
+            "contacts": loop.contacts.summary()}
+
+
+def _safety_note(report: dict[str, Any]) -> str:
+    """The job's reason's part about the bypass and contacts (empty when there is nothing to say)."""
+    parts = []
+    revoked = (report.get("bypass") or {}).get("revoked")
+    if revoked:
+        parts.append(f"barrier bypass revoked at t = {revoked['t']:.2f} s: {revoked['why']}")
+    contacts = report.get("contacts") or {}
+    if contacts.get("count"):
+        pairs = ", ".join(f"{e['robots'][0]}–{e['robots'][1]}" for e in contacts["episodes"][:10])
+        parts.append(f"{contacts['count']} contact(s) between robots ({pairs})")
+    return "; ".join(parts)
 
 
 def _record_stop(loop: ControlLoop) -> None:

@@ -23,8 +23,13 @@ Rules:
   :meth:`PortalService.move` puts a job at a position. Queued jobs are verified
   round-robin across researchers (:meth:`PortalService.claim_for_verification`).
 * **Barrier bypass**: a run goes without the barrier only if verification
-  said "may bypass", the manifest asked for it (``no_barrier``) and no operator
-  forbade it (:meth:`PortalService.forbid_barrier`) — :meth:`PortalService.bypass_allowed`.
+  said "may bypass", the manifest asked for it (``no_barrier``), no operator
+  forbade it (:meth:`PortalService.forbid_barrier`) *and an operator approved that
+  job's bypass* (:meth:`PortalService.decide_bypass`, audited) —
+  :meth:`PortalService.bypass_allowed`. Such a job stays ``approved`` with the reason
+  :data:`BYPASS_WAIT` until an operator approves the bypass (→ ``waiting``, to run
+  without the barrier, with the guard) or refuses it (→ it runs with the barrier),
+  whatever the manual-approval switch says: a verdict alone never removes protection.
 * **Emergency stop** (:meth:`PortalService.emergency_stop`): the arena runner
   stops the robots now and ends the running job (``cancelled``, reason "emergency
   stop"); the arena stays stopped (no job starts) until an operator releases it
@@ -71,6 +76,10 @@ RESULT_FILES: dict[str, str] = {
     "manifest.json": "the manifest as accepted",
 }
 BYPASS_VERDICT = "accepted, may bypass the barrier"
+BYPASS_WAIT = "waiting for an operator to approve running without the barrier"
+#: SQL: the job waits for an operator's decision on its bypass (columns of ``jobs``)
+_PENDING_SQL = ("(COALESCE(verdict, '') = 'accepted, may bypass the barrier' AND request_no_barrier = 1 "
+                "AND barrier_forbidden = 0 AND bypass_decision IS NULL)")
 
 
 class ArenaControl(Protocol):
@@ -132,9 +141,16 @@ def _job_dict(row: Any, position: int | None = None) -> dict[str, Any]:
         "request_no_barrier": bool(row["request_no_barrier"]), "barrier_forbidden": bool(row["barrier_forbidden"]),
         "verdict": row["verdict"], "safety_score": row["safety_score"],
         "bypass": None if row["bypass"] is None else bool(row["bypass"]), "reason": row["reason"],
+        "bypass_decision": row["bypass_decision"], "bypass_pending": _bypass_pending(row),
         "position": position, "created": row["created"], "updated": row["updated"], "started": row["started"],
         "ended": row["ended"], "exports": row["exports"],
     }
+
+
+def _bypass_pending(row: Any) -> bool:
+    """The job asks to run without the barrier, verification allowed it, and no operator decided yet."""
+    return (row["verdict"] == BYPASS_VERDICT and bool(row["request_no_barrier"]) and not row["barrier_forbidden"]
+            and row["bypass_decision"] is None)
 
 
 JOB_SELECT = "SELECT j.*, u.name AS owner FROM jobs j JOIN users u ON u.id = j.user_id"
@@ -345,8 +361,47 @@ class PortalService:
         return self.job(user, job_id)
 
     def approve(self, user: User, job_id: int) -> dict[str, Any]:
-        """Manual approval: ``approved → waiting``."""
+        """Manual approval: ``approved → waiting``. A job waiting for a decision on its barrier bypass is
+        refused (409): approve or refuse the bypass (:meth:`decide_bypass`)."""
+        self._require_operator(user)
+        if _bypass_pending(self._visible_row(user, job_id)):
+            raise Conflict(f"job {job_id} asks to run without the barrier: approve or refuse that bypass "
+                           f"(POST /api/operator/jobs/{job_id}/bypass {{\"approve\": true|false}})", "job")
         return self._operator_transition(user, job_id, "waiting", "approve", sources=("approved",))
+
+    def decide_bypass(self, user: User, job_id: int, approve: bool) -> dict[str, Any]:
+        """An operator's decision on a job's barrier bypass (module docstring), audited with the verdict and S.
+
+        Approve: the job goes ``waiting`` and runs without the barrier, with the guard (:mod:`swarmdeck.safety.guard`).
+        Refuse: it runs with the barrier (``waiting``, or still ``approved`` while manual approval is on). 409 unless
+        the job is ``approved`` and waiting for this decision."""
+        self._require_operator(user)
+        if not isinstance(approve, bool):
+            raise BadInput(f"approve must be true or false, got {approve!r}", "approve")
+        row = self._visible_row(user, job_id)
+        if row["state"] != "approved" or not _bypass_pending(row):
+            raise Conflict(f"job {job_id} is {row['state']} and not waiting for a decision on running without the "
+                           "barrier", "job")
+        score = "n/a" if row["safety_score"] is None else f"{row['safety_score']:.4f}"
+        detail = f"verdict {row['verdict']!r}, S = {score}"
+        target = "waiting" if approve or not self.manual_approval else "approved"
+        columns = {"bypass_decision": "approved" if approve else "refused", "barrier_forbidden": int(not approve),
+                   "reason": None}
+        with self.db.transaction() as tx:
+            if target == "approved":  # manual approval on: the refused job now waits for the usual approval
+                cur = tx.execute("UPDATE jobs SET bypass_decision = ?, barrier_forbidden = ?, reason = ?, updated = ? "
+                                 "WHERE id = ? AND state = 'approved'", (*columns.values(), time.time(), job_id))
+                if cur.rowcount != 1:
+                    raise Conflict(f"job {job_id} is no longer approved", "job")
+            else:
+                try:
+                    self.db.transition(tx, int(job_id), target, sources=("approved",), **columns)
+                except TransitionConflict as exc:
+                    raise Conflict(str(exc), "job") from None
+            self.accounts.audit(user, "approve barrier bypass" if approve else "refuse barrier bypass", int(job_id),
+                                detail, tx=tx)
+        self.notify()
+        return self.job(user, job_id)
 
     def hold(self, user: User, job_id: int) -> dict[str, Any]:
         """Hold a queued, approved or waiting job (it keeps its place; :meth:`release` puts it back)."""
@@ -362,7 +417,7 @@ class PortalService:
         if row["state"] != "held":
             raise Conflict(f"job {job_id} is {row['state']}, not held", "job")
         back = row["held_from"] or "queued"
-        if back == "approved" and not self.manual_approval:
+        if back == "approved" and not self.manual_approval and not _bypass_pending(row):
             back = "waiting"  # manual approval was switched off while it was held
         return self._operator_transition(user, job_id, back, "release", sources=("held",), held_from=None)
 
@@ -405,6 +460,15 @@ class PortalService:
                 state = tx.execute("SELECT state FROM jobs WHERE id = ?", (job_id,)).fetchone()["state"]
                 raise Conflict(f"job {job_id} is {state}: the barrier can no longer be changed", "job")
             self.accounts.audit(user, "forbid barrier bypass" if forbid else "allow barrier bypass", int(job_id), tx=tx)
+            # a job waiting for the bypass decision that is now forbidden runs with the barrier; a waiting job whose
+            # bypass is allowed again waits for an operator's decision on it
+            if forbid and not self.manual_approval:
+                tx.execute(f"UPDATE jobs SET state = 'waiting', reason = NULL WHERE id = ? AND state = 'approved' "
+                           f"AND reason = ?", (job_id, BYPASS_WAIT))
+            elif not forbid:
+                tx.execute(f"UPDATE jobs SET state = 'approved', reason = ? WHERE id = ? AND state = 'waiting' "
+                           f"AND {_PENDING_SQL}", (BYPASS_WAIT, job_id))
+        self.notify()
         return self.job(user, job_id)
 
     @property
@@ -418,8 +482,9 @@ class PortalService:
             raise BadInput(f"manual_approval must be true or false, got {on!r}", "manual_approval")
         with self.db.transaction() as tx:
             self.db.set_setting(tx, "manual_approval", "1" if on else "0")
-            if not on:
-                tx.execute("UPDATE jobs SET state = 'waiting', updated = ? WHERE state = 'approved'", (time.time(),))
+            if not on:  # jobs waiting for a decision on their bypass keep waiting for it
+                tx.execute(f"UPDATE jobs SET state = 'waiting', updated = ? WHERE state = 'approved' AND NOT {_PENDING_SQL}",
+                           (time.time(),))
             self.accounts.audit(user, "manual approval on" if on else "manual approval off", tx=tx)
         self.notify()
         return self.settings()
@@ -460,13 +525,17 @@ class PortalService:
         return self.arena_state(user)
 
     def arena_state(self, user: User) -> dict[str, Any]:
-        """``{"stopped", "needs_operator": why|None, "manual_approval", "running": job|None, "queue": [waiting
-        jobs in order], "fleet": the fleet table|None}`` (the fleet: :meth:`.ArenaFleet.status`)."""
+        """``{"stopped", "needs_operator": why|None, "alerts": {"job", "messages"}|None, "manual_approval", "running":
+        job|None, "queue": [waiting jobs in order], "fleet": the fleet table|None}`` (the fleet:
+        :meth:`.ArenaFleet.status`; the alerts: the running or last job's bypass revocation and contacts,
+        :meth:`.ArenaRunner.alerts`)."""
         self._require_operator(user)
         running = self.db.query_one(f"{JOB_SELECT} WHERE j.state IN ('setting up', 'running') ORDER BY j.id LIMIT 1")
         queue = self.db.query(f"{JOB_SELECT} WHERE j.state = 'waiting' ORDER BY j.priority, j.id")
         fleet_status = getattr(self.arena, "fleet_status", None)
+        alerts = getattr(self.arena, "alerts", None)
         return {"stopped": self.arena_stopped, "needs_operator": self.db.setting("arena_attention", "") or None,
+                "alerts": None if alerts is None else alerts(),
                 "manual_approval": self.manual_approval,
                 "running": None if running is None else _job_dict(running),
                 "queue": [_job_dict(r, k) for k, r in enumerate(queue)],
@@ -506,7 +575,10 @@ class PortalService:
                                    ended=None if accepted else time.time())
             except TransitionConflict:
                 return
-            if accepted and self.db.setting("manual_approval", "0") != "1":
+            pending = tx.execute(f"SELECT {_PENDING_SQL} AS p FROM jobs WHERE id = ?", (job_id,)).fetchone()["p"]
+            if accepted and pending:  # a verdict alone never removes protection: an operator decides
+                tx.execute("UPDATE jobs SET reason = ? WHERE id = ?", (BYPASS_WAIT, job_id))
+            elif accepted and self.db.setting("manual_approval", "0") != "1":
                 self.db.transition(tx, job_id, "waiting", sources=("approved",))
         self.notify()
 
@@ -519,7 +591,10 @@ class PortalService:
         return row is None or row["state"] != "verifying"
 
     def bypass_allowed(self, job: dict[str, Any]) -> bool:
-        return job["verdict"] == BYPASS_VERDICT and job["request_no_barrier"] and not job["barrier_forbidden"]
+        """Run ``job`` without the barrier (with the guard): verification allowed it, the manifest asked, no operator
+        forbade it and an operator approved this job's bypass."""
+        return (job["verdict"] == BYPASS_VERDICT and bool(job["request_no_barrier"]) and not job["barrier_forbidden"]
+                and job.get("bypass_decision") == "approved")
 
     def claim_for_arena(self, admit: Callable[[dict[str, Any]], str | None] | None = None) -> dict[str, Any] | None:
         """The first waiting job, now ``setting up`` — None when there is none or the arena is stopped.

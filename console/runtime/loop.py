@@ -11,7 +11,9 @@ draws on its own thread, so a slow browser never slows the loop).
 The tick reads top to bottom as its stages:
 
 1. **sense** — the pose source's ``(ids, poses, seen)``; rows with a non-finite
-   pose are not seen; robots that report a battery below
+   pose are not seen; pairs of seen robots that come into contact (the rps test) are one
+   event each per episode, alerted while they last and kept in :attr:`ControlLoop.contacts`
+   (:mod:`swarmdeck.console.runtime.contacts`); robots that report a battery below
    :attr:`ControlLoop.battery_watch` ``.warn_below`` (and are not charging) raise the
    "battery low" alert naming them (:mod:`swarmdeck.console.runtime.batteries`);
 2. **inputs** — contacts from the input hub become density bumps; the density
@@ -21,7 +23,16 @@ The tick reads top to bottom as its stages:
 4. **safety and actuation** — :func:`swarmdeck.devices.pipeline.certify`, the
    pipeline ``Arena.step`` uses too: look-ahead map, wheel limits by one uniform
    scale, the unicycle barrier with the wheel-limit rows (unseen robots and the
-   sink's ``obstacles()`` as fixed obstacles), fail-stop;
+   sink's ``obstacles()`` as fixed obstacles), fail-stop. With the barrier switched
+   off (by a person: the console's operator, or the portal runner for a bypass an
+   operator approved) the **guard** runs (:mod:`swarmdeck.safety.guard`,
+   :func:`~swarmdeck.devices.pipeline.certify_bypassed`): walls and obstacles stay
+   hard, the full barrier watches, and the first time a pair would come closer than
+   the guard distance or the barrier would have intervened by more than the threshold,
+   the barrier is switched back on (event "BARRIER BACK ON", :attr:`ControlLoop.revocations`);
+   from the first bypassed tick on, robots that would still bring a pair closer than the
+   guard distance are stopped (:func:`~swarmdeck.devices.pipeline.brake`). Only
+   ``ControlLoop(guard=None)`` (trusted code, never a setting) runs without it;
 5. **send** — the command sink gets ``(ids, v, ω)``, or ``hold()`` while paused;
 6. **Frame** — everything above, to every subscriber.
 
@@ -61,6 +72,7 @@ from numpy.typing import NDArray
 from scipy.spatial import cKDTree
 
 from swarmdeck.console.runtime.batteries import BatteryWatch, low_battery_alert
+from swarmdeck.console.runtime.contacts import ContactWatch
 from swarmdeck.console.runtime.behaviours import Behaviour, BehaviourError, BehaviourParams, TickInput, make_behaviour
 from swarmdeck.console.runtime.density import BumpSet
 from swarmdeck.console.runtime.frame import BarrierFrame, ContactsFrame, CoverageFrame, Frame
@@ -72,7 +84,8 @@ from swarmdeck.core.checks import in_range, require_in_range
 from swarmdeck.core.kinematics import GritsBotParams, lookahead_points, saturate
 from swarmdeck.devices import ArenaConfig
 from swarmdeck.devices.clock import RealTimePacer
-from swarmdeck.devices.pipeline import Certified, barrier_filter, certify
+from swarmdeck.devices.pipeline import Certified, barrier_filter, brake, certify, certify_bypassed
+from swarmdeck.safety.guard import GuardCheck, GuardConfig
 from swarmdeck.devices.simulated_robots import SimulatedRobots
 
 FrameListener = Callable[[Frame], None]
@@ -242,11 +255,14 @@ class ControlLoop:
             become density bumps through ``contact_density`` (a ``ContactDensity``).
         clock: the loop's clock in s; None → virtual (tick × dt).
         robot: the robot model (look-ahead ℓ, wheel limits).
+        guard: what watches the robots while the barrier is off (module docstring, stage 4); None runs
+            without it — for trusted tests only: no setting, file or script can reach it.
     """
 
     def __init__(self, config: LoopConfig | None = None, *, source: PoseSource | None = None,
                  sink: CommandSink | None = None, inputs: Any = None, contact_density: Any = None,
-                 clock: Callable[[], float] | None = None, robot: GritsBotParams | None = None) -> None:
+                 clock: Callable[[], float] | None = None, robot: GritsBotParams | None = None,
+                 guard: GuardConfig | None = GuardConfig()) -> None:
         self.config = config if config is not None else LoopConfig()
         cfg = self.config
         self.robot = robot if robot is not None else GritsBotParams()
@@ -269,6 +285,12 @@ class ControlLoop:
         self._safety_params = cfg.safety
         self._behaviour: Behaviour = self._make_behaviour(cfg.behaviour, cfg.behaviour_params, cfg.safety)
         self._filter = self._make_filter(cfg.safety)
+        self.guard = guard
+        self._hard_filter = self._make_filter(cfg.safety, pairs=False) if guard is not None else None
+        self._braking = False  # from the first bypassed tick on, the guard's brake holds
+        self.revocations: list[dict[str, Any]] = []  # each time the guard switched the barrier back on
+        self.brakes = 0  # ticks on which the guard's brake stopped robots
+        self.contacts = ContactWatch()
         self._state = "running"
         self._estop = False
         self._steps = 0
@@ -293,12 +315,13 @@ class ControlLoop:
         return make_behaviour(name, params, self.config.bounds, self.config.max_speed, safety.safety_distance,
                               script_budget=self.config.script_budget_s)
 
-    def _make_filter(self, p: SafetyParams) -> Any:
+    def _make_filter(self, p: SafetyParams, pairs: bool = True) -> Any:
         """The unicycle barrier: the QP on the look-ahead points plus each robot's four wheel-limit
-        rows, so the certified command is one the wheels can execute (no saturation afterwards)."""
+        rows, so the certified command is one the wheels can execute (no saturation afterwards).
+        ``pairs`` False: walls and obstacles only (the guard's hard layer)."""
         cfg = self.config
         return barrier_filter(self.robot, cfg.bounds, cfg.dt, safety_distance=p.safety_distance, gamma=p.gamma,
-                              class_k=p.class_k, max_speed=cfg.max_speed, mode=p.mode)
+                              class_k=p.class_k, max_speed=cfg.max_speed, mode=p.mode, pairs=pairs)
 
     # ------------------------------------------------------------------ operator commands (thread-safe)
     @property
@@ -422,15 +445,19 @@ class ControlLoop:
         except TypeError as exc:
             raise ValueError(str(exc)) from None
         filt = self._make_filter(params)
+        hard = self._make_filter(params, pairs=False) if self.guard is not None else None
         with self._lock:
             rebuild = params.safety_distance != self._safety_params.safety_distance
             self._safety_params = params
-            self._filter = filt
+            self._filter, self._hard_filter = filt, hard
             if rebuild and self._behaviour.name == "coverage":
                 self._behaviour = self._make_behaviour("coverage", self._behaviour_params, params)
             self._post("safety: " + ", ".join(f"{k}={v}" for k, v in changes.items()))
             if not params.enabled:
-                self._post("WARNING: safety barrier OFF")
+                self._post("WARNING: safety barrier OFF" if self.guard is None else
+                           f"safety barrier OFF, guard on: walls and docked robots stay hard; the barrier comes "
+                           f"back if a pair would come closer than {self.guard.guard_distance:g} m or it would "
+                           f"intervene by more than {self.guard.max_intervention:g} m/s")
         return params
 
     def set_moving_density(self, on: bool) -> None:
@@ -490,12 +517,13 @@ class ControlLoop:
     def _count(self, what: str) -> None:
         self.errors[what] = self.errors.get(what, 0) + 1
 
-    def _alert(self, key: str, message: str | None) -> None:
+    def _alert(self, key: str, message: str | None, event: bool = True) -> None:
         if message is None:
             self._alerts.pop(key, None)
         elif self._alerts.get(key) != message:
             self._alerts[key] = message
-            self._events.append(message)
+            if event:
+                self._events.append(message)
 
     @contextmanager
     def _stage(self, key: str, failure: str, *, stops: bool = True) -> Iterator[_Stage]:
@@ -528,6 +556,7 @@ class ControlLoop:
         marks = [time.perf_counter()]
         with self._lock:
             behaviour, filt, sp, estop = self._behaviour, self._filter, self._safety_params, self._estop
+            hard = self._hard_filter
             active = not estop and (self._state == "running" or self._steps > 0)
             if active and self._state != "running":
                 self._steps -= 1
@@ -543,6 +572,8 @@ class ControlLoop:
             sensed = self._nobody_seen(sense.error)
         ids, poses, seen = sensed.ids, sensed.poses, sensed.seen
         n, points = len(ids), lookahead_points(poses, self.robot.lookahead)
+        with self._stage("contacts", "contact detection failed", stops=False):
+            self._watch_contacts(ids, poses, seen)
         with self._stage("battery", "battery check failed", stops=False) as batteries:
             if sensed.battery is not None:  # robots that report their battery: warn when one runs low
                 low = low_battery_alert(ids, sensed.battery, sensed.charging if sensed.charging is not None
@@ -575,11 +606,20 @@ class ControlLoop:
         # 4. safety and actuation: the pipeline Arena.step uses too (look-ahead map, wheel limits, barrier)
         cert = None
         with self._stage("safety", "safety filter failed") as safety:
-            cert, barrier = self._certify(filt if sp.enabled else None, sp, poses, points, nominal, movable, safety)
+            if sp.enabled or hard is None or self.guard is None:
+                cert, barrier = self._certify(filt if sp.enabled else None, sp, poses, points, nominal, movable, safety)
+            else:
+                cert, barrier = self._certify_guarded(filt, hard, self.guard, sp, ids, poses, points, nominal, movable,
+                                                      safety)
+            if sp.enabled and self._braking and self.guard is not None and cert is not None:
+                cert = self._brake(cert, poses, movable)  # after a bypass (a guarded tick brakes by itself)
+            if sp.enabled:
+                with self._lock:
+                    self._alert("guard", None)  # the barrier is on: nothing for the guard to watch
         if cert is None or not active or sense.failed or control.failed:
             v, w, safe = np.zeros(n), np.zeros(n), np.zeros((n, 2))
         else:
-            v, w, safe = cert.v, cert.w, (cert.safe if sp.enabled else nominal.copy())
+            v, w, safe = cert.v, cert.w, (cert.safe if sp.enabled or self._braking else nominal.copy())
         if safety.failed:
             barrier = BarrierFrame(enabled=True, ok=False, status=f"{type(safety.error).__name__}: {safety.error}",
                                    min_distance=_min_distance(points), intervention=np.zeros(n),
@@ -687,6 +727,77 @@ class ControlLoop:
             barrier = replace(barrier, ok=False, status=cert.status)
             stage.warn(f"safety filter: {cert.status}; robots stopped")
         return cert, barrier
+
+    def _watch_contacts(self, ids: NDArray[np.int64], poses: NDArray[np.float64], seen: NDArray[np.bool_]) -> None:
+        """Contacts of this tick's poses: one event per new episode, an alert while any lasts."""
+        new = self.contacts.update(self._tick, self._run_time, ids, poses, seen)
+        touching = sorted(self.contacts.touching)
+        with self._lock:
+            for contact in new:
+                self._post(contact.message())
+            self._alert("contact", None if not touching else
+                        "robots in contact: " + ", ".join(f"{a}–{b}" for a, b in touching[:10]), event=False)
+
+    def _certify_guarded(self, filt: Any, hard: Any, guard: GuardConfig, sp: SafetyParams, ids: NDArray[np.int64],
+                         poses: NDArray[np.float64], points: NDArray[np.float64], nominal: NDArray[np.float64],
+                         seen: NDArray[np.bool_], stage: _Stage) -> tuple[Certified, BarrierFrame]:
+        """A tick with the barrier off and the guard on (module docstring, stage 4)."""
+        n, d_s = len(poses), sp.safety_distance
+        obstacles = getattr(self.sink, "obstacles", None)
+        cert, full, check, stopped = certify_bypassed(poses, nominal, self.robot, hard, filt, guard, self.config.dt,
+                                                      seen=seen, obstacles=None if obstacles is None else obstacles(),
+                                                      names=ids)
+        self._braking = True
+        self._braked(stopped)
+        if check.trip:
+            self._revoke(check)
+        diag = cert.diagnostics
+        if diag is None:
+            barrier = BarrierFrame(enabled=check.trip, ok=cert.ok, status=cert.status, intervention=np.zeros(n),
+                                   min_distance=_min_distance(points), safety_distance=d_s)
+        else:
+            barrier = BarrierFrame.from_diagnostics(diag, n, d_s, enabled=check.trip)
+        if not check.trip:
+            barrier = replace(barrier, status=f"off, guard on ({barrier.status})", min_distance=_min_distance(points))
+        if not cert.ok:
+            stage.warn(f"safety filter: {cert.status}; robots stopped")
+        elif not check.trip:
+            stage.warn("safety barrier OFF")
+        with self._lock:
+            self._alert("guard", None if check.trip else (
+                f"guard on: walls and docked robots hard; pairs watched (guard distance {guard.guard_distance:g} m, "
+                f"intervention threshold {guard.max_intervention:g} m/s)"), event=False)
+        return cert, barrier
+
+    def _revoke(self, check: GuardCheck) -> None:
+        """The guard tripped: the barrier is on again (until a person switches it off again), and says why."""
+        entry = {"tick": self._tick, "t": round(self._run_time, 3), "why": check.reason,
+                 "closest": None if check.closest == math.inf else round(check.closest, 4),
+                 "intervention": round(check.intervention, 4)}
+        with self._lock:
+            self.revocations.append(entry)
+            self._safety_params = replace(self._safety_params, enabled=True)
+            self._post(f"BARRIER BACK ON: the bypass is revoked at t = {self._run_time:.2f} s: {check.reason}")
+            self._alerts["revoked"] = f"barrier back on (bypass revoked at t = {self._run_time:.2f} s): {check.reason}"
+
+    def _brake(self, cert: Certified, poses: NDArray[np.float64], seen: NDArray[np.bool_]) -> Certified:
+        """The guard's last resort (stage 4): robots that would bring a pair closer than the guard distance stop."""
+        assert self.guard is not None
+        obstacles = getattr(self.sink, "obstacles", None)
+        out, stopped = brake(cert, poses, self.robot, self.config.dt, self.guard.guard_distance, seen=seen,
+                             obstacles=None if obstacles is None else obstacles())
+        self._braked(stopped)
+        return out
+
+    def _braked(self, stopped: NDArray[np.bool_]) -> None:
+        """Count and alert the guard's brake (robots stopped this tick)."""
+        assert self.guard is not None
+        if stopped.any():
+            self.brakes += 1
+        with self._lock:
+            self._alert("brake", None if not stopped.any() else
+                        f"guard: robots stopped that would come closer than {self.guard.guard_distance:g} m",
+                        event=False)
 
     def _frame(self, now: float, sensed: SensedPoses, points: NDArray[np.float64], nominal: NDArray[np.float64],
                safe: NDArray[np.float64], v: NDArray[np.float64], w: NDArray[np.float64], barrier: BarrierFrame,

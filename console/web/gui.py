@@ -225,9 +225,10 @@ class ConsoleGui:
             return
         self._modal = self.gui.add_modal("Turn the safety barrier off?")
         with self._modal:
-            self.gui.add_markdown("Without the barrier certificates nothing keeps the robots from colliding "
-                                  "or leaving the arena. Only do this in simulation or with a hand on the "
-                                  "emergency stop.")
+            self.gui.add_markdown("The robots then get their commands unchanged, within the guard: the walls stay "
+                                  "hard, and the barrier comes back by itself the first time two robots would come "
+                                  "too close or it would have to intervene strongly (BARRIER BACK ON in the alerts). "
+                                  "Only do this in simulation or with a hand on the emergency stop.")
             self.confirm_off = self.gui.add_button("Turn barrier OFF", color="red")
             self.cancel_off = self.gui.add_button("Keep it on")
         self.confirm_off.on_click(lambda _: self._close_confirmation(True))

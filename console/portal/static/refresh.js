@@ -55,7 +55,8 @@
       const [a, jobs] = await Promise.all([get(arena.dataset.arenaUrl), get("/api/jobs")]);
       if (!a || !jobs) return;
       const sig = [a.stopped, a.manual_approval, (a.running || {}).id, (a.running || {}).state,
-                   a.queue.map((j) => j.id).join(","), jobs.map((j) => `${j.id}:${j.state}`).join(",")].join("|");
+                   a.queue.map((j) => j.id).join(","), jobs.map((j) => `${j.id}:${j.state}`).join(","),
+                   ((a.alerts || {}).messages || []).length].join("|");
       if (arena.dataset.sig !== sig) { location.reload(); return; }  // data-sig: the same summary, made by the server
       const fleet = document.getElementById("fleet");
       for (const r of (a.fleet && fleet ? a.fleet.robots : [])) {  // the fleet table: states and charges in place
