@@ -437,7 +437,7 @@ class ArenaRunner:
             state["loop"] = loop
             source = redact_url(s.robots_via) if s.robots_via else "simulation"
             fleet_ids = robots.fleet_ids.tolist()
-            rec = Recorder(folder / "recording.mcap", session_metadata(loop_config, None, source=source,
+            rec = Recorder(folder / "recording.mcap", session_metadata(loop_config, None, source=source, guard=s.guard,
                                                                       job=int(job["id"]), bypass=bypass,
                                                                       fleet_ids=fleet_ids))
             loop.post(f"robots 0..{n - 1} are the fleet's robots {', '.join(map(str, fleet_ids))}")

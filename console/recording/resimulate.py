@@ -31,6 +31,7 @@ from swarmdeck.core.bounds import DEFAULT_BOUNDS
 from swarmdeck.console.runtime.frame import Frame
 from swarmdeck.console.recording.codec import CODEC_FORMAT, COMPACT_FORMAT, decode_frame, encode_frame
 from swarmdeck.console.recording.reader import RecordedDatagram, Recording
+from swarmdeck.safety.guard import GuardConfig
 
 #: Frame keys not compared: wall-clock measurements and free-text messages.
 IGNORED_KEYS = frozenset({"timing", "events", "alerts", "health"})
@@ -70,16 +71,26 @@ def loop_config_from_dict(d: Mapping[str, Any]) -> Any:
 
 
 def session_metadata(loop_config: Any, inputs: Mapping[str, Any] | None = None, *,
-                     robots: list[int] | None = None, source: str = "simulation", **extra: Any) -> dict[str, Any]:
+                     robots: list[int] | None = None, source: str = "simulation",
+                     guard: GuardConfig | None = GuardConfig(), **extra: Any) -> dict[str, Any]:
     """The ``metadata`` the console passes to ``Recorder``: robots, bounds and the ``config``
     that :func:`resimulate` needs (``loop``: the LoopConfig; ``inputs``: the ``[inputs]`` table
-    as read from the TOML file, or None for the defaults; ``source``: "simulation" or the robot/tracker source)."""
+    as read from the TOML file, or None for the defaults; ``source``: "simulation" or the robot/tracker source;
+    ``guard``: the loop's guard of a switched-off barrier, None when it ran without one)."""
     cfg = loop_config_to_dict(loop_config)
     return {
         "robots": list(range(loop_config.n_robots)) if robots is None else [int(r) for r in robots],
         "bounds": list(loop_config.bounds),
-        "config": {"loop": cfg, "inputs": None if inputs is None else dict(inputs), "source": source, **extra},
+        "config": {"loop": cfg, "inputs": None if inputs is None else dict(inputs), "source": source,
+                   "guard": None if guard is None else dataclasses.asdict(guard), **extra},
     }
+
+
+def recorded_guard(config: Mapping[str, Any]) -> GuardConfig | None:
+    """The guard a recorded session ran with (its ``config.guard``). Recordings from before the guard existed
+    have no such key: their loop ran without one, and so does their re-simulation."""
+    guard = config.get("guard")
+    return None if guard is None else GuardConfig(**dict(guard))
 
 
 @dataclass(frozen=True)
@@ -232,7 +243,7 @@ def resimulate(recording: Recording, *, max_frames: int | None = None) -> Iterat
     if robots is None:  # start where the recording starts (θ re-wrapped: may differ in the last bit)
         robots = SimulatedRobots(first.n, ArenaConfig(bounds=loop_cfg.bounds, dt=loop_cfg.dt),
                                  initial_poses=first.poses)
-    loop = ControlLoop(loop_cfg, source=robots, sink=robots, inputs=hub,
+    loop = ControlLoop(loop_cfg, source=robots, sink=robots, inputs=hub, guard=recorded_guard(cfg),
                        contact_density=ContactDensity(inputs_cfg.density), clock=lambda: now[0])
     compact = recording.metadata.get("frame_format") in (COMPACT_FORMAT, CODEC_FORMAT)
     datagrams = iter(recording.datagrams())
