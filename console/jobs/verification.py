@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import math
 import os
+import time
 import shutil
 import tempfile
 import threading
@@ -139,6 +140,7 @@ def run_task(task: RunTask) -> dict[str, Any]:
         return ArenaPlant(Arena(backend=robots, config=arena_config, safety=task.mode == "wrapped", duration=cfg.duration))
 
     cancelled = (lambda: os.path.exists(task.cancel_path)) if task.cancel_path else None
+    cpu0 = time.process_time()  # this worker's CPU (the trusted side: plant, barrier, protocol) for the run
     outcome = run_sandboxed(task.bundle, make_plant, n_robots=cfg.n_robots,
                             duration=cfg.duration, rps=cfg.rps, limits=cfg.limits, trusted=cfg.trusted, jail=cfg.jail,
                             cancelled=cancelled)
@@ -147,6 +149,8 @@ def run_task(task: RunTask) -> dict[str, Any]:
         "n_robots": outcome.n_robots, "ticks": outcome.ticks, "overruns": outcome.overruns,
         "log": outcome.log[-4000:], "log_bytes": outcome.log_bytes,
         "cgroup": outcome.cgroup, "unhardened": outcome.unhardened,
+        # CPU s of the run, trusted side and jail: what the portal charges to the researcher's daily limit
+        "cpu_s": round(time.process_time() - cpu0 + (outcome.child_cpu_s or 0.0), 3),
     }
     plant = outcome.plant
     if plant is None:
@@ -232,6 +236,7 @@ class VerificationReport:
     config: VerificationConfig
     scripts: list[dict[str, Any]]
     executor: str = "serial"
+    cpu_s: float = 0.0  # CPU s of every run, trusted side and jail (not in the JSON: it is a timing)
 
     @property
     def verdict(self) -> str:
@@ -327,8 +332,9 @@ def verify(scripts: Sequence[str | Path | ScriptBundle], config: VerificationCon
         shutil.rmtree(cancel_dir, ignore_errors=True)
     if (cancel is not None and cancel.is_set()) or any(r is None or r["ended_by"] == "cancelled" for r in results):
         raise VerificationCancelled("verification was cancelled")
+    cpu_s = sum(float(r.pop("cpu_s", 0.0)) for r in results)  # a timing: kept out of the (deterministic) report
     reports = []
     for s, bundle in enumerate(loaded):
         runs = results[s * 2 * config.runs : (s + 1) * 2 * config.runs]
         reports.append(script_verdict(bundle, runs, config))
-    return VerificationReport(config, reports, getattr(executor, "name", type(executor).__name__))
+    return VerificationReport(config, reports, getattr(executor, "name", type(executor).__name__), cpu_s)
