@@ -62,7 +62,7 @@ from swarmdeck.console.portal.service import RESULT_FILES, PortalService
 
 HERE = Path(__file__).resolve().parent
 STATIC = {"portal.css": "text/css", "live.js": "text/javascript", "refresh.js": "text/javascript",
-          "forms.js": "text/javascript"}
+          "forms.js": "text/javascript", "docs.js": "text/javascript"}
 SIGNIN_COOKIE = "swarmdeck_signin"
 LIVE_PERIOD = 0.1  # s: the live view gets at most 10 Frames a second (the newest at each send)
 CHECK_PERIOD = 1.0  # s: the live stream re-checks the session and the job's state this often
