@@ -7,6 +7,11 @@ anything must also send the session's CSRF token as ``X-CSRF-Token``.
 Every request looks the token or session up again, so a disabled account is
 refused from its next request on.
 
+A revoked or expired token is 401 saying which (``swarmdeck users revoke``,
+``--expires``). A submission over a researcher's limit is 429 (unfinished jobs,
+verification CPU a day) or 403 (disk quota), the ``field`` naming the limit
+(:mod:`.quotas`); a slow body is 408 (:mod:`.app`).
+
 Errors: every one is a 4xx with ``{"error": message, "field": name}``
 (:mod:`.errors`), counted in the app's :class:`~.errors.RejectionCounter`
 (``GET /api/operator/stats``).

@@ -30,6 +30,12 @@ Rules:
   (:meth:`PortalService.release_arena`). The latch is in the database, so it
   survives a restart.
 * Every operator action is in the audit log, committed with the change itself.
+* **Limits** (:mod:`.quotas`, ``PortalConfig.quotas``): a researcher's submission over their unfinished-jobs
+  or daily verification-CPU limit is 429, over their disk quota 403, each naming the limit and the current
+  value; the verification workers charge each job's CPU (:meth:`PortalService.record_verification_cpu`).
+* **Retention** (``PortalConfig.retain_days``): :meth:`PortalService.sweep_results` deletes the folders of
+  jobs that ended long ago; the row stays with ``results_deleted`` and its downloads say why they are gone.
+* **Ids** from outside are checked (:func:`valid_id`): one SQLite cannot hold is "no job" (404), never a 500.
 
 Result files (:meth:`PortalService.files`): a fixed list of names
 (:data:`RESULT_FILES`) under the job's folder; a download names one of them,
