@@ -124,3 +124,24 @@ def test_uploads_and_pages_still_work_under_the_limits(strict):
     assert r.status_code == 201, r.text
     with strict.client("alice") as c:
         assert c.get(f"/api/jobs/{r.json()['id']}").json()["state"] == "queued"
+
+
+def test_a_big_upload_with_a_bad_token_gets_its_401(strict):
+    with strict.client(None) as c:
+        for _ in range(3):
+            r = c.post("/api/jobs", headers={"Authorization": "Bearer sdk_revoked-or-wrong"},
+                       files={"script": ("big.py", b"#" * (60 << 10))}, data={"manifest": "{}"})
+            assert r.status_code == 401 and r.json()["field"] == "Authorization"
+
+
+def test_a_4_mib_upload_with_a_bad_token_gets_its_401(tmp_path):
+    p = make_portal(tmp_path, fleet=6, max_duration=60.0, max_upload_bytes=4 << 20)
+    try:
+        with p.client(None) as c:
+            for _ in range(3):
+                r = c.post("/api/jobs", headers={"Authorization": "Bearer sdk_revoked-or-wrong"},
+                           files={"script": ("big.py", b"#" * ((4 << 20) - 1000))}, data={"manifest": "{}"})
+                assert r.status_code == 401 and r.json()["field"] == "Authorization"
+    finally:
+        p.server.stop()
+        p.service.close()

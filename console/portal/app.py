@@ -94,15 +94,24 @@ class HttpSettings:
 
 
 class GuardedH11Protocol(H11Protocol):
-    """uvicorn's HTTP/1.1 protocol with a deadline for a request's line and headers (uvicorn has none: a
-    client sending a byte a second would hold its connection forever): ``header_timeout_s`` after the
-    connection opens, or after data of a new request starts arriving, the connection is closed with 408
-    unless the headers are complete."""
+    """uvicorn's HTTP/1.1 protocol with deadlines uvicorn lacks (a client sending a byte a second would hold its
+    connection forever):
+
+    * a request's line and headers must be in ``header_timeout_s`` after the connection opens, or after data
+      of a new request starts arriving — else 408 and the connection is closed;
+    * a request answered before its body was in (a refusal: 401, 413, 422 …) has ``body_timeout_s`` for the
+      rest of its body to arrive (and be discarded, so the client reads its answer) — else the connection is
+      closed.
+
+    An idle kept-alive connection is uvicorn's (``timeout_keep_alive``); a body the app is reading is
+    :class:`BodyLimit`'s."""
 
     header_timeout_s = HttpSettings.header_timeout_s  # set per server by a subclass (uvicorn_server)
+    body_timeout_s = HttpSettings.body_timeout_s
 
     def connection_made(self, transport: asyncio.Transport) -> None:  # type: ignore[override]
-        self._header_deadline: asyncio.TimerHandle | None = None
+        self._deadline: asyncio.TimerHandle | None = None
+        self._deadline_for: str | None = None
         super().connection_made(transport)
         self._arm()
 
@@ -116,28 +125,42 @@ class GuardedH11Protocol(H11Protocol):
 
     def on_response_complete(self) -> None:
         super().on_response_complete()
-        self._disarm()  # idle between requests: uvicorn's keep-alive timer applies
-        if self.conn.their_state is h11.SEND_BODY and not self.transport.is_closing():
-            self.transport.close()  # answered before its body was in: the rest would come at the client's pace
+        if self.conn.their_state is h11.IDLE:
+            self._disarm()  # idle between requests: uvicorn's keep-alive timer applies
+        else:
+            self._arm()
+
+    def _waiting_for(self) -> str | None:
+        if self.transport.is_closing():
+            return None
+        if self.conn.their_state is h11.IDLE:
+            return "headers"
+        if self.conn.their_state is h11.SEND_BODY and self.cycle is not None and self.cycle.response_complete:
+            return "the rest of the body"
+        return None
 
     def _arm(self) -> None:
-        if self.conn.their_state is not h11.IDLE or self.transport.is_closing():  # headers in (or closing)
+        waiting = self._waiting_for()
+        if waiting != self._deadline_for:
             self._disarm()
-        elif self._header_deadline is None:
-            self._header_deadline = self.loop.call_later(self.header_timeout_s, self._too_slow)
+        if waiting is not None and self._deadline is None:
+            timeout = self.header_timeout_s if waiting == "headers" else self.body_timeout_s
+            self._deadline, self._deadline_for = self.loop.call_later(timeout, self._too_slow, waiting), waiting
 
     def _disarm(self) -> None:
-        if self._header_deadline is not None:
-            self._header_deadline.cancel()
-            self._header_deadline = None
+        if self._deadline is not None:
+            self._deadline.cancel()
+        self._deadline, self._deadline_for = None, None
 
-    def _too_slow(self) -> None:
-        self._header_deadline = None
-        if self.conn.their_state is h11.IDLE and not self.transport.is_closing():
+    def _too_slow(self, waiting: str) -> None:
+        self._deadline, self._deadline_for = None, None
+        if self._waiting_for() != waiting:
+            return
+        if waiting == "headers":
             body = b"the request's headers did not arrive in time"
             self.transport.write(b"HTTP/1.1 408 Request Timeout\r\ncontent-type: text/plain\r\nconnection: close\r\n"
                                  b"content-length: " + str(len(body)).encode() + b"\r\n\r\n" + body)
-            self.transport.close()
+        self.transport.close()
 
 
 class BodyLimit:
@@ -294,7 +317,8 @@ def uvicorn_server(app: Any, *, log_level: str = "warning", http: HttpSettings |
     """A uvicorn server for ``app`` (HTTP/1.1 via h11 with the header deadline of :class:`GuardedH11Protocol`;
     signals left to the caller), its connections as ``http`` says (default :class:`HttpSettings`)."""
     http = http if http is not None else HttpSettings()
-    protocol = type("PortalH11Protocol", (GuardedH11Protocol,), {"header_timeout_s": float(http.header_timeout_s)})
+    protocol = type("PortalH11Protocol", (GuardedH11Protocol,), {"header_timeout_s": float(http.header_timeout_s),
+                                                                "body_timeout_s": float(http.body_timeout_s)})
     config = uvicorn.Config(app, log_level=log_level, access_log=False, lifespan="off", timeout_graceful_shutdown=2,
                             http=protocol, limit_concurrency=int(http.max_connections),
                             timeout_keep_alive=float(http.keep_alive_s),
