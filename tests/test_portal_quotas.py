@@ -4,6 +4,7 @@ researchers and operators are not held up by one researcher's limit."""
 import pytest
 from portal_fixtures import make_portal, portal, sign_in  # noqa: F401
 
+from swarmdeck.console.jobs.confinement import probe
 from swarmdeck.console.portal.quotas import Quotas
 
 
@@ -79,3 +80,22 @@ def test_a_nonsense_cpu_figure_is_not_recorded(portal, bad):
     jid = portal.submit("alice").json()["id"]
     portal.service.record_verification_cpu(jid, bad)
     assert portal.service.db.query("SELECT * FROM verification_usage") == []
+
+
+@pytest.mark.skipif(probe() is not None, reason=f"no confinement here: {probe()}")
+def test_the_verification_worker_charges_each_jobs_cpu_to_its_owner(portal):
+    from portal_fixtures import wait_for_state
+
+    from swarmdeck.console.jobs.executors import LocalPoolExecutor
+    from swarmdeck.console.portal.workers import VerificationWorkers
+
+    workers = VerificationWorkers(portal.service, LocalPoolExecutor(1), poll_s=0.2).start()
+    try:
+        jid = portal.submit("alice", robots=2, duration=1.0).json()["id"]
+        with portal.client("alice") as c:
+            wait_for_state(c, jid, ("waiting", "rejected"), timeout=180)
+    finally:
+        workers.stop()
+    [row] = portal.service.db.query("SELECT job_id, user_id, cpu_s FROM verification_usage")
+    alice = portal.service.accounts.user_named("alice")
+    assert (row["job_id"], row["user_id"]) == (jid, alice.id) and 0.0 < row["cpu_s"] < 600.0

@@ -262,7 +262,11 @@ class VerificationReport:
 
 
 class VerificationCancelled(Exception):
-    """:func:`verify` was cancelled before every run finished."""
+    """:func:`verify` was cancelled before every run finished; ``cpu_s``: the CPU its runs used until then."""
+
+    def __init__(self, message: str, cpu_s: float = 0.0) -> None:
+        super().__init__(message)
+        self.cpu_s = float(cpu_s)
 
 
 @dataclass(frozen=True)
@@ -330,9 +334,9 @@ def verify(scripts: Sequence[str | Path | ScriptBundle], config: VerificationCon
         stop_watching.set()
         watcher.join()
         shutil.rmtree(cancel_dir, ignore_errors=True)
+    cpu_s = sum(float(r.pop("cpu_s", 0.0)) for r in results if r is not None)  # a timing: not in the report
     if (cancel is not None and cancel.is_set()) or any(r is None or r["ended_by"] == "cancelled" for r in results):
-        raise VerificationCancelled("verification was cancelled")
-    cpu_s = sum(float(r.pop("cpu_s", 0.0)) for r in results)  # a timing: kept out of the (deterministic) report
+        raise VerificationCancelled("verification was cancelled", cpu_s)
     reports = []
     for s, bundle in enumerate(loaded):
         runs = results[s * 2 * config.runs : (s + 1) * 2 * config.runs]

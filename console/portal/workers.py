@@ -83,7 +83,8 @@ class VerificationWorkers:
         try:
             script, entry = service.script(job)
             report = verify([script], self.config_for(job), self.executor, cancel=cancel, entry=entry)
-        except VerificationCancelled:
+        except VerificationCancelled as exc:
+            service.record_verification_cpu(job_id, exc.cpu_s)  # a cancel does not make the CPU free
             return  # cancelled: the job is already cancelled (or requeued on restart)
         except (ValueError, ConfinementUnavailable, RuntimeError, ConnectionError, OSError) as exc:
             self.errors += 1
