@@ -99,3 +99,18 @@ def test_the_verification_worker_charges_each_jobs_cpu_to_its_owner(portal):
     [row] = portal.service.db.query("SELECT job_id, user_id, cpu_s FROM verification_usage")
     alice = portal.service.accounts.user_named("alice")
     assert (row["job_id"], row["user_id"]) == (jid, alice.id) and 0.0 < row["cpu_s"] < 600.0
+
+
+def test_a_researcher_sees_where_they_stand(portal):
+    jid = portal.submit("alice").json()["id"]
+    portal.service.record_verification_cpu(jid, 12.5)
+    with portal.client("alice") as c:
+        limits = c.get("/api/me").json()["limits"]
+    assert limits["unfinished_jobs"] == {"used": 1, "limit": 25}
+    assert limits["verify_cpu_s_today"] == {"used": 12.5, "limit": 14400.0}
+    assert limits["results_bytes"]["limit"] == 2 << 30 and 0 < limits["results_bytes"]["used"] < 10_000
+    alice, _ = sign_in(portal, "alice")
+    page = alice.get("/submit").text
+    assert "1 of 25 jobs not yet finished" in page and "12 of 14400 CPU s" in page
+    with portal.client("op1") as c:
+        assert c.get("/api/me").json()["limits"]["unfinished_jobs"]["limit"] is None

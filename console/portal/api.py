@@ -95,8 +95,10 @@ def api_router(service: PortalService, counter: RejectionCounter, *, max_upload_
 
     @router.get("/me", tags=["accounts"])
     def me(request: Request, u: User = Depends(user)) -> dict[str, Any]:
-        """Who the token or session belongs to (with the session's CSRF token when signed in by cookie)."""
+        """Who the token or session belongs to (with the session's CSRF token when signed in by cookie), and
+        ``limits``: for each per-researcher limit, ``{"used", "limit"}`` (limit null: none)."""
         out = u.to_dict()
+        out["limits"] = service.usage(u)
         sid = request.cookies.get(SESSION_COOKIE)
         if sid and "authorization" not in request.headers:
             out["csrf"] = service.accounts.session(sid).csrf

@@ -185,7 +185,8 @@ def router(service: PortalService, live: LiveFeed) -> APIRouter:
                     field: str | None = None, values: dict[str, Any] | None = None) -> HTMLResponse:
         limits = service.config.limits
         return page(request, "submit.html", s, status=status, message=message, field=field, values=values or {},
-                    fleet=limits.fleet, max_duration=limits.max_duration, max_bytes=limits.max_upload_bytes)
+                    fleet=limits.fleet, max_duration=limits.max_duration, max_bytes=limits.max_upload_bytes,
+                    usage=service.usage(s.user))
 
     @r.get("/submit")
     def submit_form(request: Request) -> Response:

@@ -72,6 +72,20 @@ def _size(n: int) -> str:
     return f"{n} bytes"
 
 
+def usage(db_rows_unfinished: int, cpu_rows: list[sqlite3.Row], job_rows: list[sqlite3.Row], quotas: Quotas,
+          jobs_folder: Path) -> dict[str, dict[str, float | None]]:
+    """Where a researcher stands: ``{"unfinished_jobs" | "verify_cpu_s_today" | "results_bytes": {"used",
+    "limit"}}`` (limit None: none) from their unfinished-job count, their verification usage rows of the last
+    24 h and their job rows (ids, results not deleted)."""
+    return {
+        "unfinished_jobs": {"used": int(db_rows_unfinished), "limit": quotas.max_unfinished_jobs},
+        "verify_cpu_s_today": {"used": round(sum(float(r["cpu_s"]) for r in cpu_rows), 1),
+                               "limit": quotas.verify_cpu_s_per_day},
+        "results_bytes": {"used": sum(folder_bytes(jobs_folder / str(int(r[0]))) for r in job_rows),
+                          "limit": quotas.results_bytes},
+    }
+
+
 def check_disk(db_rows: list[sqlite3.Row], quotas: Quotas, jobs_folder: Path) -> None:
     """Refuse a new job when the researcher's jobs (``db_rows``: their ids, results not deleted) hold
     ``results_bytes`` or more under ``jobs_folder``: :class:`QuotaExceeded` (403) naming both. Walks the folders:

@@ -61,6 +61,7 @@ from swarmdeck.console.portal.errors import BadInput, Conflict, Forbidden, NotFo
 from swarmdeck.console.portal.exports import EXPORT_FILES
 from swarmdeck.console.portal.files import private_dir, write_private
 from swarmdeck.console.portal.quotas import Quotas, check_counts, check_disk
+from swarmdeck.console.portal.quotas import usage as quota_usage
 from swarmdeck.console.portal.submission import Limits, Manifest, Upload, check_bundle, check_upload, parse_manifest
 
 #: result files a job may have, name -> what it is (the exports, :mod:`.exports`, write four of them after the run).
@@ -371,6 +372,17 @@ class PortalService:
         with self.db.transaction() as tx:
             tx.execute("INSERT OR REPLACE INTO verification_usage (job_id, user_id, t, cpu_s) "
                        "SELECT id, user_id, ?, ? FROM jobs WHERE id = ?", (time.time(), float(cpu_s), int(job_id)))
+
+    def usage(self, user: User) -> dict[str, Any]:
+        """The researcher's use of each limit (:func:`.quotas.usage`; operators: limits None, not limited)."""
+        marks = ", ".join("?" * len(FINAL))
+        unfinished = self.db.query_one(f"SELECT COUNT(*) FROM jobs WHERE user_id = ? AND state NOT IN ({marks})",
+                                       (user.id, *FINAL))[0]
+        cpu = self.db.query("SELECT cpu_s FROM verification_usage WHERE user_id = ? AND t > ?",
+                            (user.id, time.time() - 86400.0))
+        rows = self.db.query("SELECT id FROM jobs WHERE user_id = ? AND results_deleted IS NULL", (user.id,))
+        return quota_usage(unfinished, cpu, rows, Quotas(None, None, None) if user.is_operator else self.config.quotas,
+                           self.data / "jobs")
 
     def sweep_results(self, now: float | None = None) -> list[int]:
         """Delete the folders (script, recording, exports, logs, reports) of jobs that ended more than
