@@ -108,7 +108,7 @@ def test_a_researcher_sees_where_they_stand(portal):
         limits = c.get("/api/me").json()["limits"]
     assert limits["unfinished_jobs"] == {"used": 1, "limit": 25}
     assert limits["verify_cpu_s_today"] == {"used": 12.5, "limit": 14400.0}
-    assert limits["results_bytes"]["limit"] == 2 << 30 and 0 < limits["results_bytes"]["used"] < 10_000
+    assert limits["results_bytes"]["limit"] == 2_000_000_000 and 0 < limits["results_bytes"]["used"] < 10_000
     alice, _ = sign_in(portal, "alice")
     page = alice.get("/submit").text
     assert "1 of 25 jobs not yet finished" in page and "12 of 14400 CPU s" in page

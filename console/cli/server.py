@@ -60,8 +60,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     quota.add_argument("--verify-cpu", type=float, default=4 * 3600.0, metavar="S",
                        help="verification CPU seconds a researcher's jobs may use in any 24 h before new submissions "
                             "get 429 (default 14400, 4 CPU hours)")
-    quota.add_argument("--disk-quota", type=float, default=2048.0, metavar="MB",
-                       help="MB a researcher's jobs' files may take before new submissions get 403 (default 2048)")
+    quota.add_argument("--disk-quota", type=float, default=2000.0, metavar="MB",
+                       help="MB a researcher's jobs' files may take before new submissions get 403 (default 2000)")
     quota.add_argument("--retain-days", type=float, default=None, metavar="D",
                        help="delete the files of jobs that ended more than D days ago (checked hourly; the job's "
                             "row stays, marked; default: keep them)")

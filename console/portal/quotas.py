@@ -42,7 +42,7 @@ class Quotas:
 
     max_unfinished_jobs: int | None = 25
     verify_cpu_s_per_day: float | None = 4 * 3600.0
-    results_bytes: int | None = 2 << 30
+    results_bytes: int | None = 2_000_000_000
 
 
 def folder_bytes(folder: Path) -> int:
