@@ -20,7 +20,8 @@ from pathlib import Path
 import httpx
 import pytest
 
-from swarmdeck.console.portal.app import ServerThread, create_app
+from swarmdeck.console.portal.app import HttpSettings, ServerThread, create_app
+from swarmdeck.console.portal.quotas import Quotas
 from swarmdeck.console.portal.service import PortalConfig, PortalService
 from swarmdeck.console.portal.submission import Limits
 
@@ -74,12 +75,15 @@ def sign_in(portal: Portal, who: str) -> tuple[httpx.Client, str]:
     return c, c.get("/api/me").json()["csrf"]
 
 
-def make_portal(tmp_path: Path, **limits) -> Portal:
-    service = PortalService(PortalConfig(data=tmp_path / "data", limits=Limits(**limits), verify_runs=1))
+def make_portal(tmp_path: Path, *, http: HttpSettings | None = None, quotas: Quotas | None = None,
+                retain_days: float | None = None, **limits) -> Portal:
+    config = PortalConfig(data=tmp_path / "data", limits=Limits(**limits), verify_runs=1,
+                          quotas=quotas if quotas is not None else Quotas(), retain_days=retain_days)
+    service = PortalService(config)
     tokens = {}
     for name, role in (("alice", "researcher"), ("bob", "researcher"), ("op1", "operator"), ("op2", "operator")):
         tokens[name] = service.accounts.add_user(name, role)[1]
-    server = ServerThread(create_app(service))
+    server = ServerThread(create_app(service, http=http), http=http)
     return Portal(service, server, tokens)
 
 

@@ -94,9 +94,7 @@ def test_cookie_sessions_need_the_csrf_token_for_changes(portal):
 def test_sign_in_is_rate_limited_per_address(portal):
     with portal.client(None) as c:
         codes = [c.post("/api/session", json={"token": "sdk_wrong"}).status_code for _ in range(6)]
-        assert codes == [401] * 5 + [429]
-        r = c.post("/api/session", json={"token": portal.tokens["alice"]})  # even the right token, for now
-        assert r.status_code == 429 and r.json()["field"] == "token"
+        assert codes == [401] * 5 + [429]  # a right token still works: test_portal_signin_limit.py
 
 
 def test_the_database_holds_no_token_in_clear(portal):

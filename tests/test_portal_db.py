@@ -97,3 +97,31 @@ def test_a_transition_the_state_machine_does_not_allow_is_a_conflict(tmp_path):
     with pytest.raises(ValueError, match="unknown job state"):
         with db.transaction() as tx:
             db.transition(tx, job, "exploded")
+
+
+def test_a_version_2_file_keeps_its_tokens_and_sessions_and_loses_the_stored_csrf_tokens(tmp_path):
+    from swarmdeck.console.portal.accounts import digest
+
+    token, sid = "sdk_" + "t" * 43, "s" * 43
+    conn = sqlite3.connect(tmp_path / "portal.sqlite3")  # as the portal before token expiry left it
+    for migration in MIGRATIONS[:2]:
+        conn.executescript(migration)
+    conn.executescript("CREATE TABLE schema_version (version INTEGER NOT NULL); INSERT INTO schema_version VALUES (2);"
+                       "INSERT INTO users (name, role, created) VALUES ('alice', 'researcher', 0);")
+    conn.execute("INSERT INTO tokens (user_id, hash, created) VALUES (1, ?, 0)", (digest(token),))
+    conn.execute("INSERT INTO sessions (hash, user_id, csrf, created, expires) VALUES (?, 1, ?, 0, 1e12)",
+                 (digest(sid), "CLEAR-CSRF-TOKEN-OF-OLD"))
+    conn.commit()
+    conn.close()
+    db = Database(tmp_path)
+    assert db.version == len(MIGRATIONS) and db.check() == "ok"
+    accounts = Accounts(db)
+    assert accounts.user_for_token(token).name == "alice"
+    [info] = accounts.tokens("alice")
+    assert (info.expires, info.revoked) == (None, None) and info.last_used is not None
+    session = accounts.session(sid)  # still signed in
+    assert session.user.name == "alice" and session.csrf == accounts.csrf_for(sid) != "CLEAR-CSRF-TOKEN-OF-OLD"
+    assert "csrf" not in [r["name"] for r in db.query("PRAGMA table_info(sessions)")]
+    db.close()
+    raw = b"".join(p.read_bytes() for p in tmp_path.glob("portal.sqlite3*"))
+    assert b"CLEAR-CSRF-TOKEN-OF-OLD" not in raw  # not even in a free page

@@ -19,6 +19,14 @@ from swarmdeck.console.cli import main
     (["--guard-distance", "0.3"], "--guard-distance must be in [0.05, 0.17] m"),
     (["--guard-intervention", "nan"], "--guard-intervention must be in (0, 1]"),
     (["--host", "203.0.113.9", "--port", "0"], "cannot serve on 203.0.113.9"),
+    (["--max-jobs", "-1"], "--max-jobs must be >= 0"),
+    (["--verify-cpu", "nan"], "--verify-cpu must be >= 0"),
+    (["--disk-quota", "-5"], "--disk-quota must be >= 0"),
+    (["--retain-days", "0"], "--retain-days must be > 0"),
+    (["--max-connections", "1"], "--max-connections must be >= 2"),
+    (["--header-timeout", "0"], "--header-timeout must be in (0, 3600]"),
+    (["--body-timeout", "inf"], "--body-timeout must be in (0, 3600]"),
+    (["--trust-proxy", "proxy.example.org"], "is not an IP address"),
 ])
 def test_bad_options_exit_2_in_one_line(tmp_path, capsys, argv, words):
     assert main(["server", "--data", str(tmp_path / "lab"), *argv]) == 2

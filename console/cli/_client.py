@@ -53,5 +53,7 @@ def job_line(job: dict[str, Any]) -> str:
         extra += f"  (queue position {job['position']})"
     if job.get("reason"):
         extra += f"  {job['reason'][:200]}"
+    if job.get("results_deleted"):
+        extra += "  (results deleted: retention)"
     return f"{job['id']:>5}  {job['state']:<11}  {job['name'][:40]:<40}  {job['robots']:>3} robots  " \
            f"{job['duration']:g} s{extra}"

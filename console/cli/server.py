@@ -14,7 +14,9 @@ DEFAULT_DATA = "swarmdeck-data"
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.epilog = ("Add accounts with `swarmdeck users add NAME --role researcher|operator --data DIR`. "
-                     "API documentation: http://HOST:PORT/docs.")
+                     "API documentation: http://HOST:PORT/docs (served by the server itself). The data folder is "
+                     "0700 and every file the server writes 0600. Run it behind the lab's HTTPS proxy; pass "
+                     "--trust-proxy with the proxy's address so that sign-in limits key on the real clients.")
     parser.add_argument("--data", default=DEFAULT_DATA, metavar="DIR",
                         help=f"data folder: database and every job's files (default ./{DEFAULT_DATA})")
     parser.add_argument("--host", default="127.0.0.1", help="interface to bind (default 127.0.0.1: this machine only)")
@@ -57,6 +59,31 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                              "controller): then only per-process limits bound a run's memory, processes and CPU")
     parser.add_argument("--console-port", type=int, default=None, metavar="P",
                         help="also show the running job in the operator's viser view on port P (on --host)")
+    quota = parser.add_argument_group("per-researcher limits (0: no limit; operators are not limited)")
+    quota.add_argument("--max-jobs", type=int, default=25, metavar="N",
+                       help="jobs a researcher may have not yet finished (queued … running); the next submission "
+                            "gets 429 naming the limit (default 25)")
+    quota.add_argument("--verify-cpu", type=float, default=4 * 3600.0, metavar="S",
+                       help="verification CPU seconds a researcher's jobs may use in any 24 h before new submissions "
+                            "get 429 (default 14400, 4 CPU hours)")
+    quota.add_argument("--disk-quota", type=float, default=2000.0, metavar="MB",
+                       help="MB a researcher's jobs' files may take before new submissions get 403 (default 2000)")
+    quota.add_argument("--retain-days", type=float, default=None, metavar="D",
+                       help="delete the files of jobs that ended more than D days ago (checked hourly; the job's "
+                            "row stays, marked; default: keep them)")
+    net = parser.add_argument_group("connections")
+    net.add_argument("--trust-proxy", action="append", default=[], metavar="ADDR",
+                     help="believe X-Forwarded-For/-Proto from this address (your reverse proxy, e.g. 127.0.0.1); "
+                          "repeat for several (default: from nobody: the peer's address is the client's)")
+    net.add_argument("--max-connections", type=int, default=200, metavar="N",
+                     help="connections at once; with N open, a new request gets 503 (default 200)")
+    net.add_argument("--header-timeout", type=float, default=10.0, metavar="S",
+                     help="a request's line and headers must arrive within S s, else 408 and the connection is "
+                          "closed (default 10)")
+    net.add_argument("--body-timeout", type=float, default=120.0, metavar="S",
+                     help="a request's body must arrive within S s of its headers, else 408 and close (default 120)")
+    net.add_argument("--keep-alive", type=float, default=5.0, metavar="S",
+                     help="close an idle kept-alive connection after S s (default 5)")
     parser.add_argument("--log-level", default="warning", choices=("critical", "error", "warning", "info", "debug"),
                         help="uvicorn's log level (default warning)")
 
@@ -85,6 +112,25 @@ def check_arguments(args: argparse.Namespace) -> None:
         raise UsageError(f"--guard-intervention must be in (0, 1] m/s, got {args.guard_intervention}")
     if args.console_port is not None and not 0 <= args.console_port <= 65535:
         raise UsageError(f"--console-port must be in [0, 65535], got {args.console_port}")
+    for flag, value in (("--max-jobs", args.max_jobs), ("--verify-cpu", args.verify_cpu),
+                        ("--disk-quota", args.disk_quota)):
+        if not value >= 0:
+            raise UsageError(f"{flag} must be >= 0 (0: no limit), got {value}")
+    if args.retain_days is not None and not args.retain_days > 0:
+        raise UsageError(f"--retain-days must be > 0, got {args.retain_days}")
+    if args.max_connections < 2:
+        raise UsageError(f"--max-connections must be >= 2, got {args.max_connections}")
+    for flag, value in (("--header-timeout", args.header_timeout), ("--body-timeout", args.body_timeout),
+                        ("--keep-alive", args.keep_alive)):
+        if not 0 < value <= 3600:
+            raise UsageError(f"{flag} must be in (0, 3600] s, got {value}")
+    import ipaddress
+
+    for addr in args.trust_proxy:
+        try:
+            ipaddress.ip_network(addr, strict=False)
+        except ValueError:
+            raise UsageError(f"--trust-proxy: {addr!r} is not an IP address or network") from None
     if args.fast and args.robots_via:
         raise UsageError("--fast is for the simulated arena: networked robots run in real time")
     if args.robots_via is not None:
@@ -99,7 +145,9 @@ def check_arguments(args: argparse.Namespace) -> None:
 def main(args: argparse.Namespace) -> int:
     check_arguments(args)
     from swarmdeck.console.jobs.confinement import JailConfig, probe
-    from swarmdeck.console.portal.app import bind, create_app, uvicorn_server
+    from swarmdeck.console.portal.app import HttpSettings, bind, create_app, uvicorn_server
+    from swarmdeck.console.portal.quotas import Quotas
+    from swarmdeck.console.portal.retention import RetentionSweeper
     from swarmdeck.console.portal.db import SchemaError
     from swarmdeck.console.portal.livefeed import LiveFeed
     from swarmdeck.console.portal.runner import ArenaRunner, ArenaSettings
@@ -119,7 +167,14 @@ def main(args: argparse.Namespace) -> int:
                                                         max_upload_bytes=args.max_upload),
                           verify_runs=args.verify_runs, grace_s=args.grace, trusted=args.trusted,
                           allow_no_cgroup=args.allow_no_cgroup,
-                          arena_tick_budget_s=args.tick_budget)
+                          arena_tick_budget_s=args.tick_budget,
+                          quotas=Quotas(max_unfinished_jobs=args.max_jobs or None,
+                                        verify_cpu_s_per_day=args.verify_cpu or None,
+                                        results_bytes=int(args.disk_quota * 1e6) or None),
+                          retain_days=args.retain_days)
+    http = HttpSettings(max_connections=args.max_connections, header_timeout_s=args.header_timeout,
+                        body_timeout_s=args.body_timeout, keep_alive_s=args.keep_alive,
+                        trust_proxy=tuple(args.trust_proxy))
     try:
         executor = make_executor(args.workers, args.ray)
     except (ValueError, RuntimeError) as exc:
@@ -128,6 +183,11 @@ def main(args: argparse.Namespace) -> int:
         sock = bind(args.host, args.port)
     except OSError as exc:
         raise UsageError(f"cannot serve on {args.host}:{args.port}: {exc.strerror or exc}") from None
+    import os
+
+    from swarmdeck.console.portal.files import UMASK
+
+    os.umask(UMASK)  # every file the server (its workers, the exports) writes is 0600, every folder 0700
     try:
         service = PortalService(config)
     except (SchemaError, OSError) as exc:
@@ -165,8 +225,9 @@ def main(args: argparse.Namespace) -> int:
         print(f"swarmdeck server: operator view at {view.url}", flush=True)
     workers = VerificationWorkers(service, executor).start()
     runner.start()
-    app = create_app(service, live=live)
-    server = uvicorn_server(app, log_level=args.log_level)
+    sweeper = RetentionSweeper(service).start() if args.retain_days is not None else None
+    app = create_app(service, live=live, http=http)
+    server = uvicorn_server(app, log_level=args.log_level, http=http)
     host = f"[{args.host}]" if ":" in args.host else args.host
     arena = args.robots_via and f"MQTT robots 0..{fleet - 1} via {_redacted(args.robots_via)}" or \
         f"{fleet} simulated robots docked on the chargers{' (fast)' if args.fast else ''}"
@@ -184,6 +245,8 @@ def main(args: argparse.Namespace) -> int:
             signal.signal(sig, handler)
         runner.stop()
         workers.stop()
+        if sweeper is not None:
+            sweeper.stop()
         if view is not None:
             view.close()
         sock.close()

@@ -149,15 +149,18 @@ class ScriptBundle:
             h.update(len(encoded).to_bytes(8, "little") + encoded + len(data).to_bytes(8, "little") + data)
         return h.hexdigest()
 
-    def write_to(self, folder: Path) -> Path:
-        """Write the files under ``folder`` (world-readable, folders 0755); returns the entry's path."""
+    def write_to(self, folder: Path, *, file_mode: int = 0o644, dir_mode: int = 0o755) -> Path:
+        """Write the files under ``folder`` (default world-readable, folders 0755, for the jail's uid; the portal's
+        own copy is 0600/0700); returns the entry's path."""
         for name, data in self.files:
             target = folder / name
             for parent in reversed(target.relative_to(folder).parents):
                 d = folder / parent
                 if not d.exists():
-                    d.mkdir()
-                    os.chmod(d, 0o755)
-            target.write_bytes(data)
-            os.chmod(target, 0o644)
+                    d.mkdir(mode=dir_mode)
+                    os.chmod(d, dir_mode)
+            fd = os.open(target, os.O_WRONLY | os.O_CREAT | os.O_TRUNC, file_mode)
+            with os.fdopen(fd, "wb") as f:
+                os.fchmod(f.fileno(), file_mode)
+                f.write(data)
         return folder / self.entry

@@ -137,6 +137,8 @@ def build_root(root: Path, binds: list[tuple[str, Path]], symlinks: list[tuple[s
     the /dev nodes of :data:`DEVICES` and, when ``scratch`` is ``(path, tmpfs options)``, a
     size- and inode-limited tmpfs at that path (:func:`scratch_options`). Run in process A,
     after :func:`unshare_all`."""
+    os.umask(0o022)  # the mount points we make are traversable by the jail's uid whatever umask started us (the
+    # portal runs with 077); this process only builds the jail
     _mount(None, "/", None, MS_REC | MS_PRIVATE)  # nothing we mount propagates to the host
     _mount("tmpfs", root, "tmpfs", MS_NOSUID | MS_NODEV, "mode=0755,size=1m")
     for target, link in symlinks:

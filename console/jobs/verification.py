@@ -43,6 +43,7 @@ from __future__ import annotations
 
 import math
 import os
+import time
 import shutil
 import tempfile
 import threading
@@ -214,6 +215,7 @@ def run_task(task: RunTask) -> dict[str, Any]:
         return ArenaPlant(Arena(backend=robots, config=arena_config, safety=task.mode == "wrapped", duration=cfg.duration))
 
     cancelled = (lambda: os.path.exists(task.cancel_path)) if task.cancel_path else None
+    cpu0 = time.process_time()  # this worker's CPU (the trusted side: plant, barrier, protocol) for the run
     outcome = run_sandboxed(task.bundle, make_plant, n_robots=cfg.n_robots,
                             duration=cfg.duration, rps=cfg.rps, limits=cfg.run_limits, trusted=cfg.trusted,
                             jail=cfg.jail, cancelled=cancelled)
@@ -229,6 +231,8 @@ def run_task(task: RunTask) -> dict[str, Any]:
         "cgroup": outcome.cgroup, "unhardened": outcome.unhardened,
         "start_poses_from": start.get("source"),
         "start_poses": [[round(float(v), 6) for v in row] for row in start["poses"][:50]] if start else None,
+        # CPU s of the run, trusted side and jail: what the portal charges to the researcher's daily limit
+        "cpu_s": round(time.process_time() - cpu0 + (outcome.child_cpu_s or 0.0), 3),
     }
     plant = outcome.plant
     if plant is None:
@@ -312,6 +316,7 @@ class VerificationReport:
     config: VerificationConfig
     scripts: list[dict[str, Any]]
     executor: str = "serial"
+    cpu_s: float = 0.0  # CPU s of every run, trusted side and jail (not in the JSON: it is a timing)
 
     @property
     def verdict(self) -> str:
@@ -337,7 +342,11 @@ class VerificationReport:
 
 
 class VerificationCancelled(Exception):
-    """:func:`verify` was cancelled before every run finished."""
+    """:func:`verify` was cancelled before every run finished; ``cpu_s``: the CPU its runs used until then."""
+
+    def __init__(self, message: str, cpu_s: float = 0.0) -> None:
+        super().__init__(message)
+        self.cpu_s = float(cpu_s)
 
 
 @dataclass(frozen=True)
@@ -405,10 +414,11 @@ def verify(scripts: Sequence[str | Path | ScriptBundle], config: VerificationCon
         stop_watching.set()
         watcher.join()
         shutil.rmtree(cancel_dir, ignore_errors=True)
+    cpu_s = sum(float(r.pop("cpu_s", 0.0)) for r in results if r is not None)  # a timing: not in the report
     if (cancel is not None and cancel.is_set()) or any(r is None or r["ended_by"] == "cancelled" for r in results):
-        raise VerificationCancelled("verification was cancelled")
+        raise VerificationCancelled("verification was cancelled", cpu_s)
     reports = []
     for s, bundle in enumerate(loaded):
         runs = results[s * 2 * config.runs : (s + 1) * 2 * config.runs]
         reports.append(script_verdict(bundle, runs, config))
-    return VerificationReport(config, reports, getattr(executor, "name", type(executor).__name__))
+    return VerificationReport(config, reports, getattr(executor, "name", type(executor).__name__), cpu_s)

@@ -7,6 +7,11 @@ anything must also send the session's CSRF token as ``X-CSRF-Token``.
 Every request looks the token or session up again, so a disabled account is
 refused from its next request on.
 
+A revoked or expired token is 401 saying which (``swarmdeck users revoke``,
+``--expires``). A submission over a researcher's limit is 429 (unfinished jobs,
+verification CPU a day) or 403 (disk quota), the ``field`` naming the limit
+(:mod:`.quotas`); a slow body is 408 (:mod:`.app`).
+
 Errors: every one is a 4xx with ``{"error": message, "field": name}``
 (:mod:`.errors`), counted in the app's :class:`~.errors.RejectionCounter`
 (``GET /api/operator/stats``).
@@ -92,8 +97,10 @@ def api_router(service: PortalService, counter: RejectionCounter, *, max_upload_
 
     @router.get("/me", tags=["accounts"])
     def me(request: Request, u: User = Depends(user)) -> dict[str, Any]:
-        """Who the token or session belongs to (with the session's CSRF token when signed in by cookie)."""
+        """Who the token or session belongs to (with the session's CSRF token when signed in by cookie), and
+        ``limits``: for each per-researcher limit, ``{"used", "limit"}`` (limit null: none)."""
         out = u.to_dict()
+        out["limits"] = service.usage(u)
         sid = request.cookies.get(SESSION_COOKIE)
         if sid and "authorization" not in request.headers:
             out["csrf"] = service.accounts.session(sid).csrf

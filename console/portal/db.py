@@ -2,8 +2,9 @@
 
 * **Connections**: one per thread (:class:`Database` keeps them in a
   ``threading.local``), each with ``journal_mode=WAL``, ``foreign_keys=ON``,
-  ``busy_timeout`` and ``synchronous=NORMAL`` (WAL: a power cut loses at most the
-  last transactions, never corrupts the file). Autocommit mode: reads see the
+  ``busy_timeout``, ``synchronous=NORMAL`` (WAL: a power cut loses at most the
+  last transactions, never corrupts the file) and ``secure_delete`` (deleted rows
+  are overwritten). The folder is ``0700`` and the files ``0600`` (:mod:`.files`). Autocommit mode: reads see the
   newest committed state; every change runs in :meth:`Database.transaction`
   (``BEGIN IMMEDIATE`` … ``COMMIT``, rolled back on any exception), so a killed
   server leaves each change either whole or absent.
@@ -32,6 +33,8 @@ from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
 from typing import Any
+
+from swarmdeck.console.portal.files import private_dir, private_file
 
 FILENAME = "portal.sqlite3"
 
@@ -131,6 +134,32 @@ MIGRATIONS: tuple[str, ...] = (
         WHERE state = 'waiting' AND verdict = 'accepted, may bypass the barrier' AND request_no_barrier = 1
         AND barrier_forbidden = 0
     """,
+    # 4: tokens with an expiry, revocation and last use; sessions without a stored CSRF token (it is derived
+    # from the session id, accounts.py) and with the token they were opened with; verification CPU per job
+    # (per-researcher daily limit); when a job's results were deleted by the retention sweep
+    """
+    ALTER TABLE tokens ADD COLUMN expires REAL;
+    ALTER TABLE tokens ADD COLUMN revoked REAL;
+    ALTER TABLE tokens ADD COLUMN last_used REAL;
+    CREATE TABLE sessions_v3 (
+        hash TEXT PRIMARY KEY,
+        user_id INTEGER NOT NULL REFERENCES users(id),
+        token_id INTEGER REFERENCES tokens(id),
+        created REAL NOT NULL,
+        expires REAL NOT NULL
+    );
+    INSERT INTO sessions_v3 (hash, user_id, created, expires) SELECT hash, user_id, created, expires FROM sessions;
+    DROP TABLE sessions;
+    ALTER TABLE sessions_v3 RENAME TO sessions;
+    CREATE TABLE verification_usage (
+        job_id INTEGER PRIMARY KEY REFERENCES jobs(id),
+        user_id INTEGER NOT NULL REFERENCES users(id),
+        t REAL NOT NULL,
+        cpu_s REAL NOT NULL
+    );
+    CREATE INDEX verification_usage_user ON verification_usage (user_id, t);
+    ALTER TABLE jobs ADD COLUMN results_deleted REAL;
+    """,
 )
 
 
@@ -153,9 +182,11 @@ class Database:
     """The portal's database file (see the module docstring). Thread-safe: one connection per thread."""
 
     def __init__(self, directory: str | Path, *, busy_timeout_s: float = 10.0) -> None:
-        self.directory = Path(directory)
-        self.directory.mkdir(parents=True, exist_ok=True)
+        self.directory = private_dir(Path(directory))  # 0700: other local users see nothing of it
         self.path = self.directory / FILENAME
+        for path in (self.path, *(self.path.with_name(FILENAME + x) for x in ("-wal", "-shm"))):
+            if path == self.path or path.exists():
+                private_file(path)  # 0600 before SQLite opens it (its WAL and shm files copy the mode)
         self.busy_timeout_s = float(busy_timeout_s)
         self._local = threading.local()
         self._all: list[sqlite3.Connection] = []
@@ -174,6 +205,7 @@ class Database:
             conn.execute("PRAGMA foreign_keys=ON")
             conn.execute(f"PRAGMA busy_timeout={int(self.busy_timeout_s * 1000)}")
             conn.execute("PRAGMA synchronous=NORMAL")
+            conn.execute("PRAGMA secure_delete=ON")  # deleted rows (sessions, old secrets) are zeroed, not left in free pages
             self._local.conn = conn
             with self._all_lock:
                 self._all.append(conn)

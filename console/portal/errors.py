@@ -52,6 +52,12 @@ class Conflict(PortalError):
     status = 409
 
 
+class RequestTimeout(PortalError):
+    """A request's body did not arrive in time (408)."""
+
+    status = 408
+
+
 class TooLarge(PortalError):
     """An upload or archive member over the configured limits (413)."""
 
@@ -65,9 +71,15 @@ class Unsupported(PortalError):
 
 
 class RateLimited(PortalError):
-    """Too many failed sign-ins (429)."""
+    """Too many: failed sign-ins, unfinished jobs, verification CPU a day (429)."""
 
     status = 429
+
+
+class QuotaExceeded(PortalError):
+    """A researcher's quota (results on disk) is used up (403)."""
+
+    status = 403
 
 
 class Unavailable(PortalError):

@@ -41,6 +41,8 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from swarmdeck.console.portal.files import UMASK, private_dir, write_private
+
 if TYPE_CHECKING:
     from swarmdeck.console.portal.service import PortalService
 
@@ -68,7 +70,7 @@ def write_run_json(folder: Path, data: dict[str, Any]) -> None:
     """Replace the job's ``run.json`` by ``data`` atomically (written aside, then renamed)."""
     path = folder / "run.json"
     tmp = path.with_suffix(".tmp")
-    tmp.write_text(json.dumps(data, indent=1))
+    write_private(tmp, json.dumps(data, indent=1))
     tmp.replace(path)
 
 
@@ -81,7 +83,7 @@ def write_exports(folder: Path, video: bool = True) -> dict[str, Any]:
 
     staging = folder / STAGING
     shutil.rmtree(staging, ignore_errors=True)  # a killed export's leftovers
-    staging.mkdir()
+    private_dir(staging)
     files: list[str] = []
     errors: list[str] = []
 
@@ -255,6 +257,7 @@ def main(argv: list[str] | None = None) -> int:
     from swarmdeck.console.jobs.namespaces import die_with_parent
 
     die_with_parent(args.parent)
+    os.umask(UMASK)  # what the exporters write is the researcher's: 0600 (files.py), whoever started us
     os.nice(NICE)
     result = write_exports(args.folder, video=not args.no_video)
     print(RESULT_MARK + json.dumps(result), flush=True)

@@ -63,7 +63,7 @@ from swarmdeck.console.portal.service import RESULT_FILES, PortalService
 
 HERE = Path(__file__).resolve().parent
 STATIC = {"portal.css": "text/css", "live.js": "text/javascript", "refresh.js": "text/javascript",
-          "forms.js": "text/javascript"}
+          "forms.js": "text/javascript", "docs.js": "text/javascript"}
 SIGNIN_COOKIE = "swarmdeck_signin"
 LIVE_PERIOD = 0.1  # s: the live view gets at most 10 Frames a second (the newest at each send)
 CHECK_PERIOD = 1.0  # s: the live stream re-checks the session and the job's state this often
@@ -186,7 +186,8 @@ def router(service: PortalService, live: LiveFeed) -> APIRouter:
                     field: str | None = None, values: dict[str, Any] | None = None) -> HTMLResponse:
         limits = service.config.limits
         return page(request, "submit.html", s, status=status, message=message, field=field, values=values or {},
-                    fleet=limits.fleet, max_duration=limits.max_duration, max_bytes=limits.max_upload_bytes)
+                    fleet=limits.fleet, max_duration=limits.max_duration, max_bytes=limits.max_upload_bytes,
+                    usage=service.usage(s.user))
 
     @r.get("/submit")
     def submit_form(request: Request) -> Response:

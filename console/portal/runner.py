@@ -83,6 +83,7 @@ from swarmdeck.console.jobs.sandbox import SandboxOutcome, run_sandboxed
 from swarmdeck.console.jobs.start_poses import arena_start
 from swarmdeck.console.portal.arena_fleet import ArenaFleet
 from swarmdeck.console.portal.exports import JobExports, write_run_json
+from swarmdeck.console.portal.files import write_private
 from swarmdeck.console.portal.livefeed import LiveFeed
 from swarmdeck.console.portal.service import PortalService
 from swarmdeck.console.runtime.behaviours import TickInput
@@ -399,7 +400,7 @@ class ArenaRunner:
                    **self._upkeep}
         write_run_json(folder, summary)
         if outcome is not None:
-            (folder / "script.log").write_text(outcome.log, encoding="utf-8")
+            write_private(folder / "script.log", outcome.log)
         if (folder / "recording.mcap").is_file():
             self.exports.submit(job_id)  # written in the background: the next job starts now
         self.runs += 1

@@ -36,6 +36,12 @@ Rules:
   (:meth:`PortalService.release_arena`). The latch is in the database, so it
   survives a restart.
 * Every operator action is in the audit log, committed with the change itself.
+* **Limits** (:mod:`.quotas`, ``PortalConfig.quotas``): a researcher's submission over their unfinished-jobs
+  or daily verification-CPU limit is 429, over their disk quota 403, each naming the limit and the current
+  value; the verification workers charge each job's CPU (:meth:`PortalService.record_verification_cpu`).
+* **Retention** (``PortalConfig.retain_days``): :meth:`PortalService.sweep_results` deletes the folders of
+  jobs that ended long ago; the row stays with ``results_deleted`` and its downloads say why they are gone.
+* **Ids** from outside are checked (:func:`valid_id`): one SQLite cannot hold is "no job" (404), never a 500.
 
 Result files (:meth:`PortalService.files`): a fixed list of names
 (:data:`RESULT_FILES`) under the job's folder; a download names one of them,
@@ -59,6 +65,9 @@ from swarmdeck.console.portal.accounts import Accounts, User
 from swarmdeck.console.portal.db import ACTIVE, FINAL, Database, TransitionConflict
 from swarmdeck.console.portal.errors import BadInput, Conflict, Forbidden, NotFound, Unavailable
 from swarmdeck.console.portal.exports import EXPORT_FILES
+from swarmdeck.console.portal.files import private_dir, write_private
+from swarmdeck.console.portal.quotas import Quotas, check_counts, check_disk
+from swarmdeck.console.portal.quotas import usage as quota_usage
 from swarmdeck.console.portal.submission import Limits, Manifest, Upload, check_bundle, check_upload, parse_manifest
 
 #: result files a job may have, name -> what it is (the exports, :mod:`.exports`, write four of them after the run).
@@ -109,6 +118,9 @@ class PortalConfig:
         grace_s: the arena run's time limit is the declared duration plus this, s.
         trusted: run scripts unconfined where this machine cannot confine them.
         allow_no_cgroup: run scripts even where no cgroup can be created per run (``--allow-no-cgroup``).
+        quotas: per-researcher limits (:mod:`.quotas`): unfinished jobs, verification CPU a day, results on disk.
+        retain_days: results of jobs that ended more than this many days ago are deleted by
+            :meth:`PortalService.sweep_results` (the job's row stays, with ``results_deleted``); None: kept.
     """
 
     data: Path
@@ -121,6 +133,8 @@ class PortalConfig:
     grace_s: float = 15.0
     trusted: bool = False
     allow_no_cgroup: bool = False
+    quotas: Quotas = field(default_factory=Quotas)
+    retain_days: float | None = None
 
     def arena_budget(self, dt: float, real_time: bool) -> tuple[float, int]:
         """(per-tick compute budget s, missed ticks in a row that end the run) of a script on the arena with
@@ -143,7 +157,7 @@ def _job_dict(row: Any, position: int | None = None) -> dict[str, Any]:
         "bypass": None if row["bypass"] is None else bool(row["bypass"]), "reason": row["reason"],
         "bypass_decision": row["bypass_decision"], "bypass_pending": _bypass_pending(row),
         "position": position, "created": row["created"], "updated": row["updated"], "started": row["started"],
-        "ended": row["ended"], "exports": row["exports"],
+        "ended": row["ended"], "exports": row["exports"], "results_deleted": row["results_deleted"],
     }
 
 
@@ -151,6 +165,11 @@ def _bypass_pending(row: Any) -> bool:
     """The job asks to run without the barrier, verification allowed it, and no operator decided yet."""
     return (row["verdict"] == BYPASS_VERDICT and bool(row["request_no_barrier"]) and not row["barrier_forbidden"]
             and row["bypass_decision"] is None)
+
+
+def valid_id(job_id: Any) -> bool:
+    """Whether ``job_id`` can be a job's id: an integer, 1 <= id < 2**63 (what SQLite's INTEGER holds)."""
+    return isinstance(job_id, int) and not isinstance(job_id, bool) and 1 <= job_id < 2 ** 63
 
 
 JOB_SELECT = "SELECT j.*, u.name AS owner FROM jobs j JOIN users u ON u.id = j.user_id"
@@ -164,7 +183,7 @@ class PortalService:
         self.data = Path(config.data)
         self.db = db if db is not None else Database(self.data)
         self.accounts = accounts if accounts is not None else Accounts(self.db)
-        (self.data / "jobs").mkdir(parents=True, exist_ok=True)
+        private_dir(self.data / "jobs")  # the data folder itself is made 0700 by the Database
         self.changed = threading.Condition()  # notified after every change workers/runner/live views wait on
         self.arena: ArenaControl | None = None
         self._video_lock = threading.Lock()  # videos are made one at a time (video())
@@ -183,6 +202,8 @@ class PortalService:
             self.changed.wait(timeout)
 
     def _row(self, job_id: int) -> Any:
+        if not valid_id(job_id):
+            return None  # an id SQLite cannot hold (>= 2**63) or < 1 is no job: 404 like any other
         return self.db.query_one(f"{JOB_SELECT} WHERE j.id = ?", (int(job_id),))
 
     def _visible_row(self, user: User, job_id: int) -> Any:
@@ -211,8 +232,13 @@ class PortalService:
             manifest = upload.manifest
         m = parse_manifest(manifest, self.config.limits)
         entry = self._entry(m, upload)
+        if not user.is_operator:
+            check_disk(self.db.query("SELECT id FROM jobs WHERE user_id = ? AND results_deleted IS NULL",
+                                     (user.id,)), self.config.quotas, self.data / "jobs")
         now = time.time()
         with self.db.transaction() as tx:
+            if not user.is_operator:
+                check_counts(tx, self.config.quotas, user.id, now)
             top = tx.execute("SELECT COALESCE(MAX(priority), 0) FROM jobs").fetchone()[0]
             job_id = tx.execute(
                 "INSERT INTO jobs (user_id, name, state, kind, script_name, entry, n_robots, duration, initial_poses, "
@@ -236,13 +262,13 @@ class PortalService:
         folder = self.job_dir(job_id)
         if folder.exists():  # a leftover of a transaction that rolled back
             shutil.rmtree(folder)
-        folder.mkdir(parents=True)
+        private_dir(folder)
         if upload.kind == "py":
-            (folder / "script.py").write_bytes(upload.files["script.py"])
+            write_private(folder / "script.py", upload.files["script.py"])
         else:
-            (folder / "src").mkdir()
-            ScriptBundle.from_files(upload.files, entry).write_to(folder / "src")
-        (folder / "manifest.json").write_text(json.dumps(m.to_dict(), indent=2))
+            ScriptBundle.from_files(upload.files, entry).write_to(private_dir(folder / "src"), file_mode=0o600,
+                                                                  dir_mode=0o700)
+        write_private(folder / "manifest.json", json.dumps(m.to_dict(), indent=2))
 
     def script(self, job: dict[str, Any]) -> tuple[Path, str | None]:
         """What the sandbox runs for ``job``: ``(script.py, None)``, or ``(the archive's folder, its entry)``."""
@@ -280,7 +306,7 @@ class PortalService:
 
     def report(self, user: User, job_id: int) -> dict[str, Any]:
         """The verification report (JSON) of a job; 404 until verification has finished."""
-        self._visible_row(user, job_id)
+        self._require_results(self._visible_row(user, job_id))
         path = self.job_dir(job_id) / "report.json"
         if not path.is_file():
             raise NotFound(f"job {job_id} has no verification report yet", "job")
@@ -311,6 +337,7 @@ class PortalService:
         row = self._visible_row(user, job_id)
         if name not in RESULT_FILES:
             raise NotFound(f"no result file called {name[:100]!r}", "name")
+        self._require_results(row)
         path = self.job_dir(job_id) / name
         if not path.is_file():
             if row["exports"] == "writing" and name in EXPORT_FILES:
@@ -327,6 +354,7 @@ class PortalService:
         from swarmdeck.console.recording.reader import RecordingError, open_recording
 
         row = self._visible_row(user, job_id)
+        self._require_results(row)
         folder = self.job_dir(job_id)
         out, recording = folder / "video.mp4", folder / "recording.mcap"
         if out.is_file():
@@ -345,6 +373,56 @@ class PortalService:
                 except (RecordingError, VideoExportError, OSError) as exc:
                     raise Unavailable(f"the video of job {job_id} could not be made: {exc}", "name") from None
         return out
+
+    def _require_results(self, row: Any) -> None:
+        """NotFound when the retention sweep deleted the job's results (saying when and why)."""
+        if row["results_deleted"] is not None:
+            days = "" if self.config.retain_days is None else f" (the lab keeps results {self.config.retain_days:g} days)"
+            raise NotFound(f"job {row['id']}'s results were deleted on "
+                           f"{time.strftime('%Y-%m-%d', time.gmtime(row['results_deleted']))}{days}", "job")
+
+    # ------------------------------------------------------------------ quotas and retention
+    def record_verification_cpu(self, job_id: int, cpu_s: float) -> None:
+        """Charge ``cpu_s`` CPU seconds of verification to the job's owner (the daily limit, :mod:`.quotas`)."""
+        if not (isinstance(cpu_s, (int, float)) and math.isfinite(cpu_s) and cpu_s >= 0):
+            return
+        with self.db.transaction() as tx:
+            tx.execute("INSERT OR REPLACE INTO verification_usage (job_id, user_id, t, cpu_s) "
+                       "SELECT id, user_id, ?, ? FROM jobs WHERE id = ?", (time.time(), float(cpu_s), int(job_id)))
+
+    def usage(self, user: User) -> dict[str, Any]:
+        """The researcher's use of each limit (:func:`.quotas.usage`; operators: limits None, not limited)."""
+        marks = ", ".join("?" * len(FINAL))
+        unfinished = self.db.query_one(f"SELECT COUNT(*) FROM jobs WHERE user_id = ? AND state NOT IN ({marks})",
+                                       (user.id, *FINAL))[0]
+        cpu = self.db.query("SELECT cpu_s FROM verification_usage WHERE user_id = ? AND t > ?",
+                            (user.id, time.time() - 86400.0))
+        rows = self.db.query("SELECT id FROM jobs WHERE user_id = ? AND results_deleted IS NULL", (user.id,))
+        return quota_usage(unfinished, cpu, rows, Quotas(None, None, None) if user.is_operator else self.config.quotas,
+                           self.data / "jobs")
+
+    def sweep_results(self, now: float | None = None) -> list[int]:
+        """Delete the folders (script, recording, exports, logs, reports) of jobs that ended more than
+        ``retain_days`` ago and whose exports are not being written; each job's row stays, with
+        ``results_deleted`` set (shown on its page). The ids swept (none when ``retain_days`` is None)."""
+        if self.config.retain_days is None:
+            return []
+        now = time.time() if now is None else float(now)
+        cutoff = now - float(self.config.retain_days) * 86400.0
+        marks = ", ".join("?" * len(FINAL))
+        rows = self.db.query(f"SELECT id FROM jobs WHERE state IN ({marks}) AND ended IS NOT NULL AND ended < ? "
+                             "AND results_deleted IS NULL AND COALESCE(exports, '') != 'writing' ORDER BY id",
+                             (*FINAL, cutoff))
+        swept = []
+        for r in rows:
+            job_id = int(r["id"])
+            shutil.rmtree(self.job_dir(job_id), ignore_errors=True)
+            with self.db.transaction() as tx:
+                tx.execute("UPDATE jobs SET results_deleted = ? WHERE id = ?", (now, job_id))
+            swept.append(job_id)
+        if swept:
+            self.notify()
+        return swept
 
     # ------------------------------------------------------------------ operators
     def _operator_transition(self, user: User, job_id: int, target: str, action: str,
@@ -677,6 +755,8 @@ class PortalService:
         return [int(r["id"]) for r in self.db.query("SELECT id FROM jobs WHERE exports = ? ORDER BY id", (state,))]
 
     def job_state(self, job_id: int) -> str | None:
+        if not valid_id(job_id):
+            return None
         row = self.db.query_one("SELECT state FROM jobs WHERE id = ?", (int(job_id),))
         return None if row is None else str(row["state"])
 

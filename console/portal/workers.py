@@ -20,6 +20,7 @@ from typing import Any
 from swarmdeck.console.jobs.confinement import ConfinementUnavailable, JailConfig, SandboxLimits
 from swarmdeck.console.jobs.report_html import render_html
 from swarmdeck.console.jobs.verification import VerificationCancelled, VerificationConfig, verify
+from swarmdeck.console.portal.files import write_private
 from swarmdeck.console.portal.service import PortalService
 
 
@@ -87,7 +88,8 @@ class VerificationWorkers:
         try:
             script, entry = service.script(job)
             report = verify([script], self.config_for(job), self.executor, cancel=cancel, entry=entry)
-        except VerificationCancelled:
+        except VerificationCancelled as exc:
+            service.record_verification_cpu(job_id, exc.cpu_s)  # a cancel does not make the CPU free
             return  # cancelled: the job is already cancelled (or requeued on restart)
         except (ValueError, ConfinementUnavailable, RuntimeError, ConnectionError, OSError) as exc:
             self.errors += 1
@@ -97,11 +99,13 @@ class VerificationWorkers:
             stop_watch.set()
             watcher.join()
         data = report.to_dict()
+        service.record_verification_cpu(job_id, report.cpu_s)
         folder = service.job_dir(job_id)
-        (folder / "report.json").write_text(json.dumps(data, indent=1))
+        write_private(folder / "report.json", json.dumps(data, indent=1))
         try:
-            (folder / "report.html").write_text(render_html(data), encoding="utf-8")
+            write_private(folder / "report.html", render_html(data))
         except Exception:  # noqa: BLE001 - the HTML is a convenience; the JSON is the report
             self.errors += 1
         self.verified += 1
         service.finish_verification(job_id, report.verdict, report.safety_score, data["reasons"])
+

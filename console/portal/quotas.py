@@ -1,0 +1,127 @@
+"""Per-researcher limits, checked when a job is submitted: jobs not yet finished, verification CPU a day, results disk.
+
+A submission over a limit is refused with the limit named and the researcher's current value
+(``you have 25 jobs not yet finished …; the limit is 25``):
+
+* **unfinished jobs** (queued, verifying, approved, waiting, held, setting up, running) — 429: wait for one
+  to end or cancel one. Counted inside the submission's own transaction, so two submissions at once cannot
+  both pass the last free place.
+* **verification CPU seconds in the last 24 h** (the trusted side's and the jail's CPU of every run, as
+  :func:`swarmdeck.console.jobs.verification.run_task` measures it, recorded when the verdict is) — 429,
+  saying when new jobs are accepted again.
+* **results on disk** (every file under the researcher's jobs' folders) — 403: delete nothing yourself; the
+  lab's retention policy (``swarmdeck server --retain-days D``) or an operator frees space.
+
+Operators are not limited. ``None`` switches a limit off. A job that is already accepted is never stopped
+by a limit (its results may take a researcher over the disk quota: the next submission is refused).
+"""
+from __future__ import annotations
+
+import os
+import sqlite3
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+from swarmdeck.console.portal.db import FINAL
+from swarmdeck.console.portal.errors import QuotaExceeded, RateLimited
+
+DAY_S = 86400.0
+
+
+@dataclass(frozen=True)
+class Quotas:
+    """Per-researcher limits (None: no limit).
+
+    Attributes:
+        max_unfinished_jobs: jobs a researcher may have that have not finished (any state but rejected, done,
+            failed, cancelled, interrupted).
+        verify_cpu_s_per_day: verification CPU seconds of a researcher's jobs in any 24 h.
+        results_bytes: bytes a researcher's jobs' folders may hold (scripts, recordings, exports, logs).
+    """
+
+    max_unfinished_jobs: int | None = 25
+    verify_cpu_s_per_day: float | None = 4 * 3600.0
+    results_bytes: int | None = 2_000_000_000
+
+
+def folder_bytes(folder: Path) -> int:
+    """Bytes of the regular files under ``folder`` (0 if it does not exist); symlinks are not followed."""
+    total = 0
+    stack = [str(folder)]
+    while stack:
+        try:
+            entries = list(os.scandir(stack.pop()))
+        except OSError:
+            continue
+        for entry in entries:
+            try:
+                if entry.is_dir(follow_symlinks=False):
+                    stack.append(entry.path)
+                elif entry.is_file(follow_symlinks=False):
+                    total += entry.stat(follow_symlinks=False).st_size
+            except OSError:
+                continue
+    return total
+
+
+def _size(n: int) -> str:
+    for unit, scale in (("GB", 1e9), ("MB", 1e6), ("kB", 1e3)):
+        if n >= scale:
+            return f"{n / scale:.1f} {unit}"
+    return f"{n} bytes"
+
+
+def usage(db_rows_unfinished: int, cpu_rows: list[sqlite3.Row], job_rows: list[sqlite3.Row], quotas: Quotas,
+          jobs_folder: Path) -> dict[str, dict[str, float | None]]:
+    """Where a researcher stands: ``{"unfinished_jobs" | "verify_cpu_s_today" | "results_bytes": {"used",
+    "limit"}}`` (limit None: none) from their unfinished-job count, their verification usage rows of the last
+    24 h and their job rows (ids, results not deleted)."""
+    return {
+        "unfinished_jobs": {"used": int(db_rows_unfinished), "limit": quotas.max_unfinished_jobs},
+        "verify_cpu_s_today": {"used": round(sum(float(r["cpu_s"]) for r in cpu_rows), 1),
+                               "limit": quotas.verify_cpu_s_per_day},
+        "results_bytes": {"used": sum(folder_bytes(jobs_folder / str(int(r[0]))) for r in job_rows),
+                          "limit": quotas.results_bytes},
+    }
+
+
+def check_disk(db_rows: list[sqlite3.Row], quotas: Quotas, jobs_folder: Path) -> None:
+    """Refuse a new job when the researcher's jobs (``db_rows``: their ids, results not deleted) hold
+    ``results_bytes`` or more under ``jobs_folder``: :class:`QuotaExceeded` (403) naming both. Walks the folders:
+    call it outside the submission's transaction."""
+    if quotas.results_bytes is None:
+        return
+    used = sum(folder_bytes(jobs_folder / str(int(r[0]))) for r in db_rows)
+    if used >= quotas.results_bytes:
+        raise QuotaExceeded(f"your jobs' files take {_size(used)}; the limit is {_size(quotas.results_bytes)}: download what you need and ask the lab to "
+                            "free space (results are kept as the lab's retention policy says)", "results_bytes")
+
+
+def check_counts(tx: sqlite3.Connection, quotas: Quotas, user_id: int, now: float | None = None) -> None:
+    """Refuse a new job of researcher ``user_id`` over the unfinished-jobs or the daily verification-CPU limit
+    (inside the submission's transaction ``tx``): :class:`RateLimited` (429) naming the limit and the current
+    value."""
+    now = time.time() if now is None else float(now)
+    if quotas.max_unfinished_jobs is not None:
+        marks = ", ".join("?" * len(FINAL))
+        n = tx.execute(f"SELECT COUNT(*) FROM jobs WHERE user_id = ? AND state NOT IN ({marks})",
+                       (user_id, *FINAL)).fetchone()[0]
+        if n >= quotas.max_unfinished_jobs:
+            raise RateLimited(f"you have {n} jobs not yet finished (queued, verifying, waiting or running); the "
+                              f"limit is {quotas.max_unfinished_jobs}: wait for one to end, or cancel one",
+                              "max_unfinished_jobs")
+    if quotas.verify_cpu_s_per_day is not None:
+        rows = tx.execute("SELECT t, cpu_s FROM verification_usage WHERE user_id = ? AND t > ? ORDER BY t",
+                          (user_id, now - DAY_S)).fetchall()
+        used = sum(float(r["cpu_s"]) for r in rows)
+        if used >= quotas.verify_cpu_s_per_day:
+            left, again = used, now
+            for r in rows:  # the oldest usage leaves the 24 h window first
+                left -= float(r["cpu_s"])
+                again = float(r["t"]) + DAY_S
+                if left < quotas.verify_cpu_s_per_day:
+                    break
+            raise RateLimited(f"verification of your jobs used {used:.0f} CPU s in the last 24 h; the limit is "
+                              f"{quotas.verify_cpu_s_per_day:.0f} CPU s a day: new jobs are accepted again from "
+                              f"{time.strftime('%Y-%m-%d %H:%M UTC', time.gmtime(again))}", "verify_cpu_s_per_day")
