@@ -449,6 +449,20 @@ def _note_cpu(outcome: SandboxOutcome, message: dict[str, Any]) -> None:
         outcome.child_cpu_s = cpu
 
 
+def _write_private(bundle: ScriptBundle, folder: Path, uid: int | None) -> Path:
+    """The script's files for the jail, readable by the run alone: owned by us, group the run's gid (= its uid),
+    folders 0750 and files 0640 — other local users read nothing of a researcher's script while it runs. Without
+    a uid of the run's own the child runs as we do: 0700/0600."""
+    if uid is None:
+        return bundle.write_to(folder, file_mode=0o600, dir_mode=0o700)
+    os.chmod(folder, 0o750)
+    os.chown(folder, -1, uid)
+    script = bundle.write_to(folder, file_mode=0o640, dir_mode=0o750)
+    for path in folder.rglob("*"):
+        os.chown(path, -1, uid, follow_symlinks=False)
+    return script
+
+
 def run_sandboxed(
     script: str | Path | ScriptBundle,
     make_plant: PlantFactory,
@@ -507,8 +521,6 @@ def _run_sandboxed(bundle: ScriptBundle, make_plant: PlantFactory, *, n_robots: 
     uid: int | None = None
     group: cgroups.RunCgroup | None = None
     try:
-        os.chmod(folder, 0o755)
-        script = bundle.write_to(folder)
         if chosen is not None and os.geteuid() == 0:  # unconfined, the child keeps our uid (and our files)
             if hardening.run_uid:
                 try:
@@ -518,6 +530,7 @@ def _run_sandboxed(bundle: ScriptBundle, make_plant: PlantFactory, *, n_robots: 
             else:
                 uid = 200000 + os.getpid() % 100000  # the bench's baseline: the jail before issue 24
             os.chown(scratch, uid, uid)
+        script = _write_private(bundle, folder, uid)
         if hardening.cgroup:
             try:
                 group = cgroups.create(cgroups.CgroupLimits(
