@@ -144,7 +144,7 @@ def check_arguments(args: argparse.Namespace) -> None:
 
 def main(args: argparse.Namespace) -> int:
     check_arguments(args)
-    from swarmdeck.console.jobs.confinement import JailConfig, probe
+    from swarmdeck.console.jobs.confinement import JailConfig, describe, probe
     from swarmdeck.console.portal.app import HttpSettings, bind, create_app, uvicorn_server
     from swarmdeck.console.portal.quotas import Quotas
     from swarmdeck.console.portal.retention import RetentionSweeper
@@ -233,6 +233,8 @@ def main(args: argparse.Namespace) -> int:
         f"{fleet} simulated robots docked on the chargers{' (fast)' if args.fast else ''}"
     print(f"swarmdeck server: http://{host}:{sock.getsockname()[1]}  ({arena}; data in {args.data}; "
           "API docs at /docs; Ctrl-C to stop)", flush=True)
+    print(f"swarmdeck server: user code confined by: {describe(JailConfig(allow_no_cgroup=args.allow_no_cgroup))}",
+          flush=True)
     import signal
 
     # uvicorn stops on SIGINT/SIGTERM and then re-raises the signal to the handler it found: make that a

@@ -142,6 +142,15 @@ def _layout() -> tuple[int, dict[str, Path]]:
     return 1, parents
 
 
+def version() -> int | None:
+    """The cgroup version a run's group would use here (2 or 1), None when none can be made (not root, no
+    controllers)."""
+    try:
+        return _layout()[0]
+    except CgroupUnavailable:
+        return None
+
+
 def probe() -> str | None:
     """None when a run's cgroup can be created here (tries one), else why not."""
     try:

@@ -198,6 +198,22 @@ def probe(config: JailConfig = JailConfig()) -> str | None:
     return None
 
 
+def describe(config: JailConfig = JailConfig()) -> str:
+    """One line for a server's start-up: how untrusted code is confined here, e.g. "unshare jail, seccomp filter,
+    cgroup v1 per run, a uid per run" — or what is missing ("NOT CONFINED: …", "no cgroup: …")."""
+    from swarmdeck.console.jobs import cgroups, seccomp
+
+    jail, reason = choose_jail(config)
+    if jail is None:
+        return f"NOT CONFINED: {reason}"
+    parts = [f"{jail} jail"]
+    parts.append("seccomp filter" if seccomp.probe() is None else f"NO seccomp filter ({seccomp.probe()})")
+    cg = cgroups.version()
+    parts.append(f"cgroup v{cg} per run" if cg is not None else f"NO cgroup per run ({cgroups.probe()})")
+    parts.append("a uid per run" if os.geteuid() == 0 else "the server's own uid")
+    return ", ".join(parts)
+
+
 def processes_of(uid: int) -> list[int]:
     """Pids of live processes whose real uid is ``uid`` (from /proc/PID/status)."""
     pids = []
