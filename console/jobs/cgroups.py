@@ -27,11 +27,11 @@ from __future__ import annotations
 
 import os
 import secrets
-import signal
 import time
 from dataclasses import dataclass
 from pathlib import Path
 
+from swarmdeck.console.jobs.confinement import kill_until_gone
 from swarmdeck.core.checks import require_positive
 
 CGROUP_ROOT = Path("/sys/fs/cgroup")
@@ -219,16 +219,7 @@ class RunCgroup:
                 _write(self.folders["memory"] / "cgroup.kill", "1")
             except OSError:
                 pass
-        while True:
-            pids = self.pids()
-            if not pids or time.monotonic() > deadline:
-                return pids
-            for pid in pids:
-                try:
-                    os.kill(pid, signal.SIGKILL)
-                except (ProcessLookupError, PermissionError):
-                    pass
-            time.sleep(0.005)
+        return kill_until_gone(self.pids, max(0.0, deadline - time.monotonic()), pause=0.005)
 
     def remove(self, timeout: float = 10.0) -> str | None:
         """Kill what is left in the group and delete it; None, or what could not be removed."""

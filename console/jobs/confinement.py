@@ -50,9 +50,12 @@ from __future__ import annotations
 import functools
 import os
 import shutil
+import signal
 import subprocess
 import sys
 import sysconfig
+import time
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -236,26 +239,29 @@ def processes_of(uid: int) -> list[int]:
     return pids
 
 
+def kill_until_gone(pids: Callable[[], list[int]], timeout: float = 10.0, pause: float = 0.01) -> list[int]:
+    """SIGKILL the processes ``pids()`` lists, again and again, until it lists none (or ``timeout`` s pass);
+    returns the survivors. ``pids``: e.g. the processes of a uid (:func:`processes_of`) or of a cgroup."""
+    deadline = time.monotonic() + timeout
+    while True:
+        alive = pids()
+        if not alive or time.monotonic() > deadline:
+            return alive
+        for pid in alive:
+            try:
+                os.kill(pid, signal.SIGKILL)
+            except (ProcessLookupError, PermissionError):
+                pass
+        time.sleep(pause)
+
+
 def kill_all_of(uid: int, timeout: float = 10.0) -> list[int]:
     """SIGKILL every process of ``uid`` until none is left (or ``timeout`` s); returns the survivors.
 
     The jail's pid namespace dies with its first process, but asynchronously; this makes the
     end of a run synchronous, so no process of a finished run can touch the next one.
     """
-    import signal
-    import time
-
-    deadline = time.monotonic() + timeout
-    while True:
-        pids = processes_of(uid)
-        if not pids or time.monotonic() > deadline:
-            return pids
-        for pid in pids:
-            try:
-                os.kill(pid, signal.SIGKILL)
-            except (ProcessLookupError, PermissionError):
-                pass
-        time.sleep(0.01)
+    return kill_until_gone(lambda: processes_of(uid), timeout)
 
 
 @functools.lru_cache(maxsize=1)
