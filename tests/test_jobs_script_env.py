@@ -1,0 +1,117 @@
+"""The lab's script environment (``--script-env PATH``): a script imports the environment's packages in
+both jails, and an import outside it is refused with a message naming the package and how to ask for it."""
+import os
+import shutil
+import stat
+import subprocess
+import sys
+import tempfile
+import textwrap
+from pathlib import Path
+
+import pytest
+from jail_fixtures import jail_run  # noqa: F401
+
+from swarmdeck.console.jobs.import_policy import refusal
+from swarmdeck.console.jobs.script_env import PROVIDED, ScriptEnv, create, format_listing, listing
+
+
+def make_env(with_package: bool = True) -> Path:
+    """A tiny virtual environment (no pip) holding one pure-Python package, ``labtools`` 1.2, and a
+    package ``leaky`` that imports something outside the environment."""
+    root = Path(tempfile.mkdtemp(prefix="swarmdeck-test-env-"))
+    os.chmod(root, 0o755)
+    subprocess.run([sys.executable, "-m", "venv", "--without-pip", str(root / "env")], check=True)
+    site = root / "env" / "lib" / f"python{sys.version_info.major}.{sys.version_info.minor}" / "site-packages"
+    if with_package:
+        (site / "labtools").mkdir()
+        (site / "labtools" / "__init__.py").write_text("GAIN = 0.05\ndef helper():\n    return 'labtools'\n")
+        (site / "labtools-1.2.dist-info").mkdir()
+        (site / "labtools-1.2.dist-info" / "METADATA").write_text("Metadata-Version: 2.1\nName: labtools\nVersion: 1.2\n")
+        (site / "leaky.py").write_text("import msgspec\n")
+    for path in [root, *root.rglob("*")]:
+        os.chmod(path, os.stat(path).st_mode | stat.S_IROTH | (stat.S_IXOTH if path.is_dir() else 0))
+    return root / "env"
+
+
+@pytest.fixture(scope="module")
+def env():
+    path = make_env()
+    yield path
+    shutil.rmtree(path.parent, ignore_errors=True)
+
+
+USES_THE_ENV = """
+import numpy as np
+import labtools
+from labtools import helper
+import math, json
+assert helper() == "labtools"
+def experiment(arena):
+    while True:
+        arena.set_velocities(np.full((arena.n, 2), labtools.GAIN))
+        arena.step()
+"""
+
+
+def test_a_script_imports_the_environments_packages(jail_run, env):
+    out = jail_run(USES_THE_ENV, script_env=str(env))
+    assert out.ok, out.error
+    assert out.ticks > 0
+
+
+@pytest.mark.parametrize("line, package", [
+    ("import msgspec", "msgspec"),                       # in swarmdeck's own environment, not the lab's
+    ("import torch.nn", "torch"),                        # nowhere
+    ("import importlib\nimportlib.import_module('fastapi')", "fastapi"),
+    ("import leaky", "msgspec"),                         # a package of the environment reaching outside it
+])
+def test_an_import_outside_the_environment_is_refused_naming_the_package(jail_run, env, line, package):
+    out = jail_run(line + "\n" + USES_THE_ENV, script_env=str(env))
+    assert not out.ok
+    assert refusal(package) in out.error, out.error
+    assert "swarmdeck env" in refusal(package) and "ask the lab" in refusal(package)
+
+
+def test_without_a_script_environment_scripts_import_swarmdecks_packages(jail_run):
+    out = jail_run("import msgspec\nimport numpy as np\n" + USES_THE_ENV.replace("import labtools\nfrom labtools import helper\n", "")
+                   .replace('assert helper() == "labtools"\n', "").replace("labtools.GAIN", "0.05"))
+    assert out.ok, out.error
+
+
+def test_the_listing_names_the_environments_packages_and_what_swarmdeck_provides(env):
+    info = listing(ScriptEnv.open(env))
+    assert {"name": "labtools", "version": "1.2"} in info["packages"]
+    assert [p["name"] for p in info["provided"]] == list(PROVIDED) == ["numpy"]
+    assert info["script_env"] == str(env.resolve())
+    text = format_listing(info)
+    assert "labtools" in text and "1.2" in text and "numpy" in text and "ask the lab" in text
+
+
+def test_environments_that_break_the_rule_are_refused_with_the_reason(tmp_path):
+    with pytest.raises(ValueError, match="no such folder"):
+        ScriptEnv.open(tmp_path / "missing")
+    with pytest.raises(ValueError, match="not a virtual environment"):
+        ScriptEnv.open(tmp_path)
+    subprocess.run([sys.executable, "-m", "venv", "--without-pip", "--system-site-packages", str(tmp_path / "sys")],
+                   check=True)
+    with pytest.raises(ValueError, match="system's site-packages"):
+        ScriptEnv.open(tmp_path / "sys")
+    other = tmp_path / "other"
+    (other / "lib" / "python2.7" / "site-packages").mkdir(parents=True)
+    (other / "pyvenv.cfg").write_text("home = /usr/bin\nversion = 2.7.18\n")
+    with pytest.raises(ValueError, match="made for Python 2.7.18"):
+        ScriptEnv.open(other)
+    closed = tmp_path / "closed"
+    subprocess.run([sys.executable, "-m", "venv", "--without-pip", str(closed)], check=True)
+    os.chmod(closed, 0o700)
+    with pytest.raises(ValueError, match="readable by every user"):
+        ScriptEnv.open(closed)
+
+
+def test_create_makes_an_environment_that_follows_the_rule(tmp_path):
+    made = create(tmp_path / "lab-env")
+    assert made.root == (tmp_path / "lab-env").resolve()
+    assert "include-system-site-packages = false" in (tmp_path / "lab-env" / "pyvenv.cfg").read_text()
+    with pytest.raises(ValueError, match="not an empty folder"):
+        create(tmp_path / "lab-env")
