@@ -9,6 +9,7 @@ plugins start (priority 100). Nothing is written inside the repository.
 from __future__ import annotations
 
 import atexit
+import re
 import functools
 import shutil
 import sys
@@ -45,3 +46,12 @@ def on_config(config: Any) -> Any:
     if tree not in sys.path:
         sys.path.insert(0, tree)
     return config
+
+
+_ROLE = re.compile(r":(?:class|meth|func|mod|attr|data|exc|obj|const):(?=<code>)")
+_TILDE = re.compile(r"<code>~(?:[\w]+\.)*([\w]+)</code>")
+
+
+def on_page_content(html: str, **_: Any) -> str:
+    """The docstrings' Sphinx roles (``:class:`Arena```) read as plain code in the API reference."""
+    return _TILDE.sub(r"<code>\1</code>", _ROLE.sub("", html))
