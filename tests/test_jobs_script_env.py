@@ -74,3 +74,14 @@ def test_create_makes_an_environment_that_follows_the_rule(tmp_path):
     assert "include-system-site-packages = false" in (tmp_path / "lab-env" / "pyvenv.cfg").read_text()
     with pytest.raises(ValueError, match="not an empty folder"):
         create(tmp_path / "lab-env")
+
+
+def test_an_environment_gone_after_start_is_an_infrastructure_error_not_the_scripts(tmp_path):
+    from swarmdeck.console.jobs.confinement import ConfinementUnavailable, JailConfig
+    from swarmdeck.console.jobs.sandbox import run_sandboxed
+
+    script = tmp_path / "s.py"
+    script.write_text(USES_THE_ENV)
+    with pytest.raises(ConfinementUnavailable, match="lab's script environment.*no such folder"):
+        run_sandboxed(script, lambda n, ic: None, n_robots=2, duration=0.2,
+                      jail=JailConfig(script_env=str(tmp_path / "removed")))

@@ -478,7 +478,8 @@ def run_sandboxed(
     ``trusted``: run without a jail when none works here (resource limits still apply);
     otherwise :class:`ConfinementUnavailable` is raised.
     ``jail.script_env``: the lab's script environment, bound read-only and put in force before the
-    script's first line (:mod:`swarmdeck.console.jobs.script_env`); ValueError when it breaks its rule.
+    script's first line (:mod:`swarmdeck.console.jobs.script_env`); :class:`ConfinementUnavailable`
+    (naming what is wrong) when it breaks its rule.
     """
     if isinstance(script, ScriptBundle):
         bundle = script
@@ -497,7 +498,10 @@ def _run_sandboxed(bundle: ScriptBundle, make_plant: PlantFactory, *, n_robots: 
                    rps: bool | None, limits: SandboxLimits, trusted: bool, cancelled: Callable[[], bool] | None,
                    jail: JailConfig, hardening: _Hardening) -> SandboxOutcome:
     """:func:`run_sandboxed` with ``hardening`` (always :data:`_FULL` there)."""
-    env = None if jail.script_env is None else ScriptEnv.open(jail.script_env)
+    try:  # checked on every run: the lab may change the environment while a server runs
+        env = None if jail.script_env is None else ScriptEnv.open(jail.script_env)
+    except ValueError as exc:  # the machine's set-up, not the script: an infrastructure error
+        raise ConfinementUnavailable(f"cannot run scripts with the lab's script environment: {exc}") from None
     chosen, reason = choose_jail(jail)
     if chosen is None and not trusted:
         raise ConfinementUnavailable(f"cannot confine untrusted code on this machine: {reason}; "
