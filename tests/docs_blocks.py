@@ -1,6 +1,6 @@
 """The code examples of the documentation (``docs/*.md``): fenced blocks, what each is, and how to run them.
 
-A block's info string says what it is: ```` ```python ```` and ```` ```bash ```` run; a block with a title (```` ```python title="f.py" ````, ```` ```toml title="c.toml" ````)
+A block's info string says what it is: ```` ```python ```` and ```` ```bash ```` (``sh``, ``shell``) run; a block with a title (```` ```python title="f.py" ````, ```` ```toml title="c.toml" ````)
 is written to that file instead (a later block of the page runs or reads it); ``{.bash .norun}`` / ``{.python .norun}``
 marks one of the few blocks that cannot run in a test (a server that keeps running, an install); any other
 language (``text``, ``toml``, ``ini``, ``json``) is shown output or configuration, not run. A page's blocks
@@ -15,7 +15,8 @@ from dataclasses import dataclass
 from pathlib import Path
 
 DOCS = Path(__file__).resolve().parents[1] / "docs"
-RUNNABLE = ("python", "bash")
+SHELLS = ("bash", "sh", "shell")
+RUNNABLE = ("python", *SHELLS)
 FENCE = re.compile(r"^(?P<indent>[ \t]*)(?P<fence>`{3,}|~{3,})(?P<info>[^`\n]*)$")
 
 

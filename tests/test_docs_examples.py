@@ -7,7 +7,7 @@ import sys
 from pathlib import Path
 
 import pytest
-from docs_blocks import DOCS, blocks, pages, shell_commands
+from docs_blocks import DOCS, SHELLS, blocks, pages, shell_commands
 
 BIN = Path(sys.executable).parent
 PAGES = [p for p in pages() if any(b.runs or b.title for b in blocks(p))]
@@ -48,4 +48,5 @@ def test_only_a_few_blocks_are_not_run():
     norun = [b.where for p in pages() for b in blocks(p) if "norun" in b.classes]
     assert len(norun) <= NORUN_BUDGET, norun
     languages = {b.lang for p in pages() for b in blocks(p)}
-    assert languages <= {"python", "bash", "text", "toml", "ini", "json", "caddy", "nginx", ""}, languages
+    known = {"python", *SHELLS, "text", "toml", "ini", "json", "yaml", "caddy", "nginx", "html", ""}
+    assert languages <= known, f"unknown languages (a typo would silently not run): {languages - known}"
