@@ -28,6 +28,7 @@ import importlib
 import os
 import sys
 from collections.abc import Iterable
+from types import FrameType
 
 #: Always importable by a script: swarmdeck's experiment API and the rps facade.
 ALWAYS = ("swarmdeck", "rps", "__future__")
@@ -85,7 +86,7 @@ class _Policy:
             self._by_file[filename] = known
         return known
 
-    def importer_is_user(self, frame) -> bool:  # noqa: ANN001 - a frame object
+    def importer_is_user(self, frame: FrameType | None) -> bool:
         """Walk out of the import machinery to the frame that asked for the import."""
         while frame is not None:
             filename = frame.f_code.co_filename
@@ -94,7 +95,9 @@ class _Policy:
             frame = frame.f_back
         return False
 
-    def check(self, name: str, frame) -> None:  # noqa: ANN001 - a frame object
+    def check(self, name: str, frame: FrameType | None) -> None:
+        """Raise ModuleNotFoundError (:func:`refusal`) when user code at ``frame`` imports ``name`` outside the
+        environment."""
         top = name.partition(".")[0]
         if top and top not in self.allowed and self.importer_is_user(frame):
             raise ModuleNotFoundError(refusal(top), name=top)
