@@ -43,12 +43,16 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                              "memory/pids controller): then only per-process limits bound its memory, processes and CPU")
     parser.add_argument("--jail", choices=("unshare", "bwrap"), default=None,
                         help="with --sandbox: confine with this jail only (default: unshare, then bubblewrap)")
+    from swarmdeck.console.cli.env import add_script_env_argument
+
+    add_script_env_argument(parser, "with --sandbox: ")
     parser.add_argument("--entry", default=None, metavar="FILE",
                         help="with --sandbox and a directory SCRIPT: the file to run, relative to it (default main.py); "
                              "sibling modules are importable")
 
 
 def _run_sandboxed(args: argparse.Namespace) -> int:
+    from swarmdeck.console.cli.env import checked_script_env
     from swarmdeck.console.jobs.confinement import ConfinementUnavailable, JailConfig
     from swarmdeck.console.jobs.plant import ArenaPlant
     from swarmdeck.console.jobs.sandbox import run_sandboxed
@@ -65,7 +69,8 @@ def _run_sandboxed(args: argparse.Namespace) -> int:
     try:
         outcome = run_sandboxed(args.script, make_plant, entry=args.entry, n_robots=args.robots, duration=args.duration, rps=args.rps,
                                 trusted=args.trusted, jail=JailConfig(order=(args.jail,) if args.jail else JailConfig().order,
-                                                                     allow_no_cgroup=args.allow_no_cgroup))
+                                                                     allow_no_cgroup=args.allow_no_cgroup,
+                                                                     script_env=checked_script_env(args.script_env)))
     except (ConfinementUnavailable, ValueError) as exc:
         raise UsageError(str(exc)) from exc
     if outcome.log:
@@ -86,6 +91,8 @@ def _run_sandboxed(args: argparse.Namespace) -> int:
 
 
 def main(args: argparse.Namespace) -> int:
+    if args.script_env is not None and not args.sandbox:
+        raise UsageError("--script-env needs --sandbox (the script environment is the jail's)")
     if args.entry is not None and not args.sandbox:
         raise UsageError("--entry needs --sandbox (a directory of files runs in the sandbox)")
     if args.sandbox:

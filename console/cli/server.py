@@ -57,6 +57,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--allow-no-cgroup", action="store_true",
                         help="run scripts even where no cgroup can be created per run (not root, no memory/pids "
                              "controller): then only per-process limits bound a run's memory, processes and CPU")
+    from swarmdeck.console.cli.env import add_script_env_argument
+
+    add_script_env_argument(parser)
     parser.add_argument("--console-port", type=int, default=None, metavar="P",
                         help="also show the running job in the operator's viser view on port P (on --host)")
     quota = parser.add_argument_group("per-researcher limits (0: no limit; operators are not limited)")
@@ -156,6 +159,8 @@ def main(args: argparse.Namespace) -> int:
     from swarmdeck.console.portal.workers import VerificationWorkers, make_executor
     from swarmdeck.devices.fleet.chargers import ChargerLayout
 
+    from swarmdeck.console.cli.env import checked_script_env
+
     reason = probe(JailConfig(allow_no_cgroup=args.allow_no_cgroup))
     if reason is not None and not args.trusted:
         raise UsageError(f"cannot confine untrusted code on this machine: {reason}; install bubblewrap "
@@ -166,7 +171,7 @@ def main(args: argparse.Namespace) -> int:
     config = PortalConfig(data=args.data, limits=Limits(fleet=fleet, max_duration=args.max_duration,
                                                         max_upload_bytes=args.max_upload),
                           verify_runs=args.verify_runs, grace_s=args.grace, trusted=args.trusted,
-                          allow_no_cgroup=args.allow_no_cgroup,
+                          allow_no_cgroup=args.allow_no_cgroup, script_env=checked_script_env(args.script_env),
                           arena_tick_budget_s=args.tick_budget,
                           quotas=Quotas(max_unfinished_jobs=args.max_jobs or None,
                                         verify_cpu_s_per_day=args.verify_cpu or None,

@@ -62,6 +62,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                              "fork server — then bubblewrap)")
     parser.add_argument("--rps", action=argparse.BooleanOptionalAction, default=None,
                         help="resolve `import rps...` to swarmdeck's rps facade (default: when the script imports rps)")
+    from swarmdeck.console.cli.env import add_script_env_argument
+
+    add_script_env_argument(parser)
     parser.add_argument("--json", action="store_true", help="print the JSON report (schema swarmdeck.verification/1)")
     parser.add_argument("--html", default=None, metavar="OUT.html", help="write the HTML report there")
 
@@ -104,6 +107,7 @@ def _progress(total_runs: int):  # type: ignore[no-untyped-def]
 
 def main(args: argparse.Namespace) -> int:
     from swarmdeck.console.cli import UsageError
+    from swarmdeck.console.cli.env import checked_script_env
     from swarmdeck.console.cli.run import check_run_arguments
     from swarmdeck.console.jobs.confinement import ConfinementUnavailable, JailConfig, SandboxLimits
     from swarmdeck.console.jobs.executors import LocalPoolExecutor, RayExecutor
@@ -121,7 +125,8 @@ def main(args: argparse.Namespace) -> int:
         config = VerificationConfig(n_robots=robots, duration=duration, runs=args.runs, seed=args.seed,
                                     bypass_threshold=args.bypass_threshold, limits=limits, trusted=args.trusted,
                                     rps=args.rps, jail=JailConfig(order=(args.jail,) if args.jail else JailConfig().order,
-                                                                   allow_no_cgroup=args.allow_no_cgroup),
+                                                                   allow_no_cgroup=args.allow_no_cgroup,
+                                                                   script_env=checked_script_env(args.script_env)),
                                     initial_poses=poses, declared_by=declared_by, wall_factor=args.wall_factor,
                                     paced_runs=args.paced_runs)
         executor = RayExecutor(args.ray) if args.ray else LocalPoolExecutor(args.workers)

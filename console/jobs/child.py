@@ -23,6 +23,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from swarmdeck.console.jobs.import_policy import install as install_import_policy
 from swarmdeck.console.jobs.protocol import MESSAGE, FrameReader, decode, encode_commands, pack, write_frame
 from swarmdeck.console.jobs.protocol import poses as read_poses
 from swarmdeck.devices.arena import ExperimentFinished
@@ -134,6 +135,9 @@ def main(argv: list[str]) -> int:
         os.chdir(scratch)
         os.environ.update(HOME=scratch, TMPDIR=scratch)
     _confine(start)
+    env = start.get("script_env")
+    if env:  # the lab's script environment: from here on the script imports only what it lists
+        install_import_policy(env["site"], env["modules"], [os.path.dirname(os.path.abspath(start["script"]))])
     link.send({"t": "ready"})
     error: str | None = None
     error_line: str | None = None

@@ -133,11 +133,16 @@ class JailConfig:
         allow_no_cgroup: run untrusted code even where no cgroup can be created for the run
             (then only the per-process resource limits bound its memory, processes and CPU).
             An operator's choice (``--allow-no-cgroup``), never the default.
+        script_env: the lab's script environment (``--script-env PATH``), a virtual environment bound
+            read-only in the jail: scripts import only its packages besides the standard library,
+            swarmdeck and numpy (:mod:`swarmdeck.console.jobs.script_env`); None: what swarmdeck's own
+            environment has.
     """
 
     order: tuple[str, ...] = JAILS
     bwrap: str = "bwrap"
     allow_no_cgroup: bool = False
+    script_env: str | None = None
 
     def __post_init__(self) -> None:
         order = tuple(self.order) if isinstance(self.order, (list, tuple)) else (self.order,)
@@ -285,26 +290,29 @@ def _system_paths() -> tuple[Path, ...]:
     return tuple(p for p in paths if not any(p != q and p.is_relative_to(q) for q in paths))
 
 
-def _visible_paths(script_dir: Path) -> list[tuple[str, Path]]:
-    """(kind, path) binds of the jail: what Python and swarmdeck need, and the script's folder, read-only."""
-    return [("ro", p) for p in _system_paths()] + [("ro", script_dir.resolve())]
+def _visible_paths(script_dir: Path, extra: tuple[Path, ...] = ()) -> list[tuple[str, Path]]:
+    """(kind, path) binds of the jail: what Python and swarmdeck need, the script's folder and ``extra``
+    (the script environment), read-only."""
+    return [("ro", p) for p in _system_paths()] + [("ro", script_dir.resolve())] + [("ro", p.resolve()) for p in extra]
 
 
 _MERGED_USR_LINKS = ("/lib", "/lib64", "/bin", "/sbin", "/lib32", "/libx32")
 
 
-def jail_layout(script_dir: Path, scratch: Path | None = None
+def jail_layout(script_dir: Path, scratch: Path | None = None, extra: tuple[Path, ...] = ()
                 ) -> tuple[list[tuple[str, Path]], list[tuple[str, Path]]]:
     """What the jail's filesystem holds: binds ``("ro" | "rw", path)`` (each at its own path; a
     host ``scratch`` folder, when given, the only "rw" one — else scratch is a tmpfs the jail
-    mounts itself) and symlinks ``(target, path)`` (merged /usr: /lib -> usr/lib)."""
+    mounts itself; ``extra`` folders read-only: the script environment) and symlinks
+    ``(target, path)`` (merged /usr: /lib -> usr/lib)."""
     symlinks = [(os.readlink(link), link) for link in map(Path, _MERGED_USR_LINKS) if link.is_symlink()]
     rw = [] if scratch is None else [("rw", scratch.resolve())]
-    return _visible_paths(script_dir) + rw, symlinks
+    return _visible_paths(script_dir, extra) + rw, symlinks
 
 
 def bwrap_command(child_argv: list[str], script_dir: Path, scratch: Path, bwrap: str = "bwrap", *,
-                  seccomp_fd: int | None = None, scratch_size: int | None = None) -> list[str]:
+                  seccomp_fd: int | None = None, scratch_size: int | None = None,
+                  extra: tuple[Path, ...] = ()) -> list[str]:
     """The bubblewrap command line running ``child_argv`` in the jail (scratch writable).
 
     ``scratch`` is bound from the host's view at its own path (the trusted side mounts a
@@ -312,11 +320,12 @@ def bwrap_command(child_argv: list[str], script_dir: Path, scratch: Path, bwrap:
     :mod:`swarmdeck.console.jobs.sandbox`) — or, with ``scratch_size``, is a tmpfs of that
     many bytes bwrap makes itself (``--size``; no inode limit: for runs without root).
     ``seccomp_fd``: a readable descriptor holding the filter's BPF (``--seccomp``).
+    ``extra``: more folders bound read-only (the script environment).
     """
     argv = [shutil.which(bwrap) or bwrap, "--unshare-net", "--unshare-pid", "--unshare-ipc", "--unshare-uts",
             "--die-with-parent", "--new-session", "--proc", "/proc", "--dev", "/dev", "--tmpfs", "/tmp"]
     made: set[Path] = {Path("/"), Path("/proc"), Path("/dev"), Path("/tmp")}
-    binds, symlinks = jail_layout(script_dir)
+    binds, symlinks = jail_layout(script_dir, extra=extra)
     for target, link in symlinks:
         argv += ["--symlink", target, str(link)]
         made.add(link)

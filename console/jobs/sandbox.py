@@ -73,6 +73,7 @@ from numpy.typing import NDArray
 from swarmdeck.console.jobs import cgroups, uids
 from swarmdeck.console.jobs import seccomp as seccomp_filter
 from swarmdeck.console.jobs.bundle import ScriptBundle
+from swarmdeck.console.jobs.script_env import ScriptEnv
 from swarmdeck.console.jobs.confinement import (
     ConfinementUnavailable,
     JailConfig,
@@ -338,7 +339,7 @@ class _Child:
     """The jailed process and the trusted side's ends of its pipes."""
 
     def __init__(self, jail: str | None, jail_config: JailConfig, folder: Path, scratch: Path,
-                 root: Path | None, setup: _Setup) -> None:
+                 root: Path | None, setup: _Setup, env_dirs: tuple[Path, ...] = ()) -> None:
         to_child_r, self.to_child = os.pipe()
         self.from_child, from_child_w = os.pipe()
         self.log, log_w = os.pipe()
@@ -346,7 +347,7 @@ class _Child:
         try:
             tmpfs = setup.scratch_tmpfs
             if jail == "unshare":
-                binds, symlinks = jail_layout(folder, scratch if tmpfs is None else None)
+                binds, symlinks = jail_layout(folder, scratch if tmpfs is None else None, env_dirs)
                 self.process: _Started | _Forked = _Forked(
                     root, binds, symlinks, (to_child_r, from_child_w, log_w),
                     scratch=None if tmpfs is None else (scratch.resolve(), tmpfs),
@@ -366,7 +367,7 @@ class _Child:
                         extra = (seccomp_fd,)
                     own_tmpfs = tmpfs is not None and os.geteuid() != 0  # no root: bwrap's tmpfs, size only
                     argv = bwrap_command(argv, folder, scratch, jail_config.bwrap, seccomp_fd=seccomp_fd,
-                                         scratch_size=setup.scratch_bytes if own_tmpfs else None)
+                                         scratch_size=setup.scratch_bytes if own_tmpfs else None, extra=env_dirs)
                 self.process = _Started(argv, to_child_r, from_child_w, log_w, scratch,
                                         prepare=_prepare_exec(setup, scratch), extra_fds=extra)
         except BaseException:
@@ -490,6 +491,9 @@ def run_sandboxed(
     ``jail``: which jails to try, in order (default: ``unshare``, then bubblewrap).
     ``trusted``: run without a jail when none works here (resource limits still apply);
     otherwise :class:`ConfinementUnavailable` is raised.
+    ``jail.script_env``: the lab's script environment, bound read-only and put in force before the
+    script's first line (:mod:`swarmdeck.console.jobs.script_env`); :class:`ConfinementUnavailable`
+    (naming what is wrong) when it breaks its rule.
     """
     if isinstance(script, ScriptBundle):
         bundle = script
@@ -508,6 +512,10 @@ def _run_sandboxed(bundle: ScriptBundle, make_plant: PlantFactory, *, n_robots: 
                    rps: bool | None, limits: SandboxLimits, trusted: bool, cancelled: Callable[[], bool] | None,
                    jail: JailConfig, hardening: _Hardening) -> SandboxOutcome:
     """:func:`run_sandboxed` with ``hardening`` (always :data:`_FULL` there)."""
+    try:  # checked on every run: the lab may change the environment while a server runs
+        env = None if jail.script_env is None else ScriptEnv.open(jail.script_env)
+    except ValueError as exc:  # the machine's set-up, not the script: an infrastructure error
+        raise ConfinementUnavailable(f"cannot run scripts with the lab's script environment: {exc}") from None
     chosen, reason = choose_jail(jail)
     if chosen is None and not trusted:
         raise ConfinementUnavailable(f"cannot confine untrusted code on this machine: {reason}; "
@@ -552,13 +560,14 @@ def _run_sandboxed(bundle: ScriptBundle, make_plant: PlantFactory, *, n_robots: 
                 unhardened.append("scratch has no inode limit (bubblewrap's --size without root)")
         setup = _Setup(hardening, uid, group, tmpfs, limits.scratch_bytes)
         try:
-            child = _Child(chosen, jail, folder, scratch, root, setup)
+            child = _Child(chosen, jail, folder, scratch, root, setup, () if env is None else (env.root,))
         except ForkServerError as exc:
             raise ConfinementUnavailable(str(exc)) from exc
         with cgroups.OomGuard(group) if group is not None else contextlib.nullcontext():
             outcome = _loop(child, script, scratch, uid, make_plant, n_robots=n_robots, duration=duration, rps=rps,
                             limits=limits, cancelled=cancelled, jail=chosen,
-                            seccomp=chosen == "unshare" and hardening.seccomp)
+                            seccomp=chosen == "unshare" and hardening.seccomp,
+                            script_env=None if env is None else env.policy())
         outcome.uid, outcome.unhardened = uid, unhardened
         outcome.cgroup = None if group is None else f"v{group.version}"
         if group is not None and group.oom_kills():
@@ -583,7 +592,8 @@ def _run_sandboxed(bundle: ScriptBundle, make_plant: PlantFactory, *, n_robots: 
 
 def _loop(child: _Child, script: Path, scratch: Path, uid: int | None, make_plant: PlantFactory, *,
           n_robots: int | None, duration: float | None, rps: bool | None, limits: SandboxLimits,
-          cancelled: Callable[[], bool] | None, jail: str | None, seccomp: bool = False) -> SandboxOutcome:
+          cancelled: Callable[[], bool] | None, jail: str | None, seccomp: bool = False,
+          script_env: dict[str, Any] | None = None) -> SandboxOutcome:
     """The run: the child's start-up, then one exchange per tick until it ends (see the module docstring)."""
     outcome = SandboxOutcome(jail=jail)
     drain = _LogDrain(child.log, limits.log_bytes)
@@ -596,7 +606,8 @@ def _loop(child: _Child, script: Path, scratch: Path, uid: int | None, make_plan
 
     try:
         child.send({"t": "start", "script": str(script), "n_robots": n_robots, "duration": duration, "rps": rps,
-                    "rlimits": limits.rlimits(), "uid": uid, "scratch": str(scratch), "seccomp": seccomp})
+                    "rlimits": limits.rlimits(), "uid": uid, "scratch": str(scratch), "seccomp": seccomp,
+                    "script_env": script_env})
         plant: Plant | None = None
         ready: float | None = None  # when the child reported it is loaded and confined
         outstanding = False  # poses sent, commands not yet received

@@ -19,6 +19,7 @@ Errors: every one is a 4xx with ``{"error": message, "field": name}``
 Routes (researchers see only their own jobs; other ids are 404):
 
 * ``GET /api/health`` (no auth) · ``GET /api/me`` · ``POST/DELETE /api/session``
+* ``GET /api/env``: what scripts can import (the lab's script environment, ``swarmdeck env``)
 * ``POST /api/jobs`` (multipart: file ``script`` (.py/.zip), field ``manifest`` (JSON)) → 201 job
 * ``GET /api/jobs`` · ``GET /api/jobs/{id}`` · ``POST /api/jobs/{id}/cancel``
 * ``GET /api/jobs/{id}/report`` · ``GET /api/jobs/{id}/files`` · ``GET /api/jobs/{id}/files/{name}``
@@ -105,6 +106,13 @@ def api_router(service: PortalService, counter: RejectionCounter, *, max_upload_
         if sid and "authorization" not in request.headers:
             out["csrf"] = service.accounts.session(sid).csrf
         return out
+
+    @router.get("/env", tags=["jobs"])
+    def environment(u: User = Depends(user)) -> dict[str, Any]:
+        """What scripts can import: the standard library, ``always`` (swarmdeck, rps), ``provided`` (swarmdeck's own
+        numpy) and ``packages`` (the lab's script environment, name and version; with ``script_env`` null, swarmdeck's
+        whole environment). ``request``: how to ask for a package that is missing."""
+        return service.environment()
 
     @router.post("/session", tags=["accounts"])
     def sign_in(request: Request, response: Response, token: str = Body(..., embed=True)) -> dict[str, Any]:

@@ -68,6 +68,10 @@ class PortalClient:
         """The arena as operators see it (operator token): stopped, needs_operator, running, queue, fleet."""
         return self._call("GET", "/api/operator/arena").json()
 
+    def env(self) -> dict[str, Any]:
+        """What scripts can import on this portal (``GET /api/env``)."""
+        return self._call("GET", "/api/env").json()
+
     def jobs(self) -> list[dict[str, Any]]:
         return self._call("GET", "/api/jobs").json()
 

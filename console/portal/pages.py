@@ -15,6 +15,7 @@ the audit log) live in one place.
                                          rate-limited by the service
 ``GET /jobs``                            your jobs and their states (refreshed every 2 s)
 ``GET|POST /submit``                     upload a script (.py or .zip) with the manifest's fields
+``GET /env``                             the libraries scripts can import (the lab's script environment)
 ``GET /jobs/{id}``                       state, verdict, the verification report, the live view while it
                                          runs, downloads, cancel (``POST /jobs/{id}/cancel``)
 ``GET /jobs/{id}/report``                the verification report page (``console/jobs/report_html.py``)
@@ -188,6 +189,17 @@ def router(service: PortalService, live: LiveFeed) -> APIRouter:
         return page(request, "submit.html", s, status=status, message=message, field=field, values=values or {},
                     fleet=limits.fleet, max_duration=limits.max_duration, max_bytes=limits.max_upload_bytes,
                     usage=service.usage(s.user))
+
+    @r.get("/env")
+    def environment(request: Request) -> Response:
+        s = session_of(request)
+        if s is None:
+            return to_signin()
+        try:
+            info = service.environment()
+        except PortalError as exc:
+            return page(request, "message.html", s, status=exc.status, title="Libraries", message=exc.message)
+        return page(request, "env.html", s, env=info)
 
     @r.get("/submit")
     def submit_form(request: Request) -> Response:

@@ -78,7 +78,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from swarmdeck.console.jobs.confinement import ConfinementUnavailable, JailConfig, SandboxLimits
+from swarmdeck.console.jobs.confinement import ConfinementUnavailable, SandboxLimits
 from swarmdeck.console.jobs.sandbox import SandboxOutcome, run_sandboxed
 from swarmdeck.console.jobs.start_poses import arena_start
 from swarmdeck.console.portal.arena_fleet import ArenaFleet
@@ -469,7 +469,7 @@ class ArenaRunner:
             script, entry = self.service.script(job)
             outcome = run_sandboxed(script, make_plant, entry=entry, n_robots=n, duration=duration,
                                     limits=limits, trusted=cfg.trusted, cancelled=stopped,
-                                    jail=JailConfig(allow_no_cgroup=cfg.allow_no_cgroup))
+                                    jail=cfg.jail())
         finally:
             loop = state["loop"]
             if loop is not None:

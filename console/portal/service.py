@@ -60,7 +60,8 @@ from pathlib import Path
 from typing import Any, Protocol
 
 from swarmdeck.console.jobs.bundle import ScriptBundle
-from swarmdeck.console.jobs.confinement import SandboxLimits
+from swarmdeck.console.jobs.confinement import JailConfig, SandboxLimits
+from swarmdeck.console.jobs.script_env import ScriptEnv, listing
 from swarmdeck.console.portal.accounts import Accounts, User
 from swarmdeck.console.portal.db import ACTIVE, FINAL, Database, TransitionConflict
 from swarmdeck.console.portal.errors import BadInput, Conflict, Forbidden, NotFound, Unavailable
@@ -119,6 +120,8 @@ class PortalConfig:
         trusted: run scripts unconfined where this machine cannot confine them.
         allow_no_cgroup: run scripts even where no cgroup can be created per run (``--allow-no-cgroup``).
         quotas: per-researcher limits (:mod:`.quotas`): unfinished jobs, verification CPU a day, results on disk.
+        script_env: the lab's script environment (``--script-env PATH``): what users' scripts may import
+            (:mod:`swarmdeck.console.jobs.script_env`); None: what swarmdeck's own environment has.
         retain_days: results of jobs that ended more than this many days ago are deleted by
             :meth:`PortalService.sweep_results` (the job's row stays, with ``results_deleted``); None: kept.
     """
@@ -135,6 +138,11 @@ class PortalConfig:
     allow_no_cgroup: bool = False
     quotas: Quotas = field(default_factory=Quotas)
     retain_days: float | None = None
+    script_env: str | None = None
+
+    def jail(self) -> JailConfig:
+        """The jail every verification and arena run uses (``allow_no_cgroup``, ``script_env``)."""
+        return JailConfig(allow_no_cgroup=self.allow_no_cgroup, script_env=self.script_env)
 
     def arena_budget(self, dt: float, real_time: bool) -> tuple[float, int]:
         """(per-tick compute budget s, missed ticks in a row that end the run) of a script on the arena with
@@ -389,6 +397,15 @@ class PortalService:
         with self.db.transaction() as tx:
             tx.execute("INSERT OR REPLACE INTO verification_usage (job_id, user_id, t, cpu_s) "
                        "SELECT id, user_id, ?, ? FROM jobs WHERE id = ?", (time.time(), float(cpu_s), int(job_id)))
+
+    def environment(self) -> dict[str, Any]:
+        """What scripts can import here (:func:`swarmdeck.console.jobs.script_env.listing`), read now: packages
+        the lab adds show at once. Unavailable when the configured environment no longer follows its rule."""
+        try:
+            env = None if self.config.script_env is None else ScriptEnv.open(self.config.script_env)
+        except ValueError as exc:
+            raise Unavailable(f"the lab's script environment is broken: {exc}") from None
+        return listing(env)
 
     def usage(self, user: User) -> dict[str, Any]:
         """The researcher's use of each limit (:func:`.quotas.usage`; operators: limits None, not limited)."""

@@ -17,7 +17,7 @@ import json
 import threading
 from typing import Any
 
-from swarmdeck.console.jobs.confinement import ConfinementUnavailable, JailConfig, SandboxLimits
+from swarmdeck.console.jobs.confinement import ConfinementUnavailable, SandboxLimits
 from swarmdeck.console.jobs.report_html import render_html
 from swarmdeck.console.jobs.verification import VerificationCancelled, VerificationConfig, verify
 from swarmdeck.console.portal.files import write_private
@@ -67,7 +67,7 @@ class VerificationWorkers:
         poses = job.get("initial_poses")
         return VerificationConfig(n_robots=job["robots"], duration=job["duration"], runs=cfg.verify_runs,
                                   seed=cfg.verify_seed + int(job["id"]), trusted=cfg.trusted,
-                                  jail=JailConfig(allow_no_cgroup=cfg.allow_no_cgroup),
+                                  jail=cfg.jail(),
                                   limits=SandboxLimits(tick_s=cfg.tick_budget_s),
                                   initial_poses=None if poses is None else tuple(tuple(p) for p in poses))
 
