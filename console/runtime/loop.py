@@ -216,6 +216,15 @@ def _checked(sensed: Any) -> SensedPoses:
     return SensedPoses(ids, poses, seen, **extra)
 
 
+def _shown(value: Any) -> str:
+    """A parameter value as an event line shows it: numbers to 2 decimals (``(0.82, -0.4)``, not 17 digits)."""
+    if isinstance(value, float):
+        return f"{round(value, 2):g}"
+    if isinstance(value, (tuple, list, np.ndarray)):
+        return "(" + ", ".join(_shown(v) for v in value) + ")"
+    return str(value)
+
+
 def _close_behaviour(b: Behaviour) -> None:
     """Release what a replaced behaviour holds (a script's worker thread, once idle)."""
     close = getattr(b, "close", None)
@@ -435,7 +444,7 @@ class ControlLoop:
         with self._lock:
             self._behaviour_params = params
             self._behaviour = b
-            self._post("parameters: " + ", ".join(f"{k}={v}" for k, v in changes.items()))
+            self._post("parameters: " + ", ".join(f"{k}={_shown(v)}" for k, v in changes.items()))
         return params
 
     def set_safety(self, **changes: Any) -> SafetyParams:
@@ -452,7 +461,7 @@ class ControlLoop:
             self._filter, self._hard_filter = filt, hard
             if rebuild and self._behaviour.name == "coverage":
                 self._behaviour = self._make_behaviour("coverage", self._behaviour_params, params)
-            self._post("safety: " + ", ".join(f"{k}={v}" for k, v in changes.items()))
+            self._post("safety: " + ", ".join(f"{k}={_shown(v)}" for k, v in changes.items()))
             if not params.enabled:
                 self._post("WARNING: safety barrier OFF" if self.guard is None else
                            f"safety barrier OFF, guard on: walls and docked robots stay hard; the barrier comes "
