@@ -90,6 +90,7 @@ class SceneStyle:
     max_labels: int = 100  # robot labels (one scene node each) only up to this many robots
     max_glyphs: int = 300  # per-robot arrows, safety discs and trails only up to this many robots
     heatmap_max_px: int = 40_000  # the heat map's resolution drops on large arenas to stay under this
+    panel_shift: float = 0.24  # the top view's shift right, × view height, clearing the control panel (0: centred)
 
 
 def robot_mesh(radius: float) -> tuple[NDArray[np.float32], NDArray[np.uint32]]:
@@ -234,6 +235,7 @@ class ArenaScene:
         self.style = style or SceneStyle()
         self.robot_radius = robot_radius
         self.visible = {name: name not in DEFAULT_OFF for name in LAYERS}
+        self._empty = {"contacts": True, "centroids": True}  # point layers with no point this frame
         self._n = -1
         self._many = False
         self._last_tick: int | None = None
@@ -256,8 +258,9 @@ class ArenaScene:
         fov = math.radians(20.0)
         view_h = max(h, w / 1.1) * 1.17
         cam.fov = fov
-        cam.look_at = (cx + 0.24 * view_h, cy, 0.0)
-        cam.position = (cx + 0.24 * view_h, cy, 0.5 * view_h / math.tan(fov / 2))
+        shift = self.style.panel_shift * view_h
+        cam.look_at = (cx + shift, cy, 0.0)
+        cam.position = (cx + shift, cy, 0.5 * view_h / math.tan(fov / 2))
         cam.up = (0.0, 1.0, 0.0)
         corners = np.array([[x0, y0], [x1, y0], [x1, y1], [x0, y1]])
         boundary = sc.add_line_segments(
@@ -321,6 +324,11 @@ class ArenaScene:
 
     # ------------------------------------------------------------------ layers
     def _apply_visibility(self, name: str) -> None:
+        if name in self._empty and self._empty[name]:  # nothing to draw: hidden, not a placeholder under the floor
+            node = self.nodes.layer(name)
+            if node is not None:
+                node.visible = False
+            return
         if name == "labels":
             for lab in self.nodes.labels:
                 lab.visible = self.visible["labels"]
@@ -386,9 +394,7 @@ class ArenaScene:
             self.nodes.voronoi.points = segs
         if v["centroids"]:
             c = cov.centroids if cov is not None else np.zeros((0, 2))
-            cp = np.column_stack((c, np.full(len(c), 0.006))).astype(np.float32) if len(c) else \
-                np.array([[0, 0, -5]], dtype=np.float32)
-            self.nodes.centroids.points = cp
+            self._points("centroids", c, 0.006)
         if v["cells"]:
             self._draw_cells(frame)
         glyphs = not self._many
@@ -416,10 +422,15 @@ class ArenaScene:
             segs, cols = battery_bars(frame, self.robot_radius)
             self.nodes.battery.points, self.nodes.battery.colors = segs, cols
         if v["contacts"]:
-            c = frame.contacts.positions
-            cp = np.column_stack((c, np.full(len(c), 0.012))).astype(np.float32) if len(c) else \
-                np.array([[0, 0, -5]], dtype=np.float32)
-            self.nodes.contacts.points = cp
+            self._points("contacts", frame.contacts.positions, 0.012)
+
+    def _points(self, name: str, xy: NDArray[np.float64], z: float) -> None:
+        """Put ``xy`` (K, 2) m at height ``z`` into the point layer ``name``; with no point the node is hidden."""
+        was_empty, self._empty[name] = self._empty[name], not len(xy)
+        if len(xy):
+            self.nodes.layer(name).points = np.column_stack((xy, np.full(len(xy), z))).astype(np.float32)
+        if was_empty != self._empty[name]:
+            self._apply_visibility(name)
 
     def _draw_camera(self, ref: str) -> None:
         """The overhead image (RGB, row 0 at y_max, covering its bounds) just below the heat map, which
