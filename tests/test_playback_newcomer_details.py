@@ -145,3 +145,36 @@ def test_the_scene_centres_the_arena_without_a_panel():
         assert np.allclose(server.initial_camera.look_at[:2], (0.0, 0.0))
     finally:
         server.stop()
+
+
+def test_goto_draws_its_goals_live_and_in_playback(tmp_path):
+    from swarmdeck.console.runtime.behaviours import cluster_goals, default_goals
+
+    server = viser.ViserServer(host="127.0.0.1", port=0, verbose=False)
+    try:
+        scene = ArenaScene(server)
+        loop = ControlLoop(LoopConfig(n_robots=6, seed=1, behaviour="goto"))
+        frames = [loop.tick()]
+        scene.draw(frames[0])
+        assert scene.nodes.goals.visible
+        assert np.allclose(scene.nodes.goals.points[:, :2], default_goals(6, loop.config.bounds), atol=1e-6)
+        loop.set_params(goal_centre=(0.8187636363636448, -0.3))
+        frames.append(loop.tick())
+        want = cluster_goals(6, (0.8187636363636448, -0.3), loop.config.bounds)
+        scene.draw(frames[-1])
+        assert np.allclose(scene.nodes.goals.points[:, :2], want, atol=1e-6)
+        path = tmp_path / "g.mcap"
+        with Recorder(path) as rec:
+            for f in frames:
+                rec.write_frame(f)
+        with open_recording(path) as r:
+            played = r.last_frame
+        scene.draw(frames[0])
+        scene.draw(played)
+        assert np.allclose(scene.nodes.goals.points[:, :2], want, atol=1e-6)
+        loop.set_behaviour("coverage")
+        scene.draw(loop.tick())
+        assert not scene.nodes.goals.visible  # no goals outside goto
+        loop.close()
+    finally:
+        server.stop()

@@ -73,7 +73,9 @@ from scipy.spatial import cKDTree
 
 from swarmdeck.console.runtime.batteries import BatteryWatch, low_battery_alert
 from swarmdeck.console.runtime.contacts import ContactWatch
-from swarmdeck.console.runtime.behaviours import Behaviour, BehaviourError, BehaviourParams, TickInput, make_behaviour
+from swarmdeck.console.runtime.behaviours import (
+    Behaviour, BehaviourError, BehaviourParams, TickInput, goal_params, make_behaviour,
+)
 from swarmdeck.console.runtime.density import BumpSet
 from swarmdeck.console.runtime.frame import BarrierFrame, ContactsFrame, CoverageFrame, Frame
 from swarmdeck.core.ports import CommandSink, PoseSource, SensedPoses, close_ports
@@ -824,6 +826,8 @@ class ControlLoop:
             "gamma": sp.gamma, "class_k": sp.class_k, "barrier_mode": sp.mode, "moving_density": density_params.moving,
             "max_speed": self.config.max_speed,
         }
+        if behaviour == "goto":  # the goals, for the scene's goal markers (live and in playback)
+            params.update(goal_params(bp))
         timing = {name: b - a for name, a, b in zip(("sense", "inputs", "control", "safety", "actuate"),
                                                      marks, marks[1:])}
         timing["total"] = time.perf_counter() - marks[0]

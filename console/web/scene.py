@@ -12,7 +12,8 @@ camera (the rectified overhead image of the Frame's ``image_ref``, when an
 image provider is given; the density heat map is then drawn translucent over
 it), grid, density heat map, Voronoi edges, filled cells, centroids, robots,
 labels, nominal arrows, safe arrows, barrier pairs, safety discs, trails,
-contacts, virtual (a dashed violet ring around each virtual robot, which is
+contacts, goals (green crosses at the goals of ``goto``, from the Frame's params),
+virtual (a dashed violet ring around each virtual robot, which is
 also drawn pale), battery (a bar under each robot that reports its battery: its
 length the state of charge, green/amber/red by level, blue while charging, on a
 grey full-length track; :mod:`swarmdeck.console.runtime.batteries`). It scales to a thousand robots: robots are one batched mesh and the
@@ -33,6 +34,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from swarmdeck.core.bounds import DEFAULT_BOUNDS, Bounds
+from swarmdeck.console.runtime.behaviours import goals_of_frame
 from swarmdeck.console.runtime.frame import Frame
 
 if TYPE_CHECKING:
@@ -45,7 +47,7 @@ ImageProvider = Callable[[str], "tuple[ArrayLike, Bounds] | None"]
 
 LAYERS: tuple[str, ...] = (
     "camera", "grid", "density", "voronoi", "cells", "centroids", "robots", "labels", "nominal", "safe",
-    "barrier", "discs", "trails", "contacts", "virtual", "battery",
+    "barrier", "discs", "trails", "contacts", "virtual", "battery", "goals",
 )
 DEFAULT_OFF = frozenset({"cells"})
 
@@ -55,6 +57,7 @@ STOPPED = np.array([210, 30, 30], dtype=np.uint8)
 PAUSED = np.array([90, 110, 140], dtype=np.uint8)
 UNSEEN = np.array([160, 160, 160], dtype=np.uint8)
 VIRTUAL_RING = (120, 60, 200)
+GOAL = (30, 150, 70)
 #: bar colours by battery level (LEVELS of console.runtime.batteries: unknown, low, fair, good, charging)
 BATTERY_COLORS = np.array([[160, 160, 160], [220, 30, 30], [235, 160, 20], [40, 170, 60], [40, 120, 230]],
                           dtype=np.uint8)
@@ -204,6 +207,7 @@ class SceneNodes:
     contacts: viser.PointCloudHandle
     virtual: viser.LineSegmentsHandle
     battery: viser.LineSegmentsHandle
+    goals: viser.PointCloudHandle
     robots: viser.BatchedMeshHandle | None = None
     cells: viser.GlbHandle | None = None
     camera: viser.ImageHandle | None = None
@@ -235,7 +239,7 @@ class ArenaScene:
         self.style = style or SceneStyle()
         self.robot_radius = robot_radius
         self.visible = {name: name not in DEFAULT_OFF for name in LAYERS}
-        self._empty = {"contacts": True, "centroids": True}  # point layers with no point this frame
+        self._empty = {"contacts": True, "centroids": True, "goals": True}  # point layers with no point this frame
         self._n = -1
         self._many = False
         self._last_tick: int | None = None
@@ -292,9 +296,12 @@ class ArenaScene:
                                       precision="float32")
         virtual = sc.add_line_segments("/virtual", _EMPTY_SEG, VIRTUAL_RING, thickness=0.008)
         battery = sc.add_line_segments("/battery", _EMPTY_SEG, BATTERY_TRACK, thickness=0.018)
+        goals = sc.add_point_cloud("/goals", np.zeros((1, 3), np.float32), GOAL, point_size=0.05,
+                                   point_shape="diamond", precision="float32", visible=False)
         self.nodes = SceneNodes(boundary=boundary, grid=grid, density=density_image, voronoi=voronoi,
                                 centroids=centroids, trails=trails, discs=discs, barrier=barrier,
-                                nominal=nominal, safe=safe, contacts=contacts, virtual=virtual, battery=battery)
+                                nominal=nominal, safe=safe, contacts=contacts, virtual=virtual, battery=battery,
+                                goals=goals)
         for name in LAYERS:
             self._apply_visibility(name)
 
@@ -423,6 +430,10 @@ class ArenaScene:
             self.nodes.battery.points, self.nodes.battery.colors = segs, cols
         if v["contacts"]:
             self._points("contacts", frame.contacts.positions, 0.012)
+        if v["goals"]:
+            goals = goals_of_frame(frame.params, frame.n, frame.bounds) if frame.behaviour == "goto" else \
+                np.zeros((0, 2))
+            self._points("goals", goals, 0.002)
 
     def _points(self, name: str, xy: NDArray[np.float64], z: float) -> None:
         """Put ``xy`` (K, 2) m at height ``z`` into the point layer ``name``; with no point the node is hidden."""
