@@ -54,7 +54,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                              "foxglove_channels in --config)")
     parser.add_argument("--foxglove", nargs="?", type=int, const=8765, default=None, metavar="PORT",
                         help="also serve the run live to Foxglove over its WebSocket protocol (default port 8765, "
-                             "on --host): open ws://127.0.0.1:PORT in Foxglove and import `swarmdeck foxglove-layout`")
+                             "on --host; clients asking for foxglove.sdk.v1 or foxglove.websocket.v1 are both "
+                             "served): open ws://127.0.0.1:PORT in Foxglove and import `swarmdeck foxglove-layout`")
     parser.add_argument("--no-inputs", action="store_true",
                         help="do not open the TUIO/OSC input listeners (UDP 3333 by default)")
 
