@@ -7,6 +7,7 @@ from __future__ import annotations
 import asyncio
 import base64
 import json
+import logging
 import shutil
 import subprocess
 import threading
@@ -79,12 +80,15 @@ def test_the_official_client_receives_the_robots(node, live, subprotocol):
     assert bridge.errors == 0
 
 
-def test_a_client_asking_for_another_protocol_is_refused(live):
+def test_a_client_asking_for_another_protocol_is_refused(live, caplog):
     bridge, _ = live
 
     async def attempt():
         with pytest.raises(websockets.exceptions.InvalidStatus) as info:
             await websockets.connect(bridge.url, subprotocols=["mqtt"], proxy=None)
-        return info.value.response.status_code
+        return info.value.response
 
-    assert asyncio.run(attempt()) == 400
+    response = asyncio.run(attempt())
+    assert response.status_code == 400 and b"foxglove.websocket.v1" in response.body
+    assert bridge.relay.refused == 1  # counted, and no traceback logged for it
+    assert not [r for r in caplog.records if r.levelno >= logging.WARNING], caplog.records
