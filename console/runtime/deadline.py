@@ -151,8 +151,8 @@ class DeadlineCaller:
 
     def _starved(self, job: _Call, budget: float) -> bool:
         """True when ``job`` was starved of CPU rather than slow: the worker has not even started it, or it has
-        had less than ``budget`` s of CPU and is runnable now (waiting for a CPU) or spent at least half of the
-        time it did not run waiting for one (the kernel's run-queue wait). A call sleeping, waiting on I/O or
+        had less than ``budget`` s of CPU and started less than half a budget ago, is runnable now (waiting for
+        a CPU) or spent at least half of the time it did not run waiting for one (the kernel's run-queue wait). A call sleeping, waiting on I/O or
         on an Event is not starved: it is the script's own doing."""
         if job.started is None:
             return True
@@ -163,8 +163,10 @@ class DeadlineCaller:
             return False
         wall0, cpu0, wait0 = job.started
         cpu, waited = now[0] - cpu0, now[1] - wait0
-        idle = max(time.monotonic() - wall0 - cpu, 0.0)
-        return cpu < budget and (waited >= 0.5 * idle or _state(tid) == "R")
+        wall = time.monotonic() - wall0
+        idle = max(wall - cpu, 0.0)
+        # started so late that it had under half its budget of time, or waiting for a CPU (run queue, runnable)
+        return cpu < budget and (wall < 0.5 * budget or waited >= 0.5 * idle or _state(tid) == "R")
 
     def wait_idle(self, timeout: float | None = None) -> bool:
         """Block until no call runs (True) or ``timeout`` s pass (False). For tests and shutdown."""
