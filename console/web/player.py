@@ -258,6 +258,7 @@ class PlayerApp:
             self.range_text = gui.add_markdown("A/B: whole recording")
         with gui.add_folder("Events"):
             labels = tuple(f"{t:.2f} s · {text}" + (f" × {n}" if n > 1 else "") for t, text, n in self.event_rows)
+            self._event_times = dict(zip(labels, (t for t, _, _ in self.event_rows)))  # exact times to seek to
             self.event_select = gui.add_dropdown("Go to event", ("–",) + labels, initial_value="–")
             self.event_list = gui.add_markdown("\n".join(f"- {line}" for line in labels[:MAX_LISTED])
                                                + (f"\n- … {len(labels) - MAX_LISTED} more" if len(labels) > MAX_LISTED
@@ -299,10 +300,10 @@ class PlayerApp:
         self.refresh()
 
     def _on_event(self) -> None:
-        label = str(self.event_select.value)
-        if label == "–":
+        t = self._event_times.get(str(self.event_select.value))
+        if t is None:  # "–"
             return
-        self.player.seek(float(label.split(" s · ", 1)[0]))
+        self.player.seek(t)
         self.refresh()
 
     def _on_play(self) -> None:
