@@ -47,9 +47,15 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--record", default=None, metavar="PATH",
                         help="record the session to PATH (MCAP; default sessions/<UTC time>.mcap)")
     parser.add_argument("--no-record", action="store_true", help="do not record the session")
+    parser.add_argument("--foxglove-channels", action=argparse.BooleanOptionalAction, default=None,
+                        help="write Foxglove's own channels (3D scene, poses, grid, log, metrics) into the "
+                             "recording beside swarmdeck's (default on; --no-foxglove-channels: a file ≈ 6x "
+                             "smaller at 100 robots that Foxglove still opens as raw messages; [console] "
+                             "foxglove_channels in --config)")
     parser.add_argument("--foxglove", nargs="?", type=int, const=8765, default=None, metavar="PORT",
                         help="also serve the run live to Foxglove over its WebSocket protocol (default port 8765, "
-                             "on --host): open ws://127.0.0.1:PORT in Foxglove and import `swarmdeck foxglove-layout`")
+                             "on --host; clients asking for foxglove.sdk.v1 or foxglove.websocket.v1 are both "
+                             "served): open ws://127.0.0.1:PORT in Foxglove and import `swarmdeck foxglove-layout`")
     parser.add_argument("--no-inputs", action="store_true",
                         help="do not open the TUIO/OSC input listeners (UDP 3333 by default)")
 
@@ -112,8 +118,9 @@ def main(args: argparse.Namespace) -> int:
         from swarmdeck.devices.net.mqtt_config import redact_url  # never record a broker password
 
         source_name = args.camera or (redact_url(args.robots_via) if args.robots_via else "simulation")
+        fox = settings.foxglove_channels if args.foxglove_channels is None else args.foxglove_channels
         rec = _recorder(args.record, config, settings.inputs, source_name, getattr(source, "image", None),
-                        virtual=args.virtual or 0)
+                        virtual=args.virtual or 0, foxglove_channels=fox)
     hub = None
     if not args.no_inputs:
         hub = _start_inputs(settings.inputs, rec)
@@ -276,16 +283,16 @@ def _robots(config, camera: str | None, robots_via: str | None, virtual: int | N
 
 
 def _recorder(path: str | None, config, inputs_table: dict | None, source: str, image_provider=None,
-              virtual: int = 0):
+              virtual: int = 0, foxglove_channels: bool = True):
     """The session recorder (MCAP), writing in the background; never raises into the run. ``image_provider``
     (the camera source's ``image``) feeds the Foxglove camera channel; ``virtual``: how many virtual robots
-    (each Frame's ``is_virtual`` says which)."""
-    from swarmdeck.console.recording.recorder import Recorder, default_path
+    (each Frame's ``is_virtual`` says which); ``foxglove_channels``: also write Foxglove's own channels."""
+    from swarmdeck.console.recording.recorder import Recorder, RecorderConfig, default_path
     from swarmdeck.console.recording.resimulate import session_metadata
 
     extra = {"virtual_robots": int(virtual)} if virtual else {}
     return Recorder(path or default_path(), session_metadata(config, inputs_table, source=source, **extra),
-                    image_provider=image_provider)
+                    RecorderConfig(foxglove=foxglove_channels), image_provider=image_provider)
 
 
 def _start_inputs(table: dict | None, rec=None):

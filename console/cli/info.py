@@ -11,6 +11,7 @@ NAME = "info"
 HELP = ("summarise a recorded session (start, duration, robots, channels, damage); event times are "
         "session time, s since the first frame, as `play --start` and the player's timeline take them")
 ORDER = 62
+BEHAVIOUR_EVENT = "behaviour: "  # the event the console posts on every behaviour change
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -30,11 +31,16 @@ def summarise(path: str) -> dict:
         cfg = rec.config()
         first, last = rec.first_frame, rec.last_frame
         counts = rec.message_counts()
-        events = []
+        events, changes = [], []
+        if first is not None:
+            changes.append({"t": 0.0, "behaviour": first.behaviour})
         for e in rec.events():
-            events.append(f"{e.t:.3f} s [{e.kind}] {e.text}")  # session time: `play --start` seeks there
-            if len(events) >= 10:
-                break
+            if len(events) < 10:
+                events.append(f"{e.t:.3f} s [{e.kind}] {e.text}")  # session time: `play --start` seeks there
+            if e.text.startswith(BEHAVIOUR_EVENT):  # every change the loop posted (ControlLoop.use_behaviour)
+                name = e.text[len(BEHAVIOUR_EVENT):].strip()
+                if not changes or changes[-1]["behaviour"] != name:
+                    changes.append({"t": round(e.t, 3), "behaviour": name})
         n_datagrams = counts.get(TOPIC_DATAGRAM, 0)
         return {
             "file": str(rec.path),
@@ -47,7 +53,8 @@ def summarise(path: str) -> dict:
             "robots": list(cfg.get("robots", [] if first is None else first.ids.tolist())),
             "bounds": list(cfg.get("bounds", [] if first is None else first.bounds)),
             "dt": None if first is None else first.dt,
-            "behaviours": sorted({first.behaviour, last.behaviour}) if first and last else [],
+            "behaviours": list(dict.fromkeys(c["behaviour"] for c in changes)),
+            "behaviour_changes": changes,
             "recording_format": rec.metadata.get("recording_format"),
             "frame_format": rec.metadata.get("frame_format"),
             "writer": rec.library,
@@ -81,7 +88,8 @@ def main(args: argparse.Namespace) -> int:
           f"{s['datagrams']} input datagrams, {s['events']} events")
     print(f"  robots      {len(robots)}: {', '.join(map(str, robots[:30]))}{' …' if len(robots) > 30 else ''}")
     print(f"  arena       {s['bounds']} m")
-    print(f"  behaviour   {', '.join(s['behaviours'])}")
+    print("  behaviour   " + ", then ".join(f"{c['behaviour']} (from {c['t']:.2f} s)" if c["t"] else c["behaviour"]
+                                          for c in s["behaviour_changes"]))
     print(f"  size        {s['size_bytes'] / 1e6:.2f} MB in {s['chunks']} chunks"
           f"{'' if s['closed_cleanly'] else ' (not closed cleanly: recovered by scanning)'}")
     print(f"  format      recording {s['recording_format']}, frame {s['frame_format']}, written by {s['writer']}")

@@ -18,19 +18,26 @@ from swarmdeck.console.recording.reader import Recording
 def export_html(recording: Recording, out: str | os.PathLike[str], fps: float = 10.0,
                 start: float | None = None, end: float | None = None, dark_mode: bool = False) -> tuple[Path, int]:
     """Write the replay of frames in [start, end) s sampled at ``fps`` Hz to ``out``; returns (path, frames drawn)."""
+    import contextlib
+    import io
+
     import viser
 
-    from swarmdeck.console.web.scene import ArenaScene
+    from swarmdeck.console.web.scene import ArenaScene, SceneStyle
 
     if not (fps > 0):
         raise ValueError(f"fps must be > 0, got {fps!r}")
     first = recording.first_frame
     if first is None:
         raise ValueError(f"{recording.path} holds no readable frame")
-    server = viser.ViserServer(host="127.0.0.1", port=0, verbose=False)
+    # a private server only feeds the serializer: its "HTTP … Websocket …" box (printed whatever
+    # verbose says) would look like something to open
+    with contextlib.redirect_stdout(io.StringIO()):
+        server = viser.ViserServer(host="127.0.0.1", port=0, verbose=False)
     try:
         serializer = server.get_scene_serializer()
-        scene = ArenaScene(server, bounds=first.bounds)
+        # the replay has no control panel: the arena in the middle of the page
+        scene = ArenaScene(server, bounds=first.bounds, style=SceneStyle(panel_shift=0.0))
         period = 1.0 / fps
         last_t: float | None = None
         next_t = -float("inf")
@@ -46,7 +53,8 @@ def export_html(recording: Recording, out: str | os.PathLike[str], fps: float = 
             drawn += 1
         html = serializer.as_html(dark_mode=dark_mode)
     finally:
-        server.stop()
+        with contextlib.redirect_stdout(io.StringIO()):
+            server.stop()
     path = Path(out)
     path.parent.mkdir(parents=True, exist_ok=True)
     path.write_text(html, encoding="utf-8")

@@ -127,9 +127,10 @@ FRAME_SCHEMA: dict[str, Any] = {
                    "on reading; with 'pred', ids, poses, v and w are residuals against their prediction from the "
                    "frame of tick pred.ref, the one before it in the chunk (keyframes have no 'pred'). Units m, s, rad.",
     "type": "object",
+    # barrier and coverage are left out of a frame that has none (every behaviour but coverage has no
+    # coverage state; a reader takes a missing one as null)
     "required": ["format", "tick", "time", "dt", "bounds", "lookahead", "ids", "poses", "seen",
-                 "nominal_minus_safe", "v", "w", "barrier", "coverage", "density", "contacts",
-                 "behaviour", "run_state"],
+                 "nominal_minus_safe", "v", "w", "density", "contacts", "behaviour", "run_state"],
     "properties": {
         **{k: v for k, v in FRAME_SCHEMA_V1["properties"].items()
            if k not in ("ids", "poses", "seen", "nominal", "safe", "v", "w", "barrier", "coverage")},

@@ -190,6 +190,40 @@ def cluster_goals(n: int, centre: tuple[float, float], bounds: tuple[float, floa
     return pts + shift
 
 
+def goto_goals(n: int, bounds: tuple[float, float, float, float], goals: Any = None,
+               centre: tuple[float, float] | None = None) -> FloatArray:
+    """The ``(n, 2)`` goals (m) ``goto`` drives ``n`` robots to: ``goals`` when it has ``n`` rows, else a
+    cluster around ``centre`` (:func:`cluster_goals`), else a grid over the arena (:func:`default_goals`)."""
+    if goals is not None and len(goals) == n:
+        return np.asarray(goals, dtype=float)
+    return default_goals(n, bounds) if centre is None else cluster_goals(n, centre, bounds)
+
+
+def goal_params(params: BehaviourParams) -> dict[str, Any]:
+    """What a Frame's ``params`` carries of the goals, so the scene draws them live and in playback:
+    ``goal_centre_x/_y`` (m) and ``goals`` (``"x,y;x,y;…"``, mm precision), each only when set."""
+    out: dict[str, Any] = {}
+    if params.goal_centre is not None:
+        out["goal_centre_x"], out["goal_centre_y"] = (float(v) for v in params.goal_centre)
+    if params.goals is not None:
+        out["goals"] = ";".join(f"{x:.3f},{y:.3f}" for x, y in np.asarray(params.goals, dtype=float))
+    return out
+
+
+def goals_of_frame(params: dict[str, Any], n: int, bounds: tuple[float, float, float, float]) -> FloatArray:
+    """The goto goals of a Frame from its ``params`` (:func:`goal_params`); malformed entries are ignored."""
+    goals = None
+    text = params.get("goals")
+    if isinstance(text, str) and text:
+        try:
+            goals = np.array([[float(v) for v in pair.split(",")] for pair in text.split(";")]).reshape(-1, 2)
+        except ValueError:
+            goals = None
+    cx, cy = params.get("goal_centre_x"), params.get("goal_centre_y")
+    centre = (float(cx), float(cy)) if isinstance(cx, (int, float)) and isinstance(cy, (int, float)) else None
+    return goto_goals(n, bounds, goals, centre)
+
+
 class GoTo:
     """Go to goal positions with the single-integrator position controller (look-ahead points)."""
 
@@ -203,10 +237,7 @@ class GoTo:
 
     def __call__(self, tick: TickInput) -> tuple[FloatArray, None]:
         n = len(tick.points)
-        goals = self.goals
-        if goals is None or len(goals) != n:
-            goals = default_goals(n, self.bounds) if self.centre is None else \
-                cluster_goals(n, self.centre, self.bounds)
+        goals = goto_goals(n, self.bounds, self.goals, self.centre)
         return si_position_controller(tick.points, goals, self.gain, tick.max_speed), None
 
 

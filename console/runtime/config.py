@@ -4,7 +4,8 @@ Tables (every key optional; defaults from REFERENCE.md)::
 
     [console]   host = "127.0.0.1", port = 8080, robots = 12, behaviour = "coverage",
                 seed = 1, dt = 0.033, max_speed = 0.2, bounds = [-1.6, 1.6, -1.0, 1.0],
-                script_budget = dt / 2 (s a script: behaviour may take per tick)
+                script_budget = dt / 2 (s a script: behaviour may take per tick),
+                foxglove_channels = true (false: recordings carry only swarmdeck's own channels)
                 (or arena = "10x6" instead of bounds: a W x H m arena centred on the origin)
     [behaviour] kappa, law, gain, formation_edge, formation_gain, goals = [[x, y], ...],
                 goal_centre = [x, y]
@@ -27,7 +28,7 @@ from swarmdeck.console.runtime.loop import DensityParams, LoopConfig, SafetyPara
 
 TABLES = ("console", "behaviour", "safety", "density", "inputs")
 CONSOLE_KEYS = ("host", "port", "robots", "behaviour", "seed", "dt", "max_speed", "bounds", "script_budget",
-                "arena")
+                "arena", "foxglove_channels")
 # [console] key -> LoopConfig field (errors name the key, not the field)
 LOOP_KEYS = {"robots": "n_robots", "behaviour": "behaviour", "seed": "seed", "dt": "dt", "max_speed": "max_speed",
              "bounds": "bounds", "script_budget": "script_budget"}
@@ -54,12 +55,14 @@ _UNKNOWN = "unknown key(s) {unknown} in {what}; expected some of {known}"
 
 @dataclass(frozen=True)
 class ConsoleSettings:
-    """What the file says: the loop's config, server address, and the raw ``[inputs]`` table (or None)."""
+    """What the file says: the loop's config, server address, the raw ``[inputs]`` table (or None), and
+    whether recordings carry Foxglove's channels (``foxglove_channels``)."""
 
     loop: LoopConfig
     host: str = "127.0.0.1"
     port: int = 8080
     inputs: dict | None = None
+    foxglove_channels: bool = True
 
 
 def _build(cls: type, doc: dict, name: str, path: Path, convert: dict[str, Any] | None = None) -> Any:
@@ -104,7 +107,10 @@ def load_settings(path: str | Path) -> ConsoleSettings:
         raise ConfigFileError(f"{p}: [console] host must be a non-empty string, got {host!r}")
     if not in_range(port, 0, 65535, integer=True):
         raise ConfigFileError(f"{p}: [console] port must be an integer in [0, 65535], got {port!r}")
+    fox = con.get("foxglove_channels", True)
+    if not isinstance(fox, bool):
+        raise ConfigFileError(f"{p}: [console] foxglove_channels must be true or false, got {fox!r}")
     inputs = doc.get("inputs")
     if inputs is not None and not isinstance(inputs, dict):
         raise ConfigFileError(f"{p}: [inputs] must be a table")
-    return ConsoleSettings(loop, host, port, inputs)
+    return ConsoleSettings(loop, host, port, inputs, fox)

@@ -73,7 +73,9 @@ from scipy.spatial import cKDTree
 
 from swarmdeck.console.runtime.batteries import BatteryWatch, low_battery_alert
 from swarmdeck.console.runtime.contacts import ContactWatch
-from swarmdeck.console.runtime.behaviours import Behaviour, BehaviourError, BehaviourParams, TickInput, make_behaviour
+from swarmdeck.console.runtime.behaviours import (
+    Behaviour, BehaviourError, BehaviourParams, TickInput, goal_params, make_behaviour,
+)
 from swarmdeck.console.runtime.density import BumpSet
 from swarmdeck.console.runtime.frame import BarrierFrame, ContactsFrame, CoverageFrame, Frame
 from swarmdeck.core.ports import CommandSink, PoseSource, SensedPoses, close_ports
@@ -214,6 +216,15 @@ def _checked(sensed: Any) -> SensedPoses:
                 raise ValueError(f"pose source gave {name} {arr.shape} for {n} robots; expected ({n},)")
             extra[name] = arr
     return SensedPoses(ids, poses, seen, **extra)
+
+
+def _shown(value: Any) -> str:
+    """A parameter value as an event line shows it: numbers to 2 decimals (``(0.82, -0.4)``, not 17 digits)."""
+    if isinstance(value, float):
+        return f"{round(value, 2):g}"
+    if isinstance(value, (tuple, list, np.ndarray)):
+        return "(" + ", ".join(_shown(v) for v in value) + ")"
+    return str(value)
 
 
 def _close_behaviour(b: Behaviour) -> None:
@@ -435,7 +446,7 @@ class ControlLoop:
         with self._lock:
             self._behaviour_params = params
             self._behaviour = b
-            self._post("parameters: " + ", ".join(f"{k}={v}" for k, v in changes.items()))
+            self._post("parameters: " + ", ".join(f"{k}={_shown(v)}" for k, v in changes.items()))
         return params
 
     def set_safety(self, **changes: Any) -> SafetyParams:
@@ -452,7 +463,7 @@ class ControlLoop:
             self._filter, self._hard_filter = filt, hard
             if rebuild and self._behaviour.name == "coverage":
                 self._behaviour = self._make_behaviour("coverage", self._behaviour_params, params)
-            self._post("safety: " + ", ".join(f"{k}={v}" for k, v in changes.items()))
+            self._post("safety: " + ", ".join(f"{k}={_shown(v)}" for k, v in changes.items()))
             if not params.enabled:
                 self._post("WARNING: safety barrier OFF" if self.guard is None else
                            f"safety barrier OFF, guard on: walls and docked robots stay hard; the barrier comes "
@@ -815,6 +826,8 @@ class ControlLoop:
             "gamma": sp.gamma, "class_k": sp.class_k, "barrier_mode": sp.mode, "moving_density": density_params.moving,
             "max_speed": self.config.max_speed,
         }
+        if behaviour == "goto":  # the goals, for the scene's goal markers (live and in playback)
+            params.update(goal_params(bp))
         timing = {name: b - a for name, a, b in zip(("sense", "inputs", "control", "safety", "actuate"),
                                                      marks, marks[1:])}
         timing["total"] = time.perf_counter() - marks[0]

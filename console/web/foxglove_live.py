@@ -5,8 +5,12 @@ scene does (the loop thread only stores the Frame and wakes the bridge) and, on
 its own thread, encodes them with the recorder's
 :class:`~swarmdeck.console.recording.foxglove.FoxgloveEncoder` into the same
 channels a recording carries, logged through the official ``foxglove-sdk``
-WebSocket server (``foxglove.start_server``, its own ``foxglove.Context``). In
-Foxglove: *Open connection → Foxglove WebSocket → ws://127.0.0.1:8765*, then
+WebSocket server (``foxglove.start_server``, its own ``foxglove.Context``) on a
+private loopback port, behind :class:`~swarmdeck.console.web.ws_relay.SubprotocolRelay`
+on the public one, so clients asking for either name of the protocol,
+``foxglove.sdk.v1`` (the SDK's) or ``foxglove.websocket.v1`` (the official
+``@foxglove/ws-protocol`` client's, older Foxglove apps', Lichtblick's), connect.
+In Foxglove: *Open connection → Foxglove WebSocket → ws://127.0.0.1:8765*, then
 import the shipped layout (``swarmdeck foxglove-layout``).
 
 When the bridge falls behind, it draws only the newest Frame (latest wins, as
@@ -61,12 +65,18 @@ class FoxgloveBridge:
                                       message_encoding=s.message_encoding, context=self.context)
             for s in channel_specs()
         }
+        import errno
+
+        from swarmdeck.console.web.ws_relay import SubprotocolRelay
+
+        self.server = foxglove.start_server(name="swarmdeck", host="127.0.0.1", port=0, context=self.context)
         try:
-            self.server = foxglove.start_server(name="swarmdeck", host=host, port=port, context=self.context)
-        except RuntimeError as exc:
+            self.relay = SubprotocolRelay(host, port, int(self.server.port))
+        except OSError as exc:
+            self.server.stop()
             for ch in self.channels.values():
                 ch.close()
-            if "bind" in str(exc).lower() or "in use" in str(exc).lower():
+            if exc.errno == errno.EADDRINUSE:
                 raise FoxglovePortInUse(f"Foxglove port {port} on {host} is in use") from None
             raise
         self.host = host
@@ -83,8 +93,8 @@ class FoxgloveBridge:
 
     @property
     def port(self) -> int:
-        """The TCP port the server listens on."""
-        return int(self.server.port)
+        """The TCP port clients connect to (the relay's)."""
+        return self.relay.port
 
     @property
     def url(self) -> str:
@@ -145,6 +155,7 @@ class FoxgloveBridge:
         if self._thread is not None:
             self._thread.join(2.0)
             self._thread = None
+        self.relay.close()
         if self.server is not None:
             self.server.stop()
             self.server = None

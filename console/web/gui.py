@@ -23,15 +23,46 @@ from swarmdeck.console.runtime.behaviours import BUILTIN, LAWS
 from swarmdeck.console.runtime.frame import Frame
 from swarmdeck.console.runtime.loop import ControlLoop
 from swarmdeck.console.web.battery_panel import BatteryPanel
+from swarmdeck.console.web.events import EventLog
 from swarmdeck.console.web.fleet_panel import FleetPanel
 from swarmdeck.console.web.plots import PlotHistory, PlotsPanel
 from swarmdeck.console.web.scene import LAYERS, ArenaScene
 
 RECENT = 5  # alerts and notices listed (with their session times) under the status line
+RELEASE_LABEL = "Release emergency stop (stays paused: then Run)"
+RATE_WINDOW = 2.0  # s of loop clock over which "ticks/s" counts ticks
 
 if TYPE_CHECKING:
     import viser
     from viser._gui_handles import GuiModalHandle  # not re-exported by viser 1.1
+
+
+class TickRate:
+    """Ticks per second over the last ``window`` s of the loop's clock: (ticks in the window) / (its span).
+
+    Counted from the Frames' tick indices and times, so Frames the viewer skipped still count and one
+    short or long interval moves the figure by no more than its share of the window (an average of
+    1/Δt overstated the rate: 26–82 on a 30 Hz loop).
+    """
+
+    def __init__(self, window: float = RATE_WINDOW) -> None:
+        self.window = float(window)
+        self._seen: deque[tuple[float, int]] = deque()  # (Frame.time s, tick), oldest first
+
+    def add(self, time_s: float, tick: int) -> None:
+        if self._seen and (tick <= self._seen[-1][1] or time_s <= self._seen[-1][0]):
+            self._seen.clear()  # a restart or a clock jump: count afresh
+        self._seen.append((float(time_s), int(tick)))
+        while len(self._seen) > 2 and self._seen[-1][0] - self._seen[1][0] >= self.window:
+            self._seen.popleft()
+
+    @property
+    def rate(self) -> float:
+        """Ticks/s over the window (0 before two Frames)."""
+        if len(self._seen) < 2:
+            return 0.0
+        (t0, k0), (t1, k1) = self._seen[0], self._seen[-1]
+        return (k1 - k0) / (t1 - t0)
 
 
 def ray_to_floor(origin: ArrayLike, direction: ArrayLike) -> tuple[float, float] | None:
@@ -65,14 +96,18 @@ class ConsoleGui:
         self._bump_handles: dict[int, viser.TransformControlsHandle] = {}
         self.history = PlotHistory()
         self._last_gui_update = 0.0
-        self._last_tick_time: float | None = None
-        self._rate = 0.0
+        self.rate = TickRate()
         self.messages: deque[str] = deque(maxlen=6)
-        self.recent: deque[tuple[float, str]] = deque(maxlen=RECENT)  # (session t s, text), newest last
+        self.recent = EventLog(RECENT)  # (session t s, text, repeats), newest last
 
         gui.configure_theme(show_share_button=False, control_width="large", dark_mode=False,
                             brand_color=(40, 100, 200))
         gui.set_panel_label("swarmdeck")
+        # The emergency stop first, where the hand expects it: nothing above it grows (events are below).
+        self.estop_button = gui.add_button("EMERGENCY STOP", color="red",
+                                           hint="Zero every command now (hotkey: space)")
+        self.release_button = gui.add_button(RELEASE_LABEL, color="yellow",
+                                             hint="The robots stay stopped after the release: press Run to resume")
         self.status = gui.add_markdown("starting…")
         self.alerts = gui.add_markdown("")
 
@@ -80,9 +115,6 @@ class ConsoleGui:
             self.run_button = gui.add_button("Run", color="green", icon=None)
             self.pause_button = gui.add_button("Pause", color="gray")
             self.step_button = gui.add_button("Step")
-            self.estop_button = gui.add_button("EMERGENCY STOP", color="red",
-                                               hint="Zero every command now (hotkey: space)")
-            self.release_button = gui.add_button("Release emergency stop", color="yellow")
         self.estop_command = gui.add_command("Emergency stop", description="Zero every robot command",
                                              hotkey="space")
         self.run_button.on_click(lambda _: self.loop.run())
@@ -358,13 +390,10 @@ class ConsoleGui:
     # ------------------------------------------------------------------ per-frame update
     def record(self, frame: Frame) -> None:
         """Add one Frame's numbers to the plot series (cheap; every frame the viewer sees)."""
-        if self._last_tick_time is not None and frame.time > self._last_tick_time:
-            inst = 1.0 / (frame.time - self._last_tick_time)
-            self._rate = inst if self._rate == 0 else 0.9 * self._rate + 0.1 * inst
-        self._last_tick_time = frame.time
+        self.rate.add(frame.time, frame.tick)
         t = self.session_time(frame)
         for text in frame.events:
-            self.recent.append((t, text))
+            self.recent.add(t, text)
         self.history.add(t, frame)
 
     def session_time(self, frame: Frame) -> float:
@@ -393,10 +422,9 @@ class ConsoleGui:
         if frame.coverage is not None and frame.coverage.packing_warning:
             alerts.append(f"packing: {frame.coverage.packing_warning}")
         text = "\n".join(f"- ⚠ {a}" for a in alerts)
-        with self._lock:
-            recent = list(self.recent)
+        recent = self.recent.lines()
         if recent:
-            text += ("\n\n" if text else "") + "\n".join(f"- {t:.1f} s · {m}" for t, m in recent)
+            text += ("\n\n" if text else "") + "\n".join(f"- {line}" for line in recent)
         return text
 
     def _sync_widgets(self, frame: Frame) -> None:
@@ -422,13 +450,14 @@ class ConsoleGui:
         sources and their health."""
         b = frame.barrier
         state = {"running": "RUNNING", "paused": "PAUSED", "estop": "**EMERGENCY STOP**"}[frame.run_state]
+        resume = " (robots stopped: press Run to resume)" if frame.run_state == "paused" else ""
         t, run_t = self.session_time(frame), frame.run_time
         solve = f"{1e3 * b.solve_time_s:.1f} ms" if b is not None and b.enabled else "off"
         dmin = f"{b.min_distance:.3f} m" if b is not None and math.isfinite(b.min_distance) else "–"
         lines = [
-            f"**{state}** · {frame.behaviour} · N = {frame.n} · t = {t:.1f} s · run t = {run_t:.1f} s "
+            f"**{state}**{resume} · {frame.behaviour} · N = {frame.n} · t = {t:.1f} s · run t = {run_t:.1f} s "
             "(behaviour clock, stops while paused)",
-            f"{self._rate:.1f} ticks/s · tick {1e3 * frame.timing.get('total', 0.0):.1f} ms · barrier {solve}"
+            f"{self.rate.rate:.1f} ticks/s · tick {1e3 * frame.timing.get('total', 0.0):.1f} ms · barrier {solve}"
             f" · active {b.n_active if b is not None else 0} · min dist {dmin}",
         ]
         if frame.health:

@@ -25,6 +25,10 @@ from swarmdeck.console.runtime.frame import Frame
 RATE_MIN, RATE_MAX = 0.1, 4.0
 RATES: tuple[float, ...] = (0.1, 0.25, 0.5, 1.0, 2.0, 4.0)
 PLOT_BACKFILL = 5.0  # s of recording shown in the plots after a seek
+SLIDER_STEP = 0.01  # s: the timeline slider's precision
+MAX_EVENTS = 500  # events (repeats collapsed) the player lists …
+MAX_MARKS = 100  # … marks on the timeline …
+MAX_LISTED = 30  # … and lists in the panel's text
 
 
 class Player:
@@ -190,6 +194,17 @@ class Player:
             return self.version != before
 
 
+def recorded_events(recording: Recording) -> list[tuple[float, str, int]]:
+    """The recording's events, repeats collapsed (:class:`~swarmdeck.console.web.events.EventLog`):
+    (session time s, text, repeats), oldest first."""
+    from swarmdeck.console.web.events import EventLog
+
+    log = EventLog(MAX_EVENTS)
+    for e in recording.events():
+        log.add(e.t, e.text)
+    return log.rows()
+
+
 class PlayerApp:
     """A recording in the browser: the console's scene + a timeline panel.
 
@@ -225,9 +240,13 @@ class PlayerApp:
         gui.set_panel_label(f"swarmdeck playback: {recording.path.name}")
         self.status = gui.add_markdown("")
         dt = max(first.dt, 1e-3)
+        self.event_rows = recorded_events(recording)
         with gui.add_folder("Timeline"):
-            self.slider = gui.add_slider("t (s, session)", min=0.0, max=max(self.player.duration, dt), step=dt,
-                                         initial_value=0.0)
+            # a step of 0.01 s: the slider shows "83.20", not "83.204793" (a seek shows the frame at or before it)
+            self.slider = gui.add_slider("t (s, session)", min=0.0, max=round(max(self.player.duration, dt) + 0.005, 2),
+                                         step=SLIDER_STEP, initial_value=0.0,
+                                         marks=tuple(round(t, 2) for t, _, _ in self.event_rows[:MAX_MARKS]) or None,
+                                         hint="The marks are the recording's events (list below)")
             self.play_button = gui.add_button("Play", icon=None)
             self.back_button = gui.add_button("◀ Step")
             self.fwd_button = gui.add_button("Step ▶")
@@ -237,6 +256,13 @@ class PlayerApp:
             self.b_button = gui.add_button("Set B")
             self.clear_button = gui.add_button("Clear A/B")
             self.range_text = gui.add_markdown("A/B: whole recording")
+        with gui.add_folder("Events"):
+            labels = tuple(f"{t:.2f} s · {text}" + (f" × {n}" if n > 1 else "") for t, text, n in self.event_rows)
+            self._event_times = dict(zip(labels, (t for t, _, _ in self.event_rows)))  # exact times to seek to
+            self.event_select = gui.add_dropdown("Go to event", ("–",) + labels, initial_value="–")
+            self.event_list = gui.add_markdown("\n".join(f"- {line}" for line in labels[:MAX_LISTED])
+                                               + (f"\n- … {len(labels) - MAX_LISTED} more" if len(labels) > MAX_LISTED
+                                                  else "") if labels else "*no events recorded*")
         with gui.add_folder("Layers", expand_by_default=False):
             self._layer_boxes: dict[str, viser.GuiCheckboxHandle] = {}
             for name in LAYERS:
@@ -247,6 +273,7 @@ class PlayerApp:
         self.batteries = BatteryPanel(gui)
         self.events = gui.add_markdown("")
         self.slider.on_update(lambda _e: self._on_slider())
+        self.event_select.on_update(lambda _e: self._on_event())
         self.play_button.on_click(lambda _e: self._on_play())
         self.back_button.on_click(lambda _e: self._after(self.player.step(-1)))
         self.fwd_button.on_click(lambda _e: self._after(self.player.step(1)))
@@ -270,6 +297,13 @@ class PlayerApp:
         if self._syncing:
             return
         self.player.seek(float(self.slider.value))
+        self.refresh()
+
+    def _on_event(self) -> None:
+        t = self._event_times.get(str(self.event_select.value))
+        if t is None:  # "–"
+            return
+        self.player.seek(t)
         self.refresh()
 
     def _on_play(self) -> None:
@@ -305,7 +339,7 @@ class PlayerApp:
         self.scene.draw(frame)
         self._syncing = True
         try:
-            self.slider.value = round(p.frame_time, 6)
+            self.slider.value = round(p.frame_time, 2)
         finally:
             self._syncing = False
         hist, last = self.history, self.history.last_time

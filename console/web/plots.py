@@ -45,6 +45,8 @@ SERIES: tuple[str, ...] = ("t", "dmin", "ds", "active", "H", "mpc", "tick_ms", "
 H, mean ‖p − c‖ (m), tick time (ms), barrier solve time (ms)."""
 
 _NAN = math.nan
+NO_COVERAGE = ("*H(t) and mean ‖p − c‖ are coverage quantities: no coverage state in the frames shown "
+               "(another behaviour runs). Switch to coverage to plot them.*")
 
 
 def _finite_or_nan(x: float) -> float:
@@ -137,6 +139,7 @@ class PlotsPanel:
                 title="Coverage cost H(t) and mean ‖p − c‖", aspect=2.0,
                 scales={**x, "H": {"auto": True}, "m": {"auto": True}},
                 axes=({}, {"scale": "H"}, {"scale": "m", "side": 1}))
+            self.H_note: viser.GuiMarkdownHandle = gui.add_markdown(NO_COVERAGE, visible=False)
             self.tick: viser.GuiUplotHandle = gui.add_uplot(
                 (np.zeros(1), np.zeros(1), np.zeros(1)),
                 ({"label": "t (s, session)"}, {"label": "tick (ms)", "stroke": "#17becf", "width": 2},
@@ -155,4 +158,7 @@ class PlotsPanel:
         handles = self.handles()
         for name, keys in CHARTS:
             handles[name].data = tuple(s[k] for k in keys)
+        coverage = bool(np.isfinite(s["H"]).any())  # H is a coverage quantity: a note instead of a blank chart
+        if self.H.visible != coverage:
+            self.H.visible, self.H_note.visible = coverage, not coverage
         return True

@@ -12,7 +12,8 @@ camera (the rectified overhead image of the Frame's ``image_ref``, when an
 image provider is given; the density heat map is then drawn translucent over
 it), grid, density heat map, Voronoi edges, filled cells, centroids, robots,
 labels, nominal arrows, safe arrows, barrier pairs, safety discs, trails,
-contacts, virtual (a dashed violet ring around each virtual robot, which is
+contacts, goals (green crosses at the goals of ``goto``, from the Frame's params),
+virtual (a dashed violet ring around each virtual robot, which is
 also drawn pale), battery (a bar under each robot that reports its battery: its
 length the state of charge, green/amber/red by level, blue while charging, on a
 grey full-length track; :mod:`swarmdeck.console.runtime.batteries`). It scales to a thousand robots: robots are one batched mesh and the
@@ -33,6 +34,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from swarmdeck.core.bounds import DEFAULT_BOUNDS, Bounds
+from swarmdeck.console.runtime.behaviours import goals_of_frame
 from swarmdeck.console.runtime.frame import Frame
 
 if TYPE_CHECKING:
@@ -45,7 +47,7 @@ ImageProvider = Callable[[str], "tuple[ArrayLike, Bounds] | None"]
 
 LAYERS: tuple[str, ...] = (
     "camera", "grid", "density", "voronoi", "cells", "centroids", "robots", "labels", "nominal", "safe",
-    "barrier", "discs", "trails", "contacts", "virtual", "battery",
+    "barrier", "discs", "trails", "contacts", "virtual", "battery", "goals",
 )
 DEFAULT_OFF = frozenset({"cells"})
 
@@ -55,6 +57,7 @@ STOPPED = np.array([210, 30, 30], dtype=np.uint8)
 PAUSED = np.array([90, 110, 140], dtype=np.uint8)
 UNSEEN = np.array([160, 160, 160], dtype=np.uint8)
 VIRTUAL_RING = (120, 60, 200)
+GOAL = (30, 150, 70)
 #: bar colours by battery level (LEVELS of console.runtime.batteries: unknown, low, fair, good, charging)
 BATTERY_COLORS = np.array([[160, 160, 160], [220, 30, 30], [235, 160, 20], [40, 170, 60], [40, 120, 230]],
                           dtype=np.uint8)
@@ -90,6 +93,7 @@ class SceneStyle:
     max_labels: int = 100  # robot labels (one scene node each) only up to this many robots
     max_glyphs: int = 300  # per-robot arrows, safety discs and trails only up to this many robots
     heatmap_max_px: int = 40_000  # the heat map's resolution drops on large arenas to stay under this
+    panel_shift: float = 0.24  # the top view's shift right, × view height, clearing the control panel (0: centred)
 
 
 def robot_mesh(radius: float) -> tuple[NDArray[np.float32], NDArray[np.uint32]]:
@@ -203,6 +207,7 @@ class SceneNodes:
     contacts: viser.PointCloudHandle
     virtual: viser.LineSegmentsHandle
     battery: viser.LineSegmentsHandle
+    goals: viser.PointCloudHandle
     robots: viser.BatchedMeshHandle | None = None
     cells: viser.GlbHandle | None = None
     camera: viser.ImageHandle | None = None
@@ -234,6 +239,7 @@ class ArenaScene:
         self.style = style or SceneStyle()
         self.robot_radius = robot_radius
         self.visible = {name: name not in DEFAULT_OFF for name in LAYERS}
+        self._empty = {"contacts": True, "centroids": True, "goals": True}  # point layers with no point this frame
         self._n = -1
         self._many = False
         self._last_tick: int | None = None
@@ -256,8 +262,9 @@ class ArenaScene:
         fov = math.radians(20.0)
         view_h = max(h, w / 1.1) * 1.17
         cam.fov = fov
-        cam.look_at = (cx + 0.24 * view_h, cy, 0.0)
-        cam.position = (cx + 0.24 * view_h, cy, 0.5 * view_h / math.tan(fov / 2))
+        shift = self.style.panel_shift * view_h
+        cam.look_at = (cx + shift, cy, 0.0)
+        cam.position = (cx + shift, cy, 0.5 * view_h / math.tan(fov / 2))
         cam.up = (0.0, 1.0, 0.0)
         corners = np.array([[x0, y0], [x1, y0], [x1, y1], [x0, y1]])
         boundary = sc.add_line_segments(
@@ -289,9 +296,12 @@ class ArenaScene:
                                       precision="float32")
         virtual = sc.add_line_segments("/virtual", _EMPTY_SEG, VIRTUAL_RING, thickness=0.008)
         battery = sc.add_line_segments("/battery", _EMPTY_SEG, BATTERY_TRACK, thickness=0.018)
+        goals = sc.add_point_cloud("/goals", np.zeros((1, 3), np.float32), GOAL, point_size=0.05,
+                                   point_shape="diamond", precision="float32", visible=False)
         self.nodes = SceneNodes(boundary=boundary, grid=grid, density=density_image, voronoi=voronoi,
                                 centroids=centroids, trails=trails, discs=discs, barrier=barrier,
-                                nominal=nominal, safe=safe, contacts=contacts, virtual=virtual, battery=battery)
+                                nominal=nominal, safe=safe, contacts=contacts, virtual=virtual, battery=battery,
+                                goals=goals)
         for name in LAYERS:
             self._apply_visibility(name)
 
@@ -321,6 +331,11 @@ class ArenaScene:
 
     # ------------------------------------------------------------------ layers
     def _apply_visibility(self, name: str) -> None:
+        if name in self._empty and self._empty[name]:  # nothing to draw: hidden, not a placeholder under the floor
+            node = self.nodes.layer(name)
+            if node is not None:
+                node.visible = False
+            return
         if name == "labels":
             for lab in self.nodes.labels:
                 lab.visible = self.visible["labels"]
@@ -386,9 +401,7 @@ class ArenaScene:
             self.nodes.voronoi.points = segs
         if v["centroids"]:
             c = cov.centroids if cov is not None else np.zeros((0, 2))
-            cp = np.column_stack((c, np.full(len(c), 0.006))).astype(np.float32) if len(c) else \
-                np.array([[0, 0, -5]], dtype=np.float32)
-            self.nodes.centroids.points = cp
+            self._points("centroids", c, 0.006)
         if v["cells"]:
             self._draw_cells(frame)
         glyphs = not self._many
@@ -416,10 +429,19 @@ class ArenaScene:
             segs, cols = battery_bars(frame, self.robot_radius)
             self.nodes.battery.points, self.nodes.battery.colors = segs, cols
         if v["contacts"]:
-            c = frame.contacts.positions
-            cp = np.column_stack((c, np.full(len(c), 0.012))).astype(np.float32) if len(c) else \
-                np.array([[0, 0, -5]], dtype=np.float32)
-            self.nodes.contacts.points = cp
+            self._points("contacts", frame.contacts.positions, 0.012)
+        if v["goals"]:
+            goals = goals_of_frame(frame.params, frame.n, frame.bounds) if frame.behaviour == "goto" else \
+                np.zeros((0, 2))
+            self._points("goals", goals, 0.002)
+
+    def _points(self, name: str, xy: NDArray[np.float64], z: float) -> None:
+        """Put ``xy`` (K, 2) m at height ``z`` into the point layer ``name``; with no point the node is hidden."""
+        was_empty, self._empty[name] = self._empty[name], not len(xy)
+        if len(xy):
+            self.nodes.layer(name).points = np.column_stack((xy, np.full(len(xy), z))).astype(np.float32)
+        if was_empty != self._empty[name]:
+            self._apply_visibility(name)
 
     def _draw_camera(self, ref: str) -> None:
         """The overhead image (RGB, row 0 at y_max, covering its bounds) just below the heat map, which
