@@ -65,6 +65,10 @@ class RunDefaults:
     backend_factory: Any = None
     # start simulated Arenas docked on the chargers and set them up first (swarmdeck run --from-docks)
     from_docks: bool = False
+    # the rps facade (devices/rps/robotarium.py): rps's own semantics (the barrier only where the script
+    # calls it, rps's error counts) and rps's call order (get_poses() once per step())
+    rps_semantics: bool = False
+    rps_call_order: bool = True
 
 
 RUN_DEFAULTS: contextvars.ContextVar[RunDefaults] = contextvars.ContextVar("swarmdeck_run_defaults", default=RunDefaults())
@@ -491,8 +495,10 @@ class Arena:
                            fleet)
 
     def call_at_scripts_end(self) -> None:
-        """Print the report (rps compatibility)."""
-        print(self.report())
+        """Print the report (rps compatibility) — unless a runner (``swarmdeck run``) runs the script:
+        it prints the report once, at the end of the run."""
+        if RUN_DEFAULTS.get().on_create is None:
+            print(self.report())
 
 
 @dataclass

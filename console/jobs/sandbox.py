@@ -462,6 +462,9 @@ def run_sandboxed(
     trusted: bool = False,
     cancelled: Callable[[], bool] | None = None,
     jail: JailConfig = JailConfig(),
+    argv: tuple[str, ...] | list[str] = (),
+    rps_semantics: bool = False,
+    rps_call_order: bool = True,
 ) -> SandboxOutcome:
     """Run ``script`` in a jailed child against the plant ``make_plant(n, initial_poses)`` builds.
 
@@ -476,6 +479,9 @@ def run_sandboxed(
     ``jail``: which jails to try, in order (default: ``unshare``, then bubblewrap).
     ``trusted``: run without a jail when none works here (resource limits still apply);
     otherwise :class:`ConfinementUnavailable` is raised.
+    ``argv``: the script's arguments (its ``sys.argv[1:]``; it runs as ``__main__``);
+    ``rps_semantics``/``rps_call_order``: the rps facade's modes in the child (``swarmdeck run --rps-semantics``,
+    ``--no-rps-call-order``).
     """
     if isinstance(script, ScriptBundle):
         bundle = script
@@ -486,13 +492,16 @@ def run_sandboxed(
             bundle = ScriptBundle.from_path(script, entry)
         except OSError as exc:
             raise ValueError(f"cannot read the script {str(script)!r}: {exc}") from exc
+    script_options = {"argv": [str(a) for a in argv], "rps_semantics": bool(rps_semantics),
+                      "rps_call_order": bool(rps_call_order)}
     return _run_sandboxed(bundle, make_plant, n_robots=n_robots, duration=duration, rps=rps, limits=limits,
-                          trusted=trusted, cancelled=cancelled, jail=jail, hardening=_FULL)
+                          trusted=trusted, cancelled=cancelled, jail=jail, hardening=_FULL, script_options=script_options)
 
 
 def _run_sandboxed(bundle: ScriptBundle, make_plant: PlantFactory, *, n_robots: int | None, duration: float | None,
                    rps: bool | None, limits: SandboxLimits, trusted: bool, cancelled: Callable[[], bool] | None,
-                   jail: JailConfig, hardening: _Hardening) -> SandboxOutcome:
+                   jail: JailConfig, hardening: _Hardening,
+                   script_options: dict[str, Any] | None = None) -> SandboxOutcome:
     """:func:`run_sandboxed` with ``hardening`` (always :data:`_FULL` there)."""
     chosen, reason = choose_jail(jail)
     if chosen is None and not trusted:
@@ -545,7 +554,7 @@ def _run_sandboxed(bundle: ScriptBundle, make_plant: PlantFactory, *, n_robots: 
         with cgroups.OomGuard(group) if group is not None else contextlib.nullcontext():
             outcome = _loop(child, script, scratch, uid, make_plant, n_robots=n_robots, duration=duration, rps=rps,
                             limits=limits, cancelled=cancelled, jail=chosen,
-                            seccomp=chosen == "unshare" and hardening.seccomp)
+                            seccomp=chosen == "unshare" and hardening.seccomp, script_options=script_options or {})
         outcome.uid, outcome.unhardened = uid, unhardened
         outcome.cgroup = None if group is None else f"v{group.version}"
         if group is not None and group.oom_kills():
@@ -570,7 +579,8 @@ def _run_sandboxed(bundle: ScriptBundle, make_plant: PlantFactory, *, n_robots: 
 
 def _loop(child: _Child, script: Path, scratch: Path, uid: int | None, make_plant: PlantFactory, *,
           n_robots: int | None, duration: float | None, rps: bool | None, limits: SandboxLimits,
-          cancelled: Callable[[], bool] | None, jail: str | None, seccomp: bool = False) -> SandboxOutcome:
+          cancelled: Callable[[], bool] | None, jail: str | None, seccomp: bool = False,
+          script_options: dict[str, Any] | None = None) -> SandboxOutcome:
     """The run: the child's start-up, then one exchange per tick until it ends (see the module docstring)."""
     outcome = SandboxOutcome(jail=jail)
     drain = _LogDrain(child.log, limits.log_bytes)
@@ -583,7 +593,8 @@ def _loop(child: _Child, script: Path, scratch: Path, uid: int | None, make_plan
 
     try:
         child.send({"t": "start", "script": str(script), "n_robots": n_robots, "duration": duration, "rps": rps,
-                    "rlimits": limits.rlimits(), "uid": uid, "scratch": str(scratch), "seccomp": seccomp})
+                    "rlimits": limits.rlimits(), "uid": uid, "scratch": str(scratch), "seccomp": seccomp,
+                    **(script_options or {})})
         plant: Plant | None = None
         ready: float | None = None  # when the child reported it is loaded and confined
         outstanding = False  # poses sent, commands not yet received
