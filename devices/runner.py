@@ -103,10 +103,6 @@ def _nothing_runnable(path: Path, source: str) -> str:
     return text
 
 
-def _mentions_rps(source: str) -> bool:
-    return re.search(r"^\s*(import rps\b|from rps\b)", source, re.MULTILINE) is not None
-
-
 def run_experiment(
     target: str | Path | Callable[[Arena], Any],
     *,
@@ -126,7 +122,7 @@ def run_experiment(
     """Run a script file (or an ``experiment(arena)`` callable) and return its :class:`RunResult`.
 
     ``rps``: make ``import rps…`` resolve to swarmdeck's rps facade for this run;
-    None (default) does so when the script mentions rps and no real rps is installed.
+    None (default) does so when no real rps is installed.
     ``backend_factory``: builds the robots of Arenas the script creates (see
     :class:`~swarmdeck.devices.arena.RunDefaults`); None: the simulated arena.
     ``on_create``: called with every Arena the run builds.
@@ -157,8 +153,8 @@ def run_experiment(
             else:
                 path = Path(target)
                 source = _load(path)["source"]
-                if rps is None:
-                    rps = _mentions_rps(source) and importlib.util.find_spec("rps") is None
+                if rps is None:  # also for scripts that import rps only through their own modules (MARBLER)
+                    rps = importlib.util.find_spec("rps") is None
                 sys.path.insert(0, str(path.parent.resolve()))
                 saved_argv = sys.argv
                 sys.argv = [str(path), *argv]  # as `python script.py ARGS…` sees them

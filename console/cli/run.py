@@ -35,7 +35,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="record the run to PATH (MCAP, as `swarmdeck console --record`: `swarmdeck play PATH`, "
                              "Foxglove); a script that builds more Arenas records the k-th to PATH-k.mcap")
     parser.add_argument("--rps", action=argparse.BooleanOptionalAction, default=None,
-                        help="resolve `import rps...` to swarmdeck's rps facade (default: when the script imports rps and no rps is installed)")
+                        help="resolve `import rps...` to swarmdeck's rps facade (default: when no rps is installed)")
     parser.add_argument("--rps-semantics", action="store_true",
                         help="the rps facade behaves as rps: the barrier applies only where the script calls one, "
                              "and collisions, boundary and actuator violations are counted in Robotarium._errors and "
@@ -102,8 +102,7 @@ def _run_sandboxed(args: argparse.Namespace) -> int:
 
 
 def _script_args(args: argparse.Namespace) -> list[str]:
-    rest = list(args.script_args or [])
-    return rest[1:] if rest[:1] == ["--"] else rest
+    return [str(a) for a in args.script_args or []]
 
 
 def main(args: argparse.Namespace) -> int:

@@ -28,6 +28,17 @@ MODULES = (
 
 NP_MAT_NOTE = ("the script used np.mat, which numpy 2 removed: it was provided as np.asmatrix for this "
                "run only (rps scripts written for numpy 1 use it for initial conditions)")
+GET_CMAP_NOTE = ("the script used matplotlib.cm.get_cmap (plt.cm.get_cmap), which matplotlib 3.9 removed: it was "
+                 "provided as matplotlib.colormaps[name].resampled(lut) for this run only")
+
+
+def _matplotlib_cm():
+    """``matplotlib.cm`` (None where matplotlib is missing)."""
+    try:
+        import matplotlib.cm
+    except ImportError:  # pragma: no cover - matplotlib is a dependency
+        return None
+    return matplotlib.cm
 
 
 @contextmanager
@@ -35,14 +46,16 @@ def rps_aliases() -> Iterator[list[str]]:
     """Within the block, ``rps`` and ``rps.*`` import these facade modules.
 
     Also the numpy 1 API rps scripts rely on: ``np.mat`` (removed in numpy 2) is
-    ``np.asmatrix`` within the block only. Yields a list that receives a note when the
-    script used it.
+    ``np.asmatrix`` within the block only; likewise matplotlib's ``cm.get_cmap(name, lut)`` (removed
+    in matplotlib 3.9; rps-era scripts such as MARBLER's colour their markers with it). Yields a list
+    that receives a note when the script used either.
     """
     import importlib
 
     import numpy as np
 
     notes: list[str] = []
+    add_cmap = False
     saved = {k: v for k, v in sys.modules.items() if k == "rps" or k.startswith("rps.")}
     add_mat = not hasattr(np, "mat")
     try:
@@ -60,10 +73,24 @@ def rps_aliases() -> Iterator[list[str]]:
                     return np.asmatrix(data, dtype)
 
             np.mat = mat  # type: ignore[attr-defined]
+        cm = _matplotlib_cm()
+        add_cmap = cm is not None and not hasattr(cm, "get_cmap")
+        if add_cmap:
+            def get_cmap(name=None, lut=None):
+                import matplotlib
+
+                if GET_CMAP_NOTE not in notes:
+                    notes.append(GET_CMAP_NOTE)
+                cmap = matplotlib.colormaps[name if name is not None else matplotlib.rcParams["image.cmap"]]
+                return cmap if lut is None else cmap.resampled(lut)
+
+            cm.get_cmap = get_cmap
         yield notes
     finally:
         if add_mat and getattr(np, "mat", None) is mat:
             del np.mat  # type: ignore[attr-defined]
+        if add_cmap and getattr(cm, "get_cmap", None) is get_cmap:
+            del cm.get_cmap
         for k in [k for k in sys.modules if k == "rps" or k.startswith("rps.")]:
             del sys.modules[k]
         sys.modules.update(saved)
