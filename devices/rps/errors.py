@@ -10,8 +10,8 @@ thresholding — and counts into ``_errors`` (robotarium/robotarium_python_simul
   summed over steps), ``"exceeded_actuator_limits"`` (steps); printed by ``debug()``.
 
 The facade keeps both sets of keys in one dict (a script of either generation finds its own). Collisions:
-centres shifted 0.025 m ahead along the heading, at most 0.135 m apart (REFERENCE.md §1), found with a
-k-d tree (:func:`swarmdeck.devices.validation.colliding_pairs`), not rps's pairwise loops. Unlike rps 1.x,
+centres shifted 0.025 m ahead along the heading, at most 0.135 m apart (REFERENCE.md §1,
+:class:`~swarmdeck.devices.validation.ValidationRules`), vectorised, not rps's pairwise loops. Unlike rps 1.x,
 no mutable default dict is shared between Robotarium objects.
 """
 from __future__ import annotations
@@ -22,7 +22,8 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from swarmdeck.devices.validation import colliding_pairs, out_of_bounds
+from swarmdeck.core.kinematics import lookahead_points
+from swarmdeck.devices.validation import ValidationRules, colliding_pairs, out_of_bounds
 
 BOUNDARY_STRING = "iteration(s) robots were outside the boundaries."
 COLLISION_STRING = "iteration(s) where robots collided."
@@ -38,7 +39,7 @@ def count_errors(errors: dict[str, Any], poses: NDArray[np.float64], wheels_over
     exceeds its limit; ``pairs``: the colliding pairs at ``poses`` when already known (else computed).
     """
     if pairs is None:
-        pairs = colliding_pairs(poses)
+        pairs = _pairs(poses)
     oob = out_of_bounds(poses, bounds)
     if oob.any():
         boundary = errors.setdefault("boundary", {})
@@ -57,6 +58,19 @@ def count_errors(errors: dict[str, Any], poses: NDArray[np.float64], wheels_over
         errors["actuator"] = errors.get("actuator", 0) + 1
         errors["actuator_string"] = ACTUATOR_STRING
         errors["exceeded_actuator_limits"] = errors.get("exceeded_actuator_limits", 0) + 1
+
+
+def _pairs(poses: NDArray[np.float64]) -> NDArray[np.intp]:
+    """Colliding pairs by the rps test: all pairs in numpy up to rps's 50 robots (no scipy import in a
+    sandboxed script's process, and faster than building a k-d tree there), the k-d tree beyond."""
+    n = len(poses)
+    if n > 64:
+        return colliding_pairs(poses)
+    rules = ValidationRules()
+    c = lookahead_points(poses, rules.collision_shift)
+    i, j = np.triu_indices(n, 1)
+    close = np.hypot(c[i, 0] - c[j, 0], c[i, 1] - c[j, 1]) <= rules.collision_distance
+    return np.column_stack((i[close], j[close])).astype(np.intp)
 
 
 def call_at_scripts_end_text(errors: dict[str, Any], iterations: int, time_step: float) -> str:
