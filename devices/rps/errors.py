@@ -22,8 +22,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from swarmdeck.core.kinematics import lookahead_points
-from swarmdeck.devices.validation import ValidationRules, colliding_pairs, out_of_bounds
+from swarmdeck.devices.validation import colliding_pairs, out_of_bounds
 
 BOUNDARY_STRING = "iteration(s) robots were outside the boundaries."
 COLLISION_STRING = "iteration(s) where robots collided."
@@ -39,7 +38,7 @@ def count_errors(errors: dict[str, Any], poses: NDArray[np.float64], wheels_over
     exceeds its limit; ``pairs``: the colliding pairs at ``poses`` when already known (else computed).
     """
     if pairs is None:
-        pairs = _pairs(poses)
+        pairs = colliding_pairs(poses)
     oob = out_of_bounds(poses, bounds)
     if oob.any():
         boundary = errors.setdefault("boundary", {})
@@ -58,19 +57,6 @@ def count_errors(errors: dict[str, Any], poses: NDArray[np.float64], wheels_over
         errors["actuator"] = errors.get("actuator", 0) + 1
         errors["actuator_string"] = ACTUATOR_STRING
         errors["exceeded_actuator_limits"] = errors.get("exceeded_actuator_limits", 0) + 1
-
-
-def _pairs(poses: NDArray[np.float64]) -> NDArray[np.intp]:
-    """Colliding pairs by the rps test: all pairs in numpy up to rps's 50 robots (no scipy import in a
-    sandboxed script's process, and faster than building a k-d tree there), the k-d tree beyond."""
-    n = len(poses)
-    if n > 64:
-        return colliding_pairs(poses)
-    rules = ValidationRules()
-    c = lookahead_points(poses, rules.collision_shift)
-    i, j = np.triu_indices(n, 1)
-    close = np.hypot(c[i, 0] - c[j, 0], c[i, 1] - c[j, 1]) <= rules.collision_distance
-    return np.column_stack((i[close], j[close])).astype(np.intp)
 
 
 def call_at_scripts_end_text(errors: dict[str, Any], iterations: int, time_step: float) -> str:

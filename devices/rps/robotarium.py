@@ -171,7 +171,8 @@ class Robotarium:
             raise ValueError(f"ids must be robot indices (integers), got {idx.tolist()!r}")
         if vel.shape[1] != len(idx):
             raise ValueError(f"velocities has {vel.shape[1]} columns for {len(idx)} ids")
-        self._arena.set_unicycle(vel[0], vel[1], ids=idx)
+        if not self.rps_semantics:  # (rps semantics: step() hands the velocities to the robots itself)
+            self._arena.set_unicycle(vel[0], vel[1], ids=idx)
         self._velocities[:, idx] = vel
 
     def step(self) -> None:
@@ -183,7 +184,10 @@ class Robotarium:
         self._checked_poses_already = False
         self._errors = self._validate(self._errors)
         self._iterations += 1
-        self._arena.step()
+        if self.rps_semantics:  # as rps: the velocities go to the robots as they are (wheel limits apply)
+            self._arena.step_unicycle(self._velocities[0], self._velocities[1])
+        else:
+            self._arena.step()
 
     def _validate(self, errors: dict | None = None) -> dict:
         """rps's validation of the current poses and commanded velocities, counted into ``errors``
@@ -193,9 +197,10 @@ class Robotarium:
         pairs = None
         if type(backend) is SimulatedArena and backend.report.steps:
             pairs = backend.last_collisions  # the simulator validated these very poses after its last step
-        dxdd = self._uni_to_diff(self._velocities)
-        count_errors(errors, self._arena.poses(), bool(np.any(np.abs(dxdd) > self.max_wheel_velocity)),
-                     self._bounds, pairs)
+        v, w = self._velocities
+        limit = 2 * self.wheel_radius * self.max_wheel_velocity  # |2v ± Lω| / (2r) > max wheel speed
+        over = bool(np.any(np.abs(2 * v - self.base_length * w) > limit) or np.any(np.abs(2 * v + self.base_length * w) > limit))
+        count_errors(errors, backend.poses, over, self._bounds, pairs)
         return errors
 
     def _threshold(self, dxu: ArrayLike) -> NDArray[np.float64]:
