@@ -19,6 +19,7 @@ MODULES = (
     "robotarium_abc",
     "utilities",
     "utilities.barrier_certificates",
+    "utilities.barrier_certificates2",
     "utilities.controllers",
     "utilities.graph",
     "utilities.misc",

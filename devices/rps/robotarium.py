@@ -222,6 +222,19 @@ class Robotarium:
         r, base = self.wheel_radius, self.base_length
         return np.vstack((r / 2 * (dxdd[0] + dxdd[1]), r / base * (dxdd[1] - dxdd[0])))
 
+    def robot_colormap(self) -> Any:
+        """rps 2.0: the matplotlib colormap robots are drawn with (``tab20``)."""
+        import matplotlib
+
+        return matplotlib.colormaps["tab20"]
+
+    def _no_sensors(self, *_args: Any) -> None:
+        raise NotImplementedError("rps 2.0's simulated sensors (distances, encoders, IMU, magnetometer, orientation) "
+                                  "are not part of swarmdeck's rps facade")
+
+    get_distances = get_distance_endpoints = get_encoders = get_accelerations = _no_sensors
+    get_gyros = get_magnetic_fields = get_orientations = _no_sensors
+
     @property
     def _iteration(self) -> int:
         """rps 2.0's name for the step count."""

@@ -101,8 +101,40 @@ def create_pose_controller_hybrid(linear_velocity_gain: float = 0.8, angular_vel
     return controller_hybrid
 
 
+def _parking(controller, position_error: float, rotation_error: float):
+    """``controller`` with zero commands for the robots already at their goal pose (rps 2.0's parking)."""
+    from swarmdeck.devices.controllers import at_pose
+
+    def parked(states, poses):
+        dxu = np.asarray(controller(states, poses), dtype=float)
+        done = at_pose(np.asarray(states, dtype=float).T, np.asarray(poses, dtype=float).T, position_error,
+                       rotation_error)
+        return np.where(done[None, :], 0.0, dxu)
+
+    return parked
+
+
+def create_pose_parking_controller_clf(approach_angle_gain: float = 1, desired_angle_gain: float = 2.7,
+                                       rotation_error_gain: float = 1, wheel_velocity_limit: float = 10.0,
+                                       wheel_radius: float = 0.016, base_length: float = 0.105,
+                                       position_error: float = 0.05, rotation_error: float = 0.2):
+    """rps 2.0: :func:`create_pose_controller_clf` that stops the robots at their goal pose."""
+    return _parking(create_pose_controller_clf(approach_angle_gain, desired_angle_gain, rotation_error_gain),
+                    position_error, rotation_error)
+
+
+def create_pose_parking_controller_hybrid(linear_velocity_gain: float = 0.8, angular_velocity_limit: float = np.pi,
+                                          position_error: float = 0.05, position_epsilon: float = 0.02,
+                                          rotation_error: float = 0.05, velocity_magnitude_limit: float = 0.15,
+                                          **_unused):
+    """rps 2.0: :func:`create_pose_controller_hybrid` that stops the robots at their goal pose."""
+    inner = create_pose_controller_hybrid(linear_velocity_gain, angular_velocity_limit, position_error,
+                                          position_epsilon, rotation_error, velocity_magnitude_limit)
+    return _parking(lambda states, poses: inner(states, poses), position_error, rotation_error)
+
+
 __all__ = [
-    "create_clf_unicycle_pose_controller", "create_clf_unicycle_position_controller",
+    "create_clf_unicycle_pose_controller", "create_pose_parking_controller_clf", "create_pose_parking_controller_hybrid", "create_clf_unicycle_position_controller",
     "create_hybrid_unicycle_pose_controller", "create_pose_controller_clf", "create_pose_controller_hybrid",
     "create_si_position_controller", "create_uni_position_controller", *_TRANSFORMATIONS,
 ]

@@ -46,6 +46,16 @@ def generate_random_positions(N: int, spacing: float = 0.5, width: float = 3.0, 
     return generate_random_poses(N, spacing, width, height)[:2]
 
 
+def generate_initial_poses(N: int, width: float = 3.0, height: float = 1.0) -> np.ndarray:
+    """rps 2.0: (3, N) poses where robots come off the chargers: N of 22 slots on two lines (11 across
+    ``width`` at y = ±height/2), facing into the arena, chosen at random."""
+    xs = np.linspace(-width / 2, width / 2, 11)
+    slots = np.array([[x, y, np.pi / 2 if y < 0 else -np.pi / 2] for x in xs for y in (-height / 2, height / 2)])
+    if not 1 <= N <= len(slots):
+        raise ValueError(f"generate_initial_poses places 1 to {len(slots)} robots, got N={N!r}")
+    return slots[np.random.choice(len(slots), size=N, replace=False)].T
+
+
 def create_at_pose(position_error: float = 0.05, rotation_error: float = 0.2):
     """rps 2.0: f(states (3, N), poses (3, N)) → (all robots there, indices of those there)."""
 
@@ -92,5 +102,5 @@ def __getattr__(name: str):
 # rps's misc does `import numpy as np` and `import matplotlib.pyplot as plt`, and scripts get both
 # from `from rps.utilities.misc import *` (some rps examples never import numpy themselves).
 __all__ = ["at_pose", "at_position", "create_at_pose", "create_at_position", "determine_font_size",
-           "determine_marker_size", "generate_initial_conditions", "generate_random_poses", "generate_random_positions",
+           "determine_marker_size", "generate_initial_conditions", "generate_initial_poses", "generate_random_poses", "generate_random_positions",
            "np", "plt", "rotation_matrix", "unique_filename"]
