@@ -15,7 +15,8 @@ here also no GIFs and no TensorBoard logging), in a fresh process per run, on:
   facade does);
 * ``facade --rps-semantics`` and ``facade`` (default: swarmdeck's barrier on every step).
 
-Prints env steps/s (MARBLER's steps, each 29 simulator steps) and simulator steps/s; PredatorCapturePrey
+Prints env steps/s (MARBLER's steps, each 29 simulator steps) and simulator steps/s, then the cost of one
+simulator step alone at N = 6, 20, 50 (with ``--rps-path``); PredatorCapturePrey
 cannot run on numpy 2 (``ndarray == []`` raises), on either simulator. Results: bench/RESULTS.md, "rps semantics".
 """
 from __future__ import annotations
@@ -75,6 +76,38 @@ def _child(mode: str, main: str, scenario: str) -> None:
     print(json.dumps({"mode": mode, "episodes": len(steps), "env_steps": sum(steps), "seconds": elapsed}))
 
 
+def _steps(n: int, k: int = 500) -> dict[str, float]:
+    """µs per get_poses/set_velocities/step of the real rps (already on sys.path) and the facade in rps
+    semantics, interleaved, best of 5."""
+    import numpy as np
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import rps.robotarium as real
+
+    from swarmdeck.devices.rps.robotarium import Robotarium
+
+    ic = np.array([np.linspace(-1.4, 1.4, n), np.zeros(n), np.zeros(n)])
+    vel = np.vstack((np.zeros(n), np.full(n, 0.3)))
+    best: dict[str, float] = {}
+    for _ in range(5):
+        for mode in ("rps", "facade-rps"):
+            r = (real.Robotarium(number_of_robots=n, show_figure=False, initial_conditions=ic.copy(), sim_in_real_time=False)
+                 if mode == "rps" else Robotarium(n, show_figure=False, initial_conditions=ic.copy(), sim_in_real_time=False,
+                                                  rps_semantics=True))
+            for _ in range(20):
+                r.get_poses()
+                r.set_velocities(np.arange(n), vel)
+                r.step()
+            start = time.perf_counter()
+            for _ in range(k):
+                r.get_poses()
+                r.set_velocities(np.arange(n), vel)
+                r.step()
+            best[mode] = min(best.get(mode, 1e9), (time.perf_counter() - start) / k * 1e6)
+    return best
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--rps-path", action="append", default=[], metavar="DIR",
@@ -85,7 +118,10 @@ def main() -> None:
     parser.add_argument("--child", nargs=3, metavar=("MODE", "MAIN", "SCENARIO"), help=argparse.SUPPRESS)
     args = parser.parse_args()
     if args.child:
-        _child(*args.child)
+        if args.child[0] == "steps":
+            print(json.dumps(_steps(int(args.child[1]))))
+        else:
+            _child(*args.child)
         return
     with tempfile.TemporaryDirectory() as tmp:
         main_py = marbler_copy(Path(tmp), episodes=args.episodes)
@@ -116,6 +152,15 @@ def main() -> None:
         rate = best["env_steps"] / best["seconds"]
         mean_len = sum(r["env_steps"] for r in runs) / sum(r["episodes"] for r in runs)
         print(f"{names[mode]:<28} {rate:>12.1f} {29 * rate:>12.0f} {mean_len:>20.1f}")
+    if args.rps_path:
+        print("\nµs per simulator step (get_poses, set_velocities, step), best of 5, interleaved")
+        print(f"{'N':>4} {'rps 1.x':>10} {'facade --rps-semantics':>24}")
+        for n in (6, 20, 50):
+            env = dict(os.environ, PYTHONPATH=os.pathsep.join([*args.rps_path, os.environ.get("PYTHONPATH", "")]))
+            done = subprocess.run([sys.executable, __file__, "--child", "steps", str(n), "-"], env=env,
+                                  capture_output=True, text=True, check=True)
+            row = json.loads(done.stdout.strip().splitlines()[-1])
+            print(f"{n:>4} {row['rps']:>10.0f} {row['facade-rps']:>24.0f}")
 
 
 if __name__ == "__main__":
