@@ -63,7 +63,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="confine with this jail only (default: unshare — Linux namespaces around a pre-loaded "
                              "fork server — then bubblewrap)")
     parser.add_argument("--rps", action=argparse.BooleanOptionalAction, default=None,
-                        help="resolve `import rps...` to swarmdeck's rps facade (default: when the script imports rps)")
+                        help="resolve `import rps...` to swarmdeck's rps facade (default: when no real rps is installed)")
     parser.add_argument("--json", action="store_true", help="print the JSON report (schema swarmdeck.verification/1)")
     parser.add_argument("--html", default=None, metavar="OUT.html", help="write the HTML report there")
 
