@@ -65,6 +65,10 @@ class RunDefaults:
     backend_factory: Any = None
     # start simulated Arenas docked on the chargers and set them up first (swarmdeck run --from-docks)
     from_docks: bool = False
+    # the rps facade (devices/rps/robotarium.py): rps's own semantics (the barrier only where the script
+    # calls it, rps's error counts) and rps's call order (get_poses() once per step())
+    rps_semantics: bool = False
+    rps_call_order: bool = True
 
 
 RUN_DEFAULTS: contextvars.ContextVar[RunDefaults] = contextvars.ContextVar("swarmdeck_run_defaults", default=RunDefaults())
@@ -482,6 +486,24 @@ class Arena:
             self._on_step(self)
         return new_poses
 
+    def step_unicycle(self, v: ArrayLike, w: ArrayLike) -> FloatArray:
+        """Advance one period with unicycle commands ``(N,)`` [m/s], [rad/s] handed to the robots as they are
+        (their own wheel limits and validation apply): the rps facade's rps semantics, where nothing but the
+        script's own barrier filters. Only for an Arena without a safety filter (RuntimeError otherwise).
+        Returns the new poses."""
+        if self.safety is not None:
+            raise RuntimeError("step_unicycle hands commands to the robots unfiltered: only for an Arena built "
+                               "with safety=False")
+        if self.duration is not None and self.time >= self.duration - 1e-9:
+            raise ExperimentFinished(f"declared duration {self.duration} s is over")
+        v = np.asarray(v, dtype=float)
+        w = np.asarray(w, dtype=float)
+        self.last_nominal = self.last_safe = unicycle_to_si(self.backend.poses, v, w, self.ell)
+        new_poses = self.backend.step(v, w)
+        if self._on_step is not None:
+            self._on_step(self)
+        return new_poses
+
     # ------------------------------------------------------------------ reporting
     def report(self) -> "ArenaReport":
         """What happened so far: validation counts, safety filter statistics, invalid commands."""
@@ -491,8 +513,10 @@ class Arena:
                            fleet)
 
     def call_at_scripts_end(self) -> None:
-        """Print the report (rps compatibility)."""
-        print(self.report())
+        """Print the report (rps compatibility) — unless a runner (``swarmdeck run``) runs the script:
+        it prints the report once, at the end of the run."""
+        if RUN_DEFAULTS.get().on_create is None:
+            print(self.report())
 
 
 @dataclass

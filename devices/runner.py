@@ -21,7 +21,7 @@ import re
 import runpy
 import sys
 import traceback
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -93,8 +93,14 @@ def describe_error(exc: BaseException, script: str | None = None) -> str:
     return f"{where}{type(exc).__name__}: {text}"
 
 
-def _mentions_rps(source: str) -> bool:
-    return re.search(r"^\s*(import rps\b|from rps\b)", source, re.MULTILINE) is not None
+def _nothing_runnable(path: Path, source: str) -> str:
+    """Why a script that ran to its end gave nothing to run: what was looked for, and what it has."""
+    text = (f"{path} ran as __main__ (as `python {path.name}` runs it) but neither defines experiment(arena) "
+            "nor built an Arena or rps Robotarium")
+    if re.search(r"^if\s+__name__\s*==\s*['\"]__main__['\"]\s*:", source, re.MULTILINE):
+        text += ("; it has an `if __name__ == \"__main__\":` block, which ran: does the code there return "
+                 "before building one (e.g. on its command-line arguments, given after the script name)?")
+    return text
 
 
 def run_experiment(
@@ -109,17 +115,24 @@ def run_experiment(
     backend_factory: Callable[..., Any] | None = None,
     on_create: Callable[[Arena], None] | None = None,
     from_docks: bool = False,
+    argv: Sequence[str] = (),
+    rps_semantics: bool = False,
+    rps_call_order: bool = True,
 ) -> RunResult:
     """Run a script file (or an ``experiment(arena)`` callable) and return its :class:`RunResult`.
 
     ``rps``: make ``import rps…`` resolve to swarmdeck's rps facade for this run;
-    None (default) does so when the script mentions rps and no real rps is installed.
+    None (default) does so when no real rps is installed.
     ``backend_factory``: builds the robots of Arenas the script creates (see
     :class:`~swarmdeck.devices.arena.RunDefaults`); None: the simulated arena.
     ``on_create``: called with every Arena the run builds.
     ``from_docks``: the simulated robots start docked on the chargers, are set up to the script's
     initial poses before its first step and are returned to the chargers after it (also when it
     failed: they are stopped first); a return that does not finish is added to ``notes``.
+    ``argv``: the script's command-line arguments (``sys.argv[1:]`` while it runs; ``sys.argv[0]`` is
+    the script). A script file runs as ``__main__``, as ``python script.py`` runs it; ``experiment(arena)``
+    is then called unless the script built its own Arena already.
+    ``rps_semantics``/``rps_call_order``: the rps facade's modes (:class:`~swarmdeck.devices.rps.robotarium.Robotarium`).
     """
     result = RunResult()
 
@@ -130,7 +143,7 @@ def run_experiment(
 
     defaults = RunDefaults(n_robots=n_robots, duration=duration, seed=seed, safety=safety,
                            on_create=created, on_step=on_step, backend_factory=backend_factory,
-                           from_docks=from_docks)
+                           from_docks=from_docks, rps_semantics=rps_semantics, rps_call_order=rps_call_order)
     token = RUN_DEFAULTS.set(defaults)
     script = None if callable(target) else str(target)
     try:
@@ -140,21 +153,23 @@ def run_experiment(
             else:
                 path = Path(target)
                 source = _load(path)["source"]
-                if rps is None:
-                    rps = _mentions_rps(source) and importlib.util.find_spec("rps") is None
+                if rps is None:  # also for scripts that import rps only through their own modules (MARBLER)
+                    rps = importlib.util.find_spec("rps") is None
                 sys.path.insert(0, str(path.parent.resolve()))
+                saved_argv = sys.argv
+                sys.argv = [str(path), *argv]  # as `python script.py ARGS…` sees them
                 try:
                     with rps_aliases() if rps else contextlib.nullcontext([]) as notes:
                         result.notes = notes  # the facade adds to it while the script runs
-                        namespace = runpy.run_path(str(path), run_name="__swarmdeck_experiment__")
+                        # as `python script.py` runs it: code under `if __name__ == "__main__":` runs too
+                        namespace = runpy.run_path(str(path), run_name="__main__")
                         fn = namespace.get("experiment")
-                        if callable(fn):
+                        if callable(fn) and not result.arenas:
                             result.returned = fn(_runner_arena())
                     if not callable(fn) and not result.arenas:
-                        raise ScriptError(
-                            f"{path} neither defines experiment(arena) nor creates an Arena at top level"
-                        )
+                        raise ScriptError(_nothing_runnable(path, source))
                 finally:
+                    sys.argv = saved_argv
                     sys.path.remove(str(path.parent.resolve()))
         except ExperimentFinished:
             pass

@@ -8,6 +8,7 @@ step, and keeps the acceptance rules of the Robotarium's verifier.
 """
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -42,14 +43,36 @@ def out_of_bounds(poses: ArrayLike, bounds: Bounds) -> NDArray[np.bool_]:
     return (p[:, 0] < x0) | (p[:, 0] > x1) | (p[:, 1] < y0) | (p[:, 1] > y1)
 
 
+ALL_PAIRS_MAX = 64  # robots up to which colliding_pairs tests all pairs (rps allows 50)
+
+
+@functools.lru_cache(maxsize=ALL_PAIRS_MAX)
+def _upper_pairs(n: int) -> tuple[NDArray[np.intp], NDArray[np.intp]]:
+    """``np.triu_indices(n, 1)``, read-only and kept (building it costs more than testing the pairs)."""
+    i, j = np.triu_indices(n, 1)
+    i.setflags(write=False)
+    j.setflags(write=False)
+    return i, j
+
+
 def colliding_pairs(poses: ArrayLike, rules: ValidationRules = ValidationRules()) -> NDArray[np.intp]:
-    """``(K, 2)`` index pairs ``i < j`` that collide by the rps test."""
+    """``(K, 2)`` index pairs ``i < j`` that collide by the rps test, in lexicographic order.
+
+    Up to ``ALL_PAIRS_MAX`` robots every pair is tested at once in numpy (at most 2016 pairs: faster there
+    than building a k-d tree, and no scipy import); beyond, a k-d tree finds the candidates."""
+    p = np.asarray(poses, dtype=float)
+    n = p.shape[0]
+    if n < 2:
+        return np.empty((0, 2), dtype=np.intp)
+    if n <= ALL_PAIRS_MAX:  # rps shifts each centre ahead along its heading
+        x = p[:, 0] + rules.collision_shift * np.cos(p[:, 2])
+        y = p[:, 1] + rules.collision_shift * np.sin(p[:, 2])
+        i, j = _upper_pairs(n)  # lexicographic
+        close = np.hypot(x[i] - x[j], y[i] - y[j]) <= rules.collision_distance  # (no overflow in a square)
+        return np.column_stack((i[close], j[close]))
+    shifted = lookahead_points(p, rules.collision_shift)
     from scipy.spatial import cKDTree  # here, not at import: a sandboxed script's process never needs scipy
 
-    p = np.asarray(poses, dtype=float)
-    if p.shape[0] < 2:
-        return np.empty((0, 2), dtype=np.intp)
-    shifted = lookahead_points(p, rules.collision_shift)  # rps shifts each centre ahead along its heading
     # Chebyshev candidates, then the exact distance by hypot: the Euclidean k-d tree squares
     # coordinates and raises for finite positions beyond ~1e154 m
     cand = cKDTree(shifted).query_pairs(rules.collision_distance, p=np.inf, output_type="ndarray")

@@ -33,7 +33,8 @@ def test_robotarium_object_has_no_rps_defects():
 
         with pytest.raises(ValueError, match="float"):
             robotarium.Robotarium(2, initial_conditions=np.array([[0, 1], [0, 0], [0, 0]]), sim_in_real_time=False)
-        r = robotarium.Robotarium(2, initial_conditions=np.array([[0.0, 0.5], [0.0, 0.0], [0.0, 0.0]]), sim_in_real_time=False)
+        r = robotarium.Robotarium(2, initial_conditions=np.array([[0.0, 0.5], [0.0, 0.0], [0.0, 0.0]]), sim_in_real_time=False,
+                                    enforce_call_order=False)  # reads the poses twice to show they are copies
         x = r.get_poses()
         x[0, 0] = 99.0
         assert r.get_poses()[0, 0] == 0.0  # a copy, not the internal array

@@ -60,7 +60,8 @@ def test_three_children_of_1_2_gib_are_stopped_by_the_default_limit(jail_run, re
 def test_the_runs_group_holds_the_limits_while_it_runs(jail_run, record_property):
     version = cgroups._layout()[0]
     files = {"memory": "memory.limit_in_bytes" if version == 1 else "memory.max", "pids": "pids.max",
-             "cpu": "cpu.cfs_quota_us" if version == 1 else "cpu.max", "cpuset": "cpuset.cpus"}
+             "cpu": "cpu.cfs_quota_us" if version == 1 else "cpu.max", "cpuset": "cpuset.cpus",
+             "cpuacct": "cpuacct.usage"}  # (v1: the run's CPU time, charged per tick)
     seen = {}
 
     def make_plant(n, initial):  # called by the trusted side in the middle of the run

@@ -34,6 +34,7 @@ STYLES = {
             r.set_velocities(np.arange(4), si_to_uni(-(x[:2] - x[:2].mean(axis=1, keepdims=True)), x))
             r.step()
         r.call_at_scripts_end()
+        print("rps script done")
     """,
 }
 
@@ -62,7 +63,9 @@ def test_cli_run_sandbox_prints_the_trusted_report_and_the_scripts_output(tmp_pa
     out = capsys.readouterr().out
     report = json.loads(out[out.index("{\n"):])
     assert report["ended_by"] == "script" and report["reports"][0]["validation"]["steps"] == 40
-    assert "safety filter: OFF" in out  # the child's own call_at_scripts_end: it has no filter, swarmdeck does
+    assert "rps script done" in out  # the script's output
+    assert "safety filter: OFF" not in out  # the report is the trusted side's, once: the child's call_at_scripts_end
+    # (the child has no filter, swarmdeck does) prints nothing under the runner (before: a second, wrong report)
     assert report["reports"][0]["safety"]["enabled"] is True
 
 

@@ -54,7 +54,7 @@ def test_a_late_answer_is_counted_once_and_then_dropped(tmp_path):
             time.sleep(0.7)  # misses two 0.3 s budgets; its answer then arrives late
             arena.step()
             arena.step()
-    """, limits=SandboxLimits(tick_s=0.3, max_overruns=5))
+    """, limits=SandboxLimits(tick_s=0.3, max_overruns=5, tick_clock="wall"))  # (CPU time: test_jobs_sandbox_cpu_budget)
     assert out.ended_by == "script" and out.overruns >= 1  # (two 0.3 s budgets fit in 0.7 s; a loaded machine may see one)
     assert out.ticks == out.overruns + 2  # 1 good, the missed ones (the late answer dropped), 1 good after it
 

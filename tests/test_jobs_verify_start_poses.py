@@ -97,7 +97,7 @@ def test_the_script_initial_conditions_are_used_when_the_manifest_has_none(tmp_p
     script = tmp_path / "own.py"
     script.write_text("import numpy as np\nimport rps.robotarium as robotarium\n"
                       "r = robotarium.Robotarium(number_of_robots=2, initial_conditions=np.array("
-                      "[[-0.5, 0.5], [0.3, 0.3], [0.0, 1.0]]))\nr.step()\n")
+                      "[[-0.5, 0.5], [0.3, 0.3], [0.0, 1.0]]))\nr.get_poses()\nr.step()\n")
     report = verify([script], VerificationConfig(n_robots=2, duration=0.3, runs=1), SerialExecutor())
     assert report.verdict == BYPASS
     own = [[-0.5, 0.3, 0.0], [0.5, 0.3, 1.0]]
@@ -113,7 +113,7 @@ def test_script_initial_conditions_that_overlap_or_lie_outside_are_refused_by_na
     script = tmp_path / "bad.py"
     script.write_text("import numpy as np\nimport rps.robotarium as robotarium\n"
                       f"r = robotarium.Robotarium(number_of_robots=2, initial_conditions=np.array({columns}))\n"
-                      "r.step()\n")
+                      "r.get_poses()\nr.step()\n")  # (rps's order: get_poses() before step())
     report = verify([script], VerificationConfig(n_robots=2, duration=0.3, runs=1), SerialExecutor())
     assert report.verdict == REJECTED
     reason = report.to_dict()["reasons"][0]

@@ -24,7 +24,7 @@ B_POSES = [[0.0, 0.5, 1.0], [0.6, 0.4, 3.0], [-0.6, -0.3, -2.0]]
 RPS = ("import numpy as np\nimport rps.robotarium as robotarium\n"
        f"ic = np.array({np.asarray(B_POSES).T.tolist()})\n"
        "r = robotarium.Robotarium(number_of_robots=3, initial_conditions=ic, sim_in_real_time=False)\n"
-       "for _ in range(15):\n    r.set_velocities(np.arange(3), np.zeros((2, 3)))\n    r.step()\n"
+       "for _ in range(15):\n    r.get_poses()\n    r.set_velocities(np.arange(3), np.zeros((2, 3)))\n    r.step()\n"
        "r.call_at_scripts_end()\n")
 
 

@@ -56,7 +56,16 @@ def build_parser() -> argparse.ArgumentParser:
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``swarmdeck`` command; returns the exit code."""
     parser = build_parser()
+    argv = list(sys.argv[1:] if argv is None else argv)
+    rest = None
+    if "--" in argv:  # `swarmdeck run SCRIPT.py [options] -- ARGS`: ARGS are the script's, whatever they look like
+        i = argv.index("--")
+        argv, rest = argv[:i], argv[i + 1:]
     args = parser.parse_args(argv)
+    if rest is not None:
+        if not hasattr(args, "script_args"):
+            parser.error(f"unrecognized arguments: -- {' '.join(rest)}")
+        args.script_args = [*args.script_args, *rest]
     if not getattr(args, "_main", None):
         parser.print_help()
         return 2

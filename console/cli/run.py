@@ -31,8 +31,19 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                              "script's initial poses, run, and return them to the chargers; the report says how long "
                              "setup and return took, the largest start-pose error and the collisions")
     parser.add_argument("--json", action="store_true", help="print the report as JSON")
+    parser.add_argument("--record", default=None, metavar="PATH",
+                        help="record the run to PATH (MCAP, as `swarmdeck console --record`: `swarmdeck play PATH`, "
+                             "Foxglove); a script that builds more Arenas records the k-th to PATH-k.mcap")
     parser.add_argument("--rps", action=argparse.BooleanOptionalAction, default=None,
-                        help="resolve `import rps...` to swarmdeck's rps facade (default: when the script imports rps and no rps is installed)")
+                        help="resolve `import rps...` to swarmdeck's rps facade (default: when no rps is installed)")
+    parser.add_argument("--rps-semantics", action="store_true",
+                        help="the rps facade behaves as rps: the barrier applies only where the script calls one, "
+                             "and collisions, boundary and actuator violations are counted in Robotarium._errors and "
+                             "printed by debug()/call_at_scripts_end() as rps prints them (default: every step is "
+                             "filtered, as the arena runs it)")
+    parser.add_argument("--no-rps-call-order", dest="rps_call_order", action="store_false",
+                        help="let the rps facade accept get_poses() twice per step() and step() twice in a row "
+                             "(rps and the Robotarium raise an AssertionError)")
     parser.add_argument("--sandbox", action="store_true",
                         help="run the script in a confined child process (no network, read-only files, resource limits); "
                              "swarmdeck keeps the simulator and the safety filter")
@@ -49,6 +60,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--entry", default=None, metavar="FILE",
                         help="with --sandbox and a directory SCRIPT: the file to run, relative to it (default main.py); "
                              "sibling modules are importable")
+    parser.add_argument("script_args", nargs="*", metavar="ARGS",
+                        help="arguments for the script after `--` (its sys.argv[1:], as `python SCRIPT.py ARGS`); "
+                             "the script runs as __main__, so code under `if __name__ == \"__main__\":` runs")
 
 
 def _run_sandboxed(args: argparse.Namespace) -> int:
@@ -63,11 +77,13 @@ def _run_sandboxed(args: argparse.Namespace) -> int:
     config = ArenaConfig(seed=args.seed)
 
     def make_plant(n, initial):  # type: ignore[no-untyped-def]
-        return ArenaPlant(Arena(n, initial_conditions=initial, config=config, safety=not args.no_safety,
-                                duration=args.duration))
+        return ArenaPlant(Arena(n, initial_conditions=initial, config=config,
+                                safety=not (args.no_safety or args.rps_semantics), duration=args.duration))
 
     try:
         outcome = run_sandboxed(args.script, make_plant, entry=args.entry, n_robots=args.robots, duration=args.duration, rps=args.rps,
+                                argv=_script_args(args), rps_semantics=args.rps_semantics,
+                                rps_call_order=args.rps_call_order,
                                 trusted=args.trusted, jail=JailConfig(order=(args.jail,) if args.jail else JailConfig().order,
                                                                      allow_no_cgroup=args.allow_no_cgroup,
                                                                      script_env=checked_script_env(args.script_env)))
@@ -90,6 +106,10 @@ def _run_sandboxed(args: argparse.Namespace) -> int:
     return 0
 
 
+def _script_args(args: argparse.Namespace) -> list[str]:
+    return [str(a) for a in args.script_args or []]
+
+
 def main(args: argparse.Namespace) -> int:
     if args.script_env is not None and not args.sandbox:
         raise UsageError("--script-env needs --sandbox (the script environment is the jail's)")
@@ -98,8 +118,23 @@ def main(args: argparse.Namespace) -> int:
     if args.sandbox:
         if args.from_docks:
             raise UsageError("--from-docks does not combine with --sandbox yet")
+        if args.record:
+            raise UsageError("--record does not combine with --sandbox yet")
         return _run_sandboxed(args)
-    result = run_headless(args.script, args, rps=args.rps, from_docks=args.from_docks)
+    recording = None
+    if args.record:
+        from swarmdeck.console.recording.arena_recording import ArenaRecording
+
+        recording = ArenaRecording(args.record, script=args.script, seed=args.seed)
+    try:
+        result = run_headless(args.script, args, rps=args.rps, from_docks=args.from_docks, argv=_script_args(args),
+                              rps_semantics=args.rps_semantics, rps_call_order=args.rps_call_order,
+                              on_create=None if recording is None else recording.on_create,
+                              on_step=None if recording is None else recording.on_step)
+    finally:
+        if recording is not None:
+            for line in recording.close():
+                print(f"swarmdeck run: {line}", file=sys.stderr)
     if args.json:
         print(json.dumps({"reports": [r.to_dict() for r in result.reports], "error": result.error,
                           "error_line": result.error_line, "notes": result.notes,
@@ -156,6 +191,10 @@ def run_headless(experiment: Callable[..., Any] | str, args: argparse.Namespace,
 
     check_run_arguments(args.robots, args.duration, min_robots, what, args.seed)
     on_step, close = progress_bar(args.duration)
+    also = kw.pop("on_step", None)
+    if also is not None:
+        bar = on_step
+        on_step = also if bar is None else (lambda arena: (also(arena), bar(arena)))  # noqa: E731
     try:
         result = run_experiment(experiment, n_robots=args.robots, duration=args.duration, seed=args.seed,
                                 safety=not args.no_safety, on_step=on_step, **kw)

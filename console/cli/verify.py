@@ -51,7 +51,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--bypass-threshold", type=float, default=0.99, metavar="S",
                         help="safety score every raw run must reach, with no contact, to bypass the barrier (default 0.99)")
     parser.add_argument("--tick-budget", type=float, default=1.0, metavar="S",
-                        help="per-tick compute budget of the script, wall seconds (default 1.0)")
+                        help="per-tick compute budget of the script: CPU seconds it may use per tick, counted by its "
+                             "cgroup (wall seconds where it has none); a tick ends after max(10 x S, S + 5) wall "
+                             "seconds whatever it used (default 1.0)")
     parser.add_argument("--trusted", action="store_true",
                         help="run the scripts unconfined where this machine cannot confine them (no jail works)")
     parser.add_argument("--allow-no-cgroup", action="store_true",
@@ -61,7 +63,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="confine with this jail only (default: unshare — Linux namespaces around a pre-loaded "
                              "fork server — then bubblewrap)")
     parser.add_argument("--rps", action=argparse.BooleanOptionalAction, default=None,
-                        help="resolve `import rps...` to swarmdeck's rps facade (default: when the script imports rps)")
+                        help="resolve `import rps...` to swarmdeck's rps facade (default: when no real rps is installed)")
     from swarmdeck.console.cli.env import add_script_env_argument
 
     add_script_env_argument(parser)

@@ -37,6 +37,7 @@ from swarmdeck.core.checks import require_positive
 CGROUP_ROOT = Path("/sys/fs/cgroup")
 REQUIRED = ("memory", "pids")
 OPTIONAL = ("cpu", "cpuset")
+ACCOUNTING_V1 = "cpuacct"  # v1's CPU-time accounting (v2 has cpu.stat in every group): joined when mounted
 CPU_PERIOD_US = 100_000
 
 
@@ -132,7 +133,7 @@ def _layout() -> tuple[int, dict[str, Path]]:
     for point, fstype, options in mounts:
         if fstype != "cgroup":
             continue
-        for controller in (*REQUIRED, *OPTIONAL):
+        for controller in (*REQUIRED, *OPTIONAL, ACCOUNTING_V1):
             if controller in options and controller not in parents and controller in own:
                 parents[controller] = Path(point) / own[controller].lstrip("/")
     missing = [c for c in REQUIRED if c not in parents]
@@ -206,6 +207,26 @@ class RunCgroup:
         """Most memory the run held at once, bytes (0 where the kernel does not say)."""
         text = self._read("memory", "memory.peak" if self.version == 2 else "memory.max_usage_in_bytes").strip()
         return int(text) if text.isdigit() else 0
+
+    def cpu_time_s(self) -> float | None:
+        """CPU time (user + system) all the run's processes have used so far, s, as the kernel accounts it
+        (v2 ``cpu.stat`` usage_usec, v1 ``cpuacct.usage``); None where this group cannot tell."""
+        if self.version == 2:
+            folder = next(iter(self.folders.values()), None)
+            try:
+                text = (folder / "cpu.stat").read_text() if folder is not None else ""
+            except OSError:
+                return None
+            for line in text.splitlines():
+                parts = line.split()
+                if len(parts) == 2 and parts[0] == "usage_usec" and parts[1].isdigit():
+                    return int(parts[1]) * 1e-6
+            return None
+        for controller in (ACCOUNTING_V1, "cpu"):  # v1: its own hierarchy, or mounted together with cpu
+            text = self._read(controller, "cpuacct.usage").strip()
+            if text.isdigit():
+                return int(text) * 1e-9
+        return None
 
     def pids_refused(self) -> int:
         """Forks refused because the run had ``processes`` processes already."""
@@ -288,7 +309,8 @@ def create(limits: CgroupLimits, name: str | None = None) -> RunCgroup:
     folders: dict[str, Path] = {}
     missing = [c for c in OPTIONAL if c not in parents]
     try:
-        for controller in (*REQUIRED, *(c for c in OPTIONAL if c in parents)):
+        accounting = (ACCOUNTING_V1,) if version == 1 and ACCOUNTING_V1 in parents else ()
+        for controller in (*REQUIRED, *(c for c in OPTIONAL if c in parents), *accounting):
             try:
                 if version == 2:
                     _enable(parents[controller], controller)
@@ -302,6 +324,9 @@ def create(limits: CgroupLimits, name: str | None = None) -> RunCgroup:
             except OSError:
                 if controller in REQUIRED:
                     raise
+                if controller == ACCOUNTING_V1:
+                    folders.pop(controller, None)
+                    continue
                 missing.append(controller)
                 if version == 1 and controller in folders:
                     folders.pop(controller).rmdir()

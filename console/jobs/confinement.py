@@ -73,8 +73,14 @@ class SandboxLimits:
             script's time: a loaded machine can take seconds here).
         startup_s: wall time allowed from then until the script has built its Arena
             (its imports and top-level code).
-        tick_s: per-tick compute budget: wall time from sending poses to receiving commands.
-            A tick that overruns stops the robots for that tick.
+        tick_s: per-tick compute budget from sending poses to receiving commands: CPU time of the run's
+            processes (``tick_clock="cpu"``, measured by the trusted side from the run's cgroup, so a
+            loaded machine does not make a cheap script overrun), else wall time. A tick that overruns
+            stops the robots for that tick.
+        tick_clock: ``"cpu"`` (default; wall time where the run has no cgroup that counts CPU time) or
+            ``"wall"`` (a real-time arena, where the robots cannot wait).
+        tick_wall_s: with ``tick_clock="cpu"``, the wall-time backstop of a tick (a script that sleeps or
+            blocks); None: ``max(10 × tick_s, tick_s + 5)`` s.
         max_overruns: that many overrun ticks in a row end the run.
         address_space: RLIMIT_AS.
         open_files: RLIMIT_NOFILE.
@@ -93,6 +99,8 @@ class SandboxLimits:
     boot_s: float = 120.0
     startup_s: float = 30.0
     tick_s: float = 1.0
+    tick_clock: str = "cpu"
+    tick_wall_s: float | None = None
     max_overruns: int = 5
     address_space: int = 2 << 30
     open_files: int = 64
@@ -108,6 +116,17 @@ class SandboxLimits:
         require_positive(self, ("cpu_s", "wall_s", "boot_s", "startup_s", "tick_s", "max_overruns", "address_space",
                                 "open_files", "processes", "file_size", "log_bytes", "memory", "cpu_cores",
                                 "scratch_bytes", "scratch_inodes"))
+        if self.tick_clock not in ("cpu", "wall"):
+            raise ValueError(f"tick_clock must be 'cpu' or 'wall', got {self.tick_clock!r}")
+        if self.tick_wall_s is not None and not (self.tick_wall_s >= self.tick_s):
+            raise ValueError(f"tick_wall_s must be >= tick_s ({self.tick_s} s), got {self.tick_wall_s!r}")
+
+    @property
+    def tick_backstop_s(self) -> float:
+        """Wall seconds a tick may take at most, whatever clock charges its budget."""
+        if self.tick_clock == "wall":
+            return self.tick_s
+        return self.tick_wall_s if self.tick_wall_s is not None else max(10 * self.tick_s, self.tick_s + 5.0)
 
     def rlimits(self) -> dict[str, int]:
         """The setrlimit values the child applies to itself (names of :mod:`resource` constants)."""

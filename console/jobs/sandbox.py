@@ -477,6 +477,9 @@ def run_sandboxed(
     trusted: bool = False,
     cancelled: Callable[[], bool] | None = None,
     jail: JailConfig = JailConfig(),
+    argv: tuple[str, ...] | list[str] = (),
+    rps_semantics: bool = False,
+    rps_call_order: bool = True,
 ) -> SandboxOutcome:
     """Run ``script`` in a jailed child against the plant ``make_plant(n, initial_poses)`` builds.
 
@@ -494,6 +497,9 @@ def run_sandboxed(
     ``jail.script_env``: the lab's script environment, bound read-only and put in force before the
     script's first line (:mod:`swarmdeck.console.jobs.script_env`); :class:`ConfinementUnavailable`
     (naming what is wrong) when it breaks its rule.
+    ``argv``: the script's arguments (its ``sys.argv[1:]``; it runs as ``__main__``);
+    ``rps_semantics``/``rps_call_order``: the rps facade's modes in the child (``swarmdeck run --rps-semantics``,
+    ``--no-rps-call-order``).
     """
     if isinstance(script, ScriptBundle):
         bundle = script
@@ -504,13 +510,16 @@ def run_sandboxed(
             bundle = ScriptBundle.from_path(script, entry)
         except OSError as exc:
             raise ValueError(f"cannot read the script {str(script)!r}: {exc}") from exc
+    script_options = {"argv": [str(a) for a in argv], "rps_semantics": bool(rps_semantics),
+                      "rps_call_order": bool(rps_call_order)}
     return _run_sandboxed(bundle, make_plant, n_robots=n_robots, duration=duration, rps=rps, limits=limits,
-                          trusted=trusted, cancelled=cancelled, jail=jail, hardening=_FULL)
+                          trusted=trusted, cancelled=cancelled, jail=jail, hardening=_FULL, script_options=script_options)
 
 
 def _run_sandboxed(bundle: ScriptBundle, make_plant: PlantFactory, *, n_robots: int | None, duration: float | None,
                    rps: bool | None, limits: SandboxLimits, trusted: bool, cancelled: Callable[[], bool] | None,
-                   jail: JailConfig, hardening: _Hardening) -> SandboxOutcome:
+                   jail: JailConfig, hardening: _Hardening,
+                   script_options: dict[str, Any] | None = None) -> SandboxOutcome:
     """:func:`run_sandboxed` with ``hardening`` (always :data:`_FULL` there)."""
     try:  # checked on every run: the lab may change the environment while a server runs
         env = None if jail.script_env is None else ScriptEnv.open(jail.script_env)
@@ -563,10 +572,13 @@ def _run_sandboxed(bundle: ScriptBundle, make_plant: PlantFactory, *, n_robots: 
             child = _Child(chosen, jail, folder, scratch, root, setup, () if env is None else (env.root,))
         except ForkServerError as exc:
             raise ConfinementUnavailable(str(exc)) from exc
+        cpu_clock = None
+        if group is not None and limits.tick_clock == "cpu" and group.cpu_time_s() is not None:
+            cpu_clock = group.cpu_time_s
         with cgroups.OomGuard(group) if group is not None else contextlib.nullcontext():
             outcome = _loop(child, script, scratch, uid, make_plant, n_robots=n_robots, duration=duration, rps=rps,
-                            limits=limits, cancelled=cancelled, jail=chosen,
-                            seccomp=chosen == "unshare" and hardening.seccomp,
+                            limits=limits, cancelled=cancelled, jail=chosen, cpu_clock=cpu_clock,
+                            seccomp=chosen == "unshare" and hardening.seccomp, script_options=script_options or {},
                             script_env=None if env is None else env.policy())
         outcome.uid, outcome.unhardened = uid, unhardened
         outcome.cgroup = None if group is None else f"v{group.version}"
@@ -593,8 +605,13 @@ def _run_sandboxed(bundle: ScriptBundle, make_plant: PlantFactory, *, n_robots: 
 def _loop(child: _Child, script: Path, scratch: Path, uid: int | None, make_plant: PlantFactory, *,
           n_robots: int | None, duration: float | None, rps: bool | None, limits: SandboxLimits,
           cancelled: Callable[[], bool] | None, jail: str | None, seccomp: bool = False,
-          script_env: dict[str, Any] | None = None) -> SandboxOutcome:
-    """The run: the child's start-up, then one exchange per tick until it ends (see the module docstring)."""
+          script_env: dict[str, Any] | None = None, script_options: dict[str, Any] | None = None,
+          cpu_clock: Callable[[], float | None] | None = None) -> SandboxOutcome:
+    """The run: the child's start-up, then one exchange per tick until it ends (see the module docstring).
+
+    ``cpu_clock``: the run's CPU time so far (s, its cgroup's count): each tick is then charged the CPU time
+    its processes used since the poses were sent (``limits.tick_s``), within a wall backstop
+    (``limits.tick_backstop_s``); None: wall time (``limits.tick_s``)."""
     outcome = SandboxOutcome(jail=jail)
     drain = _LogDrain(child.log, limits.log_bytes)
     drain.start()
@@ -607,12 +624,29 @@ def _loop(child: _Child, script: Path, scratch: Path, uid: int | None, make_plan
     try:
         child.send({"t": "start", "script": str(script), "n_robots": n_robots, "duration": duration, "rps": rps,
                     "rlimits": limits.rlimits(), "uid": uid, "scratch": str(scratch), "seccomp": seccomp,
-                    "script_env": script_env})
+                    "script_env": script_env, **(script_options or {})})
         plant: Plant | None = None
         ready: float | None = None  # when the child reported it is loaded and confined
         outstanding = False  # poses sent, commands not yet received
         sent = -1  # the tick number of the poses last sent
         consecutive = 0
+        charged_from = (0.0, 0.0)  # (wall, CPU s) when the current tick's budget started
+
+        def cpu_now() -> float:
+            value = cpu_clock() if cpu_clock is not None else None
+            return charged_from[1] if value is None else value  # an unreadable count charges nothing more
+
+        def start_budget() -> None:
+            nonlocal charged_from
+            charged_from = (time.monotonic(), cpu_now() if cpu_clock is not None else 0.0)
+
+        def tick_over(now: float) -> bool:
+            """The current tick has used up its budget (CPU time, or wall time without a CPU clock) or its
+            wall backstop."""
+            if cpu_clock is None:
+                return now >= charged_from[0] + limits.tick_s
+            return (now >= charged_from[0] + limits.tick_backstop_s
+                    or cpu_now() - charged_from[1] >= limits.tick_s)
 
         def missed() -> bool:
             """The script's answer for this tick is missing, late or stale: the robots stop for it and
@@ -622,8 +656,11 @@ def _loop(child: _Child, script: Path, scratch: Path, uid: int | None, make_plan
             consecutive += 1
             plant.apply(None)
             outcome.ticks += 1
+            start_budget()  # the next tick (a late answer to these poses is dropped when it comes)
             if consecutive >= limits.max_overruns:
-                end("overruns", f"the script missed its per-tick compute budget of {limits.tick_s:g} s in "
+                budget = (f"{limits.tick_s:g} s of CPU time (at most {limits.tick_backstop_s:g} s of wall time)"
+                          if cpu_clock is not None else f"{limits.tick_s:g} s")
+                end("overruns", f"the script missed its per-tick compute budget of {budget} in "
                                 f"{consecutive} ticks in a row (no answer in time, or an answer for another tick; "
                                 f"at t = {plant.observe()[0]:.2f} s)")
                 return True
@@ -642,8 +679,11 @@ def _loop(child: _Child, script: Path, scratch: Path, uid: int | None, make_plan
                 deadline = min(started + limits.boot_s, wall_deadline)
             elif plant is None:
                 deadline = min(ready + limits.startup_s, wall_deadline)
-            else:
-                deadline = min(now + limits.tick_s, wall_deadline)
+            elif cpu_clock is None:
+                deadline = min(charged_from[0] + limits.tick_s, wall_deadline)
+            else:  # wake when the budget could be used up at one core, at the backstop at the latest
+                left = limits.tick_s - (cpu_now() - charged_from[1])
+                deadline = min(now + max(left, 0.0), charged_from[0] + limits.tick_backstop_s, wall_deadline)
             try:
                 frame = child.receive(deadline)
             except EOFError:
@@ -662,6 +702,8 @@ def _loop(child: _Child, script: Path, scratch: Path, uid: int | None, make_plan
                     end("startup", f"the script did not build its Arena within {limits.startup_s:g} s "
                                    "(an endless loop at import time?)")
                     break
+                if not tick_over(time.monotonic()):
+                    continue  # waiting without using CPU (sleeping, or not scheduled on a loaded machine)
                 if missed():
                     break
                 if plant.finished():
@@ -732,6 +774,7 @@ def _loop(child: _Child, script: Path, scratch: Path, uid: int | None, make_plan
             if not outstanding:
                 t_now, poses = plant.observe()
                 sent = outcome.ticks
+                start_budget()
                 child.send(encode_poses(sent, t_now, poses))
                 outstanding = True
     finally:

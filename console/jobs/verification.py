@@ -87,7 +87,7 @@ class VerificationConfig:
         rules: the Robotarium verifier's thresholds.
         trusted: run scripts unconfined where this machine cannot confine them.
         jail: which jails to try, in order (unshare, then bubblewrap).
-        rps: resolve ``import rps`` to swarmdeck's facade (None: when the script imports rps).
+        rps: resolve ``import rps`` to swarmdeck's facade (None: when no real rps is installed).
         initial_poses: the manifest's start poses ``(N, 3)`` [x, y, θ] (m, rad), as the arena will use
             them (None: the script's initial conditions, else random ones).
         declared_by: who declared ``n_robots``, for the refusal's message ("the manifest", "--robots").

@@ -463,7 +463,7 @@ class ArenaRunner:
 
         # the wall-time limit covers the set-up too (its own time limit; the script waits for it)
         tick_s, overruns = cfg.arena_budget(s.dt, s.real_time)  # real time: one control period by default
-        limits = SandboxLimits(tick_s=tick_s, max_overruns=overruns,
+        limits = SandboxLimits(tick_s=tick_s, max_overruns=overruns, tick_clock="wall" if s.real_time else "cpu",
                                wall_s=duration + cfg.grace_s + s.upkeep.limit(n))
         try:
             script, entry = self.service.script(job)

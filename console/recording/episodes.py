@@ -27,7 +27,7 @@ from typing import Any
 import numpy as np
 
 from swarmdeck.console.recording.recorder import Recorder
-from swarmdeck.console.runtime.frame import BarrierFrame, CoverageFrame, Frame
+from swarmdeck.console.runtime.frame import CoverageFrame, Frame
 
 try:
     from pettingzoo.utils import BaseParallelWrapper
@@ -92,27 +92,21 @@ def record_episodes(env: Any, folder: str | os.PathLike[str]) -> EpisodeRecorder
 
 def episode_frame(env: Any, poses: np.ndarray, tick: int, rewards: dict[str, float]) -> Frame:
     """The Frame of the step just taken by ``env`` from ``poses`` (N, 3) at step index ``tick``."""
-    from swarmdeck.core.kinematics import lookahead_points, si_to_unicycle
+    from swarmdeck.console.recording.arena_recording import arena_frame
+    from swarmdeck.core.kinematics import lookahead_points
 
     arena = env.arena
     cfg = env.config
-    ell = arena.ell
-    n = cfg.n_robots
-    safe = np.asarray(arena.last_safe, dtype=float)
-    v, w = si_to_unicycle(poses, safe, ell)
-    diag = arena.safety_stats.last_diagnostics if cfg.safety else None
-    d_s = float(getattr(getattr(arena.safety, "config", None), "safety_distance", 0.17))
-    barrier = (BarrierFrame.from_diagnostics(diag, n, d_s)
-               if diag is not None else BarrierFrame(enabled=False, intervention=np.zeros(n)))
     coverage = None
     if env.density is not None:
         from swarmdeck.coverage import CoverageConfig, coverage_tick
 
-        _, state, _ = coverage_tick(lookahead_points(poses, ell), env.density, CoverageConfig(bounds=cfg.bounds))
+        _, state, _ = coverage_tick(lookahead_points(poses, arena.ell), env.density, CoverageConfig(bounds=cfg.bounds))
         coverage = CoverageFrame.from_state(state) if state.ok else None
     r = np.array([rewards.get(a, 0.0) for a in env.possible_agents])
-    return Frame(tick=tick, time=tick * cfg.dt, run_time=tick * cfg.dt, dt=cfg.dt, bounds=cfg.bounds,
-                 lookahead=ell, poses=poses, ids=np.arange(n), nominal=arena.last_nominal, safe=safe, v=v, w=w,
-                 barrier=barrier, coverage=coverage, density=env.density, behaviour=f"env:{cfg.task}",
-                 params={"task": cfg.task, "action": cfg.action, "safety": cfg.safety,
-                         "reward_sum": float(r.sum()), "reward_min": float(r.min()), "reward_max": float(r.max())})
+    frame = arena_frame(arena, poses, tick, f"env:{cfg.task}",
+                        params={"task": cfg.task, "action": cfg.action, "safety": cfg.safety,
+                                "reward_sum": float(r.sum()), "reward_min": float(r.min()),
+                                "reward_max": float(r.max())},
+                        coverage=coverage, density=env.density)
+    return frame

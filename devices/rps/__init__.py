@@ -10,7 +10,13 @@ swarmdeck's safety filter, wheel limits and validation — without rps's
 defects (REFERENCE.md §2): poses are copies, arguments are never modified,
 integer initial conditions are rejected, wheels are scaled not clipped.
 """
+import contextvars
+import importlib
+import importlib.abc
+import importlib.machinery
 import sys
+from types import ModuleType
+from typing import Any
 from contextlib import contextmanager
 from collections.abc import Iterator
 
@@ -19,6 +25,7 @@ MODULES = (
     "robotarium_abc",
     "utilities",
     "utilities.barrier_certificates",
+    "utilities.barrier_certificates2",
     "utilities.controllers",
     "utilities.graph",
     "utilities.misc",
@@ -28,6 +35,59 @@ MODULES = (
 
 NP_MAT_NOTE = ("the script used np.mat, which numpy 2 removed: it was provided as np.asmatrix for this "
                "run only (rps scripts written for numpy 1 use it for initial conditions)")
+GET_CMAP_NOTE = ("the script used matplotlib.cm.get_cmap (plt.cm.get_cmap), which matplotlib 3.9 removed: it was "
+                 "provided as matplotlib.colormaps[name].resampled(lut) for this run only")
+
+
+_NOTES: contextvars.ContextVar[list[str] | None] = contextvars.ContextVar("swarmdeck_rps_notes", default=None)
+
+
+def provide_get_cmap() -> None:
+    """Within :func:`rps_aliases`: give ``matplotlib.cm`` back its ``get_cmap(name, lut)`` (removed in
+    matplotlib 3.9) when it lacks one, for the block only. Called when matplotlib is loaded already or the
+    facade hands out pyplot: importing matplotlib otherwise would write its folders into a script's HOME."""
+    notes = _NOTES.get()
+    if notes is None:
+        return
+    import matplotlib
+    import matplotlib.cm as cm
+
+    if hasattr(cm, "get_cmap"):
+        return
+
+    def _facade_get_cmap(name=None, lut=None):
+        if GET_CMAP_NOTE not in notes:
+            notes.append(GET_CMAP_NOTE)
+        cmap = matplotlib.colormaps[name if name is not None else matplotlib.rcParams["image.cmap"]]
+        return cmap if lut is None else cmap.resampled(lut)
+
+    cm.get_cmap = _facade_get_cmap
+
+
+class _FacadeLoader(importlib.abc.Loader):
+    """Loads ``rps.X`` as the facade's module ``swarmdeck.devices.rps.X`` (the same module object)."""
+
+    def __init__(self, target: str) -> None:
+        self.target = target
+
+    def create_module(self, spec: importlib.machinery.ModuleSpec) -> ModuleType:
+        return importlib.import_module(self.target)
+
+    def exec_module(self, module: ModuleType) -> None:
+        pass  # imported already by create_module
+
+
+class _FacadeFinder(importlib.abc.MetaPathFinder):
+    """Finds ``rps`` and the ``rps.*`` names of :data:`MODULES` in the facade."""
+
+    def find_spec(self, fullname: str, path: Any = None, target: Any = None) -> importlib.machinery.ModuleSpec | None:
+        if fullname == "rps":
+            return importlib.machinery.ModuleSpec(fullname, _FacadeLoader(__name__), is_package=True)
+        if fullname.startswith("rps.") and fullname[4:] in MODULES:
+            sub = fullname[4:]
+            return importlib.machinery.ModuleSpec(fullname, _FacadeLoader(f"{__name__}.{sub}"),
+                                                  is_package=sub == "utilities")
+        return None
 
 
 @contextmanager
@@ -35,20 +95,22 @@ def rps_aliases() -> Iterator[list[str]]:
     """Within the block, ``rps`` and ``rps.*`` import these facade modules.
 
     Also the numpy 1 API rps scripts rely on: ``np.mat`` (removed in numpy 2) is
-    ``np.asmatrix`` within the block only. Yields a list that receives a note when the
-    script used it.
+    ``np.asmatrix`` within the block only; likewise matplotlib's ``cm.get_cmap(name, lut)`` (removed
+    in matplotlib 3.9; rps-era scripts such as MARBLER's colour their markers with it). Yields a list
+    that receives a note when the script used either.
     """
-    import importlib
-
     import numpy as np
 
     notes: list[str] = []
+    token = None
     saved = {k: v for k, v in sys.modules.items() if k == "rps" or k.startswith("rps.")}
     add_mat = not hasattr(np, "mat")
+    finder = _FacadeFinder()
     try:
-        sys.modules["rps"] = sys.modules[__name__]
-        for name in MODULES:
-            sys.modules[f"rps.{name}"] = importlib.import_module(f"{__name__}.{name}")
+        for k in saved:
+            del sys.modules[k]
+        sys.meta_path.insert(0, finder)  # `import rps.X` loads the facade's X then (and only then: the
+        # barrier certificates pull in the safety filter and numba, ~1 s, which most scripts never need)
         if add_mat:
             def mat(data, dtype=None):
                 import warnings
@@ -60,10 +122,20 @@ def rps_aliases() -> Iterator[list[str]]:
                     return np.asmatrix(data, dtype)
 
             np.mat = mat  # type: ignore[attr-defined]
+        token = _NOTES.set(notes)
+        if "matplotlib.cm" in sys.modules:  # else when the facade hands out pyplot (figure.pyplot)
+            provide_get_cmap()
         yield notes
     finally:
+        if finder in sys.meta_path:
+            sys.meta_path.remove(finder)
         if add_mat and getattr(np, "mat", None) is mat:
             del np.mat  # type: ignore[attr-defined]
+        if token is not None:
+            _NOTES.reset(token)
+        cm = sys.modules.get("matplotlib.cm")
+        if cm is not None and getattr(getattr(cm, "get_cmap", None), "__name__", "") == "_facade_get_cmap":
+            del cm.get_cmap
         for k in [k for k in sys.modules if k == "rps" or k.startswith("rps.")]:
             del sys.modules[k]
         sys.modules.update(saved)

@@ -1,4 +1,20 @@
-"""``rps.robotarium.Robotarium`` on top of :class:`swarmdeck.devices.Arena`."""
+"""``rps.robotarium.Robotarium`` on top of :class:`swarmdeck.devices.Arena`.
+
+Two modes (REFERENCE.md §2, §15):
+
+* default — the script runs as the arena would run it: every ``step()`` goes through swarmdeck's
+  safety filter and wheel limits;
+* rps semantics (``Robotarium(…, rps_semantics=True)``, ``swarmdeck run --rps-semantics``) — as rps: the
+  barrier applies only where the script calls one, and nothing else filters its commands (the wheel
+  limits still scale them, as :func:`~swarmdeck.core.kinematics.limit_unicycle` does, not rps's
+  per-wheel clipping).
+
+In both, rps's error counts are kept in ``_errors`` and printed by ``debug()`` (rps 2.0) and — in rps
+semantics — ``call_at_scripts_end()`` (rps 1.x), see :mod:`swarmdeck.devices.rps.errors`; and rps's call
+order is enforced: ``get_poses()`` once per ``step()``, no ``step()`` without ``get_poses()`` before it,
+with rps's ``AssertionError`` (``enforce_call_order=False`` or ``swarmdeck run --no-rps-call-order``
+relaxes it).
+"""
 from __future__ import annotations
 
 from typing import Any
@@ -6,51 +22,98 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from swarmdeck.core.kinematics import limit_unicycle
 from swarmdeck.devices.arena import RUN_DEFAULTS, Arena
-from swarmdeck.devices.simulator import ArenaConfig
+from swarmdeck.devices.rps.errors import call_at_scripts_end_text, count_errors, debug_text
+from swarmdeck.devices.simulator import ArenaConfig, SimulatedArena
+
+RELAX_HINT = ("swarmdeck enforces rps's call order as the Robotarium does; Robotarium(..., enforce_call_order=False) "
+              "or `swarmdeck run --no-rps-call-order` relaxes it")
+# rps's own messages (1.x `dev` branch / 2.0 `master`: the same rule, worded slightly differently)
+GET_POSES_TWICE = "Can only call get_poses() once per call of step()!"
+STEP_TWICE = "Make sure you call get_poses before calling step()!"
+_IGNORED_2X = ("show_arena_boundaries", "show_robot_patches", "show_distance_endpoints", "show_distance_rays",
+               "show_obstacles")
 
 
 class Robotarium:
     """The rps experiment object: ``get_poses()`` → (3, N), ``set_velocities(ids, (2, N))``, ``step()``.
 
-    Args (as rps): number_of_robots (−1: the runner's ``--robots`` or 6),
-    show_figure (ignored: use ``swarmdeck console`` to watch), sim_in_real_time
-    (pace steps at 0.033 s of wall time), initial_conditions ((3, N) floats); swarmdeck's
-    ``from_docks=True`` (or ``swarmdeck run --from-docks``) starts the robots on the chargers and
-    sets them up to the initial conditions before the first step, as the Robotarium's back end does.
+    Args (as rps, positional as in 1.x or keywords as in 2.0): number_of_robots (−1: the runner's
+    ``--robots`` or 6), show_figure (ignored: use ``swarmdeck console`` to watch), sim_in_real_time
+    (pace steps at 0.033 s of wall time; never under ``swarmdeck run``), initial_conditions ((3, N)
+    floats). rps 2.0's ``skip_initialization`` and ``show_*`` flags are accepted (the robots start at
+    their initial conditions; nothing is drawn); ``use_distance_sensors=True`` and ``obstacles`` are refused.
+    swarmdeck's keywords: ``from_docks=True`` (``swarmdeck run --from-docks``) starts the robots on the
+    chargers and sets them up first; ``rps_semantics`` and ``enforce_call_order`` (None: the runner's,
+    else False and True) choose the modes of the module docstring.
     """
 
+    # rps 2.0's class constants (rps/robotarium_abc.py), with swarmdeck's robot (REFERENCE.md §1)
+    TIME_STEP = 0.033
+    COLLISION_DIAMETER = 0.135
+    COLLISION_OFFSET = 0.025
+
     def __init__(self, number_of_robots: int = -1, show_figure: bool = True, sim_in_real_time: bool = True,
-                 initial_conditions: ArrayLike = np.array([]), *, from_docks: bool | None = None) -> None:
+                 initial_conditions: ArrayLike = np.array([]), *, from_docks: bool | None = None,
+                 rps_semantics: bool | None = None, enforce_call_order: bool | None = None,
+                 use_distance_sensors: bool = False, obstacles: Any = None, skip_initialization: bool = False,
+                 **kwargs: Any) -> None:
+        unknown = sorted(set(kwargs) - set(_IGNORED_2X))
+        if unknown:
+            raise TypeError(f"Robotarium() got unexpected keyword argument(s) {unknown}")
+        if use_distance_sensors:
+            raise ValueError("use_distance_sensors=True: the rps facade does not simulate rps 2.0's distance sensors")
+        if obstacles is not None and np.asarray(obstacles).size:
+            raise ValueError("obstacles: the rps facade does not simulate rps 2.0's obstacles")
         ic = np.asarray(initial_conditions)
         defaults = RUN_DEFAULTS.get()
         n = None if number_of_robots is None or number_of_robots < 0 else int(number_of_robots)
         if ic.size:
             if ic.ndim != 2 or ic.shape[0] != 3:
-                raise ValueError(f"initial_conditions must have shape (3, N), got {ic.shape}")
+                raise ValueError(f"initial_conditions must have shape (3, N) [x; y; theta], got {ic.shape}")
             if n is not None and ic.shape[1] != n:
                 raise ValueError(f"initial_conditions has {ic.shape[1]} columns but number_of_robots is {n}")
+            if ic.dtype.kind != "f":  # speak rps's (3, N) here, not the Arena's (N, 3)
+                raise ValueError(
+                    f"initial_conditions must be a float array of shape (3, N) [x; y; theta]; got dtype {ic.dtype} "
+                    "(integer poses would truncate the dynamics in rps: use floats, e.g. np.array(..., dtype=float))")
+        self.rps_semantics = defaults.rps_semantics if rps_semantics is None else bool(rps_semantics)
+        self.enforce_call_order = defaults.rps_call_order if enforce_call_order is None else bool(enforce_call_order)
         real_time = bool(sim_in_real_time) and defaults.on_create is None  # never pace under `swarmdeck run`
         config = ArenaConfig(real_time=real_time, seed=defaults.seed)
-        self._arena = Arena(n, initial_conditions=ic.T if ic.size else None, config=config, from_docks=from_docks)
+        self._arena = Arena(n, initial_conditions=ic.T if ic.size else None, config=config, from_docks=from_docks,
+                            safety=False if self.rps_semantics else None)
         self.number_of_robots = self._arena.n
         self.show_figure = show_figure
         self.time_step = config.dt
         x0, x1, y0, y1 = config.bounds
-        self.boundaries = [x0, y0, x1 - x0, y1 - y0]  # rps: [x_min, y_min, width, height]
+        self._bounds = (x0, x1, y0, y1)
+        self.boundaries = [x0, y0, x1 - x0, y1 - y0]  # rps 1.x: [x_min, y_min, width, height]
+        self.BOUNDARIES = np.array([x0, x1, y0, y1])  # rps 2.0: [x_min, x_max, y_min, y_max]
         self._velocities = np.zeros((2, self.number_of_robots))
-        self._checked_poses = False
+        # rps's call-order state: as after rps's own set-up, the script's first call must be get_poses()
+        self._called_step_already = True
+        self._checked_poses_already = False
+        self._errors: dict[str, Any] = {}
+        self._iterations = 0
         # the robot's constants under rps's names (REFERENCE.md §1)
         robot = self._arena.params
-        self.robot_diameter = robot.diameter
+        self.robot_diameter = self.ROBOT_DIAMETER = robot.diameter
         self.robot_radius = robot.radius
-        self.wheel_radius = robot.wheel_radius
-        self.base_length = robot.axle_length
-        self.max_linear_velocity = robot.max_speed
-        self.max_wheel_velocity = robot.max_wheel_speed
-        self.max_angular_velocity = robot.max_angular_speed
+        self.wheel_radius = self.WHEEL_RADIUS = robot.wheel_radius
+        self.base_length = self.BASE_LENGTH = robot.axle_length
+        self.max_linear_velocity = self.MAX_LINEAR_VELOCITY = robot.max_speed
+        self.max_wheel_velocity = self.MAX_WHEEL_VELOCITY = robot.max_wheel_speed
+        self.max_angular_velocity = self.MAX_ANGULAR_VELOCITY = robot.max_angular_speed
+        self.collision_offset = self.COLLISION_OFFSET
+        self.collision_diameter = self.COLLISION_DIAMETER
+        self.robot_length, self.robot_width = 0.095, 0.09  # rps 1.x's drawing sizes
+        self.initial_conditions = ic.astype(float) if ic.size else self._arena.poses().T
+        self.initializing = False
         self._figure: Any = None
 
+    # ------------------------------------------------------------------ figure
     @property
     def figure(self) -> Any:
         """rps's matplotlib figure, headless here (see :mod:`swarmdeck.devices.rps.figure`)."""
@@ -66,14 +129,30 @@ class Robotarium:
         self.figure  # noqa: B018 - creates it
         return self._figure[1]
 
+    _axes_handle = axes  # rps 2.0's name
+
     @property
     def arena(self) -> Arena:
         """The swarmdeck Arena underneath."""
         return self._arena
 
+    # ------------------------------------------------------------------ rps's API
+    @property
+    def poses(self) -> NDArray[np.float64]:
+        """rps 1.x's ``poses`` attribute: (3, N), a copy (reading it is not a ``get_poses()`` call)."""
+        return self._arena.poses().T.copy()
+
+    @property
+    def velocities(self) -> NDArray[np.float64]:
+        """rps 1.x's ``velocities``: the (2, N) [v; ω] last set, a copy."""
+        return self._velocities.copy()
+
     def get_poses(self) -> NDArray[np.float64]:
-        """Poses (3, N) [x; y; θ] — a copy (rps returns its internal array)."""
-        self._checked_poses = True
+        """Poses (3, N) [x; y; θ] — a copy (rps returns its internal array). Once per ``step()``."""
+        if self.enforce_call_order and self._checked_poses_already:
+            raise AssertionError(f"{GET_POSES_TWICE} ({RELAX_HINT})")
+        self._called_step_already = False
+        self._checked_poses_already = True
         return self._arena.poses().T.copy()
 
     def set_velocities(self, ids: ArrayLike, velocities: ArrayLike) -> None:
@@ -92,12 +171,83 @@ class Robotarium:
             raise ValueError(f"ids must be robot indices (integers), got {idx.tolist()!r}")
         if vel.shape[1] != len(idx):
             raise ValueError(f"velocities has {vel.shape[1]} columns for {len(idx)} ids")
-        self._arena.set_unicycle(vel[0], vel[1], ids=idx)
+        if not self.rps_semantics:  # (rps semantics: step() hands the velocities to the robots itself)
+            self._arena.set_unicycle(vel[0], vel[1], ids=idx)
+        self._velocities[:, idx] = vel
 
     def step(self) -> None:
-        """Advance one 0.033 s step (through swarmdeck's safety filter and wheel limits)."""
-        self._arena.step()
+        """Validate as rps does (into ``_errors``), then advance one 0.033 s step: through swarmdeck's
+        safety filter and wheel limits (default), or the wheel limits only (rps semantics)."""
+        if self.enforce_call_order and self._called_step_already:
+            raise AssertionError(f"{STEP_TWICE} ({RELAX_HINT})")
+        self._called_step_already = True
+        self._checked_poses_already = False
+        self._errors = self._validate(self._errors)
+        self._iterations += 1
+        if self.rps_semantics:  # as rps: the velocities go to the robots as they are (wheel limits apply)
+            self._arena.step_unicycle(self._velocities[0], self._velocities[1])
+        else:
+            self._arena.step()
+
+    def _validate(self, errors: dict | None = None) -> dict:
+        """rps's validation of the current poses and commanded velocities, counted into ``errors``
+        (a new dict when None: never a shared default, unlike rps 1.x); returns it."""
+        errors = {} if errors is None else errors
+        backend = self._arena.backend
+        pairs = None
+        if type(backend) is SimulatedArena and backend.report.steps:
+            pairs = backend.last_collisions  # the simulator validated these very poses after its last step
+        v, w = self._velocities
+        limit = 2 * self.wheel_radius * self.max_wheel_velocity  # |2v ± Lω| / (2r) > max wheel speed
+        over = bool(np.any(np.abs(2 * v - self.base_length * w) > limit) or np.any(np.abs(2 * v + self.base_length * w) > limit))
+        count_errors(errors, backend.poses, over, self._bounds, pairs)
+        return errors
+
+    def _threshold(self, dxu: ArrayLike) -> NDArray[np.float64]:
+        """(2, N) [v; ω] within the wheel limits — swarmdeck's uniform scale per robot (what the robots
+        get), not rps's per-wheel clipping, which changes the direction of motion."""
+        dxu = np.asarray(dxu, dtype=float)
+        v, w, _ = limit_unicycle(dxu[0], dxu[1], self._arena.params)
+        return np.vstack((v, w))
+
+    def _uni_to_diff(self, dxu: ArrayLike) -> NDArray[np.float64]:
+        """rps's (2, N) wheel speeds, rad/s, from [v; ω]: rows (2v − Lω)/(2r), (2v + Lω)/(2r)."""
+        dxu = np.asarray(dxu, dtype=float)
+        r, base = self.wheel_radius, self.base_length
+        return np.vstack(((2 * dxu[0] - base * dxu[1]) / (2 * r), (2 * dxu[0] + base * dxu[1]) / (2 * r)))
+
+    def _diff_to_uni(self, dxdd: ArrayLike) -> NDArray[np.float64]:
+        """rps's [v; ω] (2, N) from the wheel speeds of :meth:`_uni_to_diff`."""
+        dxdd = np.asarray(dxdd, dtype=float)
+        r, base = self.wheel_radius, self.base_length
+        return np.vstack((r / 2 * (dxdd[0] + dxdd[1]), r / base * (dxdd[1] - dxdd[0])))
+
+    def robot_colormap(self) -> Any:
+        """rps 2.0: the matplotlib colormap robots are drawn with (``tab20``)."""
+        import matplotlib
+
+        return matplotlib.colormaps["tab20"]
+
+    def _no_sensors(self, *_args: Any) -> None:
+        raise NotImplementedError("rps 2.0's simulated sensors (distances, encoders, IMU, magnetometer, orientation) "
+                                  "are not part of swarmdeck's rps facade")
+
+    get_distances = get_distance_endpoints = get_encoders = get_accelerations = _no_sensors
+    get_gyros = get_magnetic_fields = get_orientations = _no_sensors
+
+    @property
+    def _iteration(self) -> int:
+        """rps 2.0's name for the step count."""
+        return self._iterations
+
+    def debug(self) -> None:
+        """Print rps 2.0's end-of-run summary of ``_errors``."""
+        print(debug_text(self._errors, self._iterations, self.time_step))
 
     def call_at_scripts_end(self) -> None:
-        """Print the run report, like rps's error summary."""
-        print(self._arena.report())
+        """rps 1.x's end-of-script call. Under rps semantics it prints rps's error summary; otherwise
+        the swarmdeck run report — once: under ``swarmdeck run`` the runner prints it at the end."""
+        if self.rps_semantics:
+            print(call_at_scripts_end_text(self._errors, self._iterations, self.time_step))
+        elif RUN_DEFAULTS.get().on_create is None:
+            print(self._arena.report())

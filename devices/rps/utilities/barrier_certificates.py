@@ -10,6 +10,8 @@ import numpy as np
 
 from swarmdeck.core.bounds import DEFAULT_BOUNDS
 from swarmdeck.core.kinematics import lookahead_points, si_to_unicycle, unicycle_to_si
+from swarmdeck.devices.rps.utilities.transformations import *  # noqa: F401,F403 - rps's module re-exports them
+from swarmdeck.devices.rps.utilities.transformations import __all__ as _TRANSFORMATIONS
 from swarmdeck.safety import BarrierConfig, SafetyFilter
 
 _OPEN = (-1e6, 1e6, -1e6, 1e6)  # "no walls" for the variants without a boundary
@@ -119,3 +121,72 @@ def create_unicycle_differential_drive_barrier_certificate_with_boundary(
     """As :func:`create_unicycle_differential_drive_barrier_certificate`, with the arena walls."""
     return _unicycle_dd(barrier_gain, safety_radius, projection_distance, wheel_vel_limit, base_length, wheel_radius,
                         disturbance, _boundary(boundary_points))
+
+
+def _unsafe_gain(unsafe_barrier_gain: float) -> None:
+    if not (np.isfinite(unsafe_barrier_gain) and unsafe_barrier_gain > 0):
+        raise ValueError(f"unsafe_barrier_gain must be a finite number > 0, got {unsafe_barrier_gain!r}")
+
+
+def create_single_integrator_barrier_certificate2(barrier_gain: float = 100, unsafe_barrier_gain: float = 1e6,
+                                                  safety_radius: float = 0.17, magnitude_limit: float = 0.2):
+    """rps 1.x's variant with a large gain once a pair is inside the unsafe set: f(dxi (2, N), x (2, N)) →
+    safe (2, N). swarmdeck's barrier already demands separation there (its recovery rows,
+    :class:`~swarmdeck.safety.BarrierConfig`), so ``unsafe_barrier_gain`` is checked, not used."""
+    _unsafe_gain(unsafe_barrier_gain)
+    return _si(barrier_gain, safety_radius, magnitude_limit, _OPEN)
+
+
+def create_unicycle_barrier_certificate2(barrier_gain: float = 500, unsafe_barrier_gain: float = 1e6,
+                                         safety_radius: float = 0.12, projection_distance: float = 0.05,
+                                         magnitude_limit: float = 0.2):
+    """rps 1.x's unicycle variant of :func:`create_single_integrator_barrier_certificate2`."""
+    _unsafe_gain(unsafe_barrier_gain)
+    return _uni(barrier_gain, safety_radius, projection_distance, magnitude_limit, _OPEN)
+
+
+# rps 2.0's names (rps/utilities/barrier_certificates.py on `master`), with its defaults
+def create_si_barrier_certificate(safety_radius: float = 0.15, barrier_gain: float = 100.0,
+                                  magnitude_limit: float = 0.2):
+    """rps 2.0: f(dxi (2, N), x (2, N)) → safe (2, N), pairwise constraints only."""
+    return _si(barrier_gain, safety_radius, magnitude_limit, _OPEN)
+
+
+def create_si_barrier_certificate_with_boundary(safety_radius: float = 0.15, barrier_gain: float = 100.0,
+                                                magnitude_limit: float = 0.2, boundary_points=None):
+    """rps 2.0: f(dxi (2, N), x (2, N)) → safe (2, N), with the arena walls (default: the arena's)."""
+    return _si(barrier_gain, safety_radius, magnitude_limit,
+               _boundary(DEFAULT_BOUNDS if boundary_points is None else boundary_points))
+
+
+def create_uni_barrier_certificate(barrier_gain: float = 100.0, safety_radius: float = 0.15,
+                                   projection_distance: float = 0.05, velocity_magnitude_limit: float = 0.2):
+    """rps 2.0: f(dxu (2, N), x (3, N)) → safe (2, N) [v; ω]."""
+    return _uni(barrier_gain, safety_radius, projection_distance, velocity_magnitude_limit, _OPEN)
+
+
+def create_uni_barrier_certificate_with_boundary(safety_radius: float = 0.12, barrier_gain: float = 150.0,
+                                                 projection_distance: float = 0.03,
+                                                 velocity_magnitude_limit: float = 0.2, boundary_points=None):
+    """rps 2.0: f(dxu (2, N), x (3, N), obstacles=None) → safe (2, N) [v; ω] within the walls; the
+    obstacle segments of rps 2.0 are not supported (refused when given)."""
+    inner = _uni(barrier_gain, safety_radius, projection_distance, velocity_magnitude_limit,
+                 _boundary(DEFAULT_BOUNDS if boundary_points is None else boundary_points))
+
+    def barrier_unicycle(dxu, x, obstacles=None):
+        if obstacles is not None and np.asarray(obstacles).size:
+            raise ValueError("obstacles: the rps facade's barrier does not take rps 2.0's obstacle segments")
+        return inner(dxu, x)
+
+    return barrier_unicycle
+
+
+__all__ = [
+    "create_si_barrier_certificate", "create_si_barrier_certificate_with_boundary",
+    "create_single_integrator_barrier_certificate", "create_single_integrator_barrier_certificate2",
+    "create_single_integrator_barrier_certificate_with_boundary", "create_uni_barrier_certificate",
+    "create_uni_barrier_certificate_with_boundary", "create_unicycle_barrier_certificate",
+    "create_unicycle_barrier_certificate2", "create_unicycle_barrier_certificate_with_boundary",
+    "create_unicycle_differential_drive_barrier_certificate",
+    "create_unicycle_differential_drive_barrier_certificate_with_boundary", "np", *_TRANSFORMATIONS,
+]

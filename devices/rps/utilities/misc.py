@@ -35,6 +35,60 @@ def determine_font_size(robotarium, font_height_meters: float) -> float:
     return float(font_height_meters)
 
 
+# rps 2.0's names (rps/utilities/misc.py on `master`)
+def generate_random_poses(N: int, spacing: float = 0.5, width: float = 3.0, height: float = 1.8) -> np.ndarray:
+    """rps 2.0: (3, N) random float poses at least ``spacing`` apart in a width × height box at the centre."""
+    return generate_initial_conditions(N, spacing=spacing, width=width, height=height)
+
+
+def generate_random_positions(N: int, spacing: float = 0.5, width: float = 3.0, height: float = 1.8) -> np.ndarray:
+    """rps 2.0: (2, N) random positions at least ``spacing`` apart."""
+    return generate_random_poses(N, spacing, width, height)[:2]
+
+
+def generate_initial_poses(N: int, width: float = 3.0, height: float = 1.0) -> np.ndarray:
+    """rps 2.0: (3, N) poses where robots come off the chargers: N of 22 slots on two lines (11 across
+    ``width`` at y = ±height/2), facing into the arena, chosen at random."""
+    xs = np.linspace(-width / 2, width / 2, 11)
+    slots = np.array([[x, y, np.pi / 2 if y < 0 else -np.pi / 2] for x in xs for y in (-height / 2, height / 2)])
+    if not 1 <= N <= len(slots):
+        raise ValueError(f"generate_initial_poses places 1 to {len(slots)} robots, got N={N!r}")
+    return slots[np.random.choice(len(slots), size=N, replace=False)].T
+
+
+def create_at_pose(position_error: float = 0.05, rotation_error: float = 0.2):
+    """rps 2.0: f(states (3, N), poses (3, N)) → (all robots there, indices of those there)."""
+
+    def check_at_pose(states, poses):
+        idxs = at_pose(states, poses, position_error, rotation_error)[0]
+        return bool(len(idxs) == np.asarray(states).shape[1]), idxs
+
+    return check_at_pose
+
+
+def create_at_position(position_error: float = 0.05):
+    """rps 2.0: f(states (2+, N), positions (2, N)) → (all robots there, indices of those there)."""
+
+    def check_at_position(states, positions):
+        idxs = at_position(states, positions, position_error)[0]
+        return bool(len(idxs) == np.asarray(states).shape[1]), idxs
+
+    return check_at_position
+
+
+def rotation_matrix(theta: float) -> np.ndarray:
+    """The 2 × 2 rotation by ``theta`` rad."""
+    c, s = np.cos(theta), np.sin(theta)
+    return np.array([[c, -s], [s, c]])
+
+
+def unique_filename(file_name: str) -> str:
+    """rps 2.0: ``file_name`` with the current time, ``.npy``."""
+    from datetime import datetime
+
+    return f"{file_name}_{datetime.now().strftime('%Y%m%d_%H%M%S')}.npy"
+
+
 def __getattr__(name: str):
     """``plt`` (``from rps.utilities.misc import *`` gives it to rps scripts): matplotlib's pyplot on a
     headless backend, loaded on first use so scripts that never plot do not pay for it."""
@@ -47,5 +101,6 @@ def __getattr__(name: str):
 
 # rps's misc does `import numpy as np` and `import matplotlib.pyplot as plt`, and scripts get both
 # from `from rps.utilities.misc import *` (some rps examples never import numpy themselves).
-__all__ = ["at_pose", "at_position", "determine_font_size", "determine_marker_size", "generate_initial_conditions",
-           "np", "plt"]
+__all__ = ["at_pose", "at_position", "create_at_pose", "create_at_position", "determine_font_size",
+           "determine_marker_size", "generate_initial_conditions", "generate_initial_poses", "generate_random_poses", "generate_random_positions",
+           "np", "plt", "rotation_matrix", "unique_filename"]

@@ -65,7 +65,25 @@ def create_uni_to_si_dynamics(projection_distance: float = 0.05):
     return uni_to_si_dyn
 
 
+def create_uni_to_si_mapping(projection_distance: float = 0.05):
+    """rps 2.0: returns (uni_to_si_dyn(dxu (2, N), states (3, N)) → dxi (2, N),
+    si_to_uni_states(uni_states (3, N), si_states (2, N)) → the centres (2, N) behind the look-ahead points)."""
+    if not (np.isfinite(projection_distance) and projection_distance > 0):
+        raise ValueError(f"projection_distance must be a positive number, got {projection_distance!r}")
+    d = float(projection_distance)
+
+    def uni_to_si(dxu, states):
+        return create_uni_to_si_dynamics(d)(dxu, states)
+
+    def si_to_uni(uni_states, si_states):
+        theta = np.asarray(uni_states, dtype=float)[2]
+        return np.asarray(si_states, dtype=float)[:2] - d * np.vstack((np.cos(theta), np.sin(theta)))
+
+    return uni_to_si, si_to_uni
+
+
+# rps's module does `import numpy as np`, and `from rps.utilities.transformations import *` hands it on
 __all__ = [
     "create_si_to_uni_dynamics", "create_si_to_uni_dynamics_with_backwards_motion", "create_si_to_uni_mapping",
-    "create_uni_to_si_dynamics",
+    "create_uni_to_si_dynamics", "create_uni_to_si_mapping", "np",
 ]

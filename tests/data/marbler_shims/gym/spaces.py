@@ -1,0 +1,1 @@
+from gymnasium.spaces import Box, Discrete, Tuple  # noqa: F401
