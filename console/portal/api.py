@@ -125,7 +125,7 @@ def api_router(service: PortalService, counter: RejectionCounter, *, max_upload_
 
     @router.post("/jobs", status_code=201, tags=["jobs"], openapi_extra=UPLOAD_SCHEMA)
     async def submit(request: Request, u: User = Depends(user)) -> dict[str, Any]:
-        """Submit a script (multipart file ``script``) with its ``manifest`` (JSON text): the new job, ``queued``."""
+        """Submit a script (multipart file ``script``) with its ``manifest`` (JSON text): the new job, ``awaiting verification``."""
         form = await request.form(max_files=1, max_fields=4, max_part_size=max_upload_bytes)
         try:
             script, manifest = form.get("script"), form.get("manifest")

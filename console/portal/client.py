@@ -14,7 +14,7 @@ from typing import Any
 
 import httpx
 
-FINAL_STATES = ("rejected", "done", "failed", "cancelled", "interrupted")
+from swarmdeck.console.portal.states import FINAL as FINAL_STATES
 
 
 class ClientError(Exception):

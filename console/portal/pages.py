@@ -55,7 +55,7 @@ from starlette.datastructures import FormData, UploadFile
 
 from swarmdeck.console.portal.accounts import Session
 from swarmdeck.console.portal.api import SESSION_COOKIE
-from swarmdeck.console.portal.db import ACTIVE, FINAL
+from swarmdeck.console.portal.states import ACTIVE, FINAL, JobState
 from swarmdeck.console.portal.errors import BadInput, PortalError, Unauthorized
 from swarmdeck.console.portal.live import scene_message
 from swarmdeck.console.portal.livefeed import LiveFeed
@@ -341,8 +341,8 @@ def router(service: PortalService, live: LiveFeed) -> APIRouter:
                         ",".join(f"{j['id']}:{j['state']}" for j in everyone),
                         str(len((arena["alerts"] or {}).get("messages", [])))])  # as refresh.js sums it up
         return page(request, "operator.html", s, status=status, message=message, arena=arena, sig=sig,
-                    approve=[j for j in everyone if j["state"] == "approved"],
-                    held=[j for j in everyone if j["state"] == "held"],
+                    approve=[j for j in everyone if j["state"] == JobState.AWAITING_APPROVAL],
+                    held=[j for j in everyone if j["state"] == JobState.HELD],
                     jobs=everyone[:100])
 
     @r.get("/operator")
@@ -380,7 +380,7 @@ def router(service: PortalService, live: LiveFeed) -> APIRouter:
             elif action in ("up", "down", "top"):
                 position = service.job(u, job_id)["position"]
                 if position is None:
-                    raise BadInput(f"job {job_id} is not waiting in the queue", "job")
+                    raise BadInput(f"job {job_id} is not in the arena queue", "job")
                 service.move(u, job_id, {"up": max(0, position - 1), "down": position + 1, "top": 0}[action])
             else:
                 raise BadInput(f"unknown action {action[:40]!r}", "action")

@@ -1,11 +1,11 @@
 """The arena runner: one job at a time on the arena, through the console's runtime, the user's code in the sandbox.
 
-For each job the service hands over (``waiting → setting up``):
+For each job the service hands over (``in arena queue → setting up``):
 
 1. **Robots** (:class:`~.arena_fleet.ArenaFleet`, the arena's one fleet of
    ``ArenaSettings.fleet`` = M robots, simulated or the MQTT fleet's ids 0…M−1, docked on
    the chargers): a job is claimed only when N charged, healthy robots can be
-   assigned — otherwise it stays ``waiting`` and its ``reason`` says which robots
+   assigned — otherwise it stays ``in arena queue`` and its ``reason`` says which robots
    are not ready and why (they charge on the strips; the job starts when they
    are). The assigned robots are set up at the job's start poses (the manifest's,
    else the script's initial conditions, else random valid ones:
@@ -86,6 +86,7 @@ from swarmdeck.console.portal.exports import JobExports, write_run_json
 from swarmdeck.console.portal.files import write_private
 from swarmdeck.console.portal.livefeed import LiveFeed
 from swarmdeck.console.portal.service import PortalService
+from swarmdeck.console.portal.states import ACTIVE, JobState
 from swarmdeck.console.runtime.behaviours import TickInput
 from swarmdeck.console.runtime.fleet_upkeep import UpkeepConfig, UpkeepResult
 from swarmdeck.console.runtime.loop import ControlLoop, LoopConfig, SafetyParams
@@ -266,7 +267,7 @@ class ArenaRunner:
             try:
                 self.run_job(job)
             except Exception as exc:  # noqa: BLE001 - never let the arena thread die: the job fails, say why
-                self.service.finish_run(int(job["id"]), "failed", f"the arena runner failed: {type(exc).__name__}: {exc}")
+                self.service.finish_run(int(job["id"]), JobState.FAILED, f"the arena runner failed: {type(exc).__name__}: {exc}")
             self._idle_mark = time.monotonic()
 
     # ------------------------------------------------------------------ the fleet between and around jobs
@@ -365,7 +366,7 @@ class ArenaRunner:
         self._alerts = (job_id, [])
         with self._lock:
             self._job = job_id
-        if self.service.job_state(job_id) not in ("setting up", "running"):
+        if self.service.job_state(job_id) not in ACTIVE:
             self._end_job.set()  # cancelled or e-stopped between the claim and here: nothing moves
         try:
             return self._run_job(job_id, job, folder)
@@ -383,18 +384,18 @@ class ArenaRunner:
                 self._loop = None
             self.live.clear()
         if outcome is None:
-            state, reason = "failed", note
+            state, reason = JobState.FAILED, note
         elif outcome.ended_by in ENDED_OK:
-            state, reason = "done", note
+            state, reason = JobState.DONE, note
         elif outcome.ended_by == "cancelled":
-            state, reason = "cancelled", "cancelled"
+            state, reason = JobState.CANCELLED, "cancelled"
         else:
-            state, reason = "failed", outcome.error_line
+            state, reason = JobState.FAILED, outcome.error_line
         said = _safety_note(self._safety)
         if said:
             reason = f"{reason}; {said}" if reason else said
         summary = {"ended_by": None if outcome is None else outcome.ended_by,
-                   "error": reason if state == "failed" else None,
+                   "error": reason if state == JobState.FAILED else None,
                    "ticks": None if outcome is None else outcome.ticks,
                    "overruns": None if outcome is None else outcome.overruns, "note": note, **self._safety,
                    **self._upkeep}

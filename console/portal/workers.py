@@ -1,4 +1,4 @@
-"""Verification workers: queued jobs → ``verifying`` → ``rejected`` | ``approved`` (then ``waiting``).
+"""Verification workers: jobs awaiting verification → ``verifying`` → ``rejected`` | ``awaiting approval`` (then ``in arena queue``).
 
 One thread (:class:`VerificationWorkers`) claims the next queued job (round-robin
 across researchers: :meth:`~.service.PortalService.claim_for_verification`) and
