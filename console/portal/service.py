@@ -652,7 +652,8 @@ class PortalService:
         with self.db.transaction() as tx:
             try:
                 self.db.transition(tx, job_id, JobState.AWAITING_APPROVAL if accepted else JobState.REJECTED, sources=(JobState.VERIFYING,),
-                                   verdict=verdict, safety_score=safety_score,
+                                   # S of a rejected script says nothing (it may never have moved a robot)
+                                   verdict=verdict, safety_score=safety_score if accepted else None,
                                    reason=None if accepted else "; ".join(reasons)[:4000],
                                    ended=None if accepted else time.time())
             except TransitionConflict:
