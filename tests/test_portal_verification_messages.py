@@ -37,7 +37,7 @@ def test_a_syntax_error_is_found_by_compiling_and_named_once_with_the_users_file
         report = c.get(f"/api/jobs/{jid}/report").json()
         html = c.get(f"/api/jobs/{jid}/files/report.html").text
     reason = job["reason"]
-    assert reason.startswith("my_walk.py: syntax error at line 3: invalid syntax — x = = 1"), reason
+    assert reason.startswith("syntax error in my_walk.py at line 3: invalid syntax — x = = 1"), reason
     assert "script.py" not in reason and "swarmdeck-script-" not in reason and "/tmp" not in reason
     assert report["scripts"][0]["runs"] == []  # no sandbox run was spent on it
     cpu = portal3.service.db.query_one("SELECT cpu_s FROM verification_usage WHERE job_id = ?", (jid,))["cpu_s"]

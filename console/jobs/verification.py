@@ -315,7 +315,7 @@ def compile_check(bundle: ScriptBundle, shown: str | None = None) -> str | None:
     except SyntaxError as exc:
         where = "" if exc.lineno is None else f" at line {exc.lineno}"
         line = None if exc.lineno is None else _excerpt(bundle, bundle.entry, exc.lineno)
-        return (f"syntax error{where}: {exc.msg}" + ("" if line is None else f" — {line}")
+        return (f"syntax error in {shown or bundle.entry}{where}: {exc.msg}" + ("" if line is None else f" — {line}")
                 + " (found by compiling the script: nothing was run)")
     except ValueError as exc:  # null bytes
         return f"the script cannot be compiled: {exc} (nothing was run)"
@@ -398,7 +398,7 @@ class VerificationReport:
     def to_dict(self) -> dict[str, Any]:
         """The JSON report (schema ``swarmdeck.verification/1``; no timings, so equal runs give equal JSON)."""
         return {"schema": SCHEMA, "verdict": self.verdict, "safety_score": self.safety_score,
-                "reasons": [r if r.startswith(f"{s['script']}:") else f"{s['script']}: {r}"
+                "reasons": [r if s["script"] in r else f"{s['script']}: {r}"  # named once
                             for s in self.scripts for r in s["reasons"]],
                 "config": self.config.to_dict(), "scripts": self.scripts}
 
