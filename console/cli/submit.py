@@ -24,6 +24,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--name", default=None, help="the experiment's name (default: the script's file name)")
     parser.add_argument("--robots", type=int, default=None, metavar="N", help="robots the experiment uses")
     parser.add_argument("--duration", type=float, default=None, metavar="S", help="declared duration, s")
+    parser.add_argument("--entry", default=None, metavar="FILE",
+                        help="for a .zip: the script inside it to run, e.g. src/main.py (default: the manifest's "
+                             "'entry', else main.py, else the archive's only .py file)")
     parser.add_argument("--no-barrier", action="store_true",
                         help="ask to run without the safety barrier: granted only if verification allows it and an "
                              "operator approves this job's bypass (until then it waits); the walls, the docked robots "
@@ -59,12 +62,14 @@ def main(args: argparse.Namespace) -> int:
 
     if not Path(args.script).is_file():
         raise UsageError(f"script {args.script!r} does not exist or is not a file")
+    if args.entry is not None and not args.script.lower().endswith(".zip"):
+        raise UsageError("--entry names the script inside a .zip; a .py is its own entry")
     manifest = manifest_from(args)
     if manifest is not None and ("robots" not in manifest or "duration" not in manifest):
         raise UsageError("say how many robots and for how long: --robots N --duration S (or --manifest M)")
     with client(args) as c:
         try:
-            job = c.submit(args.script, manifest)
+            job = c.submit(args.script, manifest, args.entry)
             if not args.json:
                 print(f"submitted job {job['id']}: {job['state']}")
             if args.wait:

@@ -58,6 +58,8 @@ UPLOAD_SCHEMA = {
                 "script": {"type": "string", "format": "binary", "description": "the script (.py) or a .zip"},
                 "manifest": {"type": "string", "description": 'JSON: {"name", "robots", "duration", '
                              '"initial_poses"?, "no_barrier"?, "entry"?} (optional for a .zip with manifest.json)'},
+                "entry": {"type": "string", "description": "for a .zip: the .py file inside it to run "
+                          "(overrides the manifest's entry)"},
             }}}},
     }
 }
@@ -126,15 +128,17 @@ def api_router(service: PortalService, counter: RejectionCounter, *, max_upload_
     @router.post("/jobs", status_code=201, tags=["jobs"], openapi_extra=UPLOAD_SCHEMA)
     async def submit(request: Request, u: User = Depends(user)) -> dict[str, Any]:
         """Submit a script (multipart file ``script``) with its ``manifest`` (JSON text): the new job, ``awaiting verification``."""
-        form = await request.form(max_files=1, max_fields=4, max_part_size=max_upload_bytes)
+        form = await request.form(max_files=1, max_fields=5, max_part_size=max_upload_bytes)
         try:
-            script, manifest = form.get("script"), form.get("manifest")
+            script, manifest, entry = form.get("script"), form.get("manifest"), form.get("entry")
             if not isinstance(script, UploadFile):
                 raise BadInput("send the script as the multipart file field 'script'", "script")
             if manifest is not None and not isinstance(manifest, str):
                 raise BadInput("the manifest is a form field holding JSON text, not a file", "manifest")
+            if entry is not None and not isinstance(entry, str):
+                raise BadInput("entry is a form field naming the .py file inside the .zip, not a file", "entry")
             data = await script.read(max_upload_bytes + 1)
-            return await run_in_threadpool(service.submit, u, script.filename, data, manifest)
+            return await run_in_threadpool(service.submit, u, script.filename, data, manifest, entry)
         finally:
             await form.close()
 

@@ -58,9 +58,13 @@ class PortalClient:
             raise ClientError(response.status_code, message, field)
         return response
 
-    def submit(self, script: str | Path, manifest: dict[str, Any] | None) -> dict[str, Any]:
+    def submit(self, script: str | Path, manifest: dict[str, Any] | None, entry: str | None = None) -> dict[str, Any]:
+        """Submit ``script`` (.py or .zip) with ``manifest`` (None: the archive's manifest.json); ``entry``: the
+        script to run inside a .zip."""
         path = Path(script)
         data = {} if manifest is None else {"manifest": json.dumps(manifest)}
+        if entry is not None:
+            data["entry"] = entry
         with open(path, "rb") as f:
             return self._call("POST", "/api/jobs", files={"script": (path.name, f)}, data=data).json()
 

@@ -60,6 +60,7 @@ from swarmdeck.console.portal.errors import BadInput, PortalError, Unauthorized
 from swarmdeck.console.portal.live import scene_message
 from swarmdeck.console.portal.livefeed import LiveFeed
 from swarmdeck.console.portal.service import RESULT_FILES, PortalService
+from swarmdeck.console.portal.submission import Limits, display_name, manifest_errors
 
 HERE = Path(__file__).resolve().parent
 STATIC = {"portal.css": "text/css", "live.js": "text/javascript", "refresh.js": "text/javascript",
@@ -182,12 +183,15 @@ def router(service: PortalService, live: LiveFeed) -> APIRouter:
             return to_signin()
         return page(request, "jobs.html", s, jobs=service.jobs(s.user, mine=True))
 
-    def submit_page(request: Request, s: Session, status: int = 200, message: str | None = None,
-                    field: str | None = None, values: dict[str, Any] | None = None) -> HTMLResponse:
+    def submit_page(request: Request, s: Session, status: int = 200, errors: list[PortalError] | None = None,
+                    values: dict[str, Any] | None = None, chosen: str | None = None) -> HTMLResponse:
+        """The Submit page; after a refused submission: every error (each naming its field), the fields as they
+        were typed, and the name of the file chosen (a browser cannot put a file back into a file input)."""
         limits = service.config.limits
-        return page(request, "submit.html", s, status=status, message=message, field=field, values=values or {},
-                    fleet=limits.fleet, max_duration=limits.max_duration, max_bytes=limits.max_upload_bytes,
-                    usage=service.usage(s.user))
+        errors = errors or []
+        return page(request, "submit.html", s, status=status, errors=errors, bad={e.field for e in errors},
+                    values=values or {}, chosen=chosen, fleet=limits.fleet, max_duration=limits.max_duration,
+                    max_bytes=limits.max_upload_bytes, usage=service.usage(s.user))
 
     @r.get("/submit")
     def submit_form(request: Request) -> Response:
@@ -204,18 +208,25 @@ def router(service: PortalService, live: LiveFeed) -> APIRouter:
         form = await checked_form(request, s)
         if isinstance(form, Response):
             return form
-        values = {k: form.get(k) for k in ("name", "robots", "duration", "initial_poses")
+        values = {k: form.get(k) for k in ("name", "robots", "duration", "initial_poses", "entry")
                   if isinstance(form.get(k), str)}
         values["no_barrier"] = form.get("no_barrier") == "on"
+        script = form.get("script")
+        chosen = display_name(script.filename) if isinstance(script, UploadFile) and script.filename else None
         try:
-            script = form.get("script")
-            if not isinstance(script, UploadFile) or not script.filename:
-                raise BadInput("choose the script to upload (.py, or a .zip)", "script")
+            # every mistake in the fields at once (the service would stop at the first)
+            errors: list[PortalError] = []
+            if chosen is None:
+                errors.append(BadInput("choose the script to upload (.py, or a .zip)", "script"))
+            manifest, field_errors = manifest_from_form(values, chosen, service.config.limits)
+            errors += field_errors
+            if errors:
+                return submit_page(request, s, 422, errors, values, chosen)
             data = await script.read(service.config.limits.max_upload_bytes + 1)
-            manifest = manifest_from_form(values, script.filename)
-            job = await run_in_threadpool(service.submit, s.user, script.filename, data, manifest)
+            job = await run_in_threadpool(service.submit, s.user, script.filename, data, manifest,
+                                          (values.get("entry") or "").strip() or None)
         except PortalError as exc:
-            return submit_page(request, s, exc.status, exc.message, exc.field, values)
+            return submit_page(request, s, exc.status, [exc], values, chosen)
         finally:
             await form.close()
         return RedirectResponse(f"/jobs/{job['id']}", status_code=303)
@@ -431,23 +442,44 @@ def _sse(event: str, data: Any) -> str:
     return f"event: {event}\ndata: {json.dumps(data, separators=(',', ':'))}\n\n"
 
 
-def manifest_from_form(values: dict[str, Any], filename: str | None) -> dict[str, Any] | None:
-    """The manifest object from the upload form's fields (the service checks it and names the bad field).
+def manifest_from_form(values: dict[str, Any], filename: str | None,
+                       limits: Limits) -> tuple[dict[str, Any] | None, list[PortalError]]:
+    """The manifest object from the upload form's fields and every problem with them (each naming its field).
 
-    Numbers are converted when they parse and passed on as typed otherwise (the service then says what is
-    wrong with them). Initial poses: one robot per line, ``x y θ`` (m, m, rad; commas allowed). A .zip with
-    every field empty uses its own ``manifest.json`` (None).
+    Numbers are converted when they parse and passed on as typed otherwise (the checks then say what is
+    wrong with them). Initial poses: one robot per line, ``x y θ`` (m, m, rad; commas allowed), numbered from 1
+    like the lines. A .zip with every manifest field empty uses its own ``manifest.json`` (None; the entry
+    field may still name the script to run).
     """
     text = {k: str(values.get(k) or "").strip() for k in ("name", "robots", "duration", "initial_poses")}
     if (filename or "").lower().endswith(".zip") and not any(text.values()) and not values.get("no_barrier"):
-        return None
+        return None, []
+    errors: list[PortalError] = []
     m: dict[str, Any] = {"name": text["name"], "robots": _number(text["robots"], int),
                          "duration": _number(text["duration"], float), "no_barrier": bool(values.get("no_barrier"))}
     if not text["name"]:
-        raise BadInput("give the experiment a name", "name")
+        errors.append(BadInput("give the experiment a name", "name"))
+    for key, what in (("robots", "how many robots"), ("duration", "the duration in seconds")):
+        if m[key] is None:
+            errors.append(BadInput(f"give {what}", key))
     if text["initial_poses"]:
-        m["initial_poses"] = _poses(text["initial_poses"])
-    return m
+        try:
+            m["initial_poses"] = _poses(text["initial_poses"])
+        except BadInput as exc:
+            errors.append(exc)
+    entry = str(values.get("entry") or "").strip()
+    if entry and not (filename or "").lower().endswith(".zip"):
+        errors.append(BadInput("the entry file is only for a .zip (a .py is its own entry): leave it empty", "entry"))
+    elif entry:
+        m["entry"] = entry
+    known = {e.field for e in errors}
+    probe = {k: v for k, v in m.items() if v is not None and k not in known}
+    # a field already reported is checked no further; the others are checked against stand-ins for it (the
+    # poses against their own count when the robots are wrong)
+    probe.setdefault("name", "x")
+    probe.setdefault("duration", min(1.0, limits.max_duration))
+    errors += [e for e in manifest_errors(probe, limits) if e.field not in known]
+    return m, errors
 
 
 def _number(text: str, kind: type) -> Any:

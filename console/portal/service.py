@@ -222,14 +222,26 @@ class PortalService:
             raise Forbidden("this needs an operator account", "Authorization")
 
     # ------------------------------------------------------------------ researchers
-    def submit(self, user: User, filename: str | None, data: bytes, manifest: Any = None) -> dict[str, Any]:
-        """Check and store a submission; the new job (``awaiting verification``). ``manifest``: JSON text or object, or None
-        to use ``manifest.json`` from inside a ``.zip``."""
+    def submit(self, user: User, filename: str | None, data: bytes, manifest: Any = None,
+               entry: str | None = None) -> dict[str, Any]:
+        """Check and store a submission; the new job (``awaiting verification``). ``manifest``: JSON text or
+        object, or None to use ``manifest.json`` from inside a ``.zip``; ``entry``: the script to run inside a
+        ``.zip`` (overrides the manifest's ``entry``)."""
         upload = check_upload(filename, data, self.config.limits)
         if manifest is None or (isinstance(manifest, str) and not manifest.strip()):
             if upload.manifest is None:
                 raise BadInput("send a manifest (name, robots, duration) with the script", "manifest")
             manifest = upload.manifest
+        if entry is not None and str(entry).strip():
+            if upload.kind != "zip":
+                raise BadInput("an entry file is only for a .zip (a .py is its own entry)", "entry")
+            if isinstance(manifest, (str, bytes)):
+                try:
+                    manifest = json.loads(manifest)
+                except ValueError:
+                    pass  # parse_manifest says what is wrong with it
+            if isinstance(manifest, dict):
+                manifest = {**manifest, "entry": str(entry).strip()}
         m = parse_manifest(manifest, self.config.limits)
         entry = self._entry(m, upload)
         if not user.is_operator:
