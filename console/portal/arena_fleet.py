@@ -284,12 +284,13 @@ class ArenaFleet:
     def status(self) -> dict[str, Any]:
         """``{"robots": [rows], "ready", "docked", "size", "assigned": {id: job}, "error"}``; each row ``id``,
         ``state`` (docked | charging | assigned | away | not seen | missing: never heard from), ``job``
-        (assigned), ``charge`` ∈ [0, 1] or None, ``voltage`` V or None, ``slot`` or None, ``x``, ``y``, ``theta``."""
+        (assigned), ``charge`` ∈ [0, 1] or None, ``voltage`` V or None, ``slot`` or None, ``x``, ``y``, ``theta``
+        (m, rad); ``bounds`` ``[x0, x1, y0, y1]`` m, the arena (the operator page draws the fleet on it)."""
         with self._lock:
             reading, assigned = self._reading, dict(self._assigned)
         if reading is None:
             return {"robots": [], "ready": False, "docked": 0, "assigned": {}, "error": self.error,
-                    "size": self.n_robots}
+                    "size": self.n_robots, "bounds": [float(v) for v in self.bounds]}
         n = len(reading.ids)
         volts = np.full(n, np.nan) if reading.battery is None else np.asarray(reading.battery, dtype=float)
         charging = np.zeros(n, dtype=bool) if reading.charging is None else np.asarray(reading.charging, dtype=bool)
@@ -317,4 +318,4 @@ class ArenaFleet:
         docked = sum(r["slot"] is not None and r["job"] is None for r in rows)
         ready = all(r["state"] in ("docked", "charging", "assigned") for r in rows)
         return {"robots": rows, "ready": ready, "docked": docked, "assigned": {str(k): v for k, v in assigned.items()},
-                "error": self.error, "size": self.n_robots}
+                "error": self.error, "size": self.n_robots, "bounds": [float(v) for v in self.bounds]}

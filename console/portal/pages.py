@@ -388,6 +388,8 @@ def router(service: PortalService, live: LiveFeed) -> APIRouter:
                 simple[action](u, job_id)
             elif action in ("bypass-approve", "bypass-refuse"):
                 service.decide_bypass(u, job_id, action == "bypass-approve")
+            elif action in ("forbid-barrier", "allow-barrier"):
+                service.forbid_barrier(u, job_id, action == "forbid-barrier")
             elif action in ("up", "down", "top"):
                 position = service.job(u, job_id)["position"]
                 if position is None:
