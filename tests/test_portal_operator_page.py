@@ -27,7 +27,7 @@ def test_the_running_job_has_its_own_cancel(portal):  # noqa: F811
     op, csrf = sign_in(portal, "op1")
     try:
         page = op.get("/operator").text
-        assert re.search(rf'<p id="arena-state">Running:.*data-action="cancel" data-job="{jid}"', page, re.S)
+        assert re.search(rf'<div id="arena-state">Running:.*data-action="cancel" data-job="{jid}"', page, re.S)
         assert op.post(f"/operator/jobs/{jid}/cancel", data={"csrf": csrf}).status_code == 303
     finally:
         op.close()
