@@ -279,6 +279,11 @@ _RUN_FOLDER = re.compile(r"(?:/[^\s:'\"()]*)?/swarmdeck-script-[A-Za-z0-9_]+/")
 _FILE_LINE = re.compile(r"(?<![\w./-])([\w./-]+\.py)(?::|\"?, line )(\d+)")
 
 
+def without_run_folder(text: str) -> str:
+    """``text`` without the sandbox's per-run folder (``/tmp/swarmdeck-script-…/``): file names stay relative."""
+    return _RUN_FOLDER.sub("", text)
+
+
 def _excerpt(bundle: ScriptBundle, name: str, line: int) -> str | None:
     """Line ``line`` (1-based) of file ``name`` of the bundle, stripped (None: no such line)."""
     try:

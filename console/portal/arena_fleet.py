@@ -28,8 +28,8 @@ pipeline; the robots that do not move are fixed obstacles of the barrier):
 4. :meth:`ArenaFleet.idle` — between jobs docked simulated robots charge for the wall time that
    passed (networked robots charge by themselves, their firmware reports it).
 
-The simulated fleet's maneuvers are computed as fast as they go (simulated time, no pacing: a
-simulation has nobody to wait for); the networked fleet's run in real time.
+The maneuvers run in real time, one control period per tick, as the jobs do (the networked fleet's always;
+the simulated fleet's unless ``fast``, ``swarmdeck server --fast``, where they are computed as fast as they go).
 
 :meth:`ArenaFleet.status` (any thread) is the fleet table: per robot its state (``docked``,
 ``charging``, ``assigned`` to job X, ``away``), charge, voltage and slot, and ``ready`` (every robot
@@ -71,17 +71,18 @@ class ArenaFleet:
         charge: the simulated robots' state of charge at start, scalar or ``(M,)`` ∈ [0, 1].
         config: the maneuvers' limits and the assignment policy.
         wait_for_poses: networked fleet: s to wait for every robot's first pose when connecting.
+        fast: simulated fleet: compute the maneuvers as fast as they go instead of in real time.
     """
 
     def __init__(self, n_robots: int, bounds: Bounds, dt: float, *, robots_via: str | None = None,
                  seed: int | None = None, charge: ArrayLike = 1.0, config: fu.UpkeepConfig = fu.UpkeepConfig(),
-                 robot: GritsBotParams | None = None, wait_for_poses: float = 5.0) -> None:
+                 robot: GritsBotParams | None = None, wait_for_poses: float = 5.0, fast: bool = False) -> None:
         self.chargers = ChargerLayout(bounds=bounds)
         m = int(n_robots)
         if not 1 <= m <= self.chargers.n_slots:
             raise ValueError(f"a fleet of {m} robots needs 1..{self.chargers.n_slots} charger slots "
                              f"(the arena's charging strips have {self.chargers.n_slots})")
-        self.bounds, self.dt, self.seed = bounds, float(dt), seed
+        self.bounds, self.dt, self.seed, self.fast = bounds, float(dt), seed, bool(fast)
         self.robots_via, self.config, self.wait_for_poses = robots_via, config, float(wait_for_poses)
         self.robot = robot if robot is not None else GritsBotParams()
         self.ids = np.arange(m, dtype=np.int64)
@@ -106,8 +107,8 @@ class ArenaFleet:
 
     @property
     def real_time(self) -> bool:
-        """Maneuvers run in real time (networked robots) or as fast as they compute (simulated)."""
-        return self.robots_via is not None
+        """Maneuvers run in real time (networked robots; simulated ones unless ``fast``)."""
+        return self.robots_via is not None or not self.fast
 
     # ------------------------------------------------------------------ ports
     def ports(self) -> tuple[Any, Any]:

@@ -71,7 +71,7 @@ from __future__ import annotations
 import threading
 import time
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
@@ -82,14 +82,16 @@ from swarmdeck.console.jobs.confinement import ConfinementUnavailable, JailConfi
 from swarmdeck.console.jobs.sandbox import SandboxOutcome, run_sandboxed
 from swarmdeck.console.jobs.start_poses import arena_start
 from swarmdeck.console.portal.arena_fleet import ArenaFleet
-from swarmdeck.console.portal.exports import JobExports, write_run_json
+from swarmdeck.console.jobs.verification import without_run_folder
+from swarmdeck.console.portal.exports import JobExports, without_server_paths, write_run_json
 from swarmdeck.console.portal.files import write_private
 from swarmdeck.console.portal.livefeed import LiveFeed
 from swarmdeck.console.portal.service import PortalService
 from swarmdeck.console.portal.states import ACTIVE, JobState
 from swarmdeck.console.runtime.behaviours import TickInput
 from swarmdeck.console.runtime.fleet_upkeep import UpkeepConfig, UpkeepResult
-from swarmdeck.console.runtime.loop import ControlLoop, LoopConfig, SafetyParams
+from swarmdeck.console.runtime.frame import Frame
+from swarmdeck.console.runtime.loop import ControlLoop, DensityParams, LoopConfig, SafetyParams
 from swarmdeck.core.bounds import DEFAULT_BOUNDS, Bounds
 from swarmdeck.devices.clock import RealTimePacer
 from swarmdeck.safety.guard import GuardConfig
@@ -106,7 +108,8 @@ class ArenaSettings:
         fleet: robots the arena has (the most a job may use).
         bounds: the floor, m.
         dt: control period, s.
-        fast: simulated arena only: tick as fast as it computes instead of in real time.
+        fast: simulated arena only: tick as fast as it computes instead of in real time (the jobs, and the
+            robots' set-up and return).
         seed: seed of the simulated arena's random start poses (None: fresh).
         charge: the simulated robots' state of charge when the server starts, scalar or one per robot.
         upkeep: set-up and return limits, which robots may be assigned (``min_charge``).
@@ -198,7 +201,7 @@ class ArenaRunner:
         self.exports = JobExports(service)  # CSV, replay, video of ended jobs, in a child process
         self.fleet = ArenaFleet(settings.fleet, settings.bounds, settings.dt, robots_via=settings.robots_via,
                                 seed=settings.seed, charge=np.asarray(settings.charge, dtype=float),
-                                config=settings.upkeep)
+                                config=settings.upkeep, fast=settings.fast)
         self.fleet.frame_listeners = self.frame_listeners  # the operator's view sees set-ups and returns too
         self._halt = threading.Event()  # fleet maneuvers must stop now (emergency stop, shutdown)
         self._idle_mark = time.monotonic()  # wall time the simulated fleet has charged up to
@@ -394,6 +397,7 @@ class ArenaRunner:
         said = _safety_note(self._safety)
         if said:
             reason = f"{reason}; {said}" if reason else said
+        reason = None if reason is None else without_server_paths(reason, folder)
         summary = {"ended_by": None if outcome is None else outcome.ended_by,
                    "error": reason if state == JobState.FAILED else None,
                    "ticks": None if outcome is None else outcome.ticks,
@@ -401,7 +405,7 @@ class ArenaRunner:
                    **self._upkeep}
         write_run_json(folder, summary)
         if outcome is not None:
-            write_private(folder / "script.log", outcome.log)
+            write_private(folder / "script.log", without_run_folder(outcome.log))
         if (folder / "recording.mcap").is_file():
             self.exports.submit(job_id)  # written in the background: the next job starts now
         self.runs += 1
@@ -416,8 +420,9 @@ class ArenaRunner:
         n, duration = int(job["robots"]), float(job["duration"])
         initial = None if job["initial_poses"] is None else np.asarray(job["initial_poses"], dtype=float)
         bypass = bool(job["bypass"])
+        # the script's job knows nothing of the console's circling density: none is computed, drawn or recorded
         loop_config = LoopConfig(n_robots=n, dt=s.dt, bounds=s.bounds, seed=s.seed, behaviour="rendezvous",
-                                 safety=SafetyParams(enabled=True))
+                                 safety=SafetyParams(enabled=True), density=DensityParams(moving=False))
         state: dict[str, Any] = {"loop": None, "recorder": None, "setup_failed": None}
         notes: list[str] = []
 
@@ -444,8 +449,12 @@ class ArenaRunner:
                                                                       fleet_ids=fleet_ids))
             loop.post(f"robots 0..{n - 1} are the fleet's robots {', '.join(map(str, fleet_ids))}")
             state["recorder"] = rec
-            loop.subscribe(rec.write_frame)
-            loop.subscribe(lambda frame: self.live.publish(int(job["id"]), frame))
+            def publish(frame: Frame) -> None:  # recording, live view (and so video and replay): no density layer
+                frame = frame if frame.density is None else replace(frame, density=None)
+                rec.write_frame(frame)
+                self.live.publish(int(job["id"]), frame)
+
+            loop.subscribe(publish)
             loop.subscribe(self._watch_events)
             for listener in self.frame_listeners:
                 loop.subscribe(listener)
