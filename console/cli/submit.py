@@ -31,7 +31,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="ask to run without the safety barrier: granted only if verification allows it and an "
                              "operator approves this job's bypass (until then it waits); the walls, the docked robots "
                              "and the guard stay on, and the barrier comes back if two robots get too close")
-    parser.add_argument("--wait", action="store_true", help="follow the job until it ends (states on stderr)")
+    parser.add_argument("--wait", action="store_true",
+                        help="follow the job until it ends (states on stderr), then print its results in short: did "
+                             "the barrier step in, the minimum distance, contacts, the files, the download command")
     add_client_arguments(parser)
 
 
@@ -72,12 +74,19 @@ def main(args: argparse.Namespace) -> int:
             job = c.submit(args.script, manifest, args.entry)
             if not args.json:
                 print(f"submitted job {job['id']}: {job['state']}")
+            results = None
             if args.wait:
                 job = c.wait(job["id"], on_state=lambda j: print(job_line(j), file=sys.stderr))
+                if job["state"] != "rejected" and not job.get("results_deleted"):
+                    results = c.results(job["id"])
         except ClientError as exc:
             return fail(NAME, exc, args.json)
     if args.json:
-        print(json.dumps(job))
+        print(json.dumps(job if results is None else {**job, "results": results}))
     elif args.wait:
+        from swarmdeck.console.portal.results import summary_lines
+
         print(f"job {job['id']}: {job['state']}" + (f" ({job['reason']})" if job.get("reason") else ""))
+        for line in [] if results is None else summary_lines(results):
+            print(f"  {line}")
     return 0 if not args.wait or job["state"] == "done" else 1

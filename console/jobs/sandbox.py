@@ -160,11 +160,12 @@ class SandboxOutcome:
 
 
 class _LogDrain(threading.Thread):
-    """Reads the child's stdout+stderr (a pipe) to the end, keeping the first ``limit`` bytes."""
+    """Reads the child's stdout+stderr (a pipe) to the end, keeping the first ``limit`` bytes (and handing each
+    kept chunk to ``on_log`` as it comes: the portal's live log)."""
 
-    def __init__(self, fd: int, limit: int) -> None:
+    def __init__(self, fd: int, limit: int, on_log: Callable[[bytes], None] | None = None) -> None:
         super().__init__(daemon=True)
-        self.fd, self.limit = fd, limit
+        self.fd, self.limit, self.on_log = fd, limit, on_log
         self.kept = bytearray()
         self.total = 0
 
@@ -181,6 +182,11 @@ class _LogDrain(threading.Thread):
                 room = self.limit - len(self.kept)
                 if room > 0:
                     self.kept += chunk[:room]
+                    if self.on_log is not None:
+                        try:
+                            self.on_log(bytes(chunk[:room]))
+                        except Exception:  # noqa: BLE001 - a watcher's failure never stops the drain
+                            self.on_log = None
         finally:
             os.close(self.fd)
 
@@ -462,6 +468,7 @@ def run_sandboxed(
     trusted: bool = False,
     cancelled: Callable[[], bool] | None = None,
     jail: JailConfig = JailConfig(),
+    on_log: Callable[[bytes], None] | None = None,
 ) -> SandboxOutcome:
     """Run ``script`` in a jailed child against the plant ``make_plant(n, initial_poses)`` builds.
 
@@ -475,7 +482,8 @@ def run_sandboxed(
     ``n_robots``/``duration``: what an Arena built without arguments gets (declared values).
     ``jail``: which jails to try, in order (default: ``unshare``, then bubblewrap).
     ``trusted``: run without a jail when none works here (resource limits still apply);
-    otherwise :class:`ConfinementUnavailable` is raised.
+    otherwise :class:`ConfinementUnavailable` is raised. ``on_log(bytes)``: each piece of the script's output
+    (stdout and stderr, within ``limits.log_bytes``) as it comes, on a reader thread.
     """
     if isinstance(script, ScriptBundle):
         bundle = script
@@ -487,12 +495,13 @@ def run_sandboxed(
         except OSError as exc:
             raise ValueError(f"cannot read the script {str(script)!r}: {exc}") from exc
     return _run_sandboxed(bundle, make_plant, n_robots=n_robots, duration=duration, rps=rps, limits=limits,
-                          trusted=trusted, cancelled=cancelled, jail=jail, hardening=_FULL)
+                          trusted=trusted, cancelled=cancelled, jail=jail, hardening=_FULL, on_log=on_log)
 
 
 def _run_sandboxed(bundle: ScriptBundle, make_plant: PlantFactory, *, n_robots: int | None, duration: float | None,
                    rps: bool | None, limits: SandboxLimits, trusted: bool, cancelled: Callable[[], bool] | None,
-                   jail: JailConfig, hardening: _Hardening) -> SandboxOutcome:
+                   jail: JailConfig, hardening: _Hardening,
+                   on_log: Callable[[bytes], None] | None = None) -> SandboxOutcome:
     """:func:`run_sandboxed` with ``hardening`` (always :data:`_FULL` there)."""
     chosen, reason = choose_jail(jail)
     if chosen is None and not trusted:
@@ -545,7 +554,7 @@ def _run_sandboxed(bundle: ScriptBundle, make_plant: PlantFactory, *, n_robots: 
         with cgroups.OomGuard(group) if group is not None else contextlib.nullcontext():
             outcome = _loop(child, script, scratch, uid, make_plant, n_robots=n_robots, duration=duration, rps=rps,
                             limits=limits, cancelled=cancelled, jail=chosen,
-                            seccomp=chosen == "unshare" and hardening.seccomp)
+                            seccomp=chosen == "unshare" and hardening.seccomp, on_log=on_log)
         outcome.uid, outcome.unhardened = uid, unhardened
         outcome.cgroup = None if group is None else f"v{group.version}"
         if group is not None and group.oom_kills():
@@ -570,10 +579,11 @@ def _run_sandboxed(bundle: ScriptBundle, make_plant: PlantFactory, *, n_robots: 
 
 def _loop(child: _Child, script: Path, scratch: Path, uid: int | None, make_plant: PlantFactory, *,
           n_robots: int | None, duration: float | None, rps: bool | None, limits: SandboxLimits,
-          cancelled: Callable[[], bool] | None, jail: str | None, seccomp: bool = False) -> SandboxOutcome:
+          cancelled: Callable[[], bool] | None, jail: str | None, seccomp: bool = False,
+          on_log: Callable[[bytes], None] | None = None) -> SandboxOutcome:
     """The run: the child's start-up, then one exchange per tick until it ends (see the module docstring)."""
     outcome = SandboxOutcome(jail=jail)
-    drain = _LogDrain(child.log, limits.log_bytes)
+    drain = _LogDrain(child.log, limits.log_bytes, on_log)
     drain.start()
     started = time.monotonic()
     wall_deadline = started + limits.wall_s

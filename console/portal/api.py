@@ -160,6 +160,18 @@ def api_router(service: PortalService, counter: RejectionCounter, *, max_upload_
         """The verification report (schema swarmdeck.verification/1)."""
         return service.report(u, job_id)
 
+    @router.get("/jobs/{job_id}/results", tags=["results"])
+    def results(job_id: int, u: User = Depends(user)) -> dict[str, Any]:
+        """An ended job's results in short: did the barrier step in (how often, which robots), the minimum
+        distance between robots, contacts, the files and the command that downloads them."""
+        return service.results(u, job_id)
+
+    @router.get("/jobs/{job_id}/log", tags=["results"])
+    def script_log(job_id: int, since: int = 0, u: User = Depends(user)) -> dict[str, Any]:
+        """The script's output from byte ``since``: ``{"text", "next", "live"}`` (live while the job runs; poll
+        with ``since=next``). The job's owner and operators only."""
+        return service.script_log(u, job_id, since)
+
     @router.get("/jobs/{job_id}/files", tags=["results"])
     def files(job_id: int, u: User = Depends(user)) -> list[dict[str, Any]]:
         """The job's result files: recording, CSV, HTML replay, script log, reports."""

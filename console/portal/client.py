@@ -81,6 +81,10 @@ class PortalClient:
     def cancel(self, job_id: int) -> dict[str, Any]:
         return self._call("POST", f"/api/jobs/{int(job_id)}/cancel").json()
 
+    def results(self, job_id: int) -> dict[str, Any]:
+        """An ended job's results summary (:func:`swarmdeck.console.portal.results.results_summary`)."""
+        return self._call("GET", f"/api/jobs/{int(job_id)}/results").json()
+
     def files(self, job_id: int) -> list[dict[str, Any]]:
         return self._call("GET", f"/api/jobs/{int(job_id)}/files").json()
 

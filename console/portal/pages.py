@@ -59,12 +59,13 @@ from swarmdeck.console.portal.states import ACTIVE, FINAL, JobState
 from swarmdeck.console.portal.errors import BadInput, PortalError, Unauthorized
 from swarmdeck.console.portal.live import scene_message
 from swarmdeck.console.portal.livefeed import LiveFeed
+from swarmdeck.console.portal.results import summary_lines
 from swarmdeck.console.portal.service import RESULT_FILES, PortalService
 from swarmdeck.console.portal.submission import Limits, display_name, manifest_errors
 
 HERE = Path(__file__).resolve().parent
 STATIC = {"portal.css": "text/css", "live.js": "text/javascript", "refresh.js": "text/javascript",
-          "forms.js": "text/javascript", "docs.js": "text/javascript"}
+          "forms.js": "text/javascript", "docs.js": "text/javascript", "log.js": "text/javascript"}
 SIGNIN_COOKIE = "swarmdeck_signin"
 LIVE_PERIOD = 0.1  # s: the live view gets at most 10 Frames a second (the newest at each send)
 CHECK_PERIOD = 1.0  # s: the live stream re-checks the session and the job's state this often
@@ -249,7 +250,10 @@ def router(service: PortalService, live: LiveFeed) -> APIRouter:
         if VIDEO not in names and job["state"] in FINAL and "recording.mcap" in names and job["exports"] != "writing":
             files.append({"name": VIDEO, "bytes": None, "what": RESULT_FILES[VIDEO] + " (made when first downloaded)"})
         run = service.run_summary(s.user, job_id) if job["state"] in FINAL else None
-        return page(request, "job.html", s, job=job, files=files, report=report, run=run,
+        results = None
+        if job["state"] in FINAL and job["state"] != JobState.REJECTED and not job["results_deleted"]:
+            results = summary_lines(service.results(s.user, job_id))
+        return page(request, "job.html", s, job=job, files=files, report=report, run=run, results=results,
                     live=job["state"] in ACTIVE, final=job["state"] in FINAL, live_states=ACTIVE, final_states=FINAL)
 
     @r.post("/jobs/{job_id}/cancel")

@@ -68,6 +68,7 @@ exports the previous server left unfinished are written again.
 """
 from __future__ import annotations
 
+import math
 import threading
 import time
 from collections.abc import Callable
@@ -77,6 +78,7 @@ from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
+from scipy.spatial import cKDTree
 
 from swarmdeck.console.jobs.confinement import ConfinementUnavailable, JailConfig, SandboxLimits
 from swarmdeck.console.jobs.sandbox import SandboxOutcome, run_sandboxed
@@ -207,7 +209,9 @@ class ArenaRunner:
         self._idle_mark = time.monotonic()  # wall time the simulated fleet has charged up to
         self._upkeep: dict[str, Any] = {}  # the current job's set-up and return, for run.json
         self._safety: dict[str, Any] = {}  # the current job's bypass and contacts, for run.json
+        self._barrier: dict[str, Any] | None = None  # the current job's barrier tally (BarrierTally.report)
         self._alerts: tuple[int | None, list[str]] = (None, [])  # the last job's guard and contact events
+        self._log: tuple[int | None, bytearray] = (None, bytearray())  # the running job's script output so far
 
     # ------------------------------------------------------------------ control (any thread)
     def start(self) -> "ArenaRunner":
@@ -243,6 +247,17 @@ class ArenaRunner:
     @property
     def current_job(self) -> int | None:
         return self._job
+
+    def live_log(self, job_id: int) -> bytes | None:
+        """The script output of job ``job_id`` so far, while it is the runner's job (None otherwise)."""
+        with self._lock:
+            job, log = self._log
+            return bytes(log) if job == int(job_id) else None
+
+    def _append_log(self, job_id: int, chunk: bytes) -> None:
+        with self._lock:
+            if self._log[0] == job_id:
+                self._log[1].extend(chunk)
 
     def alerts(self) -> dict[str, Any]:
         """The running (or last) job's guard and contact events, for the operator page: ``{"job", "messages"}``."""
@@ -365,8 +380,10 @@ class ArenaRunner:
         """Run one claimed job to its end; its final state."""
         job_id, folder = int(job["id"]), self.service.job_dir(int(job["id"]))
         self._end_job.clear()
-        self._upkeep, self._safety = {}, {}
+        self._upkeep, self._safety, self._barrier = {}, {}, None
         self._alerts = (job_id, [])
+        with self._lock:
+            self._log = (job_id, bytearray())
         with self._lock:
             self._job = job_id
         if self.service.job_state(job_id) not in ACTIVE:
@@ -398,7 +415,7 @@ class ArenaRunner:
         if said:
             reason = f"{reason}; {said}" if reason else said
         reason = None if reason is None else without_server_paths(reason, folder)
-        summary = {"ended_by": None if outcome is None else outcome.ended_by,
+        summary = {"ended_by": None if outcome is None else outcome.ended_by, "barrier": self._barrier,
                    "error": reason if state == JobState.FAILED else None,
                    "ticks": None if outcome is None else outcome.ticks,
                    "overruns": None if outcome is None else outcome.overruns, "note": note, **self._safety,
@@ -423,7 +440,7 @@ class ArenaRunner:
         # the script's job knows nothing of the console's circling density: none is computed, drawn or recorded
         loop_config = LoopConfig(n_robots=n, dt=s.dt, bounds=s.bounds, seed=s.seed, behaviour="rendezvous",
                                  safety=SafetyParams(enabled=True), density=DensityParams(moving=False))
-        state: dict[str, Any] = {"loop": None, "recorder": None, "setup_failed": None}
+        state: dict[str, Any] = {"loop": None, "recorder": None, "setup_failed": None, "tally": None}
         notes: list[str] = []
 
         def stopped() -> bool:
@@ -449,10 +466,13 @@ class ArenaRunner:
                                                                       fleet_ids=fleet_ids))
             loop.post(f"robots 0..{n - 1} are the fleet's robots {', '.join(map(str, fleet_ids))}")
             state["recorder"] = rec
+            tally = state["tally"] = BarrierTally(n)
+
             def publish(frame: Frame) -> None:  # recording, live view (and so video and replay): no density layer
                 frame = frame if frame.density is None else replace(frame, density=None)
                 rec.write_frame(frame)
                 self.live.publish(int(job["id"]), frame)
+                tally(frame)
 
             loop.subscribe(publish)
             loop.subscribe(self._watch_events)
@@ -479,7 +499,8 @@ class ArenaRunner:
             script, entry = self.service.script(job)
             outcome = run_sandboxed(script, make_plant, entry=entry, n_robots=n, duration=duration,
                                     limits=limits, trusted=cfg.trusted, cancelled=stopped,
-                                    jail=JailConfig(allow_no_cgroup=cfg.allow_no_cgroup))
+                                    jail=JailConfig(allow_no_cgroup=cfg.allow_no_cgroup),
+                                    on_log=lambda chunk: self._append_log(int(job["id"]), chunk))
         finally:
             loop = state["loop"]
             if loop is not None:
@@ -488,6 +509,8 @@ class ArenaRunner:
                 self._safety = _safety_report(loop, bypass)
             if state["recorder"] is not None:
                 state["recorder"].close()
+            if state["tally"] is not None:
+                self._barrier = state["tally"].report()
             with self._lock:
                 self._loop = None
             self.fleet.end_assignment()
@@ -495,6 +518,45 @@ class ArenaRunner:
         if state["setup_failed"] is not None:
             return None, state["setup_failed"]
         return outcome, "; ".join(notes) or None
+
+
+#: the barrier "stepped in" for a robot when it changed its command by more than this, m/s
+STEPPED_IN_MPS = 1e-3
+
+
+class BarrierTally:
+    """How often the barrier stepped in during a run, for which robots, and the closest two robots came
+    (run.json's ``barrier``; the job page's and ``swarmdeck submit --wait``'s results). Called with each
+    Frame on the loop thread: O(N) per tick, vectorised."""
+
+    def __init__(self, n: int) -> None:
+        self.ticks = 0
+        self.stepped_in = 0
+        self.per_robot = np.zeros(n, dtype=np.int64)
+        self.min_distance = math.inf
+
+    def __call__(self, frame: Frame) -> None:
+        xy = frame.poses[:, :2]
+        if len(xy) >= 2:  # the closest pair of robot centres this tick (k-d tree: no N×N matrix)
+            d, _ = cKDTree(xy).query(xy, k=2)
+            self.min_distance = min(self.min_distance, float(d[:, 1].min()))
+        b = frame.barrier
+        if b is None:
+            return
+        self.ticks += 1
+        if b.enabled and b.intervention.shape == self.per_robot.shape:
+            hit = b.intervention > STEPPED_IN_MPS
+            if hit.any():
+                self.stepped_in += 1
+                self.per_robot += hit
+
+    def report(self) -> dict[str, Any]:
+        """``{"ticks", "stepped_in_ticks", "robots": {robot: ticks}, "min_distance_m"}`` (robots 0…N−1 of the
+        job; the minimum distance between robot centres, m, None when never measured)."""
+        robots = {str(int(k)): int(self.per_robot[k]) for k in np.flatnonzero(self.per_robot)}
+        return {"ticks": self.ticks, "stepped_in_ticks": self.stepped_in, "robots": robots,
+                "threshold_mps": STEPPED_IN_MPS,
+                "min_distance_m": None if not math.isfinite(self.min_distance) else round(self.min_distance, 4)}
 
 
 def _safety_report(loop: ControlLoop, bypass: bool) -> dict[str, Any]:

@@ -68,6 +68,7 @@ from swarmdeck.console.portal.exports import EXPORT_FILES
 from swarmdeck.console.portal.files import private_dir, write_private
 from swarmdeck.console.portal.quotas import Quotas, check_counts, check_disk
 from swarmdeck.console.portal.quotas import usage as quota_usage
+from swarmdeck.console.portal.results import results_summary
 from swarmdeck.console.portal.submission import Limits, Manifest, Upload, check_bundle, check_upload, parse_manifest
 
 #: result files a job may have, name -> what it is (the exports, :mod:`.exports`, write four of them after the run).
@@ -336,6 +337,31 @@ class PortalService:
         except (OSError, ValueError):
             return None
         return data if isinstance(data, dict) else None
+
+    def results(self, user: User, job_id: int) -> dict[str, Any]:
+        """The results summary of an ended job (:func:`.results.results_summary`); 404 while it has not ended."""
+        row = self._visible_row(user, job_id)
+        if row["state"] not in FINAL:
+            raise NotFound(f"job {job_id} is {row['state']}: its results come when it has ended", "job")
+        return results_summary(_job_dict(row), self.run_summary(user, job_id), self.files(user, job_id))
+
+    def script_log(self, user: User, job_id: int, since: int = 0) -> dict[str, Any]:
+        """The job's script output from byte ``since`` on: ``{"text", "next", "live"}`` — while it runs, what the
+        script printed so far (the arena runner's live copy); after, ``script.log``. Its owner and operators."""
+        row = self._visible_row(user, job_id)
+        if isinstance(since, bool) or not isinstance(since, int) or since < 0:
+            raise BadInput(f"since must be an integer >= 0, got {since!r}", "since")
+        live = getattr(self.arena, "live_log", None)
+        data = live(int(job_id)) if live is not None and row["state"] in ACTIVE else None
+        if data is None:
+            self._require_results(row)
+            try:
+                data = (self.job_dir(job_id) / "script.log").read_bytes()
+            except OSError:
+                data = b""
+        chunk = data[since:]
+        return {"text": chunk.decode("utf-8", errors="replace"), "next": since + len(chunk),
+                "live": row["state"] in ACTIVE}
 
     def files(self, user: User, job_id: int) -> list[dict[str, Any]]:
         """The job's result files that exist: ``{"name", "bytes", "what"}``."""
