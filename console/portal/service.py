@@ -352,7 +352,7 @@ class PortalService:
         if isinstance(since, bool) or not isinstance(since, int) or since < 0:
             raise BadInput(f"since must be an integer >= 0, got {since!r}", "since")
         live = getattr(self.arena, "live_log", None)
-        data = live(int(job_id)) if live is not None and row["state"] in ACTIVE else None
+        data = live(int(job_id)) if live is not None else None  # the runner's copy until script.log is written
         if data is None:
             self._require_results(row)
             try:
