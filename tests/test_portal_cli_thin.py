@@ -1,5 +1,5 @@
-"""The portal's client commands stay thin (issue 26 item 18): `swarmdeck jobs|submit|results|cancel` import only
-their own module (no numpy, scipy, viser, cv2), a closed pipe (`swarmdeck jobs | head -2`) ends them quietly,
+"""The portal's client commands stay thin (issue 26 item 18): `swarmdeck jobs|submit|results|cancel|fleet status`
+import only their own module (no numpy, scipy, viser, cv2: measured, each starts in well under 1 s), a closed pipe (`swarmdeck jobs | head -2`) ends them quietly,
 and their messages read as sentences."""
 from __future__ import annotations
 
@@ -27,7 +27,8 @@ def test_client_commands_import_no_heavy_module(portal, tmp_path):  # noqa: F811
     runs = {"jobs": _run(portal, "alice", "jobs"),
             "submit": _run(portal, "alice", "submit", str(script), "--robots", "2", "--duration", "1"),
             "cancel": _run(portal, "alice", "cancel", "1"),
-            "results": _run(portal, "alice", "results", "1", "-o", str(tmp_path / "out"), "--no-wait")}
+            "results": _run(portal, "alice", "results", "1", "-o", str(tmp_path / "out"), "--no-wait"),
+            "fleet status": _run(portal, "op1", "fleet", "status")}
     for name, r in runs.items():
         report = json.loads(r.stderr.strip().splitlines()[-1])
         assert report["heavy"] == [], (name, report, r.stderr)

@@ -8,6 +8,7 @@ from pathlib import Path
 
 from swarmdeck.console.cli import UsageError
 from swarmdeck.console.cli._client import add_client_arguments, client, fail, job_line
+from swarmdeck.console.portal.states import JobState
 
 NAME = "submit"
 HELP = "submit an experiment script (.py or .zip) to the lab's portal; --wait follows it to the end"
@@ -77,7 +78,7 @@ def main(args: argparse.Namespace) -> int:
             results = None
             if args.wait:
                 job = c.wait(job["id"], on_state=lambda j: print(job_line(j), file=sys.stderr))
-                if job["state"] != "rejected" and not job.get("results_deleted"):
+                if job["state"] != JobState.REJECTED and not job.get("results_deleted"):
                     results = c.results(job["id"])
         except ClientError as exc:
             return fail(NAME, exc, args.json)
@@ -89,4 +90,4 @@ def main(args: argparse.Namespace) -> int:
         print(f"job {job['id']}: {job['state']}" + (f" ({job['reason']})" if job.get("reason") else ""))
         for line in [] if results is None else summary_lines(results):
             print(f"  {line}")
-    return 0 if not args.wait or job["state"] == "done" else 1
+    return 0 if not args.wait or job["state"] == JobState.DONE else 1
