@@ -89,6 +89,7 @@ def test_the_results_say_whether_the_barrier_stepped_in_and_how_close_robots_cam
     data = str(portal.service.data)
     assert "KeyError: 'late'" in run_json and "/tmp/" not in run_json and data not in run_json, run_json
     assert "/tmp/" not in crash_job["reason"] and data not in crash_job["reason"]
+    assert "late.py:4" in crash_job["reason"] and "raise KeyError('late')" in crash_job["reason"]  # their file, line
     # the script's robots run without the console's circling density: none recorded (so none in video and replay)
     assert frames and all(f.density is None for f in frames)
 

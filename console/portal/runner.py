@@ -84,7 +84,8 @@ from swarmdeck.console.jobs.confinement import ConfinementUnavailable, JailConfi
 from swarmdeck.console.jobs.sandbox import SandboxOutcome, run_sandboxed
 from swarmdeck.console.jobs.start_poses import arena_start
 from swarmdeck.console.portal.arena_fleet import ArenaFleet
-from swarmdeck.console.jobs.verification import without_run_folder
+from swarmdeck.console.jobs.bundle import ScriptBundle
+from swarmdeck.console.jobs.verification import user_message, without_run_folder
 from swarmdeck.console.portal.exports import JobExports, without_server_paths, write_run_json
 from swarmdeck.console.portal.files import write_private
 from swarmdeck.console.portal.livefeed import LiveFeed
@@ -414,7 +415,7 @@ class ArenaRunner:
         said = _safety_note(self._safety)
         if said:
             reason = f"{reason}; {said}" if reason else said
-        reason = None if reason is None else without_server_paths(reason, folder)
+        reason = None if reason is None else _user_reason(without_server_paths(reason, folder), job, folder)
         summary = {"ended_by": None if outcome is None else outcome.ended_by, "barrier": self._barrier,
                    "error": reason if state == JobState.FAILED else None,
                    "ticks": None if outcome is None else outcome.ticks,
@@ -518,6 +519,17 @@ class ArenaRunner:
         if state["setup_failed"] is not None:
             return None, state["setup_failed"]
         return outcome, "; ".join(notes) or None
+
+
+def _user_reason(reason: str, job: dict[str, Any], folder: Path) -> str:
+    """The job's reason as verification words it (:func:`~swarmdeck.console.jobs.verification.user_message`): the
+    researcher's file name for the stored ``script.py``, and the line of their code an error names."""
+    try:
+        bundle = (ScriptBundle.single("script.py", (folder / "script.py").read_bytes()) if job["kind"] == "py"
+                  else ScriptBundle.from_path(folder / "src", job["entry"]))
+    except (OSError, ValueError):
+        return reason
+    return user_message(reason, bundle, job["script"] if job["kind"] == "py" else None) or reason
 
 
 #: the barrier "stepped in" for a robot when it changed its command by more than this, m/s
