@@ -110,4 +110,4 @@ def test_the_openapi_page_documents_the_api(portal):
         spec = c.get("/openapi.json").json()
     assert {"/api/jobs", "/api/jobs/{job_id}", "/api/operator/estop"} <= set(spec["paths"])
     upload = spec["paths"]["/api/jobs"]["post"]["requestBody"]["content"]["multipart/form-data"]["schema"]
-    assert set(upload["properties"]) == {"script", "manifest"}
+    assert set(upload["properties"]) == {"script", "manifest", "entry"}
