@@ -19,9 +19,13 @@ Errors: every one is a 4xx with ``{"error": message, "field": name}``
 Routes (researchers see only their own jobs; other ids are 404):
 
 * ``GET /api/health`` (no auth) · ``GET /api/me`` · ``POST/DELETE /api/session``
-* ``POST /api/jobs`` (multipart: file ``script`` (.py/.zip), field ``manifest`` (JSON)) → 201 job
+* ``POST /api/jobs`` (multipart: file ``script`` (.py/.zip), field ``manifest`` (JSON), field ``entry`` (the
+  script inside a .zip)) → 201 job (its ``state``: :class:`~.states.JobState`; ``position`` in the arena queue
+  0-based here, 1-based on the pages and in ``swarmdeck jobs``)
 * ``GET /api/jobs`` · ``GET /api/jobs/{id}`` · ``POST /api/jobs/{id}/cancel``
 * ``GET /api/jobs/{id}/report`` · ``GET /api/jobs/{id}/files`` · ``GET /api/jobs/{id}/files/{name}``
+* ``GET /api/jobs/{id}/results`` (an ended job in short) · ``GET /api/jobs/{id}/log?since=B`` (the script's output,
+  live while it runs)
 * operators: ``POST /api/operator/jobs/{id}/{approve|hold|release|cancel}``,
   ``POST /api/operator/jobs/{id}/move`` ``{"position": k}``,
   ``POST /api/operator/jobs/{id}/barrier`` ``{"forbid": bool}``,

@@ -14,9 +14,12 @@ the audit log) live in one place.
                                          SameSite=Strict, Secure over https); failed sign-ins are
                                          rate-limited by the service
 ``GET /jobs``                            your jobs and their states (refreshed every 2 s)
-``GET|POST /submit``                     upload a script (.py or .zip) with the manifest's fields
-``GET /jobs/{id}``                       state, verdict, the verification report, the live view while it
-                                         runs, downloads, cancel (``POST /jobs/{id}/cancel``)
+``GET|POST /submit``                     upload a script (.py or .zip, its entry file) with the manifest's
+                                         fields; every mistake shown at once (``forms.js`` sends the form in
+                                         the background so the chosen file stays chosen)
+``GET /jobs/{id}``                       state, verdict, the verification report, the live view and the
+                                         script's output while it runs (``log.js``), the results in short
+                                         when it has ended, downloads, cancel (``POST /jobs/{id}/cancel``)
 ``GET /jobs/{id}/report``                the verification report page (``console/jobs/report_html.py``)
 ``GET /jobs/{id}/live``                  the live view's stream (Server-Sent Events): the runner's
                                          LiveFeed as :func:`~.live.scene_message` JSON, 10 a second at most;
