@@ -6,24 +6,7 @@ the pages keep plain, readable strings, and code compares with the members. The 
 and the CLI client all use these. This module imports nothing of swarmdeck's, so the thin client commands
 (``swarmdeck jobs`` …) stay fast.
 
-=======================  ==========================================================================
-state                    meaning
-=======================  ==========================================================================
-awaiting verification    submitted; waits for a verification worker
-verifying                being run in simulation (with and without the barrier)
-rejected                 verification refused it (final; the reason says why)
-awaiting approval        verified; waits for an operator: manual approval is on, or the job asks to
-                         run without the barrier (``bypass_pending``) and an operator must decide
-in arena queue           approved; waits for its turn on the arena (``position``, from 1 on pages)
-setting up               the robots drive to the job's start poses
-running                  the script drives the robots
-done                     the run ended as declared (final)
-failed                   the script raised, overran or the run could not go on (final)
-cancelled                by its owner or an operator, or the emergency stop (final)
-interrupted              the server stopped during the run; the partial recording is kept (final)
-held                     an operator's hold of a job awaiting verification, awaiting approval or
-                         in the arena queue; released to where it was
-=======================  ==========================================================================
+What each state means is in one table, the README's portal section ("A job's state").
 
 The names until schema version 4 were ``queued`` (now ``awaiting verification``), ``approved`` (now
 ``awaiting approval``) and ``waiting`` (now ``in arena queue``); migration 5 renames stored jobs.
