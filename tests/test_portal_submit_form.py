@@ -47,10 +47,11 @@ def test_every_mistake_comes_back_at_once_with_the_typed_fields_and_the_chosen_f
     assert r.status_code == 422 and set(_errors(r.text)) == {"script"}
 
 
-def test_the_api_names_overlapping_poses_counted_from_1(portal):  # noqa: F811
+def test_the_api_names_overlapping_poses_saying_how_they_are_counted(portal):  # noqa: F811
     r = portal.submit("alice", robots=3, initial_poses=[[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [1.1, 0.0, 0.0]])
-    assert r.status_code == 422
-    assert "poses 2 (1.000, 0.000) and 3 (1.100, 0.000) are 0.100 m apart" in r.json()["error"]
+    assert r.status_code == 422  # the JSON list's own index, said
+    assert r.json()["error"].startswith("initial_poses (numbered from 0): poses 1 (1.000, 0.000) and 2 (1.100, 0.000) "
+                                        "are 0.100 m apart")
 
 
 def test_the_entry_field_picks_the_script_inside_a_zip(portal, tmp_path):  # noqa: F811

@@ -487,7 +487,7 @@ def manifest_from_form(values: dict[str, Any], filename: str | None,
     # poses against their own count when the robots are wrong)
     probe.setdefault("name", "x")
     probe.setdefault("duration", min(1.0, limits.max_duration))
-    errors += [e for e in manifest_errors(probe, limits) if e.field not in known]
+    errors += [e for e in manifest_errors(probe, limits, first=1) if e.field not in known]  # poses: as the lines
     return m, errors
 
 

@@ -100,7 +100,7 @@ def display_name(filename: str | None) -> str:
     return clean or "script"
 
 
-def parse_manifest(data: Any, limits: Limits) -> Manifest:
+def parse_manifest(data: Any, limits: Limits, first: int = 0) -> Manifest:
     """The manifest from a JSON text (or an already parsed object); :class:`BadInput` naming the key."""
     if isinstance(data, (str, bytes)):
         try:
@@ -109,21 +109,23 @@ def parse_manifest(data: Any, limits: Limits) -> Manifest:
             raise BadInput(f"the manifest is not valid JSON: {exc}", "manifest") from None
     if not isinstance(data, dict):
         raise BadInput(f"the manifest must be a JSON object, got {type(data).__name__}", "manifest")
-    manifest, errors = _checked(data, limits)
+    manifest, errors = _checked(data, limits, first)
     if errors:
         raise errors[0]
     assert manifest is not None
     return manifest
 
 
-def manifest_errors(data: dict[str, Any], limits: Limits) -> list[BadInput]:
+def manifest_errors(data: dict[str, Any], limits: Limits, first: int = 0) -> list[BadInput]:
     """Every problem of a manifest object, one per key, in the manifest's order (:func:`parse_manifest`
     raises the first): a form shows them all at once."""
-    return _checked(data, limits)[1]
+    return _checked(data, limits, first)[1]
 
 
-def _checked(data: dict[str, Any], limits: Limits) -> tuple[Manifest | None, list[BadInput]]:
-    """The manifest (None when anything is wrong) and the problems, each key checked on its own."""
+def _checked(data: dict[str, Any], limits: Limits, first: int = 0) -> tuple[Manifest | None, list[BadInput]]:
+    """The manifest (None when anything is wrong) and the problems, each key checked on its own; poses are
+    numbered from ``first`` in messages, and the messages say so (0: the JSON list's index; 1: the Submit
+    page's lines)."""
     errors: list[BadInput] = []
 
     def check(key: str, fn: Any) -> Any:
@@ -144,7 +146,7 @@ def _checked(data: dict[str, Any], limits: Limits) -> tuple[Manifest | None, lis
     poses = data.get("initial_poses")
     if poses is not None:  # with a bad robot count the poses are still checked (against their own count)
         n = robots if robots is not None else (len(poses) if isinstance(poses, list) else 0)
-        poses = check("initial_poses", lambda: _initial_poses(poses, n, limits.bounds))
+        poses = check("initial_poses", lambda: _initial_poses(poses, n, limits.bounds, first))
     if errors:
         return None, errors
     return Manifest(name, robots, float(duration), poses, no_barrier, entry), []
@@ -196,17 +198,13 @@ def _entry(data: dict[str, Any]) -> str | None:
     return entry
 
 
-#: how the portal names poses in its messages: counted from 1, like the Submit page's lines
-POSES_NAME = "initial_poses (numbered from 1, one per line on the Submit page)"
-
-
-def _initial_poses(poses: Any, n: int, bounds: Bounds) -> tuple[tuple[float, float, float], ...]:
+def _initial_poses(poses: Any, n: int, bounds: Bounds, first: int = 0) -> tuple[tuple[float, float, float], ...]:
     try:
         arr = np.asarray(poses, dtype=float)  # JSON has no int/float distinction: 0 means 0.0 here
     except (TypeError, ValueError):
         raise BadInput("initial_poses must be a list of [x, y, theta] number triples", "initial_poses") from None
     try:
-        arr = check_initial_poses(arr, n, bounds, POSES_NAME, first=1)
+        arr = check_initial_poses(arr, n, bounds, f"initial_poses (numbered from {first})", first=first)
     except ValueError as exc:
         raise BadInput(str(exc), "initial_poses") from None
     return tuple((float(x), float(y), float(t)) for x, y, t in arr)
