@@ -76,8 +76,8 @@ def sign_in(portal: Portal, who: str) -> tuple[httpx.Client, str]:
 
 
 def make_portal(tmp_path: Path, *, http: HttpSettings | None = None, quotas: Quotas | None = None,
-                retain_days: float | None = None, **limits) -> Portal:
-    config = PortalConfig(data=tmp_path / "data", limits=Limits(**limits), verify_runs=1,
+                retain_days: float | None = None, verify_runs: int = 1, **limits) -> Portal:
+    config = PortalConfig(data=tmp_path / "data", limits=Limits(**limits), verify_runs=verify_runs,
                           quotas=quotas if quotas is not None else Quotas(), retain_days=retain_days)
     service = PortalService(config)
     tokens = {}

@@ -28,8 +28,8 @@ def test_fleet_status_through_the_server_shows_the_assigned_robots(portal, capsy
         jid = portal.submit("alice", source=SPIN, robots=2, duration=60.0).json()["id"]  # cancelled long before
         with svc.db.transaction() as tx:
             svc.db.transition(tx, jid, "verifying")
-            svc.db.transition(tx, jid, "approved", verdict="accepted")
-            svc.db.transition(tx, jid, "waiting")
+            svc.db.transition(tx, jid, "awaiting approval", verdict="accepted")
+            svc.db.transition(tx, jid, "in arena queue")
         svc.notify()
         with portal.client("alice") as c:
             wait_for_state(c, jid, ("running",))

@@ -129,7 +129,7 @@ def test_the_portal_verifies_a_job_from_its_manifest_poses(portal):  # noqa: F81
                           initial_poses=[list(p) for p in FACING], no_barrier=True)
         assert r.status_code == 201, r.text
         with portal.client("alice") as c:
-            job = wait_for_state(c, r.json()["id"], ("waiting", "rejected"), timeout=120)
+            job = wait_for_state(c, r.json()["id"], ("in arena queue", "rejected"), timeout=120)
             report = c.get(f"/api/jobs/{job['id']}/report").json()
     finally:
         workers.stop()

@@ -33,8 +33,8 @@ def verified(portal, who, verdict="accepted", decision=None, **kwargs):
     jid = portal.submit(who, **kwargs).json()["id"]
     with svc.db.transaction() as tx:
         svc.db.transition(tx, jid, "verifying")
-        svc.db.transition(tx, jid, "approved", verdict=verdict)
-        svc.db.transition(tx, jid, "waiting", bypass_decision=decision)
+        svc.db.transition(tx, jid, "awaiting approval", verdict=verdict)
+        svc.db.transition(tx, jid, "in arena queue", bypass_decision=decision)
     svc.notify()
     return jid
 
@@ -58,7 +58,7 @@ def test_an_emergency_stop_ends_the_run_and_holds_the_arena_until_released(porta
         wait_until(lambda: arena.current_job is None, what="the run to end")
         job = op.get(f"/api/jobs/{long}").json()
         assert job["state"] == "cancelled" and job["reason"] == "emergency stop by operator op1"
-        assert portal.service.job_state(nxt) == "waiting"  # the arena stays stopped
+        assert portal.service.job_state(nxt) == "in arena queue"  # the arena stays stopped
         assert op.post("/api/operator/estop").json()["running"] is None
         assert [e["action"] for e in op.get("/api/operator/audit").json()][:2] == ["emergency stop", "emergency stop"]
         assert arena.live.latest()[1] is None
@@ -104,8 +104,8 @@ def test_the_barrier_is_bypassed_only_when_everyone_agrees(portal, arena):
     svc = portal.service
     with svc.db.transaction() as tx:  # the operator forbade it
         svc.db.transition(tx, forbidden, "verifying")
-        svc.db.transition(tx, forbidden, "approved", verdict=bypass)
-        svc.db.transition(tx, forbidden, "waiting")
+        svc.db.transition(tx, forbidden, "awaiting approval", verdict=bypass)
+        svc.db.transition(tx, forbidden, "in arena queue")
     svc.notify()
     cases[forbidden] = True
     with portal.client("alice") as c:

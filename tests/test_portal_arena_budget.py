@@ -43,8 +43,8 @@ def test_late_ticks_stop_the_robots_and_a_second_of_them_ends_the_run(portal):
     for source in (HICCUP, SLOW):
         jid = portal.submit("alice", source=source, filename="s.py", robots=2, duration=1.5).json()["id"]
         with svc.db.transaction() as tx:
-            for s in ("verifying", "approved", "waiting"):
-                svc.db.transition(tx, jid, s, **({"verdict": "accepted"} if s == "approved" else {}))
+            for s in ("verifying", "awaiting approval", "in arena queue"):
+                svc.db.transition(tx, jid, s, **({"verdict": "accepted"} if s == "awaiting approval" else {}))
         ids.append(jid)
     runner.start()
     try:

@@ -46,7 +46,7 @@ def test_another_researchers_job_is_404_everywhere(portal):
         assert [j["id"] for j in c.get("/api/jobs").json()] == [jid]
         assert c.get(f"/api/jobs/{jid}/files/manifest.json").json()["robots"] == 2
         assert c.get(f"/api/jobs/{jid}/files/..%2Fportal.sqlite3").status_code == 404
-    assert portal.service.job_state(jid) == "queued"
+    assert portal.service.job_state(jid) == "awaiting verification"
 
 
 def test_researchers_cannot_use_operator_endpoints(portal):
@@ -61,7 +61,7 @@ def test_researchers_cannot_use_operator_endpoints(portal):
                                    ("GET", "/api/operator/arena", None), ("GET", "/api/operator/stats", None)):
             r = c.request(method, path, json=body)
             assert r.status_code == 403 and r.json()["field"] == "Authorization", (path, r.text)
-    assert portal.service.job_state(jid) == "queued" and not portal.service.arena_stopped
+    assert portal.service.job_state(jid) == "awaiting verification" and not portal.service.arena_stopped
     assert not portal.service.manual_approval
     with portal.client("op1") as c:
         assert [j["id"] for j in c.get("/api/jobs").json()] == [jid]  # operators see everyone's jobs
@@ -110,4 +110,4 @@ def test_the_openapi_page_documents_the_api(portal):
         spec = c.get("/openapi.json").json()
     assert {"/api/jobs", "/api/jobs/{job_id}", "/api/operator/estop"} <= set(spec["paths"])
     upload = spec["paths"]["/api/jobs"]["post"]["requestBody"]["content"]["multipart/form-data"]["schema"]
-    assert set(upload["properties"]) == {"script", "manifest"}
+    assert set(upload["properties"]) == {"script", "manifest", "entry"}

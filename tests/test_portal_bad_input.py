@@ -180,7 +180,7 @@ def test_two_operators_approving_one_job_at_once_get_one_success_and_one_409(por
     jid = post(portal)[1]["id"]
     with svc.db.transaction() as tx:  # as a verification worker leaves it
         svc.db.transition(tx, jid, "verifying")
-        svc.db.transition(tx, jid, "approved", verdict="accepted")
+        svc.db.transition(tx, jid, "awaiting approval", verdict="accepted")
     start = threading.Barrier(2)
     results = {}
 
@@ -197,8 +197,8 @@ def test_two_operators_approving_one_job_at_once_get_one_success_and_one_409(por
     codes = sorted(r.status_code for r in results.values())
     assert codes == [200, 409]
     loser = next(r for r in results.values() if r.status_code == 409).json()
-    assert loser == {"error": f"job {jid} is waiting: it cannot become waiting", "field": "job"}
-    assert svc.job_state(jid) == "waiting"
+    assert loser == {"error": f"job {jid} is already in arena queue", "field": "job"}
+    assert svc.job_state(jid) == "in arena queue"
     assert [e["action"] for e in svc.accounts.audit_log()] == ["approve", "manual approval on"]
     # two operators cancelling at once: one cancels, the other is told it already is
     start = threading.Barrier(2)

@@ -23,16 +23,16 @@ def test_a_may_bypass_verdict_waits_for_an_operator_whatever_the_switches_say(po
     svc = portal.service
     asks = portal.submit("alice", duration=1.0, no_barrier=True).json()["id"]
     plain = portal.submit("alice", duration=1.0).json()["id"]
-    assert verified(svc, asks) == "approved" and verified(svc, plain) == "waiting"  # manual approval is off
+    assert verified(svc, asks) == "awaiting approval" and verified(svc, plain) == "in arena queue"  # manual approval is off
     with portal.client("alice") as c:
         job = c.get(f"/api/jobs/{asks}").json()
         assert job["reason"] == BYPASS_WAIT and job["bypass_pending"] and job["bypass_decision"] is None
     with portal.client("op1") as op:
         assert op.put("/api/operator/settings", json={"manual_approval": True}).status_code == 200
         assert op.put("/api/operator/settings", json={"manual_approval": False}).status_code == 200
-        assert svc.job_state(asks) == "approved"  # switching manual approval off does not release it
+        assert svc.job_state(asks) == "awaiting approval"  # switching manual approval off does not release it
         assert op.post(f"/api/operator/jobs/{asks}/hold").json()["state"] == "held"
-        assert op.post(f"/api/operator/jobs/{asks}/release").json()["state"] == "approved"  # nor a release
+        assert op.post(f"/api/operator/jobs/{asks}/release").json()["state"] == "awaiting approval"  # nor a release
         r = op.post(f"/api/operator/jobs/{asks}/approve")
         assert r.status_code == 409 and "approve or refuse that bypass" in r.json()["error"]
         r = op.post(f"/api/operator/jobs/{plain}/bypass", json={"approve": True})
@@ -40,11 +40,11 @@ def test_a_may_bypass_verdict_waits_for_an_operator_whatever_the_switches_say(po
         r = op.post(f"/api/operator/jobs/{asks}/bypass", json={})
         assert r.status_code == 422 and r.json()["field"] == "approve"
         # an operator forbidding the bypass decides it too: the job runs with the barrier
-        assert op.post(f"/api/operator/jobs/{asks}/barrier", json={"forbid": True}).json()["state"] == "waiting"
+        assert op.post(f"/api/operator/jobs/{asks}/barrier", json={"forbid": True}).json()["state"] == "in arena queue"
         again = op.post(f"/api/operator/jobs/{asks}/barrier", json={"forbid": False}).json()
-        assert again["state"] == "approved" and again["reason"] == BYPASS_WAIT
+        assert again["state"] == "awaiting approval" and again["reason"] == BYPASS_WAIT
         done = op.post(f"/api/operator/jobs/{asks}/bypass", json={"approve": True}).json()
-        assert done["state"] == "waiting" and done["bypass_decision"] == "approved" and done["reason"] is None
+        assert done["state"] == "in arena queue" and done["bypass_decision"] == "approved" and done["reason"] is None
         assert svc.bypass_allowed(done) and not svc.bypass_allowed(op.get(f"/api/jobs/{plain}").json())
         actions = [e["action"] for e in op.get("/api/operator/audit").json()]
         assert actions[:3] == ["approve barrier bypass", "allow barrier bypass", "forbid barrier bypass"]
@@ -55,10 +55,10 @@ def test_under_manual_approval_a_refused_bypass_still_needs_the_usual_approval(p
     with portal.client("op1") as op:
         op.put("/api/operator/settings", json={"manual_approval": True})
         jid = portal.submit("bob", duration=1.0, no_barrier=True).json()["id"]
-        assert verified(svc, jid) == "approved"
+        assert verified(svc, jid) == "awaiting approval"
         refused = op.post(f"/api/operator/jobs/{jid}/bypass", json={"approve": False}).json()
-        assert refused["state"] == "approved" and refused["barrier_forbidden"] and not refused["bypass_pending"]
-        assert op.post(f"/api/operator/jobs/{jid}/approve").json()["state"] == "waiting"
+        assert refused["state"] == "awaiting approval" and refused["barrier_forbidden"] and not refused["bypass_pending"]
+        assert op.post(f"/api/operator/jobs/{jid}/approve").json()["state"] == "in arena queue"
         assert not svc.bypass_allowed(op.get(f"/api/jobs/{jid}").json())
 
 
@@ -74,7 +74,7 @@ def test_the_operator_page_shows_verdict_score_and_report_beside_the_bypass_butt
         assert f'data-action="bypass-refuse" data-job="{jid}"' in page
         assert f'data-action="approve" data-job="{jid}"' not in page  # no plain approve for it
         assert op.post(f"/operator/jobs/{jid}/bypass-approve", data={"csrf": csrf}).status_code == 303
-        assert svc.job_state(jid) == "waiting"
+        assert svc.job_state(jid) == "in arena queue"
     finally:
         op.close()
     researcher, _ = sign_in(portal, "alice")
@@ -103,6 +103,6 @@ def test_a_version_2_database_sends_unapproved_bypasses_back_to_wait_for_an_oper
     assert db.version == len(MIGRATIONS) and db.check() == "ok"
     got = {r["name"]: (r["state"], r["reason"], r["bypass_decision"])
            for r in db.query("SELECT name, state, reason, bypass_decision FROM jobs")}
-    assert got == {"asks": ("approved", BYPASS_WAIT, None), "forbidden": ("waiting", None, None),
-                   "plain": ("waiting", None, None), "ran": ("done", None, None)}
+    assert got == {"asks": ("awaiting approval", BYPASS_WAIT, None), "forbidden": ("in arena queue", None, None),
+                   "plain": ("in arena queue", None, None), "ran": ("done", None, None)}
     db.close()

@@ -66,12 +66,12 @@ def test_a_two_faced_script_waits_for_an_operator_then_runs_guarded_and_the_bypa
     jid = portal.submit("alice", source=TWO_FACED, filename="twofaced.py", duration=3.0, no_barrier=True,
                         initial_poses=FACING).json()["id"]
     with portal.client("alice") as c:
-        job = wait_for_state(c, jid, ("approved", "rejected", "waiting"), timeout=120)
+        job = wait_for_state(c, jid, ("awaiting approval", "rejected", "in arena queue"), timeout=120)
         # verification was fooled — and that alone changes nothing: the job waits for a person
-        assert job["verdict"] == BYPASS_VERDICT and job["state"] == "approved", job
+        assert job["verdict"] == BYPASS_VERDICT and job["state"] == "awaiting approval", job
         assert job["reason"] == BYPASS_WAIT and job["bypass_pending"]
         assert BYPASS_WAIT in job_line(job)  # what `swarmdeck jobs` prints
-    assert svc.job_state(jid) == "approved" and arena.runs == 0  # manual approval is off: it still waits
+    assert svc.job_state(jid) == "awaiting approval" and arena.runs == 0  # manual approval is off: it still waits
     with portal.client("op1") as op:
         page = op.get("/api/operator/arena").json()
         assert page["queue"] == [] and page["alerts"]["messages"] == []
@@ -80,7 +80,7 @@ def test_a_two_faced_script_waits_for_an_operator_then_runs_guarded_and_the_bypa
         with portal.client("alice") as c:
             assert c.post(f"/api/operator/jobs/{jid}/bypass", json={"approve": True}).status_code == 403
         approved = op.post(f"/api/operator/jobs/{jid}/bypass", json={"approve": True}).json()
-        assert approved["state"] in ("waiting", "setting up", "running") and approved["bypass_decision"] == "approved"
+        assert approved["state"] in ("in arena queue", "setting up", "running") and approved["bypass_decision"] == "approved"
         audit = op.get("/api/operator/audit").json()
         assert audit[0]["action"] == "approve barrier bypass" and audit[0]["job"] == jid
         assert "S = 1.0000" in audit[0]["detail"]
@@ -114,7 +114,7 @@ def test_a_refused_bypass_runs_with_the_barrier(portal, arena):
     jid = portal.submit("bob", source=TWO_FACED, filename="twofaced.py", duration=1.0, no_barrier=True,
                         initial_poses=FACING).json()["id"]
     with portal.client("op1") as op:
-        wait_until(lambda: svc.job_state(jid) == "approved", timeout=120, what="verification")
+        wait_until(lambda: svc.job_state(jid) == "awaiting approval", timeout=120, what="verification")
         refused = op.post(f"/api/operator/jobs/{jid}/bypass", json={"approve": False}).json()
         assert refused["bypass_decision"] == "refused" and refused["barrier_forbidden"]
         assert op.post(f"/api/operator/jobs/{jid}/bypass", json={"approve": True}).status_code == 409

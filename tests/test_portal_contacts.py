@@ -40,7 +40,7 @@ def test_a_contact_is_counted_once_and_named_in_the_result(portal, unguarded):
                         initial_poses=[[-0.35, 0.0, 0.0], [0.35, 0.0, 3.141592653589793]]).json()["id"]
     with svc.db.transaction() as tx:  # as verification and an operator's approval of the bypass would
         svc.db.transition(tx, jid, "verifying")
-        svc.db.transition(tx, jid, "approved", verdict=BYPASS_VERDICT, safety_score=1.0)
+        svc.db.transition(tx, jid, "awaiting approval", verdict=BYPASS_VERDICT, safety_score=1.0)
     with portal.client("op1") as op:
         assert op.post(f"/api/operator/jobs/{jid}/bypass", json={"approve": True}).status_code == 200
     with portal.client("alice") as c:

@@ -66,7 +66,7 @@ def _job(db, state):
 
 def test_two_threads_moving_one_job_at_once_give_one_success_and_one_conflict(tmp_path):
     db = Database(tmp_path)
-    job = _job(db, "approved")
+    job = _job(db, "awaiting approval")
     start = threading.Barrier(2)
     outcomes = []
 
@@ -74,7 +74,7 @@ def test_two_threads_moving_one_job_at_once_give_one_success_and_one_conflict(tm
         start.wait()
         try:
             with db.transaction() as tx:
-                db.transition(tx, job, "waiting", sources=("approved",))
+                db.transition(tx, job, "in arena queue", sources=("awaiting approval",))
             outcomes.append("ok")
         except TransitionConflict as exc:
             outcomes.append(exc.state)
@@ -84,14 +84,14 @@ def test_two_threads_moving_one_job_at_once_give_one_success_and_one_conflict(tm
         t.start()
     for t in threads:
         t.join()
-    assert sorted(outcomes) == ["ok", "waiting"]
-    assert db.query_one("SELECT state FROM jobs WHERE id = ?", (job,))["state"] == "waiting"
+    assert sorted(outcomes) == ["in arena queue", "ok"]
+    assert db.query_one("SELECT state FROM jobs WHERE id = ?", (job,))["state"] == "in arena queue"
 
 
 def test_a_transition_the_state_machine_does_not_allow_is_a_conflict(tmp_path):
     db = Database(tmp_path)
     job = _job(db, "done")
-    with pytest.raises(TransitionConflict, match=f"job {job} is done: it cannot become cancelled"):
+    with pytest.raises(TransitionConflict, match=rf"job {job} has already ended \(done\): it cannot be cancelled any more"):
         with db.transaction() as tx:
             db.transition(tx, job, "cancelled")
     with pytest.raises(ValueError, match="unknown job state"):

@@ -26,8 +26,8 @@ def ended_job(portal, who="alice", state="done"):
     svc = portal.service
     jid = portal.submit(who).json()["id"]
     with svc.db.transaction() as tx:
-        for s in ("verifying", "approved", "waiting", "setting up", "running", state):
-            svc.db.transition(tx, jid, s, **({"verdict": "accepted"} if s == "approved" else {}))
+        for s in ("verifying", "awaiting approval", "in arena queue", "setting up", "running", state):
+            svc.db.transition(tx, jid, s, **({"verdict": "accepted"} if s == "awaiting approval" else {}))
     return jid
 
 
@@ -44,8 +44,8 @@ def test_the_next_job_runs_while_the_exports_wait_and_a_restart_writes_them(port
     ids = [portal.submit("alice", duration=0.5).json()["id"] for _ in range(2)]
     with svc.db.transaction() as tx:
         for jid in ids:
-            for s in ("verifying", "approved", "waiting"):
-                svc.db.transition(tx, jid, s, **({"verdict": "accepted"} if s == "approved" else {}))
+            for s in ("verifying", "awaiting approval", "in arena queue"):
+                svc.db.transition(tx, jid, s, **({"verdict": "accepted"} if s == "awaiting approval" else {}))
     runner.start()
     try:
         with portal.client("alice") as c:

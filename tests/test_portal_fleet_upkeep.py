@@ -40,8 +40,8 @@ def waiting(portal, who, source=STILL, **kwargs):
     jid = portal.submit(who, source=source, **kwargs).json()["id"]
     with svc.db.transaction() as tx:
         svc.db.transition(tx, jid, "verifying")
-        svc.db.transition(tx, jid, "approved", verdict="accepted")
-        svc.db.transition(tx, jid, "waiting")
+        svc.db.transition(tx, jid, "awaiting approval", verdict="accepted")
+        svc.db.transition(tx, jid, "in arena queue")
     svc.notify()
     return jid
 
@@ -104,13 +104,13 @@ def test_a_job_needing_more_charged_robots_waits_naming_them_until_they_charge(p
         jid = waiting(portal, "alice", robots=3, duration=0.2)
         with portal.client("alice") as c:
             job = wait_until(lambda: (j := c.get(f"/api/jobs/{jid}").json())["reason"] and j, what="a reason")
-            assert job["state"] == "waiting"
+            assert job["state"] == "in arena queue"
             assert "waiting for robots" in job["reason"] and "robot 1: battery 10% < 50%" in job["reason"]
             with portal.client("op1") as op:
                 assert op.get("/api/operator/arena").json()["queue"][0]["reason"] == job["reason"]
             runner.fleet.idle(4 * 3600.0)  # four hours on the strip
             done = wait_for_state(c, jid, ("done", "failed"))
-        assert done["state"] == "done" and done["reason"].startswith("set up: done"), done  # no longer "waiting"
+        assert done["state"] == "done" and done["reason"].startswith("set up: done"), done  # no longer "in arena queue"
         run = json.loads((portal.service.job_dir(jid) / "run.json").read_text())
         assert sorted(run["setup"]["robots"]) == [0, 1, 2] and run["return"]["ok"]
         assert runner.fleet_status()["ready"]
@@ -153,11 +153,11 @@ def test_setup_and_return_that_cannot_finish_stop_the_robots_and_call_the_operat
             browser.close()
             assert "NEEDS AN OPERATOR" in page and "Arena NOT ready" in page
             nxt = waiting(portal, "bob", robots=1, duration=0.2)
-            assert portal.service.job_state(nxt) == "waiting"  # the arena takes no job
+            assert portal.service.job_state(nxt) == "in arena queue"  # the arena takes no job
             assert op.post("/api/operator/release").status_code == 200
             assert op.get("/api/operator/audit").json()[0]["action"] == "release emergency stop"
             # released: the arena tries the return again (and, with the same 1 s limit, calls again)
             wait_until(lambda: op.get("/api/operator/arena").json()["needs_operator"], what="needs operator again")
-            assert portal.service.job_state(nxt) == "waiting"
+            assert portal.service.job_state(nxt) == "in arena queue"
     finally:
         runner.stop()

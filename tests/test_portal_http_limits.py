@@ -123,7 +123,7 @@ def test_uploads_and_pages_still_work_under_the_limits(strict):
     r = strict.submit("alice")
     assert r.status_code == 201, r.text
     with strict.client("alice") as c:
-        assert c.get(f"/api/jobs/{r.json()['id']}").json()["state"] == "queued"
+        assert c.get(f"/api/jobs/{r.json()['id']}").json()["state"] == "awaiting verification"
 
 
 def test_a_big_upload_with_a_bad_token_gets_its_401(strict):

@@ -41,7 +41,7 @@ def test_kill_9_during_a_run_then_restart(tmp_path):
     db = Database(data)
     assert db.check() == "ok"
     states = {r["id"]: r["state"] for r in db.query("SELECT id, state FROM jobs")}
-    assert states[running] == "running" and states[queued] in ("queued", "verifying", "approved", "waiting")
+    assert states[running] == "running" and states[queued] in ("awaiting verification", "verifying", "awaiting approval", "in arena queue")
     db.close()
 
     server = start_server(data, "--robots", "4", "--verify-runs", "1", "--workers", "1", "--fast")

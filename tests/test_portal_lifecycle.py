@@ -53,7 +53,7 @@ def test_submit_verify_run_and_download_the_data(tmp_path, capsys, monkeypatch):
         run = json.loads((tmp_path / "out" / "run.json").read_text())
         assert run["ended_by"] == "duration" and run["error"] is None
         code, out, err = cli(capsys, "cancel", str(job["id"]), "--server", server.url)
-        assert code == 1 and err.count("\n") == 1 and "HTTP 409" in err and "is done" in err
+        assert code == 1 and err.count("\n") == 1 and "HTTP 409" in err and "has already ended (done)" in err
         code, _, err = cli(capsys, "jobs", "--server", server.url, "--token", "sdk_wrong")
         assert code == 1 and "HTTP 401" in err
     finally:

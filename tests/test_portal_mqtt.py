@@ -42,8 +42,8 @@ def test_a_job_is_set_up_on_the_docked_mqtt_fleet_runs_and_the_robots_return(por
         jid = portal.submit("alice", robots=2, duration=1.5, initial_poses=goals.tolist()).json()["id"]
         with svc.db.transaction() as tx:  # verified (as the workers would leave it)
             svc.db.transition(tx, jid, "verifying")
-            svc.db.transition(tx, jid, "approved", verdict="accepted")
-            svc.db.transition(tx, jid, "waiting")
+            svc.db.transition(tx, jid, "awaiting approval", verdict="accepted")
+            svc.db.transition(tx, jid, "in arena queue")
         svc.notify()
         with portal.client("alice") as c:
             job = wait_for_state(c, jid, ("done", "failed"), timeout=120)

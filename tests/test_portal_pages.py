@@ -108,7 +108,7 @@ def test_another_researchers_job_is_not_found(portal):
 def _run(portal, jid: int, state: str = "running") -> None:
     svc = portal.service
     with svc.db.transaction() as tx:
-        for s in ("verifying", "approved", "waiting", "setting up", "running"):
+        for s in ("verifying", "awaiting approval", "in arena queue", "setting up", "running"):
             svc.db.transition(tx, jid, s)
         if state != "running":
             svc.db.transition(tx, jid, state)
@@ -185,7 +185,7 @@ def test_operator_forms_act_and_are_audited(portal):
     with svc.db.transaction() as tx:
         for jid in (a, b):
             svc.db.transition(tx, jid, "verifying")
-            svc.db.transition(tx, jid, "approved", verdict="accepted")
+            svc.db.transition(tx, jid, "awaiting approval", verdict="accepted")
     page = op.get("/operator").text
     assert "Manual approval is ON" in page and f'data-action="approve" data-job="{a}"' in page
     for jid in (a, b):

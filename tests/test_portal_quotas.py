@@ -17,7 +17,8 @@ def test_the_26th_submission_in_a_row_is_refused_naming_the_limit(portal):
         ids.append(r.json()["id"])
     r = portal.submit("alice", name="run25")
     assert r.status_code == 429 and r.json() == {
-        "error": "you have 25 jobs not yet finished (queued, verifying, waiting or running); the limit is 25: "
+        "error": "you have 25 jobs not yet finished (awaiting verification or approval, verifying, in arena queue or "
+                 "running); the limit is 25: "
                  "wait for one to end, or cancel one", "field": "max_unfinished_jobs"}
     assert len(portal.service.db.query("SELECT id FROM jobs")) == 25  # nothing stored for the refused one
     assert portal.submit("bob").status_code == 201  # bob has his own count
@@ -93,7 +94,7 @@ def test_the_verification_worker_charges_each_jobs_cpu_to_its_owner(portal):
     try:
         jid = portal.submit("alice", robots=2, duration=1.0).json()["id"]
         with portal.client("alice") as c:
-            wait_for_state(c, jid, ("waiting", "rejected"), timeout=180)
+            wait_for_state(c, jid, ("in arena queue", "rejected"), timeout=180)
     finally:
         workers.stop()
     [row] = portal.service.db.query("SELECT job_id, user_id, cpu_s FROM verification_usage")

@@ -26,7 +26,7 @@ def test_a_release_between_the_checks_does_not_start_a_job_before_the_return(por
     svc.arena_needs_operator("test: robots left on the floor")  # stopped, as after an emergency stop
     jid = portal.submit("alice", source="def experiment(arena):\n    arena.step()\n", robots=1, duration=0.1).json()["id"]
     with svc.db.transaction() as tx:
-        for state, extra in (("verifying", {}), ("approved", {"verdict": "accepted"}), ("waiting", {})):
+        for state, extra in (("verifying", {}), ("awaiting approval", {"verdict": "accepted"}), ("in arena queue", {})):
             svc.db.transition(tx, jid, state, **extra)
 
     between = runner._between_jobs
@@ -40,5 +40,5 @@ def test_a_release_between_the_checks_does_not_start_a_job_before_the_return(por
 
     runner._between_jobs = then_released
     runner._run()
-    assert svc.job_state(jid) == "waiting"  # not claimed on the pass that saw the arena stopped
+    assert svc.job_state(jid) == "in arena queue"  # not claimed on the pass that saw the arena stopped
     assert runner.fleet.away() == on_floor  # and nobody moved

@@ -33,16 +33,16 @@ def test_verified_jobs_queue_for_the_arena_unless_an_operator_approves_each(port
     svc = portal.service
     first = portal.submit("alice", source=SPIN, duration=0.5).json()["id"]
     with portal.client("alice") as c:
-        job = wait_for_state(c, first, ("waiting",), timeout=60)
+        job = wait_for_state(c, first, ("in arena queue",), timeout=60)
         assert job["verdict"].startswith("accepted") and job["position"] == 0
     with portal.client("op1") as op:
         assert op.put("/api/operator/settings", json={"manual_approval": True}).json() == {"manual_approval": True}
         second = portal.submit("bob", source=SPIN, duration=0.5).json()["id"]
         with portal.client("bob") as c:
-            wait_for_state(c, second, ("approved",), timeout=60)
+            wait_for_state(c, second, ("awaiting approval",), timeout=60)
         arena = op.get("/api/operator/arena").json()
         assert [j["id"] for j in arena["queue"]] == [first] and arena["manual_approval"]
-        assert op.post(f"/api/operator/jobs/{second}/approve").json()["state"] == "waiting"
+        assert op.post(f"/api/operator/jobs/{second}/approve").json()["state"] == "in arena queue"
         assert op.post(f"/api/operator/jobs/{second}/move", json={"position": 0}).json()["position"] == 0
         assert [j["id"] for j in op.get("/api/operator/arena").json()["queue"]] == [second, first]
         r = op.post(f"/api/operator/jobs/{second}/move", json={"position": -1})
@@ -62,5 +62,5 @@ def test_a_multi_file_archive_is_verified_from_its_entry_with_its_modules(portal
     r = portal.submit("alice", source=buf.getvalue(), filename="multi.zip", duration=0.5, entry="run.py")
     assert r.status_code == 201, r.text
     with portal.client("alice") as c:
-        job = wait_for_state(c, r.json()["id"], ("waiting", "rejected"), timeout=60)
-    assert job["state"] == "waiting" and job["entry"] == "run.py", job
+        job = wait_for_state(c, r.json()["id"], ("in arena queue", "rejected"), timeout=60)
+    assert job["state"] == "in arena queue" and job["entry"] == "run.py", job

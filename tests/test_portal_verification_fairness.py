@@ -45,11 +45,11 @@ def test_stalling_jobs_end_with_the_reason_and_another_researchers_job_is_verifi
     workers = VerificationWorkers(portal.service, SerialExecutor(), poll_s=0.2).start()
     try:
         with portal.client("op1") as op:
-            jobs = {jid: wait_for_state(op, jid, ("waiting", "rejected"), timeout=120)
+            jobs = {jid: wait_for_state(op, jid, ("in arena queue", "rejected"), timeout=120)
                     for jid in (*stallers, good)}
     finally:
         workers.stop()
-    assert jobs[good]["state"] == "waiting" and jobs[good]["verdict"].startswith("accepted")
+    assert jobs[good]["state"] == "in arena queue" and jobs[good]["verdict"].startswith("accepted")
     stale, many, stale2 = (jobs[j] for j in stallers)
     assert stale["state"] == many["state"] == stale2["state"] == "rejected"
     assert "in 5 ticks in a row (no answer in time, or an answer for another tick" in stale["reason"]

@@ -34,18 +34,24 @@ class UsageError(Exception):
     """A mistake in the command line or in a file the user named."""
 
 
-def build_parser() -> argparse.ArgumentParser:
-    """Build the top-level parser with every discovered subcommand."""
+def _command_modules(only: str | None = None) -> list[str]:
+    """The command modules' names (module ``foo_bar`` is command ``foo-bar``); ``only``: just that command's
+    module, when it exists (so ``swarmdeck jobs`` imports the ``jobs`` module and not the console's)."""
+    names = [info.name for info in pkgutil.iter_modules(__path__) if not info.name.startswith("_") and not info.ispkg]
+    if only is not None and only.replace("-", "_") in names:
+        return [only.replace("-", "_")]
+    return names
+
+
+def build_parser(command: str | None = None) -> argparse.ArgumentParser:
+    """Build the top-level parser with every discovered subcommand (``command``: only that one, when it
+    exists — a thin command then imports only what it uses)."""
     parser = argparse.ArgumentParser(
         prog="swarmdeck",
         description="Operator console and runtime for a Robotarium-style multi-robot arena.",
     )
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
-    modules = []
-    for info in pkgutil.iter_modules(__path__):
-        if info.name.startswith("_") or info.ispkg:
-            continue
-        modules.append(importlib.import_module(f"{__name__}.{info.name}"))
+    modules = [importlib.import_module(f"{__name__}.{name}") for name in _command_modules(command)]
     for module in sorted(modules, key=lambda m: getattr(m, "ORDER", 50)):
         p = sub.add_parser(module.NAME, help=module.HELP, description=module.HELP)
         module.add_arguments(p)
@@ -55,13 +61,26 @@ def build_parser() -> argparse.ArgumentParser:
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``swarmdeck`` command; returns the exit code."""
-    parser = build_parser()
-    argv = list(sys.argv[1:] if argv is None else argv)
+    try:
+        code = _main(argv)
+        sys.stdout.flush()  # a closed pipe (`swarmdeck jobs | head -2`) shows here, not at exit
+        return code
+    except BrokenPipeError:
+        # the reader went away (head, less): stop quietly, as Unix tools do; nothing more can be written
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+        return 141  # 128 + SIGPIPE, what a shell reports for a tool ended by a closed pipe
+
+
+def _main(argv: Sequence[str] | None) -> int:
+    words = list(sys.argv[1:] if argv is None else argv)
     rest = None
-    if "--" in argv:  # `swarmdeck run SCRIPT.py [options] -- ARGS`: ARGS are the script's, whatever they look like
-        i = argv.index("--")
-        argv, rest = argv[:i], argv[i + 1:]
-    args = parser.parse_args(argv)
+    if "--" in words:  # `swarmdeck run SCRIPT.py [options] -- ARGS`: ARGS are the script's, whatever they look like
+        i = words.index("--")
+        words, rest = words[:i], words[i + 1:]
+    first = next((w for w in words if not w.startswith("-")), None)  # the top-level parser has no options but -h
+    parser = build_parser(first)
+    args = parser.parse_args(words)
     if rest is not None:
         if not hasattr(args, "script_args"):
             parser.error(f"unrecognized arguments: -- {' '.join(rest)}")

@@ -45,15 +45,26 @@ def fail(command: str, exc: Any, as_json: bool) -> int:
     return 1
 
 
+def shorten(text: str, width: int) -> str:
+    """``text`` on one line, at most ``width`` characters, cut at a word boundary with "…" (never mid-word)."""
+    text = " ".join(text.split())
+    if len(text) <= width:
+        return text
+    cut = text[: width - 1]
+    space = cut.rfind(" ")
+    return (cut[:space] if space > width // 2 else cut).rstrip(" ,;:") + "…"
+
+
 def job_line(job: dict[str, Any]) -> str:
+    """One job as ``swarmdeck jobs`` lists it (queue positions counted from 1, as on the pages)."""
     extra = ""
     if job.get("verdict"):
         extra += f"  [{job['verdict']}]"
     if job.get("position") is not None:
-        extra += f"  (queue position {job['position']})"
+        extra += f"  (queue position {job['position'] + 1})"
     if job.get("reason"):
-        extra += f"  {job['reason'][:200]}"
+        extra += f"  {shorten(job['reason'], 200)}"
     if job.get("results_deleted"):
         extra += "  (results deleted: retention)"
-    return f"{job['id']:>5}  {job['state']:<11}  {job['name'][:40]:<40}  {job['robots']:>3} robots  " \
+    return f"{job['id']:>5}  {job['state']:<21}  {job['name'][:40]:<40}  {job['robots']:>3} robots  " \
            f"{job['duration']:g} s{extra}"

@@ -1,4 +1,4 @@
-"""``swarmdeck cancel JOB``: cancel one of your jobs on the lab's portal (queued, verifying, waiting or running)."""
+"""``swarmdeck cancel JOB``: cancel one of your jobs on the lab's portal (awaiting verification, verifying, awaiting approval, in arena queue or running)."""
 from __future__ import annotations
 
 import argparse

@@ -71,6 +71,8 @@ def main(args: argparse.Namespace) -> int:
         raise UsageError(str(exc)) from None
     changes = {}
     if args.robots is not None:
+        if args.robots < 1:
+            raise UsageError(f"--robots must be >= 1, got {args.robots}")  # the option's name, not the config key's
         changes["n_robots"] = args.robots
     if args.behaviour is not None:
         changes["behaviour"] = args.behaviour

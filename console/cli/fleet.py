@@ -13,8 +13,6 @@ import math
 import sys
 from typing import Any
 
-import numpy as np
-
 from swarmdeck.console.cli import UsageError
 
 NAME = "fleet"
@@ -58,8 +56,6 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def main(args: argparse.Namespace) -> int:
-    from swarmdeck.console.runtime import fleet_upkeep as fu
-
     if args.action == "setup" and args.poses is None:
         raise UsageError("setup needs POSES.csv (one 'x, y, theta' line per robot)")
     if args.action != "setup" and args.poses is not None:
@@ -69,6 +65,7 @@ def main(args: argparse.Namespace) -> int:
             raise UsageError(f"{args.action} through --server: the portal's arena sets up and returns its robots "
                              "itself between jobs (use --robots-via on the arena's machine when no server runs)")
         return _server_status(args)
+    from swarmdeck.console.runtime import fleet_upkeep as fu  # here: `status --server` stays a thin client
     if args.token is not None:
         raise UsageError("--token goes with --server")
     if args.robots_via is None and args.simulated is None:
@@ -228,6 +225,7 @@ def _act(args: argparse.Namespace, loop: Any, pace: Any, frame: Any, goals: Any,
         out["assignment"] = {str(k): rid for k, rid in enumerate(result.robots)}
     if args.action == "release":
         last = loop.latest
+        import numpy as np  # here: `fleet status --server` (a thin client) never loads it
         out["ready"] = bool(np.all(chargers.docked_slot(last.poses) >= 0)) if last is not None else False
     if args.json:
         print(json.dumps(out, indent=1))

@@ -28,7 +28,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--robots-via", default=None, metavar="URL",
                         help="drive GRITSBots over MQTT instead of simulating them, e.g. mqtt://127.0.0.1:1883")
     parser.add_argument("--fast", action="store_true",
-                        help="simulated arena: run jobs as fast as they compute instead of in real time (tests, benchmarks)")
+                        help="simulated arena: run jobs, and the robots' set-up and return, as fast as they compute instead of "
+                             "in real time (tests, benchmarks)")
     parser.add_argument("--workers", type=int, default=None, metavar="W",
                         help="local verification worker processes (default: number of cores)")
     parser.add_argument("--ray", default=None, metavar="ADDRESS",

@@ -8,6 +8,7 @@ from pathlib import Path
 
 from swarmdeck.console.cli import UsageError
 from swarmdeck.console.cli._client import add_client_arguments, client, fail, job_line
+from swarmdeck.console.portal.states import JobState
 
 NAME = "submit"
 HELP = "submit an experiment script (.py or .zip) to the lab's portal; --wait follows it to the end"
@@ -24,11 +25,16 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--name", default=None, help="the experiment's name (default: the script's file name)")
     parser.add_argument("--robots", type=int, default=None, metavar="N", help="robots the experiment uses")
     parser.add_argument("--duration", type=float, default=None, metavar="S", help="declared duration, s")
+    parser.add_argument("--entry", default=None, metavar="FILE",
+                        help="for a .zip: the script inside it to run, e.g. src/main.py (default: the manifest's "
+                             "'entry', else main.py, else the archive's only .py file)")
     parser.add_argument("--no-barrier", action="store_true",
                         help="ask to run without the safety barrier: granted only if verification allows it and an "
                              "operator approves this job's bypass (until then it waits); the walls, the docked robots "
                              "and the guard stay on, and the barrier comes back if two robots get too close")
-    parser.add_argument("--wait", action="store_true", help="follow the job until it ends (states on stderr)")
+    parser.add_argument("--wait", action="store_true",
+                        help="follow the job until it ends (states on stderr), then print its results in short: did "
+                             "the barrier step in, the minimum distance, contacts, the files, the download command")
     add_client_arguments(parser)
 
 
@@ -59,20 +65,29 @@ def main(args: argparse.Namespace) -> int:
 
     if not Path(args.script).is_file():
         raise UsageError(f"script {args.script!r} does not exist or is not a file")
+    if args.entry is not None and not args.script.lower().endswith(".zip"):
+        raise UsageError("--entry names the script inside a .zip; a .py is its own entry")
     manifest = manifest_from(args)
     if manifest is not None and ("robots" not in manifest or "duration" not in manifest):
         raise UsageError("say how many robots and for how long: --robots N --duration S (or --manifest M)")
     with client(args) as c:
         try:
-            job = c.submit(args.script, manifest)
+            job = c.submit(args.script, manifest, args.entry)
             if not args.json:
                 print(f"submitted job {job['id']}: {job['state']}")
+            results = None
             if args.wait:
                 job = c.wait(job["id"], on_state=lambda j: print(job_line(j), file=sys.stderr))
+                if job["state"] != JobState.REJECTED and not job.get("results_deleted"):
+                    results = c.results(job["id"])
         except ClientError as exc:
             return fail(NAME, exc, args.json)
     if args.json:
-        print(json.dumps(job))
+        print(json.dumps(job if results is None else {**job, "results": results}))
     elif args.wait:
+        from swarmdeck.console.portal.results import summary_lines
+
         print(f"job {job['id']}: {job['state']}" + (f" ({job['reason']})" if job.get("reason") else ""))
-    return 0 if not args.wait or job["state"] == "done" else 1
+        for line in [] if results is None else summary_lines(results):
+            print(f"  {line}")
+    return 0 if not args.wait or job["state"] == JobState.DONE else 1

@@ -19,16 +19,32 @@ def _esc(value: Any) -> str:
     return html.escape(str(value), quote=True)
 
 
-def _score_bars(runs: list[dict[str, Any]], width: int = 520, height: int = 160) -> str:
+def _nothing(why: str) -> str:
+    """In place of a chart with nothing to draw: why there is nothing (never an empty frame)."""
+    return f'<p class="nothing">{_esc(why)}</p>'
+
+
+def _no_motion(runs: list[dict[str, Any]]) -> str | None:
+    """Why no raw run has anything to plot (None: some raw run moved robots)."""
     raw = [r for r in runs if r["mode"] == "raw"]
     if not raw:
-        return ""
+        return "nothing was run: the script was refused before any simulation (see the reasons above)"
+    if not any(r["min_distance_series"] for r in raw):
+        return "no run moved a robot: every run ended before its first step (see the runs' errors below)"
+    return None
+
+
+def _score_bars(runs: list[dict[str, Any]], width: int = 520, height: int = 160) -> str:
+    why = _no_motion(runs)
+    raw = [r for r in runs if r["mode"] == "raw" and r["safety_score"] is not None]
+    if why is not None or not raw:
+        return _nothing(why or "no raw run measured S (see the runs' errors below)")
     bar = (width - 40) / len(raw)
     parts = [f'<svg width="{width}" height="{height + 30}" role="img" aria-label="S per run">',
              f'<line x1="30" y1="{height}" x2="{width}" y2="{height}" stroke="#444"/>',
              f'<text x="0" y="12" font-size="11">1.0</text><text x="0" y="{height}" font-size="11">0</text>']
     for k, r in enumerate(raw):
-        s = r["safety_score"] if r["safety_score"] is not None else 0.0
+        s = r["safety_score"]
         h = s * (height - 10)
         x = 30 + k * bar
         colour = "#2ca02c" if s >= 1.0 else "#d62728"
@@ -40,9 +56,10 @@ def _score_bars(runs: list[dict[str, Any]], width: int = 520, height: int = 160)
 
 
 def _distance_plot(runs: list[dict[str, Any]], duration: float, width: int = 520, height: int = 200) -> str:
+    why = _no_motion(runs)
+    if why is not None:
+        return _nothing(why)
     series = [(r["index"], r["min_distance_series"]) for r in runs if r["mode"] == "raw" and r["min_distance_series"]]
-    if not series:
-        return "<p>no run produced positions</p>"
     top = max(max(s) for _, s in series) * 1.05 or 1.0
     parts = [f'<svg width="{width}" height="{height + 20}" role="img" aria-label="minimum distance over time">',
              f'<rect x="40" y="0" width="{width - 40}" height="{height}" fill="none" stroke="#444"/>']
@@ -62,6 +79,9 @@ def _distance_plot(runs: list[dict[str, Any]], duration: float, width: int = 520
 
 def _arena_plot(runs: list[dict[str, Any]], bounds: Bounds = DEFAULT_BOUNDS,
                 scale: float = 160.0) -> str:
+    why = _no_motion(runs)
+    if why is not None:
+        return _nothing(why)
     x0, x1, y0, y1 = bounds
     w, h = (x1 - x0) * scale, (y1 - y0) * scale
     parts = [f'<svg width="{w + 2:.0f}" height="{h + 2:.0f}" role="img" aria-label="first contacts on the arena">',
@@ -81,6 +101,8 @@ def _arena_plot(runs: list[dict[str, Any]], bounds: Bounds = DEFAULT_BOUNDS,
 
 
 def _run_table(runs: list[dict[str, Any]]) -> str:
+    if not runs:
+        return _nothing("no run")
     rows = ["<tr><th>run</th><th>mode</th><th>ended by</th><th>S</th><th>contacts</th><th>first contact (s)</th>"
             "<th>min distance (m)</th><th>steps too close</th><th>steps outside</th><th>error</th></tr>"]
     for r in runs:
@@ -100,7 +122,8 @@ def render_html(report: dict[str, Any]) -> str:
     duration = report["config"]["duration"]
     sections = []
     for s in report["scripts"]:
-        score = "—" if s["safety_score"] is None else f"{s['safety_score']:.4f}"
+        score = ("— (not measured: rejected)" if s["verdict"] == "rejected" and s["safety_score"] is None
+                 else "—" if s["safety_score"] is None else f"{s['safety_score']:.4f}")
         reasons = "".join(f"<li>{_esc(r)}</li>" for r in s["reasons"] + s["bypass_refused_because"])
         sections.append(
             f"<section><h2>{_esc(s['script'])}: {_esc(s['verdict'])}</h2>"

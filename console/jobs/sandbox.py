@@ -161,11 +161,12 @@ class SandboxOutcome:
 
 
 class _LogDrain(threading.Thread):
-    """Reads the child's stdout+stderr (a pipe) to the end, keeping the first ``limit`` bytes."""
+    """Reads the child's stdout+stderr (a pipe) to the end, keeping the first ``limit`` bytes (and handing each
+    kept chunk to ``on_log`` as it comes: the portal's live log)."""
 
-    def __init__(self, fd: int, limit: int) -> None:
+    def __init__(self, fd: int, limit: int, on_log: Callable[[bytes], None] | None = None) -> None:
         super().__init__(daemon=True)
-        self.fd, self.limit = fd, limit
+        self.fd, self.limit, self.on_log = fd, limit, on_log
         self.kept = bytearray()
         self.total = 0
 
@@ -182,6 +183,11 @@ class _LogDrain(threading.Thread):
                 room = self.limit - len(self.kept)
                 if room > 0:
                     self.kept += chunk[:room]
+                    if self.on_log is not None:
+                        try:
+                            self.on_log(bytes(chunk[:room]))
+                        except Exception:  # noqa: BLE001 - a watcher's failure never stops the drain
+                            self.on_log = None
         finally:
             os.close(self.fd)
 
@@ -480,6 +486,7 @@ def run_sandboxed(
     argv: tuple[str, ...] | list[str] = (),
     rps_semantics: bool = False,
     rps_call_order: bool = True,
+    on_log: Callable[[bytes], None] | None = None,
 ) -> SandboxOutcome:
     """Run ``script`` in a jailed child against the plant ``make_plant(n, initial_poses)`` builds.
 
@@ -499,7 +506,8 @@ def run_sandboxed(
     (naming what is wrong) when it breaks its rule.
     ``argv``: the script's arguments (its ``sys.argv[1:]``; it runs as ``__main__``);
     ``rps_semantics``/``rps_call_order``: the rps facade's modes in the child (``swarmdeck run --rps-semantics``,
-    ``--no-rps-call-order``).
+    ``--no-rps-call-order``). ``on_log(bytes)``: each piece of the script's output
+    (stdout and stderr, within ``limits.log_bytes``) as it comes, on a reader thread.
     """
     if isinstance(script, ScriptBundle):
         bundle = script
@@ -513,13 +521,15 @@ def run_sandboxed(
     script_options = {"argv": [str(a) for a in argv], "rps_semantics": bool(rps_semantics),
                       "rps_call_order": bool(rps_call_order)}
     return _run_sandboxed(bundle, make_plant, n_robots=n_robots, duration=duration, rps=rps, limits=limits,
-                          trusted=trusted, cancelled=cancelled, jail=jail, hardening=_FULL, script_options=script_options)
+                          trusted=trusted, cancelled=cancelled, jail=jail, hardening=_FULL, script_options=script_options,
+                          on_log=on_log)
 
 
 def _run_sandboxed(bundle: ScriptBundle, make_plant: PlantFactory, *, n_robots: int | None, duration: float | None,
                    rps: bool | None, limits: SandboxLimits, trusted: bool, cancelled: Callable[[], bool] | None,
                    jail: JailConfig, hardening: _Hardening,
-                   script_options: dict[str, Any] | None = None) -> SandboxOutcome:
+                   script_options: dict[str, Any] | None = None,
+                   on_log: Callable[[bytes], None] | None = None) -> SandboxOutcome:
     """:func:`run_sandboxed` with ``hardening`` (always :data:`_FULL` there)."""
     try:  # checked on every run: the lab may change the environment while a server runs
         env = None if jail.script_env is None else ScriptEnv.open(jail.script_env)
@@ -579,7 +589,7 @@ def _run_sandboxed(bundle: ScriptBundle, make_plant: PlantFactory, *, n_robots: 
             outcome = _loop(child, script, scratch, uid, make_plant, n_robots=n_robots, duration=duration, rps=rps,
                             limits=limits, cancelled=cancelled, jail=chosen, cpu_clock=cpu_clock,
                             seccomp=chosen == "unshare" and hardening.seccomp, script_options=script_options or {},
-                            script_env=None if env is None else env.policy())
+                            script_env=None if env is None else env.policy(), on_log=on_log)
         outcome.uid, outcome.unhardened = uid, unhardened
         outcome.cgroup = None if group is None else f"v{group.version}"
         if group is not None and group.oom_kills():
@@ -606,14 +616,15 @@ def _loop(child: _Child, script: Path, scratch: Path, uid: int | None, make_plan
           n_robots: int | None, duration: float | None, rps: bool | None, limits: SandboxLimits,
           cancelled: Callable[[], bool] | None, jail: str | None, seccomp: bool = False,
           script_env: dict[str, Any] | None = None, script_options: dict[str, Any] | None = None,
-          cpu_clock: Callable[[], float | None] | None = None) -> SandboxOutcome:
+          cpu_clock: Callable[[], float | None] | None = None,
+          on_log: Callable[[bytes], None] | None = None) -> SandboxOutcome:
     """The run: the child's start-up, then one exchange per tick until it ends (see the module docstring).
 
     ``cpu_clock``: the run's CPU time so far (s, its cgroup's count): each tick is then charged the CPU time
     its processes used since the poses were sent (``limits.tick_s``), within a wall backstop
     (``limits.tick_backstop_s``); None: wall time (``limits.tick_s``)."""
     outcome = SandboxOutcome(jail=jail)
-    drain = _LogDrain(child.log, limits.log_bytes)
+    drain = _LogDrain(child.log, limits.log_bytes, on_log)
     drain.start()
     started = time.monotonic()
     wall_deadline = started + limits.wall_s

@@ -37,10 +37,11 @@ SOURCES = ("manifest", "script", "random")
 
 
 def check_initial_poses(poses: ArrayLike, n: int, bounds: Bounds = DEFAULT_BOUNDS,
-                        name: str = "initial_poses") -> NDArray[np.float64]:
+                        name: str = "initial_poses", *, first: int = 0) -> NDArray[np.float64]:
     """Validated copy of ``n`` initial poses ``(n, 3)`` [x, y, θ] (m, rad): finite floats, every centre
     inside ``bounds``, centres pairwise at least :data:`MIN_SEPARATION` apart. ValueError naming the
-    first bad pose (``name`` says whose poses they are: the manifest's, the script's)."""
+    first bad pose (``name`` says whose poses they are: the manifest's, the script's; poses are numbered
+    from ``first``: 0 for a script's array rows, 1 where people count them, as the portal does)."""
     arr = np.asarray(poses)
     if arr.dtype.kind in "iu":
         arr = arr.astype(float)  # JSON has no int/float distinction: 0 means 0.0 here
@@ -49,14 +50,15 @@ def check_initial_poses(poses: ArrayLike, n: int, bounds: Bounds = DEFAULT_BOUND
     outside = np.flatnonzero((arr[:, 0] < x0) | (arr[:, 0] > x1) | (arr[:, 1] < y0) | (arr[:, 1] > y1))
     if len(outside):
         k = int(outside[0])
-        raise ValueError(f"{name}: pose {k} ({arr[k, 0]:.3f}, {arr[k, 1]:.3f}, {arr[k, 2]:.3f}) is outside the "
+        raise ValueError(f"{name}: pose {k + first} ({arr[k, 0]:.3f}, {arr[k, 1]:.3f}, {arr[k, 2]:.3f}) is outside the "
                          f"arena {tuple(bounds)}")
     if len(arr) >= 2:
         pairs = cKDTree(arr[:, :2]).query_pairs(MIN_SEPARATION - 1e-9, output_type="ndarray")
         if len(pairs):
             i, j = (int(v) for v in pairs[np.lexsort((pairs[:, 1], pairs[:, 0]))][0])
             gap = float(np.hypot(*(arr[i, :2] - arr[j, :2])))
-            raise ValueError(f"{name}: poses {i} ({arr[i, 0]:.3f}, {arr[i, 1]:.3f}) and {j} ({arr[j, 0]:.3f}, "
+            raise ValueError(f"{name}: poses {i + first} ({arr[i, 0]:.3f}, {arr[i, 1]:.3f}) and {j + first} "
+                             f"({arr[j, 0]:.3f}, "
                              f"{arr[j, 1]:.3f}) are {gap:.3f} m apart; initial positions must be at least "
                              f"{MIN_SEPARATION} m apart")
     return arr

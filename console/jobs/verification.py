@@ -43,6 +43,7 @@ from __future__ import annotations
 
 import math
 import os
+import re
 import time
 import shutil
 import tempfile
@@ -272,6 +273,67 @@ def _run_reasons(run: dict[str, Any], cfg: VerificationConfig) -> list[str]:
     return reasons
 
 
+#: the sandbox's per-run folder in a message (``/tmp/swarmdeck-script-k1z…/``): random, so it would make one error
+#: look like as many errors as runs, and it tells the researcher nothing
+_RUN_FOLDER = re.compile(r"(?:/[^\s:'\"()]*)?/swarmdeck-script-[A-Za-z0-9_]+/")
+_FILE_LINE = re.compile(r"(?<![\w./-])([\w./-]+\.py)(?::|\"?, line )(\d+)")
+
+
+def without_run_folder(text: str) -> str:
+    """``text`` without the sandbox's per-run folder (``/tmp/swarmdeck-script-…/``): file names stay relative."""
+    return _RUN_FOLDER.sub("", text)
+
+
+def _excerpt(bundle: ScriptBundle, name: str, line: int) -> str | None:
+    """Line ``line`` (1-based) of file ``name`` of the bundle, stripped (None: no such line)."""
+    try:
+        text = dict(bundle.files)[name].decode("utf-8", "replace").splitlines()
+    except KeyError:
+        return None
+    return text[line - 1].strip()[:160] if 1 <= line <= len(text) and text[line - 1].strip() else None
+
+
+def user_message(text: str | None, bundle: ScriptBundle, shown: str | None = None) -> str | None:
+    """A run's error as the researcher should read it: without the sandbox's random run folder, the entry called
+    ``shown`` (the file name the researcher uploaded; the portal stores it under another name), and the
+    first line of their code it names quoted: ``spin.py:3 (in experiment): KeyError: 'oops' — line 3:
+    raise KeyError('oops')``. The same error in every run then reads the same (and is reported once)."""
+    if text is None:
+        return None
+    text = _RUN_FOLDER.sub("", text)
+    shown = shown or bundle.entry
+    if shown != bundle.entry:
+        text = re.sub(rf"(?<![\w./-]){re.escape(bundle.entry)}(?![\w-])", shown, text)
+    for m in _FILE_LINE.finditer(text):
+        name = bundle.entry if m.group(1) == shown else m.group(1)
+        line = _excerpt(bundle, name, int(m.group(2)))
+        if line is not None:
+            return f"{text} — line {m.group(2)}: {line}"
+    return text
+
+
+def compile_check(bundle: ScriptBundle, shown: str | None = None) -> str | None:
+    """Compile the entry script before anything runs: why it cannot run (a syntax error, with its line and an
+    excerpt), or None. Costs no sandbox run; the source is bounded by the bundle's size limit."""
+    try:
+        compile(bundle.source, bundle.entry, "exec", dont_inherit=True)
+    except SyntaxError as exc:
+        where = "" if exc.lineno is None else f" at line {exc.lineno}"
+        line = None if exc.lineno is None else _excerpt(bundle, bundle.entry, exc.lineno)
+        return (f"syntax error in {shown or bundle.entry}{where}: {exc.msg}" + ("" if line is None else f" — {line}")
+                + " (found by compiling the script: nothing was run)")
+    except ValueError as exc:  # null bytes
+        return f"the script cannot be compiled: {exc} (nothing was run)"
+    return None
+
+
+def _rejected_unrun(bundle: ScriptBundle, shown: str, reason: str) -> dict[str, Any]:
+    """The report entry of a script refused before any run (:func:`compile_check`)."""
+    return {"script": shown, "sha256": bundle.sha256, "verdict": REJECTED, "safety_score": None,
+            "safety_score_min": None, "safety_score_ci95": None, "reasons": [reason], "bypass_refused_because": [],
+            "runs": []}
+
+
 def _grouped(pairs: list[tuple[int, str]]) -> list[str]:
     """'reason (runs 0, 2)' lines, in order of first appearance."""
     by_reason: dict[str, list[int]] = {}
@@ -280,8 +342,12 @@ def _grouped(pairs: list[tuple[int, str]]) -> list[str]:
     return [f"{reason} (run{'s' if len(ix) > 1 else ''} {', '.join(map(str, ix))})" for reason, ix in by_reason.items()]
 
 
-def script_verdict(bundle: ScriptBundle, runs: Sequence[dict[str, Any]], cfg: VerificationConfig) -> dict[str, Any]:
-    """The verdict of one script from its raw and wrapped runs (ordered by index)."""
+def script_verdict(bundle: ScriptBundle, runs: Sequence[dict[str, Any]], cfg: VerificationConfig,
+                   shown: str | None = None) -> dict[str, Any]:
+    """The verdict of one script from its raw and wrapped runs (ordered by index); ``shown``: what to call the
+    entry in messages (the researcher's file name; default the entry's)."""
+    runs = [dict(r, error=user_message(r["error"], bundle, shown), log=_RUN_FOLDER.sub("", r.get("log") or ""))
+            for r in runs]
     wrapped = [r for r in runs if r["mode"] == "wrapped"]
     raw = [r for r in runs if r["mode"] == "raw"]
     reasons = _grouped([(r["index"], why) for r in wrapped for why in _run_reasons(r, cfg)])
@@ -302,7 +368,7 @@ def script_verdict(bundle: ScriptBundle, runs: Sequence[dict[str, Any]], cfg: Ve
         half = 1.96 * float(np.std(scores, ddof=1)) / math.sqrt(len(scores))
         spread = [max(0.0, score - half), min(1.0, score + half)]
     return {
-        "script": bundle.name, "sha256": bundle.sha256, "verdict": verdict,
+        "script": shown or bundle.name, "sha256": bundle.sha256, "verdict": verdict,
         "safety_score": score, "safety_score_min": min(scores) if scores else None, "safety_score_ci95": spread,
         "reasons": reasons, "bypass_refused_because": no_bypass if verdict == ACCEPTED else [],
         "runs": list(runs),
@@ -337,7 +403,8 @@ class VerificationReport:
     def to_dict(self) -> dict[str, Any]:
         """The JSON report (schema ``swarmdeck.verification/1``; no timings, so equal runs give equal JSON)."""
         return {"schema": SCHEMA, "verdict": self.verdict, "safety_score": self.safety_score,
-                "reasons": [f"{s['script']}: {r}" for s in self.scripts for r in s["reasons"]],
+                "reasons": [r if s["script"] in r else f"{s['script']}: {r}"  # named once
+                            for s in self.scripts for r in s["reasons"]],
                 "config": self.config.to_dict(), "scripts": self.scripts}
 
 
@@ -362,7 +429,8 @@ class Progress:
 
 def verify(scripts: Sequence[str | Path | ScriptBundle], config: VerificationConfig = VerificationConfig(),
            executor: Any = None, *, on_progress: Callable[[Progress], None] | None = None,
-           cancel: Any = None, entry: str | None = None) -> VerificationReport:
+           cancel: Any = None, entry: str | None = None,
+           names: Sequence[str | None] | None = None) -> VerificationReport:
     """Verify ``scripts`` under ``config`` on ``executor`` (default: a local process pool).
 
     ``on_progress(Progress)`` is called after each run; ``cancel`` is a
@@ -371,7 +439,11 @@ def verify(scripts: Sequence[str | Path | ScriptBundle], config: VerificationCon
     directories (each run from its ``entry`` file, default ``main.py``, with sibling modules
     importable) or :class:`~swarmdeck.console.jobs.bundle.ScriptBundle`\\ s. ValueError for a
     script that cannot be read or an invalid bundle; :class:`~swarmdeck.console.jobs.confinement.ConfinementUnavailable` when
-    this machine cannot confine untrusted code and ``config.trusted`` is False.
+    this machine cannot confine untrusted code and ``config.trusted`` is False. ``names``: what to call each
+    script's entry in the report (the file names the researcher uploaded; default the entries' own).
+
+    Each entry script is compiled first (:func:`compile_check`): one that does not compile is rejected with its
+    line and an excerpt, without any sandbox run.
     """
     from swarmdeck.console.jobs.confinement import ConfinementUnavailable, probe
     from swarmdeck.console.jobs.executors import LocalPoolExecutor
@@ -379,6 +451,12 @@ def verify(scripts: Sequence[str | Path | ScriptBundle], config: VerificationCon
     loaded = [load_script(s, entry) for s in scripts]
     if not loaded:
         raise ValueError("no script to verify")
+    shown = [b.name if names is None or k >= len(names) or not names[k] else str(names[k])
+             for k, b in enumerate(loaded)]
+    unrunnable = {k: why for k, b in enumerate(loaded) if (why := compile_check(b, shown[k])) is not None}
+    if len(unrunnable) == len(loaded):  # nothing to run: no jail needed, no sandbox run spent
+        return VerificationReport(config, [_rejected_unrun(b, shown[k], unrunnable[k]) for k, b in enumerate(loaded)],
+                                  "none (compile check)", 0.0)
     reason = probe(config.jail)
     if reason is not None and not config.trusted:
         raise ConfinementUnavailable(f"cannot confine untrusted code on this machine: {reason}; "
@@ -386,8 +464,9 @@ def verify(scripts: Sequence[str | Path | ScriptBundle], config: VerificationCon
     executor = executor if executor is not None else LocalPoolExecutor()
     cancel_dir = Path(tempfile.mkdtemp(prefix="swarmdeck-cancel-"))
     cancel_path = str(cancel_dir / "cancel")
-    tasks = [RunTask(bundle, config, i, mode, cancel_path)
-             for bundle in loaded for i in range(config.runs) for mode in ("raw", "wrapped")]
+    runnable = [k for k in range(len(loaded)) if k not in unrunnable]
+    tasks = [RunTask(loaded[k], config, i, mode, cancel_path)
+             for k in runnable for i in range(config.runs) for mode in ("raw", "wrapped")]
 
     def done(k: int, result: dict[str, Any], finished: int) -> None:
         if on_progress is not None:
@@ -418,7 +497,11 @@ def verify(scripts: Sequence[str | Path | ScriptBundle], config: VerificationCon
     if (cancel is not None and cancel.is_set()) or any(r is None or r["ended_by"] == "cancelled" for r in results):
         raise VerificationCancelled("verification was cancelled", cpu_s)
     reports = []
-    for s, bundle in enumerate(loaded):
+    for k, bundle in enumerate(loaded):
+        if k in unrunnable:
+            reports.append(_rejected_unrun(bundle, shown[k], unrunnable[k]))
+            continue
+        s = runnable.index(k)
         runs = results[s * 2 * config.runs : (s + 1) * 2 * config.runs]
-        reports.append(script_verdict(bundle, runs, config))
+        reports.append(script_verdict(bundle, runs, config, shown[k]))
     return VerificationReport(config, reports, getattr(executor, "name", type(executor).__name__), cpu_s)

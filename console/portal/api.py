@@ -20,9 +20,13 @@ Routes (researchers see only their own jobs; other ids are 404):
 
 * ``GET /api/health`` (no auth) · ``GET /api/me`` · ``POST/DELETE /api/session``
 * ``GET /api/env``: what scripts can import (the lab's script environment, ``swarmdeck env``)
-* ``POST /api/jobs`` (multipart: file ``script`` (.py/.zip), field ``manifest`` (JSON)) → 201 job
+* ``POST /api/jobs`` (multipart: file ``script`` (.py/.zip), field ``manifest`` (JSON), field ``entry`` (the
+  script inside a .zip)) → 201 job (its ``state``: :class:`~.states.JobState`; ``position`` in the arena queue
+  0-based here, 1-based on the pages and in ``swarmdeck jobs``)
 * ``GET /api/jobs`` · ``GET /api/jobs/{id}`` · ``POST /api/jobs/{id}/cancel``
 * ``GET /api/jobs/{id}/report`` · ``GET /api/jobs/{id}/files`` · ``GET /api/jobs/{id}/files/{name}``
+* ``GET /api/jobs/{id}/results`` (an ended job in short) · ``GET /api/jobs/{id}/log?since=B`` (the script's output,
+  live while it runs)
 * operators: ``POST /api/operator/jobs/{id}/{approve|hold|release|cancel}``,
   ``POST /api/operator/jobs/{id}/move`` ``{"position": k}``,
   ``POST /api/operator/jobs/{id}/barrier`` ``{"forbid": bool}``,
@@ -59,6 +63,8 @@ UPLOAD_SCHEMA = {
                 "script": {"type": "string", "format": "binary", "description": "the script (.py) or a .zip"},
                 "manifest": {"type": "string", "description": 'JSON: {"name", "robots", "duration", '
                              '"initial_poses"?, "no_barrier"?, "entry"?} (optional for a .zip with manifest.json)'},
+                "entry": {"type": "string", "description": "for a .zip: the .py file inside it to run "
+                          "(overrides the manifest's entry)"},
             }}}},
     }
 }
@@ -133,16 +139,18 @@ def api_router(service: PortalService, counter: RejectionCounter, *, max_upload_
 
     @router.post("/jobs", status_code=201, tags=["jobs"], openapi_extra=UPLOAD_SCHEMA)
     async def submit(request: Request, u: User = Depends(user)) -> dict[str, Any]:
-        """Submit a script (multipart file ``script``) with its ``manifest`` (JSON text): the new job, ``queued``."""
-        form = await request.form(max_files=1, max_fields=4, max_part_size=max_upload_bytes)
+        """Submit a script (multipart file ``script``) with its ``manifest`` (JSON text): the new job, ``awaiting verification``."""
+        form = await request.form(max_files=1, max_fields=5, max_part_size=max_upload_bytes)
         try:
-            script, manifest = form.get("script"), form.get("manifest")
+            script, manifest, entry = form.get("script"), form.get("manifest"), form.get("entry")
             if not isinstance(script, UploadFile):
                 raise BadInput("send the script as the multipart file field 'script'", "script")
             if manifest is not None and not isinstance(manifest, str):
                 raise BadInput("the manifest is a form field holding JSON text, not a file", "manifest")
+            if entry is not None and not isinstance(entry, str):
+                raise BadInput("entry is a form field naming the .py file inside the .zip, not a file", "entry")
             data = await script.read(max_upload_bytes + 1)
-            return await run_in_threadpool(service.submit, u, script.filename, data, manifest)
+            return await run_in_threadpool(service.submit, u, script.filename, data, manifest, entry)
         finally:
             await form.close()
 
@@ -163,6 +171,18 @@ def api_router(service: PortalService, counter: RejectionCounter, *, max_upload_
     def report(job_id: int, u: User = Depends(user)) -> dict[str, Any]:
         """The verification report (schema swarmdeck.verification/1)."""
         return service.report(u, job_id)
+
+    @router.get("/jobs/{job_id}/results", tags=["results"])
+    def results(job_id: int, u: User = Depends(user)) -> dict[str, Any]:
+        """An ended job's results in short: did the barrier step in (how often, which robots), the minimum
+        distance between robots, contacts, the files and the command that downloads them."""
+        return service.results(u, job_id)
+
+    @router.get("/jobs/{job_id}/log", tags=["results"])
+    def script_log(job_id: int, since: int = 0, u: User = Depends(user)) -> dict[str, Any]:
+        """The script's output from byte ``since``: ``{"text", "next", "live"}`` (live while the job runs; poll
+        with ``since=next``). The job's owner and operators only."""
+        return service.script_log(u, job_id, since)
 
     @router.get("/jobs/{job_id}/files", tags=["results"])
     def files(job_id: int, u: User = Depends(user)) -> list[dict[str, Any]]:

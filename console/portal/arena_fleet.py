@@ -28,8 +28,8 @@ pipeline; the robots that do not move are fixed obstacles of the barrier):
 4. :meth:`ArenaFleet.idle` — between jobs docked simulated robots charge for the wall time that
    passed (networked robots charge by themselves, their firmware reports it).
 
-The simulated fleet's maneuvers are computed as fast as they go (simulated time, no pacing: a
-simulation has nobody to wait for); the networked fleet's run in real time.
+The maneuvers run in real time, one control period per tick, as the jobs do (the networked fleet's always;
+the simulated fleet's unless ``fast``, ``swarmdeck server --fast``, where they are computed as fast as they go).
 
 :meth:`ArenaFleet.status` (any thread) is the fleet table: per robot its state (``docked``,
 ``charging``, ``assigned`` to job X, ``away``), charge, voltage and slot, and ``ready`` (every robot
@@ -71,17 +71,18 @@ class ArenaFleet:
         charge: the simulated robots' state of charge at start, scalar or ``(M,)`` ∈ [0, 1].
         config: the maneuvers' limits and the assignment policy.
         wait_for_poses: networked fleet: s to wait for every robot's first pose when connecting.
+        fast: simulated fleet: compute the maneuvers as fast as they go instead of in real time.
     """
 
     def __init__(self, n_robots: int, bounds: Bounds, dt: float, *, robots_via: str | None = None,
                  seed: int | None = None, charge: ArrayLike = 1.0, config: fu.UpkeepConfig = fu.UpkeepConfig(),
-                 robot: GritsBotParams | None = None, wait_for_poses: float = 5.0) -> None:
+                 robot: GritsBotParams | None = None, wait_for_poses: float = 5.0, fast: bool = False) -> None:
         self.chargers = ChargerLayout(bounds=bounds)
         m = int(n_robots)
         if not 1 <= m <= self.chargers.n_slots:
             raise ValueError(f"a fleet of {m} robots needs 1..{self.chargers.n_slots} charger slots "
                              f"(the arena's charging strips have {self.chargers.n_slots})")
-        self.bounds, self.dt, self.seed = bounds, float(dt), seed
+        self.bounds, self.dt, self.seed, self.fast = bounds, float(dt), seed, bool(fast)
         self.robots_via, self.config, self.wait_for_poses = robots_via, config, float(wait_for_poses)
         self.robot = robot if robot is not None else GritsBotParams()
         self.ids = np.arange(m, dtype=np.int64)
@@ -106,8 +107,8 @@ class ArenaFleet:
 
     @property
     def real_time(self) -> bool:
-        """Maneuvers run in real time (networked robots) or as fast as they compute (simulated)."""
-        return self.robots_via is not None
+        """Maneuvers run in real time (networked robots; simulated ones unless ``fast``)."""
+        return self.robots_via is not None or not self.fast
 
     # ------------------------------------------------------------------ ports
     def ports(self) -> tuple[Any, Any]:
@@ -284,12 +285,13 @@ class ArenaFleet:
     def status(self) -> dict[str, Any]:
         """``{"robots": [rows], "ready", "docked", "size", "assigned": {id: job}, "error"}``; each row ``id``,
         ``state`` (docked | charging | assigned | away | not seen | missing: never heard from), ``job``
-        (assigned), ``charge`` ∈ [0, 1] or None, ``voltage`` V or None, ``slot`` or None, ``x``, ``y``, ``theta``."""
+        (assigned), ``charge`` ∈ [0, 1] or None, ``voltage`` V or None, ``slot`` or None, ``x``, ``y``, ``theta``
+        (m, rad); ``bounds`` ``[x0, x1, y0, y1]`` m, the arena (the operator page draws the fleet on it)."""
         with self._lock:
             reading, assigned = self._reading, dict(self._assigned)
         if reading is None:
             return {"robots": [], "ready": False, "docked": 0, "assigned": {}, "error": self.error,
-                    "size": self.n_robots}
+                    "size": self.n_robots, "bounds": [float(v) for v in self.bounds]}
         n = len(reading.ids)
         volts = np.full(n, np.nan) if reading.battery is None else np.asarray(reading.battery, dtype=float)
         charging = np.zeros(n, dtype=bool) if reading.charging is None else np.asarray(reading.charging, dtype=bool)
@@ -317,4 +319,4 @@ class ArenaFleet:
         docked = sum(r["slot"] is not None and r["job"] is None for r in rows)
         ready = all(r["state"] in ("docked", "charging", "assigned") for r in rows)
         return {"robots": rows, "ready": ready, "docked": docked, "assigned": {str(k): v for k, v in assigned.items()},
-                "error": self.error, "size": self.n_robots}
+                "error": self.error, "size": self.n_robots, "bounds": [float(v) for v in self.bounds]}

@@ -14,7 +14,7 @@ from typing import Any
 
 import httpx
 
-FINAL_STATES = ("rejected", "done", "failed", "cancelled", "interrupted")
+from swarmdeck.console.portal.states import FINAL as FINAL_STATES
 
 
 class ClientError(Exception):
@@ -58,9 +58,13 @@ class PortalClient:
             raise ClientError(response.status_code, message, field)
         return response
 
-    def submit(self, script: str | Path, manifest: dict[str, Any] | None) -> dict[str, Any]:
+    def submit(self, script: str | Path, manifest: dict[str, Any] | None, entry: str | None = None) -> dict[str, Any]:
+        """Submit ``script`` (.py or .zip) with ``manifest`` (None: the archive's manifest.json); ``entry``: the
+        script to run inside a .zip."""
         path = Path(script)
         data = {} if manifest is None else {"manifest": json.dumps(manifest)}
+        if entry is not None:
+            data["entry"] = entry
         with open(path, "rb") as f:
             return self._call("POST", "/api/jobs", files={"script": (path.name, f)}, data=data).json()
 
@@ -80,6 +84,10 @@ class PortalClient:
 
     def cancel(self, job_id: int) -> dict[str, Any]:
         return self._call("POST", f"/api/jobs/{int(job_id)}/cancel").json()
+
+    def results(self, job_id: int) -> dict[str, Any]:
+        """An ended job's results summary (:func:`swarmdeck.console.portal.results.results_summary`)."""
+        return self._call("GET", f"/api/jobs/{int(job_id)}/results").json()
 
     def files(self, job_id: int) -> list[dict[str, Any]]:
         return self._call("GET", f"/api/jobs/{int(job_id)}/files").json()

@@ -12,13 +12,15 @@
   applied in order on start, each in its own transaction together with the new
   version number. A database newer than this code is refused
   (:class:`SchemaError`).
-* **Jobs' state machine** (:data:`TRANSITIONS`): ``queued → verifying →
-  rejected | approved → waiting → setting up → running → done | failed |
-  cancelled | interrupted``, plus ``held`` (an operator's hold of a queued,
-  approved or waiting job; released back to the state it came from). A job whose
-  verification said "may bypass the barrier" and whose manifest asked for it stays
-  ``approved`` until an operator approves or refuses that bypass (``bypass_decision``,
-  migration 3), whatever the manual-approval switch says. Every
+* **Jobs' state machine** (:data:`TRANSITIONS`, the states :class:`~.states.JobState`):
+  ``awaiting verification → verifying → rejected | awaiting approval → in arena queue →
+  setting up → running → done | failed | cancelled | interrupted``, plus ``held`` (an
+  operator's hold of a job awaiting verification or approval or in the arena queue;
+  released back to the state it came from). A job whose verification said "may bypass
+  the barrier" and whose manifest asked for it stays ``awaiting approval`` until an
+  operator approves or refuses that bypass (``bypass_decision``, migration 3), whatever
+  the manual-approval switch says. Migration 5 renamed the states ``queued``,
+  ``approved`` and ``waiting`` of older files. Every
   transition is one conditional ``UPDATE … WHERE id = ? AND state IN (…)``
   (:meth:`Database.transition`): of two operators acting on one job at once,
   exactly one changes it, the other gets :class:`TransitionConflict` naming the
@@ -35,23 +37,27 @@ from pathlib import Path
 from typing import Any
 
 from swarmdeck.console.portal.files import private_dir, private_file
+from swarmdeck.console.portal.states import ACTIVE, FINAL, RENAMED, JobState
+
+__all__ = ["ACTIVE", "FINAL", "MIGRATIONS", "STATES", "TRANSITIONS", "Database", "JobState", "SchemaError",
+           "TransitionConflict"]
 
 FILENAME = "portal.sqlite3"
 
-STATES = ("queued", "verifying", "rejected", "approved", "waiting", "setting up", "running", "done", "failed",
-          "cancelled", "interrupted", "held")
-FINAL = ("rejected", "done", "failed", "cancelled", "interrupted")
-ACTIVE = ("setting up", "running")  # the job is on the arena
+S = JobState
+STATES: tuple[JobState, ...] = tuple(JobState)
 #: state -> the states it may move to.
-TRANSITIONS: dict[str, tuple[str, ...]] = {
-    "queued": ("verifying", "cancelled", "held"),
-    "verifying": ("rejected", "approved", "queued", "cancelled"),  # -> queued: a worker stopped mid-way (restart)
-    "approved": ("waiting", "cancelled", "held"),
-    "waiting": ("setting up", "cancelled", "held"),
-    "held": ("queued", "approved", "waiting", "cancelled"),
-    "setting up": ("running", "failed", "cancelled", "interrupted"),
-    "running": ("done", "failed", "cancelled", "interrupted"),
+TRANSITIONS: dict[JobState, tuple[JobState, ...]] = {
+    S.AWAITING_VERIFICATION: (S.VERIFYING, S.CANCELLED, S.HELD),
+    # -> awaiting verification: a worker stopped mid-way (restart)
+    S.VERIFYING: (S.REJECTED, S.AWAITING_APPROVAL, S.AWAITING_VERIFICATION, S.CANCELLED),
+    S.AWAITING_APPROVAL: (S.IN_ARENA_QUEUE, S.CANCELLED, S.HELD),
+    S.IN_ARENA_QUEUE: (S.SETTING_UP, S.CANCELLED, S.HELD),
+    S.HELD: (S.AWAITING_VERIFICATION, S.AWAITING_APPROVAL, S.IN_ARENA_QUEUE, S.CANCELLED),
+    S.SETTING_UP: (S.RUNNING, S.FAILED, S.CANCELLED, S.INTERRUPTED),
+    S.RUNNING: (S.DONE, S.FAILED, S.CANCELLED, S.INTERRUPTED),
 }
+del S
 
 MIGRATIONS: tuple[str, ...] = (
     # 1: accounts, sessions, sign-in attempts, jobs, audit log, settings
@@ -160,6 +166,10 @@ MIGRATIONS: tuple[str, ...] = (
     CREATE INDEX verification_usage_user ON verification_usage (user_id, t);
     ALTER TABLE jobs ADD COLUMN results_deleted REAL;
     """,
+    # 5: job states named for what they mean (states.py): queued -> awaiting verification, approved -> awaiting
+    # approval, waiting -> in arena queue; a held job's state to go back to too
+    ";".join(f"UPDATE jobs SET {col} = '{new}' WHERE {col} = '{old}'"
+             for old, new in RENAMED.items() for col in ("state", "held_from")),
 )
 
 
@@ -174,8 +184,15 @@ class TransitionConflict(Exception):
 
     def __init__(self, job_id: int, target: str, state: str | None) -> None:
         self.job_id, self.target, self.state = job_id, target, state
-        now = "does not exist" if state is None else f"is {state}"
-        super().__init__(f"job {job_id} {now}: it cannot become {target}")
+        if state is None:
+            message = f"there is no job {job_id}"
+        elif state == target:
+            message = f"job {job_id} is already {state}"
+        elif state in FINAL:
+            message = f"job {job_id} has already ended ({state}): it cannot be {target} any more"
+        else:
+            message = f"job {job_id} is {state}, so it cannot be {target} now"
+        super().__init__(message)
 
 
 class Database:

@@ -66,11 +66,29 @@ def update_run_json(folder: Path, **fields: Any) -> dict[str, Any]:
     return data
 
 
+def without_server_paths(value: Any, folder: Path) -> Any:
+    """``value`` (JSON-like) with the server's paths taken out of its strings: the job's folder (and the data
+    folder it is in) and the sandbox's per-run folder, so a researcher's files name only their own files."""
+    from swarmdeck.console.jobs.verification import without_run_folder
+
+    if isinstance(value, str):
+        data = folder.parent.parent
+        for prefix in {str(p) for p in (folder, folder.resolve(), data, data.resolve())}:
+            value = value.replace(prefix + "/", "").replace(prefix, "")
+        return without_run_folder(value)
+    if isinstance(value, dict):
+        return {k: without_server_paths(v, folder) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [without_server_paths(v, folder) for v in value]
+    return value
+
+
 def write_run_json(folder: Path, data: dict[str, Any]) -> None:
-    """Replace the job's ``run.json`` by ``data`` atomically (written aside, then renamed)."""
+    """Replace the job's ``run.json`` by ``data`` (server paths taken out: :func:`without_server_paths`)
+    atomically (written aside, then renamed)."""
     path = folder / "run.json"
     tmp = path.with_suffix(".tmp")
-    write_private(tmp, json.dumps(data, indent=1))
+    write_private(tmp, json.dumps(without_server_paths(data, folder), indent=1))
     tmp.replace(path)
 
 

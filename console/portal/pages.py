@@ -14,10 +14,13 @@ the audit log) live in one place.
                                          SameSite=Strict, Secure over https); failed sign-ins are
                                          rate-limited by the service
 ``GET /jobs``                            your jobs and their states (refreshed every 2 s)
-``GET|POST /submit``                     upload a script (.py or .zip) with the manifest's fields
+``GET|POST /submit``                     upload a script (.py or .zip, its entry file) with the manifest's
+                                         fields; every mistake shown at once (``forms.js`` sends the form in
+                                         the background so the chosen file stays chosen)
 ``GET /env``                             the libraries scripts can import (the lab's script environment)
-``GET /jobs/{id}``                       state, verdict, the verification report, the live view while it
-                                         runs, downloads, cancel (``POST /jobs/{id}/cancel``)
+``GET /jobs/{id}``                       state, verdict, the verification report, the live view and the
+                                         script's output while it runs (``log.js``), the results in short
+                                         when it has ended, downloads, cancel (``POST /jobs/{id}/cancel``)
 ``GET /jobs/{id}/report``                the verification report page (``console/jobs/report_html.py``)
 ``GET /jobs/{id}/live``                  the live view's stream (Server-Sent Events): the runner's
                                          LiveFeed as :func:`~.live.scene_message` JSON, 10 a second at most;
@@ -56,15 +59,17 @@ from starlette.datastructures import FormData, UploadFile
 
 from swarmdeck.console.portal.accounts import Session
 from swarmdeck.console.portal.api import SESSION_COOKIE
-from swarmdeck.console.portal.db import ACTIVE, FINAL
+from swarmdeck.console.portal.states import ACTIVE, FINAL, JobState
 from swarmdeck.console.portal.errors import BadInput, PortalError, Unauthorized
 from swarmdeck.console.portal.live import scene_message
 from swarmdeck.console.portal.livefeed import LiveFeed
+from swarmdeck.console.portal.results import summary_lines
 from swarmdeck.console.portal.service import RESULT_FILES, PortalService
+from swarmdeck.console.portal.submission import Limits, display_name, manifest_errors
 
 HERE = Path(__file__).resolve().parent
 STATIC = {"portal.css": "text/css", "live.js": "text/javascript", "refresh.js": "text/javascript",
-          "forms.js": "text/javascript", "docs.js": "text/javascript"}
+          "forms.js": "text/javascript", "docs.js": "text/javascript", "log.js": "text/javascript"}
 SIGNIN_COOKIE = "swarmdeck_signin"
 LIVE_PERIOD = 0.1  # s: the live view gets at most 10 Frames a second (the newest at each send)
 CHECK_PERIOD = 1.0  # s: the live stream re-checks the session and the job's state this often
@@ -183,12 +188,15 @@ def router(service: PortalService, live: LiveFeed) -> APIRouter:
             return to_signin()
         return page(request, "jobs.html", s, jobs=service.jobs(s.user, mine=True))
 
-    def submit_page(request: Request, s: Session, status: int = 200, message: str | None = None,
-                    field: str | None = None, values: dict[str, Any] | None = None) -> HTMLResponse:
+    def submit_page(request: Request, s: Session, status: int = 200, errors: list[PortalError] | None = None,
+                    values: dict[str, Any] | None = None, chosen: str | None = None) -> HTMLResponse:
+        """The Submit page; after a refused submission: every error (each naming its field), the fields as they
+        were typed, and the name of the file chosen (a browser cannot put a file back into a file input)."""
         limits = service.config.limits
-        return page(request, "submit.html", s, status=status, message=message, field=field, values=values or {},
-                    fleet=limits.fleet, max_duration=limits.max_duration, max_bytes=limits.max_upload_bytes,
-                    usage=service.usage(s.user))
+        errors = errors or []
+        return page(request, "submit.html", s, status=status, errors=errors, bad={e.field for e in errors},
+                    values=values or {}, chosen=chosen, fleet=limits.fleet, max_duration=limits.max_duration,
+                    max_bytes=limits.max_upload_bytes, usage=service.usage(s.user))
 
     @r.get("/env")
     def environment(request: Request) -> Response:
@@ -216,18 +224,25 @@ def router(service: PortalService, live: LiveFeed) -> APIRouter:
         form = await checked_form(request, s)
         if isinstance(form, Response):
             return form
-        values = {k: form.get(k) for k in ("name", "robots", "duration", "initial_poses")
+        values = {k: form.get(k) for k in ("name", "robots", "duration", "initial_poses", "entry")
                   if isinstance(form.get(k), str)}
         values["no_barrier"] = form.get("no_barrier") == "on"
+        script = form.get("script")
+        chosen = display_name(script.filename) if isinstance(script, UploadFile) and script.filename else None
         try:
-            script = form.get("script")
-            if not isinstance(script, UploadFile) or not script.filename:
-                raise BadInput("choose the script to upload (.py, or a .zip)", "script")
+            # every mistake in the fields at once (the service would stop at the first)
+            errors: list[PortalError] = []
+            if chosen is None:
+                errors.append(BadInput("choose the script to upload (.py, or a .zip)", "script"))
+            manifest, field_errors = manifest_from_form(values, chosen, service.config.limits)
+            errors += field_errors
+            if errors:
+                return submit_page(request, s, 422, errors, values, chosen)
             data = await script.read(service.config.limits.max_upload_bytes + 1)
-            manifest = manifest_from_form(values, script.filename)
-            job = await run_in_threadpool(service.submit, s.user, script.filename, data, manifest)
+            job = await run_in_threadpool(service.submit, s.user, script.filename, data, manifest,
+                                          (values.get("entry") or "").strip() or None)
         except PortalError as exc:
-            return submit_page(request, s, exc.status, exc.message, exc.field, values)
+            return submit_page(request, s, exc.status, [exc], values, chosen)
         finally:
             await form.close()
         return RedirectResponse(f"/jobs/{job['id']}", status_code=303)
@@ -250,7 +265,10 @@ def router(service: PortalService, live: LiveFeed) -> APIRouter:
         if VIDEO not in names and job["state"] in FINAL and "recording.mcap" in names and job["exports"] != "writing":
             files.append({"name": VIDEO, "bytes": None, "what": RESULT_FILES[VIDEO] + " (made when first downloaded)"})
         run = service.run_summary(s.user, job_id) if job["state"] in FINAL else None
-        return page(request, "job.html", s, job=job, files=files, report=report, run=run,
+        results = None
+        if job["state"] in FINAL and job["state"] != JobState.REJECTED and not job["results_deleted"]:
+            results = summary_lines(service.results(s.user, job_id))
+        return page(request, "job.html", s, job=job, files=files, report=report, run=run, results=results,
                     live=job["state"] in ACTIVE, final=job["state"] in FINAL, live_states=ACTIVE, final_states=FINAL)
 
     @r.post("/jobs/{job_id}/cancel")
@@ -353,8 +371,8 @@ def router(service: PortalService, live: LiveFeed) -> APIRouter:
                         ",".join(f"{j['id']}:{j['state']}" for j in everyone),
                         str(len((arena["alerts"] or {}).get("messages", [])))])  # as refresh.js sums it up
         return page(request, "operator.html", s, status=status, message=message, arena=arena, sig=sig,
-                    approve=[j for j in everyone if j["state"] == "approved"],
-                    held=[j for j in everyone if j["state"] == "held"],
+                    approve=[j for j in everyone if j["state"] == JobState.AWAITING_APPROVAL],
+                    held=[j for j in everyone if j["state"] == JobState.HELD],
                     jobs=everyone[:100])
 
     @r.get("/operator")
@@ -389,10 +407,12 @@ def router(service: PortalService, live: LiveFeed) -> APIRouter:
                 simple[action](u, job_id)
             elif action in ("bypass-approve", "bypass-refuse"):
                 service.decide_bypass(u, job_id, action == "bypass-approve")
+            elif action in ("forbid-barrier", "allow-barrier"):
+                service.forbid_barrier(u, job_id, action == "forbid-barrier")
             elif action in ("up", "down", "top"):
                 position = service.job(u, job_id)["position"]
                 if position is None:
-                    raise BadInput(f"job {job_id} is not waiting in the queue", "job")
+                    raise BadInput(f"job {job_id} is not in the arena queue", "job")
                 service.move(u, job_id, {"up": max(0, position - 1), "down": position + 1, "top": 0}[action])
             else:
                 raise BadInput(f"unknown action {action[:40]!r}", "action")
@@ -443,23 +463,44 @@ def _sse(event: str, data: Any) -> str:
     return f"event: {event}\ndata: {json.dumps(data, separators=(',', ':'))}\n\n"
 
 
-def manifest_from_form(values: dict[str, Any], filename: str | None) -> dict[str, Any] | None:
-    """The manifest object from the upload form's fields (the service checks it and names the bad field).
+def manifest_from_form(values: dict[str, Any], filename: str | None,
+                       limits: Limits) -> tuple[dict[str, Any] | None, list[PortalError]]:
+    """The manifest object from the upload form's fields and every problem with them (each naming its field).
 
-    Numbers are converted when they parse and passed on as typed otherwise (the service then says what is
-    wrong with them). Initial poses: one robot per line, ``x y θ`` (m, m, rad; commas allowed). A .zip with
-    every field empty uses its own ``manifest.json`` (None).
+    Numbers are converted when they parse and passed on as typed otherwise (the checks then say what is
+    wrong with them). Initial poses: one robot per line, ``x y θ`` (m, m, rad; commas allowed), numbered from 1
+    like the lines. A .zip with every manifest field empty uses its own ``manifest.json`` (None; the entry
+    field may still name the script to run).
     """
     text = {k: str(values.get(k) or "").strip() for k in ("name", "robots", "duration", "initial_poses")}
     if (filename or "").lower().endswith(".zip") and not any(text.values()) and not values.get("no_barrier"):
-        return None
+        return None, []
+    errors: list[PortalError] = []
     m: dict[str, Any] = {"name": text["name"], "robots": _number(text["robots"], int),
                          "duration": _number(text["duration"], float), "no_barrier": bool(values.get("no_barrier"))}
     if not text["name"]:
-        raise BadInput("give the experiment a name", "name")
+        errors.append(BadInput("give the experiment a name", "name"))
+    for key, what in (("robots", "how many robots"), ("duration", "the duration in seconds")):
+        if m[key] is None:
+            errors.append(BadInput(f"give {what}", key))
     if text["initial_poses"]:
-        m["initial_poses"] = _poses(text["initial_poses"])
-    return m
+        try:
+            m["initial_poses"] = _poses(text["initial_poses"])
+        except BadInput as exc:
+            errors.append(exc)
+    entry = str(values.get("entry") or "").strip()
+    if entry and not (filename or "").lower().endswith(".zip"):
+        errors.append(BadInput("the entry file is only for a .zip (a .py is its own entry): leave it empty", "entry"))
+    elif entry:
+        m["entry"] = entry
+    known = {e.field for e in errors}
+    probe = {k: v for k, v in m.items() if v is not None and k not in known}
+    # a field already reported is checked no further; the others are checked against stand-ins for it (the
+    # poses against their own count when the robots are wrong)
+    probe.setdefault("name", "x")
+    probe.setdefault("duration", min(1.0, limits.max_duration))
+    errors += [e for e in manifest_errors(probe, limits, first=1) if e.field not in known]  # poses: as the lines
+    return m, errors
 
 
 def _number(text: str, kind: type) -> Any:

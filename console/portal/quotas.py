@@ -3,7 +3,7 @@
 A submission over a limit is refused with the limit named and the researcher's current value
 (``you have 25 jobs not yet finished …; the limit is 25``):
 
-* **unfinished jobs** (queued, verifying, approved, waiting, held, setting up, running) — 429: wait for one
+* **unfinished jobs** (awaiting verification, verifying, awaiting approval, in arena queue, held, setting up, running) — 429: wait for one
   to end or cancel one. Counted inside the submission's own transaction, so two submissions at once cannot
   both pass the last free place.
 * **verification CPU seconds in the last 24 h** (the trusted side's and the jail's CPU of every run, as
@@ -108,8 +108,9 @@ def check_counts(tx: sqlite3.Connection, quotas: Quotas, user_id: int, now: floa
         n = tx.execute(f"SELECT COUNT(*) FROM jobs WHERE user_id = ? AND state NOT IN ({marks})",
                        (user_id, *FINAL)).fetchone()[0]
         if n >= quotas.max_unfinished_jobs:
-            raise RateLimited(f"you have {n} jobs not yet finished (queued, verifying, waiting or running); the "
-                              f"limit is {quotas.max_unfinished_jobs}: wait for one to end, or cancel one",
+            raise RateLimited(f"you have {n} jobs not yet finished (awaiting verification or approval, verifying, in "
+                              f"arena queue or running); the limit is {quotas.max_unfinished_jobs}: wait for one to "
+                              "end, or cancel one",
                               "max_unfinished_jobs")
     if quotas.verify_cpu_s_per_day is not None:
         rows = tx.execute("SELECT t, cpu_s FROM verification_usage WHERE user_id = ? AND t > ? ORDER BY t",

@@ -1,11 +1,11 @@
 """The arena runner: one job at a time on the arena, through the console's runtime, the user's code in the sandbox.
 
-For each job the service hands over (``waiting → setting up``):
+For each job the service hands over (``in arena queue → setting up``):
 
 1. **Robots** (:class:`~.arena_fleet.ArenaFleet`, the arena's one fleet of
    ``ArenaSettings.fleet`` = M robots, simulated or the MQTT fleet's ids 0…M−1, docked on
    the chargers): a job is claimed only when N charged, healthy robots can be
-   assigned — otherwise it stays ``waiting`` and its ``reason`` says which robots
+   assigned — otherwise it stays ``in arena queue`` and its ``reason`` says which robots
    are not ready and why (they charge on the strips; the job starts when they
    are). The assigned robots are set up at the job's start poses (the manifest's,
    else the script's initial conditions, else random valid ones:
@@ -68,27 +68,33 @@ exports the previous server left unfinished are written again.
 """
 from __future__ import annotations
 
+import math
 import threading
 import time
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
+from scipy.spatial import cKDTree
 
 from swarmdeck.console.jobs.confinement import ConfinementUnavailable, SandboxLimits
 from swarmdeck.console.jobs.sandbox import SandboxOutcome, run_sandboxed
 from swarmdeck.console.jobs.start_poses import arena_start
 from swarmdeck.console.portal.arena_fleet import ArenaFleet
-from swarmdeck.console.portal.exports import JobExports, write_run_json
+from swarmdeck.console.jobs.bundle import ScriptBundle
+from swarmdeck.console.jobs.verification import user_message, without_run_folder
+from swarmdeck.console.portal.exports import JobExports, without_server_paths, write_run_json
 from swarmdeck.console.portal.files import write_private
 from swarmdeck.console.portal.livefeed import LiveFeed
 from swarmdeck.console.portal.service import PortalService
+from swarmdeck.console.portal.states import ACTIVE, JobState
 from swarmdeck.console.runtime.behaviours import TickInput
 from swarmdeck.console.runtime.fleet_upkeep import UpkeepConfig, UpkeepResult
-from swarmdeck.console.runtime.loop import ControlLoop, LoopConfig, SafetyParams
+from swarmdeck.console.runtime.frame import Frame
+from swarmdeck.console.runtime.loop import ControlLoop, DensityParams, LoopConfig, SafetyParams
 from swarmdeck.core.bounds import DEFAULT_BOUNDS, Bounds
 from swarmdeck.devices.clock import RealTimePacer
 from swarmdeck.safety.guard import GuardConfig
@@ -105,7 +111,8 @@ class ArenaSettings:
         fleet: robots the arena has (the most a job may use).
         bounds: the floor, m.
         dt: control period, s.
-        fast: simulated arena only: tick as fast as it computes instead of in real time.
+        fast: simulated arena only: tick as fast as it computes instead of in real time (the jobs, and the
+            robots' set-up and return).
         seed: seed of the simulated arena's random start poses (None: fresh).
         charge: the simulated robots' state of charge when the server starts, scalar or one per robot.
         upkeep: set-up and return limits, which robots may be assigned (``min_charge``).
@@ -197,13 +204,15 @@ class ArenaRunner:
         self.exports = JobExports(service)  # CSV, replay, video of ended jobs, in a child process
         self.fleet = ArenaFleet(settings.fleet, settings.bounds, settings.dt, robots_via=settings.robots_via,
                                 seed=settings.seed, charge=np.asarray(settings.charge, dtype=float),
-                                config=settings.upkeep)
+                                config=settings.upkeep, fast=settings.fast)
         self.fleet.frame_listeners = self.frame_listeners  # the operator's view sees set-ups and returns too
         self._halt = threading.Event()  # fleet maneuvers must stop now (emergency stop, shutdown)
         self._idle_mark = time.monotonic()  # wall time the simulated fleet has charged up to
         self._upkeep: dict[str, Any] = {}  # the current job's set-up and return, for run.json
         self._safety: dict[str, Any] = {}  # the current job's bypass and contacts, for run.json
+        self._barrier: dict[str, Any] | None = None  # the current job's barrier tally (BarrierTally.report)
         self._alerts: tuple[int | None, list[str]] = (None, [])  # the last job's guard and contact events
+        self._log: tuple[int | None, bytearray] = (None, bytearray())  # the running job's script output so far
 
     # ------------------------------------------------------------------ control (any thread)
     def start(self) -> "ArenaRunner":
@@ -240,6 +249,17 @@ class ArenaRunner:
     def current_job(self) -> int | None:
         return self._job
 
+    def live_log(self, job_id: int) -> bytes | None:
+        """The script output of job ``job_id`` so far, while it is the runner's job (None otherwise)."""
+        with self._lock:
+            job, log = self._log
+            return bytes(log) if job == int(job_id) else None
+
+    def _append_log(self, job_id: int, chunk: bytes) -> None:
+        with self._lock:
+            if self._log[0] == job_id:
+                self._log[1].extend(chunk)
+
     def alerts(self) -> dict[str, Any]:
         """The running (or last) job's guard and contact events, for the operator page: ``{"job", "messages"}``."""
         job, messages = self._alerts
@@ -266,7 +286,7 @@ class ArenaRunner:
             try:
                 self.run_job(job)
             except Exception as exc:  # noqa: BLE001 - never let the arena thread die: the job fails, say why
-                self.service.finish_run(int(job["id"]), "failed", f"the arena runner failed: {type(exc).__name__}: {exc}")
+                self.service.finish_run(int(job["id"]), JobState.FAILED, f"the arena runner failed: {type(exc).__name__}: {exc}")
             self._idle_mark = time.monotonic()
 
     # ------------------------------------------------------------------ the fleet between and around jobs
@@ -361,11 +381,13 @@ class ArenaRunner:
         """Run one claimed job to its end; its final state."""
         job_id, folder = int(job["id"]), self.service.job_dir(int(job["id"]))
         self._end_job.clear()
-        self._upkeep, self._safety = {}, {}
+        self._upkeep, self._safety, self._barrier = {}, {}, None
         self._alerts = (job_id, [])
         with self._lock:
+            self._log = (job_id, bytearray())
+        with self._lock:
             self._job = job_id
-        if self.service.job_state(job_id) not in ("setting up", "running"):
+        if self.service.job_state(job_id) not in ACTIVE:
             self._end_job.set()  # cancelled or e-stopped between the claim and here: nothing moves
         try:
             return self._run_job(job_id, job, folder)
@@ -383,24 +405,25 @@ class ArenaRunner:
                 self._loop = None
             self.live.clear()
         if outcome is None:
-            state, reason = "failed", note
+            state, reason = JobState.FAILED, note
         elif outcome.ended_by in ENDED_OK:
-            state, reason = "done", note
+            state, reason = JobState.DONE, note
         elif outcome.ended_by == "cancelled":
-            state, reason = "cancelled", "cancelled"
+            state, reason = JobState.CANCELLED, "cancelled"
         else:
-            state, reason = "failed", outcome.error_line
+            state, reason = JobState.FAILED, outcome.error_line
         said = _safety_note(self._safety)
         if said:
             reason = f"{reason}; {said}" if reason else said
-        summary = {"ended_by": None if outcome is None else outcome.ended_by,
-                   "error": reason if state == "failed" else None,
+        reason = None if reason is None else _user_reason(without_server_paths(reason, folder), job, folder)
+        summary = {"ended_by": None if outcome is None else outcome.ended_by, "barrier": self._barrier,
+                   "error": reason if state == JobState.FAILED else None,
                    "ticks": None if outcome is None else outcome.ticks,
                    "overruns": None if outcome is None else outcome.overruns, "note": note, **self._safety,
                    **self._upkeep}
         write_run_json(folder, summary)
         if outcome is not None:
-            write_private(folder / "script.log", outcome.log)
+            write_private(folder / "script.log", without_run_folder(outcome.log))
         if (folder / "recording.mcap").is_file():
             self.exports.submit(job_id)  # written in the background: the next job starts now
         self.runs += 1
@@ -415,9 +438,10 @@ class ArenaRunner:
         n, duration = int(job["robots"]), float(job["duration"])
         initial = None if job["initial_poses"] is None else np.asarray(job["initial_poses"], dtype=float)
         bypass = bool(job["bypass"])
+        # the script's job knows nothing of the console's circling density: none is computed, drawn or recorded
         loop_config = LoopConfig(n_robots=n, dt=s.dt, bounds=s.bounds, seed=s.seed, behaviour="rendezvous",
-                                 safety=SafetyParams(enabled=True))
-        state: dict[str, Any] = {"loop": None, "recorder": None, "setup_failed": None}
+                                 safety=SafetyParams(enabled=True), density=DensityParams(moving=False))
+        state: dict[str, Any] = {"loop": None, "recorder": None, "setup_failed": None, "tally": None}
         notes: list[str] = []
 
         def stopped() -> bool:
@@ -443,8 +467,15 @@ class ArenaRunner:
                                                                       fleet_ids=fleet_ids))
             loop.post(f"robots 0..{n - 1} are the fleet's robots {', '.join(map(str, fleet_ids))}")
             state["recorder"] = rec
-            loop.subscribe(rec.write_frame)
-            loop.subscribe(lambda frame: self.live.publish(int(job["id"]), frame))
+            tally = state["tally"] = BarrierTally(n)
+
+            def publish(frame: Frame) -> None:  # recording, live view (and so video and replay): no density layer
+                frame = frame if frame.density is None else replace(frame, density=None)
+                rec.write_frame(frame)
+                self.live.publish(int(job["id"]), frame)
+                tally(frame)
+
+            loop.subscribe(publish)
             loop.subscribe(self._watch_events)
             for listener in self.frame_listeners:
                 loop.subscribe(listener)
@@ -469,7 +500,8 @@ class ArenaRunner:
             script, entry = self.service.script(job)
             outcome = run_sandboxed(script, make_plant, entry=entry, n_robots=n, duration=duration,
                                     limits=limits, trusted=cfg.trusted, cancelled=stopped,
-                                    jail=cfg.jail())
+                                    jail=cfg.jail(),
+                                    on_log=lambda chunk: self._append_log(int(job["id"]), chunk))
         finally:
             loop = state["loop"]
             if loop is not None:
@@ -478,6 +510,8 @@ class ArenaRunner:
                 self._safety = _safety_report(loop, bypass)
             if state["recorder"] is not None:
                 state["recorder"].close()
+            if state["tally"] is not None:
+                self._barrier = state["tally"].report()
             with self._lock:
                 self._loop = None
             self.fleet.end_assignment()
@@ -485,6 +519,56 @@ class ArenaRunner:
         if state["setup_failed"] is not None:
             return None, state["setup_failed"]
         return outcome, "; ".join(notes) or None
+
+
+def _user_reason(reason: str, job: dict[str, Any], folder: Path) -> str:
+    """The job's reason as verification words it (:func:`~swarmdeck.console.jobs.verification.user_message`): the
+    researcher's file name for the stored ``script.py``, and the line of their code an error names."""
+    try:
+        bundle = (ScriptBundle.single("script.py", (folder / "script.py").read_bytes()) if job["kind"] == "py"
+                  else ScriptBundle.from_path(folder / "src", job["entry"]))
+    except (OSError, ValueError):
+        return reason
+    return user_message(reason, bundle, job["script"] if job["kind"] == "py" else None) or reason
+
+
+#: the barrier "stepped in" for a robot when it changed its command by more than this, m/s
+STEPPED_IN_MPS = 1e-3
+
+
+class BarrierTally:
+    """How often the barrier stepped in during a run, for which robots, and the closest two robots came
+    (run.json's ``barrier``; the job page's and ``swarmdeck submit --wait``'s results). Called with each
+    Frame on the loop thread: O(N) per tick, vectorised."""
+
+    def __init__(self, n: int) -> None:
+        self.ticks = 0
+        self.stepped_in = 0
+        self.per_robot = np.zeros(n, dtype=np.int64)
+        self.min_distance = math.inf
+
+    def __call__(self, frame: Frame) -> None:
+        xy = frame.poses[:, :2]
+        if len(xy) >= 2:  # the closest pair of robot centres this tick (k-d tree: no N×N matrix)
+            d, _ = cKDTree(xy).query(xy, k=2)
+            self.min_distance = min(self.min_distance, float(d[:, 1].min()))
+        b = frame.barrier
+        if b is None:
+            return
+        self.ticks += 1
+        if b.enabled and b.intervention.shape == self.per_robot.shape:
+            hit = b.intervention > STEPPED_IN_MPS
+            if hit.any():
+                self.stepped_in += 1
+                self.per_robot += hit
+
+    def report(self) -> dict[str, Any]:
+        """``{"ticks", "stepped_in_ticks", "robots": {robot: ticks}, "min_distance_m"}`` (robots 0…N−1 of the
+        job; the minimum distance between robot centres, m, None when never measured)."""
+        robots = {str(int(k)): int(self.per_robot[k]) for k in np.flatnonzero(self.per_robot)}
+        return {"ticks": self.ticks, "stepped_in_ticks": self.stepped_in, "robots": robots,
+                "threshold_mps": STEPPED_IN_MPS,
+                "min_distance_m": None if not math.isfinite(self.min_distance) else round(self.min_distance, 4)}
 
 
 def _safety_report(loop: ControlLoop, bypass: bool) -> dict[str, Any]:

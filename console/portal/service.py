@@ -14,20 +14,19 @@ Rules:
 * **Submission** (:meth:`PortalService.submit`): the manifest and upload checks
   of :mod:`.submission`; the job's files go to ``DIR/jobs/<id>/`` under names
   the portal chooses (``script.py``, or ``src/<checked member names>``); the job
-  starts ``queued``.
-* **Approval**: verified jobs go ``approved → waiting`` at once unless an
+  starts ``awaiting verification`` (the states: :mod:`.states`).
+* **Approval**: verified jobs go ``awaiting approval → in arena queue`` at once unless an
   operator switched manual approval on (:meth:`PortalService.set_manual_approval`);
-  then an operator approves each (``approved → waiting``). Switching it off
-  releases the approved jobs.
-* **Queue order**: ``waiting`` jobs run by ``priority`` then id;
+  then an operator approves each. Switching it off releases the jobs awaiting approval.
+* **Queue order**: jobs ``in arena queue`` run by ``priority`` then id;
   :meth:`PortalService.move` puts a job at a position. Queued jobs are verified
   round-robin across researchers (:meth:`PortalService.claim_for_verification`).
 * **Barrier bypass**: a run goes without the barrier only if verification
   said "may bypass", the manifest asked for it (``no_barrier``), no operator
   forbade it (:meth:`PortalService.forbid_barrier`) *and an operator approved that
   job's bypass* (:meth:`PortalService.decide_bypass`, audited) —
-  :meth:`PortalService.bypass_allowed`. Such a job stays ``approved`` with the reason
-  :data:`BYPASS_WAIT` until an operator approves the bypass (→ ``waiting``, to run
+  :meth:`PortalService.bypass_allowed`. Such a job stays ``awaiting approval`` with the reason
+  :data:`BYPASS_WAIT` until an operator approves the bypass (→ ``in arena queue``, to run
   without the barrier, with the guard) or refuses it (→ it runs with the barrier),
   whatever the manual-approval switch says: a verdict alone never removes protection.
 * **Emergency stop** (:meth:`PortalService.emergency_stop`): the arena runner
@@ -64,11 +63,13 @@ from swarmdeck.console.jobs.confinement import JailConfig, SandboxLimits
 from swarmdeck.console.jobs.script_env import ScriptEnv, listing
 from swarmdeck.console.portal.accounts import Accounts, User
 from swarmdeck.console.portal.db import ACTIVE, FINAL, Database, TransitionConflict
+from swarmdeck.console.portal.states import JobState
 from swarmdeck.console.portal.errors import BadInput, Conflict, Forbidden, NotFound, Unavailable
 from swarmdeck.console.portal.exports import EXPORT_FILES
 from swarmdeck.console.portal.files import private_dir, write_private
 from swarmdeck.console.portal.quotas import Quotas, check_counts, check_disk
 from swarmdeck.console.portal.quotas import usage as quota_usage
+from swarmdeck.console.portal.results import results_summary
 from swarmdeck.console.portal.submission import Limits, Manifest, Upload, check_bundle, check_upload, parse_manifest
 
 #: result files a job may have, name -> what it is (the exports, :mod:`.exports`, write four of them after the run).
@@ -221,7 +222,7 @@ class PortalService:
         return row
 
     def _queue_positions(self) -> dict[int, int]:
-        rows = self.db.query("SELECT id FROM jobs WHERE state = 'waiting' ORDER BY priority, id")
+        rows = self.db.query(f"SELECT id FROM jobs WHERE state = '{JobState.IN_ARENA_QUEUE}' ORDER BY priority, id")
         return {int(r["id"]): k for k, r in enumerate(rows)}
 
     @staticmethod
@@ -230,14 +231,26 @@ class PortalService:
             raise Forbidden("this needs an operator account", "Authorization")
 
     # ------------------------------------------------------------------ researchers
-    def submit(self, user: User, filename: str | None, data: bytes, manifest: Any = None) -> dict[str, Any]:
-        """Check and store a submission; the new job (``queued``). ``manifest``: JSON text or object, or None
-        to use ``manifest.json`` from inside a ``.zip``."""
+    def submit(self, user: User, filename: str | None, data: bytes, manifest: Any = None,
+               entry: str | None = None) -> dict[str, Any]:
+        """Check and store a submission; the new job (``awaiting verification``). ``manifest``: JSON text or
+        object, or None to use ``manifest.json`` from inside a ``.zip``; ``entry``: the script to run inside a
+        ``.zip`` (overrides the manifest's ``entry``)."""
         upload = check_upload(filename, data, self.config.limits)
         if manifest is None or (isinstance(manifest, str) and not manifest.strip()):
             if upload.manifest is None:
                 raise BadInput("send a manifest (name, robots, duration) with the script", "manifest")
             manifest = upload.manifest
+        if entry is not None and str(entry).strip():
+            if upload.kind != "zip":
+                raise BadInput("an entry file is only for a .zip (a .py is its own entry)", "entry")
+            if isinstance(manifest, (str, bytes)):
+                try:
+                    manifest = json.loads(manifest)
+                except ValueError:
+                    pass  # parse_manifest says what is wrong with it
+            if isinstance(manifest, dict):
+                manifest = {**manifest, "entry": str(entry).strip()}
         m = parse_manifest(manifest, self.config.limits)
         entry = self._entry(m, upload)
         if not user.is_operator:
@@ -250,7 +263,7 @@ class PortalService:
             top = tx.execute("SELECT COALESCE(MAX(priority), 0) FROM jobs").fetchone()[0]
             job_id = tx.execute(
                 "INSERT INTO jobs (user_id, name, state, kind, script_name, entry, n_robots, duration, initial_poses, "
-                "request_no_barrier, priority, created, updated) VALUES (?, ?, 'queued', ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)",
+                f"request_no_barrier, priority, created, updated) VALUES (?, ?, '{JobState.AWAITING_VERIFICATION}', ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)",
                 (user.id, m.name, upload.kind, upload.display_name, entry, m.robots, m.duration,
                  None if m.initial_poses is None else json.dumps(m.initial_poses), int(m.no_barrier), top + 1,
                  now, now)).lastrowid
@@ -301,9 +314,12 @@ class PortalService:
         row = self._visible_row(user, job_id)
         with self.db.transaction() as tx:
             try:
-                self.db.transition(tx, int(job_id), "cancelled", ended=time.time(),
+                self.db.transition(tx, int(job_id), JobState.CANCELLED, ended=time.time(),
                                    reason=f"cancelled by {user.name}")
             except TransitionConflict as exc:
+                if exc.state in FINAL:
+                    raise Conflict(f"job {job_id} has already ended ({exc.state}): there is nothing to cancel",
+                                   "job") from None
                 raise Conflict(str(exc), "job") from None
             if user.is_operator and row["user_id"] != user.id:
                 self.accounts.audit(user, "cancel", int(job_id), tx=tx)
@@ -329,6 +345,31 @@ class PortalService:
         except (OSError, ValueError):
             return None
         return data if isinstance(data, dict) else None
+
+    def results(self, user: User, job_id: int) -> dict[str, Any]:
+        """The results summary of an ended job (:func:`.results.results_summary`); 404 while it has not ended."""
+        row = self._visible_row(user, job_id)
+        if row["state"] not in FINAL:
+            raise NotFound(f"job {job_id} is {row['state']}: its results come when it has ended", "job")
+        return results_summary(_job_dict(row), self.run_summary(user, job_id), self.files(user, job_id))
+
+    def script_log(self, user: User, job_id: int, since: int = 0) -> dict[str, Any]:
+        """The job's script output from byte ``since`` on: ``{"text", "next", "live"}`` — while it runs, what the
+        script printed so far (the arena runner's live copy); after, ``script.log``. Its owner and operators."""
+        row = self._visible_row(user, job_id)
+        if isinstance(since, bool) or not isinstance(since, int) or since < 0:
+            raise BadInput(f"since must be an integer >= 0, got {since!r}", "since")
+        live = getattr(self.arena, "live_log", None)
+        data = live(int(job_id)) if live is not None else None  # the runner's copy until script.log is written
+        if data is None:
+            self._require_results(row)
+            try:
+                data = (self.job_dir(job_id) / "script.log").read_bytes()
+            except OSError:
+                data = b""
+        chunk = data[since:]
+        return {"text": chunk.decode("utf-8", errors="replace"), "next": since + len(chunk),
+                "live": row["state"] in ACTIVE}
 
     def files(self, user: User, job_id: int) -> list[dict[str, Any]]:
         """The job's result files that exist: ``{"name", "bytes", "what"}``."""
@@ -462,7 +503,7 @@ class PortalService:
         if _bypass_pending(self._visible_row(user, job_id)):
             raise Conflict(f"job {job_id} asks to run without the barrier: approve or refuse that bypass "
                            f"(POST /api/operator/jobs/{job_id}/bypass {{\"approve\": true|false}})", "job")
-        return self._operator_transition(user, job_id, "waiting", "approve", sources=("approved",))
+        return self._operator_transition(user, job_id, JobState.IN_ARENA_QUEUE, "approve", sources=(JobState.AWAITING_APPROVAL,))
 
     def decide_bypass(self, user: User, job_id: int, approve: bool) -> dict[str, Any]:
         """An operator's decision on a job's barrier bypass (module docstring), audited with the verdict and S.
@@ -474,23 +515,23 @@ class PortalService:
         if not isinstance(approve, bool):
             raise BadInput(f"approve must be true or false, got {approve!r}", "approve")
         row = self._visible_row(user, job_id)
-        if row["state"] != "approved" or not _bypass_pending(row):
+        if row["state"] != JobState.AWAITING_APPROVAL or not _bypass_pending(row):
             raise Conflict(f"job {job_id} is {row['state']} and not waiting for a decision on running without the "
                            "barrier", "job")
         score = "n/a" if row["safety_score"] is None else f"{row['safety_score']:.4f}"
         detail = f"verdict {row['verdict']!r}, S = {score}"
-        target = "waiting" if approve or not self.manual_approval else "approved"
+        target = JobState.IN_ARENA_QUEUE if approve or not self.manual_approval else JobState.AWAITING_APPROVAL
         columns = {"bypass_decision": "approved" if approve else "refused", "barrier_forbidden": int(not approve),
                    "reason": None}
         with self.db.transaction() as tx:
-            if target == "approved":  # manual approval on: the refused job now waits for the usual approval
+            if target == JobState.AWAITING_APPROVAL:  # manual approval on: the refused job now waits for the usual approval
                 cur = tx.execute("UPDATE jobs SET bypass_decision = ?, barrier_forbidden = ?, reason = ?, updated = ? "
-                                 "WHERE id = ? AND state = 'approved'", (*columns.values(), time.time(), job_id))
+                                 f"WHERE id = ? AND state = '{JobState.AWAITING_APPROVAL}'", (*columns.values(), time.time(), job_id))
                 if cur.rowcount != 1:
-                    raise Conflict(f"job {job_id} is no longer approved", "job")
+                    raise Conflict(f"job {job_id} is no longer awaiting approval", "job")
             else:
                 try:
-                    self.db.transition(tx, int(job_id), target, sources=("approved",), **columns)
+                    self.db.transition(tx, int(job_id), target, sources=(JobState.AWAITING_APPROVAL,), **columns)
                 except TransitionConflict as exc:
                     raise Conflict(str(exc), "job") from None
             self.accounts.audit(user, "approve barrier bypass" if approve else "refuse barrier bypass", int(job_id),
@@ -499,22 +540,22 @@ class PortalService:
         return self.job(user, job_id)
 
     def hold(self, user: User, job_id: int) -> dict[str, Any]:
-        """Hold a queued, approved or waiting job (it keeps its place; :meth:`release` puts it back)."""
+        """Hold a job awaiting verification or approval or in the arena queue (it keeps its place; :meth:`release` puts it back)."""
         self._require_operator(user)
         row = self._visible_row(user, job_id)
-        return self._operator_transition(user, job_id, "held", "hold", held_from=row["state"])
+        return self._operator_transition(user, job_id, JobState.HELD, "hold", held_from=row["state"])
 
     def release(self, user: User, job_id: int) -> dict[str, Any]:
         """Release a held job to the state it was held in (an approved one to ``waiting`` if manual approval
         is off by now)."""
         self._require_operator(user)
         row = self._visible_row(user, job_id)
-        if row["state"] != "held":
+        if row["state"] != JobState.HELD:
             raise Conflict(f"job {job_id} is {row['state']}, not held", "job")
-        back = row["held_from"] or "queued"
-        if back == "approved" and not self.manual_approval and not _bypass_pending(row):
-            back = "waiting"  # manual approval was switched off while it was held
-        return self._operator_transition(user, job_id, back, "release", sources=("held",), held_from=None)
+        back = row["held_from"] or JobState.AWAITING_VERIFICATION
+        if back == JobState.AWAITING_APPROVAL and not self.manual_approval and not _bypass_pending(row):
+            back = JobState.IN_ARENA_QUEUE  # manual approval was switched off while it was held
+        return self._operator_transition(user, job_id, back, "release", sources=(JobState.HELD,), held_from=None)
 
     def operator_cancel(self, user: User, job_id: int) -> dict[str, Any]:
         self._require_operator(user)
@@ -527,17 +568,18 @@ class PortalService:
         if isinstance(position, bool) or not isinstance(position, int) or position < 0:
             raise BadInput(f"position must be an integer >= 0, got {position!r}", "position")
         with self.db.transaction() as tx:
-            ids = [int(r["id"]) for r in tx.execute("SELECT id FROM jobs WHERE state = 'waiting' "
+            ids = [int(r["id"]) for r in tx.execute(f"SELECT id FROM jobs WHERE state = '{JobState.IN_ARENA_QUEUE}' "
                                                     "ORDER BY priority, id").fetchall()]
             if int(job_id) not in ids:
                 state = tx.execute("SELECT state FROM jobs WHERE id = ?", (job_id,)).fetchone()["state"]
-                raise Conflict(f"job {job_id} is {state}: only waiting jobs can be reordered", "job")
+                raise Conflict(f"job {job_id} is {state}: only jobs in the arena queue can be reordered", "job")
             ids.remove(int(job_id))
             ids.insert(min(position, len(ids)), int(job_id))
-            base = tx.execute("SELECT COALESCE(MIN(priority), 0) FROM jobs WHERE state = 'waiting'").fetchone()[0]
+            base = tx.execute(f"SELECT COALESCE(MIN(priority), 0) FROM jobs WHERE state = '{JobState.IN_ARENA_QUEUE}'").fetchone()[0]
             for k, jid in enumerate(ids):
                 tx.execute("UPDATE jobs SET priority = ? WHERE id = ?", (base + k * 1e-3, jid))
-            self.accounts.audit(user, "move", int(job_id), f"to position {min(position, len(ids) - 1)}", tx=tx)
+            # counted from 1, as the operator page and the CLI show positions (the API's ``position`` is 0-based)
+            self.accounts.audit(user, "move", int(job_id), f"to position {min(position, len(ids) - 1) + 1}", tx=tx)
         self.notify()
         return self.job(user, job_id)
 
@@ -558,10 +600,10 @@ class PortalService:
             # a job waiting for the bypass decision that is now forbidden runs with the barrier; a waiting job whose
             # bypass is allowed again waits for an operator's decision on it
             if forbid and not self.manual_approval:
-                tx.execute(f"UPDATE jobs SET state = 'waiting', reason = NULL WHERE id = ? AND state = 'approved' "
+                tx.execute(f"UPDATE jobs SET state = '{JobState.IN_ARENA_QUEUE}', reason = NULL WHERE id = ? AND state = '{JobState.AWAITING_APPROVAL}' "
                            f"AND reason = ?", (job_id, BYPASS_WAIT))
             elif not forbid:
-                tx.execute(f"UPDATE jobs SET state = 'approved', reason = ? WHERE id = ? AND state = 'waiting' "
+                tx.execute(f"UPDATE jobs SET state = '{JobState.AWAITING_APPROVAL}', reason = ? WHERE id = ? AND state = '{JobState.IN_ARENA_QUEUE}' "
                            f"AND {_PENDING_SQL}", (BYPASS_WAIT, job_id))
         self.notify()
         return self.job(user, job_id)
@@ -578,7 +620,7 @@ class PortalService:
         with self.db.transaction() as tx:
             self.db.set_setting(tx, "manual_approval", "1" if on else "0")
             if not on:  # jobs waiting for a decision on their bypass keep waiting for it
-                tx.execute(f"UPDATE jobs SET state = 'waiting', updated = ? WHERE state = 'approved' AND NOT {_PENDING_SQL}",
+                tx.execute(f"UPDATE jobs SET state = '{JobState.IN_ARENA_QUEUE}', updated = ? WHERE state = '{JobState.AWAITING_APPROVAL}' AND NOT {_PENDING_SQL}",
                            (time.time(),))
             self.accounts.audit(user, "manual approval on" if on else "manual approval off", tx=tx)
         self.notify()
@@ -599,7 +641,7 @@ class PortalService:
             active = tx.execute(f"SELECT id FROM jobs WHERE state IN ({', '.join('?' * len(ACTIVE))})",
                                 ACTIVE).fetchall()
             for r in active:
-                self.db.transition(tx, int(r["id"]), "cancelled", ended=time.time(),
+                self.db.transition(tx, int(r["id"]), JobState.CANCELLED, ended=time.time(),
                                    reason=f"emergency stop by operator {user.name}")
             self.accounts.audit(user, "emergency stop", None if not active else int(active[0]["id"]), tx=tx)
         if self.arena is not None:
@@ -625,8 +667,8 @@ class PortalService:
         :meth:`.ArenaFleet.status`; the alerts: the running or last job's bypass revocation and contacts,
         :meth:`.ArenaRunner.alerts`)."""
         self._require_operator(user)
-        running = self.db.query_one(f"{JOB_SELECT} WHERE j.state IN ('setting up', 'running') ORDER BY j.id LIMIT 1")
-        queue = self.db.query(f"{JOB_SELECT} WHERE j.state = 'waiting' ORDER BY j.priority, j.id")
+        running = self.db.query_one(f"{JOB_SELECT} WHERE j.state IN ('{JobState.SETTING_UP}', '{JobState.RUNNING}') ORDER BY j.id LIMIT 1")
+        queue = self.db.query(f"{JOB_SELECT} WHERE j.state = '{JobState.IN_ARENA_QUEUE}' ORDER BY j.priority, j.id")
         fleet_status = getattr(self.arena, "fleet_status", None)
         alerts = getattr(self.arena, "alerts", None)
         return {"stopped": self.arena_stopped, "needs_operator": self.db.setting("arena_attention", "") or None,
@@ -648,11 +690,11 @@ class PortalService:
         The owner served last is kept in the database (``settings``), so the turn survives a restart."""
         with self.db.transaction() as tx:
             last = int(self.db.setting("verify_last_owner", "0"))
-            row = tx.execute("SELECT id, user_id FROM jobs WHERE state = 'queued' "
+            row = tx.execute(f"SELECT id, user_id FROM jobs WHERE state = '{JobState.AWAITING_VERIFICATION}' "
                              "ORDER BY user_id <= ?, user_id, id LIMIT 1", (last,)).fetchone()
             if row is None:
                 return None
-            self.db.transition(tx, int(row["id"]), "verifying", sources=("queued",))
+            self.db.transition(tx, int(row["id"]), JobState.VERIFYING, sources=(JobState.AWAITING_VERIFICATION,))
             self.db.set_setting(tx, "verify_last_owner", str(int(row["user_id"])))
         self.notify()
         return _job_dict(self._row(int(row["id"])))
@@ -664,8 +706,9 @@ class PortalService:
         accepted = verdict != "rejected"
         with self.db.transaction() as tx:
             try:
-                self.db.transition(tx, job_id, "approved" if accepted else "rejected", sources=("verifying",),
-                                   verdict=verdict, safety_score=safety_score,
+                self.db.transition(tx, job_id, JobState.AWAITING_APPROVAL if accepted else JobState.REJECTED, sources=(JobState.VERIFYING,),
+                                   # S of a rejected script says nothing (it may never have moved a robot)
+                                   verdict=verdict, safety_score=safety_score if accepted else None,
                                    reason=None if accepted else "; ".join(reasons)[:4000],
                                    ended=None if accepted else time.time())
             except TransitionConflict:
@@ -674,7 +717,7 @@ class PortalService:
             if accepted and pending:  # a verdict alone never removes protection: an operator decides
                 tx.execute("UPDATE jobs SET reason = ? WHERE id = ?", (BYPASS_WAIT, job_id))
             elif accepted and self.db.setting("manual_approval", "0") != "1":
-                self.db.transition(tx, job_id, "waiting", sources=("approved",))
+                self.db.transition(tx, job_id, JobState.IN_ARENA_QUEUE, sources=(JobState.AWAITING_APPROVAL,))
         self.notify()
 
     def fail_verification(self, job_id: int, reason: str) -> None:
@@ -683,7 +726,7 @@ class PortalService:
 
     def verifying_cancelled(self, job_id: int) -> bool:
         row = self.db.query_one("SELECT state FROM jobs WHERE id = ?", (job_id,))
-        return row is None or row["state"] != "verifying"
+        return row is None or row["state"] != JobState.VERIFYING
 
     def bypass_allowed(self, job: dict[str, Any]) -> bool:
         """Run ``job`` without the barrier (with the guard): verification allowed it, the manifest asked, no operator
@@ -698,7 +741,7 @@ class PortalService:
         must wait: it stays first in the queue, ``waiting``, with that ``reason`` (jobs run in queue order:
         a smaller job behind it does not overtake it). ``admit`` runs outside the database transaction.
         """
-        first = f"{JOB_SELECT} WHERE j.state = 'waiting' ORDER BY j.priority, j.id LIMIT 1"
+        first = f"{JOB_SELECT} WHERE j.state = '{JobState.IN_ARENA_QUEUE}' ORDER BY j.priority, j.id LIMIT 1"
         if admit is not None:
             if self.arena_stopped:
                 return None
@@ -718,7 +761,7 @@ class PortalService:
                 return None  # the queue changed meanwhile: the arena asks again
             job = _job_dict(row)
             bypass = self.bypass_allowed(job)
-            self.db.transition(tx, int(row["id"]), "setting up", sources=("waiting",), started=time.time(),
+            self.db.transition(tx, int(row["id"]), JobState.SETTING_UP, sources=(JobState.IN_ARENA_QUEUE,), started=time.time(),
                                bypass=int(bypass), reason=None)
         self.notify()
         return _job_dict(self._row(int(row["id"])))
@@ -726,7 +769,7 @@ class PortalService:
     def _waiting_reason(self, job_id: int, reason: str) -> None:
         """Say why a waiting job does not start yet (shown with the job; cleared when it is claimed)."""
         with self.db.transaction() as tx:
-            cur = tx.execute("UPDATE jobs SET reason = ? WHERE id = ? AND state = 'waiting' AND "
+            cur = tx.execute(f"UPDATE jobs SET reason = ? WHERE id = ? AND state = '{JobState.IN_ARENA_QUEUE}' AND "
                              "COALESCE(reason, '') != ?", (reason, job_id, reason))
         if cur.rowcount:
             self.notify()
@@ -744,7 +787,7 @@ class PortalService:
         """``setting up → running``; False if the job was cancelled (or e-stopped) meanwhile."""
         with self.db.transaction() as tx:
             try:
-                self.db.transition(tx, job_id, "running", sources=("setting up",))
+                self.db.transition(tx, job_id, JobState.RUNNING, sources=(JobState.SETTING_UP,))
             except TransitionConflict:
                 return False
         self.notify()
@@ -779,15 +822,15 @@ class PortalService:
 
     def recover_on_start(self) -> list[int]:
         """After a restart: jobs found on the arena become ``interrupted`` (their ids are returned, for the
-        runner to recover their recordings); jobs found ``verifying`` go back to ``queued``."""
+        runner to recover their recordings); jobs found ``verifying`` go back to ``awaiting verification``."""
         with self.db.transaction() as tx:
             ids = [int(r["id"]) for r in tx.execute(
                 f"SELECT id FROM jobs WHERE state IN ({', '.join('?' * len(ACTIVE))})", ACTIVE).fetchall()]
             for jid in ids:
-                self.db.transition(tx, jid, "interrupted", sources=ACTIVE, ended=time.time(),
+                self.db.transition(tx, jid, JobState.INTERRUPTED, sources=ACTIVE, ended=time.time(),
                                    reason="the server stopped during the run (partial recording kept)")
-            for r in tx.execute("SELECT id FROM jobs WHERE state = 'verifying'").fetchall():
-                self.db.transition(tx, int(r["id"]), "queued", sources=("verifying",))
+            for r in tx.execute(f"SELECT id FROM jobs WHERE state = '{JobState.VERIFYING}'").fetchall():
+                self.db.transition(tx, int(r["id"]), JobState.AWAITING_VERIFICATION, sources=(JobState.VERIFYING,))
         return ids
 
     def close(self) -> None:

@@ -100,7 +100,7 @@ def display_name(filename: str | None) -> str:
     return clean or "script"
 
 
-def parse_manifest(data: Any, limits: Limits) -> Manifest:
+def parse_manifest(data: Any, limits: Limits, first: int = 0) -> Manifest:
     """The manifest from a JSON text (or an already parsed object); :class:`BadInput` naming the key."""
     if isinstance(data, (str, bytes)):
         try:
@@ -109,44 +109,102 @@ def parse_manifest(data: Any, limits: Limits) -> Manifest:
             raise BadInput(f"the manifest is not valid JSON: {exc}", "manifest") from None
     if not isinstance(data, dict):
         raise BadInput(f"the manifest must be a JSON object, got {type(data).__name__}", "manifest")
+    manifest, errors = _checked(data, limits, first)
+    if errors:
+        raise errors[0]
+    assert manifest is not None
+    return manifest
+
+
+def manifest_errors(data: dict[str, Any], limits: Limits, first: int = 0) -> list[BadInput]:
+    """Every problem of a manifest object, one per key, in the manifest's order (:func:`parse_manifest`
+    raises the first): a form shows them all at once."""
+    return _checked(data, limits, first)[1]
+
+
+def _checked(data: dict[str, Any], limits: Limits, first: int = 0) -> tuple[Manifest | None, list[BadInput]]:
+    """The manifest (None when anything is wrong) and the problems, each key checked on its own; poses are
+    numbered from ``first`` in messages, and the messages say so (0: the JSON list's index; 1: the Submit
+    page's lines)."""
+    errors: list[BadInput] = []
+
+    def check(key: str, fn: Any) -> Any:
+        try:
+            return fn()
+        except BadInput as exc:
+            errors.append(exc)
+            return None
+
     unknown = sorted(set(data) - set(MANIFEST_KEYS))
     if unknown:
-        raise BadInput(f"unknown manifest key {unknown[0]!r} (known: {', '.join(MANIFEST_KEYS)})", unknown[0])
-    for key in ("name", "robots", "duration"):
-        if key not in data:
-            raise BadInput(f"the manifest needs {key!r}", key)
-    name = data["name"]
+        errors.append(BadInput(f"unknown manifest key {unknown[0]!r} (known: {', '.join(MANIFEST_KEYS)})", unknown[0]))
+    name = check("name", lambda: _name(data))
+    robots = check("robots", lambda: _robots(data, limits))
+    duration = check("duration", lambda: _duration(data, limits))
+    no_barrier = check("no_barrier", lambda: _no_barrier(data))
+    entry = check("entry", lambda: _entry(data))
+    poses = data.get("initial_poses")
+    if poses is not None:  # with a bad robot count the poses are still checked (against their own count)
+        n = robots if robots is not None else (len(poses) if isinstance(poses, list) else 0)
+        poses = check("initial_poses", lambda: _initial_poses(poses, n, limits.bounds, first))
+    if errors:
+        return None, errors
+    return Manifest(name, robots, float(duration), poses, no_barrier, entry), []
+
+
+def _required(data: dict[str, Any], key: str) -> Any:
+    if key not in data:
+        raise BadInput(f"the manifest needs {key!r}", key)
+    return data[key]
+
+
+def _name(data: dict[str, Any]) -> str:
+    name = _required(data, "name")
     if not isinstance(name, str) or not 1 <= len(name.strip()) <= 100 or not name.isprintable():
         raise BadInput("name must be 1-100 printable characters", "name")
-    robots = data["robots"]
+    return name.strip()
+
+
+def _robots(data: dict[str, Any], limits: Limits) -> int:
+    robots = _required(data, "robots")
     if isinstance(robots, bool) or not isinstance(robots, int):
         raise BadInput(f"robots must be an integer, got {robots!r}", "robots")
     if not 1 <= robots <= limits.fleet:
         raise BadInput(f"robots must be between 1 and {limits.fleet} (the robots this arena has), got {robots}",
                        "robots")
-    duration = data["duration"]
+    return robots
+
+
+def _duration(data: dict[str, Any], limits: Limits) -> float:
+    duration = _required(data, "duration")
     if isinstance(duration, bool) or not isinstance(duration, (int, float)) or not math.isfinite(duration):
         raise BadInput(f"duration must be a number of seconds, got {duration!r}", "duration")
     if not 0 < duration <= limits.max_duration:
         raise BadInput(f"duration must be > 0 and at most {limits.max_duration:g} s, got {duration:g}", "duration")
+    return float(duration)
+
+
+def _no_barrier(data: dict[str, Any]) -> bool:
     no_barrier = data.get("no_barrier", False)
     if not isinstance(no_barrier, bool):
         raise BadInput(f"no_barrier must be true or false, got {no_barrier!r}", "no_barrier")
+    return no_barrier
+
+
+def _entry(data: dict[str, Any]) -> str | None:
     entry = data.get("entry")
     if entry is not None and (not isinstance(entry, str) or not _safe_name(entry) or not entry.endswith(".py")):
         raise BadInput("entry must be the relative name of a .py file in the archive", "entry")
-    poses = data.get("initial_poses")
-    checked = None if poses is None else _initial_poses(poses, robots, limits.bounds)
-    return Manifest(name.strip(), robots, float(duration), checked, no_barrier, entry)
+    return entry
 
 
-def _initial_poses(poses: Any, n: int, bounds: Bounds) -> tuple[tuple[float, float, float], ...]:
+def _initial_poses(poses: Any, n: int, bounds: Bounds, first: int = 0) -> tuple[tuple[float, float, float], ...]:
     try:
         arr = np.asarray(poses, dtype=float)  # JSON has no int/float distinction: 0 means 0.0 here
     except (TypeError, ValueError):
         raise BadInput("initial_poses must be a list of [x, y, theta] number triples", "initial_poses") from None
     try:
-        arr = check_initial_poses(arr, n, bounds, "initial_poses")
+        arr = check_initial_poses(arr, n, bounds, f"initial_poses (numbered from {first})", first=first)
     except ValueError as exc:
         raise BadInput(str(exc), "initial_poses") from None
     return tuple((float(x), float(y), float(t)) for x, y, t in arr)

@@ -1,4 +1,4 @@
-"""Verification workers: queued jobs → ``verifying`` → ``rejected`` | ``approved`` (then ``waiting``).
+"""Verification workers: jobs awaiting verification → ``verifying`` → ``rejected`` | ``awaiting approval`` (then ``in arena queue``).
 
 One thread (:class:`VerificationWorkers`) claims the next queued job (round-robin
 across researchers: :meth:`~.service.PortalService.claim_for_verification`) and
@@ -87,7 +87,9 @@ class VerificationWorkers:
         watcher.start()
         try:
             script, entry = service.script(job)
-            report = verify([script], self.config_for(job), self.executor, cancel=cancel, entry=entry)
+            # messages name the file the researcher uploaded, not the name the portal stored it under
+            names = [job["script"]] if job["kind"] == "py" else None
+            report = verify([script], self.config_for(job), self.executor, cancel=cancel, entry=entry, names=names)
         except VerificationCancelled as exc:
             service.record_verification_cpu(job_id, exc.cpu_s)  # a cancel does not make the CPU free
             return  # cancelled: the job is already cancelled (or requeued on restart)

@@ -66,6 +66,13 @@
         row.querySelector('[data-field="charge"]').textContent = r.charge !== null ? `${Math.round(100 * r.charge)} %` : "unknown";
         row.querySelector('[data-field="slot"]').textContent = r.slot !== null ? r.slot : (r.state === "missing" ? "–" : "floor");
       }
+      const map = document.getElementById("arena-map");  // the fleet's poses, drawn in place
+      for (const r of (a.fleet && map ? a.fleet.robots : [])) {
+        const g = map.querySelector(`g[data-robot="${r.id}"]`);
+        if (!g || r.x === null) continue;
+        g.setAttribute("transform", `translate(${r.x.toFixed(4)} ${(-r.y).toFixed(4)}) rotate(${(-r.theta * 57.29578).toFixed(2)})`);
+        g.setAttribute("class", "robot robot-" + r.state.replace(/ /g, "-"));
+      }
       const ready = document.getElementById("fleet-ready");
       if (ready && a.fleet) ready.firstChild.textContent = a.fleet.ready
         ? "Arena ready: every robot is docked or assigned to a job." : "Arena NOT ready: robots are away from the chargers.";
