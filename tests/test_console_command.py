@@ -25,7 +25,7 @@ def test_console_records_the_session(tmp_path, capsys) -> None:
 
 @pytest.mark.parametrize("argv, message", [
     (["console", "--behaviour", "dance", "--no-inputs"], "unknown behaviour"),
-    (["console", "--robots", "0", "--no-inputs"], "n_robots"),
+    (["console", "--robots", "0", "--no-inputs"], "--robots must be >= 1, got 0"),  # the flag, not n_robots
     (["console", "--duration", "-1", "--no-inputs"], "--duration"),
     (["console", "--behaviour", "script:/no/such/file.py", "--no-inputs"], "does not exist"),
 ])

@@ -41,6 +41,7 @@ def test_rejected_exits_1_and_names_the_scripts_line(tmp_path, capsys):
     assert main(args(script)) == 1
     out = capsys.readouterr().out
     assert "crash.py: rejected" in out and "crash.py:3 (in experiment): KeyError: 'oops'" in out
+    assert "safety score" not in out  # a rejected script shows no S (it said "S = 1.0000" of runs that failed)
 
 
 @pytest.mark.parametrize("extra,message", [

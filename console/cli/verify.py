@@ -156,8 +156,12 @@ def main(args: argparse.Namespace) -> int:
         print(json.dumps(data, indent=2))
     else:
         for s in data["scripts"]:
-            score = "n/a" if s["safety_score"] is None else f"{s['safety_score']:.4f}"
-            print(f"{s['script']}: {s['verdict']} (safety score S = {score} over {args.runs} runs without the barrier)")
+            if s["verdict"] == REJECTED:  # S of runs that failed says nothing: the reasons below do
+                print(f"{s['script']}: {s['verdict']}")
+            else:
+                score = "n/a" if s["safety_score"] is None else f"{s['safety_score']:.4f}"
+                print(f"{s['script']}: {s['verdict']} (safety score S = {score} over {args.runs} runs without the "
+                      "barrier)")
             for reason in s["reasons"]:
                 print(f"  rejected: {reason}")
             for reason in s["bypass_refused_because"]:
