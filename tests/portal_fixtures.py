@@ -160,3 +160,21 @@ def wait_for_state(client: httpx.Client, job_id: int, states: tuple[str, ...], t
         if time.monotonic() > deadline:
             raise AssertionError(f"job {job_id} is {job['state']}, not {states}, after {timeout} s: {job}")
         time.sleep(0.05)
+
+
+def skip_verification(portal: Portal, job_id: int, verdict: str = "accepted") -> None:
+    """Move a submitted job straight into the arena queue as if verification had accepted it (tests of the arena
+    and its pages that do not need a verifier), and wake the runner."""
+    svc = portal.service
+    with svc.db.transaction() as tx:
+        for state in ("verifying", "awaiting approval", "in arena queue"):
+            svc.db.transition(tx, job_id, state, **({"verdict": verdict} if state == "awaiting approval" else {}))
+    svc.notify()
+
+
+def browser_sign_in(page, portal: Portal, who: str) -> None:
+    """Sign ``who`` in on a Playwright page with their token; it lands on Operator (operators) or My jobs."""
+    page.goto(f"{portal.url}/signin")
+    page.fill("#token", portal.tokens[who])
+    page.click("button[type=submit]")
+    page.wait_for_url("**/operator" if who.startswith("op") else "**/jobs")

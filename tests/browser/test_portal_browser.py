@@ -11,7 +11,7 @@ from pathlib import Path
 
 import pytest
 from mqtt_broker import wait_until
-from portal_fixtures import SPIN, make_portal, wait_for_state
+from portal_fixtures import SPIN, browser_sign_in, make_portal, wait_for_state
 
 from swarmdeck.console.jobs.confinement import probe
 from swarmdeck.console.jobs.executors import LocalPoolExecutor
@@ -61,10 +61,7 @@ def browser():
 
 def signed_in(browser, portal, who):
     page = browser.new_page(viewport={"width": 1200, "height": 900}, accept_downloads=True)
-    page.goto(f"{portal.url}/signin")
-    page.fill("#token", portal.tokens[who])
-    page.click("button[type=submit]")
-    page.wait_for_url("**/operator" if who.startswith("op") else "**/jobs")
+    browser_sign_in(page, portal, who)
     return page
 
 

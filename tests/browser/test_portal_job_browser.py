@@ -6,7 +6,7 @@ import os
 
 import pytest
 from mqtt_broker import wait_until
-from portal_fixtures import portal  # noqa: F401
+from portal_fixtures import browser_sign_in, portal, skip_verification  # noqa: F401
 
 from swarmdeck.console.jobs.confinement import probe
 from swarmdeck.console.portal.runner import ArenaRunner, ArenaSettings
@@ -34,19 +34,13 @@ def test_the_job_page_shows_the_script_output_live_then_the_results(portal):  # 
     runner.start()
     try:
         jid = portal.submit("alice", source=CHATTY, robots=2, duration=8.0).json()["id"]
-        with svc.db.transaction() as tx:
-            for state in ("verifying", "awaiting approval", "in arena queue"):
-                svc.db.transition(tx, jid, state, **({"verdict": "accepted"} if state == "awaiting approval" else {}))
-        svc.notify()
+        skip_verification(portal, jid)
         wait_until(lambda: svc.job_state(jid) == "running", timeout=120, what="the job running")
         with sync_playwright() as pw:
             b = pw.chromium.launch(executable_path=CHROMIUM, args=ARGS)
             try:
                 page = b.new_page(viewport={"width": 1200, "height": 1000})
-                page.goto(f"{portal.url}/signin")
-                page.fill("#token", portal.tokens["alice"])
-                page.click("button[type=submit]")
-                page.wait_for_url("**/jobs")
+                browser_sign_in(page, portal, "alice")
                 page.goto(f"{portal.url}/jobs/{jid}")
                 page.wait_for_function("() => document.getElementById('script-log').textContent.includes('60 steps in')",
                                        timeout=60_000)

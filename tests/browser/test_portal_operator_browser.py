@@ -6,7 +6,7 @@ import os
 
 import pytest
 from mqtt_broker import wait_until
-from portal_fixtures import portal  # noqa: F401
+from portal_fixtures import browser_sign_in, portal, skip_verification  # noqa: F401
 
 from swarmdeck.console.jobs.confinement import probe
 from swarmdeck.console.portal.runner import ArenaRunner, ArenaSettings
@@ -30,19 +30,13 @@ def test_the_operator_sees_the_fleet_on_the_arena_and_cancels_the_running_job(po
             wait_until(lambda: len((c.get("/api/operator/arena").json()["fleet"] or {}).get("robots", [])) == 4,
                        timeout=60, what="the fleet's first reading")
         jid = portal.submit("alice", source=SLOW, robots=2, duration=50.0).json()["id"]
-        with svc.db.transaction() as tx:
-            for state in ("verifying", "awaiting approval", "in arena queue"):
-                svc.db.transition(tx, jid, state, **({"verdict": "accepted"} if state == "awaiting approval" else {}))
-        svc.notify()
+        skip_verification(portal, jid)
         wait_until(lambda: svc.job_state(jid) == "running", timeout=120, what="the job running")
         with sync_playwright() as pw:
             b = pw.chromium.launch(executable_path=CHROMIUM, args=ARGS)
             try:
                 page = b.new_page(viewport={"width": 1200, "height": 1000})
-                page.goto(f"{portal.url}/signin")
-                page.fill("#token", portal.tokens["op1"])
-                page.click("button[type=submit]")
-                page.wait_for_url("**/operator")
+                browser_sign_in(page, portal, "op1")
                 robots = page.eval_on_selector_all("#arena-map g.robot", "gs => gs.map(g => g.getBBox().width)")
                 assert len(robots) == 4 and all(w > 0.1 for w in robots)  # drawn, robot-sized (m)
                 assert page.locator("#arena-map g.robot-assigned").count() == 2  # the job's two robots

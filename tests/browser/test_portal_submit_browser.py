@@ -6,7 +6,7 @@ from __future__ import annotations
 import os
 
 import pytest
-from portal_fixtures import SPIN, portal  # noqa: F401
+from portal_fixtures import SPIN, browser_sign_in, portal  # noqa: F401
 
 CHROMIUM = "/usr/bin/chromium"
 ARGS = ["--no-sandbox", "--disable-background-networking", "--disable-component-update"]
@@ -21,10 +21,7 @@ def page(portal):  # noqa: F811
         b = pw.chromium.launch(executable_path=CHROMIUM, args=ARGS)
         try:
             p = b.new_page(viewport={"width": 1200, "height": 900})
-            p.goto(f"{portal.url}/signin")
-            p.fill("#token", portal.tokens["alice"])
-            p.click("button[type=submit]")
-            p.wait_for_url("**/jobs")
+            browser_sign_in(p, portal, "alice")
             yield p
         finally:
             b.close()
