@@ -78,7 +78,7 @@ def run(n: int, ticks: int, scene: str, seed: int = 0) -> tuple[dict[str, np.nda
         cert = certify(poses, nominal, robot, full)
         t1 = clock()
         bind = len(cert.diagnostics.active_pairs) > 0 or "soft" in cert.diagnostics.status
-        kept = _without_pairs(cert, poses, nominal, robot, walls, seen, None)
+        kept = _without_pairs(cert, poses, nominal, robot, walls, seen, np.zeros((0, 2)))  # no fixed points
         t2 = clock()
         p0, p1 = lookahead_points(poses, robot.lookahead), next_points(poses, kept.v, kept.w, robot, DT)
         extra = np.linalg.norm(cert.safe - kept.safe, axis=1) if bind else np.zeros(n)

@@ -263,14 +263,14 @@ def certify_bypassed(poses: ArrayLike, nominal: ArrayLike, robot: GritsBotParams
     n = len(poses)
     seen_mask = np.ones(n, dtype=bool) if seen is None else np.asarray(seen, dtype=bool).reshape(n)
     full = certify(poses, nominal, robot, monitor, seen=seen_mask, obstacles=obstacles)
-    kept = _without_pairs(full, poses, nominal, robot, hard, seen_mask, obstacles) if full.ok else full
-    idx = np.flatnonzero(seen_mask)
     ell = robot.lookahead
+    fixed = _fixed_points(poses, seen_mask, obstacles, ell)
+    kept = _without_pairs(full, poses, nominal, robot, hard, seen_mask, fixed) if full.ok else full
+    idx = np.flatnonzero(seen_mask)
     p0 = lookahead_points(poses[idx], ell)
     p1 = next_points(poses[idx], kept.v[idx], kept.w[idx], robot, dt)
     extra = np.zeros(len(idx)) if kept is full else np.linalg.norm(full.safe[idx] - kept.safe[idx], axis=1)
     labels = np.arange(n) if names is None else np.asarray(names).reshape(n)
-    fixed = _fixed_points(poses, seen_mask, obstacles, ell)
     verdict, stops = assess(guard, p0, p1, extra, fixed, full.ok, full.status, labels[idx])
     if verdict.trip:
         out, stopped = brake(full, poses, robot, dt, guard.guard_distance, seen=seen_mask, obstacles=obstacles)
@@ -285,9 +285,10 @@ def certify_bypassed(poses: ArrayLike, nominal: ArrayLike, robot: GritsBotParams
 
 
 def _without_pairs(full: Certified, poses: FloatArray, nominal: ArrayLike, robot: GritsBotParams, hard: Any,
-                   seen: BoolArray, obstacles: ArrayLike | None) -> Certified:
+                   seen: BoolArray, fixed: FloatArray) -> Certified:
     """The walls-and-obstacles answer from the full barrier's (see :func:`certify_bypassed`): ``hard`` on the robots
-    of active pair rows only, with the robots that are not seen and ``obstacles`` as its fixed points."""
+    of active pair rows only, with ``fixed`` (the unseen robots and the obstacles, :func:`_fixed_points`) as its fixed
+    points."""
     diag = full.diagnostics
     pairs = np.asarray(getattr(diag, "active_pairs", np.zeros((0, 2))), dtype=np.int64).reshape(-1, 2)
     if "soft" in str(getattr(diag, "status", "")):  # the soft recovery form is not the QP's optimum: all of them
@@ -297,7 +298,6 @@ def _without_pairs(full: Certified, poses: FloatArray, nominal: ArrayLike, robot
     if rows.size == 0:
         return full
     ell = robot.lookahead
-    fixed = _fixed_points(poses, seen, obstacles, ell)
     v, w = full.v.copy(), full.w.copy()
     free = _no_rows(hard, lookahead_points(poses[rows], ell), fixed)
     v[rows[free]], w[rows[free]] = full.v_nominal[rows[free]], full.w_nominal[rows[free]]  # nothing to change
