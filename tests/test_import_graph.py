@@ -102,3 +102,43 @@ def test_lazy_and_relative_imports_are_seen(tmp_path: Path) -> None:
     found = violations("safety", tmp_path)
     assert len(found) == 3 and all(f"{tmp_path.name}/sub/mod.py" in v for v in found)
     assert any("safety imports swarmdeck.devices" in v for v in found)
+
+
+#: inside the console: subpackage → the console subpackages it must not import. The picture of a Frame
+#: (console/picture) lies below every renderer, so the recording's renderers (video, Foxglove) never reach
+#: up into the viser console (web) for a colour, and the picture reaches into no renderer.
+CONSOLE_FORBIDDEN: dict[str, set[str]] = {
+    "recording": {"web"},
+    "picture": {"web", "recording", "portal", "cli", "jobs"},
+}
+
+
+def console_violations(console: Path) -> list[str]:
+    """``file:line: console.<sub> imports <name>`` for every import against :data:`CONSOLE_FORBIDDEN`."""
+    out = []
+    for sub, forbidden in CONSOLE_FORBIDDEN.items():
+        for path in sorted((console / sub).rglob("*.py")):
+            rel = path.relative_to(console).with_suffix("")
+            parts = [p for p in rel.parts if p != "__init__"]
+            module = ".".join(["swarmdeck", "console", *parts])
+            for line, name in imported_modules(path.read_text(encoding="utf-8"), module, rel.name == "__init__"):
+                bits = name.split(".")
+                if bits[:2] == ["swarmdeck", "console"] and len(bits) > 2 and bits[2] in forbidden:
+                    out.append(f"{path.relative_to(console.parent)}:{line}: console.{sub} imports {name}")
+    return out
+
+
+def test_recording_never_imports_web_and_the_picture_imports_no_renderer() -> None:
+    found = console_violations(packages()["console"])
+    assert not found, "imports against the console's layering:\n" + "\n".join(found)
+
+
+def test_the_console_layer_rule_sees_lazy_imports(tmp_path: Path) -> None:
+    for sub in CONSOLE_FORBIDDEN:
+        (tmp_path / sub).mkdir()
+    (tmp_path / "recording" / "x.py").write_text("def f():\n    from swarmdeck.console.web.scene import ROBOT\n")
+    (tmp_path / "picture" / "y.py").write_text("from ..recording import reader\nimport swarmdeck.console.runtime\n")
+    found = console_violations(tmp_path)
+    assert len(found) == 3  # the relative import names the package and its module
+    assert "console.recording imports swarmdeck.console.web.scene" in found[0]
+    assert all("console.picture imports swarmdeck.console.recording" in f for f in found[1:])

@@ -11,7 +11,7 @@ import viser
 
 from swarmdeck.console.cli import main as cli
 from swarmdeck.console.cli.info import summarise
-from swarmdeck.console.recording.export_html import export_html
+from swarmdeck.console.web.export_html import export_html
 from swarmdeck.console.recording.reader import open_recording
 from swarmdeck.console.recording.recorder import Recorder
 from swarmdeck.console.runtime.frame import ContactsFrame

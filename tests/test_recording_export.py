@@ -11,7 +11,7 @@ import pytest
 import zstandard
 
 from swarmdeck.console.recording.export_csv import ROBOT_COLUMNS, export_csv
-from swarmdeck.console.recording.export_html import export_html
+from swarmdeck.console.web.export_html import export_html
 from swarmdeck.console.recording.recorder import Recorder
 from swarmdeck.console.recording.reader import open_recording
 from recording_synth import as_recorded, simulated_frames

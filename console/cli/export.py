@@ -69,7 +69,7 @@ def main(args: argparse.Namespace) -> int:
                 raise UsageError(f"cannot write CSV to {args.csv}: {exc.strerror or exc}") from exc
             print(f"wrote {n} frames to {robots} and {frames}")
         if args.html:
-            from swarmdeck.console.recording.export_html import export_html
+            from swarmdeck.console.web.export_html import export_html
 
             try:
                 path, n = export_html(rec, args.html, fps=args.fps or HTML_FPS, start=args.start, end=args.end)

@@ -7,7 +7,7 @@ job ids; for each it starts this module as a child process
 writes, from ``recording.mcap``:
 
 * ``robots.csv`` and ``frames.csv`` (:func:`~swarmdeck.console.recording.export_csv.export_csv`),
-* ``replay.html`` (:func:`~swarmdeck.console.recording.export_html.export_html`),
+* ``replay.html`` (:func:`~swarmdeck.console.web.export_html.export_html`),
 * ``video.mp4`` (:func:`~swarmdeck.console.recording.export_video.export_video`),
 
 each into ``.exports/`` first and then renamed into the job's folder, so a file
@@ -133,7 +133,7 @@ def write_exports(folder: Path, video: bool = True) -> dict[str, Any]:
 
 
 def _html(rec: Any, out: Path) -> None:
-    from swarmdeck.console.recording.export_html import export_html
+    from swarmdeck.console.web.export_html import export_html
 
     export_html(rec, out, fps=HTML_FPS)
 

@@ -1,12 +1,12 @@
 """The live view's picture of a running job: one Frame as the JSON the portal's canvas draws.
 
-:func:`scene_message` gives what the console's scene shows of a Frame, read-only
-and in plain JSON, drawn with the scene's own helpers
-(:mod:`swarmdeck.console.web.scene`: ``robot_colors`` for the state colours,
-``h_colors`` for the active barrier pairs, ``heatmap`` for the density) so the
-portal's live view, the console and the video (:mod:`~swarmdeck.console.recording.export_video`)
-colour a run the same way. Keys (units m, s, rad; N robots, E Voronoi edges, K
-active pairs)::
+:func:`scene_message` is a serialisation of the renderer-neutral picture of the Frame
+(:func:`~swarmdeck.console.picture.picture.picture_of`), the same the console's scene, the
+video and the Foxglove channels draw: ``colours``, ``moved``, ``pairs``/``pair_colours`` and
+``virtual`` are the picture's robot colours, changed robots, active pairs and virtual robots,
+and ``palette``/``robot_radius``/``rings`` give ``static/live.js`` the picture's colours and
+glyph sizes, so the canvas hard-codes none of them. Keys (units m, s, rad; N robots, E Voronoi
+edges, K active pairs)::
 
     seq          int, the LiveFeed's sequence number of this Frame
     tick, t      tick index; run time s (the behaviours' clock: what the script sees)
@@ -24,6 +24,9 @@ active pairs)::
     barrier      null | {enabled, ok, n_active, min_distance, safety_distance}
     density      null | "data:image/png;base64,…" the heat map, row 0 at y_max, covering ``bounds``
     events       [str] messages of this tick
+    robot_radius body radius of the robot glyph, m
+    rings        {"changed": …, "virtual": …} ring radii round changed / virtual robots, × robot_radius
+    palette      {floor, grid, boundary, voronoi, centroid, changed, virtual, label, heading, stopped}: "#rrggbb"
 
 A message is a few kB (N = 12); the pages send at most ten a second.
 """
@@ -34,56 +37,57 @@ import math
 from typing import Any
 
 import numpy as np
-from numpy.typing import NDArray
 
+from swarmdeck.console.picture import colours as pal
+from swarmdeck.console.picture.picture import Picture, picture_of
+from swarmdeck.console.picture.shapes import CHANGED_RING, ROBOT_RADIUS, VIRTUAL_RING_RADIUS
 from swarmdeck.console.runtime.frame import Frame
-from swarmdeck.console.web.scene import h_colors, heatmap, robot_colors
 
 DENSITY_PX_PER_M = 20.0  # the canvas smooths the small image up; 64 × 40 px on the default arena
 
-
-def _hex(colours: NDArray[np.uint8]) -> list[str]:
-    return [f"#{int(r):02x}{int(g):02x}{int(b):02x}" for r, g, b in colours.reshape(-1, 3)]
+PALETTE: dict[str, str] = dict(zip(
+    ("floor", "grid", "boundary", "voronoi", "centroid", "changed", "virtual", "label", "heading", "stopped"),
+    pal.hex_colors(np.array([pal.LUT[0], (150, 150, 150), pal.BOUNDARY, pal.VORONOI, pal.CENTROID, pal.CHANGED,
+                             pal.VIRTUAL_RING, pal.LABEL, pal.HEADING, pal.STOPPED], dtype=np.uint8)),
+    strict=True))
+"""the picture's colours as the canvas needs them (``palette`` of every message)"""
 
 
 def _num(x: float) -> float | None:
     return float(x) if math.isfinite(x) else None
 
 
-def density_png(frame: Frame, px_per_m: float = DENSITY_PX_PER_M) -> str | None:
-    """The Frame's density as the console's heat map, a PNG data URL (None without a density)."""
-    if frame.density is None:
+def density_png(picture: Picture | Frame, px_per_m: float = DENSITY_PX_PER_M) -> str | None:
+    """The density as the console's heat map, a PNG data URL (None without a density)."""
+    if picture.density is None:
         return None
     import cv2
 
-    img = heatmap(frame.density, frame.bounds, px_per_m)
+    from swarmdeck.console.picture.heat import heatmap
+
+    img = heatmap(picture.density, picture.bounds, px_per_m)
     ok, buf = cv2.imencode(".png", np.ascontiguousarray(img[..., ::-1]))
     return "data:image/png;base64," + base64.b64encode(buf.tobytes()).decode("ascii") if ok else None
 
 
 def scene_message(frame: Frame, seq: int) -> dict[str, Any]:
     """The JSON-able picture of ``frame`` (module docstring)."""
-    b, cov = frame.barrier, frame.coverage
-    pairs = np.empty((0, 2), dtype=np.int64)
-    pair_colours: list[str] = []
-    moved: list[int] = []
+    pic = picture_of(frame)
+    b = frame.barrier
     barrier = None
     if b is not None:
-        if len(b.active_pairs) and b.active_pairs.max() < frame.n:
-            pairs = b.active_pairs
-            pair_colours = _hex(h_colors(b.active_h, b.safety_distance)[:, 0, :])
-        if len(b.intervention) == frame.n:
-            moved = np.flatnonzero(b.intervention > 1e-3).tolist()
         barrier = {"enabled": b.enabled, "ok": b.ok, "n_active": b.n_active,
                    "min_distance": _num(b.min_distance), "safety_distance": b.safety_distance}
     return {
-        "seq": int(seq), "tick": frame.tick, "t": round(frame.run_time, 3), "run_state": frame.run_state,
-        "bounds": list(frame.bounds), "ids": frame.ids.tolist(),
-        "poses": np.round(frame.poses, 4).tolist(), "colours": _hex(robot_colors(frame)),
-        "points": np.round(frame.points, 4).tolist(), "moved": moved,
-        "virtual": np.flatnonzero(frame.is_virtual).tolist(),
-        "edges": np.round(cov.edges, 3).tolist() if cov is not None else [],
-        "centroids": np.round(cov.centroids, 3).tolist() if cov is not None else [],
-        "pairs": pairs.tolist(), "pair_colours": pair_colours, "barrier": barrier,
-        "density": density_png(frame), "events": list(frame.events),
+        "seq": int(seq), "tick": frame.tick, "t": round(frame.run_time, 3), "run_state": pic.run_state,
+        "bounds": list(pic.bounds), "ids": pic.ids.tolist(),
+        "poses": np.round(pic.poses, 4).tolist(), "colours": pal.hex_colors(pic.colors),
+        "points": np.round(pic.points, 4).tolist(), "moved": np.flatnonzero(pic.changed).tolist(),
+        "virtual": np.flatnonzero(pic.virtual).tolist(),
+        "edges": np.round(pic.edges, 3).tolist() if frame.coverage is not None else [],
+        "centroids": np.round(pic.centroids, 3).tolist() if frame.coverage is not None else [],
+        "pairs": pic.pairs.tolist(), "pair_colours": pal.hex_colors(pic.pair_colors), "barrier": barrier,
+        "density": density_png(pic), "events": list(pic.events),
+        "robot_radius": ROBOT_RADIUS, "rings": {"changed": CHANGED_RING, "virtual": VIRTUAL_RING_RADIUS},
+        "palette": PALETTE,
     }

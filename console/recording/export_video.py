@@ -5,17 +5,17 @@ recording time (video frame k shows the last recorded Frame at or before
 ``start + k / fps``, so a recording of D s gives ``floor(D · fps) + 1`` video
 frames) and draws each sample with OpenCV on a numpy RGB image:
 
-- the density φ as the console's heat map (``scene.heatmap``, its colour map),
+- the density φ as the console's heat map (``picture.heatmap``, its colour map),
   with the floor grid every 0.5 m and the arena outline;
 - the Voronoi edges and centroids of the coverage state;
 - barrier activity: active pairs as thick lines between look-ahead points,
-  coloured by h like the console (``scene.h_colors``: red at h ≤ 0 → yellow),
+  coloured by h like the console (``picture.pair_colors``: red at h ≤ 0 → yellow),
   and an orange ring around every robot whose command the filter changed;
-- the robots as the console's teardrop (``scene.robot_mesh``: a disc with a nose
-  along the heading) coloured by state (``scene.robot_colors``: blue, orange when
+- the robots as the console's teardrop (``picture.shapes.robot_outline``: a disc with a nose
+  along the heading) coloured by state (``picture.robot_colors``: blue, orange when
   the filter changed the command, red in an emergency stop, slate paused, grey
-  unseen; virtual robots pale, in a dashed violet ring), a white heading tick, and the id above (up to ``SceneStyle.max_labels``
-  robots), with the safety discs of radius D_s / 2 up to ``SceneStyle.max_glyphs``;
+  unseen; virtual robots pale, in a dashed violet ring), a white heading tick, and the id above (up to ``PictureStyle.max_labels``
+  robots), with the safety discs of radius D_s / 2 up to ``PictureStyle.max_glyphs``;
 - touch contacts (magenta dots);
 - a header with the recording time (s since the first frame, the time
   ``swarmdeck play`` seeks to), N, the behaviour, the run state and the barrier's
@@ -50,9 +50,13 @@ from numpy.typing import NDArray
 from swarmdeck.core.bounds import Bounds
 from swarmdeck.console.recording.reader import Recording, RecordedEvent
 from swarmdeck.console.runtime.frame import Frame
-from swarmdeck.console.web.scene import (
-    LUT, VIRTUAL_RING, SceneStyle, h_colors, heatmap, robot_colors, robot_mesh,
+from swarmdeck.console.picture.colours import (
+    BOUNDARY, CENTROID, CHANGED, CONTACT, HEADING, LABEL, LUT, STOPPED, VIRTUAL_RING, VORONOI, pair_colors,
 )
+from swarmdeck.console.picture.heat import heatmap
+from swarmdeck.console.picture.picture import Picture, picture_of
+from swarmdeck.console.picture.shapes import CHANGED_RING, ROBOT_RADIUS, dashed_rings, robot_outline
+from swarmdeck.console.picture.style import PictureStyle
 
 #: H.264 encoders tried in this order (PyAV's wheels carry libx264).
 H264_ENCODERS = ("libx264", "libopenh264", "h264")
@@ -62,13 +66,9 @@ _ONE = 1 << _SHIFT
 BACKGROUND = (246, 246, 242)
 BAND = (32, 34, 40)
 GRID = np.array([150, 150, 150], dtype=float)
-VORONOI = (70, 70, 70)
-CENTROID = (200, 30, 60)
-CONTACT = (200, 0, 200)
 DISC = (135, 135, 135)
-RING = (255, 140, 0)
-LABEL = (25, 25, 25)
-ESTOP = (210, 30, 30)
+RING = tuple(int(c) for c in CHANGED)  # the ring round a robot the barrier changed
+ESTOP = tuple(int(c) for c in STOPPED)
 
 
 class VideoExportError(Exception):
@@ -88,7 +88,7 @@ class VideoStyle:
     width: int = 1280
     height: int = 720
     fps: float = 30.0
-    robot_radius: float = 0.055
+    robot_radius: float = ROBOT_RADIUS
     events_shown: float = 3.0
     camera_panel: float = 0.3
     crf: int = 23
@@ -159,26 +159,24 @@ class FrameRenderer:
     """Draws Frames into RGB images (height, width, 3) uint8 for one layout. Keeps only caches that
     depend on the layout, the robot ids and the camera picture."""
 
-    def __init__(self, layout: VideoLayout, style: VideoStyle, scene_style: SceneStyle | None = None) -> None:
+    def __init__(self, layout: VideoLayout, style: VideoStyle, picture: PictureStyle | None = None) -> None:
         import cv2
 
         self.cv2 = cv2
         self.layout = layout
         self.style = style
-        self.scene_style = scene_style or SceneStyle()
+        self.picture_style = picture or PictureStyle()
         lay = layout
         self.font_scale = max(0.35, lay.height / 720 * 0.6)
         self.thick = max(1, round(lay.height / 720 * 1.5))
         x0, x1, y0, y1 = lay.bounds
         # heat map sampled coarsely (as the console does) and stretched to the arena rectangle
-        self.heat_px_per_m = min(self.scene_style.heatmap_px_per_m,
-                                 math.sqrt(self.scene_style.heatmap_max_px / ((x1 - x0) * (y1 - y0))))
+        self.heat_px_per_m = self.picture_style.heatmap_px(lay.bounds)
         self.empty_heat = np.empty((lay.arena_h, lay.arena_w, 3), dtype=np.uint8)
         self.empty_heat[:] = LUT[0]
         self.grid_mask = self._grid_mask(0.5)
         r = style.robot_radius
-        rim = robot_mesh(r)[0][1:, :2].astype(float)  # teardrop outline, nose at +x
-        self.body = rim
+        self.body = robot_outline(r)  # the picture's teardrop, nose at +x
         self.tick = np.array([[0.25 * r, 0.0], [1.35 * r, 0.0]])
         ring = np.linspace(0.0, 2 * np.pi, 17)[:-1]
         self.unit_ring = np.column_stack((np.cos(ring), np.sin(ring)))
@@ -187,7 +185,7 @@ class FrameRenderer:
         self.base[:lay.band] = BAND
         self.base[lay.height - lay.band:] = BAND
         cv2.rectangle(self.base, (lay.left - 2, lay.top - 2), (lay.left + lay.arena_w + 1, lay.top + lay.arena_h + 1),
-                      (40, 40, 40), 2)
+                      BOUNDARY, 2)
         self._labels_key: tuple[int, ...] | None = None
         self._labels: tuple[NDArray[np.intp], NDArray[np.intp], NDArray[np.intp]] | None = None
         self._picture: NDArray[np.uint8] | None = None
@@ -225,7 +223,8 @@ class FrameRenderer:
     # ------------------------------------------------------------------ one image
     def render(self, frame: Frame, t: float, events: Sequence[RecordedEvent] = ()) -> NDArray[np.uint8]:
         """The picture of ``frame`` at recording time ``t`` s, with ``events`` (the recent ones) in the footer."""
-        cv2, lay, sst = self.cv2, self.layout, self.scene_style
+        cv2, lay = self.cv2, self.layout
+        pic = picture_of(frame, self.picture_style)
         img = self.base.copy()
         top, left, ah, aw = lay.top, lay.left, lay.arena_h, lay.arena_w
         arena = img[top:top + ah, left:left + aw]
@@ -236,33 +235,26 @@ class FrameRenderer:
             self._floor, self._floor_of = floor, frame
         arena[:] = self._floor
         aa, sh = cv2.LINE_AA, _SHIFT
-        cov = frame.coverage
-        if cov is not None and len(cov.edges):
-            cv2.polylines(img, list(lay.fixed(cov.edges)), False, VORONOI, 1, aa, sh)  # thick AA lines cost 4×
-        if cov is not None and len(cov.centroids):
+        if len(pic.edges):
+            cv2.polylines(img, list(lay.fixed(pic.edges)), False, VORONOI, 1, aa, sh)  # thick AA lines cost 4×
+        if len(pic.centroids):
             d = 0.018 * np.array([[1.0, 0.0], [0.0, 1.0], [-1.0, 0.0], [0.0, -1.0]])
-            cv2.fillPoly(img, list(lay.fixed(cov.centroids[:, None, :] + d[None])), CENTROID, aa, sh)
-        n = frame.n
-        pts = frame.points
-        b = frame.barrier
-        many = n > sst.max_glyphs
-        if not many and n:
-            d_s = b.safety_distance if b is not None else 0.17
-            discs = pts[:, None, :] + 0.5 * d_s * self.unit_ring[None]
+            cv2.fillPoly(img, list(lay.fixed(pic.centroids[:, None, :] + d[None])), CENTROID, aa, sh)
+        pts = pic.points
+        if pic.glyphs and pic.n:
+            discs = pts[:, None, :] + pic.ring_radius * self.unit_ring[None]
             cv2.polylines(img, list(lay.fixed(discs)), True, DISC, 1, aa, sh)
-        if b is not None and len(b.active_pairs) and b.active_pairs.max() < n:
-            self._pairs(img, pts, b.active_pairs, b.active_h, b.safety_distance)
-        if b is not None and len(b.intervention) == n:
-            moved = np.flatnonzero(b.intervention > 1e-3)
-            if len(moved):
-                rings = frame.poses[moved, None, :2] + 1.7 * self.style.robot_radius * self.unit_ring[None]
-                cv2.polylines(img, list(lay.fixed(rings)), True, RING, max(1, self.thick), aa, sh)
-        c = frame.contacts.positions
+        if len(pic.pairs):
+            self._pairs(img, pts, pic.pairs, pic.pair_h)
+        if pic.changed.any():
+            rings = pic.poses[pic.changed, None, :2] + CHANGED_RING * self.style.robot_radius * self.unit_ring[None]
+            cv2.polylines(img, list(lay.fixed(rings)), True, RING, max(1, self.thick), aa, sh)
+        c = pic.contacts
         if len(c):
             dots = c[:, None, :] + 0.03 * self.unit_ring[None]
             cv2.fillPoly(img, list(lay.fixed(dots)), CONTACT, aa, sh)
-        if n:
-            self._robots(img, frame)
+        if pic.n:
+            self._robots(img, frame, pic)
         if frame.run_state == "estop":
             cv2.rectangle(img, (left - 3, top - 3), (left + aw + 2, top + ah + 2), ESTOP, 6)
         if self._picture is not None:
@@ -272,10 +264,11 @@ class FrameRenderer:
         return img
 
     def _pairs(self, img: NDArray[np.uint8], pts: NDArray[np.float64], pairs: NDArray[np.int64],
-               h: NDArray[np.float64], d_s: float) -> None:
-        """Active barrier pairs, one ``polylines`` call per colour (h quantised to 6 levels of the console's ramp)."""
-        level = np.round(np.clip(np.asarray(h, dtype=float) / 0.1, 0.0, 1.0) * 5) / 5
-        cols = h_colors(level * 0.1, d_s)[:, 0, :]
+               h: NDArray[np.float64]) -> None:
+        """Active barrier pairs, one ``polylines`` call per colour (h quantised to 6 levels of the picture's ramp)."""
+        h_full = self.picture_style.h_full
+        level = np.round(np.clip(np.asarray(h, dtype=float) / h_full, 0.0, 1.0) * 5) / 5
+        cols = pair_colors(level * h_full, h_full)
         segs = self.layout.fixed(np.stack((pts[pairs[:, 0]], pts[pairs[:, 1]]), axis=1))
         keys = level * 5
         for k in np.unique(keys):
@@ -283,28 +276,24 @@ class FrameRenderer:
             col = tuple(int(v) for v in cols[np.flatnonzero(sel)[0]])
             self.cv2.polylines(img, list(segs[sel]), False, col, 2 * self.thick + 1, self.cv2.LINE_AA, _SHIFT)
 
-    def _robots(self, img: NDArray[np.uint8], frame: Frame) -> None:
+    def _robots(self, img: NDArray[np.uint8], frame: Frame, pic: Picture) -> None:
         cv2, lay = self.cv2, self.layout
         poses = frame.poses
         c, s = np.cos(poses[:, 2]), np.sin(poses[:, 2])
         rot = np.stack((np.stack((c, -s), -1), np.stack((s, c), -1)), axis=1)  # (N, 2, 2)
         bodies = poses[:, None, :2] + np.einsum("nij,vj->nvi", rot, self.body)
         ticks = poses[:, None, :2] + np.einsum("nij,vj->nvi", rot, self.tick)
-        cols = robot_colors(frame)
+        cols = pic.colors
         fixed = lay.fixed(bodies)
         uniq, which = np.unique(cols, axis=0, return_inverse=True)
         which = np.asarray(which).reshape(-1)
         for k, col in enumerate(uniq):  # a handful of state colours, not one call per robot
             cv2.fillPoly(img, list(fixed[which == k]), tuple(int(v) for v in col), cv2.LINE_AA, _SHIFT)
-        cv2.polylines(img, list(lay.fixed(ticks)), False, (255, 255, 255), max(1, self.thick), cv2.LINE_AA, _SHIFT)
-        virtual = frame.is_virtual
-        if virtual.any():  # as the console: a dashed violet ring (every other of 16 arcs) at 1.35 radii
-            dash = 1.35 * self.style.robot_radius * self.unit_ring[::2]  # unit_ring has 16 points
-            ends = 1.35 * self.style.robot_radius * self.unit_ring[1::2]
-            c = poses[virtual, None, :2]
-            segs = np.stack(((c + dash[None]).reshape(-1, 2), (c + ends[None]).reshape(-1, 2)), axis=1)
+        cv2.polylines(img, list(lay.fixed(ticks)), False, HEADING, max(1, self.thick), cv2.LINE_AA, _SHIFT)
+        if pic.virtual.any():  # as the console: the picture's dashed violet ring
+            segs = np.stack(dashed_rings(poses[pic.virtual, :2], self.style.robot_radius), axis=1)
             cv2.polylines(img, list(lay.fixed(segs)), False, VIRTUAL_RING, max(1, self.thick), cv2.LINE_AA, _SHIFT)
-        if frame.n <= self.scene_style.max_labels:
+        if pic.labelled:
             self._ids(img, frame)
 
     def _ids(self, img: NDArray[np.uint8], frame: Frame) -> None:
@@ -315,7 +304,7 @@ class FrameRenderer:
         assert self._labels is not None
         robot, dy, dx = self._labels
         lay = self.layout
-        anchor = lay.to_px(frame.poses[:, :2] + np.array([0.0, self.scene_style.label_offset + 0.02]))
+        anchor = lay.to_px(frame.poses[:, :2] + np.array([0.0, self.picture_style.label_offset + 0.02]))
         rows = np.round(anchor[robot, 1]).astype(np.intp) + dy
         cols = np.round(anchor[robot, 0]).astype(np.intp) + dx
         ok = (rows >= 0) & (rows < lay.height) & (cols >= 0) & (cols < lay.width)

@@ -57,6 +57,10 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from swarmdeck.console.picture.colours import PAIR, pair_colors
+from swarmdeck.console.picture.picture import active_pairs, changed_mask, robot_colors
+from swarmdeck.console.picture.shapes import ROBOT_RADIUS
+from swarmdeck.console.picture.style import PictureStyle
 from swarmdeck.core.bounds import DEFAULT_BOUNDS, Bounds
 from swarmdeck.console.runtime.frame import Frame
 
@@ -233,15 +237,17 @@ class FoxgloveEncoder:
         config: :class:`FoxgloveConfig`.
         image_provider: ``image_ref -> (RGB image (H, W, 3) row 0 at y_max, bounds) | None`` (the
             camera source's ``image``), or None when no camera runs.
+        picture: the picture's rules (changed threshold, pair colours) shared with every other renderer.
     """
 
     def __init__(self, bounds: Bounds = DEFAULT_BOUNDS,
-                 robot_radius: float = 0.055, config: FoxgloveConfig | None = None,
-                 image_provider: Callable[[str], Any] | None = None) -> None:
+                 robot_radius: float = ROBOT_RADIUS, config: FoxgloveConfig | None = None,
+                 image_provider: Callable[[str], Any] | None = None, picture: PictureStyle | None = None) -> None:
         import foxglove.messages as fm
 
         self.fm = fm
         self.config = config or FoxgloveConfig()
+        self.picture = picture or PictureStyle()
         self.bounds = tuple(float(b) for b in bounds)
         self.radius = float(robot_radius)
         self.image_provider = image_provider
@@ -281,9 +287,8 @@ class FoxgloveEncoder:
 
     # ------------------------------------------------------------------ channels
     def robots(self, frame: Frame, ns: int) -> bytes:
-        """SceneUpdate: the arena boundary and the robots (discs, heading arrows, id labels)."""
-        from swarmdeck.console.web.scene import robot_colors
-
+        """SceneUpdate: the arena boundary and the robots (discs, heading arrows, id labels) in the
+        picture's colours (:func:`~swarmdeck.console.picture.picture.robot_colors`)."""
         fm = self.fm
         x0, x1, y0, y1 = self.bounds
         border = fm.LinePrimitive(type=fm.LinePrimitiveLineType.LineLoop, thickness=0.01,
@@ -293,7 +298,7 @@ class FoxgloveEncoder:
         xs, ys = p[:, 0].tolist(), p[:, 1].tolist()
         half = 0.5 * p[:, 2]
         qz, qw = np.sin(half).tolist(), np.cos(half).tolist()
-        cols = [self._color(c) for c in robot_colors(frame)]
+        cols = [self._color(c) for c in robot_colors(frame, self.picture)]
         r = self.radius
         disc = fm.Vector3(x=2 * r, y=2 * r, z=0.03)
         cyl = [fm.CylinderPrimitive(pose=fm.Pose(position=fm.Vector3(x=x, y=y, z=0.015),
@@ -324,17 +329,14 @@ class FoxgloveEncoder:
         return self._scene(self._entity(ns, "cells", lines=lines))
 
     def barrier(self, frame: Frame, ns: int) -> bytes:
-        """SceneUpdate: active barrier pairs between look-ahead points, coloured by h."""
-        from swarmdeck.console.web.scene import h_colors
-
-        b = frame.barrier
+        """SceneUpdate: the picture's active barrier pairs between look-ahead points, coloured by h."""
+        pairs, h = active_pairs(frame)
         lines = []
-        if b is not None and len(b.active_pairs) and int(b.active_pairs.max()) < frame.n:
+        if len(pairs):
             pts = frame.points
-            pairs = b.active_pairs
             segs = np.stack((pts[pairs[:, 0]], pts[pairs[:, 1]]), axis=1)
-            colors = [self._color(c) for c in h_colors(b.active_h, b.safety_distance).reshape(-1, 3)]
-            lines = [self._line_list(segs, 0.04, 0.012, self._color((230, 40, 20)), colors)]
+            colors = [self._color(c) for c in np.repeat(pair_colors(h, self.picture.h_full), 2, axis=0)]
+            lines = [self._line_list(segs, 0.04, 0.012, self._color(PAIR), colors)]
         return self._scene(self._entity(ns, "barrier", lines=lines))
 
     def contacts(self, frame: Frame, ns: int) -> bytes:
@@ -422,7 +424,7 @@ class FoxgloveEncoder:
             "safety_distance_m": _num(b.safety_distance) if b is not None else None,
             "min_wall_clearance_m": _num(b.min_wall_clearance) if b is not None else None,
             "n_active": b.n_active if b is not None else None,
-            "robots_changed": int(np.count_nonzero(inter > 1e-3)) if b is not None else None,
+            "robots_changed": int(np.count_nonzero(changed_mask(frame, self.picture))) if b is not None else None,
             "max_intervention_mps": _num(inter.max()) if len(inter) else None,
             "solve_time_ms": _num(1e3 * b.solve_time_s) if b is not None else None,
             "cost_H": _num(cov.cost_H) if cov is not None else None,

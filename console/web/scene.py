@@ -33,14 +33,19 @@ from typing import TYPE_CHECKING
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from swarmdeck.console.picture.colours import (  # noqa: F401 - the palette, re-exported for the scene's callers
+    BATTERY_COLORS, BATTERY_TRACK, CHANGED, GOAL, LUT, PAIR, PAUSED, ROBOT, STOPPED, UNSEEN, VIRTUAL_PALE,
+    VIRTUAL_RING, BOUNDARY, CENTROID, CONTACT, VORONOI, pair_colors,
+)
+from swarmdeck.console.picture.heat import heatmap  # noqa: F401 - re-exported for the scene's callers
+from swarmdeck.console.picture.picture import cell_shades, picture_of, robot_colors
+from swarmdeck.console.picture.shapes import ROBOT_RADIUS, dashed_rings, robot_outline
+from swarmdeck.console.picture.style import PictureStyle
 from swarmdeck.core.bounds import DEFAULT_BOUNDS, Bounds
-from swarmdeck.console.runtime.behaviours import goals_of_frame
 from swarmdeck.console.runtime.frame import Frame
 
 if TYPE_CHECKING:
     import viser
-
-    from swarmdeck.coverage.density import GaussianMixture
 
 ImageProvider = Callable[[str], "tuple[ArrayLike, Bounds] | None"]
 """Maps a Frame's ``image_ref`` to (RGB image (H, W, 3), its bounds (x0, x1, y0, y1) m), or None."""
@@ -51,83 +56,32 @@ LAYERS: tuple[str, ...] = (
 )
 DEFAULT_OFF = frozenset({"cells"})
 
-ROBOT = np.array([20, 70, 170], dtype=np.uint8)
-CHANGED = np.array([255, 140, 0], dtype=np.uint8)
-STOPPED = np.array([210, 30, 30], dtype=np.uint8)
-PAUSED = np.array([90, 110, 140], dtype=np.uint8)
-UNSEEN = np.array([160, 160, 160], dtype=np.uint8)
-VIRTUAL_RING = (120, 60, 200)
-GOAL = (30, 150, 70)
-#: bar colours by battery level (LEVELS of console.runtime.batteries: unknown, low, fair, good, charging)
-BATTERY_COLORS = np.array([[160, 160, 160], [220, 30, 30], [235, 160, 20], [40, 170, 60], [40, 120, 230]],
-                          dtype=np.uint8)
-BATTERY_TRACK = np.array([200, 200, 200], dtype=np.uint8)
-VIRTUAL_PALE = 0.55  # virtual robots' colours are blended this much toward white
-
-# Heat map colours (low → high φ): near-white → light orange → red-orange.
-_LUT_STOPS = np.array([[250, 250, 246], [254, 227, 180], [253, 174, 97], [227, 74, 51]], dtype=float)
 _EMPTY_SEG = np.array([[[0.0, 0.0, -5.0], [0.0, 0.0, -5.0]]], dtype=np.float32)
 _PER_ROBOT_GLYPHS = frozenset({"nominal", "safe", "discs", "trails"})  # hidden above SceneStyle.max_glyphs robots
 
 
-def _lut() -> NDArray[np.uint8]:
-    x = np.linspace(0.0, 1.0, 256)
-    xp = np.linspace(0.0, 1.0, len(_LUT_STOPS))
-    return np.column_stack([np.interp(x, xp, _LUT_STOPS[:, c]) for c in range(3)]).astype(np.uint8)
-
-
-LUT = _lut()
-
-
 @dataclass(frozen=True)
-class SceneStyle:
-    """Sizes in m (world units) and sampling of the drawing."""
+class SceneStyle(PictureStyle):
+    """The picture's rules (:class:`~swarmdeck.console.picture.style.PictureStyle`: changed threshold, pair
+    colours, labels and glyphs up to how many robots, heat-map sampling, arrow scale) plus the viser scene's
+    own sizes in m (world units) and sampling."""
 
-    heatmap_px_per_m: float = 50.0
-    arrow_scale: float = 1.5  # s: an arrow is the distance travelled in this time
     trail_length: int = 40
     trail_every: int = 3  # ticks between trail samples
     disc_segments: int = 20
-    label_offset: float = 0.07
     overlay_alpha: tuple[float, float] = (0.15, 0.6)  # heat map opacity over the camera picture, φ = 0 … max φ
-    max_labels: int = 100  # robot labels (one scene node each) only up to this many robots
-    max_glyphs: int = 300  # per-robot arrows, safety discs and trails only up to this many robots
-    heatmap_max_px: int = 40_000  # the heat map's resolution drops on large arenas to stay under this
     panel_shift: float = 0.24  # the top view's shift right, × view height, clearing the control panel (0: centred)
 
 
 def robot_mesh(radius: float) -> tuple[NDArray[np.float32], NDArray[np.uint32]]:
-    """A flat teardrop pointing along +x (a disc with a nose): vertices (V, 3), faces (F, 3)."""
-    ang = np.linspace(math.radians(35), math.radians(325), 22)
-    rim = np.column_stack((radius * np.cos(ang), radius * np.sin(ang)))
-    rim = np.vstack((rim, [[1.5 * radius, 0.0]]))
+    """The picture's teardrop (:func:`~swarmdeck.console.picture.shapes.robot_outline`) as a flat fan
+    mesh: vertices (V, 3), faces (F, 3)."""
+    rim = robot_outline(radius)
     verts = np.vstack(([[0.0, 0.0]], rim))
     verts = np.column_stack((verts, np.zeros(len(verts)))).astype(np.float32)
     m = len(rim)
     faces = np.array([[0, 1 + i, 1 + (i + 1) % m] for i in range(m)], dtype=np.uint32)
     return verts, faces
-
-
-def heatmap(density: GaussianMixture, bounds: Bounds, px_per_m: float,
-            alpha: tuple[float, float] | None = None) -> NDArray[np.uint8]:
-    """RGB image (H, W, 3) of φ over the arena, row 0 at y_max, colour-mapped by φ / max φ.
-
-    With ``alpha = (lo, hi)`` (opacities in [0, 1]): RGBA (H, W, 4) with opacity rising linearly
-    from ``lo`` at φ = 0 to ``hi`` at max φ, to lay over the camera picture.
-    """
-    x0, x1, y0, y1 = bounds
-    w = max(2, int(round((x1 - x0) * px_per_m)))
-    h = max(2, int(round((y1 - y0) * px_per_m)))
-    xs = x0 + (np.arange(w) + 0.5) * (x1 - x0) / w
-    ys = y1 - (np.arange(h) + 0.5) * (y1 - y0) / h
-    gx, gy = np.meshgrid(xs, ys)
-    phi = density.evaluate(np.stack((gx, gy), axis=-1))
-    top = float(phi.max())
-    idx = np.zeros(phi.shape, dtype=np.intp) if top <= 0 else np.clip(phi / top * 255.0, 0, 255).astype(np.intp)
-    if alpha is None:
-        return LUT[idx]
-    a = np.round(255.0 * (alpha[0] + (alpha[1] - alpha[0]) * idx / 255.0)).astype(np.uint8)
-    return np.concatenate((LUT[idx], a[:, :, None]), axis=2)
 
 
 def _segments_2d(a: NDArray[np.float64], b: NDArray[np.float64], z: float) -> NDArray[np.float32]:
@@ -143,23 +97,6 @@ def _segments_2d(a: NDArray[np.float64], b: NDArray[np.float64], z: float) -> ND
 def _yaw_wxyz(theta: NDArray[np.float64]) -> NDArray[np.float32]:
     h = 0.5 * theta
     return np.column_stack((np.cos(h), np.zeros_like(h), np.zeros_like(h), np.sin(h))).astype(np.float32)
-
-
-def robot_colors(frame: Frame) -> NDArray[np.uint8]:
-    """(N, 3) colours by state: stopped red, paused slate, unseen grey, changed by the barrier orange, else blue."""
-    n = frame.n
-    cols = np.tile(ROBOT, (n, 1))
-    if frame.barrier is not None and len(frame.barrier.intervention) == n:
-        cols[frame.barrier.intervention > 1e-3] = CHANGED
-    if frame.run_state == "estop":
-        cols[:] = STOPPED
-    elif frame.run_state == "paused":
-        cols[:] = PAUSED
-    cols[~frame.seen] = UNSEEN
-    virtual = frame.is_virtual
-    if virtual.any():
-        cols[virtual] = np.round(cols[virtual] * (1.0 - VIRTUAL_PALE) + 255.0 * VIRTUAL_PALE).astype(np.uint8)
-    return cols
 
 
 def battery_bars(frame: Frame, robot_radius: float) -> tuple[NDArray[np.float32], NDArray[np.uint8]]:
@@ -181,11 +118,10 @@ def battery_bars(frame: Frame, robot_radius: float) -> tuple[NDArray[np.float32]
     return segs, np.repeat(cols[:, None, :], 2, axis=1)
 
 
-def h_colors(h: NDArray[np.float64], d_s: float) -> NDArray[np.uint8]:
-    """(K, 2, 3) colours for active pairs by barrier value h (m²): red at h ≤ 0 → yellow at h ≥ 0.1."""
-    s = np.clip(np.asarray(h, dtype=float) / 0.1, 0.0, 1.0)
-    c = np.column_stack((np.full_like(s, 230), 40 + 180 * s, 20 + 20 * s)).astype(np.uint8)
-    return np.repeat(c[:, None, :], 2, axis=1)
+def h_colors(h: NDArray[np.float64], d_s: float = 0.0) -> NDArray[np.uint8]:
+    """(K, 2, 3) per-vertex colours of active pairs by barrier value h (m²) — the picture's
+    :func:`~swarmdeck.console.picture.colours.pair_colors` (red at h ≤ 0 → yellow), for a line-segments node."""
+    return np.repeat(pair_colors(h)[:, None, :], 2, axis=1)
 
 
 @dataclass
@@ -229,7 +165,7 @@ class ArenaScene:
     """
 
     def __init__(self, server: viser.ViserServer, bounds: Bounds = DEFAULT_BOUNDS,
-                 robot_radius: float = 0.055, style: SceneStyle | None = None,
+                 robot_radius: float = ROBOT_RADIUS, style: SceneStyle | None = None,
                  image_provider: ImageProvider | None = None) -> None:
         self.server = server
         self.image_provider = image_provider
@@ -268,7 +204,7 @@ class ArenaScene:
         cam.up = (0.0, 1.0, 0.0)
         corners = np.array([[x0, y0], [x1, y0], [x1, y1], [x0, y1]])
         boundary = sc.add_line_segments(
-            "/arena/boundary", _segments_2d(corners, np.roll(corners, -1, axis=0), 0.004), (40, 40, 40),
+            "/arena/boundary", _segments_2d(corners, np.roll(corners, -1, axis=0), 0.004), BOUNDARY,
             thickness=0.015)
         grid = sc.add_grid("/arena/grid", width=w, height=h, plane="xy", cell_size=0.1, section_size=0.5,
                            cell_color=(215, 215, 215), section_color=(170, 170, 170),
@@ -279,20 +215,20 @@ class ArenaScene:
         density_image = sc.add_image("/density", blank, render_width=w, render_height=h, format="auto",
                                      jpeg_quality=90, position=(cx, cy, -0.01), wxyz=(0.0, 1.0, 0.0, 0.0),
                                      cast_shadow=False, receive_shadow=False)
-        voronoi = sc.add_line_segments("/voronoi", _EMPTY_SEG, (60, 60, 60), thickness=0.006)
+        voronoi = sc.add_line_segments("/voronoi", _EMPTY_SEG, VORONOI, thickness=0.006)
         centroids = sc.add_point_cloud("/centroids", np.zeros((1, 3), np.float32) - [0, 0, 5],
-                                       (200, 30, 60), point_size=0.035, point_shape="diamond",
+                                       CENTROID, point_size=0.035, point_shape="diamond",
                                        precision="float32")
         trails = sc.add_line_segments("/trails", _EMPTY_SEG, (120, 160, 220), thickness=0.006)
         discs = sc.add_line_segments("/discs", _EMPTY_SEG, (120, 120, 120), thickness=0.004)
-        barrier = sc.add_line_segments("/barrier", _EMPTY_SEG, (230, 40, 20), thickness=0.014)
+        barrier = sc.add_line_segments("/barrier", _EMPTY_SEG, PAIR, thickness=0.014)
         stub = np.array([[[0, 0, -5], [0.001, 0, -5]]], dtype=np.float32)
         nominal = sc.add_arrows("/arrows/nominal", stub, (130, 130, 130), shaft_radius=0.006,
                                 head_radius=0.016, head_length=0.03)
         safe = sc.add_arrows("/arrows/safe", stub, (20, 150, 60), shaft_radius=0.007,
                              head_radius=0.018, head_length=0.03)
         contacts = sc.add_point_cloud("/contacts", np.zeros((1, 3), np.float32) - [0, 0, 5],
-                                      (200, 0, 200), point_size=0.07, point_shape="circle",
+                                      CONTACT, point_size=0.07, point_shape="circle",
                                       precision="float32")
         virtual = sc.add_line_segments("/virtual", _EMPTY_SEG, VIRTUAL_RING, thickness=0.008)
         battery = sc.add_line_segments("/battery", _EMPTY_SEG, BATTERY_TRACK, thickness=0.018)
@@ -366,74 +302,61 @@ class ArenaScene:
         st = self.style
         if frame.n != self._n:
             self._setup_robots(frame)
-        pts = frame.points
+        pic = picture_of(frame, st)
+        pts = pic.points
         poses = frame.poses
         if v["robots"]:
             robots = self.nodes.robots
             assert robots is not None  # made by _setup_robots above
             robots.batched_positions = np.column_stack((poses[:, :2], np.full(frame.n, 0.01))).astype(np.float32)
             robots.batched_wxyzs = _yaw_wxyz(poses[:, 2])
-            robots.batched_colors = robot_colors(frame)
+            robots.batched_colors = pic.colors
         if v["labels"] and self.nodes.labels:  # no labels above SceneStyle.max_labels robots
             # One message per label, in the same atomic update as the robots: every label whose robot
             # moved at all is moved to it (a "moved enough" threshold left labels trailing their robots).
             moved = np.flatnonzero(np.any(poses[:, :2] != self._label_xy, axis=1))
             for i in moved:
-                self.nodes.labels[i].position = (float(poses[i, 0]), float(poses[i, 1]) + st.label_offset, 0.02)
+                self.nodes.labels[i].position = (float(pic.label_xy[i, 0]), float(pic.label_xy[i, 1]), 0.02)
             self._label_xy[moved] = poses[moved, :2]
         if v["camera"] and frame.image_ref is not None and self.image_provider is not None \
                 and frame.image_ref != self._image_ref:
             self._draw_camera(frame.image_ref)
-        if v["density"] and frame.density is not None:
+        if v["density"] and pic.density is not None:
             over_camera = v["camera"] and self.nodes.camera is not None
-            x0, x1, y0, y1 = self.bounds
-            px_per_m = min(st.heatmap_px_per_m, math.sqrt(st.heatmap_max_px / ((x1 - x0) * (y1 - y0))))
-            self.nodes.density.image = heatmap(frame.density, self.bounds, px_per_m,
-                                               st.overlay_alpha if over_camera else None)
-        cov = frame.coverage
+            image = pic.heat_map(st.heatmap_px(self.bounds), st.overlay_alpha if over_camera else None)
+            assert image is not None  # the Frame has a density
+            self.nodes.density.image = image
         if v["voronoi"]:
-            if cov is not None and len(cov.edges):
-                segs = np.empty((len(cov.edges), 2, 3), dtype=np.float32)
-                segs[:, :, :2] = cov.edges
-                segs[:, :, 2] = 0.003
-            else:
-                segs = _EMPTY_SEG
-            self.nodes.voronoi.points = segs
+            self.nodes.voronoi.points = _segments_2d(pic.edges[:, 0], pic.edges[:, 1], 0.003)
         if v["centroids"]:
-            c = cov.centroids if cov is not None else np.zeros((0, 2))
-            self._points("centroids", c, 0.006)
+            self._points("centroids", pic.centroids, 0.006)
         if v["cells"]:
             self._draw_cells(frame)
         glyphs = not self._many
         if v["nominal"] and glyphs:
-            self.nodes.nominal.points = self._arrows(pts, frame.nominal, 0.02)
+            self.nodes.nominal.points = self._arrows(pts, pic.nominal_tips, frame.nominal, 0.02)
         if v["safe"] and glyphs:
-            self.nodes.safe.points = self._arrows(pts, frame.safe, 0.025)
-        b = frame.barrier
+            self.nodes.safe.points = self._arrows(pts, pic.safe_tips, frame.safe, 0.025)
         if v["barrier"]:
             pair_lines = self.nodes.barrier
-            if b is not None and len(b.active_pairs) and b.active_pairs.max() < frame.n:
-                pairs = b.active_pairs
-                pair_lines.points = _segments_2d(pts[pairs[:, 0]], pts[pairs[:, 1]], 0.008)
-                pair_lines.colors = h_colors(b.active_h, b.safety_distance)
+            if len(pic.pairs):
+                pair_lines.points = _segments_2d(pts[pic.pairs[:, 0]], pts[pic.pairs[:, 1]], 0.008)
+                pair_lines.colors = np.repeat(pic.pair_colors[:, None, :], 2, axis=1)
             else:
                 pair_lines.points = _EMPTY_SEG
-                pair_lines.colors = np.array([230, 40, 20], dtype=np.uint8)
+                pair_lines.colors = np.array(PAIR, dtype=np.uint8)
         if v["discs"] and glyphs:
-            d_s = b.safety_distance if b is not None else 0.17
-            self.nodes.discs.points = self._discs(pts, 0.5 * d_s)
+            self.nodes.discs.points = self._discs(pts, pic.ring_radius)
         self._update_trails(frame)  # accumulates even while hidden, so showing trails is instant
         if v["virtual"]:
-            self.nodes.virtual.points = self._virtual_rings(poses[frame.is_virtual, :2])
+            self.nodes.virtual.points = self._virtual_rings(poses[pic.virtual, :2])
         if v["battery"]:
             segs, cols = battery_bars(frame, self.robot_radius)
             self.nodes.battery.points, self.nodes.battery.colors = segs, cols
         if v["contacts"]:
-            self._points("contacts", frame.contacts.positions, 0.012)
+            self._points("contacts", pic.contacts, 0.012)
         if v["goals"]:
-            goals = goals_of_frame(frame.params, frame.n, frame.bounds) if frame.behaviour == "goto" else \
-                np.zeros((0, 2))
-            self._points("goals", goals, 0.002)
+            self._points("goals", pic.goals, 0.002)
 
     def _points(self, name: str, xy: NDArray[np.float64], z: float) -> None:
         """Put ``xy`` (K, 2) m at height ``z`` into the point layer ``name``; with no point the node is hidden."""
@@ -460,8 +383,12 @@ class ArenaScene:
         else:
             h.image = np.asarray(img)
 
-    def _arrows(self, start: NDArray[np.float64], u: NDArray[np.float64], z: float) -> NDArray[np.float32]:
-        end = start + self.style.arrow_scale * u
+    @staticmethod
+    def _arrows(start: NDArray[np.float64], tips: NDArray[np.float64], u: NDArray[np.float64],
+                z: float) -> NDArray[np.float32]:
+        """Arrows from ``start`` to the picture's ``tips`` (N, 2) m at height ``z``; a command ``u`` below
+        0.1 mm/s gets a stub (viser cannot draw a zero-length arrow), all hidden when every one is a stub."""
+        end = np.array(tips, dtype=float)
         tiny = np.linalg.norm(u, axis=1) < 1e-4
         end[tiny] = start[tiny] + np.array([1e-4, 0.0])
         out = np.empty((len(start), 2, 3), dtype=np.float32)
@@ -472,13 +399,9 @@ class ArenaScene:
         return out
 
     def _virtual_rings(self, centres: NDArray[np.float64]) -> NDArray[np.float32]:
-        """Dashed rings (every other of 16 arcs) at 1.35 robot radii around the virtual robots ``(K, 2)``."""
-        a = np.linspace(0, 2 * np.pi, 17)[:-1]
-        r = 1.35 * self.robot_radius
-        ring = r * np.column_stack((np.cos(a), np.sin(a)))
-        p = centres[:, None, :] + ring[None, ::2, :]  # dash starts
-        q = centres[:, None, :] + ring[None, 1::2, :]  # dash ends
-        return _segments_2d(p.reshape(-1, 2), q.reshape(-1, 2), 0.012)
+        """The picture's dashed rings (:func:`~swarmdeck.console.picture.shapes.dashed_rings`) round the
+        virtual robots ``(K, 2)``."""
+        return _segments_2d(*dashed_rings(centres, self.robot_radius), 0.012)
 
     def _discs(self, centres: NDArray[np.float64], r: float) -> NDArray[np.float32]:
         k = self.style.disc_segments
@@ -534,8 +457,7 @@ class ArenaScene:
         k = np.arange(len(cell_of)) - np.repeat(np.cumsum(np.maximum(counts - 2, 0)) - np.maximum(counts - 2, 0),
                                                 np.maximum(counts - 2, 0))
         faces = np.column_stack((start, start + k + 1, start + k + 2))
-        m = cov.masses / max(float(cov.masses.max()), 1e-12)
-        shade = (np.array([200, 220, 255])[None] * (1 - m[:, None]) + np.array([60, 110, 220])[None] * m[:, None])
+        shade = cell_shades(cov.masses)
         face_colors = np.column_stack((shade[cell_of], np.full(len(cell_of), 90))).astype(np.uint8)
         mesh = trimesh.Trimesh(vertices=verts, faces=faces, face_colors=face_colors, process=False)
         self.nodes.cells = self.scene.add_mesh_trimesh("/cells", mesh)

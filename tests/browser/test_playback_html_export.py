@@ -6,7 +6,7 @@ import os
 import numpy as np
 import pytest
 
-from swarmdeck.console.recording.export_html import export_html
+from swarmdeck.console.web.export_html import export_html
 from swarmdeck.console.recording.recorder import Recorder
 from swarmdeck.console.recording.reader import open_recording
 from recording_synth import simulated_frames

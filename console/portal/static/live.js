@@ -1,6 +1,9 @@
 // The live view: the running job drawn top-down on a canvas from the portal's stream (Server-Sent Events of
-// the arena's newest Frame, at most 10 a second). Read-only: the console's picture, no controls. Colours come
-// from the server (the console's scene colours); window.swarmdeckLive tells tests what was drawn.
+// the arena's newest Frame, at most 10 a second). Read-only: the console's picture, no controls. Each message
+// is the renderer-neutral picture of the Frame (swarmdeck.console.picture, serialised by portal/live.py):
+// robot colours, changed robots, active pairs and their colours, the palette and the glyph sizes all come
+// from the server, so this canvas draws what the console, the video and Foxglove draw. window.swarmdeckLive
+// tells tests what was drawn.
 "use strict";
 document.addEventListener("DOMContentLoaded", () => {
   const canvas = document.getElementById("live");
@@ -18,33 +21,35 @@ document.addEventListener("DOMContentLoaded", () => {
     const s = Math.min(W / (x1 - x0), H / (y1 - y0));
     const ox = (W - s * (x1 - x0)) / 2, oy = (H - s * (y1 - y0)) / 2;
     const X = (x) => ox + (x - x0) * s, Y = (y) => oy + (y1 - y) * s;
-    ctx.fillStyle = "#fafaf6";
+    const P = m.palette, r = m.robot_radius * s;
+    ctx.fillStyle = P.floor;
     ctx.fillRect(0, 0, W, H);
     if (m.density && heat.complete && heat.naturalWidth) {
       ctx.imageSmoothingEnabled = true;
       ctx.drawImage(heat, X(x0), Y(y1), s * (x1 - x0), s * (y1 - y0));
     }
-    ctx.strokeStyle = "rgba(150,150,150,0.35)"; ctx.lineWidth = 1;  // floor grid, 0.5 m
+    ctx.strokeStyle = P.grid; ctx.globalAlpha = 0.35; ctx.lineWidth = 1;  // floor grid, 0.5 m
     ctx.beginPath();
     for (let x = Math.ceil(x0 / 0.5) * 0.5; x <= x1 + 1e-9; x += 0.5) { ctx.moveTo(X(x), Y(y0)); ctx.lineTo(X(x), Y(y1)); }
     for (let y = Math.ceil(y0 / 0.5) * 0.5; y <= y1 + 1e-9; y += 0.5) { ctx.moveTo(X(x0), Y(y)); ctx.lineTo(X(x1), Y(y)); }
     ctx.stroke();
-    ctx.strokeStyle = "#464646"; ctx.lineWidth = 1.2;  // Voronoi cells
+    ctx.globalAlpha = 1;
+    ctx.strokeStyle = P.voronoi; ctx.lineWidth = 1.2;  // Voronoi cells
     ctx.beginPath();
     for (const [[ax, ay], [bx, by]] of m.edges) { ctx.moveTo(X(ax), Y(ay)); ctx.lineTo(X(bx), Y(by)); }
     ctx.stroke();
-    ctx.fillStyle = "#c81e3c";
+    ctx.fillStyle = P.centroid;
     for (const [cx, cy] of m.centroids) ctx.fillRect(X(cx) - 3, Y(cy) - 3, 6, 6);
     ctx.lineWidth = 3;  // active barrier pairs, coloured by h
     m.pairs.forEach(([i, j], k) => {
       ctx.strokeStyle = m.pair_colours[k];
       ctx.beginPath(); ctx.moveTo(X(m.points[i][0]), Y(m.points[i][1])); ctx.lineTo(X(m.points[j][0]), Y(m.points[j][1])); ctx.stroke();
     });
-    const r = 0.055 * s;
-    ctx.strokeStyle = "#ff8c00"; ctx.lineWidth = 2;  // robots whose command the filter changed
-    for (const i of m.moved) { ctx.beginPath(); ctx.arc(X(m.poses[i][0]), Y(m.poses[i][1]), 1.7 * r, 0, 2 * Math.PI); ctx.stroke(); }
-    ctx.strokeStyle = "rgb(120,60,200)"; ctx.setLineDash([0.53 * r, 0.53 * r]);  // virtual robots, as the console
-    for (const i of m.virtual || []) { ctx.beginPath(); ctx.arc(X(m.poses[i][0]), Y(m.poses[i][1]), 1.35 * r, 0, 2 * Math.PI); ctx.stroke(); }
+    ctx.strokeStyle = P.changed; ctx.lineWidth = 2;  // robots whose command the filter changed
+    for (const i of m.moved) { ctx.beginPath(); ctx.arc(X(m.poses[i][0]), Y(m.poses[i][1]), m.rings.changed * r, 0, 2 * Math.PI); ctx.stroke(); }
+    const rv = m.rings.virtual * r, dash = (2 * Math.PI * rv) / 16;  // virtual robots: every other of 16 arcs
+    ctx.strokeStyle = P.virtual; ctx.setLineDash([dash, dash]);
+    for (const i of m.virtual) { ctx.beginPath(); ctx.arc(X(m.poses[i][0]), Y(m.poses[i][1]), rv, 0, 2 * Math.PI); ctx.stroke(); }
     ctx.setLineDash([]);
     ctx.font = `${Math.max(10, Math.round(r * 1.1))}px system-ui, sans-serif`;
     ctx.textAlign = "center"; ctx.textBaseline = "bottom";
@@ -52,17 +57,17 @@ document.addEventListener("DOMContentLoaded", () => {
       const px = X(x), py = Y(y);
       ctx.fillStyle = m.colours[i];
       ctx.beginPath(); ctx.arc(px, py, r, 0, 2 * Math.PI); ctx.fill();
-      ctx.strokeStyle = "#fff"; ctx.lineWidth = 2;  // heading
+      ctx.strokeStyle = P.heading; ctx.lineWidth = 2;  // heading
       ctx.beginPath(); ctx.moveTo(px + 0.2 * r * Math.cos(th), py - 0.2 * r * Math.sin(th));
       ctx.lineTo(px + 1.4 * r * Math.cos(th), py - 1.4 * r * Math.sin(th)); ctx.stroke();
-      ctx.fillStyle = "#191919";
+      ctx.fillStyle = P.label;
       ctx.fillText(String(m.ids[i]), px, py - 1.2 * r);
     });
-    ctx.strokeStyle = "#282828"; ctx.lineWidth = 2;
+    ctx.strokeStyle = P.boundary; ctx.lineWidth = 2;
     ctx.strokeRect(X(x0), Y(y1), s * (x1 - x0), s * (y1 - y0));
     if (m.run_state === "estop") {
-      ctx.strokeStyle = "#d21e1e"; ctx.lineWidth = 8; ctx.strokeRect(4, 4, W - 8, H - 8);
-      ctx.fillStyle = "#d21e1e"; ctx.font = "bold 22px system-ui, sans-serif"; ctx.textAlign = "right"; ctx.textBaseline = "top";
+      ctx.strokeStyle = P.stopped; ctx.lineWidth = 8; ctx.strokeRect(4, 4, W - 8, H - 8);
+      ctx.fillStyle = P.stopped; ctx.font = "bold 22px system-ui, sans-serif"; ctx.textAlign = "right"; ctx.textBaseline = "top";
       ctx.fillText("EMERGENCY STOP", W - 16, 14);
     }
   }
