@@ -21,7 +21,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--html", metavar="OUT.html", help="write a standalone HTML replay (viser scene serializer)")
     parser.add_argument("--video", metavar="OUT.mp4",
                         help="write an MP4 video (H.264) drawn from above: robots, Voronoi cells, density, barrier "
-                             "activity, events, time, and the camera picture when a camera ran")
+                             "activity, events, time, and the camera picture when a camera ran; the same colours, "
+                             "changed robots and active pairs as the console (one picture of a Frame)")
     parser.add_argument("--fps", type=float, default=None,
                         help=f"frames per second of recording time: HTML replay (default {HTML_FPS:g}) and video "
                              f"(default {VIDEO_FPS:g})")
