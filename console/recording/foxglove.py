@@ -123,7 +123,7 @@ class FoxgloveConfig:
         poses, cells, barrier): with N robots they are written every N / robot_rate s (0: every
         frame). The default keeps 30 Hz up to 100 robots and writes 3 scenes per second at N = 1000
         (bench/RESULTS.md, "foxglove": ≈ 12 ms of writer CPU and 40 kB per scene at N = 1000).
-    max_labels: id labels only up to this many robots (the console's scene draws them up to 100 too).
+    max_labels: id labels only up to this many robots (default: the picture's ``PictureStyle.max_labels``, 100).
     """
 
     density_period: float = 0.25
@@ -133,7 +133,7 @@ class FoxgloveConfig:
     camera_height: float = 2.5
     labels: bool = True
     robot_rate: float = 3000.0
-    max_labels: int = 100
+    max_labels: int = PictureStyle.max_labels
 
     def scene_period(self, n: int) -> float:
         """s of recorded time between the per-robot scene messages of N robots (0: every frame)."""
