@@ -107,6 +107,9 @@ class Picture:
         labelled: ids are drawn (N ≤ ``style.max_labels``).
         glyphs: per-robot glyphs — arrows, safety rings, trails — are drawn (N ≤ ``style.max_glyphs``).
         edges, centroids: (E, 2, 2) Voronoi edges and (C, 2) centroids, empty without coverage.
+        cell_vertices, cell_offsets, cell_shades: the filled Voronoi cells — cell k is the polygon
+            ``cell_vertices[cell_offsets[k]:cell_offsets[k + 1]]`` (m) shaded ``cell_shades[k]`` (RGB float
+            0–255 by mass, :func:`cell_shades`); no cell without coverage.
         contacts: (M, 2) touch contacts. goals: (G, 2) goals of the goto behaviour (else empty).
         density: φ(·, t) for :meth:`heat_map`, or None.
         run_state, behaviour, events, alerts: the Frame's, for banners and logs.
@@ -130,6 +133,9 @@ class Picture:
     glyphs: bool
     edges: NDArray[np.float64]
     centroids: NDArray[np.float64]
+    cell_vertices: NDArray[np.float64]
+    cell_offsets: NDArray[np.int64]
+    cell_shades: NDArray[np.float64]
     contacts: NDArray[np.float64]
     goals: NDArray[np.float64]
     density: GaussianMixture | None
@@ -166,6 +172,9 @@ def picture_of(frame: Frame, style: PictureStyle = DEFAULT_STYLE) -> Picture:
         labelled=n <= style.max_labels, glyphs=n <= style.max_glyphs,
         edges=cov.edges if cov is not None else np.zeros((0, 2, 2)),
         centroids=cov.centroids if cov is not None else np.zeros((0, 2)),
+        cell_vertices=cov.cell_vertices if cov is not None else np.zeros((0, 2)),
+        cell_offsets=cov.cell_offsets if cov is not None else np.zeros(1, dtype=np.int64),
+        cell_shades=_frozen(cell_shades(cov.masses)) if cov is not None and len(cov.masses) else np.zeros((0, 3)),
         contacts=frame.contacts.positions, goals=_frozen(np.asarray(goals, dtype=float)),
         density=frame.density, run_state=frame.run_state, behaviour=frame.behaviour,
         events=frame.events, alerts=frame.alerts,

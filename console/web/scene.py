@@ -22,6 +22,11 @@ Voronoi edges one line-segment node whatever N; labels exist only up to
 trails) only up to ``max_glyphs``; the heat map keeps under ``heatmap_max_px`` pixels. Colours: robots blue; robots whose command the barrier changed
 orange; stopped (emergency stop) red; paused slate; not seen grey; virtual robots
 the same colours blended 55 % toward white.
+
+What to draw comes from the renderer-neutral picture of the Frame
+(:func:`~swarmdeck.console.picture.picture.picture_of`: colours, changed robots, active pairs,
+rings, arrow tips, labels, heat map, cells), which the video, the Foxglove channels and the
+portal's live view draw too; this module only turns it into viser nodes.
 """
 from __future__ import annotations
 
@@ -38,7 +43,7 @@ from swarmdeck.console.picture.colours import (  # noqa: F401 - the palette, re-
     VIRTUAL_RING, BOUNDARY, CENTROID, CONTACT, VORONOI, pair_colors,
 )
 from swarmdeck.console.picture.heat import heatmap  # noqa: F401 - re-exported for the scene's callers
-from swarmdeck.console.picture.picture import cell_shades, picture_of, robot_colors
+from swarmdeck.console.picture.picture import Picture, picture_of, robot_colors
 from swarmdeck.console.picture.shapes import ROBOT_RADIUS, dashed_rings, robot_outline
 from swarmdeck.console.picture.style import PictureStyle
 from swarmdeck.core.bounds import DEFAULT_BOUNDS, Bounds
@@ -331,7 +336,7 @@ class ArenaScene:
         if v["centroids"]:
             self._points("centroids", pic.centroids, 0.006)
         if v["cells"]:
-            self._draw_cells(frame)
+            self._draw_cells(pic)
         glyphs = not self._many
         if v["nominal"] and glyphs:
             self.nodes.nominal.points = self._arrows(pts, pic.nominal_tips, frame.nominal, 0.02)
@@ -439,25 +444,24 @@ class ArenaScene:
         h.points = _segments_2d(a, b, 0.001)
         h.colors = self._trail_colors
 
-    def _draw_cells(self, frame: Frame) -> None:
-        cov = frame.coverage
+    def _draw_cells(self, pic: Picture) -> None:
         old = self.nodes.cells
-        if cov is None or len(cov.cell_offsets) < 2:
+        if len(pic.cell_offsets) < 2:
             if old is not None:
                 old.remove()
                 self.nodes.cells = None
             return
         import trimesh
 
-        o = cov.cell_offsets
-        verts = np.column_stack((cov.cell_vertices, np.full(len(cov.cell_vertices), -0.006)))
+        o = pic.cell_offsets
+        verts = np.column_stack((pic.cell_vertices, np.full(len(pic.cell_vertices), -0.006)))
         counts = np.diff(o)
         cell_of = np.repeat(np.arange(len(counts)), np.maximum(counts - 2, 0))
         start = o[cell_of]
         k = np.arange(len(cell_of)) - np.repeat(np.cumsum(np.maximum(counts - 2, 0)) - np.maximum(counts - 2, 0),
                                                 np.maximum(counts - 2, 0))
         faces = np.column_stack((start, start + k + 1, start + k + 2))
-        shade = cell_shades(cov.masses)
+        shade = pic.cell_shades
         face_colors = np.column_stack((shade[cell_of], np.full(len(cell_of), 90))).astype(np.uint8)
         mesh = trimesh.Trimesh(vertices=verts, faces=faces, face_colors=face_colors, process=False)
         self.nodes.cells = self.scene.add_mesh_trimesh("/cells", mesh)
