@@ -40,7 +40,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from swarmdeck.console.picture.colours import (  # noqa: F401 - the palette, re-exported for the scene's callers
     BATTERY_COLORS, BATTERY_TRACK, CHANGED, GOAL, LUT, PAIR, PAUSED, ROBOT, STOPPED, UNSEEN, VIRTUAL_PALE,
-    VIRTUAL_RING, BOUNDARY, CENTROID, CONTACT, VORONOI, pair_colors,
+    VIRTUAL_RING, BOUNDARY, CENTROID, CONTACT, VORONOI,
 )
 from swarmdeck.console.picture.heat import heatmap  # noqa: F401 - re-exported for the scene's callers
 from swarmdeck.console.picture.picture import Picture, picture_of, robot_colors
@@ -121,12 +121,6 @@ def battery_bars(frame: Frame, robot_radius: float) -> tuple[NDArray[np.float32]
     segs = np.concatenate((_segments_2d(left, track_end, 0.013), _segments_2d(left, fill_end, 0.014)))
     cols = np.concatenate((np.tile(BATTERY_TRACK, (len(known), 1)), BATTERY_COLORS[level[known]]))
     return segs, np.repeat(cols[:, None, :], 2, axis=1)
-
-
-def h_colors(h: NDArray[np.float64], d_s: float = 0.0) -> NDArray[np.uint8]:
-    """(K, 2, 3) per-vertex colours of active pairs by barrier value h (m²) — the picture's
-    :func:`~swarmdeck.console.picture.colours.pair_colors` (red at h ≤ 0 → yellow), for a line-segments node."""
-    return np.repeat(pair_colors(h)[:, None, :], 2, axis=1)
 
 
 @dataclass
