@@ -50,6 +50,12 @@ LABEL = (25, 25, 25)
 """robot id labels"""
 HEADING = (255, 255, 255)
 """the heading tick on a robot"""
+SAFETY_RING = (120, 120, 120)
+"""the safety ring (radius D_s / 2) round every look-ahead point"""
+NOMINAL = (130, 130, 130)
+"""the nominal command's arrow"""
+SAFE = (20, 150, 60)
+"""the safe (certified) command's arrow"""
 
 #: bar colours by battery level (LEVELS of console.runtime.batteries: unknown, low, fair, good, charging)
 BATTERY_COLORS = _rgb(160, 160, 160, 220, 30, 30, 235, 160, 20, 40, 170, 60, 40, 120, 230)

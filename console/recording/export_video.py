@@ -51,7 +51,8 @@ from swarmdeck.core.bounds import Bounds
 from swarmdeck.console.recording.reader import Recording, RecordedEvent
 from swarmdeck.console.runtime.frame import Frame
 from swarmdeck.console.picture.colours import (
-    BOUNDARY, CENTROID, CHANGED, CONTACT, HEADING, LABEL, LUT, STOPPED, VIRTUAL_RING, VORONOI, pair_colors,
+    BOUNDARY, CENTROID, CHANGED, CONTACT, HEADING, LABEL, LUT, SAFETY_RING, STOPPED, VIRTUAL_RING, VORONOI,
+    pair_colors,
 )
 from swarmdeck.console.picture.heat import heatmap
 from swarmdeck.console.picture.picture import Picture, picture_of
@@ -66,7 +67,6 @@ _ONE = 1 << _SHIFT
 BACKGROUND = (246, 246, 242)
 BAND = (32, 34, 40)
 GRID = np.array([150, 150, 150], dtype=float)
-DISC = (135, 135, 135)
 RING = tuple(int(c) for c in CHANGED)  # the ring round a robot the barrier changed
 ESTOP = tuple(int(c) for c in STOPPED)
 
@@ -243,7 +243,7 @@ class FrameRenderer:
         pts = pic.points
         if pic.glyphs and pic.n:
             discs = pts[:, None, :] + pic.ring_radius * self.unit_ring[None]
-            cv2.polylines(img, list(lay.fixed(discs)), True, DISC, 1, aa, sh)
+            cv2.polylines(img, list(lay.fixed(discs)), True, SAFETY_RING, 1, aa, sh)
         if len(pic.pairs):
             self._pairs(img, pts, pic.pairs, pic.pair_h)
         if pic.changed.any():

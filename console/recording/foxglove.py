@@ -57,7 +57,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from swarmdeck.console.picture.colours import PAIR, pair_colors
+from swarmdeck.console.picture.colours import BOUNDARY, CONTACT, HEADING, LABEL, PAIR, VORONOI, pair_colors
 from swarmdeck.console.picture.picture import active_pairs, changed_mask, robot_colors
 from swarmdeck.console.picture.shapes import ROBOT_RADIUS
 from swarmdeck.console.picture.style import PictureStyle
@@ -293,7 +293,7 @@ class FoxgloveEncoder:
         x0, x1, y0, y1 = self.bounds
         border = fm.LinePrimitive(type=fm.LinePrimitiveLineType.LineLoop, thickness=0.01,
                                   points=[fm.Point3(x=x, y=y, z=0.0) for x, y in ((x0, y0), (x1, y0), (x1, y1), (x0, y1))],
-                                  color=fm.Color(r=0.2, g=0.2, b=0.2, a=1.0))
+                                  color=self._color(BOUNDARY))
         p = frame.poses
         xs, ys = p[:, 0].tolist(), p[:, 1].tolist()
         half = 0.5 * p[:, 2]
@@ -305,7 +305,7 @@ class FoxgloveEncoder:
                                                  orientation=fm.Quaternion(z=z, w=w)),
                                     size=disc, bottom_scale=1.0, top_scale=1.0, color=c)
                for x, y, z, w, c in zip(xs, ys, qz, qw, cols)]
-        white = fm.Color(r=1.0, g=1.0, b=1.0, a=1.0)
+        white = self._color(HEADING)
         arrows = [fm.ArrowPrimitive(pose=fm.Pose(position=fm.Vector3(x=x, y=y, z=0.035),
                                                  orientation=fm.Quaternion(z=z, w=w)),
                                     shaft_length=0.8 * r, shaft_diameter=0.2 * r, head_length=0.5 * r,
@@ -313,7 +313,7 @@ class FoxgloveEncoder:
                   for x, y, z, w in zip(xs, ys, qz, qw)]
         texts = []
         if self.config.labels and frame.n <= self.config.max_labels:
-            ink = fm.Color(r=0.05, g=0.05, b=0.05, a=1.0)
+            ink = self._color(LABEL)
             texts = [fm.TextPrimitive(pose=fm.Pose(position=fm.Vector3(x=x, y=y + 1.4 * r, z=0.05)),
                                       billboard=True, font_size=14.0, scale_invariant=True, color=ink, text=str(i))
                      for x, y, i in zip(xs, ys, frame.ids.tolist())]
@@ -325,7 +325,7 @@ class FoxgloveEncoder:
         cov = frame.coverage
         lines = []
         if cov is not None and len(cov.edges):
-            lines = [self._line_list(cov.edges, 0.002, 0.006, self.fm.Color(r=0.3, g=0.3, b=0.35, a=1.0))]
+            lines = [self._line_list(cov.edges, 0.002, 0.006, self._color(VORONOI))]
         return self._scene(self._entity(ns, "cells", lines=lines))
 
     def barrier(self, frame: Frame, ns: int) -> bytes:
@@ -343,7 +343,7 @@ class FoxgloveEncoder:
         """SceneUpdate: touch contacts as spheres (⌀ 6 cm)."""
         fm = self.fm
         size = fm.Vector3(x=0.06, y=0.06, z=0.06)
-        col = fm.Color(r=0.8, g=0.1, b=0.7, a=0.8)
+        col = self._color(CONTACT, 0.8)
         spheres = [fm.SpherePrimitive(pose=fm.Pose(position=fm.Vector3(x=x, y=y, z=0.03)), size=size, color=col)
                    for x, y in frame.contacts.positions.tolist()]
         return self._scene(self._entity(ns, "contacts", spheres=spheres))

@@ -40,7 +40,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from swarmdeck.console.picture.colours import (  # noqa: F401 - the palette, re-exported for the scene's callers
     BATTERY_COLORS, BATTERY_TRACK, CHANGED, GOAL, LUT, PAIR, PAUSED, ROBOT, STOPPED, UNSEEN, VIRTUAL_PALE,
-    VIRTUAL_RING, BOUNDARY, CENTROID, CONTACT, VORONOI,
+    VIRTUAL_RING, BOUNDARY, CENTROID, CONTACT, NOMINAL, SAFE, SAFETY_RING, VORONOI,
 )
 from swarmdeck.console.picture.heat import heatmap  # noqa: F401 - re-exported for the scene's callers
 from swarmdeck.console.picture.picture import Picture, picture_of, robot_colors
@@ -219,12 +219,12 @@ class ArenaScene:
                                        CENTROID, point_size=0.035, point_shape="diamond",
                                        precision="float32")
         trails = sc.add_line_segments("/trails", _EMPTY_SEG, (120, 160, 220), thickness=0.006)
-        discs = sc.add_line_segments("/discs", _EMPTY_SEG, (120, 120, 120), thickness=0.004)
+        discs = sc.add_line_segments("/discs", _EMPTY_SEG, SAFETY_RING, thickness=0.004)
         barrier = sc.add_line_segments("/barrier", _EMPTY_SEG, PAIR, thickness=0.014)
         stub = np.array([[[0, 0, -5], [0.001, 0, -5]]], dtype=np.float32)
-        nominal = sc.add_arrows("/arrows/nominal", stub, (130, 130, 130), shaft_radius=0.006,
+        nominal = sc.add_arrows("/arrows/nominal", stub, NOMINAL, shaft_radius=0.006,
                                 head_radius=0.016, head_length=0.03)
-        safe = sc.add_arrows("/arrows/safe", stub, (20, 150, 60), shaft_radius=0.007,
+        safe = sc.add_arrows("/arrows/safe", stub, SAFE, shaft_radius=0.007,
                              head_radius=0.018, head_length=0.03)
         contacts = sc.add_point_cloud("/contacts", np.zeros((1, 3), np.float32) - [0, 0, 5],
                                       CONTACT, point_size=0.07, point_shape="circle",
