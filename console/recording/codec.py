@@ -1,8 +1,13 @@
-"""Frame ⇄ message bytes: the one place that knows how a Frame is written to a recording.
+"""Recording messages ⇄ bytes: the one place that knows how each swarmdeck channel is written.
 
 ``encode_frame(frame) -> bytes`` is what the recorder writes on ``/swarmdeck/frame``;
 ``decode_frame(data) -> Frame`` reads it back, for every frame format ever written.
-Other writers (Foxglove channels, exports, recovery tools) call these two.
+Other writers (Foxglove channels, exports, recovery tools) call these two. The other channels
+(``schemas.py`` lists them) are here too: :func:`datagram_message` / :func:`decode_datagram`
+(``/swarmdeck/datagram``), :func:`event_message` / :func:`decode_event` (``/swarmdeck/event``),
+:func:`decode_config` (``/swarmdeck/config``) and :func:`metadata_record` / :func:`decode_metadata`
+(the ``swarmdeck`` metadata record: every value JSON-encoded). The Foxglove channels' own
+messages are :mod:`swarmdeck.console.recording.foxglove`'s.
 
 Frame format 2 (recording format 2) — compact
 ---------------------------------------------
@@ -69,8 +74,10 @@ float with 17 digits; still read.
 from __future__ import annotations
 
 import base64
+import json
 import zlib
 from collections.abc import Mapping
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -427,6 +434,82 @@ def derived_coverage(poses: np.ndarray, lookahead: float, density: Any, config: 
     return geo if geo.ok else None
 
 
-__all__ = ["CODEC_FORMAT", "COMPACT_FORMAT", "READABLE_FORMATS", "EXACT_FIELDS", "MissingReference", "can_predict",
+# ---------------------------------------------------------------------------- the other channels
+@dataclass(frozen=True)
+class RecordedDatagram:
+    """One recorded input datagram: raw ``data``, ``peer`` (tuple (host, port) or name),
+    ``transport``, console receive time ``t`` (s), receiving ``listener`` name or None."""
+
+    t: float
+    data: bytes
+    peer: object
+    transport: str
+    listener: str | None
+
+
+@dataclass(frozen=True)
+class RecordedEvent:
+    """``t``: recording time, s since the first frame (session time: what ``swarmdeck play`` seeks
+    to); ``kind`` ("operator", "frame", "recorder", …); ``text``; ``console_t``: the loop's clock, s."""
+
+    t: float
+    kind: str
+    text: str
+    console_t: float = float("nan")
+
+
+def datagram_message(data: bytes, peer: object, transport: str, t: float, listener: str | None) -> dict[str, Any]:
+    """The ``/swarmdeck/datagram`` message of a raw input datagram received at console time ``t`` s
+    (the bytes base64, a (host, port) peer as a list, any other peer as its string)."""
+    peer_j = list(peer) if isinstance(peer, (tuple, list)) else str(peer)
+    return {"t": t, "data": base64.b64encode(data).decode("ascii"), "peer": peer_j, "transport": transport,
+            "listener": listener}
+
+
+def decode_datagram(data: bytes) -> RecordedDatagram:
+    """Inverse of :func:`datagram_message` (from the message bytes); ValueError, KeyError or TypeError
+    for a malformed message."""
+    d = json.loads(data)
+    peer = d["peer"]
+    return RecordedDatagram(float(d["t"]), base64.b64decode(d["data"], validate=True),
+                            tuple(peer) if isinstance(peer, list) else peer, str(d["transport"]), d.get("listener"))
+
+
+def event_message(t: float, kind: str, text: str) -> dict[str, Any]:
+    """The ``/swarmdeck/event`` message of an event at console time ``t`` s."""
+    return {"t": t, "kind": kind, "text": text}
+
+
+def decode_event(data: bytes, rel: float) -> RecordedEvent:
+    """Inverse of :func:`event_message` (from the message bytes), at recording time ``rel`` s;
+    ValueError, KeyError or TypeError for a malformed message."""
+    d = json.loads(data)
+    return RecordedEvent(rel, str(d["kind"]), str(d["text"]), float(d["t"]))
+
+
+def decode_config(data: bytes) -> dict[str, Any]:
+    """The ``/swarmdeck/config`` message (the recorder's ``_write_config``) as a dict; ValueError
+    for bad JSON, TypeError or ValueError for a message that is not an object."""
+    return dict(json.loads(data))
+
+
+def metadata_record(meta: Mapping[str, Any]) -> dict[str, str]:
+    """The ``swarmdeck`` metadata record's string map: every value JSON-encoded."""
+    return {k: json.dumps(v) for k, v in meta.items()}
+
+
+def decode_metadata(record: Mapping[str, str]) -> dict[str, Any]:
+    """Inverse of :func:`metadata_record`; a value that is not JSON stays the string it is."""
+    out: dict[str, Any] = {}
+    for k, v in record.items():
+        try:
+            out[k] = json.loads(v)
+        except ValueError:
+            out[k] = v
+    return out
+
+
+__all__ = ["RecordedDatagram", "RecordedEvent", "datagram_message", "decode_datagram", "event_message",
+           "decode_event", "decode_config", "metadata_record", "decode_metadata", "CODEC_FORMAT", "COMPACT_FORMAT", "READABLE_FORMATS", "EXACT_FIELDS", "MissingReference", "can_predict",
            "exact_crc", "encode_frame", "decode_frame", "frame_message", "pack_array",
            "unpack_array", "derived_coverage", "geometry_config", "derived_safe", "encode_json", "decode_json"]

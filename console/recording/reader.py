@@ -20,9 +20,7 @@ seeks to, see :mod:`swarmdeck.console.runtime.loop`); ``Frame.time``,
 """
 from __future__ import annotations
 
-import base64
 import io
-import json
 import os
 import struct
 from bisect import bisect_right
@@ -34,7 +32,9 @@ from pathlib import Path
 from typing import Any
 
 from swarmdeck.console.runtime.frame import Frame
-from swarmdeck.console.recording.codec import CODEC_FORMAT, MissingReference, decode_frame
+from swarmdeck.console.recording.codec import (CODEC_FORMAT, MissingReference, RecordedDatagram, RecordedEvent,
+                                               decode_config, decode_datagram, decode_event, decode_frame,
+                                               decode_metadata)
 from swarmdeck.console.recording.schemas import (
     METADATA_NAME, PROFILE, RECORDING_FORMAT, TOPIC_CONFIG, TOPIC_DATAGRAM, TOPIC_EVENT, TOPIC_FRAME,
 )
@@ -59,29 +59,6 @@ class ChunkRef:
     offset: int
     start_ns: int
     end_ns: int
-
-
-@dataclass(frozen=True)
-class RecordedDatagram:
-    """One recorded input datagram: raw ``data``, ``peer`` (tuple (host, port) or name),
-    ``transport``, console receive time ``t`` (s), receiving ``listener`` name or None."""
-
-    t: float
-    data: bytes
-    peer: object
-    transport: str
-    listener: str | None
-
-
-@dataclass(frozen=True)
-class RecordedEvent:
-    """``t``: recording time, s since the first frame (session time: what ``swarmdeck play`` seeks
-    to); ``kind`` ("operator", "frame", "recorder", …); ``text``; ``console_t``: the loop's clock, s."""
-
-    t: float
-    kind: str
-    text: str
-    console_t: float = float("nan")
 
 
 def _read_head(f: Any, pos: int, size: int) -> tuple[int, int] | None:
@@ -199,11 +176,7 @@ class Recording:
             name, data = _parse_metadata(rec[2])
             if name == METADATA_NAME:
                 meta_found = True
-                for k, v in data.items():
-                    try:
-                        self.metadata[k] = json.loads(v)
-                    except ValueError:
-                        self.metadata[k] = v
+                self.metadata.update(decode_metadata(data))
             pos += 9 + rec[1]
         if not meta_found:
             raise RecordingError(f"{self.path}: damaged swarmdeck recording (no '{METADATA_NAME}' metadata record)")
@@ -524,11 +497,7 @@ class Recording:
         """Every readable recorded datagram in [start, end) s, in receive order."""
         for ns, data in self._messages(TOPIC_DATAGRAM, start, end):
             try:
-                d = json.loads(data)
-                peer = d["peer"]
-                yield RecordedDatagram(float(d["t"]), base64.b64decode(d["data"], validate=True),
-                                       tuple(peer) if isinstance(peer, list) else peer, str(d["transport"]),
-                                       d.get("listener"))
+                yield decode_datagram(data)
             except (ValueError, KeyError, TypeError) as exc:
                 self.warnings.append(f"undecodable datagram at log time {ns} skipped: {exc}")
 
@@ -536,8 +505,7 @@ class Recording:
         """Every readable event in [start, end) s."""
         for ns, data in self._messages(TOPIC_EVENT, start, end):
             try:
-                d = json.loads(data)
-                yield RecordedEvent(self.rel(ns), str(d["kind"]), str(d["text"]), float(d["t"]))
+                yield decode_event(data, self.rel(ns))
             except (ValueError, KeyError, TypeError):
                 continue
 
@@ -558,7 +526,7 @@ class Recording:
         """The run's configuration message (falls back to the metadata record)."""
         for _, data in self._messages(TOPIC_CONFIG, None, None):
             try:
-                return dict(json.loads(data))
+                return decode_config(data)
             except ValueError:
                 break
         return dict(self.metadata)
