@@ -73,7 +73,7 @@ class GeometryConfig:
         return out
 
     @classmethod
-    def from_changes(cls, changes: Mapping[str, Any] | None, bounds: Bounds) -> "GeometryConfig":
+    def from_changes(cls, changes: Mapping[str, Any] | None, bounds: Bounds) -> GeometryConfig:
         """The configuration :meth:`changes` describes on ``bounds``; ValueError naming an unknown key or a
         bad value."""
         quad = lambda sub: (from_mapping(QuadratureOptions, sub, "quadrature", error=ValueError)  # noqa: E731
