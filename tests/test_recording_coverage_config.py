@@ -10,12 +10,14 @@ from __future__ import annotations
 
 import json
 
+import jsonschema
 import numpy as np
 import pytest
 
 from swarmdeck.console.recording.codec import decode_frame, encode_frame
 from swarmdeck.console.recording.reader import open_recording
 from swarmdeck.console.recording.recorder import Recorder, RecorderConfig
+from swarmdeck.console.recording.schemas import CHANNELS, TOPIC_FRAME
 from swarmdeck.console.runtime.loop import ControlLoop, LoopConfig
 from swarmdeck.coverage import CoverageConfig, CoverageController
 from swarmdeck.coverage.quadrature import QuadratureOptions
@@ -97,3 +99,12 @@ def test_a_bad_stored_config_is_a_clear_error(run):
     msg["coverage"]["config"] = {"min_separation": -1.0}
     with pytest.raises(ValueError, match="coverage.config"):
         decode_frame(json.dumps(msg).encode())
+
+
+def test_the_stored_config_is_in_the_frame_schema(run):
+    """External readers (Foxglove, the mcap tools) see the stored config as a declared field."""
+    frames, _ = run
+    msg = json.loads(encode_frame(frames[-1]))
+    jsonschema.validate(msg, CHANNELS[TOPIC_FRAME][1])
+    assert set(msg["coverage"]["config"]) <= set(CHANNELS[TOPIC_FRAME][1]["properties"]["coverage"]["oneOf"][1]
+                                                 ["properties"]["config"]["properties"])
