@@ -7,7 +7,8 @@ Densities: :class:`GaussianMixture` (snapshot with analytic φ_t, isotropic or a
 ``merge_mixtures`` adds the bumps of several),
 :class:`AnalyticDensity` of :class:`Bump` s that move/grow/fade/rotate (``s1_density``,
 ``moving_density``), ``image_density`` (grey image → static mixture). Numerics, usable on their
-own: ``precondition_positions``, ``bounded_voronoi``, ``cell_moments``, ``centroid_jacobian``,
+own: ``coverage_geometry`` (pre-conditioning, cells and moments of one tick, as the controller and
+the recordings compute them), ``precondition_positions``, ``bounded_voronoi``, ``cell_moments``, ``centroid_jacobian``,
 ``raster_moments`` (test oracle), ``predicted_spacing``/``packing_warning``; laws in
 :mod:`swarmdeck.coverage.laws`; scenario S1 in :mod:`swarmdeck.coverage.scenario`.
 Group behaviours (consensus, formation): :mod:`swarmdeck.coverage.group`; their interaction graphs
@@ -19,6 +20,7 @@ from swarmdeck.coverage.densities import (AnalyticDensity, Bump, Constant, Fixed
                                           Lissajous, Orbit, Pulse, Sine, moving_density,
                                           s1_density)
 from swarmdeck.coverage.density import Density, GaussianMixture, merge_mixtures
+from swarmdeck.coverage.geometry import CoverageGeometry, GeometryConfig, coverage_geometry
 from swarmdeck.coverage.image import image_density, letter_image
 from swarmdeck.coverage.jacobian import EdgeOptions, centroid_jacobian
 from swarmdeck.core.kinematics import saturate
@@ -30,9 +32,9 @@ from swarmdeck.coverage.voronoi import BoundedVoronoi, bounded_voronoi, precondi
 
 __all__ = [
     "AnalyticDensity", "BoundedVoronoi", "Bump", "CellMoments", "Constant", "CoverageConfig",
-    "CoverageController", "CoverageState", "Density", "EdgeOptions", "Fixed", "GaussianMixture",
+    "CoverageController", "CoverageGeometry", "CoverageState", "Density", "GeometryConfig", "EdgeOptions", "Fixed", "GaussianMixture",
     "LAWS", "Linear", "Lissajous", "Orbit", "Pulse", "QuadratureOptions", "Sine",
-    "bounded_voronoi", "cell_moments", "centroid_jacobian", "coverage_tick", "image_density",
+    "bounded_voronoi", "cell_moments", "centroid_jacobian", "coverage_geometry", "coverage_tick", "image_density",
     "letter_image", "merge_mixtures", "moving_density", "packing_warning", "parse_law",
     "precondition_positions", "predicted_spacing", "raster_moments", "s1_density", "saturate",
 ]

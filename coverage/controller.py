@@ -18,9 +18,10 @@ from typing import Any
 import numpy as np
 import scipy.sparse as sp
 from numpy.typing import ArrayLike, NDArray
-from scipy.spatial import QhullError
 
 from swarmdeck.coverage.density import Density, GaussianMixture
+from swarmdeck.coverage.geometry import (DEFAULT_QUADRATURE, NUMERICAL_ERRORS, GeometryConfig,
+                                         coverage_geometry)
 from swarmdeck.coverage.jacobian import EdgeOptions, centroid_jacobian
 from swarmdeck.core.bounds import DEFAULT_BOUNDS, Bounds, check_bounds
 from swarmdeck.core.checks import require_in_range
@@ -28,8 +29,7 @@ from swarmdeck.core.config import from_mapping
 from swarmdeck.core.kinematics import saturate
 from swarmdeck.coverage.laws import law_command, parse_law
 from swarmdeck.coverage.packing import packing_warning
-from swarmdeck.coverage.quadrature import QuadratureOptions, cell_moments
-from swarmdeck.coverage.voronoi import bounded_voronoi, precondition_positions
+from swarmdeck.coverage.quadrature import QuadratureOptions
 
 __all__ = ["CoverageConfig", "CoverageState", "CoverageController", "coverage_tick"]
 
@@ -55,7 +55,7 @@ class CoverageConfig:
     safety_distance: float = 0.17
     wall_margin: float = 1e-6
     min_separation: float = 1e-3
-    quadrature: QuadratureOptions = field(default_factory=lambda: QuadratureOptions(resolution=1.25))
+    quadrature: QuadratureOptions = field(default_factory=lambda: DEFAULT_QUADRATURE)
     edges: EdgeOptions = field(default_factory=EdgeOptions)
     packing_every: int = 15
 
@@ -70,10 +70,16 @@ class CoverageConfig:
             raise ValueError(f"max_speed must be > 0 or None, got {self.max_speed!r}")
         object.__setattr__(self, "bounds", check_bounds(self.bounds))
         require_in_range(self.safety_distance, "safety_distance", 0.0, unit="m")
-        if not (0 < self.wall_margin < 0.01 and 0 <= self.min_separation < 0.1):
-            raise ValueError("need 0 < wall_margin < 0.01 m and 0 <= min_separation < 0.1 m")
+        _ = self.geometry  # checks wall_margin, min_separation, quadrature
         if int(self.packing_every) < 1:
             raise ValueError(f"packing_every must be >= 1, got {self.packing_every!r}")
+
+    @property
+    def geometry(self) -> GeometryConfig:
+        """The part of this configuration the cells and their moments depend on
+        (:func:`~swarmdeck.coverage.geometry.coverage_geometry`; stored in recordings)."""
+        return GeometryConfig(bounds=self.bounds, wall_margin=self.wall_margin, min_separation=self.min_separation,
+                              quadrature=self.quadrature)
 
     @classmethod
     def from_dict(cls, data: dict[str, Any]) -> "CoverageConfig":
@@ -98,7 +104,8 @@ class CoverageState:
     cost_H_normalised: H / ∫φ; mean_centroid_distance, max_centroid_distance: ‖p_i − c_i‖ [m];
     edges (E, 2, 2) shared Voronoi edge segments [m]; neighbours (E, 2) int robot pairs;
     cells: N counter-clockwise polygons (V_i, 2) [m]; packing_warning: str | None;
-    repaired: robots moved by pre-conditioning; saturated: robots whose speed was limited.
+    repaired: robots moved by pre-conditioning; saturated: robots whose speed was limited;
+    geometry_config: what the cells were computed with (recordings store it to derive them again).
     """
 
     t: float
@@ -118,6 +125,7 @@ class CoverageState:
     packing_warning: str | None
     repaired: int
     saturated: int
+    geometry_config: GeometryConfig = field(default_factory=GeometryConfig)
 
     @property
     def ok(self) -> bool:
@@ -150,34 +158,36 @@ def coverage_tick(positions: ArrayLike, density: GaussianMixture, config: Covera
     """
     if not isinstance(density, GaussianMixture):
         raise TypeError(f"a density snapshot must be a GaussianMixture, got {type(density).__name__}")
-    pts, repaired = precondition_positions(positions, config.bounds, config.wall_margin,
-                                           config.min_separation)
+    geo = coverage_geometry(positions, density, config.geometry)
+    pts, repaired, vor, mom = geo.positions, geo.repaired, geo.voronoi, geo.moments
     n = pts.shape[0]
     family, k = parse_law(config.law, config.hops)
-    try:
-        vor = bounded_voronoi(pts, config.bounds)
-        mom = cell_moments(vor, density, config.quadrature)
-        jac = (centroid_jacobian(vor, mom, density, config.edges)
-               if family in ("tvd-dk", "tvd-c") else None)
-        raw = law_command(family, k, config.kappa, pts, mom.centroids, mom.dc_dt, jac)
-    except (RuntimeError, ValueError, QhullError, np.linalg.LinAlgError) as exc:
+    error = geo.error
+    if vor is not None and mom is not None:
+        try:
+            jac = (centroid_jacobian(vor, mom, density, config.edges)
+                   if family in ("tvd-dk", "tvd-c") else None)
+            raw = law_command(family, k, config.kappa, pts, mom.centroids, mom.dc_dt, jac)
+        except NUMERICAL_ERRORS as exc:
+            error = str(exc)
+    if error is not None or vor is None or mom is None:
         zero = np.zeros((n, 2))
         state = CoverageState(
-            t=float(t), law=config.law, status=f"error: {exc}", positions=pts,
+            t=float(t), law=config.law, status=f"error: {error}", positions=pts,
             centroids=pts.copy(), masses=np.zeros(n), dc_dt=np.zeros((n, 2)), cost_H=0.0,
             cost_H_normalised=0.0, mean_centroid_distance=0.0,
             max_centroid_distance=0.0, edges=np.zeros((0, 2, 2)),
             neighbours=np.zeros((0, 2), dtype=np.intp), cells=[], packing_warning=packing,
-            repaired=repaired, saturated=0)
+            repaired=repaired, saturated=0, geometry_config=geo.config)
         return zero, state, None
     u = saturate(raw, config.max_speed)
     speed_raw = np.hypot(raw[:, 0], raw[:, 1])
     saturated = int(np.count_nonzero(~np.isfinite(speed_raw) | (
         speed_raw > (config.max_speed if config.max_speed is not None else np.inf))))
-    dist = np.hypot(*(mom.centroids - pts).T)
+    dist = geo.centroid_distances()
     total = float(mom.masses.sum())
-    edges = vor.edge_segments()
-    cells = vor.polygons()
+    edges = geo.edges
+    cells = geo.cells()
     for arr in (pts, mom.centroids, mom.masses, mom.dc_dt, edges, vor.edge_pairs, *cells):
         if arr.flags.writeable:
             arr.setflags(write=False)
@@ -186,7 +196,7 @@ def coverage_tick(positions: ArrayLike, density: GaussianMixture, config: Covera
         masses=mom.masses, dc_dt=mom.dc_dt, cost_H=mom.cost_H, cost_H_normalised=mom.cost_H / total,
         mean_centroid_distance=float(dist.mean()), max_centroid_distance=float(dist.max()),
         edges=edges, neighbours=vor.edge_pairs, cells=cells, packing_warning=packing,
-        repaired=repaired, saturated=saturated)
+        repaired=repaired, saturated=saturated, geometry_config=geo.config)
     return u, state, jac
 
 

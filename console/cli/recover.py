@@ -7,7 +7,8 @@ import sys
 from swarmdeck.console.cli import UsageError
 
 NAME = "recover"
-HELP = "rewrite a recording that was not closed cleanly (kill -9, power cut) into a valid, indexed MCAP file"
+HELP = ("rewrite a recording that was not closed cleanly (kill -9, power cut) or is damaged into a valid, indexed "
+        "MCAP file holding exactly what `swarmdeck play` plays of it")
 ORDER = 63
 
 

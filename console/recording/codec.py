@@ -1,8 +1,13 @@
-"""Frame ⇄ message bytes: the one place that knows how a Frame is written to a recording.
+"""Recording messages ⇄ bytes: the one place that knows how each swarmdeck channel is written.
 
 ``encode_frame(frame) -> bytes`` is what the recorder writes on ``/swarmdeck/frame``;
 ``decode_frame(data) -> Frame`` reads it back, for every frame format ever written.
-Other writers (Foxglove channels, exports, recovery tools) call these two.
+Other writers (Foxglove channels, exports, recovery tools) call these two. The other channels
+(``schemas.py`` lists them) are here too: :func:`datagram_message` / :func:`decode_datagram`
+(``/swarmdeck/datagram``), :func:`event_message` / :func:`decode_event` (``/swarmdeck/event``),
+:func:`decode_config` (``/swarmdeck/config``) and :func:`metadata_record` / :func:`decode_metadata`
+(the ``swarmdeck`` metadata record: every value JSON-encoded). The Foxglove channels' own
+messages are :mod:`swarmdeck.console.recording.foxglove`'s.
 
 Frame format 2 (recording format 2) — compact
 ---------------------------------------------
@@ -19,11 +24,13 @@ A JSON object (message encoding ``json``), :meth:`Frame.to_dict`'s layout with
   replay need; everything else is for display and is compared at the precision below.
 * derived on reading instead of stored: ``safe`` = ṗ = M(θ)[v, ω] (REFERENCE.md §1:
   the look-ahead velocity of the command sent) and the coverage geometry (``edges``, ``neighbours``, cells) —
-  the bounded Voronoi diagram of the look-ahead points (``swarmdeck.coverage``),
-  recomputed from the poses when ``coverage.geometry`` is ``"derived"``.
-  the centroids and masses are the cell moments of that diagram under the frame's
-  density snapshot, recomputed with the same code (stored as float64 only when there is
-  no diagram), and ``barrier.active_h`` = ‖p_i − p_j‖² − D_s² of the ``active_pairs``
+  the bounded Voronoi diagram of the look-ahead points and its cell moments under the
+  frame's density snapshot, recomputed from the poses when ``coverage.geometry`` is
+  ``"derived"`` by the function the live tick runs (``swarmdeck.coverage.coverage_geometry``)
+  with the frame's coverage config: ``coverage.config``, the fields of
+  ``GeometryConfig`` that differ from its defaults on the frame's bounds, absent when none
+  does (and in every file written before it was stored); the centroids and masses are
+  stored as float64 only when there is no diagram; and ``barrier.active_h`` = ‖p_i − p_j‖² − D_s² of the ``active_pairs``
   (int16, int32 beyond 32 767 robots). ``nominal`` is stored as float16
   ``nominal_minus_safe`` (zero where neither the wheel limits nor the barrier changed
   the command; error ≤ 5e-4 of that difference), ``barrier.intervention`` float16.
@@ -67,8 +74,10 @@ float with 17 digits; still read.
 from __future__ import annotations
 
 import base64
+import json
 import zlib
 from collections.abc import Mapping
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -76,7 +85,8 @@ import numpy as np
 from swarmdeck.console.runtime.frame import (FRAME_FORMAT, BarrierFrame, CoverageFrame, Frame, _dec_float,
                                              _enc_float)
 from swarmdeck.console.recording.prediction import predict_poses
-from swarmdeck.core.kinematics import unicycle_to_si
+from swarmdeck.core.kinematics import lookahead_points, unicycle_to_si
+from swarmdeck.coverage.geometry import CoverageGeometry, GeometryConfig, coverage_geometry
 
 #: The frame format this module writes (``Frame.to_dict`` is format 1; format 2: keyframes only).
 CODEC_FORMAT = 3
@@ -176,6 +186,9 @@ def frame_message(frame: Frame, previous: Frame | None = None) -> dict[str, Any]
         derived = bool(len(c.cell_vertices)) and frame.density is not None
         cov = {"cost_H": _enc_float(c.cost_H), "mean_centroid_distance": _enc_float(c.mean_centroid_distance),
                "packing_warning": c.packing_warning, "geometry": "derived" if derived else "none"}
+        changes = c.geometry_config.changes(frame.bounds) if c.geometry_config is not None else {}
+        if changes:  # a non-default coverage config: what the cells are derived with on reading
+            cov["config"] = changes
         if not derived:  # no diagram to recompute (coverage failed this tick): store what there is
             cov["centroids"] = pack_array(c.centroids, "<f8")
             cov["masses"] = pack_array(c.masses, "<f8")
@@ -239,8 +252,6 @@ _FLEET = (("is_virtual", bool), ("battery", float), ("charging", bool))
 
 def active_h(poses: np.ndarray, pairs: np.ndarray, lookahead: float, safety_distance: float) -> np.ndarray:
     """Barrier values h = ‖p_i − p_j‖² − D_s² (m²) of robot pairs (K, 2) at their look-ahead points."""
-    from swarmdeck.core.kinematics import lookahead_points
-
     if not len(pairs):
         return np.zeros(0)
     p = lookahead_points(poses, lookahead)
@@ -387,10 +398,11 @@ def _decode_v2(d: Mapping[str, Any], exact: Mapping[str, np.ndarray]) -> Frame:
 def _decode_coverage(cd: Mapping[str, Any], poses: np.ndarray, shell: Frame, lookahead: float) -> CoverageFrame:
     scalars = dict(cost_H=_dec_float(cd["cost_H"]), mean_centroid_distance=_dec_float(cd["mean_centroid_distance"]),
                    packing_warning=cd.get("packing_warning"))
+    config = geometry_config(cd.get("config"), shell.bounds)
     if cd.get("geometry") == "derived" and len(poses) and shell.density is not None:
-        derived = coverage_geometry(poses, shell.bounds, lookahead, shell.density)
+        derived = derived_coverage(poses, lookahead, shell.density, config)
         if derived is not None:
-            return CoverageFrame(**derived, **scalars)
+            return CoverageFrame.from_geometry(derived, **scalars)
     if "centroids" in cd:
         return CoverageFrame(centroids=unpack_array(cd["centroids"], "coverage.centroids").astype(float),
                              masses=unpack_array(cd["masses"], "coverage.masses").astype(float),
@@ -400,29 +412,104 @@ def _decode_coverage(cd: Mapping[str, Any], poses: np.ndarray, shell: Frame, loo
                          neighbours=np.zeros((0, 2), dtype=np.int64), **scalars)
 
 
-def coverage_geometry(poses: np.ndarray, bounds: tuple[float, float, float, float], lookahead: float,
-                      density: Any) -> dict[str, np.ndarray] | None:
-    """What the coverage behaviour computed from the poses, recomputed with the same code
-    (``swarmdeck.coverage``: pre-conditioned look-ahead points, bounded Voronoi diagram, cell
-    moments of the density snapshot with the default quadrature): centroids (N, 2), masses (N,),
-    edges (E, 2, 2), neighbours (E, 2), cell_vertices (V, 2), cell_offsets (N + 1,). None when
-    the diagram cannot be built."""
-    from swarmdeck.core.kinematics import lookahead_points
-    from swarmdeck.coverage import CoverageConfig, bounded_voronoi, cell_moments, precondition_positions
-
+def geometry_config(changes: Any, bounds: tuple[float, float, float, float]) -> GeometryConfig:
+    """The coverage geometry config a frame's ``coverage.config`` describes on the frame's ``bounds``
+    (absent, as in every recording made before it was stored: the defaults). ValueError naming the field."""
+    if changes is not None and not isinstance(changes, Mapping):
+        raise ValueError(f"frame field 'coverage.config' must be an object, got {type(changes).__name__}")
     try:
-        pts, _ = precondition_positions(lookahead_points(poses, lookahead), bounds)
-        vor = bounded_voronoi(pts, bounds)
-        mom = cell_moments(vor, density, CoverageConfig(bounds=bounds).quadrature)
-        cells = vor.polygons()
-    except Exception:  # noqa: BLE001 - a degenerate diagram: nothing to draw, never a failed read
+        return GeometryConfig.from_changes(changes, bounds)
+    except (TypeError, ValueError) as exc:
+        raise ValueError(f"frame field 'coverage.config': {exc}") from None
+
+
+def derived_coverage(poses: np.ndarray, lookahead: float, density: Any, config: GeometryConfig) -> CoverageGeometry | None:
+    """What the coverage behaviour computed from the poses, computed again by the same function
+    (:func:`swarmdeck.coverage.coverage_geometry` on the look-ahead points, with the frame's coverage
+    config); None when the diagram cannot be built (nothing to draw, never a failed read)."""
+    try:
+        geo = coverage_geometry(lookahead_points(poses, lookahead), density, config)
+    except Exception:  # noqa: BLE001 - poses the pre-conditioning refuses: nothing to draw
         return None
-    verts = np.concatenate([np.asarray(c, dtype=float).reshape(-1, 2) for c in cells]) if cells else np.zeros((0, 2))
-    return dict(centroids=mom.centroids, masses=mom.masses, edges=vor.edge_segments(),
-                neighbours=np.asarray(vor.edge_pairs, dtype=np.int64), cell_vertices=verts,
-                cell_offsets=np.concatenate(([0], np.cumsum([len(c) for c in cells]))).astype(np.int64))
+    return geo if geo.ok else None
 
 
-__all__ = ["CODEC_FORMAT", "COMPACT_FORMAT", "READABLE_FORMATS", "EXACT_FIELDS", "MissingReference", "can_predict",
+# ---------------------------------------------------------------------------- the other channels
+@dataclass(frozen=True)
+class RecordedDatagram:
+    """One recorded input datagram: raw ``data``, ``peer`` (tuple (host, port) or name),
+    ``transport``, console receive time ``t`` (s), receiving ``listener`` name or None."""
+
+    t: float
+    data: bytes
+    peer: object
+    transport: str
+    listener: str | None
+
+
+@dataclass(frozen=True)
+class RecordedEvent:
+    """``t``: recording time, s since the first frame (session time: what ``swarmdeck play`` seeks
+    to); ``kind`` ("operator", "frame", "recorder", …); ``text``; ``console_t``: the loop's clock, s."""
+
+    t: float
+    kind: str
+    text: str
+    console_t: float = float("nan")
+
+
+def datagram_message(data: bytes, peer: object, transport: str, t: float, listener: str | None) -> dict[str, Any]:
+    """The ``/swarmdeck/datagram`` message of a raw input datagram received at console time ``t`` s
+    (the bytes base64, a (host, port) peer as a list, any other peer as its string)."""
+    peer_j = list(peer) if isinstance(peer, (tuple, list)) else str(peer)
+    return {"t": t, "data": base64.b64encode(data).decode("ascii"), "peer": peer_j, "transport": transport,
+            "listener": listener}
+
+
+def decode_datagram(data: bytes) -> RecordedDatagram:
+    """Inverse of :func:`datagram_message` (from the message bytes); ValueError, KeyError or TypeError
+    for a malformed message."""
+    d = json.loads(data)
+    peer = d["peer"]
+    return RecordedDatagram(float(d["t"]), base64.b64decode(d["data"], validate=True),
+                            tuple(peer) if isinstance(peer, list) else peer, str(d["transport"]), d.get("listener"))
+
+
+def event_message(t: float, kind: str, text: str) -> dict[str, Any]:
+    """The ``/swarmdeck/event`` message of an event at console time ``t`` s."""
+    return {"t": t, "kind": kind, "text": text}
+
+
+def decode_event(data: bytes, rel: float) -> RecordedEvent:
+    """Inverse of :func:`event_message` (from the message bytes), at recording time ``rel`` s;
+    ValueError, KeyError or TypeError for a malformed message."""
+    d = json.loads(data)
+    return RecordedEvent(rel, str(d["kind"]), str(d["text"]), float(d["t"]))
+
+
+def decode_config(data: bytes) -> dict[str, Any]:
+    """The ``/swarmdeck/config`` message (the recorder's ``_write_config``) as a dict; ValueError
+    for bad JSON, TypeError or ValueError for a message that is not an object."""
+    return dict(json.loads(data))
+
+
+def metadata_record(meta: Mapping[str, Any]) -> dict[str, str]:
+    """The ``swarmdeck`` metadata record's string map: every value JSON-encoded."""
+    return {k: json.dumps(v) for k, v in meta.items()}
+
+
+def decode_metadata(record: Mapping[str, str]) -> dict[str, Any]:
+    """Inverse of :func:`metadata_record`; a value that is not JSON stays the string it is."""
+    out: dict[str, Any] = {}
+    for k, v in record.items():
+        try:
+            out[k] = json.loads(v)
+        except ValueError:
+            out[k] = v
+    return out
+
+
+__all__ = ["RecordedDatagram", "RecordedEvent", "datagram_message", "decode_datagram", "event_message",
+           "decode_event", "decode_config", "metadata_record", "decode_metadata", "CODEC_FORMAT", "COMPACT_FORMAT", "READABLE_FORMATS", "EXACT_FIELDS", "MissingReference", "can_predict",
            "exact_crc", "encode_frame", "decode_frame", "frame_message", "pack_array",
-           "unpack_array", "coverage_geometry", "derived_safe", "encode_json", "decode_json"]
+           "unpack_array", "derived_coverage", "geometry_config", "derived_safe", "encode_json", "decode_json"]

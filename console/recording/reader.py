@@ -20,128 +20,37 @@ seeks to, see :mod:`swarmdeck.console.runtime.loop`); ``Frame.time``,
 """
 from __future__ import annotations
 
-import base64
-import io
-import json
 import os
 import struct
 from bisect import bisect_right
 from collections import OrderedDict
 from collections.abc import Iterator
-from dataclasses import dataclass
 from itertools import accumulate
 from pathlib import Path
 from typing import Any
 
 from swarmdeck.console.runtime.frame import Frame
-from swarmdeck.console.recording.codec import CODEC_FORMAT, MissingReference, decode_frame
+from swarmdeck.console.recording.codec import (CODEC_FORMAT, MissingReference, RecordedDatagram, RecordedEvent,
+                                               decode_config, decode_datagram, decode_event, decode_frame,
+                                               decode_metadata)
+from swarmdeck.console.recording.mcap_walk import (MAGIC, OP_CHANNEL, OP_CHUNK, OP_HEADER, OP_METADATA,
+                                                   ChunkRef, DamagedChunk, McapFile, channel_topic, parse_record)
 from swarmdeck.console.recording.schemas import (
     METADATA_NAME, PROFILE, RECORDING_FORMAT, TOPIC_CONFIG, TOPIC_DATAGRAM, TOPIC_EVENT, TOPIC_FRAME,
 )
-
-MAGIC = bytes([137, 77, 67, 65, 80, 48, 13, 10])
-_OP_HEADER, _OP_FOOTER, _OP_SCHEMA, _OP_CHANNEL, _OP_MESSAGE, _OP_CHUNK = 0x01, 0x02, 0x03, 0x04, 0x05, 0x06
-_OP_CHUNK_INDEX, _OP_STATISTICS, _OP_METADATA, _OP_DATA_END = 0x08, 0x0B, 0x0C, 0x0F
-_MAX_OPCODE = 0x0F
-_REC = struct.Struct("<BQ")
-
-
 
 
 class RecordingError(Exception):
     """The file cannot be played: not MCAP, not a swarmdeck recording, a newer format, unreadable."""
 
 
-@dataclass(frozen=True)
-class ChunkRef:
-    """Where one chunk is: ``offset`` of its record (opcode byte), message time range (ns)."""
-
-    offset: int
-    start_ns: int
-    end_ns: int
-
-
-@dataclass(frozen=True)
-class RecordedDatagram:
-    """One recorded input datagram: raw ``data``, ``peer`` (tuple (host, port) or name),
-    ``transport``, console receive time ``t`` (s), receiving ``listener`` name or None."""
-
-    t: float
-    data: bytes
-    peer: object
-    transport: str
-    listener: str | None
-
-
-@dataclass(frozen=True)
-class RecordedEvent:
-    """``t``: recording time, s since the first frame (session time: what ``swarmdeck play`` seeks
-    to); ``kind`` ("operator", "frame", "recorder", …); ``text``; ``console_t``: the loop's clock, s."""
-
-    t: float
-    kind: str
-    text: str
-    console_t: float = float("nan")
-
-
-def _read_head(f: Any, pos: int, size: int) -> tuple[int, int] | None:
-    """(opcode, length) of the record at ``pos`` (file left at its body), or None when the record is
-    damaged (opcode 0 or unknown) or runs past the end of the file."""
-    if pos + 9 > size:
-        return None
-    f.seek(pos)
-    head = f.read(9)
-    if len(head) < 9:
-        return None
-    op, length = _REC.unpack(head)
-    if op == 0 or op > _MAX_OPCODE or pos + 9 + length > size:
-        return None
-    return op, length
-
-
-def _runs_past_end(f: Any, pos: int, size: int) -> bool:
-    """True when the record at ``pos`` has a valid opcode but is cut off by the end of the file."""
-    f.seek(pos)
-    head = f.read(9)
-    if len(head) < 9:
-        return True
-    op, length = _REC.unpack(head)
-    return 0 < op <= _MAX_OPCODE and pos + 9 + length > size
-
-
-def _parse_channel(body: bytes) -> tuple[int, str]:
-    """(id, topic) of a Channel record body: id u16, schema_id u16, topic (u32 length + UTF-8), …"""
-    cid, _schema, n = struct.unpack_from("<HHI", body, 0)
-    if 8 + n > len(body):
-        raise ValueError("channel topic runs past the record")
-    return cid, body[8:8 + n].decode("utf-8")
-
-
-def _read_record_at(f: Any, pos: int, size: int) -> tuple[int, int, bytes] | None:
-    """(opcode, length, body) of the record at ``pos``, or None when damaged/truncated."""
-    head = _read_head(f, pos, size)
-    if head is None:
-        return None
-    op, length = head
-    body = f.read(length)
-    if len(body) < length:
-        return None
-    return op, length, body
-
-
 def _parse_header(body: bytes) -> tuple[str, str]:
-    from mcap.data_stream import ReadDataStream
-    from mcap.records import Header
-
-    h = Header.read(ReadDataStream(io.BytesIO(body)))
+    h = parse_record(OP_HEADER, body)
     return h.profile, h.library
 
 
 def _parse_metadata(body: bytes) -> tuple[str, dict[str, str]]:
-    from mcap.data_stream import ReadDataStream
-    from mcap.records import Metadata
-
-    m = Metadata.read(ReadDataStream(io.BytesIO(body)))
+    m = parse_record(OP_METADATA, body)
     return m.name, dict(m.metadata)
 
 
@@ -168,6 +77,7 @@ class Recording:
             raise RecordingError(f"cannot open {self.path}: {exc.strerror or exc}") from None
         try:
             self.size = os.fstat(self._f.fileno()).st_size
+            self._mcap = McapFile(self._f, self.size)
             self._check_and_index()
             self._first = self._find_first_frame()
             self._last = self._find_last_frame()
@@ -177,34 +87,30 @@ class Recording:
 
     # ------------------------------------------------------------------ opening
     def _check_and_index(self) -> None:
-        f, size = self._f, self.size
+        mf, size = self._mcap, self.size
         if size < len(MAGIC):
             raise RecordingError(f"{self.path} is not an MCAP file (only {size} bytes)")
-        if f.read(8) != MAGIC:
+        if mf.read(0, len(MAGIC)) != MAGIC:
             raise RecordingError(f"{self.path} is not an MCAP file (no MCAP magic at the start)")
-        rec = _read_record_at(f, 8, size)
-        if rec is None or rec[0] != _OP_HEADER:
+        rec = mf.head(len(MAGIC))
+        if rec is None or rec.op != OP_HEADER:
             raise RecordingError(f"{self.path}: damaged MCAP file (no header record after the magic)")
-        self.profile, self.library = _parse_header(rec[2])
+        self.profile, self.library = _parse_header(mf.body(rec))
         if self.profile != PROFILE:
             raise RecordingError(f"{self.path} is an MCAP file from another tool (profile {self.profile!r}, "
                                  f"library {self.library!r}), not a swarmdeck recording")
-        pos = 8 + 9 + rec[1]
+        pos = rec.end
         meta_found = False
         # Metadata records follow the header directly.
         while True:
-            rec = _read_record_at(f, pos, size)
-            if rec is None or rec[0] != _OP_METADATA:
+            meta = mf.head(pos)
+            if meta is None or meta.op != OP_METADATA:
                 break
-            name, data = _parse_metadata(rec[2])
+            name, data = _parse_metadata(mf.body(meta))
             if name == METADATA_NAME:
                 meta_found = True
-                for k, v in data.items():
-                    try:
-                        self.metadata[k] = json.loads(v)
-                    except ValueError:
-                        self.metadata[k] = v
-            pos += 9 + rec[1]
+                self.metadata.update(decode_metadata(data))
+            pos = meta.end
         if not meta_found:
             raise RecordingError(f"{self.path}: damaged swarmdeck recording (no '{METADATA_NAME}' metadata record)")
         fmt = self.metadata.get("recording_format")
@@ -227,94 +133,53 @@ class Recording:
 
     def _index_from_summary(self) -> bool:
         """Chunk index, channels and message counts from the MCAP summary (a cleanly closed file).
-        Reads only what seeking needs, with ``struct`` (12 000 chunk indexes in a few ms). False when
-        the summary is missing or inconsistent: the caller scans the file instead."""
-        from mcap.data_stream import ReadDataStream
-        from mcap.records import Statistics
-
-        f, size = self._f, self.size
-        footer_at = size - 8 - 29  # Footer: opcode, length 20, summary_start, summary_offset_start, crc
-        if footer_at < 8:
+        False when the summary is missing or inconsistent: the caller scans the file instead."""
+        summary, warning = self._mcap.summary()
+        if warning:
+            self.warnings.append(warning)
+        if summary is None:
             return False
-        f.seek(footer_at)
-        tail = f.read(37)
-        if len(tail) != 37 or tail[29:] != MAGIC or _REC.unpack_from(tail)[:2] != (_OP_FOOTER, 20):
-            return False
-        summary_start = struct.unpack_from("<Q", tail, 9)[0]
-        if not 8 <= summary_start < footer_at:
-            return False
-        f.seek(summary_start)
-        buf = f.read(footer_at - summary_start)
-        chunks: list[ChunkRef] = []
-        channels: dict[int, str] = {}
-        stats = None
-        p = 0
-        try:
-            while p + 9 <= len(buf):
-                op, length = _REC.unpack_from(buf, p)
-                body, end = p + 9, p + 9 + length
-                if end > len(buf):
-                    return False
-                if op == _OP_CHUNK_INDEX:
-                    start_ns, end_ns, offset = struct.unpack_from("<QQQ", buf, body)
-                    chunks.append(ChunkRef(offset, start_ns, end_ns))
-                elif op == _OP_CHANNEL:
-                    cid, topic = _parse_channel(buf[body:end])
-                    channels[cid] = topic
-                elif op == _OP_STATISTICS:
-                    stats = Statistics.read(ReadDataStream(io.BytesIO(buf[body:end])))
-                p = end
-        except (struct.error, ValueError, UnicodeDecodeError):
-            return False
-        if not chunks:
-            return False
-        if any(c.offset < 8 or c.offset >= summary_start for c in chunks):
-            self.warnings.append("the MCAP summary points outside the data; scanned the file instead")
-            return False
-        self._channels = channels
-        if stats is not None:
+        self._channels = dict(summary.channels)
+        if summary.channel_counts is not None:
             counts: dict[str, int] = {}
-            for cid, c in stats.channel_message_counts.items():
-                topic = channels.get(cid)
+            for cid, c in summary.channel_counts.items():
+                topic = summary.channels.get(cid)
                 if topic is not None:
-                    counts[topic] = counts.get(topic, 0) + int(c)
+                    counts[topic] = counts.get(topic, 0) + c
             self._counts = counts
-        self._chunks = chunks
+        self._chunks = list(summary.chunks)
         self.indexed = True
         return True
 
     def _index_by_scan(self, pos: int) -> None:
         """Walk the data section record by record (reading only chunk headers), up to the first
-        damaged or truncated record."""
-        f, size = self._f, self.size
-        while True:
-            head = _read_head(f, pos, size)
-            if head is None:
-                if pos >= size:
-                    self.warnings.append("file was not closed cleanly (no summary); recovered by scanning")
-                elif _runs_past_end(f, pos, size):
-                    self.warnings.append(f"file ends inside a record at byte {pos} of {size} (the recording was "
-                                         "cut off there); playing everything before it")
+        damaged or truncated record (:mod:`~swarmdeck.console.recording.mcap_walk`, as ``recover`` does)."""
+        mf = self._mcap
+        walk = mf.walk(pos)
+        for rec in walk:
+            if rec.op == OP_CHUNK:
+                if rec.length >= 16:
+                    start_ns, end_ns = struct.unpack("<QQ", mf.read(rec.body_offset, 16))
+                    self._chunks.append(ChunkRef(rec.offset, start_ns, end_ns))
                 else:
-                    self.warnings.append(f"file damaged at byte {pos} of {size}: playing everything before it")
-                break
-            op, length = head
-            if op == _OP_CHUNK:
-                if length >= 16:
-                    start_ns, end_ns = struct.unpack("<QQ", f.read(16))
-                    self._chunks.append(ChunkRef(pos, start_ns, end_ns))
-                else:
-                    self.warnings.append(f"damaged chunk at byte {pos} skipped")
-            elif op == _OP_CHANNEL:
+                    self.warnings.append(f"damaged chunk at byte {rec.offset} skipped")
+            elif rec.op == OP_CHANNEL:
                 try:
-                    cid, topic = _parse_channel(f.read(length))
+                    cid, topic = channel_topic(mf.body(rec))
                     self._channels[cid] = topic
                 except (struct.error, ValueError, UnicodeDecodeError):
-                    self.warnings.append(f"damaged channel record at byte {pos} skipped")
-            elif op in (_OP_DATA_END, _OP_FOOTER):
-                self.warnings.append("the MCAP summary is unreadable; recovered by scanning")
-                break
-            pos += 9 + length
+                    self.warnings.append(f"damaged channel record at byte {rec.offset} skipped")
+        stop = walk.stop
+        assert stop is not None
+        if stop.reason == "end":
+            self.warnings.append("file was not closed cleanly (no summary); recovered by scanning")
+        elif stop.reason == "cut":
+            self.warnings.append(f"file ends inside a record at byte {stop.offset} of {self.size} (the recording "
+                                 "was cut off there); playing everything before it")
+        elif stop.reason == "damaged":
+            self.warnings.append(f"file damaged at byte {stop.offset} of {self.size}: playing everything before it")
+        else:
+            self.warnings.append("the MCAP summary is unreadable; recovered by scanning")
 
     # ------------------------------------------------------------------ chunks
     def _chunk_messages(self, i: int) -> dict[str, list[tuple[int, bytes]]]:
@@ -323,20 +188,14 @@ class Recording:
         if hit is not None:
             self._cache.move_to_end(i)
             return hit
-        from mcap.data_stream import ReadDataStream
-        from mcap.records import Channel, Chunk, Message
-        from mcap.stream_reader import breakup_chunk
+        from mcap.records import Channel, Message
 
         ref = self._chunks[i]
         out: dict[str, list[tuple[int, bytes]]] = {}
         try:
-            rec = _read_record_at(self._f, ref.offset, self.size)
-            if rec is None or rec[0] != _OP_CHUNK:
-                raise ValueError("not a chunk record")
-            chunk = Chunk.read(ReadDataStream(io.BytesIO(rec[2])))
-            records = breakup_chunk(chunk, validate_crc=True)
-        except Exception as exc:  # noqa: BLE001 - damage of any kind: skip the chunk, say so
-            msg = f"damaged chunk at byte {ref.offset} skipped ({type(exc).__name__})"
+            records = self._mcap.read_chunk(ref.offset)[1]
+        except DamagedChunk as exc:  # damage of any kind: skip the chunk, say so (recover skips it too)
+            msg = f"damaged chunk at byte {ref.offset} skipped ({exc})"
             if msg not in self.warnings:
                 self.warnings.append(msg)
             records = []
@@ -524,11 +383,7 @@ class Recording:
         """Every readable recorded datagram in [start, end) s, in receive order."""
         for ns, data in self._messages(TOPIC_DATAGRAM, start, end):
             try:
-                d = json.loads(data)
-                peer = d["peer"]
-                yield RecordedDatagram(float(d["t"]), base64.b64decode(d["data"], validate=True),
-                                       tuple(peer) if isinstance(peer, list) else peer, str(d["transport"]),
-                                       d.get("listener"))
+                yield decode_datagram(data)
             except (ValueError, KeyError, TypeError) as exc:
                 self.warnings.append(f"undecodable datagram at log time {ns} skipped: {exc}")
 
@@ -536,8 +391,7 @@ class Recording:
         """Every readable event in [start, end) s."""
         for ns, data in self._messages(TOPIC_EVENT, start, end):
             try:
-                d = json.loads(data)
-                yield RecordedEvent(self.rel(ns), str(d["kind"]), str(d["text"]), float(d["t"]))
+                yield decode_event(data, self.rel(ns))
             except (ValueError, KeyError, TypeError):
                 continue
 
@@ -558,7 +412,7 @@ class Recording:
         """The run's configuration message (falls back to the metadata record)."""
         for _, data in self._messages(TOPIC_CONFIG, None, None):
             try:
-                return dict(json.loads(data))
+                return decode_config(data)
             except ValueError:
                 break
         return dict(self.metadata)

@@ -34,7 +34,6 @@ Wiring in the console (``--record PATH`` / ``--no-record``)::
 from __future__ import annotations
 
 import datetime as _dt
-import json
 import os
 import platform
 import threading
@@ -49,7 +48,8 @@ from swarmdeck.core.bounds import DEFAULT_BOUNDS
 from swarmdeck.core.checks import require_in_range
 from swarmdeck.console.recording.foxglove import TOPIC_LOG, FoxgloveConfig, FoxgloveEncoder, channel_specs
 from swarmdeck.console.runtime.frame import Frame
-from swarmdeck.console.recording.codec import CODEC_FORMAT, encode_frame, encode_json
+from swarmdeck.console.recording.codec import (CODEC_FORMAT, datagram_message, encode_frame, encode_json,
+                                               event_message, metadata_record)
 from swarmdeck.console.recording.schemas import (
     CHANNELS, METADATA_NAME, PROFILE, RECORDING_FORMAT, TOPIC_CONFIG, TOPIC_DATAGRAM, TOPIC_EVENT, TOPIC_FRAME,
 )
@@ -279,7 +279,7 @@ class Recorder:
             "versions": software_versions(),
             **{k: v for k, v in self._meta.items() if k != "config"},
         }
-        w.add_metadata(METADATA_NAME, {k: json.dumps(v) for k, v in meta.items()})
+        w.add_metadata(METADATA_NAME, metadata_record(meta))
         for topic, (name, schema) in CHANNELS.items():
             sid = w.register_schema(name=name, encoding="jsonschema", data=_json(schema))
             self._channels[topic] = w.register_channel(topic=topic, message_encoding="json", schema_id=sid)
@@ -333,20 +333,16 @@ class Recorder:
             self._add(TOPIC_FRAME, frame.time, encode_frame(frame, self._previous))
             self._previous = frame
             for text in frame.events:
-                self._add(TOPIC_EVENT, frame.time, {"t": frame.time, "kind": "frame", "text": text})
+                self._add(TOPIC_EVENT, frame.time, event_message(frame.time, "frame", text))
             self._counts["frames"] += 1
             self._write_foxglove(lambda enc, ns: enc.encode(frame, ns, frame.time - self._origin), frame)
         elif kind == "d":
-            import base64
-
             _, data, peer, transport, t, listener = item
-            peer_j = list(peer) if isinstance(peer, (tuple, list)) else str(peer)
-            self._add(TOPIC_DATAGRAM, t, {"t": t, "data": base64.b64encode(data).decode("ascii"), "peer": peer_j,
-                                          "transport": transport, "listener": listener})
+            self._add(TOPIC_DATAGRAM, t, datagram_message(data, peer, transport, t, listener))
             self._counts["datagrams"] += 1
         else:
             _, t, k, text = item
-            self._add(TOPIC_EVENT, t, {"t": t, "kind": k, "text": text})
+            self._add(TOPIC_EVENT, t, event_message(t, k, text))
             self._counts["events"] += 1
             self._write_foxglove(lambda enc, ns: [(TOPIC_LOG, ns, enc.log(ns, text, name=k))], None, t)
 
@@ -399,8 +395,8 @@ class Recorder:
                         self._close_chunk()
                         last_flush, dirty = time.monotonic(), False
                 if dropped > reported_drops and self._origin is not None:
-                    self._add(TOPIC_EVENT, last_t, {"t": last_t, "kind": "recorder",
-                                                    "text": f"queue full: {dropped - reported_drops} items dropped"})
+                    self._add(TOPIC_EVENT, last_t, event_message(last_t, "recorder",
+                                                                 f"queue full: {dropped - reported_drops} items dropped"))
                     reported_drops = dropped
                 now = time.monotonic()
                 if dirty and (stopping or now - last_flush >= interval):

@@ -4,11 +4,12 @@ A console that is killed (``kill -9``, a power cut) leaves an MCAP file with
 its data section cut off somewhere and no summary: swarmdeck's own reader
 plays it (it scans), and the ``mcap`` package's ``NonSeekingReader`` reads it
 with ``log_time_order=False`` up to the cut (REFERENCE.md §13), but
-``make_reader`` — and so most tools — cannot open it. :func:`recover` reads
-the damaged file with the ``mcap`` package's own :class:`~mcap.stream_reader.StreamReader`
-and writes every complete record into a new file through the ``mcap``
-package's ``Writer``, which adds the summary, the chunk and message indexes
-and the statistics:
+``make_reader`` — and so most tools — cannot open it. :func:`recover` walks
+the damaged file with the walk swarmdeck's reader uses
+(:mod:`~swarmdeck.console.recording.mcap_walk`: so the recovered file holds exactly
+what ``swarmdeck play`` plays of the damaged one) and writes every complete record
+into a new file through the ``mcap`` package's ``Writer``, which adds the summary,
+the chunk and message indexes and the statistics:
 
 * the header's profile and library, every metadata record and attachment,
   every schema and channel and every message of every complete chunk, in file
@@ -16,10 +17,12 @@ and the statistics:
   the original);
 * a chunk that fails its CRC or cannot be decompressed is skipped and counted
   (the next one is read); messages whose channel record was lost with such a
-  chunk are skipped and counted;
-* reading stops at the first record that runs past the end of the file or
-  cannot be parsed (the crash point), or at the end of the data section of a
-  file that was closed cleanly.
+  chunk are skipped and counted; so is any other record that cannot be parsed;
+* reading stops at the first record that runs past the end of the file (the
+  crash point) or whose head is damaged (an opcode that is no MCAP record), or
+  at the end of the data section of a file that was closed cleanly; a file that
+  still has its summary resumes at the next chunk the summary indexes (the
+  chunks passed over count as skipped).
 
 The input is only ever read. The output is written to a temporary file beside
 it and renamed into place when complete, so an interrupted recovery leaves no
@@ -34,7 +37,8 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-MAGIC = bytes([137, 77, 67, 65, 80, 48, 13, 10])
+from swarmdeck.console.recording.mcap_walk import (MAGIC, OP_CHUNK, OP_HEADER, DamagedChunk, McapFile, Stop,
+                                                   parse_record)
 
 
 class RecoveryError(Exception):
@@ -46,9 +50,10 @@ class RecoveryReport:
     """What :func:`recover` did.
 
     messages: messages written; chunks: chunks read intact; skipped_chunks: chunks dropped (CRC or
-    decompression failure); orphan_messages: messages dropped because their channel record was lost;
-    closed_cleanly: the input already had its data-end record (nothing was cut off);
-    stopped: why reading ended (one line); stopped_at: byte offset where it ended.
+    decompression failure, or passed over after a damaged record); orphan_messages: messages dropped
+    because their channel record was lost; closed_cleanly: the input already had its data-end record
+    (nothing was cut off); stopped: why reading ended (one line); stopped_at: byte offset where it
+    ended; skipped_records: other records that could not be parsed.
     """
 
     source: str
@@ -60,6 +65,7 @@ class RecoveryReport:
     closed_cleanly: bool
     stopped: str
     stopped_at: int
+    skipped_records: int = 0
 
     def summary(self) -> str:
         """One line for the operator."""
@@ -68,6 +74,8 @@ class RecoveryReport:
             parts.append(f"{self.skipped_chunks} damaged chunks skipped")
         if self.orphan_messages:
             parts.append(f"{self.orphan_messages} messages without a channel skipped")
+        if self.skipped_records:
+            parts.append(f"{self.skipped_records} damaged records skipped")
         return f"recovered {self.source} -> {self.output}: {', '.join(parts)}; {self.stopped}"
 
 
@@ -144,15 +152,26 @@ class _Copier:
                                   media_type=rec.media_type, data=rec.data)
 
 
+def _stopped(stop: Stop) -> tuple[bool, str]:
+    """(closed cleanly, one line) for where the walk over the input ended."""
+    at = f"stopped at byte {stop.offset}"
+    if stop.reason == "data_end":
+        return True, "the input was closed cleanly (its data section was complete)"
+    if stop.reason == "end":
+        return False, f"{at}: the file ends there without its summary (the recording was cut off there)"
+    if stop.reason == "cut":
+        return False, f"{at}: the file ends inside a record (the recording was cut off there)"
+    return False, (f"{at}: damaged record (opcode {stop.op:#04x} is no MCAP record; the recording is unreadable "
+                   "from there on)")
+
+
 def recover(source: str | os.PathLike[str], output: str | os.PathLike[str] | None = None) -> RecoveryReport:
     """Write the readable part of MCAP file ``source`` to ``output`` (default :func:`default_output`) as a
     valid MCAP file with summary and indexes. ``source`` is never modified.
 
     Raises RecoveryError for an input with nothing to recover or an output that cannot be written.
     """
-    from mcap.exceptions import McapError
-    from mcap.records import Chunk, DataEnd, Footer, Header
-    from mcap.stream_reader import StreamReader, breakup_chunk
+    from mcap.records import Header
     from mcap.writer import Writer
 
     src = Path(source)
@@ -165,16 +184,14 @@ def recover(source: str | os.PathLike[str], output: str | os.PathLike[str] | Non
     tmp = Path(tmp_name)
     try:
         with open(src, "rb") as f, os.fdopen(fd, "wb") as out:
-            reader = StreamReader(f, emit_chunks=True, record_size_limit=size)
-            records = reader.records
-            header = next(records)
-            if not isinstance(header, Header):  # pragma: no cover - _check_head saw opcode 0x01
+            mf = McapFile(f, size)
+            head = mf.head(len(MAGIC))
+            header = parse_record(OP_HEADER, mf.body(head)) if head is not None and head.op == OP_HEADER else None
+            if not isinstance(header, Header):  # pragma: no cover - _check_head saw a complete header record
                 raise RecoveryError(f"{src} does not start with an MCAP header record")
             writer: Any = None
             copier: _Copier | None = None
-            chunks = skipped = 0
-            clean = False
-            stopped = "the file ends cleanly"
+            chunks = skipped = bad_records = 0
 
             def start(compression: str) -> _Copier:
                 nonlocal writer
@@ -182,35 +199,40 @@ def recover(source: str | os.PathLike[str], output: str | os.PathLike[str] | Non
                 writer.start(profile=header.profile, library=header.library)
                 return _Copier(writer)
 
+            summary, _ = mf.summary()
+            indexed = [c.offset for c in summary.chunks] if summary is not None else []
+            walk = mf.walk(head.end, resume=indexed)
             pending: list[Any] = []  # records before the first chunk (its compression picks the output's)
-            try:
-                for rec in records:
-                    if isinstance(rec, Chunk):
-                        try:
-                            inner = breakup_chunk(rec, validate_crc=True)
-                        except Exception:  # noqa: BLE001 - CRC mismatch, corrupt compression, cut inner record
-                            skipped += 1
-                            continue
-                        if copier is None:
-                            copier = start(rec.compression)
-                            for p in pending:
-                                copier.record(p)
-                        for r in inner:
-                            copier.record(r)
-                        writer.flush()  # one output chunk per input chunk
-                        chunks += 1
-                    elif isinstance(rec, (DataEnd, Footer)):
-                        clean, stopped = True, "the input was closed cleanly (its data section was complete)"
-                        break
-                    elif copier is None:
-                        pending.append(rec)
-                    else:
-                        copier.record(rec)
-            except McapError as exc:
-                what = "the file ends inside a record" if "EndOfFile" in type(exc).__name__ else f"damaged record ({exc})"
-                stopped = f"stopped at byte {f.tell()}: {what} (the recording was cut off there)"
-            except Exception as exc:  # noqa: BLE001 - struct/unicode errors in a damaged record body
-                stopped = f"stopped at byte {f.tell()}: unreadable record ({type(exc).__name__}: {exc})"
+            for rec in walk:
+                if rec.op == OP_CHUNK:
+                    try:
+                        chunk, inner = mf.read_chunk(rec)
+                    except DamagedChunk:  # CRC mismatch, corrupt compression, cut inner record
+                        skipped += 1
+                        continue
+                    if copier is None:
+                        copier = start(chunk.compression)
+                        for p in pending:
+                            copier.record(p)
+                    for r in inner:
+                        copier.record(r)
+                    writer.flush()  # one output chunk per input chunk
+                    chunks += 1
+                    continue
+                try:
+                    parsed = parse_record(rec.op, mf.body(rec))
+                except Exception:  # noqa: BLE001 - struct/unicode/mcap errors in a damaged record body
+                    bad_records += 1
+                    continue
+                if parsed is None:
+                    continue
+                if copier is None:
+                    pending.append(parsed)
+                else:
+                    copier.record(parsed)
+            skipped += sum(1 for lo, hi in walk.skipped for c in indexed if lo <= c < hi)
+            assert walk.stop is not None
+            clean, stopped = _stopped(walk.stop)
             if copier is None:
                 copier = start("zstd")
                 for p in pending:
@@ -218,7 +240,7 @@ def recover(source: str | os.PathLike[str], output: str | os.PathLike[str] | Non
             writer.finish()
             out.flush()
             os.fsync(out.fileno())
-            at = f.tell()
+            at = walk.stop.offset
         os.chmod(tmp, 0o644)
         os.replace(tmp, dst)
     except RecoveryError:
@@ -230,4 +252,5 @@ def recover(source: str | os.PathLike[str], output: str | os.PathLike[str] | Non
     except BaseException:
         tmp.unlink(missing_ok=True)
         raise
-    return RecoveryReport(str(src), str(dst), copier.messages, chunks, skipped, copier.orphans, clean, stopped, at)
+    return RecoveryReport(str(src), str(dst), copier.messages, chunks, skipped, copier.orphans, clean, stopped, at,
+                          bad_records)

@@ -153,6 +153,11 @@ FRAME_SCHEMA: dict[str, Any] = {
             "properties": {
                 "cost_H": _NUM, "mean_centroid_distance": _NUM, "packing_warning": {"type": ["string", "null"]},
                 "geometry": {"enum": ["derived", "none"]}, "centroids": _ND, "masses": _ND,
+                "config": {"type": "object", "description": "the coverage geometry config where it differs from "
+                           "the defaults on the frame's bounds (swarmdeck.coverage.GeometryConfig): bounds, "
+                           "wall_margin, min_separation (m), quadrature {resolution, reach, max_level, min_level}",
+                           "properties": {"bounds": _arr({"type": "number"}, 4), "wall_margin": _NUM,
+                                          "min_separation": _NUM, "quadrature": {"type": "object"}}},
             }}]},
     },
 }

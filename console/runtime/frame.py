@@ -69,6 +69,7 @@ from numpy.typing import ArrayLike, NDArray
 from swarmdeck.core.bounds import DEFAULT_BOUNDS, Bounds
 from swarmdeck.core.kinematics import lookahead_points
 from swarmdeck.coverage.density import GaussianMixture
+from swarmdeck.coverage.geometry import GeometryConfig
 
 FRAME_FORMAT = 1
 RUN_STATES = ("running", "paused", "estop")
@@ -216,6 +217,14 @@ class BarrierFrame:
         )
 
 
+def _flat_cells(cells: list[Any]) -> tuple[FloatArray, IntArray]:
+    """Polygons (V_i, 2) m → their concatenated vertices (V, 2) and offsets (N + 1,)."""
+    if not cells:
+        return np.empty((0, 2)), np.zeros(1, dtype=np.int64)
+    arrs = [np.asarray(c, dtype=float).reshape(-1, 2) for c in cells]
+    return np.concatenate(arrs, axis=0), np.concatenate(([0], np.cumsum([len(a) for a in arrs]))).astype(np.int64)
+
+
 @dataclass(frozen=True, eq=False)
 class CoverageFrame:
     """Coverage state of one tick (see ``swarmdeck.coverage.CoverageState``).
@@ -223,7 +232,8 @@ class CoverageFrame:
     centroids (N, 2) m, masses (N,), edges (E, 2, 2) Voronoi edge segments m,
     neighbours (E, 2) robot index pairs, cost_H the locational cost,
     mean_centroid_distance mean ‖p_i − c_i‖ m, cells as concatenated vertices
-    (V, 2) with offsets (N + 1,).
+    (V, 2) with offsets (N + 1,); geometry_config: what the cells and moments were computed with
+    (``swarmdeck.coverage.GeometryConfig``; None: the defaults on the frame's bounds).
     """
 
     centroids: FloatArray
@@ -235,6 +245,7 @@ class CoverageFrame:
     packing_warning: str | None = None
     cell_vertices: FloatArray = field(default_factory=lambda: np.empty((0, 2)))
     cell_offsets: IntArray = field(default_factory=lambda: np.zeros(1, dtype=np.int64))
+    geometry_config: GeometryConfig | None = None
 
     def __post_init__(self) -> None:
         _set(self, "centroids", _ro(self.centroids, float, (2,), "coverage.centroids"))
@@ -251,20 +262,25 @@ class CoverageFrame:
     @classmethod
     def from_state(cls, state: Any) -> "CoverageFrame":
         """Build from a ``CoverageState``-like object (attributes per the coverage contract)."""
-        cells = list(getattr(state, "cells", None) or [])
-        if cells:
-            arrs = [np.asarray(c, dtype=float).reshape(-1, 2) for c in cells]
-            verts = np.concatenate(arrs, axis=0)
-            offsets = np.concatenate(([0], np.cumsum([len(a) for a in arrs])))
-        else:
-            verts, offsets = np.empty((0, 2)), np.zeros(1, dtype=np.int64)
+        verts, offsets = _flat_cells(list(getattr(state, "cells", None) or []))
         return cls(
             centroids=state.centroids, masses=state.masses, edges=state.edges,
             neighbours=getattr(state, "neighbours", np.empty((0, 2), dtype=np.int64)),
             cost_H=state.cost_H, mean_centroid_distance=state.mean_centroid_distance,
             packing_warning=getattr(state, "packing_warning", None),
-            cell_vertices=verts, cell_offsets=offsets,
+            cell_vertices=verts, cell_offsets=offsets, geometry_config=getattr(state, "geometry_config", None),
         )
+
+    @classmethod
+    def from_geometry(cls, geometry: Any, cost_H: float, mean_centroid_distance: float,
+                      packing_warning: str | None = None) -> "CoverageFrame":
+        """Build from a ``swarmdeck.coverage.CoverageGeometry`` that has a diagram (a recorded frame's
+        cells, derived again) and the tick's scalars."""
+        verts, offsets = _flat_cells(geometry.cells())
+        return cls(centroids=geometry.centroids, masses=geometry.masses, edges=geometry.edges,
+                   neighbours=geometry.neighbours, cost_H=cost_H, mean_centroid_distance=mean_centroid_distance,
+                   packing_warning=packing_warning, cell_vertices=verts, cell_offsets=offsets,
+                   geometry_config=geometry.config)
 
     def cells(self) -> list[FloatArray]:
         """The cell polygons as a list of (V_i, 2) arrays (views, read-only)."""
