@@ -27,7 +27,7 @@ from typing import Any
 
 import numpy as np
 
-from swarmdeck.core.bounds import DEFAULT_BOUNDS
+from swarmdeck.console.runtime import params
 from swarmdeck.console.runtime.frame import Frame
 from swarmdeck.console.recording.codec import CODEC_FORMAT, COMPACT_FORMAT, decode_frame, encode_frame
 from swarmdeck.console.recording.reader import RecordedDatagram, Recording
@@ -36,36 +36,17 @@ from swarmdeck.safety.guard import GuardConfig
 #: Frame keys not compared: wall-clock measurements and free-text messages.
 IGNORED_KEYS = frozenset({"timing", "events", "alerts", "health"})
 IGNORED_BARRIER_KEYS = frozenset({"solve_time_s"})
-_LOOP_PARAM_KEYS = ("kappa", "law", "gain", "formation_edge", "formation_gain")
-_SAFETY_PARAM_KEYS = {"safety_enabled": "enabled", "safety_distance": "safety_distance", "gamma": "gamma",
-                      "class_k": "class_k"}
 
 
 def loop_config_to_dict(config: Any) -> dict[str, Any]:
     """A ``LoopConfig`` as JSON-able nested dicts (inverse: :func:`loop_config_from_dict`)."""
-    d = dataclasses.asdict(config)
-    goals = d.get("behaviour_params", {}).get("goals")
-    if goals is not None:
-        d["behaviour_params"]["goals"] = [list(g) for g in goals]
-    d["bounds"] = list(d["bounds"])
-    return d
+    return params.to_dict(config)
 
 
 def loop_config_from_dict(d: Mapping[str, Any]) -> Any:
     """Rebuild a ``LoopConfig`` from :func:`loop_config_to_dict` output; ValueError for bad data."""
-    from swarmdeck.console.runtime.behaviours import BehaviourParams
-    from swarmdeck.console.runtime.loop import DensityParams, LoopConfig, SafetyParams
-
     try:
-        kw = dict(d)
-        bp = dict(kw.pop("behaviour_params", {}) or {})
-        if bp.get("goals") is not None:
-            bp["goals"] = tuple(tuple(float(x) for x in g) for g in bp["goals"])
-        kw["behaviour_params"] = BehaviourParams(**bp)
-        kw["safety"] = SafetyParams(**dict(kw.pop("safety", {}) or {}))
-        kw["density"] = DensityParams(**dict(kw.pop("density", {}) or {}))
-        kw["bounds"] = tuple(float(b) for b in kw.get("bounds", DEFAULT_BOUNDS))
-        return LoopConfig(**kw)
+        return params.from_dict(params.LoopConfig, d)
     except TypeError as exc:
         raise ValueError(f"recorded loop configuration is not a LoopConfig: {exc}") from None
 
@@ -170,15 +151,18 @@ def _apply_operator_actions(loop: Any, prev: Frame | None, frame: Frame, nxt: Fr
     p = frame.params
     # behaviour parameters and the barrier, when they differ from the loop's
     bp = loop.behaviour_params
-    changes = {k: p[k] for k in _LOOP_PARAM_KEYS if k in p and getattr(bp, k) != p[k]}
+    changes = {f: p[k] for k, f in params.frame_keys(params.BehaviourParams).items()
+               if k in p and getattr(bp, f) != p[k]}
     if changes:
         loop.set_params(**changes)
     sp = loop.safety_params
-    schanges = {v: p[k] for k, v in _SAFETY_PARAM_KEYS.items() if k in p and getattr(sp, v) != p[k]}
+    schanges = {f: p[k] for k, f in params.frame_keys(params.SafetyParams).items()
+                if k in p and getattr(sp, f) != p[k]}
     if schanges:
         loop.set_safety(**schanges)
-    if "moving_density" in p and loop.density.params.moving != bool(p["moving_density"]):
-        loop.set_moving_density(bool(p["moving_density"]))
+    for k, f in params.frame_keys(params.DensityParams).items():
+        if k in p and getattr(loop.density.params, f) != p[k]:
+            loop.set_density(**{f: p[k]})
     if frame.behaviour != loop.behaviour_name:
         loop.set_behaviour(frame.behaviour)
     # run state

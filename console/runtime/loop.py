@@ -64,7 +64,7 @@ import threading
 import time
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
-from dataclasses import dataclass, field, replace
+from dataclasses import replace
 from typing import Any
 
 import numpy as np
@@ -78,11 +78,10 @@ from swarmdeck.console.runtime.behaviours import (
 )
 from swarmdeck.console.runtime.density import BumpSet
 from swarmdeck.console.runtime.frame import BarrierFrame, ContactsFrame, CoverageFrame, Frame
+from swarmdeck.console.runtime.params import DensityParams, LoopConfig, SafetyParams, frame_params
 from swarmdeck.core.ports import CommandSink, PoseSource, SensedPoses, close_ports
 from swarmdeck.coverage.densities import s1_density
 from swarmdeck.coverage.density import GaussianMixture, merge_mixtures
-from swarmdeck.core.bounds import DEFAULT_BOUNDS, Bounds
-from swarmdeck.core.checks import in_range, require_in_range
 from swarmdeck.core.kinematics import GritsBotParams, lookahead_points, saturate
 from swarmdeck.devices import ArenaConfig
 from swarmdeck.devices.clock import RealTimePacer
@@ -91,80 +90,6 @@ from swarmdeck.safety.guard import GuardCheck, GuardConfig
 from swarmdeck.devices.simulated_robots import SimulatedRobots
 
 FrameListener = Callable[[Frame], None]
-
-
-@dataclass(frozen=True)
-class SafetyParams:
-    """The barrier filter as the operator sets it: on/off, D_s (m, 0.11–0.4), γ (1–1000), class-K, and
-    ``mode``: "centralised", "distributed" or "auto" (distributed above 200 robots; ``swarmdeck.safety``)."""
-
-    enabled: bool = True
-    safety_distance: float = 0.17
-    gamma: float = 100.0
-    class_k: str = "cubic"
-    mode: str = "auto"
-
-    def __post_init__(self) -> None:
-        require_in_range(self.safety_distance, "safety_distance (D_s)", 0.11, 0.4, unit="m")
-        require_in_range(self.gamma, "gamma", 1.0, 1000.0)
-        if self.class_k not in ("cubic", "linear"):
-            raise ValueError(f"class_k must be 'cubic' or 'linear', got {self.class_k!r}")
-        if self.mode not in ("centralised", "distributed", "auto"):
-            raise ValueError(f"mode must be 'centralised', 'distributed' or 'auto', got {self.mode!r}")
-
-
-@dataclass(frozen=True)
-class DensityParams:
-    """The console's density: an optional circling bump (REFERENCE.md §5 S1) and defaults for new bumps."""
-
-    moving: bool = True
-    radius: float = 0.6
-    period: float = 20.0
-    sigma: float = 0.4
-    weight: float = 1.0
-    floor: float = 0.05
-    bump_sigma: float = 0.25
-    bump_weight: float = 1.0
-
-    def __post_init__(self) -> None:
-        s1_density(self.radius, self.period, self.sigma, self.weight, self.floor)  # validates
-        if not in_range(self.floor, 0.0, lo_open=True):
-            raise ValueError(f"density floor must be > 0 (keeps every cell's mass positive), got {self.floor!r}")
-        require_in_range(self.bump_sigma, "bump_sigma", 0.05, 1.0, unit="m")
-        require_in_range(self.bump_weight, "bump_weight", 0.0, 5.0)
-
-
-@dataclass(frozen=True)
-class LoopConfig:
-    """Everything the loop starts with. Units m, s."""
-
-    n_robots: int = 12
-    dt: float = 0.033
-    bounds: Bounds = DEFAULT_BOUNDS
-    seed: int | None = None
-    behaviour: str = "coverage"
-    max_speed: float = 0.2
-    behaviour_params: BehaviourParams = field(default_factory=BehaviourParams)
-    safety: SafetyParams = field(default_factory=SafetyParams)
-    density: DensityParams = field(default_factory=DensityParams)
-    script_budget: float | None = None
-
-    @property
-    def script_budget_s(self) -> float:
-        """How long a tick waits for a ``script:`` behaviour, s: ``script_budget``, or half of ``dt``
-        (the other half is the loop's own work). A script that takes longer is abandoned for the tick
-        (robots stopped; :mod:`swarmdeck.console.runtime.deadline`)."""
-        return 0.5 * self.dt if self.script_budget is None else float(self.script_budget)
-
-    def __post_init__(self) -> None:
-        # no upper bound here: how many fit depends on the arena (the initial layout names the maximum)
-        require_in_range(self.n_robots, "n_robots", 1, integer=True)
-        require_in_range(self.dt, "dt", 0.005, 0.5, unit="s")
-        require_in_range(self.max_speed, "max_speed", 0.0, 1.0, unit="m/s", lo_open=True)
-        ArenaConfig(bounds=self.bounds, dt=self.dt)  # validates bounds
-        b = self.script_budget
-        if b is not None and (isinstance(b, bool) or not isinstance(b, (int, float)) or not 0 < b <= 0.5):
-            raise ValueError(f"script_budget must be in (0, 0.5] s, got {b!r}")
 
 
 class ConsoleDensity:
@@ -176,11 +101,20 @@ class ConsoleDensity:
 
     def __init__(self, params: DensityParams, bumps: BumpSet) -> None:
         self.params = params
-        self.moving = s1_density(params.radius, params.period, params.sigma, params.weight, params.floor)
         self.bumps = bumps
         self.contacts: GaussianMixture | None = None
         self._cache: tuple[Any, GaussianMixture] | None = None
         self._cache_contacts: GaussianMixture | None = None
+
+    @property
+    def params(self) -> DensityParams:
+        """The operator's density parameters (setting them rebuilds the circling bump)."""
+        return self._params
+
+    @params.setter
+    def params(self, p: DensityParams) -> None:
+        self.moving = s1_density(p.radius, p.period, p.sigma, p.weight, p.floor)
+        self._params = p
 
     def at(self, t: float) -> GaussianMixture:
         key = (t, self.bumps.revision, self.params)
@@ -471,9 +405,19 @@ class ControlLoop:
                            f"intervene by more than {self.guard.max_intervention:g} m/s")
         return params
 
-    def set_moving_density(self, on: bool) -> None:
+    def set_density(self, **changes: Any) -> DensityParams:
+        """Change the density parameters (see DensityParams); ValueError for bad values."""
+        try:
+            params = replace(self.density.params, **changes)
+        except TypeError as exc:
+            raise ValueError(str(exc)) from None
         with self._lock:
-            self.density.params = replace(self.density.params, moving=bool(on))
+            self.density.params = params
+        return params
+
+    def set_moving_density(self, on: bool) -> None:
+        """Switch the circling bump on or off."""
+        self.set_density(moving=bool(on))
 
     def add_bump(self, xy: Any, sigma: float | None = None, weight: float | None = None) -> int:
         """Add a density bump at ``xy`` (m); returns its id. ValueError for bad values."""
@@ -820,12 +764,7 @@ class ControlLoop:
             self._events.clear()
             alerts = tuple(self._alerts.values())
         bp = self._behaviour_params
-        params = {
-            "kappa": bp.kappa, "law": bp.law, "gain": bp.gain, "formation_edge": bp.formation_edge,
-            "formation_gain": bp.formation_gain, "safety_enabled": sp.enabled, "safety_distance": sp.safety_distance,
-            "gamma": sp.gamma, "class_k": sp.class_k, "barrier_mode": sp.mode, "moving_density": density_params.moving,
-            "max_speed": self.config.max_speed,
-        }
+        params = frame_params(bp, sp, density_params, self.config)
         if behaviour == "goto":  # the goals, for the scene's goal markers (live and in playback)
             params.update(goal_params(bp))
         timing = {name: b - a for name, a, b in zip(("sense", "inputs", "control", "safety", "actuate"),
