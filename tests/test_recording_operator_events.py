@@ -165,3 +165,24 @@ def test_an_action_that_cannot_be_replayed_is_noted(tmp_path) -> None:
     with open_recording(path) as r:
         res = resimulate_and_compare(r)
     assert not res.ok and any("SwitchBehaviour not replayed" in n for n in res.notes), res.summary()
+
+
+def test_swarmdeck_info_says_whether_the_actions_were_recorded(tmp_path, capsys) -> None:
+    from swarmdeck.console.cli import main
+
+    path = tmp_path / "s.mcap"
+    cfg = LoopConfig(n_robots=3, seed=2)
+    rec = Recorder(path, session_metadata(cfg, None), RecorderConfig(foxglove=False))
+    loop = ControlLoop(cfg)
+    rec.follow(loop)
+    loop.pause()
+    loop.tick()
+    loop.step(1)
+    loop.tick()
+    loop.close()
+    rec.close()
+    assert main(["info", str(path), "--resimulate"]) == 0
+    out = capsys.readouterr().out
+    assert "2 recorded actions (replayed by --resimulate)" in out and "2 identical" in out
+    assert main(["info", str(BEFORE)]) == 0
+    assert "actions not recorded" in capsys.readouterr().out

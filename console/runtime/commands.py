@@ -84,6 +84,7 @@ class OperatorCommands:
         self._filter = self._make_filter(config.safety)
         self._hard_filter = self._make_filter(config.safety, pairs=False) if guard is not None else None
         self._operator_safety: SafetyParams | None = None  # kept while a behaviour runs its own barrier gains
+        self._barrier_keys: set[str] = set()  # which of them behaviours changed
         self._state = "running"
         self._estop = False
         self._steps = 0
@@ -234,16 +235,17 @@ class OperatorCommands:
             close_behaviour(old)
 
     def _behaviour_barrier(self, barrier: Any) -> None:
-        """Apply a behaviour's own barrier settings (keeping the operator's), or restore the operator's.
-        Not operator events: replaying the behaviour switch does it again."""
+        """Apply a behaviour's own barrier settings (keeping the operator's), or restore the operator's
+        values of what behaviours changed. Not operator events: replaying the behaviour switch does it again."""
         if barrier:
             if self._operator_safety is None:
                 self._operator_safety = self._safety_params
+            self._barrier_keys |= set(barrier)
             self._set_safety(dict(barrier), record=False)
         elif self._operator_safety is not None:
             saved, self._operator_safety = self._operator_safety, None
-            self._set_safety({"class_k": saved.class_k, "gamma": saved.gamma,
-                              "safety_distance": saved.safety_distance}, record=False)
+            keys, self._barrier_keys = sorted(self._barrier_keys), set()
+            self._set_safety({k: getattr(saved, k) for k in keys}, record=False)
 
     def set_params(self, **changes: Any) -> BehaviourParams:
         """Change behaviour parameters (see BehaviourParams); BehaviourError/ValueError for bad values."""
