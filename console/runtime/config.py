@@ -13,7 +13,10 @@ Tables (every key optional; defaults from REFERENCE.md)::
     [density]   moving, radius, period, sigma, weight, floor, bump_sigma, bump_weight
     [inputs]    see swarmdeck.inputs.InputConfig (listeners, density, bounds)
 
-Unknown tables or keys and values out of range are errors naming the table and key.
+The keys of ``[behaviour]``, ``[safety]``, ``[density]`` and the loop's keys of ``[console]`` are the
+operator parameters declared in :mod:`swarmdeck.console.runtime.params` (units, ranges and defaults
+there; the list above is a summary). Unknown tables or keys and values out of range are errors naming
+the table and key.
 """
 from __future__ import annotations
 
