@@ -20,6 +20,8 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any, ClassVar
 
+import numpy as np
+
 from swarmdeck.console.runtime import params as P
 
 Changes = tuple[tuple[str, Any], ...]
@@ -86,7 +88,8 @@ class SetParams(_SetGroup):
 
 @dataclass(frozen=True)
 class SetSafety(_SetGroup):
-    """Barrier parameters changed, the barrier switched on or off (:class:`~swarmdeck.console.runtime.params.SafetyParams`)."""
+    """Barrier parameters changed, or the barrier switched on or off
+    (:class:`~swarmdeck.console.runtime.params.SafetyParams`)."""
 
     group: ClassVar[type] = P.SafetyParams
 
@@ -157,7 +160,12 @@ def changes_of(params: Any, names: Any) -> Changes:
 
 
 def _plain(v: Any) -> Any:
-    return [_plain(x) for x in v] if isinstance(v, tuple) else v
+    """JSON-native: tuples, lists and arrays as lists, numpy scalars as Python numbers."""
+    if isinstance(v, (tuple, list, np.ndarray)):
+        return [_plain(x) for x in v]
+    if isinstance(v, np.generic):
+        return v.item()
+    return v
 
 
 def event_to_dict(stamped: Stamped) -> dict[str, Any]:

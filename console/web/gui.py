@@ -215,7 +215,8 @@ class ConsoleGui:
             if name in special:
                 handle.on_update(special[name])
             else:
-                handle.on_update(lambda _, name=name, spec=spec, handle=handle: change(name, widget_value(spec, handle)))
+                handle.on_update(lambda _, name=name, spec=spec, handle=handle:
+                                 change(name, widget_value(spec, handle)))
             out[name] = handle
         return out
 
