@@ -51,13 +51,13 @@ def test_behaviour_and_parameters(console) -> None:
     loop, _, gui = console
     gui.behaviour.value = "formation"
     assert loop.tick().behaviour == "formation"
-    gui.kappa.value = 2.5
-    gui.law.value = "lloyd"
-    gui.edge.value = 0.5
+    gui.params["kappa"].value = 2.5
+    gui.params["law"].value = "lloyd"
+    gui.params["formation_edge"].value = 0.5
     f = loop.tick()
     assert (f.params["kappa"], f.params["law"], f.params["formation_edge"]) == (2.5, "lloyd", 0.5)
-    gui.gamma.value = 30.0
-    gui.d_s.value = 0.2
+    gui.params["gamma"].value = 30.0
+    gui.params["safety_distance"].value = 0.2
     f = loop.tick()
     assert f.params["gamma"] == 30.0 and f.barrier.safety_distance == pytest.approx(0.2)
 

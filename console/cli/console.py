@@ -138,7 +138,7 @@ def main(args: argparse.Namespace) -> int:
             rec.close()
         raise UsageError(str(exc)) from None
     if rec is not None:
-        loop.subscribe(rec.write_frame)
+        rec.follow(loop)  # its Frames and typed operator actions (re-simulation replays them)
         loop.add_health("recording", lambda: rec.status().message)
         print(f"swarmdeck console: recording to {rec.path}", file=sys.stderr)
 

@@ -19,13 +19,15 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--json", action="store_true", help="print the summary as JSON")
     parser.add_argument("--resimulate", action="store_true",
                         help="also re-run the session on a fresh simulated loop from its recorded input datagrams "
-                             "and compare every frame (exit code 1 when they differ)")
+                             "and operator actions (run/pause/step/e-stop, behaviour, parameters, density bumps; "
+                             "recordings from before those were recorded: reconstructed from the frames) and compare "
+                             "every frame (exit code 1 when they differ)")
 
 
 def summarise(path: str) -> dict:
     """The summary printed by ``swarmdeck info`` as a dict (RecordingError for unplayable files)."""
     from swarmdeck.console.recording.reader import open_recording
-    from swarmdeck.console.recording.schemas import TOPIC_DATAGRAM, TOPIC_EVENT
+    from swarmdeck.console.recording.schemas import TOPIC_DATAGRAM, TOPIC_EVENT, TOPIC_OPERATOR
 
     with open_recording(path) as rec:
         cfg = rec.config()
@@ -50,6 +52,9 @@ def summarise(path: str) -> dict:
             "frames": rec.count_frames(),
             "datagrams": n_datagrams,
             "events": counts.get(TOPIC_EVENT, 0),
+            # None: a recording from before operator actions were recorded (re-simulation reads its frames)
+            "operator_actions": counts.get(TOPIC_OPERATOR, 0) if (cfg.get("config") or {}).get("operator_events")
+            else None,
             "robots": list(cfg.get("robots", [] if first is None else first.ids.tolist())),
             "bounds": list(cfg.get("bounds", [] if first is None else first.bounds)),
             "dt": None if first is None else first.dt,
@@ -88,6 +93,9 @@ def main(args: argparse.Namespace) -> int:
           f"{s['datagrams']} input datagrams, {s['events']} events")
     print(f"  robots      {len(robots)}: {', '.join(map(str, robots[:30]))}{' …' if len(robots) > 30 else ''}")
     print(f"  arena       {s['bounds']} m")
+    ops = s["operator_actions"]
+    print("  operator    " + ("actions not recorded (reconstructed from the frames by --resimulate)" if ops is None
+                              else f"{ops} recorded actions (replayed by --resimulate)"))
     print("  behaviour   " + ", then ".join(f"{c['behaviour']} (from {c['t']:.2f} s)" if c["t"] else c["behaviour"]
                                           for c in s["behaviour_changes"]))
     print(f"  size        {s['size_bytes'] / 1e6:.2f} MB in {s['chunks']} chunks"

@@ -37,6 +37,7 @@ from swarmdeck.console.recording.mcap_walk import (MAGIC, OP_CHANNEL, OP_CHUNK, 
                                                    ChunkRef, DamagedChunk, McapFile, channel_topic, parse_record)
 from swarmdeck.console.recording.schemas import (
     METADATA_NAME, PROFILE, RECORDING_FORMAT, TOPIC_CONFIG, TOPIC_DATAGRAM, TOPIC_EVENT, TOPIC_FRAME,
+    TOPIC_OPERATOR,
 )
 
 
@@ -394,6 +395,17 @@ class Recording:
                 yield decode_event(data, self.rel(ns))
             except (ValueError, KeyError, TypeError):
                 continue
+
+    def operator_events(self) -> Iterator[Any]:
+        """Every readable operator action (``operator_events.Stamped``), in order; none in files from before
+        them (``config.operator_events`` says whether the file has them). Unreadable ones are skipped with a warning."""
+        from swarmdeck.console.runtime.operator_events import event_from_dict
+
+        for ns, data in self._messages(TOPIC_OPERATOR, None, None):
+            try:
+                yield event_from_dict(json.loads(data))
+            except ValueError as exc:
+                self.warnings.append(f"undecodable operator event at log time {ns} skipped: {exc}")
 
     def camera_pictures(self, start: float | None = None, end: float | None = None) -> Iterator[tuple[float, bytes]]:
         """``(recording time s, JPEG bytes)`` of the overhead camera pictures in [start, end) s (the Foxglove

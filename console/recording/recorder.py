@@ -26,8 +26,8 @@ Wiring in the console (``--record PATH`` / ``--no-record``)::
     rec = Recorder(args.record or default_path(),            # sessions/<UTC timestamp>.mcap
                    session_metadata(loop_config, inputs_table))  # what re-simulation needs
     hub = InputHub.from_config(input_config, clock=clock, on_datagram=rec.raw_datagram)
-    loop.subscribe(rec.write_frame)                          # enqueue only, on the loop thread
-    rec.write_event(t, "operator", "e-stop")                 # optional: operator actions
+    rec.follow(loop)       # its Frames and typed operator actions (enqueue only, on the loop thread)
+    rec.write_event(t, "note", "…")                          # optional: free-text notices
     st = rec.status()                                        # show st.message when not st.ok
     rec.close()                                              # at exit: finishes the index
 """
@@ -51,7 +51,8 @@ from swarmdeck.console.runtime.frame import Frame
 from swarmdeck.console.recording.codec import (CODEC_FORMAT, datagram_message, encode_frame, encode_json,
                                                event_message, metadata_record)
 from swarmdeck.console.recording.schemas import (
-    CHANNELS, METADATA_NAME, PROFILE, RECORDING_FORMAT, TOPIC_CONFIG, TOPIC_DATAGRAM, TOPIC_EVENT, TOPIC_FRAME,
+    CHANNELS, METADATA_NAME, OPERATOR_EVENTS, PROFILE, RECORDING_FORMAT, TOPIC_CONFIG, TOPIC_DATAGRAM, TOPIC_EVENT,
+    TOPIC_FRAME, TOPIC_OPERATOR,
 )
 
 DEFAULT_DIR = "sessions"
@@ -226,6 +227,28 @@ class Recorder:
         """Queue an event (operator action, notice) at console time ``t`` (s)."""
         return self._put(("e", float(t), str(kind), str(text)))
 
+    def write_operator(self, events: Any) -> bool:
+        """Queue a tick's operator actions (``operator_events.Stamped``; the loop's operator listener)."""
+        from swarmdeck.console.runtime.operator_events import event_to_dict
+
+        ok = True
+        for e in events:
+            ok = self._put(("o", float(e.time), event_to_dict(e))) and ok
+        return ok
+
+    def follow(self, loop: Any) -> Callable[[], None]:
+        """Record ``loop``: every Frame and every operator action (``config.operator_events``, so
+        re-simulation replays the actions). Call before the loop's first tick; returns an unsubscribe."""
+        self._meta["config"] = {**dict(self._meta.get("config", {})), "operator_events": OPERATOR_EVENTS}
+        frames = loop.subscribe(self.write_frame)
+        actions = loop.subscribe_operator(self.write_operator)
+
+        def unsubscribe() -> None:
+            frames()
+            actions()
+
+        return unsubscribe
+
     def _put(self, item: tuple[Any, ...]) -> bool:
         if self._state != "recording":
             return False
@@ -326,7 +349,7 @@ class Recorder:
     def _write_item(self, item: tuple[Any, ...]) -> None:
         kind = item[0]
         if self._origin is None:
-            t0 = item[1].time if kind == "f" else (item[4] if kind == "d" else item[1])
+            t0 = item[1].time if kind == "f" else (item[4] if kind == "d" else item[1])  # "e", "o": item[1]
             self._write_config(float(t0), item[1] if kind == "f" else None)
         if kind == "f":
             frame: Frame = item[1]
@@ -340,6 +363,10 @@ class Recorder:
             _, data, peer, transport, t, listener = item
             self._add(TOPIC_DATAGRAM, t, datagram_message(data, peer, transport, t, listener))
             self._counts["datagrams"] += 1
+        elif kind == "o":
+            _, t, event = item
+            self._add(TOPIC_OPERATOR, t, event)
+            self._counts["events"] += 1
         else:
             _, t, k, text = item
             self._add(TOPIC_EVENT, t, event_message(t, k, text))

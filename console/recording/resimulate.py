@@ -7,15 +7,17 @@ the first frame's poses, configured from the recording's ``config`` message
 ``[inputs]`` table that ``InputConfig.from_dict`` reads), socket-free
 :class:`~swarmdeck.inputs.InputSource` s fed with every recorded datagram
 whose receive time is at or before each tick, and the loop's clock set to each
-recorded frame's time. Operator actions that the frames themselves record are
-replayed before the tick they took effect in: run/pause/step/e-stop (from
-``run_state`` and ``run_time``), behaviour switches (``behaviour``) and the
-behaviour/barrier parameters (``params``). Each new Frame is compared with the
+recorded frame's time. The operator's actions are replayed before the tick they took effect in:
+recordings made with ``Recorder.follow`` (``config.operator_events``) carry every action as a typed
+event (``/swarmdeck/operator``, :mod:`swarmdeck.console.runtime.operator_events`: run, pause, step,
+e-stop, release, behaviour switches, parameters, density bumps) and the loop gets exactly those
+(:meth:`~swarmdeck.console.runtime.commands.OperatorCommands.apply`); older recordings have none, and
+their actions are reconstructed from the frames (run state and run time, ``behaviour``, ``params``;
+bumps painted in the browser are then lost). Each new Frame is compared with the
 recorded one; with unchanged code the two are identical (except wall-clock
 ``timing`` and ``barrier.solve_time_s``), and the first difference says where
-a change in the code (or an unrecorded action, such as a density bump dragged
-in the browser) altered the run. This turns a bug report's recording into a
-reproducible test.
+a change in the code (or an action that could not be replayed) altered the run. This turns a bug
+report's recording into a reproducible test.
 """
 from __future__ import annotations
 
@@ -27,7 +29,7 @@ from typing import Any
 
 import numpy as np
 
-from swarmdeck.core.bounds import DEFAULT_BOUNDS
+from swarmdeck.console.runtime import params
 from swarmdeck.console.runtime.frame import Frame
 from swarmdeck.console.recording.codec import CODEC_FORMAT, COMPACT_FORMAT, decode_frame, encode_frame
 from swarmdeck.console.recording.reader import RecordedDatagram, Recording
@@ -36,36 +38,17 @@ from swarmdeck.safety.guard import GuardConfig
 #: Frame keys not compared: wall-clock measurements and free-text messages.
 IGNORED_KEYS = frozenset({"timing", "events", "alerts", "health"})
 IGNORED_BARRIER_KEYS = frozenset({"solve_time_s"})
-_LOOP_PARAM_KEYS = ("kappa", "law", "gain", "formation_edge", "formation_gain")
-_SAFETY_PARAM_KEYS = {"safety_enabled": "enabled", "safety_distance": "safety_distance", "gamma": "gamma",
-                      "class_k": "class_k"}
 
 
 def loop_config_to_dict(config: Any) -> dict[str, Any]:
     """A ``LoopConfig`` as JSON-able nested dicts (inverse: :func:`loop_config_from_dict`)."""
-    d = dataclasses.asdict(config)
-    goals = d.get("behaviour_params", {}).get("goals")
-    if goals is not None:
-        d["behaviour_params"]["goals"] = [list(g) for g in goals]
-    d["bounds"] = list(d["bounds"])
-    return d
+    return params.to_dict(config)
 
 
 def loop_config_from_dict(d: Mapping[str, Any]) -> Any:
     """Rebuild a ``LoopConfig`` from :func:`loop_config_to_dict` output; ValueError for bad data."""
-    from swarmdeck.console.runtime.behaviours import BehaviourParams
-    from swarmdeck.console.runtime.loop import DensityParams, LoopConfig, SafetyParams
-
     try:
-        kw = dict(d)
-        bp = dict(kw.pop("behaviour_params", {}) or {})
-        if bp.get("goals") is not None:
-            bp["goals"] = tuple(tuple(float(x) for x in g) for g in bp["goals"])
-        kw["behaviour_params"] = BehaviourParams(**bp)
-        kw["safety"] = SafetyParams(**dict(kw.pop("safety", {}) or {}))
-        kw["density"] = DensityParams(**dict(kw.pop("density", {}) or {}))
-        kw["bounds"] = tuple(float(b) for b in kw.get("bounds", DEFAULT_BOUNDS))
-        return LoopConfig(**kw)
+        return params.from_dict(params.LoopConfig, d)
     except TypeError as exc:
         raise ValueError(f"recorded loop configuration is not a LoopConfig: {exc}") from None
 
@@ -165,20 +148,34 @@ def compare_frames(recorded: Frame, resimulated: Frame) -> list[tuple[str, float
     return out
 
 
+def _replay_actions(loop: Any, events: list[Any], notes: list[str]) -> None:
+    """Before the tick they took effect in: the recorded operator events, in order (one that cannot be
+    replayed here is noted and skipped)."""
+    for stamped in events:
+        try:
+            loop.apply(stamped.event)
+        except ValueError as exc:
+            notes.append(f"tick {stamped.tick}: operator action {type(stamped.event).__name__} not replayed: {exc}")
+
+
 def _apply_operator_actions(loop: Any, prev: Frame | None, frame: Frame, nxt: Frame | None) -> None:
-    """Before the tick that produced ``frame``: put the loop in the state the frame records."""
+    """Recordings without operator events: before the tick that produced ``frame``, put the loop in the
+    state the frame records."""
     p = frame.params
     # behaviour parameters and the barrier, when they differ from the loop's
     bp = loop.behaviour_params
-    changes = {k: p[k] for k in _LOOP_PARAM_KEYS if k in p and getattr(bp, k) != p[k]}
+    changes = {f: p[k] for k, f in params.frame_keys(params.BehaviourParams).items()
+               if k in p and getattr(bp, f) != p[k]}
     if changes:
         loop.set_params(**changes)
     sp = loop.safety_params
-    schanges = {v: p[k] for k, v in _SAFETY_PARAM_KEYS.items() if k in p and getattr(sp, v) != p[k]}
+    schanges = {f: p[k] for k, f in params.frame_keys(params.SafetyParams).items()
+                if k in p and getattr(sp, f) != p[k]}
     if schanges:
         loop.set_safety(**schanges)
-    if "moving_density" in p and loop.density.params.moving != bool(p["moving_density"]):
-        loop.set_moving_density(bool(p["moving_density"]))
+    for k, f in params.frame_keys(params.DensityParams).items():
+        if k in p and getattr(loop.density.params, f) != p[k]:
+            loop.set_density(**{f: p[k]})
     if frame.behaviour != loop.behaviour_name:
         loop.set_behaviour(frame.behaviour)
     # run state
@@ -208,8 +205,10 @@ def _route(sources: list[Any], names: list[str], d: RecordedDatagram) -> Any:
     return sources[0]
 
 
-def resimulate(recording: Recording, *, max_frames: int | None = None) -> Iterator[tuple[Frame, Frame]]:
-    """Yield ``(recorded, resimulated)`` frame pairs, tick by tick (see the module docstring).
+def resimulate(recording: Recording, *, max_frames: int | None = None,
+               notes: list[str] | None = None) -> Iterator[tuple[Frame, Frame]]:
+    """Yield ``(recorded, resimulated)`` frame pairs, tick by tick (see the module docstring); operator
+    actions that could not be replayed are appended to ``notes``.
 
     Raises ValueError when the recording lacks what a re-simulation needs (no frames, a
     configuration that does not rebuild)."""
@@ -246,6 +245,12 @@ def resimulate(recording: Recording, *, max_frames: int | None = None) -> Iterat
     loop = ControlLoop(loop_cfg, source=robots, sink=robots, inputs=hub, guard=recorded_guard(cfg),
                        contact_density=ContactDensity(inputs_cfg.density), clock=lambda: now[0])
     compact = recording.metadata.get("frame_format") in (COMPACT_FORMAT, CODEC_FORMAT)
+    notes = notes if notes is not None else []
+    actions: dict[int, list[Any]] | None = None
+    if cfg.get("operator_events"):
+        actions = {}
+        for stamped in recording.operator_events():
+            actions.setdefault(stamped.tick, []).append(stamped)
     datagrams = iter(recording.datagrams())
     pending = next(datagrams, None)
     frames = recording.frames()
@@ -260,7 +265,10 @@ def resimulate(recording: Recording, *, max_frames: int | None = None) -> Iterat
             while pending is not None and pending.t <= frame.time:
                 _route(sources, names, pending).feed(pending.data, pending.peer, pending.t, pending.transport)
                 pending = next(datagrams, None)
-            _apply_operator_actions(loop, prev, frame, None if nxt is None else nxt[1])
+            if actions is None:
+                _apply_operator_actions(loop, prev, frame, None if nxt is None else nxt[1])
+            else:
+                _replay_actions(loop, actions.pop(frame.tick, []), notes)
             sim = loop.tick()
             # compare at the recording's precision: the new frame as it would have been recorded
             yield frame, (decode_frame(encode_frame(sim)) if compact else sim)
@@ -275,7 +283,8 @@ def resimulate_and_compare(recording: Recording, *, max_frames: int | None = Non
     frames = identical = 0
     first: Difference | None = None
     keys: dict[str, int] = {}
-    for rec, sim in resimulate(recording, max_frames=max_frames):
+    notes: list[str] = []
+    for rec, sim in resimulate(recording, max_frames=max_frames, notes=notes):
         frames += 1
         diffs = compare_frames(rec, sim)
         if not diffs:
@@ -290,7 +299,6 @@ def resimulate_and_compare(recording: Recording, *, max_frames: int | None = Non
             first = Difference(rec.tick, path, mag, str(rec.to_dict().get(top))[:200], str(sim.to_dict().get(top))[:200])
     dgs = list(recording.datagrams())
     n_dg = len(dgs)
-    notes = []
     cfg = recording.config().get("config", {}) or {}
     listeners = (cfg.get("inputs") or {}).get("listeners") or []
     transports = [str(lc.get("transport", "udp")) for lc in listeners if isinstance(lc, dict)]
@@ -302,6 +310,6 @@ def resimulate_and_compare(recording: Recording, *, max_frames: int | None = Non
     if cfg.get("source", "simulation") != "simulation":
         notes.append(f"recorded with robots from {cfg.get('source')!r}: re-simulated robots follow the model, "
                      "not the real floor, so poses diverge")
-    if "density" in keys:
+    if "density" in keys and not cfg.get("operator_events"):
         notes.append("the density differs: density bumps added or moved in the browser are not replayed")
     return ResimulationResult(frames, identical, n_dg, first, keys, tuple(notes))

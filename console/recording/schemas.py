@@ -17,6 +17,9 @@ topic                       message
 ``/swarmdeck/datagram``     one raw input datagram: ``{t, data (base64), peer, transport, listener}``
 ``/swarmdeck/config``       the run's configuration and metadata, once at the start
 ``/swarmdeck/event``        ``{t, kind, text}`` operator actions, frame events, recorder notices
+``/swarmdeck/operator``     one typed operator action: ``{tick, time, type, <fields>}``
+                            (:mod:`swarmdeck.console.runtime.operator_events`), written before the
+                            frame of the tick it took effect in; present when ``config.operator_events``
 ==========================  ===============================================
 
 Message ``log_time`` is ``start_unix_ns + round((t − time_origin) · 1e9)`` where
@@ -38,6 +41,9 @@ TOPIC_FRAME = "/swarmdeck/frame"
 TOPIC_DATAGRAM = "/swarmdeck/datagram"
 TOPIC_CONFIG = "/swarmdeck/config"
 TOPIC_EVENT = "/swarmdeck/event"
+TOPIC_OPERATOR = "/swarmdeck/operator"
+#: ``config.operator_events``: the recording carries every operator action on TOPIC_OPERATOR (version 1).
+OPERATOR_EVENTS = 1
 
 _NUM: dict[str, Any] = {"oneOf": [{"type": "number"}, {"enum": ["NaN", "Infinity", "-Infinity"]}]}
 _INT: dict[str, Any] = {"type": "integer"}
@@ -204,10 +210,21 @@ EVENT_SCHEMA: dict[str, Any] = {
     "properties": {"t": {"type": "number"}, "kind": {"type": "string"}, "text": {"type": "string"}},
 }
 
+OPERATOR_SCHEMA: dict[str, Any] = {
+    "$schema": "https://json-schema.org/draft/2020-12/schema",
+    "title": "swarmdeck.OperatorEvent",
+    "description": "One operator action (run, pause, step, e-stop, release, behaviour, parameters, bumps), "
+                   "stamped with the tick that first ran with it and that tick's loop clock (s).",
+    "type": "object",
+    "required": ["tick", "time", "type"],
+    "properties": {"tick": _INT, "time": {"type": "number"}, "type": {"type": "string"}},
+}
+
 #: topic -> (schema name, JSON schema)
 CHANNELS: dict[str, tuple[str, dict[str, Any]]] = {
     TOPIC_CONFIG: ("swarmdeck.Config", CONFIG_SCHEMA),
     TOPIC_FRAME: ("swarmdeck.Frame", FRAME_SCHEMA),
     TOPIC_DATAGRAM: ("swarmdeck.Datagram", DATAGRAM_SCHEMA),
     TOPIC_EVENT: ("swarmdeck.Event", EVENT_SCHEMA),
+    TOPIC_OPERATOR: ("swarmdeck.OperatorEvent", OPERATOR_SCHEMA),
 }

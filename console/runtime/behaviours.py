@@ -25,55 +25,13 @@ import numpy as np
 from numpy.typing import NDArray
 
 from swarmdeck.console.runtime.deadline import DeadlineCaller
-from swarmdeck.core.checks import require_in_range
+from swarmdeck.console.runtime.params import BehaviourError, BehaviourParams
 from swarmdeck.core.graphs import complete_laplacian, rigid_formation
 from swarmdeck.coverage.group import consensus, formation_control
 from swarmdeck.devices.controllers import si_position_controller
 
 FloatArray = NDArray[np.float64]
 BUILTIN = ("coverage", "rendezvous", "formation", "goto")
-LAWS = ("lloyd", "lloyd-ff", "tvd-d1", "tvd-dk")
-
-
-class BehaviourError(ValueError):
-    """A behaviour name, script or parameter that cannot be used."""
-
-
-@dataclass(frozen=True)
-class BehaviourParams:
-    """Parameters of the built-in behaviours (GUI and ``[behaviour]`` in the config file).
-
-    kappa: coverage gain κ, 1/s (0.1–5). law: coverage law (``LAWS``).
-    gain: rendezvous / go-to gain, 1/s (0.1–5). formation_edge: side of the
-    formation polygon, m (0.2–1.0). formation_gain: α of the edge-tension
-    gradient, 1/(m² s) (0.5–50). goals: ``(N, 2)`` go-to positions, m, or None
-    for a grid spread over the arena. goal_centre: ``(x, y)`` m — when set (and
-    ``goals`` is None), robots gather in a hexagonal cluster (0.25 m spacing) there
-    (the console's shift-click).
-    """
-
-    kappa: float = 1.0
-    law: str = "tvd-d1"
-    gain: float = 1.0
-    formation_edge: float = 0.4
-    formation_gain: float = 10.0
-    goals: tuple[tuple[float, float], ...] | None = None
-    goal_centre: tuple[float, float] | None = None
-
-    def __post_init__(self) -> None:
-        checks = (("kappa", 0.1, 5.0), ("gain", 0.1, 5.0), ("formation_edge", 0.2, 1.0), ("formation_gain", 0.5, 50.0))
-        for name, lo, hi in checks:
-            require_in_range(getattr(self, name), name, lo, hi, error=BehaviourError)
-        if self.law not in LAWS:
-            raise BehaviourError(f"law must be one of {', '.join(LAWS)}, got {self.law!r}")
-        if self.goal_centre is not None:
-            c = np.asarray(self.goal_centre, dtype=float)
-            if c.shape != (2,) or not np.all(np.isfinite(c)):
-                raise BehaviourError(f"goal_centre must be a finite (x, y) in m, got {self.goal_centre!r}")
-        if self.goals is not None:
-            g = np.asarray(self.goals, dtype=float)
-            if g.ndim != 2 or g.shape[1] != 2 or not np.all(np.isfinite(g)):
-                raise BehaviourError(f"goals must be a list of finite [x, y] pairs, got shape {g.shape}")
 
 
 @dataclass(frozen=True)

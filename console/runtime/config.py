@@ -13,7 +13,10 @@ Tables (every key optional; defaults from REFERENCE.md)::
     [density]   moving, radius, period, sigma, weight, floor, bump_sigma, bump_weight
     [inputs]    see swarmdeck.inputs.InputConfig (listeners, density, bounds)
 
-Unknown tables or keys and values out of range are errors naming the table and key.
+The keys of ``[behaviour]``, ``[safety]``, ``[density]`` and the loop's keys of ``[console]`` are the
+operator parameters declared in :mod:`swarmdeck.console.runtime.params` (units, ranges and defaults
+there; the list above is a summary). Unknown tables or keys and values out of range are errors naming
+the table and key.
 """
 from __future__ import annotations
 
@@ -21,17 +24,14 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from swarmdeck.console.runtime.behaviours import BehaviourParams
+from swarmdeck.console.runtime.params import BehaviourParams, DensityParams, LoopConfig, SafetyParams, converters, toml_keys
 from swarmdeck.core.checks import in_range
-from swarmdeck.core.config import ConfigError, check_keys, floats, from_mapping, read_toml
-from swarmdeck.console.runtime.loop import DensityParams, LoopConfig, SafetyParams
+from swarmdeck.core.config import ConfigError, check_keys, from_mapping, read_toml
 
 TABLES = ("console", "behaviour", "safety", "density", "inputs")
-CONSOLE_KEYS = ("host", "port", "robots", "behaviour", "seed", "dt", "max_speed", "bounds", "script_budget",
-                "arena", "foxglove_channels")
-# [console] key -> LoopConfig field (errors name the key, not the field)
-LOOP_KEYS = {"robots": "n_robots", "behaviour": "behaviour", "seed": "seed", "dt": "dt", "max_speed": "max_speed",
-             "bounds": "bounds", "script_budget": "script_budget"}
+# [console] key -> LoopConfig field (errors name the key, not the field), from the parameters' declarations
+LOOP_KEYS = toml_keys(LoopConfig)
+CONSOLE_KEYS = ("host", "port", *LOOP_KEYS, "arena", "foxglove_channels")
 
 
 def arena_bounds(spec: str) -> tuple[float, float, float, float]:
@@ -78,16 +78,16 @@ def load_settings(path: str | Path) -> ConsoleSettings:
                template="unknown table(s) {unknown}; expected some of {known}")
     con = check_keys(doc.get("console", {}), CONSOLE_KEYS, "[console]", error=ConfigFileError, template=_UNKNOWN,
                      source=p)
-    goals = lambda g: tuple(floats(row) for row in g)  # noqa: E731
-    bp = _build(BehaviourParams, doc, "behaviour", p, {"goals": goals, "goal_centre": floats})
-    sp = _build(SafetyParams, doc, "safety", p, {"gamma": float, "safety_distance": float})
-    dp = _build(DensityParams, doc, "density", p)
+    bp = _build(BehaviourParams, doc, "behaviour", p, converters(BehaviourParams))
+    sp = _build(SafetyParams, doc, "safety", p, converters(SafetyParams))
+    dp = _build(DensityParams, doc, "density", p, converters(DensityParams))
+    convert = converters(LoopConfig)
     loop_kw: dict[str, Any] = {"behaviour_params": bp, "safety": sp, "density": dp}
     for key, target in LOOP_KEYS.items():  # one key at a time, so the error names the key written
         if key not in con:
             continue
         try:
-            value = floats(con[key]) if key == "bounds" else con[key]
+            value = convert[target](con[key]) if target in convert else con[key]
             LoopConfig(**{target: value})
         except (TypeError, ValueError) as exc:
             message = str(exc).replace(target, key) if target != key else str(exc)

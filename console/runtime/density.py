@@ -1,4 +1,5 @@
-"""Bumps the operator paints in the browser: a thread-safe set with ids, drags and fades.
+"""Bumps the operator paints in the browser (a thread-safe set with ids, drags and fades), and the
+console's one density (:class:`ConsoleDensity`: circling bump + bumps + input contacts).
 
 The density mathematics lives below the console: the circling bump is
 :func:`swarmdeck.coverage.s1_density` with the operator's parameters, snapshots are
@@ -12,12 +13,15 @@ from __future__ import annotations
 import math
 import threading
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike
 
+from swarmdeck.console.runtime.params import DensityParams
 from swarmdeck.core.checks import require_in_range
-from swarmdeck.coverage.density import GaussianMixture
+from swarmdeck.coverage.densities import s1_density
+from swarmdeck.coverage.density import GaussianMixture, merge_mixtures
 from swarmdeck.inputs import density as touch  # the fades and drags of touch contacts
 
 
@@ -127,13 +131,28 @@ class BumpSet:
             b = self._bumps.get(bid)
             return None if b is None else Bump(**vars(b))
 
+    def copy(self) -> "BumpSet":
+        """An independent copy (the bumps as they are now: what one tick sees)."""
+        with self._lock:
+            return BumpSet(self.ramp, self.extrapolate, self.max_gap, self.sigma_range, self.weight_range,
+                           self.max_bumps, {k: Bump(**vars(b)) for k, b in self._bumps.items()}, self._next,
+                           self.revision)
+
+    def prune(self, t: float) -> None:
+        """Forget the bumps that have faded out by run time ``t`` (s)."""
+        with self._lock:
+            self._prune(t)
+
+    def _prune(self, t: float) -> None:
+        gone = [k for k, b in self._bumps.items() if b.dying_since is not None and t - b.dying_since >= self.ramp]
+        for k in gone:
+            del self._bumps[k]
+
     def snapshot(self, t: float, floor: float = 0.05) -> GaussianMixture | None:
         """Bumps at run time t over ``floor`` (> 0: a bump fading in from weight 0 is still a valid
         density) with ramped weights and their exact rates; None when there are none."""
         with self._lock:
-            gone = [k for k, b in self._bumps.items() if b.dying_since is not None and t - b.dying_since >= self.ramp]
-            for k in gone:
-                del self._bumps[k]
+            self._prune(t)
             bumps = list(self._bumps.values())
             if not bumps:
                 return None
@@ -147,3 +166,46 @@ class BumpSet:
         scale, rate = touch.fade(t, born, dying, self.ramp)
         mu, mu_dot = touch.extrapolate(mu, vel, moved, t, self.extrapolate)
         return GaussianMixture(floor, mu=mu, sigma=sigma, weight=w * scale, weight_dot=w * rate, mu_dot=mu_dot)
+
+
+class ConsoleDensity:
+    """The one density the behaviours see: circling bump + browser bumps + input contacts (a Density).
+
+    ``at(t)`` takes the loop's run time; the contact part is the snapshot the loop set for this tick
+    (contacts live on the loop clock). The bumps are those of :meth:`freeze` (the loop freezes them at
+    the start of every tick, so an edit from another thread lands whole at the next tick), or the live set.
+    """
+
+    def __init__(self, params: DensityParams, bumps: BumpSet) -> None:
+        self.params = params
+        self.bumps = bumps
+        self.contacts: GaussianMixture | None = None
+        self._view: BumpSet | None = None
+        self._cache: tuple[Any, GaussianMixture] | None = None
+        self._cache_contacts: GaussianMixture | None = None
+
+    @property
+    def params(self) -> DensityParams:
+        """The operator's density parameters (setting them rebuilds the circling bump)."""
+        return self._params
+
+    @params.setter
+    def params(self, p: DensityParams) -> None:
+        self.moving = s1_density(p.radius, p.period, p.sigma, p.weight, p.floor)
+        self._params = p
+
+    def freeze(self, t: float) -> None:
+        """From now on use the bumps as they are at run time ``t`` (s), faded-out ones forgotten."""
+        self.bumps.prune(t)
+        self._view = self.bumps.copy()
+
+    def at(self, t: float) -> GaussianMixture:
+        bumps = self.bumps if self._view is None else self._view
+        key = (t, bumps.revision, self.params)
+        if self._cache is not None and self._cache[0] == key and self._cache_contacts is self.contacts:
+            return self._cache[1]
+        parts = [self.moving.at(t) if self.params.moving else None, bumps.snapshot(t, self.params.floor),
+                 self.contacts]
+        snap = merge_mixtures(parts, self.params.floor)
+        self._cache, self._cache_contacts = (key, snap), self.contacts
+        return snap

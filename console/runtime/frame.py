@@ -41,7 +41,8 @@ active barrier pairs, B density bumps, C contacts)::
     contacts      {sources [C] str, ids (C,) int, positions (C,2), velocities (C,2)}
     behaviour     str  ("coverage", "rendezvous", "formation", "goto", "script:PATH")
     run_state     "running" | "paused" | "estop"
-    params        {name: number|str|bool} behaviour and barrier parameters in force
+    params        {name: number|str|bool} operator parameters in force (``params.frame_params``: every
+                  parameter declared with a ``frame`` key in console/runtime/params.py), goals for goto
     events        [str] messages raised during this tick
     alerts        [str] conditions in force (script failing, filter failed, …)
     health        {source name: str} input sources / transport and their state

@@ -19,9 +19,10 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from numpy.typing import ArrayLike
 
-from swarmdeck.console.runtime.behaviours import BUILTIN, LAWS
+from swarmdeck.console.runtime.behaviours import BUILTIN
 from swarmdeck.console.runtime.frame import Frame
 from swarmdeck.console.runtime.loop import ControlLoop
+from swarmdeck.console.runtime.params import BehaviourParams, DensityParams, SafetyParams, Spec, gui_fields
 from swarmdeck.console.web.battery_panel import BatteryPanel
 from swarmdeck.console.web.events import EventLog
 from swarmdeck.console.web.fleet_panel import FleetPanel
@@ -63,6 +64,24 @@ class TickRate:
             return 0.0
         (t0, k0), (t1, k1) = self._seen[0], self._seen[-1]
         return (k1 - k0) / (t1 - t0)
+
+
+def add_param_widget(gui: viser.GuiApi, spec: Spec, value: Any) -> Any:
+    """The widget a parameter's declaration asks for (:mod:`swarmdeck.console.runtime.params`): a dropdown
+    of its choices, a checkbox for a bool, else a slider over its range with its step."""
+    if spec.choices is not None:
+        return gui.add_dropdown(spec.label, spec.choices, initial_value=value)
+    if isinstance(value, bool):
+        return gui.add_checkbox(spec.label, initial_value=value)
+    return gui.add_slider(spec.label, min=spec.lo, max=spec.hi, step=spec.step, initial_value=value)
+
+
+def widget_value(spec: Spec, handle: Any) -> Any:
+    """A parameter widget's value as the parameter's type (str, bool or float)."""
+    v = handle.value
+    if spec.choices is not None:
+        return str(v)
+    return v if isinstance(v, bool) else float(v)
 
 
 def ray_to_floor(origin: ArrayLike, direction: ArrayLike) -> tuple[float, float] | None:
@@ -133,46 +152,33 @@ class ConsoleGui:
             self.script_path = gui.add_text("Script path", initial_value="",
                                             hint="A .py file defining behaviour(poses, t) -> (N, 2)")
             self.load_script = gui.add_button("Load script")
-            self.kappa = gui.add_slider("κ (coverage gain)", min=0.1, max=5.0, step=0.1, initial_value=bp.kappa)
-            self.law = gui.add_dropdown("Coverage law", LAWS, initial_value=bp.law)
-            self.gain = gui.add_slider("Gain (rendezvous/goto)", min=0.1, max=5.0, step=0.1, initial_value=bp.gain)
-            self.edge = gui.add_slider("Formation edge (m)", min=0.2, max=1.0, step=0.05,
-                                       initial_value=bp.formation_edge)
+            self.params = self._param_widgets(BehaviourParams, bp, lambda name, v: self._set_param(**{name: v}))
         self.behaviour.on_update(self._on_behaviour)
         self.load_script.on_click(self._on_load_script)
-        self.kappa.on_update(lambda _: self._set_param(kappa=float(self.kappa.value)))
-        self.law.on_update(lambda _: self._set_param(law=str(self.law.value)))
-        self.gain.on_update(lambda _: self._set_param(gain=float(self.gain.value)))
-        self.edge.on_update(lambda _: self._set_param(formation_edge=float(self.edge.value)))
 
         sp = loop.safety_params
         with gui.add_folder("Safety barrier"):
-            self.barrier_on = gui.add_checkbox("Barrier on", initial_value=sp.enabled)
-            self.gamma = gui.add_slider("γ", min=1.0, max=1000.0, step=1.0, initial_value=sp.gamma)
-            self.d_s = gui.add_slider("D_s (m)", min=0.11, max=0.4, step=0.01, initial_value=sp.safety_distance)
-            self.class_k = gui.add_dropdown("κ(h)", ("cubic", "linear"), initial_value=sp.class_k)
-        self.barrier_on.on_update(self._on_barrier_toggle)
-        self.gamma.on_update(lambda _: self._set_safety(gamma=float(self.gamma.value)))
-        self.d_s.on_update(lambda _: self._set_safety(safety_distance=float(self.d_s.value)))
-        self.class_k.on_update(lambda _: self._set_safety(class_k=str(self.class_k.value)))
+            self.params.update(self._param_widgets(SafetyParams, sp, lambda name, v: self._set_safety(**{name: v}),
+                                                   enabled=self._on_barrier_toggle))
+        self.barrier_on = self.params["enabled"]
         self.confirm_off: viser.GuiButtonHandle | None = None
         self.cancel_off: viser.GuiButtonHandle | None = None
         self._modal: GuiModalHandle | None = None
 
         dp = loop.density.params
         with gui.add_folder("Density"):
-            self.moving = gui.add_checkbox("Circling bump", initial_value=dp.moving)
             self.click_adds = gui.add_checkbox("Click on arena adds a bump", initial_value=True,
                                                hint="Shift-click sends the robots there (goto)")
             self.bump_select = gui.add_dropdown("Bump", ("none",), initial_value="none")
-            self.bump_sigma = gui.add_slider("σ (m)", min=0.05, max=1.0, step=0.01, initial_value=dp.bump_sigma)
-            self.bump_weight = gui.add_slider("Weight", min=0.0, max=5.0, step=0.1, initial_value=dp.bump_weight)
+            # bump_sigma / bump_weight: the σ and weight of new bumps, and of the selected one
+            self.params.update(self._param_widgets(
+                DensityParams, dp, lambda name, v: self._set_density(**{name: v}),
+                bump_sigma=lambda _: self._edit_bump(sigma=float(self.bump_sigma.value)),
+                bump_weight=lambda _: self._edit_bump(weight=float(self.bump_weight.value))))
+            self.bump_sigma, self.bump_weight = self.params["bump_sigma"], self.params["bump_weight"]
             self.bump_remove = gui.add_button("Remove bump")
             self.bump_clear = gui.add_button("Remove all bumps")
-        self.moving.on_update(lambda _: self.loop.set_moving_density(bool(self.moving.value)))
         self.bump_select.on_update(self._on_bump_select)
-        self.bump_sigma.on_update(lambda _: self._edit_bump(sigma=float(self.bump_sigma.value)))
-        self.bump_weight.on_update(lambda _: self._edit_bump(weight=float(self.bump_weight.value)))
         self.bump_remove.on_click(lambda _: self._remove_selected())
         self.bump_clear.on_click(lambda _: self._remove_all())
         server.scene.on_click()(self._on_scene_click)
@@ -199,6 +205,26 @@ class ConsoleGui:
                 client.add_notification("swarmdeck", text, auto_close_seconds=6.0, color="red" if error else None)
             except Exception:  # a tab that disconnected mid-update
                 pass
+
+    def _param_widgets(self, cls: type, values: Any, change: Any, **special: Any) -> dict[str, Any]:
+        """One widget per declared GUI parameter of ``cls`` (initial values from ``values``); a change calls
+        ``change(name, value)``, or ``special[name](event)`` for a parameter with its own handling."""
+        out: dict[str, Any] = {}
+        for name, spec in gui_fields(cls):
+            handle = add_param_widget(self.gui, spec, getattr(values, name))
+            if name in special:
+                handle.on_update(special[name])
+            else:
+                handle.on_update(lambda _, name=name, spec=spec, handle=handle:
+                                 change(name, widget_value(spec, handle)))
+            out[name] = handle
+        return out
+
+    def _set_density(self, **changes: Any) -> None:
+        try:
+            self.loop.set_density(**changes)
+        except ValueError as exc:
+            self.notify(f"density not changed: {exc}")
 
     def _set_param(self, **changes: Any) -> None:
         try:
