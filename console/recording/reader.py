@@ -20,6 +20,7 @@ seeks to, see :mod:`swarmdeck.console.runtime.loop`); ``Frame.time``,
 """
 from __future__ import annotations
 
+import json
 import os
 import struct
 from bisect import bisect_right
