@@ -42,9 +42,7 @@ Routes (researchers see only their own jobs; other ids are 404):
 from __future__ import annotations
 
 import hmac
-from typing import Any
-
-from typing import TypeVar
+from typing import Any, TypeVar
 
 from fastapi import APIRouter, Depends, Request, Response
 from fastapi.responses import FileResponse

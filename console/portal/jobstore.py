@@ -92,6 +92,7 @@ class JobStore:
         return None if row is None else Job.from_row(row)
 
     def queue_ids(self, tx: Tx) -> list[int]:
+        """The ids of the arena queue, in the order jobs will run."""
         return [int(r["id"]) for r in tx.execute(f"SELECT id FROM jobs WHERE state = ? {QUEUE_ORDER}",
                                                  (JobState.IN_ARENA_QUEUE,)).fetchall()]
 
@@ -160,6 +161,7 @@ class JobStore:
         return cur.rowcount == 1
 
     def set_reason(self, tx: Tx, job_id: int, reason: str | None) -> None:
+        """Set what the job's page says it waits for or why it ended (None: nothing)."""
         tx.execute("UPDATE jobs SET reason = ? WHERE id = ?", (reason, int(job_id)))
 
     def set_waiting_reason(self, job_id: int, reason: str) -> bool:
@@ -185,6 +187,7 @@ class JobStore:
 
     # ------------------------------------------------------------------ exports and retention
     def set_exports(self, job_id: int, state: ExportState) -> None:
+        """Record where the job's exports are."""
         with self.transaction() as tx:
             tx.execute("UPDATE jobs SET exports = ? WHERE id = ?", (ExportState(state), int(job_id)))
 
@@ -201,6 +204,7 @@ class JobStore:
         return [int(r["id"]) for r in rows]
 
     def mark_results_deleted(self, job_id: int, when: float) -> None:
+        """Record that the retention sweep deleted the job's folder at ``when`` (UNIX s); the row stays."""
         with self.transaction() as tx:
             tx.execute("UPDATE jobs SET results_deleted = ? WHERE id = ?", (when, int(job_id)))
 
@@ -231,9 +235,11 @@ class JobStore:
 
     # ------------------------------------------------------------------ the arena's switches (``settings``)
     def manual_approval(self) -> bool:
+        """Whether an operator approves each verified job."""
         return self.db.setting("manual_approval", "0") == "1"
 
     def set_manual_approval(self, tx: Tx, on: bool) -> None:
+        """Switch manual approval (the jobs it releases: :meth:`release_approved`)."""
         self.db.set_setting(tx, "manual_approval", "1" if on else "0")
 
     def arena_stopped(self) -> bool:
@@ -251,7 +257,9 @@ class JobStore:
         return self.db.setting("arena_attention", "") or None
 
     def last_verified_owner(self) -> int:
+        """The user id whose job verification took last (0: none yet): the round-robin's turn."""
         return int(self.db.setting("verify_last_owner", "0"))
 
     def set_last_verified_owner(self, tx: Tx, user_id: int) -> None:
+        """Record whose job verification took last."""
         self.db.set_setting(tx, "verify_last_owner", str(int(user_id)))
