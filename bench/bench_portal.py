@@ -51,6 +51,7 @@ def pipeline(n_jobs: int, workdir: Path) -> list[dict]:
     from swarmdeck.console.jobs.executors import LocalPoolExecutor
     from swarmdeck.console.portal.runner import ArenaRunner, ArenaSettings
     from swarmdeck.console.portal.service import PortalConfig, PortalService
+    from swarmdeck.console.portal.states import FINAL, JobState
     from swarmdeck.console.portal.workers import VerificationWorkers
 
     service = PortalService(PortalConfig(data=workdir / "pipeline"))
@@ -64,14 +65,14 @@ def pipeline(n_jobs: int, workdir: Path) -> list[dict]:
     for k in range(n_jobs):
         job = service.submit(user, "rendezvous.py", RENDEZVOUS.encode(),
                              json.dumps({"name": f"bench {k}", "robots": 12, "duration": 30.0}))
-        ids.append(job["id"])
-        marks[job["id"]] = {"submitted": time.monotonic()}
+        ids.append(job.id)
+        marks[job.id] = {"submitted": time.monotonic()}
     while True:
         states = {jid: service.job_state(jid) for jid in ids}
         now = time.monotonic()
         for jid, state in states.items():
             marks[jid].setdefault(state, now)
-        if all(s in ("done", "failed", "rejected", "cancelled") for s in states.values()):
+        if all(s in FINAL for s in states.values()):
             break
         time.sleep(0.01)
     total = time.monotonic() - t0
@@ -82,14 +83,15 @@ def pipeline(n_jobs: int, workdir: Path) -> list[dict]:
     for jid in ids:
         job = service.job(user, jid)
         m = marks[jid]
-        verdict_at = min(t for state, t in m.items() if state in ("approved", "waiting", "setting up", "running",
-                                                                   "done", "failed", "rejected"))
+        verdict_at = min(t for state, t in m.items() if state not in ("submitted",
+                                                                       JobState.AWAITING_VERIFICATION,
+                                                                       JobState.VERIFYING))
         run = json.loads((service.job_dir(jid) / "run.json").read_text())
-        rows.append({"id": jid, "state": job["state"], "verdict": job["verdict"],
+        rows.append({"id": jid, "state": job.state, "verdict": job.verdict,
                      "verdict_s": verdict_at - m["submitted"],
-                     "verifying_s": verdict_at - m.get("verifying", verdict_at),
-                     "setup_s": m.get("running", now) - m.get("setting up", now),
-                     "run_and_end_s": job["ended"] - job["started"] - (m.get("running", now) - m.get("setting up", now)),
+                     "verifying_s": verdict_at - m.get(JobState.VERIFYING, verdict_at),
+                     "setup_s": m.get(JobState.RUNNING, now) - m.get(JobState.SETTING_UP, now),
+                     "run_and_end_s": job.ended - job.started - (m.get(JobState.RUNNING, now) - m.get(JobState.SETTING_UP, now)),
                      "exports_s": run.get("exports_s", 0.0), "ticks": run.get("ticks")})
     service.close()
     print(f"\npipeline: {n_jobs} jobs in {total:.1f} s wall ({3600 * n_jobs / total:.0f} jobs/hour, --fast)")
@@ -105,6 +107,7 @@ def arena_gap(n_jobs: int, workdir: Path) -> dict[str, dict]:
     from swarmdeck.console.portal.exports import JobExports
     from swarmdeck.console.portal.runner import ArenaRunner, ArenaSettings
     from swarmdeck.console.portal.service import PortalConfig, PortalService
+    from swarmdeck.console.portal.states import FINAL, JobState
 
     out = {}
     for mode in ("before", "after"):
@@ -130,13 +133,13 @@ def arena_gap(n_jobs: int, workdir: Path) -> dict[str, dict]:
             job = service.submit(user, "rendezvous.py", RENDEZVOUS.encode(),
                                  json.dumps({"name": f"gap {k}", "robots": 12, "duration": 30.0}))
             with service.db.transaction() as tx:
-                for state in ("verifying", "approved", "waiting"):
-                    service.db.transition(tx, job["id"], state, **({"verdict": "accepted"} if state == "approved"
-                                                                   else {}))
-            ids.append(job["id"])
+                for state in (JobState.VERIFYING, JobState.AWAITING_APPROVAL, JobState.IN_ARENA_QUEUE):
+                    service.db.transition(tx, job.id, state, **({"verdict": "accepted"}
+                                                                if state == JobState.AWAITING_APPROVAL else {}))
+            ids.append(job.id)
         service.notify()
         runner.start()
-        while not all(service.job_state(j) in ("done", "failed", "cancelled") for j in ids):
+        while not all(service.job_state(j) in FINAL for j in ids):
             time.sleep(0.05)
         runner.exports.wait_idle(900)
         runner.stop()
@@ -144,7 +147,7 @@ def arena_gap(n_jobs: int, workdir: Path) -> dict[str, dict]:
         runs = [json.loads((service.job_dir(j) / "run.json").read_text()) for j in ids]
         out[mode] = {"gaps": gaps, "states": [service.job_state(j) for j in ids],
                      "exports_s": [r.get("exports_s") for r in runs],
-                     "exports": [service.job(user, j)["exports"] for j in ids]}
+                     "exports": [service.job(user, j).exports for j in ids]}
         service.close()
     return out
 

@@ -29,6 +29,7 @@ STILL = "def experiment(arena):\n    while True:\n        arena.step()\n"
 def run(fleet: int, n_jobs: int, sizes: list[int], workdir: Path) -> list[dict]:
     from swarmdeck.console.portal.runner import ArenaRunner, ArenaSettings
     from swarmdeck.console.portal.service import PortalConfig, PortalService
+    from swarmdeck.console.portal.states import FINAL, JobState
 
     service = PortalService(PortalConfig(data=workdir / "data", trusted=True))
     user, _ = service.accounts.add_user("bench", "researcher")
@@ -42,12 +43,12 @@ def run(fleet: int, n_jobs: int, sizes: list[int], workdir: Path) -> list[dict]:
                 job = service.submit(user, "still.py", STILL.encode(),
                                      json.dumps({"name": f"N={n} #{k}", "robots": n, "duration": 2.0}))
                 with service.db.transaction() as tx:
-                    service.db.transition(tx, job["id"], "verifying")
-                    service.db.transition(tx, job["id"], "approved", verdict="accepted")
-                    service.db.transition(tx, job["id"], "waiting")
-                ids.append(job["id"])
+                    service.db.transition(tx, job.id, JobState.VERIFYING)
+                    service.db.transition(tx, job.id, JobState.AWAITING_APPROVAL, verdict="accepted")
+                    service.db.transition(tx, job.id, JobState.IN_ARENA_QUEUE)
+                ids.append(job.id)
             service.notify()
-            while not all(service.job_state(j) in ("done", "failed", "cancelled") for j in ids):
+            while not all(service.job_state(j) in FINAL for j in ids):
                 time.sleep(0.05)
             while runner.current_job is not None:
                 time.sleep(0.05)
@@ -55,8 +56,8 @@ def run(fleet: int, n_jobs: int, sizes: list[int], workdir: Path) -> list[dict]:
                 job = service.job(user, jid)
                 run_json = json.loads((service.job_dir(jid) / "run.json").read_text())
                 s, r = run_json.get("setup", {}), run_json.get("return", {})
-                wall = job["ended"] - job["started"]
-                rows.append({"n": n, "id": jid, "state": job["state"], "setup_sim": s.get("seconds"),
+                wall = job.ended - job.started
+                rows.append({"n": n, "id": jid, "state": job.state, "setup_sim": s.get("seconds"),
                              "setup_wall": s.get("wall_s"), "return_sim": r.get("seconds"),
                              "return_wall": r.get("wall_s"), "error_cm": 100 * (s.get("max_position_error") or 0),
                              "error_deg": s.get("max_heading_error_deg"), "escapes": s.get("escapes", 0),
@@ -86,7 +87,7 @@ def main() -> None:
     print("| ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |")
     for n in args.robots:
         rs = [r for r in rows if r["n"] == n]
-        ok = [r for r in rs if r["state"] == "done"]
+        ok = [r for r in rs if r["state"] == JobState.DONE]
         if not ok:
             print(f"| {n} | 0/{len(rs)} | | | | | | | | | | |")
             continue

@@ -170,7 +170,7 @@ def test_an_oversize_upload_is_refused_while_it_streams_and_the_server_keeps_ser
     assert status == 201 and portal.service.db.check() == "ok"
     with portal.client("op1") as c:
         assert c.get("/api/operator/stats").json()["rejected"]["by_field"]["413 script"] == 2
-    assert [j["id"] for j in portal.service.jobs(portal.service.accounts.user_named("alice"))] == [job["id"]]
+    assert [j.id for j in portal.service.jobs(portal.service.accounts.user_named("alice"))] == [job["id"]]
 
 
 def test_two_operators_approving_one_job_at_once_get_one_success_and_one_409(portal):

@@ -71,7 +71,7 @@ def test_the_next_job_runs_while_the_exports_wait_and_a_restart_writes_them(port
     finally:
         exports.stop()
     for jid in ids:
-        assert svc.job(svc.accounts.user_named("alice"), jid)["exports"] == "ready"
+        assert svc.job(svc.accounts.user_named("alice"), jid).exports == "ready"
         run = run_json(portal, jid)
         assert run["ended_by"] == "duration" and run["export_error"] is None
         assert run["exports"] == ["robots.csv", "frames.csv", "replay.html", "video.mp4"] and run["exports_s"] > 0
@@ -128,7 +128,7 @@ def test_a_data_folder_given_as_a_relative_path_is_exported(tmp_path, monkeypatc
     svc = PortalService(PortalConfig(data=Path("lab")))
     try:
         user, _ = svc.accounts.add_user("alice", "researcher")
-        jid = svc.submit(user, "spin.py", SPIN.encode(), json.dumps(manifest()))["id"]
+        jid = svc.submit(user, "spin.py", SPIN.encode(), json.dumps(manifest())).id
         write_synthetic_session(svc.job_dir(jid) / "recording.mcap", n_robots=2, seconds=0.5, dt=0.05)
         exports = JobExports(svc, video=False)
         try:
@@ -136,6 +136,6 @@ def test_a_data_folder_given_as_a_relative_path_is_exported(tmp_path, monkeypatc
             assert exports.wait_idle(240)
         finally:
             exports.stop()
-        assert svc.job(user, jid)["exports"] == "ready" and (tmp_path / "lab" / "jobs" / str(jid) / "robots.csv").is_file()
+        assert svc.job(user, jid).exports == "ready" and (tmp_path / "lab" / "jobs" / str(jid) / "robots.csv").is_file()
     finally:
         svc.close()

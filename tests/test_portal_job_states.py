@@ -52,7 +52,7 @@ def test_the_api_says_what_a_job_waits_for(portal):  # noqa: F811
     jid = portal.submit("alice").json()["id"]
     with portal.client("alice") as c:
         assert c.get(f"/api/jobs/{jid}").json()["state"] in ("awaiting verification", "verifying")
-    svc.finish_verification(int(svc.claim_for_verification()["id"]), "accepted", 1.0, [])
+    svc.finish_verification(svc.claim_for_verification().id, "accepted", 1.0, [])
     with portal.client("alice") as c:
         assert c.get(f"/api/jobs/{jid}").json()["state"] == "awaiting approval"  # an operator must approve it
     with portal.client("op1") as op:

@@ -37,7 +37,7 @@ def test_the_running_job_has_its_own_cancel(portal):  # noqa: F811
 def test_forbid_running_without_the_barrier_from_the_page(portal):  # noqa: F811
     svc = portal.service
     jid = portal.submit("alice", no_barrier=True).json()["id"]
-    assert svc.claim_for_verification()["id"] == jid
+    assert svc.claim_for_verification().id == jid
     svc.finish_verification(jid, "accepted, may bypass the barrier", 1.0, [])  # waits for an operator's decision
     op, csrf = sign_in(portal, "op1")
     try:

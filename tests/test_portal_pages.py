@@ -190,9 +190,9 @@ def test_operator_forms_act_and_are_audited(portal):
     assert "Manual approval is ON" in page and f'data-action="approve" data-job="{a}"' in page
     for jid in (a, b):
         assert op.post(f"/operator/jobs/{jid}/approve", data={"csrf": csrf}).status_code == 303
-    assert [j["id"] for j in svc.arena_state(svc.accounts.user_named("op1"))["queue"]] == [a, b]
+    assert [j.id for j in svc.arena_state(svc.accounts.user_named("op1")).queue] == [a, b]
     assert op.post(f"/operator/jobs/{b}/top", data={"csrf": csrf}).status_code == 303
-    assert [j["id"] for j in svc.arena_state(svc.accounts.user_named("op1"))["queue"]] == [b, a]
+    assert [j.id for j in svc.arena_state(svc.accounts.user_named("op1")).queue] == [b, a]
     r = op.post(f"/operator/jobs/{a}/approve", data={"csrf": csrf})  # already approved (as if by another operator)
     assert r.status_code == 409 and 'role="alert"' in r.text and "EMERGENCY STOP" in r.text
     assert op.post("/operator/estop", data={"csrf": csrf}).status_code == 303 and svc.arena_stopped

@@ -21,7 +21,7 @@ def test_claims_go_round_robin_across_researchers(portal):  # noqa: F811
     alice.append(portal.submit("alice", duration=0.5).json()["id"])
     order = []
     while (job := svc.claim_for_verification()) is not None:
-        order.append(job["id"])
+        order.append(job.id)
     assert order == [alice[0], bob[0], alice[1], bob[1], alice[2], alice[3]]
     assert svc.claim_for_verification() is None
 
@@ -29,11 +29,11 @@ def test_claims_go_round_robin_across_researchers(portal):  # noqa: F811
 def test_the_turn_goes_on_from_the_researcher_served_last(portal):  # noqa: F811
     svc = portal.service
     first = portal.submit("alice", duration=0.5).json()["id"]
-    assert svc.claim_for_verification()["id"] == first
+    assert svc.claim_for_verification().id == first
     later = [portal.submit("alice", duration=0.5).json()["id"] for _ in range(2)]
     theirs = portal.submit("bob", duration=0.5).json()["id"]
-    assert svc.claim_for_verification()["id"] == theirs  # alice was served last: bob's one job goes first
-    assert [svc.claim_for_verification()["id"] for _ in later] == later
+    assert svc.claim_for_verification().id == theirs  # alice was served last: bob's one job goes first
+    assert [svc.claim_for_verification().id for _ in later] == later
 
 
 @confined

@@ -8,6 +8,7 @@ from pathlib import Path
 
 from swarmdeck.console.cli import UsageError
 from swarmdeck.console.cli._client import add_client_arguments, client, fail
+from swarmdeck.console.portal.job import ExportState
 
 NAME = "results"
 HELP = ("download a job's results from the lab's portal: MCAP recording, CSV, HTML replay, video, script log, "
@@ -40,7 +41,7 @@ def main(args: argparse.Namespace) -> int:
     with client(args) as c:
         try:
             job = c.job(args.job)
-            if job.get("exports") == "writing":
+            if job.get("exports") == ExportState.WRITING:
                 if args.no_wait:
                     print(f"job {args.job}: exports still being written (CSV, HTML replay, video): downloading what "
                           "is ready; run again later for the rest", file=sys.stderr)

@@ -266,6 +266,8 @@ def create_app(service: PortalService, *, live: LiveFeed | None = None,
         field = loc[-1] if loc else None
         return _error_response(counter, 422, f"{field or 'request'}: {first.get('msg', 'invalid')}", field)
 
+    app.add_exception_handler(pages.SignInRequired, pages.to_signin_page)  # a page behind sign-in, signed out
+
     @app.exception_handler(StarletteHTTPException)
     async def http_error(request: Request, exc: StarletteHTTPException) -> JSONResponse:
         return _error_response(counter, exc.status_code, str(exc.detail), None)

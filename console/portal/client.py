@@ -14,6 +14,7 @@ from typing import Any
 
 import httpx
 
+from swarmdeck.console.portal.job import ExportState
 from swarmdeck.console.portal.states import FINAL as FINAL_STATES
 
 
@@ -132,7 +133,7 @@ class PortalClient:
         deadline = None if timeout is None else time.monotonic() + timeout
         while True:
             job = self.job(job_id)
-            if job.get("exports") != "writing":
+            if job.get("exports") != ExportState.WRITING:
                 return job
             if deadline is not None and time.monotonic() > deadline:
                 raise ClientError(0, f"job {job_id}'s exports are still being written after {timeout:g} s")

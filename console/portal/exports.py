@@ -42,6 +42,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from swarmdeck.console.portal.files import UMASK, private_dir, write_private
+from swarmdeck.console.portal.job import ExportState
 
 if TYPE_CHECKING:
     from swarmdeck.console.portal.service import PortalService
@@ -164,12 +165,12 @@ class JobExports:
 
     def submit(self, job_id: int) -> None:
         """Write the exports of ended job ``job_id`` (its ``exports`` becomes ``"writing"`` now)."""
-        self.service.set_exports(int(job_id), "writing")
+        self.service.set_exports(int(job_id), ExportState.WRITING)
         self._enqueue(int(job_id))
 
     def resume(self) -> list[int]:
         """On start: the jobs whose exports a stopped server left ``"writing"``, queued again; their ids."""
-        ids = self.service.exports_in("writing")
+        ids = self.service.exports_in(ExportState.WRITING)
         for job_id in ids:
             self._enqueue(job_id)
         return ids
@@ -250,7 +251,7 @@ class JobExports:
         errors = result["errors"]
         update_run_json(self.service.job_dir(job_id), exports=result["files"], exports_s=round(wall_s, 3),
                         export_error="; ".join(errors) if errors else None)
-        self.service.set_exports(job_id, "failed" if errors else "ready")
+        self.service.set_exports(job_id, ExportState.FAILED if errors else ExportState.READY)
         self.jobs_done += 1
 
 

@@ -49,9 +49,10 @@ import math
 import secrets
 import time
 from pathlib import Path
+from collections.abc import Callable
 from typing import Any
 
-from fastapi import APIRouter, Request
+from fastapi import APIRouter, Depends, Request
 from fastapi.responses import FileResponse, HTMLResponse, RedirectResponse, Response, StreamingResponse
 from jinja2 import Environment, FileSystemLoader, select_autoescape
 from starlette.concurrency import run_in_threadpool
@@ -64,7 +65,7 @@ from swarmdeck.console.portal.errors import BadInput, PortalError, Unauthorized
 from swarmdeck.console.portal.live import scene_message
 from swarmdeck.console.portal.livefeed import LiveFeed
 from swarmdeck.console.portal.results import summary_lines
-from swarmdeck.console.portal.service import RESULT_FILES, PortalService
+from swarmdeck.console.portal.service import PortalService
 from swarmdeck.console.portal.submission import Limits, display_name, manifest_errors
 
 HERE = Path(__file__).resolve().parent
@@ -76,9 +77,6 @@ CHECK_PERIOD = 1.0  # s: the live stream re-checks the session and the job's sta
 CSP = ("default-src 'self'; img-src 'self' data:; style-src 'self'; script-src 'self'; frame-src 'self'; "
        "connect-src 'self'; frame-ancestors 'self'; form-action 'self'; base-uri 'none'")
 REPORT_CSP = "default-src 'none'; style-src 'unsafe-inline'; img-src data:; frame-ancestors 'self'"
-#: the video is written with the exports; if they did not (older jobs, a failure), it is listed once the run has
-#: ended and left a recording, and made on its first request
-VIDEO = "video.mp4"
 
 
 def _templates() -> Environment:
@@ -103,7 +101,8 @@ def router(service: PortalService, live: LiveFeed) -> APIRouter:
                                                                "X-Content-Type-Options": "nosniff",
                                                                "Referrer-Policy": "same-origin"})
 
-    def session_of(request: Request) -> Session | None:
+    async def session_of(request: Request) -> Session | None:
+        """The request's web session (None: no cookie, or one signed out, expired or of a disabled account)."""
         sid = request.cookies.get(SESSION_COOKIE)
         if not sid:
             return None
@@ -111,6 +110,12 @@ def router(service: PortalService, live: LiveFeed) -> APIRouter:
             return service.accounts.session(sid)
         except Unauthorized:
             return None
+
+    async def signed_in(s: Session | None = Depends(session_of)) -> Session:
+        """The dependency of every page behind sign-in: the session, or :class:`SignInRequired` (→ ``/signin``)."""
+        if s is None:
+            raise SignInRequired()
+        return s
 
     def to_signin() -> RedirectResponse:
         return RedirectResponse("/signin", status_code=303)
@@ -131,10 +136,7 @@ def router(service: PortalService, live: LiveFeed) -> APIRouter:
 
     # ------------------------------------------------------------------ sign-in
     @r.get("/")
-    def home(request: Request) -> Response:
-        s = session_of(request)
-        if s is None:
-            return to_signin()
+    def home(request: Request, s: Session = Depends(signed_in)) -> Response:
         return RedirectResponse("/operator" if s.user.is_operator else "/jobs", status_code=303)
 
     def signin_page(request: Request, message: str | None = None, status: int = 200) -> HTMLResponse:
@@ -168,10 +170,7 @@ def router(service: PortalService, live: LiveFeed) -> APIRouter:
         return resp
 
     @r.post("/signout")
-    async def signout(request: Request) -> Response:
-        s = session_of(request)
-        if s is None:
-            return to_signin()
+    async def signout(request: Request, s: Session = Depends(signed_in)) -> Response:
         form = await checked_form(request, s)
         if isinstance(form, Response):
             return form
@@ -182,10 +181,7 @@ def router(service: PortalService, live: LiveFeed) -> APIRouter:
 
     # ------------------------------------------------------------------ researchers
     @r.get("/jobs")
-    def jobs(request: Request) -> Response:
-        s = session_of(request)
-        if s is None:
-            return to_signin()
+    def jobs(request: Request, s: Session = Depends(signed_in)) -> Response:
         return page(request, "jobs.html", s, jobs=service.jobs(s.user, mine=True))
 
     def submit_page(request: Request, s: Session, status: int = 200, errors: list[PortalError] | None = None,
@@ -199,10 +195,7 @@ def router(service: PortalService, live: LiveFeed) -> APIRouter:
                     max_bytes=limits.max_upload_bytes, usage=service.usage(s.user))
 
     @r.get("/env")
-    def environment(request: Request) -> Response:
-        s = session_of(request)
-        if s is None:
-            return to_signin()
+    def environment(request: Request, s: Session = Depends(signed_in)) -> Response:
         try:
             info = service.environment()
         except PortalError as exc:
@@ -210,17 +203,11 @@ def router(service: PortalService, live: LiveFeed) -> APIRouter:
         return page(request, "env.html", s, env=info)
 
     @r.get("/submit")
-    def submit_form(request: Request) -> Response:
-        s = session_of(request)
-        if s is None:
-            return to_signin()
+    def submit_form(request: Request, s: Session = Depends(signed_in)) -> Response:
         return submit_page(request, s)
 
     @r.post("/submit")
-    async def submit(request: Request) -> Response:
-        s = session_of(request)
-        if s is None:
-            return to_signin()
+    async def submit(request: Request, s: Session = Depends(signed_in)) -> Response:
         form = await checked_form(request, s)
         if isinstance(form, Response):
             return form
@@ -245,37 +232,28 @@ def router(service: PortalService, live: LiveFeed) -> APIRouter:
             return submit_page(request, s, exc.status, [exc], values, chosen)
         finally:
             await form.close()
-        return RedirectResponse(f"/jobs/{job['id']}", status_code=303)
+        return RedirectResponse(f"/jobs/{job.id}", status_code=303)
 
     @r.get("/jobs/{job_id}")
-    def job_page(request: Request, job_id: int) -> Response:
-        s = session_of(request)
-        if s is None:
-            return to_signin()
+    def job_page(request: Request, job_id: int, s: Session = Depends(signed_in)) -> Response:
         try:
             job = service.job(s.user, job_id)
-            files = service.files(s.user, job_id)
+            files = service.downloads(s.user, job_id)  # the video too, when it is made on its first download
         except PortalError as exc:
             return refused(request, s, exc.message, exc.status)
         try:
             report = service.report(s.user, job_id)
         except PortalError:
             report = None
-        names = {f["name"] for f in files}
-        if VIDEO not in names and job["state"] in FINAL and "recording.mcap" in names and job["exports"] != "writing":
-            files.append({"name": VIDEO, "bytes": None, "what": RESULT_FILES[VIDEO] + " (made when first downloaded)"})
-        run = service.run_summary(s.user, job_id) if job["state"] in FINAL else None
+        run = service.run_summary(s.user, job_id) if job.state in FINAL else None
         results = None
-        if job["state"] in FINAL and job["state"] != JobState.REJECTED and not job["results_deleted"]:
+        if job.state in FINAL and job.state != JobState.REJECTED and not job.results_deleted:
             results = summary_lines(service.results(s.user, job_id))
         return page(request, "job.html", s, job=job, files=files, report=report, run=run, results=results,
-                    live=job["state"] in ACTIVE, final=job["state"] in FINAL, live_states=ACTIVE, final_states=FINAL)
+                    live=job.state in ACTIVE, final=job.state in FINAL, live_states=ACTIVE, final_states=FINAL)
 
     @r.post("/jobs/{job_id}/cancel")
-    async def cancel(request: Request, job_id: int) -> Response:
-        s = session_of(request)
-        if s is None:
-            return to_signin()
+    async def cancel(request: Request, job_id: int, s: Session = Depends(signed_in)) -> Response:
         form = await checked_form(request, s)
         if isinstance(form, Response):
             return form
@@ -286,12 +264,9 @@ def router(service: PortalService, live: LiveFeed) -> APIRouter:
         return RedirectResponse(f"/jobs/{job_id}", status_code=303)
 
     @r.get("/jobs/{job_id}/report")
-    def report_page(request: Request, job_id: int) -> Response:
+    def report_page(request: Request, job_id: int, s: Session = Depends(signed_in)) -> Response:
         from swarmdeck.console.jobs.report_html import render_html
 
-        s = session_of(request)
-        if s is None:
-            return to_signin()
         try:
             report = service.report(s.user, job_id)
         except PortalError as exc:
@@ -300,10 +275,7 @@ def router(service: PortalService, live: LiveFeed) -> APIRouter:
                                                           "Cache-Control": "no-store"})
 
     @r.get("/jobs/{job_id}/files/{name}")
-    async def download(request: Request, job_id: int, name: str) -> Response:
-        s = session_of(request)
-        if s is None:
-            return to_signin()
+    async def download(request: Request, job_id: int, name: str, s: Session = Depends(signed_in)) -> Response:
         try:
             path = await run_in_threadpool(service.file_path, s.user, job_id, name)  # video.mp4: made now if need be
         except PortalError as exc:
@@ -311,15 +283,14 @@ def router(service: PortalService, live: LiveFeed) -> APIRouter:
         return FileResponse(path, filename=f"job{job_id}-{name}")
 
     @r.get("/jobs/{job_id}/live")
-    async def live_stream(request: Request, job_id: int) -> Response:
-        s = session_of(request)
+    async def live_stream(request: Request, job_id: int, s: Session | None = Depends(session_of)) -> Response:
         if s is None:
             return Response("not signed in", status_code=401, media_type="text/plain")
         try:
             job = service.job(s.user, job_id)
         except PortalError as exc:
             return Response(exc.message, status_code=exc.status, media_type="text/plain")
-        return StreamingResponse(live_events(request, s, job_id, job["state"]), media_type="text/event-stream",
+        return StreamingResponse(live_events(request, s, job_id, job.state), media_type="text/event-stream",
                                  headers={"Cache-Control": "no-store", "X-Accel-Buffering": "no"})
 
     shared: dict[str, Any] = {"seq": None, "text": ""}  # the newest frame event, made once for every viewer
@@ -364,30 +335,24 @@ def router(service: PortalService, live: LiveFeed) -> APIRouter:
     def operator_page(request: Request, s: Session, status: int = 200, message: str | None = None) -> HTMLResponse:
         everyone = service.jobs(s.user)
         arena = service.arena_state(s.user)
-        running = arena["running"] or {}
-        sig = "|".join([str(arena["stopped"]).lower(), str(arena["manual_approval"]).lower(),
-                        str(running.get("id", "")), str(running.get("state", "")),
-                        ",".join(str(j["id"]) for j in arena["queue"]),
-                        ",".join(f"{j['id']}:{j['state']}" for j in everyone),
-                        str(len((arena["alerts"] or {}).get("messages", [])))])  # as refresh.js sums it up
+        running = arena.running
+        sig = "|".join([str(arena.stopped).lower(), str(arena.manual_approval).lower(),
+                        "" if running is None else str(running.id), "" if running is None else str(running.state),
+                        ",".join(str(j.id) for j in arena.queue),
+                        ",".join(f"{j.id}:{j.state}" for j in everyone),
+                        str(len((arena.alerts or {}).get("messages", [])))])  # as refresh.js sums it up
         return page(request, "operator.html", s, status=status, message=message, arena=arena, sig=sig,
-                    approve=[j for j in everyone if j["state"] == JobState.AWAITING_APPROVAL],
-                    held=[j for j in everyone if j["state"] == JobState.HELD],
+                    approve=[j for j in everyone if j.state == JobState.AWAITING_APPROVAL],
+                    held=[j for j in everyone if j.state == JobState.HELD],
                     jobs=everyone[:100])
 
     @r.get("/operator")
-    def operator(request: Request) -> Response:
-        s = session_of(request)
-        if s is None:
-            return to_signin()
+    def operator(request: Request, s: Session = Depends(signed_in)) -> Response:
         if not s.user.is_operator:
             return refused(request, s, "this page is for operators", 403)
         return operator_page(request, s)
 
-    async def operator_post(request: Request, act: Any) -> Response:
-        s = session_of(request)
-        if s is None:
-            return to_signin()
+    async def operator_post(request: Request, s: Session, act: Callable[[Session, FormData], object]) -> Response:
         form = await checked_form(request, s)
         if isinstance(form, Response):
             return form
@@ -398,7 +363,7 @@ def router(service: PortalService, live: LiveFeed) -> APIRouter:
         return RedirectResponse("/operator", status_code=303)
 
     @r.post("/operator/jobs/{job_id}/{action}")
-    async def operator_action(request: Request, job_id: int, action: str) -> Response:
+    async def operator_action(request: Request, job_id: int, action: str, s: Session = Depends(signed_in)) -> Response:
         def act(s: Session, form: FormData) -> None:
             u = s.user
             simple = {"approve": service.approve, "hold": service.hold, "release": service.release,
@@ -410,38 +375,35 @@ def router(service: PortalService, live: LiveFeed) -> APIRouter:
             elif action in ("forbid-barrier", "allow-barrier"):
                 service.forbid_barrier(u, job_id, action == "forbid-barrier")
             elif action in ("up", "down", "top"):
-                position = service.job(u, job_id)["position"]
+                position = service.job(u, job_id).position
                 if position is None:
                     raise BadInput(f"job {job_id} is not in the arena queue", "job")
                 service.move(u, job_id, {"up": max(0, position - 1), "down": position + 1, "top": 0}[action])
             else:
                 raise BadInput(f"unknown action {action[:40]!r}", "action")
 
-        return await operator_post(request, act)
+        return await operator_post(request, s, act)
 
     @r.post("/operator/estop")
-    async def estop(request: Request) -> Response:
-        return await operator_post(request, lambda s, form: service.emergency_stop(s.user))
+    async def estop(request: Request, s: Session = Depends(signed_in)) -> Response:
+        return await operator_post(request, s, lambda s, form: service.emergency_stop(s.user))
 
     @r.post("/operator/release")
-    async def release(request: Request) -> Response:
-        return await operator_post(request, lambda s, form: service.release_arena(s.user))
+    async def release(request: Request, s: Session = Depends(signed_in)) -> Response:
+        return await operator_post(request, s, lambda s, form: service.release_arena(s.user))
 
     @r.post("/operator/approval")
-    async def approval(request: Request) -> Response:
+    async def approval(request: Request, s: Session = Depends(signed_in)) -> Response:
         def act(s: Session, form: FormData) -> None:
             value = form.get("manual")
             if value not in ("on", "off"):
                 raise BadInput("manual approval is 'on' or 'off'", "manual")
             service.set_manual_approval(s.user, value == "on")
 
-        return await operator_post(request, act)
+        return await operator_post(request, s, act)
 
     @r.get("/operator/audit")
-    def audit(request: Request) -> Response:
-        s = session_of(request)
-        if s is None:
-            return to_signin()
+    def audit(request: Request, s: Session = Depends(signed_in)) -> Response:
         try:
             entries = service.audit_log(s.user, 500)
         except PortalError as exc:
@@ -457,6 +419,15 @@ def router(service: PortalService, live: LiveFeed) -> APIRouter:
                             headers={"Cache-Control": "no-cache", "X-Content-Type-Options": "nosniff"})
 
     return r
+
+
+class SignInRequired(Exception):
+    """A page behind sign-in was asked for without a valid session: :func:`to_signin_page` answers it."""
+
+
+async def to_signin_page(request: Request, exc: Exception) -> Response:
+    """The answer to :class:`SignInRequired`: see other, ``/signin`` (the app's exception handler)."""
+    return RedirectResponse("/signin", status_code=303)
 
 
 def _sse(event: str, data: Any) -> str:

@@ -18,12 +18,10 @@ by a limit (its results may take a researcher over the disk quota: the next subm
 from __future__ import annotations
 
 import os
-import sqlite3
 import time
 from dataclasses import dataclass
 from pathlib import Path
 
-from swarmdeck.console.portal.db import FINAL
 from swarmdeck.console.portal.errors import QuotaExceeded, RateLimited
 
 DAY_S = 86400.0
@@ -72,55 +70,51 @@ def _size(n: int) -> str:
     return f"{n} bytes"
 
 
-def usage(db_rows_unfinished: int, cpu_rows: list[sqlite3.Row], job_rows: list[sqlite3.Row], quotas: Quotas,
+def results_bytes(job_ids: list[int], jobs_folder: Path) -> int:
+    """Bytes under the folders of jobs ``job_ids`` in ``jobs_folder`` (a researcher's results on disk)."""
+    return sum(folder_bytes(jobs_folder / str(int(j))) for j in job_ids)
+
+
+def usage(unfinished: int, cpu: list[tuple[float, float]], job_ids: list[int], quotas: Quotas,
           jobs_folder: Path) -> dict[str, dict[str, float | None]]:
     """Where a researcher stands: ``{"unfinished_jobs" | "verify_cpu_s_today" | "results_bytes": {"used",
-    "limit"}}`` (limit None: none) from their unfinished-job count, their verification usage rows of the last
-    24 h and their job rows (ids, results not deleted)."""
+    "limit"}}`` (limit None: none) from their unfinished-job count, their verification usage (when, CPU s) of the
+    last 24 h and their jobs whose results were not deleted."""
     return {
-        "unfinished_jobs": {"used": int(db_rows_unfinished), "limit": quotas.max_unfinished_jobs},
-        "verify_cpu_s_today": {"used": round(sum(float(r["cpu_s"]) for r in cpu_rows), 1),
-                               "limit": quotas.verify_cpu_s_per_day},
-        "results_bytes": {"used": sum(folder_bytes(jobs_folder / str(int(r[0]))) for r in job_rows),
-                          "limit": quotas.results_bytes},
+        "unfinished_jobs": {"used": int(unfinished), "limit": quotas.max_unfinished_jobs},
+        "verify_cpu_s_today": {"used": round(sum(c for _, c in cpu), 1), "limit": quotas.verify_cpu_s_per_day},
+        "results_bytes": {"used": results_bytes(job_ids, jobs_folder), "limit": quotas.results_bytes},
     }
 
 
-def check_disk(db_rows: list[sqlite3.Row], quotas: Quotas, jobs_folder: Path) -> None:
-    """Refuse a new job when the researcher's jobs (``db_rows``: their ids, results not deleted) hold
+def check_disk(job_ids: list[int], quotas: Quotas, jobs_folder: Path) -> None:
+    """Refuse a new job when the researcher's jobs (``job_ids``: results not deleted) hold
     ``results_bytes`` or more under ``jobs_folder``: :class:`QuotaExceeded` (403) naming both. Walks the folders:
     call it outside the submission's transaction."""
     if quotas.results_bytes is None:
         return
-    used = sum(folder_bytes(jobs_folder / str(int(r[0]))) for r in db_rows)
+    used = results_bytes(job_ids, jobs_folder)
     if used >= quotas.results_bytes:
         raise QuotaExceeded(f"your jobs' files take {_size(used)}; the limit is {_size(quotas.results_bytes)}: download what you need and ask the lab to "
                             "free space (results are kept as the lab's retention policy says)", "results_bytes")
 
 
-def check_counts(tx: sqlite3.Connection, quotas: Quotas, user_id: int, now: float | None = None) -> None:
-    """Refuse a new job of researcher ``user_id`` over the unfinished-jobs or the daily verification-CPU limit
-    (inside the submission's transaction ``tx``): :class:`RateLimited` (429) naming the limit and the current
-    value."""
-    now = time.time() if now is None else float(now)
-    if quotas.max_unfinished_jobs is not None:
-        marks = ", ".join("?" * len(FINAL))
-        n = tx.execute(f"SELECT COUNT(*) FROM jobs WHERE user_id = ? AND state NOT IN ({marks})",
-                       (user_id, *FINAL)).fetchone()[0]
-        if n >= quotas.max_unfinished_jobs:
-            raise RateLimited(f"you have {n} jobs not yet finished (awaiting verification or approval, verifying, in "
-                              f"arena queue or running); the limit is {quotas.max_unfinished_jobs}: wait for one to "
-                              "end, or cancel one",
-                              "max_unfinished_jobs")
+def check_counts(quotas: Quotas, unfinished: int, cpu: list[tuple[float, float]], now: float) -> None:
+    """Refuse a new job of a researcher with ``unfinished`` jobs not yet ended and verification usage ``cpu``
+    ((when, CPU s) of the last 24 h, oldest first; read inside the submission's transaction) over the
+    unfinished-jobs or the daily verification-CPU limit: :class:`RateLimited` (429) naming the limit and the
+    current value."""
+    if quotas.max_unfinished_jobs is not None and unfinished >= quotas.max_unfinished_jobs:
+        raise RateLimited(f"you have {unfinished} jobs not yet finished (awaiting verification or approval, "
+                          f"verifying, in arena queue or running); the limit is {quotas.max_unfinished_jobs}: wait "
+                          "for one to end, or cancel one", "max_unfinished_jobs")
     if quotas.verify_cpu_s_per_day is not None:
-        rows = tx.execute("SELECT t, cpu_s FROM verification_usage WHERE user_id = ? AND t > ? ORDER BY t",
-                          (user_id, now - DAY_S)).fetchall()
-        used = sum(float(r["cpu_s"]) for r in rows)
+        used = sum(c for _, c in cpu)
         if used >= quotas.verify_cpu_s_per_day:
             left, again = used, now
-            for r in rows:  # the oldest usage leaves the 24 h window first
-                left -= float(r["cpu_s"])
-                again = float(r["t"]) + DAY_S
+            for t, c in cpu:  # the oldest usage leaves the 24 h window first
+                left -= c
+                again = t + DAY_S
                 if left < quotas.verify_cpu_s_per_day:
                     break
             raise RateLimited(f"verification of your jobs used {used:.0f} CPU s in the last 24 h; the limit is "

@@ -7,6 +7,8 @@ from __future__ import annotations
 
 from typing import Any
 
+from swarmdeck.console.portal.job import ExportState
+
 
 def results_summary(job: dict[str, Any], run: dict[str, Any] | None, files: list[dict[str, Any]]) -> dict[str, Any]:
     """``{"job", "state", "ended_by", "barrier", "bypass", "contacts", "setup", "return", "files", "command"}``:
@@ -61,7 +63,7 @@ def summary_lines(s: dict[str, Any]) -> list[str]:
             lines.append(f"{what}: {m['collisions']} collision(s).")
     if s.get("files"):
         more = (" (the CSV, the HTML replay and the video are still being written: `swarmdeck results` waits for "
-                "them)" if s.get("exports") == "writing" else "")
+                "them)" if s.get("exports") == ExportState.WRITING else "")
         lines.append(f"Files: {', '.join(s['files'])}{more}.")
     lines.append(f"Download them: {s['command']}")
     return lines

@@ -88,6 +88,7 @@ from swarmdeck.console.jobs.bundle import ScriptBundle
 from swarmdeck.console.jobs.verification import user_message, without_run_folder
 from swarmdeck.console.portal.exports import JobExports, without_server_paths, write_run_json
 from swarmdeck.console.portal.files import write_private
+from swarmdeck.console.portal.job import Job
 from swarmdeck.console.portal.livefeed import LiveFeed
 from swarmdeck.console.portal.service import PortalService
 from swarmdeck.console.portal.states import ACTIVE, JobState
@@ -286,7 +287,7 @@ class ArenaRunner:
             try:
                 self.run_job(job)
             except Exception as exc:  # noqa: BLE001 - never let the arena thread die: the job fails, say why
-                self.service.finish_run(int(job["id"]), JobState.FAILED, f"the arena runner failed: {type(exc).__name__}: {exc}")
+                self.service.finish_run(job.id, JobState.FAILED, f"the arena runner failed: {type(exc).__name__}: {exc}")
             self._idle_mark = time.monotonic()
 
     # ------------------------------------------------------------------ the fleet between and around jobs
@@ -296,9 +297,9 @@ class ArenaRunner:
             if event.startswith(("BARRIER BACK ON", "CONTACT:")):
                 self._alerts[1].append(event)
 
-    def _admit(self, job: dict[str, Any]) -> str | None:
+    def _admit(self, job: Job) -> str | None:
         """None when the job's N robots can be assigned now; else why it waits (the robots named)."""
-        why = self.fleet.shortfall(int(job["robots"]))
+        why = self.fleet.shortfall(job.robots)
         return None if why is None else f"waiting for robots: {why}"
 
     def _between_jobs(self) -> bool:
@@ -377,9 +378,9 @@ class ArenaRunner:
                 self.exports.submit(job_id)
         return ids
 
-    def run_job(self, job: dict[str, Any]) -> str:
+    def run_job(self, job: Job) -> JobState | None:
         """Run one claimed job to its end; its final state."""
-        job_id, folder = int(job["id"]), self.service.job_dir(int(job["id"]))
+        job_id, folder = job.id, self.service.job_dir(job.id)
         self._end_job.clear()
         self._upkeep, self._safety, self._barrier = {}, {}, None
         self._alerts = (job_id, [])
@@ -395,7 +396,7 @@ class ArenaRunner:
             with self._lock:
                 self._job, self._loop = None, None
 
-    def _run_job(self, job_id: int, job: dict[str, Any], folder: Path) -> str:
+    def _run_job(self, job_id: int, job: Job, folder: Path) -> JobState | None:
         try:
             outcome, note = self._sandboxed(job, folder)
         except ConfinementUnavailable as exc:
@@ -429,15 +430,15 @@ class ArenaRunner:
         self.runs += 1
         return self.service.finish_run(job_id, state, reason)
 
-    def _sandboxed(self, job: dict[str, Any], folder: Path) -> tuple[SandboxOutcome | None, str | None]:
+    def _sandboxed(self, job: Job, folder: Path) -> tuple[SandboxOutcome | None, str | None]:
         from swarmdeck.console.recording.recorder import Recorder
         from swarmdeck.console.recording.resimulate import session_metadata
         from swarmdeck.devices.net.mqtt_config import redact_url
 
         s, cfg = self.settings, self.service.config
-        n, duration = int(job["robots"]), float(job["duration"])
-        initial = None if job["initial_poses"] is None else np.asarray(job["initial_poses"], dtype=float)
-        bypass = bool(job["bypass"])
+        n, duration = job.robots, job.duration
+        initial = None if job.initial_poses is None else np.asarray(job.initial_poses, dtype=float)
+        bypass = bool(job.bypass)
         # the script's job knows nothing of the console's circling density: none is computed, drawn or recorded
         loop_config = LoopConfig(n_robots=n, dt=s.dt, bounds=s.bounds, seed=s.seed, behaviour="rendezvous",
                                  safety=SafetyParams(enabled=True), density=DensityParams(moving=False))
@@ -450,7 +451,7 @@ class ArenaRunner:
         def make_plant(n_script: int, script_initial: NDArray[np.float64] | None) -> LoopPlant:
             poses = arena_start(n_script, n, initial, script_initial, self.fleet.start_poses, s.bounds).poses
             try:
-                robots = self._set_up(int(job["id"]), np.asarray(poses, dtype=float))
+                robots = self._set_up(job.id, np.asarray(poses, dtype=float))
             except ValueError as exc:
                 state["setup_failed"] = str(exc)
                 raise
@@ -463,7 +464,7 @@ class ArenaRunner:
             source = redact_url(s.robots_via) if s.robots_via else "simulation"
             fleet_ids = robots.fleet_ids.tolist()
             rec = Recorder(folder / "recording.mcap", session_metadata(loop_config, None, source=source, guard=s.guard,
-                                                                      job=int(job["id"]), bypass=bypass,
+                                                                      job=job.id, bypass=bypass,
                                                                       fleet_ids=fleet_ids))
             loop.post(f"robots 0..{n - 1} are the fleet's robots {', '.join(map(str, fleet_ids))}")
             state["recorder"] = rec
@@ -472,7 +473,7 @@ class ArenaRunner:
             def publish(frame: Frame) -> None:  # recording, live view (and so video and replay): no density layer
                 frame = frame if frame.density is None else replace(frame, density=None)
                 rec.write_frame(frame)
-                self.live.publish(int(job["id"]), frame)
+                self.live.publish(job.id, frame)
                 tally(frame)
 
             loop.subscribe(publish)
@@ -485,7 +486,7 @@ class ArenaRunner:
                 loop.set_safety(enabled=False)  # the guard stays on (the loop's guard, set above)
                 loop.post("barrier bypassed: an operator approved it (verification allowed it, the manifest asked); "
                           "the guard is on")
-            if not self.service.mark_running(int(job["id"])):
+            if not self.service.mark_running(job.id):
                 self._end_job.set()
             loop.pause()
             loop.tick()  # the starting poses, recorded; robots hold still
@@ -501,7 +502,7 @@ class ArenaRunner:
             outcome = run_sandboxed(script, make_plant, entry=entry, n_robots=n, duration=duration,
                                     limits=limits, trusted=cfg.trusted, cancelled=stopped,
                                     jail=cfg.jail(),
-                                    on_log=lambda chunk: self._append_log(int(job["id"]), chunk))
+                                    on_log=lambda chunk: self._append_log(job.id, chunk))
         finally:
             loop = state["loop"]
             if loop is not None:
@@ -515,21 +516,21 @@ class ArenaRunner:
             with self._lock:
                 self._loop = None
             self.fleet.end_assignment()
-            self._upkeep["return"] = self._return_fleet(f"after job {int(job['id'])}")
+            self._upkeep["return"] = self._return_fleet(f"after job {job.id}")
         if state["setup_failed"] is not None:
             return None, state["setup_failed"]
         return outcome, "; ".join(notes) or None
 
 
-def _user_reason(reason: str, job: dict[str, Any], folder: Path) -> str:
+def _user_reason(reason: str, job: Job, folder: Path) -> str:
     """The job's reason as verification words it (:func:`~swarmdeck.console.jobs.verification.user_message`): the
     researcher's file name for the stored ``script.py``, and the line of their code an error names."""
     try:
-        bundle = (ScriptBundle.single("script.py", (folder / "script.py").read_bytes()) if job["kind"] == "py"
-                  else ScriptBundle.from_path(folder / "src", job["entry"]))
+        bundle = (ScriptBundle.single("script.py", (folder / "script.py").read_bytes()) if job.kind == "py"
+                  else ScriptBundle.from_path(folder / "src", job.entry))
     except (OSError, ValueError):
         return reason
-    return user_message(reason, bundle, job["script"] if job["kind"] == "py" else None) or reason
+    return user_message(reason, bundle, job.script if job.kind == "py" else None) or reason
 
 
 #: the barrier "stepped in" for a robot when it changed its command by more than this, m/s

@@ -1,5 +1,8 @@
 """The portal's rules, in one place: submissions, who sees what, the queue, operator actions, the arena's latch.
 
+The rules only: the jobs' rows (every SQL statement, rows as typed :class:`~.job.Job`) are the job store's
+(:mod:`.jobstore`), a job's folder (layout, results, reports, the video) is :mod:`.jobfiles`'.
+
 The HTTP routes (:mod:`.api`, and the pages) are thin: each calls one method
 of :class:`PortalService` with the signed-in :class:`~.accounts.User` and turns
 its :class:`~.errors.PortalError` into a JSON error. The verification workers
@@ -40,57 +43,47 @@ Rules:
   value; the verification workers charge each job's CPU (:meth:`PortalService.record_verification_cpu`).
 * **Retention** (``PortalConfig.retain_days``): :meth:`PortalService.sweep_results` deletes the folders of
   jobs that ended long ago; the row stays with ``results_deleted`` and its downloads say why they are gone.
-* **Ids** from outside are checked (:func:`valid_id`): one SQLite cannot hold is "no job" (404), never a 500.
+* **Ids** from outside are checked (:func:`~.job.valid_id`): one SQLite cannot hold is "no job" (404), never a 500.
 
 Result files (:meth:`PortalService.files`): a fixed list of names
-(:data:`RESULT_FILES`) under the job's folder; a download names one of them,
+(:data:`~.jobfiles.RESULT_FILES`) under the job's folder; a download names one of them,
 never a path.
 """
 from __future__ import annotations
 
 import json
 import math
-import shutil
 import threading
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Protocol
 
-from swarmdeck.console.jobs.bundle import ScriptBundle
 from swarmdeck.console.jobs.confinement import JailConfig, SandboxLimits
 from swarmdeck.console.jobs.script_env import ScriptEnv, listing
 from swarmdeck.console.portal.accounts import Accounts, User
-from swarmdeck.console.portal.db import ACTIVE, FINAL, Database, TransitionConflict
-from swarmdeck.console.portal.states import JobState
+from swarmdeck.console.portal.db import Database, TransitionConflict
 from swarmdeck.console.portal.errors import BadInput, Conflict, Forbidden, NotFound, Unavailable
-from swarmdeck.console.portal.exports import EXPORT_FILES
-from swarmdeck.console.portal.files import private_dir, write_private
-from swarmdeck.console.portal.quotas import Quotas, check_counts, check_disk
+from swarmdeck.console.portal.job import (
+    BYPASS_VERDICT,
+    BYPASS_WAIT,
+    REJECTED_VERDICT,
+    BypassDecision,
+    ExportState,
+    Job,
+    bypass_decided,
+)
+from swarmdeck.console.portal.jobfiles import RESULT_FILES, JobFiles, ResultFile
+from swarmdeck.console.portal.jobstore import JobStore
+from swarmdeck.console.portal.quotas import DAY_S, Quotas, check_counts, check_disk
 from swarmdeck.console.portal.quotas import usage as quota_usage
 from swarmdeck.console.portal.results import results_summary
+from swarmdeck.console.portal.states import ACTIVE, FINAL, JobState
 from swarmdeck.console.portal.submission import Limits, Manifest, Upload, check_bundle, check_upload, parse_manifest
 
-#: result files a job may have, name -> what it is (the exports, :mod:`.exports`, write four of them after the run).
-RESULT_FILES: dict[str, str] = {
-    "recording.mcap": "the run's MCAP recording (swarmdeck play / Foxglove)",
-    "recording.partial.mcap": "the recording as the interrupted run left it (before recovery)",
-    "robots.csv": "poses and commands per robot per frame (CSV)",
-    "frames.csv": "one row per frame (CSV)",
-    "replay.html": "standalone 3D replay (open in a browser)",
-    "video.mp4": "top-down video of the run",
-    "script.log": "the script's output (stdout and stderr)",
-    "report.json": "the verification report (JSON)",
-    "report.html": "the verification report (HTML)",
-    "run.json": "how the run ended (JSON)",
-    "manifest.json": "the manifest as accepted",
-}
-BYPASS_VERDICT = "accepted, may bypass the barrier"
-BYPASS_WAIT = "waiting for an operator to approve running without the barrier"
-#: SQL: the job waits for an operator's decision on its bypass (columns of ``jobs``)
-_PENDING_SQL = ("(COALESCE(verdict, '') = 'accepted, may bypass the barrier' AND request_no_barrier = 1 "
-                "AND barrier_forbidden = 0 AND bypass_decision IS NULL)")
+__all__ = ["BYPASS_VERDICT", "BYPASS_WAIT", "RESULT_FILES", "ArenaControl", "ArenaState", "PortalConfig",
+           "PortalService"]
 
 
 class ArenaControl(Protocol):
@@ -154,52 +147,46 @@ class PortalConfig:
         return budget, max(1, math.ceil(self.arena_overrun_s / budget - 1e-9))
 
 
-def _job_dict(row: Any, position: int | None = None) -> dict[str, Any]:
-    poses = row["initial_poses"]
-    return {
-        "id": row["id"], "name": row["name"], "owner": row["owner"], "state": row["state"],
-        "held_from": row["held_from"], "kind": row["kind"], "script": row["script_name"], "entry": row["entry"],
-        "robots": row["n_robots"], "duration": row["duration"],
-        "initial_poses": None if poses is None else json.loads(poses),
-        "request_no_barrier": bool(row["request_no_barrier"]), "barrier_forbidden": bool(row["barrier_forbidden"]),
-        "verdict": row["verdict"], "safety_score": row["safety_score"],
-        "bypass": None if row["bypass"] is None else bool(row["bypass"]), "reason": row["reason"],
-        "bypass_decision": row["bypass_decision"], "bypass_pending": _bypass_pending(row),
-        "position": position, "created": row["created"], "updated": row["updated"], "started": row["started"],
-        "ended": row["ended"], "exports": row["exports"], "results_deleted": row["results_deleted"],
-    }
+@dataclass(frozen=True)
+class ArenaState:
+    """The arena as operators see it (:meth:`PortalService.arena_state`).
 
+    ``needs_operator``: why the arena stopped itself (None: it did not); ``alerts``: the running or last job's
+    bypass revocation and contacts (:meth:`.ArenaRunner.alerts`); ``fleet``: the fleet table
+    (:meth:`.ArenaFleet.status`; None without a fleet)."""
 
-def _bypass_pending(row: Any) -> bool:
-    """The job asks to run without the barrier, verification allowed it, and no operator decided yet."""
-    return (row["verdict"] == BYPASS_VERDICT and bool(row["request_no_barrier"]) and not row["barrier_forbidden"]
-            and row["bypass_decision"] is None)
+    stopped: bool
+    needs_operator: str | None
+    alerts: dict[str, Any] | None
+    manual_approval: bool
+    running: Job | None
+    queue: tuple[Job, ...]
+    fleet: dict[str, Any] | None
 
-
-def valid_id(job_id: Any) -> bool:
-    """Whether ``job_id`` can be a job's id: an integer, 1 <= id < 2**63 (what SQLite's INTEGER holds)."""
-    return isinstance(job_id, int) and not isinstance(job_id, bool) and 1 <= job_id < 2 ** 63
-
-
-JOB_SELECT = "SELECT j.*, u.name AS owner FROM jobs j JOIN users u ON u.id = j.user_id"
+    def to_dict(self) -> dict[str, Any]:
+        return {"stopped": self.stopped, "needs_operator": self.needs_operator, "alerts": self.alerts,
+                "manual_approval": self.manual_approval,
+                "running": None if self.running is None else self.running.to_dict(),
+                "queue": [j.to_dict() for j in self.queue], "fleet": self.fleet}
 
 
 class PortalService:
-    """The rules (module docstring) over the :class:`Database` and :class:`Accounts`."""
+    """The rules (module docstring) over the :class:`.JobStore`, the :class:`.JobFiles` and :class:`.Accounts`."""
 
     def __init__(self, config: PortalConfig, *, db: Database | None = None, accounts: Accounts | None = None) -> None:
         self.config = config
         self.data = Path(config.data)
         self.db = db if db is not None else Database(self.data)
         self.accounts = accounts if accounts is not None else Accounts(self.db)
-        private_dir(self.data / "jobs")  # the data folder itself is made 0700 by the Database
+        self.store = JobStore(self.db)
+        self.job_files = JobFiles(self.data / "jobs")  # the data folder itself is made 0700 by the Database
         self.changed = threading.Condition()  # notified after every change workers/runner/live views wait on
         self.arena: ArenaControl | None = None
-        self._video_lock = threading.Lock()  # videos are made one at a time (video())
 
     # ------------------------------------------------------------------ helpers
     def job_dir(self, job_id: int) -> Path:
-        return self.data / "jobs" / str(int(job_id))
+        """The job's folder (:meth:`.JobFiles.folder`)."""
+        return self.job_files.folder(job_id)
 
     def notify(self) -> None:
         with self.changed:
@@ -210,29 +197,28 @@ class PortalService:
         with self.changed:
             self.changed.wait(timeout)
 
-    def _row(self, job_id: int) -> Any:
-        if not valid_id(job_id):
-            return None  # an id SQLite cannot hold (>= 2**63) or < 1 is no job: 404 like any other
-        return self.db.query_one(f"{JOB_SELECT} WHERE j.id = ?", (int(job_id),))
-
-    def _visible_row(self, user: User, job_id: int) -> Any:
-        row = self._row(job_id)
-        if row is None or (not user.is_operator and row["user_id"] != user.id):
+    def _visible(self, user: User, job_id: int) -> Job:
+        """The job if ``user`` may see it; NotFound (404) for another researcher's job, as for no job."""
+        job = self.store.get(job_id)
+        if job is None or (not user.is_operator and job.user_id != user.id):
             raise NotFound(f"no job {job_id}", "job")
-        return row
-
-    def _queue_positions(self) -> dict[int, int]:
-        rows = self.db.query(f"SELECT id FROM jobs WHERE state = '{JobState.IN_ARENA_QUEUE}' ORDER BY priority, id")
-        return {int(r["id"]): k for k, r in enumerate(rows)}
+        return job
 
     @staticmethod
     def _require_operator(user: User) -> None:
         if not user.is_operator:
             raise Forbidden("this needs an operator account", "Authorization")
 
+    def _require_results(self, job: Job) -> None:
+        """NotFound when the retention sweep deleted the job's results (saying when and why)."""
+        if job.results_deleted is not None:
+            days = "" if self.config.retain_days is None else f" (the lab keeps results {self.config.retain_days:g} days)"
+            raise NotFound(f"job {job.id}'s results were deleted on "
+                           f"{time.strftime('%Y-%m-%d', time.gmtime(job.results_deleted))}{days}", "job")
+
     # ------------------------------------------------------------------ researchers
     def submit(self, user: User, filename: str | None, data: bytes, manifest: Any = None,
-               entry: str | None = None) -> dict[str, Any]:
+               entry: str | None = None) -> Job:
         """Check and store a submission; the new job (``awaiting verification``). ``manifest``: JSON text or
         object, or None to use ``manifest.json`` from inside a ``.zip``; ``entry``: the script to run inside a
         ``.zip`` (overrides the manifest's ``entry``)."""
@@ -254,22 +240,18 @@ class PortalService:
         m = parse_manifest(manifest, self.config.limits)
         entry = self._entry(m, upload)
         if not user.is_operator:
-            check_disk(self.db.query("SELECT id FROM jobs WHERE user_id = ? AND results_deleted IS NULL",
-                                     (user.id,)), self.config.quotas, self.data / "jobs")
+            check_disk(self.store.kept_job_ids(user.id), self.config.quotas, self.job_files.root)
         now = time.time()
-        with self.db.transaction() as tx:
+        with self.store.transaction() as tx:
             if not user.is_operator:
-                check_counts(tx, self.config.quotas, user.id, now)
-            top = tx.execute("SELECT COALESCE(MAX(priority), 0) FROM jobs").fetchone()[0]
-            job_id = tx.execute(
-                "INSERT INTO jobs (user_id, name, state, kind, script_name, entry, n_robots, duration, initial_poses, "
-                f"request_no_barrier, priority, created, updated) VALUES (?, ?, '{JobState.AWAITING_VERIFICATION}', ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)",
-                (user.id, m.name, upload.kind, upload.display_name, entry, m.robots, m.duration,
-                 None if m.initial_poses is None else json.dumps(m.initial_poses), int(m.no_barrier), top + 1,
-                 now, now)).lastrowid
-            self._store(int(job_id), upload, m, entry)  # inside the transaction: no job row without its files
+                check_counts(self.config.quotas, self.store.unfinished_count(user.id, tx),
+                             self.store.verification_cpu(user.id, now - DAY_S, tx), now)
+            job_id = self.store.insert(tx, user_id=user.id, name=m.name, kind=upload.kind, script=upload.display_name,
+                                       entry=entry, robots=m.robots, duration=m.duration,
+                                       initial_poses=m.initial_poses, no_barrier=m.no_barrier, now=now)
+            self.job_files.store(job_id, upload, m, entry)  # inside the transaction: no job row without its files
         self.notify()
-        return self.job(user, int(job_id))
+        return self.job(user, job_id)
 
     @staticmethod
     def _entry(m: Manifest, upload: Upload) -> str:
@@ -279,165 +261,104 @@ class PortalService:
         check_bundle(upload.files, entry)
         return str(entry)
 
-    def _store(self, job_id: int, upload: Upload, m: Manifest, entry: str) -> None:
-        folder = self.job_dir(job_id)
-        if folder.exists():  # a leftover of a transaction that rolled back
-            shutil.rmtree(folder)
-        private_dir(folder)
-        if upload.kind == "py":
-            write_private(folder / "script.py", upload.files["script.py"])
-        else:
-            ScriptBundle.from_files(upload.files, entry).write_to(private_dir(folder / "src"), file_mode=0o600,
-                                                                  dir_mode=0o700)
-        write_private(folder / "manifest.json", json.dumps(m.to_dict(), indent=2))
+    def script(self, job: Job) -> tuple[Path, str | None]:
+        """What the sandbox runs for ``job`` (:meth:`.JobFiles.script`)."""
+        return self.job_files.script(job)
 
-    def script(self, job: dict[str, Any]) -> tuple[Path, str | None]:
-        """What the sandbox runs for ``job``: ``(script.py, None)``, or ``(the archive's folder, its entry)``."""
-        folder = self.job_dir(job["id"])
-        return (folder / "script.py", None) if job["kind"] == "py" else (folder / "src", job["entry"])
-
-    def jobs(self, user: User, *, mine: bool = False) -> list[dict[str, Any]]:
+    def jobs(self, user: User, *, mine: bool = False) -> list[Job]:
         """A researcher's own jobs; an operator's view of all jobs (``mine``: only their own). Newest first."""
-        positions = self._queue_positions()
-        if user.is_operator and not mine:
-            rows = self.db.query(f"{JOB_SELECT} ORDER BY j.id DESC")
-        else:
-            rows = self.db.query(f"{JOB_SELECT} WHERE j.user_id = ? ORDER BY j.id DESC", (user.id,))
-        return [_job_dict(r, positions.get(int(r["id"]))) for r in rows]
+        return self.store.list(None if user.is_operator and not mine else user.id)
 
-    def job(self, user: User, job_id: int) -> dict[str, Any]:
-        row = self._visible_row(user, job_id)
-        return _job_dict(row, self._queue_positions().get(int(row["id"])))
+    def job(self, user: User, job_id: int) -> Job:
+        return self._visible(user, job_id)
 
-    def cancel(self, user: User, job_id: int) -> dict[str, Any]:
+    def cancel(self, user: User, job_id: int) -> Job:
         """Cancel a job that has not ended (its owner, or an operator); 409 if it has ended."""
-        row = self._visible_row(user, job_id)
-        with self.db.transaction() as tx:
+        job = self._visible(user, job_id)
+        with self.store.transaction() as tx:
             try:
-                self.db.transition(tx, int(job_id), JobState.CANCELLED, ended=time.time(),
-                                   reason=f"cancelled by {user.name}")
+                self.store.transition(tx, job.id, JobState.CANCELLED, ended=time.time(),
+                                      reason=f"cancelled by {user.name}")
             except TransitionConflict as exc:
                 if exc.state in FINAL:
                     raise Conflict(f"job {job_id} has already ended ({exc.state}): there is nothing to cancel",
                                    "job") from None
                 raise Conflict(str(exc), "job") from None
-            if user.is_operator and row["user_id"] != user.id:
-                self.accounts.audit(user, "cancel", int(job_id), tx=tx)
-        if row["state"] in ACTIVE and self.arena is not None:
-            self.arena.cancel(int(job_id))
+            if user.is_operator and job.user_id != user.id:
+                self.accounts.audit(user, "cancel", job.id, tx=tx)
+        if job.state in ACTIVE and self.arena is not None:
+            self.arena.cancel(job.id)
         self.notify()
         return self.job(user, job_id)
 
     def report(self, user: User, job_id: int) -> dict[str, Any]:
         """The verification report (JSON) of a job; 404 until verification has finished."""
-        self._require_results(self._visible_row(user, job_id))
-        path = self.job_dir(job_id) / "report.json"
-        if not path.is_file():
+        job = self._visible(user, job_id)
+        self._require_results(job)
+        report = self.job_files.report(job.id)
+        if report is None:
             raise NotFound(f"job {job_id} has no verification report yet", "job")
-        return json.loads(path.read_text())
+        return report
 
     def run_summary(self, user: User, job_id: int) -> dict[str, Any] | None:
         """How the arena run went (``run.json``: how it ended, the robots' set-up and return), None before
         it ended (or when the file cannot be read)."""
-        self._visible_row(user, job_id)
-        try:
-            data = json.loads((self.job_dir(job_id) / "run.json").read_text())
-        except (OSError, ValueError):
-            return None
-        return data if isinstance(data, dict) else None
+        return self.job_files.run_summary(self._visible(user, job_id).id)
 
     def results(self, user: User, job_id: int) -> dict[str, Any]:
         """The results summary of an ended job (:func:`.results.results_summary`); 404 while it has not ended."""
-        row = self._visible_row(user, job_id)
-        if row["state"] not in FINAL:
-            raise NotFound(f"job {job_id} is {row['state']}: its results come when it has ended", "job")
-        return results_summary(_job_dict(row), self.run_summary(user, job_id), self.files(user, job_id))
+        job = self._visible(user, job_id)
+        if job.state not in FINAL:
+            raise NotFound(f"job {job_id} is {job.state}: its results come when it has ended", "job")
+        return results_summary(job.to_dict(), self.job_files.run_summary(job.id),
+                               [f.to_dict() for f in self.job_files.listing(job.id)])
 
     def script_log(self, user: User, job_id: int, since: int = 0) -> dict[str, Any]:
         """The job's script output from byte ``since`` on: ``{"text", "next", "live"}`` — while it runs, what the
         script printed so far (the arena runner's live copy); after, ``script.log``. Its owner and operators."""
-        row = self._visible_row(user, job_id)
+        job = self._visible(user, job_id)
         if isinstance(since, bool) or not isinstance(since, int) or since < 0:
             raise BadInput(f"since must be an integer >= 0, got {since!r}", "since")
         live = getattr(self.arena, "live_log", None)
-        data = live(int(job_id)) if live is not None else None  # the runner's copy until script.log is written
+        data = live(job.id) if live is not None else None  # the runner's copy until script.log is written
         if data is None:
-            self._require_results(row)
-            try:
-                data = (self.job_dir(job_id) / "script.log").read_bytes()
-            except OSError:
-                data = b""
+            self._require_results(job)
+            data = self.job_files.script_log(job.id)
         chunk = data[since:]
         return {"text": chunk.decode("utf-8", errors="replace"), "next": since + len(chunk),
-                "live": row["state"] in ACTIVE}
+                "live": job.state in ACTIVE}
 
-    def files(self, user: User, job_id: int) -> list[dict[str, Any]]:
-        """The job's result files that exist: ``{"name", "bytes", "what"}``."""
-        self._visible_row(user, job_id)
-        folder = self.job_dir(job_id)
-        return [{"name": name, "bytes": (folder / name).stat().st_size, "what": what}
-                for name, what in RESULT_FILES.items() if (folder / name).is_file()]
+    def files(self, user: User, job_id: int) -> list[ResultFile]:
+        """The job's result files that exist (:meth:`.JobFiles.listing`)."""
+        return self.job_files.listing(self._visible(user, job_id).id)
+
+    def downloads(self, user: User, job_id: int) -> list[ResultFile]:
+        """What the job page offers: its result files, and the video if it can be made on its first request."""
+        job = self._visible(user, job_id)
+        listed = self.job_files.listing(job.id)
+        video = None if job.results_deleted is not None else self.job_files.video_to_come(job, listed)
+        return listed if video is None else [*listed, video]
 
     def file_path(self, user: User, job_id: int, name: str) -> Path:
-        """The path of result file ``name`` of the job (one of :data:`RESULT_FILES`); 404 otherwise.
-        ``video.mp4`` is made from the recording on its first request (:meth:`video`)."""
-        if name == "video.mp4":
-            return self.video(user, job_id)
-        row = self._visible_row(user, job_id)
-        if name not in RESULT_FILES:
-            raise NotFound(f"no result file called {name[:100]!r}", "name")
-        self._require_results(row)
-        path = self.job_dir(job_id) / name
-        if not path.is_file():
-            if row["exports"] == "writing" and name in EXPORT_FILES:
-                raise Unavailable(f"job {job_id}'s exports are still being written: {name} is not ready yet", "name")
-            raise NotFound(f"job {job_id} has no {name} (yet)", "name")
-        return path
+        """The path of result file ``name`` of the job (one of :data:`RESULT_FILES`); 404 otherwise, 503 while
+        its export is written. ``video.mp4`` is made from the recording on its first request (:meth:`video`)."""
+        job = self._visible(user, job_id)
+        if name in RESULT_FILES:
+            self._require_results(job)
+        return self.job_files.path(job, name)
 
     def video(self, user: User, job_id: int) -> Path:
-        """The job's ``video.mp4`` (top-down, H.264): written with the job's exports (:mod:`.exports`; 503
-        while they are being written); if they did not write it, rendered from its recording on the first request
-        (:func:`~swarmdeck.console.recording.export_video.export_video`, one at a time) and kept; 404 while
-        the job is not over or has no recording, 503 when it cannot be made."""
-        from swarmdeck.console.recording.export_video import VideoExportError, export_video
-        from swarmdeck.console.recording.reader import RecordingError, open_recording
-
-        row = self._visible_row(user, job_id)
-        self._require_results(row)
-        folder = self.job_dir(job_id)
-        out, recording = folder / "video.mp4", folder / "recording.mcap"
-        if out.is_file():
-            return out
-        if row["exports"] == "writing":
-            raise Unavailable(f"job {job_id}'s exports are still being written: the video follows the CSV and "
-                              "the replay", "name")
-        if row["state"] not in FINAL or not recording.is_file():
-            raise NotFound(f"job {job_id} has no video (yet): it is made from the recording once the run is over",
-                           "name")
-        with self._video_lock:
-            if not out.is_file():
-                try:
-                    with open_recording(recording) as rec:
-                        export_video(rec, out)
-                except (RecordingError, VideoExportError, OSError) as exc:
-                    raise Unavailable(f"the video of job {job_id} could not be made: {exc}", "name") from None
-        return out
-
-    def _require_results(self, row: Any) -> None:
-        """NotFound when the retention sweep deleted the job's results (saying when and why)."""
-        if row["results_deleted"] is not None:
-            days = "" if self.config.retain_days is None else f" (the lab keeps results {self.config.retain_days:g} days)"
-            raise NotFound(f"job {row['id']}'s results were deleted on "
-                           f"{time.strftime('%Y-%m-%d', time.gmtime(row['results_deleted']))}{days}", "job")
+        """The job's ``video.mp4`` (:meth:`.JobFiles.video`: made from the recording on the first request)."""
+        job = self._visible(user, job_id)
+        self._require_results(job)
+        return self.job_files.video(job)
 
     # ------------------------------------------------------------------ quotas and retention
     def record_verification_cpu(self, job_id: int, cpu_s: float) -> None:
         """Charge ``cpu_s`` CPU seconds of verification to the job's owner (the daily limit, :mod:`.quotas`)."""
         if not (isinstance(cpu_s, (int, float)) and math.isfinite(cpu_s) and cpu_s >= 0):
             return
-        with self.db.transaction() as tx:
-            tx.execute("INSERT OR REPLACE INTO verification_usage (job_id, user_id, t, cpu_s) "
-                       "SELECT id, user_id, ?, ? FROM jobs WHERE id = ?", (time.time(), float(cpu_s), int(job_id)))
+        self.store.record_verification_cpu(job_id, float(cpu_s))
 
     def environment(self) -> dict[str, Any]:
         """What scripts can import here (:func:`swarmdeck.console.jobs.script_env.listing`), read now: packages
@@ -450,14 +371,10 @@ class PortalService:
 
     def usage(self, user: User) -> dict[str, Any]:
         """The researcher's use of each limit (:func:`.quotas.usage`; operators: limits None, not limited)."""
-        marks = ", ".join("?" * len(FINAL))
-        unfinished = self.db.query_one(f"SELECT COUNT(*) FROM jobs WHERE user_id = ? AND state NOT IN ({marks})",
-                                       (user.id, *FINAL))[0]
-        cpu = self.db.query("SELECT cpu_s FROM verification_usage WHERE user_id = ? AND t > ?",
-                            (user.id, time.time() - 86400.0))
-        rows = self.db.query("SELECT id FROM jobs WHERE user_id = ? AND results_deleted IS NULL", (user.id,))
-        return quota_usage(unfinished, cpu, rows, Quotas(None, None, None) if user.is_operator else self.config.quotas,
-                           self.data / "jobs")
+        return quota_usage(self.store.unfinished_count(user.id),
+                           self.store.verification_cpu(user.id, time.time() - DAY_S),
+                           self.store.kept_job_ids(user.id),
+                           Quotas(None, None, None) if user.is_operator else self.config.quotas, self.job_files.root)
 
     def sweep_results(self, now: float | None = None) -> list[int]:
         """Delete the folders (script, recording, exports, logs, reports) of jobs that ended more than
@@ -466,162 +383,146 @@ class PortalService:
         if self.config.retain_days is None:
             return []
         now = time.time() if now is None else float(now)
-        cutoff = now - float(self.config.retain_days) * 86400.0
-        marks = ", ".join("?" * len(FINAL))
-        rows = self.db.query(f"SELECT id FROM jobs WHERE state IN ({marks}) AND ended IS NOT NULL AND ended < ? "
-                             "AND results_deleted IS NULL AND COALESCE(exports, '') != 'writing' ORDER BY id",
-                             (*FINAL, cutoff))
-        swept = []
-        for r in rows:
-            job_id = int(r["id"])
-            shutil.rmtree(self.job_dir(job_id), ignore_errors=True)
-            with self.db.transaction() as tx:
-                tx.execute("UPDATE jobs SET results_deleted = ? WHERE id = ?", (now, job_id))
-            swept.append(job_id)
+        swept = self.store.ended_before(now - float(self.config.retain_days) * DAY_S)
+        for job_id in swept:
+            self.job_files.delete(job_id)
+            self.store.mark_results_deleted(job_id, now)
         if swept:
             self.notify()
         return swept
 
     # ------------------------------------------------------------------ operators
-    def _operator_transition(self, user: User, job_id: int, target: str, action: str,
-                             sources: tuple[str, ...] | None = None, detail: str = "", **columns: Any) -> dict:
+    def _operator_transition(self, user: User, job_id: int, target: JobState, action: str,
+                             sources: tuple[JobState, ...] | None = None, detail: str = "", **columns: Any) -> Job:
         self._require_operator(user)
-        self._visible_row(user, job_id)
-        with self.db.transaction() as tx:
+        job = self._visible(user, job_id)
+        with self.store.transaction() as tx:
             try:
-                self.db.transition(tx, int(job_id), target, sources=sources, **columns)
+                self.store.transition(tx, job.id, target, sources=sources, **columns)
             except TransitionConflict as exc:
                 raise Conflict(str(exc), "job") from None
-            self.accounts.audit(user, action, int(job_id), detail, tx=tx)
+            self.accounts.audit(user, action, job.id, detail, tx=tx)
         self.notify()
         return self.job(user, job_id)
 
-    def approve(self, user: User, job_id: int) -> dict[str, Any]:
-        """Manual approval: ``approved → waiting``. A job waiting for a decision on its barrier bypass is
-        refused (409): approve or refuse the bypass (:meth:`decide_bypass`)."""
+    def approve(self, user: User, job_id: int) -> Job:
+        """Manual approval: ``awaiting approval → in arena queue``. A job waiting for a decision on its barrier
+        bypass is refused (409): approve or refuse the bypass (:meth:`decide_bypass`)."""
         self._require_operator(user)
-        if _bypass_pending(self._visible_row(user, job_id)):
+        if self._visible(user, job_id).bypass_pending:
             raise Conflict(f"job {job_id} asks to run without the barrier: approve or refuse that bypass "
                            f"(POST /api/operator/jobs/{job_id}/bypass {{\"approve\": true|false}})", "job")
-        return self._operator_transition(user, job_id, JobState.IN_ARENA_QUEUE, "approve", sources=(JobState.AWAITING_APPROVAL,))
+        return self._operator_transition(user, job_id, JobState.IN_ARENA_QUEUE, "approve",
+                                         sources=(JobState.AWAITING_APPROVAL,))
 
-    def decide_bypass(self, user: User, job_id: int, approve: bool) -> dict[str, Any]:
+    def decide_bypass(self, user: User, job_id: int, approve: bool) -> Job:
         """An operator's decision on a job's barrier bypass (module docstring), audited with the verdict and S.
 
-        Approve: the job goes ``waiting`` and runs without the barrier, with the guard (:mod:`swarmdeck.safety.guard`).
-        Refuse: it runs with the barrier (``waiting``, or still ``approved`` while manual approval is on). 409 unless
-        the job is ``approved`` and waiting for this decision."""
+        Approve: the job goes ``in arena queue`` and runs without the barrier, with the guard
+        (:mod:`swarmdeck.safety.guard`). Refuse: it runs with the barrier (``in arena queue``, or still
+        ``awaiting approval`` while manual approval is on). 409 unless the job is ``awaiting approval`` and waiting
+        for this decision."""
         self._require_operator(user)
         if not isinstance(approve, bool):
             raise BadInput(f"approve must be true or false, got {approve!r}", "approve")
-        row = self._visible_row(user, job_id)
-        if row["state"] != JobState.AWAITING_APPROVAL or not _bypass_pending(row):
-            raise Conflict(f"job {job_id} is {row['state']} and not waiting for a decision on running without the "
+        job = self._visible(user, job_id)
+        if job.state != JobState.AWAITING_APPROVAL or not job.bypass_pending:
+            raise Conflict(f"job {job_id} is {job.state} and not waiting for a decision on running without the "
                            "barrier", "job")
-        score = "n/a" if row["safety_score"] is None else f"{row['safety_score']:.4f}"
-        detail = f"verdict {row['verdict']!r}, S = {score}"
+        score = "n/a" if job.safety_score is None else f"{job.safety_score:.4f}"
+        detail = f"verdict {job.verdict!r}, S = {score}"
         target = JobState.IN_ARENA_QUEUE if approve or not self.manual_approval else JobState.AWAITING_APPROVAL
-        columns = {"bypass_decision": "approved" if approve else "refused", "barrier_forbidden": int(not approve),
-                   "reason": None}
-        with self.db.transaction() as tx:
+        decision = BypassDecision.APPROVED if approve else BypassDecision.REFUSED
+        with self.store.transaction() as tx:
             if target == JobState.AWAITING_APPROVAL:  # manual approval on: the refused job now waits for the usual approval
-                cur = tx.execute("UPDATE jobs SET bypass_decision = ?, barrier_forbidden = ?, reason = ?, updated = ? "
-                                 f"WHERE id = ? AND state = '{JobState.AWAITING_APPROVAL}'", (*columns.values(), time.time(), job_id))
-                if cur.rowcount != 1:
+                if not self.store.decide_bypass_in_place(tx, job.id, decision, forbidden=not approve):
                     raise Conflict(f"job {job_id} is no longer awaiting approval", "job")
             else:
                 try:
-                    self.db.transition(tx, int(job_id), target, sources=(JobState.AWAITING_APPROVAL,), **columns)
+                    self.store.transition(tx, job.id, target, sources=(JobState.AWAITING_APPROVAL,),
+                                          bypass_decision=decision, barrier_forbidden=int(not approve), reason=None)
                 except TransitionConflict as exc:
                     raise Conflict(str(exc), "job") from None
-            self.accounts.audit(user, "approve barrier bypass" if approve else "refuse barrier bypass", int(job_id),
+            self.accounts.audit(user, "approve barrier bypass" if approve else "refuse barrier bypass", job.id,
                                 detail, tx=tx)
         self.notify()
         return self.job(user, job_id)
 
-    def hold(self, user: User, job_id: int) -> dict[str, Any]:
-        """Hold a job awaiting verification or approval or in the arena queue (it keeps its place; :meth:`release` puts it back)."""
+    def hold(self, user: User, job_id: int) -> Job:
+        """Hold a job awaiting verification or approval or in the arena queue (it keeps its place; :meth:`release`
+        puts it back)."""
         self._require_operator(user)
-        row = self._visible_row(user, job_id)
-        return self._operator_transition(user, job_id, JobState.HELD, "hold", held_from=row["state"])
+        job = self._visible(user, job_id)
+        return self._operator_transition(user, job_id, JobState.HELD, "hold", held_from=job.state)
 
-    def release(self, user: User, job_id: int) -> dict[str, Any]:
-        """Release a held job to the state it was held in (an approved one to ``waiting`` if manual approval
-        is off by now)."""
+    def release(self, user: User, job_id: int) -> Job:
+        """Release a held job to the state it was held in (one awaiting approval to the arena queue if manual
+        approval is off by now)."""
         self._require_operator(user)
-        row = self._visible_row(user, job_id)
-        if row["state"] != JobState.HELD:
-            raise Conflict(f"job {job_id} is {row['state']}, not held", "job")
-        back = row["held_from"] or JobState.AWAITING_VERIFICATION
-        if back == JobState.AWAITING_APPROVAL and not self.manual_approval and not _bypass_pending(row):
+        job = self._visible(user, job_id)
+        if job.state != JobState.HELD:
+            raise Conflict(f"job {job_id} is {job.state}, not held", "job")
+        back = job.held_from or JobState.AWAITING_VERIFICATION
+        if back == JobState.AWAITING_APPROVAL and not self.manual_approval and not job.bypass_pending:
             back = JobState.IN_ARENA_QUEUE  # manual approval was switched off while it was held
         return self._operator_transition(user, job_id, back, "release", sources=(JobState.HELD,), held_from=None)
 
-    def operator_cancel(self, user: User, job_id: int) -> dict[str, Any]:
+    def operator_cancel(self, user: User, job_id: int) -> Job:
         self._require_operator(user)
         return self.cancel(user, job_id)
 
-    def move(self, user: User, job_id: int, position: int) -> dict[str, Any]:
-        """Put a waiting job at ``position`` (0: next) of the arena queue."""
+    def move(self, user: User, job_id: int, position: int) -> Job:
+        """Put a job of the arena queue at ``position`` (0: next)."""
         self._require_operator(user)
-        self._visible_row(user, job_id)
+        job = self._visible(user, job_id)
         if isinstance(position, bool) or not isinstance(position, int) or position < 0:
             raise BadInput(f"position must be an integer >= 0, got {position!r}", "position")
-        with self.db.transaction() as tx:
-            ids = [int(r["id"]) for r in tx.execute(f"SELECT id FROM jobs WHERE state = '{JobState.IN_ARENA_QUEUE}' "
-                                                    "ORDER BY priority, id").fetchall()]
-            if int(job_id) not in ids:
-                state = tx.execute("SELECT state FROM jobs WHERE id = ?", (job_id,)).fetchone()["state"]
-                raise Conflict(f"job {job_id} is {state}: only jobs in the arena queue can be reordered", "job")
-            ids.remove(int(job_id))
-            ids.insert(min(position, len(ids)), int(job_id))
-            base = tx.execute(f"SELECT COALESCE(MIN(priority), 0) FROM jobs WHERE state = '{JobState.IN_ARENA_QUEUE}'").fetchone()[0]
-            for k, jid in enumerate(ids):
-                tx.execute("UPDATE jobs SET priority = ? WHERE id = ?", (base + k * 1e-3, jid))
+        with self.store.transaction() as tx:
+            ids = self.store.queue_ids(tx)
+            if job.id not in ids:
+                raise Conflict(f"job {job_id} is {self.store.state_in(tx, job.id)}: only jobs in the arena queue can "
+                               "be reordered", "job")
+            ids.remove(job.id)
+            ids.insert(min(position, len(ids)), job.id)
+            self.store.reorder_queue(tx, ids)
             # counted from 1, as the operator page and the CLI show positions (the API's ``position`` is 0-based)
-            self.accounts.audit(user, "move", int(job_id), f"to position {min(position, len(ids) - 1) + 1}", tx=tx)
+            self.accounts.audit(user, "move", job.id, f"to position {min(position, len(ids) - 1) + 1}", tx=tx)
         self.notify()
         return self.job(user, job_id)
 
-    def forbid_barrier(self, user: User, job_id: int, forbid: bool) -> dict[str, Any]:
+    def forbid_barrier(self, user: User, job_id: int, forbid: bool) -> Job:
         """Forbid (or allow again) running this job without the barrier; refused once it is on the arena."""
         self._require_operator(user)
-        self._visible_row(user, job_id)
+        job = self._visible(user, job_id)
         if not isinstance(forbid, bool):
             raise BadInput(f"forbid must be true or false, got {forbid!r}", "forbid")
-        with self.db.transaction() as tx:
-            cur = tx.execute("UPDATE jobs SET barrier_forbidden = ?, updated = ? WHERE id = ? AND state NOT IN "
-                             f"({', '.join('?' * len(ACTIVE + FINAL))})",
-                             (int(forbid), time.time(), job_id, *ACTIVE, *FINAL))
-            if cur.rowcount != 1:
-                state = tx.execute("SELECT state FROM jobs WHERE id = ?", (job_id,)).fetchone()["state"]
-                raise Conflict(f"job {job_id} is {state}: the barrier can no longer be changed", "job")
-            self.accounts.audit(user, "forbid barrier bypass" if forbid else "allow barrier bypass", int(job_id), tx=tx)
+        with self.store.transaction() as tx:
+            if not self.store.set_barrier_forbidden(tx, job.id, forbid):
+                raise Conflict(f"job {job_id} is {self.store.state_in(tx, job.id)}: the barrier can no longer be "
+                               "changed", "job")
+            self.accounts.audit(user, "forbid barrier bypass" if forbid else "allow barrier bypass", job.id, tx=tx)
             # a job waiting for the bypass decision that is now forbidden runs with the barrier; a waiting job whose
             # bypass is allowed again waits for an operator's decision on it
             if forbid and not self.manual_approval:
-                tx.execute(f"UPDATE jobs SET state = '{JobState.IN_ARENA_QUEUE}', reason = NULL WHERE id = ? AND state = '{JobState.AWAITING_APPROVAL}' "
-                           f"AND reason = ?", (job_id, BYPASS_WAIT))
+                self.store.requeue_bypass_wait(tx, job.id)
             elif not forbid:
-                tx.execute(f"UPDATE jobs SET state = '{JobState.AWAITING_APPROVAL}', reason = ? WHERE id = ? AND state = '{JobState.IN_ARENA_QUEUE}' "
-                           f"AND {_PENDING_SQL}", (BYPASS_WAIT, job_id))
+                self.store.back_to_bypass_wait(tx, job.id)
         self.notify()
         return self.job(user, job_id)
 
     @property
     def manual_approval(self) -> bool:
-        return self.db.setting("manual_approval", "0") == "1"
+        return self.store.manual_approval()
 
     def set_manual_approval(self, user: User, on: bool) -> dict[str, Any]:
         """Switch manual approval; switching it off sends every approved job to the arena queue."""
         self._require_operator(user)
         if not isinstance(on, bool):
             raise BadInput(f"manual_approval must be true or false, got {on!r}", "manual_approval")
-        with self.db.transaction() as tx:
-            self.db.set_setting(tx, "manual_approval", "1" if on else "0")
+        with self.store.transaction() as tx:
+            self.store.set_manual_approval(tx, on)
             if not on:  # jobs waiting for a decision on their bypass keep waiting for it
-                tx.execute(f"UPDATE jobs SET state = '{JobState.IN_ARENA_QUEUE}', updated = ? WHERE state = '{JobState.AWAITING_APPROVAL}' AND NOT {_PENDING_SQL}",
-                           (time.time(),))
+                self.store.release_approved(tx)
             self.accounts.audit(user, "manual approval on" if on else "manual approval off", tx=tx)
         self.notify()
         return self.settings()
@@ -631,208 +532,184 @@ class PortalService:
 
     @property
     def arena_stopped(self) -> bool:
-        return self.db.setting("arena_stopped", "0") == "1"
+        return self.store.arena_stopped()
 
-    def emergency_stop(self, user: User) -> dict[str, Any]:
+    def emergency_stop(self, user: User) -> ArenaState:
         """Stop the robots now, end the running job, latch the arena stopped (see the module docstring)."""
         self._require_operator(user)
-        with self.db.transaction() as tx:
-            self.db.set_setting(tx, "arena_stopped", "1")
-            active = tx.execute(f"SELECT id FROM jobs WHERE state IN ({', '.join('?' * len(ACTIVE))})",
-                                ACTIVE).fetchall()
-            for r in active:
-                self.db.transition(tx, int(r["id"]), JobState.CANCELLED, ended=time.time(),
-                                   reason=f"emergency stop by operator {user.name}")
-            self.accounts.audit(user, "emergency stop", None if not active else int(active[0]["id"]), tx=tx)
+        with self.store.transaction() as tx:
+            self.store.set_arena_stopped(tx, True)
+            active = self.store.ids_in(tx, ACTIVE)
+            for job_id in active:
+                self.store.transition(tx, job_id, JobState.CANCELLED, ended=time.time(),
+                                      reason=f"emergency stop by operator {user.name}")
+            self.accounts.audit(user, "emergency stop", None if not active else active[0], tx=tx)
         if self.arena is not None:
             self.arena.emergency_stop()
         self.notify()
         return self.arena_state(user)
 
-    def release_arena(self, user: User) -> dict[str, Any]:
+    def release_arena(self, user: User) -> ArenaState:
         """Release the emergency stop: the arena takes the next waiting job."""
         self._require_operator(user)
-        with self.db.transaction() as tx:
-            if self.db.setting("arena_stopped", "0") != "1":
+        with self.store.transaction() as tx:
+            if not self.store.arena_stopped():
                 raise Conflict("the arena is not stopped", "arena")
-            self.db.set_setting(tx, "arena_stopped", "0")
-            self.db.set_setting(tx, "arena_attention", "")
+            self.store.set_arena_stopped(tx, False, attention="")
             self.accounts.audit(user, "release emergency stop", tx=tx)
         self.notify()
         return self.arena_state(user)
 
-    def arena_state(self, user: User) -> dict[str, Any]:
-        """``{"stopped", "needs_operator": why|None, "alerts": {"job", "messages"}|None, "manual_approval", "running":
-        job|None, "queue": [waiting jobs in order], "fleet": the fleet table|None}`` (the fleet:
-        :meth:`.ArenaFleet.status`; the alerts: the running or last job's bypass revocation and contacts,
-        :meth:`.ArenaRunner.alerts`)."""
+    def arena_state(self, user: User) -> ArenaState:
+        """The arena, its queue, its alerts and its fleet as operators see it (:class:`ArenaState`)."""
         self._require_operator(user)
-        running = self.db.query_one(f"{JOB_SELECT} WHERE j.state IN ('{JobState.SETTING_UP}', '{JobState.RUNNING}') ORDER BY j.id LIMIT 1")
-        queue = self.db.query(f"{JOB_SELECT} WHERE j.state = '{JobState.IN_ARENA_QUEUE}' ORDER BY j.priority, j.id")
         fleet_status = getattr(self.arena, "fleet_status", None)
         alerts = getattr(self.arena, "alerts", None)
-        return {"stopped": self.arena_stopped, "needs_operator": self.db.setting("arena_attention", "") or None,
-                "alerts": None if alerts is None else alerts(),
-                "manual_approval": self.manual_approval,
-                "running": None if running is None else _job_dict(running),
-                "queue": [_job_dict(r, k) for k, r in enumerate(queue)],
-                "fleet": None if fleet_status is None else fleet_status()}
+        return ArenaState(stopped=self.arena_stopped, needs_operator=self.store.attention(),
+                          alerts=None if alerts is None else alerts(), manual_approval=self.manual_approval,
+                          running=self.store.on_arena(), queue=tuple(self.store.queue()),
+                          fleet=None if fleet_status is None else fleet_status())
 
     def audit_log(self, user: User, limit: int = 200) -> list[dict[str, Any]]:
         self._require_operator(user)
         return self.accounts.audit_log(limit)
 
     # ------------------------------------------------------------------ workers and runner
-    def claim_for_verification(self) -> dict[str, Any] | None:
+    def claim_for_verification(self) -> Job | None:
         """The next queued job, now ``verifying`` (None when there is none): round-robin over the owners
         of queued jobs — the next owner (by user id) after the one served last, wrapping around — and that
         owner's oldest queued job, so one researcher's many jobs never make another's wait behind them all.
         The owner served last is kept in the database (``settings``), so the turn survives a restart."""
-        with self.db.transaction() as tx:
-            last = int(self.db.setting("verify_last_owner", "0"))
-            row = tx.execute(f"SELECT id, user_id FROM jobs WHERE state = '{JobState.AWAITING_VERIFICATION}' "
-                             "ORDER BY user_id <= ?, user_id, id LIMIT 1", (last,)).fetchone()
-            if row is None:
+        with self.store.transaction() as tx:
+            found = self.store.next_for_verification(tx, self.store.last_verified_owner())
+            if found is None:
                 return None
-            self.db.transition(tx, int(row["id"]), JobState.VERIFYING, sources=(JobState.AWAITING_VERIFICATION,))
-            self.db.set_setting(tx, "verify_last_owner", str(int(row["user_id"])))
+            job_id, owner = found
+            self.store.transition(tx, job_id, JobState.VERIFYING, sources=(JobState.AWAITING_VERIFICATION,))
+            self.store.set_last_verified_owner(tx, owner)
         self.notify()
-        return _job_dict(self._row(int(row["id"])))
+        return self.store.get(job_id)
 
     def finish_verification(self, job_id: int, verdict: str, safety_score: float | None,
                             reasons: list[str]) -> None:
-        """Record the verdict: ``rejected``, or ``approved`` (then ``waiting`` unless manual approval is on).
-        A job cancelled meanwhile stays cancelled."""
-        accepted = verdict != "rejected"
-        with self.db.transaction() as tx:
+        """Record the verdict: ``rejected``, or ``awaiting approval`` (then ``in arena queue`` unless manual
+        approval is on or the job waits for a decision on its bypass). A job cancelled meanwhile stays cancelled."""
+        accepted = verdict != REJECTED_VERDICT
+        with self.store.transaction() as tx:
             try:
-                self.db.transition(tx, job_id, JobState.AWAITING_APPROVAL if accepted else JobState.REJECTED, sources=(JobState.VERIFYING,),
-                                   # S of a rejected script says nothing (it may never have moved a robot)
-                                   verdict=verdict, safety_score=safety_score if accepted else None,
-                                   reason=None if accepted else "; ".join(reasons)[:4000],
-                                   ended=None if accepted else time.time())
+                self.store.transition(tx, job_id, JobState.AWAITING_APPROVAL if accepted else JobState.REJECTED,
+                                      sources=(JobState.VERIFYING,),
+                                      # S of a rejected script says nothing (it may never have moved a robot)
+                                      verdict=verdict, safety_score=safety_score if accepted else None,
+                                      reason=None if accepted else "; ".join(reasons)[:4000],
+                                      ended=None if accepted else time.time())
             except TransitionConflict:
                 return
-            pending = tx.execute(f"SELECT {_PENDING_SQL} AS p FROM jobs WHERE id = ?", (job_id,)).fetchone()["p"]
-            if accepted and pending:  # a verdict alone never removes protection: an operator decides
-                tx.execute("UPDATE jobs SET reason = ? WHERE id = ?", (BYPASS_WAIT, job_id))
-            elif accepted and self.db.setting("manual_approval", "0") != "1":
-                self.db.transition(tx, job_id, JobState.IN_ARENA_QUEUE, sources=(JobState.AWAITING_APPROVAL,))
+            if accepted and self.store.bypass_pending(tx, job_id):  # a verdict alone never removes protection
+                self.store.set_reason(tx, job_id, BYPASS_WAIT)
+            elif accepted and not self.store.manual_approval():
+                self.store.transition(tx, job_id, JobState.IN_ARENA_QUEUE, sources=(JobState.AWAITING_APPROVAL,))
         self.notify()
 
     def fail_verification(self, job_id: int, reason: str) -> None:
         """Verification could not run (infrastructure): the job is ``rejected`` with the reason."""
-        self.finish_verification(job_id, "rejected", None, [f"verification could not run: {reason}"])
+        self.finish_verification(job_id, REJECTED_VERDICT, None, [f"verification could not run: {reason}"])
 
     def verifying_cancelled(self, job_id: int) -> bool:
-        row = self.db.query_one("SELECT state FROM jobs WHERE id = ?", (job_id,))
-        return row is None or row["state"] != JobState.VERIFYING
+        return self.store.state(job_id) != JobState.VERIFYING
 
-    def bypass_allowed(self, job: dict[str, Any]) -> bool:
-        """Run ``job`` without the barrier (with the guard): verification allowed it, the manifest asked, no operator
-        forbade it and an operator approved this job's bypass."""
-        return (job["verdict"] == BYPASS_VERDICT and bool(job["request_no_barrier"]) and not job["barrier_forbidden"]
-                and job.get("bypass_decision") == "approved")
+    @staticmethod
+    def bypass_allowed(job: Job | Mapping[str, Any]) -> bool:
+        """Run ``job`` (a :class:`.Job`, or its JSON from the API) without the barrier, with the guard:
+        :attr:`.Job.bypass_allowed`."""
+        if isinstance(job, Job):
+            return job.bypass_allowed
+        return bypass_decided(job.get("verdict"), bool(job.get("request_no_barrier")),
+                              bool(job.get("barrier_forbidden")), job.get("bypass_decision"), BypassDecision.APPROVED)
 
-    def claim_for_arena(self, admit: Callable[[dict[str, Any]], str | None] | None = None) -> dict[str, Any] | None:
-        """The first waiting job, now ``setting up`` — None when there is none or the arena is stopped.
+    def claim_for_arena(self, admit: Callable[[Job], str | None] | None = None) -> Job | None:
+        """The first job of the arena queue, now ``setting up`` — None when there is none or the arena is stopped.
 
         ``admit(job)`` (the arena: are N charged robots free?) returns None to go ahead, or why the job
-        must wait: it stays first in the queue, ``waiting``, with that ``reason`` (jobs run in queue order:
+        must wait: it stays first in the queue with that ``reason`` (jobs run in queue order:
         a smaller job behind it does not overtake it). ``admit`` runs outside the database transaction.
         """
-        first = f"{JOB_SELECT} WHERE j.state = '{JobState.IN_ARENA_QUEUE}' ORDER BY j.priority, j.id LIMIT 1"
+        admitted = None
         if admit is not None:
             if self.arena_stopped:
                 return None
-            row = self.db.query_one(first)
-            if row is None:
+            first = self.store.first_in_queue()
+            if first is None:
                 return None
-            why = admit(_job_dict(row))
+            why = admit(first)
             if why is not None:
-                self._waiting_reason(int(row["id"]), why[:4000])
+                if self.store.set_waiting_reason(first.id, why[:4000]):
+                    self.notify()
                 return None
-            admitted = int(row["id"])
-        with self.db.transaction() as tx:
-            if self.db.setting("arena_stopped", "0") == "1":
+            admitted = first.id
+        with self.store.transaction() as tx:
+            if self.store.arena_stopped():
                 return None
-            row = tx.execute(first).fetchone()
-            if row is None or (admit is not None and int(row["id"]) != admitted):
+            job = self.store.first_in_queue(tx)
+            if job is None or (admit is not None and job.id != admitted):
                 return None  # the queue changed meanwhile: the arena asks again
-            job = _job_dict(row)
-            bypass = self.bypass_allowed(job)
-            self.db.transition(tx, int(row["id"]), JobState.SETTING_UP, sources=(JobState.IN_ARENA_QUEUE,), started=time.time(),
-                               bypass=int(bypass), reason=None)
+            self.store.transition(tx, job.id, JobState.SETTING_UP, sources=(JobState.IN_ARENA_QUEUE,),
+                                  started=time.time(), bypass=int(job.bypass_allowed), reason=None)
         self.notify()
-        return _job_dict(self._row(int(row["id"])))
-
-    def _waiting_reason(self, job_id: int, reason: str) -> None:
-        """Say why a waiting job does not start yet (shown with the job; cleared when it is claimed)."""
-        with self.db.transaction() as tx:
-            cur = tx.execute(f"UPDATE jobs SET reason = ? WHERE id = ? AND state = '{JobState.IN_ARENA_QUEUE}' AND "
-                             "COALESCE(reason, '') != ?", (reason, job_id, reason))
-        if cur.rowcount:
-            self.notify()
+        return self.store.get(job.id)
 
     def arena_needs_operator(self, message: str) -> None:
         """The arena cannot look after itself (a return to the chargers failed): it stops (no job starts,
         as after an emergency stop) and ``message`` (the robots named) is shown to operators until one
         releases it (:meth:`release_arena`)."""
-        with self.db.transaction() as tx:
-            self.db.set_setting(tx, "arena_stopped", "1")
-            self.db.set_setting(tx, "arena_attention", message[:4000])
+        with self.store.transaction() as tx:
+            self.store.set_arena_stopped(tx, True, attention=message[:4000])
         self.notify()
 
     def mark_running(self, job_id: int) -> bool:
         """``setting up → running``; False if the job was cancelled (or e-stopped) meanwhile."""
-        with self.db.transaction() as tx:
+        with self.store.transaction() as tx:
             try:
-                self.db.transition(tx, job_id, JobState.RUNNING, sources=(JobState.SETTING_UP,))
+                self.store.transition(tx, job_id, JobState.RUNNING, sources=(JobState.SETTING_UP,))
             except TransitionConflict:
                 return False
         self.notify()
         return True
 
-    def finish_run(self, job_id: int, state: str, reason: str | None) -> str:
+    def finish_run(self, job_id: int, state: JobState, reason: str | None) -> JobState | None:
         """End a run (``done``/``failed``/``cancelled``) unless it already ended (cancelled, e-stopped):
-        the job's final state."""
-        with self.db.transaction() as tx:
+        the job's final state (None: there is no such job)."""
+        with self.store.transaction() as tx:
             try:
-                self.db.transition(tx, job_id, state, sources=ACTIVE, ended=time.time(), reason=reason)
+                self.store.transition(tx, job_id, state, sources=ACTIVE, ended=time.time(), reason=reason)
             except TransitionConflict as exc:
-                return str(exc.state)
+                return None if exc.state is None else JobState(exc.state)
         self.notify()
-        return state
+        return JobState(state)
 
-    def set_exports(self, job_id: int, state: str) -> None:
-        """Where the job's exports are: ``"writing"``, ``"ready"`` or ``"failed"`` (:mod:`.exports`)."""
-        with self.db.transaction() as tx:
-            tx.execute("UPDATE jobs SET exports = ? WHERE id = ?", (state, int(job_id)))
+    def set_exports(self, job_id: int, state: ExportState) -> None:
+        """Where the job's exports are (:class:`.ExportState`; :mod:`.exports`)."""
+        self.store.set_exports(job_id, state)
         self.notify()
 
-    def exports_in(self, state: str) -> list[int]:
+    def exports_in(self, state: ExportState) -> list[int]:
         """The ids of the jobs whose exports are in ``state``, oldest first."""
-        return [int(r["id"]) for r in self.db.query("SELECT id FROM jobs WHERE exports = ? ORDER BY id", (state,))]
+        return self.store.exports_in(state)
 
-    def job_state(self, job_id: int) -> str | None:
-        if not valid_id(job_id):
-            return None
-        row = self.db.query_one("SELECT state FROM jobs WHERE id = ?", (int(job_id),))
-        return None if row is None else str(row["state"])
+    def job_state(self, job_id: int) -> JobState | None:
+        return self.store.state(job_id)
 
     def recover_on_start(self) -> list[int]:
         """After a restart: jobs found on the arena become ``interrupted`` (their ids are returned, for the
         runner to recover their recordings); jobs found ``verifying`` go back to ``awaiting verification``."""
-        with self.db.transaction() as tx:
-            ids = [int(r["id"]) for r in tx.execute(
-                f"SELECT id FROM jobs WHERE state IN ({', '.join('?' * len(ACTIVE))})", ACTIVE).fetchall()]
+        with self.store.transaction() as tx:
+            ids = self.store.ids_in(tx, ACTIVE)
             for jid in ids:
-                self.db.transition(tx, jid, JobState.INTERRUPTED, sources=ACTIVE, ended=time.time(),
-                                   reason="the server stopped during the run (partial recording kept)")
-            for r in tx.execute(f"SELECT id FROM jobs WHERE state = '{JobState.VERIFYING}'").fetchall():
-                self.db.transition(tx, int(r["id"]), JobState.AWAITING_VERIFICATION, sources=(JobState.VERIFYING,))
+                self.store.transition(tx, jid, JobState.INTERRUPTED, sources=ACTIVE, ended=time.time(),
+                                      reason="the server stopped during the run (partial recording kept)")
+            for jid in self.store.ids_in(tx, (JobState.VERIFYING,)):
+                self.store.transition(tx, jid, JobState.AWAITING_VERIFICATION, sources=(JobState.VERIFYING,))
         return ids
 
     def close(self) -> None:
         self.db.close()
-

@@ -21,6 +21,7 @@ from swarmdeck.console.jobs.confinement import ConfinementUnavailable, SandboxLi
 from swarmdeck.console.jobs.report_html import render_html
 from swarmdeck.console.jobs.verification import VerificationCancelled, VerificationConfig, verify
 from swarmdeck.console.portal.files import write_private
+from swarmdeck.console.portal.job import Job
 from swarmdeck.console.portal.service import PortalService
 
 
@@ -60,20 +61,20 @@ class VerificationWorkers:
                 continue
             self.verify_job(job)
 
-    def config_for(self, job: dict[str, Any]) -> VerificationConfig:
+    def config_for(self, job: Job) -> VerificationConfig:
         """The job's verification: its declared robots, duration and start poses (as the arena will run it);
         each run's wall time is bounded by the declared duration (``VerificationConfig.run_wall_s``)."""
         cfg = self.service.config
-        poses = job.get("initial_poses")
-        return VerificationConfig(n_robots=job["robots"], duration=job["duration"], runs=cfg.verify_runs,
-                                  seed=cfg.verify_seed + int(job["id"]), trusted=cfg.trusted,
+        poses = job.initial_poses
+        return VerificationConfig(n_robots=job.robots, duration=job.duration, runs=cfg.verify_runs,
+                                  seed=cfg.verify_seed + int(job.id), trusted=cfg.trusted,
                                   jail=cfg.jail(),
                                   limits=SandboxLimits(tick_s=cfg.tick_budget_s),
                                   initial_poses=None if poses is None else tuple(tuple(p) for p in poses))
 
-    def verify_job(self, job: dict[str, Any]) -> None:
+    def verify_job(self, job: Job) -> None:
         """Verify one claimed job and record the verdict (never raises)."""
-        service, job_id = self.service, int(job["id"])
+        service, job_id = self.service, int(job.id)
         cancel = threading.Event()
         stop_watch = threading.Event()
 
@@ -88,7 +89,7 @@ class VerificationWorkers:
         try:
             script, entry = service.script(job)
             # messages name the file the researcher uploaded, not the name the portal stored it under
-            names = [job["script"]] if job["kind"] == "py" else None
+            names = [job.script] if job.kind == "py" else None
             report = verify([script], self.config_for(job), self.executor, cancel=cancel, entry=entry, names=names)
         except VerificationCancelled as exc:
             service.record_verification_cpu(job_id, exc.cpu_s)  # a cancel does not make the CPU free

@@ -1,0 +1,265 @@
+"""The portal's jobs in the database: every SQL statement on ``jobs``, ``verification_usage`` and the arena's
+settings, in one place; rows come out as typed :class:`~.job.Job`.
+
+The service (:mod:`.service`) holds the rules and calls these. Reads run on the thread's connection (autocommit:
+they see the newest committed state); changes take the caller's transaction ``tx``
+(:meth:`~.db.Database.transaction`), so a rule that changes several rows, files or the audit log commits them as
+one. State changes go through :meth:`JobStore.transition` (the conditional ``UPDATE`` of :mod:`.db`'s state
+machine). The schema and its migrations stay in :mod:`.db`; accounts, tokens and sessions in :mod:`.accounts`.
+"""
+from __future__ import annotations
+
+import json
+import sqlite3
+import time
+from collections.abc import Iterator, Sequence
+from contextlib import contextmanager
+from typing import Any
+
+from swarmdeck.console.portal.db import Database
+from swarmdeck.console.portal.job import BYPASS_VERDICT, BYPASS_WAIT, ExportState, Job, valid_id
+from swarmdeck.console.portal.states import ACTIVE, FINAL, JobState
+
+#: a job row with its owner's name (``owner``)
+JOB_SELECT = "SELECT j.*, u.name AS owner FROM jobs j JOIN users u ON u.id = j.user_id"
+#: SQL: the job waits for an operator's decision on its bypass (columns of ``jobs``; :attr:`.Job.bypass_pending`)
+PENDING_SQL = (f"(COALESCE(verdict, '') = '{BYPASS_VERDICT}' AND request_no_barrier = 1 "
+               "AND barrier_forbidden = 0 AND bypass_decision IS NULL)")
+QUEUE_ORDER = "ORDER BY priority, id"
+Tx = sqlite3.Connection
+
+
+def _marks(values: Sequence[object]) -> str:
+    return ", ".join("?" * len(values))
+
+
+class JobStore:
+    """The jobs' rows (module docstring) of one :class:`~.db.Database`. Thread-safe as the database is."""
+
+    def __init__(self, db: Database) -> None:
+        self.db = db
+
+    @contextmanager
+    def transaction(self) -> Iterator[Tx]:
+        """One whole change (:meth:`.Database.transaction`)."""
+        with self.db.transaction() as tx:
+            yield tx
+
+    # ------------------------------------------------------------------ reading jobs
+    def get(self, job_id: int, tx: Tx | None = None) -> Job | None:
+        """The job ``job_id`` (with its queue position), None when there is none or the id cannot be one
+        (:func:`.job.valid_id`: such an id is "no job", never an SQL error)."""
+        if not valid_id(job_id):
+            return None
+        conn = tx if tx is not None else self.db.connection()
+        row = conn.execute(f"{JOB_SELECT} WHERE j.id = ?", (int(job_id),)).fetchone()
+        if row is None:
+            return None
+        return Job.from_row(row, self._positions(conn).get(int(row["id"])) if row["state"] == JobState.IN_ARENA_QUEUE
+                            else None)
+
+    def state(self, job_id: int) -> JobState | None:
+        """The job's state (None: no such job)."""
+        if not valid_id(job_id):
+            return None
+        row = self.db.query_one("SELECT state FROM jobs WHERE id = ?", (int(job_id),))
+        return None if row is None else JobState(row["state"])
+
+    def list(self, user_id: int | None = None) -> list[Job]:
+        """Every job (``user_id``: that user's), newest first, with queue positions."""
+        positions = self._positions(self.db.connection())
+        if user_id is None:
+            rows = self.db.query(f"{JOB_SELECT} ORDER BY j.id DESC")
+        else:
+            rows = self.db.query(f"{JOB_SELECT} WHERE j.user_id = ? ORDER BY j.id DESC", (int(user_id),))
+        return [Job.from_row(r, positions.get(int(r["id"]))) for r in rows]
+
+    def queue(self) -> list[Job]:
+        """The arena queue, in the order jobs will run."""
+        rows = self.db.query(f"{JOB_SELECT} WHERE j.state = ? ORDER BY j.priority, j.id", (JobState.IN_ARENA_QUEUE,))
+        return [Job.from_row(r, k) for k, r in enumerate(rows)]
+
+    def first_in_queue(self, tx: Tx | None = None) -> Job | None:
+        """The next job for the arena (None: the queue is empty)."""
+        conn = tx if tx is not None else self.db.connection()
+        row = conn.execute(f"{JOB_SELECT} WHERE j.state = ? ORDER BY j.priority, j.id LIMIT 1",
+                           (JobState.IN_ARENA_QUEUE,)).fetchone()
+        return None if row is None else Job.from_row(row, 0)
+
+    def on_arena(self) -> Job | None:
+        """The job on the arena (setting up or running), None when it is idle."""
+        row = self.db.query_one(f"{JOB_SELECT} WHERE j.state IN ({_marks(ACTIVE)}) ORDER BY j.id LIMIT 1", ACTIVE)
+        return None if row is None else Job.from_row(row)
+
+    def queue_ids(self, tx: Tx) -> list[int]:
+        """The ids of the arena queue, in the order jobs will run."""
+        return [int(r["id"]) for r in tx.execute(f"SELECT id FROM jobs WHERE state = ? {QUEUE_ORDER}",
+                                                 (JobState.IN_ARENA_QUEUE,)).fetchall()]
+
+    def _positions(self, conn: Tx) -> dict[int, int]:
+        rows = conn.execute(f"SELECT id FROM jobs WHERE state = ? {QUEUE_ORDER}", (JobState.IN_ARENA_QUEUE,))
+        return {int(r["id"]): k for k, r in enumerate(rows.fetchall())}
+
+    def ids_in(self, tx: Tx, states: Sequence[JobState]) -> list[int]:
+        """The ids of the jobs in ``states``, oldest first."""
+        return [int(r["id"]) for r in tx.execute(f"SELECT id FROM jobs WHERE state IN ({_marks(states)}) ORDER BY id",
+                                                 tuple(states)).fetchall()]
+
+    def bypass_pending(self, tx: Tx, job_id: int) -> bool:
+        """:attr:`.Job.bypass_pending` of the row as ``tx`` sees it."""
+        return bool(tx.execute(f"SELECT {PENDING_SQL} AS p FROM jobs WHERE id = ?", (int(job_id),)).fetchone()["p"])
+
+    # ------------------------------------------------------------------ changing jobs
+    def insert(self, tx: Tx, *, user_id: int, name: str, kind: str, script: str, entry: str, robots: int,
+               duration: float, initial_poses: list[list[float]] | None, no_barrier: bool, now: float) -> int:
+        """A new job, ``awaiting verification``, last in priority; its id."""
+        top = tx.execute("SELECT COALESCE(MAX(priority), 0) FROM jobs").fetchone()[0]
+        cur = tx.execute(
+            "INSERT INTO jobs (user_id, name, state, kind, script_name, entry, n_robots, duration, initial_poses, "
+            "request_no_barrier, priority, created, updated) VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)",
+            (user_id, name, JobState.AWAITING_VERIFICATION, kind, script, entry, robots, duration,
+             None if initial_poses is None else json.dumps(initial_poses), int(no_barrier), top + 1, now, now))
+        return int(cur.lastrowid or 0)
+
+    def transition(self, tx: Tx, job_id: int, target: JobState, *, sources: tuple[JobState, ...] | None = None,
+                   **columns: Any) -> None:
+        """The state machine's conditional move (:meth:`.Database.transition`; :class:`.db.TransitionConflict`)."""
+        self.db.transition(tx, int(job_id), target, sources=sources, **columns)
+
+    def state_in(self, tx: Tx, job_id: int) -> JobState | None:
+        """The job's state as ``tx`` sees it (None: no such job)."""
+        row = tx.execute("SELECT state FROM jobs WHERE id = ?", (int(job_id),)).fetchone()
+        return None if row is None else JobState(row["state"])
+
+    def set_barrier_forbidden(self, tx: Tx, job_id: int, forbid: bool) -> bool:
+        """Forbid (or allow) the job's bypass unless it is on the arena or has ended; whether it changed."""
+        blocked = (*ACTIVE, *FINAL)
+        cur = tx.execute(f"UPDATE jobs SET barrier_forbidden = ?, updated = ? WHERE id = ? AND state NOT IN "
+                         f"({_marks(blocked)})", (int(forbid), time.time(), int(job_id), *blocked))
+        return cur.rowcount == 1
+
+    def requeue_bypass_wait(self, tx: Tx, job_id: int) -> None:
+        """A job awaiting the decision on its (now forbidden) bypass goes to the arena queue, with the barrier."""
+        tx.execute("UPDATE jobs SET state = ?, reason = NULL WHERE id = ? AND state = ? AND reason = ?",
+                   (JobState.IN_ARENA_QUEUE, int(job_id), JobState.AWAITING_APPROVAL, BYPASS_WAIT))
+
+    def back_to_bypass_wait(self, tx: Tx, job_id: int) -> None:
+        """A queued job whose bypass is allowed again waits for an operator's decision on it."""
+        tx.execute(f"UPDATE jobs SET state = ?, reason = ? WHERE id = ? AND state = ? AND {PENDING_SQL}",
+                   (JobState.AWAITING_APPROVAL, BYPASS_WAIT, int(job_id), JobState.IN_ARENA_QUEUE))
+
+    def release_approved(self, tx: Tx) -> None:
+        """Every job awaiting approval that is not waiting for a bypass decision goes to the arena queue."""
+        tx.execute(f"UPDATE jobs SET state = ?, updated = ? WHERE state = ? AND NOT {PENDING_SQL}",
+                   (JobState.IN_ARENA_QUEUE, time.time(), JobState.AWAITING_APPROVAL))
+
+    def decide_bypass_in_place(self, tx: Tx, job_id: int, decision: str, forbidden: bool) -> bool:
+        """Record an operator's bypass decision on a job that stays ``awaiting approval``; whether it was."""
+        cur = tx.execute("UPDATE jobs SET bypass_decision = ?, barrier_forbidden = ?, reason = NULL, updated = ? "
+                         "WHERE id = ? AND state = ?",
+                         (decision, int(forbidden), time.time(), int(job_id), JobState.AWAITING_APPROVAL))
+        return cur.rowcount == 1
+
+    def set_reason(self, tx: Tx, job_id: int, reason: str | None) -> None:
+        """Set what the job's page says it waits for or why it ended (None: nothing)."""
+        tx.execute("UPDATE jobs SET reason = ? WHERE id = ?", (reason, int(job_id)))
+
+    def set_waiting_reason(self, job_id: int, reason: str) -> bool:
+        """Say why a job in the arena queue does not start yet; whether that changed anything."""
+        with self.transaction() as tx:
+            cur = tx.execute("UPDATE jobs SET reason = ? WHERE id = ? AND state = ? AND COALESCE(reason, '') != ?",
+                             (reason, int(job_id), JobState.IN_ARENA_QUEUE, reason))
+        return cur.rowcount > 0
+
+    def reorder_queue(self, tx: Tx, ids: list[int]) -> None:
+        """Give the queued jobs ``ids`` priorities in that order (from the queue's lowest on)."""
+        base = tx.execute("SELECT COALESCE(MIN(priority), 0) FROM jobs WHERE state = ?",
+                          (JobState.IN_ARENA_QUEUE,)).fetchone()[0]
+        for k, jid in enumerate(ids):
+            tx.execute("UPDATE jobs SET priority = ? WHERE id = ?", (base + k * 1e-3, int(jid)))
+
+    def next_for_verification(self, tx: Tx, last_owner: int) -> tuple[int, int] | None:
+        """(job id, owner id) of the oldest job awaiting verification of the first owner after ``last_owner``
+        (by user id, wrapping around); None when no job awaits verification."""
+        row = tx.execute("SELECT id, user_id FROM jobs WHERE state = ? ORDER BY user_id <= ?, user_id, id LIMIT 1",
+                         (JobState.AWAITING_VERIFICATION, int(last_owner))).fetchone()
+        return None if row is None else (int(row["id"]), int(row["user_id"]))
+
+    # ------------------------------------------------------------------ exports and retention
+    def set_exports(self, job_id: int, state: ExportState) -> None:
+        """Record where the job's exports are."""
+        with self.transaction() as tx:
+            tx.execute("UPDATE jobs SET exports = ? WHERE id = ?", (ExportState(state), int(job_id)))
+
+    def exports_in(self, state: ExportState) -> list[int]:
+        """The ids of the jobs whose exports are in ``state``, oldest first."""
+        return [int(r["id"]) for r in self.db.query("SELECT id FROM jobs WHERE exports = ? ORDER BY id",
+                                                    (ExportState(state),))]
+
+    def ended_before(self, cutoff: float) -> list[int]:
+        """Jobs that ended before ``cutoff`` (UNIX s), still have their results and no exports being written."""
+        rows = self.db.query(f"SELECT id FROM jobs WHERE state IN ({_marks(FINAL)}) AND ended IS NOT NULL AND "
+                             "ended < ? AND results_deleted IS NULL AND COALESCE(exports, '') != ? ORDER BY id",
+                             (*FINAL, cutoff, ExportState.WRITING))
+        return [int(r["id"]) for r in rows]
+
+    def mark_results_deleted(self, job_id: int, when: float) -> None:
+        """Record that the retention sweep deleted the job's folder at ``when`` (UNIX s); the row stays."""
+        with self.transaction() as tx:
+            tx.execute("UPDATE jobs SET results_deleted = ? WHERE id = ?", (when, int(job_id)))
+
+    # ------------------------------------------------------------------ what a researcher uses (quotas)
+    def kept_job_ids(self, user_id: int) -> list[int]:
+        """The user's jobs whose results were not deleted."""
+        return [int(r["id"]) for r in self.db.query("SELECT id FROM jobs WHERE user_id = ? AND results_deleted IS NULL",
+                                                    (int(user_id),))]
+
+    def unfinished_count(self, user_id: int, tx: Tx | None = None) -> int:
+        """How many of the user's jobs have not ended."""
+        conn = tx if tx is not None else self.db.connection()
+        return int(conn.execute(f"SELECT COUNT(*) FROM jobs WHERE user_id = ? AND state NOT IN ({_marks(FINAL)})",
+                                (int(user_id), *FINAL)).fetchone()[0])
+
+    def verification_cpu(self, user_id: int, since: float, tx: Tx | None = None) -> list[tuple[float, float]]:
+        """(when, CPU s) of the verification of each of the user's jobs recorded after ``since``, oldest first."""
+        conn = tx if tx is not None else self.db.connection()
+        rows = conn.execute("SELECT t, cpu_s FROM verification_usage WHERE user_id = ? AND t > ? ORDER BY t",
+                            (int(user_id), float(since))).fetchall()
+        return [(float(r["t"]), float(r["cpu_s"])) for r in rows]
+
+    def record_verification_cpu(self, job_id: int, cpu_s: float) -> None:
+        """Charge ``cpu_s`` CPU seconds of the job's verification to its owner (replacing an earlier charge)."""
+        with self.transaction() as tx:
+            tx.execute("INSERT OR REPLACE INTO verification_usage (job_id, user_id, t, cpu_s) "
+                       "SELECT id, user_id, ?, ? FROM jobs WHERE id = ?", (time.time(), float(cpu_s), int(job_id)))
+
+    # ------------------------------------------------------------------ the arena's switches (``settings``)
+    def manual_approval(self) -> bool:
+        """Whether an operator approves each verified job."""
+        return self.db.setting("manual_approval", "0") == "1"
+
+    def set_manual_approval(self, tx: Tx, on: bool) -> None:
+        """Switch manual approval (the jobs it releases: :meth:`release_approved`)."""
+        self.db.set_setting(tx, "manual_approval", "1" if on else "0")
+
+    def arena_stopped(self) -> bool:
+        """The emergency-stop latch (it survives a restart)."""
+        return self.db.setting("arena_stopped", "0") == "1"
+
+    def set_arena_stopped(self, tx: Tx, stopped: bool, attention: str | None = None) -> None:
+        """Latch (or release) the arena; ``attention``: why it needs an operator ("" clears it, None keeps it)."""
+        self.db.set_setting(tx, "arena_stopped", "1" if stopped else "0")
+        if attention is not None:
+            self.db.set_setting(tx, "arena_attention", attention)
+
+    def attention(self) -> str | None:
+        """Why the arena needs an operator (None: it does not)."""
+        return self.db.setting("arena_attention", "") or None
+
+    def last_verified_owner(self) -> int:
+        """The user id whose job verification took last (0: none yet): the round-robin's turn."""
+        return int(self.db.setting("verify_last_owner", "0"))
+
+    def set_last_verified_owner(self, tx: Tx, user_id: int) -> None:
+        """Record whose job verification took last."""
+        self.db.set_setting(tx, "verify_last_owner", str(int(user_id)))

@@ -1,0 +1,228 @@
+"""The JSON API's request and response shapes, as pydantic models: what ``/openapi.json`` (and ``/docs``) show.
+
+Every JSON route of :mod:`.api` names its response model here, so the schema describes each response; request
+bodies are validated by these models (a wrong or missing field is 422 naming it, :mod:`.app`). The service
+returns typed objects (:class:`~.job.Job`, :class:`~.service.ArenaState`, :class:`~.jobfiles.ResultFile`) or
+plain dicts; the routes hand those to FastAPI, which checks them against the model.
+
+Nested documents the portal passes on as written elsewhere (the verification report, a run's barrier
+statistics, the fleet table) are models that keep every key (``extra="allow"``) and name the keys a client can
+rely on.
+"""
+from __future__ import annotations
+
+from typing import Any
+
+from pydantic import BaseModel, ConfigDict, Field, StrictBool, StrictInt
+
+from swarmdeck.console.portal.job import BypassDecision, ExportState
+from swarmdeck.console.portal.states import JobState
+
+
+class _Open(BaseModel):
+    """A document that keeps keys beyond those named."""
+
+    model_config = ConfigDict(extra="allow")
+
+
+# ---------------------------------------------------------------------- requests
+class MoveIn(BaseModel):
+    """``POST /api/operator/jobs/{id}/move``."""
+
+    position: StrictInt = Field(ge=0, description="0-based place in the arena queue (0: next)")
+
+
+class BarrierIn(BaseModel):
+    """``POST /api/operator/jobs/{id}/barrier``."""
+
+    forbid: StrictBool = Field(description="true: the job always runs with the barrier; false: allow its bypass")
+
+
+class BypassIn(BaseModel):
+    """``POST /api/operator/jobs/{id}/bypass``."""
+
+    approve: StrictBool = Field(description="true: run without the barrier, with the guard; false: with the barrier")
+
+
+class SettingsIn(BaseModel):
+    """``PUT /api/operator/settings``."""
+
+    manual_approval: StrictBool = Field(description="true: an operator approves each verified job")
+
+
+class TokenIn(BaseModel):
+    """``POST /api/session``."""
+
+    token: str = Field(description="an access token (``swarmdeck users add``)")
+
+
+# ---------------------------------------------------------------------- responses
+class OkOut(BaseModel):
+    ok: bool
+
+
+class UserOut(BaseModel):
+    id: int
+    name: str
+    role: str = Field(description="researcher | operator")
+    disabled: bool
+
+
+class LimitUse(BaseModel):
+    used: int | float
+    limit: int | float | None = Field(description="null: no limit")
+
+
+class MeOut(UserOut):
+    """Who a token or session belongs to; ``csrf`` only when signed in by cookie."""
+
+    limits: dict[str, LimitUse] = Field(
+        description="unfinished_jobs, verify_cpu_s_today (CPU s), results_bytes: each {used, limit}")
+    csrf: str | None = Field(default=None, description="the session's CSRF token (send it as X-CSRF-Token)")
+
+
+class SessionOut(BaseModel):
+    user: UserOut
+    csrf: str
+    expires: float = Field(description="UNIX s")
+
+
+class PackageOut(BaseModel):
+    name: str
+    version: str | None
+
+
+class EnvOut(BaseModel):
+    """What scripts can import (:func:`swarmdeck.console.jobs.script_env.listing`)."""
+
+    script_env: str | None
+    python: str
+    packages: list[PackageOut]
+    provided: list[PackageOut]
+    always: list[str]
+    request: str
+
+
+class JobOut(BaseModel):
+    """A job (:class:`~swarmdeck.console.portal.job.Job`). Times are UNIX s (null: not yet)."""
+
+    id: int
+    name: str
+    owner: str
+    state: JobState
+    held_from: JobState | None = Field(description="the state a held job goes back to")
+    kind: str = Field(description="py | zip")
+    script: str = Field(description="the uploaded file's name")
+    entry: str = Field(description="what runs: script.py, or the .py inside the .zip")
+    robots: int
+    duration: float = Field(description="declared run length, s")
+    initial_poses: list[list[float]] | None = Field(description="[x m, y m, θ rad] per robot; null: the default start")
+    request_no_barrier: bool
+    barrier_forbidden: bool
+    verdict: str | None
+    safety_score: float | None
+    bypass: bool | None = Field(description="the run went without the barrier (set when it starts)")
+    reason: str | None
+    bypass_decision: BypassDecision | None
+    bypass_pending: bool = Field(description="waiting for an operator's decision on running without the barrier")
+    position: int | None = Field(description="0-based place in the arena queue; null when not in it")
+    created: float
+    updated: float
+    started: float | None
+    ended: float | None
+    exports: ExportState | None = Field(description="the CSV, replay and video: writing | ready | failed")
+    results_deleted: float | None = Field(description="when the retention sweep deleted the files")
+
+
+class ReportOut(_Open):
+    """The verification report (schema ``swarmdeck.verification/1``; its config and per-script runs kept whole)."""
+
+    model_config = ConfigDict(extra="allow", populate_by_name=True)
+
+    schema_: str | None = Field(default=None, alias="schema")
+    verdict: str | None = None
+    safety_score: float | None = None
+    reasons: list[str] = Field(default_factory=list)
+    config: dict[str, Any] | None = None
+    scripts: list[dict[str, Any]] = Field(default_factory=list)
+
+
+class ManeuverOut(BaseModel):
+    ok: bool | None
+    collisions: int | None
+    seconds: float | None
+
+
+class ContactsOut(BaseModel):
+    count: int
+    robots: list[int]
+
+
+class ResultsOut(BaseModel):
+    """An ended job in short (:func:`~swarmdeck.console.portal.results.results_summary`)."""
+
+    model_config = ConfigDict(populate_by_name=True)
+
+    job: int
+    state: JobState
+    ended_by: str | None
+    barrier: dict[str, Any] | None = Field(description="ticks, stepped_in_ticks, robots, min_distance_m")
+    bypass: dict[str, Any] | None = Field(description="granted, revoked {t, why}")
+    contacts: ContactsOut | None
+    setup: ManeuverOut | None
+    return_: ManeuverOut | None = Field(alias="return")
+    files: list[str]
+    exports: ExportState | None
+    command: str = Field(description="the command that downloads the files")
+
+
+class LogOut(BaseModel):
+    text: str
+    next: int = Field(description="the byte to ask for next (since=next)")
+    live: bool = Field(description="the job is on the arena: more may come")
+
+
+class FileOut(BaseModel):
+    name: str
+    bytes: int | None
+    what: str
+
+
+class SettingsOut(BaseModel):
+    manual_approval: bool
+
+
+class AlertsOut(BaseModel):
+    job: int | None
+    messages: list[str]
+
+
+class ArenaOut(BaseModel):
+    """The arena as operators see it (:class:`~swarmdeck.console.portal.service.ArenaState`)."""
+
+    stopped: bool
+    needs_operator: str | None
+    alerts: AlertsOut | None
+    manual_approval: bool
+    running: JobOut | None
+    queue: list[JobOut]
+    fleet: dict[str, Any] | None = Field(description="the fleet table (robots, charge, slots); null without a fleet")
+
+
+class AuditOut(BaseModel):
+    id: int
+    t: float
+    user: str | None
+    action: str
+    job: int | None
+    detail: str
+
+
+class RejectionsOut(BaseModel):
+    total: int
+    by_status: dict[str, int]
+    by_field: dict[str, int]
+
+
+class StatsOut(BaseModel):
+    rejected: RejectionsOut
