@@ -33,6 +33,8 @@ from swarmdeck.devices.controllers import (
     si_position_controller,
 )
 from swarmdeck.core.kinematics import GritsBotParams, lookahead_points, unicycle_to_si, wheels_to_unicycle
+from swarmdeck.devices.fleet.manager import FleetManager
+from swarmdeck.devices.initial_conditions import random_initial_poses
 from swarmdeck.devices.pipeline import barrier_filter, certify
 from swarmdeck.devices.simulator import ArenaConfig, SimulatedArena, check_poses
 
@@ -195,9 +197,6 @@ class Arena:
     def _set_up_from_docks(self, from_docks: Any, n: int | None, initial: ArrayLike | None,
                            config: ArenaConfig) -> RobotBackend:
         """The fleet's robots set up at the start poses; their experiment view is the backend."""
-        from swarmdeck.devices.fleet.manager import FleetManager
-        from swarmdeck.devices.initial_conditions import random_initial_poses
-
         if initial is not None:
             poses = check_poses(initial)
         else:

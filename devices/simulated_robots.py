@@ -5,9 +5,9 @@
 hardware): every robot is seen every tick, each ``send`` steps the simulation
 one period on its virtual clock, ``hold`` leaves it standing still.
 
-With ``chargers`` (a :class:`~swarmdeck.devices.fleet.chargers.ChargerLayout`) the robots have
+With ``chargers`` (a :class:`~swarmdeck.devices.chargers.ChargerLayout`) the robots have
 batteries, as the networked fleet does: robots docked on a slot charge, the others drain as
-they drive (:func:`~swarmdeck.devices.fleet.battery.battery_step`), and every reading carries
+they drive (:func:`~swarmdeck.devices.battery.battery_step`), and every reading carries
 their voltage and charging state; ``start_docked`` puts robot k on slot k.
 """
 from __future__ import annotations
@@ -19,8 +19,8 @@ from numpy.typing import NDArray
 
 from swarmdeck.core.ports import SensedPoses
 from swarmdeck.core.kinematics import GritsBotParams
-from swarmdeck.devices.fleet.battery import BatteryParams, battery_step
-from swarmdeck.devices.fleet.chargers import ChargerLayout
+from swarmdeck.devices.battery import BatteryParams, battery_step
+from swarmdeck.devices.chargers import ChargerLayout
 from swarmdeck.devices.initial_conditions import max_robots, random_initial_poses
 from swarmdeck.devices.simulator import ArenaConfig, SimulatedArena
 
@@ -76,6 +76,10 @@ class SimulatedRobots:
         if self.chargers is None:
             return np.zeros(self.n_robots, dtype=bool)
         return self.chargers.docked_slot(self.sim.poses) >= 0
+
+    def truth(self, now: float = 0.0) -> NDArray[np.float64]:
+        """The simulator's true poses ``(N, 3)`` (what a synthetic overhead camera renders)."""
+        return self.sim.poses
 
     def read(self, now: float = 0.0) -> SensedPoses:
         if self.charge is None:

@@ -8,7 +8,7 @@ from swarmdeck.console.runtime.assigned_robots import AssignedRobots
 from swarmdeck.console.runtime.loop import ControlLoop, LoopConfig, SafetyParams
 from swarmdeck.core.kinematics import GritsBotParams, lookahead_points
 from swarmdeck.devices import ArenaConfig
-from swarmdeck.devices.fleet.chargers import ChargerLayout
+from swarmdeck.devices.chargers import ChargerLayout
 from swarmdeck.devices.simulated_robots import SimulatedRobots
 
 ELL = GritsBotParams().lookahead

@@ -41,8 +41,8 @@ from swarmdeck.core.bounds import Bounds
 from swarmdeck.core.checks import require_positive
 from swarmdeck.core.kinematics import GritsBotParams
 from swarmdeck.devices.fleet.assignment import assign
-from swarmdeck.devices.fleet.battery import BatteryParams, charge_from_voltage
-from swarmdeck.devices.fleet.chargers import ChargerLayout
+from swarmdeck.devices.battery import BatteryParams, charge_from_voltage
+from swarmdeck.devices.chargers import ChargerLayout
 from swarmdeck.devices.fleet.docking import choose_slots, return_maneuver
 from swarmdeck.devices.fleet.maneuver import Maneuver
 from swarmdeck.devices.fleet.manager import FleetConfig

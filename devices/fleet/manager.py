@@ -4,8 +4,8 @@
 robot of the fleet (paper §III-A: the back end "assigns charged robots, sets them up to the
 experiment's initial conditions, and returns them to the chargers afterwards"; REFERENCE.md §11):
 
-1. the robots start docked on charger slots (:class:`~swarmdeck.devices.fleet.chargers.ChargerLayout`)
-   and charge there (:mod:`~swarmdeck.devices.fleet.battery`);
+1. the robots start docked on charger slots (:class:`~swarmdeck.devices.chargers.ChargerLayout`)
+   and charge there (:mod:`~swarmdeck.devices.battery`);
 2. :meth:`FleetManager.setup` assigns N charged, healthy robots to experiment ids 0…N−1
    (:func:`~swarmdeck.devices.fleet.assignment.assign`), checks the start poses
    (:func:`~swarmdeck.devices.fleet.setup.check_start_poses`) and drives the robots there under
@@ -31,8 +31,8 @@ from numpy.typing import ArrayLike, NDArray
 
 from swarmdeck.core.kinematics import GritsBotParams, limit_unicycle, lookahead_points
 from swarmdeck.devices.fleet.assignment import Assignment, AssignmentPolicy, assign
-from swarmdeck.devices.fleet.battery import BatteryParams, battery_step, recharge
-from swarmdeck.devices.fleet.chargers import ChargerLayout
+from swarmdeck.devices.battery import BatteryParams, battery_step, recharge
+from swarmdeck.devices.chargers import ChargerLayout
 from swarmdeck.devices.fleet.docking import choose_slots, return_maneuver
 from swarmdeck.devices.fleet.maneuver import Maneuver, ManeuverParams
 from swarmdeck.devices.fleet.setup import ManeuverReport, check_start_poses, drive

@@ -68,6 +68,8 @@ class NetworkRobots:
         *,
         n_robots: int | None = None,
         wait_for_poses: float = 5.0,
+        partial: bool = False,
+        name: str | None = None,
         timeouts: LinkTimeouts = LinkTimeouts(),
         streamer: StreamerConfig = StreamerConfig(),
         **mqtt: object,
@@ -75,7 +77,10 @@ class NetworkRobots:
         """Connect to ``url`` and wait up to ``wait_for_poses`` s for the first pose of every robot.
 
         ``ids`` (or ``n_robots`` for ids 0..N−1) fixes the robots to control; with neither,
-        every robot heard of within ``wait_for_poses`` is used. Extra keywords go to
+        every robot heard of within ``wait_for_poses`` is used. ``partial``: with ``ids``, go on
+        once the wait is over if at least one of them reported (the others stay out of readings
+        until they do: one silent robot does not keep a fleet from working). ``name``: the status
+        line's name (default ``mqtt <url without password>``). Extra keywords go to
         :class:`~swarmdeck.devices.net.mqtt_config.MqttConfig` (``qos``, ``protocol``, ``ca_certs``, …).
 
         Raises:
@@ -92,7 +97,7 @@ class NetworkRobots:
                 seen = transport.latest_poses().ids
                 if ids is not None:
                     missing = np.setdiff1d(np.asarray(ids, dtype=np.int64), seen)
-                    if not len(missing):
+                    if not len(missing) or (partial and len(seen) and time.monotonic() > deadline):
                         break
                 elif len(seen) and time.monotonic() > deadline - wait_for_poses / 2:
                     break  # robots heard of; half the wait spent collecting stragglers
@@ -105,7 +110,7 @@ class NetworkRobots:
         except BaseException:
             transport.close()
             raise
-        return cls(transport, ids, streamer=streamer)
+        return cls(transport, ids, streamer=streamer, name=name if name is not None else f"mqtt {redact_url(url)}")
 
     # ---------------------------------------------------------------- pose source
     def read(self, now: float | None = None) -> SensedPoses:
@@ -124,6 +129,13 @@ class NetworkRobots:
         seen = (self.clock() - stamps) <= self.streamer.config.pose_timeout
         battery, charging = self.transport.status().robots.battery_of(ids)
         return SensedPoses(ids.astype(np.int64), poses, seen, battery=battery, charging=charging)
+
+    def truth(self, now: float | None = None) -> NDArray[np.float64]:
+        """Latest reported poses ``(N, 3)`` of the robots under control, unknown ones at 0 (what a
+        synthetic overhead camera renders, ``--camera synthetic``)."""
+        out = np.array(self.read().poses, dtype=float)
+        out[~np.isfinite(out)] = 0.0
+        return out
 
     def obstacles(self) -> NDArray[np.float64]:
         """``(M, 2)`` last known centres of robots excluded from control (fixed obstacles), m."""
