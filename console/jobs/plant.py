@@ -18,6 +18,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.spatial import cKDTree
 
+from swarmdeck.core.ports import SensedPoses
 from swarmdeck.devices.arena import Arena
 from swarmdeck.core.kinematics import GritsBotParams, limit_unicycle, unicycle_to_si
 from swarmdeck.devices.gritsbot import wrap_angle
@@ -58,7 +59,7 @@ class Disturbances:
 
 @dataclass
 class VerificationRobots:
-    """A :class:`~swarmdeck.devices.backend.RobotBackend`: the simulator with disturbances and contacts.
+    """Robot ports (:mod:`swarmdeck.core.ports`) for the Arena: the simulator with disturbances and contacts.
 
     Args:
         sim: the simulated arena (true poses).
@@ -75,8 +76,12 @@ class VerificationRobots:
     min_distance: list[float] = field(init=False, default_factory=list)  # per step, m (centres)
     contact_points: list[tuple[float, float, float]] = field(init=False, default_factory=list)  # (t, x, y)
 
+    name = "verification (disturbed simulation)"
+
     def __post_init__(self) -> None:
         self.n_robots = self.sim.n_robots
+        self._ids = np.arange(self.n_robots, dtype=np.int64)
+        self._seen = np.ones(self.n_robots, dtype=bool)
         self.params: GritsBotParams = self.sim.params
         self.contacts = ContactLog(self.n_robots, self.sim.config.dt)
         self._pending = (np.zeros(self.n_robots), np.zeros(self.n_robots))
@@ -106,6 +111,25 @@ class VerificationRobots:
         observed = self.sim.poses + noise
         observed[:, 2] = wrap_angle(observed[:, 2])
         self._observed = observed
+
+    def read(self, now: float = 0.0) -> SensedPoses:
+        """The tracked poses (every robot seen) at the simulator's time."""
+        return SensedPoses(self._ids, self._observed.copy(), self._seen, time=self.sim.time)
+
+    def send(self, ids: NDArray[np.int64], v: ArrayLike, w: ArrayLike) -> None:
+        """One period of ``(v, ω)`` for robots 0…N−1 in order (:meth:`step`)."""
+        if len(ids) != self.n_robots or np.any(np.asarray(ids) != self._ids):
+            raise ValueError(f"verification expects commands for ids 0..{self.n_robots - 1} in order")
+        self.step(v, w)
+
+    def hold(self) -> None:
+        """Nothing moves."""
+
+    def health(self) -> str:
+        return f"simulator clock {self.sim.time:.1f} s"
+
+    def close(self) -> None:
+        """Nothing to release."""
 
     def step(self, v: ArrayLike, w: ArrayLike) -> NDArray[np.float64]:
         """Apply (v, ω) (N,) each, subject to latency, drops and non-penetration; returns the tracked poses."""

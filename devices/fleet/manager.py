@@ -11,7 +11,7 @@ experiment's initial conditions, and returns them to the chargers afterwards"; R
    (:func:`~swarmdeck.devices.fleet.setup.check_start_poses`) and drives the robots there under
    the barrier with the deadlock escape (:func:`~swarmdeck.devices.fleet.setup.drive`);
 3. :meth:`FleetManager.experiment` is the experiment's view: N robots with ids 0…N−1 (a
-   :class:`~swarmdeck.devices.backend.RobotBackend`, what :class:`~swarmdeck.devices.Arena`
+   robot ports (:mod:`swarmdeck.core.ports`), what :class:`~swarmdeck.devices.Arena`
    drives), whose ``obstacles`` are the look-ahead points of the robots that stayed docked;
 4. :meth:`FleetManager.return_to_chargers` docks every robot that is off its charger on a free
    slot; :meth:`FleetManager.ready` is True when every robot is docked or assigned.
@@ -30,6 +30,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from swarmdeck.core.kinematics import GritsBotParams, limit_unicycle, lookahead_points
+from swarmdeck.core.ports import SensedPoses
 from swarmdeck.devices.fleet.assignment import Assignment, AssignmentPolicy, assign
 from swarmdeck.devices.battery import BatteryParams, battery_step, recharge
 from swarmdeck.devices.chargers import ChargerLayout
@@ -246,13 +247,17 @@ class FleetManager:
 
 
 class FleetExperiment:
-    """The experiment's robots 0…N−1: fleet rows ``rows`` of a :class:`FleetManager` (a RobotBackend).
+    """The experiment's robots 0…N−1: fleet rows ``rows`` of a :class:`FleetManager`, as robot ports
+    (:mod:`swarmdeck.core.ports`: what :class:`~swarmdeck.devices.Arena` drives).
 
-    ``time`` starts at 0 when the experiment starts; ``step(v, w)`` drives these robots (the others
-    hold still) and charges/drains the batteries; ``obstacles`` are the look-ahead points ``(M − N, 2)``
-    of the robots that stayed docked (for :func:`~swarmdeck.devices.pipeline.certify`);
-    ``report`` counts the experiment's own boundary, collision and actuator errors.
+    ``time`` starts at 0 when the experiment starts (every reading carries it); ``send`` (or
+    ``step(v, w)``) drives these robots (the others hold still) and charges/drains the batteries;
+    ``obstacles()`` are the look-ahead points ``(M − N, 2)`` of the robots that stayed docked (for
+    :func:`~swarmdeck.devices.pipeline.certify`); ``report`` counts the experiment's own boundary,
+    collision and actuator errors.
     """
+
+    name = "fleet (from the chargers)"
 
     def __init__(self, fleet: FleetManager, rows: ArrayLike) -> None:
         self.fleet = fleet
@@ -263,6 +268,27 @@ class FleetExperiment:
         self.report = ValidationReport(self.n_robots)
         others = np.setdiff1d(np.arange(fleet.n_robots), self.rows)
         self._others = others
+        self._ids = np.arange(self.n_robots, dtype=np.int64)
+        self._seen = np.ones(self.n_robots, dtype=bool)
+
+    def read(self, now: float = 0.0) -> SensedPoses:
+        """The experiment's robots 0…N−1, every one seen, on the experiment's clock."""
+        return SensedPoses(self._ids, self.poses, self._seen, time=self.time)
+
+    def send(self, ids: NDArray[np.int64], v: ArrayLike, w: ArrayLike) -> None:
+        """One period of ``(v, ω)`` for robots 0…N−1 in order."""
+        if len(ids) != self.n_robots or np.any(np.asarray(ids) != self._ids):
+            raise ValueError(f"the experiment's robots are 0..{self.n_robots - 1}, in order")
+        self.step(v, w)
+
+    def hold(self) -> None:
+        """Nothing moves (a simulation does not advance)."""
+
+    def health(self) -> str:
+        return f"fleet clock {self.fleet.time:.1f} s"
+
+    def close(self) -> None:
+        """Nothing to release: the fleet outlives the experiment."""
 
     @property
     def poses(self) -> FloatArray:
@@ -274,8 +300,8 @@ class FleetExperiment:
         end = self.fleet.experiment_end
         return float((self.fleet.sim.time if end is None else end) - self._t0)
 
-    @property
     def obstacles(self) -> FloatArray | None:
+        """``(M − N, 2)`` look-ahead points of the robots that stayed docked, m (None: there are none)."""
         if len(self._others) == 0:
             return None
         return lookahead_points(self.fleet.sim.poses[self._others], self.params.lookahead)
