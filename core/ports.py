@@ -43,7 +43,7 @@ from dataclasses import dataclass
 from typing import Protocol, runtime_checkable
 
 import numpy as np
-from numpy.typing import NDArray
+from numpy.typing import ArrayLike, NDArray
 
 
 @dataclass(frozen=True)
@@ -101,6 +101,19 @@ class NominalSink(Protocol):
 
     def send_nominal(self, ids: NDArray[np.int64], nominal: NDArray[np.float64]) -> None:
         """Hand over the nominal ``(N, 2)`` look-ahead velocities (m/s) for ``ids`` (one period)."""
+
+
+def rows_of(ids: ArrayLike, want: ArrayLike) -> tuple[NDArray[np.intp], NDArray[np.bool_]]:
+    """Rows ``(K,)`` of the robot ids ``want`` in ``ids`` ``(N,)`` and whether each is there (rows of
+    missing ids are 0, not to be used)."""
+    ids = np.asarray(ids, dtype=np.int64).reshape(-1)
+    want = np.asarray(want, dtype=np.int64).reshape(-1)
+    if not len(ids):
+        return np.zeros(len(want), dtype=np.intp), np.zeros(len(want), dtype=bool)
+    order = np.argsort(ids)
+    rows = order[np.minimum(np.searchsorted(ids[order], want), len(ids) - 1)]
+    present = ids[rows] == want
+    return np.where(present, rows, 0).astype(np.intp), present
 
 
 def close_ports(source: PoseSource, sink: CommandSink) -> None:

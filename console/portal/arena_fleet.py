@@ -22,7 +22,7 @@ pipeline; the robots that do not move are fixed obstacles of the barrier):
 1. :meth:`ArenaFleet.shortfall` — can N robots be assigned now (charged ≥ ``min_charge``, tracked,
    firmware heard)? If not, the reason, naming each robot left out;
 2. :meth:`ArenaFleet.set_up` — assign N robots (least total travel) and drive them to the start
-   poses; on success the experiment's ports, :class:`~swarmdeck.console.runtime.assigned_robots.AssignedRobots`
+   poses; on success the experiment's ports, :class:`~swarmdeck.devices.fleet.assigned.AssignedRobots`
    (robots 0…N−1; the others are the barrier's obstacles);
 3. :meth:`ArenaFleet.return_all` — every robot on the floor backs onto a free charger slot;
 4. :meth:`ArenaFleet.idle` — between jobs docked simulated robots charge for the wall time that
@@ -48,13 +48,13 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from swarmdeck.console.runtime import fleet_upkeep as fu
-from swarmdeck.console.runtime.assigned_robots import AssignedRobots
 from swarmdeck.console.runtime.batteries import battery_levels
 from swarmdeck.console.runtime.hardware import RobotsSpec, open_robots
 from swarmdeck.console.runtime.loop import ControlLoop, LoopConfig
 from swarmdeck.core.bounds import Bounds
 from swarmdeck.core.kinematics import GritsBotParams
 from swarmdeck.core.ports import SensedPoses
+from swarmdeck.devices.fleet.assigned import AssignedRobots
 from swarmdeck.devices.fleet.assignment import AssignmentError, assign
 from swarmdeck.devices.battery import recharge
 from swarmdeck.devices.chargers import ChargerLayout

@@ -11,7 +11,7 @@ For each job the service hands over (``in arena queue → setting up``):
    else the script's initial conditions, else random valid ones:
    :func:`~swarmdeck.console.jobs.start_poses.arena_start`, the rule verification
    uses too) under the barrier; the job then runs on them as robots 0…N−1
-   (:class:`~swarmdeck.console.runtime.assigned_robots.AssignedRobots`), the
+   (:class:`~swarmdeck.devices.fleet.assigned.AssignedRobots`), the
    docked robots fixed obstacles of its barrier. A set-up that fails (time limit,
    lost robot, a start pose on a docked robot) stops the robots and fails the job
    naming them.
