@@ -199,6 +199,7 @@ class Arena:
         self.last_nominal = np.zeros((self.n, 2))
         self.last_safe = np.zeros((self.n, 2))
         self._on_step = defaults.on_step
+        self.robots.start_clock()  # real robots: the run starts now, not when the robots were opened
         if defaults.on_create is not None:
             defaults.on_create(self)
 

@@ -22,7 +22,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from swarmdeck.core.kinematics import GritsBotParams
-from swarmdeck.core.ports import CommandSink, NominalSink, PoseSource, SensedPoses
+from swarmdeck.core.ports import CommandSink, NominalSink, PoseSource, SensedPoses, rows_of
 from swarmdeck.devices.clock import RealTimePacer
 
 FloatArray = NDArray[np.float64]
@@ -67,6 +67,11 @@ class SteppedRobots:
         self._t0 = float(reading.time) if reading.time is not None else clock()
         self._pacer = None if self.simulated else RealTimePacer(self.dt)
 
+    def start_clock(self) -> None:
+        """Time 0 is now (robots in the real world; a simulated clock keeps its first reading's time)."""
+        if not self.simulated:
+            self._t0 = self.clock()
+
     def read(self) -> SensedPoses:
         """A fresh reading of the ports (every robot of the first reading in its order is in ``poses``)."""
         reading = self.source.read(0.0)
@@ -75,10 +80,8 @@ class SteppedRobots:
         if len(ids) == self.n_robots and np.array_equal(ids, self.ids):
             p = np.asarray(reading.poses, dtype=float)
         else:  # robots left out of this reading keep their last known pose
+            rows, have = rows_of(ids, self.ids)
             p = self._last.copy()
-            pos = {int(i): k for k, i in enumerate(ids.tolist())}
-            rows = np.array([pos.get(int(i), -1) for i in self.ids.tolist()])  # once per changed reading
-            have = rows >= 0
             p[have] = np.asarray(reading.poses, dtype=float)[rows[have]]
         ok = np.all(np.isfinite(p), axis=1)
         self._last = np.where(ok[:, None], p, self._last)
