@@ -1,9 +1,12 @@
-"""The simulated arena as the control loop's robot ports: pose source and command sink in one.
+"""The simulated arena as robot ports (the console loop's and the Arena's): pose source and command sink in one.
 
 :class:`SimulatedRobots` is the :class:`~swarmdeck.core.ports.PoseSource` and
 :class:`~swarmdeck.core.ports.CommandSink` of a :class:`SimulatedArena` (no
 hardware): every robot is seen every tick, each ``send`` steps the simulation
-one period on its virtual clock, ``hold`` leaves it standing still.
+one period on its virtual clock (every reading carries it as ``SensedPoses.time``),
+``hold`` leaves it standing still. ``SimulatedRobots(sim=SimulatedArena(...))`` wraps
+physics built already (the Arena's default robots, which pace themselves when
+``ArenaConfig.real_time``).
 
 With ``chargers`` (a :class:`~swarmdeck.devices.chargers.ChargerLayout`) the robots have
 batteries, as the networked fleet does: robots docked on a slot charge, the others drain as

@@ -19,8 +19,8 @@ frozen :class:`RobotsSpec` and gets the robot ports of :mod:`swarmdeck.core.port
   one object as both ports.
 
 Robots without a fresh pose are "not seen": the loop commands them zero and the barrier treats
-them as fixed obstacles. To add a robot transport, see ``/work/wt/notes/arch-robots.md`` (one branch
-here and one ports class in ``devices/``).
+them as fixed obstacles. To add a robot transport (docs/architecture.md): one ports class in ``devices/``,
+one field of :class:`RobotsSpec` and one branch of :func:`open_robots` here.
 """
 from __future__ import annotations
 
