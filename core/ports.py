@@ -20,16 +20,19 @@ camera, GRITSBots over MQTT, the in-process transport):
   from control, for the barrier). Implemented by ``SimulatedRobots`` and
   ``NetworkRobots`` (any ``RobotTransport`` behind the streamer's watchdogs).
 
-Two neighbouring roles keep their own names because they really differ:
+These two ports are the only robot interface: the console loop reads and sends through them,
+and so does the experiment API — ``devices.arena.Arena`` drives any ports through one adapter,
+``devices.stepped.SteppedRobots`` (``poses``, ``time``, ``step(v, w)`` one period at a time). A
+simulation says how much simulated time a reading is at (``SensedPoses.time``); robots in the real
+world leave it None and the adapter paces them to the period on the monotonic clock. A sink behind
+a trust boundary (the sandboxed script's robots, ``console/jobs/child.py``) is a
+:class:`NominalSink`: it takes the nominal look-ahead velocities and the far side certifies them.
 
-* ``devices.net.transport.RobotTransport`` — the wire: carries commands (with
-  LEDs) to robots and brings back their status and stamped pose samples
-  (``PoseFeed.latest_poses() -> PoseSample``, judged for staleness by the
-  command streamer on the receiver's clock). Implemented by ``MqttTransport``
-  and ``InProcessTransport``; the loop reaches it only through ``NetworkRobots``.
-* ``devices.backend.RobotBackend`` — the experiment API's synchronous view
-  (``poses``, ``time``, ``step(v, w)`` advancing one period), which ``Arena``
-  drives: ``SimulatedArena`` or ``TransportBackend``.
+The wire below the ports keeps its own name: ``devices.net.transport.RobotTransport`` carries
+commands (with LEDs) to robots and brings back their status and stamped pose samples
+(``PoseFeed.latest_poses() -> PoseSample``, judged for staleness by the command streamer on the
+receiver's clock). Implemented by ``MqttTransport`` and ``InProcessTransport``; everything above it
+reaches it only through ``NetworkRobots``.
 
 This module is at the bottom of the dependency graph so that every subsystem
 (``tracking`` included, which imports nothing above ``core``) can speak it.
@@ -40,14 +43,15 @@ from dataclasses import dataclass
 from typing import Protocol, runtime_checkable
 
 import numpy as np
-from numpy.typing import NDArray
+from numpy.typing import ArrayLike, NDArray
 
 
 @dataclass(frozen=True)
 class SensedPoses:
     """One reading: ids (N,) int, poses (N, 3) [x, y, θ] (m, rad), seen (N,) bool (fresh this tick);
-    optional is_virtual (N,) bool (None: all physical), battery (N,) V (None or NaN: unknown) and
-    charging (N,) bool (None: unknown)."""
+    optional is_virtual (N,) bool (None: all physical), battery (N,) V (None or NaN: unknown),
+    charging (N,) bool (None: unknown) and time, s: the robots' simulated clock at this reading
+    (None: robots in the real world, on the reader's monotonic clock)."""
 
     ids: NDArray[np.int64]
     poses: NDArray[np.float64]
@@ -55,6 +59,7 @@ class SensedPoses:
     is_virtual: NDArray[np.bool_] | None = None
     battery: NDArray[np.float64] | None = None
     charging: NDArray[np.bool_] | None = None
+    time: float | None = None
 
 
 @runtime_checkable
@@ -87,6 +92,28 @@ class CommandSink(Protocol):
 
     def close(self) -> None:
         """Stop the robots and release resources."""
+
+
+@runtime_checkable
+class NominalSink(Protocol):
+    """A command sink behind a trust boundary: it takes the nominal look-ahead velocities before any
+    limit or filter, and the far side (which owns the robots) certifies them."""
+
+    def send_nominal(self, ids: NDArray[np.int64], nominal: NDArray[np.float64]) -> None:
+        """Hand over the nominal ``(N, 2)`` look-ahead velocities (m/s) for ``ids`` (one period)."""
+
+
+def rows_of(ids: ArrayLike, want: ArrayLike) -> tuple[NDArray[np.intp], NDArray[np.bool_]]:
+    """Rows ``(K,)`` of the robot ids ``want`` in ``ids`` ``(N,)`` and whether each is there (rows of
+    missing ids are 0, not to be used)."""
+    ids = np.asarray(ids, dtype=np.int64).reshape(-1)
+    want = np.asarray(want, dtype=np.int64).reshape(-1)
+    if not len(ids):
+        return np.zeros(len(want), dtype=np.intp), np.zeros(len(want), dtype=bool)
+    order = np.argsort(ids)
+    rows = order[np.minimum(np.searchsorted(ids[order], want), len(ids) - 1)]
+    present = ids[rows] == want
+    return np.where(present, rows, 0).astype(np.intp), present
 
 
 def close_ports(source: PoseSource, sink: CommandSink) -> None:

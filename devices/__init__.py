@@ -3,10 +3,11 @@
 
 The :class:`Arena` is what experiments program against, at any abstraction
 level of the paper (wheel speeds, unicycle, single integrator, go-to-goal,
-waypoints, next positions); it runs on a :class:`SimulatedArena` by default.
+waypoints, next positions); it drives robot ports (:mod:`swarmdeck.core.ports`) through
+:class:`SteppedRobots`: :class:`SimulatedRobots` over the physics (:class:`SimulatedArena`) by
+default, ``NetworkRobots`` for GRITSBots over MQTT.
 """
 from swarmdeck.devices.arena import Arena, ArenaReport, ExperimentFinished, RunDefaults, RUN_DEFAULTS
-from swarmdeck.devices.backend import RobotBackend
 from swarmdeck.devices.controllers import (
     HybridPoseController,
     at_pose,
@@ -28,7 +29,9 @@ from swarmdeck.core.kinematics import (
     wheel_scale,
     wheels_to_unicycle,
 )
+from swarmdeck.devices.simulated_robots import SimulatedRobots
 from swarmdeck.devices.simulator import ArenaConfig, SimulatedArena
+from swarmdeck.devices.stepped import SteppedRobots
 from swarmdeck.devices.validation import ValidationReport, ValidationRules, colliding_pairs, out_of_bounds
 
 # Transports load paho-mqtt; import them on first use so `import swarmdeck.devices` stays light.
@@ -37,8 +40,6 @@ _LAZY = {
     "InProcessTransport": "net.transport_inprocess",
     "MqttTransport": "net.transport_mqtt",
     "CommandStreamer": "net.streamer",
-    "TransportBackend": "net.transport_backend",
-    "mqtt_backend": "net.transport_backend",
     "NetworkRobots": "net.console_robots",
     "parse_broker_url": "net.mqtt_config",
     "MqttConfig": "net.mqtt_config",
@@ -55,7 +56,7 @@ def __getattr__(name: str):
 
 __all__ = [*_LAZY,
     "Arena", "ArenaConfig", "ArenaReport", "ExperimentFinished", "GritsBotParams", "HybridPoseController",
-    "RobotBackend", "RunDefaults", "RUN_DEFAULTS", "SimulatedArena", "ValidationReport", "ValidationRules",
+    "RunDefaults", "RUN_DEFAULTS", "SimulatedArena", "SimulatedRobots", "SteppedRobots", "ValidationReport", "ValidationRules",
     "at_pose", "at_position", "clf_unicycle_pose_controller", "clf_unicycle_position_controller",
     "colliding_pairs", "limit_unicycle", "lookahead_points", "max_robots", "out_of_bounds",
     "random_initial_poses", "saturate", "si_position_controller", "si_to_unicycle", "unicycle_step",

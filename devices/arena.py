@@ -24,7 +24,6 @@ from typing import Any, Literal, Protocol
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from swarmdeck.devices.backend import RobotBackend
 from swarmdeck.devices.controllers import (
     HybridPoseController,
     at_position,
@@ -33,8 +32,12 @@ from swarmdeck.devices.controllers import (
     si_position_controller,
 )
 from swarmdeck.core.kinematics import GritsBotParams, lookahead_points, unicycle_to_si, wheels_to_unicycle
+from swarmdeck.devices.fleet.manager import FleetManager
+from swarmdeck.devices.initial_conditions import random_initial_poses
 from swarmdeck.devices.pipeline import barrier_filter, certify
+from swarmdeck.devices.simulated_robots import SimulatedRobots
 from swarmdeck.devices.simulator import ArenaConfig, SimulatedArena, check_poses
+from swarmdeck.devices.stepped import SteppedRobots
 
 FloatArray = NDArray[np.float64]
 GoalController = Literal["si", "clf", "pose", "hybrid"]
@@ -60,8 +63,8 @@ class RunDefaults:
     safety: bool = True
     on_create: Any = None  # callable(Arena) -> None, lets the runner find the script's arena
     on_step: Any = None  # callable(Arena) -> None after every step (progress display)
-    # callable(n_robots, initial_conditions, config, params) -> RobotBackend for Arenas built
-    # without a backend (the sandbox's child: robots on the other side of a pipe); None: simulated
+    # callable(n_robots, initial_conditions, config, params) -> robot ports (core/ports.py) for Arenas
+    # built without robots (the sandbox's child: robots on the other side of a pipe); None: simulated
     backend_factory: Any = None
     # start simulated Arenas docked on the chargers and set them up first (swarmdeck run --from-docks)
     from_docks: bool = False
@@ -105,7 +108,12 @@ class Arena:
         safety: True for the default barrier filter, False to run without it, or any object
             with ``filter(points, nominal, obstacles=None)``.
         duration: declared duration, s; :meth:`step` raises :class:`ExperimentFinished` after it.
-        backend: robots to drive; a :class:`SimulatedArena` when omitted.
+        backend: the robots to drive: robot ports (:mod:`swarmdeck.core.ports`; one object that is pose
+            source and command sink, or a ``(source, sink)`` pair) — the MQTT robots
+            (``devices.net.console_robots.NetworkRobots``), virtual robots beside them
+            (``devices.virtual_robots.MixedRobots``), … Driven through
+            :class:`~swarmdeck.devices.stepped.SteppedRobots` (:attr:`robots`). Simulated robots
+            (:class:`~swarmdeck.devices.simulated_robots.SimulatedRobots`) when omitted.
         from_docks: start the simulated robots docked on the chargers and set them up to
             ``initial_conditions`` (given, or random as rps generates them) before the first step,
             as the paper's back end does (:mod:`swarmdeck.devices.fleet`); or a
@@ -134,7 +142,7 @@ class Arena:
         params: GritsBotParams | None = None,
         safety: bool | CommandFilter | None = None,
         duration: float | None = None,
-        backend: RobotBackend | None = None,
+        backend: Any = None,
         from_docks: Any = None,
     ) -> None:
         defaults = RUN_DEFAULTS.get()
@@ -165,10 +173,12 @@ class Arena:
                 initial_conditions = check_poses(initial_conditions)
             elif number_of_robots is None:
                 number_of_robots = 6
-            make = defaults.backend_factory if defaults.backend_factory is not None else SimulatedArena
+            make = defaults.backend_factory if defaults.backend_factory is not None else _simulated_robots
             backend = make(number_of_robots, initial_conditions, config=config, params=self.params)
-        self.backend = backend
-        self.n = int(backend.n_robots)
+        source, sink = backend if isinstance(backend, tuple) else (backend, backend)
+        self.backend = sink  # the robot ports the user handed over (or the simulated robots)
+        self.robots = SteppedRobots(source, sink, params=self.params, dt=config.dt)
+        self.n = int(self.robots.n_robots)
         self.ell = self.params.lookahead
         if safety is True:
             self.safety: CommandFilter | UnicycleCommandFilter | None = barrier_filter(
@@ -189,15 +199,13 @@ class Arena:
         self.last_nominal = np.zeros((self.n, 2))
         self.last_safe = np.zeros((self.n, 2))
         self._on_step = defaults.on_step
+        self.robots.start_clock()  # real robots: the run starts now, not when the robots were opened
         if defaults.on_create is not None:
             defaults.on_create(self)
 
     def _set_up_from_docks(self, from_docks: Any, n: int | None, initial: ArrayLike | None,
-                           config: ArenaConfig) -> RobotBackend:
+                           config: ArenaConfig) -> Any:
         """The fleet's robots set up at the start poses; their experiment view is the backend."""
-        from swarmdeck.devices.fleet.manager import FleetManager
-        from swarmdeck.devices.initial_conditions import random_initial_poses
-
         if initial is not None:
             poses = check_poses(initial)
         else:
@@ -223,7 +231,7 @@ class Arena:
     @property
     def time(self) -> float:
         """Seconds since the start of the run."""
-        return float(self.backend.time)
+        return float(self.robots.time)
 
     @property
     def ids(self) -> NDArray[np.intp]:
@@ -233,18 +241,17 @@ class Arena:
     @property
     def is_virtual(self) -> NDArray[np.bool_]:
         """``(N,)`` bool: robots simulated beside the physical ones (a
-        :class:`~swarmdeck.devices.virtual_robots.MixedBackend`); all False otherwise. The only way
+        :class:`~swarmdeck.devices.virtual_robots.MixedRobots`); all False otherwise. The only way
         user code can tell them apart: the safety filter treats every robot alike."""
-        mask = getattr(self.backend, "is_virtual", None)
-        return np.zeros(self.n, dtype=bool) if mask is None else np.array(mask, dtype=bool)
+        return self.robots.is_virtual
 
     def poses(self) -> FloatArray:
         """Current poses ``(N, 3)`` ``[x, y, θ]`` (a fresh copy every call)."""
-        return self.backend.poses
+        return self.robots.poses
 
     def positions(self) -> FloatArray:
         """Look-ahead points ``(N, 2)``: the points single-integrator commands move."""
-        return lookahead_points(self.backend.poses, self.ell)
+        return lookahead_points(self.robots.poses, self.ell)
 
     # ------------------------------------------------------------------ commanding
     def _ids(self, ids: ArrayLike | None) -> NDArray[np.intp] | None:
@@ -448,22 +455,22 @@ class Arena:
         safety filter) → robots. Returns the new poses.
 
         Robots whose nominal command is NaN or inf are stopped for this step and the
-        event counted. If the safety filter fails, every robot is stopped. A backend with
-        ``step_nominal(nominal)`` (the sandboxed child's robots, console/jobs/child.py) gets the
-        nominal ``(N, 2)`` as it is instead: the trusted side across the pipe certifies it.
+        event counted. If the safety filter fails, every robot is stopped. Robots behind a trust
+        boundary (a :class:`~swarmdeck.core.ports.NominalSink`: the sandboxed child's robots,
+        console/jobs/child.py) get the nominal ``(N, 2)`` as it is instead: the trusted side across the
+        pipe certifies it.
         """
         if self.duration is not None and self.time >= self.duration - 1e-9:
             raise ExperimentFinished(f"declared duration {self.duration} s is over")
-        poses = self.backend.poses
+        poses = self.robots.poses
         nominal = self.nominal_velocities(poses)
-        forward = getattr(self.backend, "step_nominal", None)
-        if forward is not None:  # robots behind a trust boundary (a sandboxed script): the far side certifies
+        if self.robots.nominal_sink is not None:  # robots behind a trust boundary: the far side certifies
             self.last_nominal = nominal
-            new_poses = forward(nominal)
+            new_poses = self.robots.step_nominal(nominal)
             if self._on_step is not None:
                 self._on_step(self)
             return new_poses
-        cert = certify(poses, nominal, self.params, self.safety, obstacles=getattr(self.backend, "obstacles", None))
+        cert = certify(poses, nominal, self.params, self.safety, obstacles=self.robots.obstacles())
         if cert.invalid.any():
             self.invalid_commands += int(cert.invalid.sum())
             self.events.append(f"t={self.time:.3f}: non-finite command for robot(s) "
@@ -481,7 +488,7 @@ class Arena:
                 st.interventions += int(np.count_nonzero(cert.changed()))
         self.last_nominal = np.where(cert.invalid[:, None], 0.0, nominal)
         self.last_safe = cert.safe
-        new_poses = self.backend.step(cert.v, cert.w)
+        new_poses = self.robots.step(cert.v, cert.w)
         if self._on_step is not None:
             self._on_step(self)
         return new_poses
@@ -498,8 +505,8 @@ class Arena:
             raise ExperimentFinished(f"declared duration {self.duration} s is over")
         v = np.asarray(v, dtype=float)
         w = np.asarray(w, dtype=float)
-        self.last_nominal = self.last_safe = unicycle_to_si(self.backend.poses, v, w, self.ell)
-        new_poses = self.backend.step(v, w)
+        self.last_nominal = self.last_safe = unicycle_to_si(self.robots.poses, v, w, self.ell)
+        new_poses = self.robots.step(v, w)
         if self._on_step is not None:
             self._on_step(self)
         return new_poses
@@ -507,7 +514,7 @@ class Arena:
     # ------------------------------------------------------------------ reporting
     def report(self) -> "ArenaReport":
         """What happened so far: validation counts, safety filter statistics, invalid commands."""
-        validation = getattr(self.backend, "report", None)
+        validation = self.robots.report
         fleet = None if self.fleet is None else fleet_summary(self.fleet)
         return ArenaReport(self.n, self.time, validation, self.safety_stats, self.invalid_commands, self.safety is not None,
                            fleet)
@@ -517,6 +524,12 @@ class Arena:
         it prints the report once, at the end of the run."""
         if RUN_DEFAULTS.get().on_create is None:
             print(self.report())
+
+
+def _simulated_robots(n_robots: int | None, initial_conditions: ArrayLike | None, *, config: ArenaConfig,
+                      params: GritsBotParams) -> SimulatedRobots:
+    """The Arena's robots when none are given: the simulator, pacing itself when ``config.real_time``."""
+    return SimulatedRobots(sim=SimulatedArena(n_robots, initial_conditions, config=config, params=params))
 
 
 @dataclass

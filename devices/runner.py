@@ -27,6 +27,7 @@ from pathlib import Path
 from typing import Any
 
 from swarmdeck.devices.arena import RUN_DEFAULTS, Arena, ArenaReport, ExperimentFinished, RunDefaults
+from swarmdeck.devices.fleet.setup import SetupFailed
 from swarmdeck.devices.rps import rps_aliases
 
 
@@ -198,8 +199,6 @@ def run_experiment(
 
 def _return_fleets(result: RunResult) -> None:
     """Dock the robots of every Arena that started from the chargers (after the script, safely)."""
-    from swarmdeck.devices.fleet.setup import SetupFailed
-
     for arena in result.arenas:
         if arena.fleet is None or arena.fleet.assignment is None:
             continue

@@ -7,17 +7,11 @@ virtual one exactly as it avoids a real one), and only an ``is_virtual`` mask
 tells them apart. Physical robots come first (rows 0 … N_p−1), the K virtual
 ones after them.
 
-Two views of the same idea, one per API level:
-
-* :class:`MixedRobots` — the console loop's robot ports
-  (:mod:`swarmdeck.core.ports`): any physical pose source and command sink (the
-  MQTT robots behind ``--robots-via``, a camera, or the simulation standing in
-  for hardware) plus a :class:`~swarmdeck.devices.simulated_robots.SimulatedRobots`
-  of the K virtual ones, stepped one period per tick. Its readings carry
-  ``SensedPoses.is_virtual``, which the loop puts in every Frame.
-* :class:`MixedBackend` — the experiment API's backend
-  (:class:`~swarmdeck.devices.backend.RobotBackend`): ``Arena(backend=MixedBackend(…))``
-  and ``arena.is_virtual``.
+:class:`MixedRobots` is the robot ports (:mod:`swarmdeck.core.ports`) of any physical pose source
+and command sink (the MQTT robots behind ``--robots-via``, a camera, or the simulation standing in
+for hardware) plus a :class:`~swarmdeck.devices.simulated_robots.SimulatedRobots` of the K virtual
+ones, stepped one period per tick. Its readings carry ``SensedPoses.is_virtual``, which the console
+loop puts in every Frame and ``Arena(backend=MixedRobots(…)).is_virtual`` shows user code.
 
 Virtual robots start on free sites at least the robots' separation away from
 every physical robot (:func:`virtual_start_poses`), so the barrier starts in
@@ -33,10 +27,9 @@ from numpy.typing import ArrayLike, NDArray
 from swarmdeck.core.bounds import Bounds
 from swarmdeck.core.kinematics import GritsBotParams
 from swarmdeck.core.ports import CommandSink, PoseSource, SensedPoses, close_ports
-from swarmdeck.devices.backend import RobotBackend
 from swarmdeck.devices.initial_conditions import random_initial_poses
 from swarmdeck.devices.simulated_robots import SimulatedRobots
-from swarmdeck.devices.simulator import ArenaConfig, SimulatedArena
+from swarmdeck.devices.simulator import ArenaConfig
 
 FloatArray = NDArray[np.float64]
 
@@ -115,7 +108,7 @@ class MixedRobots:
             np.concatenate((np.asarray(phys.poses, dtype=float).reshape(-1, 3), virt.poses)),
             np.concatenate((np.asarray(phys.seen, dtype=bool).reshape(-1), np.ones(k, dtype=bool))),
             is_virtual=np.concatenate((np.zeros(n_p, dtype=bool), np.ones(k, dtype=bool))),
-            battery=battery, charging=charging,
+            battery=battery, charging=charging, time=phys.time,
         )
 
     # ---------------------------------------------------------------- command sink
@@ -162,51 +155,3 @@ class MixedRobots:
         if name == "robot_health":  # the physical robots' firmware reports (virtual ones have none)
             return getattr(self.sink, name)
         raise AttributeError(f"{type(self).__name__} has no attribute {name!r}")
-
-
-class MixedBackend:
-    """A physical :class:`~swarmdeck.devices.backend.RobotBackend` plus K virtual robots simulated here,
-    as one backend for :class:`~swarmdeck.devices.arena.Arena` (rows: physical, then virtual).
-
-    Args:
-        physical: the physical robots (a ``TransportBackend`` for GRITSBots; any RobotBackend).
-        virtual: the K virtual robots (a ``SimulatedArena`` with ``real_time`` off: the physical
-            backend paces the step).
-    """
-
-    def __init__(self, physical: RobotBackend, virtual: SimulatedArena) -> None:
-        if virtual.config.real_time:
-            raise ValueError("the virtual robots' SimulatedArena must not pace itself (real_time=False)")
-        self.physical, self.virtual = physical, virtual
-        self.params = physical.params
-        self.n_physical = int(physical.n_robots)
-        self.n_robots = self.n_physical + int(virtual.n_robots)
-        self.is_virtual = np.arange(self.n_robots) >= self.n_physical
-        self.is_virtual.setflags(write=False)
-
-    @classmethod
-    def add_virtual(cls, physical: RobotBackend, k: int, config: ArenaConfig) -> "MixedBackend":
-        """K virtual robots clear of the physical ones (:func:`virtual_start_poses`, seeded by ``config.seed``)."""
-        start = virtual_start_poses(k, physical.poses[:, :2], config.bounds, config.seed)
-        virtual = SimulatedArena(None, start, config=ArenaConfig(bounds=config.bounds, dt=config.dt, seed=config.seed),
-                                 params=physical.params)
-        return cls(physical, virtual)
-
-    @property
-    def poses(self) -> FloatArray:
-        return np.concatenate((self.physical.poses, self.virtual.poses))
-
-    @property
-    def time(self) -> float:
-        return float(self.physical.time)
-
-    def step(self, v: ArrayLike, w: ArrayLike) -> FloatArray:
-        """Physical rows to the physical robots, the rest to the simulation; the new poses ``(N, 3)``."""
-        v = np.asarray(v, dtype=float).reshape(-1)
-        w = np.asarray(w, dtype=float).reshape(-1)
-        if v.shape != (self.n_robots,) or w.shape != (self.n_robots,):
-            raise ValueError(f"step needs ({self.n_robots},) v and w, got {v.shape} and {w.shape}")
-        p = self.n_physical
-        self.physical.step(v[:p], w[:p])
-        self.virtual.step(v[p:], w[p:])
-        return self.poses

@@ -3,7 +3,7 @@ import numpy as np
 import pytest
 
 from swarmdeck.devices import GritsBotParams
-from swarmdeck.devices.fleet.battery import BatteryParams
+from swarmdeck.devices.battery import BatteryParams
 from swarmdeck.devices.net.firmware import FirmwareParams
 from swarmdeck.devices.net.streamer import StreamerConfig
 

@@ -5,7 +5,7 @@ import numpy as np
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from swarmdeck.devices.fleet.battery import BatteryParams
+from swarmdeck.devices.battery import BatteryParams
 from swarmdeck.devices.net.firmware import FirmwareParams, FleetState
 from swarmdeck.core.kinematics import GritsBotParams
 from swarmdeck.devices.gritsbot import unicycle_step

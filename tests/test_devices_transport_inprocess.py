@@ -3,23 +3,25 @@ from __future__ import annotations
 
 import numpy as np
 
-from swarmdeck.devices import Arena, ArenaConfig, RobotBackend, SimulatedArena
+from swarmdeck.core.ports import CommandSink, PoseSource
+from swarmdeck.devices import Arena, ArenaConfig, SimulatedArena
 from swarmdeck.core.kinematics import unicycle_to_wheels
+from swarmdeck.devices.net.console_robots import NetworkRobots
 from swarmdeck.devices.net.transport import PoseFeed, RobotTransport
-from swarmdeck.devices.net.transport_backend import TransportBackend
 from swarmdeck.devices.net.transport_inprocess import InProcessTransport
 
 
-def backend_on_transport(n: int, seed: int) -> tuple[TransportBackend, InProcessTransport]:
+def backend_on_transport(n: int, seed: int) -> tuple[NetworkRobots, InProcessTransport]:
     transport = InProcessTransport(SimulatedArena(n, config=ArenaConfig(seed=seed)))
-    backend = TransportBackend(transport, np.arange(n), clock=lambda: transport.time, real_time=False, wait_for_poses=0)
+    backend = NetworkRobots(transport, np.arange(n), background=False, clock=lambda: transport.time,
+                            simulated_time=True)
     return backend, transport
 
 
 def test_protocols_are_satisfied():
     backend, transport = backend_on_transport(3, 1)
     assert isinstance(transport, RobotTransport) and isinstance(transport, PoseFeed)
-    assert isinstance(backend, RobotBackend)
+    assert isinstance(backend, PoseSource) and isinstance(backend, CommandSink)
 
 
 def test_arena_through_the_transport_matches_the_direct_simulation():
@@ -58,7 +60,7 @@ def test_robots_not_named_stand_still_and_status_reports_batteries():
 def test_backend_applies_wheel_limits_before_sending():
     backend, _ = backend_on_transport(2, 6)
     v, w = np.array([1.0, 0.1]), np.array([4.0, np.nan])
-    backend.step(v, w)
+    backend.send(np.arange(2), v, w)
     sent = backend.streamer.last_tick
     right, left = unicycle_to_wheels(sent.v, sent.w, backend.params)
     assert np.all(np.maximum(np.abs(right), np.abs(left)) <= backend.params.max_wheel_speed + 1e-9)

@@ -1,14 +1,14 @@
-"""An experiment's robots inside the fleet (console.runtime.assigned_robots): the assigned fleet robots are the
+"""An experiment's robots inside the fleet (devices.fleet.assigned): the assigned fleet robots are the
 experiment's robots 0..N-1 in assignment order, commands reach only them, and every other robot is a fixed
 obstacle of the experiment's barrier — a script driving straight at a docked robot is stopped short of it."""
 import numpy as np
 import pytest
 
-from swarmdeck.console.runtime.assigned_robots import AssignedRobots
+from swarmdeck.devices.fleet.assigned import AssignedRobots
 from swarmdeck.console.runtime.loop import ControlLoop, LoopConfig, SafetyParams
 from swarmdeck.core.kinematics import GritsBotParams, lookahead_points
 from swarmdeck.devices import ArenaConfig
-from swarmdeck.devices.fleet.chargers import ChargerLayout
+from swarmdeck.devices.chargers import ChargerLayout
 from swarmdeck.devices.simulated_robots import SimulatedRobots
 
 ELL = GritsBotParams().lookahead

@@ -12,7 +12,7 @@ def test_after_an_experiment_every_robot_docks_and_the_arena_is_ready():
     exp = fleet.experiment()
     assert fleet.ready()  # every robot docked or assigned
     for _ in range(90):  # the experiment drives the robots around a little
-        exp.step(np.zeros(12), np.full(12, 0.8))  # turning on the spot: drains, moves nobody
+        exp.send(np.arange(12), np.zeros(12), np.full(12, 0.8))  # turning on the spot: drains, moves nobody
     charge_after_run = fleet.charge.copy()
     report = fleet.return_to_chargers()
     assert report.ok and report.collision_steps == 0 and fleet.sim.report.steps_with_collision == 0

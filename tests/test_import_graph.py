@@ -142,3 +142,72 @@ def test_the_console_layer_rule_sees_lazy_imports(tmp_path: Path) -> None:
     assert len(found) == 3  # the relative import names the package and its module
     assert "console.recording imports swarmdeck.console.web.scene" in found[0]
     assert all("console.picture imports swarmdeck.console.recording" in f for f in found[1:])
+
+
+# Inside devices (issue 25 item 7): the fleet (devices/fleet/) sits on the robot model, the
+# simulator, the pipeline and the robot ports of the devices root, and under the experiment API
+# (Arena, the runner, the rps facade), which set robots up from the chargers. So:
+#   * no module of the devices root below the experiment API (every devices/*.py but __init__,
+#     arena and runner; devices/net/, devices/rps/) imports devices.fleet;
+#   * devices.fleet imports nothing of the experiment API (the devices package itself, arena,
+#     runner, rps);
+#   * no import of a swarmdeck.devices module inside a function anywhere in devices (a lazy import
+#     dodging a cycle), but for the rps facade's matplotlib figure (loaded when a script draws).
+EXPERIMENT_API = {"swarmdeck.devices", "swarmdeck.devices.arena", "swarmdeck.devices.runner"}
+LAZY_ALLOWED = {"swarmdeck.devices.rps.figure", "swarmdeck.devices.rps"}
+
+
+def _devices_modules() -> list[tuple[str, Path]]:
+    folder = packages()["devices"]
+    out = []
+    for path in sorted(folder.rglob("*.py")):
+        parts = [p for p in path.relative_to(folder).with_suffix("").parts if p != "__init__"]
+        out.append((".".join(["swarmdeck", "devices", *parts]), path))
+    return out
+
+
+def _imports(module: str, path: Path) -> list[tuple[int, str]]:
+    return imported_modules(path.read_text(encoding="utf-8"), module, path.name == "__init__.py")
+
+
+def _is_in(name: str, package: str) -> bool:
+    return name == package or name.startswith(package + ".")
+
+
+def test_devices_root_below_the_experiment_api_never_imports_the_fleet() -> None:
+    found = [f"{path.relative_to(ROOT)}:{line} imports {name}" for module, path in _devices_modules()
+             if not _is_in(module, "swarmdeck.devices.fleet") and module not in EXPERIMENT_API
+             for line, name in _imports(module, path) if _is_in(name, "swarmdeck.devices.fleet")]
+    assert not found, "the devices root imports devices.fleet (the fleet sits above it):\n" + "\n".join(found)
+
+
+def test_the_fleet_never_imports_the_experiment_api() -> None:
+    found = [f"{path.relative_to(ROOT)}:{line} imports {name}" for module, path in _devices_modules()
+             if _is_in(module, "swarmdeck.devices.fleet")
+             for line, name in _imports(module, path)
+             if name in EXPERIMENT_API or _is_in(name, "swarmdeck.devices.rps")]
+    assert not found, "devices.fleet imports the experiment API above it:\n" + "\n".join(found)
+
+
+def lazy_imports(source: str, module: str, is_package: bool) -> list[tuple[int, str]]:
+    """(line, module) of the imports made inside a function body of ``source``."""
+    found: set[tuple[int, str]] = set()
+    for node in ast.walk(ast.parse(source)):
+        if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)):
+            for inner in ast.walk(node):
+                if isinstance(inner, (ast.Import, ast.ImportFrom)):
+                    found |= {(inner.lineno, name) for _, name in imported_modules(ast.unparse(inner), module, is_package)}
+    return sorted(found)
+
+
+def test_no_lazy_import_dodges_a_cycle_inside_devices() -> None:
+    found = sorted({f"{path.relative_to(ROOT)}: imports {name} inside a function"
+                    for module, path in _devices_modules()
+                    for _, name in lazy_imports(path.read_text(encoding="utf-8"), module, path.name == "__init__.py")
+                    if _is_in(name, "swarmdeck.devices") and name not in LAZY_ALLOWED})
+    assert not found, "lazy imports inside devices (import at module level; fix the layering instead):\n" + "\n".join(found)
+
+
+def test_the_devices_rules_see_a_lazy_fleet_import(tmp_path: Path) -> None:
+    src = "def f():\n    from swarmdeck.devices.fleet.manager import FleetManager\n"
+    assert lazy_imports(src, "swarmdeck.devices.simulator", False) == [(2, "swarmdeck.devices.fleet.manager")]

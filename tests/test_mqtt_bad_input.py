@@ -81,7 +81,7 @@ def test_malformed_unknown_and_out_of_order_messages_are_counted(mosquitto):
 
 
 def test_experiment_backend_names_robots_that_never_sent_a_pose(mosquitto):
-    from swarmdeck.devices.net.transport_backend import mqtt_backend
+    from swarmdeck.devices.net.console_robots import NetworkRobots
 
-    with pytest.raises(ValueError, match=r"no pose received for robot id\(s\) \[0, 1\].*swarmdeck robots"):
-        mqtt_backend(mosquitto.url, n_robots=2, wait_for_poses=0.3)
+    with pytest.raises(ValueError, match=r"no pose from robot id\(s\) \[0, 1\].*swarmdeck robots"):
+        NetworkRobots.connect(mosquitto.url, n_robots=2, wait_for_poses=0.3)

@@ -12,7 +12,7 @@ from mqtt_broker import mosquitto, wait_until  # noqa: F401
 from swarmdeck.devices import Arena
 from swarmdeck.devices.gritsbot import unicycle_step, wrap_angle
 from swarmdeck.devices.net.mqtt_config import parse_broker_url
-from swarmdeck.devices.net.transport_backend import TransportBackend
+from swarmdeck.devices.net.console_robots import NetworkRobots
 from swarmdeck.devices.net.transport_mqtt import LinkTimeouts, MqttTransport
 
 pytestmark = pytest.mark.mqtt
@@ -69,7 +69,8 @@ def test_arena_drives_the_fleet_process_and_loses_it_when_it_stops(mosquitto):
                               timeouts=LinkTimeouts(missing_after=0.6)).start()
     backend = None
     try:
-        backend = TransportBackend(transport, np.arange(4), wait_for_poses=15)
+        backend = NetworkRobots(transport, np.arange(4), background=False)
+        wait_until(lambda: len(transport.latest_poses().ids) == 4, 15, "a pose from every robot")
         arena = Arena(backend=backend, safety=False)
         start = arena.positions()
         goals = start + np.array([0.06, 0.0])
@@ -83,7 +84,7 @@ def test_arena_drives_the_fleet_process_and_loses_it_when_it_stops(mosquitto):
         code, log = stop_fleet(fleet)
         assert code == 0, log
         wait_until(lambda: len(transport.excluded()) == 4, 10, "robots marked missing after their fleet stopped")
-        last = backend.poses
+        last = arena.poses()
         obstacles = backend.obstacles()
         assert np.allclose(np.sort(obstacles, axis=0), np.sort(last[:, :2], axis=0))
         tick = backend.streamer.tick()

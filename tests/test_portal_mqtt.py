@@ -16,7 +16,7 @@ from portal_fixtures import portal, wait_for_state  # noqa: F401
 from swarmdeck.console.jobs.confinement import probe
 from swarmdeck.console.portal.runner import ArenaRunner, ArenaSettings
 from swarmdeck.console.recording.reader import open_recording
-from swarmdeck.devices.fleet.chargers import ChargerLayout
+from swarmdeck.devices.chargers import ChargerLayout
 from swarmdeck.devices.net.mqtt_config import parse_broker_url
 from swarmdeck.devices.net.transport_mqtt import MqttTransport
 

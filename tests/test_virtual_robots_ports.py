@@ -6,9 +6,9 @@ import numpy as np
 import pytest
 
 from swarmdeck.console.runtime.loop import ControlLoop, LoopConfig
-from swarmdeck.devices import Arena, ArenaConfig, SimulatedArena, colliding_pairs
+from swarmdeck.devices import Arena, ArenaConfig, colliding_pairs
 from swarmdeck.devices.simulated_robots import SimulatedRobots
-from swarmdeck.devices.virtual_robots import MixedBackend, MixedRobots, virtual_ids, virtual_start_poses
+from swarmdeck.devices.virtual_robots import MixedRobots, virtual_ids, virtual_start_poses
 
 
 def test_start_poses_keep_clear_of_physical_robots_and_name_the_maximum():
@@ -65,8 +65,8 @@ def test_console_loop_certifies_physical_and_virtual_robots_together():
 
 
 def test_arena_sees_n_robots_and_an_is_virtual_mask():
-    physical = SimulatedArena(3, config=ArenaConfig(seed=3))
-    arena = Arena(backend=MixedBackend.add_virtual(physical, 4, ArenaConfig(seed=4)))
+    physical = SimulatedRobots(3, ArenaConfig(seed=3))
+    arena = Arena(backend=MixedRobots.add_virtual(physical, physical, 4, ArenaConfig(seed=4)))
     assert arena.n == 7 and arena.is_virtual.tolist() == [False] * 3 + [True] * 4
     mask = arena.is_virtual
     mask[:] = True  # a copy: user code cannot change which robots are virtual
@@ -77,7 +77,7 @@ def test_arena_sees_n_robots_and_an_is_virtual_mask():
         arena.step()
         assert len(colliding_pairs(arena.poses())) == 0
     assert arena.safety_stats.failures == 0 and arena.safety_stats.interventions > 0
-    assert np.array_equal(arena.poses()[:3], physical.poses)  # rows 0..2 are the physical robots
+    assert np.array_equal(arena.poses()[:3], physical.sim.poses)  # rows 0..2 are the physical robots
     assert Arena(3).is_virtual.tolist() == [False] * 3
     with pytest.raises(ValueError, match=r"\(7,\)"):
-        arena.backend.step(np.zeros(6), np.zeros(6))
+        arena.robots.step(np.zeros(6), np.zeros(6))

@@ -241,47 +241,14 @@ def _check_address(host: str, port: int) -> None:
 
 
 def _robots(config, camera: str | None, robots_via: str | None, virtual: int | None = None, docked: bool = False):
-    """(pose source, command sink): simulation by default, MQTT robots with --robots-via, camera poses
-    with --camera, plus ``virtual`` virtual robots simulated here (one ``MixedRobots`` as both ports).
-    Raises ValueError/OSError naming what could not be opened."""
-    import numpy as np
+    """(pose source, command sink) from the one robots factory (:func:`~swarmdeck.console.runtime.hardware.open_robots`):
+    simulation by default, MQTT robots with --robots-via, camera poses with --camera, plus ``virtual`` virtual
+    robots simulated here. Raises ValueError/OSError naming what could not be opened."""
+    from swarmdeck.console.runtime.hardware import RobotsSpec, open_robots
 
-    from swarmdeck.console.runtime.hardware import camera_source, mqtt_robots
-    from swarmdeck.devices.simulated_robots import SimulatedRobots
-    from swarmdeck.devices import ArenaConfig
-
-    ids = np.arange(config.n_robots, dtype=np.int64)
-    if robots_via:
-        sink, source = mqtt_robots(robots_via, ids)
-        truth = source.truth
-    else:
-        arena = ArenaConfig(bounds=config.bounds, dt=config.dt, seed=config.seed)
-        if docked:
-            from swarmdeck.devices.fleet.chargers import ChargerLayout
-
-            sim = SimulatedRobots(config.n_robots, arena, chargers=ChargerLayout(bounds=config.bounds),
-                                  start_docked=True)
-        else:
-            sim = SimulatedRobots(config.n_robots, arena)
-        sink = source = sim
-        truth = lambda now: sim.sim.poses  # noqa: E731
-    if camera:
-        try:
-            source = camera_source(camera, ids, truth, config.bounds)
-        except Exception:
-            sink.close()
-            raise
-    if virtual:
-        from swarmdeck.devices.virtual_robots import MixedRobots
-
-        try:
-            mixed = MixedRobots.add_virtual(source, sink, virtual,
-                                            ArenaConfig(bounds=config.bounds, dt=config.dt, seed=config.seed))
-        except Exception:
-            sink.close()
-            raise
-        return mixed, mixed
-    return source, sink
+    ports = open_robots(RobotsSpec(n_robots=config.n_robots, bounds=config.bounds, dt=config.dt, seed=config.seed,
+                                   robots_via=robots_via, docked=docked, camera=camera, virtual=virtual or 0))
+    return ports.source, ports.sink
 
 
 def _recorder(path: str | None, config, inputs_table: dict | None, source: str, image_provider=None,

@@ -103,35 +103,31 @@ def main(args: argparse.Namespace) -> int:
 
 
 def _open(args: argparse.Namespace) -> tuple[Any, Any]:
-    """The control loop on the named robots (paused: nothing moves until an action runs) and its pacer."""
+    """The control loop on the named robots (paused: nothing moves until an action runs) and its pacer.
+    The robots come from the one robots factory (:func:`~swarmdeck.console.runtime.hardware.open_robots`)."""
+    import time
+
+    from swarmdeck.console.runtime.hardware import RobotsSpec, open_robots
     from swarmdeck.console.runtime.loop import ControlLoop, LoopConfig
     from swarmdeck.devices.clock import RealTimePacer
-    from swarmdeck.devices.fleet.chargers import ChargerLayout
-    from swarmdeck.devices.simulator import ArenaConfig
-    from swarmdeck.devices.simulated_robots import SimulatedRobots
 
     cfg = LoopConfig(n_robots=args.simulated or 1, behaviour="rendezvous", seed=args.seed)
     if args.simulated is not None:
         start = args.start or ("docked" if args.action in ("status", "setup") else "random")
-        try:
-            sim = SimulatedRobots(args.simulated, ArenaConfig(bounds=cfg.bounds, dt=cfg.dt, seed=args.seed),
-                                  chargers=ChargerLayout(bounds=cfg.bounds), start_docked=start == "docked",
-                                  charge=args.charge)
-        except ValueError as exc:
-            raise UsageError(str(exc)) from None
-        loop = ControlLoop(cfg, source=sim, sink=sim)
-        loop.pause()
-        return loop, None
-    import time
-
-    from swarmdeck.console.runtime.hardware import NetworkPoseSource
-    from swarmdeck.devices.net.console_robots import NetworkRobots
-
+        spec = RobotsSpec(n_robots=args.simulated, bounds=cfg.bounds, dt=cfg.dt, seed=args.seed,
+                          docked=start == "docked", chargers=True, charge=args.charge)
+    else:
+        spec = RobotsSpec(n_robots=None, bounds=cfg.bounds, dt=cfg.dt, robots_via=args.robots_via,
+                          wait_for_poses=args.wait)
     try:
-        robots = NetworkRobots.connect(args.robots_via, wait_for_poses=args.wait)
+        ports = open_robots(spec)
     except (ValueError, OSError) as exc:
         raise UsageError(str(exc)) from None
-    loop = ControlLoop(cfg, source=NetworkPoseSource(robots), sink=robots, clock=time.monotonic)
+    if spec.simulated:
+        loop = ControlLoop(cfg, source=ports.source, sink=ports.sink)
+        loop.pause()
+        return loop, None
+    loop = ControlLoop(cfg, source=ports.source, sink=ports.sink, clock=time.monotonic)
     loop.pause()
     return loop, RealTimePacer(cfg.dt).wait
 
@@ -167,7 +163,7 @@ def _server_status(args: argparse.Namespace) -> int:
 def _status(loop: Any, frame: Any) -> list[dict[str, Any]]:
     """One JSON-able row per robot of ``frame``: battery, charge, charging, docked slot, link, ages."""
     from swarmdeck.console.runtime.batteries import battery_levels
-    from swarmdeck.devices.fleet.chargers import ChargerLayout
+    from swarmdeck.devices.chargers import ChargerLayout
 
     q, _ = battery_levels(frame.battery, frame.charging)
     slot = ChargerLayout(bounds=frame.bounds).docked_slot(frame.poses)
@@ -208,7 +204,7 @@ def _print_status(rows: list[dict[str, Any]], as_json: bool) -> int:
 
 def _act(args: argparse.Namespace, loop: Any, pace: Any, frame: Any, goals: Any, ids: Any, config: Any) -> int:
     from swarmdeck.console.runtime import fleet_upkeep as fu
-    from swarmdeck.devices.fleet.chargers import ChargerLayout
+    from swarmdeck.devices.chargers import ChargerLayout
 
     chargers = ChargerLayout(bounds=frame.bounds)
     view = fu.FleetView.of(frame, fu.status_ages(loop.sink, frame.ids, frame.is_virtual))

@@ -86,8 +86,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def main(args: argparse.Namespace) -> int:
-    from swarmdeck.devices.fleet.battery import BatteryParams
-    from swarmdeck.devices.fleet.chargers import ChargerLayout
+    from swarmdeck.devices.battery import BatteryParams
+    from swarmdeck.devices.chargers import ChargerLayout
     from swarmdeck.devices.net.firmware import FirmwareParams
     from swarmdeck.devices.net.fleet import FleetNode
     from swarmdeck.devices.initial_conditions import random_initial_poses

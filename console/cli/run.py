@@ -30,6 +30,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="start the simulated robots docked on the chargers along the walls, set them up to the "
                              "script's initial poses, run, and return them to the chargers; the report says how long "
                              "setup and return took, the largest start-pose error and the collisions")
+    parser.add_argument("--robots-via", default=None, metavar="URL",
+                        help="run the script on GRITSBots over MQTT instead of the simulation, e.g. "
+                             "mqtt://127.0.0.1:1883 (try `swarmdeck robots --broker URL` for a simulated fleet): robots "
+                             "0..N-1 of --robots N, through the same safety pipeline; they start where they are (a "
+                             "script's initial conditions are not driven to) and each step lasts one period of wall time")
     parser.add_argument("--json", action="store_true", help="print the report as JSON")
     parser.add_argument("--record", default=None, metavar="PATH",
                         help="record the run to PATH (MCAP, as `swarmdeck console --record`: `swarmdeck play PATH`, "
@@ -106,6 +111,35 @@ def _run_sandboxed(args: argparse.Namespace) -> int:
     return 0
 
 
+def _physical_robots(args: argparse.Namespace) -> tuple[Callable[..., Any], Any]:
+    """``--robots-via``: the robots, opened now by the one robots factory
+    (:func:`~swarmdeck.console.runtime.hardware.open_robots`), and the ``backend_factory`` handing them
+    to the one Arena the script builds."""
+    from swarmdeck.console.runtime.hardware import RobotsSpec, open_robots
+
+    if args.robots is None:
+        raise UsageError("--robots-via needs --robots N: the robots 0..N-1 to drive")
+    try:
+        ports = open_robots(RobotsSpec(n_robots=args.robots, robots_via=args.robots_via))
+    except (ValueError, OSError) as exc:
+        raise UsageError(str(exc)) from None
+    handed: list[bool] = []
+
+    def factory(n: int | None, initial: Any, *, config: Any, params: Any) -> tuple[Any, Any]:
+        if handed:
+            raise ValueError("a run on physical robots drives one Arena (its robots are in use)")
+        want = len(initial) if initial is not None else n
+        if want is not None and want != args.robots:
+            raise ValueError(f"the script asks for {want} robots; --robots-via drives --robots {args.robots}")
+        if initial is not None:
+            print("swarmdeck run: the physical robots start where they are (the script's initial conditions "
+                  "are not driven to)", file=sys.stderr)
+        handed.append(True)
+        return ports.source, ports.sink
+
+    return factory, ports
+
+
 def _script_args(args: argparse.Namespace) -> list[str]:
     return [str(a) for a in args.script_args or []]
 
@@ -115,12 +149,15 @@ def main(args: argparse.Namespace) -> int:
         raise UsageError("--script-env needs --sandbox (the script environment is the jail's)")
     if args.entry is not None and not args.sandbox:
         raise UsageError("--entry needs --sandbox (a directory of files runs in the sandbox)")
+    if args.robots_via is not None and (args.sandbox or args.from_docks):
+        raise UsageError(f"--robots-via does not combine with {'--sandbox' if args.sandbox else '--from-docks'}")
     if args.sandbox:
         if args.from_docks:
             raise UsageError("--from-docks does not combine with --sandbox yet")
         if args.record:
             raise UsageError("--record does not combine with --sandbox yet")
         return _run_sandboxed(args)
+    factory, ports = _physical_robots(args) if args.robots_via is not None else (None, None)
     recording = None
     if args.record:
         from swarmdeck.console.recording.arena_recording import ArenaRecording
@@ -130,8 +167,10 @@ def main(args: argparse.Namespace) -> int:
         result = run_headless(args.script, args, rps=args.rps, from_docks=args.from_docks, argv=_script_args(args),
                               rps_semantics=args.rps_semantics, rps_call_order=args.rps_call_order,
                               on_create=None if recording is None else recording.on_create,
-                              on_step=None if recording is None else recording.on_step)
+                              on_step=None if recording is None else recording.on_step, backend_factory=factory)
     finally:
+        if ports is not None:
+            ports.close()  # robots stopped, link closed
         if recording is not None:
             for line in recording.close():
                 print(f"swarmdeck run: {line}", file=sys.stderr)

@@ -158,7 +158,7 @@ def main(args: argparse.Namespace) -> int:
     from swarmdeck.console.portal.service import PortalConfig, PortalService
     from swarmdeck.console.portal.submission import Limits
     from swarmdeck.console.portal.workers import VerificationWorkers, make_executor
-    from swarmdeck.devices.fleet.chargers import ChargerLayout
+    from swarmdeck.devices.chargers import ChargerLayout
 
     from swarmdeck.console.cli.env import checked_script_env
 

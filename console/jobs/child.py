@@ -28,6 +28,7 @@ from swarmdeck.console.jobs.protocol import MESSAGE, FrameReader, decode, encode
 from swarmdeck.console.jobs.protocol import poses as read_poses
 from swarmdeck.devices.arena import ExperimentFinished
 from swarmdeck.core.kinematics import GritsBotParams, unicycle_to_si
+from swarmdeck.core.ports import SensedPoses
 from swarmdeck.devices.runner import ScriptError, RunnerArenaError, run_experiment
 from swarmdeck.devices.simulator import ArenaConfig
 
@@ -54,11 +55,14 @@ class Link:
 
 
 class PipeRobots:
-    """A :class:`~swarmdeck.devices.backend.RobotBackend` whose robots are on the trusted side.
+    """Robot ports (:mod:`swarmdeck.core.ports`) whose robots are on the trusted side: a
+    :class:`~swarmdeck.core.ports.NominalSink`.
 
-    The Arena hands it the nominal look-ahead velocities (:meth:`step_nominal`) before any
+    The Arena hands it the nominal look-ahead velocities (:meth:`send_nominal`) before any
     wheel limit or filter: those run once, on the trusted side, as in an in-process run.
     """
+
+    name = "the trusted side's robots"
 
     def __init__(self, link: Link, n_robots: int | None, initial_poses: ArrayLike | None, *,
                  config: ArenaConfig, params: GritsBotParams) -> None:
@@ -68,6 +72,8 @@ class PipeRobots:
         ic = None if initial_poses is None else np.asarray(initial_poses, dtype=float)
         n = int(ic.shape[0]) if ic is not None else int(n_robots)
         self.link, self.n_robots, self.params, self.config = link, n, params, config
+        self._ids = np.arange(n, dtype=np.int64)
+        self._seen = np.ones(n, dtype=bool)
         link.send({"t": "arena", "n": n, "initial": None if ic is None else pack(ic)})
         self._take()
 
@@ -80,25 +86,29 @@ class PipeRobots:
             raise RuntimeError(f"unexpected message from the trusted side: {message['t']!r}")
         self._k, self._time, self._poses = read_poses(body, self.n_robots)
 
-    @property
-    def poses(self) -> NDArray[np.float64]:
-        return self._poses.copy()
+    def read(self, now: float = 0.0) -> SensedPoses:
+        """The poses and time the trusted side sent last (every robot seen)."""
+        return SensedPoses(self._ids, self._poses.copy(), self._seen, time=self._time)
 
-    @property
-    def time(self) -> float:
-        return self._time
-
-    def step_nominal(self, nominal: NDArray[np.float64]) -> NDArray[np.float64]:
-        """Send the nominal ``(N, 2)`` for the current poses; returns the next poses."""
+    def send_nominal(self, ids: NDArray[np.int64], nominal: NDArray[np.float64]) -> None:
+        """Send the nominal ``(N, 2)`` for the current poses; waits for the next poses."""
         self.link.send(encode_commands(self._k, nominal))
         self._take()
-        return self._poses.copy()
 
-    def step(self, v: ArrayLike, w: ArrayLike) -> NDArray[np.float64]:
+    def send(self, ids: NDArray[np.int64], v: ArrayLike, w: ArrayLike) -> None:
         """Unicycle commands (for callers without the nominal): sent as the velocities they give."""
         u = unicycle_to_si(self._poses, np.asarray(v, dtype=float).reshape(-1), np.asarray(w, dtype=float).reshape(-1),
                            self.params.lookahead)
-        return self.step_nominal(u)
+        self.send_nominal(ids, u)
+
+    def hold(self) -> None:
+        """Nothing to do: the trusted side owns the robots."""
+
+    def health(self) -> str:
+        return f"t = {self._time:.1f} s"
+
+    def close(self) -> None:
+        """Nothing to release: the trusted side stops the robots."""
 
 
 def _confine(start: dict[str, Any]) -> None:

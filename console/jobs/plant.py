@@ -1,8 +1,9 @@
 """The trusted side's robots for sandboxed runs: an Arena, and the disturbed simulator verification uses.
 
-:class:`ArenaPlant` drives a trusted :class:`~swarmdeck.devices.Arena` (wheel
-limits, the barrier when on, validation) with the commands the sandboxed script
-sends. :class:`VerificationRobots` is the robot backend under it during
+:class:`SandboxPlant` is the sandbox's one plant: it drives a trusted
+:class:`~swarmdeck.devices.Arena` (wheel limits, the barrier when on, validation;
+``ArenaPlant(arena)``) or the console's control loop (the portal's arena) with the
+commands the sandboxed script sends. :class:`VerificationRobots` is the robot backend under it during
 verification: the simulated arena plus what a real arena adds (pose noise from
 tracking, one tick of command latency, dropped commands) and the contact model
 of REFERENCE.md §4 (robots are discs of the robot diameter; at a contact they
@@ -12,13 +13,17 @@ the same simulation.
 """
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.spatial import cKDTree
 
+from swarmdeck.core.ports import SensedPoses
 from swarmdeck.devices.arena import Arena
+from swarmdeck.devices.clock import RealTimePacer
 from swarmdeck.core.kinematics import GritsBotParams, limit_unicycle, unicycle_to_si
 from swarmdeck.devices.gritsbot import wrap_angle
 from swarmdeck.devices.simulator import SimulatedArena
@@ -58,7 +63,7 @@ class Disturbances:
 
 @dataclass
 class VerificationRobots:
-    """A :class:`~swarmdeck.devices.backend.RobotBackend`: the simulator with disturbances and contacts.
+    """Robot ports (:mod:`swarmdeck.core.ports`) for the Arena: the simulator with disturbances and contacts.
 
     Args:
         sim: the simulated arena (true poses).
@@ -75,8 +80,12 @@ class VerificationRobots:
     min_distance: list[float] = field(init=False, default_factory=list)  # per step, m (centres)
     contact_points: list[tuple[float, float, float]] = field(init=False, default_factory=list)  # (t, x, y)
 
+    name = "verification (disturbed simulation)"
+
     def __post_init__(self) -> None:
         self.n_robots = self.sim.n_robots
+        self._ids = np.arange(self.n_robots, dtype=np.int64)
+        self._seen = np.ones(self.n_robots, dtype=bool)
         self.params: GritsBotParams = self.sim.params
         self.contacts = ContactLog(self.n_robots, self.sim.config.dt)
         self._pending = (np.zeros(self.n_robots), np.zeros(self.n_robots))
@@ -106,6 +115,25 @@ class VerificationRobots:
         observed = self.sim.poses + noise
         observed[:, 2] = wrap_angle(observed[:, 2])
         self._observed = observed
+
+    def read(self, now: float = 0.0) -> SensedPoses:
+        """The tracked poses (every robot seen) at the simulator's time."""
+        return SensedPoses(self._ids, self._observed.copy(), self._seen, time=self.sim.time)
+
+    def send(self, ids: NDArray[np.int64], v: ArrayLike, w: ArrayLike) -> None:
+        """One period of ``(v, ω)`` for robots 0…N−1 in order (:meth:`step`)."""
+        if len(ids) != self.n_robots or np.any(np.asarray(ids) != self._ids):
+            raise ValueError(f"verification expects commands for ids 0..{self.n_robots - 1} in order")
+        self.step(v, w)
+
+    def hold(self) -> None:
+        """Nothing moves."""
+
+    def health(self) -> str:
+        return f"simulator clock {self.sim.time:.1f} s"
+
+    def close(self) -> None:
+        """Nothing to release."""
 
     def step(self, v: ArrayLike, w: ArrayLike) -> NDArray[np.float64]:
         """Apply (v, ω) (N,) each, subject to latency, drops and non-penetration; returns the tracked poses."""
@@ -139,25 +167,75 @@ class VerificationRobots:
         return self._observed.copy()
 
 
-class ArenaPlant:
-    """The sandbox's :class:`~swarmdeck.console.jobs.sandbox.Plant` on a trusted Arena."""
+class SandboxPlant:
+    """The sandbox's one :class:`~swarmdeck.console.jobs.sandbox.Plant`: each tick, the script's nominal
+    look-ahead velocities (N, 2) go to a trusted driver that certifies them (wheel limits, the barrier,
+    fail-stop, :func:`~swarmdeck.devices.pipeline.certify`) and drives the robots; the script sees the
+    driver's time and poses. Two drivers, one plant:
 
-    def __init__(self, arena: Arena) -> None:
-        self.arena = arena
-        self.n = arena.n
+    * :meth:`on_arena` — an :class:`~swarmdeck.devices.Arena` (``swarmdeck run --sandbox``, verification):
+      NaN/inf rows are stopped and counted by the Arena; finished at its declared duration;
+    * :meth:`on_loop` — the console's control loop (the portal's arena): the nominal is the loop's
+      behaviour for one tick (``commands.set``), paced by ``pacer``; time is the loop's run time (it stops
+      while the loop is e-stopped); finished at ``duration``.
+
+    Args:
+        n: robots the script drives.
+        observe: ``() -> (time s, poses (N, 3))``.
+        step: one tick with the nominal ``(N, 2)`` (None: the script missed the tick → stop).
+        finished: the run's declared duration is over.
+        arena: the Arena driven (:meth:`on_arena`; its report is the run's), else None.
+    """
+
+    def __init__(self, n: int, observe: Callable[[], tuple[float, NDArray[np.float64]]],
+                 step: Callable[[NDArray[np.float64] | None], None], finished: Callable[[], bool],
+                 arena: Arena | None = None) -> None:
+        self.n, self._observe, self._step, self._finished, self.arena = int(n), observe, step, finished, arena
+
+    @classmethod
+    def on_arena(cls, arena: Arena) -> "SandboxPlant":
+        """The plant on a trusted Arena."""
+
+        def step(nominal: NDArray[np.float64] | None) -> None:
+            if nominal is None:
+                arena.stop()
+            else:
+                arena.set_velocities(nominal)
+            arena.step()
+
+        def finished() -> bool:
+            d = arena.duration
+            return d is not None and arena.time >= d - 1e-9
+
+        return cls(arena.n, lambda: (arena.time, arena.poses()), step, finished, arena)
+
+    @classmethod
+    def on_loop(cls, loop: Any, commands: Any, duration: float, pacer: RealTimePacer | None) -> "SandboxPlant":
+        """The plant on a ControlLoop whose behaviour is ``commands`` (``set(nominal)`` before each tick)."""
+        n = int(loop.config.n_robots)
+
+        def observe() -> tuple[float, NDArray[np.float64]]:
+            frame = loop.latest
+            return loop.run_time, (frame.poses.copy() if frame is not None else np.zeros((n, 3)))
+
+        def step(nominal: NDArray[np.float64] | None) -> None:
+            commands.set(nominal)
+            loop.tick()
+            if pacer is not None:
+                pacer.wait()
+
+        return cls(n, observe, step, lambda: loop.run_time >= duration - 1e-9)
 
     def observe(self) -> tuple[float, NDArray[np.float64]]:
-        return self.arena.time, self.arena.poses()
+        return self._observe()
 
     def apply(self, nominal: NDArray[np.float64] | None) -> None:
-        """One tick: the script's nominal look-ahead velocities (N, 2) through this Arena's pipeline
-        (wheel limits, barrier when on; NaN/inf rows stopped and counted); None: stop."""
-        if nominal is None:
-            self.arena.stop()
-        else:
-            self.arena.set_velocities(nominal)
-        self.arena.step()
+        """One tick: the script's nominal look-ahead velocities (N, 2) through the driver's pipeline; None: stop."""
+        self._step(nominal)
 
     def finished(self) -> bool:
-        d = self.arena.duration
-        return d is not None and self.arena.time >= d - 1e-9
+        return self._finished()
+
+
+#: the plant on a trusted Arena (``ArenaPlant(arena)``: ``swarmdeck run --sandbox``, verification, the tests)
+ArenaPlant = SandboxPlant.on_arena

@@ -58,7 +58,7 @@ import numpy as np
 from swarmdeck.console.jobs.bundle import ScriptBundle
 from swarmdeck.console.jobs.confinement import JailConfig, SandboxLimits
 from swarmdeck.core.checks import in_range
-from swarmdeck.console.jobs.plant import ArenaPlant, Disturbances, VerificationRobots
+from swarmdeck.console.jobs.plant import ArenaPlant, Disturbances, SandboxPlant, VerificationRobots
 from swarmdeck.console.jobs.sandbox import run_sandboxed
 from swarmdeck.console.jobs.start_poses import arena_start, check_initial_poses, perturb
 from swarmdeck.devices.arena import Arena
@@ -206,7 +206,7 @@ def run_task(task: RunTask) -> dict[str, Any]:
     def random_poses(n: int) -> np.ndarray:
         return random_initial_poses(n, arena_config.bounds, rng=np.random.default_rng(seeds[0]))
 
-    def make_plant(n: int, initial: np.ndarray | None) -> ArenaPlant:
+    def make_plant(n: int, initial: np.ndarray | None) -> SandboxPlant:
         chosen = arena_start(n, cfg.n_robots, cfg.initial_poses, initial, random_poses, arena_config.bounds,
                              declared_by=cfg.declared_by)
         poses = perturb(chosen.poses, np.random.default_rng(seeds[2]))

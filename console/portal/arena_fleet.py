@@ -22,7 +22,7 @@ pipeline; the robots that do not move are fixed obstacles of the barrier):
 1. :meth:`ArenaFleet.shortfall` — can N robots be assigned now (charged ≥ ``min_charge``, tracked,
    firmware heard)? If not, the reason, naming each robot left out;
 2. :meth:`ArenaFleet.set_up` — assign N robots (least total travel) and drive them to the start
-   poses; on success the experiment's ports, :class:`~swarmdeck.console.runtime.assigned_robots.AssignedRobots`
+   poses; on success the experiment's ports, :class:`~swarmdeck.devices.fleet.assigned.AssignedRobots`
    (robots 0…N−1; the others are the barrier's obstacles);
 3. :meth:`ArenaFleet.return_all` — every robot on the floor backs onto a free charger slot;
 4. :meth:`ArenaFleet.idle` — between jobs docked simulated robots charge for the wall time that
@@ -41,21 +41,23 @@ import math
 import threading
 import time
 from collections.abc import Callable
+from dataclasses import replace
 from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from swarmdeck.console.runtime import fleet_upkeep as fu
-from swarmdeck.console.runtime.assigned_robots import AssignedRobots
 from swarmdeck.console.runtime.batteries import battery_levels
+from swarmdeck.console.runtime.hardware import RobotsSpec, open_robots
 from swarmdeck.console.runtime.loop import ControlLoop, LoopConfig
 from swarmdeck.core.bounds import Bounds
 from swarmdeck.core.kinematics import GritsBotParams
 from swarmdeck.core.ports import SensedPoses
+from swarmdeck.devices.fleet.assigned import AssignedRobots
 from swarmdeck.devices.fleet.assignment import AssignmentError, assign
-from swarmdeck.devices.fleet.battery import recharge
-from swarmdeck.devices.fleet.chargers import ChargerLayout
+from swarmdeck.devices.battery import recharge
+from swarmdeck.devices.chargers import ChargerLayout
 
 LoopHook = Callable[[ControlLoop | None], None]
 
@@ -88,11 +90,8 @@ class ArenaFleet:
         self.ids = np.arange(m, dtype=np.int64)
         self.sim = None
         if robots_via is None:
-            from swarmdeck.devices import ArenaConfig
-            from swarmdeck.devices.simulated_robots import SimulatedRobots
-
-            self.sim = SimulatedRobots(m, ArenaConfig(bounds=bounds, dt=dt, seed=seed), self.robot,
-                                       chargers=self.chargers, start_docked=True, charge=charge)
+            charges = np.broadcast_to(np.asarray(charge, dtype=float), (m,))
+            self.sim = open_robots(replace(self._spec(), charge=tuple(charges.tolist()))).sink
         self._net: Any = None
         self._lock = threading.Lock()
         self._reading: SensedPoses | None = None
@@ -127,31 +126,20 @@ class ArenaFleet:
             self.error = None
         return self._net[1], self._net[0]
 
+    def _spec(self) -> RobotsSpec:
+        """The fleet's robots for the one robots factory: M simulated robots docked on slots 0…M−1 with
+        batteries, or the networked fleet's ids 0…M−1 (going on with those that report in time)."""
+        return RobotsSpec(n_robots=self.n_robots, bounds=self.bounds, dt=self.dt, seed=self.seed,
+                          robots_via=self.robots_via, docked=self.robots_via is None,
+                          wait_for_poses=self.wait_for_poses, partial=True, params=self.robot)
+
     def _connect(self) -> tuple[Any, Any]:
         """The networked fleet's ports once every robot sent a pose, or at least one did within
         ``wait_for_poses`` s (ValueError: none did). Robots that have not (yet) reported are left out of
         readings and never assigned: one silent robot does not keep the arena from working (the table
         lists it as missing)."""
-        from swarmdeck.console.runtime.hardware import NetworkPoseSource
-        from swarmdeck.devices.net.console_robots import NetworkRobots
-        from swarmdeck.devices.net.mqtt_config import parse_broker_url, redact_url
-        from swarmdeck.devices.net.transport_mqtt import MqttTransport
-
-        url = str(self.robots_via)
-        transport = MqttTransport(parse_broker_url(url), ids=self.ids).start()
-        deadline = time.monotonic() + self.wait_for_poses
-        while len(heard := transport.latest_poses().ids) < self.n_robots:  # every robot, or as many as report in time
-            if time.monotonic() > deadline and len(heard):
-                break
-            if time.monotonic() > deadline:
-                state = transport.status().state
-                transport.close()
-                raise ValueError(f"no pose from any of the robots 0..{self.n_robots - 1} on {redact_url(url)} "
-                                 f"within {self.wait_for_poses:g} s ({state}); are the robots (or `swarmdeck robots "
-                                 "--start docked --charge`) running?")
-            time.sleep(0.02)
-        robots = NetworkRobots(transport, self.ids, name=f"mqtt {redact_url(url)}")
-        return robots, NetworkPoseSource(robots)
+        ports = open_robots(self._spec())
+        return ports.sink, ports.source
 
     def close(self) -> None:
         """Disconnect the networked fleet (robots commanded zero first); nothing for a simulation."""

@@ -11,7 +11,7 @@ For each job the service hands over (``in arena queue → setting up``):
    else the script's initial conditions, else random valid ones:
    :func:`~swarmdeck.console.jobs.start_poses.arena_start`, the rule verification
    uses too) under the barrier; the job then runs on them as robots 0…N−1
-   (:class:`~swarmdeck.console.runtime.assigned_robots.AssignedRobots`), the
+   (:class:`~swarmdeck.devices.fleet.assigned.AssignedRobots`), the
    docked robots fixed obstacles of its barrier. A set-up that fails (time limit,
    lost robot, a start pose on a docked robot) stops the robots and fails the job
    naming them.
@@ -32,7 +32,7 @@ For each job the service hands over (``in arena queue → setting up``):
    ``bypass`` (granted, revoked: when and why) and ``contacts`` (count, robots, episodes),
    and the job's reason.
 3. **Script**: :func:`swarmdeck.console.jobs.sandbox.run_sandboxed` with
-   :class:`LoopPlant` as its plant: each sandbox tick is one loop tick, paced
+   :meth:`SandboxPlant.on_loop <swarmdeck.console.jobs.plant.SandboxPlant.on_loop>` as its plant: each sandbox tick is one loop tick, paced
    in real time (MQTT robots always; the simulated arena unless ``fast``). On the
    real-time arena the script's commands for a tick are due within
    :meth:`~.service.PortalConfig.arena_budget` (one control period, 33 ms, by
@@ -81,6 +81,7 @@ from numpy.typing import NDArray
 from scipy.spatial import cKDTree
 
 from swarmdeck.console.jobs.confinement import ConfinementUnavailable, SandboxLimits
+from swarmdeck.console.jobs.plant import SandboxPlant
 from swarmdeck.console.jobs.sandbox import SandboxOutcome, run_sandboxed
 from swarmdeck.console.jobs.start_poses import arena_start
 from swarmdeck.console.portal.arena_fleet import ArenaFleet
@@ -154,33 +155,6 @@ class SandboxCommands:
         if self._nominal is None or self._nominal.shape != (len(tick.poses), 2):
             return np.zeros((len(tick.poses), 2)), None
         return self._nominal.copy(), None
-
-
-class LoopPlant:
-    """The sandbox's :class:`~swarmdeck.console.jobs.sandbox.Plant` on a ControlLoop: one apply = one loop tick.
-
-    The script sees the loop's newest poses and its run time (s since the run started; it stops
-    while the loop is e-stopped); the run is finished at the declared duration (a cancel or an
-    e-stop ends it through the sandbox's ``cancelled``).
-    """
-
-    def __init__(self, loop: ControlLoop, commands: SandboxCommands, duration: float,
-                 pacer: RealTimePacer | None) -> None:
-        self.loop, self.commands, self.duration, self.pacer = loop, commands, duration, pacer
-        self.n = loop.config.n_robots
-
-    def observe(self) -> tuple[float, NDArray[np.float64]]:
-        frame = self.loop.latest
-        return self.loop.run_time, (frame.poses.copy() if frame is not None else np.zeros((self.n, 3)))
-
-    def apply(self, nominal: NDArray[np.float64] | None) -> None:
-        self.commands.set(nominal)
-        self.loop.tick()
-        if self.pacer is not None:
-            self.pacer.wait()
-
-    def finished(self) -> bool:
-        return self.loop.run_time >= self.duration - 1e-9
 
 
 class ArenaRunner:
@@ -448,7 +422,7 @@ class ArenaRunner:
         def stopped() -> bool:
             return self._end_job.is_set()
 
-        def make_plant(n_script: int, script_initial: NDArray[np.float64] | None) -> LoopPlant:
+        def make_plant(n_script: int, script_initial: NDArray[np.float64] | None) -> SandboxPlant:
             poses = arena_start(n_script, n, initial, script_initial, self.fleet.start_poses, s.bounds).poses
             try:
                 robots = self._set_up(job.id, np.asarray(poses, dtype=float))
@@ -491,7 +465,7 @@ class ArenaRunner:
             loop.pause()
             loop.tick()  # the starting poses, recorded; robots hold still
             loop.run()
-            return LoopPlant(loop, commands, duration, RealTimePacer(s.dt) if s.real_time else None)
+            return SandboxPlant.on_loop(loop, commands, duration, RealTimePacer(s.dt) if s.real_time else None)
 
         # the wall-time limit covers the set-up too (its own time limit; the script waits for it)
         tick_s, overruns = cfg.arena_budget(s.dt, s.real_time)  # real time: one control period by default

@@ -3,7 +3,7 @@
 Each Frame carries ``battery`` ``(N,)`` V (NaN: unknown, e.g. simulated or virtual robots, a robot
 that has not reported yet) and ``charging`` ``(N,)`` (REFERENCE.md §9 ``batt_volt`` /
 ``charge_status``). The state of charge is the inverse of the battery model's voltage curve
-(:func:`swarmdeck.devices.fleet.battery.charge_from_voltage`). The scene's bar, the Batteries
+(:func:`swarmdeck.devices.battery.charge_from_voltage`). The scene's bar, the Batteries
 panel and the loop's "battery" alert all read it through :func:`battery_levels`, so they agree.
 """
 from __future__ import annotations
@@ -14,7 +14,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from swarmdeck.core.checks import require_in_range
-from swarmdeck.devices.fleet.battery import BatteryParams, charge_from_voltage
+from swarmdeck.devices.battery import BatteryParams, charge_from_voltage
 
 #: level names, lowest first (see :func:`battery_levels`)
 LEVELS = ("unknown", "low", "fair", "good", "charging")

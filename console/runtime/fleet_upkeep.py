@@ -40,9 +40,10 @@ from swarmdeck.console.runtime.behaviours import BehaviourError, TickInput
 from swarmdeck.core.bounds import Bounds
 from swarmdeck.core.checks import require_positive
 from swarmdeck.core.kinematics import GritsBotParams
+from swarmdeck.core.ports import rows_of
 from swarmdeck.devices.fleet.assignment import assign
-from swarmdeck.devices.fleet.battery import BatteryParams, charge_from_voltage
-from swarmdeck.devices.fleet.chargers import ChargerLayout
+from swarmdeck.devices.battery import BatteryParams, charge_from_voltage
+from swarmdeck.devices.chargers import ChargerLayout
 from swarmdeck.devices.fleet.docking import choose_slots, return_maneuver
 from swarmdeck.devices.fleet.maneuver import Maneuver
 from swarmdeck.devices.fleet.manager import FleetConfig
@@ -127,19 +128,6 @@ class FleetView:
         q = charge_from_voltage(self.battery, battery)
         some_report = bool((~np.isnan(q) & ~self.is_virtual).any())
         return np.where(self.is_virtual | (~self.firmware & np.isnan(q) & (not some_report)), 1.0, q)
-
-
-def rows_of(ids: ArrayLike, want: ArrayLike) -> tuple[NDArray[np.intp], NDArray[np.bool_]]:
-    """Rows ``(K,)`` of the robot ids ``want`` in ``ids`` ``(N,)`` and whether each is there (rows of
-    missing ids are 0, not to be used)."""
-    ids = np.asarray(ids, dtype=np.int64).reshape(-1)
-    want = np.asarray(want, dtype=np.int64).reshape(-1)
-    if not len(ids):
-        return np.zeros(len(want), dtype=np.intp), np.zeros(len(want), dtype=bool)
-    order = np.argsort(ids)
-    rows = order[np.minimum(np.searchsorted(ids[order], want), len(ids) - 1)]
-    present = ids[rows] == want
-    return np.where(present, rows, 0).astype(np.intp), present
 
 
 class FleetManeuver:

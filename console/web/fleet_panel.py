@@ -16,7 +16,7 @@ from swarmdeck.console.runtime.fleet_upkeep import (FleetManeuver, FleetView, Up
                                                     read_poses_csv, return_to_chargers, set_up, status_ages)
 from swarmdeck.console.runtime.frame import Frame
 from swarmdeck.console.runtime.loop import ControlLoop
-from swarmdeck.devices.fleet.chargers import ChargerLayout
+from swarmdeck.devices.chargers import ChargerLayout
 
 if TYPE_CHECKING:
     import viser

@@ -16,8 +16,10 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from swarmdeck.core.kinematics import GritsBotParams
-from swarmdeck.devices.fleet.chargers import ChargerLayout
+from swarmdeck.devices.chargers import ChargerLayout
 from swarmdeck.devices.fleet.maneuver import Maneuver, ManeuverParams
+from swarmdeck.devices.fleet.retrace import RetraceManeuver, plan_retrace
+from swarmdeck.devices.fleet.setup import SetupFailed
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.intp]
@@ -68,9 +70,6 @@ def return_maneuver(poses: ArrayLike, slots: ArrayLike, layout: ChargerLayout,
     p = np.asarray(poses, dtype=float).reshape(-1, 3)
     slots = np.asarray(slots, dtype=np.intp).reshape(-1)
     if retrace and len(p):
-        from swarmdeck.devices.fleet.retrace import RetraceManeuver, plan_retrace
-        from swarmdeck.devices.fleet.setup import SetupFailed
-
         try:
             plan = plan_retrace(p, slots, layout, robot, params, occupied=occupied, safety_distance=safety_distance,
                                 gamma=gamma, dt=dt)

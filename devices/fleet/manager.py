@@ -4,14 +4,14 @@
 robot of the fleet (paper §III-A: the back end "assigns charged robots, sets them up to the
 experiment's initial conditions, and returns them to the chargers afterwards"; REFERENCE.md §11):
 
-1. the robots start docked on charger slots (:class:`~swarmdeck.devices.fleet.chargers.ChargerLayout`)
-   and charge there (:mod:`~swarmdeck.devices.fleet.battery`);
+1. the robots start docked on charger slots (:class:`~swarmdeck.devices.chargers.ChargerLayout`)
+   and charge there (:mod:`~swarmdeck.devices.battery`);
 2. :meth:`FleetManager.setup` assigns N charged, healthy robots to experiment ids 0…N−1
    (:func:`~swarmdeck.devices.fleet.assignment.assign`), checks the start poses
    (:func:`~swarmdeck.devices.fleet.setup.check_start_poses`) and drives the robots there under
    the barrier with the deadlock escape (:func:`~swarmdeck.devices.fleet.setup.drive`);
 3. :meth:`FleetManager.experiment` is the experiment's view: N robots with ids 0…N−1 (a
-   :class:`~swarmdeck.devices.backend.RobotBackend`, what :class:`~swarmdeck.devices.Arena`
+   robot ports (:mod:`swarmdeck.core.ports`), what :class:`~swarmdeck.devices.Arena`
    drives), whose ``obstacles`` are the look-ahead points of the robots that stayed docked;
 4. :meth:`FleetManager.return_to_chargers` docks every robot that is off its charger on a free
    slot; :meth:`FleetManager.ready` is True when every robot is docked or assigned.
@@ -29,16 +29,17 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from swarmdeck.core.kinematics import GritsBotParams, limit_unicycle, lookahead_points
+from swarmdeck.core.kinematics import GritsBotParams, lookahead_points
+from swarmdeck.core.ports import SensedPoses
+from swarmdeck.devices.fleet.assigned import AssignedRobots
 from swarmdeck.devices.fleet.assignment import Assignment, AssignmentPolicy, assign
-from swarmdeck.devices.fleet.battery import BatteryParams, battery_step, recharge
-from swarmdeck.devices.fleet.chargers import ChargerLayout
+from swarmdeck.devices.battery import BatteryParams, battery_step, recharge
+from swarmdeck.devices.chargers import ChargerLayout
 from swarmdeck.devices.fleet.docking import choose_slots, return_maneuver
 from swarmdeck.devices.fleet.maneuver import Maneuver, ManeuverParams
 from swarmdeck.devices.fleet.setup import ManeuverReport, check_start_poses, drive
 from swarmdeck.devices.pipeline import barrier_filter
 from swarmdeck.devices.simulator import ArenaConfig, SimulatedArena
-from swarmdeck.devices.validation import ValidationReport
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.intp]
@@ -118,6 +119,8 @@ class FleetManager:
         self.experiment_end: float | None = None  # fleet time the last experiment ended (return began)
         self.last_setup: ManeuverReport | None = None
         self.last_return: ManeuverReport | None = None
+        self._experiment: AssignedRobots | None = None
+        self._seen = np.ones(m, dtype=bool)
 
     # ------------------------------------------------------------------ state
     @property
@@ -201,11 +204,40 @@ class FleetManager:
         self.last_setup = report
         return report
 
-    def experiment(self) -> "FleetExperiment":
-        """The assigned robots as the experiment's robots 0…N−1 (after :meth:`setup`)."""
+    def experiment(self) -> AssignedRobots:
+        """The assigned robots as the experiment's robots 0…N−1 (after :meth:`setup`): robot ports over
+        this fleet's (:meth:`read`, :meth:`send`) whose ``obstacles()`` are the look-ahead points of the
+        robots that stayed docked and whose ``report`` counts the experiment's own validation errors;
+        their clock starts at 0 and stands still once the fleet returns to the chargers."""
         if self.assignment is None:
             raise RuntimeError("no robots are assigned: call setup() first")
-        return FleetExperiment(self, self.assignment.rows)
+        self._experiment = AssignedRobots(self, self, self.ids[self.assignment.rows], self.params.lookahead,
+                                          validate=(self.config.bounds, self.params))
+        return self._experiment
+
+    # ------------------------------------------------------------------ the fleet's robot ports
+    name = "fleet"
+
+    def read(self, now: float = 0.0) -> SensedPoses:
+        """Every robot of the fleet (always seen), its battery and charging state, on the fleet's clock."""
+        return SensedPoses(self.ids.astype(np.int64), self.sim.poses, self._seen,
+                           battery=self.fleet.battery.voltage(self.charge), charging=self.docked(), time=self.sim.time)
+
+    def send(self, ids: ArrayLike, v: ArrayLike, w: ArrayLike) -> None:
+        """One period of ``(v, ω)`` for every robot of the fleet, in id order; batteries drain or charge."""
+        if len(ids) != self.n_robots or np.any(np.asarray(ids) != self.ids):
+            raise ValueError(f"the fleet expects commands for ids 0..{self.n_robots - 1} in order")
+        self.sim.step(v, w)
+        self._battery(self.sim, *self.sim.applied)
+
+    def hold(self) -> None:
+        """Nothing moves (the simulation does not advance)."""
+
+    def health(self) -> str:
+        return f"fleet clock {self.time:.1f} s, collision steps {self.sim.report.steps_with_collision}"
+
+    def close(self) -> None:
+        """Nothing to release."""
 
     # ------------------------------------------------------------------ return
     def return_to_chargers(self, *, time_limit: float | None = None) -> ManeuverReport:
@@ -216,6 +248,9 @@ class FleetManager:
             SetupFailed: the time limit passed (robots stopped; those not docked named).
         """
         away = np.flatnonzero(self.slot < 0)
+        if self._experiment is not None:
+            self._experiment.end()
+            self._experiment = None
         self.assignment = None
         self.experiment_end = self.sim.time  # the experiment's clock stops here
         if len(away) == 0:
@@ -243,56 +278,3 @@ class FleetManager:
         if self.assignment is not None:
             assigned[self.assignment.rows] = True
         self.slot = np.where(assigned, -1, on)
-
-
-class FleetExperiment:
-    """The experiment's robots 0…N−1: fleet rows ``rows`` of a :class:`FleetManager` (a RobotBackend).
-
-    ``time`` starts at 0 when the experiment starts; ``step(v, w)`` drives these robots (the others
-    hold still) and charges/drains the batteries; ``obstacles`` are the look-ahead points ``(M − N, 2)``
-    of the robots that stayed docked (for :func:`~swarmdeck.devices.pipeline.certify`);
-    ``report`` counts the experiment's own boundary, collision and actuator errors.
-    """
-
-    def __init__(self, fleet: FleetManager, rows: ArrayLike) -> None:
-        self.fleet = fleet
-        self.rows = np.asarray(rows, dtype=np.intp)
-        self.n_robots = int(len(self.rows))
-        self.params = fleet.params
-        self._t0 = fleet.sim.time
-        self.report = ValidationReport(self.n_robots)
-        others = np.setdiff1d(np.arange(fleet.n_robots), self.rows)
-        self._others = others
-
-    @property
-    def poses(self) -> FloatArray:
-        return self.fleet.sim.poses[self.rows]
-
-    @property
-    def time(self) -> float:
-        """s since the experiment started (stops when the fleet returns to the chargers)."""
-        end = self.fleet.experiment_end
-        return float((self.fleet.sim.time if end is None else end) - self._t0)
-
-    @property
-    def obstacles(self) -> FloatArray | None:
-        if len(self._others) == 0:
-            return None
-        return lookahead_points(self.fleet.sim.poses[self._others], self.params.lookahead)
-
-    def step(self, v: ArrayLike, w: ArrayLike) -> FloatArray:
-        v = np.asarray(v, dtype=float).reshape(-1)
-        w = np.asarray(w, dtype=float).reshape(-1)
-        if v.shape != (self.n_robots,) or w.shape != (self.n_robots,):
-            raise ValueError(f"v and w must each have shape ({self.n_robots},), got {v.shape} and {w.shape}")
-        sim, m = self.fleet.sim, self.fleet.n_robots
-        invalid = ~(np.isfinite(v) & np.isfinite(w))
-        _, _, saturated = limit_unicycle(np.where(invalid, 0.0, v), np.where(invalid, 0.0, w), self.params)
-        full_v, full_w = np.zeros(m), np.zeros(m)
-        full_v[self.rows], full_w[self.rows] = v, w
-        sim.step(full_v, full_w)
-        av, aw = sim.applied
-        self.fleet._battery(sim, av, aw)
-        poses = sim.poses[self.rows]
-        self.report.record(poses, sim.config.bounds, saturated, invalid, self.time)
-        return poses

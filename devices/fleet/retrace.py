@@ -35,8 +35,11 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from swarmdeck.core.kinematics import GritsBotParams, lookahead_points, unicycle_to_si
-from swarmdeck.devices.fleet.chargers import ChargerLayout
+from swarmdeck.devices.chargers import ChargerLayout
 from swarmdeck.devices.fleet.maneuver import Maneuver, ManeuverParams
+from swarmdeck.devices.fleet.setup import drive
+from swarmdeck.devices.pipeline import barrier_filter
+from swarmdeck.devices.simulator import ArenaConfig, SimulatedArena
 from swarmdeck.devices.gritsbot import wrap_angle
 
 FloatArray = NDArray[np.float64]
@@ -124,10 +127,6 @@ def plan_retrace(poses: ArrayLike, slots: ArrayLike, layout: ChargerLayout, robo
     Raises:
         SetupFailed: the setup did not reach every pose within ``time_limit`` s (default 60 + 2 K).
     """
-    from swarmdeck.devices.fleet.setup import drive
-    from swarmdeck.devices.pipeline import barrier_filter
-    from swarmdeck.devices.simulator import ArenaConfig, SimulatedArena
-
     p = np.asarray(poses, dtype=float).reshape(-1, 3)
     slots = np.asarray(slots, dtype=np.intp).reshape(-1)
     k = len(p)

@@ -1,4 +1,4 @@
-"""Networked robots as the console loop's pose source and command sink (``--robots-via mqtt://…``).
+"""Networked robots as robot ports: the console loop's (``--robots-via mqtt://…``) and the Arena's.
 
 :class:`NetworkRobots` is both robot ports of :mod:`swarmdeck.core.ports` —
 the ``PoseSource`` (``read(now) -> SensedPoses``) and the ``CommandSink``
@@ -10,6 +10,13 @@ real tracker). Commands pass through a
 :class:`~swarmdeck.devices.net.streamer.CommandStreamer`, which also keeps
 streaming (zeros, once inputs are stale) from a background thread if the loop
 stalls.
+
+The same class drives an experiment on real robots: ``Arena(backend=NetworkRobots.connect(url,
+n_robots=6))`` (the Arena paces each step to one period of wall time). As the simulator does, every
+``send`` stops robots whose command is not finite and applies the wheel limits by one uniform scale
+per robot (curvature kept) before anything goes out: real firmware clips each wheel on its own,
+which would change the direction of motion (:attr:`NetworkRobots.saturated`, :attr:`NetworkRobots.invalid`
+count them).
 
 Robots the transport reports missing or duplicated are left out of
 :meth:`NetworkRobots.read` (excluded from control) and returned by
@@ -24,6 +31,7 @@ from collections.abc import Callable
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from swarmdeck.core.kinematics import GritsBotParams, limit_unicycle
 from swarmdeck.core.ports import SensedPoses
 from swarmdeck.devices.net.mqtt_config import parse_broker_url, redact_url
 from swarmdeck.devices.net.streamer import CommandStreamer, StreamerConfig
@@ -40,6 +48,9 @@ class NetworkRobots:
         background: keep a background streaming thread (zeros flow even if the loop hangs).
         clock: the transport's monotonic clock.
         name: shown in the console's status bar.
+        params: the robot model (its wheel limits apply to every command sent).
+        simulated_time: the transport runs on a simulated clock (the in-process transport): readings
+            carry ``clock()`` as the robots' time, so an Arena over them does not pace itself.
     """
 
     def __init__(
@@ -51,10 +62,16 @@ class NetworkRobots:
         background: bool = True,
         clock: Callable[[], float] = time.monotonic,
         name: str = "mqtt",
+        params: GritsBotParams = GritsBotParams(),
+        simulated_time: bool = False,
     ) -> None:
         self.transport = transport
         self.name = name
         self.clock = clock
+        self.params = params
+        self.simulated_time = bool(simulated_time)
+        self.saturated = 0  # robot-commands the wheel limits scaled down
+        self.invalid = 0  # robot-commands that were NaN/inf (sent as zero)
         self.ids = None if ids is None else np.asarray(ids, dtype=np.int64).reshape(-1).copy()
         self.streamer = CommandStreamer(transport, transport, streamer, clock)
         if background:
@@ -68,6 +85,8 @@ class NetworkRobots:
         *,
         n_robots: int | None = None,
         wait_for_poses: float = 5.0,
+        partial: bool = False,
+        name: str | None = None,
         timeouts: LinkTimeouts = LinkTimeouts(),
         streamer: StreamerConfig = StreamerConfig(),
         **mqtt: object,
@@ -75,7 +94,10 @@ class NetworkRobots:
         """Connect to ``url`` and wait up to ``wait_for_poses`` s for the first pose of every robot.
 
         ``ids`` (or ``n_robots`` for ids 0..N−1) fixes the robots to control; with neither,
-        every robot heard of within ``wait_for_poses`` is used. Extra keywords go to
+        every robot heard of within ``wait_for_poses`` is used. ``partial``: with ``ids``, go on
+        once the wait is over if at least one of them reported (the others stay out of readings
+        until they do: one silent robot does not keep a fleet from working). ``name``: the status
+        line's name (default ``mqtt <url without password>``). Extra keywords go to
         :class:`~swarmdeck.devices.net.mqtt_config.MqttConfig` (``qos``, ``protocol``, ``ca_certs``, …).
 
         Raises:
@@ -92,7 +114,7 @@ class NetworkRobots:
                 seen = transport.latest_poses().ids
                 if ids is not None:
                     missing = np.setdiff1d(np.asarray(ids, dtype=np.int64), seen)
-                    if not len(missing):
+                    if not len(missing) or (partial and len(seen) and time.monotonic() > deadline):
                         break
                 elif len(seen) and time.monotonic() > deadline - wait_for_poses / 2:
                     break  # robots heard of; half the wait spent collecting stragglers
@@ -105,7 +127,7 @@ class NetworkRobots:
         except BaseException:
             transport.close()
             raise
-        return cls(transport, ids, streamer=streamer)
+        return cls(transport, ids, streamer=streamer, name=name if name is not None else f"mqtt {redact_url(url)}")
 
     # ---------------------------------------------------------------- pose source
     def read(self, now: float | None = None) -> SensedPoses:
@@ -123,7 +145,15 @@ class NetworkRobots:
         ids, poses, stamps = ids[known], poses[known], stamps[known]
         seen = (self.clock() - stamps) <= self.streamer.config.pose_timeout
         battery, charging = self.transport.status().robots.battery_of(ids)
-        return SensedPoses(ids.astype(np.int64), poses, seen, battery=battery, charging=charging)
+        return SensedPoses(ids.astype(np.int64), poses, seen, battery=battery, charging=charging,
+                           time=self.clock() if self.simulated_time else None)
+
+    def truth(self, now: float | None = None) -> NDArray[np.float64]:
+        """Latest reported poses ``(N, 3)`` of the robots under control, unknown ones at 0 (what a
+        synthetic overhead camera renders, ``--camera synthetic``)."""
+        out = np.array(self.read().poses, dtype=float)
+        out[~np.isfinite(out)] = 0.0
+        return out
 
     def obstacles(self) -> NDArray[np.float64]:
         """``(M, 2)`` last known centres of robots excluded from control (fixed obstacles), m."""
@@ -131,7 +161,17 @@ class NetworkRobots:
 
     # ---------------------------------------------------------------- command sink
     def send(self, ids: ArrayLike, v: ArrayLike, w: ArrayLike, leds: ArrayLike | None = None) -> None:
-        """Hand this tick's commands to the streamer and send them at once (watchdogs applied)."""
+        """Hand this tick's commands to the streamer and send them at once (watchdogs applied).
+
+        Non-finite commands become zero and the wheel limits are applied by one uniform scale per
+        robot first (module docstring); the caller's arrays are not changed.
+        """
+        v = np.asarray(v, dtype=float).reshape(-1)
+        w = np.asarray(w, dtype=float).reshape(-1)
+        bad = ~(np.isfinite(v) & np.isfinite(w))
+        v, w, saturated = limit_unicycle(np.where(bad, 0.0, v), np.where(bad, 0.0, w), self.params)
+        self.saturated += int(saturated.sum())
+        self.invalid += int(bad.sum())
         self.streamer.submit(ids, v, w, leds)
         self.streamer.tick()
 

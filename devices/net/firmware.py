@@ -12,10 +12,10 @@ with the monotonic clock. REFERENCE.md §9 / notes/robotarium.md §4.3:
 * wheel limits by one uniform scale per robot
   (:func:`~swarmdeck.core.kinematics.limit_unicycle`), exact unicycle arcs
   (:func:`~swarmdeck.devices.gritsbot.unicycle_step`);
-* the battery of :mod:`swarmdeck.devices.fleet.battery` (voltage linear in the charge drawn,
+* the battery of :mod:`swarmdeck.devices.battery` (voltage linear in the charge drawn,
   I = I_idle + k·(|ω_R| + |ω_L|) while driving, I_idle otherwise); a robot docked on a slot of
   the charging strips (``chargers``, :meth:`ChargerLayout.docked_slot`) charges instead (CC-CV,
-  :func:`~swarmdeck.devices.fleet.battery.recharge`) and reports ``charge_status`` true.
+  :func:`~swarmdeck.devices.battery.recharge`) and reports ``charge_status`` true.
 """
 from __future__ import annotations
 
@@ -26,8 +26,8 @@ from numpy.typing import ArrayLike, NDArray
 
 from swarmdeck.core.checks import in_range, require_positive
 from swarmdeck.core.kinematics import GritsBotParams, limit_unicycle, unicycle_to_wheels
-from swarmdeck.devices.fleet.battery import BatteryParams, discharge, recharge
-from swarmdeck.devices.fleet.chargers import ChargerLayout
+from swarmdeck.devices.battery import BatteryParams, discharge, recharge
+from swarmdeck.devices.chargers import ChargerLayout
 from swarmdeck.devices.gritsbot import unicycle_step
 
 FloatArray = NDArray[np.float64]

@@ -21,7 +21,7 @@ from typing import IO
 import numpy as np
 from numpy.typing import ArrayLike
 
-from swarmdeck.devices.fleet.chargers import ChargerLayout
+from swarmdeck.devices.chargers import ChargerLayout
 from swarmdeck.devices.net.firmware import BatteryParams, FirmwareParams, FleetState
 from swarmdeck.core.kinematics import GritsBotParams
 from swarmdeck.devices.net.mqtt_config import MqttConfig

@@ -5,14 +5,14 @@ their command, robots not named get zero (a robot nobody commands stands
 still, as after the firmware's 500 ms brake), and the
 :class:`~swarmdeck.devices.simulator.SimulatedArena` steps once on its virtual
 clock — so a run is exactly reproducible. Battery voltages follow the same
-model as the networked fleet (:mod:`swarmdeck.devices.fleet.battery`).
+model as the networked fleet (:mod:`swarmdeck.devices.battery`).
 """
 from __future__ import annotations
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from swarmdeck.devices.fleet.battery import BatteryParams, battery_step
+from swarmdeck.devices.battery import BatteryParams, battery_step
 from swarmdeck.devices.simulator import SimulatedArena
 from swarmdeck.devices.net.transport import (
     LINK_OK,

@@ -25,7 +25,8 @@ from numpy.typing import ArrayLike, NDArray
 from swarmdeck.core.kinematics import limit_unicycle
 from swarmdeck.devices.arena import RUN_DEFAULTS, Arena
 from swarmdeck.devices.rps.errors import call_at_scripts_end_text, count_errors, debug_text
-from swarmdeck.devices.simulator import ArenaConfig, SimulatedArena
+from swarmdeck.devices.simulated_robots import SimulatedRobots
+from swarmdeck.devices.simulator import ArenaConfig
 
 RELAX_HINT = ("swarmdeck enforces rps's call order as the Robotarium does; Robotarium(..., enforce_call_order=False) "
               "or `swarmdeck run --no-rps-call-order` relaxes it")
@@ -193,14 +194,14 @@ class Robotarium:
         """rps's validation of the current poses and commanded velocities, counted into ``errors``
         (a new dict when None: never a shared default, unlike rps 1.x); returns it."""
         errors = {} if errors is None else errors
-        backend = self._arena.backend
+        robots = self._arena.backend
         pairs = None
-        if type(backend) is SimulatedArena and backend.report.steps:
-            pairs = backend.last_collisions  # the simulator validated these very poses after its last step
+        if isinstance(robots, SimulatedRobots) and robots.sim.report.steps:
+            pairs = robots.sim.last_collisions  # the simulator validated these very poses after its last step
         v, w = self._velocities
         limit = 2 * self.wheel_radius * self.max_wheel_velocity  # |2v ± Lω| / (2r) > max wheel speed
         over = bool(np.any(np.abs(2 * v - self.base_length * w) > limit) or np.any(np.abs(2 * v + self.base_length * w) > limit))
-        count_errors(errors, backend.poses, over, self._bounds, pairs)
+        count_errors(errors, self._arena.poses(), over, self._bounds, pairs)
         return errors
 
     def _threshold(self, dxu: ArrayLike) -> NDArray[np.float64]:

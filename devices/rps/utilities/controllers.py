@@ -8,6 +8,7 @@ from swarmdeck.devices.rps.utilities.transformations import __all__ as _TRANSFOR
 from swarmdeck.devices.rps.utilities.transformations import create_si_to_uni_mapping as _si_to_uni_mapping
 from swarmdeck.devices.controllers import (
     HybridPoseController,
+    at_pose,
     clf_unicycle_pose_controller,
     clf_unicycle_position_controller,
 )
@@ -103,8 +104,6 @@ def create_pose_controller_hybrid(linear_velocity_gain: float = 0.8, angular_vel
 
 def _parking(controller, position_error: float, rotation_error: float):
     """``controller`` with zero commands for the robots already at their goal pose (rps 2.0's parking)."""
-    from swarmdeck.devices.controllers import at_pose
-
     def parked(states, poses):
         dxu = np.asarray(controller(states, poses), dtype=float)
         done = at_pose(np.asarray(states, dtype=float).T, np.asarray(poses, dtype=float).T, position_error,
