@@ -196,7 +196,8 @@ class Warehouse(Scenario):
     """MARBLER's Warehouse: agents load on the right edge (x > 1.5 − ``goal_width``) and unload on the left
     (x < −1.5 + ``goal_width``), each in its colour's half (even agents green: unload y > 0, load y ≤ 0; odd
     agents red: the other way round); ``load_reward`` and ``unload_reward`` per agent. Observation: own
-    [x, y, loaded] and the same of ``num_neighbors`` others."""
+    [x, y, loaded] (as before this step's loading and unloading, as in MARBLER) and the same of ``num_neighbors``
+    others."""
 
     n_agents: int = 6
     actions: Actions = Actions("moves", hold=29, step=0.2, box=MARBLER_BOX)
@@ -223,10 +224,11 @@ class Warehouse(Scenario):
 
         poses = random_initial_poses(self.n_agents, MARBLER_BOX, rng=rng, wall_margin=0.1,
                                      spacing=0.6, min_separation=0.3)
-        return poses, {"loaded": np.zeros(self.n_agents, dtype=bool)}
+        return poses, {"loaded": np.zeros(self.n_agents, dtype=bool), "shown": np.zeros(self.n_agents, dtype=bool)}
 
     def observe(self, view: View) -> NDArray[np.float32]:
-        own = np.concatenate((view.poses[..., :2], view.state["loaded"][..., None].astype(float)), axis=-1)
+        # MARBLER observes before its reward updates ``loaded``: "shown" is the flag before this step's update
+        own = np.concatenate((view.poses[..., :2], view.state["shown"][..., None].astype(float)), axis=-1)
         return _neighbour_rows(view, own, self.num_neighbors).astype(np.float32)
 
     def reward(self, view: View) -> tuple[FloatArray, State]:
@@ -237,4 +239,4 @@ class Warehouse(Scenario):
         unload = loaded & (x < -1.5 + self.goal_width) & np.where(green, upper, ~upper)
         load = ~loaded & (x > 1.5 - self.goal_width) & np.where(green, ~upper, upper)
         r = np.where(unload, self.unload_reward, np.where(load, self.load_reward, 0.0))
-        return r, dict(view.state, loaded=(loaded & ~unload) | load)
+        return r, dict(view.state, loaded=(loaded & ~unload) | load, shown=loaded)
