@@ -163,7 +163,7 @@ class BatchedEnv:
                 self.sim.points().reshape(-1, 2), goals.reshape(-1, 2),
                 speed_limit=self.sim.params.max_speed).reshape(e, n, 2)
             before = self.sim.poses
-            res = self.sim.tick(np.where(live[:, None, None], nominal, 0.0))
+            res = self.sim.tick(np.where(live[:, None, None], nominal, 0.0), check=sc.violation_penalty is not None)
             self.sim.set_poses(np.where(live[:, None, None], self.sim.poses, before))
             filter_change += np.where(live[:, None], res.filter_change, 0.0)
             command_change += np.where(live[:, None], res.command_change, 0.0)

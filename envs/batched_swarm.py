@@ -24,7 +24,7 @@ from swarmdeck.devices.gritsbot import unicycle_step
 from swarmdeck.devices.pipeline import certify
 from swarmdeck.devices.validation import ValidationRules
 from swarmdeck.envs.batched_barrier import BatchedDistributedBarrier
-from swarmdeck.envs.neighbours import batched_min_distance, lifted_tree
+from swarmdeck.envs.neighbours import lifted_tree
 
 FloatArray = NDArray[np.float64]
 BoolArray = NDArray[np.bool_]
@@ -78,9 +78,10 @@ class BatchedSwarm:
             new[swarms] = poses
         self.poses = new
 
-    def tick(self, nominal: FloatArray) -> TickResult:
+    def tick(self, nominal: FloatArray, check: bool = True) -> TickResult:
         """Advance every swarm one period ``dt`` under look-ahead velocities ``(E, N, 2)`` m/s (rows with NaN or
-        inf stop that robot)."""
+        inf stop that robot). ``check``: test for collisions and boundary violations after the tick (else both
+        all False)."""
         e, n = self.n_swarms, self.n_robots
         flat = self.poses.reshape(e * n, 3)
         nom = np.asarray(nominal, dtype=float).reshape(e * n, 2)
@@ -98,7 +99,10 @@ class BatchedSwarm:
         v, w, _ = limit_unicycle(v, w, self.params)  # the simulated robots' own limits (a no-op after the pipeline)
         new = unicycle_step(flat, v, w, self.dt)
         self.poses = new.reshape(e, n, 3)
-        collision, boundary = self.violations()
+        if check:
+            collision, boundary = self.violations()
+        else:
+            collision = boundary = np.zeros(e, dtype=bool)
         return TickResult(change.reshape(e, n), command_change.reshape(e, n), ok, collision, boundary)
 
     def violations(self) -> tuple[BoolArray, BoolArray]:
@@ -111,5 +115,7 @@ class BatchedSwarm:
             return np.zeros(self.n_swarms, dtype=bool), boundary
         s = self.rules.collision_shift
         shifted = p[..., :2] + s * np.stack((np.cos(p[..., 2]), np.sin(p[..., 2])), axis=-1)
-        dmin = batched_min_distance(shifted, lifted_tree(shifted))
-        return dmin <= self.rules.collision_distance, boundary
+        pairs = lifted_tree(shifted).query_pairs(self.rules.collision_distance, output_type="ndarray")
+        collision = np.zeros(self.n_swarms, dtype=bool)
+        collision[pairs[:, 0] // self.n_robots] = True
+        return collision, boundary
