@@ -31,7 +31,6 @@ from numpy.typing import NDArray
 from swarmdeck.devices.controllers import si_position_controller
 from swarmdeck.devices.simulator import check_poses
 from swarmdeck.envs.batched_swarm import BatchedSwarm
-from swarmdeck.envs.neighbours import batched_min_distance
 from swarmdeck.envs.scenario import MOVES, Scenario, State, View
 
 try:  # the optional extra: pip install 'swarmdeck[rl]'
@@ -102,8 +101,8 @@ class BatchedEnv:
     def _view(self) -> View:
         return View(self.sim.poses, self.sim.points(), self.state, self._last_actions, self.steps, self.scenario.bounds)
 
-    def _observe(self) -> NDArray[np.float32]:
-        obs = np.asarray(self.scenario.observe(self._view()), dtype=np.float32)
+    def _observe(self, view: View | None = None) -> NDArray[np.float32]:
+        obs = np.asarray(self.scenario.observe(self._view() if view is None else view), dtype=np.float32)
         return np.clip(obs, self.obs_low, self.obs_high)
 
     # ------------------------------------------------------------------ actions
@@ -162,9 +161,12 @@ class BatchedEnv:
             nominal = act if goals is None else si_position_controller(
                 self.sim.points().reshape(-1, 2), goals.reshape(-1, 2),
                 speed_limit=self.sim.params.max_speed).reshape(e, n, 2)
+            everyone = bool(live.all())
             before = self.sim.poses
-            res = self.sim.tick(np.where(live[:, None, None], nominal, 0.0), check=sc.violation_penalty is not None)
-            self.sim.set_poses(np.where(live[:, None, None], self.sim.poses, before))
+            res = self.sim.tick(nominal if everyone else np.where(live[:, None, None], nominal, 0.0),
+                                check=sc.violation_penalty is not None)
+            if not everyone:  # swarms that are over (or start afresh) stay where they are
+                self.sim.set_poses(np.where(live[:, None, None], self.sim.poses, before))
             filter_change += np.where(live[:, None], res.filter_change, 0.0)
             command_change += np.where(live[:, None], res.command_change, 0.0)
             filter_ok &= res.filter_ok | ~live
@@ -183,14 +185,21 @@ class BatchedEnv:
         self.state = {k: np.where(_rows(violated, v), self.state[k], v) for k, v in state.items()} if state else state
         rewards = np.where(violated[:, None], sc.violation_penalty or 0.0, rewards)
         rewards = np.where(fresh[:, None], 0.0, rewards)
-        view = self._view()
+        view = view.with_state(self.state)
         terminated = (violated | np.asarray(sc.terminated(view), dtype=bool)) & ~fresh
         truncated = (self.steps >= sc.max_steps) & ~terminated & ~fresh
         self._done = terminated | truncated
-        pts = self.sim.points()
+        obs = self._observe(view)  # before the minimum distance: it reuses the observation's neighbour query
         info = {"filter_change": filter_change, "command_change": command_change, "filter_ok": filter_ok,
-                "violation": message.astype(str), "min_distance": batched_min_distance(pts), "reset": fresh}
-        return self._observe(), rewards, terminated, truncated, info
+                "violation": message.astype(str), "min_distance": _min_distance(view),
+                "reset": fresh}
+        return obs, rewards, terminated, truncated, info
+
+
+def _min_distance(view: View) -> FloatArray:
+    """(E,) smallest distance between two look-ahead points of each swarm, m (inf for one robot)."""
+    e, n, _ = view.points.shape
+    return view.nearest_points(1)[0][..., 0].min(axis=1) if n > 1 else np.full(e, np.inf)
 
 
 def _rows(mask: NDArray[np.bool_], like: np.ndarray) -> NDArray[np.bool_]:

@@ -49,23 +49,33 @@ def lifted_tree(points: FloatArray) -> cKDTree:
     """One k-d tree over E swarms ``(E, N, 2)`` (module docstring): swarm e lifted to z = e·separation."""
     e, n, _ = points.shape
     flat = points.reshape(e * n, 2)
-    finite = flat[np.all(np.isfinite(flat), axis=1)]
-    span = float(np.ptp(finite, axis=0).max()) if len(finite) else 0.0
-    separation = 4.0 * (span + 1.0)
+    reach = float(np.abs(flat).max()) if flat.size else 0.0  # every swarm within [-reach, reach]²
+    if not np.isfinite(reach):
+        raise ValueError("lifted_tree: points must be finite")
+    separation = 4.0 * (reach + 1.0)
     z = np.repeat(np.arange(e, dtype=float) * separation, n)
     return cKDTree(np.column_stack((flat, z)))
 
 
-def batched_nearest_neighbours(points: FloatArray, k: int, tree: cKDTree | None = None) -> IndexArray:
-    """(E, N, k) indices (within the swarm) of each robot's k nearest others, nearest first; k ≤ N − 1."""
+def batched_query(points: FloatArray, k: int, tree: cKDTree | None = None) -> tuple[FloatArray, IndexArray]:
+    """Each robot's k nearest others in its swarm (points (E, N, 2), k ≤ N − 1): distances (E, N, k) m and indices
+    within the swarm (E, N, k), nearest first."""
     e, n, _ = points.shape
     if k <= 0 or n < 2:
-        return np.zeros((e, n, 0), dtype=np.intp)
+        return np.zeros((e, n, 0)), np.zeros((e, n, 0), dtype=np.intp)
     tree = lifted_tree(points) if tree is None else tree
-    _, idx = tree.query(tree.data, k=k + 1)
+    dist, idx = tree.query(tree.data, k=k + 1)
     idx = np.asarray(idx, dtype=np.intp).reshape(e * n, k + 1)
     own = np.arange(e * n)
-    return (_drop_self(idx, own, k) - (own // n * n)[:, None]).reshape(e, n, k)
+    keep = idx != own[:, None]
+    keep[keep.sum(axis=1) > k, -1] = False  # own index absent (a coincident twin came first): drop the last
+    others = idx[keep].reshape(e * n, k) - (own // n * n)[:, None]
+    return dist.reshape(e * n, k + 1)[keep].reshape(e, n, k), others.reshape(e, n, k)
+
+
+def batched_nearest_neighbours(points: FloatArray, k: int, tree: cKDTree | None = None) -> IndexArray:
+    """(E, N, k) indices (within the swarm) of each robot's k nearest others, nearest first; k ≤ N − 1."""
+    return batched_query(points, k, tree)[1]
 
 
 def batched_min_distance(points: FloatArray, tree: cKDTree | None = None) -> FloatArray:
@@ -73,6 +83,4 @@ def batched_min_distance(points: FloatArray, tree: cKDTree | None = None) -> Flo
     e, n, _ = points.shape
     if n < 2:
         return np.full(e, np.inf)
-    tree = lifted_tree(points) if tree is None else tree
-    d, _ = tree.query(tree.data, k=2)
-    return d[:, 1].reshape(e, n).min(axis=1)
+    return batched_query(points, 1, tree)[0][..., 0].min(axis=1)

@@ -25,13 +25,16 @@ during a step ends that swarm's episode at once with that reward for every agent
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from functools import cached_property
 from typing import Literal
 
 import numpy as np
 from numpy.typing import NDArray
 
 from swarmdeck.core.bounds import DEFAULT_BOUNDS, Bounds
-from swarmdeck.envs.neighbours import batched_nearest_neighbours
+from scipy.spatial import cKDTree
+
+from swarmdeck.envs.neighbours import batched_nearest_neighbours, batched_query, lifted_tree
 
 FloatArray = NDArray[np.float64]
 State = dict[str, np.ndarray]
@@ -71,6 +74,29 @@ class View:
     actions: np.ndarray
     steps: NDArray[np.int64]
     bounds: Bounds
+
+    @cached_property
+    def points_tree(self) -> cKDTree:
+        """One k-d tree over every swarm's look-ahead points (:func:`swarmdeck.envs.neighbours.lifted_tree`), built once
+        per view."""
+        return lifted_tree(self.points)
+
+    def nearest_points(self, k: int) -> tuple[FloatArray, NDArray[np.intp]]:
+        """Each agent's k nearest other look-ahead points (k ≤ N − 1): distances (E, N, k) m and indices (E, N, k),
+        nearest first (:func:`swarmdeck.envs.neighbours.batched_query`; one query per view, reused for smaller k)."""
+        cached = self.__dict__.get("_nearest")
+        if cached is None or cached[0].shape[2] < k:
+            cached = batched_query(self.points, k, self.points_tree)
+            self.__dict__["_nearest"] = cached
+        return cached[0][..., :k], cached[1][..., :k]
+
+    def with_state(self, state: State) -> "View":
+        """The same view with another state (the k-d tree and its queries, once made, are kept)."""
+        new = View(self.poses, self.points, state, self.actions, self.steps, self.bounds)
+        for key in ("points_tree", "_nearest"):
+            if key in self.__dict__:
+                new.__dict__[key] = self.__dict__[key]
+        return new
 
     def neighbours(self, k: int) -> NDArray[np.intp]:
         """(E, N, k) each agent's k nearest other agents (by centre), nearest first — or, when k ≥ N − 1, all the

@@ -18,7 +18,6 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import NDArray
 
-from swarmdeck.envs.neighbours import batched_nearest_neighbours
 from swarmdeck.envs.observations import observation_bounds
 from swarmdeck.envs.scenario import Actions, Scenario, State, View
 from swarmdeck.envs.tasks import formation_slots
@@ -36,7 +35,7 @@ def task_observations(view: View, k: int, slots: FloatArray | None = None) -> ND
     rel = np.zeros((e, n, k, 2))
     kk = min(k, n - 1)
     if kk > 0:
-        idx = batched_nearest_neighbours(points, kk)
+        idx = view.nearest_points(kk)[1]
         rel[:, :, :kk] = np.take_along_axis(points[:, None, :, :], idx[..., None], axis=2) - points[:, :, None, :]
     parts.append(rel.reshape(e, n, 2 * k))
     px, py = points[..., 0], points[..., 1]
