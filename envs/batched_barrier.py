@@ -75,7 +75,7 @@ class BatchedDistributedBarrier:
         fail = np.zeros(n_swarms, dtype=bool)
         reasons = [""] * n_swarms
         far = np.max(np.abs(P), axis=1) > MAX_COORDINATE
-        for e in np.unique(swarm_of[far]):
+        for e in np.unique(swarm_of[far]) if far.any() else ():
             fail[e], reasons[e] = True, f"points beyond ±{MAX_COORDINATE:g} m"
         with np.errstate(over="ignore", invalid="ignore"):
             tree = lifted_tree(P.reshape(n_swarms, n, 2))
@@ -83,9 +83,10 @@ class BatchedDistributedBarrier:
             rows = Rows.concat(parts + [wheel_limit_rows(poses, params)])
         row_swarm = swarm_of[rows.i]
         bad_b = ~np.isfinite(rows.b)
-        for e in np.unique(row_swarm[bad_b]):
-            fail[e], reasons[e] = True, "non-finite bound (gains too large for these positions)"
-        rows = dataclasses.replace(rows, b=np.where(bad_b, 0.0, rows.b))
+        if bad_b.any():  # that swarm stops; a finite stand-in keeps the others' arithmetic clean
+            for e in np.unique(row_swarm[bad_b]):
+                fail[e], reasons[e] = True, "non-finite bound (gains too large for these positions)"
+            rows = dataclasses.replace(rows, b=np.where(bad_b, 0.0, rows.b))
 
         # safety.distributed.filter_distributed, with recovery and certificate per swarm
         unsafe = (rows.h < 0) & (rows.kind != LIMIT)
@@ -104,11 +105,11 @@ class BatchedDistributedBarrier:
             res2 = solve_small_qps(hard.owner, hard.a, hard.b, U, None, reach, todo=retry)
             u = np.where(retry[:, None], res2.u, u)
             solved = np.where(retry, res2.solved, solved)
-        for e in np.unique(swarm_of[~solved]):
+        for e in np.unique(swarm_of[~solved]) if not solved.all() else ():
             if not fail[e]:
                 fail[e], reasons[e] = True, "distributed: no certified answer (infeasible own QP)"
-        excess = rows.lhs(u) - b_hard
-        for e in np.unique(row_swarm[excess > 2 * _FEAS_TOL]):
+        over = rows.lhs(u) - b_hard > 2 * _FEAS_TOL
+        for e in np.unique(row_swarm[over]) if over.any() else ():
             if not fail[e]:
                 fail[e], reasons[e] = True, "distributed: a row is violated after the split"
 
