@@ -40,6 +40,7 @@ FloatArray = NDArray[np.float64]
 State = dict[str, np.ndarray]
 
 MOVES = np.array([[-1.0, 0.0], [1.0, 0.0], [0.0, -1.0], [0.0, 1.0], [0.0, 0.0]])  # left, right, up, down, stay
+MOVES.setflags(write=False)
 
 
 @dataclass(frozen=True)
@@ -103,7 +104,8 @@ class View:
         others in index order (MARBLER's convention)."""
         e, n, _ = self.poses.shape
         if k >= n - 1:
-            others = np.array([[j for j in range(n) if j != i] for i in range(n)], dtype=np.intp).reshape(n, n - 1)
+            cols = np.arange(n - 1, dtype=np.intp)
+            others = cols[None, :] + (cols[None, :] >= np.arange(n)[:, None])  # row i: 0 … N−1 without i
             return np.broadcast_to(others, (e, n, n - 1))
         return batched_nearest_neighbours(np.ascontiguousarray(self.poses[..., :2]), k)
 
