@@ -10,6 +10,9 @@
 
     single = swarmdeck.envs.CentralisedEnv(n_robots=10, task="rendezvous")  # Gymnasium Env
 
+    batched = swarmdeck.envs.BatchedEnv(swarmdeck.envs.scenarios.Rendezvous(n_agents=10), n_envs=64)
+    obs, info = batched.reset(seed=0)          # (64, 10, D): 64 swarms stepped at once (swarmdeck.envs.batched)
+
 Every action passes the barrier-certificate safety filter of ``swarmdeck.safety``
 (through ``swarmdeck.devices.Arena``) unless ``safety=False``. Episodes can be
 recorded to MCAP and played in the console: ``swarmdeck.console.recording.episodes``.
@@ -17,5 +20,9 @@ recorded to MCAP and played in the console: ``swarmdeck.console.recording.episod
 from swarmdeck.envs.swarm import ACTIONS, EnvConfig, SwarmParallelEnv, parallel_env
 from swarmdeck.envs.tasks import TASKS
 from swarmdeck.envs.centralised import CentralisedEnv
+from swarmdeck.envs import scenarios
+from swarmdeck.envs.batched import BatchedEnv, ScenarioParallelEnv, SwarmVectorEnv
+from swarmdeck.envs.scenario import Actions, Scenario, View
 
-__all__ = ["ACTIONS", "CentralisedEnv", "EnvConfig", "SwarmParallelEnv", "TASKS", "parallel_env"]
+__all__ = ["ACTIONS", "Actions", "BatchedEnv", "CentralisedEnv", "EnvConfig", "Scenario", "ScenarioParallelEnv",
+           "SwarmParallelEnv", "SwarmVectorEnv", "TASKS", "View", "parallel_env", "scenarios"]

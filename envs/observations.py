@@ -20,21 +20,11 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from swarmdeck.envs.neighbours import nearest_neighbours
+
 FloatArray = NDArray[np.float64]
 
 DENSITY_OFFSETS = np.array([(dx, dy) for dy in (-1.0, 0.0, 1.0) for dx in (-1.0, 0.0, 1.0)])
-
-
-def nearest_neighbours(points: FloatArray, k: int) -> NDArray[np.intp]:
-    """(N, k) indices of each point's k nearest other points, nearest first (k ≤ N − 1)."""
-    n = len(points)
-    if k <= 0 or n < 2:
-        return np.zeros((n, 0), dtype=np.intp)
-    d2 = np.sum((points[:, None, :] - points[None, :, :]) ** 2, axis=-1)
-    np.fill_diagonal(d2, np.inf)
-    idx = np.argpartition(d2, k - 1, axis=1)[:, :k] if k < n - 1 else np.argsort(d2, axis=1)[:, :k]
-    order = np.argsort(np.take_along_axis(d2, idx, axis=1), axis=1, kind="stable")
-    return np.take_along_axis(idx, order, axis=1)
 
 
 def observation_size(k: int, task: str, density: bool) -> int:

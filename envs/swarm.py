@@ -40,6 +40,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from swarmdeck.core.bounds import DEFAULT_BOUNDS, Bounds
+from swarmdeck.envs.neighbours import min_distance
 from swarmdeck.envs.observations import observation_bounds, observation_size, observe
 from swarmdeck.envs.tasks import (
     TASKS, coverage_cells, coverage_reward, formation_reward, formation_slots, rendezvous_reward,
@@ -52,6 +53,7 @@ except ImportError as _exc:  # pragma: no cover - exercised only without the ext
     raise ImportError("swarmdeck.envs needs the 'rl' extra: pip install 'swarmdeck[rl]'") from _exc
 
 ACTIONS = ("velocity", "unicycle")
+BARRIERS = ("centralised", "distributed")
 
 
 @dataclass(frozen=True)
@@ -63,6 +65,8 @@ class EnvConfig:
     safety: the barrier filter on every action (True) or off. max_steps: steps per episode.
     bounds: arena (x_min, x_max, y_min, y_max), m. dt: control period, s.
     formation_radius: m. n_bumps: Gaussian bumps of the coverage density (drawn per episode).
+    barrier: "centralised" (one QP over the swarm) or "distributed" (every robot its own QP, REFERENCE.md §12;
+        what the batched environment runs, :mod:`swarmdeck.envs.batched`).
     """
 
     n_robots: int = 6
@@ -76,6 +80,7 @@ class EnvConfig:
     dt: float = 0.033
     formation_radius: float = 0.6
     n_bumps: int = 2
+    barrier: str = "centralised"
 
     def __post_init__(self) -> None:
         def intlike(v: Any) -> bool:
@@ -95,6 +100,8 @@ class EnvConfig:
             raise ValueError(f"n_bumps must be an int >= 1, got {self.n_bumps!r}")
         if not (math.isfinite(self.formation_radius) and self.formation_radius > 0):
             raise ValueError(f"formation_radius must be > 0 m, got {self.formation_radius!r}")
+        if self.barrier not in BARRIERS:
+            raise ValueError(f"barrier must be one of {BARRIERS}, got {self.barrier!r}")
         if self.density_obs and self.task != "coverage":
             raise ValueError("density_obs needs task='coverage' (the other tasks have no density)")
 
@@ -165,13 +172,22 @@ class SwarmParallelEnv(ParallelEnv):
         if self.density is not None:
             self._density_scale = float(self.density.evaluate(self.density.mu).max()) or 1.0
         self.arena = Arena(initial_conditions=poses, config=ArenaConfig(bounds=cfg.bounds, dt=cfg.dt),
-                           params=self.params, safety=cfg.safety)
+                           params=self.params, safety=self._safety())
         self.agents = list(self.possible_agents)
         self.steps = 0
         self.moments = None
         n = cfg.n_robots
         infos = self._infos(np.zeros(n), np.zeros(n), "reset", True)
         return self._observations(), infos
+
+    def _safety(self) -> Any:
+        """The Arena's ``safety``: the barrier of ``config.barrier``, or off."""
+        from swarmdeck.devices.pipeline import barrier_filter
+
+        cfg = self.config
+        if not cfg.safety or cfg.barrier == "centralised":
+            return cfg.safety
+        return barrier_filter(self.params, cfg.bounds, cfg.dt, mode="distributed")
 
     def _observations(self) -> dict[str, NDArray[np.float32]]:
         poses = self.arena.poses()
@@ -201,10 +217,7 @@ class SwarmParallelEnv(ParallelEnv):
                ok: bool) -> dict[str, dict[str, Any]]:
         from swarmdeck.core.kinematics import lookahead_points
 
-        pts = lookahead_points(self.arena.poses(), self.params.lookahead)
-        d = np.linalg.norm(pts[:, None] - pts[None], axis=-1) if len(pts) > 1 else np.full((1, 1), np.inf)
-        np.fill_diagonal(d, np.inf)
-        dmin = float(d.min())
+        dmin = min_distance(lookahead_points(self.arena.poses(), self.params.lookahead))
         return {a: {"filter_change": float(filter_change[i]), "command_change": float(command_change[i]),
                     "filter_active": bool(filter_change[i] > 1e-9), "filter_status": status, "filter_ok": ok,
                     "min_distance": dmin}
