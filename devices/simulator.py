@@ -44,11 +44,11 @@ class ArenaConfig:
 
     @property
     def width(self) -> float:
-        return self.bounds[1] - self.bounds[0]
+        return Bounds.of(self.bounds).width
 
     @property
     def height(self) -> float:
-        return self.bounds[3] - self.bounds[2]
+        return Bounds.of(self.bounds).height
 
 
 def check_poses(poses: ArrayLike, name: str = "initial_conditions", n: int | None = None) -> NDArray[np.float64]:

@@ -160,9 +160,9 @@ class BarrierConfig:
             _real(self, "bounds", v)
         if self.recovery_depth >= self.safety_distance:
             raise ValueError("BarrierConfig: recovery_depth must be < safety_distance")
-        x_min, x_max, y_min, y_max = (float(v) for v in self.bounds)
+        b = Bounds(*(float(v) for v in self.bounds))
         m = self.margin
-        if m < 0 or x_max - x_min <= 2 * m or y_max - y_min <= 2 * m:
+        if m < 0 or b.width <= 2 * m or b.height <= 2 * m:
             raise ValueError(
                 f"BarrierConfig: bounds {self.bounds} leave no room inside the wall margin {m} m"
             )

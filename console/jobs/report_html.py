@@ -82,8 +82,9 @@ def _arena_plot(runs: list[dict[str, Any]], bounds: Bounds = DEFAULT_BOUNDS,
     why = _no_motion(runs)
     if why is not None:
         return _nothing(why)
-    x0, x1, y0, y1 = bounds
-    w, h = (x1 - x0) * scale, (y1 - y0) * scale
+    b = Bounds.of(bounds)
+    x0, x1, y0, y1 = b
+    w, h = b.width * scale, b.height * scale
     parts = [f'<svg width="{w + 2:.0f}" height="{h + 2:.0f}" role="img" aria-label="first contacts on the arena">',
              f'<rect x="1" y="1" width="{w:.0f}" height="{h:.0f}" fill="#f7f7f2" stroke="#444"/>']
     count = 0

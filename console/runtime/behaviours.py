@@ -25,6 +25,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from swarmdeck.console.runtime.deadline import DeadlineCaller
+from swarmdeck.core.bounds import Bounds
 from swarmdeck.core.checks import require_in_range
 from swarmdeck.core.graphs import complete_laplacian, rigid_formation
 from swarmdeck.coverage.group import consensus, formation_control
@@ -166,8 +167,9 @@ class Formation:
 
 def default_goals(n: int, bounds: tuple[float, float, float, float], margin: float = 0.3) -> FloatArray:
     """``(n, 2)`` goal positions on a grid filling the arena (m), as square as the arena allows."""
-    x0, x1, y0, y1 = bounds
-    w, h = (x1 - x0) - 2 * margin, (y1 - y0) - 2 * margin
+    b = Bounds.of(bounds)
+    x0, x1, y0, y1 = b
+    w, h = b.width - 2 * margin, b.height - 2 * margin
     cols = max(1, int(math.ceil(math.sqrt(n * w / max(h, 1e-9)))))
     rows = int(math.ceil(n / cols))
     xs = np.linspace(x0 + margin, x1 - margin, cols) if cols > 1 else np.array([(x0 + x1) / 2])

@@ -308,9 +308,7 @@ class Maneuver:
         direction /= np.maximum(np.hypot(direction[:, 0], direction[:, 1]), 1e-9)[:, None]
         scale = prm.escape_offset * np.minimum(1.0 + 0.25 * self._attempts[movers], 2.0)
         goal = p[movers, :2] + scale[:, None] * direction
-        x0, x1, y0, y1 = self.bounds
-        c = prm.wall_clearance
-        goal = np.column_stack((np.clip(goal[:, 0], x0 + c, x1 - c), np.clip(goal[:, 1], y0 + c, y1 - c)))
+        goal = Bounds.of(self.bounds).clip(goal, prm.wall_clearance)
         self._esc_goal[movers] = goal
         self._esc_until[movers] = t + prm.escape_time
         self._attempts[movers] += 1
