@@ -38,8 +38,7 @@ import time  # noqa: E402
 import numpy as np  # noqa: E402
 
 from swarmdeck.console.runtime.contacts import ContactWatch  # noqa: E402
-from swarmdeck.core.kinematics import GritsBotParams, lookahead_points  # noqa: E402
-from swarmdeck.devices.gritsbot import unicycle_step  # noqa: E402
+from swarmdeck.core.kinematics import GritsBotParams, lookahead_points, unicycle_step  # noqa: E402
 from swarmdeck.devices.pipeline import _without_pairs, barrier_filter, brake, certify, next_points  # noqa: E402
 from swarmdeck.safety import BarrierConfig  # noqa: E402
 from swarmdeck.safety.guard import GuardConfig, assess  # noqa: E402

@@ -31,7 +31,7 @@ import numpy as np
 from swarmdeck.console.recording.codec import encode_frame
 from swarmdeck.console.recording.recorder import Recorder, RecorderConfig
 from swarmdeck.console.runtime.loop import ControlLoop, LoopConfig
-from swarmdeck.devices.gritsbot import wrap_angle
+from swarmdeck.core.kinematics import wrap_angle
 
 
 class SelfContainedRecorder(Recorder):

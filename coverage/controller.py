@@ -20,6 +20,7 @@ import scipy.sparse as sp
 from numpy.typing import ArrayLike, NDArray
 from scipy.spatial import QhullError
 
+from swarmdeck.core.constants import SAFETY_DISTANCE
 from swarmdeck.coverage.density import Density, GaussianMixture
 from swarmdeck.coverage.jacobian import EdgeOptions, centroid_jacobian
 from swarmdeck.core.bounds import DEFAULT_BOUNDS, Bounds, check_bounds
@@ -52,7 +53,7 @@ class CoverageConfig:
     bounds: Bounds = DEFAULT_BOUNDS
     hops: int = 2
     allow_centralised: bool = False
-    safety_distance: float = 0.17
+    safety_distance: float = SAFETY_DISTANCE
     wall_margin: float = 1e-6
     min_separation: float = 1e-3
     quadrature: QuadratureOptions = field(default_factory=lambda: QuadratureOptions(resolution=1.25))

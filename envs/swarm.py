@@ -40,6 +40,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from swarmdeck.core.bounds import DEFAULT_BOUNDS, Bounds
+from swarmdeck.core.constants import CONTROL_PERIOD
 from swarmdeck.envs.observations import observation_bounds, observation_size, observe
 from swarmdeck.envs.tasks import (
     TASKS, coverage_cells, coverage_reward, formation_reward, formation_slots, rendezvous_reward,
@@ -73,7 +74,7 @@ class EnvConfig:
     safety: bool = True
     max_steps: int = 600
     bounds: Bounds = DEFAULT_BOUNDS
-    dt: float = 0.033
+    dt: float = CONTROL_PERIOD
     formation_radius: float = 0.6
     n_bumps: int = 2
 

@@ -10,7 +10,7 @@ import pytest
 from mqtt_broker import mosquitto, wait_until  # noqa: F401
 
 from swarmdeck.devices import Arena
-from swarmdeck.devices.gritsbot import unicycle_step, wrap_angle
+from swarmdeck.core.kinematics import unicycle_step, wrap_angle
 from swarmdeck.devices.net.mqtt_config import parse_broker_url
 from swarmdeck.devices.net.transport_backend import TransportBackend
 from swarmdeck.devices.net.transport_mqtt import LinkTimeouts, MqttTransport

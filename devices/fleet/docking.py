@@ -15,6 +15,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from swarmdeck.core.constants import CONTROL_PERIOD, SAFETY_DISTANCE
 from swarmdeck.core.kinematics import GritsBotParams
 from swarmdeck.devices.fleet.chargers import ChargerLayout
 from swarmdeck.devices.fleet.maneuver import Maneuver, ManeuverParams
@@ -55,8 +56,8 @@ def choose_slots(positions: ArrayLike, free: ArrayLike, layout: ChargerLayout) -
 def return_maneuver(poses: ArrayLike, slots: ArrayLike, layout: ChargerLayout,
                     robot: GritsBotParams = GritsBotParams(), params: ManeuverParams = ManeuverParams(),
                     hold_distance: float = 0.4, max_active: int | None = None, *,
-                    occupied: ArrayLike | None = None, retrace: bool = True, safety_distance: float = 0.17,
-                    gamma: float = 20.0, dt: float = 0.033) -> Maneuver:
+                    occupied: ArrayLike | None = None, retrace: bool = True, safety_distance: float = SAFETY_DISTANCE,
+                    gamma: float = 20.0, dt: float = CONTROL_PERIOD) -> Maneuver:
     """The maneuver that docks robots at ``poses`` ``(K, 3)`` on ``slots`` ``(K,)``.
 
     By default (``retrace``) the setup from ``slots`` to ``poses`` is planned under the fleet's

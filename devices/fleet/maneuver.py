@@ -46,9 +46,8 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from swarmdeck.core.bounds import DEFAULT_BOUNDS, Bounds
-from swarmdeck.core.kinematics import GritsBotParams, unicycle_to_si
+from swarmdeck.core.kinematics import GritsBotParams, unicycle_to_si, wrap_angle
 from swarmdeck.devices.controllers import HybridPoseController
-from swarmdeck.devices.gritsbot import wrap_angle
 
 FloatArray = NDArray[np.float64]
 BoolArray = NDArray[np.bool_]

@@ -34,6 +34,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from swarmdeck.core.checks import require_positive
+from swarmdeck.core.constants import CONTROL_PERIOD
 from swarmdeck.devices.net.transport import Counters, PoseFeed, RobotTransport, check_command
 
 FloatArray = NDArray[np.float64]
@@ -53,7 +54,7 @@ class StreamerConfig:
 
     pose_timeout: float = 0.1
     input_timeout: float = 0.1
-    period: float = 0.033
+    period: float = CONTROL_PERIOD
     max_events: int = 200
 
     def __post_init__(self) -> None:

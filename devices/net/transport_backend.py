@@ -23,6 +23,7 @@ from collections.abc import Callable
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from swarmdeck.core.constants import CONTROL_PERIOD
 from swarmdeck.devices.clock import RealTimePacer
 from swarmdeck.core.kinematics import GritsBotParams, limit_unicycle
 from swarmdeck.devices.net.mqtt_config import parse_broker_url
@@ -58,7 +59,7 @@ class TransportBackend:
         *,
         poses: PoseFeed | None = None,
         params: GritsBotParams = GritsBotParams(),
-        dt: float = 0.033,
+        dt: float = CONTROL_PERIOD,
         streamer: StreamerConfig | None = None,
         clock: Callable[[], float] = time.monotonic,
         wait_for_poses: float = 5.0,

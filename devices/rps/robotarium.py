@@ -22,6 +22,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from swarmdeck.core.constants import COLLISION_DISTANCE, COLLISION_SHIFT, CONTROL_PERIOD
 from swarmdeck.core.kinematics import limit_unicycle
 from swarmdeck.devices.arena import RUN_DEFAULTS, Arena
 from swarmdeck.devices.rps.errors import call_at_scripts_end_text, count_errors, debug_text
@@ -50,9 +51,9 @@ class Robotarium:
     """
 
     # rps 2.0's class constants (rps/robotarium_abc.py), with swarmdeck's robot (REFERENCE.md §1)
-    TIME_STEP = 0.033
-    COLLISION_DIAMETER = 0.135
-    COLLISION_OFFSET = 0.025
+    TIME_STEP = CONTROL_PERIOD
+    COLLISION_DIAMETER = COLLISION_DISTANCE
+    COLLISION_OFFSET = COLLISION_SHIFT
 
     def __init__(self, number_of_robots: int = -1, show_figure: bool = True, sim_in_real_time: bool = True,
                  initial_conditions: ArrayLike = np.array([]), *, from_docks: bool | None = None,
