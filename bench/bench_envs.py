@@ -10,11 +10,10 @@ towards the swarm's centre, so the filter works; observations with 3 neighbours;
 """
 from __future__ import annotations
 
-import os
-import statistics
 import sys
 import time
 
+import harness  # first: pins BLAS/OpenMP to one thread, before numpy loads
 import numpy as np
 
 import swarmdeck.envs as envs
@@ -22,13 +21,11 @@ from swarmdeck.devices import Arena, ArenaConfig, SimulatedArena, random_initial
 
 
 def blocks(fn, n_blocks: int = 7, per: int = 10) -> float:
-    out = []
-    for _ in range(n_blocks):
-        t = time.process_time()
+    """Median process-CPU seconds per call of ``fn``, over ``n_blocks`` blocks of ``per`` calls."""
+    def block() -> None:
         for _ in range(per):
             fn()
-        out.append((time.process_time() - t) / per)
-    return statistics.median(out)
+    return harness.measure(block, n_blocks, clock="cpu").median / per
 
 
 def towards_centre(points: np.ndarray) -> np.ndarray:
@@ -63,9 +60,7 @@ def row(n: int) -> str:
 
 
 def main() -> int:
-    cpu = next((ln.split(":", 1)[1].strip() for ln in open("/proc/cpuinfo") if ln.startswith("model name")), "?")
-    print(f"env benchmarks — {time.strftime('%Y-%m-%d')}, {os.cpu_count()} cores, {cpu}, Python {sys.version.split()[0]}, "
-          f"load average {os.getloadavg()[0]:.1f}\n")
+    print(f"env benchmarks — {time.strftime('%Y-%m-%d')}, {harness.machine()}\n")
     print("| N | bare simulator step (ms) | Arena.step, filter on (ms, ratio) | env step, rendezvous (ms, ratio) | "
           "steps/s | env step, coverage (ms, ratio) | steps/s |")
     print("| ---: | ---: | ---: | ---: | ---: | ---: | ---: |")

@@ -12,7 +12,7 @@ Run: ``.venv/bin/python bench/bench_foxglove.py`` (prints markdown tables; ~2 mi
 """
 from __future__ import annotations
 
-import os
+import harness  # first: pins BLAS/OpenMP to one thread, before numpy loads
 import statistics
 import sys
 import tempfile
@@ -75,9 +75,7 @@ def size(tmp: Path, frames: list, fox: bool) -> float:
 
 
 def main() -> int:
-    cpu = next((ln.split(":", 1)[1].strip() for ln in open("/proc/cpuinfo") if ln.startswith("model name")), "?")
-    print(f"Foxglove channel benchmarks — {time.strftime('%Y-%m-%d')}, {os.cpu_count()} cores, {cpu}, "
-          f"Python {sys.version.split()[0]}, load average {os.getloadavg()[0]:.1f}\n")
+    print(f"Foxglove channel benchmarks — {time.strftime('%Y-%m-%d')}, {harness.machine()}\n")
     rows_o, rows_w, rows_s = [], [], []
     with tempfile.TemporaryDirectory() as d:
         tmp = Path(d)

@@ -26,13 +26,10 @@ Medians and worst over the ticks (the first 5, the warm-up, left out); "binds": 
 """
 from __future__ import annotations
 
-import os
 
-os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
-os.environ.setdefault("OMP_NUM_THREADS", "1")
+import harness  # first: pins BLAS/OpenMP to one thread, before numpy loads
 
 import argparse  # noqa: E402
-import platform  # noqa: E402
 import time  # noqa: E402
 
 import numpy as np  # noqa: E402
@@ -99,8 +96,7 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--ticks", type=int, default=300)
     args = parser.parse_args()
-    print(f"# {platform.machine()} {platform.processor() or ''}, Python {platform.python_version()}, "
-          f"numpy {np.__version__}, {os.cpu_count()} cores, {args.ticks} ticks")
+    print(f"# {harness.machine()}, {args.ticks} ticks")
     print("| scene | N | binds | barrier ms median (worst) | walls ms median | assess ms median (worst) "
           "| guard during a bypass ms median (worst) | guard / barrier | brake after revocation ms median (worst) "
           "| brake / barrier | contacts ms median |")

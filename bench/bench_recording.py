@@ -1,6 +1,6 @@
 """Recording benchmarks (issue 8): loop-thread overhead, file size per minute, seek in a one-hour file.
 
-Run: ``/work/venv/bin/python bench/bench_recording.py`` (prints markdown tables; ~3 min, ~300 MB in a temp dir).
+Run: ``.venv/bin/python bench/bench_recording.py`` (prints markdown tables; ~3 min, ~300 MB in a temp dir).
 
 1. Overhead per tick on the loop thread at N = 100: the real ControlLoop ticks with the
    recorder subscribed (enqueue only) vs without, interleaved blocks; and the cost of the
@@ -14,13 +14,13 @@ Run: ``/work/venv/bin/python bench/bench_recording.py`` (prints markdown tables;
 from __future__ import annotations
 
 import json
-import os
 import statistics
 import sys
 import tempfile
 import time
 from pathlib import Path
 
+import harness  # first: pins BLAS/OpenMP to one thread, before numpy loads
 import numpy as np
 
 from swarmdeck.console.runtime.loop import ControlLoop, LoopConfig
@@ -178,9 +178,7 @@ def seek_one_hour(tmp: Path, n: int = 12, hours: float = 1.0, dt: float = 0.033)
 
 
 def main() -> int:
-    cpu = next((ln.split(":", 1)[1].strip() for ln in open("/proc/cpuinfo") if ln.startswith("model name")), "?")
-    print(f"recording benchmarks — {time.strftime('%Y-%m-%d')}, {os.cpu_count()} cores, {cpu}, "
-          f"Python {sys.version.split()[0]}\n")
+    print(f"recording benchmarks — {time.strftime('%Y-%m-%d')}, {harness.machine()}\n")
     with tempfile.TemporaryDirectory() as d:
         tmp = Path(d)
         for section in (overhead(tmp), size_per_minute(tmp), seek_one_hour(tmp)):

@@ -19,13 +19,13 @@ CPU time of recording the frames (encode, zstd, write) per frame, as a share of 
 from __future__ import annotations
 
 import dataclasses
-import os
 import statistics
 import sys
 import tempfile
 import time
 from pathlib import Path
 
+import harness  # first: pins BLAS/OpenMP to one thread, before numpy loads
 import numpy as np
 
 from swarmdeck.console.recording.codec import encode_frame
@@ -81,9 +81,7 @@ def growth(d: str, frames: list, recorder: type[Recorder], foxglove: bool = Fals
 
 
 def main() -> int:
-    cpu = next((ln.split(":", 1)[1].strip() for ln in open("/proc/cpuinfo") if ln.startswith("model name")), "?")
-    print(f"# bench_recording_compact  {time.strftime('%Y-%m-%d %H:%M UTC', time.gmtime())}  nproc={os.cpu_count()}  "
-          f"cpu={cpu}  python={sys.version.split()[0]}  load={os.getloadavg()[0]:.1f}\n")
+    print(f"# bench_recording_compact  {time.strftime('%Y-%m-%d %H:%M UTC', time.gmtime())}  {harness.machine()}\n")
     print("| N | poses | frames | format 3 MB/min (30 Hz) | format 2 MB/min | format 3 / format 2 | kB/frame | "
           "writer CPU ms/frame (3 / 2) | writer % of a core at 30 Hz | encode ms/frame (3 / 2) | "
           "format 3 with the Foxglove channels: MB/min, writer % of a core |")

@@ -1,6 +1,6 @@
 """Tracking benchmark: detection + poses per frame on one core, accuracy, and latency.
 
-Run: ``/work/venv/bin/python bench/bench_tracking.py`` (prints a markdown table).
+Run: ``.venv/bin/python bench/bench_tracking.py`` (prints a markdown table).
 
 Scenarios (issue 9 targets): 1280×720 with 20 robots (+4 references) ≤ 15 ms, 1920×1080 with
 50 tags (46 robots + 4 references) ≤ 30 ms, ``cv2.setNumThreads(1)``. Time per frame is
@@ -17,6 +17,7 @@ import platform
 import statistics
 import time
 
+import harness  # first: pins BLAS/OpenMP to one thread, before numpy loads
 import cv2
 import numpy as np
 
@@ -25,14 +26,7 @@ from swarmdeck.tracking import (
     Tracker, TrackerConfig, random_poses)
 
 
-def _cpu() -> str:
-    try:
-        for line in open("/proc/cpuinfo"):
-            if line.startswith("model name"):
-                return line.split(":", 1)[1].strip()
-    except OSError:
-        pass
-    return platform.processor() or "unknown"
+_cpu = harness.cpu_name
 
 
 def scenario(width: int, height: int, n_robots: int, frames: int, rounds: int, seed: int) -> dict:
