@@ -6,7 +6,7 @@ import textwrap
 
 import numpy as np
 import pytest
-from portal_fixtures import portal, wait_for_state  # noqa: F401
+from portal_fixtures import wait_for_state
 
 from swarmdeck.console.jobs.confinement import probe
 from swarmdeck.console.jobs.executors import SerialExecutor

@@ -7,7 +7,7 @@ import time
 
 import numpy as np
 import pytest
-from mqtt_broker import mosquitto, wait_until  # noqa: F401
+from mqtt_broker import wait_until
 
 from swarmdeck.devices import Arena
 from swarmdeck.core.kinematics import unicycle_step, wrap_angle
