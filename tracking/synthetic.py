@@ -459,9 +459,9 @@ def density_image(evaluate: Callable[[np.ndarray], np.ndarray],
     ``bounds`` (row 0 at y_max) → (rows, cols, 3) uint8, white where φ is smallest and ``rgb``
     where it is largest (φ normalised by its range on the grid)."""
     rows, cols = shape
-    x0, x1, y0, y1 = bounds
-    xs = x0 + (np.arange(cols) + 0.5) * (x1 - x0) / cols
-    ys = y1 - (np.arange(rows) + 0.5) * (y1 - y0) / rows
+    b = Bounds.of(bounds)
+    xs = b.x_min + (np.arange(cols) + 0.5) * b.width / cols
+    ys = b.y_max - (np.arange(rows) + 0.5) * b.height / rows
     X, Y = np.meshgrid(xs, ys)
     phi = np.asarray(evaluate(np.column_stack([X.ravel(), Y.ravel()])), dtype=float).reshape(rows, cols)
     lo, hi = np.nanmin(phi), np.nanmax(phi)

@@ -160,8 +160,7 @@ class Formation:
             self._cache = (n, edges, lengths)
         _, edges, lengths = self._cache
         u = formation_control(tick.points, edges, lengths, self.alpha)
-        x0, x1, y0, y1 = tick.bounds
-        centre = np.array([(x0 + x1) / 2, (y0 + y1) / 2])
+        centre = np.array(Bounds.of(tick.bounds).centre)
         return u + 0.3 * (centre - tick.points.mean(axis=0)), None
 
 
@@ -172,8 +171,8 @@ def default_goals(n: int, bounds: tuple[float, float, float, float], margin: flo
     w, h = b.width - 2 * margin, b.height - 2 * margin
     cols = max(1, int(math.ceil(math.sqrt(n * w / max(h, 1e-9)))))
     rows = int(math.ceil(n / cols))
-    xs = np.linspace(x0 + margin, x1 - margin, cols) if cols > 1 else np.array([(x0 + x1) / 2])
-    ys = np.linspace(y1 - margin, y0 + margin, rows) if rows > 1 else np.array([(y0 + y1) / 2])
+    xs = np.linspace(x0 + margin, x1 - margin, cols) if cols > 1 else np.array([b.centre[0]])
+    ys = np.linspace(y1 - margin, y0 + margin, rows) if rows > 1 else np.array([b.centre[1]])
     gx, gy = np.meshgrid(xs, ys)
     return np.column_stack((gx.ravel(), gy.ravel()))[:n]
 

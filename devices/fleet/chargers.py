@@ -66,11 +66,11 @@ class ChargerLayout:
         unknown = [w for w in self.walls if w not in WALLS]
         if unknown or len(set(self.walls)) != len(self.walls):
             raise ValueError(f"ChargerLayout.walls must be distinct names from {WALLS}, got {self.walls!r}")
-        x0, x1, y0, y1 = self.bounds
+        b = self.bounds
         reach = self.dock_depth + self.approach_distance + self.approach_stagger
-        if reach >= min(x1 - x0, y1 - y0) / 2:
+        if reach >= min(b.width, b.height) / 2:
             raise ValueError(f"ChargerLayout: dock_depth + approach_distance + approach_stagger ({reach:g} m) "
-                             f"reaches past the middle of the {x1 - x0:g} m x {y1 - y0:g} m arena")
+                             f"reaches past the middle of the {b.width:g} m x {b.height:g} m arena")
 
     @cached_property
     def _table(self) -> tuple[FloatArray, NDArray[np.intp], NDArray[np.intp]]:

@@ -117,8 +117,7 @@ def staged_return_maneuver(poses: ArrayLike, slots: ArrayLike, layout: ChargerLa
     conflict = (blocks_all | blocks_all.T | layout.approaches_clash())[np.ix_(slots, slots)]
     blocks = conflict & (priority[:, None] < priority[None, :])
     # waiting robots stand back towards the middle of the arena, clear of the other slots' approaches
-    x0, x1, y0, y1 = layout.bounds
-    towards = np.array([(x0 + x1) / 2, (y0 + y1) / 2]) - app[:, :2]
+    towards = np.array(layout.bounds.centre) - app[:, :2]
     hold = app.copy()
     hold[:, :2] += hold_distance * towards / np.maximum(np.hypot(towards[:, 0], towards[:, 1]), 1e-9)[:, None]
     if max_active is None and k > 30:

@@ -22,6 +22,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from swarmdeck.core.bounds import Bounds
 from swarmdeck.core.constants import COLLISION_DISTANCE, COLLISION_SHIFT, CONTROL_PERIOD
 from swarmdeck.core.kinematics import limit_unicycle
 from swarmdeck.devices.arena import RUN_DEFAULTS, Arena
@@ -88,9 +89,9 @@ class Robotarium:
         self.number_of_robots = self._arena.n
         self.show_figure = show_figure
         self.time_step = config.dt
-        x0, x1, y0, y1 = config.bounds
-        self._bounds = (x0, x1, y0, y1)
-        self.boundaries = [x0, y0, x1 - x0, y1 - y0]  # rps 1.x: [x_min, y_min, width, height]
+        b = Bounds.of(config.bounds)
+        x0, x1, y0, y1 = self._bounds = tuple(b)
+        self.boundaries = [x0, y0, b.width, b.height]  # rps 1.x: [x_min, y_min, width, height]
         self.BOUNDARIES = np.array([x0, x1, y0, y1])  # rps 2.0: [x_min, x_max, y_min, y_max]
         self._velocities = np.zeros((2, self.number_of_robots))
         # rps's call-order state: as after rps's own set-up, the script's first call must be get_poses()
