@@ -10,9 +10,10 @@ import html
 from typing import Any
 
 from swarmdeck.core.bounds import DEFAULT_BOUNDS, Bounds
+from swarmdeck.core.constants import ROBOT_DIAMETER
 
 COLOURS = ("#1f77b4", "#d62728", "#2ca02c", "#ff7f0e", "#9467bd", "#8c564b", "#e377c2", "#17becf")
-CONTACT_DISTANCE = 0.11  # m, robot diameter (REFERENCE.md §1)
+CONTACT_DISTANCE = ROBOT_DIAMETER  # m: bodies touch
 
 
 def _esc(value: Any) -> str:
