@@ -25,7 +25,7 @@ class ServiceThread:
         target: the thread's body, called with no arguments; it should return soon after
             :attr:`stop_event` is set (wait on it with :meth:`wait` instead of sleeping).
         name: the thread's name (shown in tracebacks and ``threading.enumerate()``).
-        join_timeout: how long :meth:`stop` waits for the thread to end, s.
+        join_timeout: how long :meth:`stop` waits for the thread to end, s (None: until it ends).
         on_error: called once, in the service thread, with the exception that ended ``target``;
             default: the traceback is printed on stderr.
         wake: called by :meth:`stop` after setting the stop event, to unblock a target that waits on
@@ -33,7 +33,7 @@ class ServiceThread:
             ignored (the target may already have ended).
     """
 
-    def __init__(self, target: Callable[[], object], name: str, *, join_timeout: float = 2.0,
+    def __init__(self, target: Callable[[], object], name: str, *, join_timeout: float | None = 2.0,
                  on_error: Callable[[BaseException], None] | None = None,
                  wake: Callable[[], object] | None = None) -> None:
         self._target = target
