@@ -1,6 +1,6 @@
 """Benchmark of the safety filter (issue 4): median ms per call on dense random scenes.
 
-Run: ``OPENBLAS_NUM_THREADS=1 .venv/bin/python bench/bench_safety.py [--quick]``
+Run: ``.venv/bin/python bench/bench_safety.py [--quick]`` (BLAS pinned to one thread by the harness)
 (BLAS threads are pinned to one below as well, before numpy is imported).
 
 Scenes (REFERENCE.md §3): robots on a random subset (80 % occupancy) of a
