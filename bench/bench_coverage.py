@@ -17,11 +17,12 @@ import harness  # first: pins BLAS before numpy loads
 import numpy as np
 from scipy.spatial import Voronoi
 
+from swarmdeck.core.bounds import DEFAULT_BOUNDS
 from swarmdeck.coverage import (CoverageConfig, QuadratureOptions, bounded_voronoi, cell_moments,
                                 centroid_jacobian, coverage_tick, moving_density,
                                 precondition_positions)
 
-DEFAULT = (-1.6, 1.6, -1.0, 1.0)
+DEFAULT = DEFAULT_BOUNDS
 LARGE = (-5.0, 5.0, -3.0, 3.0)
 
 

@@ -17,6 +17,7 @@ import harness  # first: pins BLAS/OpenMP to one thread, before numpy loads
 import numpy as np
 
 import swarmdeck.envs as envs
+from swarmdeck.core.bounds import DEFAULT_BOUNDS
 from swarmdeck.devices import Arena, ArenaConfig, SimulatedArena, random_initial_poses
 
 
@@ -34,7 +35,7 @@ def towards_centre(points: np.ndarray) -> np.ndarray:
 
 
 def row(n: int) -> str:
-    bounds = (-1.6, 1.6, -1.0, 1.0) if n <= 20 else (-4.0, 4.0, -2.5, 2.5)
+    bounds = DEFAULT_BOUNDS if n <= 20 else (-4.0, 4.0, -2.5, 2.5)
     poses = random_initial_poses(n, bounds, rng=0)
     sim = SimulatedArena(n, poses, config=ArenaConfig(bounds=bounds))
     v, w = np.full(n, 0.05), np.full(n, 0.2)

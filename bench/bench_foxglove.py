@@ -22,6 +22,7 @@ from pathlib import Path
 from swarmdeck.console.recording.foxglove import FoxgloveEncoder
 from swarmdeck.console.recording.recorder import Recorder, RecorderConfig, encode_json
 from swarmdeck.console.runtime.loop import ControlLoop, LoopConfig
+from swarmdeck.core.constants import CONTROL_PERIOD
 
 
 def ms(x: float) -> str:
@@ -83,7 +84,7 @@ def main() -> int:
             row, frames = overhead(tmp, n)
             rows_o.append(row)
             fox, base = writer_cost(frames)
-            rows_w.append(f"| {n} | {ms(fox)} | {ms(base)} | {fox / base:.1f}x | {100 * fox / 0.033:.1f} % |")
+            rows_w.append(f"| {n} | {ms(fox)} | {ms(base)} | {fox / base:.1f}x | {100 * fox / CONTROL_PERIOD:.1f} % |")
             seq = []
             loop = ControlLoop(LoopConfig(n_robots=n, seed=1))
             seq = [loop.tick() for _ in range(300 if n == 12 else 150)]

@@ -35,14 +35,16 @@ import time  # noqa: E402
 import numpy as np  # noqa: E402
 
 from swarmdeck.console.runtime.contacts import ContactWatch  # noqa: E402
+from swarmdeck.core.bounds import DEFAULT_BOUNDS
+from swarmdeck.core.constants import CONTROL_PERIOD
 from swarmdeck.core.kinematics import GritsBotParams, lookahead_points, unicycle_step  # noqa: E402
 from swarmdeck.devices.pipeline import _without_pairs, barrier_filter, brake, certify, next_points  # noqa: E402
 from swarmdeck.safety import BarrierConfig  # noqa: E402
 from swarmdeck.safety.guard import GuardConfig, assess  # noqa: E402
 from swarmdeck.safety.scenes import arena_for, grid_scene  # noqa: E402
 
-DT = 0.033
-DENSE_BOUNDS = (-1.6, 1.6, -1.0, 1.0)
+DT = CONTROL_PERIOD
+DENSE_BOUNDS = DEFAULT_BOUNDS
 SPARSE_PITCH = 0.45
 
 

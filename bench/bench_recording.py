@@ -26,6 +26,7 @@ import numpy as np
 from swarmdeck.console.runtime.loop import ControlLoop, LoopConfig
 from swarmdeck.console.recording.recorder import Recorder, encode_json
 from swarmdeck.console.recording.reader import open_recording
+from swarmdeck.core.constants import CONTROL_PERIOD
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))  # the synthetic-session fixture
 from recording_synth import retimed  # noqa: E402
 
@@ -97,7 +98,7 @@ def overhead(tmp: Path, n: int = 100, rounds: int = 12, ticks: int = 4) -> list[
         "| --- | ---: | --- |",
         f"| `write_frame` (enqueue) on the loop thread | {ms(e_med)} | p99 {ms(e_p99)} ms; {st.dropped} dropped |",
         f"| inline baseline: to_dict + JSON + MCAP add on the loop thread | {ms(i_med)} | {i_med / e_med:.0f}x the enqueue |",
-        f"| writer thread CPU per frame (JSON, zstd, write) | {ms(cpu)} | {100 * cpu / 0.033:.0f} % of one core at 30 Hz |",
+        f"| writer thread CPU per frame (JSON, zstd, write) | {ms(cpu)} | {100 * cpu / CONTROL_PERIOD:.0f} % of one core at 30 Hz |",
         f"| tick without recorder | {ms(t_without)} | {rounds}×{ticks} ticks, alternating blocks |",
         f"| tick with recorder (writer thread running) | {ms(t_with)} | {100 * (t_with / t_without - 1):+.1f} % |",
     ]
@@ -119,7 +120,7 @@ def size_per_minute(tmp: Path) -> list[str]:
     return rows
 
 
-def seek_one_hour(tmp: Path, n: int = 12, hours: float = 1.0, dt: float = 0.033) -> list[str]:
+def seek_one_hour(tmp: Path, n: int = 12, hours: float = 1.0, dt: float = CONTROL_PERIOD) -> list[str]:
     base = loop_frames(n, 60)
     path = tmp / "hour.mcap"
     total = int(hours * 3600 / dt)

@@ -31,6 +31,7 @@ import numpy as np
 from swarmdeck.console.recording.codec import encode_frame
 from swarmdeck.console.recording.recorder import Recorder, RecorderConfig
 from swarmdeck.console.runtime.loop import ControlLoop, LoopConfig
+from swarmdeck.core.bounds import DEFAULT_BOUNDS
 from swarmdeck.core.kinematics import wrap_angle
 
 
@@ -47,7 +48,7 @@ class SelfContainedRecorder(Recorder):
 
 
 def loop_frames(n: int, ticks: int) -> list:
-    bounds = (-1.6, 1.6, -1.0, 1.0) if n <= 100 else (-5.0, 5.0, -3.0, 3.0)
+    bounds = DEFAULT_BOUNDS if n <= 100 else (-5.0, 5.0, -3.0, 3.0)
     loop = ControlLoop(LoopConfig(n_robots=n, seed=1, bounds=bounds))
     try:
         return [loop.tick() for _ in range(ticks)]

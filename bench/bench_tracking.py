@@ -21,6 +21,7 @@ import harness  # first: pins BLAS/OpenMP to one thread, before numpy loads
 import cv2
 import numpy as np
 
+from swarmdeck.core.constants import CONTROL_PERIOD
 from swarmdeck.tracking import (
     CameraCalibration, CameraFrame, CameraPoseSource, SyntheticCamera, SyntheticCameraConfig, SyntheticRenderer,
     Tracker, TrackerConfig, random_poses)
@@ -80,7 +81,7 @@ def latency(r: SyntheticRenderer, n_robots: int, ticks: int) -> dict:
     src = CameraPoseSource(cam, Tracker(TrackerConfig(calibration=CameraCalibration.from_camera(r.camera))))
     lat, render = [], []
     for k in range(ticks + 2):
-        src.read(0.033 * k)
+        src.read(CONTROL_PERIOD * k)
         if k >= 2:
             lat.append(src.health()["latency_ms"])
     rng = np.random.default_rng(3)
