@@ -11,6 +11,8 @@ CONTROL_PERIOD: float = 0.033
 
 #: GRITSBot body diameter, m (REFERENCE.md §1); two bodies touch when their centres are this close.
 ROBOT_DIAMETER: float = 0.11
+#: GRITSBot body radius, m: half of :data:`ROBOT_DIAMETER` (0.055, exactly the literal's double).
+ROBOT_RADIUS: float = ROBOT_DIAMETER / 2
 #: Wheel radius r, m (REFERENCE.md §1).
 WHEEL_RADIUS: float = 0.016
 #: Axle (base) length L between the wheels, m (REFERENCE.md §1).

@@ -20,7 +20,7 @@ import scipy.sparse as sp
 from numpy.typing import ArrayLike, NDArray
 from scipy.spatial import QhullError
 
-from swarmdeck.core.constants import SAFETY_DISTANCE
+from swarmdeck.core.constants import MAX_LINEAR_SPEED, SAFETY_DISTANCE
 from swarmdeck.coverage.density import Density, GaussianMixture
 from swarmdeck.coverage.jacobian import EdgeOptions, centroid_jacobian
 from swarmdeck.core.bounds import DEFAULT_BOUNDS, Bounds, check_bounds
@@ -49,7 +49,7 @@ class CoverageConfig:
 
     law: str = "tvd-d1"
     kappa: float = 1.0
-    max_speed: float | None = 0.2
+    max_speed: float | None = MAX_LINEAR_SPEED
     bounds: Bounds = DEFAULT_BOUNDS
     hops: int = 2
     allow_centralised: bool = False

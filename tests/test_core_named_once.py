@@ -22,13 +22,14 @@ ROOT = Path(__file__).resolve().parents[1]
 
 #: REFERENCE.md numbers that must appear as a literal only in core/constants.py.
 NAMED = {"0.17": "SAFETY_DISTANCE", "0.033": "CONTROL_PERIOD", "0.135": "COLLISION_DISTANCE",
-         "12.5": "MAX_WHEEL_SPEED", "0.105": "AXLE_LENGTH"}
+         "12.5": "MAX_WHEEL_SPEED", "0.105": "AXLE_LENGTH", "0.055": "ROBOT_RADIUS"}
 
 #: Files other parts of issue 25 are rewriting (operator: the parameter schema; portal: the runner;
 #: picture: the renderers); the lead removes each entry when merging that part.
 LEFT_TO_OTHER_PARTS = {
     "console/runtime/loop.py", "console/runtime/frame.py", "console/runtime/config.py", "console/web/gui.py",
     "console/portal/runner.py", "console/web/scene.py", "console/recording/export_video.py",
+    "console/recording/foxglove.py",
 }
 #: Hand-rolled thread lifecycles left to their owners: the loop thread (operator), the portal's threads
 #: (portal), and the deadline caller's worker (a per-call worker with its own starvation accounting).
@@ -47,6 +48,7 @@ def rel(path: Path) -> str:
 
 def test_constants_are_the_reference_values():
     assert constants.SAFETY_DISTANCE == 0.17 and constants.CONTROL_PERIOD == 0.033
+    assert constants.ROBOT_RADIUS == 0.055 == GritsBotParams().radius
     p = GritsBotParams()
     assert (p.wheel_radius, p.axle_length, p.max_wheel_speed, p.diameter, p.max_speed, p.lookahead) == (
         constants.WHEEL_RADIUS, constants.AXLE_LENGTH, constants.MAX_WHEEL_SPEED, constants.ROBOT_DIAMETER,

@@ -20,6 +20,7 @@ import cv2
 import numpy as np
 
 from swarmdeck.core.bounds import DEFAULT_BOUNDS, Bounds
+from swarmdeck.core.constants import ROBOT_RADIUS
 from swarmdeck.tracking.calibration import CharucoSpec
 from swarmdeck.tracking.camera_model import PinholeCamera, overhead_camera
 from swarmdeck.tracking.markers import DEFAULT_REFERENCES, ReferenceMarker, marker_corners
@@ -57,7 +58,7 @@ class SyntheticCameraConfig:
     tag_size: float = 0.08
     plate_scale: float = 1.3
     tag_height: float = 0.06
-    body_radius: float = 0.055
+    body_radius: float = ROBOT_RADIUS
     body_rgb: tuple[int, int, int] = (40, 44, 52)
     floor_texel: float = 0.002
     sprite_texel: float = 0.0005

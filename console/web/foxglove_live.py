@@ -29,6 +29,7 @@ from swarmdeck.console.recording.foxglove import (
     TOPIC_LOG, FoxgloveConfig, FoxgloveEncoder, channel_specs,
 )
 from swarmdeck.console.runtime.frame import Frame
+from swarmdeck.core.constants import ROBOT_RADIUS
 from swarmdeck.core.service_thread import ServiceThread
 
 DEFAULT_PORT = 8765
@@ -54,7 +55,7 @@ class FoxgloveBridge:
     """
 
     def __init__(self, bounds: tuple[float, float, float, float], host: str = "127.0.0.1", port: int = DEFAULT_PORT,
-                 robot_radius: float = 0.055, config: FoxgloveConfig | None = None,
+                 robot_radius: float = ROBOT_RADIUS, config: FoxgloveConfig | None = None,
                  image_provider: Callable[[str], Any] | None = None) -> None:
         import foxglove
 
