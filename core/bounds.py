@@ -30,6 +30,10 @@ class Bounds(NamedTuple):
         (see :func:`check_bounds` for validation of outside input)."""
         return bounds if isinstance(bounds, Bounds) else cls(*bounds)
 
+    def __repr__(self) -> str:
+        """As the plain tuple ``(x_min, x_max, y_min, y_max)``: messages and logs that quote a bounds read as before."""
+        return repr(tuple(self))
+
     @property
     def width(self) -> float:
         """Extent along x, m: ``x_max − x_min``."""

@@ -11,6 +11,7 @@ def test_bounds_is_still_a_tuple():
     assert DEFAULT_BOUNDS == (-1.6, 1.6, -1.0, 1.0)
     assert list(DEFAULT_BOUNDS) == [-1.6, 1.6, -1.0, 1.0]
     assert isinstance(check_bounds([-1, 2, -3, 4]), Bounds)
+    assert f"{DEFAULT_BOUNDS}" == repr(DEFAULT_BOUNDS) == "(-1.6, 1.6, -1.0, 1.0)"  # messages quote it as before
 
 
 def test_geometry_of_the_robotarium_floor():
