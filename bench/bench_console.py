@@ -1,6 +1,6 @@
 """Benchmark: one console tick (sense, density, coverage, barrier, actuate) and the server-side scene update.
 
-Run: ``/work/venv/bin/python bench/bench_console.py`` (prints a markdown table).
+Run: ``.venv/bin/python bench/bench_console.py`` (prints a markdown table).
 
 For N = 12, 50, 100 simulated robots running coverage (TVD-D1) on the circling density:
 * ``tick``: ``ControlLoop.tick()`` (no subscribers), ms;
@@ -15,37 +15,25 @@ Baseline: the same process times a fixed numpy workload (sort 10⁵ floats ×10)
 """
 from __future__ import annotations
 
-import os
+import sys
+import time
 
-for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):  # one core, no BLAS thread thrash
-    os.environ.setdefault(_var, "1")
+import harness  # first: one BLAS thread (no thread thrash on one core), before numpy loads
 
-import platform  # noqa: E402
-import statistics  # noqa: E402
-import sys  # noqa: E402
-import time  # noqa: E402
-
-import numpy as np  # noqa: E402
+from swarmdeck.core.constants import CONTROL_PERIOD
 
 
 def median_ms(samples: list[float]) -> float:
-    return 1e3 * statistics.median(samples)
+    return harness.timing(samples, "thread").median_ms
 
 
 def p90_ms(samples: list[float]) -> float:
-    return 1e3 * float(np.percentile(samples, 90))
+    return harness.timing(samples, "thread").percentile_ms(90)
 
 
 def baseline(repeats: int = 30) -> float:
     """CPU ms of a fixed numpy workload (sort 10⁵ floats ×10), to compare machines."""
-    a = np.random.default_rng(0).normal(size=100_000)
-    out = []
-    for _ in range(repeats):
-        t = time.thread_time()
-        for _ in range(10):
-            np.sort(a)
-        out.append(time.thread_time() - t)
-    return median_ms(out)
+    return harness.baseline(repeats).median_ms
 
 
 def run(n: int, server, warm: int = 300, ticks: int = 150) -> dict[str, float]:
@@ -90,21 +78,14 @@ def main() -> int:
     finally:
         server.stop()
     base = 0.5 * (base0 + base1)
-    cpu = "unknown"
-    try:
-        with open("/proc/cpuinfo") as f:
-            cpu = next(line.split(":", 1)[1].strip() for line in f if line.startswith("model name"))
-    except (OSError, StopIteration):
-        pass
-    load = os.getloadavg()[0] if hasattr(os, "getloadavg") else float("nan")
-    print(f"machine: {os.cpu_count()} cores, {cpu}; Python {platform.python_version()}; load average {load:.1f}; "
-          f"baseline (sort 10⁵ floats ×10) {base:.2f} ms CPU")
+    period_ms = 1e3 * CONTROL_PERIOD
+    print(f"{harness.machine()}; baseline (sort 10⁵ floats ×10) {base:.2f} ms CPU")
     print()
-    print("| N | tick CPU ms (p90) | coverage wall ms | barrier wall ms | scene CPU ms (p90) | tick + scene CPU ms (p90) | "
-          "spare of 33 ms | wall ms | (tick+scene)/baseline |")
-    print("|---|---|---|---|---|---|---|---|---|")
+    print(harness.table_header(["N", "tick CPU ms (p90)", "coverage wall ms", "barrier wall ms", "scene CPU ms (p90)",
+                                "tick + scene CPU ms (p90)", f"spare of {period_ms:g} ms", "wall ms",
+                                "(tick+scene)/baseline"]))
     for n, r in rows:
-        spare = 100.0 * (1.0 - r["both"] / 33.0)
+        spare = 100.0 * (1.0 - r["both"] / period_ms)
         print(f"| {n} | {r['tick']:.2f} ({r['tick_p90']:.2f}) | {r['stage_control']:.2f} | {r['stage_safety']:.2f} | "
               f"{r['scene']:.2f} ({r['scene_p90']:.2f}) | {r['both']:.2f} ({r['both_p90']:.2f}) | {spare:.0f} % | "
               f"{r['wall']:.2f} | {r['both'] / base:.2f} |")

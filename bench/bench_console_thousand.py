@@ -15,9 +15,8 @@ the console's only filter before this issue.
 """
 from __future__ import annotations
 
-import os
 
-os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+import harness  # first: pins BLAS/OpenMP to one thread, before numpy loads
 
 import statistics  # noqa: E402
 import sys  # noqa: E402
@@ -76,9 +75,7 @@ def measure(n: int, mode: str, ticks: int, with_scene: bool) -> dict:
 
 
 def main() -> int:
-    cpu = next((ln.split(":", 1)[1].strip() for ln in open("/proc/cpuinfo") if ln.startswith("model name")), "?")
-    print(f"# bench_console_thousand  {time.strftime('%Y-%m-%d %H:%M UTC', time.gmtime())}  nproc={os.cpu_count()}  "
-          f"cpu={cpu}  python={sys.version.split()[0]}  load={os.getloadavg()[0]:.1f}\n")
+    print(f"# bench_console_thousand  {time.strftime('%Y-%m-%d %H:%M UTC', time.gmtime())}  {harness.machine()}\n")
     print("| N | arena (m) | barrier | tick CPU ms | tick wall ms | scene CPU ms | record CPU ms | "
           "loop budget ms | ticks/s (1 / budget) |")
     print("| ---: | --- | --- | ---: | ---: | ---: | ---: | ---: | ---: |")

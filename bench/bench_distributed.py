@@ -23,8 +23,7 @@ from __future__ import annotations
 
 import os
 
-os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
-os.environ.setdefault("OMP_NUM_THREADS", "1")
+import harness  # first: pins BLAS/OpenMP to one thread, before numpy loads
 
 import argparse  # noqa: E402
 import dataclasses  # noqa: E402
@@ -44,10 +43,7 @@ def config_for(n: int) -> BarrierConfig:
     return BarrierConfig() if n <= 100 else BarrierConfig(bounds=arena_for(n, PITCH, fill=0.8))
 
 
-def timed(fn, *args):
-    t = time.process_time()
-    out = fn(*args)
-    return time.process_time() - t, out
+timed = harness.timed  # (process CPU seconds, result)
 
 
 def closed_loop(cfg: BarrierConfig, x: np.ndarray, nominal: np.ndarray, ticks: int, seed: int) -> list[float]:

@@ -10,25 +10,23 @@ towards the swarm's centre, so the filter works; observations with 3 neighbours;
 """
 from __future__ import annotations
 
-import os
-import statistics
 import sys
 import time
 
+import harness  # first: pins BLAS/OpenMP to one thread, before numpy loads
 import numpy as np
 
 import swarmdeck.envs as envs
+from swarmdeck.core.bounds import DEFAULT_BOUNDS
 from swarmdeck.devices import Arena, ArenaConfig, SimulatedArena, random_initial_poses
 
 
 def blocks(fn, n_blocks: int = 7, per: int = 10) -> float:
-    out = []
-    for _ in range(n_blocks):
-        t = time.process_time()
+    """Median process-CPU seconds per call of ``fn``, over ``n_blocks`` blocks of ``per`` calls."""
+    def block() -> None:
         for _ in range(per):
             fn()
-        out.append((time.process_time() - t) / per)
-    return statistics.median(out)
+    return harness.measure(block, n_blocks, clock="cpu").median / per
 
 
 def towards_centre(points: np.ndarray) -> np.ndarray:
@@ -37,7 +35,7 @@ def towards_centre(points: np.ndarray) -> np.ndarray:
 
 
 def row(n: int) -> str:
-    bounds = (-1.6, 1.6, -1.0, 1.0) if n <= 20 else (-4.0, 4.0, -2.5, 2.5)
+    bounds = DEFAULT_BOUNDS if n <= 20 else (-4.0, 4.0, -2.5, 2.5)
     poses = random_initial_poses(n, bounds, rng=0)
     sim = SimulatedArena(n, poses, config=ArenaConfig(bounds=bounds))
     v, w = np.full(n, 0.05), np.full(n, 0.2)
@@ -63,9 +61,7 @@ def row(n: int) -> str:
 
 
 def main() -> int:
-    cpu = next((ln.split(":", 1)[1].strip() for ln in open("/proc/cpuinfo") if ln.startswith("model name")), "?")
-    print(f"env benchmarks — {time.strftime('%Y-%m-%d')}, {os.cpu_count()} cores, {cpu}, Python {sys.version.split()[0]}, "
-          f"load average {os.getloadavg()[0]:.1f}\n")
+    print(f"env benchmarks — {time.strftime('%Y-%m-%d')}, {harness.machine()}\n")
     print("| N | bare simulator step (ms) | Arena.step, filter on (ms, ratio) | env step, rendezvous (ms, ratio) | "
           "steps/s | env step, coverage (ms, ratio) | steps/s |")
     print("| ---: | ---: | ---: | ---: | ---: | ---: | ---: |")

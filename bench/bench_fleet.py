@@ -19,13 +19,10 @@ rows add to the bare tick.
 """
 from __future__ import annotations
 
-import os
 
-for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
-    os.environ.setdefault(_var, "1")
+import harness  # first: pins BLAS/OpenMP to one thread, before numpy loads
 
 import argparse  # noqa: E402
-import platform  # noqa: E402
 import statistics  # noqa: E402
 import time  # noqa: E402
 
@@ -92,8 +89,7 @@ def main() -> None:
     ap.add_argument("--runs", type=int, default=8)
     ap.add_argument("--return-runs", type=int, default=10)
     args = ap.parse_args()
-    print(f"date {time.strftime('%Y-%m-%d')}, {platform.machine()}, Python {platform.python_version()}, "
-          f"numpy {np.__version__}, {args.runs} runs per N")
+    print(f"date {time.strftime('%Y-%m-%d')}, {harness.machine()}, {args.runs} runs per N")
     print("| N | setups finished | setup simulated s (median, max) | setup CPU s (median) | baseline ticks CPU s "
           "| ratio | runs needing the deadlock escape | largest pose error | collision steps | returns finished "
           "| return simulated s (median) | return CPU s (median) |")

@@ -12,7 +12,7 @@ Run: ``.venv/bin/python bench/bench_foxglove.py`` (prints markdown tables; ~2 mi
 """
 from __future__ import annotations
 
-import os
+import harness  # first: pins BLAS/OpenMP to one thread, before numpy loads
 import statistics
 import sys
 import tempfile
@@ -22,6 +22,7 @@ from pathlib import Path
 from swarmdeck.console.recording.foxglove import FoxgloveEncoder
 from swarmdeck.console.recording.recorder import Recorder, RecorderConfig, encode_json
 from swarmdeck.console.runtime.loop import ControlLoop, LoopConfig
+from swarmdeck.core.constants import CONTROL_PERIOD
 
 
 def ms(x: float) -> str:
@@ -75,9 +76,7 @@ def size(tmp: Path, frames: list, fox: bool) -> float:
 
 
 def main() -> int:
-    cpu = next((ln.split(":", 1)[1].strip() for ln in open("/proc/cpuinfo") if ln.startswith("model name")), "?")
-    print(f"Foxglove channel benchmarks — {time.strftime('%Y-%m-%d')}, {os.cpu_count()} cores, {cpu}, "
-          f"Python {sys.version.split()[0]}, load average {os.getloadavg()[0]:.1f}\n")
+    print(f"Foxglove channel benchmarks — {time.strftime('%Y-%m-%d')}, {harness.machine()}\n")
     rows_o, rows_w, rows_s = [], [], []
     with tempfile.TemporaryDirectory() as d:
         tmp = Path(d)
@@ -85,7 +84,7 @@ def main() -> int:
             row, frames = overhead(tmp, n)
             rows_o.append(row)
             fox, base = writer_cost(frames)
-            rows_w.append(f"| {n} | {ms(fox)} | {ms(base)} | {fox / base:.1f}x | {100 * fox / 0.033:.1f} % |")
+            rows_w.append(f"| {n} | {ms(fox)} | {ms(base)} | {fox / base:.1f}x | {100 * fox / CONTROL_PERIOD:.1f} % |")
             seq = []
             loop = ControlLoop(LoopConfig(n_robots=n, seed=1))
             seq = [loop.tick() for _ in range(300 if n == 12 else 150)]

@@ -26,27 +26,25 @@ Medians and worst over the ticks (the first 5, the warm-up, left out); "binds": 
 """
 from __future__ import annotations
 
-import os
 
-os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
-os.environ.setdefault("OMP_NUM_THREADS", "1")
+import harness  # first: pins BLAS/OpenMP to one thread, before numpy loads
 
 import argparse  # noqa: E402
-import platform  # noqa: E402
 import time  # noqa: E402
 
 import numpy as np  # noqa: E402
 
 from swarmdeck.console.runtime.contacts import ContactWatch  # noqa: E402
-from swarmdeck.core.kinematics import GritsBotParams, lookahead_points  # noqa: E402
-from swarmdeck.devices.gritsbot import unicycle_step  # noqa: E402
+from swarmdeck.core.bounds import DEFAULT_BOUNDS
+from swarmdeck.core.constants import CONTROL_PERIOD
+from swarmdeck.core.kinematics import GritsBotParams, lookahead_points, unicycle_step  # noqa: E402
 from swarmdeck.devices.pipeline import _without_pairs, barrier_filter, brake, certify, next_points  # noqa: E402
 from swarmdeck.safety import BarrierConfig  # noqa: E402
 from swarmdeck.safety.guard import GuardConfig, assess  # noqa: E402
 from swarmdeck.safety.scenes import arena_for, grid_scene  # noqa: E402
 
-DT = 0.033
-DENSE_BOUNDS = (-1.6, 1.6, -1.0, 1.0)
+DT = CONTROL_PERIOD
+DENSE_BOUNDS = DEFAULT_BOUNDS
 SPARSE_PITCH = 0.45
 
 
@@ -100,8 +98,7 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--ticks", type=int, default=300)
     args = parser.parse_args()
-    print(f"# {platform.machine()} {platform.processor() or ''}, Python {platform.python_version()}, "
-          f"numpy {np.__version__}, {os.cpu_count()} cores, {args.ticks} ticks")
+    print(f"# {harness.machine()}, {args.ticks} ticks")
     print("| scene | N | binds | barrier ms median (worst) | walls ms median | assess ms median (worst) "
           "| guard during a bypass ms median (worst) | guard / barrier | brake after revocation ms median (worst) "
           "| brake / barrier | contacts ms median |")

@@ -15,12 +15,11 @@ as ratios to feeding a ten-finger bundle. Medians over repeats of CPU time
 """
 from __future__ import annotations
 
-import os
-import platform
 import statistics
 import sys
 import time
 
+import harness  # first: pins BLAS/OpenMP to one thread, before numpy loads
 import numpy as np
 from pythonosc.osc_bundle import OscBundle
 
@@ -44,12 +43,7 @@ def make_bundles(n: int, fingers: int = 10) -> list[bytes]:
 
 def rate(fn, data: list[bytes]) -> float:
     """Median bundles/s of ``fn`` over ``data``."""
-    rates = []
-    for _ in range(REPEATS):
-        t0 = time.process_time()
-        fn(data)
-        rates.append(len(data) / (time.process_time() - t0))
-    return statistics.median(rates)
+    return len(data) / harness.measure(lambda: fn(data), REPEATS, clock="cpu").median
 
 
 def main() -> int:
@@ -131,16 +125,7 @@ def main() -> int:
 
     heavy_rows = heavy_traffic(data[0], peer)
 
-    cpu = "unknown"
-    try:
-        for line in open("/proc/cpuinfo"):
-            if line.startswith("model name"):
-                cpu = line.split(":", 1)[1].strip()
-                break
-    except OSError:
-        pass
-    print(f"inputs benchmark — {time.strftime('%Y-%m-%d %H:%M UTC', time.gmtime())}, "
-          f"nproc {os.cpu_count()}, {cpu}, Python {platform.python_version()}, "
+    print(f"inputs benchmark — {time.strftime('%Y-%m-%d %H:%M UTC', time.gmtime())}, {harness.machine()}, "
           f"{N_BUNDLES} ten-finger 2Dcur bundles of {len(data[0])} B, median of {REPEATS}")
     print()
     print("| stage | bundles/s | ratio to python-osc parse |")
@@ -161,12 +146,7 @@ def main() -> int:
 
 
 def _median_cpu(fn, repeats: int = 7) -> float:
-    out = []
-    for _ in range(repeats):
-        t0 = time.process_time()
-        fn()
-        out.append(time.process_time() - t0)
-    return statistics.median(out)
+    return harness.measure(fn, repeats, clock="cpu").median
 
 
 def heavy_traffic(ten_finger: bytes, peer: tuple) -> list[tuple[str, float, float, str]]:

@@ -27,14 +27,13 @@ import argparse
 import asyncio
 import json
 import os
-import platform
 import statistics
 import subprocess
-import sys
 import tempfile
 import time
 from pathlib import Path
 
+import harness  # first: pins BLAS/OpenMP to one thread, before numpy loads
 import httpx
 
 RENDEZVOUS = """
@@ -44,7 +43,7 @@ def experiment(arena):
         arena.set_velocities(-0.5 * (p - p.mean(axis=0)))
         arena.step()
 """
-CLI = [sys.executable, "-c", "import sys; from swarmdeck.console.cli import main; sys.exit(main())"]
+CLI = harness.swarmdeck_cli()
 
 
 def pipeline(n_jobs: int, workdir: Path) -> list[dict]:
@@ -220,8 +219,7 @@ def main() -> None:
     parser.add_argument("--gap-jobs", type=int, default=4, help="jobs per mode for the gap between jobs")
     parser.add_argument("--only", choices=("api", "pipeline", "gap"), default=None, help="run one part")
     args = parser.parse_args()
-    print(f"machine: {platform.processor() or platform.machine()}, {os.cpu_count()} cores, Python "
-          f"{platform.python_version()}, load average {os.getloadavg()[0]:.1f}")
+    print(harness.machine())
     with tempfile.TemporaryDirectory() as tmp:
         work = Path(tmp)
         if args.only in (None, "gap"):

@@ -14,10 +14,9 @@ to end without set-up and return (sandbox start-up, the 2 s run, the recording a
 """
 from __future__ import annotations
 
+import harness  # first: pins BLAS/OpenMP to one thread, before numpy loads
 import argparse
 import json
-import os
-import platform
 import statistics
 import tempfile
 import time
@@ -79,8 +78,8 @@ def main() -> None:
     with tempfile.TemporaryDirectory() as tmp:
         rows = run(args.fleet, args.jobs, args.robots, Path(tmp))
     med = statistics.median
-    print(f"\nfleet upkeep per job: fleet of {args.fleet}, {args.jobs} jobs per N, {os.cpu_count()} cores, "
-          f"Python {platform.python_version()}, load average {os.getloadavg()[0]:.1f}\n")
+    print(f"\nfleet upkeep per job: fleet of {args.fleet}, {args.jobs} jobs per N, "
+          f"{harness.machine()}\n")
     print("| N | jobs done | set-up simulated s (median, max) | set-up wall s | return simulated s (median, max) "
           "| return wall s | job without upkeep, wall s (baseline) | upkeep wall / baseline | largest pose error "
           "| escapes | collisions | arena ready after the jobs |")

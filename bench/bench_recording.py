@@ -1,6 +1,6 @@
 """Recording benchmarks (issue 8): loop-thread overhead, file size per minute, seek in a one-hour file.
 
-Run: ``/work/venv/bin/python bench/bench_recording.py`` (prints markdown tables; ~3 min, ~300 MB in a temp dir).
+Run: ``.venv/bin/python bench/bench_recording.py`` (prints markdown tables; ~3 min, ~300 MB in a temp dir).
 
 1. Overhead per tick on the loop thread at N = 100: the real ControlLoop ticks with the
    recorder subscribed (enqueue only) vs without, interleaved blocks; and the cost of the
@@ -14,18 +14,19 @@ Run: ``/work/venv/bin/python bench/bench_recording.py`` (prints markdown tables;
 from __future__ import annotations
 
 import json
-import os
 import statistics
 import sys
 import tempfile
 import time
 from pathlib import Path
 
+import harness  # first: pins BLAS/OpenMP to one thread, before numpy loads
 import numpy as np
 
 from swarmdeck.console.runtime.loop import ControlLoop, LoopConfig
 from swarmdeck.console.recording.recorder import Recorder, encode_json
 from swarmdeck.console.recording.reader import open_recording
+from swarmdeck.core.constants import CONTROL_PERIOD
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))  # the synthetic-session fixture
 from recording_synth import retimed  # noqa: E402
 
@@ -97,7 +98,7 @@ def overhead(tmp: Path, n: int = 100, rounds: int = 12, ticks: int = 4) -> list[
         "| --- | ---: | --- |",
         f"| `write_frame` (enqueue) on the loop thread | {ms(e_med)} | p99 {ms(e_p99)} ms; {st.dropped} dropped |",
         f"| inline baseline: to_dict + JSON + MCAP add on the loop thread | {ms(i_med)} | {i_med / e_med:.0f}x the enqueue |",
-        f"| writer thread CPU per frame (JSON, zstd, write) | {ms(cpu)} | {100 * cpu / 0.033:.0f} % of one core at 30 Hz |",
+        f"| writer thread CPU per frame (JSON, zstd, write) | {ms(cpu)} | {100 * cpu / CONTROL_PERIOD:.0f} % of one core at 30 Hz |",
         f"| tick without recorder | {ms(t_without)} | {rounds}×{ticks} ticks, alternating blocks |",
         f"| tick with recorder (writer thread running) | {ms(t_with)} | {100 * (t_with / t_without - 1):+.1f} % |",
     ]
@@ -119,7 +120,7 @@ def size_per_minute(tmp: Path) -> list[str]:
     return rows
 
 
-def seek_one_hour(tmp: Path, n: int = 12, hours: float = 1.0, dt: float = 0.033) -> list[str]:
+def seek_one_hour(tmp: Path, n: int = 12, hours: float = 1.0, dt: float = CONTROL_PERIOD) -> list[str]:
     base = loop_frames(n, 60)
     path = tmp / "hour.mcap"
     total = int(hours * 3600 / dt)
@@ -178,9 +179,7 @@ def seek_one_hour(tmp: Path, n: int = 12, hours: float = 1.0, dt: float = 0.033)
 
 
 def main() -> int:
-    cpu = next((ln.split(":", 1)[1].strip() for ln in open("/proc/cpuinfo") if ln.startswith("model name")), "?")
-    print(f"recording benchmarks — {time.strftime('%Y-%m-%d')}, {os.cpu_count()} cores, {cpu}, "
-          f"Python {sys.version.split()[0]}\n")
+    print(f"recording benchmarks — {time.strftime('%Y-%m-%d')}, {harness.machine()}\n")
     with tempfile.TemporaryDirectory() as d:
         tmp = Path(d)
         for section in (overhead(tmp), size_per_minute(tmp), seek_one_hour(tmp)):

@@ -19,19 +19,20 @@ CPU time of recording the frames (encode, zstd, write) per frame, as a share of 
 from __future__ import annotations
 
 import dataclasses
-import os
 import statistics
 import sys
 import tempfile
 import time
 from pathlib import Path
 
+import harness  # first: pins BLAS/OpenMP to one thread, before numpy loads
 import numpy as np
 
 from swarmdeck.console.recording.codec import encode_frame
 from swarmdeck.console.recording.recorder import Recorder, RecorderConfig
 from swarmdeck.console.runtime.loop import ControlLoop, LoopConfig
-from swarmdeck.devices.gritsbot import wrap_angle
+from swarmdeck.core.bounds import DEFAULT_BOUNDS
+from swarmdeck.core.kinematics import wrap_angle
 
 
 class SelfContainedRecorder(Recorder):
@@ -47,7 +48,7 @@ class SelfContainedRecorder(Recorder):
 
 
 def loop_frames(n: int, ticks: int) -> list:
-    bounds = (-1.6, 1.6, -1.0, 1.0) if n <= 100 else (-5.0, 5.0, -3.0, 3.0)
+    bounds = DEFAULT_BOUNDS if n <= 100 else (-5.0, 5.0, -3.0, 3.0)
     loop = ControlLoop(LoopConfig(n_robots=n, seed=1, bounds=bounds))
     try:
         return [loop.tick() for _ in range(ticks)]
@@ -81,9 +82,7 @@ def growth(d: str, frames: list, recorder: type[Recorder], foxglove: bool = Fals
 
 
 def main() -> int:
-    cpu = next((ln.split(":", 1)[1].strip() for ln in open("/proc/cpuinfo") if ln.startswith("model name")), "?")
-    print(f"# bench_recording_compact  {time.strftime('%Y-%m-%d %H:%M UTC', time.gmtime())}  nproc={os.cpu_count()}  "
-          f"cpu={cpu}  python={sys.version.split()[0]}  load={os.getloadavg()[0]:.1f}\n")
+    print(f"# bench_recording_compact  {time.strftime('%Y-%m-%d %H:%M UTC', time.gmtime())}  {harness.machine()}\n")
     print("| N | poses | frames | format 3 MB/min (30 Hz) | format 2 MB/min | format 3 / format 2 | kB/frame | "
           "writer CPU ms/frame (3 / 2) | writer % of a core at 30 Hz | encode ms/frame (3 / 2) | "
           "format 3 with the Foxglove channels: MB/min, writer % of a core |")

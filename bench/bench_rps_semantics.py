@@ -33,6 +33,8 @@ import tempfile
 import time
 from pathlib import Path
 
+import harness  # first: pins BLAS/OpenMP to one thread, before numpy loads
+
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE.parent / "tests"))
 
@@ -138,7 +140,7 @@ def main() -> None:
                 env["MPLBACKEND"] = "Agg"
                 if mode == "rps":
                     env["PYTHONPATH"] = os.pathsep.join([*args.rps_path, env["PYTHONPATH"]])
-                done = subprocess.run([sys.executable, __file__, "--child", mode, str(main_py), args.scenario],
+                done = subprocess.run([*harness.python(), __file__, "--child", mode, str(main_py), args.scenario],
                                       env=env, capture_output=True, text=True, cwd=tmp, check=False)
                 if done.returncode != 0:
                     raise SystemExit(f"{mode} failed:\n{done.stdout[-2000:]}\n{done.stderr[-4000:]}")
@@ -157,7 +159,7 @@ def main() -> None:
         print(f"{'N':>4} {'rps 1.x':>10} {'facade --rps-semantics':>24}")
         for n in (6, 20, 50):
             env = dict(os.environ, PYTHONPATH=os.pathsep.join([*args.rps_path, os.environ.get("PYTHONPATH", "")]))
-            done = subprocess.run([sys.executable, __file__, "--child", "steps", str(n), "-"], env=env,
+            done = subprocess.run([*harness.python(), __file__, "--child", "steps", str(n), "-"], env=env,
                                   capture_output=True, text=True, check=True)
             row = json.loads(done.stdout.strip().splitlines()[-1])
             print(f"{n:>4} {row['rps']:>10.0f} {row['facade-rps']:>24.0f}")

@@ -1,6 +1,6 @@
 """Benchmark of the safety filter (issue 4): median ms per call on dense random scenes.
 
-Run: ``OPENBLAS_NUM_THREADS=1 /work/venv/bin/python bench/bench_safety.py [--quick]``
+Run: ``.venv/bin/python bench/bench_safety.py [--quick]`` (BLAS pinned to one thread by the harness)
 (BLAS threads are pinned to one below as well, before numpy is imported).
 
 Scenes (REFERENCE.md §3): robots on a random subset (80 % occupancy) of a
@@ -25,9 +25,7 @@ from __future__ import annotations
 
 import os
 
-os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
-os.environ.setdefault("OMP_NUM_THREADS", "1")
-os.environ.setdefault("MKL_NUM_THREADS", "1")
+import harness  # first: pins BLAS/OpenMP to one thread, before numpy loads
 
 import argparse  # noqa: E402
 import collections  # noqa: E402
@@ -50,11 +48,7 @@ def config_for(n: int) -> BarrierConfig:
     return BarrierConfig(bounds=arena_for(n, PITCH, fill=0.8))
 
 
-def timed(fn, *args):
-    """(process CPU seconds, result): CPU time is robust to the other processes on a shared VM."""
-    t = time.process_time()
-    out = fn(*args)
-    return time.process_time() - t, out
+timed = harness.timed  # (process CPU seconds, result)
 
 
 def bench(n: int, scenes: int, ticks: int, baseline: bool, rng: np.random.Generator) -> dict:

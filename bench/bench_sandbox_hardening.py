@@ -28,10 +28,8 @@ from __future__ import annotations
 import argparse
 import os
 
-for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
-    os.environ.setdefault(_var, "1")
+import harness  # first: pins BLAS/OpenMP to one thread, before numpy loads
 
-import platform  # noqa: E402
 import resource  # noqa: E402
 import statistics  # noqa: E402
 import tempfile  # noqa: E402
@@ -95,7 +93,9 @@ def one_run(bundle: ScriptBundle, jail: str, variant: str, robots: int, duration
 
 
 def stats(values: list[float], scale: float = 1.0, digits: int = 3) -> str:
-    return f"{statistics.median(values) * scale:.{digits}f} / {max(values) * scale:.{digits}f}"
+    """``"median / worst"`` of ``values`` × ``scale``."""
+    t = harness.timing(values)
+    return f"{t.median * scale:.{digits}f} / {t.worst * scale:.{digits}f}"
 
 
 def load() -> str:
@@ -119,8 +119,7 @@ def main() -> None:
     if not args.no_pin:
         os.sched_setaffinity(0, {max(everywhere)})
     jails = [j for j in ("unshare", "bwrap") if choose_jail(JailConfig(order=(j,)))[0] == j]
-    print(f"machine: {platform.machine()}, {os.cpu_count()} cores, Python {platform.python_version()}, "
-          f"{'unpinned' if args.no_pin else 'pinned to one core'}, load average {load()}")
+    print(f"{harness.machine()}, {'unpinned' if args.no_pin else 'pinned to one core'}, load average {load()}")
     for jail in jails:
         one_run(tick, jail, "hardened", 2, 0.1, 0)  # warm up (the fork server, the filter, the jail layout)
     print(f"\n**start-up** (a one-tick script, 2 robots; median / worst of {args.startups})\n")

@@ -1,6 +1,6 @@
 """Tracking benchmark: detection + poses per frame on one core, accuracy, and latency.
 
-Run: ``/work/venv/bin/python bench/bench_tracking.py`` (prints a markdown table).
+Run: ``.venv/bin/python bench/bench_tracking.py`` (prints a markdown table).
 
 Scenarios (issue 9 targets): 1280×720 with 20 robots (+4 references) ≤ 15 ms, 1920×1080 with
 50 tags (46 robots + 4 references) ≤ 30 ms, ``cv2.setNumThreads(1)``. Time per frame is
@@ -17,22 +17,17 @@ import platform
 import statistics
 import time
 
+import harness  # first: pins BLAS/OpenMP to one thread, before numpy loads
 import cv2
 import numpy as np
 
+from swarmdeck.core.constants import CONTROL_PERIOD
 from swarmdeck.tracking import (
     CameraCalibration, CameraFrame, CameraPoseSource, SyntheticCamera, SyntheticCameraConfig, SyntheticRenderer,
     Tracker, TrackerConfig, random_poses)
 
 
-def _cpu() -> str:
-    try:
-        for line in open("/proc/cpuinfo"):
-            if line.startswith("model name"):
-                return line.split(":", 1)[1].strip()
-    except OSError:
-        pass
-    return platform.processor() or "unknown"
+_cpu = harness.cpu_name
 
 
 def scenario(width: int, height: int, n_robots: int, frames: int, rounds: int, seed: int) -> dict:
@@ -86,7 +81,7 @@ def latency(r: SyntheticRenderer, n_robots: int, ticks: int) -> dict:
     src = CameraPoseSource(cam, Tracker(TrackerConfig(calibration=CameraCalibration.from_camera(r.camera))))
     lat, render = [], []
     for k in range(ticks + 2):
-        src.read(0.033 * k)
+        src.read(CONTROL_PERIOD * k)
         if k >= 2:
             lat.append(src.health()["latency_ms"])
     rng = np.random.default_rng(3)

@@ -16,15 +16,14 @@ from __future__ import annotations
 
 import argparse
 import os
-import platform
 import shutil
 import socket
 import subprocess
-import sys
 import tempfile
 import time
 from pathlib import Path
 
+import harness  # first: pins BLAS/OpenMP to one thread, before numpy loads
 import numpy as np
 
 from swarmdeck.devices.clock import RealTimePacer
@@ -67,7 +66,7 @@ def proc_cpu_seconds(pid: int) -> float:
 def run_one(url: str, n: int, seconds: float, rate: float, workdir: Path) -> dict:
     trace = workdir / f"trace_{n}.txt"
     fleet = subprocess.Popen(
-        [sys.executable, "-c", "import sys; from swarmdeck.console.cli import main; sys.exit(main())", "robots",
+        [*harness.swarmdeck_cli(), "robots",
          "--broker", url, "--robots", str(n), "--bounds", "-5", "5", "-3", "3", "--trace", str(trace), "--quiet"],
         stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True,
     )
@@ -155,7 +154,7 @@ def run_raw(url: str, n: int, seconds: float, rate: float, workdir: Path) -> dic
 
     port = int(url.rsplit(":", 1)[1])
     path = workdir / f"raw_{n}.txt"
-    sub = subprocess.Popen([sys.executable, "-c", RAW_SUBSCRIBER, str(port), str(n), str(path)],
+    sub = subprocess.Popen([*harness.python(), "-c", RAW_SUBSCRIBER, str(port), str(n), str(path)],
                            stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True)
     assert sub.stdout is not None and sub.stdout.readline().strip() == "ready"
     pub = mqtt.Client(CallbackAPIVersion.VERSION2)
@@ -189,9 +188,7 @@ def main() -> None:
     ap.add_argument("--rate", type=float, default=30.0)
     ap.add_argument("--robots", type=int, nargs="+", default=[12, 50, 200])
     args = ap.parse_args()
-    cpu = next((l.split(":", 1)[1].strip() for l in open("/proc/cpuinfo") if l.startswith("model name")), "?")
-    print(f"machine: {cpu}, {os.cpu_count()} cores, Python {platform.python_version()}; load average at start "
-          f"{os.getloadavg()[0]:.1f}; {args.seconds:g} s per N at {args.rate:g} Hz\n")
+    print(f"{harness.machine()} (at start); {args.seconds:g} s per N at {args.rate:g} Hz\n")
     for nodelay in (False, True):
         with tempfile.TemporaryDirectory() as tmp:
             broker, url = start_broker(Path(tmp), nodelay)

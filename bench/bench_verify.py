@@ -32,10 +32,8 @@ from __future__ import annotations
 import argparse
 import os
 
-for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
-    os.environ.setdefault(_var, "1")
+import harness  # first: pins BLAS/OpenMP to one thread, before numpy loads
 
-import platform  # noqa: E402
 import resource  # noqa: E402
 import statistics  # noqa: E402
 import tempfile  # noqa: E402
@@ -153,8 +151,7 @@ def main() -> None:
     folder = Path(tempfile.mkdtemp())
     script = folder / "circle_swap.py"
     script.write_text(SCRIPT)
-    print(f"machine: {platform.machine()}, {os.cpu_count()} cores, Python {platform.python_version()}, "
-          f"load average (1/5/15 min) {load()}")
+    print(f"{harness.machine()}, load average (1/5/15 min) {load()}")
     if not args.throughput_only:
         everywhere = os.sched_getaffinity(0)
         if not args.no_pin:

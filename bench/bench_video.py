@@ -11,11 +11,11 @@ Medians of the three rounds; wall and process CPU time (the machine is shared).
 """
 from __future__ import annotations
 
+import harness  # first: pins BLAS/OpenMP to one thread, before numpy loads
 import os
 import statistics
 import sys
 import tempfile
-import time
 from pathlib import Path
 
 from swarmdeck.console.recording.export_video import FrameRenderer, VideoLayout, VideoStyle, export_video
@@ -26,9 +26,9 @@ from recording_synth import write_synthetic_session  # noqa: E402
 
 
 def timed(fn) -> tuple[float, float]:
-    w, c = time.perf_counter(), time.process_time()
-    fn()
-    return time.perf_counter() - w, time.process_time() - c
+    """(wall s, process CPU s) of one call."""
+    cpu, (wall, _) = harness.timed(lambda: harness.timed(fn, clock="wall"), clock="cpu")
+    return wall, cpu
 
 
 def bench(n: int, tmp: Path, rounds: int = 3) -> str:
@@ -58,6 +58,7 @@ def bench(n: int, tmp: Path, rounds: int = 3) -> str:
 
 
 def main() -> None:
+    print(harness.machine())
     print("| N | video frames | export frames/s, wall / CPU | drawing alone frames/s, wall / CPU | "
           "baseline: reading frames/s, wall / CPU | export / reading CPU time | real-time factor (wall) | MP4 MB |")
     print("| ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |")

@@ -15,6 +15,8 @@ Defined once, at the bottom of the dependency graph (``safety``, ``devices``,
   applied by one uniform scale per robot (keeps the curvature ω/v).
 * :func:`saturate`: single-integrator speed limit per robot; non-finite rows
   become zero (the safe reading of a NaN command).
+* :func:`unicycle_step`: the exact unicycle motion over one step (the simulator's, the firmware
+  model's, the predictions'); :func:`wrap_angle` to (−π, π].
 
 Shapes: poses ``(N, 3)`` rows ``[x, y, θ]`` (m, rad); velocities ``(N, 2)`` m/s;
 ``v`` (N,) m/s, ``ω`` (N,) rad/s. All functions are pure and return new arrays.
@@ -27,6 +29,14 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from swarmdeck.core.checks import require_positive
+from swarmdeck.core.constants import (
+    AXLE_LENGTH,
+    LOOKAHEAD,
+    MAX_LINEAR_SPEED,
+    MAX_WHEEL_SPEED,
+    ROBOT_DIAMETER,
+    WHEEL_RADIUS,
+)
 
 FloatArray = NDArray[np.float64]
 
@@ -42,10 +52,10 @@ class UnicycleParams:
         lookahead: ℓ of the look-ahead (near-identity) diffeomorphism, m.
     """
 
-    wheel_radius: float = 0.016
-    axle_length: float = 0.105
-    max_wheel_speed: float = 12.5
-    lookahead: float = 0.03
+    wheel_radius: float = WHEEL_RADIUS
+    axle_length: float = AXLE_LENGTH
+    max_wheel_speed: float = MAX_WHEEL_SPEED
+    lookahead: float = LOOKAHEAD
 
     def __post_init__(self) -> None:
         require_positive(self, ("wheel_radius", "axle_length", "max_wheel_speed", "lookahead"))
@@ -70,8 +80,8 @@ class GritsBotParams(UnicycleParams):
         max_speed: largest linear speed the experiment API commands, m/s (= r · max_wheel_speed).
     """
 
-    diameter: float = 0.11
-    max_speed: float = 0.2
+    diameter: float = ROBOT_DIAMETER
+    max_speed: float = MAX_LINEAR_SPEED
 
     def __post_init__(self) -> None:
         require_positive(self, ("diameter", "wheel_radius", "axle_length", "max_speed", "max_wheel_speed", "lookahead"))
@@ -179,3 +189,45 @@ def saturate(u: ArrayLike, limit: float | None) -> FloatArray:
             break
         out[over] = np.nextafter(out[over], 0.0)
     return out
+
+
+# ---------------------------------------------------------------------------- the motion
+def unicycle_step(poses: ArrayLike, v: ArrayLike, w: ArrayLike, dt: float) -> FloatArray:
+    """Integrate ẋ = v cos θ, ẏ = v sin θ, θ̇ = ω exactly over ``dt`` with constant (v, ω).
+
+    The robot moves on a circular arc of radius v/ω; for |ω·dt| small the
+    straight-line limit is used through the series of sin(a)/a and (1−cos a)/a,
+    so the result is smooth in ω. Heading is wrapped to (−π, π].
+
+    Args:
+        poses: ``(N, 3)`` rows ``[x, y, θ]``.
+        v: ``(N,)`` linear speeds, m/s.
+        w: ``(N,)`` angular speeds, rad/s.
+        dt: step, s.
+
+    Returns:
+        New ``(N, 3)`` array.
+    """
+    poses = np.asarray(poses, dtype=float)
+    v = np.asarray(v, dtype=float)
+    w = np.asarray(w, dtype=float)
+    theta = poses[:, 2]
+    a = w * dt  # heading change over the step
+    small = np.abs(a) < 1e-6
+    a_safe = np.where(small, 1.0, a)
+    # f = sin(a)/a, g = (1 - cos a)/a with their Taylor series near 0.
+    f = np.where(small, 1.0 - a * a / 6.0, np.sin(a_safe) / a_safe)
+    g = np.where(small, a / 2.0 - a**3 / 24.0, (1.0 - np.cos(a_safe)) / a_safe)
+    d = v * dt
+    c, s = np.cos(theta), np.sin(theta)
+    out = np.empty_like(poses)
+    out[:, 0] = poses[:, 0] + d * (f * c - g * s)
+    out[:, 1] = poses[:, 1] + d * (f * s + g * c)
+    out[:, 2] = wrap_angle(theta + a)
+    return out
+
+
+def wrap_angle(theta: ArrayLike) -> FloatArray:
+    """Wrap angles to (−π, π]."""
+    theta = np.asarray(theta, dtype=float)
+    return np.arctan2(np.sin(theta), np.cos(theta))

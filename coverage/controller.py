@@ -19,6 +19,7 @@ import numpy as np
 import scipy.sparse as sp
 from numpy.typing import ArrayLike, NDArray
 
+from swarmdeck.core.constants import MAX_LINEAR_SPEED, SAFETY_DISTANCE
 from swarmdeck.coverage.density import Density, GaussianMixture
 from swarmdeck.coverage.geometry import (DEFAULT_QUADRATURE, NUMERICAL_ERRORS, GeometryConfig,
                                          coverage_geometry)
@@ -48,11 +49,11 @@ class CoverageConfig:
 
     law: str = "tvd-d1"
     kappa: float = 1.0
-    max_speed: float | None = 0.2
+    max_speed: float | None = MAX_LINEAR_SPEED
     bounds: Bounds = DEFAULT_BOUNDS
     hops: int = 2
     allow_centralised: bool = False
-    safety_distance: float = 0.17
+    safety_distance: float = SAFETY_DISTANCE
     wall_margin: float = 1e-6
     min_separation: float = 1e-3
     quadrature: QuadratureOptions = field(default_factory=lambda: DEFAULT_QUADRATURE)

@@ -237,9 +237,9 @@ def moving_density(bounds: Bounds = DEFAULT_BOUNDS
                    ) -> AnalyticDensity:
     """Demo density: one bump orbiting, one breathing on a Lissajous path, one elongated bump
     that rocks back and forth and fades in and out every 16 s, all scaled to ``bounds``."""
-    x0, x1, y0, y1 = bounds
-    cx, cy = 0.5 * (x0 + x1), 0.5 * (y0 + y1)
-    sx, sy = 0.5 * (x1 - x0), 0.5 * (y1 - y0)
+    b = Bounds.of(bounds)
+    cx, cy = b.centre
+    sx, sy = 0.5 * b.width, 0.5 * b.height
     s = min(sx, sy)
     return AnalyticDensity(0.05, (
         Bump(Orbit((cx - 0.35 * sx, cy), 0.45 * s, 20.0), Constant(0.25 * s), Constant(1.0)),

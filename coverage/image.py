@@ -76,11 +76,12 @@ def image_density(image: str | Path | ArrayLike,
     if not 2 <= int(columns) <= 200:
         raise ValueError(f"columns must be in [2, 200], got {columns}")
     ink = 1.0 - grey if invert else grey
-    x0, x1, y0, y1 = bounds
+    b = Bounds.of(bounds)
+    x0, x1, y0, y1 = b
     nx = int(columns)
-    ny = max(2, int(round(nx * (y1 - y0) / (x1 - x0))))
+    ny = max(2, int(round(nx * b.height / b.width)))
     small = cv2.resize(ink.astype(np.float32), (nx, ny), interpolation=cv2.INTER_AREA).astype(float)
-    hx, hy = (x1 - x0) / nx, (y1 - y0) / ny
+    hx, hy = b.width / nx, b.height / ny
     sigma = 0.6 * max(hx, hy)
     row, col = np.nonzero(small > threshold)
     mu = np.column_stack([x0 + hx * (col + 0.5), y1 - hy * (row + 0.5)])

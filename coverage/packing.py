@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from swarmdeck.core.bounds import Bounds
 from swarmdeck.coverage.density import GaussianMixture
 
 __all__ = ["predicted_spacing", "packing_warning"]
@@ -24,15 +25,15 @@ def predicted_spacing(density: GaussianMixture, n_robots: int,
     """
     if n_robots < 1:
         raise ValueError(f"n_robots must be >= 1, got {n_robots}")
-    x0, x1, y0, y1 = bounds
+    b = Bounds.of(bounds)
+    x0, x1, y0, y1 = b
     nx = int(grid)
-    ny = max(4, int(round(grid * (y1 - y0) / (x1 - x0))))
-    hx, hy = (x1 - x0) / nx, (y1 - y0) / ny
+    ny = max(4, int(round(grid * b.height / b.width)))
+    hx, hy = b.width / nx, b.height / ny
     gx = x0 + hx * (np.arange(nx) + 0.5)
     gy = y0 + hy * (np.arange(ny) + 0.5)
     q = np.stack(np.meshgrid(gx, gy), axis=-1).reshape(-1, 2)
-    inside = density.mu[(density.mu[:, 0] >= x0) & (density.mu[:, 0] <= x1)
-                        & (density.mu[:, 1] >= y0) & (density.mu[:, 1] <= y1)]
+    inside = density.mu[b.contains(density.mu)]
     pts = np.concatenate([q, inside])
     root = np.sqrt(np.maximum(density.evaluate(pts), 0.0))
     total = root[: q.shape[0]].sum() * hx * hy

@@ -23,9 +23,10 @@ def raster_moments(points: ArrayLike, density: GaussianMixture,
     """Midpoint-rule moments on a grid of spacing ≈ h [m] labelled by the nearest robot."""
     p = np.asarray(points, dtype=float)
     n = p.shape[0]
-    x0, x1, y0, y1 = bounds
-    nx, ny = int(np.ceil((x1 - x0) / h)), int(np.ceil((y1 - y0) / h))
-    hx, hy = (x1 - x0) / nx, (y1 - y0) / ny
+    b = Bounds.of(bounds)
+    x0, x1, y0, y1 = b
+    nx, ny = int(np.ceil(b.width / h)), int(np.ceil(b.height / h))
+    hx, hy = b.width / nx, b.height / ny
     gx = x0 + hx * (np.arange(nx) + 0.5)
     gy = y0 + hy * (np.arange(ny) + 0.5)
     q = np.stack(np.meshgrid(gx, gy), axis=-1).reshape(-1, 2)

@@ -13,6 +13,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from swarmdeck.core.bounds import DEFAULT_BOUNDS
+from swarmdeck.core.constants import CONTROL_PERIOD
 from swarmdeck.coverage.controller import CoverageConfig
 from swarmdeck.coverage.densities import s1_density
 from swarmdeck.coverage.jacobian import centroid_jacobian
@@ -36,7 +37,7 @@ S1_T0 = {"H": 0.159274, "mass": 1.306659, "c": (-1.04205, -0.62228),
          "dc_dt": (-0.0043961, -0.00083564)}
 
 S1_BOUNDS = DEFAULT_BOUNDS
-S1_DT = 0.033
+S1_DT = CONTROL_PERIOD
 S1_STEPS = 1212
 
 

@@ -191,18 +191,19 @@ def _diagram(points: NDArray[np.float64], bounds: tuple[float, float, float, flo
     cell lies in the rectangle; such a cell then equals the clipped cell (a reflection is never
     closer than its original to a point of the rectangle).
     """
-    x0, x1, y0, y1 = bounds
+    b = Bounds.of(bounds)
+    x0, x1, y0, y1 = b
     n = points.shape[0]
-    centre = np.array([0.5 * (x0 + x1), 0.5 * (y0 + y1)])
+    centre = np.array(b.centre)
     pts = points - centre
     cb = (x0 - centre[0], x1 - centre[0], y0 - centre[1], y1 - centre[1])
     wall_dist = np.stack([pts[:, 0] - cb[0], cb[1] - pts[:, 0], pts[:, 1] - cb[2], cb[3] - pts[:, 1]])
     if full or n <= 16:
         masks = np.ones((4, n), dtype=bool)
     else:
-        spacing = np.sqrt((x1 - x0) * (y1 - y0) / n)
+        spacing = np.sqrt(b.area / n)
         masks = wall_dist < 2.5 * spacing
-    tol = 1e-9 * max(x1 - x0, y1 - y0)
+    tol = 1e-9 * max(b.width, b.height)
     for _ in range(8):
         allp = _mirrors(pts, cb, masks)
         pairs, seg, _cc = _ridges_delaunay(allp)
@@ -266,7 +267,7 @@ def bounded_voronoi(points: ArrayLike,
     if np.any(p[:, 0] <= b[0]) or np.any(p[:, 0] >= b[1]) or np.any(p[:, 1] <= b[2]) \
             or np.any(p[:, 1] >= b[3]):
         raise ValueError("points must lie strictly inside bounds (use precondition_positions)")
-    total = (b[1] - b[0]) * (b[3] - b[2])
+    total = b.area
     for full in (False, True):
         try:
             vor = _diagram(p, b, full)

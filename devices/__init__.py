@@ -16,7 +16,6 @@ from swarmdeck.devices.controllers import (
     clf_unicycle_position_controller,
     si_position_controller,
 )
-from swarmdeck.devices.gritsbot import unicycle_step, wrap_angle
 from swarmdeck.devices.initial_conditions import max_robots, random_initial_poses
 from swarmdeck.core.kinematics import (
     GritsBotParams,
@@ -25,9 +24,11 @@ from swarmdeck.core.kinematics import (
     saturate,
     si_to_unicycle,
     unicycle_to_si,
+    unicycle_step,
     unicycle_to_wheels,
     wheel_scale,
     wheels_to_unicycle,
+    wrap_angle,
 )
 from swarmdeck.devices.simulated_robots import SimulatedRobots
 from swarmdeck.devices.simulator import ArenaConfig, SimulatedArena

@@ -24,6 +24,8 @@ from numpy.typing import NDArray
 
 from swarmdeck.core.bounds import DEFAULT_BOUNDS, Bounds, check_bounds
 from swarmdeck.core.checks import require_positive
+from swarmdeck.core.constants import LOOKAHEAD, SAFETY_DISTANCE
+from swarmdeck.core.kinematics import lookahead_points
 
 FloatArray = NDArray[np.float64]
 WALLS = ("bottom", "top", "left", "right")
@@ -64,11 +66,11 @@ class ChargerLayout:
         unknown = [w for w in self.walls if w not in WALLS]
         if unknown or len(set(self.walls)) != len(self.walls):
             raise ValueError(f"ChargerLayout.walls must be distinct names from {WALLS}, got {self.walls!r}")
-        x0, x1, y0, y1 = self.bounds
+        b = self.bounds
         reach = self.dock_depth + self.approach_distance + self.approach_stagger
-        if reach >= min(x1 - x0, y1 - y0) / 2:
+        if reach >= min(b.width, b.height) / 2:
             raise ValueError(f"ChargerLayout: dock_depth + approach_distance + approach_stagger ({reach:g} m) "
-                             f"reaches past the middle of the {x1 - x0:g} m x {y1 - y0:g} m arena")
+                             f"reaches past the middle of the {b.width:g} m x {b.height:g} m arena")
 
     @cached_property
     def _table(self) -> tuple[FloatArray, NDArray[np.intp], NDArray[np.intp]]:
@@ -134,14 +136,13 @@ class ChargerLayout:
         out[ok] = k[ok]
         return out
 
-    def dock_blocks(self, lookahead: float = 0.03, safety_distance: float = 0.17) -> NDArray[np.bool_]:
+    def dock_blocks(self, lookahead: float = LOOKAHEAD, safety_distance: float = SAFETY_DISTANCE) -> NDArray[np.bool_]:
         """``(M, M)``: ``[a, b]`` is True when a robot docked on slot a blocks slot b — its look-ahead
         point lies within ``safety_distance`` (+ 5 mm) of the path of b's look-ahead point from b's
         approach pose to its dock (near a corner). Slot b must then be filled before slot a.
         Neighbours on one wall dock in parallel lanes and never block each other."""
         d0, a0 = self.dock_poses(), self.approach_poses()
-        head = np.column_stack((np.cos(d0[:, 2]), np.sin(d0[:, 2])))
-        dock_pt, app_pt = d0[:, :2] + lookahead * head, a0[:, :2] + lookahead * head
+        dock_pt, app_pt = lookahead_points(d0, lookahead), lookahead_points(a0, lookahead)  # a0 keeps d0's heading
         seg = app_pt - dock_pt  # (M, 2) lane of each slot's point
         rel = dock_pt[:, None, :] - dock_pt[None, :, :]  # [a, b]: a's docked point relative to b's lane start
         t = np.clip(np.einsum("abd,bd->ab", rel, seg) / np.einsum("bd,bd->b", seg, seg)[None, :], 0.0, 1.0)
@@ -180,7 +181,7 @@ class ChargerLayout:
             k = int(np.flatnonzero(out)[0])
             raise ValueError(f"charger slot {k} at ({docks[k, 0]:.3f}, {docks[k, 1]:.3f}) m is unreachable: "
                              f"it lies outside the arena {tuple(bounds)}")
-        pts = docks[:, :2] + lookahead * np.column_stack((np.cos(docks[:, 2]), np.sin(docks[:, 2])))
+        pts = lookahead_points(docks, lookahead)
         if len(pts) > 1:
             from scipy.spatial import cKDTree
 

@@ -13,8 +13,8 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from swarmdeck.core.kinematics import saturate, si_to_unicycle
-from swarmdeck.devices.gritsbot import wrap_angle
+from swarmdeck.core.constants import LOOKAHEAD
+from swarmdeck.core.kinematics import saturate, si_to_unicycle, wrap_angle
 
 FloatArray = NDArray[np.float64]
 
@@ -106,7 +106,7 @@ class HybridPoseController:
     position_error: float = 0.03
     position_epsilon: float = 0.01
     rotation_error: float = 0.05
-    lookahead: float = 0.03
+    lookahead: float = LOOKAHEAD
     gain: float = 1.0
     _approach: NDArray[np.bool_] | None = field(default=None, repr=False)
 

@@ -81,9 +81,9 @@ def random_initial_poses(
             d = np.linalg.norm(sites[:, None, :] - others[None, :, :], axis=2).min(axis=1)
             sites = sites[d >= min_separation + jr]  # any jitter keeps >= min_separation
     if n > len(sites):
-        x0, x1, y0, y1 = bounds
+        b = Bounds.of(bounds)
         raise ValueError(
-            f"{n} robots do not fit in the {x1 - x0:.2f} m x {y1 - y0:.2f} m arena with "
+            f"{n} robots do not fit in the {b.width:.2f} m x {b.height:.2f} m arena with "
             f"{min_separation} m separation: at most {len(sites)}; use a larger arena or fewer robots"
         )
     chosen = sites[rng.choice(len(sites), size=n, replace=False)]

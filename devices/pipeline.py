@@ -192,7 +192,7 @@ def _remap(diag: Any, idx: NDArray[np.intp], n: int) -> Any:
 
 def next_points(poses: ArrayLike, v: ArrayLike, w: ArrayLike, robot: GritsBotParams, dt: float) -> FloatArray:
     """``(N, 2)`` look-ahead points after one period ``dt`` (s) of ``(v, ω)``, m: the exact arc the simulator drives
-    (:func:`~swarmdeck.devices.gritsbot.unicycle_step`; chord = v·dt·sinc(a/2) along the mean heading θ + a/2,
+    (:func:`~swarmdeck.core.kinematics.unicycle_step`; chord = v·dt·sinc(a/2) along the mean heading θ + a/2,
     a = ω·dt), then ℓ ahead along the new heading."""
     poses = np.asarray(poses, dtype=float)
     a = np.asarray(w, dtype=float) * dt

@@ -15,9 +15,9 @@ from numpy.typing import ArrayLike, NDArray
 
 from swarmdeck.core.checks import require_in_range
 from swarmdeck.core.bounds import DEFAULT_BOUNDS, Bounds, check_bounds
+from swarmdeck.core.constants import CONTROL_PERIOD
 from swarmdeck.devices.clock import RealTimePacer, VirtualClock
-from swarmdeck.core.kinematics import GritsBotParams, limit_unicycle
-from swarmdeck.devices.gritsbot import unicycle_step, wrap_angle
+from swarmdeck.core.kinematics import GritsBotParams, limit_unicycle, unicycle_step, wrap_angle
 from swarmdeck.devices.initial_conditions import random_initial_poses
 from swarmdeck.devices.validation import ValidationReport, ValidationRules
 
@@ -34,7 +34,7 @@ class ArenaConfig:
     """
 
     bounds: Bounds = DEFAULT_BOUNDS
-    dt: float = 0.033
+    dt: float = CONTROL_PERIOD
     real_time: bool = False
     seed: int | None = None
 
@@ -44,11 +44,11 @@ class ArenaConfig:
 
     @property
     def width(self) -> float:
-        return self.bounds[1] - self.bounds[0]
+        return Bounds.of(self.bounds).width
 
     @property
     def height(self) -> float:
-        return self.bounds[3] - self.bounds[2]
+        return Bounds.of(self.bounds).height
 
 
 def check_poses(poses: ArrayLike, name: str = "initial_conditions", n: int | None = None) -> NDArray[np.float64]:

@@ -15,6 +15,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from swarmdeck.core.bounds import Bounds
+from swarmdeck.core.constants import COLLISION_DISTANCE, COLLISION_SHIFT
 from swarmdeck.core.kinematics import lookahead_points
 
 
@@ -30,8 +31,8 @@ class ValidationRules:
         max_time_factor: the verifier rejects runs longer than this × declared duration.
     """
 
-    collision_shift: float = 0.025
-    collision_distance: float = 0.135
+    collision_shift: float = COLLISION_SHIFT
+    collision_distance: float = COLLISION_DISTANCE
     max_violation_steps: int = 100
     max_time_factor: float = 1.5
 

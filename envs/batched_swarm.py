@@ -5,7 +5,7 @@ swarm, on all E·N robots at once: :func:`swarmdeck.devices.pipeline.certify` (n
 the look-ahead map, the wheel limits by one scale per robot), the distributed barrier for every
 swarm (:class:`~swarmdeck.envs.batched_barrier.BatchedDistributedBarrier`; a swarm whose barrier
 fails stops, the others carry on), the simulator's wheel limits and the exact unicycle step
-(:func:`swarmdeck.devices.gritsbot.unicycle_step`). So swarm e equals an ``Arena`` with the
+(:func:`swarmdeck.core.kinematics.unicycle_step`). So swarm e equals an ``Arena`` with the
 distributed barrier (``swarmdeck.envs.parallel_env(..., barrier="distributed")``) fed the same
 commands, bit for bit. No per-robot Python loop; neighbour queries by one k-d tree.
 
@@ -20,7 +20,7 @@ from numpy.typing import NDArray
 
 from swarmdeck.core.bounds import DEFAULT_BOUNDS, Bounds
 from swarmdeck.core.kinematics import GritsBotParams, limit_unicycle, lookahead_points, unicycle_to_si
-from swarmdeck.devices.gritsbot import unicycle_step
+from swarmdeck.core.kinematics import unicycle_step
 from swarmdeck.devices.pipeline import certify
 from swarmdeck.devices.validation import ValidationRules
 from swarmdeck.envs.batched_barrier import BatchedDistributedBarrier

@@ -19,6 +19,8 @@ from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
+from swarmdeck.core.bounds import Bounds
+
 
 from swarmdeck.envs.neighbours import nearest_neighbours
 
@@ -57,8 +59,9 @@ def observe(poses: FloatArray, points: FloatArray, bounds: tuple[float, float, f
 def observation_bounds(k: int, task: str, density: bool, bounds: tuple[float, float, float, float]
                        ) -> tuple[NDArray[np.float32], NDArray[np.float32]]:
     """(low, high) of one observation: positions within the arena, differences within its diagonal."""
-    x0, x1, y0, y1 = bounds
-    span = float(np.hypot(x1 - x0, y1 - y0))
+    b = Bounds.of(bounds)
+    x0, x1, y0, y1 = b
+    span = float(np.hypot(b.width, b.height))
     m = max(abs(x0), abs(x1), abs(y0), abs(y1))
     lo = [-m, -m, -1.0, -1.0] + [-span] * (2 * k) + [-span] * 4
     hi = [m, m, 1.0, 1.0] + [span] * (2 * k) + [span] * 4

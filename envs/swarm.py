@@ -40,6 +40,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from swarmdeck.core.bounds import DEFAULT_BOUNDS, Bounds
+from swarmdeck.core.constants import CONTROL_PERIOD
 from swarmdeck.envs.neighbours import min_distance
 from swarmdeck.envs.observations import observation_bounds, observation_size, observe
 from swarmdeck.envs.tasks import (
@@ -77,7 +78,7 @@ class EnvConfig:
     safety: bool = True
     max_steps: int = 600
     bounds: Bounds = DEFAULT_BOUNDS
-    dt: float = 0.033
+    dt: float = CONTROL_PERIOD
     formation_radius: float = 0.6
     n_bumps: int = 2
     barrier: str = "centralised"

@@ -15,6 +15,7 @@ from typing import Any
 
 import numpy as np
 
+from swarmdeck.core.constants import SAFETY_DISTANCE
 from swarmdeck.coverage import CoverageConfig, CoverageController, Density, moving_density
 from swarmdeck.devices import Arena
 
@@ -27,7 +28,7 @@ def coverage_experiment(arena: Arena, density: Density, law: str = "tvd-d1",
     the ticks whose coverage step succeeded, the packing ``warnings`` seen and the number of
     ``failures`` (ticks whose coverage step failed; the robots were stopped then).
     """
-    safety_distance = getattr(getattr(arena.safety, "config", None), "safety_distance", 0.17)
+    safety_distance = getattr(getattr(arena.safety, "config", None), "safety_distance", SAFETY_DISTANCE)
     cfg = CoverageConfig(law=law, kappa=kappa, max_speed=arena.params.max_speed,
                          bounds=tuple(arena.config.bounds), safety_distance=safety_distance)
     ctrl = CoverageController(cfg, density)

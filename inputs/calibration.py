@@ -51,14 +51,14 @@ class Calibration:
 
     def matrix(self) -> tuple[np.ndarray, np.ndarray]:
         """``(A (2,2), b (2,))`` with ``p = A @ (u, v) + b``; velocities map by ``A``."""
-        x0, x1, y0, y1 = self.bounds
+        b = Bounds.of(self.bounds)
         down = np.array([[1.0, 0.0], [0.0, -1.0]])  # (u, v) y-down -> y-up
         flips = np.diag([-1.0 if self.flip_x else 1.0, -1.0 if self.flip_y else 1.0])
         c, s = math.cos(self.rotation), math.sin(self.rotation)
         rot = np.array([[c, -s], [s, c]])
-        sc = np.diag([self.scale[0] * (x1 - x0), self.scale[1] * (y1 - y0)])
+        sc = np.diag([self.scale[0] * b.width, self.scale[1] * b.height])
         a = sc @ rot @ flips @ down
-        centre = np.array([(x0 + x1) / 2 + self.offset[0], (y0 + y1) / 2 + self.offset[1]])
+        centre = np.array([b.centre[0] + self.offset[0], b.centre[1] + self.offset[1]])
         b = centre - a @ np.array([0.5, 0.5])
         return a, b
 

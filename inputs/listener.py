@@ -12,12 +12,15 @@ consistent snapshot.
 from __future__ import annotations
 
 import fnmatch
+import functools
 import math
 import socket
 import struct
 import threading
 import time
 from collections.abc import Callable
+
+from swarmdeck.core.service_thread import ServiceThread
 
 from .calibration import Calibration
 from .config import ListenerConfig
@@ -26,6 +29,7 @@ from .contacts import ContactTable, HealthBook
 from .oscparse import MalformedDatagram, parse_datagram
 from .pointstream import PointStreamDecoder
 from .tuio import TuioAssembler
+
 
 #: ``hook(data, peer, transport, t)``, called for every datagram before parsing.
 DatagramHook = Callable[[bytes, object, str, float], None]
@@ -267,13 +271,12 @@ class UdpListener(InputSource):
         super().__init__(config, on_datagram=on_datagram, wallclock=wallclock)
         self._clock = clock
         self._sock: socket.socket | None = None
-        self._thread: threading.Thread | None = None
-        self._stop = threading.Event()
+        self._service = ServiceThread(self._run, "swarmdeck-udp")
         self.address: tuple[str, int] | None = None
 
     def start(self) -> "UdpListener":
         """Bind the socket and start the receive thread (idempotent)."""
-        if self._thread is not None:
+        if self._service.started:
             return self
         sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
         try:
@@ -288,25 +291,25 @@ class UdpListener(InputSource):
         self.address = sock.getsockname()[:2]
         with self._lock:
             self._health.name = f"listener {self.config.name} {peer_name(self.config.transport, self.address)}"
-        self._stop.clear()
-        self._thread = threading.Thread(target=self._run, name=f"swarmdeck-udp-{self.address[1]}", daemon=True)
-        self._thread.start()
+        self._service.name = f"swarmdeck-udp-{self.address[1]}"
+        self._service.start()
         return self
 
     def _run(self) -> None:
         sock = self._sock
         assert sock is not None
-        while not self._stop.is_set():
+        svc = self._service
+        while not svc.stopping:
             try:
                 data, addr = sock.recvfrom(65536)
             except TimeoutError:
                 continue
             except OSError as exc:
-                if self._stop.is_set():
+                if svc.stopping:
                     break
                 with self._lock:
                     self._health.error(self._health.name, "listener", "socket_error", str(exc))
-                self._stop.wait(0.05)
+                svc.wait(0.05)
                 continue
             self.feed(data, addr, self._clock(), "udp")
 
@@ -324,10 +327,7 @@ class UdpListener(InputSource):
 
     def close(self) -> None:
         """Stop the thread and close the socket (idempotent)."""
-        self._stop.set()
-        if self._thread is not None:
-            self._thread.join(timeout=2.0)
-            self._thread = None
+        self._service.stop()
         if self._sock is not None:
             self._sock.close()
             self._sock = None
@@ -344,10 +344,10 @@ class TcpListener(InputSource):
         super().__init__(config, on_datagram=on_datagram, wallclock=wallclock)
         self._clock = clock
         self._sock: socket.socket | None = None
-        self._threads: list[threading.Thread] = []
+        self._acceptor = ServiceThread(self._accept, "swarmdeck-tcp")
+        self._readers: list[ServiceThread] = []
         self._conns: set[socket.socket] = set()
         self._conn_lock = threading.Lock()
-        self._stop = threading.Event()
         self.address: tuple[str, int] | None = None
 
     def start(self) -> "TcpListener":
@@ -368,38 +368,36 @@ class TcpListener(InputSource):
         self.address = sock.getsockname()[:2]
         with self._lock:
             self._health.name = f"listener {self.config.name} {peer_name(self.config.transport, self.address)}"
-        self._stop.clear()
-        th = threading.Thread(target=self._accept, name=f"swarmdeck-tcp-{self.address[1]}", daemon=True)
-        self._threads.append(th)
-        th.start()
+        self._acceptor.name = f"swarmdeck-tcp-{self.address[1]}"
+        self._acceptor.start()
         return self
 
     def _accept(self) -> None:
-        while not self._stop.is_set():
+        svc = self._acceptor
+        while not svc.stopping:
             try:
                 conn, addr = self._sock.accept()  # type: ignore[union-attr]
             except TimeoutError:
                 continue
             except OSError:
-                if self._stop.is_set():
+                if svc.stopping:
                     break
-                self._stop.wait(0.05)
+                svc.wait(0.05)
                 continue
             conn.settimeout(0.05)
-            self._threads = [th for th in self._threads if th.is_alive()]
             with self._conn_lock:
+                self._readers = [r for r in self._readers if r.alive]
                 self._conns.add(conn)
-            th = threading.Thread(target=self._read, args=(conn, addr), daemon=True,
-                                  name=f"swarmdeck-tcp-{addr[0]}:{addr[1]}")
-            self._threads.append(th)
-            th.start()
+                reader = ServiceThread(functools.partial(self._read, conn, addr), f"swarmdeck-tcp-{addr[0]}:{addr[1]}")
+                self._readers.append(reader)
+            reader.start()
 
     def _read(self, conn: socket.socket, addr: tuple) -> None:
         buf = bytearray()
         pname = sender_name("tcp", addr)
         limit = self.config.max_datagram
         try:
-            while not self._stop.is_set():
+            while not self._acceptor.stopping:  # one stop for the acceptor and every connection
                 try:
                     chunk = conn.recv(65536)
                 except TimeoutError:
@@ -438,10 +436,11 @@ class TcpListener(InputSource):
 
     def close(self) -> None:
         """Stop all threads, close the connections and the listening socket."""
-        self._stop.set()
-        for th in self._threads:
-            th.join(timeout=2.0)
-        self._threads = []
+        self._acceptor.stop()
+        with self._conn_lock:
+            readers, self._readers = self._readers, []
+        for r in readers:
+            r.stop()
         with self._conn_lock:
             for c in self._conns:
                 c.close()

@@ -22,6 +22,7 @@ from typing import Literal
 
 from swarmdeck.core.bounds import DEFAULT_BOUNDS, Bounds
 from swarmdeck.core.config import floats, from_mapping
+from swarmdeck.core.constants import CONTROL_PERIOD, MAX_LINEAR_SPEED, SAFETY_DISTANCE
 
 
 def _real(owner, name: str, value, lower: float | None = None, strict: bool = False,
@@ -97,14 +98,14 @@ class BarrierConfig:
         (e.g. docked robots) only — the hard layer of a bypassed run (:mod:`safety.guard`).
     """
 
-    safety_distance: float = 0.17
+    safety_distance: float = SAFETY_DISTANCE
     gamma: float = 100.0
     class_k: Literal["cubic", "linear"] = "cubic"
-    max_speed: float = 0.2
+    max_speed: float = MAX_LINEAR_SPEED
     bounds: Bounds = DEFAULT_BOUNDS
     wall_margin: float | None = None
     wall_gain: float = 0.4
-    dt: float = 0.033
+    dt: float = CONTROL_PERIOD
     recovery: bool = True
     recovery_speed: float = 0.05
     recovery_depth: float = 0.03
@@ -160,9 +161,9 @@ class BarrierConfig:
             _real(self, "bounds", v)
         if self.recovery_depth >= self.safety_distance:
             raise ValueError("BarrierConfig: recovery_depth must be < safety_distance")
-        x_min, x_max, y_min, y_max = (float(v) for v in self.bounds)
+        b = Bounds(*(float(v) for v in self.bounds))
         m = self.margin
-        if m < 0 or x_max - x_min <= 2 * m or y_max - y_min <= 2 * m:
+        if m < 0 or b.width <= 2 * m or b.height <= 2 * m:
             raise ValueError(
                 f"BarrierConfig: bounds {self.bounds} leave no room inside the wall margin {m} m"
             )

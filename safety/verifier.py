@@ -24,6 +24,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 from scipy.spatial import cKDTree
+from swarmdeck.core.constants import CONTROL_PERIOD, MAX_LINEAR_SPEED, ROBOT_DIAMETER
+
 
 
 def first_contact_times(r0: np.ndarray, vr: np.ndarray, distance: float, dt: float) -> np.ndarray:
@@ -167,7 +169,8 @@ class ContactLog:
 
 
 def verify(x0: np.ndarray, controller: Callable[[np.ndarray, float], np.ndarray], steps: int,
-           dt: float = 0.033, contact_distance: float = 0.11, v_max: float = 0.2) -> VerificationReport:
+           dt: float = CONTROL_PERIOD, contact_distance: float = ROBOT_DIAMETER,
+           v_max: float = MAX_LINEAR_SPEED) -> VerificationReport:
     """Run ``controller(x (N, 2), t) -> u (N, 2)`` from x0 for ``steps`` steps and score it.
 
     The controller's commands are used as given (wrap a SafetyFilter inside it to

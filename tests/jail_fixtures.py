@@ -1,7 +1,7 @@
 """Running a script body in each jail, for the jail-hardening suites.
 
-Import into a test module with ``from jail_fixtures import jail_run  # noqa: F401``: the
-fixture is parametrized over both jails ("unshare", "bwrap") and returns ``go(body, limits=…,
+The fixture ``jail_run`` is registered for every test by ``pytest_plugins`` in ``tests/conftest.py``; it is
+parametrized over both jails ("unshare", "bwrap") and returns ``go(body, limits=…,
 jail_options=…) -> SandboxOutcome`` (the body is dedented, runs with 2 robots for 0.2 s).
 """
 import textwrap

@@ -1,6 +1,6 @@
 """A real mosquitto broker for the MQTT tests: free loopback port, generated config, torn down after.
 
-Import the fixture into a test module with ``from mqtt_broker import mosquitto  # noqa: F401``.
+The fixture ``mosquitto`` is registered for every test by ``pytest_plugins`` in ``tests/conftest.py``.
 The broker listens on 127.0.0.1 only, allows anonymous clients and keeps no
 persistence. :meth:`Broker.kill` and :meth:`Broker.start` let a test take it
 down and bring it back on the same port.

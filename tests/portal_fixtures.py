@@ -1,8 +1,9 @@
 """Helpers for the portal's tests: a portal served by real uvicorn on loopback, in this process or as
 ``swarmdeck server`` in its own process, on a real SQLite file in the test's folder.
 
-Import into a test module with ``from portal_fixtures import portal  # noqa: F401`` (in-process) or use
-:func:`start_server` (a child process, for kill -9 and the CLI).
+The fixture ``portal`` (in-process) is registered for every test by ``pytest_plugins`` in ``tests/conftest.py``;
+import the helpers (``sign_in``, ``wait_for_state``, …) by name, or use :func:`start_server` (a child process,
+for kill -9 and the CLI).
 """
 from __future__ import annotations
 

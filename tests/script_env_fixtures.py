@@ -1,7 +1,8 @@
 """A tiny script environment for the tests of ``--script-env``: a real virtual environment (no pip) holding one
 pure-Python package, ``labtools`` 1.2, and a module ``leaky`` that imports something outside the environment.
 
-Import with ``from script_env_fixtures import env  # noqa: F401`` (module-scoped: made once per test module).
+The fixture ``env`` is registered for every test by ``pytest_plugins`` in ``tests/conftest.py`` (module-scoped:
+made once per test module).
 """
 import os
 import shutil
@@ -42,13 +43,6 @@ def make_env(with_package: bool = True) -> Path:
     for path in [root, *root.rglob("*")]:
         os.chmod(path, os.stat(path).st_mode | stat.S_IROTH | (stat.S_IXOTH if path.is_dir() else 0))
     return root / "env"
-
-
-@pytest.fixture(scope="module")
-def env():
-    path = make_env()
-    yield path
-    shutil.rmtree(path.parent, ignore_errors=True)
 
 
 @pytest.fixture(scope="module")

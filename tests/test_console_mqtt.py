@@ -5,7 +5,7 @@ import time
 
 import numpy as np
 import pytest
-from mqtt_broker import mosquitto, wait_until  # noqa: F401
+from mqtt_broker import wait_until
 
 from swarmdeck.console.runtime.hardware import mqtt_robots
 from swarmdeck.console.runtime.loop import ControlLoop, LoopConfig

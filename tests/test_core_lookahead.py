@@ -2,8 +2,7 @@
 import numpy as np
 from hypothesis import given, settings, strategies as st
 
-from swarmdeck.core.kinematics import lookahead_points, si_to_unicycle, unicycle_to_si
-from swarmdeck.devices.gritsbot import unicycle_step
+from swarmdeck.core.kinematics import lookahead_points, si_to_unicycle, unicycle_step, unicycle_to_si
 
 
 @settings(max_examples=100, deadline=None)

@@ -7,8 +7,7 @@ from hypothesis import strategies as st
 
 from swarmdeck.devices.battery import BatteryParams
 from swarmdeck.devices.net.firmware import FirmwareParams, FleetState
-from swarmdeck.core.kinematics import GritsBotParams
-from swarmdeck.devices.gritsbot import unicycle_step
+from swarmdeck.core.kinematics import GritsBotParams, unicycle_step
 
 
 def straight_fleet(n: int = 1) -> FleetState:

@@ -1,4 +1,4 @@
-"""Closed-form checks of the exact unicycle step (devices.gritsbot.unicycle_step)."""
+"""Closed-form checks of the exact unicycle step (core.kinematics.unicycle_step)."""
 import numpy as np
 from hypothesis import given, settings, strategies as st
 

@@ -4,7 +4,7 @@ import json
 
 import pytest
 from mqtt_broker import wait_until
-from portal_fixtures import SPIN, portal, wait_for_state  # noqa: F401
+from portal_fixtures import SPIN, wait_for_state
 
 from swarmdeck.console.cli import main
 from swarmdeck.console.jobs.confinement import probe

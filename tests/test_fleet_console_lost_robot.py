@@ -7,7 +7,7 @@ import time
 
 import numpy as np
 import pytest
-from mqtt_broker import mosquitto, wait_until  # noqa: F401
+from mqtt_broker import wait_until
 
 from swarmdeck.console.cli import main
 from swarmdeck.console.runtime import fleet_upkeep as fu

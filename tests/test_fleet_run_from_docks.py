@@ -6,7 +6,7 @@ import pytest
 
 from swarmdeck.console.cli import main
 from swarmdeck.devices import Arena, ArenaConfig, ExperimentFinished
-from swarmdeck.devices.gritsbot import wrap_angle
+from swarmdeck.core.kinematics import wrap_angle
 from swarmdeck.devices.rps.robotarium import Robotarium
 
 SCRIPT = """\

@@ -5,7 +5,7 @@ from hypothesis import given, settings, strategies as st
 
 from swarmdeck.devices.fleet import AssignmentError, FleetManager, SetupFailed
 from swarmdeck.devices.fleet.setup import ACCEPT_HEADING, ACCEPT_POSITION
-from swarmdeck.devices.gritsbot import wrap_angle
+from swarmdeck.core.kinematics import wrap_angle
 from swarmdeck.devices.initial_conditions import random_initial_poses
 from swarmdeck.devices.simulator import ArenaConfig
 

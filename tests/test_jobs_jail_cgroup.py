@@ -4,7 +4,7 @@ operator allowed it. Each test records which cgroup version it exercised (``cgro
 import os
 
 import pytest
-from jail_fixtures import jail_run, plant  # noqa: F401
+from jail_fixtures import plant
 
 from swarmdeck.console.jobs import cgroups
 from swarmdeck.console.jobs.confinement import ConfinementUnavailable, SandboxLimits

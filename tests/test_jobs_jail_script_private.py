@@ -6,7 +6,7 @@ import stat
 import tempfile
 from pathlib import Path
 
-from jail_fixtures import jail_run, plant  # noqa: F401
+from jail_fixtures import plant
 
 
 def _copies() -> list[Path]:

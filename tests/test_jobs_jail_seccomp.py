@@ -5,7 +5,6 @@ The script reports each call's errno on its log; the test asserts from the trust
 import platform
 
 import pytest
-from jail_fixtures import jail_run  # noqa: F401
 
 from swarmdeck.console.jobs.seccomp import filter_program
 

@@ -6,7 +6,7 @@ import textwrap
 
 import numpy as np
 import pytest
-from portal_fixtures import portal, wait_for_state  # noqa: F401
+from portal_fixtures import wait_for_state
 
 from swarmdeck.console.jobs.confinement import probe
 from swarmdeck.console.jobs.executors import SerialExecutor
@@ -14,7 +14,7 @@ from swarmdeck.console.jobs.start_poses import MIN_SEPARATION, arena_start, chec
 from swarmdeck.console.jobs.verification import ACCEPTED, BYPASS, REJECTED, VerificationConfig, verify
 from swarmdeck.console.portal.workers import VerificationWorkers
 from swarmdeck.devices.fleet.setup import ACCEPT_HEADING, ACCEPT_POSITION
-from swarmdeck.devices.gritsbot import wrap_angle
+from swarmdeck.core.kinematics import wrap_angle
 
 confined = pytest.mark.skipif(probe() is not None, reason=f"no confinement here: {probe()}")
 

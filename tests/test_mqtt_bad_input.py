@@ -5,7 +5,7 @@ import json
 
 import numpy as np
 import pytest
-from mqtt_broker import Collector, free_port, mosquitto, wait_until  # noqa: F401
+from mqtt_broker import Collector, free_port, wait_until
 
 from swarmdeck.devices.net.mqtt_config import parse_broker_url
 from swarmdeck.devices.net.wire import encode_poses, encode_status

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from mqtt_broker import mosquitto, wait_until  # noqa: F401
+from mqtt_broker import wait_until
 
 from swarmdeck.devices import lookahead_points, random_initial_poses, si_to_unicycle
 from swarmdeck.devices.net.fleet import FleetNode

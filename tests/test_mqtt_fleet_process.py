@@ -7,10 +7,10 @@ import time
 
 import numpy as np
 import pytest
-from mqtt_broker import mosquitto, wait_until  # noqa: F401
+from mqtt_broker import wait_until
 
 from swarmdeck.devices import Arena
-from swarmdeck.devices.gritsbot import unicycle_step, wrap_angle
+from swarmdeck.core.kinematics import unicycle_step, wrap_angle
 from swarmdeck.devices.net.mqtt_config import parse_broker_url
 from swarmdeck.devices.net.console_robots import NetworkRobots
 from swarmdeck.devices.net.transport_mqtt import LinkTimeouts, MqttTransport

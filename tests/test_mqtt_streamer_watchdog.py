@@ -5,7 +5,7 @@ import json
 
 import numpy as np
 import pytest
-from mqtt_broker import Collector, mosquitto, wait_until  # noqa: F401
+from mqtt_broker import Collector, wait_until
 
 from swarmdeck.devices import ArenaConfig, SimulatedArena
 from swarmdeck.devices.clock import VirtualClock

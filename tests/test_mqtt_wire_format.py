@@ -10,7 +10,7 @@ import json
 
 import numpy as np
 import pytest
-from mqtt_broker import Collector, mosquitto, wait_until  # noqa: F401
+from mqtt_broker import Collector, wait_until
 
 from swarmdeck.devices.net.fleet import FleetNode
 from swarmdeck.devices.net.mqtt_config import parse_broker_url

@@ -3,7 +3,6 @@ script, stylesheet and icon the page names is on the portal's own origin, and se
 a Content-Security-Policy that allows only this origin; /openapi.json documents the API."""
 from html.parser import HTMLParser
 
-from portal_fixtures import portal  # noqa: F401
 
 
 class Refs(HTMLParser):

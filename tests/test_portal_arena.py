@@ -7,7 +7,7 @@ import csv
 import json
 
 import pytest
-from portal_fixtures import SPIN, portal, wait_for_state  # noqa: F401
+from portal_fixtures import wait_for_state
 from mqtt_broker import wait_until
 
 from swarmdeck.console.jobs.confinement import probe

@@ -8,7 +8,7 @@ import threading
 import zipfile
 
 import pytest
-from portal_fixtures import SPIN, make_portal, manifest, portal  # noqa: F401
+from portal_fixtures import SPIN, make_portal, manifest
 
 
 @pytest.fixture(scope="module")

@@ -5,7 +5,7 @@ report beside the approve/refuse buttons, each decision is audited, and a databa
 waiting for the arena with a bypass nobody approved) is migrated back to waiting for the decision."""
 import sqlite3
 
-from portal_fixtures import portal, sign_in  # noqa: F401
+from portal_fixtures import sign_in
 
 from swarmdeck.console.portal.db import MIGRATIONS, Database
 from swarmdeck.console.portal.service import BYPASS_VERDICT, BYPASS_WAIT

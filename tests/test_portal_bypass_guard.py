@@ -9,7 +9,7 @@ import json
 import numpy as np
 import pytest
 from mqtt_broker import wait_until
-from portal_fixtures import portal, wait_for_state  # noqa: F401
+from portal_fixtures import wait_for_state
 
 from swarmdeck.console.cli._client import job_line
 from swarmdeck.console.jobs.confinement import probe

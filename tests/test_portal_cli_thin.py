@@ -7,7 +7,7 @@ import json
 import subprocess
 import sys
 
-from portal_fixtures import CLI, portal  # noqa: F401
+from portal_fixtures import CLI
 
 HEAVY = ("numpy", "scipy", "viser", "cv2")
 PROBE = ("import json, sys\n"

@@ -5,7 +5,7 @@ alerts. Forced with a bypass the operator approved on an arena whose guard the t
 import json
 
 import pytest
-from portal_fixtures import portal, sign_in, wait_for_state  # noqa: F401
+from portal_fixtures import sign_in, wait_for_state
 
 from swarmdeck.console.cli._client import job_line
 from swarmdeck.console.jobs.confinement import probe

@@ -9,7 +9,7 @@ from pathlib import Path
 import av
 import pytest
 from mqtt_broker import wait_until
-from portal_fixtures import SPIN, manifest, portal, wait_for_state  # noqa: F401
+from portal_fixtures import SPIN, manifest, wait_for_state
 from recording_synth import write_synthetic_session
 
 from swarmdeck.console.cli import main

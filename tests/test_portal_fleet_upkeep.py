@@ -8,7 +8,7 @@ import math
 import numpy as np
 import pytest
 from mqtt_broker import wait_until
-from portal_fixtures import portal, sign_in, wait_for_state  # noqa: F401
+from portal_fixtures import sign_in, wait_for_state
 
 from swarmdeck.console.jobs.confinement import probe
 from swarmdeck.console.portal.runner import ArenaRunner, ArenaSettings

@@ -1,7 +1,7 @@
 """Job ids from outside are validated: an id SQLite cannot hold (``GET /api/jobs/99999999999999999999999``), zero or a
 negative one is "no job" (404) on every API route and page that takes one — never a 500."""
 import pytest
-from portal_fixtures import portal, sign_in  # noqa: F401
+from portal_fixtures import sign_in
 
 IDS = ("99999999999999999999999", str(2 ** 63), "0", "-1", str(-(2 ** 70)))
 

@@ -10,8 +10,8 @@ import sys
 
 import numpy as np
 import pytest
-from mqtt_broker import mosquitto, wait_until  # noqa: F401
-from portal_fixtures import portal, wait_for_state  # noqa: F401
+from mqtt_broker import wait_until
+from portal_fixtures import wait_for_state
 
 from swarmdeck.console.jobs.confinement import probe
 from swarmdeck.console.portal.runner import ArenaRunner, ArenaSettings

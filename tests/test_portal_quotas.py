@@ -2,7 +2,7 @@
 refused, 429, naming the limit and the count), verification CPU a day (429), results on disk (403). Other
 researchers and operators are not held up by one researcher's limit."""
 import pytest
-from portal_fixtures import make_portal, portal, sign_in  # noqa: F401
+from portal_fixtures import make_portal, sign_in
 
 from swarmdeck.console.jobs.confinement import probe
 from swarmdeck.console.portal.quotas import Quotas

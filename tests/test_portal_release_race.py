@@ -5,7 +5,6 @@ with robots still on the floor: the robots return to the chargers first, then th
 next job at once: its set-up began from wherever the robots had stopped. tests/test_portal_fleet_upkeep.py hit it
 about one run in ten.)"""
 import pytest
-from portal_fixtures import portal  # noqa: F401
 
 from swarmdeck.console.jobs.confinement import probe
 from swarmdeck.console.portal.runner import ArenaRunner, ArenaSettings

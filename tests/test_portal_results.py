@@ -9,7 +9,7 @@ import subprocess
 
 import pytest
 from mqtt_broker import wait_until
-from portal_fixtures import CLI, portal, sign_in, wait_for_state  # noqa: F401
+from portal_fixtures import CLI, sign_in, wait_for_state
 
 from swarmdeck.console.jobs.confinement import probe
 from swarmdeck.console.portal.runner import ArenaRunner, ArenaSettings

@@ -6,7 +6,7 @@ import subprocess
 
 import pytest
 from portal_fixtures import CLI, CSRF, add_user, start_server, wait_for_state
-from script_env_fixtures import USES_THE_ENV, env  # noqa: F401
+from script_env_fixtures import USES_THE_ENV
 
 import httpx
 

@@ -5,7 +5,7 @@ own key with ``X-Forwarded-For`` unless the server was told to trust the proxy i
 (``swarmdeck server --trust-proxy ADDR``); then the proxy's word is the client's address."""
 import httpx
 import pytest
-from portal_fixtures import CSRF, make_portal, portal  # noqa: F401
+from portal_fixtures import CSRF, make_portal
 
 from swarmdeck.console.portal.app import HttpSettings
 

@@ -11,7 +11,7 @@ import re
 import subprocess
 import zipfile
 
-from portal_fixtures import CLI, SPIN, portal, sign_in  # noqa: F401
+from portal_fixtures import CLI, SPIN, sign_in
 
 GOOD = {"name": "spin", "robots": "2", "duration": "1"}
 

@@ -5,7 +5,6 @@ import json
 import time
 
 import pytest
-from portal_fixtures import portal  # noqa: F401
 
 from swarmdeck.console.cli import main
 

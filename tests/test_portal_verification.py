@@ -1,7 +1,7 @@
 """Verification workers behind the API: a script that fails verification is rejected with the reason and its
 report; a good one is approved and queued for the arena at once, or waits for an operator under manual approval."""
 import pytest
-from portal_fixtures import CRASH, SPIN, portal, wait_for_state  # noqa: F401
+from portal_fixtures import CRASH, SPIN, wait_for_state
 
 from swarmdeck.console.jobs.confinement import probe
 from swarmdeck.console.jobs.executors import SerialExecutor

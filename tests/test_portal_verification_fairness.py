@@ -4,7 +4,7 @@ declared — each end at once with the reason while another researcher's job is 
 import textwrap
 
 import pytest
-from portal_fixtures import SPIN, portal, wait_for_state  # noqa: F401
+from portal_fixtures import SPIN, wait_for_state
 from test_jobs_verify_budget import FIVE_HUNDRED, STALE_FOREVER
 
 from swarmdeck.console.jobs.confinement import probe

@@ -25,7 +25,7 @@ from hypothesis.extra.numpy import arrays
 from swarmdeck.console.recording.codec import MissingReference, decode_frame, derived_safe, encode_frame
 from swarmdeck.console.recording.prediction import predict_poses, sin_cos
 from swarmdeck.console.runtime.frame import Frame
-from swarmdeck.devices.gritsbot import unicycle_step, wrap_angle
+from swarmdeck.core.kinematics import unicycle_step, wrap_angle
 
 DT = 0.033
 

@@ -125,7 +125,7 @@ def test_webcam_that_cannot_open_reports_and_retries() -> None:
         for _ in range(200):                   # poll the thread's status (no timing assertion)
             if "cannot open" in cam.status:
                 break
-            cam._stop.wait(0.01)
+            cam._service.wait(0.01)
         assert "cannot open" in cam.status and cam.read(0.0) is None and not cam.ok
     finally:
         cam.close()

@@ -87,7 +87,7 @@ def test_threaded_capture_hands_out_only_the_newest_frame(recording) -> None:
         for _ in range(3000):
             if pred():
                 return True
-            cam._stop.wait(0.01)
+            cam._service.wait(0.01)
         return False
 
     try:

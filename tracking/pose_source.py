@@ -18,6 +18,7 @@ from pathlib import Path
 import cv2
 import numpy as np
 
+from swarmdeck.core.bounds import Bounds
 from swarmdeck.core.ports import SensedPoses
 from swarmdeck.tracking.calibration import CameraCalibration
 from swarmdeck.tracking.config import TrackerConfig
@@ -198,8 +199,8 @@ class CameraPoseSource:
         probe = apply_homography(Hinv, np.array([[x0, y0], [x1, y0], [x1, y1], [x0, y1]], float))
         if self._rect_cache is not None and np.max(np.abs(self._rect_cache[0] - probe)) < 0.25:
             return self._rect_cache[1], self._rect_cache[2]
-        w = max(2, int(round((x1 - x0) * self.px_per_m)))
-        h = max(2, int(round((y1 - y0) * self.px_per_m)))
+        w = max(2, int(round(Bounds.of(bounds).width * self.px_per_m)))
+        h = max(2, int(round(Bounds.of(bounds).height * self.px_per_m)))
         xs = x0 + (np.arange(w) + 0.5) / self.px_per_m
         ys = y1 - (np.arange(h) + 0.5) / self.px_per_m
         X, Y = np.meshgrid(xs, ys)

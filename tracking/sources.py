@@ -22,6 +22,7 @@ from typing import Protocol, runtime_checkable
 import cv2
 import numpy as np
 
+from swarmdeck.core.service_thread import ServiceThread
 from swarmdeck.tracking.imageread import IMAGE_SUFFIXES, ImageReadError, decoded_to_rgb, read_image
 from swarmdeck.tracking.types import CameraFrame
 
@@ -65,12 +66,11 @@ class OpenCVCamera:
         self._newest: CameraFrame | None = None
         self._handed = -1
         self._index = 0
-        self._stop = threading.Event()
         self.status = f"camera {device}: opening"
         self.frames_grabbed = 0
         self.failures = 0
-        self._thread = threading.Thread(target=self._run, name=f"camera-{device}", daemon=True)
-        self._thread.start()
+        self._service = ServiceThread(self._run, f"camera-{device}")
+        self._service.start()
 
     @property
     def ok(self) -> bool:
@@ -94,13 +94,14 @@ class OpenCVCamera:
 
     def _run(self) -> None:
         cap = None
-        while not self._stop.is_set():
+        svc = self._service
+        while not svc.stopping:
             if cap is None:
                 cap = self._open()
                 if cap is None:
                     self.failures += 1
                     self.status = f"camera {self.device}: cannot open (retrying every {self._retry_s:g} s)"
-                    self._stop.wait(self._retry_s)
+                    svc.wait(self._retry_s)
                     continue
             ok, img = cap.read()
             stamp = self._clock()
@@ -111,7 +112,7 @@ class OpenCVCamera:
                 self.status = f"camera {self.device}: read failed, reopening"
                 cap.release()
                 cap = None
-                self._stop.wait(min(self._retry_s, 0.5))
+                svc.wait(min(self._retry_s, 0.5))
                 continue
             with self._lock:
                 self._newest = CameraFrame(rgb, stamp, self._index, wall)
@@ -132,8 +133,7 @@ class OpenCVCamera:
 
     def close(self) -> None:
         """Stop the thread and release the device."""
-        self._stop.set()
-        self._thread.join(timeout=2.0)
+        self._service.stop()
         self.status = f"camera {self.device}: closed"
 
 

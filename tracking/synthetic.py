@@ -20,6 +20,7 @@ import cv2
 import numpy as np
 
 from swarmdeck.core.bounds import DEFAULT_BOUNDS, Bounds
+from swarmdeck.core.constants import ROBOT_RADIUS
 from swarmdeck.tracking.calibration import CharucoSpec
 from swarmdeck.tracking.camera_model import PinholeCamera, overhead_camera
 from swarmdeck.tracking.markers import DEFAULT_REFERENCES, ReferenceMarker, marker_corners
@@ -57,7 +58,7 @@ class SyntheticCameraConfig:
     tag_size: float = 0.08
     plate_scale: float = 1.3
     tag_height: float = 0.06
-    body_radius: float = 0.055
+    body_radius: float = ROBOT_RADIUS
     body_rgb: tuple[int, int, int] = (40, 44, 52)
     floor_texel: float = 0.002
     sprite_texel: float = 0.0005
@@ -459,9 +460,9 @@ def density_image(evaluate: Callable[[np.ndarray], np.ndarray],
     ``bounds`` (row 0 at y_max) → (rows, cols, 3) uint8, white where φ is smallest and ``rgb``
     where it is largest (φ normalised by its range on the grid)."""
     rows, cols = shape
-    x0, x1, y0, y1 = bounds
-    xs = x0 + (np.arange(cols) + 0.5) * (x1 - x0) / cols
-    ys = y1 - (np.arange(rows) + 0.5) * (y1 - y0) / rows
+    b = Bounds.of(bounds)
+    xs = b.x_min + (np.arange(cols) + 0.5) * b.width / cols
+    ys = b.y_max - (np.arange(rows) + 0.5) * b.height / rows
     X, Y = np.meshgrid(xs, ys)
     phi = np.asarray(evaluate(np.column_stack([X.ravel(), Y.ravel()])), dtype=float).reshape(rows, cols)
     lo, hi = np.nanmin(phi), np.nanmax(phi)

@@ -5,6 +5,7 @@ import argparse
 import sys
 
 from swarmdeck.console.cli import UsageError
+from swarmdeck.core.constants import CONTROL_PERIOD, SAFETY_DISTANCE
 
 NAME = "server"
 HELP = "start the lab's remote-access service: accounts, submissions, verification, the arena runner, results"
@@ -45,11 +46,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--tick-budget", type=float, default=None, metavar="S",
                         help="real-time arena: a script's commands for a tick are due within S seconds of its poses, "
                              "else the robots stop for that tick; 1 s of late ticks in a row ends the run (default: "
-                             "one control period, 0.033 s). Verification and --fast allow 1 s per tick")
+                             f"one control period, {CONTROL_PERIOD:g} s). Verification and --fast allow 1 s per tick")
     parser.add_argument("--guard-distance", type=float, default=0.15, metavar="M",
                         help="during a barrier bypass an operator approved, the barrier comes back the first time two "
                              "robots' look-ahead points would come closer than M metres (default 0.15: between contact "
-                             "and the barrier's 0.17)")
+                             f"and the barrier's {SAFETY_DISTANCE:g})")
     parser.add_argument("--guard-intervention", type=float, default=0.1, metavar="MS",
                         help="... or the barrier would have changed a command by more than MS m/s (default 0.1)")
     parser.add_argument("--seed", type=int, default=None, help="seed of the simulated arena's initial poses")
@@ -109,8 +110,8 @@ def check_arguments(args: argparse.Namespace) -> None:
         raise UsageError(f"--grace must be > 0 s, got {args.grace}")
     if args.tick_budget is not None and not 0 < args.tick_budget <= 10:
         raise UsageError(f"--tick-budget must be in (0, 10] s, got {args.tick_budget}")
-    if not 0.05 <= args.guard_distance <= 0.17:
-        raise UsageError(f"--guard-distance must be in [0.05, 0.17] m (at most the barrier's D_s), "
+    if not 0.05 <= args.guard_distance <= SAFETY_DISTANCE:
+        raise UsageError(f"--guard-distance must be in [0.05, {SAFETY_DISTANCE:g}] m (at most the barrier's D_s), "
                          f"got {args.guard_distance}")
     if not 0 < args.guard_intervention <= 1:
         raise UsageError(f"--guard-intervention must be in (0, 1] m/s, got {args.guard_intervention}")

@@ -33,6 +33,7 @@ from pathlib import Path
 
 from swarmdeck.console.jobs.confinement import kill_until_gone
 from swarmdeck.core.checks import require_positive
+from swarmdeck.core.service_thread import ServiceThread
 
 CGROUP_ROOT = Path("/sys/fs/cgroup")
 REQUIRED = ("memory", "pids")
@@ -374,24 +375,19 @@ class OomGuard:
     """
 
     def __init__(self, group: RunCgroup, interval: float = 0.05) -> None:
-        import threading
-
         self.group, self.interval = group, interval
-        self._stop = threading.Event()
-        self._thread = threading.Thread(target=self._run, name="swarmdeck-oom-guard", daemon=True)
+        self._service = ServiceThread(self._run, "swarmdeck-oom-guard", join_timeout=None)
 
     def _run(self) -> None:
-        while not self._stop.wait(self.interval):
+        while not self._service.wait(self.interval):
             if self.group.oom_kills():
                 self.group.kill(timeout=2.0)
                 return
 
     def __enter__(self) -> "OomGuard":
         if self.group.version == 1:
-            self._thread.start()
+            self._service.start()
         return self
 
     def __exit__(self, *exc: object) -> None:
-        self._stop.set()
-        if self._thread.is_alive():
-            self._thread.join()
+        self._service.stop()

@@ -21,11 +21,11 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.spatial import cKDTree
 
+from swarmdeck.core.constants import ROBOT_DIAMETER
 from swarmdeck.core.ports import SensedPoses
 from swarmdeck.devices.arena import Arena
 from swarmdeck.devices.clock import RealTimePacer
-from swarmdeck.core.kinematics import GritsBotParams, limit_unicycle, unicycle_to_si
-from swarmdeck.devices.gritsbot import wrap_angle
+from swarmdeck.core.kinematics import GritsBotParams, limit_unicycle, unicycle_to_si, wrap_angle
 from swarmdeck.devices.simulator import SimulatedArena
 from swarmdeck.devices.validation import ValidationReport
 from swarmdeck.safety.verifier import ContactLog, step_contacts
@@ -75,7 +75,7 @@ class VerificationRobots:
     sim: SimulatedArena
     disturbances: Disturbances
     rng: np.random.Generator
-    contact_distance: float = 0.11
+    contact_distance: float = ROBOT_DIAMETER
     contacts: ContactLog = field(init=False)
     min_distance: list[float] = field(init=False, default_factory=list)  # per step, m (centres)
     contact_points: list[tuple[float, float, float]] = field(init=False, default_factory=list)  # (t, x, y)

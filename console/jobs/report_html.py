@@ -10,9 +10,10 @@ import html
 from typing import Any
 
 from swarmdeck.core.bounds import DEFAULT_BOUNDS, Bounds
+from swarmdeck.core.constants import ROBOT_DIAMETER
 
 COLOURS = ("#1f77b4", "#d62728", "#2ca02c", "#ff7f0e", "#9467bd", "#8c564b", "#e377c2", "#17becf")
-CONTACT_DISTANCE = 0.11  # m, robot diameter (REFERENCE.md §1)
+CONTACT_DISTANCE = ROBOT_DIAMETER  # m: bodies touch
 
 
 def _esc(value: Any) -> str:
@@ -82,8 +83,9 @@ def _arena_plot(runs: list[dict[str, Any]], bounds: Bounds = DEFAULT_BOUNDS,
     why = _no_motion(runs)
     if why is not None:
         return _nothing(why)
-    x0, x1, y0, y1 = bounds
-    w, h = (x1 - x0) * scale, (y1 - y0) * scale
+    b = Bounds.of(bounds)
+    x0, x1, y0, y1 = b
+    w, h = b.width * scale, b.height * scale
     parts = [f'<svg width="{w + 2:.0f}" height="{h + 2:.0f}" role="img" aria-label="first contacts on the arena">',
              f'<rect x="1" y="1" width="{w:.0f}" height="{h:.0f}" fill="#f7f7f2" stroke="#444"/>']
     count = 0

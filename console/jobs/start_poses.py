@@ -27,7 +27,7 @@ from scipy.spatial import cKDTree
 
 from swarmdeck.core.bounds import DEFAULT_BOUNDS, Bounds
 from swarmdeck.devices.fleet.setup import ACCEPT_HEADING, ACCEPT_POSITION
-from swarmdeck.devices.gritsbot import wrap_angle
+from swarmdeck.core.kinematics import wrap_angle
 from swarmdeck.devices.simulator import check_poses
 
 #: m between the centres of two initial poses: the look-ahead points (ℓ = 0.03 m) start outside

@@ -47,7 +47,6 @@ import re
 import time
 import shutil
 import tempfile
-import threading
 from collections.abc import Callable, Sequence
 from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
@@ -61,6 +60,7 @@ from swarmdeck.core.checks import in_range
 from swarmdeck.console.jobs.plant import ArenaPlant, Disturbances, SandboxPlant, VerificationRobots
 from swarmdeck.console.jobs.sandbox import run_sandboxed
 from swarmdeck.console.jobs.start_poses import arena_start, check_initial_poses, perturb
+from swarmdeck.core.service_thread import ServiceThread
 from swarmdeck.devices.arena import Arena
 from swarmdeck.devices.initial_conditions import random_initial_poses
 from swarmdeck.devices.simulator import ArenaConfig, SimulatedArena
@@ -479,19 +479,16 @@ def verify(scripts: Sequence[str | Path | ScriptBundle], config: VerificationCon
             return True
         return False
 
-    stop_watching = threading.Event()
-
     def watch() -> None:
-        while not stop_watching.wait(0.1) and not cancelled():
+        while not watcher.wait(0.1) and not cancelled():
             pass
 
-    watcher = threading.Thread(target=watch, daemon=True)
+    watcher = ServiceThread(watch, "swarmdeck-verification-cancel", join_timeout=None)
     watcher.start()
     try:
         results = executor.run(tasks, done, cancelled)
     finally:
-        stop_watching.set()
-        watcher.join()
+        watcher.stop()
         shutil.rmtree(cancel_dir, ignore_errors=True)
     cpu_s = sum(float(r.pop("cpu_s", 0.0)) for r in results if r is not None)  # a timing: not in the report
     if (cancel is not None and cancel.is_set()) or any(r is None or r["ended_by"] == "cancelled" for r in results):

@@ -7,8 +7,7 @@ import math
 import numpy as np
 from numpy.typing import NDArray
 
-ROBOT_RADIUS = 0.055
-"""body radius of the robot glyph, m (REFERENCE.md §1: a GRITSBot is 0.11 m across)"""
+from swarmdeck.core.constants import ROBOT_RADIUS  # the glyph's body radius, m (REFERENCE.md §1)
 CHANGED_RING = 1.7
 """radius of the ring round a robot the barrier changed, × robot radius"""
 VIRTUAL_RING_RADIUS = 1.35

@@ -10,6 +10,8 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+from swarmdeck.core.constants import SAFETY_DISTANCE
+
 
 @dataclass(frozen=True)
 class PictureStyle:
@@ -31,7 +33,7 @@ class PictureStyle:
 
     changed_threshold: float = 1e-3
     h_full: float = 0.1
-    safety_distance: float = 0.17
+    safety_distance: float = SAFETY_DISTANCE
     heatmap_px_per_m: float = 50.0
     heatmap_max_px: int = 40_000
     arrow_scale: float = 1.5

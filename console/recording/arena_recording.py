@@ -14,6 +14,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from swarmdeck.console.runtime.frame import BarrierFrame, Frame
+from swarmdeck.core.constants import SAFETY_DISTANCE
 from swarmdeck.core.kinematics import si_to_unicycle
 
 
@@ -26,7 +27,7 @@ def arena_frame(arena: Any, poses: NDArray[np.float64], tick: int, behaviour: st
     safe = np.asarray(arena.last_safe, dtype=float)
     v, w = si_to_unicycle(poses, safe, arena.ell)
     diag = arena.safety_stats.last_diagnostics if arena.safety is not None else None
-    d_s = float(getattr(getattr(arena.safety, "config", None), "safety_distance", 0.17))
+    d_s = float(getattr(getattr(arena.safety, "config", None), "safety_distance", SAFETY_DISTANCE))
     barrier = (BarrierFrame.from_diagnostics(diag, n, d_s)
                if diag is not None else BarrierFrame(enabled=False, intervention=np.zeros(n)))
     return Frame(tick=tick, time=tick * dt, run_time=tick * dt, dt=dt, bounds=arena.config.bounds,

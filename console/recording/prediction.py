@@ -3,7 +3,7 @@
 Frame format 3 (:mod:`~swarmdeck.console.recording.codec`) stores a frame's exact poses as the
 XOR of their bits with :func:`predict_poses` of the previous frame — its poses moved by its
 applied command (v, ω) over its period ``dt``: the step the simulator takes
-(:func:`swarmdeck.devices.gritsbot.unicycle_step`, the exact arc of constant (v, ω); the
+(:func:`swarmdeck.core.kinematics.unicycle_step`, the exact arc of constant (v, ω); the
 same formula, sin(a)/a and (1 − cos a)/a by their series for |a| < 1e-6), so a simulated
 robot's residual is zero or a few low bits, a tracked robot's only its measurement noise.
 

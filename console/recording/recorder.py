@@ -54,6 +54,7 @@ from swarmdeck.console.recording.schemas import (
     CHANNELS, METADATA_NAME, OPERATOR_EVENTS, PROFILE, RECORDING_FORMAT, TOPIC_CONFIG, TOPIC_DATAGRAM, TOPIC_EVENT,
     TOPIC_FRAME, TOPIC_OPERATOR,
 )
+from swarmdeck.core.service_thread import ServiceThread
 
 DEFAULT_DIR = "sessions"
 
@@ -176,7 +177,7 @@ class Recorder:
         self._meta = dict(metadata or {})
         self._lock = threading.Lock()
         self._queue: deque[tuple[Any, ...]] = deque()
-        self._stop = threading.Event()
+        self._service = ServiceThread(self._run, "swarmdeck-recorder")
         self._counts = {"frames": 0, "datagrams": 0, "events": 0, "dropped": 0}
         self._state = "recording"
         self._message = f"recording to {self.path}"
@@ -187,7 +188,6 @@ class Recorder:
         self._file: Any = None
         self._writer: Any = None
         self._channels: dict[str, int] = {}
-        self._thread: threading.Thread | None = None
         self._image_provider = image_provider
         self._foxglove_config = foxglove
         self._foxglove: FoxgloveEncoder | None = None
@@ -200,8 +200,7 @@ class Recorder:
         except Exception as exc:  # noqa: BLE001 - unwritable path, full disk, …: record nothing, run on
             self._fail("disabled", f"recording disabled: cannot write {self.path}: {_reason(exc)}")
             return
-        self._thread = threading.Thread(target=self._run, name="swarmdeck-recorder", daemon=True)
-        self._thread.start()
+        self._service.start()
 
     # ------------------------------------------------------------------ loop side
     def write_frame(self, frame: Frame) -> bool:
@@ -273,9 +272,7 @@ class Recorder:
 
     def close(self, timeout: float = 10.0) -> RecorderStatus:
         """Write what is queued, finish the file (summary + index) and stop the thread. Idempotent."""
-        self._stop.set()
-        if self._thread is not None:
-            self._thread.join(timeout)
+        self._service.stop(timeout)
         return self.status()
 
     def __enter__(self) -> "Recorder":
@@ -401,7 +398,7 @@ class Recorder:
         last_t = chunk_t0 = 0.0
         try:
             while True:
-                stopping = self._stop.is_set()
+                stopping = self._service.stopping
                 with self._lock:
                     items = list(self._queue)
                     self._queue.clear()
@@ -431,7 +428,7 @@ class Recorder:
                     last_flush, dirty = now, False
                 if stopping:
                     break
-                self._stop.wait(min(0.02, interval / 4))
+                self._service.wait(min(0.02, interval / 4))
             self._writer.finish()
             self._file.flush()
             self._bytes = self._file.tell()

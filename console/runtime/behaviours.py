@@ -26,6 +26,8 @@ from numpy.typing import NDArray
 
 from swarmdeck.console.runtime.deadline import DeadlineCaller
 from swarmdeck.console.runtime.params import BehaviourError, BehaviourParams
+from swarmdeck.core.bounds import Bounds
+from swarmdeck.core.checks import require_in_range
 from swarmdeck.core.graphs import complete_laplacian, rigid_formation
 from swarmdeck.coverage.group import consensus, formation_control
 from swarmdeck.devices.controllers import si_position_controller
@@ -117,19 +119,19 @@ class Formation:
             self._cache = (n, edges, lengths)
         _, edges, lengths = self._cache
         u = formation_control(tick.points, edges, lengths, self.alpha)
-        x0, x1, y0, y1 = tick.bounds
-        centre = np.array([(x0 + x1) / 2, (y0 + y1) / 2])
+        centre = np.array(Bounds.of(tick.bounds).centre)
         return u + 0.3 * (centre - tick.points.mean(axis=0)), None
 
 
 def default_goals(n: int, bounds: tuple[float, float, float, float], margin: float = 0.3) -> FloatArray:
     """``(n, 2)`` goal positions on a grid filling the arena (m), as square as the arena allows."""
-    x0, x1, y0, y1 = bounds
-    w, h = (x1 - x0) - 2 * margin, (y1 - y0) - 2 * margin
+    b = Bounds.of(bounds)
+    x0, x1, y0, y1 = b
+    w, h = b.width - 2 * margin, b.height - 2 * margin
     cols = max(1, int(math.ceil(math.sqrt(n * w / max(h, 1e-9)))))
     rows = int(math.ceil(n / cols))
-    xs = np.linspace(x0 + margin, x1 - margin, cols) if cols > 1 else np.array([(x0 + x1) / 2])
-    ys = np.linspace(y1 - margin, y0 + margin, rows) if rows > 1 else np.array([(y0 + y1) / 2])
+    xs = np.linspace(x0 + margin, x1 - margin, cols) if cols > 1 else np.array([b.centre[0]])
+    ys = np.linspace(y1 - margin, y0 + margin, rows) if rows > 1 else np.array([b.centre[1]])
     gx, gy = np.meshgrid(xs, ys)
     return np.column_stack((gx.ravel(), gy.ravel()))[:n]
 

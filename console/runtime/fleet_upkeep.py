@@ -39,7 +39,8 @@ from numpy.typing import ArrayLike, NDArray
 from swarmdeck.console.runtime.behaviours import BehaviourError, TickInput
 from swarmdeck.core.bounds import Bounds
 from swarmdeck.core.checks import require_positive
-from swarmdeck.core.kinematics import GritsBotParams
+from swarmdeck.core.constants import SAFETY_DISTANCE
+from swarmdeck.core.kinematics import GritsBotParams, wrap_angle
 from swarmdeck.core.ports import rows_of
 from swarmdeck.devices.fleet.assignment import assign
 from swarmdeck.devices.battery import BatteryParams, charge_from_voltage
@@ -48,7 +49,6 @@ from swarmdeck.devices.fleet.docking import choose_slots, return_maneuver
 from swarmdeck.devices.fleet.maneuver import Maneuver
 from swarmdeck.devices.fleet.manager import FleetConfig
 from swarmdeck.devices.fleet.setup import ACCEPT_HEADING, ACCEPT_POSITION, check_start_poses
-from swarmdeck.devices.gritsbot import wrap_angle
 from swarmdeck.devices.initial_conditions import random_initial_poses
 
 FloatArray = NDArray[np.float64]
@@ -278,7 +278,7 @@ def random_start_poses(n: int, bounds: Bounds, chargers: ChargerLayout, seed: in
 
 # ---------------------------------------------------------------------------- planning
 def set_up(view: FleetView, goals: ArrayLike, bounds: Bounds, chargers: ChargerLayout,
-           robot: GritsBotParams = GritsBotParams(), safety_distance: float = 0.17,
+           robot: GritsBotParams = GritsBotParams(), safety_distance: float = SAFETY_DISTANCE,
            config: UpkeepConfig = UpkeepConfig()) -> FleetManeuver:
     """A :class:`FleetManeuver` that sets N assigned robots up at ``goals`` ``(N, 3)``; robot k of the
     experiment is ``maneuver.ids[k]``.

@@ -16,6 +16,7 @@ from swarmdeck.console.runtime.frame import Frame
 from swarmdeck.console.runtime.loop import ControlLoop
 from swarmdeck.console.web.gui import ConsoleGui
 from swarmdeck.console.web.scene import ArenaScene
+from swarmdeck.core.service_thread import ServiceThread
 
 
 class FrameViewer:
@@ -27,8 +28,7 @@ class FrameViewer:
         self._pending: Frame | None = None
         self._lock = threading.Lock()
         self._wake = threading.Event()
-        self._stop = threading.Event()
-        self._thread: threading.Thread | None = None
+        self._service = ServiceThread(self._run, "swarmdeck-viewer", wake=self._wake.set)
         self.drawn = 0
         self.skipped = 0
         self.errors = 0
@@ -46,8 +46,7 @@ class FrameViewer:
         self._wake.set()
 
     def start(self) -> "FrameViewer":
-        self._thread = threading.Thread(target=self._run, name="swarmdeck-viewer", daemon=True)
-        self._thread.start()
+        self._service.start()
         return self
 
     def draw_pending(self) -> Frame | None:
@@ -70,17 +69,14 @@ class FrameViewer:
         return frame
 
     def _run(self) -> None:
-        while not self._stop.is_set():
+        while not self._service.stopping:
             if not self._wake.wait(0.5):
                 continue
             self._wake.clear()
             self.draw_pending()
 
     def stop(self) -> None:
-        self._stop.set()
-        self._wake.set()
-        if self._thread is not None:
-            self._thread.join(2.0)
+        self._service.stop()
 
 
 class ConsoleApp:

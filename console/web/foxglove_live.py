@@ -29,7 +29,8 @@ from swarmdeck.console.recording.foxglove import (
     TOPIC_LOG, FoxgloveConfig, FoxgloveEncoder, channel_specs,
 )
 from swarmdeck.console.runtime.frame import Frame
-from swarmdeck.console.picture.shapes import ROBOT_RADIUS
+from swarmdeck.core.constants import ROBOT_RADIUS
+from swarmdeck.core.service_thread import ServiceThread
 
 DEFAULT_PORT = 8765
 
@@ -84,8 +85,7 @@ class FoxgloveBridge:
         self._pending: list[tuple[Frame, int]] = []
         self._lock = threading.Lock()
         self._wake = threading.Event()
-        self._stop = threading.Event()
-        self._thread: threading.Thread | None = None
+        self._service = ServiceThread(self._run, "swarmdeck-foxglove", wake=self._wake.set)
         self._t0: float | None = None
         self.sent = 0
         self.skipped = 0
@@ -138,12 +138,11 @@ class FoxgloveBridge:
         return n
 
     def start(self) -> "FoxgloveBridge":
-        self._thread = threading.Thread(target=self._run, name="swarmdeck-foxglove", daemon=True)
-        self._thread.start()
+        self._service.start()
         return self
 
     def _run(self) -> None:
-        while not self._stop.is_set():
+        while not self._service.stopping:
             if not self._wake.wait(0.5):
                 continue
             self._wake.clear()
@@ -151,11 +150,7 @@ class FoxgloveBridge:
 
     def close(self) -> None:
         """Stop the thread and the server. Idempotent."""
-        self._stop.set()
-        self._wake.set()
-        if self._thread is not None:
-            self._thread.join(2.0)
-            self._thread = None
+        self._service.stop()
         self.relay.close()
         if self.server is not None:
             self.server.stop()

@@ -21,6 +21,7 @@ from collections.abc import Callable
 
 from swarmdeck.console.recording.reader import Recording
 from swarmdeck.console.runtime.frame import Frame
+from swarmdeck.core.service_thread import ServiceThread
 
 RATE_MIN, RATE_MAX = 0.1, 4.0
 RATES: tuple[float, ...] = (0.1, 0.25, 0.5, 1.0, 2.0, 4.0)
@@ -230,8 +231,8 @@ class PlayerApp:
         self.scene: ArenaScene = ArenaScene(self.server, bounds=first.bounds)
         self._syncing = False
         self._draw_lock = threading.RLock()
-        self._stop = threading.Event()
-        self._thread: threading.Thread | None = None
+        self._period = 1 / 30
+        self._service = ServiceThread(self._run, "swarmdeck-player")
         self.history: PlotHistory = PlotHistory()
         self._drawn_version = -1
         gui = self.server.gui
@@ -357,8 +358,8 @@ class PlayerApp:
         notes = list(frame.events) + list(frame.alerts)
         self.events.content = "\n".join(f"- {n}" for n in notes[-6:])
 
-    def _run(self, period: float) -> None:
-        while not self._stop.wait(period):
+    def _run(self) -> None:
+        while not self._service.wait(self._period):
             if self.player.update():
                 self.refresh()
             elif not self.player.playing and self.play_button.label != "Play":
@@ -366,12 +367,10 @@ class PlayerApp:
 
     def start(self, period: float = 1 / 30) -> "PlayerApp":
         """Start the playback thread (advances and draws every ``period`` s)."""
-        self._thread = threading.Thread(target=self._run, args=(period,), name="swarmdeck-player", daemon=True)
-        self._thread.start()
+        self._period = period
+        self._service.start()
         return self
 
     def close(self) -> None:
-        self._stop.set()
-        if self._thread is not None:
-            self._thread.join(2.0)
+        self._service.stop()
         self.server.stop()

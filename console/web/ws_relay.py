@@ -16,8 +16,10 @@ It runs an asyncio loop on its own daemon thread; a busy port is an ``OSError``
 from __future__ import annotations
 
 import asyncio
-import threading
 from typing import Any
+
+from swarmdeck.core.service_thread import ServiceThread
+
 
 #: The names a client may ask for, the SDK's own first (REFERENCE.md §13).
 SUBPROTOCOLS: tuple[str, ...] = ("foxglove.sdk.v1", "foxglove.websocket.v1")
@@ -39,8 +41,9 @@ class SubprotocolRelay:
         self.served = 0  # connections relayed so far
         self.refused = 0  # clients that asked for another protocol (HTTP 400)
         self._loop = asyncio.new_event_loop()
-        self._thread = threading.Thread(target=self._loop.run_forever, name="swarmdeck-foxglove-relay", daemon=True)
-        self._thread.start()
+        self._service = ServiceThread(self._loop.run_forever, "swarmdeck-foxglove-relay", join_timeout=5.0,
+                                      wake=lambda: self._loop.call_soon_threadsafe(self._loop.stop))
+        self._service.start()
         try:
             self._server = asyncio.run_coroutine_threadsafe(self._serve(host, port), self._loop).result(10.0)
         except BaseException:
@@ -92,9 +95,7 @@ class SubprotocolRelay:
             self.clients -= 1
 
     def _stop_loop(self) -> None:
-        self._loop.call_soon_threadsafe(self._loop.stop)
-        self._thread.join(5.0)
-        if not self._thread.is_alive():
+        if self._service.stop():
             self._loop.close()
 
     def close(self) -> None:

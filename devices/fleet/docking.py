@@ -15,6 +15,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from swarmdeck.core.constants import CONTROL_PERIOD, SAFETY_DISTANCE
 from swarmdeck.core.kinematics import GritsBotParams
 from swarmdeck.devices.chargers import ChargerLayout
 from swarmdeck.devices.fleet.maneuver import Maneuver, ManeuverParams
@@ -57,8 +58,8 @@ def choose_slots(positions: ArrayLike, free: ArrayLike, layout: ChargerLayout) -
 def return_maneuver(poses: ArrayLike, slots: ArrayLike, layout: ChargerLayout,
                     robot: GritsBotParams = GritsBotParams(), params: ManeuverParams = ManeuverParams(),
                     hold_distance: float = 0.4, max_active: int | None = None, *,
-                    occupied: ArrayLike | None = None, retrace: bool = True, safety_distance: float = 0.17,
-                    gamma: float = 20.0, dt: float = 0.033) -> Maneuver:
+                    occupied: ArrayLike | None = None, retrace: bool = True, safety_distance: float = SAFETY_DISTANCE,
+                    gamma: float = 20.0, dt: float = CONTROL_PERIOD) -> Maneuver:
     """The maneuver that docks robots at ``poses`` ``(K, 3)`` on ``slots`` ``(K,)``.
 
     By default (``retrace``) the setup from ``slots`` to ``poses`` is planned under the fleet's
@@ -115,8 +116,7 @@ def staged_return_maneuver(poses: ArrayLike, slots: ArrayLike, layout: ChargerLa
     conflict = (blocks_all | blocks_all.T | layout.approaches_clash())[np.ix_(slots, slots)]
     blocks = conflict & (priority[:, None] < priority[None, :])
     # waiting robots stand back towards the middle of the arena, clear of the other slots' approaches
-    x0, x1, y0, y1 = layout.bounds
-    towards = np.array([(x0 + x1) / 2, (y0 + y1) / 2]) - app[:, :2]
+    towards = np.array(layout.bounds.centre) - app[:, :2]
     hold = app.copy()
     hold[:, :2] += hold_distance * towards / np.maximum(np.hypot(towards[:, 0], towards[:, 1]), 1e-9)[:, None]
     if max_active is None and k > 30:

@@ -29,7 +29,8 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from swarmdeck.core.kinematics import GritsBotParams, lookahead_points
+from swarmdeck.core.constants import SAFETY_DISTANCE
+from swarmdeck.core.kinematics import GritsBotParams, limit_unicycle, lookahead_points
 from swarmdeck.core.ports import SensedPoses
 from swarmdeck.devices.fleet.assigned import AssignedRobots
 from swarmdeck.devices.fleet.assignment import Assignment, AssignmentPolicy, assign
@@ -64,7 +65,7 @@ class FleetConfig:
     battery: BatteryParams = field(default_factory=BatteryParams)
     policy: AssignmentPolicy = field(default_factory=AssignmentPolicy)
     maneuver: ManeuverParams = field(default_factory=ManeuverParams)
-    safety_distance: float = 0.17
+    safety_distance: float = SAFETY_DISTANCE
     gamma: float = 20.0
     time_limit_base: float = 60.0
     time_limit_per_robot: float = 2.0

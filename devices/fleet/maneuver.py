@@ -46,9 +46,8 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from swarmdeck.core.bounds import DEFAULT_BOUNDS, Bounds
-from swarmdeck.core.kinematics import GritsBotParams, unicycle_to_si
+from swarmdeck.core.kinematics import GritsBotParams, unicycle_to_si, wrap_angle
 from swarmdeck.devices.controllers import HybridPoseController
-from swarmdeck.devices.gritsbot import wrap_angle
 
 FloatArray = NDArray[np.float64]
 BoolArray = NDArray[np.bool_]
@@ -308,9 +307,7 @@ class Maneuver:
         direction /= np.maximum(np.hypot(direction[:, 0], direction[:, 1]), 1e-9)[:, None]
         scale = prm.escape_offset * np.minimum(1.0 + 0.25 * self._attempts[movers], 2.0)
         goal = p[movers, :2] + scale[:, None] * direction
-        x0, x1, y0, y1 = self.bounds
-        c = prm.wall_clearance
-        goal = np.column_stack((np.clip(goal[:, 0], x0 + c, x1 - c), np.clip(goal[:, 1], y0 + c, y1 - c)))
+        goal = Bounds.of(self.bounds).clip(goal, prm.wall_clearance)
         self._esc_goal[movers] = goal
         self._esc_until[movers] = t + prm.escape_time
         self._attempts[movers] += 1

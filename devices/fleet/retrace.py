@@ -34,13 +34,13 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from swarmdeck.core.kinematics import GritsBotParams, lookahead_points, unicycle_to_si
+from swarmdeck.core.constants import CONTROL_PERIOD, SAFETY_DISTANCE
+from swarmdeck.core.kinematics import GritsBotParams, lookahead_points, unicycle_to_si, wrap_angle
 from swarmdeck.devices.chargers import ChargerLayout
 from swarmdeck.devices.fleet.maneuver import Maneuver, ManeuverParams
 from swarmdeck.devices.fleet.setup import drive
 from swarmdeck.devices.pipeline import barrier_filter
 from swarmdeck.devices.simulator import ArenaConfig, SimulatedArena
-from swarmdeck.devices.gritsbot import wrap_angle
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.intp]
@@ -116,7 +116,7 @@ def phantom_slots(poses: ArrayLike, slots: ArrayLike, layout: ChargerLayout, rob
 
 def plan_retrace(poses: ArrayLike, slots: ArrayLike, layout: ChargerLayout, robot: GritsBotParams = GritsBotParams(),
                  params: ManeuverParams = ManeuverParams(), *, occupied: ArrayLike | None = None,
-                 safety_distance: float = 0.17, gamma: float = 20.0, dt: float = 0.033,
+                 safety_distance: float = SAFETY_DISTANCE, gamma: float = 20.0, dt: float = CONTROL_PERIOD,
                  margin: float = 0.008, time_limit: float | None = None) -> RetracePlan:
     """Simulate the setup from ``slots`` ``(K,)`` to ``poses`` ``(K, 3)`` (module docstring) and record it.
 

@@ -19,9 +19,9 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from swarmdeck.core.bounds import Bounds
-from swarmdeck.core.kinematics import GritsBotParams, lookahead_points
+from swarmdeck.core.constants import SAFETY_DISTANCE
+from swarmdeck.core.kinematics import GritsBotParams, lookahead_points, wrap_angle
 from swarmdeck.devices.fleet.maneuver import Maneuver
-from swarmdeck.devices.gritsbot import wrap_angle
 from swarmdeck.devices.pipeline import certify
 from swarmdeck.devices.simulator import SimulatedArena, check_poses
 
@@ -87,7 +87,7 @@ def start_separation(robot: GritsBotParams, safety_distance: float) -> float:
 
 
 def check_start_poses(poses: ArrayLike, bounds: Bounds, robot: GritsBotParams = GritsBotParams(), *,
-                      safety_distance: float = 0.17, wall_margin: float | None = None,
+                      safety_distance: float = SAFETY_DISTANCE, wall_margin: float | None = None,
                       obstacles: ArrayLike | None = None, obstacle_names: list[str] | None = None) -> FloatArray:
     """Validated copy of ``(N, 3)`` start poses; ValueError naming the first bad pose.
 

@@ -11,7 +11,7 @@ with the monotonic clock. REFERENCE.md §9 / notes/robotarium.md §4.3:
   the robot on [t_c, t_c + 0.5 s] and not a moment longer, whatever the loop jitter;
 * wheel limits by one uniform scale per robot
   (:func:`~swarmdeck.core.kinematics.limit_unicycle`), exact unicycle arcs
-  (:func:`~swarmdeck.devices.gritsbot.unicycle_step`);
+  (:func:`~swarmdeck.core.kinematics.unicycle_step`);
 * the battery of :mod:`swarmdeck.devices.battery` (voltage linear in the charge drawn,
   I = I_idle + k·(|ω_R| + |ω_L|) while driving, I_idle otherwise); a robot docked on a slot of
   the charging strips (``chargers``, :meth:`ChargerLayout.docked_slot`) charges instead (CC-CV,
@@ -25,10 +25,10 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from swarmdeck.core.checks import in_range, require_positive
-from swarmdeck.core.kinematics import GritsBotParams, limit_unicycle, unicycle_to_wheels
+from swarmdeck.core.constants import CONTROL_PERIOD
+from swarmdeck.core.kinematics import GritsBotParams, limit_unicycle, unicycle_step, unicycle_to_wheels
 from swarmdeck.devices.battery import BatteryParams, discharge, recharge
 from swarmdeck.devices.chargers import ChargerLayout
-from swarmdeck.devices.gritsbot import unicycle_step
 
 FloatArray = NDArray[np.float64]
 
@@ -48,7 +48,7 @@ class FirmwareParams:
     command_timeout: float = 0.5
     loop_period: float = 0.016
     status_period: float = 1.0
-    pose_period: float = 0.033
+    pose_period: float = CONTROL_PERIOD
     pose_decimals: int = 3
 
     def __post_init__(self) -> None:

@@ -21,6 +21,7 @@ from typing import IO
 import numpy as np
 from numpy.typing import ArrayLike
 
+from swarmdeck.core.service_thread import ServiceThread
 from swarmdeck.devices.chargers import ChargerLayout
 from swarmdeck.devices.net.firmware import BatteryParams, FirmwareParams, FleetState
 from swarmdeck.core.kinematics import GritsBotParams
@@ -71,7 +72,6 @@ class FleetNode:
         self.firmware = firmware
         self._lock = threading.Lock()
         self._trace = trace
-        self._stop = threading.Event()
         self._seq = 0
         self._inbox: dict[int, tuple] = {}
         self._received = [0] * self.state.n
@@ -84,7 +84,7 @@ class FleetNode:
             name=self.name,
             clock=clock,
         )
-        self._thread: threading.Thread | None = None
+        self._service = ServiceThread(self.run, f"{self.name}-loop")
 
     # ---------------------------------------------------------------- messages
     def _on_message(self, topic: str, payload: bytes, t: float) -> None:
@@ -139,8 +139,7 @@ class FleetNode:
     def start(self) -> "FleetNode":
         """Connect and run the firmware loop in a background thread."""
         self.link.start()
-        self._thread = threading.Thread(target=self.run, name=f"{self.name}-loop", daemon=True)
-        self._thread.start()
+        self._service.start()
         return self
 
     def run(self) -> None:
@@ -149,7 +148,8 @@ class FleetNode:
         next_loop = self.clock()
         next_pose = next_loop
         next_status = next_loop
-        while not self._stop.is_set():
+        stop = self._service.stop_event
+        while not stop.is_set():
             try:
                 with self._lock:
                     now = self.clock()
@@ -166,7 +166,7 @@ class FleetNode:
             next_loop += fw.loop_period
             delay = next_loop - self.clock()
             if delay > 0:
-                self._stop.wait(delay)
+                stop.wait(delay)
             else:
                 next_loop = self.clock()
 
@@ -209,7 +209,5 @@ class FleetNode:
 
     def stop(self) -> None:
         """Stop the loop and disconnect (idempotent)."""
-        self._stop.set()
-        if self._thread is not None and self._thread is not threading.current_thread():
-            self._thread.join(timeout=2.0)
+        self._service.stop()
         self.link.close()

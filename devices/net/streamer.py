@@ -34,6 +34,8 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from swarmdeck.core.checks import require_positive
+from swarmdeck.core.constants import CONTROL_PERIOD
+from swarmdeck.core.service_thread import ServiceThread
 from swarmdeck.devices.net.transport import Counters, PoseFeed, RobotTransport, check_command
 
 FloatArray = NDArray[np.float64]
@@ -53,7 +55,7 @@ class StreamerConfig:
 
     pose_timeout: float = 0.1
     input_timeout: float = 0.1
-    period: float = 0.033
+    period: float = CONTROL_PERIOD
     max_events: int = 200
 
     def __post_init__(self) -> None:
@@ -135,8 +137,7 @@ class CommandStreamer:
         self._input: _Input | None = None
         self._prev_zeroed: dict[str, frozenset[int]] = {"stale_pose": frozenset(), "stale_input": frozenset(), "excluded": frozenset()}
         self._prev_delivered = True
-        self._thread: threading.Thread | None = None
-        self._stop = threading.Event()
+        self._service = ServiceThread(self._run, "swarmdeck-streamer")
         self.last_tick: StreamTick | None = None
         self._tick_lock = threading.Lock()
 
@@ -269,17 +270,14 @@ class CommandStreamer:
         :meth:`tick` itself right after :meth:`submit` sees no added latency, and a loop
         that hangs still has its robots zeroed (stale input) at the streaming rate.
         """
-        if self._thread is not None:
-            return self
-        self._stop.clear()
-        self._thread = threading.Thread(target=self._run, name="swarmdeck-streamer", daemon=True)
-        self._thread.start()
+        self._service.start()
         return self
 
     def _run(self) -> None:
         period = self.config.period
         nxt = self.clock()
-        while not self._stop.is_set():
+        svc = self._service
+        while not svc.stopping:
             last = self.last_tick
             if last is None or self.clock() - last.t >= 0.9 * period:
                 try:
@@ -289,16 +287,13 @@ class CommandStreamer:
             nxt += period
             delay = nxt - self.clock()
             if delay > 0:
-                self._stop.wait(delay)
+                svc.wait(delay)
             else:
                 nxt = self.clock()
 
     def stop(self) -> None:
         """Stop background streaming and send one zero command to the last robots named."""
-        self._stop.set()
-        if self._thread is not None:
-            self._thread.join(timeout=2.0)
-            self._thread = None
+        self._service.stop()
         with self._lock:
             inp = self._input
         if inp is not None and len(inp.ids):

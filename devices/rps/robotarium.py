@@ -22,6 +22,8 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from swarmdeck.core.bounds import Bounds
+from swarmdeck.core.constants import COLLISION_DISTANCE, COLLISION_SHIFT, CONTROL_PERIOD
 from swarmdeck.core.kinematics import limit_unicycle
 from swarmdeck.devices.arena import RUN_DEFAULTS, Arena
 from swarmdeck.devices.rps.errors import call_at_scripts_end_text, count_errors, debug_text
@@ -51,9 +53,9 @@ class Robotarium:
     """
 
     # rps 2.0's class constants (rps/robotarium_abc.py), with swarmdeck's robot (REFERENCE.md §1)
-    TIME_STEP = 0.033
-    COLLISION_DIAMETER = 0.135
-    COLLISION_OFFSET = 0.025
+    TIME_STEP = CONTROL_PERIOD
+    COLLISION_DIAMETER = COLLISION_DISTANCE
+    COLLISION_OFFSET = COLLISION_SHIFT
 
     def __init__(self, number_of_robots: int = -1, show_figure: bool = True, sim_in_real_time: bool = True,
                  initial_conditions: ArrayLike = np.array([]), *, from_docks: bool | None = None,
@@ -88,9 +90,9 @@ class Robotarium:
         self.number_of_robots = self._arena.n
         self.show_figure = show_figure
         self.time_step = config.dt
-        x0, x1, y0, y1 = config.bounds
-        self._bounds = (x0, x1, y0, y1)
-        self.boundaries = [x0, y0, x1 - x0, y1 - y0]  # rps 1.x: [x_min, y_min, width, height]
+        b = Bounds.of(config.bounds)
+        x0, x1, y0, y1 = self._bounds = tuple(b)
+        self.boundaries = [x0, y0, b.width, b.height]  # rps 1.x: [x_min, y_min, width, height]
         self.BOUNDARIES = np.array([x0, x1, y0, y1])  # rps 2.0: [x_min, x_max, y_min, y_max]
         self._velocities = np.zeros((2, self.number_of_robots))
         # rps's call-order state: as after rps's own set-up, the script's first call must be get_poses()

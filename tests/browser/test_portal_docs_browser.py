@@ -7,7 +7,6 @@ import os
 from urllib.parse import urlsplit
 
 import pytest
-from portal_fixtures import portal  # noqa: F401
 
 CHROMIUM = "/usr/bin/chromium"
 ARGS = ["--no-sandbox", "--disable-background-networking", "--disable-component-update"]

@@ -6,7 +6,7 @@ from __future__ import annotations
 import os
 
 import pytest
-from portal_fixtures import SPIN, browser_sign_in, portal  # noqa: F401
+from portal_fixtures import SPIN, browser_sign_in
 
 CHROMIUM = "/usr/bin/chromium"
 ARGS = ["--no-sandbox", "--disable-background-networking", "--disable-component-update"]

@@ -9,6 +9,7 @@ from __future__ import annotations
 import numpy as np
 
 from swarmdeck.core.bounds import DEFAULT_BOUNDS
+from swarmdeck.core.constants import AXLE_LENGTH, MAX_LINEAR_SPEED, MAX_WHEEL_SPEED, SAFETY_DISTANCE, WHEEL_RADIUS
 from swarmdeck.core.kinematics import lookahead_points, si_to_unicycle, unicycle_to_si
 from swarmdeck.devices.rps.utilities.transformations import *  # noqa: F401,F403 - rps's module re-exports them
 from swarmdeck.devices.rps.utilities.transformations import __all__ as _TRANSFORMATIONS
@@ -35,14 +36,14 @@ def _si(barrier_gain, safety_radius, magnitude_limit, bounds):
     return f
 
 
-def create_single_integrator_barrier_certificate(barrier_gain: float = 100, safety_radius: float = 0.17,
-                                                 magnitude_limit: float = 0.2):
+def create_single_integrator_barrier_certificate(barrier_gain: float = 100, safety_radius: float = SAFETY_DISTANCE,
+                                                 magnitude_limit: float = MAX_LINEAR_SPEED):
     """f(dxi (2, N), x (2, N)) → safe (2, N), pairwise constraints only."""
     return _si(barrier_gain, safety_radius, magnitude_limit, _OPEN)
 
 
-def create_single_integrator_barrier_certificate_with_boundary(barrier_gain: float = 100, safety_radius: float = 0.17,
-                                                               magnitude_limit: float = 0.2,
+def create_single_integrator_barrier_certificate_with_boundary(barrier_gain: float = 100, safety_radius: float = SAFETY_DISTANCE,
+                                                               magnitude_limit: float = MAX_LINEAR_SPEED,
                                                                boundary_points=np.array(DEFAULT_BOUNDS)):
     """f(dxi (2, N), x (2, N)) → safe (2, N), with the arena walls."""
     return _si(barrier_gain, safety_radius, magnitude_limit, _boundary(boundary_points))
@@ -63,13 +64,13 @@ def _uni(barrier_gain, safety_radius, projection_distance, magnitude_limit, boun
 
 
 def create_unicycle_barrier_certificate(barrier_gain: float = 100, safety_radius: float = 0.12,
-                                        projection_distance: float = 0.05, magnitude_limit: float = 0.2):
+                                        projection_distance: float = 0.05, magnitude_limit: float = MAX_LINEAR_SPEED):
     """f(dxu (2, N), x (3, N)) → safe (2, N) [v; ω], barrier on the look-ahead points (radius r + ℓ, as rps)."""
     return _uni(barrier_gain, safety_radius, projection_distance, magnitude_limit, _OPEN)
 
 
 def create_unicycle_barrier_certificate_with_boundary(barrier_gain: float = 100, safety_radius: float = 0.12,
-                                                      projection_distance: float = 0.05, magnitude_limit: float = 0.2,
+                                                      projection_distance: float = 0.05, magnitude_limit: float = MAX_LINEAR_SPEED,
                                                       boundary_points=np.array(DEFAULT_BOUNDS)):
     """As :func:`create_unicycle_barrier_certificate`, with the arena walls."""
     return _uni(barrier_gain, safety_radius, projection_distance, magnitude_limit, _boundary(boundary_points))
@@ -97,10 +98,10 @@ def _unicycle_dd(barrier_gain, safety_radius, projection_distance, wheel_vel_lim
 
 
 def create_unicycle_differential_drive_barrier_certificate(max_num_obstacle_points: int = 100, max_num_robots: int = 30,
-                                                           disturbance: float = 5, wheel_vel_limit: float = 12.5,
-                                                           base_length: float = 0.105, wheel_radius: float = 0.016,
+                                                           disturbance: float = 5, wheel_vel_limit: float = MAX_WHEEL_SPEED,
+                                                           base_length: float = AXLE_LENGTH, wheel_radius: float = WHEEL_RADIUS,
                                                            projection_distance: float = 0.05, barrier_gain: float = 150,
-                                                           safety_radius: float = 0.17):
+                                                           safety_radius: float = SAFETY_DISTANCE):
     """f(dxu (2, N), x (3, N), obstacles (2, M) = none) → safe (2, N) [v; ω] within the wheel limits.
 
     swarmdeck's unicycle barrier: the QP on the look-ahead points (D_s = ``safety_radius``) with each
@@ -115,8 +116,8 @@ def create_unicycle_differential_drive_barrier_certificate(max_num_obstacle_poin
 
 def create_unicycle_differential_drive_barrier_certificate_with_boundary(
         max_num_obstacle_points: int = 100, max_num_robots: int = 30, disturbance: float = 5,
-        wheel_vel_limit: float = 12.5, base_length: float = 0.105, wheel_radius: float = 0.016,
-        projection_distance: float = 0.05, barrier_gain: float = 150, safety_radius: float = 0.17,
+        wheel_vel_limit: float = MAX_WHEEL_SPEED, base_length: float = AXLE_LENGTH, wheel_radius: float = WHEEL_RADIUS,
+        projection_distance: float = 0.05, barrier_gain: float = 150, safety_radius: float = SAFETY_DISTANCE,
         boundary_points=np.array(DEFAULT_BOUNDS)):
     """As :func:`create_unicycle_differential_drive_barrier_certificate`, with the arena walls."""
     return _unicycle_dd(barrier_gain, safety_radius, projection_distance, wheel_vel_limit, base_length, wheel_radius,
@@ -129,7 +130,7 @@ def _unsafe_gain(unsafe_barrier_gain: float) -> None:
 
 
 def create_single_integrator_barrier_certificate2(barrier_gain: float = 100, unsafe_barrier_gain: float = 1e6,
-                                                  safety_radius: float = 0.17, magnitude_limit: float = 0.2):
+                                                  safety_radius: float = SAFETY_DISTANCE, magnitude_limit: float = MAX_LINEAR_SPEED):
     """rps 1.x's variant with a large gain once a pair is inside the unsafe set: f(dxi (2, N), x (2, N)) →
     safe (2, N). swarmdeck's barrier already demands separation there (its recovery rows,
     :class:`~swarmdeck.safety.BarrierConfig`), so ``unsafe_barrier_gain`` is checked, not used."""
@@ -139,7 +140,7 @@ def create_single_integrator_barrier_certificate2(barrier_gain: float = 100, uns
 
 def create_unicycle_barrier_certificate2(barrier_gain: float = 500, unsafe_barrier_gain: float = 1e6,
                                          safety_radius: float = 0.12, projection_distance: float = 0.05,
-                                         magnitude_limit: float = 0.2):
+                                         magnitude_limit: float = MAX_LINEAR_SPEED):
     """rps 1.x's unicycle variant of :func:`create_single_integrator_barrier_certificate2`."""
     _unsafe_gain(unsafe_barrier_gain)
     return _uni(barrier_gain, safety_radius, projection_distance, magnitude_limit, _OPEN)
@@ -147,27 +148,27 @@ def create_unicycle_barrier_certificate2(barrier_gain: float = 500, unsafe_barri
 
 # rps 2.0's names (rps/utilities/barrier_certificates.py on `master`), with its defaults
 def create_si_barrier_certificate(safety_radius: float = 0.15, barrier_gain: float = 100.0,
-                                  magnitude_limit: float = 0.2):
+                                  magnitude_limit: float = MAX_LINEAR_SPEED):
     """rps 2.0: f(dxi (2, N), x (2, N)) → safe (2, N), pairwise constraints only."""
     return _si(barrier_gain, safety_radius, magnitude_limit, _OPEN)
 
 
 def create_si_barrier_certificate_with_boundary(safety_radius: float = 0.15, barrier_gain: float = 100.0,
-                                                magnitude_limit: float = 0.2, boundary_points=None):
+                                                magnitude_limit: float = MAX_LINEAR_SPEED, boundary_points=None):
     """rps 2.0: f(dxi (2, N), x (2, N)) → safe (2, N), with the arena walls (default: the arena's)."""
     return _si(barrier_gain, safety_radius, magnitude_limit,
                _boundary(DEFAULT_BOUNDS if boundary_points is None else boundary_points))
 
 
 def create_uni_barrier_certificate(barrier_gain: float = 100.0, safety_radius: float = 0.15,
-                                   projection_distance: float = 0.05, velocity_magnitude_limit: float = 0.2):
+                                   projection_distance: float = 0.05, velocity_magnitude_limit: float = MAX_LINEAR_SPEED):
     """rps 2.0: f(dxu (2, N), x (3, N)) → safe (2, N) [v; ω]."""
     return _uni(barrier_gain, safety_radius, projection_distance, velocity_magnitude_limit, _OPEN)
 
 
 def create_uni_barrier_certificate_with_boundary(safety_radius: float = 0.12, barrier_gain: float = 150.0,
                                                  projection_distance: float = 0.03,
-                                                 velocity_magnitude_limit: float = 0.2, boundary_points=None):
+                                                 velocity_magnitude_limit: float = MAX_LINEAR_SPEED, boundary_points=None):
     """rps 2.0: f(dxu (2, N), x (3, N), obstacles=None) → safe (2, N) [v; ω] within the walls; the
     obstacle segments of rps 2.0 are not supported (refused when given)."""
     inner = _uni(barrier_gain, safety_radius, projection_distance, velocity_magnitude_limit,

@@ -3,11 +3,12 @@ from __future__ import annotations
 
 import numpy as np
 
+from swarmdeck.core.constants import AXLE_LENGTH, MAX_WHEEL_SPEED, WHEEL_RADIUS
 from swarmdeck.devices.rps.utilities.barrier_certificates import create_unicycle_differential_drive_barrier_certificate
 
 
 def create_robust_barriers(max_num_obstacles: int = 100, max_num_robots: int = 30, d: float = 5,
-                           wheel_vel_limit: float = 12.5, base_length: float = 0.105, wheel_radius: float = 0.016,
+                           wheel_vel_limit: float = MAX_WHEEL_SPEED, base_length: float = AXLE_LENGTH, wheel_radius: float = WHEEL_RADIUS,
                            projection_distance: float = 0.05, gamma: float = 150, safety_radius: float = 0.12):
     """f(dxu (2, N), x (3, N), obstacles (2, M)) → safe (2, N) [v; ω]: rps's robust differential-drive
     barrier, here :func:`~swarmdeck.devices.rps.utilities.barrier_certificates.create_unicycle_differential_drive_barrier_certificate`

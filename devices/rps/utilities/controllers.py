@@ -3,6 +3,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from swarmdeck.core.constants import AXLE_LENGTH, WHEEL_RADIUS
 from swarmdeck.devices.rps.utilities.transformations import *  # noqa: F401,F403 - rps's module re-exports them
 from swarmdeck.devices.rps.utilities.transformations import __all__ as _TRANSFORMATIONS
 from swarmdeck.devices.rps.utilities.transformations import create_si_to_uni_mapping as _si_to_uni_mapping
@@ -115,7 +116,7 @@ def _parking(controller, position_error: float, rotation_error: float):
 
 def create_pose_parking_controller_clf(approach_angle_gain: float = 1, desired_angle_gain: float = 2.7,
                                        rotation_error_gain: float = 1, wheel_velocity_limit: float = 10.0,
-                                       wheel_radius: float = 0.016, base_length: float = 0.105,
+                                       wheel_radius: float = WHEEL_RADIUS, base_length: float = AXLE_LENGTH,
                                        position_error: float = 0.05, rotation_error: float = 0.2):
     """rps 2.0: :func:`create_pose_controller_clf` that stops the robots at their goal pose."""
     return _parking(create_pose_controller_clf(approach_angle_gain, desired_angle_gain, rotation_error_gain),
