@@ -28,6 +28,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from swarmdeck.core.constants import CONTROL_PERIOD
 from swarmdeck.devices.controllers import si_position_controller
 from swarmdeck.devices.simulator import check_poses
 from swarmdeck.envs.batched_swarm import BatchedSwarm
@@ -47,7 +48,7 @@ class BatchedEnv:
     """E swarms of one scenario (module docstring). ``safety``: the distributed barrier on every tick;
     ``dt``: control period, s."""
 
-    def __init__(self, scenario: Scenario, n_envs: int = 1, *, safety: bool = True, dt: float = 0.033) -> None:
+    def __init__(self, scenario: Scenario, n_envs: int = 1, *, safety: bool = True, dt: float = CONTROL_PERIOD) -> None:
         self.scenario = sc = scenario
         self.sim = BatchedSwarm(n_envs, sc.n_agents, bounds=sc.bounds, dt=dt, safety=safety)
         self.n_envs, self.n_agents = self.sim.n_swarms, sc.n_agents

@@ -18,9 +18,9 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
+from swarmdeck.core.constants import CONTROL_PERIOD
 from swarmdeck.core.bounds import DEFAULT_BOUNDS, Bounds
-from swarmdeck.core.kinematics import GritsBotParams, limit_unicycle, lookahead_points, unicycle_to_si
-from swarmdeck.core.kinematics import unicycle_step
+from swarmdeck.core.kinematics import GritsBotParams, limit_unicycle, lookahead_points, unicycle_step, unicycle_to_si
 from swarmdeck.devices.pipeline import certify
 from swarmdeck.devices.validation import ValidationRules
 from swarmdeck.envs.batched_barrier import BatchedDistributedBarrier
@@ -50,7 +50,7 @@ class TickResult:
 class BatchedSwarm:
     """E swarms of N robots (module docstring). ``safety``: the distributed barrier on (True) or off."""
 
-    def __init__(self, n_swarms: int, n_robots: int, *, bounds: Bounds = DEFAULT_BOUNDS, dt: float = 0.033,
+    def __init__(self, n_swarms: int, n_robots: int, *, bounds: Bounds = DEFAULT_BOUNDS, dt: float = CONTROL_PERIOD,
                  safety: bool = True, params: GritsBotParams | None = None,
                  rules: ValidationRules = ValidationRules()) -> None:
         from swarmdeck.safety import BarrierConfig

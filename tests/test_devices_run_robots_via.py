@@ -7,7 +7,6 @@ import subprocess
 import sys
 
 import pytest
-from mqtt_broker import mosquitto  # noqa: F401
 
 from swarmdeck.console.cli import main
 

@@ -1,7 +1,6 @@
 """/openapi.json describes every JSON route's response (a schema, not an empty object) and every operator body,
 and what the server answers has that shape: a client generated from the spec can read the portal."""
 import jsonschema
-from portal_fixtures import portal  # noqa: F401
 
 
 def _resolve(spec: dict, schema: dict) -> dict:

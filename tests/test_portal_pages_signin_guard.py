@@ -3,7 +3,7 @@ one signed out) each sends the browser to /signin (303) and does nothing; the li
 import re
 
 from fastapi.routing import APIRoute
-from portal_fixtures import portal, sign_in  # noqa: F401
+from portal_fixtures import sign_in
 
 from swarmdeck.console.portal import pages
 from swarmdeck.console.portal.livefeed import LiveFeed

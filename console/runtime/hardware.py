@@ -31,6 +31,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from numpy.typing import NDArray
 
+from swarmdeck.core.constants import CONTROL_PERIOD
 from swarmdeck.core.bounds import DEFAULT_BOUNDS, Bounds, check_bounds
 from swarmdeck.core.kinematics import GritsBotParams
 from swarmdeck.core.ports import CommandSink, PoseSource
@@ -63,7 +64,7 @@ class RobotsSpec:
 
     n_robots: int | None = 12
     bounds: Bounds = DEFAULT_BOUNDS
-    dt: float = 0.033
+    dt: float = CONTROL_PERIOD
     seed: int | None = None
     robots_via: str | None = None
     docked: bool = False

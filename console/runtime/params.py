@@ -26,6 +26,7 @@ from typing import Any, TypeVar
 
 import numpy as np
 
+from swarmdeck.core.constants import CONTROL_PERIOD, SAFETY_DISTANCE
 from swarmdeck.core.bounds import DEFAULT_BOUNDS, Bounds
 from swarmdeck.core.checks import in_range, require_in_range
 from swarmdeck.core.config import floats
@@ -180,7 +181,7 @@ class SafetyParams:
     ``mode``: "auto" is distributed above 200 robots (``swarmdeck.safety``)."""
 
     enabled: bool = param(True, label="Barrier on", frame="safety_enabled")
-    safety_distance: float = param(0.17, unit="m", lo=0.11, hi=0.4, label="D_s (m)", step=0.01,
+    safety_distance: float = param(SAFETY_DISTANCE, unit="m", lo=0.11, hi=0.4, label="D_s (m)", step=0.01,
                                    frame="safety_distance", shown="safety_distance (D_s)")
     gamma: float = param(100.0, lo=1.0, hi=1000.0, label="γ", step=1.0, frame="gamma")
     class_k: str = param("cubic", choices=("cubic", "linear"), label="κ(h)", frame="class_k")
@@ -217,7 +218,7 @@ class LoopConfig:
 
     # no upper bound on robots: how many fit depends on the arena (the initial layout names the maximum)
     n_robots: int = param(12, lo=1, integer=True, toml="robots")
-    dt: float = param(0.033, unit="s", lo=0.005, hi=0.5)
+    dt: float = param(CONTROL_PERIOD, unit="s", lo=0.005, hi=0.5)
     bounds: Bounds = param(DEFAULT_BOUNDS, unit="m")
     seed: int | None = param(None)
     behaviour: str = param("coverage")
