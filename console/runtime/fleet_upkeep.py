@@ -18,7 +18,9 @@ behaviour, whether the robots are simulated, MQTT GRITSBots, or both with virtua
   travel, approach pose, then backing onto the strip).
 
 Robots that do not take part are fixed obstacles of the barrier (``FleetManeuver.fixed``): a docked
-robot is never pushed off its strip. A maneuver that cannot finish in ``time_limit`` s of run time,
+robot is never pushed off its strip. ``FleetManeuver`` is a thin behaviour over one
+:class:`~swarmdeck.devices.fleet.task.UpkeepTask`, the task ``FleetManager`` drives too, which holds the
+rules below. A maneuver that cannot finish in ``time_limit`` s of run time,
 or loses a robot (no fresh pose for ``lost_after`` s, or gone from the reading), stops every robot
 and names the robots (a ``BehaviourError`` each tick, shown as the loop's alert, until the operator
 chooses another behaviour). Progress is the behaviour's health line (in every Frame).

@@ -171,8 +171,8 @@ def drive(robots: UpkeepRobots | SimulatedArena, maneuver: Maneuver, rows: Array
     task = UpkeepTask(what, labels_arr, maneuver, time_limit=time_limit, lost_after=lost_after, wording=FLEET_WORDING)
     first = ports.read()
     if first.time is None:
-        raise ValueError(f"{what}: drive needs robots on a simulated clock ({getattr(ports, 'name', 'robots')} "
-                         "gives no time); real robots are driven by the console loop (FleetManeuver)")
+        raise ValueError(f"{what}: drive needs robots on a simulated clock (the reading has no time); "
+                         "real robots are driven by the console loop (FleetManeuver)")
     m = len(first.ids)
     moving = np.zeros(m, dtype=bool)
     moving[rows] = True
