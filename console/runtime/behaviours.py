@@ -27,7 +27,6 @@ from numpy.typing import NDArray
 from swarmdeck.console.runtime.deadline import DeadlineCaller
 from swarmdeck.console.runtime.params import BehaviourError, BehaviourParams
 from swarmdeck.core.bounds import Bounds
-from swarmdeck.core.checks import require_in_range
 from swarmdeck.core.graphs import complete_laplacian, rigid_formation
 from swarmdeck.coverage.group import consensus, formation_control
 from swarmdeck.devices.controllers import si_position_controller

@@ -18,7 +18,9 @@ behaviour, whether the robots are simulated, MQTT GRITSBots, or both with virtua
   travel, approach pose, then backing onto the strip).
 
 Robots that do not take part are fixed obstacles of the barrier (``FleetManeuver.fixed``): a docked
-robot is never pushed off its strip. A maneuver that cannot finish in ``time_limit`` s of run time,
+robot is never pushed off its strip. ``FleetManeuver`` is a thin behaviour over one
+:class:`~swarmdeck.devices.fleet.task.UpkeepTask`, the task ``FleetManager`` drives too, which holds the
+rules below. A maneuver that cannot finish in ``time_limit`` s of run time,
 or loses a robot (no fresh pose for ``lost_after`` s, or gone from the reading), stops every robot
 and names the robots (a ``BehaviourError`` each tick, shown as the loop's alert, until the operator
 chooses another behaviour). Progress is the behaviour's health line (in every Frame).
@@ -40,7 +42,7 @@ from swarmdeck.console.runtime.behaviours import BehaviourError, TickInput
 from swarmdeck.core.bounds import Bounds
 from swarmdeck.core.checks import require_positive
 from swarmdeck.core.constants import SAFETY_DISTANCE
-from swarmdeck.core.kinematics import GritsBotParams, wrap_angle
+from swarmdeck.core.kinematics import GritsBotParams
 from swarmdeck.core.ports import rows_of
 from swarmdeck.devices.fleet.assignment import assign
 from swarmdeck.devices.battery import BatteryParams, charge_from_voltage
@@ -49,6 +51,7 @@ from swarmdeck.devices.fleet.docking import choose_slots, return_maneuver
 from swarmdeck.devices.fleet.maneuver import Maneuver
 from swarmdeck.devices.fleet.manager import FleetConfig
 from swarmdeck.devices.fleet.setup import ACCEPT_HEADING, ACCEPT_POSITION, check_start_poses
+from swarmdeck.devices.fleet.task import LOOP_WORDING, UpkeepTask
 from swarmdeck.devices.initial_conditions import random_initial_poses
 
 FloatArray = NDArray[np.float64]
@@ -131,7 +134,10 @@ class FleetView:
 
 
 class FleetManeuver:
-    """Robots ``ids`` driven by a :class:`Maneuver` through the console loop (module docstring).
+    """Robots ``ids`` driven by a :class:`Maneuver` through the console loop (module docstring): a thin
+    behaviour over one :class:`~swarmdeck.devices.fleet.task.UpkeepTask` (time limit, lost robots,
+    progress, messages — the rules ``FleetManager`` applies too), whose failures are the loop's
+    ``BehaviourError``.
 
     Args:
         name: ``"set up"`` or ``"return to chargers"`` (the Frame's behaviour).
@@ -141,20 +147,38 @@ class FleetManeuver:
     """
 
     def __init__(self, name: str, ids: ArrayLike, maneuver: Maneuver, config: UpkeepConfig = UpkeepConfig()) -> None:
-        self.name = name
-        self.ids = np.asarray(ids, dtype=np.int64).reshape(-1)
-        if len(self.ids) != maneuver.n:
-            raise ValueError(f"{name}: {len(self.ids)} robot ids for a maneuver of {maneuver.n} robots")
-        self.maneuver, self.config = maneuver, config
+        n = len(np.asarray(ids).reshape(-1))
+        self.task = UpkeepTask(name, ids, maneuver, time_limit=config.limit(n), lost_after=config.lost_after,
+                               wording=LOOP_WORDING)
+        self.name, self.ids, self.maneuver, self.config = name, self.task.ids, maneuver, config
         self.barrier = config.barrier
-        self.time_limit = config.limit(len(self.ids))
-        self.state = "running" if len(self.ids) else "done"
-        self.message = f"{name}: nothing to do" if not len(self.ids) else f"{name}: starting"
-        self._t0: float | None = None
-        self._last_seen = np.full(len(self.ids), np.nan)
-        self.elapsed = 0.0
-        self.at_goal = np.zeros(len(self.ids), dtype=bool)
-        self.final_errors: tuple[float, float] | None = None
+        self.time_limit = self.task.time_limit
+
+    # ------------------------------------------------------------------ the task's state
+    @property
+    def state(self) -> str:
+        """``"running"``, ``"done"`` or ``"failed"``."""
+        return self.task.state
+
+    @property
+    def message(self) -> str:
+        """Progress while running, the outcome once over."""
+        return self.task.message
+
+    @property
+    def elapsed(self) -> float:
+        """s of run time since the maneuver's first tick."""
+        return self.task.elapsed
+
+    @property
+    def at_goal(self) -> NDArray[np.bool_]:
+        """``(K,)`` robots at their goal at the last tick."""
+        return self.task.at_goal
+
+    @property
+    def final_errors(self) -> tuple[float, float] | None:
+        """(m, rad) largest errors once done, else None."""
+        return self.task.final_errors
 
     # ------------------------------------------------------------------ behaviour protocol
     def fixed(self, ids: ArrayLike) -> NDArray[np.bool_]:
@@ -176,47 +200,14 @@ class FleetManeuver:
         u = np.zeros((n, 2))
         if self.state == "done":
             return u, None
-        if self._t0 is None:
-            self._t0 = tick.t
-            self._last_seen[:] = tick.t
-        t = tick.t - self._t0
-        self.elapsed = t
         rows, present = rows_of(ids, self.ids)
-        fresh = present & seen[rows]
-        self._last_seen = np.where(fresh, tick.t, self._last_seen)
-        lost = ~present | (tick.t - self._last_seen > self.config.lost_after)
-        if lost.any():
-            gone = ", ".join(f"robot {int(i)}" + ("" if p else " (gone from the robots' reports)")
-                             for i, p in zip(self.ids[lost], present[lost]))
-            self._fail(f"{self.name} stopped: {gone} stopped reporting its pose for more than "
-                       f"{self.config.lost_after:g} s; every robot stopped")
-        poses = tick.poses[rows]
-        self.at_goal = self.maneuver.at_goal(poses)
-        if self.at_goal.all():
-            g = self.maneuver.goals
-            err = float(np.hypot(*(poses[:, :2] - g[:, :2]).T).max())
-            head = float(np.abs(wrap_angle(poses[:, 2] - g[:, 2])).max())
-            self.final_errors = (err, head)
-            self.state = "done"
-            escaped = int(self.maneuver.escaped.sum())
-            self.message = (f"{self.name}: done in {t:.1f} s, {len(self.ids)} robot(s) at their poses (largest error "
-                            f"{100 * err:.1f} cm, {math.degrees(head):.1f}°)"
-                            + (f"; deadlock escape used by {escaped}" if escaped else ""))
-            return u, None
-        if t > self.time_limit:
-            g = self.maneuver.goals
-            err = np.hypot(*(poses[:, :2] - g[:, :2]).T)
-            off = ", ".join(f"robot {int(i)} {100 * e:.1f} cm away" for i, e in zip(self.ids[~self.at_goal],
-                                                                                    err[~self.at_goal]))
-            self._fail(f"{self.name} did not finish within {self.time_limit:g} s: {off}; every robot stopped")
-        u[rows] = self.maneuver.nominal(poses, t)
-        self.message = (f"{self.name}: {int(self.at_goal.sum())}/{len(self.ids)} robots at their poses, "
-                        f"{t:.1f} s" + (f", {self.maneuver.escapes} escape(s)" if self.maneuver.escapes else ""))
+        poses = tick.poses[rows] if n else np.zeros((len(self.ids), 3))  # no robot at all: every one is lost
+        nominal = self.task.update(tick.t, poses, present, seen[rows] if n else present)
+        if self.state == "failed":
+            raise BehaviourError(self.message)
+        if nominal is not None:
+            u[rows] = nominal
         return u, None
-
-    def _fail(self, message: str) -> None:
-        self.state, self.message = "failed", message
-        raise BehaviourError(message)
 
 
 def status_ages(sink: Any, view_ids: ArrayLike, is_virtual: ArrayLike) -> FloatArray | None:
@@ -397,9 +388,8 @@ def run_maneuver(loop: Any, maneuver: FleetManeuver, pace: Any = None, max_ticks
     err, head = maneuver.final_errors if maneuver.final_errors is not None else (math.nan, math.nan)
     if maneuver.state != "done" and frame is not None and len(maneuver.ids):
         rows, _ = rows_of(frame.ids, maneuver.ids)
-        g = maneuver.maneuver.goals
-        err = float(np.hypot(*(frame.poses[rows, :2] - g[:, :2]).T).max())
-        head = float(np.abs(wrap_angle(frame.poses[rows, 2] - g[:, 2])).max())
+        err_all, head_all = maneuver.task.errors(frame.poses[rows])
+        err, head = float(err_all.max()), float(head_all.max())
     message = f"{maneuver.name} stopped before it finished ({maneuver.message})" if stopped else maneuver.message
     return UpkeepResult(maneuver.state == "done", tuple(int(i) for i in maneuver.ids), maneuver.elapsed, err, head,
                         collisions, int(maneuver.maneuver.escapes), message)

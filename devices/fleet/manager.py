@@ -9,7 +9,8 @@ experiment's initial conditions, and returns them to the chargers afterwards"; R
 2. :meth:`FleetManager.setup` assigns N charged, healthy robots to experiment ids 0…N−1
    (:func:`~swarmdeck.devices.fleet.assignment.assign`), checks the start poses
    (:func:`~swarmdeck.devices.fleet.setup.check_start_poses`) and drives the robots there under
-   the barrier with the deadlock escape (:func:`~swarmdeck.devices.fleet.setup.drive`);
+   the barrier with the deadlock escape (:func:`~swarmdeck.devices.fleet.setup.drive`: one
+   :class:`~swarmdeck.devices.fleet.task.UpkeepTask` over the fleet's own ports, :meth:`read`/:meth:`send`);
 3. :meth:`FleetManager.experiment` is the experiment's view: N robots with ids 0…N−1 (a
    robot ports (:mod:`swarmdeck.core.ports`), what :class:`~swarmdeck.devices.Arena`
    drives), whose ``obstacles`` are the look-ahead points of the robots that stayed docked;
@@ -30,7 +31,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from swarmdeck.core.constants import SAFETY_DISTANCE
-from swarmdeck.core.kinematics import GritsBotParams, limit_unicycle, lookahead_points
+from swarmdeck.core.kinematics import GritsBotParams, lookahead_points
 from swarmdeck.core.ports import SensedPoses
 from swarmdeck.devices.fleet.assigned import AssignedRobots
 from swarmdeck.devices.fleet.assignment import Assignment, AssignmentPolicy, assign
@@ -198,8 +199,7 @@ class FleetManager:
         self.slot[a.rows] = -1
         limit = self.fleet.time_limit(len(g)) if time_limit is None else float(time_limit)
         try:
-            report = drive(self.sim, man, a.rows, self.filter, time_limit=limit, labels=self.ids[a.rows],
-                           what="setup", on_step=self._battery)
+            report = drive(self, man, a.rows, self.filter, time_limit=limit, labels=self.ids[a.rows], what="setup")
         finally:
             self._settle()
         self.last_setup = report
@@ -230,6 +230,11 @@ class FleetManager:
             raise ValueError(f"the fleet expects commands for ids 0..{self.n_robots - 1} in order")
         self.sim.step(v, w)
         self._battery(self.sim, *self.sim.applied)
+
+    @property
+    def report(self) -> Any:
+        """The simulator's validation counts (boundary, collisions, actuator limits) over every robot."""
+        return self.sim.report
 
     def hold(self) -> None:
         """Nothing moves (the simulation does not advance)."""
@@ -265,8 +270,8 @@ class FleetManager:
                               gamma=self.fleet.gamma, dt=self.config.dt)
         limit = self.fleet.time_limit(len(away)) if time_limit is None else float(time_limit)
         try:
-            report = drive(self.sim, man, away, self.filter, time_limit=limit, labels=self.ids[away],
-                           what="return to the chargers", on_step=self._battery)
+            report = drive(self, man, away, self.filter, time_limit=limit, labels=self.ids[away],
+                           what="return to the chargers")
         finally:
             self._settle()
         self.last_return = report

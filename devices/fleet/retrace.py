@@ -39,6 +39,7 @@ from swarmdeck.core.kinematics import GritsBotParams, lookahead_points, unicycle
 from swarmdeck.devices.chargers import ChargerLayout
 from swarmdeck.devices.fleet.maneuver import Maneuver, ManeuverParams
 from swarmdeck.devices.fleet.setup import drive
+from swarmdeck.devices.simulated_robots import SimulatedRobots
 from swarmdeck.devices.pipeline import barrier_filter
 from swarmdeck.devices.simulator import ArenaConfig, SimulatedArena
 
@@ -140,18 +141,29 @@ def plan_retrace(poses: ArrayLike, slots: ArrayLike, layout: ChargerLayout, robo
     # errors, no pair comes near the barrier's boundary, so it never has to bend the reversed paths
     filt = barrier_filter(robot, layout.bounds, dt, class_k="linear", gamma=gamma,
                           safety_distance=safety_distance + margin)
-    trace = [sim.poses[:k]]
-    applied: list[FloatArray] = []
-
-    def record(s, v, w) -> None:
-        trace.append(s.poses[:k])
-        av, aw = s.applied
-        applied.append(np.column_stack((av[:k], aw[:k])))
-
+    robots = _RecordingRobots(sim, k)
     limit = 60.0 + 2.0 * k if time_limit is None else float(time_limit)
-    drive(sim, Maneuver(p, layout.bounds, robot, params), np.arange(k), filt, time_limit=limit,
-          what="planning the return", on_step=record)
+    drive(robots, Maneuver(p, layout.bounds, robot, params), np.arange(k), filt, time_limit=limit,
+          what="planning the return")
+    trace, applied = robots.trace, robots.commands
     return RetracePlan(np.array(trace), np.array(applied).reshape(-1, k, 2), dt)
+
+
+class _RecordingRobots(SimulatedRobots):
+    """The planning simulation's ports, recording the first ``k`` robots' poses ``(3,)`` after every
+    period and the ``(v, ω)`` applied to them."""
+
+    def __init__(self, sim: SimulatedArena, k: int) -> None:
+        super().__init__(sim=sim)
+        self._k = k
+        self.trace: list[FloatArray] = [sim.poses[:k]]
+        self.commands: list[FloatArray] = []
+
+    def send(self, ids: NDArray[np.int64], v: NDArray[np.float64], w: NDArray[np.float64]) -> None:
+        super().send(ids, v, w)
+        self.trace.append(self.sim.poses[:self._k])
+        av, aw = self.sim.applied
+        self.commands.append(np.column_stack((av[:self._k], aw[:self._k])))
 
 
 class RetraceManeuver(Maneuver):

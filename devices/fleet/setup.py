@@ -2,8 +2,9 @@
 
 :func:`check_start_poses` refuses start poses the robots cannot take (outside the arena, closer
 than the safety distance to each other or to a robot that stays docked) with the pose named.
-:func:`drive` runs a :class:`~swarmdeck.devices.fleet.maneuver.Maneuver` on a simulated fleet:
-each tick the maneuver's nominal velocities for the moving robots pass through
+:func:`drive` runs a :class:`~swarmdeck.devices.fleet.maneuver.Maneuver` on a simulated fleet's robot
+ports as one :class:`~swarmdeck.devices.fleet.task.UpkeepTask` (the rules the console loop applies too):
+each tick the task's nominal velocities for the moving robots pass through
 :func:`~swarmdeck.devices.pipeline.certify` (the barrier; robots that do not move are fixed
 obstacles and get zero commands), until every moving robot is at its goal or the time limit is
 over. On failure the robots are stopped and :class:`SetupFailed` names the robots that did
@@ -13,16 +14,19 @@ from __future__ import annotations
 
 import time as _time
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, Protocol
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from swarmdeck.core.bounds import Bounds
 from swarmdeck.core.constants import SAFETY_DISTANCE
-from swarmdeck.core.kinematics import GritsBotParams, lookahead_points, wrap_angle
+from swarmdeck.core.kinematics import GritsBotParams, lookahead_points
+from swarmdeck.core.ports import CommandSink, PoseSource
 from swarmdeck.devices.fleet.maneuver import Maneuver
+from swarmdeck.devices.fleet.task import DONE, FLEET_WORDING, UpkeepTask
 from swarmdeck.devices.pipeline import certify
+from swarmdeck.devices.simulated_robots import SimulatedRobots
 from swarmdeck.devices.simulator import SimulatedArena, check_poses
 
 FloatArray = NDArray[np.float64]
@@ -131,61 +135,80 @@ def check_start_poses(poses: ArrayLike, bounds: Bounds, robot: GritsBotParams = 
     return p
 
 
-def drive(sim: SimulatedArena, maneuver: Maneuver, rows: ArrayLike, filt: Any, *, time_limit: float,
-          labels: ArrayLike | None = None, accept_position: float = ACCEPT_POSITION,
-          accept_heading: float = ACCEPT_HEADING, what: str = "setup", on_step: Any = None) -> ManeuverReport:
-    """Drive fleet rows ``rows`` (``(K,)``, the maneuver's robots in order) of ``sim`` until every one is
-    at its goal (the maneuver's tolerances) or ``time_limit`` simulated s have passed.
+class UpkeepRobots(PoseSource, CommandSink, Protocol):
+    """Robot ports a fleet maneuver can be driven over (:func:`drive`): on a simulated clock
+    (``read(now).time``), with the robot model (``params``) and the simulator's validation counts
+    (``report.steps_with_collision``) — ``FleetManager``, :class:`SimulatedRobots`."""
 
-    The other robots of ``sim`` stand still and are fixed obstacles of the barrier ``filt``
-    (``certify(..., seen=moving)``). ``on_step(sim, v, w)`` is called after each step (battery).
-    ``labels`` ``(K,)`` name the robots in messages (default: the rows).
+    @property
+    def params(self) -> GritsBotParams: ...
+
+    @property
+    def report(self) -> Any: ...
+
+
+def drive(robots: UpkeepRobots | SimulatedArena, maneuver: Maneuver, rows: ArrayLike, filt: Any, *,
+          time_limit: float, labels: ArrayLike | None = None, accept_position: float = ACCEPT_POSITION,
+          accept_heading: float = ACCEPT_HEADING, what: str = "setup", lost_after: float | None = 1.0
+          ) -> ManeuverReport:
+    """Drive rows ``rows`` (``(K,)``, the maneuver's robots in order) of the robots' readings until every
+    one is at its goal (the maneuver's tolerances) or ``time_limit`` s of the robots' simulated clock have
+    passed: one :class:`~swarmdeck.devices.fleet.task.UpkeepTask` (the rules, as the console loop's
+    ``FleetManeuver`` applies them) stepped over the robot ports ``robots`` (``FleetManager``,
+    :class:`SimulatedRobots`; a bare :class:`SimulatedArena` is wrapped, without batteries).
+
+    The other robots stand still and are fixed obstacles of the barrier ``filt``
+    (``certify(..., seen=moving)``). ``labels`` ``(K,)`` name the robots in messages (default: the rows).
+    A moving robot not seen for ``lost_after`` s stops the maneuver (None: never).
 
     Raises:
-        SetupFailed: the time limit passed; every robot was stopped first. Its report names the
-            robots (by label) farther than ``accept_position`` m / ``accept_heading`` rad from their goal.
+        SetupFailed: the time limit passed (or a robot was lost); every robot was stopped first. Its
+            report names the robots (by label) farther than ``accept_position`` m / ``accept_heading``
+            rad from their goal.
     """
+    ports: UpkeepRobots = SimulatedRobots(sim=robots) if isinstance(robots, SimulatedArena) else robots
     rows = np.asarray(rows, dtype=np.intp).reshape(-1)
     labels_arr = rows if labels is None else np.asarray(labels).reshape(-1)
-    m = sim.n_robots
+    task = UpkeepTask(what, labels_arr, maneuver, time_limit=time_limit, lost_after=lost_after, wording=FLEET_WORDING)
+    first = ports.read()
+    if first.time is None:
+        raise ValueError(f"{what}: drive needs robots on a simulated clock (the reading has no time); "
+                         "real robots are driven by the console loop (FleetManeuver)")
+    m = len(first.ids)
     moving = np.zeros(m, dtype=bool)
     moving[rows] = True
-    robot, dt = sim.params, sim.config.dt
-    t0, wall0 = sim.time, _time.perf_counter()
-    collisions0 = sim.report.steps_with_collision
+    robot = ports.params
+    t0, wall0 = float(first.time), _time.perf_counter()
+    collisions0 = ports.report.steps_with_collision
     steps = 0
     u = np.zeros((m, 2))
     while True:
-        poses = sim.poses
-        t = sim.time - t0
-        if maneuver.at_goal(poses[rows]).all():
-            ok = True
+        reading = ports.read()
+        nominal = task.update(float(reading.time), reading.poses[rows], seen=reading.seen[rows])
+        if nominal is None:
             break
-        if t >= time_limit - 1e-9:
-            ok = False
-            break
-        u[rows] = maneuver.nominal(poses[rows], t)
-        cert = certify(poses, u, robot, filt, seen=moving)
-        sim.step(cert.v, cert.w)
-        if on_step is not None:
-            on_step(sim, cert.v, cert.w)
+        u[rows] = nominal
+        cert = certify(reading.poses, u, robot, filt, seen=moving)
+        ports.send(reading.ids, cert.v, cert.w)
         steps += 1
-    if not ok:
-        sim.step(np.zeros(m), np.zeros(m))  # stop: the robots hold still (the firmware would brake anyway)
-        if on_step is not None:
-            on_step(sim, np.zeros(m), np.zeros(m))
-    final = sim.poses[rows]
-    goals = maneuver.goals
-    pos_err = np.hypot(*(final[:, :2] - goals[:, :2]).T)
-    head_err = np.abs(wrap_angle(final[:, 2] - goals[:, 2]))
-    off = (pos_err > accept_position) | (head_err > accept_heading) if ok else ~maneuver.at_goal(final)
-    report = ManeuverReport(ok, float(sim.time - t0), _time.perf_counter() - wall0, steps, float(pos_err.max()),
-                            float(head_err.max()), maneuver.escapes,
+    ok = task.state == DONE
+    if not ok:  # stop: the robots hold still (the firmware would brake anyway)
+        ports.send(reading.ids, np.zeros(m), np.zeros(m))
+        reading = ports.read()
+    final = reading.poses[rows]
+    pos_err, head_err = task.errors(final)
+    if ok:
+        off = (pos_err > accept_position) | (head_err > accept_heading)
+    elif task.timed_out:
+        task.stopped_at(final)  # a time-out: named over the poses the robots stopped at
+        off = task.not_at_pose
+    else:
+        off = ~maneuver.at_goal(final)
+    report = ManeuverReport(ok, float(reading.time) - t0, _time.perf_counter() - wall0, steps,
+                            float(pos_err.max()), float(head_err.max()), maneuver.escapes,
                             [int(v) for v in labels_arr[maneuver.escaped]],
-                            int(sim.report.steps_with_collision - collisions0),
+                            int(ports.report.steps_with_collision - collisions0),
                             [int(v) for v in labels_arr[off]])
     if not ok:
-        detail = ", ".join(f"robot {int(labels_arr[k])} {pos_err[k] * 100:.1f} cm / {np.rad2deg(head_err[k]):.1f} deg away"
-                           for k in np.flatnonzero(off))
-        raise SetupFailed(f"{what} did not finish within {time_limit:g} s: {detail}; every robot was stopped", report)
+        raise SetupFailed(task.message, report)
     return report
