@@ -25,8 +25,8 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from swarmdeck.core.kinematics import wrap_angle
 from swarmdeck.devices.fleet.maneuver import Maneuver
-from swarmdeck.devices.gritsbot import wrap_angle
 
 FloatArray = NDArray[np.float64]
 BoolArray = NDArray[np.bool_]
