@@ -21,9 +21,8 @@ os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 
 import statistics  # noqa: E402
 import sys  # noqa: E402
-import time  # noqa: E402
-
 import tempfile  # noqa: E402
+import time  # noqa: E402
 from pathlib import Path  # noqa: E402
 
 from swarmdeck.console.recording.recorder import Recorder  # noqa: E402

@@ -18,10 +18,16 @@ import time
 
 import numpy as np
 from scipy.spatial import Voronoi
-
-from swarmdeck.coverage import (CoverageConfig, QuadratureOptions, bounded_voronoi, cell_moments,
-                                centroid_jacobian, coverage_tick, moving_density,
-                                precondition_positions)
+from swarmdeck.coverage import (
+    CoverageConfig,
+    QuadratureOptions,
+    bounded_voronoi,
+    cell_moments,
+    centroid_jacobian,
+    coverage_tick,
+    moving_density,
+    precondition_positions,
+)
 
 DEFAULT = (-1.6, 1.6, -1.0, 1.0)
 LARGE = (-5.0, 5.0, -3.0, 3.0)

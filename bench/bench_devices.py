@@ -11,7 +11,6 @@ import platform
 import time
 
 import numpy as np
-
 from swarmdeck.devices import ArenaConfig, SimulatedArena, random_initial_poses
 
 
@@ -50,9 +49,9 @@ def main() -> None:
         v = rng.uniform(-0.2, 0.2, n)
         w = rng.uniform(-2, 2, n)
         repeats = 2000 if n <= 100 else 500
-        t_ours = median_time(lambda: sim.step(v, w), repeats)
+        t_ours = median_time(lambda: sim.step(v, w), repeats)  # noqa: B023  (timed at once)
         p = sim.poses
-        t_loop = median_time(lambda: looped_step(p, v, w, cfg.dt), max(20, repeats // 10))
+        t_loop = median_time(lambda: looped_step(p, v, w, cfg.dt), max(20, repeats // 10))  # noqa: B023  (timed at once)
         rows.append((n, t_ours * 1e3, t_loop * 1e3, t_loop / t_ours))
     print(f"machine: {platform.processor() or platform.machine()}, python {platform.python_version()}, numpy {np.__version__}")
     print("| N | swarmdeck step (ms, median) | per-robot loop baseline (ms) | speed-up |")

@@ -23,7 +23,6 @@ import time
 
 import numpy as np
 from pythonosc.osc_bundle import OscBundle
-
 from swarmdeck.inputs import ContactDensity, InputSource, parse_datagram
 from swarmdeck.inputs import oscbuild as ob
 
@@ -59,7 +58,7 @@ def main() -> int:
     def python_osc(ds):
         for d in ds:
             for m in OscBundle(d):
-                m.params
+                _ = m.params
 
     def ours_parse(ds):
         for d in ds:

@@ -79,12 +79,11 @@ def _child(mode: str, main: str, scenario: str) -> None:
 def _steps(n: int, k: int = 500) -> dict[str, float]:
     """µs per get_poses/set_velocities/step of the real rps (already on sys.path) and the facade in rps
     semantics, interleaved, best of 5."""
-    import numpy as np
     import matplotlib
+    import numpy as np
 
     matplotlib.use("Agg")
     import rps.robotarium as real
-
     from swarmdeck.devices.rps.robotarium import Robotarium
 
     ic = np.array([np.linspace(-1.4, 1.4, n), np.zeros(n), np.zeros(n)])

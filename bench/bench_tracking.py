@@ -19,10 +19,17 @@ import time
 
 import cv2
 import numpy as np
-
 from swarmdeck.tracking import (
-    CameraCalibration, CameraFrame, CameraPoseSource, SyntheticCamera, SyntheticCameraConfig, SyntheticRenderer,
-    Tracker, TrackerConfig, random_poses)
+    CameraCalibration,
+    CameraFrame,
+    CameraPoseSource,
+    SyntheticCamera,
+    SyntheticCameraConfig,
+    SyntheticRenderer,
+    Tracker,
+    TrackerConfig,
+    random_poses,
+)
 
 
 def _cpu() -> str:

@@ -26,7 +26,6 @@ import time
 from pathlib import Path
 
 import numpy as np
-
 from swarmdeck.devices.clock import RealTimePacer
 from swarmdeck.devices.net.mqtt_config import parse_broker_url
 from swarmdeck.devices.net.streamer import CommandStreamer

@@ -19,13 +19,12 @@ import numpy as np
 import scipy.sparse as sp
 from numpy.typing import ArrayLike, NDArray
 from scipy.spatial import QhullError
-
-from swarmdeck.coverage.density import Density, GaussianMixture
-from swarmdeck.coverage.jacobian import EdgeOptions, centroid_jacobian
 from swarmdeck.core.bounds import DEFAULT_BOUNDS, Bounds, check_bounds
 from swarmdeck.core.checks import require_in_range
 from swarmdeck.core.config import from_mapping
 from swarmdeck.core.kinematics import saturate
+from swarmdeck.coverage.density import Density, GaussianMixture
+from swarmdeck.coverage.jacobian import EdgeOptions, centroid_jacobian
 from swarmdeck.coverage.laws import law_command, parse_law
 from swarmdeck.coverage.packing import packing_warning
 from swarmdeck.coverage.quadrature import QuadratureOptions, cell_moments
@@ -76,7 +75,7 @@ class CoverageConfig:
             raise ValueError(f"packing_every must be >= 1, got {self.packing_every!r}")
 
     @classmethod
-    def from_dict(cls, data: dict[str, Any]) -> "CoverageConfig":
+    def from_dict(cls, data: dict[str, Any]) -> CoverageConfig:
         """Build from a plain dict (e.g. a TOML table); ``quadrature`` and ``edges`` may be
         nested tables. Raises ValueError naming unknown keys or bad values."""
         def table(typ: type, key: str):

@@ -27,7 +27,7 @@ __all__ = ["Density", "GaussianMixture", "merge_mixtures"]
 class Density(Protocol):
     """Anything that gives a Gaussian-mixture snapshot (with time derivatives) at time t [s]."""
 
-    def at(self, t: float) -> "GaussianMixture":  # pragma: no cover - protocol
+    def at(self, t: float) -> GaussianMixture:  # pragma: no cover - protocol
         ...
 
 
@@ -188,7 +188,7 @@ class GaussianMixture:
         raise AttributeError("GaussianMixture is immutable")
 
     # ------------------------------------------------------------------ protocol
-    def at(self, t: float) -> "GaussianMixture":
+    def at(self, t: float) -> GaussianMixture:
         """A snapshot is a (frozen-in-time) Density: returns itself for every t."""
         return self
 
@@ -268,7 +268,7 @@ class GaussianMixture:
             feat = np.column_stack([np.ones_like(x), x, y, x * x, x * y, y * y])
             small = chunk.shape[0] * cq.shape[1] * 6 < 200_000
 
-            def poly(c: NDArray[np.float64]) -> NDArray[np.float64]:
+            def poly(c: NDArray[np.float64], feat: NDArray[np.float64] = feat, small: bool = small) -> NDArray[np.float64]:
                 return feat @ c if small else np.einsum("mf,fk->mk", feat, c)
 
             e = np.exp(-0.5 * poly(cq))
@@ -296,7 +296,7 @@ class GaussianMixture:
         return out
 
     @classmethod
-    def from_dict(cls, data: dict[str, Any]) -> "GaussianMixture":
+    def from_dict(cls, data: dict[str, Any]) -> GaussianMixture:
         """Inverse of :meth:`to_dict`; raises ValueError for malformed data."""
         if not isinstance(data, dict):
             raise ValueError(f"density parameters must be a dict, got {type(data).__name__}")

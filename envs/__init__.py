@@ -14,8 +14,8 @@ Every action passes the barrier-certificate safety filter of ``swarmdeck.safety`
 (through ``swarmdeck.devices.Arena``) unless ``safety=False``. Episodes can be
 recorded to MCAP and played in the console: ``swarmdeck.console.recording.episodes``.
 """
+from swarmdeck.envs.centralised import CentralisedEnv
 from swarmdeck.envs.swarm import ACTIONS, EnvConfig, SwarmParallelEnv, parallel_env
 from swarmdeck.envs.tasks import TASKS
-from swarmdeck.envs.centralised import CentralisedEnv
 
 __all__ = ["ACTIONS", "CentralisedEnv", "EnvConfig", "SwarmParallelEnv", "TASKS", "parallel_env"]

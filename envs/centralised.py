@@ -16,7 +16,6 @@ import gymnasium
 import numpy as np
 from gymnasium import spaces
 from numpy.typing import NDArray
-
 from swarmdeck.envs.swarm import EnvConfig, SwarmParallelEnv
 
 

@@ -38,11 +38,15 @@ from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
-
 from swarmdeck.core.bounds import DEFAULT_BOUNDS, Bounds
 from swarmdeck.envs.observations import observation_bounds, observation_size, observe
 from swarmdeck.envs.tasks import (
-    TASKS, coverage_cells, coverage_reward, formation_reward, formation_slots, rendezvous_reward,
+    TASKS,
+    coverage_cells,
+    coverage_reward,
+    formation_reward,
+    formation_slots,
+    rendezvous_reward,
 )
 
 try:  # the optional extra: pip install 'swarmdeck[rl]'

@@ -30,7 +30,6 @@ from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-
 from swarmdeck.core.checks import in_range, require_in_range
 from swarmdeck.core.config import check_keys, field_names
 from swarmdeck.core.smooth import inverse_smoothstep, smoothstep
@@ -80,7 +79,7 @@ class DensityConfig:
             raise ValueError(f"density max_bumps must be an int >= 1, got {self.max_bumps!r}")
 
     @classmethod
-    def from_dict(cls, d: dict) -> "DensityConfig":
+    def from_dict(cls, d: dict) -> DensityConfig:
         """Build from a mapping (``[inputs.density]``); unknown keys are an error."""
         return cls(**check_keys(d, field_names(cls), "density", error=ValueError))
 

@@ -98,7 +98,7 @@ class PointStreamConfig:
         return None if m is None else m.groupdict()
 
     @classmethod
-    def from_dict(cls, d: dict) -> "PointStreamConfig":
+    def from_dict(cls, d: dict) -> PointStreamConfig:
         """Build from a config mapping; unknown keys are an error."""
         kw = check_keys(d, field_names(cls), "point stream", error=ValueError)
         for k in ("x_range", "y_range"):

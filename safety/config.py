@@ -181,7 +181,7 @@ class BarrierConfig:
         return self.mode == "distributed" or (self.mode == "auto" and n > self.distributed_above)
 
     @classmethod
-    def from_dict(cls, data: dict) -> "BarrierConfig":
+    def from_dict(cls, data: dict) -> BarrierConfig:
         """Build from a plain mapping (e.g. a TOML ``[safety]`` table); unknown keys are refused."""
         return from_mapping(cls, data, "BarrierConfig", error=ValueError, convert={"bounds": floats},
                             template="{what}: unknown setting(s) {unknown}; known: {known}")
@@ -215,7 +215,10 @@ class BarrierConfig:
         bisection (the gap is increasing in d for d > D_s).
         """
         d_lo, d_hi = self.safety_distance, self.safety_distance + 1.0
-        gap = lambda d: self.gamma * self.kappa(d * d - self.safety_distance**2) - 4 * d * self.max_speed
+
+        def gap(d: float) -> float:
+            return self.gamma * self.kappa(d * d - self.safety_distance**2) - 4 * d * self.max_speed
+
         while gap(d_hi) < 0:
             d_hi *= 2
         for _ in range(80):

@@ -231,7 +231,6 @@ def solve_small_qps(owner: np.ndarray, a: np.ndarray, b: np.ndarray, nominal: np
     where = np.full((s, K), -1, dtype=np.int64)  # position in the caller's arrays
     where[slot, col] = idx
     U = uh[robots]
-    rs = np.arange(s)
 
     # Π_D(û): û itself, or its radial projection on the speed disc; optimal when feasible
     sp = speed[robots]

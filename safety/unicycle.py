@@ -15,8 +15,13 @@ import dataclasses
 import time
 
 import numpy as np
-
-from swarmdeck.core.kinematics import UnicycleParams, lookahead_points, si_to_unicycle, unicycle_to_si, unicycle_to_wheels
+from swarmdeck.core.kinematics import (
+    UnicycleParams,
+    lookahead_points,
+    si_to_unicycle,
+    unicycle_to_si,
+    unicycle_to_wheels,
+)
 
 from .config import BarrierConfig
 from .constraints import LIMIT, Rows

@@ -154,7 +154,7 @@ class ContactLog:
         s = 1.0 - self.total_vn / (max(self.n_robots, 1) * max(self.steps, 1) * v_max)
         return float(np.clip(s, 0.0, 1.0))
 
-    def report(self, v_max: float, final_positions: np.ndarray) -> "VerificationReport":
+    def report(self, v_max: float, final_positions: np.ndarray) -> VerificationReport:
         durations = self.durations + list(self.running.values())
         contacts = self.contacts
         return VerificationReport(

@@ -13,11 +13,10 @@ from pathlib import Path
 
 import cv2
 import numpy as np
-
 from swarmdeck.core.checks import in_range
 from swarmdeck.tracking.camera_model import PinholeCamera
-from swarmdeck.tracking.jsonfile import read_json_object, write_json
 from swarmdeck.tracking.dictionaries import canonical_dictionary, dictionary
+from swarmdeck.tracking.jsonfile import read_json_object, write_json
 
 
 class CalibrationError(ValueError):
@@ -56,7 +55,7 @@ class CameraCalibration:
         return out.reshape(p.shape)
 
     @staticmethod
-    def from_camera(camera: PinholeCamera) -> "CameraCalibration":
+    def from_camera(camera: PinholeCamera) -> CameraCalibration:
         """The exact intrinsics of a (synthetic) pinhole camera."""
         return CameraCalibration(camera.K.copy(), camera.dist.copy(), tuple(camera.size), 0.0, 0)
 
@@ -67,7 +66,7 @@ class CameraCalibration:
                 "n_images": int(self.n_images)}
 
     @staticmethod
-    def from_dict(d: dict) -> "CameraCalibration":
+    def from_dict(d: dict) -> CameraCalibration:
         """Parse and check the JSON form (raises :class:`CalibrationError`)."""
         try:
             K = np.asarray(d["camera_matrix"], dtype=float)
@@ -88,7 +87,7 @@ class CameraCalibration:
         write_json(path, self.to_dict(), "calibration file", CalibrationError)
 
     @staticmethod
-    def load(path: str | Path) -> "CameraCalibration":
+    def load(path: str | Path) -> CameraCalibration:
         """Read a JSON calibration file (raises :class:`CalibrationError` naming the problem)."""
         d = read_json_object(path, "calibration file", CalibrationError)
         return CameraCalibration.from_dict(d)

@@ -11,9 +11,8 @@ from dataclasses import dataclass
 
 import cv2
 import numpy as np
-
-from swarmdeck.tracking.markers import ReferenceMarker, reference_corners
 from swarmdeck.tracking.dictionaries import dictionary
+from swarmdeck.tracking.markers import ReferenceMarker, reference_corners
 
 
 @dataclass(frozen=True, eq=False)

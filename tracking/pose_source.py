@@ -17,7 +17,6 @@ from pathlib import Path
 
 import cv2
 import numpy as np
-
 from swarmdeck.core.ports import SensedPoses
 from swarmdeck.tracking.calibration import CameraCalibration
 from swarmdeck.tracking.config import TrackerConfig
@@ -63,7 +62,7 @@ class CameraPoseSource:
     def open(cls, spec: str | int, *, get_poses: Callable[[float], np.ndarray] | None = None,
              ids: Sequence[int] | None = None, config: TrackerConfig | str | Path | None = None,
              get_density: Callable[[float], np.ndarray | None] | None = None,
-             synthetic: SyntheticCameraConfig | None = None, paced: bool = True) -> "CameraPoseSource":
+             synthetic: SyntheticCameraConfig | None = None, paced: bool = True) -> CameraPoseSource:
         """Build a camera + tracker from a command-line spec (``swarmdeck console --camera``).
 
         ``"synthetic"``: a :class:`SyntheticCamera` rendering ``get_poses(now)`` (robot ``ids``)

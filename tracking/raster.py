@@ -7,8 +7,8 @@ from __future__ import annotations
 
 import cv2
 import numpy as np
-
 from swarmdeck.tracking.dictionaries import dictionary
+
 
 def marker_image(dict_name: str, marker_id: int, px_per_bit: int = 24) -> np.ndarray:
     """(S, S) uint8 printed marker incl. its 1-bit black border, S = (bits + 2)·px_per_bit."""

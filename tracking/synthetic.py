@@ -18,12 +18,11 @@ from dataclasses import dataclass, field
 
 import cv2
 import numpy as np
-
 from swarmdeck.core.bounds import DEFAULT_BOUNDS, Bounds
 from swarmdeck.tracking.calibration import CharucoSpec
 from swarmdeck.tracking.camera_model import PinholeCamera, overhead_camera
-from swarmdeck.tracking.markers import DEFAULT_REFERENCES, ReferenceMarker, marker_corners
 from swarmdeck.tracking.dictionaries import dictionary
+from swarmdeck.tracking.markers import DEFAULT_REFERENCES, ReferenceMarker, marker_corners
 from swarmdeck.tracking.raster import disc_coverage, marker_image, pixel_edge_square, warp_into
 from swarmdeck.tracking.types import CameraFrame
 
