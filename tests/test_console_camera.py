@@ -3,11 +3,10 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-
 from swarmdeck.console.runtime.hardware import camera_source
 from swarmdeck.console.runtime.loop import ControlLoop, LoopConfig
-from swarmdeck.devices.simulated_robots import SimulatedRobots
 from swarmdeck.devices import ArenaConfig
+from swarmdeck.devices.simulated_robots import SimulatedRobots
 
 
 def test_tracked_poses_follow_the_simulation() -> None:
@@ -34,7 +33,6 @@ def test_bad_camera_spec_is_named() -> None:
 
 def test_camera_image_is_drawn_under_the_robots() -> None:
     import viser
-
     from swarmdeck.console.web.scene import ArenaScene
 
     cfg = LoopConfig(seed=2, n_robots=4)

@@ -2,7 +2,6 @@
 from __future__ import annotations
 
 import pytest
-
 from swarmdeck.console.runtime.config import ConfigFileError, load_settings
 
 

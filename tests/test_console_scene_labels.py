@@ -3,7 +3,6 @@ from __future__ import annotations
 
 import numpy as np
 import viser
-
 from swarmdeck.console.runtime.loop import ControlLoop, LoopConfig
 from swarmdeck.console.web.scene import ArenaScene
 

@@ -9,7 +9,6 @@ import sys
 
 import numpy as np
 import pytest
-
 from swarmdeck.console.runtime.deadline import DeadlineCaller, TickBudgetExceeded
 from swarmdeck.console.runtime.loop import ControlLoop, LoopConfig
 

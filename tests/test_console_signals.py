@@ -8,7 +8,6 @@ import subprocess
 import sys
 
 import pytest
-
 from swarmdeck.console.recording.reader import open_recording
 
 

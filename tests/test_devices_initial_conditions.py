@@ -2,7 +2,6 @@
 import numpy as np
 import pytest
 from scipy.spatial.distance import pdist
-
 from swarmdeck.devices import max_robots, random_initial_poses
 
 

@@ -2,7 +2,6 @@
 import textwrap
 
 import pytest
-
 from swarmdeck.console.cli import main
 
 SCRIPTS = {

@@ -4,11 +4,10 @@ from __future__ import annotations
 import numpy as np
 from hypothesis import given, settings
 from hypothesis import strategies as st
-
-from swarmdeck.devices.fleet.battery import BatteryParams
-from swarmdeck.devices.net.firmware import FirmwareParams, FleetState
 from swarmdeck.core.kinematics import GritsBotParams
+from swarmdeck.devices.fleet.battery import BatteryParams
 from swarmdeck.devices.gritsbot import unicycle_step
+from swarmdeck.devices.net.firmware import FirmwareParams, FleetState
 
 
 def straight_fleet(n: int = 1) -> FleetState:

@@ -2,9 +2,8 @@
 from __future__ import annotations
 
 import numpy as np
-
-from swarmdeck.devices import Arena, ArenaConfig, RobotBackend, SimulatedArena
 from swarmdeck.core.kinematics import unicycle_to_wheels
+from swarmdeck.devices import Arena, ArenaConfig, RobotBackend, SimulatedArena
 from swarmdeck.devices.net.transport import PoseFeed, RobotTransport
 from swarmdeck.devices.net.transport_backend import TransportBackend
 from swarmdeck.devices.net.transport_inprocess import InProcessTransport

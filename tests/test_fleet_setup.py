@@ -1,8 +1,8 @@
 """Setup from the chargers: every robot reaches its start pose (2 cm, 5 deg), no collision, bad input named."""
 import numpy as np
 import pytest
-from hypothesis import given, settings, strategies as st
-
+from hypothesis import given, settings
+from hypothesis import strategies as st
 from swarmdeck.devices.fleet import AssignmentError, FleetManager, SetupFailed
 from swarmdeck.devices.fleet.setup import ACCEPT_HEADING, ACCEPT_POSITION
 from swarmdeck.devices.gritsbot import wrap_angle

@@ -2,7 +2,6 @@
 from __future__ import annotations
 
 import pytest
-
 from swarmdeck.inputs import ConfigError, InputConfig, InputHub, ListenerConfig, TcpListener, UdpListener
 
 TOML = """

@@ -1,13 +1,11 @@
 """Generic OSC point streams and the gesture-bridge presets."""
 from __future__ import annotations
 
-import socket
 import time
 
 import numpy as np
 import pytest
 from pythonosc.udp_client import SimpleUDPClient
-
 from swarmdeck.inputs import PRESETS, Calibration, InputSource, ListenerConfig, PointStreamConfig, UdpListener
 from swarmdeck.inputs import oscbuild as ob
 

@@ -9,7 +9,6 @@ import numpy as np
 import pytest
 from pythonosc.osc_bundle_builder import IMMEDIATELY, OscBundleBuilder
 from pythonosc.osc_message_builder import OscMessageBuilder
-
 from swarmdeck.inputs import Calibration, InputSource, ListenerConfig
 from swarmdeck.inputs import oscbuild as ob
 

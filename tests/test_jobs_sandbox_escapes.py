@@ -5,13 +5,11 @@ import textwrap
 
 import numpy as np
 import pytest
-
 from swarmdeck.console.jobs.confinement import JAILS, JailConfig, SandboxLimits, choose_jail, processes_of
 from swarmdeck.console.jobs.plant import ArenaPlant
 from swarmdeck.console.jobs.sandbox import run_sandboxed
 from swarmdeck.devices.arena import Arena
 from swarmdeck.devices.simulator import ArenaConfig
-
 
 
 def plant(n, initial):

@@ -3,12 +3,10 @@ both jails, and an import outside it is refused with a message naming the packag
 import os
 import subprocess
 import sys
-from pathlib import Path
 
 import pytest
 from jail_fixtures import jail_run  # noqa: F401
 from script_env_fixtures import USES_THE_ENV, env  # noqa: F401
-
 from swarmdeck.console.jobs.import_policy import refusal
 from swarmdeck.console.jobs.script_env import PROVIDED, ScriptEnv, create, format_listing, listing
 

@@ -2,7 +2,6 @@
 import threading
 
 import pytest
-
 from swarmdeck.console.jobs.confinement import probe
 from swarmdeck.console.jobs.executors import SerialExecutor
 from swarmdeck.console.jobs.verification import VerificationCancelled, VerificationConfig, verify

@@ -20,7 +20,6 @@ from mcap.reader import make_reader
 from mcap.records import Channel, Chunk, Message
 from mcap.stream_reader import StreamReader, breakup_chunk
 from mcap.writer import Writer
-
 from swarmdeck.console.recording.codec import decode_frame, encode_frame, unpack_array
 from swarmdeck.console.recording.reader import open_recording
 from swarmdeck.console.recording.recorder import Recorder, RecorderConfig

@@ -11,7 +11,6 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-
 from swarmdeck.safety import BarrierConfig, SafetyFilter
 from swarmdeck.safety.constraints import barrier_rows
 from swarmdeck.safety.scenes import arena_for, grid_scene

@@ -5,9 +5,15 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-
 from swarmdeck.tracking import (
-    CameraCalibration, CameraFrame, SyntheticCameraConfig, SyntheticRenderer, Tracker, TrackerConfig, random_poses)
+    CameraCalibration,
+    CameraFrame,
+    SyntheticCameraConfig,
+    SyntheticRenderer,
+    Tracker,
+    TrackerConfig,
+    random_poses,
+)
 
 
 @pytest.fixture(scope="module")

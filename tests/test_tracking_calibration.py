@@ -6,11 +6,20 @@ import json
 
 import numpy as np
 import pytest
-
 from swarmdeck.console.cli import main as cli
 from swarmdeck.tracking import (
-    CalibrationError, CameraCalibration, CameraFrame, CharucoSpec, ConfigError, SyntheticCameraConfig,
-    SyntheticRenderer, Tracker, TrackerConfig, calibrate_charuco, random_poses)
+    CalibrationError,
+    CameraCalibration,
+    CameraFrame,
+    CharucoSpec,
+    ConfigError,
+    SyntheticCameraConfig,
+    SyntheticRenderer,
+    Tracker,
+    TrackerConfig,
+    calibrate_charuco,
+    random_poses,
+)
 from swarmdeck.tracking.synthetic import charuco_views
 
 

@@ -5,10 +5,16 @@ from __future__ import annotations
 import cv2
 import numpy as np
 import pytest
-
 from swarmdeck.tracking import (
-    CameraCalibration, CameraPoseSource, SyntheticCamera, SyntheticCameraConfig, SyntheticRenderer, Tracker,
-    TrackerConfig, random_poses)
+    CameraCalibration,
+    CameraPoseSource,
+    SyntheticCamera,
+    SyntheticCameraConfig,
+    SyntheticRenderer,
+    Tracker,
+    TrackerConfig,
+    random_poses,
+)
 
 
 class MovingRobots:
