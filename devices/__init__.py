@@ -5,18 +5,6 @@ The :class:`Arena` is what experiments program against, at any abstraction
 level of the paper (wheel speeds, unicycle, single integrator, go-to-goal,
 waypoints, next positions); it runs on a :class:`SimulatedArena` by default.
 """
-from swarmdeck.devices.arena import Arena, ArenaReport, ExperimentFinished, RunDefaults, RUN_DEFAULTS
-from swarmdeck.devices.backend import RobotBackend
-from swarmdeck.devices.controllers import (
-    HybridPoseController,
-    at_pose,
-    at_position,
-    clf_unicycle_pose_controller,
-    clf_unicycle_position_controller,
-    si_position_controller,
-)
-from swarmdeck.devices.gritsbot import unicycle_step, wrap_angle
-from swarmdeck.devices.initial_conditions import max_robots, random_initial_poses
 from swarmdeck.core.kinematics import (
     GritsBotParams,
     limit_unicycle,
@@ -28,6 +16,18 @@ from swarmdeck.core.kinematics import (
     wheel_scale,
     wheels_to_unicycle,
 )
+from swarmdeck.devices.arena import RUN_DEFAULTS, Arena, ArenaReport, ExperimentFinished, RunDefaults
+from swarmdeck.devices.backend import RobotBackend
+from swarmdeck.devices.controllers import (
+    HybridPoseController,
+    at_pose,
+    at_position,
+    clf_unicycle_pose_controller,
+    clf_unicycle_position_controller,
+    si_position_controller,
+)
+from swarmdeck.devices.gritsbot import unicycle_step, wrap_angle
+from swarmdeck.devices.initial_conditions import max_robots, random_initial_poses
 from swarmdeck.devices.simulator import ArenaConfig, SimulatedArena
 from swarmdeck.devices.validation import ValidationReport, ValidationRules, colliding_pairs, out_of_bounds
 
@@ -53,7 +53,7 @@ def __getattr__(name: str):
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
-__all__ = [*_LAZY,
+__all__ = [*_LAZY,  # noqa: PLE0604  (the lazily imported names)
     "Arena", "ArenaConfig", "ArenaReport", "ExperimentFinished", "GritsBotParams", "HybridPoseController",
     "RobotBackend", "RunDefaults", "RUN_DEFAULTS", "SimulatedArena", "ValidationReport", "ValidationRules",
     "at_pose", "at_position", "clf_unicycle_pose_controller", "clf_unicycle_position_controller",

@@ -23,7 +23,7 @@ from typing import Any, Literal, Protocol
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-
+from swarmdeck.core.kinematics import GritsBotParams, lookahead_points, unicycle_to_si, wheels_to_unicycle
 from swarmdeck.devices.backend import RobotBackend
 from swarmdeck.devices.controllers import (
     HybridPoseController,
@@ -32,7 +32,6 @@ from swarmdeck.devices.controllers import (
     clf_unicycle_position_controller,
     si_position_controller,
 )
-from swarmdeck.core.kinematics import GritsBotParams, lookahead_points, unicycle_to_si, wheels_to_unicycle
 from swarmdeck.devices.pipeline import barrier_filter, certify
 from swarmdeck.devices.simulator import ArenaConfig, SimulatedArena, check_poses
 
@@ -71,7 +70,7 @@ class RunDefaults:
     rps_call_order: bool = True
 
 
-RUN_DEFAULTS: contextvars.ContextVar[RunDefaults] = contextvars.ContextVar("swarmdeck_run_defaults", default=RunDefaults())
+RUN_DEFAULTS: contextvars.ContextVar[RunDefaults] = contextvars.ContextVar("swarmdeck_run_defaults", default=RunDefaults())  # noqa: B039  (frozen)
 
 
 class UnicycleCommandFilter(Protocol):
@@ -505,7 +504,7 @@ class Arena:
         return new_poses
 
     # ------------------------------------------------------------------ reporting
-    def report(self) -> "ArenaReport":
+    def report(self) -> ArenaReport:
         """What happened so far: validation counts, safety filter statistics, invalid commands."""
         validation = getattr(self.backend, "report", None)
         fleet = None if self.fleet is None else fleet_summary(self.fleet)

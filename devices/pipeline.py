@@ -41,7 +41,6 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-
 from swarmdeck.core.kinematics import GritsBotParams, limit_unicycle, lookahead_points, si_to_unicycle, unicycle_to_si
 
 if TYPE_CHECKING:
@@ -240,9 +239,9 @@ def brake(cert: Certified, poses: ArrayLike, robot: GritsBotParams, dt: float, d
 
 
 def certify_bypassed(poses: ArrayLike, nominal: ArrayLike, robot: GritsBotParams, hard: Any, monitor: Any,
-                     guard: "GuardConfig", dt: float, *, seen: ArrayLike | None = None,
+                     guard: GuardConfig, dt: float, *, seen: ArrayLike | None = None,
                      obstacles: ArrayLike | None = None, names: ArrayLike | None = None
-                     ) -> tuple[Certified, Certified, "GuardCheck", BoolArray]:
+                     ) -> tuple[Certified, Certified, GuardCheck, BoolArray]:
     """One tick of a bypassed barrier (module docstring): ``(commands to send, the full barrier's answer, the
     guard's verdict, (N,) robots the brake stopped)``. The commands are ``hard``'s (walls and obstacles only) unless
     the guard trips, then the full barrier's (``monitor``); the brake is applied to them.

@@ -13,7 +13,6 @@ from dataclasses import dataclass, field
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-
 from swarmdeck.core.bounds import Bounds
 from swarmdeck.core.kinematics import lookahead_points
 

@@ -29,7 +29,6 @@ from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-
 from swarmdeck.core.bounds import Bounds
 from swarmdeck.core.kinematics import GritsBotParams
 from swarmdeck.core.ports import CommandSink, PoseSource, SensedPoses, close_ports
@@ -84,7 +83,7 @@ class MixedRobots:
 
     @classmethod
     def add_virtual(cls, source: PoseSource, sink: CommandSink, k: int, config: ArenaConfig,
-                    params: GritsBotParams | None = None) -> "MixedRobots":
+                    params: GritsBotParams | None = None) -> MixedRobots:
         """K virtual robots beside the robots ``source`` reads now: ids after the largest physical id,
         start poses clear of every physical robot (:func:`virtual_start_poses`, seeded by ``config.seed``).
 
@@ -185,7 +184,7 @@ class MixedBackend:
         self.is_virtual.setflags(write=False)
 
     @classmethod
-    def add_virtual(cls, physical: RobotBackend, k: int, config: ArenaConfig) -> "MixedBackend":
+    def add_virtual(cls, physical: RobotBackend, k: int, config: ArenaConfig) -> MixedBackend:
         """K virtual robots clear of the physical ones (:func:`virtual_start_poses`, seeded by ``config.seed``)."""
         start = virtual_start_poses(k, physical.poses[:, :2], config.bounds, config.seed)
         virtual = SimulatedArena(None, start, config=ArenaConfig(bounds=config.bounds, dt=config.dt, seed=config.seed),

@@ -20,8 +20,8 @@ from swarmdeck.devices.fleet.battery import (
 )
 from swarmdeck.devices.fleet.chargers import WALLS, ChargerLayout
 from swarmdeck.devices.fleet.docking import choose_slots, return_maneuver
-from swarmdeck.devices.fleet.maneuver import Maneuver, ManeuverParams
 from swarmdeck.devices.fleet.manager import FleetConfig, FleetExperiment, FleetManager
+from swarmdeck.devices.fleet.maneuver import Maneuver, ManeuverParams
 from swarmdeck.devices.fleet.setup import ManeuverReport, SetupFailed, check_start_poses, drive
 
 __all__ = [

@@ -28,7 +28,6 @@ from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-
 from swarmdeck.core.kinematics import GritsBotParams, limit_unicycle, lookahead_points
 from swarmdeck.devices.fleet.assignment import Assignment, AssignmentPolicy, assign
 from swarmdeck.devices.fleet.battery import BatteryParams, battery_step, recharge
@@ -201,7 +200,7 @@ class FleetManager:
         self.last_setup = report
         return report
 
-    def experiment(self) -> "FleetExperiment":
+    def experiment(self) -> FleetExperiment:
         """The assigned robots as the experiment's robots 0…N−1 (after :meth:`setup`)."""
         if self.assignment is None:
             raise RuntimeError("no robots are assigned: call setup() first")

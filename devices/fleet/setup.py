@@ -17,7 +17,6 @@ from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-
 from swarmdeck.core.bounds import Bounds
 from swarmdeck.core.kinematics import GritsBotParams, lookahead_points
 from swarmdeck.devices.fleet.maneuver import Maneuver
@@ -150,7 +149,7 @@ def drive(sim: SimulatedArena, maneuver: Maneuver, rows: ArrayLike, filt: Any, *
     m = sim.n_robots
     moving = np.zeros(m, dtype=bool)
     moving[rows] = True
-    robot, dt = sim.params, sim.config.dt
+    robot = sim.params
     t0, wall0 = sim.time, _time.perf_counter()
     collisions0 = sim.report.steps_with_collision
     steps = 0

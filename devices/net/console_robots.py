@@ -23,7 +23,6 @@ from collections.abc import Callable
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-
 from swarmdeck.core.ports import SensedPoses
 from swarmdeck.devices.net.mqtt_config import parse_broker_url, redact_url
 from swarmdeck.devices.net.streamer import CommandStreamer, StreamerConfig
@@ -71,7 +70,7 @@ class NetworkRobots:
         timeouts: LinkTimeouts = LinkTimeouts(),
         streamer: StreamerConfig = StreamerConfig(),
         **mqtt: object,
-    ) -> "NetworkRobots":
+    ) -> NetworkRobots:
         """Connect to ``url`` and wait up to ``wait_for_poses`` s for the first pose of every robot.
 
         ``ids`` (or ``n_robots`` for ids 0..N−1) fixes the robots to control; with neither,

@@ -20,14 +20,13 @@ from typing import IO
 
 import numpy as np
 from numpy.typing import ArrayLike
-
+from swarmdeck.core.kinematics import GritsBotParams
 from swarmdeck.devices.fleet.chargers import ChargerLayout
 from swarmdeck.devices.net.firmware import BatteryParams, FirmwareParams, FleetState
-from swarmdeck.core.kinematics import GritsBotParams
-from swarmdeck.devices.net.mqtt_config import MqttConfig
 from swarmdeck.devices.net.link import MqttLink
-from swarmdeck.devices.net.wire import WireError, decode_command, encode_poses, encode_status
+from swarmdeck.devices.net.mqtt_config import MqttConfig
 from swarmdeck.devices.net.transport import Counters
+from swarmdeck.devices.net.wire import WireError, decode_command, encode_poses, encode_status
 
 
 class FleetNode:
@@ -136,7 +135,7 @@ class FleetNode:
         self.state.receive(rows, v, w, t, leds)
 
     # ---------------------------------------------------------------- loop
-    def start(self) -> "FleetNode":
+    def start(self) -> FleetNode:
         """Connect and run the firmware loop in a background thread."""
         self.link.start()
         self._thread = threading.Thread(target=self.run, name=f"{self.name}-loop", daemon=True)

@@ -18,9 +18,8 @@ from collections.abc import Callable, Sequence
 
 import paho.mqtt.client as mqtt
 from paho.mqtt.enums import CallbackAPIVersion
-from paho.mqtt.properties import Properties
 from paho.mqtt.packettypes import PacketTypes
-
+from paho.mqtt.properties import Properties
 from swarmdeck.devices.net.mqtt_config import MqttConfig
 from swarmdeck.devices.net.transport import Counters
 
@@ -97,7 +96,7 @@ class MqttLink:
             self._expiry.MessageExpiryInterval = 1
 
     # ---------------------------------------------------------------- lifetime
-    def start(self) -> "MqttLink":
+    def start(self) -> MqttLink:
         """Start connecting in the background (returns at once)."""
         try:
             if self.config.protocol == "5":

@@ -32,7 +32,6 @@ from dataclasses import dataclass, field
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-
 from swarmdeck.core.checks import require_positive
 from swarmdeck.devices.net.transport import Counters, PoseFeed, RobotTransport, check_command
 
@@ -212,7 +211,7 @@ class CommandStreamer:
     def _account(self, now: float, ids: IntArray, stale_pose: NDArray[np.bool_], stale_input: NDArray[np.bool_],
                  excluded: NDArray[np.bool_], delivered: bool) -> None:
         labels = {
-            "stale_pose": ("pose older than %.2f s: commanded to zero" % self.config.pose_timeout, "poses fresh again"),
+            "stale_pose": (f"pose older than {self.config.pose_timeout:.2f} s: commanded to zero", "poses fresh again"),
             "stale_input": ("commands older than their timeout: commanded to zero", "commands fresh again"),
             "excluded": ("missing or duplicated: excluded from control (fixed obstacle at last known position)",
                          "answering again: back under control"),
@@ -262,7 +261,7 @@ class CommandStreamer:
         return StreamerHealth(st.connected, st.state, counters, tuple(self.events), excluded)
 
     # ---------------------------------------------------------------- background streaming
-    def start(self) -> "CommandStreamer":
+    def start(self) -> CommandStreamer:
         """Keep commands flowing from a background thread until :meth:`stop`.
 
         The thread ticks whenever no tick happened for ``period`` s, so a loop that calls

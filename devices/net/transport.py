@@ -54,7 +54,7 @@ class PoseSample:
     stamps: FloatArray
 
     @staticmethod
-    def empty() -> "PoseSample":
+    def empty() -> PoseSample:
         return PoseSample(np.empty(0, dtype=np.intp), np.empty((0, 3)), np.empty(0))
 
     def ages(self, now: float) -> FloatArray:
@@ -108,7 +108,7 @@ class RobotStatusTable:
         return volts, charging
 
     @staticmethod
-    def empty() -> "RobotStatusTable":
+    def empty() -> RobotStatusTable:
         return RobotStatusTable(np.empty(0, dtype=np.intp), np.empty(0), np.zeros(0, bool), np.empty(0), np.empty(0), ())
 
     def to_dict(self) -> dict:

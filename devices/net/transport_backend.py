@@ -22,9 +22,8 @@ from collections.abc import Callable
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-
-from swarmdeck.devices.clock import RealTimePacer
 from swarmdeck.core.kinematics import GritsBotParams, limit_unicycle
+from swarmdeck.devices.clock import RealTimePacer
 from swarmdeck.devices.net.mqtt_config import parse_broker_url
 from swarmdeck.devices.net.streamer import CommandStreamer, StreamerConfig
 from swarmdeck.devices.net.transport import PoseFeed, RobotTransport

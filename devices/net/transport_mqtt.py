@@ -18,10 +18,8 @@ from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-
-from swarmdeck.devices.net.mqtt_config import MqttConfig
 from swarmdeck.devices.net.link import MqttLink
-from swarmdeck.devices.net.wire import WireError, decode_poses, decode_status, encode_commands
+from swarmdeck.devices.net.mqtt_config import MqttConfig
 from swarmdeck.devices.net.transport import (
     LINK_MISSING,
     LINK_OK,
@@ -33,6 +31,7 @@ from swarmdeck.devices.net.transport import (
     TransportStatus,
     check_command,
 )
+from swarmdeck.devices.net.wire import WireError, decode_poses, decode_status, encode_commands
 
 LINK_DUPLICATE = "duplicate"  # two nodes claim this id: commands reach both, so it is not controlled
 
@@ -136,11 +135,11 @@ class MqttTransport:
         )
 
     # ---------------------------------------------------------------- lifetime
-    def start(self) -> "MqttTransport":
+    def start(self) -> MqttTransport:
         self.link.start()
         return self
 
-    def __enter__(self) -> "MqttTransport":
+    def __enter__(self) -> MqttTransport:
         return self.start()
 
     def __exit__(self, *exc: object) -> None:

@@ -15,10 +15,10 @@ import importlib
 import importlib.abc
 import importlib.machinery
 import sys
+from collections.abc import Iterator
+from contextlib import contextmanager
 from types import ModuleType
 from typing import Any
-from contextlib import contextmanager
-from collections.abc import Iterator
 
 MODULES = (
     "robotarium",

@@ -20,7 +20,6 @@ def pyplot() -> Any:
 
     matplotlib.use("Agg")  # before pyplot is imported; a script's later plt.show() is then a no-op
     import matplotlib.pyplot as plt
-
     from swarmdeck.devices.rps import provide_get_cmap
 
     provide_get_cmap()  # rps-era scripts colour with plt.cm.get_cmap
@@ -28,7 +27,7 @@ def pyplot() -> Any:
     return plt
 
 
-def arena_figure(boundaries: tuple[float, float, float, float]) -> "tuple[Figure, Axes]":
+def arena_figure(boundaries: tuple[float, float, float, float]) -> tuple[Figure, Axes]:
     """A figure and axes showing the arena ``(x_min, y_min, width, height)`` in metres, as rps sets up."""
     plt = pyplot()
     from matplotlib.patches import Rectangle
