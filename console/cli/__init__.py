@@ -29,7 +29,6 @@ import sys  # noqa: E402
 from collections.abc import Sequence  # noqa: E402
 
 
-
 class UsageError(Exception):
     """A mistake in the command line or in a file the user named."""
 

@@ -19,7 +19,6 @@ from pathlib import Path
 
 import cv2
 import numpy as np
-
 from swarmdeck.console.cli import UsageError
 
 NAME = "calibrate"

@@ -245,10 +245,9 @@ def _robots(config, camera: str | None, robots_via: str | None, virtual: int | N
     with --camera, plus ``virtual`` virtual robots simulated here (one ``MixedRobots`` as both ports).
     Raises ValueError/OSError naming what could not be opened."""
     import numpy as np
-
     from swarmdeck.console.runtime.hardware import camera_source, mqtt_robots
-    from swarmdeck.devices.simulated_robots import SimulatedRobots
     from swarmdeck.devices import ArenaConfig
+    from swarmdeck.devices.simulated_robots import SimulatedRobots
 
     ids = np.arange(config.n_robots, dtype=np.int64)
     if robots_via:

@@ -107,8 +107,8 @@ def _open(args: argparse.Namespace) -> tuple[Any, Any]:
     from swarmdeck.console.runtime.loop import ControlLoop, LoopConfig
     from swarmdeck.devices.clock import RealTimePacer
     from swarmdeck.devices.fleet.chargers import ChargerLayout
-    from swarmdeck.devices.simulator import ArenaConfig
     from swarmdeck.devices.simulated_robots import SimulatedRobots
+    from swarmdeck.devices.simulator import ArenaConfig
 
     cfg = LoopConfig(n_robots=args.simulated or 1, behaviour="rendezvous", seed=args.seed)
     if args.simulated is not None:

@@ -29,7 +29,7 @@ def summarise(path: str) -> dict:
 
     with open_recording(path) as rec:
         cfg = rec.config()
-        first, last = rec.first_frame, rec.last_frame
+        first = rec.first_frame
         counts = rec.message_counts()
         events, changes = [], []
         if first is not None:

@@ -15,9 +15,8 @@ import threading
 import time
 
 import numpy as np
-
-from swarmdeck.core.bounds import DEFAULT_BOUNDS
 from swarmdeck.console.cli import UsageError
+from swarmdeck.core.bounds import DEFAULT_BOUNDS
 
 NAME = "robots"
 HELP = "run a simulated GRITSBot fleet that takes commands over MQTT (like the robots' firmware)"
@@ -88,9 +87,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 def main(args: argparse.Namespace) -> int:
     from swarmdeck.devices.fleet.battery import BatteryParams
     from swarmdeck.devices.fleet.chargers import ChargerLayout
+    from swarmdeck.devices.initial_conditions import random_initial_poses
     from swarmdeck.devices.net.firmware import FirmwareParams
     from swarmdeck.devices.net.fleet import FleetNode
-    from swarmdeck.devices.initial_conditions import random_initial_poses
     from swarmdeck.devices.net.mqtt_config import parse_broker_url
 
     if args.ids is not None:

@@ -386,7 +386,7 @@ class OomGuard:
                 self.group.kill(timeout=2.0)
                 return
 
-    def __enter__(self) -> "OomGuard":
+    def __enter__(self) -> OomGuard:
         if self.group.version == 1:
             self._thread.start()
         return self

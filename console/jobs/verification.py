@@ -44,23 +44,22 @@ from __future__ import annotations
 import math
 import os
 import re
-import time
 import shutil
 import tempfile
 import threading
+import time
 from collections.abc import Callable, Sequence
 from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
 import numpy as np
-
 from swarmdeck.console.jobs.bundle import ScriptBundle
 from swarmdeck.console.jobs.confinement import JailConfig, SandboxLimits
-from swarmdeck.core.checks import in_range
 from swarmdeck.console.jobs.plant import ArenaPlant, Disturbances, VerificationRobots
 from swarmdeck.console.jobs.sandbox import run_sandboxed
 from swarmdeck.console.jobs.start_poses import arena_start, check_initial_poses, perturb
+from swarmdeck.core.checks import in_range
 from swarmdeck.devices.arena import Arena
 from swarmdeck.devices.initial_conditions import random_initial_poses
 from swarmdeck.devices.simulator import ArenaConfig, SimulatedArena

@@ -47,10 +47,16 @@ from pathlib import Path
 from typing import Any
 
 import msgspec
-
 from swarmdeck.console.jobs.cgroups import join as join_cgroup
 from swarmdeck.console.jobs.keyrings import join_session_keyring
-from swarmdeck.console.jobs.namespaces import PR_SET_PDEATHSIG, build_root, enter_root, prctl, probe_in_child, unshare_all
+from swarmdeck.console.jobs.namespaces import (
+    PR_SET_PDEATHSIG,
+    build_root,
+    enter_root,
+    prctl,
+    probe_in_child,
+    unshare_all,
+)
 
 CHILD_ENV = {"PATH": "/usr/bin:/bin", "LANG": "C.UTF-8", "PYTHONHASHSEED": "0", "PYTHONDONTWRITEBYTECODE": "1",
              "PYTHONUNBUFFERED": "1", "OPENBLAS_NUM_THREADS": "1", "OMP_NUM_THREADS": "1", "MKL_NUM_THREADS": "1"}
@@ -276,7 +282,6 @@ def main(argv: list[str]) -> int:
     started = time.process_time()
     sock = socket.socket(fileno=int(argv[0]))
     import numpy as np  # loaded once here, shared by every run's fork
-
     import swarmdeck.console.jobs.child  # noqa: F401
 
     np.random.seed()  # the first seeding loads its machinery (about 20 ms): once here, not in every run

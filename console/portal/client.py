@@ -13,7 +13,6 @@ from pathlib import Path
 from typing import Any
 
 import httpx
-
 from swarmdeck.console.portal.states import FINAL as FINAL_STATES
 
 
@@ -38,7 +37,7 @@ class PortalClient:
     def close(self) -> None:
         self.http.close()
 
-    def __enter__(self) -> "PortalClient":
+    def __enter__(self) -> PortalClient:
         return self
 
     def __exit__(self, *exc: object) -> None:

@@ -56,15 +56,14 @@ from fastapi.responses import FileResponse, HTMLResponse, RedirectResponse, Resp
 from jinja2 import Environment, FileSystemLoader, select_autoescape
 from starlette.concurrency import run_in_threadpool
 from starlette.datastructures import FormData, UploadFile
-
 from swarmdeck.console.portal.accounts import Session
 from swarmdeck.console.portal.api import SESSION_COOKIE
-from swarmdeck.console.portal.states import ACTIVE, FINAL, JobState
 from swarmdeck.console.portal.errors import BadInput, PortalError, Unauthorized
 from swarmdeck.console.portal.live import scene_message
 from swarmdeck.console.portal.livefeed import LiveFeed
 from swarmdeck.console.portal.results import summary_lines
 from swarmdeck.console.portal.service import RESULT_FILES, PortalService
+from swarmdeck.console.portal.states import ACTIVE, FINAL, JobState
 from swarmdeck.console.portal.submission import Limits, display_name, manifest_errors
 
 HERE = Path(__file__).resolve().parent

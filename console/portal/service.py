@@ -63,13 +63,13 @@ from swarmdeck.console.jobs.confinement import JailConfig, SandboxLimits
 from swarmdeck.console.jobs.script_env import ScriptEnv, listing
 from swarmdeck.console.portal.accounts import Accounts, User
 from swarmdeck.console.portal.db import ACTIVE, FINAL, Database, TransitionConflict
-from swarmdeck.console.portal.states import JobState
 from swarmdeck.console.portal.errors import BadInput, Conflict, Forbidden, NotFound, Unavailable
 from swarmdeck.console.portal.exports import EXPORT_FILES
 from swarmdeck.console.portal.files import private_dir, write_private
 from swarmdeck.console.portal.quotas import Quotas, check_counts, check_disk
 from swarmdeck.console.portal.quotas import usage as quota_usage
 from swarmdeck.console.portal.results import results_summary
+from swarmdeck.console.portal.states import JobState
 from swarmdeck.console.portal.submission import Limits, Manifest, Upload, check_bundle, check_upload, parse_manifest
 
 #: result files a job may have, name -> what it is (the exports, :mod:`.exports`, write four of them after the run).

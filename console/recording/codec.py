@@ -72,10 +72,8 @@ from collections.abc import Mapping
 from typing import Any
 
 import numpy as np
-
-from swarmdeck.console.runtime.frame import (FRAME_FORMAT, BarrierFrame, CoverageFrame, Frame, _dec_float,
-                                             _enc_float)
 from swarmdeck.console.recording.prediction import predict_poses
+from swarmdeck.console.runtime.frame import FRAME_FORMAT, BarrierFrame, CoverageFrame, Frame, _dec_float, _enc_float
 from swarmdeck.core.kinematics import unicycle_to_si
 
 #: The frame format this module writes (``Frame.to_dict`` is format 1; format 2: keyframes only).

@@ -46,13 +46,18 @@ from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
-
-from swarmdeck.core.bounds import Bounds
-from swarmdeck.console.recording.reader import Recording, RecordedEvent
+from swarmdeck.console.recording.reader import RecordedEvent, Recording
 from swarmdeck.console.runtime.frame import Frame
 from swarmdeck.console.web.scene import (
-    LUT, VIRTUAL_RING, SceneStyle, h_colors, heatmap, robot_colors, robot_mesh,
+    LUT,
+    VIRTUAL_RING,
+    SceneStyle,
+    h_colors,
+    heatmap,
+    robot_colors,
+    robot_mesh,
 )
+from swarmdeck.core.bounds import Bounds
 
 #: H.264 encoders tried in this order (PyAV's wheels carry libx264).
 H264_ENCODERS = ("libx264", "libopenh264", "h264")
@@ -121,7 +126,7 @@ class VideoLayout:
     panel: tuple[int, int, int, int] = (0, 0, 0, 0)
 
     @classmethod
-    def fit(cls, bounds: Bounds, width: int, height: int, panel: float = 0.0) -> "VideoLayout":
+    def fit(cls, bounds: Bounds, width: int, height: int, panel: float = 0.0) -> VideoLayout:
         """The arena as large as fits between a header and a footer band, centred, aspect kept; with
         ``panel`` > 0 that fraction of the width (right) is kept for the camera picture."""
         x0, x1, y0, y1 = (float(b) for b in bounds)

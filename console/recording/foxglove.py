@@ -56,9 +56,8 @@ from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
-
-from swarmdeck.core.bounds import DEFAULT_BOUNDS, Bounds
 from swarmdeck.console.runtime.frame import Frame
+from swarmdeck.core.bounds import DEFAULT_BOUNDS, Bounds
 
 TOPIC_ROBOTS = "/foxglove/robots"
 TOPIC_CELLS = "/foxglove/cells"
@@ -164,7 +163,6 @@ class ChannelSpec:
 def channel_specs() -> list[ChannelSpec]:
     """The channels of :data:`TOPICS`, with the SDK's schemas (protobuf descriptors) and the metrics JSON Schema."""
     import foxglove.messages as fm
-
     from swarmdeck.console.recording.recorder import encode_json
 
     out = []

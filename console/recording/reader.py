@@ -33,11 +33,17 @@ from itertools import accumulate
 from pathlib import Path
 from typing import Any
 
-from swarmdeck.console.runtime.frame import Frame
 from swarmdeck.console.recording.codec import CODEC_FORMAT, MissingReference, decode_frame
 from swarmdeck.console.recording.schemas import (
-    METADATA_NAME, PROFILE, RECORDING_FORMAT, TOPIC_CONFIG, TOPIC_DATAGRAM, TOPIC_EVENT, TOPIC_FRAME,
+    METADATA_NAME,
+    PROFILE,
+    RECORDING_FORMAT,
+    TOPIC_CONFIG,
+    TOPIC_DATAGRAM,
+    TOPIC_EVENT,
+    TOPIC_FRAME,
 )
+from swarmdeck.console.runtime.frame import Frame
 
 MAGIC = bytes([137, 77, 67, 65, 80, 48, 13, 10])
 _OP_HEADER, _OP_FOOTER, _OP_SCHEMA, _OP_CHANNEL, _OP_MESSAGE, _OP_CHUNK = 0x01, 0x02, 0x03, 0x04, 0x05, 0x06
@@ -581,7 +587,7 @@ class Recording:
     def close(self) -> None:
         self._f.close()
 
-    def __enter__(self) -> "Recording":
+    def __enter__(self) -> Recording:
         return self
 
     def __exit__(self, *exc: object) -> None:

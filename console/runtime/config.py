@@ -22,9 +22,9 @@ from pathlib import Path
 from typing import Any
 
 from swarmdeck.console.runtime.behaviours import BehaviourParams
+from swarmdeck.console.runtime.loop import DensityParams, LoopConfig, SafetyParams
 from swarmdeck.core.checks import in_range
 from swarmdeck.core.config import ConfigError, check_keys, floats, from_mapping, read_toml
-from swarmdeck.console.runtime.loop import DensityParams, LoopConfig, SafetyParams
 
 TABLES = ("console", "behaviour", "safety", "density", "inputs")
 CONSOLE_KEYS = ("host", "port", "robots", "behaviour", "seed", "dt", "max_speed", "bounds", "script_budget",

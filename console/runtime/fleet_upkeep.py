@@ -35,7 +35,6 @@ from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-
 from swarmdeck.console.runtime.behaviours import BehaviourError, TickInput
 from swarmdeck.core.bounds import Bounds
 from swarmdeck.core.checks import require_positive
@@ -44,8 +43,8 @@ from swarmdeck.devices.fleet.assignment import assign
 from swarmdeck.devices.fleet.battery import BatteryParams, charge_from_voltage
 from swarmdeck.devices.fleet.chargers import ChargerLayout
 from swarmdeck.devices.fleet.docking import choose_slots, return_maneuver
-from swarmdeck.devices.fleet.maneuver import Maneuver
 from swarmdeck.devices.fleet.manager import FleetConfig
+from swarmdeck.devices.fleet.maneuver import Maneuver
 from swarmdeck.devices.fleet.setup import ACCEPT_HEADING, ACCEPT_POSITION, check_start_poses
 from swarmdeck.devices.gritsbot import wrap_angle
 from swarmdeck.devices.initial_conditions import random_initial_poses
@@ -108,7 +107,7 @@ class FleetView:
     firmware: NDArray[np.bool_]
 
     @classmethod
-    def of(cls, frame: Any, status_age: ArrayLike | None = None) -> "FleetView":
+    def of(cls, frame: Any, status_age: ArrayLike | None = None) -> FleetView:
         """From a Frame (or anything with its per-robot fields); ``status_age`` None: robots without
         firmware reports (simulated)."""
         n = len(frame.ids)

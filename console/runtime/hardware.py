@@ -23,7 +23,6 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from numpy.typing import NDArray
-
 from swarmdeck.core.ports import SensedPoses
 
 if TYPE_CHECKING:
@@ -76,8 +75,16 @@ def camera_source(spec: str, ids: NDArray[np.int64], truth: Callable[[float], ND
                   bounds: tuple[float, float, float, float]) -> TrackedPoseSource:
     """A tracked pose source for ``--camera`` ``synthetic`` (rendering ``truth(now)``), a webcam index,
     a stream URL, a folder of images or a video file. Raises ValueError naming what is wrong."""
-    from swarmdeck.tracking import (CameraCalibration, CameraPoseSource, SyntheticCamera, SyntheticCameraConfig,
-                                    TrackedPoseSource, Tracker, TrackerConfig, open_source)
+    from swarmdeck.tracking import (
+        CameraCalibration,
+        CameraPoseSource,
+        SyntheticCamera,
+        SyntheticCameraConfig,
+        TrackedPoseSource,
+        Tracker,
+        TrackerConfig,
+        open_source,
+    )
 
     expected = tuple(int(i) for i in ids)
     if spec == "synthetic":

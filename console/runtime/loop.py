@@ -70,25 +70,29 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 from scipy.spatial import cKDTree
-
 from swarmdeck.console.runtime.batteries import BatteryWatch, low_battery_alert
-from swarmdeck.console.runtime.contacts import ContactWatch
 from swarmdeck.console.runtime.behaviours import (
-    Behaviour, BehaviourError, BehaviourParams, TickInput, goal_params, make_behaviour,
+    Behaviour,
+    BehaviourError,
+    BehaviourParams,
+    TickInput,
+    goal_params,
+    make_behaviour,
 )
+from swarmdeck.console.runtime.contacts import ContactWatch
 from swarmdeck.console.runtime.density import BumpSet
 from swarmdeck.console.runtime.frame import BarrierFrame, ContactsFrame, CoverageFrame, Frame
-from swarmdeck.core.ports import CommandSink, PoseSource, SensedPoses, close_ports
-from swarmdeck.coverage.densities import s1_density
-from swarmdeck.coverage.density import GaussianMixture, merge_mixtures
 from swarmdeck.core.bounds import DEFAULT_BOUNDS, Bounds
 from swarmdeck.core.checks import in_range, require_in_range
 from swarmdeck.core.kinematics import GritsBotParams, lookahead_points, saturate
+from swarmdeck.core.ports import CommandSink, PoseSource, SensedPoses, close_ports
+from swarmdeck.coverage.densities import s1_density
+from swarmdeck.coverage.density import GaussianMixture, merge_mixtures
 from swarmdeck.devices import ArenaConfig
 from swarmdeck.devices.clock import RealTimePacer
 from swarmdeck.devices.pipeline import Certified, barrier_filter, brake, certify, certify_bypassed
-from swarmdeck.safety.guard import GuardCheck, GuardConfig
 from swarmdeck.devices.simulated_robots import SimulatedRobots
+from swarmdeck.safety.guard import GuardCheck, GuardConfig
 
 FrameListener = Callable[[Frame], None]
 
@@ -853,7 +857,7 @@ class ControlLoop:
                 self.post(f"frame listener failed: {type(exc).__name__}: {exc}")
 
     # ------------------------------------------------------------------ threaded running
-    def start(self) -> "ControlLoop":
+    def start(self) -> ControlLoop:
         """Run :meth:`tick` every ``dt`` seconds (monotonic clock) on a daemon thread."""
         if self._thread is not None and self._thread.is_alive():
             return self

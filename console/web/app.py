@@ -45,7 +45,7 @@ class FrameViewer:
             self.gui.record(frame)
         self._wake.set()
 
-    def start(self) -> "FrameViewer":
+    def start(self) -> FrameViewer:
         self._thread = threading.Thread(target=self._run, name="swarmdeck-viewer", daemon=True)
         self._thread.start()
         return self
@@ -113,7 +113,7 @@ class ConsoleApp:
         host = "127.0.0.1" if self.host in ("0.0.0.0", "") else self.host
         return f"http://{host}:{self.port}"
 
-    def start(self) -> "ConsoleApp":
+    def start(self) -> ConsoleApp:
         """Draw the first frame, then start the viewer and the loop threads."""
         frame = self.loop.tick() if self.loop.latest is None else self.loop.latest
         self.scene.draw(frame)

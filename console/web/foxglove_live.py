@@ -26,7 +26,10 @@ from collections.abc import Callable
 from typing import Any
 
 from swarmdeck.console.recording.foxglove import (
-    TOPIC_LOG, FoxgloveConfig, FoxgloveEncoder, channel_specs,
+    TOPIC_LOG,
+    FoxgloveConfig,
+    FoxgloveEncoder,
+    channel_specs,
 )
 from swarmdeck.console.runtime.frame import Frame
 
@@ -136,7 +139,7 @@ class FoxgloveBridge:
             self.last_error = f"Foxglove bridge: {type(exc).__name__}: {exc}"
         return n
 
-    def start(self) -> "FoxgloveBridge":
+    def start(self) -> FoxgloveBridge:
         self._thread = threading.Thread(target=self._run, name="swarmdeck-foxglove", daemon=True)
         self._thread.start()
         return self

@@ -217,7 +217,6 @@ class PlayerApp:
     def __init__(self, recording: Recording, host: str = "127.0.0.1", port: int = 8080,
                  clock: Callable[[], float] = time.monotonic) -> None:
         import viser  # here, not at the top: the timeline (Player) works without the browser side
-
         from swarmdeck.console.web.battery_panel import BatteryPanel
         from swarmdeck.console.web.plots import PlotHistory, PlotsPanel
         from swarmdeck.console.web.scene import LAYERS, ArenaScene
@@ -364,7 +363,7 @@ class PlayerApp:
             elif not self.player.playing and self.play_button.label != "Play":
                 self.refresh(force=True)
 
-    def start(self, period: float = 1 / 30) -> "PlayerApp":
+    def start(self, period: float = 1 / 30) -> PlayerApp:
         """Start the playback thread (advances and draws every ``period`` s)."""
         self._thread = threading.Thread(target=self._run, args=(period,), name="swarmdeck-player", daemon=True)
         self._thread.start()

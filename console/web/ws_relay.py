@@ -71,7 +71,7 @@ class SubprotocolRelay:
         try:
             upstream = await connect(self.upstream, subprotocols=[UPSTREAM_SUBPROTOCOL],  # type: ignore[list-item]
                                      compression=None, max_size=None, proxy=None)
-        except (OSError, ConnectionClosed, asyncio.TimeoutError) as exc:
+        except (TimeoutError, OSError, ConnectionClosed) as exc:
             await client.close(1011, f"Foxglove server unavailable: {type(exc).__name__}")
             return
         self.clients += 1
