@@ -18,6 +18,7 @@ import time
 
 import numpy as np
 from scipy.spatial import Voronoi
+
 from swarmdeck.coverage import (
     CoverageConfig,
     QuadratureOptions,

@@ -11,6 +11,7 @@ import platform
 import time
 
 import numpy as np
+
 from swarmdeck.devices import ArenaConfig, SimulatedArena, random_initial_poses
 
 

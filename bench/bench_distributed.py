@@ -32,6 +32,7 @@ import platform  # noqa: E402
 import time  # noqa: E402
 
 import numpy as np  # noqa: E402
+
 from swarmdeck.safety import BarrierConfig, SafetyFilter  # noqa: E402
 from swarmdeck.safety.constraints import barrier_rows  # noqa: E402
 from swarmdeck.safety.scenes import arena_for, grid_scene  # noqa: E402

@@ -16,6 +16,7 @@ import sys
 import time
 
 import numpy as np
+
 import swarmdeck.envs as envs
 from swarmdeck.devices import Arena, ArenaConfig, SimulatedArena, random_initial_poses
 

@@ -30,6 +30,7 @@ import statistics  # noqa: E402
 import time  # noqa: E402
 
 import numpy as np  # noqa: E402
+
 from swarmdeck.devices.fleet import FleetManager, SetupFailed, choose_slots, drive, return_maneuver  # noqa: E402
 from swarmdeck.devices.initial_conditions import random_initial_poses  # noqa: E402
 from swarmdeck.devices.pipeline import certify  # noqa: E402

@@ -36,6 +36,7 @@ import platform  # noqa: E402
 import time  # noqa: E402
 
 import numpy as np  # noqa: E402
+
 from swarmdeck.console.runtime.contacts import ContactWatch  # noqa: E402
 from swarmdeck.core.kinematics import GritsBotParams, lookahead_points  # noqa: E402
 from swarmdeck.devices.gritsbot import unicycle_step  # noqa: E402

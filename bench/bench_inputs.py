@@ -23,6 +23,7 @@ import time
 
 import numpy as np
 from pythonosc.osc_bundle import OscBundle
+
 from swarmdeck.inputs import ContactDensity, InputSource, parse_datagram
 from swarmdeck.inputs import oscbuild as ob
 

@@ -22,6 +22,7 @@ import time
 from pathlib import Path
 
 import numpy as np
+
 from swarmdeck.console.recording.reader import open_recording
 from swarmdeck.console.recording.recorder import Recorder, encode_json
 from swarmdeck.console.runtime.loop import ControlLoop, LoopConfig

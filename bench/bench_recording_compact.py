@@ -27,6 +27,7 @@ import time
 from pathlib import Path
 
 import numpy as np
+
 from swarmdeck.console.recording.codec import encode_frame
 from swarmdeck.console.recording.recorder import Recorder, RecorderConfig
 from swarmdeck.console.runtime.loop import ControlLoop, LoopConfig

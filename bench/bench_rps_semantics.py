@@ -84,6 +84,7 @@ def _steps(n: int, k: int = 500) -> dict[str, float]:
 
     matplotlib.use("Agg")
     import rps.robotarium as real
+
     from swarmdeck.devices.rps.robotarium import Robotarium
 
     ic = np.array([np.linspace(-1.4, 1.4, n), np.zeros(n), np.zeros(n)])

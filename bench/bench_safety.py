@@ -36,6 +36,7 @@ import platform  # noqa: E402
 import time  # noqa: E402
 
 import numpy as np  # noqa: E402
+
 from swarmdeck.safety import BarrierConfig, SafetyFilter  # noqa: E402
 from swarmdeck.safety.reference import all_pairs_filter  # noqa: E402
 from swarmdeck.safety.scenes import arena_for, grid_scene  # noqa: E402

@@ -19,6 +19,7 @@ import time
 
 import cv2
 import numpy as np
+
 from swarmdeck.tracking import (
     CameraCalibration,
     CameraFrame,

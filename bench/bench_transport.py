@@ -26,6 +26,7 @@ import time
 from pathlib import Path
 
 import numpy as np
+
 from swarmdeck.devices.clock import RealTimePacer
 from swarmdeck.devices.net.mqtt_config import parse_broker_url
 from swarmdeck.devices.net.streamer import CommandStreamer

@@ -17,10 +17,10 @@ def check_bounds(bounds: object, name: str = "bounds", error: type[Exception] = 
     """``bounds`` as a tuple of 4 floats; ``error`` naming ``name`` unless it is 4 finite numbers with
     x_min < x_max and y_min < y_max."""
     try:
-        b = tuple(float(v) for v in bounds)  # type: ignore[union-attr]
+        b = tuple(float(v) for v in bounds)  # type: ignore[attr-defined]  (anything iterable; TypeError otherwise)
     except (TypeError, ValueError):
         b = ()
     if len(b) != 4 or not all(math.isfinite(v) for v in b) or not (b[0] < b[1] and b[2] < b[3]):
         raise error(f"{name} must be (x_min, x_max, y_min, y_max): 4 finite numbers with min < max, "
                     f"got {bounds!r}")
-    return b  # type: ignore[return-value]
+    return (b[0], b[1], b[2], b[3])

@@ -37,7 +37,7 @@ This module is at the bottom of the dependency graph so that every subsystem
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Protocol, runtime_checkable
+from typing import Protocol, cast, runtime_checkable
 
 import numpy as np
 from numpy.typing import NDArray
@@ -98,5 +98,5 @@ def close_ports(source: PoseSource, sink: CommandSink) -> None:
         sink.close()
     finally:
         close_source = getattr(source, "close", None)
-        if source is not sink and close_source is not None:
+        if source is not cast(object, sink) and close_source is not None:
             close_source()

@@ -17,6 +17,7 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.sparse as sp
 from numpy.typing import NDArray
+
 from swarmdeck.coverage.density import GaussianMixture
 from swarmdeck.coverage.quadrature import CellMoments
 from swarmdeck.coverage.voronoi import BoundedVoronoi

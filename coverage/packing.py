@@ -8,6 +8,7 @@ be active all the time: the operator is warned.
 from __future__ import annotations
 
 import numpy as np
+
 from swarmdeck.coverage.density import GaussianMixture
 
 __all__ = ["predicted_spacing", "packing_warning"]

@@ -17,6 +17,7 @@ from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import NDArray
+
 from swarmdeck.core.checks import in_range
 from swarmdeck.coverage.density import GaussianMixture
 from swarmdeck.coverage.voronoi import BoundedVoronoi

@@ -11,6 +11,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 from numpy.typing import NDArray
+
 from swarmdeck.core.bounds import DEFAULT_BOUNDS
 from swarmdeck.core.kinematics import saturate
 from swarmdeck.coverage.controller import CoverageConfig

@@ -23,6 +23,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.spatial import Delaunay, QhullError, cKDTree
+
 from swarmdeck.core.bounds import DEFAULT_BOUNDS, Bounds, check_bounds
 
 __all__ = ["BoundedVoronoi", "bounded_voronoi", "precondition_positions"]

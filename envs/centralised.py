@@ -16,6 +16,7 @@ import gymnasium
 import numpy as np
 from gymnasium import spaces
 from numpy.typing import NDArray
+
 from swarmdeck.envs.swarm import EnvConfig, SwarmParallelEnv
 
 

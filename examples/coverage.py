@@ -14,6 +14,7 @@ centroids over time.
 from typing import Any
 
 import numpy as np
+
 from swarmdeck.coverage import CoverageConfig, CoverageController, Density, moving_density
 from swarmdeck.devices import Arena
 

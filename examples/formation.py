@@ -8,6 +8,7 @@ hexagon with 0.4 m sides — up to rotation, translation and reflection.
     swarmdeck run examples/formation.py --duration 40
 """
 import numpy as np
+
 from swarmdeck.core.graphs import rigid_formation
 from swarmdeck.coverage.group import formation_control, formation_errors
 from swarmdeck.devices import Arena, saturate

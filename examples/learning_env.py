@@ -16,6 +16,7 @@ from __future__ import annotations
 import argparse
 
 import numpy as np
+
 import swarmdeck.envs as envs
 
 

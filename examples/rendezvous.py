@@ -11,6 +11,7 @@ cluster radius and the centroid's drift).
     swarmdeck run examples/rendezvous.py --robots 6 --duration 30
 """
 import numpy as np
+
 from swarmdeck.core.graphs import cycle_laplacian
 from swarmdeck.coverage.group import consensus
 from swarmdeck.devices import Arena

@@ -30,6 +30,7 @@ from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
+
 from swarmdeck.core.checks import in_range, require_in_range
 from swarmdeck.core.config import check_keys, field_names
 from swarmdeck.core.smooth import inverse_smoothstep, smoothstep

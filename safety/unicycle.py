@@ -15,6 +15,7 @@ import dataclasses
 import time
 
 import numpy as np
+
 from swarmdeck.core.kinematics import (
     UnicycleParams,
     lookahead_points,

@@ -13,6 +13,7 @@ from pathlib import Path
 
 import cv2
 import numpy as np
+
 from swarmdeck.core.checks import in_range
 from swarmdeck.tracking.camera_model import PinholeCamera
 from swarmdeck.tracking.dictionaries import canonical_dictionary, dictionary

@@ -11,6 +11,7 @@ from dataclasses import dataclass
 
 import cv2
 import numpy as np
+
 from swarmdeck.tracking.dictionaries import dictionary
 from swarmdeck.tracking.markers import ReferenceMarker, reference_corners
 

@@ -17,6 +17,7 @@ from pathlib import Path
 
 import cv2
 import numpy as np
+
 from swarmdeck.core.ports import SensedPoses
 from swarmdeck.tracking.calibration import CameraCalibration
 from swarmdeck.tracking.config import TrackerConfig

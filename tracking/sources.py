@@ -21,6 +21,7 @@ from typing import Protocol, runtime_checkable
 
 import cv2
 import numpy as np
+
 from swarmdeck.tracking.imageread import IMAGE_SUFFIXES, ImageReadError, decoded_to_rgb, read_image
 from swarmdeck.tracking.types import CameraFrame
 

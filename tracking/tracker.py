@@ -10,6 +10,7 @@ import math
 
 import cv2
 import numpy as np
+
 from swarmdeck.tracking.config import TrackerConfig
 from swarmdeck.tracking.detector import Detections, MarkerDetector
 from swarmdeck.tracking.homography import (
