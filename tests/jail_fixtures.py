@@ -7,6 +7,7 @@ jail_options=…) -> SandboxOutcome`` (the body is dedented, runs with 2 robots 
 import textwrap
 
 import pytest
+
 from swarmdeck.console.jobs.confinement import JAILS, JailConfig, SandboxLimits, choose_jail
 from swarmdeck.console.jobs.plant import ArenaPlant
 from swarmdeck.console.jobs.sandbox import run_sandboxed

@@ -19,6 +19,7 @@ from pathlib import Path
 
 import httpx
 import pytest
+
 from swarmdeck.console.portal.app import HttpSettings, ServerThread, create_app
 from swarmdeck.console.portal.quotas import Quotas
 from swarmdeck.console.portal.service import PortalConfig, PortalService

@@ -3,6 +3,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+
 from swarmdeck.console.runtime.hardware import camera_source
 from swarmdeck.console.runtime.loop import ControlLoop, LoopConfig
 from swarmdeck.devices import ArenaConfig
@@ -33,6 +34,7 @@ def test_bad_camera_spec_is_named() -> None:
 
 def test_camera_image_is_drawn_under_the_robots() -> None:
     import viser
+
     from swarmdeck.console.web.scene import ArenaScene
 
     cfg = LoopConfig(seed=2, n_robots=4)

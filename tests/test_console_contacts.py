@@ -2,6 +2,7 @@
 per tick), an alert while it lasts, and the episode kept for the run's result. Forced here with the barrier off and
 the guard disabled by the trusted-side hook (``ControlLoop(guard=None)``); with the guard on there is none."""
 import numpy as np
+
 from swarmdeck.console.runtime.contacts import ContactWatch
 from swarmdeck.console.runtime.loop import ControlLoop, LoopConfig
 from swarmdeck.devices import ArenaConfig

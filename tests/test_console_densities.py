@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
+
 from swarmdeck.console.runtime.density import BumpSet
 from swarmdeck.console.runtime.loop import DensityParams
 from swarmdeck.coverage import s1_density

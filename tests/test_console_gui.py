@@ -4,6 +4,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 import viser
+
 from swarmdeck.console.runtime.loop import ControlLoop, DensityParams, LoopConfig
 from swarmdeck.console.web.gui import ConsoleGui, ray_to_floor
 from swarmdeck.console.web.scene import ArenaScene

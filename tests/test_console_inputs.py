@@ -5,6 +5,7 @@ import socket
 import time
 
 import numpy as np
+
 from swarmdeck.console.runtime.loop import ControlLoop, DensityParams, LoopConfig
 from swarmdeck.inputs import InputHub, ListenerConfig, UdpListener
 from swarmdeck.inputs import oscbuild as ob

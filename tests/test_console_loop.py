@@ -5,6 +5,7 @@ import time
 
 import numpy as np
 import pytest
+
 from swarmdeck.console.runtime.behaviours import BehaviourError, BehaviourParams
 from swarmdeck.console.runtime.loop import ControlLoop, DensityParams, LoopConfig, SafetyParams
 

@@ -6,6 +6,7 @@ import math
 
 import numpy as np
 import pytest
+
 from swarmdeck.console.recording.reader import open_recording
 from swarmdeck.console.recording.recorder import Recorder
 from swarmdeck.console.runtime.loop import ControlLoop, LoopConfig

@@ -6,6 +6,7 @@ import json
 import numpy as np
 import pytest
 import viser
+
 from swarmdeck.console.runtime.frame import Frame
 from swarmdeck.console.runtime.loop import ControlLoop, DensityParams, LoopConfig
 from swarmdeck.console.web.app import FrameViewer

@@ -6,6 +6,7 @@ import dataclasses
 import numpy as np
 import pytest
 import viser
+
 from swarmdeck.console.runtime.loop import ControlLoop, LoopConfig
 from swarmdeck.console.web.scene import ArenaScene
 

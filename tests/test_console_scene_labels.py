@@ -3,6 +3,7 @@ from __future__ import annotations
 
 import numpy as np
 import viser
+
 from swarmdeck.console.runtime.loop import ControlLoop, LoopConfig
 from swarmdeck.console.web.scene import ArenaScene
 

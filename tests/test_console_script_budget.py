@@ -9,6 +9,7 @@ import sys
 
 import numpy as np
 import pytest
+
 from swarmdeck.console.runtime.deadline import DeadlineCaller, TickBudgetExceeded
 from swarmdeck.console.runtime.loop import ControlLoop, LoopConfig
 

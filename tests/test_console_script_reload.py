@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import pytest
 import viser
+
 from swarmdeck.console.runtime.loop import ControlLoop, DensityParams, LoopConfig
 from swarmdeck.console.web.gui import ConsoleGui
 from swarmdeck.console.web.scene import ArenaScene

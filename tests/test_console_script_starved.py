@@ -12,6 +12,7 @@ import threading
 import time
 
 import pytest
+
 from swarmdeck.console.runtime.deadline import DeadlineCaller, TickBudgetExceeded
 
 needs_two_cpus = pytest.mark.skipif(len(os.sched_getaffinity(0)) < 2, reason="needs two CPUs to starve one")

@@ -8,6 +8,7 @@ import subprocess
 import sys
 
 import pytest
+
 from swarmdeck.console.recording.reader import open_recording
 
 

@@ -8,6 +8,7 @@ import itertools
 
 import pytest
 import viser
+
 from swarmdeck.console.runtime.loop import ControlLoop, LoopConfig
 from swarmdeck.console.web.events import EventLog
 from swarmdeck.console.web.gui import ConsoleGui, TickRate

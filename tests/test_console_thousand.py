@@ -11,6 +11,7 @@ import numpy as np
 import pytest
 import viser
 from scipy.spatial import cKDTree
+
 from swarmdeck.console.cli import main
 from swarmdeck.console.runtime.config import ConfigFileError, arena_bounds, load_settings
 from swarmdeck.console.runtime.loop import ControlLoop, LoopConfig, SafetyParams

@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import numpy as np
 from scipy.spatial import cKDTree
+
 from swarmdeck.console.runtime.behaviours import default_goals
 from swarmdeck.console.runtime.config import arena_bounds
 from swarmdeck.console.runtime.loop import ControlLoop, LoopConfig

@@ -4,6 +4,7 @@ from dataclasses import dataclass
 
 import numpy as np
 import pytest
+
 from swarmdeck.core.checks import in_range, require_in_range
 from swarmdeck.core.config import ConfigError, check_keys, floats, from_mapping, read_toml
 

@@ -1,5 +1,6 @@
 """core.ports.close_ports: the sink first, the source once, even when the sink's close fails."""
 import pytest
+
 from swarmdeck.core.ports import close_ports
 
 

@@ -3,6 +3,7 @@ import dataclasses
 
 import numpy as np
 import pytest
+
 from swarmdeck.core.bounds import DEFAULT_BOUNDS, check_bounds
 from swarmdeck.core.kinematics import GritsBotParams, UnicycleParams, limit_unicycle, si_to_unicycle
 from swarmdeck.core.smooth import inverse_smoothstep, smoothstep

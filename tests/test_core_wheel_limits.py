@@ -3,6 +3,7 @@ import numpy as np
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
+
 from swarmdeck.core.kinematics import GritsBotParams, limit_unicycle, unicycle_to_wheels, wheels_to_unicycle
 
 P = GritsBotParams()

@@ -3,6 +3,7 @@ from __future__ import annotations
 
 import cv2
 import pytest
+
 from swarmdeck.console.cli import main
 from swarmdeck.coverage import letter_image
 

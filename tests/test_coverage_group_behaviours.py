@@ -1,6 +1,7 @@
 """Rendezvous and formation control (paper §V-A, §V-B) and the graphs they run on."""
 import numpy as np
 import pytest
+
 from swarmdeck.core.graphs import (
     complete_laplacian,
     cycle_laplacian,

@@ -4,6 +4,7 @@ from __future__ import annotations
 import cv2
 import numpy as np
 import pytest
+
 from swarmdeck.coverage import CoverageConfig, CoverageController, GaussianMixture, image_density, letter_image
 
 BOUNDS = (-1.6, 1.6, -1.0, 1.0)
@@ -79,6 +80,7 @@ def test_blank_image_with_floor_is_uniform_and_without_floor_has_no_mass():
 
 def test_float_rgb_images_are_grey_not_cast_to_uint8():
     import numpy as np
+
     from swarmdeck.coverage import image_density
 
     grey = np.ones((40, 64))

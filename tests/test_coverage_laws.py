@@ -4,6 +4,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 import scipy.sparse as sp
+
 from swarmdeck.coverage import CoverageConfig, coverage_tick, moving_density, parse_law, saturate
 from swarmdeck.coverage.laws import law_command
 

@@ -4,6 +4,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 from scipy.spatial import cKDTree
+
 from swarmdeck.coverage import (
     GaussianMixture,
     QuadratureOptions,

@@ -6,6 +6,7 @@ import pytest
 import shapely
 from hypothesis import given, settings
 from hypothesis import strategies as st
+
 from swarmdeck.coverage import bounded_voronoi, precondition_positions
 
 BOUNDS = (-1.6, 1.6, -1.0, 1.0)

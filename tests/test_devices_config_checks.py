@@ -1,6 +1,7 @@
 """Configuration dataclasses of devices reject NaN, inf, bools and non-positive values, naming the field."""
 import numpy as np
 import pytest
+
 from swarmdeck.devices import GritsBotParams
 from swarmdeck.devices.fleet.battery import BatteryParams
 from swarmdeck.devices.net.firmware import FirmwareParams

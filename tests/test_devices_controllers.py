@@ -1,6 +1,7 @@
 """Every go-to-goal controller converges from random starts (no safety filter: one robot each)."""
 import numpy as np
 import pytest
+
 from swarmdeck.devices import Arena, ArenaConfig, wrap_angle
 
 

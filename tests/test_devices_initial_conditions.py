@@ -2,6 +2,7 @@
 import numpy as np
 import pytest
 from scipy.spatial.distance import pdist
+
 from swarmdeck.devices import max_robots, random_initial_poses
 
 

@@ -4,6 +4,7 @@ import textwrap
 
 import numpy as np
 import pytest
+
 from swarmdeck.console.cli import main
 from swarmdeck.devices.rps.robotarium import Robotarium
 from swarmdeck.devices.runner import run_experiment

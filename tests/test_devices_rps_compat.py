@@ -6,6 +6,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+
 from swarmdeck.devices.rps import NP_MAT_NOTE, rps_aliases
 from swarmdeck.devices.runner import run_experiment
 

@@ -4,6 +4,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+
 from swarmdeck.console.cli import main as cli_main
 from swarmdeck.devices.rps import rps_aliases
 from swarmdeck.devices.runner import run_experiment

@@ -1,6 +1,7 @@
 """The rps facade speaks rps's (3, N) shape in its initial-conditions errors."""
 import numpy as np
 import pytest
+
 from swarmdeck.devices.rps.robotarium import Robotarium
 
 

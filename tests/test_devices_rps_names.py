@@ -2,6 +2,7 @@
 (robotarium/robotarium_python_simulator: rps 1.x on `dev`, 6bb184e and later; rps 2.0 on `master`)."""
 import numpy as np
 import pytest
+
 from swarmdeck.devices.rps import rps_aliases
 
 MODULES = {  # module: names defined there in rps 1.x and 2.0 (their `def`s; star imports hand on the transformations)

@@ -3,6 +3,7 @@ script's own, and rps's error counts in `_errors`, `debug()` and `call_at_script
 import textwrap
 
 import numpy as np
+
 from swarmdeck.console.cli import main
 from swarmdeck.devices.rps.robotarium import Robotarium
 

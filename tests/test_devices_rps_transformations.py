@@ -3,6 +3,7 @@ import numpy as np
 from hypothesis import example, given, settings
 from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
+
 from swarmdeck.devices.rps.utilities.transformations import (
     create_si_to_uni_dynamics,
     create_si_to_uni_dynamics_with_backwards_motion,

@@ -2,6 +2,7 @@
 import textwrap
 
 import pytest
+
 from swarmdeck.console.cli import main
 
 SCRIPTS = {

@@ -2,6 +2,7 @@
 import textwrap
 
 import pytest
+
 from swarmdeck.console.cli import main
 from swarmdeck.console.jobs.confinement import probe
 from swarmdeck.console.jobs.plant import ArenaPlant

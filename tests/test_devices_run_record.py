@@ -2,6 +2,7 @@
 import textwrap
 
 import numpy as np
+
 from swarmdeck.console.cli import main
 from swarmdeck.console.recording.reader import open_recording
 

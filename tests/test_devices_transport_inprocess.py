@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import numpy as np
+
 from swarmdeck.core.kinematics import unicycle_to_wheels
 from swarmdeck.devices import Arena, ArenaConfig, RobotBackend, SimulatedArena
 from swarmdeck.devices.net.transport import PoseFeed, RobotTransport

@@ -1,5 +1,6 @@
 """Validation counts match hand-built collision, boundary and actuator cases (rps rules)."""
 import numpy as np
+
 from swarmdeck.devices import ArenaConfig, SimulatedArena, colliding_pairs, out_of_bounds
 
 

@@ -5,9 +5,10 @@ import warnings
 
 import numpy as np
 import pytest
-import swarmdeck.envs as envs
 from gymnasium.utils.env_checker import check_env
 from pettingzoo.test import parallel_api_test, parallel_seed_test
+
+import swarmdeck.envs as envs
 
 
 @pytest.mark.parametrize("task, action, cycles", [

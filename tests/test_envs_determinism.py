@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import numpy as np
+
 import swarmdeck.envs as envs
 
 

@@ -3,8 +3,9 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-import swarmdeck.envs as envs
 import viser
+
+import swarmdeck.envs as envs
 from swarmdeck.console.recording.episodes import record_episodes
 from swarmdeck.console.recording.foxglove import TOPIC_ROBOTS
 from swarmdeck.console.recording.reader import open_recording

@@ -3,6 +3,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+
 import swarmdeck.envs as envs
 
 D_S = 0.17

@@ -3,6 +3,7 @@ experiment's robots 0..N-1 in assignment order, commands reach only them, and ev
 obstacle of the experiment's barrier — a script driving straight at a docked robot is stopped short of it."""
 import numpy as np
 import pytest
+
 from swarmdeck.console.runtime.assigned_robots import AssignedRobots
 from swarmdeck.console.runtime.loop import ControlLoop, LoopConfig, SafetyParams
 from swarmdeck.core.kinematics import GritsBotParams, lookahead_points

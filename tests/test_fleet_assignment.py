@@ -5,6 +5,7 @@ import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
+
 from swarmdeck.devices.fleet import AssignmentError, AssignmentPolicy, assign
 
 POLICY = AssignmentPolicy(min_charge=0.5)

@@ -2,6 +2,7 @@
 import numpy as np
 from hypothesis import given, settings
 from hypothesis import strategies as st
+
 from swarmdeck.core.kinematics import GritsBotParams
 from swarmdeck.devices.fleet import BatteryParams, battery_step, charge_from_voltage, recharge
 from swarmdeck.devices.net.firmware import FleetState

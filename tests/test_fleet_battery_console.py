@@ -9,6 +9,7 @@ import time
 import numpy as np
 import pytest
 from mqtt_broker import mosquitto, wait_until  # noqa: F401
+
 from swarmdeck.console.recording.codec import decode_frame, encode_frame
 from swarmdeck.console.runtime.batteries import BatteryWatch, battery_levels, low_battery_alert
 from swarmdeck.console.runtime.frame import Frame

@@ -1,6 +1,7 @@
 """Charging strips: slots fit the arena and its robots, larger arenas get more, bad layouts are named."""
 import numpy as np
 import pytest
+
 from swarmdeck.core.kinematics import GritsBotParams, lookahead_points
 from swarmdeck.devices.fleet import ChargerLayout
 from swarmdeck.devices.validation import colliding_pairs, out_of_bounds

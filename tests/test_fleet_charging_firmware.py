@@ -3,6 +3,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+
 from swarmdeck.devices.fleet import BatteryParams, ChargerLayout, recharge
 from swarmdeck.devices.net.firmware import FleetState
 

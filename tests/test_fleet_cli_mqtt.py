@@ -7,6 +7,7 @@ import json
 import numpy as np
 import pytest
 from mqtt_broker import mosquitto, wait_until  # noqa: F401
+
 from swarmdeck.console.cli import main
 from swarmdeck.devices.fleet import ChargerLayout
 from swarmdeck.devices.net.fleet import FleetNode

@@ -5,6 +5,7 @@ import json
 import pytest
 from mqtt_broker import wait_until
 from portal_fixtures import SPIN, portal, wait_for_state  # noqa: F401
+
 from swarmdeck.console.cli import main
 from swarmdeck.console.jobs.confinement import probe
 from swarmdeck.console.portal.runner import ArenaRunner, ArenaSettings

@@ -8,6 +8,7 @@ import time
 import numpy as np
 import pytest
 from mqtt_broker import mosquitto, wait_until  # noqa: F401
+
 from swarmdeck.console.cli import main
 from swarmdeck.console.runtime import fleet_upkeep as fu
 from swarmdeck.console.runtime.hardware import mqtt_robots

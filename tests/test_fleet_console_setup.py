@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+
 from swarmdeck.console.runtime import fleet_upkeep as fu
 from swarmdeck.console.runtime.loop import ControlLoop, LoopConfig
 from swarmdeck.devices import ArenaConfig

@@ -2,6 +2,7 @@
 the next, all finish (the gap's and the corridor's walls are standing robots: fixed obstacles of the barrier)."""
 import numpy as np
 import pytest
+
 from swarmdeck.core.kinematics import GritsBotParams
 from swarmdeck.devices.fleet import Maneuver, ManeuverParams, SetupFailed, drive
 from swarmdeck.devices.pipeline import barrier_filter

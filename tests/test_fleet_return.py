@@ -1,5 +1,6 @@
 """Return to the chargers: every robot docks on a free slot, safely; the arena is then ready; docked robots charge."""
 import numpy as np
+
 from swarmdeck.devices.fleet import FleetManager, choose_slots
 from swarmdeck.devices.initial_conditions import random_initial_poses
 from swarmdeck.devices.simulator import ArenaConfig

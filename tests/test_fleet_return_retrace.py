@@ -1,5 +1,6 @@
 """The return as the setup played backwards: the plan, its playback, and the docking logic when playback stalls."""
 import numpy as np
+
 from swarmdeck.core.kinematics import GritsBotParams, lookahead_points
 from swarmdeck.devices.fleet import ChargerLayout, Maneuver, drive, return_maneuver
 from swarmdeck.devices.fleet.retrace import RetraceGains, RetraceManeuver, plan_retrace

@@ -3,6 +3,7 @@ import json
 
 import numpy as np
 import pytest
+
 from swarmdeck.console.cli import main
 from swarmdeck.devices import Arena, ArenaConfig, ExperimentFinished
 from swarmdeck.devices.gritsbot import wrap_angle

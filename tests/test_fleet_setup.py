@@ -3,6 +3,7 @@ import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
+
 from swarmdeck.devices.fleet import AssignmentError, FleetManager, SetupFailed
 from swarmdeck.devices.fleet.setup import ACCEPT_HEADING, ACCEPT_POSITION
 from swarmdeck.devices.gritsbot import wrap_angle

@@ -14,6 +14,7 @@ import numpy as np
 import pytest
 from foxglove_schemas import decode
 from mcap.reader import make_reader
+
 from swarmdeck.console.cli import main as cli
 from swarmdeck.console.recording.foxglove import (
     METRICS_SCHEMA,

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import pytest
 from mcap.reader import make_reader
+
 from swarmdeck.console.cli import main as cli
 from swarmdeck.console.recording.foxglove import TOPICS
 from swarmdeck.console.recording.schemas import CHANNELS

@@ -15,6 +15,7 @@ import sys
 import numpy as np
 import websockets
 from foxglove_schemas import decode
+
 from swarmdeck.console.cli import main as cli
 from swarmdeck.console.recording.foxglove import TOPIC_LOG, TOPIC_ROBOTS
 from swarmdeck.console.runtime.loop import ControlLoop, LoopConfig

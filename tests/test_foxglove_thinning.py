@@ -9,6 +9,7 @@ import foxglove.messages as fm
 import numpy as np
 import pytest
 from foxglove_schemas import decode
+
 from swarmdeck.console.recording.foxglove import (
     TOPIC_BARRIER,
     TOPIC_CELLS,

@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import pytest
+
 from swarmdeck.inputs import ConfigError, InputConfig, InputHub, ListenerConfig, TcpListener, UdpListener
 
 TOML = """

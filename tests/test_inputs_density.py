@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 from hypothesis import assume, example, given, settings
 from hypothesis import strategies as st
+
 from swarmdeck.coverage import GaussianMixture
 from swarmdeck.inputs import Contact, ContactDensity, DensityConfig
 

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 from hypothesis import given, settings
 from hypothesis import strategies as st
+
 from swarmdeck.inputs import InputSource
 from swarmdeck.inputs import oscbuild as ob
 

@@ -10,6 +10,7 @@ import struct
 import numpy as np
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
+
 from swarmdeck.inputs import PRESETS, InputSource, ListenerConfig
 from swarmdeck.inputs import oscbuild as ob
 

@@ -5,6 +5,7 @@ in bench/bench_inputs.py."""
 from __future__ import annotations
 
 import pytest
+
 from swarmdeck.inputs import ConfigError, InputConfig, InputSource, ListenerConfig
 from swarmdeck.inputs import oscbuild as ob
 

@@ -9,6 +9,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+
 from swarmdeck.inputs import Calibration, ListenerConfig, UdpListener
 
 pytestmark = [

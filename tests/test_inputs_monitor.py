@@ -51,6 +51,7 @@ def test_send_demo_fingers_reach_a_real_listener():
     import time as _time
 
     import numpy as np
+
     from swarmdeck.inputs import ListenerConfig, UdpListener, sender
 
     with UdpListener(ListenerConfig(port=0), clock=lambda: 0.0) as lst:
@@ -79,6 +80,7 @@ def test_cli_send_rejects_bad_values():
     p = argparse.ArgumentParser()
     add_arguments(p)
     import pytest
+
     from swarmdeck.console.cli import UsageError
 
     with pytest.raises(UsageError, match="rate > 0"):

@@ -4,6 +4,7 @@ from __future__ import annotations
 import struct
 
 import pytest
+
 from swarmdeck.inputs import MalformedDatagram, parse_datagram
 from swarmdeck.inputs import oscbuild as ob
 

@@ -6,6 +6,7 @@ import time
 import numpy as np
 import pytest
 from pythonosc.udp_client import SimpleUDPClient
+
 from swarmdeck.inputs import PRESETS, Calibration, InputSource, ListenerConfig, PointStreamConfig, UdpListener
 from swarmdeck.inputs import oscbuild as ob
 

@@ -3,6 +3,7 @@ contacts, events and density exactly."""
 from __future__ import annotations
 
 import numpy as np
+
 from swarmdeck.inputs import Capture, ContactDensity, Datagram, InputSource, read_jsonl, replay, write_jsonl
 from swarmdeck.inputs import oscbuild as ob
 

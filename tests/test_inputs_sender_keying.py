@@ -4,6 +4,7 @@ same finger, and an empty ALIVE from yet another port lifts it."""
 from __future__ import annotations
 
 import numpy as np
+
 from swarmdeck.inputs import Calibration, InputSource
 from swarmdeck.inputs import oscbuild as ob
 

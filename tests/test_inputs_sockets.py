@@ -11,6 +11,7 @@ import pytest
 from pythonosc.osc_bundle_builder import IMMEDIATELY, OscBundleBuilder
 from pythonosc.osc_message_builder import OscMessageBuilder
 from pythonosc.udp_client import UDPClient
+
 from swarmdeck.inputs import Capture, InputHub, ListenerConfig, TcpListener, UdpListener
 from swarmdeck.inputs import oscbuild as ob
 

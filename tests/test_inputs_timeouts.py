@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import numpy as np
+
 from swarmdeck.inputs import ContactDensity, DensityConfig, InputSource, ListenerConfig, PointStreamConfig
 from swarmdeck.inputs import oscbuild as ob
 

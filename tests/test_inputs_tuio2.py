@@ -5,6 +5,7 @@ import time
 
 import numpy as np
 import pytest
+
 from swarmdeck.inputs import Calibration, InputSource
 from swarmdeck.inputs import oscbuild as ob
 

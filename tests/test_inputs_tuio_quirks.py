@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 from pythonosc.osc_bundle_builder import IMMEDIATELY, OscBundleBuilder
 from pythonosc.osc_message_builder import OscMessageBuilder
+
 from swarmdeck.inputs import Calibration, InputSource, ListenerConfig
 from swarmdeck.inputs import oscbuild as ob
 

@@ -4,6 +4,7 @@ import os
 import textwrap
 
 import pytest
+
 from swarmdeck.console.jobs.bundle import MAX_BYTES, ScriptBundle
 from swarmdeck.console.jobs.confinement import probe
 from swarmdeck.console.jobs.executors import SerialExecutor

@@ -5,6 +5,7 @@ import os
 
 import pytest
 from jail_fixtures import jail_run, plant  # noqa: F401
+
 from swarmdeck.console.jobs import cgroups
 from swarmdeck.console.jobs.confinement import ConfinementUnavailable, SandboxLimits
 

@@ -4,6 +4,7 @@ import os
 import textwrap
 
 import pytest
+
 from swarmdeck.console.jobs.confinement import (
     ConfinementUnavailable,
     JailConfig,

@@ -8,6 +8,7 @@ import textwrap
 
 import pytest
 from jail_fixtures import jail_run  # noqa: F401
+
 from swarmdeck.console.jobs import keyrings, uids
 from swarmdeck.console.jobs.confinement import JAILS, processes_of
 

@@ -1,6 +1,7 @@
 """Scratch is a tmpfs of the run's own in both jails, limited in bytes and in files: filling it is ENOSPC for
 the script, and nothing lands on the host's disk."""
 from jail_fixtures import jail_run  # noqa: F401
+
 from swarmdeck.console.jobs.confinement import SandboxLimits
 
 FILL_BYTES = """

@@ -4,6 +4,7 @@ import textwrap
 
 import numpy as np
 import pytest
+
 from swarmdeck.console.cli import main
 from swarmdeck.console.jobs.confinement import probe
 from swarmdeck.console.jobs.plant import ArenaPlant

@@ -4,6 +4,7 @@ backstop still bounds every tick, and a late answer is still a missed tick (issu
 import textwrap
 
 import pytest
+
 from swarmdeck.console.jobs import cgroups
 from swarmdeck.console.jobs.confinement import SandboxLimits, probe
 from swarmdeck.console.jobs.plant import ArenaPlant

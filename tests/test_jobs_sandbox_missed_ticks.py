@@ -5,6 +5,7 @@ import textwrap
 
 import numpy as np
 import pytest
+
 from swarmdeck.console.jobs.confinement import SandboxLimits, probe
 from swarmdeck.console.jobs.plant import ArenaPlant
 from swarmdeck.console.jobs.sandbox import run_sandboxed

@@ -7,6 +7,7 @@ import sys
 import pytest
 from jail_fixtures import jail_run  # noqa: F401
 from script_env_fixtures import USES_THE_ENV, env  # noqa: F401
+
 from swarmdeck.console.jobs.import_policy import refusal
 from swarmdeck.console.jobs.script_env import PROVIDED, ScriptEnv, create, format_listing, listing
 

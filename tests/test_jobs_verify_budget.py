@@ -4,6 +4,7 @@ declared duration, and a script cannot make the trusted side simulate more robot
 import textwrap
 
 import pytest
+
 from swarmdeck.console.jobs.confinement import probe
 from swarmdeck.console.jobs.executors import SerialExecutor
 from swarmdeck.console.jobs.verification import REJECTED, VerificationConfig, verify

@@ -2,6 +2,7 @@
 import threading
 
 import pytest
+
 from swarmdeck.console.jobs.confinement import probe
 from swarmdeck.console.jobs.executors import SerialExecutor
 from swarmdeck.console.jobs.verification import VerificationCancelled, VerificationConfig, verify

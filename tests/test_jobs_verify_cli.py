@@ -4,6 +4,7 @@ from pathlib import Path
 
 import jsonschema
 import pytest
+
 import swarmdeck.console.jobs as jobs
 from swarmdeck.console.cli import main
 from swarmdeck.console.jobs import confinement

@@ -3,6 +3,7 @@ import json
 import textwrap
 
 import pytest
+
 from swarmdeck.console.jobs.confinement import probe
 from swarmdeck.console.jobs.executors import LocalPoolExecutor, RayExecutor, SerialExecutor
 from swarmdeck.console.jobs.verification import VerificationConfig, verify

@@ -7,6 +7,7 @@ import textwrap
 
 import numpy as np
 import pytest
+
 from swarmdeck.console.jobs.confinement import probe
 from swarmdeck.console.jobs.executors import SerialExecutor
 from swarmdeck.console.jobs.verification import ACCEPTED, VerificationConfig, verify

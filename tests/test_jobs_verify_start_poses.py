@@ -7,6 +7,7 @@ import textwrap
 import numpy as np
 import pytest
 from portal_fixtures import portal, wait_for_state  # noqa: F401
+
 from swarmdeck.console.jobs.confinement import probe
 from swarmdeck.console.jobs.executors import SerialExecutor
 from swarmdeck.console.jobs.start_poses import MIN_SEPARATION, arena_start, check_initial_poses, perturb

@@ -2,6 +2,7 @@
 import textwrap
 
 import pytest
+
 from swarmdeck.console.jobs.confinement import SandboxLimits, probe
 from swarmdeck.console.jobs.executors import SerialExecutor
 from swarmdeck.console.jobs.verification import ACCEPTED, BYPASS, REJECTED, VerificationConfig, verify

@@ -7,6 +7,7 @@ import time
 import numpy as np
 import pytest
 from mqtt_broker import mosquitto, wait_until  # noqa: F401
+
 from swarmdeck.devices import colliding_pairs, lookahead_points, random_initial_poses, si_to_unicycle
 from swarmdeck.devices.controllers import si_position_controller
 from swarmdeck.devices.net.fleet import FleetNode

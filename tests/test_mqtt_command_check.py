@@ -1,6 +1,7 @@
 """check_command never raises: text, complex, ragged or missing commands stop the robots and are described."""
 import numpy as np
 import pytest
+
 from swarmdeck.devices.net.transport import check_command
 
 

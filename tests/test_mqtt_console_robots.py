@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 from mqtt_broker import mosquitto, wait_until  # noqa: F401
+
 from swarmdeck.devices import lookahead_points, random_initial_poses, si_to_unicycle
 from swarmdeck.devices.net.console_robots import NetworkRobots
 from swarmdeck.devices.net.fleet import FleetNode

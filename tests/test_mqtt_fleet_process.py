@@ -8,6 +8,7 @@ import time
 import numpy as np
 import pytest
 from mqtt_broker import mosquitto, wait_until  # noqa: F401
+
 from swarmdeck.devices import Arena
 from swarmdeck.devices.gritsbot import unicycle_step, wrap_angle
 from swarmdeck.devices.net.mqtt_config import parse_broker_url

@@ -6,6 +6,7 @@ to the transport's receive path directly, as the paho thread would).
 import json
 
 import numpy as np
+
 from swarmdeck.devices.net.mqtt_config import parse_broker_url
 from swarmdeck.devices.net.transport_mqtt import MqttTransport
 from swarmdeck.devices.net.wire import encode_status

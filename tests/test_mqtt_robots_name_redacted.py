@@ -8,6 +8,7 @@ import sys
 import numpy as np
 import pytest
 from mqtt_broker import mosquitto  # noqa: F401
+
 from swarmdeck.console.runtime.hardware import mqtt_robots
 
 pytestmark = pytest.mark.mqtt

@@ -6,6 +6,7 @@ import json
 import numpy as np
 import pytest
 from mqtt_broker import Collector, mosquitto, wait_until  # noqa: F401
+
 from swarmdeck.devices import ArenaConfig, SimulatedArena
 from swarmdeck.devices.clock import VirtualClock
 from swarmdeck.devices.net.mqtt_config import parse_broker_url

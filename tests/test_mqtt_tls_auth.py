@@ -8,6 +8,7 @@ from pathlib import Path
 
 import pytest
 from mqtt_broker import MOSQUITTO, Broker, wait_until
+
 from swarmdeck.devices.net.mqtt_config import parse_broker_url
 from swarmdeck.devices.net.transport_mqtt import MqttTransport
 

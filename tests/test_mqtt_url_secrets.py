@@ -1,5 +1,6 @@
 """Broker passwords never appear in messages or reprs."""
 import pytest
+
 from swarmdeck.console.cli import main
 from swarmdeck.devices.net.mqtt_config import parse_broker_url, redact_url
 

@@ -11,6 +11,7 @@ import json
 import numpy as np
 import pytest
 from mqtt_broker import Collector, mosquitto, wait_until  # noqa: F401
+
 from swarmdeck.devices.net.fleet import FleetNode
 from swarmdeck.devices.net.mqtt_config import parse_broker_url
 from swarmdeck.devices.net.transport_mqtt import MqttTransport

@@ -2,6 +2,7 @@
 import json
 
 import pytest
+
 from swarmdeck.devices.net.mqtt_config import parse_broker_url
 from swarmdeck.devices.net.wire import decode_poses
 

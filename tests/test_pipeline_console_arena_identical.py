@@ -9,6 +9,7 @@ filter stops every robot through both.
 from __future__ import annotations
 
 import numpy as np
+
 from swarmdeck.console.runtime.loop import ControlLoop, LoopConfig
 from swarmdeck.devices import Arena, ArenaConfig, GritsBotParams, lookahead_points, unicycle_to_wheels
 from swarmdeck.devices.pipeline import barrier_filter, certify

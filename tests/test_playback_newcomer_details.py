@@ -8,6 +8,7 @@ import dataclasses
 import numpy as np
 import pytest
 import viser
+
 from swarmdeck.console.cli import main as cli
 from swarmdeck.console.cli.info import summarise
 from swarmdeck.console.recording.export_html import export_html

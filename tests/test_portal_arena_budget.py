@@ -7,6 +7,7 @@ import json
 import pytest
 from mqtt_broker import wait_until
 from portal_fixtures import portal, wait_for_state  # noqa: F401
+
 from swarmdeck.console.jobs.confinement import probe
 from swarmdeck.console.portal.runner import ArenaRunner, ArenaSettings
 from swarmdeck.console.portal.service import PortalConfig

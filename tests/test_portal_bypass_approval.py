@@ -6,6 +6,7 @@ waiting for the arena with a bypass nobody approved) is migrated back to waiting
 import sqlite3
 
 from portal_fixtures import portal, sign_in  # noqa: F401
+
 from swarmdeck.console.portal.db import MIGRATIONS, Database
 from swarmdeck.console.portal.service import BYPASS_VERDICT, BYPASS_WAIT
 

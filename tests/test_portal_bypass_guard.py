@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 from mqtt_broker import wait_until
 from portal_fixtures import portal, wait_for_state  # noqa: F401
+
 from swarmdeck.console.cli._client import job_line
 from swarmdeck.console.jobs.confinement import probe
 from swarmdeck.console.jobs.executors import SerialExecutor

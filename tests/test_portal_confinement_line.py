@@ -3,6 +3,7 @@ operator sees at a glance what a run goes without (docs/security.md, "What the o
 import os
 
 from portal_fixtures import ServerProcess
+
 from swarmdeck.console.jobs import cgroups
 from swarmdeck.console.jobs.confinement import JailConfig, choose_jail, describe
 

@@ -6,6 +6,7 @@ import json
 
 import pytest
 from portal_fixtures import portal, sign_in, wait_for_state  # noqa: F401
+
 from swarmdeck.console.cli._client import job_line
 from swarmdeck.console.jobs.confinement import probe
 from swarmdeck.console.portal.runner import ArenaRunner, ArenaSettings

@@ -3,6 +3,7 @@ stored: the database holds no CSRF token, one session's token does not work for 
 token across a server restart. The pages' forms and the API's X-CSRF-Token keep working (test_portal_pages.py)."""
 import httpx
 from portal_fixtures import make_portal, portal, sign_in  # noqa: F401
+
 from swarmdeck.console.portal.app import ServerThread, create_app
 from swarmdeck.console.portal.service import PortalService
 

@@ -4,6 +4,7 @@ import sqlite3
 import threading
 
 import pytest
+
 from swarmdeck.console.portal.accounts import Accounts
 from swarmdeck.console.portal.db import MIGRATIONS, Database, SchemaError, TransitionConflict
 

@@ -11,6 +11,7 @@ import pytest
 from mqtt_broker import wait_until
 from portal_fixtures import SPIN, manifest, portal, wait_for_state  # noqa: F401
 from recording_synth import write_synthetic_session
+
 from swarmdeck.console.cli import main
 from swarmdeck.console.jobs.confinement import probe
 from swarmdeck.console.portal.exports import JobExports

@@ -9,6 +9,7 @@ import time
 import httpx
 import pytest
 from portal_fixtures import SPIN, add_user, manifest, start_server, wait_for_state
+
 from swarmdeck.console.jobs.confinement import probe
 from swarmdeck.console.portal.db import Database
 

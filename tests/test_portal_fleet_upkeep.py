@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 from mqtt_broker import wait_until
 from portal_fixtures import portal, sign_in, wait_for_state  # noqa: F401
+
 from swarmdeck.console.jobs.confinement import probe
 from swarmdeck.console.portal.runner import ArenaRunner, ArenaSettings
 from swarmdeck.console.recording.reader import open_recording

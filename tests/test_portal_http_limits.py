@@ -8,6 +8,7 @@ import time
 
 import pytest
 from portal_fixtures import make_portal
+
 from swarmdeck.console.portal.app import HttpSettings
 
 STEP_S = 0.2  # the slow client's pace: a byte every STEP_S seconds

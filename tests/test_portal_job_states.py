@@ -8,6 +8,7 @@ import sqlite3
 from pathlib import Path
 
 from portal_fixtures import portal  # noqa: F401
+
 from swarmdeck.console.portal import client, db
 from swarmdeck.console.portal.states import ACTIVE, FINAL, JobState
 

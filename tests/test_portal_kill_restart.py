@@ -10,6 +10,7 @@ import httpx
 import pytest
 from mqtt_broker import wait_until
 from portal_fixtures import SPIN, add_user, manifest, start_server, wait_for_state
+
 from swarmdeck.console.jobs.confinement import probe
 from swarmdeck.console.portal.db import Database
 from swarmdeck.console.recording.reader import open_recording

@@ -6,6 +6,7 @@ import json
 
 import pytest
 from portal_fixtures import SPIN, add_user, start_server
+
 from swarmdeck.console.cli import main
 from swarmdeck.console.jobs.confinement import probe
 from swarmdeck.console.recording.reader import open_recording

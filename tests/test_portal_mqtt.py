@@ -12,6 +12,7 @@ import numpy as np
 import pytest
 from mqtt_broker import mosquitto, wait_until  # noqa: F401
 from portal_fixtures import portal, wait_for_state  # noqa: F401
+
 from swarmdeck.console.jobs.confinement import probe
 from swarmdeck.console.portal.runner import ArenaRunner, ArenaSettings
 from swarmdeck.console.recording.reader import open_recording

@@ -8,6 +8,7 @@ import re
 import pytest
 from mqtt_broker import wait_until
 from portal_fixtures import portal, sign_in  # noqa: F401
+
 from swarmdeck.console.jobs.confinement import probe
 from swarmdeck.console.portal.runner import ArenaRunner, ArenaSettings
 

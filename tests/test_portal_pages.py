@@ -13,6 +13,7 @@ import numpy as np
 import pytest
 from portal_fixtures import CSRF, SPIN, manifest, portal, sign_in  # noqa: F401
 from recording_synth import simulated_frames, write_synthetic_session
+
 from swarmdeck.console.portal.live import scene_message
 from swarmdeck.console.recording.export_video import video_frame_count
 from swarmdeck.console.web.scene import robot_colors

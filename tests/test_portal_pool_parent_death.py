@@ -10,6 +10,7 @@ import httpx
 import pytest
 from mqtt_broker import wait_until
 from portal_fixtures import add_user, manifest, start_server, wait_for_state
+
 from swarmdeck.console.jobs.confinement import probe
 
 pytestmark = pytest.mark.skipif(probe() is not None, reason=f"no confinement here: {probe()}")

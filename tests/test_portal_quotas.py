@@ -3,6 +3,7 @@ refused, 429, naming the limit and the count), verification CPU a day (429), res
 researchers and operators are not held up by one researcher's limit."""
 import pytest
 from portal_fixtures import make_portal, portal, sign_in  # noqa: F401
+
 from swarmdeck.console.jobs.confinement import probe
 from swarmdeck.console.portal.quotas import Quotas
 
@@ -85,6 +86,7 @@ def test_a_nonsense_cpu_figure_is_not_recorded(portal, bad):
 @pytest.mark.skipif(probe() is not None, reason=f"no confinement here: {probe()}")
 def test_the_verification_worker_charges_each_jobs_cpu_to_its_owner(portal):
     from portal_fixtures import wait_for_state
+
     from swarmdeck.console.jobs.executors import LocalPoolExecutor
     from swarmdeck.console.portal.workers import VerificationWorkers
 

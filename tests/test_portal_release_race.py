@@ -6,6 +6,7 @@ next job at once: its set-up began from wherever the robots had stopped. tests/t
 about one run in ten.)"""
 import pytest
 from portal_fixtures import portal  # noqa: F401
+
 from swarmdeck.console.jobs.confinement import probe
 from swarmdeck.console.portal.runner import ArenaRunner, ArenaSettings
 

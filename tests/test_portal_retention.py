@@ -5,6 +5,7 @@ import time
 
 import pytest
 from portal_fixtures import make_portal, sign_in
+
 from swarmdeck.console.portal.retention import RetentionSweeper
 
 DAY = 86400.0

@@ -8,6 +8,7 @@ import httpx
 import pytest
 from portal_fixtures import CLI, CSRF, add_user, start_server, wait_for_state
 from script_env_fixtures import USES_THE_ENV, env  # noqa: F401
+
 from swarmdeck.console.jobs.import_policy import refusal
 
 

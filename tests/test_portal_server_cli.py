@@ -1,5 +1,6 @@
 """`swarmdeck server` refuses bad options in one line with exit status 2, before opening anything."""
 import pytest
+
 from swarmdeck.console.cli import main
 
 

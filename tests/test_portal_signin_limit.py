@@ -6,6 +6,7 @@ own key with ``X-Forwarded-For`` unless the server was told to trust the proxy i
 import httpx
 import pytest
 from portal_fixtures import CSRF, make_portal, portal  # noqa: F401
+
 from swarmdeck.console.portal.app import HttpSettings
 
 

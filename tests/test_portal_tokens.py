@@ -6,6 +6,7 @@ import time
 
 import pytest
 from portal_fixtures import portal  # noqa: F401
+
 from swarmdeck.console.cli import main
 
 

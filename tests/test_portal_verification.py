@@ -2,6 +2,7 @@
 report; a good one is approved and queued for the arena at once, or waits for an operator under manual approval."""
 import pytest
 from portal_fixtures import CRASH, SPIN, portal, wait_for_state  # noqa: F401
+
 from swarmdeck.console.jobs.confinement import probe
 from swarmdeck.console.jobs.executors import SerialExecutor
 from swarmdeck.console.portal.workers import VerificationWorkers

@@ -5,10 +5,11 @@ import textwrap
 
 import pytest
 from portal_fixtures import SPIN, portal, wait_for_state  # noqa: F401
+from test_jobs_verify_budget import FIVE_HUNDRED, STALE_FOREVER
+
 from swarmdeck.console.jobs.confinement import probe
 from swarmdeck.console.jobs.executors import SerialExecutor
 from swarmdeck.console.portal.workers import VerificationWorkers
-from test_jobs_verify_budget import FIVE_HUNDRED, STALE_FOREVER
 
 confined = pytest.mark.skipif(probe() is not None, reason=f"no confinement here: {probe()}")
 

@@ -8,6 +8,7 @@ import re
 
 import pytest
 from portal_fixtures import make_portal, sign_in, wait_for_state
+
 from swarmdeck.console.cli._client import job_line
 from swarmdeck.console.jobs.confinement import probe
 from swarmdeck.console.jobs.executors import SerialExecutor

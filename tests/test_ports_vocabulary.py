@@ -10,6 +10,7 @@ import re
 from pathlib import Path
 
 import numpy as np
+
 from swarmdeck.core.ports import CommandSink, PoseSource, SensedPoses
 from swarmdeck.devices import ArenaConfig, SimulatedArena
 from swarmdeck.devices.net.console_robots import NetworkRobots

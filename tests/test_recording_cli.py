@@ -5,6 +5,7 @@ import json
 
 import pytest
 from recording_synth import write_synthetic_session
+
 from swarmdeck.console.cli import main
 from swarmdeck.console.recording.schemas import RECORDING_FORMAT
 

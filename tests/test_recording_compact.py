@@ -15,6 +15,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 from mcap.reader import make_reader
+
 from swarmdeck.console.recording.codec import decode_frame, encode_frame, pack_array, unpack_array
 from swarmdeck.console.recording.reader import open_recording
 from swarmdeck.console.recording.recorder import Recorder, RecorderConfig

@@ -7,6 +7,7 @@ import pytest
 from mcap.reader import make_reader
 from mcap.writer import Writer
 from recording_synth import as_recorded, simulated_frames
+
 from swarmdeck.console.recording.reader import RecordingError, open_recording
 from swarmdeck.console.recording.recorder import Recorder, RecorderConfig
 

@@ -8,6 +8,7 @@ import sys
 import textwrap
 
 from recording_synth import simulated_frames
+
 from swarmdeck.console.recording.reader import open_recording
 from swarmdeck.console.recording.recorder import Recorder
 

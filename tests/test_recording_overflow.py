@@ -4,6 +4,7 @@ from __future__ import annotations
 import threading
 
 from recording_synth import retimed, simulated_frames
+
 from swarmdeck.console.recording.reader import open_recording
 from swarmdeck.console.recording.recorder import Recorder, RecorderConfig
 

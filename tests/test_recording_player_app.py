@@ -4,6 +4,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 from recording_synth import simulated_frames
+
 from swarmdeck.console.recording.reader import open_recording
 from swarmdeck.console.recording.recorder import Recorder
 from swarmdeck.console.web.player import PLOT_BACKFILL, PlayerApp

@@ -21,6 +21,7 @@ import zstandard
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
+
 from swarmdeck.console.recording.codec import MissingReference, decode_frame, derived_safe, encode_frame
 from swarmdeck.console.recording.prediction import predict_poses, sin_cos
 from swarmdeck.console.runtime.frame import Frame

@@ -13,6 +13,7 @@ from collections import Counter
 import pytest
 from mcap.exceptions import EndOfFile
 from mcap.reader import NonSeekingReader, make_reader
+
 from swarmdeck.console.cli import main as cli
 from swarmdeck.console.recording.reader import open_recording
 from swarmdeck.console.recording.schemas import TOPIC_FRAME

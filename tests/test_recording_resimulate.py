@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import pytest
+
 from swarmdeck.console.recording.reader import open_recording
 from swarmdeck.console.recording.recorder import Recorder
 from swarmdeck.console.recording.resimulate import (

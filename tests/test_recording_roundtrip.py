@@ -7,6 +7,7 @@ import math
 import numpy as np
 import pytest
 from recording_synth import as_recorded, simulated_frames
+
 from swarmdeck.console.recording.codec import CODEC_FORMAT
 from swarmdeck.console.recording.reader import open_recording
 from swarmdeck.console.recording.recorder import Recorder, RecorderConfig

@@ -6,6 +6,7 @@ while); the recording is made from the first tick, as ``swarmdeck console`` make
 from __future__ import annotations
 
 import viser
+
 from swarmdeck.console.cli.info import summarise
 from swarmdeck.console.recording.reader import open_recording
 from swarmdeck.console.recording.recorder import Recorder

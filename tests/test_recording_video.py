@@ -8,6 +8,7 @@ import sys
 import av
 import numpy as np
 import pytest
+
 from swarmdeck.console.cli import main
 from swarmdeck.console.recording.export_video import (
     VideoExportError,

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+
 from swarmdeck.safety import BarrierConfig, SafetyFilter
 from swarmdeck.safety.active_set import solve_active_set
 from swarmdeck.safety.constraints import barrier_rows

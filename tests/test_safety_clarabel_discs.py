@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import numpy as np
+
 from swarmdeck.safety.constraints import Rows
 from swarmdeck.safety.qp_clarabel import solve_qp
 

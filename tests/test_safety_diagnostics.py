@@ -5,6 +5,7 @@ import json
 
 import numpy as np
 from scipy.spatial.distance import pdist
+
 from swarmdeck.safety import BarrierConfig, SafetyFilter
 from swarmdeck.safety.scenes import grid_scene
 

@@ -3,6 +3,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+
 from swarmdeck.safety import BarrierConfig, SafetyFilter, UnicycleSafetyFilter
 from swarmdeck.safety.scenes import arena_for, grid_scene
 

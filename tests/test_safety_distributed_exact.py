@@ -14,6 +14,7 @@ from __future__ import annotations
 import numpy as np
 from hypothesis import given, settings
 from hypothesis import strategies as st
+
 from swarmdeck.safety.constraints import PAIR, Rows
 from swarmdeck.safety.distributed import solve_small_qps
 from swarmdeck.safety.qp_clarabel import solve_qp

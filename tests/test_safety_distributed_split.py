@@ -11,6 +11,7 @@ from __future__ import annotations
 import numpy as np
 from hypothesis import given, settings
 from hypothesis import strategies as st
+
 from swarmdeck.core.kinematics import UnicycleParams
 from swarmdeck.safety import BarrierConfig
 from swarmdeck.safety.constraints import Rows, barrier_rows

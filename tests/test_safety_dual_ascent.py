@@ -9,6 +9,7 @@ from __future__ import annotations
 import numpy as np
 from hypothesis import given, settings
 from hypothesis import strategies as st
+
 from swarmdeck.safety import BarrierConfig, dual_ascent
 from swarmdeck.safety.active_set import solve_active_set
 from swarmdeck.safety.constraints import barrier_rows

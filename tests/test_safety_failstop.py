@@ -5,6 +5,7 @@ import json
 
 import numpy as np
 import pytest
+
 from swarmdeck.safety import BarrierConfig, SafetyFilter, UnicycleSafetyFilter
 from swarmdeck.safety.scenes import grid_scene
 

@@ -7,6 +7,7 @@ import pytest
 from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 from scipy.spatial.distance import pdist
+
 from swarmdeck.console.runtime.loop import ControlLoop, LoopConfig
 from swarmdeck.devices import ArenaConfig
 from swarmdeck.devices.simulated_robots import SimulatedRobots

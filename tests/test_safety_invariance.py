@@ -9,6 +9,7 @@ import numpy as np
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from scipy.spatial.distance import pdist
+
 from swarmdeck.safety import BarrierConfig, SafetyFilter
 from swarmdeck.safety.scenes import grid_scene
 

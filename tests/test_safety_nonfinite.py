@@ -5,6 +5,7 @@ import math
 
 import numpy as np
 import pytest
+
 from swarmdeck.devices import Arena
 from swarmdeck.safety import BarrierConfig, SafetyFilter, UnicycleParams, UnicycleSafetyFilter
 

@@ -11,6 +11,7 @@ import numpy as np
 import scipy.sparse as sp
 from hypothesis import given, settings
 from hypothesis import strategies as st
+
 from swarmdeck.safety import BarrierConfig, SafetyFilter
 from swarmdeck.safety.scenes import grid_scene
 

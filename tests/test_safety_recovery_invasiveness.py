@@ -12,6 +12,7 @@ import dataclasses
 
 import numpy as np
 import pytest
+
 from swarmdeck.safety import BarrierConfig, SafetyFilter
 from swarmdeck.safety.constraints import barrier_rows
 from swarmdeck.safety.reference import all_pairs_filter

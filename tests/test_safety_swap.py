@@ -4,6 +4,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 from scipy.spatial.distance import pdist
+
 from swarmdeck.core.kinematics import lookahead_points
 from swarmdeck.safety import BarrierConfig, SafetyFilter, UnicycleSafetyFilter
 

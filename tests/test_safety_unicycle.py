@@ -5,6 +5,7 @@ import numpy as np
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from scipy.spatial.distance import pdist
+
 from swarmdeck.core.kinematics import lookahead_points, si_to_unicycle, unicycle_to_si, unicycle_to_wheels
 from swarmdeck.safety import UnicycleParams, UnicycleSafetyFilter
 from swarmdeck.safety.scenes import grid_scene

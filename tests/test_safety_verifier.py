@@ -7,6 +7,7 @@ import numpy as np
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from scipy.spatial.distance import pdist
+
 from swarmdeck.safety import SafetyFilter
 from swarmdeck.safety.verifier import first_contact_times, verify
 

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+
 from swarmdeck.safety import BarrierConfig, SafetyFilter
 from swarmdeck.safety.constraints import barrier_rows
 from swarmdeck.safety.scenes import arena_for, grid_scene

@@ -1,6 +1,7 @@
 """`swarmdeck calibrate`: unwritable outputs and bad board settings are one line and exit 2."""
 import numpy as np
 import pytest
+
 from swarmdeck.console.cli import main
 from swarmdeck.tracking import CalibrationError, CharucoSpec, ConfigError, TrackerConfig
 
@@ -63,6 +64,7 @@ def test_unusable_input_files_are_one_line(option, content, tmp_path, capsys):
 
 def test_repeated_views_do_not_count(tmp_path):
     import cv2
+
     from swarmdeck.tracking import calibrate_charuco
 
     views = tmp_path / "views"

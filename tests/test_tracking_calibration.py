@@ -6,6 +6,7 @@ import json
 
 import numpy as np
 import pytest
+
 from swarmdeck.console.cli import main as cli
 from swarmdeck.tracking import (
     CalibrationError,

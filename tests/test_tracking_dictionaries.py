@@ -6,6 +6,7 @@ from __future__ import annotations
 import cv2
 import numpy as np
 import pytest
+
 from swarmdeck.tracking import ConfigError, TrackerConfig
 from swarmdeck.tracking.calibration import CharucoSpec
 from swarmdeck.tracking.detector import MarkerDetector

@@ -3,6 +3,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+
 from swarmdeck.tracking.camera_model import overhead_camera
 from swarmdeck.tracking.homography import (
     apply_homography,

@@ -9,6 +9,7 @@ import struct
 import cv2
 import numpy as np
 import pytest
+
 from swarmdeck.console.cli import main
 from swarmdeck.tracking import ImageFolderSource, open_source
 from swarmdeck.tracking.imageread import ImageReadError, read_image

@@ -4,6 +4,7 @@ from __future__ import annotations
 import numpy as np
 from hypothesis import given, settings
 from hypothesis import strategies as st
+
 from swarmdeck.tracking.markers import DEFAULT_REFERENCES, marker_corners, poses_from_corners
 
 

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import cv2
 import numpy as np
+
 from swarmdeck.tracking import Tracker, TrackerConfig
 from swarmdeck.tracking.dictionaries import dictionary
 from swarmdeck.tracking.types import CameraFrame

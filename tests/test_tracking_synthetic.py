@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+
 from swarmdeck.tracking import SyntheticCameraConfig, SyntheticRenderer
 from swarmdeck.tracking.camera_model import overhead_camera
 

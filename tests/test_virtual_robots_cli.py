@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import pytest
+
 from swarmdeck.console.cli import main
 from swarmdeck.console.recording.reader import open_recording
 

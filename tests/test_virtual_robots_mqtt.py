@@ -9,6 +9,7 @@ import time
 import numpy as np
 import pytest
 from mqtt_broker import mosquitto, wait_until  # noqa: F401
+
 from swarmdeck.console.runtime.hardware import mqtt_robots
 from swarmdeck.console.runtime.loop import ControlLoop, LoopConfig
 from swarmdeck.core.kinematics import lookahead_points

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+
 from swarmdeck.console.runtime.loop import ControlLoop, LoopConfig
 from swarmdeck.devices import Arena, ArenaConfig, SimulatedArena, colliding_pairs
 from swarmdeck.devices.simulated_robots import SimulatedRobots

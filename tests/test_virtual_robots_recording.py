@@ -8,6 +8,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 import viser
+
 from swarmdeck.console.recording.codec import decode_frame, encode_frame
 from swarmdeck.console.recording.reader import open_recording
 from swarmdeck.console.recording.recorder import Recorder

@@ -30,6 +30,7 @@ def wait_until(cond, timeout: float = 30.0) -> None:
 
 def test_the_estop_stays_put_while_a_failing_script_fills_the_events(tmp_path):
     from playwright.sync_api import sync_playwright
+
     from swarmdeck.console.runtime.loop import ControlLoop, LoopConfig
     from swarmdeck.console.web.app import ConsoleApp
 

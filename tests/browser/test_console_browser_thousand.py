@@ -23,6 +23,7 @@ ROBOTS_DRAWN = """(n) => {
 
 def test_page_loads_and_emergency_stop_works_with_1000_robots() -> None:
     from playwright.sync_api import sync_playwright
+
     from swarmdeck.console.runtime.config import arena_bounds
     from swarmdeck.console.runtime.loop import ControlLoop, LoopConfig
     from swarmdeck.console.web.app import ConsoleApp

@@ -6,6 +6,7 @@ import os
 
 import pytest
 from recording_synth import simulated_frames
+
 from swarmdeck.console.cli import main as cli
 from swarmdeck.console.recording.recorder import Recorder
 

@@ -6,6 +6,7 @@ import os
 import numpy as np
 import pytest
 from recording_synth import simulated_frames
+
 from swarmdeck.console.recording.export_html import export_html
 from swarmdeck.console.recording.reader import open_recording
 from swarmdeck.console.recording.recorder import Recorder

@@ -12,6 +12,7 @@ from pathlib import Path
 import pytest
 from mqtt_broker import wait_until
 from portal_fixtures import SPIN, browser_sign_in, make_portal, wait_for_state
+
 from swarmdeck.console.jobs.confinement import probe
 from swarmdeck.console.jobs.executors import LocalPoolExecutor
 from swarmdeck.console.portal.runner import ArenaRunner, ArenaSettings

@@ -7,6 +7,7 @@ import os
 import pytest
 from mqtt_broker import wait_until
 from portal_fixtures import browser_sign_in, portal, skip_verification  # noqa: F401
+
 from swarmdeck.console.jobs.confinement import probe
 from swarmdeck.console.portal.runner import ArenaRunner, ArenaSettings
 
