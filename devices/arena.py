@@ -23,6 +23,7 @@ from typing import Any, Literal, Protocol
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
+
 from swarmdeck.core.kinematics import GritsBotParams, lookahead_points, unicycle_to_si, wheels_to_unicycle
 from swarmdeck.devices.backend import RobotBackend
 from swarmdeck.devices.controllers import (

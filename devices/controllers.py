@@ -12,6 +12,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
+
 from swarmdeck.core.kinematics import saturate, si_to_unicycle
 from swarmdeck.devices.gritsbot import wrap_angle
 

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 from numpy.typing import NDArray
+
 from swarmdeck.core.bounds import DEFAULT_BOUNDS, Bounds
 
 

@@ -1,5 +1,6 @@
 """The Robotarium's constants under the names rps uses (REFERENCE.md §1)."""
 import numpy as np
+
 from swarmdeck.core.kinematics import GritsBotParams
 
 _P = GritsBotParams()

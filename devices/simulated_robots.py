@@ -16,6 +16,7 @@ from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
+
 from swarmdeck.core.kinematics import GritsBotParams
 from swarmdeck.core.ports import SensedPoses
 from swarmdeck.devices.fleet.battery import BatteryParams, battery_step

@@ -13,6 +13,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
+
 from swarmdeck.core.bounds import Bounds
 from swarmdeck.core.kinematics import lookahead_points
 

@@ -19,6 +19,7 @@ from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
+
 from swarmdeck.core.checks import require_in_range, require_positive
 
 FloatArray = NDArray[np.float64]

@@ -18,6 +18,7 @@ from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
+
 from swarmdeck.core.checks import require_positive
 from swarmdeck.core.kinematics import UnicycleParams, unicycle_to_wheels
 

@@ -28,6 +28,7 @@ from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
+
 from swarmdeck.core.kinematics import GritsBotParams, limit_unicycle, lookahead_points
 from swarmdeck.devices.fleet.assignment import Assignment, AssignmentPolicy, assign
 from swarmdeck.devices.fleet.battery import BatteryParams, battery_step, recharge

@@ -17,6 +17,7 @@ from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
+
 from swarmdeck.core.bounds import Bounds
 from swarmdeck.core.kinematics import GritsBotParams, lookahead_points
 from swarmdeck.devices.fleet.maneuver import Maneuver

@@ -23,6 +23,7 @@ from collections.abc import Callable
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
+
 from swarmdeck.core.ports import SensedPoses
 from swarmdeck.devices.net.mqtt_config import parse_broker_url, redact_url
 from swarmdeck.devices.net.streamer import CommandStreamer, StreamerConfig

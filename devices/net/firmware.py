@@ -23,6 +23,7 @@ from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
+
 from swarmdeck.core.checks import in_range, require_positive
 from swarmdeck.core.kinematics import GritsBotParams, limit_unicycle, unicycle_to_wheels
 from swarmdeck.devices.fleet.battery import BatteryParams, discharge, recharge

@@ -20,6 +20,7 @@ from typing import IO
 
 import numpy as np
 from numpy.typing import ArrayLike
+
 from swarmdeck.core.kinematics import GritsBotParams
 from swarmdeck.devices.fleet.chargers import ChargerLayout
 from swarmdeck.devices.net.firmware import BatteryParams, FirmwareParams, FleetState

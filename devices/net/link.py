@@ -20,6 +20,7 @@ import paho.mqtt.client as mqtt
 from paho.mqtt.enums import CallbackAPIVersion
 from paho.mqtt.packettypes import PacketTypes
 from paho.mqtt.properties import Properties
+
 from swarmdeck.devices.net.mqtt_config import MqttConfig
 from swarmdeck.devices.net.transport import Counters
 

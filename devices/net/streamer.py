@@ -32,6 +32,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
+
 from swarmdeck.core.checks import require_positive
 from swarmdeck.devices.net.transport import Counters, PoseFeed, RobotTransport, check_command
 

@@ -22,6 +22,7 @@ from collections.abc import Callable
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
+
 from swarmdeck.core.kinematics import GritsBotParams, limit_unicycle
 from swarmdeck.devices.clock import RealTimePacer
 from swarmdeck.devices.net.mqtt_config import parse_broker_url

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
+
 from swarmdeck.devices.fleet.battery import BatteryParams, battery_step
 from swarmdeck.devices.net.transport import (
     LINK_OK,

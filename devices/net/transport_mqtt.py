@@ -18,6 +18,7 @@ from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
+
 from swarmdeck.devices.net.link import MqttLink
 from swarmdeck.devices.net.mqtt_config import MqttConfig
 from swarmdeck.devices.net.transport import (

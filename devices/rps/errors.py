@@ -21,6 +21,7 @@ from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
+
 from swarmdeck.devices.validation import colliding_pairs, out_of_bounds
 
 BOUNDARY_STRING = "iteration(s) robots were outside the boundaries."

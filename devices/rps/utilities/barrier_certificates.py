@@ -7,6 +7,7 @@ returns zeros (robots stop) instead of an unconverged iterate.
 from __future__ import annotations
 
 import numpy as np
+
 from swarmdeck.core.bounds import DEFAULT_BOUNDS
 from swarmdeck.core.kinematics import lookahead_points, si_to_unicycle, unicycle_to_si
 from swarmdeck.devices.rps.utilities.transformations import *  # noqa: F401,F403 - rps's module re-exports them

@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import numpy as np
+
 from swarmdeck.devices.rps.utilities.barrier_certificates import create_unicycle_differential_drive_barrier_certificate
 
 

@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import numpy as np
+
 from swarmdeck.devices.controllers import (
     HybridPoseController,
     clf_unicycle_pose_controller,

@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import numpy as np
+
 from swarmdeck.core.graphs import (
     complete_laplacian,
     cycle_laplacian,

@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import numpy as np
+
 from swarmdeck.devices.controllers import at_pose as _at_pose
 from swarmdeck.devices.controllers import at_position as _at_position
 from swarmdeck.devices.initial_conditions import random_initial_poses

@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import numpy as np
+
 from swarmdeck.core.kinematics import lookahead_points, si_to_unicycle, unicycle_to_si
 
 
