@@ -19,6 +19,7 @@ from pathlib import Path
 
 import cv2
 import numpy as np
+
 from swarmdeck.console.cli import UsageError
 
 NAME = "calibrate"

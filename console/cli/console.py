@@ -245,6 +245,7 @@ def _robots(config, camera: str | None, robots_via: str | None, virtual: int | N
     with --camera, plus ``virtual`` virtual robots simulated here (one ``MixedRobots`` as both ports).
     Raises ValueError/OSError naming what could not be opened."""
     import numpy as np
+
     from swarmdeck.console.runtime.hardware import camera_source, mqtt_robots
     from swarmdeck.devices import ArenaConfig
     from swarmdeck.devices.simulated_robots import SimulatedRobots

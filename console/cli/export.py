@@ -83,8 +83,9 @@ def main(args: argparse.Namespace) -> int:
 
 
 def _video(rec, out: str, fps: float, size: tuple[int, int], start: float | None, end: float | None) -> None:
-    from swarmdeck.console.recording.export_video import VideoExportError, VideoStyle, export_video
     from tqdm import tqdm
+
+    from swarmdeck.console.recording.export_video import VideoExportError, VideoStyle, export_video
 
     bar = tqdm(total=0, unit="frame", desc=f"video {out}", file=sys.stderr, leave=False,
                disable=None)  # no bar when stderr is not a terminal

@@ -15,6 +15,7 @@ import threading
 import time
 
 import numpy as np
+
 from swarmdeck.console.cli import UsageError
 from swarmdeck.core.bounds import DEFAULT_BOUNDS
 

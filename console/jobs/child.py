@@ -22,6 +22,7 @@ from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
+
 from swarmdeck.console.jobs.import_policy import install as install_import_policy
 from swarmdeck.console.jobs.protocol import MESSAGE, FrameReader, decode, encode_commands, pack, write_frame
 from swarmdeck.console.jobs.protocol import poses as read_poses

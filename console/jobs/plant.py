@@ -17,6 +17,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.spatial import cKDTree
+
 from swarmdeck.core.kinematics import GritsBotParams, limit_unicycle, unicycle_to_si
 from swarmdeck.devices.arena import Arena
 from swarmdeck.devices.gritsbot import wrap_angle

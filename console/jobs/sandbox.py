@@ -69,6 +69,7 @@ from typing import Any, Protocol
 import msgspec
 import numpy as np
 from numpy.typing import NDArray
+
 from swarmdeck.console.jobs import cgroups, uids
 from swarmdeck.console.jobs import seccomp as seccomp_filter
 from swarmdeck.console.jobs.bundle import ScriptBundle

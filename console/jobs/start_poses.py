@@ -24,6 +24,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.spatial import cKDTree
+
 from swarmdeck.core.bounds import DEFAULT_BOUNDS, Bounds
 from swarmdeck.devices.fleet.setup import ACCEPT_HEADING, ACCEPT_POSITION
 from swarmdeck.devices.gritsbot import wrap_angle

@@ -54,6 +54,7 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+
 from swarmdeck.console.jobs.bundle import ScriptBundle
 from swarmdeck.console.jobs.confinement import JailConfig, SandboxLimits
 from swarmdeck.console.jobs.plant import ArenaPlant, Disturbances, VerificationRobots

@@ -47,6 +47,7 @@ from pathlib import Path
 from typing import Any
 
 import msgspec
+
 from swarmdeck.console.jobs.cgroups import join as join_cgroup
 from swarmdeck.console.jobs.keyrings import join_session_keyring
 from swarmdeck.console.jobs.namespaces import (
@@ -282,6 +283,7 @@ def main(argv: list[str]) -> int:
     started = time.process_time()
     sock = socket.socket(fileno=int(argv[0]))
     import numpy as np  # loaded once here, shared by every run's fork
+
     import swarmdeck.console.jobs.child  # noqa: F401
 
     np.random.seed()  # the first seeding loads its machinery (about 20 ms): once here, not in every run

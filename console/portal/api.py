@@ -45,6 +45,7 @@ from fastapi import APIRouter, Body, Depends, Request, Response
 from fastapi.responses import FileResponse
 from starlette.concurrency import run_in_threadpool
 from starlette.datastructures import UploadFile
+
 from swarmdeck.console.portal.accounts import User
 from swarmdeck.console.portal.errors import BadInput, Forbidden, RejectionCounter, Unauthorized
 from swarmdeck.console.portal.service import PortalService

@@ -43,12 +43,13 @@ from fastapi.exceptions import RequestValidationError
 from fastapi.responses import FileResponse, HTMLResponse, JSONResponse, RedirectResponse, Response
 from starlette.exceptions import HTTPException as StarletteHTTPException
 from starlette.types import ASGIApp, Message, Receive, Scope, Send
+from uvicorn.protocols.http.h11_impl import H11Protocol
+
 from swarmdeck.console.portal import pages
 from swarmdeck.console.portal.api import api_router
 from swarmdeck.console.portal.errors import PortalError, RejectionCounter, RequestTimeout, TooLarge
 from swarmdeck.console.portal.livefeed import LiveFeed
 from swarmdeck.console.portal.service import PortalService
-from uvicorn.protocols.http.h11_impl import H11Protocol
 
 FORM_OVERHEAD = 64 << 10  # multipart boundaries, headers and the manifest field on top of the script's bytes
 #: the API page: Swagger UI from this server (no inline script: docs.js starts it), under DOCS_CSP

@@ -45,6 +45,7 @@ from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
+
 from swarmdeck.console.runtime import fleet_upkeep as fu
 from swarmdeck.console.runtime.assigned_robots import AssignedRobots
 from swarmdeck.console.runtime.batteries import battery_levels

@@ -13,6 +13,7 @@ from pathlib import Path
 from typing import Any
 
 import httpx
+
 from swarmdeck.console.portal.states import FINAL as FINAL_STATES
 
 

@@ -35,6 +35,7 @@ from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
+
 from swarmdeck.console.runtime.frame import Frame
 from swarmdeck.console.web.scene import h_colors, heatmap, robot_colors
 

@@ -56,6 +56,7 @@ from fastapi.responses import FileResponse, HTMLResponse, RedirectResponse, Resp
 from jinja2 import Environment, FileSystemLoader, select_autoescape
 from starlette.concurrency import run_in_threadpool
 from starlette.datastructures import FormData, UploadFile
+
 from swarmdeck.console.portal.accounts import Session
 from swarmdeck.console.portal.api import SESSION_COOKIE
 from swarmdeck.console.portal.errors import BadInput, PortalError, Unauthorized

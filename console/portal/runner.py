@@ -79,6 +79,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 from scipy.spatial import cKDTree
+
 from swarmdeck.console.jobs.bundle import ScriptBundle
 from swarmdeck.console.jobs.confinement import ConfinementUnavailable, SandboxLimits
 from swarmdeck.console.jobs.sandbox import SandboxOutcome, run_sandboxed

@@ -38,6 +38,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
+
 from swarmdeck.console.jobs.bundle import MAX_BYTES, ScriptBundle
 from swarmdeck.console.jobs.start_poses import check_initial_poses
 from swarmdeck.console.portal.errors import BadInput, TooLarge, Unsupported

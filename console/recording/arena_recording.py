@@ -12,6 +12,7 @@ from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
+
 from swarmdeck.console.runtime.frame import BarrierFrame, Frame
 from swarmdeck.core.kinematics import si_to_unicycle
 

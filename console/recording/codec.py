@@ -72,6 +72,7 @@ from collections.abc import Mapping
 from typing import Any
 
 import numpy as np
+
 from swarmdeck.console.recording.prediction import predict_poses
 from swarmdeck.console.runtime.frame import FRAME_FORMAT, BarrierFrame, CoverageFrame, Frame, _dec_float, _enc_float
 from swarmdeck.core.kinematics import unicycle_to_si

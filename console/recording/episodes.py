@@ -25,6 +25,7 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+
 from swarmdeck.console.recording.recorder import Recorder
 from swarmdeck.console.runtime.frame import CoverageFrame, Frame
 

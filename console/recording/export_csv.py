@@ -24,6 +24,7 @@ import os
 from pathlib import Path
 
 import numpy as np
+
 from swarmdeck.console.recording.reader import Recording
 
 ROBOT_COLUMNS = ("t", "time", "tick", "id", "x", "y", "theta", "v", "w",

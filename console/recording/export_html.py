@@ -22,6 +22,7 @@ def export_html(recording: Recording, out: str | os.PathLike[str], fps: float = 
     import io
 
     import viser
+
     from swarmdeck.console.web.scene import ArenaScene, SceneStyle
 
     if not (fps > 0):

@@ -46,6 +46,7 @@ from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
+
 from swarmdeck.console.recording.reader import RecordedEvent, Recording
 from swarmdeck.console.runtime.frame import Frame
 from swarmdeck.console.web.scene import (

@@ -56,6 +56,7 @@ from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
+
 from swarmdeck.console.runtime.frame import Frame
 from swarmdeck.core.bounds import DEFAULT_BOUNDS, Bounds
 
@@ -163,6 +164,7 @@ class ChannelSpec:
 def channel_specs() -> list[ChannelSpec]:
     """The channels of :data:`TOPICS`, with the SDK's schemas (protobuf descriptors) and the metrics JSON Schema."""
     import foxglove.messages as fm
+
     from swarmdeck.console.recording.recorder import encode_json
 
     out = []

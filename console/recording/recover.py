@@ -102,6 +102,7 @@ def _check_head(path: Path) -> int:
 
 def _compression_of(name: str) -> Any:
     from mcap.writer import CompressionType
+
     from swarmdeck.console.recording.recorder import _compression
 
     return _compression(name) if name in ("zstd", "lz4") else CompressionType.NONE

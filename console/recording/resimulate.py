@@ -26,6 +26,7 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
+
 from swarmdeck.console.recording.codec import CODEC_FORMAT, COMPACT_FORMAT, decode_frame, encode_frame
 from swarmdeck.console.recording.reader import RecordedDatagram, Recording
 from swarmdeck.console.runtime.frame import Frame

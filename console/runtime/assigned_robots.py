@@ -27,6 +27,7 @@ from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
+
 from swarmdeck.console.runtime.fleet_upkeep import rows_of
 from swarmdeck.core.kinematics import lookahead_points
 from swarmdeck.core.ports import SensedPoses

@@ -12,6 +12,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 from numpy.typing import NDArray
+
 from swarmdeck.core.checks import require_in_range
 from swarmdeck.devices.fleet.battery import BatteryParams, charge_from_voltage
 

@@ -23,6 +23,7 @@ from typing import Any, Protocol
 
 import numpy as np
 from numpy.typing import NDArray
+
 from swarmdeck.console.runtime.deadline import DeadlineCaller
 from swarmdeck.core.checks import require_in_range
 from swarmdeck.core.graphs import complete_laplacian, rigid_formation

@@ -12,6 +12,7 @@ from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import NDArray
+
 from swarmdeck.devices.validation import ValidationRules, colliding_pairs
 
 

@@ -15,6 +15,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 from numpy.typing import ArrayLike
+
 from swarmdeck.core.checks import require_in_range
 from swarmdeck.coverage.density import GaussianMixture
 from swarmdeck.inputs import density as touch  # the fades and drags of touch contacts

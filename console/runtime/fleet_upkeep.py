@@ -35,6 +35,7 @@ from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
+
 from swarmdeck.console.runtime.behaviours import BehaviourError, TickInput
 from swarmdeck.core.bounds import Bounds
 from swarmdeck.core.checks import require_positive

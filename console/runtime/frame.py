@@ -65,6 +65,7 @@ from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
+
 from swarmdeck.core.bounds import DEFAULT_BOUNDS, Bounds
 from swarmdeck.core.kinematics import lookahead_points
 from swarmdeck.coverage.density import GaussianMixture

@@ -23,6 +23,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from numpy.typing import NDArray
+
 from swarmdeck.core.ports import SensedPoses
 
 if TYPE_CHECKING:

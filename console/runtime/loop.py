@@ -70,6 +70,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 from scipy.spatial import cKDTree
+
 from swarmdeck.console.runtime.batteries import BatteryWatch, low_battery_alert
 from swarmdeck.console.runtime.behaviours import (
     Behaviour,

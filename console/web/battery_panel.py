@@ -10,6 +10,7 @@ from __future__ import annotations
 from typing import TYPE_CHECKING
 
 import numpy as np
+
 from swarmdeck.console.runtime.batteries import CHARGING, LEVELS, LOW, BatteryWatch, battery_levels
 from swarmdeck.console.runtime.frame import Frame
 

@@ -18,6 +18,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from numpy.typing import ArrayLike
+
 from swarmdeck.console.runtime.behaviours import BUILTIN, LAWS
 from swarmdeck.console.runtime.frame import Frame
 from swarmdeck.console.runtime.loop import ControlLoop

@@ -217,6 +217,7 @@ class PlayerApp:
     def __init__(self, recording: Recording, host: str = "127.0.0.1", port: int = 8080,
                  clock: Callable[[], float] = time.monotonic) -> None:
         import viser  # here, not at the top: the timeline (Player) works without the browser side
+
         from swarmdeck.console.web.battery_panel import BatteryPanel
         from swarmdeck.console.web.plots import PlotHistory, PlotsPanel
         from swarmdeck.console.web.scene import LAYERS, ArenaScene

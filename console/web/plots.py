@@ -30,6 +30,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import NDArray
+
 from swarmdeck.console.runtime.frame import Frame
 
 if TYPE_CHECKING:

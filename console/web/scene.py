@@ -32,12 +32,14 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
+
 from swarmdeck.console.runtime.behaviours import goals_of_frame
 from swarmdeck.console.runtime.frame import Frame
 from swarmdeck.core.bounds import DEFAULT_BOUNDS, Bounds
 
 if TYPE_CHECKING:
     import viser
+
     from swarmdeck.coverage.density import GaussianMixture
 
 ImageProvider = Callable[[str], "tuple[ArrayLike, Bounds] | None"]

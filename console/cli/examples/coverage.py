@@ -13,6 +13,7 @@ import argparse
 from typing import Any
 
 import numpy as np
+
 from swarmdeck.console.cli import UsageError
 from swarmdeck.console.cli.run import add_run_arguments, check_run_arguments, raise_if_failed, run_headless
 from swarmdeck.coverage import CoverageConfig, Density, image_density, letter_image, moving_density
