@@ -11,7 +11,7 @@ Example::
 """
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -79,7 +79,7 @@ class CoverageConfig:
     def from_dict(cls, data: dict[str, Any]) -> CoverageConfig:
         """Build from a plain dict (e.g. a TOML table); ``quadrature`` and ``edges`` may be
         nested tables. Raises ValueError naming unknown keys or bad values."""
-        def table(typ: type, key: str):
+        def table(typ: type, key: str) -> Callable[[Any], Any]:
             return lambda sub: from_mapping(typ, sub, f"coverage.{key}") if isinstance(sub, Mapping) else sub
 
         return from_mapping(cls, data, "coverage config", error=ValueError, wrap="bad {what}: {message}",

@@ -154,6 +154,7 @@ class SwarmParallelEnv(ParallelEnv):
         x0, x1, y0, y1 = self.config.bounds
         k = self.config.n_bumps
         rng = self._rng
+        assert rng is not None, "reset() draws the generator first"
         mu = np.column_stack((rng.uniform(x0 + 0.3, x1 - 0.3, k), rng.uniform(y0 + 0.3, y1 - 0.3, k)))
         return GaussianMixture(floor=0.05, mu=mu, sigma=rng.uniform(0.2, 0.4, k), weight=rng.uniform(0.5, 1.0, k))
 

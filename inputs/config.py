@@ -137,7 +137,7 @@ class ListenerConfig:
             if "calibration" in kw:
                 kw["calibration"] = Calibration.from_dict(kw["calibration"], bounds)
             elif bounds is not None:
-                kw["calibration"] = Calibration(bounds=tuple(bounds))
+                kw["calibration"] = Calibration(bounds=tuple(bounds))  # type: ignore[arg-type]  # 4 numbers: Calibration checks
             if "source_calibrations" in kw:
                 sc = kw["source_calibrations"]
                 if not isinstance(sc, dict):

@@ -132,7 +132,7 @@ class PointStreamDecoder:
     def __init__(self, streams: tuple[PointStreamConfig, ...], problems: Problems) -> None:
         self._streams = tuple(streams)
         self._problems = problems
-        self._ids: dict[tuple, dict] = {}
+        self._ids: dict[str, dict[tuple, int]] = {}
         self._frames: dict[str, SourceFrame] = {}
         self._peer = ""
 

@@ -18,13 +18,16 @@ import math
 import numbers
 from dataclasses import dataclass, fields
 from functools import cached_property
-from typing import Literal
+from typing import TYPE_CHECKING, Any, Literal
 
 from swarmdeck.core.bounds import DEFAULT_BOUNDS, Bounds
 from swarmdeck.core.config import floats, from_mapping
 
+if TYPE_CHECKING:
+    import numpy as np
 
-def _real(owner, name: str, value, lower: float | None = None, strict: bool = False,
+
+def _real(owner: object, name: str, value: Any, lower: float | None = None, strict: bool = False,
           upper: float | None = None) -> None:
     """Refuse a setting that is not a finite real number in range (ValueError naming it)."""
     cls = type(owner).__name__
@@ -34,7 +37,7 @@ def _real(owner, name: str, value, lower: float | None = None, strict: bool = Fa
         raise ValueError(f"{cls}: {name} must be finite, got {value!r}")
     if lower is not None and (value <= lower if strict else value < lower):
         raise ValueError(f"{cls}: {name} must be {'>' if strict else '>='} {lower:g}, got {value!r}")
-    if upper is not None and value >= upper:
+    if upper is not None and value >= upper:  # type: ignore[operator]  # numbers.Real declares no operators
         raise ValueError(f"{cls}: {name} must be < {upper:g}, got {value!r}")
 
 
@@ -197,13 +200,13 @@ class BarrierConfig:
         """Wall margin in m (``wall_margin`` or D_s/2)."""
         return self.safety_distance / 2 if self.wall_margin is None else float(self.wall_margin)
 
-    def deep_overlap(self, h, kind_is_wall):
+    def deep_overlap(self, h: np.ndarray, kind_is_wall: np.ndarray) -> np.ndarray:
         """(m,) bool: rows whose h (pairs/obstacles m², walls m) is a deep overlap (see ``recovery_depth``)."""
         d = self.safety_distance - self.recovery_depth
         return (h < 0) & (((h < -self.recovery_depth) & kind_is_wall)
                           | ((h < d * d - self.safety_distance**2) & ~kind_is_wall))
 
-    def kappa(self, h):
+    def kappa(self, h: Any) -> Any:
         """Class-K function κ(h) (elementwise, keeps the sign of h)."""
         return h * h * h if self.class_k == "cubic" else h
 

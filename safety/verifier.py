@@ -122,7 +122,7 @@ class ContactLog:
     n_robots: int
     dt: float
     contacts: list[Contact] = field(default_factory=list)
-    per_robot: np.ndarray = field(default=None)  # type: ignore[assignment]
+    per_robot: np.ndarray = field(default=None)  # type: ignore[arg-type]  # filled in __post_init__
     total_vn: float = 0.0
     steps: int = 0
     durations: list[int] = field(default_factory=list)

@@ -40,7 +40,7 @@ class CameraCalibration:
         if p.size == 0:
             return p.copy()
         crit = (cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS, 20, 1e-8)
-        out = cv2.undistortPointsIter(p.reshape(-1, 1, 2), self.camera_matrix, self.dist_coeffs,
+        out = cv2.undistortPointsIter(p.reshape(-1, 1, 2), self.camera_matrix, self.dist_coeffs,  # type: ignore[call-overload]  # cv2's stubs
                                       None, self.camera_matrix, crit)
         return out.reshape(p.shape)
 
@@ -58,7 +58,7 @@ class CameraCalibration:
     @staticmethod
     def from_camera(camera: PinholeCamera) -> CameraCalibration:
         """The exact intrinsics of a (synthetic) pinhole camera."""
-        return CameraCalibration(camera.K.copy(), camera.dist.copy(), tuple(camera.size), 0.0, 0)
+        return CameraCalibration(camera.K.copy(), camera.dist.copy(), tuple(camera.size), 0.0, 0)  # type: ignore[arg-type]  # (w, h)
 
     def to_dict(self) -> dict:
         """JSON-able form."""
@@ -140,7 +140,7 @@ def detect_charuco(image: np.ndarray, spec: CharucoSpec) -> tuple[np.ndarray, np
     ch_corners, ch_ids, _, _ = det.detectBoard(gray)
     if ch_ids is None or len(ch_ids) < 6:
         return np.zeros((0, 3)), np.zeros((0, 2))
-    obj, img = board.matchImagePoints(ch_corners, ch_ids)
+    obj, img = board.matchImagePoints(ch_corners, ch_ids)  # type: ignore[call-overload]  # cv2's stubs
     return obj.reshape(-1, 3), img.reshape(-1, 2)
 
 

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 from dataclasses import asdict, dataclass, fields, replace
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -88,7 +89,7 @@ class TrackerConfig:
         if self.fallback_homography is not None and np.asarray(self.fallback_homography).shape != (3, 3):
             raise ConfigError("fallback_homography must be 3×3")
 
-    def with_(self, **changes: object) -> TrackerConfig:
+    def with_(self, **changes: Any) -> TrackerConfig:
         """A copy with some fields replaced."""
         return replace(self, **changes)
 

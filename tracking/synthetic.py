@@ -212,7 +212,7 @@ class SyntheticRenderer:
             warp_into(color, rgb, pixel_edge_square(img.shape[0]), tag_tex)
             sp[..., :3] = color
             if sigma > 0.3:
-                sp = cv2.GaussianBlur(sp, (0, 0), sigma)
+                sp = cv2.GaussianBlur(sp, (0, 0), sigma)  # type: ignore[assignment]  # cv2's stubs
             # premultiply colour by alpha so bilinear lookups at the rim stay unbiased
             sp[..., :3] *= sp[..., 3:4] / 255.0
             rr, cc = divmod(k, self._cols)
