@@ -26,15 +26,16 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from swarmdeck.core.errors import SwarmdeckError
 from swarmdeck.devices.arena import RUN_DEFAULTS, Arena, ArenaReport, ExperimentFinished, RunDefaults
 from swarmdeck.devices.rps import rps_aliases
 
 
-class ScriptError(Exception):
+class ScriptError(SwarmdeckError):
     """The script could not be loaded (missing, unreadable, syntax error)."""
 
 
-class RunnerArenaError(ValueError):
+class RunnerArenaError(ValueError, SwarmdeckError):
     """The runner could not build the Arena it hands to ``experiment(arena)`` (e.g. too many robots)."""
 
 

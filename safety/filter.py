@@ -42,6 +42,8 @@ from numpy.typing import ArrayLike
 from scipy.sparse.csgraph import connected_components
 from scipy.spatial import cKDTree
 
+from swarmdeck.core.errors import SwarmdeckError
+
 from . import dual_ascent
 from .active_set import FEAS_TOL, clip_speed, solve_active_set
 from .config import BarrierConfig
@@ -62,7 +64,7 @@ _CLARABEL_FEAS = 1e-7  # m/s: an interior-point answer violating a row by more t
 _KIND_NAMES = {PAIR: "pair", WALL: "wall", OBSTACLE: "obstacle", LIMIT: "limit"}
 
 
-class InputError(ValueError):
+class InputError(ValueError, SwarmdeckError):
     """Malformed input to the filter (shape or non-finite values)."""
 
 

@@ -15,12 +15,13 @@ import cv2
 import numpy as np
 
 from swarmdeck.core.checks import in_range
+from swarmdeck.core.errors import SwarmdeckError
 from swarmdeck.tracking.camera_model import PinholeCamera
 from swarmdeck.tracking.dictionaries import canonical_dictionary, dictionary
 from swarmdeck.tracking.jsonfile import read_json_object, write_json
 
 
-class CalibrationError(ValueError):
+class CalibrationError(ValueError, SwarmdeckError):
     """A calibration file or calibration input is unusable (message says why)."""
 
 

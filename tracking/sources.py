@@ -22,11 +22,12 @@ from typing import Any, Protocol, runtime_checkable
 import cv2
 import numpy as np
 
+from swarmdeck.core.errors import SwarmdeckError
 from swarmdeck.tracking.imageread import IMAGE_SUFFIXES, ImageReadError, decoded_to_rgb, read_image
 from swarmdeck.tracking.types import CameraFrame
 
 
-class CameraError(ValueError):
+class CameraError(ValueError, SwarmdeckError):
     """A camera specification that cannot name any source (e.g. a path that does not exist)."""
 
 

@@ -58,13 +58,14 @@ from swarmdeck.console.jobs.namespaces import (
     probe_in_child,
     unshare_all,
 )
+from swarmdeck.core.errors import SwarmdeckError
 
 CHILD_ENV = {"PATH": "/usr/bin:/bin", "LANG": "C.UTF-8", "PYTHONHASHSEED": "0", "PYTHONDONTWRITEBYTECODE": "1",
              "PYTHONUNBUFFERED": "1", "OPENBLAS_NUM_THREADS": "1", "OMP_NUM_THREADS": "1", "MKL_NUM_THREADS": "1"}
 _MAX_MESSAGE = 1 << 16
 
 
-class ForkServerError(RuntimeError):
+class ForkServerError(RuntimeError, SwarmdeckError):
     """The fork server could not start or stopped answering."""
 
 

@@ -15,9 +15,10 @@ from typing import Any
 import httpx
 
 from swarmdeck.console.portal.states import FINAL as FINAL_STATES
+from swarmdeck.core.errors import SwarmdeckError
 
 
-class ClientError(Exception):
+class ClientError(SwarmdeckError):
     def __init__(self, status: int, message: str, field: str | None = None) -> None:
         super().__init__(message)
         self.status, self.message, self.field = status, message, field

@@ -75,6 +75,7 @@ import numpy as np
 
 from swarmdeck.console.recording.prediction import predict_poses
 from swarmdeck.console.runtime.frame import FRAME_FORMAT, BarrierFrame, CoverageFrame, Frame, _dec_float, _enc_float
+from swarmdeck.core.errors import SwarmdeckError
 from swarmdeck.core.kinematics import unicycle_to_si
 
 #: The frame format this module writes (``Frame.to_dict`` is format 1; format 2: keyframes only).
@@ -279,7 +280,7 @@ def _barrier_scalars(b: BarrierFrame) -> dict[str, Any]:
 
 
 # ---------------------------------------------------------------------------- decode
-class MissingReference(ValueError):
+class MissingReference(ValueError, SwarmdeckError):
     """A predicted frame (format 3) was read without the frame it is coded against."""
 
 

@@ -59,6 +59,7 @@ from swarmdeck.console.web.scene import (
     robot_mesh,
 )
 from swarmdeck.core.bounds import Bounds
+from swarmdeck.core.errors import SwarmdeckError
 
 #: H.264 encoders tried in this order (PyAV's wheels carry libx264).
 H264_ENCODERS = ("libx264", "libopenh264", "h264")
@@ -77,7 +78,7 @@ LABEL = (25, 25, 25)
 ESTOP = (210, 30, 30)
 
 
-class VideoExportError(Exception):
+class VideoExportError(SwarmdeckError):
     """The video cannot be made: no H.264 encoder, a recording without frames, bad settings."""
 
 

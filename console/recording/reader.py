@@ -44,6 +44,7 @@ from swarmdeck.console.recording.schemas import (
     TOPIC_FRAME,
 )
 from swarmdeck.console.runtime.frame import Frame
+from swarmdeck.core.errors import SwarmdeckError
 
 MAGIC = bytes([137, 77, 67, 65, 80, 48, 13, 10])
 _OP_HEADER, _OP_FOOTER, _OP_SCHEMA, _OP_CHANNEL, _OP_MESSAGE, _OP_CHUNK = 0x01, 0x02, 0x03, 0x04, 0x05, 0x06
@@ -54,7 +55,7 @@ _REC = struct.Struct("<BQ")
 
 
 
-class RecordingError(Exception):
+class RecordingError(SwarmdeckError):
     """The file cannot be played: not MCAP, not a swarmdeck recording, a newer format, unreadable."""
 
 

@@ -34,10 +34,12 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from swarmdeck.core.errors import SwarmdeckError
+
 MAGIC = bytes([137, 77, 67, 65, 80, 48, 13, 10])
 
 
-class RecoveryError(Exception):
+class RecoveryError(SwarmdeckError):
     """The input cannot be recovered (not MCAP, empty, cut inside the header) or the output cannot be written."""
 
 

@@ -26,6 +26,7 @@ from numpy.typing import NDArray
 
 from swarmdeck.console.runtime.deadline import DeadlineCaller
 from swarmdeck.core.checks import require_in_range
+from swarmdeck.core.errors import SwarmdeckError
 from swarmdeck.core.graphs import complete_laplacian, rigid_formation
 from swarmdeck.coverage.group import consensus, formation_control
 from swarmdeck.devices.controllers import si_position_controller
@@ -35,7 +36,7 @@ BUILTIN = ("coverage", "rendezvous", "formation", "goto")
 LAWS = ("lloyd", "lloyd-ff", "tvd-d1", "tvd-dk")
 
 
-class BehaviourError(ValueError):
+class BehaviourError(ValueError, SwarmdeckError):
     """A behaviour name, script or parameter that cannot be used."""
 
 

@@ -32,8 +32,10 @@ import time
 from collections.abc import Callable
 from typing import Any
 
+from swarmdeck.core.errors import SwarmdeckError
 
-class TickBudgetExceeded(RuntimeError):
+
+class TickBudgetExceeded(RuntimeError, SwarmdeckError):
     """A call was abandoned: it did not return within its budget, or an earlier call still runs."""
 
 

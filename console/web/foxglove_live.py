@@ -32,11 +32,12 @@ from swarmdeck.console.recording.foxglove import (
     channel_specs,
 )
 from swarmdeck.console.runtime.frame import Frame
+from swarmdeck.core.errors import SwarmdeckError
 
 DEFAULT_PORT = 8765
 
 
-class FoxglovePortInUse(OSError):
+class FoxglovePortInUse(OSError, SwarmdeckError):
     """The Foxglove WebSocket server could not bind its port."""
 
 

@@ -19,6 +19,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from swarmdeck.core.bounds import Bounds
+from swarmdeck.core.errors import SwarmdeckError
 from swarmdeck.core.kinematics import GritsBotParams, lookahead_points
 from swarmdeck.devices.fleet.maneuver import Maneuver
 from swarmdeck.devices.gritsbot import wrap_angle
@@ -68,7 +69,7 @@ class ManeuverReport:
                 "not_at_pose": list(self.not_at_pose)}
 
 
-class SetupFailed(RuntimeError):
+class SetupFailed(RuntimeError, SwarmdeckError):
     """A setup or return did not finish in its time limit; the robots were stopped.
 
     Attributes:
