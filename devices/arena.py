@@ -19,7 +19,7 @@ import contextvars
 from collections import deque
 from collections.abc import Sequence
 from dataclasses import dataclass, field
-from typing import Any, Literal, Protocol
+from typing import Any, Literal
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -33,7 +33,13 @@ from swarmdeck.devices.controllers import (
     clf_unicycle_position_controller,
     si_position_controller,
 )
-from swarmdeck.devices.pipeline import barrier_filter, certify
+from swarmdeck.devices.pipeline import (
+    CommandFilter,
+    FilterDiagnostics,
+    UnicycleCommandFilter,
+    barrier_filter,
+    certify,
+)
 from swarmdeck.devices.simulator import ArenaConfig, SimulatedArena, check_poses
 
 FloatArray = NDArray[np.float64]
@@ -42,12 +48,6 @@ GoalController = Literal["si", "clf", "pose", "hybrid"]
 
 class ExperimentFinished(Exception):
     """Raised by :meth:`Arena.step` when the run's declared duration is over."""
-
-
-class CommandFilter(Protocol):
-    """A safety filter: ``filter(points (N,2), nominal (N,2), obstacles=None) -> (safe (N,2), diagnostics)``."""
-
-    def filter(self, points: ArrayLike, nominal: ArrayLike, obstacles: ArrayLike | None = None) -> tuple[FloatArray, Any]: ...
 
 
 @dataclass(frozen=True)
@@ -74,12 +74,6 @@ class RunDefaults:
 RUN_DEFAULTS: contextvars.ContextVar[RunDefaults] = contextvars.ContextVar("swarmdeck_run_defaults", default=RunDefaults())  # noqa: B039  (frozen)
 
 
-class UnicycleCommandFilter(Protocol):
-    """A filter on unicycle commands: ``filter(poses (N,3), v (N,), w (N,), obstacles=None) -> (v, w, diagnostics)``."""
-
-    def filter(self, poses: ArrayLike, v: ArrayLike, w: ArrayLike, obstacles: ArrayLike | None = None) -> tuple[FloatArray, FloatArray, Any]: ...
-
-
 @dataclass
 class SafetyStats:
     """Running counts of the safety filter over a run."""
@@ -90,7 +84,7 @@ class SafetyStats:
     saturations: int = 0  # robot-steps whose command was scaled down to the wheel limits before filtering
     saturation_steps: int = 0  # steps in which at least one robot's command was scaled down
     last_status: str = "off"
-    last_diagnostics: Any = None
+    last_diagnostics: FilterDiagnostics | None = None
     failure_reasons: dict[str, int] = field(default_factory=dict)
 
 

@@ -30,7 +30,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from swarmdeck.console.runtime.fleet_upkeep import rows_of
 from swarmdeck.core.kinematics import lookahead_points
-from swarmdeck.core.ports import SensedPoses
+from swarmdeck.core.ports import CommandSink, PoseSource, SensedPoses
 
 FloatArray = NDArray[np.float64]
 
@@ -45,7 +45,7 @@ class AssignedRobots:
         on_read: called with every full fleet reading (e.g. to keep the fleet's status table fresh).
     """
 
-    def __init__(self, source: Any, sink: Any, assigned: ArrayLike, lookahead: float,
+    def __init__(self, source: PoseSource, sink: CommandSink, assigned: ArrayLike, lookahead: float,
                  on_read: Any = None) -> None:
         self.source, self.sink = source, sink
         self.fleet_ids = np.asarray(assigned, dtype=np.int64).reshape(-1).copy()

@@ -19,7 +19,7 @@ import weakref
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Protocol
+from typing import TYPE_CHECKING, Any, Protocol
 
 import numpy as np
 from numpy.typing import NDArray
@@ -30,6 +30,9 @@ from swarmdeck.core.errors import SwarmdeckError
 from swarmdeck.core.graphs import complete_laplacian, rigid_formation
 from swarmdeck.coverage.group import consensus, formation_control
 from swarmdeck.devices.controllers import si_position_controller
+
+if TYPE_CHECKING:
+    from swarmdeck.coverage.density import Density
 
 FloatArray = NDArray[np.float64]
 BUILTIN = ("coverage", "rendezvous", "formation", "goto")
@@ -86,7 +89,7 @@ class TickInput:
     poses: FloatArray
     points: FloatArray
     t: float
-    density: Any
+    density: Density
     bounds: tuple[float, float, float, float]
     max_speed: float
     ids: NDArray[np.int64] | None = None
