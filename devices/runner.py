@@ -160,7 +160,9 @@ def run_experiment(
                 saved_argv = sys.argv
                 sys.argv = [str(path), *argv]  # as `python script.py ARGS…` sees them
                 try:
-                    with rps_aliases() if rps else contextlib.nullcontext([]) as notes:
+                    aliases: contextlib.AbstractContextManager[list[str]] = (
+                        rps_aliases() if rps else contextlib.nullcontext([]))
+                    with aliases as notes:
                         result.notes = notes  # the facade adds to it while the script runs
                         # as `python script.py` runs it: code under `if __name__ == "__main__":` runs too
                         namespace = runpy.run_path(str(path), run_name="__main__")

@@ -25,7 +25,7 @@ its safe set.
 """
 from __future__ import annotations
 
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -144,7 +144,7 @@ class MixedRobots:
 
     def health(self) -> str:
         parts = [self.source.health()]
-        if self.sink is not self.source:
+        if self.sink is not cast(object, self.source):
             parts.append(f"commands: {self.sink.health()}")
         parts.append(f"virtual: {len(self.virtual_ids)} robots, {self.virtual.health()}")
         return "; ".join(parts)

@@ -180,7 +180,7 @@ class FleetManager:
         """
         if self.assignment is not None:
             raise RuntimeError("the fleet is already set up for an experiment: return it to the chargers first")
-        check = dict(safety_distance=self.fleet.safety_distance)
+        check: dict[str, Any] = dict(safety_distance=self.fleet.safety_distance)
         g = check_start_poses(goals, self.config.bounds, self.params, **check)
         a = assign(len(g), self.ids, self.charge, pose_age, status_age, positions=self.poses()[:, :2], goals=g,
                    policy=self.fleet.policy)

@@ -181,7 +181,7 @@ class MqttTransport:
             known = np.isin(sel, self._expected_arr)
             if not known.all():
                 self.counters.add("unknown_id", f"command for unknown robot id(s) {sel[~known].tolist()} not sent "
-                                  f"(this console controls {sorted(self.expected)})")
+                                  f"(this console controls {sorted(self.expected or ())})")
                 sel, v_out, w_out = sel[known], v_out[known], w_out[known]
                 led_out = None if led_out is None else led_out[known]
                 ok = False
@@ -213,7 +213,7 @@ class MqttTransport:
         if self.expected is None or rid in self.expected:
             return True
         self.counters.add("unknown_id", f"message about unknown robot id {rid} ignored "
-                          f"(this console controls {sorted(self.expected)})")
+                          f"(this console controls {sorted(self.expected or ())})")
         return False
 
     def _on_status(self, rid: int, payload: bytes, t: float) -> None:
