@@ -162,6 +162,6 @@ class FoxgloveBridge:
         self.relay.close()
         if self.server is not None:
             self.server.stop()
-            self.server = None
+            self.server = None  # type: ignore[assignment]  # stopped: the attribute says so
         for ch in self.channels.values():
             ch.close()
