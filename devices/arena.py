@@ -25,6 +25,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from swarmdeck.core.kinematics import GritsBotParams, lookahead_points, unicycle_to_si, wheels_to_unicycle
+from swarmdeck.core.ports import obstacles_of
 from swarmdeck.devices.backend import RobotBackend
 from swarmdeck.devices.controllers import (
     HybridPoseController,
@@ -457,7 +458,7 @@ class Arena:
             if self._on_step is not None:
                 self._on_step(self)
             return new_poses
-        cert = certify(poses, nominal, self.params, self.safety, obstacles=getattr(self.backend, "obstacles", None))
+        cert = certify(poses, nominal, self.params, self.safety, obstacles=obstacles_of(self.backend))
         if cert.invalid.any():
             self.invalid_commands += int(cert.invalid.sum())
             self.events.append(f"t={self.time:.3f}: non-finite command for robot(s) "

@@ -32,7 +32,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from swarmdeck.core.bounds import Bounds
 from swarmdeck.core.kinematics import GritsBotParams
-from swarmdeck.core.ports import CommandSink, PoseSource, SensedPoses, close_ports
+from swarmdeck.core.ports import CommandSink, PoseSource, SensedPoses, close_ports, obstacles_of
 from swarmdeck.devices.backend import RobotBackend
 from swarmdeck.devices.initial_conditions import random_initial_poses
 from swarmdeck.devices.simulated_robots import SimulatedRobots
@@ -139,8 +139,8 @@ class MixedRobots:
 
     def obstacles(self) -> FloatArray:
         """The physical sink's fixed obstacles ``(M, 2)`` m (robots excluded from control)."""
-        obstacles = getattr(self.sink, "obstacles", None)
-        return np.zeros((0, 2)) if obstacles is None else np.asarray(obstacles(), dtype=float).reshape(-1, 2)
+        obstacles = obstacles_of(self.sink)
+        return np.zeros((0, 2)) if obstacles is None else np.asarray(obstacles, dtype=float).reshape(-1, 2)
 
     def health(self) -> str:
         parts = [self.source.health()]

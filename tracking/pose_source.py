@@ -18,7 +18,7 @@ from pathlib import Path
 import cv2
 import numpy as np
 
-from swarmdeck.core.ports import SensedPoses
+from swarmdeck.core.ports import Closeable, SensedPoses
 from swarmdeck.tracking.calibration import CameraCalibration
 from swarmdeck.tracking.config import TrackerConfig
 from swarmdeck.tracking.homography import apply_homography
@@ -269,6 +269,5 @@ class TrackedPoseSource:
         return self.camera.rectified_image()
 
     def close(self) -> None:
-        close = getattr(self.camera.source, "close", None)
-        if close is not None:
-            close()
+        if isinstance(self.camera.source, Closeable):
+            self.camera.source.close()

@@ -167,12 +167,12 @@ def _server_status(args: argparse.Namespace) -> int:
 def _status(loop: Any, frame: Any) -> list[dict[str, Any]]:
     """One JSON-able row per robot of ``frame``: battery, charge, charging, docked slot, link, ages."""
     from swarmdeck.console.runtime.batteries import battery_levels
+    from swarmdeck.core.ports import ReportsRobotHealth
     from swarmdeck.devices.fleet.chargers import ChargerLayout
 
     q, _ = battery_levels(frame.battery, frame.charging)
     slot = ChargerLayout(bounds=frame.bounds).docked_slot(frame.poses)
-    health = getattr(loop.sink, "robot_health", None)
-    table = health() if health is not None else {}
+    table = loop.sink.robot_health() if isinstance(loop.sink, ReportsRobotHealth) else {}
     rows = []
     for k, rid in enumerate(frame.ids.tolist()):  # a table for people, once
         h = table.get(str(rid), {})

@@ -30,7 +30,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from swarmdeck.console.runtime.fleet_upkeep import rows_of
 from swarmdeck.core.kinematics import lookahead_points
-from swarmdeck.core.ports import CommandSink, PoseSource, SensedPoses
+from swarmdeck.core.ports import CommandSink, PoseSource, SensedPoses, obstacles_of
 
 FloatArray = NDArray[np.float64]
 
@@ -103,9 +103,9 @@ class AssignedRobots:
         if full is not None:
             others = ~np.isin(np.asarray(full.ids, dtype=np.int64), self.fleet_ids)
             parts.append(lookahead_points(np.asarray(full.poses, dtype=float)[others], self.lookahead))
-        extra = getattr(self.sink, "obstacles", None)
+        extra = obstacles_of(self.sink)
         if extra is not None:
-            parts.append(np.asarray(extra(), dtype=float).reshape(-1, 2))
+            parts.append(np.asarray(extra, dtype=float).reshape(-1, 2))
         return np.concatenate(parts) if parts else np.zeros((0, 2))
 
     def close(self) -> None:

@@ -40,6 +40,7 @@ from swarmdeck.console.runtime.behaviours import BehaviourError, TickInput
 from swarmdeck.core.bounds import Bounds
 from swarmdeck.core.checks import require_positive
 from swarmdeck.core.kinematics import GritsBotParams
+from swarmdeck.core.ports import ReportsRobotHealth
 from swarmdeck.devices.fleet.assignment import assign
 from swarmdeck.devices.fleet.battery import BatteryParams, charge_from_voltage
 from swarmdeck.devices.fleet.chargers import ChargerLayout
@@ -231,15 +232,14 @@ class FleetManeuver:
         raise BehaviourError(message)
 
 
-def status_ages(sink: Any, view_ids: ArrayLike, is_virtual: ArrayLike) -> FloatArray | None:
+def status_ages(sink: object, view_ids: ArrayLike, is_virtual: ArrayLike) -> FloatArray | None:
     """``(M,)`` s since each robot's firmware last reported (the sink's ``robot_health()``, as
     ``NetworkRobots`` gives it; inf: never), 0 for virtual robots; None when the robots have no
     firmware (a simulation)."""
     ids = np.asarray(view_ids, dtype=np.int64).reshape(-1)
-    health = getattr(sink, "robot_health", None)
-    if health is None:
+    if not isinstance(sink, ReportsRobotHealth):
         return None
-    table = health()
+    table = sink.robot_health()
     ages = np.array([(table.get(str(int(i))) or {}).get("status_age") for i in ids.tolist()], dtype=object)
     out = np.array([np.inf if a is None else float(a) for a in ages.tolist()], dtype=float)
     return np.where(np.asarray(is_virtual, dtype=bool), 0.0, out)

@@ -86,7 +86,15 @@ from swarmdeck.console.runtime.frame import BarrierFrame, ContactsFrame, Coverag
 from swarmdeck.core.bounds import DEFAULT_BOUNDS, Bounds
 from swarmdeck.core.checks import in_range, require_in_range
 from swarmdeck.core.kinematics import GritsBotParams, lookahead_points, saturate
-from swarmdeck.core.ports import CommandSink, PoseSource, SensedPoses, close_ports
+from swarmdeck.core.ports import (
+    Closeable,
+    CommandSink,
+    PoseSource,
+    ProvidesImage,
+    SensedPoses,
+    close_ports,
+    obstacles_of,
+)
 from swarmdeck.coverage.densities import s1_density
 from swarmdeck.coverage.density import GaussianMixture, merge_mixtures
 from swarmdeck.devices import ArenaConfig
@@ -234,9 +242,8 @@ def _shown(value: Any) -> str:
 
 def _close_behaviour(b: Behaviour) -> None:
     """Release what a replaced behaviour holds (a script's worker thread, once idle)."""
-    close = getattr(b, "close", None)
-    if close is not None:
-        close()
+    if isinstance(b, Closeable):
+        b.close()
 
 
 class _Stage:
@@ -732,9 +739,7 @@ class ControlLoop:
             return certify(poses, nominal, self.robot, None, seen=seen), BarrierFrame(
                 enabled=False, status="off", min_distance=_min_distance(points), intervention=np.zeros(n),
                 safety_distance=d_s)
-        obstacles = getattr(self.sink, "obstacles", None)
-        cert = certify(poses, nominal, self.robot, filt, seen=seen,
-                       obstacles=None if obstacles is None else obstacles())
+        cert = certify(poses, nominal, self.robot, filt, seen=seen, obstacles=obstacles_of(self.sink))
         if cert.diagnostics is None:
             barrier = BarrierFrame(ok=cert.ok, status=cert.status, intervention=np.zeros(n), safety_distance=d_s)
         else:
@@ -759,9 +764,8 @@ class ControlLoop:
                          seen: NDArray[np.bool_], stage: _Stage) -> tuple[Certified, BarrierFrame]:
         """A tick with the barrier off and the guard on (module docstring, stage 4)."""
         n, d_s = len(poses), sp.safety_distance
-        obstacles = getattr(self.sink, "obstacles", None)
         cert, full, check, stopped = certify_bypassed(poses, nominal, self.robot, hard, filt, guard, self.config.dt,
-                                                      seen=seen, obstacles=None if obstacles is None else obstacles(),
+                                                      seen=seen, obstacles=obstacles_of(self.sink),
                                                       names=ids)
         self._braking = True
         self._braked(stopped)
@@ -799,9 +803,8 @@ class ControlLoop:
     def _brake(self, cert: Certified, poses: NDArray[np.float64], seen: NDArray[np.bool_]) -> Certified:
         """The guard's last resort (stage 4): robots that would bring a pair closer than the guard distance stop."""
         assert self.guard is not None
-        obstacles = getattr(self.sink, "obstacles", None)
         out, stopped = brake(cert, poses, self.robot, self.config.dt, self.guard.guard_distance, seen=seen,
-                             obstacles=None if obstacles is None else obstacles())
+                             obstacles=obstacles_of(self.sink))
         self._braked(stopped)
         return out
 
@@ -836,7 +839,7 @@ class ControlLoop:
         timing = {name: b - a for name, a, b in zip(("sense", "inputs", "control", "safety", "actuate"),
                                                      marks, marks[1:])}
         timing["total"] = time.perf_counter() - marks[0]
-        image_ref = getattr(self.source, "image_ref", None)
+        image_ref = self.source.image_ref if isinstance(self.source, ProvidesImage) else None
         return Frame(
             tick=self._tick, time=now, run_time=self._run_time, dt=self.config.dt, bounds=self.config.bounds,
             lookahead=self.robot.lookahead, poses=sensed.poses, ids=sensed.ids, seen=sensed.seen, nominal=nominal,

@@ -16,6 +16,7 @@ from swarmdeck.console.runtime.frame import Frame
 from swarmdeck.console.runtime.loop import ControlLoop
 from swarmdeck.console.web.gui import ConsoleGui
 from swarmdeck.console.web.scene import ArenaScene
+from swarmdeck.core.ports import ProvidesImage
 
 
 class FrameViewer:
@@ -98,7 +99,7 @@ class ConsoleApp:
         self.loop = loop
         self.server: viser.ViserServer = viser.ViserServer(host=host, port=port, verbose=verbose)
         self.scene = ArenaScene(self.server, loop.config.bounds, robot_radius=loop.robot.radius,
-                                image_provider=getattr(loop.source, "image", None))
+                                image_provider=loop.source.image if isinstance(loop.source, ProvidesImage) else None)
         self.gui = ConsoleGui(self.server, loop, self.scene)
         self.viewer = FrameViewer(self.scene, self.gui, on_error=loop.post)
         self._unsubscribe = loop.subscribe(self.viewer.offer)
