@@ -76,6 +76,9 @@ from swarmdeck.console.runtime.behaviours import (
     Behaviour,
     BehaviourError,
     BehaviourParams,
+    HasBarrierSettings,
+    HoldsRobots,
+    ReportsHealth,
     TickInput,
     goal_params,
     make_behaviour,
@@ -433,7 +436,7 @@ class ControlLoop:
             old, self._behaviour = self._behaviour, b
             self._alerts.pop("behaviour", None)
             self._post(f"behaviour: {b.name}")
-        self._behaviour_barrier(getattr(b, "barrier", None))
+        self._behaviour_barrier(b.barrier if isinstance(b, HasBarrierSettings) else None)
         if old is not b:
             _close_behaviour(old)
 
@@ -619,9 +622,8 @@ class ControlLoop:
         nominal, coverage, movable = np.zeros((n, 2)), None, seen
         with self._stage("behaviour", f"{behaviour.name} failed") as control:
             nominal, coverage = self._control(behaviour, control, poses, points, ids, seen)
-            fixed = getattr(behaviour, "fixed", None)
-            if fixed is not None:  # robots the behaviour holds in place: fixed obstacles of the barrier
-                movable = seen & ~np.asarray(fixed(ids), dtype=bool).reshape(n)
+            if isinstance(behaviour, HoldsRobots):  # robots the behaviour holds in place: fixed obstacles of the barrier
+                movable = seen & ~np.asarray(behaviour.fixed(ids), dtype=bool).reshape(n)
         nominal[~movable] = 0.0
         nominal = saturate(nominal, self.config.max_speed)
         marks.append(time.perf_counter())
@@ -685,10 +687,9 @@ class ControlLoop:
         """One line per port and per registered health function (a failing one shows its error)."""
         with self._lock:
             fns = [("robots", self.source.health)]
-            behaviour_health = getattr(self._behaviour, "health", None)
-            if behaviour_health is not None:  # a script's worker, a fleet maneuver's progress
+            if isinstance(self._behaviour, ReportsHealth):  # a script's worker, a fleet maneuver's progress
                 name = self._behaviour.name
-                fns.append(("script" if name.startswith("script:") else name, behaviour_health))
+                fns.append(("script" if name.startswith("script:") else name, self._behaviour.health))
             if self.source is not self.sink:
                 fns.append(("commands", self.sink.health))
             fns += list(self._health_fns.items())

@@ -181,6 +181,15 @@ class RobotTransport(Protocol):
 
 
 @runtime_checkable
+class ExcludesRobots(Protocol):
+    """A transport that takes robots out of control (missing or duplicated in the poses): the streamer sends them
+    zero and the barrier keeps them as fixed obstacles."""
+
+    def excluded(self) -> ArrayLike:
+        """Ids of the robots excluded now."""
+
+
+@runtime_checkable
 class PoseFeed(Protocol):
     """Stamped tracker-style poses as received (the wire side; the loop's port is ``core.ports.PoseSource``)."""
 
