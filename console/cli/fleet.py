@@ -201,8 +201,8 @@ def _print_status(rows: list[dict[str, Any]], as_json: bool) -> int:
         seen = f"{r['last_seen_s']:.1f} s" if isinstance(r["last_seen_s"], (int, float)) else "never"
         print(f"{r['id']:>5}  {volts:>8}  {charge:>6}  {'yes' if r['charging'] else 'no':>8}  {docked:>9}  "
               f"{r['link']:>8}  {seen:>9}")
-    docked = sum(r["docked_slot"] is not None for r in rows)
-    print(f"{docked}/{len(rows)} docked" + (" · ready" if docked == len(rows) else ""))
+    n_docked = sum(r["docked_slot"] is not None for r in rows)
+    print(f"{n_docked}/{len(rows)} docked" + (" · ready" if n_docked == len(rows) else ""))
     return 0
 
 

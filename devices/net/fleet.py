@@ -78,7 +78,7 @@ class FleetNode:
         self._topic_rows: dict[str, int] = {}
         self.link = MqttLink(
             config.with_client_id(config.client_id or f"{self.name}"),
-            subscriptions=[config.command_topic(i) for i in self.state.ids],
+            subscriptions=[config.command_topic(int(i)) for i in self.state.ids],
             on_message=self._on_message,
             counters=self.counters,
             name=self.name,
@@ -181,7 +181,7 @@ class FleetNode:
         with self._lock:
             volts, charging, ages = st.battery_voltage(), st.charging(), st.command_age()
         self._seq += 1
-        topics = [self.config.status_topic(i) for i in st.ids]
+        topics = [self.config.status_topic(int(i)) for i in st.ids]
         payloads = [
             encode_status(b, c, cmd_age=a, seq=self._seq, node=self.name, stamp=now)
             for b, c, a in zip(volts.tolist(), charging.tolist(), ages.tolist())
