@@ -52,7 +52,7 @@ def test_robots_left_on_the_chargers_are_obstacles_and_start_poses_near_them_are
     report = fleet.setup(goals)
     assert report.ok and fleet.sim.report.steps_with_collision == 0
     exp = fleet.experiment()
-    assert exp.n_robots == 3 and exp.obstacles.shape == (47, 2)
+    assert exp.n_robots == 3 and exp.obstacles().shape == (47, 2)
 
 
 @pytest.mark.parametrize("goals, match", [

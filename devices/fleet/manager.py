@@ -274,8 +274,9 @@ class FleetExperiment:
         end = self.fleet.experiment_end
         return float((self.fleet.sim.time if end is None else end) - self._t0)
 
-    @property
     def obstacles(self) -> FloatArray | None:
+        """The look-ahead points ``(M − N, 2)`` m of the robots that stayed docked (None: none), as every port and
+        backend reports them (``core.ports.ReportsObstacles``)."""
         if len(self._others) == 0:
             return None
         return lookahead_points(self.fleet.sim.poses[self._others], self.params.lookahead)
