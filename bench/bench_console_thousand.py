@@ -15,15 +15,13 @@ the console's only filter before this issue.
 """
 from __future__ import annotations
 
-
-import harness  # first: pins BLAS/OpenMP to one thread, before numpy loads
-
 import statistics  # noqa: E402
 import sys  # noqa: E402
-import time  # noqa: E402
-
 import tempfile  # noqa: E402
+import time  # noqa: E402
 from pathlib import Path  # noqa: E402
+
+import harness  # first: pins BLAS/OpenMP to one thread, before numpy loads
 
 from swarmdeck.console.recording.recorder import Recorder  # noqa: E402
 from swarmdeck.console.runtime.config import arena_bounds  # noqa: E402

@@ -18,9 +18,16 @@ import numpy as np
 from scipy.spatial import Voronoi
 
 from swarmdeck.core.bounds import DEFAULT_BOUNDS
-from swarmdeck.coverage import (CoverageConfig, QuadratureOptions, bounded_voronoi, cell_moments,
-                                centroid_jacobian, coverage_tick, moving_density,
-                                precondition_positions)
+from swarmdeck.coverage import (
+    CoverageConfig,
+    QuadratureOptions,
+    bounded_voronoi,
+    cell_moments,
+    centroid_jacobian,
+    coverage_tick,
+    moving_density,
+    precondition_positions,
+)
 
 DEFAULT = DEFAULT_BOUNDS
 LARGE = (-5.0, 5.0, -3.0, 3.0)

@@ -21,15 +21,13 @@ Per scene, in the same process, times in process CPU ms (robust to other load):
 """
 from __future__ import annotations
 
-import os
-
-import harness  # first: pins BLAS/OpenMP to one thread, before numpy loads
-
 import argparse  # noqa: E402
 import dataclasses  # noqa: E402
+import os
 import platform  # noqa: E402
 import time  # noqa: E402
 
+import harness  # first: pins BLAS/OpenMP to one thread, before numpy loads
 import numpy as np  # noqa: E402
 
 from swarmdeck.safety import BarrierConfig, SafetyFilter  # noqa: E402

@@ -51,7 +51,7 @@ def row(n: int) -> str:
         env = envs.parallel_env(n_robots=n, task=task, bounds=bounds, max_steps=10**6)
         env.reset(seed=0)
 
-        def env_step():
+        def env_step(env=env):
             u = towards_centre(env.arena.positions()).astype(np.float32)
             env.step({a: u[i] for i, a in enumerate(env.possible_agents)})
         res[task] = blocks(env_step, n_blocks=5 if task == "coverage" else 7)

@@ -19,13 +19,11 @@ rows add to the bare tick.
 """
 from __future__ import annotations
 
-
-import harness  # first: pins BLAS/OpenMP to one thread, before numpy loads
-
 import argparse  # noqa: E402
 import statistics  # noqa: E402
 import time  # noqa: E402
 
+import harness  # first: pins BLAS/OpenMP to one thread, before numpy loads
 import numpy as np  # noqa: E402
 
 from swarmdeck.devices.fleet import FleetManager, SetupFailed, choose_slots, drive, return_maneuver  # noqa: E402

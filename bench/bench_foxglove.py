@@ -12,12 +12,13 @@ Run: ``.venv/bin/python bench/bench_foxglove.py`` (prints markdown tables; ~2 mi
 """
 from __future__ import annotations
 
-import harness  # first: pins BLAS/OpenMP to one thread, before numpy loads
 import statistics
 import sys
 import tempfile
 import time
 from pathlib import Path
+
+import harness  # first: pins BLAS/OpenMP to one thread, before numpy loads
 
 from swarmdeck.console.recording.foxglove import FoxgloveEncoder
 from swarmdeck.console.recording.recorder import Recorder, RecorderConfig, encode_json

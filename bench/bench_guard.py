@@ -26,12 +26,10 @@ Medians and worst over the ticks (the first 5, the warm-up, left out); "binds": 
 """
 from __future__ import annotations
 
-
-import harness  # first: pins BLAS/OpenMP to one thread, before numpy loads
-
 import argparse  # noqa: E402
 import time  # noqa: E402
 
+import harness  # first: pins BLAS/OpenMP to one thread, before numpy loads
 import numpy as np  # noqa: E402
 
 from swarmdeck.console.runtime.contacts import ContactWatch  # noqa: E402

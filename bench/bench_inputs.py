@@ -53,7 +53,7 @@ def main() -> int:
     def python_osc(ds):
         for d in ds:
             for m in OscBundle(d):
-                m.params
+                _ = m.params
 
     def ours_parse(ds):
         for d in ds:

@@ -117,7 +117,7 @@ def arena_gap(n_jobs: int, workdir: Path) -> dict[str, dict]:
             blocking = JobExports(service, video=False)
             runner.exports = blocking
             submit = blocking.submit
-            blocking.submit = lambda job_id: (submit(job_id), blocking.wait_idle(600))  # type: ignore[method-assign]
+            blocking.submit = lambda job_id, submit=submit, blocking=blocking: (submit(job_id), blocking.wait_idle(600))  # type: ignore[method-assign]
         frames: dict[int, list[float]] = {}
 
         def seen(frame, runner=runner, frames=frames) -> None:

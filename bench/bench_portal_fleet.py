@@ -14,13 +14,16 @@ to end without set-up and return (sandbox start-up, the 2 s run, the recording a
 """
 from __future__ import annotations
 
-import harness  # first: pins BLAS/OpenMP to one thread, before numpy loads
 import argparse
 import json
 import statistics
 import tempfile
 import time
 from pathlib import Path
+
+import harness  # first: pins BLAS/OpenMP to one thread, before numpy loads
+
+from swarmdeck.console.portal.states import JobState
 
 STILL = "def experiment(arena):\n    while True:\n        arena.step()\n"
 

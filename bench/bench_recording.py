@@ -23,10 +23,11 @@ from pathlib import Path
 import harness  # first: pins BLAS/OpenMP to one thread, before numpy loads
 import numpy as np
 
-from swarmdeck.console.runtime.loop import ControlLoop, LoopConfig
-from swarmdeck.console.recording.recorder import Recorder, encode_json
 from swarmdeck.console.recording.reader import open_recording
+from swarmdeck.console.recording.recorder import Recorder, encode_json
+from swarmdeck.console.runtime.loop import ControlLoop, LoopConfig
 from swarmdeck.core.constants import CONTROL_PERIOD
+
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))  # the synthetic-session fixture
 from recording_synth import retimed  # noqa: E402
 

@@ -81,8 +81,8 @@ def _child(mode: str, main: str, scenario: str) -> None:
 def _steps(n: int, k: int = 500) -> dict[str, float]:
     """µs per get_poses/set_velocities/step of the real rps (already on sys.path) and the facade in rps
     semantics, interleaved, best of 5."""
-    import numpy as np
     import matplotlib
+    import numpy as np
 
     matplotlib.use("Agg")
     import rps.robotarium as real

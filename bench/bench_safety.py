@@ -23,16 +23,14 @@ a second closed-loop filter without the dual-ascent prediction (``warm_dual_swee
 """
 from __future__ import annotations
 
-import os
-
-import harness  # first: pins BLAS/OpenMP to one thread, before numpy loads
-
 import argparse  # noqa: E402
 import collections  # noqa: E402
 import dataclasses  # noqa: E402
+import os
 import platform  # noqa: E402
 import time  # noqa: E402
 
+import harness  # first: pins BLAS/OpenMP to one thread, before numpy loads
 import numpy as np  # noqa: E402
 
 from swarmdeck.safety import BarrierConfig, SafetyFilter  # noqa: E402
@@ -79,7 +77,9 @@ def bench(n: int, scenes: int, ticks: int, baseline: bool, rng: np.random.Genera
             fails += not diag.ok
             x = x + u * cfg.dt
             ang = ang + rng.normal(0, 0.1, n)
-    med = lambda v: 1e3 * float(np.median(v)) if v else float("nan")
+    def med(v):
+        return 1e3 * float(np.median(v)) if v else float("nan")
+
     return dict(n=n, cold=med(cold), loop=med(loop), pruned=med(pruned), dense=med(dense),
                 methods=dict(methods), fails=fails, arena=cfg.bounds)
 
@@ -112,7 +112,9 @@ def closed_loop(n: int, ticks: int, rng: np.random.Generator) -> dict:
             diff = max(diff, float(np.abs(u - ue).max()), float(np.abs(un - ue).max()))
         x = x + u * cfg.dt
         ang = ang + rng.normal(0, 0.1, n)
-    med = lambda v: 1e3 * float(np.median(v))
+    def med(v):
+        return 1e3 * float(np.median(v))
+
     return dict(n=n, warm=med(t_warm), clarabel=med(t_clarabel), cold=med(t_cold), no_dual=med(t_no_dual), diff=diff,
                 methods=dict(methods))
 

@@ -27,14 +27,13 @@ from __future__ import annotations
 
 import argparse
 import os
-
-import harness  # first: pins BLAS/OpenMP to one thread, before numpy loads
-
 import resource  # noqa: E402
 import statistics  # noqa: E402
 import tempfile  # noqa: E402
 import time  # noqa: E402
 from pathlib import Path  # noqa: E402
+
+import harness  # first: pins BLAS/OpenMP to one thread, before numpy loads
 
 from swarmdeck.console.jobs import sandbox  # noqa: E402
 from swarmdeck.console.jobs.bundle import ScriptBundle  # noqa: E402

@@ -17,15 +17,22 @@ import platform
 import statistics
 import time
 
-import harness  # first: pins BLAS/OpenMP to one thread, before numpy loads
 import cv2
+import harness  # first: pins BLAS/OpenMP to one thread, before numpy loads
 import numpy as np
 
 from swarmdeck.core.constants import CONTROL_PERIOD
 from swarmdeck.tracking import (
-    CameraCalibration, CameraFrame, CameraPoseSource, SyntheticCamera, SyntheticCameraConfig, SyntheticRenderer,
-    Tracker, TrackerConfig, random_poses)
-
+    CameraCalibration,
+    CameraFrame,
+    CameraPoseSource,
+    SyntheticCamera,
+    SyntheticCameraConfig,
+    SyntheticRenderer,
+    Tracker,
+    TrackerConfig,
+    random_poses,
+)
 
 _cpu = harness.cpu_name
 

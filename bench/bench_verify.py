@@ -31,14 +31,13 @@ from __future__ import annotations
 
 import argparse
 import os
-
-import harness  # first: pins BLAS/OpenMP to one thread, before numpy loads
-
 import resource  # noqa: E402
 import statistics  # noqa: E402
 import tempfile  # noqa: E402
 import time  # noqa: E402
 from pathlib import Path  # noqa: E402
+
+import harness  # first: pins BLAS/OpenMP to one thread, before numpy loads
 
 from swarmdeck.console.jobs.confinement import JailConfig, choose_jail  # noqa: E402
 from swarmdeck.console.jobs.executors import LocalPoolExecutor, RayExecutor  # noqa: E402

@@ -11,12 +11,13 @@ Medians of the three rounds; wall and process CPU time (the machine is shared).
 """
 from __future__ import annotations
 
-import harness  # first: pins BLAS/OpenMP to one thread, before numpy loads
 import os
 import statistics
 import sys
 import tempfile
 from pathlib import Path
+
+import harness  # first: pins BLAS/OpenMP to one thread, before numpy loads
 
 from swarmdeck.console.recording.export_video import FrameRenderer, VideoLayout, VideoStyle, export_video
 from swarmdeck.console.recording.reader import open_recording
@@ -43,11 +44,11 @@ def bench(n: int, tmp: Path, rounds: int = 3) -> str:
         with open_recording(path) as rec:
             loaded = [f for _, f in rec.frames()]
             r = FrameRenderer(VideoLayout.fit(loaded[0].bounds, style.width, style.height), style)
-            draw.append(timed(lambda: [r.render(f, 0.0) for f in loaded]))
+            draw.append(timed(lambda: [r.render(f, 0.0) for f in loaded]))  # noqa: B023  (timed at once)
         with open_recording(path) as rec:
             out = tmp / f"n{n}-{k}.mp4"
             made: list[int] = []
-            export.append(timed(lambda: made.append(export_video(rec, out, style)[1])))
+            export.append(timed(lambda: made.append(export_video(rec, out, style)[1])))  # noqa: B023  (timed at once)
             size = os.path.getsize(out)
     vf = made[0]
     med = lambda xs, i: statistics.median(x[i] for x in xs)  # noqa: E731

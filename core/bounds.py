@@ -79,7 +79,7 @@ def check_bounds(bounds: object, name: str = "bounds", error: type[Exception] = 
     """``bounds`` as a :class:`Bounds` of 4 floats; ``error`` naming ``name`` unless it is 4 finite numbers
     with x_min < x_max and y_min < y_max."""
     try:
-        b = tuple(float(v) for v in bounds)  # type: ignore[union-attr]
+        b = tuple(float(v) for v in bounds)  # type: ignore[attr-defined]  # anything iterable; TypeError otherwise
     except (TypeError, ValueError):
         b = ()
     if len(b) != 4 or not all(math.isfinite(v) for v in b) or not (b[0] < b[1] and b[2] < b[3]):

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import math
 import numbers
+from typing import cast
 
 
 def in_range(x: object, lo: float = -math.inf, hi: float = math.inf, *, lo_open: bool = False,
@@ -21,7 +22,8 @@ def in_range(x: object, lo: float = -math.inf, hi: float = math.inf, *, lo_open:
         return False
     if not isinstance(x, numbers.Integral) and not math.isfinite(x):  # ints are finite (and may not fit a float)
         return False
-    return bool((x > lo if lo_open else x >= lo) and (x < hi if hi_open else x <= hi))
+    v = cast(float, x)  # a Real: compares with floats (typeshed's numbers.Real declares no operators)
+    return bool((v > lo if lo_open else v >= lo) and (v < hi if hi_open else v <= hi))
 
 
 def describe_range(lo: float = -math.inf, hi: float = math.inf, *, lo_open: bool = False, hi_open: bool = False,

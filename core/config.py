@@ -19,13 +19,15 @@ from collections.abc import Callable, Collection, Mapping
 from pathlib import Path
 from typing import Any, TypeVar
 
+from .errors import SwarmdeckError
+
 T = TypeVar("T")
 
 #: The usual unknown-key message; ``{what}`` names the table, ``{unknown}``/``{known}`` are sorted lists.
 UNKNOWN_KEYS = "unknown {what} keys {unknown}; expected some of {known}"
 
 
-class ConfigError(ValueError):
+class ConfigError(ValueError, SwarmdeckError):
     """A configuration value, table or file that cannot be used; the message names the key (and the file)."""
 
 

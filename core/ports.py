@@ -40,7 +40,7 @@ This module is at the bottom of the dependency graph so that every subsystem
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Protocol, runtime_checkable
+from typing import Any, Protocol, cast, runtime_checkable
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -124,6 +124,49 @@ def close_ports(source: PoseSource, sink: CommandSink) -> None:
     try:
         sink.close()
     finally:
-        close_source = getattr(source, "close", None)
-        if source is not sink and close_source is not None:
-            close_source()
+        if source is not cast(object, sink) and isinstance(source, Closeable):
+            source.close()
+
+
+# Optional capabilities of a pose source, command sink or backend: checked with isinstance (runtime_checkable),
+# never with getattr, so each is named and typed once here.
+
+@runtime_checkable
+class Closeable(Protocol):
+    """Holds resources (sockets, threads, a camera) to release."""
+
+    def close(self) -> None: ...
+
+
+@runtime_checkable
+class ReportsObstacles(Protocol):
+    """Holds robots out of control (missing, duplicated or docked) and says where they stand, so the barrier keeps
+    them as fixed points."""
+
+    def obstacles(self) -> NDArray[np.float64] | None:
+        """Their last known positions ``(M, 2)``, m (None or no rows: none)."""
+
+
+@runtime_checkable
+class ReportsRobotHealth(Protocol):
+    """Talks to robot firmware that reports its own status (``NetworkRobots``)."""
+
+    def robot_health(self) -> dict[str, dict[str, Any]]:
+        """Robot id (as text) → its last status report (``status_age`` s, battery, …)."""
+
+
+@runtime_checkable
+class ProvidesImage(Protocol):
+    """A pose source that also has the camera images its poses came from (``CameraPoseSource``)."""
+
+    @property
+    def image_ref(self) -> str | None:
+        """A reference to this tick's image (None: no image yet)."""
+
+    def image(self, ref: str) -> tuple[NDArray[Any], tuple[float, float, float, float]] | None:
+        """The image for ``ref`` and the floor rectangle it shows ``(x_min, x_max, y_min, y_max)``, m."""
+
+
+def obstacles_of(port: object) -> NDArray[np.float64] | None:
+    """``port.obstacles()`` when ``port`` reports obstacles (:class:`ReportsObstacles`), else None."""
+    return port.obstacles() if isinstance(port, ReportsObstacles) else None

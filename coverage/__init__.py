@@ -14,16 +14,25 @@ the recordings compute them), ``precondition_positions``, ``bounded_voronoi``, `
 Group behaviours (consensus, formation): :mod:`swarmdeck.coverage.group`; their interaction graphs
 are in :mod:`swarmdeck.core.graphs` (shared with the rps facade).
 """
-from swarmdeck.coverage.controller import (CoverageConfig, CoverageController, CoverageState,
-                                           coverage_tick)
-from swarmdeck.coverage.densities import (AnalyticDensity, Bump, Constant, Fixed, Linear,
-                                          Lissajous, Orbit, Pulse, Sine, moving_density,
-                                          s1_density)
+from swarmdeck.core.kinematics import saturate
+from swarmdeck.coverage.controller import CoverageConfig, CoverageController, CoverageState, coverage_tick
+from swarmdeck.coverage.densities import (
+                                           AnalyticDensity,
+                                           Bump,
+                                           Constant,
+                                           Fixed,
+                                           Linear,
+                                           Lissajous,
+                                           Orbit,
+                                           Pulse,
+                                           Sine,
+                                           moving_density,
+                                           s1_density,
+)
 from swarmdeck.coverage.density import Density, GaussianMixture, merge_mixtures
 from swarmdeck.coverage.geometry import CoverageGeometry, GeometryConfig, coverage_geometry
 from swarmdeck.coverage.image import image_density, letter_image
 from swarmdeck.coverage.jacobian import EdgeOptions, centroid_jacobian
-from swarmdeck.core.kinematics import saturate
 from swarmdeck.coverage.laws import LAWS, parse_law
 from swarmdeck.coverage.packing import packing_warning, predicted_spacing
 from swarmdeck.coverage.quadrature import CellMoments, QuadratureOptions, cell_moments

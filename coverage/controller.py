@@ -11,7 +11,7 @@ Example::
 """
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -19,15 +19,14 @@ import numpy as np
 import scipy.sparse as sp
 from numpy.typing import ArrayLike, NDArray
 
-from swarmdeck.core.constants import MAX_LINEAR_SPEED, SAFETY_DISTANCE
-from swarmdeck.coverage.density import Density, GaussianMixture
-from swarmdeck.coverage.geometry import (DEFAULT_QUADRATURE, NUMERICAL_ERRORS, GeometryConfig,
-                                         coverage_geometry)
-from swarmdeck.coverage.jacobian import EdgeOptions, centroid_jacobian
 from swarmdeck.core.bounds import DEFAULT_BOUNDS, Bounds, check_bounds
 from swarmdeck.core.checks import require_in_range
 from swarmdeck.core.config import from_mapping
+from swarmdeck.core.constants import MAX_LINEAR_SPEED, SAFETY_DISTANCE
 from swarmdeck.core.kinematics import saturate
+from swarmdeck.coverage.density import Density, GaussianMixture
+from swarmdeck.coverage.geometry import DEFAULT_QUADRATURE, NUMERICAL_ERRORS, GeometryConfig, coverage_geometry
+from swarmdeck.coverage.jacobian import EdgeOptions, centroid_jacobian
 from swarmdeck.coverage.laws import law_command, parse_law
 from swarmdeck.coverage.packing import packing_warning
 from swarmdeck.coverage.quadrature import QuadratureOptions
@@ -83,10 +82,10 @@ class CoverageConfig:
                               quadrature=self.quadrature)
 
     @classmethod
-    def from_dict(cls, data: dict[str, Any]) -> "CoverageConfig":
+    def from_dict(cls, data: dict[str, Any]) -> CoverageConfig:
         """Build from a plain dict (e.g. a TOML table); ``quadrature`` and ``edges`` may be
         nested tables. Raises ValueError naming unknown keys or bad values."""
-        def table(typ: type, key: str):
+        def table(typ: type, key: str) -> Callable[[Any], Any]:
             return lambda sub: from_mapping(typ, sub, f"coverage.{key}") if isinstance(sub, Mapping) else sub
 
         return from_mapping(cls, data, "coverage config", error=ValueError, wrap="bad {what}: {message}",

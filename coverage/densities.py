@@ -16,9 +16,9 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import NDArray
 
+from swarmdeck.core.bounds import DEFAULT_BOUNDS, Bounds
 from swarmdeck.core.checks import require_in_range
 from swarmdeck.core.smooth import smoothstep
-from swarmdeck.core.bounds import DEFAULT_BOUNDS, Bounds
 from swarmdeck.coverage.density import GaussianMixture
 
 __all__ = ["Constant", "Sine", "Pulse", "Fixed", "Orbit", "Lissajous", "Linear", "Bump",

@@ -27,7 +27,7 @@ __all__ = ["Density", "GaussianMixture", "merge_mixtures"]
 class Density(Protocol):
     """Anything that gives a Gaussian-mixture snapshot (with time derivatives) at time t [s]."""
 
-    def at(self, t: float) -> "GaussianMixture":  # pragma: no cover - protocol
+    def at(self, t: float) -> GaussianMixture:  # pragma: no cover - protocol
         ...
 
 
@@ -109,6 +109,22 @@ class GaussianMixture:
 
     __slots__ = ("floor", "mu", "sigma", "weight", "mu_dot", "sigma_dot", "weight_dot",
                  "cov", "cov_dot", "isotropic", "std_min", "std_max", "_prec", "_qdot", "_cq", "_ct")
+    floor: float
+    mu: NDArray[np.float64]
+    sigma: NDArray[np.float64]
+    weight: NDArray[np.float64]
+    mu_dot: NDArray[np.float64]
+    sigma_dot: NDArray[np.float64]
+    weight_dot: NDArray[np.float64]
+    cov: NDArray[np.float64]
+    cov_dot: NDArray[np.float64]
+    isotropic: bool
+    std_min: NDArray[np.float64]
+    std_max: NDArray[np.float64]
+    _prec: NDArray[np.float64]
+    _qdot: NDArray[np.float64]
+    _cq: NDArray[np.float64]
+    _ct: NDArray[np.float64]
 
     def __init__(
         self,
@@ -169,13 +185,13 @@ class GaussianMixture:
         # Polynomial coefficients on the features F(q) = [1, x, y, x², xy, y²] (6, K):
         # (q − μ)ᵀ P (q − μ) = F·cq and (q − μ)ᵀ P μ̇ + (q − μ)ᵀ Q (q − μ) = F·ct, so the
         # evaluation is two small matrix products and one exp over (M, K) (no (M, K, 2) arrays).
-        cq = _quadratic_coeffs(prec, mu_arr)
+        cq = _quadratic_coeffs(prec, mu_arr)  # type: ignore[arg-type]
         pm = np.einsum("kab,kb->ka", prec, m_dot) if k else np.zeros((0, 2))
         ct = _quadratic_coeffs(qdot, mu_arr)
         ct[0] -= (mu_arr * pm).sum(axis=1)
         ct[1:3] += pm.T
         ct = ct * w
-        _readonly(mu_arr, s, w, m_dot, s_dot, w_dot, c, c_dot, prec, qdot, cq, ct, std_lo, std_hi)
+        _readonly(mu_arr, s, w, m_dot, s_dot, w_dot, c, c_dot, prec, qdot, cq, ct, std_lo, std_hi)  # type: ignore[arg-type]
         object.__setattr__(self, "floor", f)
         for name, val in (("mu", mu_arr), ("sigma", s), ("weight", w), ("mu_dot", m_dot),
                           ("sigma_dot", s_dot), ("weight_dot", w_dot), ("cov", c),
@@ -188,7 +204,7 @@ class GaussianMixture:
         raise AttributeError("GaussianMixture is immutable")
 
     # ------------------------------------------------------------------ protocol
-    def at(self, t: float) -> "GaussianMixture":
+    def at(self, t: float) -> GaussianMixture:
         """A snapshot is a (frozen-in-time) Density: returns itself for every t."""
         return self
 
@@ -268,7 +284,7 @@ class GaussianMixture:
             feat = np.column_stack([np.ones_like(x), x, y, x * x, x * y, y * y])
             small = chunk.shape[0] * cq.shape[1] * 6 < 200_000
 
-            def poly(c: NDArray[np.float64]) -> NDArray[np.float64]:
+            def poly(c: NDArray[np.float64], feat: NDArray[np.float64] = feat, small: bool = small) -> NDArray[np.float64]:
                 return feat @ c if small else np.einsum("mf,fk->mk", feat, c)
 
             e = np.exp(-0.5 * poly(cq))
@@ -296,7 +312,7 @@ class GaussianMixture:
         return out
 
     @classmethod
-    def from_dict(cls, data: dict[str, Any]) -> "GaussianMixture":
+    def from_dict(cls, data: dict[str, Any]) -> GaussianMixture:
         """Inverse of :meth:`to_dict`; raises ValueError for malformed data."""
         if not isinstance(data, dict):
             raise ValueError(f"density parameters must be a dict, got {type(data).__name__}")

@@ -28,7 +28,7 @@ def load_grey(path: str | Path) -> NDArray[np.uint8]:
     img = cv2.imread(str(p), cv2.IMREAD_GRAYSCALE)
     if img is None or img.size == 0:
         raise ValueError(f"cannot read {p} as an image (expected PNG, JPEG, …)")
-    return img
+    return img  # type: ignore[return-value]  # cv2's stubs
 
 
 def letter_image(text: str = "R", height: int = 200, width: int = 320) -> NDArray[np.uint8]:

@@ -200,4 +200,4 @@ def cell_moments(vor: BoundedVoronoi, density: GaussianMixture,
     dc_dt[massless] = 0.0
     polar = np.maximum(m2 - m * (off ** 2).sum(axis=1), 0.0)
     return CellMoments(masses=m, centroids=centroids, dc_dt=dc_dt, dm_dt=g0, polar=polar,
-                       cost=m2, areas=areas, massless=massless, n_points=n_points)
+                       cost=m2, areas=areas, massless=massless, n_points=n_points)  # type: ignore[arg-type]

@@ -45,5 +45,5 @@ def raster_moments(points: ArrayLike, density: GaussianMixture,
     cost = s(phi * (r ** 2).sum(axis=1))
     return CellMoments(masses=m, centroids=p + off, dc_dt=dc, dm_dt=g0,
                        polar=cost - m * (off ** 2).sum(axis=1), cost=cost,
-                       areas=np.bincount(lab, minlength=n) * da,
+                       areas=np.bincount(lab, minlength=n) * da,  # type: ignore[arg-type]
                        massless=np.zeros(n, dtype=bool), n_points=q.shape[0])

@@ -14,10 +14,10 @@ from numpy.typing import NDArray
 
 from swarmdeck.core.bounds import DEFAULT_BOUNDS
 from swarmdeck.core.constants import CONTROL_PERIOD
+from swarmdeck.core.kinematics import saturate
 from swarmdeck.coverage.controller import CoverageConfig
 from swarmdeck.coverage.densities import s1_density
 from swarmdeck.coverage.jacobian import centroid_jacobian
-from swarmdeck.core.kinematics import saturate
 from swarmdeck.coverage.laws import law_command, parse_law
 from swarmdeck.coverage.quadrature import QuadratureOptions, cell_moments
 from swarmdeck.coverage.voronoi import bounded_voronoi

@@ -111,7 +111,7 @@ class BoundedVoronoi:
         a = self.vertices[self.tri_a] - p
         b = self.vertices[self.tri_b] - p
         tri = 0.5 * (a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0])
-        return np.bincount(self.tri_cell, weights=tri, minlength=self.n)
+        return np.bincount(self.tri_cell, weights=tri, minlength=self.n)  # type: ignore[return-value]  # bincount with weights is float64
 
     def polygons(self) -> list[NDArray[np.float64]]:
         """Cells as counter-clockwise polygons, a list of N arrays (V_i, 2) [m]."""

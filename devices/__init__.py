@@ -7,7 +7,20 @@ waypoints, next positions); it drives robot ports (:mod:`swarmdeck.core.ports`) 
 :class:`SteppedRobots`: :class:`SimulatedRobots` over the physics (:class:`SimulatedArena`) by
 default, ``NetworkRobots`` for GRITSBots over MQTT.
 """
-from swarmdeck.devices.arena import Arena, ArenaReport, ExperimentFinished, RunDefaults, RUN_DEFAULTS
+from swarmdeck.core.kinematics import (
+    GritsBotParams,
+    limit_unicycle,
+    lookahead_points,
+    saturate,
+    si_to_unicycle,
+    unicycle_step,
+    unicycle_to_si,
+    unicycle_to_wheels,
+    wheel_scale,
+    wheels_to_unicycle,
+    wrap_angle,
+)
+from swarmdeck.devices.arena import RUN_DEFAULTS, Arena, ArenaReport, ExperimentFinished, RunDefaults
 from swarmdeck.devices.controllers import (
     HybridPoseController,
     at_pose,
@@ -17,19 +30,6 @@ from swarmdeck.devices.controllers import (
     si_position_controller,
 )
 from swarmdeck.devices.initial_conditions import max_robots, random_initial_poses
-from swarmdeck.core.kinematics import (
-    GritsBotParams,
-    limit_unicycle,
-    lookahead_points,
-    saturate,
-    si_to_unicycle,
-    unicycle_to_si,
-    unicycle_step,
-    unicycle_to_wheels,
-    wheel_scale,
-    wheels_to_unicycle,
-    wrap_angle,
-)
 from swarmdeck.devices.simulated_robots import SimulatedRobots
 from swarmdeck.devices.simulator import ArenaConfig, SimulatedArena
 from swarmdeck.devices.stepped import SteppedRobots
@@ -55,7 +55,7 @@ def __getattr__(name: str):
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
-__all__ = [*_LAZY,
+__all__ = [*_LAZY,  # noqa: PLE0604  (the lazily imported names)
     "Arena", "ArenaConfig", "ArenaReport", "ExperimentFinished", "GritsBotParams", "HybridPoseController",
     "RunDefaults", "RUN_DEFAULTS", "SimulatedArena", "SimulatedRobots", "SteppedRobots", "ValidationReport", "ValidationRules",
     "at_pose", "at_position", "clf_unicycle_pose_controller", "clf_unicycle_position_controller",

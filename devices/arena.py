@@ -19,11 +19,12 @@ import contextvars
 from collections import deque
 from collections.abc import Sequence
 from dataclasses import dataclass, field
-from typing import Any, Literal, Protocol
+from typing import Any, Literal
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from swarmdeck.core.kinematics import GritsBotParams, lookahead_points, unicycle_to_si, wheels_to_unicycle
 from swarmdeck.devices.controllers import (
     HybridPoseController,
     at_position,
@@ -31,10 +32,9 @@ from swarmdeck.devices.controllers import (
     clf_unicycle_position_controller,
     si_position_controller,
 )
-from swarmdeck.core.kinematics import GritsBotParams, lookahead_points, unicycle_to_si, wheels_to_unicycle
 from swarmdeck.devices.fleet.manager import FleetManager
 from swarmdeck.devices.initial_conditions import random_initial_poses
-from swarmdeck.devices.pipeline import barrier_filter, certify
+from swarmdeck.devices.pipeline import CommandFilter, FilterDiagnostics, UnicycleCommandFilter, barrier_filter, certify
 from swarmdeck.devices.simulated_robots import SimulatedRobots
 from swarmdeck.devices.simulator import ArenaConfig, SimulatedArena, check_poses
 from swarmdeck.devices.stepped import SteppedRobots
@@ -45,12 +45,6 @@ GoalController = Literal["si", "clf", "pose", "hybrid"]
 
 class ExperimentFinished(Exception):
     """Raised by :meth:`Arena.step` when the run's declared duration is over."""
-
-
-class CommandFilter(Protocol):
-    """A safety filter: ``filter(points (N,2), nominal (N,2), obstacles=None) -> (safe (N,2), diagnostics)``."""
-
-    def filter(self, points: ArrayLike, nominal: ArrayLike, obstacles: ArrayLike | None = None) -> tuple[FloatArray, Any]: ...
 
 
 @dataclass(frozen=True)
@@ -74,13 +68,7 @@ class RunDefaults:
     rps_call_order: bool = True
 
 
-RUN_DEFAULTS: contextvars.ContextVar[RunDefaults] = contextvars.ContextVar("swarmdeck_run_defaults", default=RunDefaults())
-
-
-class UnicycleCommandFilter(Protocol):
-    """A filter on unicycle commands: ``filter(poses (N,3), v (N,), w (N,), obstacles=None) -> (v, w, diagnostics)``."""
-
-    def filter(self, poses: ArrayLike, v: ArrayLike, w: ArrayLike, obstacles: ArrayLike | None = None) -> tuple[FloatArray, FloatArray, Any]: ...
+RUN_DEFAULTS: contextvars.ContextVar[RunDefaults] = contextvars.ContextVar("swarmdeck_run_defaults", default=RunDefaults())  # noqa: B039  (frozen)
 
 
 @dataclass
@@ -93,7 +81,7 @@ class SafetyStats:
     saturations: int = 0  # robot-steps whose command was scaled down to the wheel limits before filtering
     saturation_steps: int = 0  # steps in which at least one robot's command was scaled down
     last_status: str = "off"
-    last_diagnostics: Any = None
+    last_diagnostics: FilterDiagnostics | None = None
     failure_reasons: dict[str, int] = field(default_factory=dict)
 
 
@@ -512,7 +500,7 @@ class Arena:
         return new_poses
 
     # ------------------------------------------------------------------ reporting
-    def report(self) -> "ArenaReport":
+    def report(self) -> ArenaReport:
         """What happened so far: validation counts, safety filter statistics, invalid commands."""
         validation = self.robots.report
         fleet = None if self.fleet is None else fleet_summary(self.fleet)

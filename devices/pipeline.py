@@ -37,7 +37,7 @@ is its last resort (robots that would bring a pair closer than the guard distanc
 from __future__ import annotations
 
 import dataclasses
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, Protocol, cast
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -45,10 +45,44 @@ from numpy.typing import ArrayLike, NDArray
 from swarmdeck.core.kinematics import GritsBotParams, limit_unicycle, lookahead_points, si_to_unicycle, unicycle_to_si
 
 if TYPE_CHECKING:
+    from swarmdeck.safety import UnicycleSafetyFilter
     from swarmdeck.safety.guard import GuardCheck, GuardConfig
 
 FloatArray = NDArray[np.float64]
 BoolArray = NDArray[np.bool_]
+
+
+class FilterDiagnostics(Protocol):
+    """What a safety filter reports with its commands: at least ``ok`` (False: every robot was stopped) and
+    ``status`` in words. swarmdeck's barrier returns :class:`~swarmdeck.safety.BarrierDiagnostics` (also
+    ``active_pairs``, ``active_h``, ``intervention`` (N,) m/s, ``min_distance`` m, …), which :func:`certify` re-indexes
+    over all robots and the console draws; a user's filter may report less (missing fields read as ok, "ok")."""
+
+    @property
+    def ok(self) -> bool: ...
+
+    @property
+    def status(self) -> str: ...
+
+
+class CommandFilter(Protocol):
+    """A safety filter on look-ahead points: ``filter(points (N, 2) m, nominal (N, 2) m/s, obstacles (M, 2) m or
+    None) -> (safe (N, 2) m/s, diagnostics)`` (``Arena(safety=...)`` takes one; :func:`certify` maps to ``(v, ω)``)."""
+
+    def filter(self, points: ArrayLike, nominal: ArrayLike, obstacles: ArrayLike | None = None
+               ) -> tuple[FloatArray, FilterDiagnostics]: ...
+
+
+class UnicycleCommandFilter(Protocol):
+    """A safety filter on unicycle commands: ``filter(poses (N, 3), v (N,) m/s, w (N,) rad/s, obstacles (M, 2) m or
+    None) -> (v, w, diagnostics)``; swarmdeck's barrier (:func:`barrier_filter`) is one."""
+
+    def filter(self, poses: ArrayLike, v: ArrayLike, w: ArrayLike, obstacles: ArrayLike | None = None
+               ) -> tuple[FloatArray, FloatArray, FilterDiagnostics]: ...
+
+
+#: What :func:`certify` accepts as its barrier (None: no barrier).
+SafetyFilterLike = CommandFilter | UnicycleCommandFilter
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
@@ -76,7 +110,7 @@ class Certified:
     invalid: BoolArray
     ok: bool
     status: str
-    diagnostics: Any
+    diagnostics: FilterDiagnostics | None
 
     def changed(self) -> BoolArray:
         """``(N,)`` robots whose command the filter changed (beyond round-off of a non-unicycle filter)."""
@@ -86,7 +120,7 @@ class Certified:
 
 
 def barrier_filter(robot: GritsBotParams, bounds: tuple[float, float, float, float], dt: float,
-                   **barrier: Any) -> Any:
+                   **barrier: Any) -> UnicycleSafetyFilter:
     """swarmdeck's unicycle barrier filter for this robot and arena.
 
     ``barrier``: further :class:`~swarmdeck.safety.BarrierConfig` fields (``safety_distance``,
@@ -97,14 +131,14 @@ def barrier_filter(robot: GritsBotParams, bounds: tuple[float, float, float, flo
     return UnicycleSafetyFilter(BarrierConfig(bounds=bounds, dt=dt, **barrier), robot)
 
 
-def is_unicycle_filter(filt: Any) -> bool:
+def is_unicycle_filter(filt: object) -> bool:
     """True for swarmdeck's unicycle barrier (poses, v, w); other filters take points and SI velocities."""
     from swarmdeck.safety import UnicycleSafetyFilter
 
     return isinstance(filt, UnicycleSafetyFilter)
 
 
-def certify(poses: ArrayLike, nominal: ArrayLike, robot: GritsBotParams, filt: Any = None, *,
+def certify(poses: ArrayLike, nominal: ArrayLike, robot: GritsBotParams, filt: SafetyFilterLike | None = None, *,
             seen: ArrayLike | None = None, obstacles: ArrayLike | None = None) -> Certified:
     """Nominal look-ahead velocities → the unicycle commands to send (see the module docstring).
 
@@ -137,8 +171,9 @@ def certify(poses: ArrayLike, nominal: ArrayLike, robot: GritsBotParams, filt: A
     return Certified(v, w, safe, v0, w0, saturated, invalid, ok, status, diag)
 
 
-def _filter(filt: Any, poses: FloatArray, v: FloatArray, w: FloatArray, seen: BoolArray,
-            obstacles: ArrayLike | None, robot: GritsBotParams) -> tuple[FloatArray, FloatArray, bool, str, Any]:
+def _filter(filt: SafetyFilterLike, poses: FloatArray, v: FloatArray, w: FloatArray, seen: BoolArray,
+            obstacles: ArrayLike | None, robot: GritsBotParams
+            ) -> tuple[FloatArray, FloatArray, bool, str, FilterDiagnostics | None]:
     """The barrier over the seen robots; unseen ones and ``obstacles`` are fixed points. Fail-stop."""
     n, ell = len(poses), robot.lookahead
     extra = None if obstacles is None else np.asarray(obstacles, dtype=float).reshape(-1, 2)
@@ -154,12 +189,13 @@ def _filter(filt: Any, poses: FloatArray, v: FloatArray, w: FloatArray, seen: Bo
         poses, v, w = poses[idx], v[idx], w[idx]
     k = len(idx)
     if is_unicycle_filter(filt):
-        vs, ws, diag = filt.filter(poses, v, w, extra)
+        vs, ws, diag = cast(UnicycleCommandFilter, filt).filter(poses, v, w, extra)
         vs, ws = np.asarray(vs, dtype=float), np.asarray(ws, dtype=float)
     else:
+        si = cast(CommandFilter, filt)
         u = unicycle_to_si(poses, v, w, ell)
         points = lookahead_points(poses, ell)
-        safe_u, diag = filt.filter(points, u) if extra is None else filt.filter(points, u, extra)
+        safe_u, diag = si.filter(points, u) if extra is None else si.filter(points, u, extra)
         safe_u = np.asarray(safe_u, dtype=float)
         vs, ws = (np.zeros(0), np.zeros(0)) if safe_u.shape != (k, 2) else si_to_unicycle(poses, safe_u, ell)
         vs, ws, _ = limit_unicycle(vs, ws, robot)
@@ -175,7 +211,7 @@ def _filter(filt: Any, poses: FloatArray, v: FloatArray, w: FloatArray, seen: Bo
     return v_all, w_all, True, status, _remap(diag, idx, n)
 
 
-def _remap(diag: Any, idx: NDArray[np.intp], n: int) -> Any:
+def _remap(diag: FilterDiagnostics | None, idx: NDArray[np.intp], n: int) -> FilterDiagnostics | None:
     """Diagnostics of the robots ``idx`` as diagnostics over all ``n``: intervention ``(n,)`` (zero
     for robots not filtered), active robot pairs in full indices (pairs with obstacles dropped)."""
     if len(idx) == n or not dataclasses.is_dataclass(diag) or not hasattr(diag, "active_pairs"):
@@ -239,10 +275,11 @@ def brake(cert: Certified, poses: ArrayLike, robot: GritsBotParams, dt: float, d
     return dataclasses.replace(cert, v=v, w=w, safe=safe), stopped
 
 
-def certify_bypassed(poses: ArrayLike, nominal: ArrayLike, robot: GritsBotParams, hard: Any, monitor: Any,
-                     guard: "GuardConfig", dt: float, *, seen: ArrayLike | None = None,
+def certify_bypassed(poses: ArrayLike, nominal: ArrayLike, robot: GritsBotParams, hard: SafetyFilterLike,
+                     monitor: SafetyFilterLike,
+                     guard: GuardConfig, dt: float, *, seen: ArrayLike | None = None,
                      obstacles: ArrayLike | None = None, names: ArrayLike | None = None
-                     ) -> tuple[Certified, Certified, "GuardCheck", BoolArray]:
+                     ) -> tuple[Certified, Certified, GuardCheck, BoolArray]:
     """One tick of a bypassed barrier (module docstring): ``(commands to send, the full barrier's answer, the
     guard's verdict, (N,) robots the brake stopped)``. The commands are ``hard``'s (walls and obstacles only) unless
     the guard trips, then the full barrier's (``monitor``); the brake is applied to them.
@@ -284,7 +321,8 @@ def certify_bypassed(poses: ArrayLike, nominal: ArrayLike, robot: GritsBotParams
     return dataclasses.replace(kept, v=v, w=w, safe=safe), full, verdict, stopped
 
 
-def _without_pairs(full: Certified, poses: FloatArray, nominal: ArrayLike, robot: GritsBotParams, hard: Any,
+def _without_pairs(full: Certified, poses: FloatArray, nominal: ArrayLike, robot: GritsBotParams,
+                   hard: SafetyFilterLike,
                    seen: BoolArray, fixed: FloatArray) -> Certified:
     """The walls-and-obstacles answer from the full barrier's (see :func:`certify_bypassed`): ``hard`` on the robots
     of active pair rows only, with ``fixed`` (the unseen robots and the obstacles, :func:`_fixed_points`) as its fixed
@@ -314,7 +352,7 @@ def _without_pairs(full: Certified, poses: FloatArray, nominal: ArrayLike, robot
     return dataclasses.replace(full, v=v, w=w, safe=safe)
 
 
-def _no_rows(filt: Any, points: FloatArray, fixed: FloatArray) -> BoolArray:
+def _no_rows(filt: SafetyFilterLike, points: FloatArray, fixed: FloatArray) -> BoolArray:
     """``(K,)`` controlled points for which ``filt`` (a barrier without pair rows) builds no row but the wheel limits:
     farther from every wall than its wall radius and from every fixed point than its neighbour radius
     (``BarrierConfig.wall_radius``/``neighbour_radius``: beyond them no row can bind, so the filter is not built

@@ -26,16 +26,17 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from swarmdeck.core.errors import SwarmdeckError
 from swarmdeck.devices.arena import RUN_DEFAULTS, Arena, ArenaReport, ExperimentFinished, RunDefaults
 from swarmdeck.devices.fleet.setup import SetupFailed
 from swarmdeck.devices.rps import rps_aliases
 
 
-class ScriptError(Exception):
+class ScriptError(SwarmdeckError):
     """The script could not be loaded (missing, unreadable, syntax error)."""
 
 
-class RunnerArenaError(ValueError):
+class RunnerArenaError(ValueError, SwarmdeckError):
     """The runner could not build the Arena it hands to ``experiment(arena)`` (e.g. too many robots)."""
 
 
@@ -160,7 +161,9 @@ def run_experiment(
                 saved_argv = sys.argv
                 sys.argv = [str(path), *argv]  # as `python script.py ARGS…` sees them
                 try:
-                    with rps_aliases() if rps else contextlib.nullcontext([]) as notes:
+                    aliases: contextlib.AbstractContextManager[list[str]] = (
+                        rps_aliases() if rps else contextlib.nullcontext([]))
+                    with aliases as notes:
                         result.notes = notes  # the facade adds to it while the script runs
                         # as `python script.py` runs it: code under `if __name__ == "__main__":` runs too
                         namespace = runpy.run_path(str(path), run_name="__main__")

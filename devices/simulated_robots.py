@@ -20,8 +20,8 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from swarmdeck.core.ports import SensedPoses
 from swarmdeck.core.kinematics import GritsBotParams
+from swarmdeck.core.ports import SensedPoses
 from swarmdeck.devices.battery import BatteryParams, battery_step
 from swarmdeck.devices.chargers import ChargerLayout
 from swarmdeck.devices.initial_conditions import max_robots, random_initial_poses

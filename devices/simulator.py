@@ -13,11 +13,11 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from swarmdeck.core.checks import require_in_range
 from swarmdeck.core.bounds import DEFAULT_BOUNDS, Bounds, check_bounds
+from swarmdeck.core.checks import require_in_range
 from swarmdeck.core.constants import CONTROL_PERIOD
-from swarmdeck.devices.clock import RealTimePacer, VirtualClock
 from swarmdeck.core.kinematics import GritsBotParams, limit_unicycle, unicycle_step, wrap_angle
+from swarmdeck.devices.clock import RealTimePacer, VirtualClock
 from swarmdeck.devices.initial_conditions import random_initial_poses
 from swarmdeck.devices.validation import ValidationReport, ValidationRules
 

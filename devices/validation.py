@@ -93,10 +93,10 @@ class ValidationReport:
     n_robots: int
     steps: int = 0
     time: float = 0.0
-    collisions_per_robot: NDArray[np.int64] = field(default=None)  # type: ignore[assignment]
-    boundary_per_robot: NDArray[np.int64] = field(default=None)  # type: ignore[assignment]
-    actuator_per_robot: NDArray[np.int64] = field(default=None)  # type: ignore[assignment]
-    invalid_command_per_robot: NDArray[np.int64] = field(default=None)  # type: ignore[assignment]
+    collisions_per_robot: NDArray[np.int64] = field(default=None)  # type: ignore[arg-type]
+    boundary_per_robot: NDArray[np.int64] = field(default=None)  # type: ignore[arg-type]
+    actuator_per_robot: NDArray[np.int64] = field(default=None)  # type: ignore[arg-type]
+    invalid_command_per_robot: NDArray[np.int64] = field(default=None)  # type: ignore[arg-type]
     steps_with_collision: int = 0
     steps_with_boundary: int = 0
     steps_with_actuator: int = 0

@@ -19,14 +19,14 @@ its safe set.
 """
 from __future__ import annotations
 
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from swarmdeck.core.bounds import Bounds
 from swarmdeck.core.kinematics import GritsBotParams
-from swarmdeck.core.ports import CommandSink, PoseSource, SensedPoses, close_ports
+from swarmdeck.core.ports import CommandSink, PoseSource, SensedPoses, close_ports, obstacles_of
 from swarmdeck.devices.initial_conditions import random_initial_poses
 from swarmdeck.devices.simulated_robots import SimulatedRobots
 from swarmdeck.devices.simulator import ArenaConfig
@@ -77,7 +77,7 @@ class MixedRobots:
 
     @classmethod
     def add_virtual(cls, source: PoseSource, sink: CommandSink, k: int, config: ArenaConfig,
-                    params: GritsBotParams | None = None) -> "MixedRobots":
+                    params: GritsBotParams | None = None) -> MixedRobots:
         """K virtual robots beside the robots ``source`` reads now: ids after the largest physical id,
         start poses clear of every physical robot (:func:`virtual_start_poses`, seeded by ``config.seed``).
 
@@ -132,12 +132,12 @@ class MixedRobots:
 
     def obstacles(self) -> FloatArray:
         """The physical sink's fixed obstacles ``(M, 2)`` m (robots excluded from control)."""
-        obstacles = getattr(self.sink, "obstacles", None)
-        return np.zeros((0, 2)) if obstacles is None else np.asarray(obstacles(), dtype=float).reshape(-1, 2)
+        obstacles = obstacles_of(self.sink)
+        return np.zeros((0, 2)) if obstacles is None else np.asarray(obstacles, dtype=float).reshape(-1, 2)
 
     def health(self) -> str:
         parts = [self.source.health()]
-        if self.sink is not self.source:
+        if self.sink is not cast(object, self.source):
             parts.append(f"commands: {self.sink.health()}")
         parts.append(f"virtual: {len(self.virtual_ids)} robots, {self.virtual.health()}")
         return "; ".join(parts)

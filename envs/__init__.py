@@ -17,12 +17,12 @@ Every action passes the barrier-certificate safety filter of ``swarmdeck.safety`
 (through ``swarmdeck.devices.Arena``) unless ``safety=False``. Episodes can be
 recorded to MCAP and played in the console: ``swarmdeck.console.recording.episodes``.
 """
-from swarmdeck.envs.swarm import ACTIONS, EnvConfig, SwarmParallelEnv, parallel_env
-from swarmdeck.envs.tasks import TASKS
-from swarmdeck.envs.centralised import CentralisedEnv
 from swarmdeck.envs import scenarios
 from swarmdeck.envs.batched import BatchedEnv, ScenarioParallelEnv, SwarmVectorEnv
+from swarmdeck.envs.centralised import CentralisedEnv
 from swarmdeck.envs.scenario import Actions, Scenario, View
+from swarmdeck.envs.swarm import ACTIONS, EnvConfig, SwarmParallelEnv, parallel_env
+from swarmdeck.envs.tasks import TASKS
 
 __all__ = ["ACTIONS", "Actions", "BatchedEnv", "CentralisedEnv", "EnvConfig", "Scenario", "ScenarioParallelEnv",
            "SwarmParallelEnv", "SwarmVectorEnv", "TASKS", "View", "parallel_env", "scenarios"]

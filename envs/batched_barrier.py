@@ -22,11 +22,17 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from swarmdeck.core.kinematics import UnicycleParams, lookahead_points, si_to_unicycle, unicycle_to_si, unicycle_to_wheels
+from swarmdeck.core.kinematics import (
+    UnicycleParams,
+    lookahead_points,
+    si_to_unicycle,
+    unicycle_to_si,
+    unicycle_to_wheels,
+)
 from swarmdeck.envs.neighbours import lifted_tree
 from swarmdeck.safety import BarrierConfig
 from swarmdeck.safety.constraints import LIMIT, Rows, pair_rows, wall_rows
-from swarmdeck.safety.distributed import split_rows, solve_small_qps
+from swarmdeck.safety.distributed import solve_small_qps, split_rows
 from swarmdeck.safety.filter import MAX_COORDINATE
 from swarmdeck.safety.unicycle import max_point_speed, wheel_limit_rows
 

@@ -18,8 +18,8 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from swarmdeck.core.constants import CONTROL_PERIOD
 from swarmdeck.core.bounds import DEFAULT_BOUNDS, Bounds
+from swarmdeck.core.constants import CONTROL_PERIOD
 from swarmdeck.core.kinematics import GritsBotParams, limit_unicycle, lookahead_points, unicycle_step, unicycle_to_si
 from swarmdeck.devices.pipeline import certify
 from swarmdeck.devices.validation import ValidationRules

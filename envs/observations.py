@@ -19,9 +19,8 @@ from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
+
 from swarmdeck.core.bounds import Bounds
-
-
 from swarmdeck.envs.neighbours import nearest_neighbours
 
 FloatArray = NDArray[np.float64]

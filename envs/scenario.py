@@ -30,10 +30,9 @@ from typing import Literal
 
 import numpy as np
 from numpy.typing import NDArray
-
-from swarmdeck.core.bounds import DEFAULT_BOUNDS, Bounds
 from scipy.spatial import cKDTree
 
+from swarmdeck.core.bounds import DEFAULT_BOUNDS, Bounds
 from swarmdeck.envs.neighbours import batched_nearest_neighbours, batched_query, lifted_tree
 
 FloatArray = NDArray[np.float64]
@@ -91,7 +90,7 @@ class View:
             self.__dict__["_nearest"] = cached
         return cached[0][..., :k], cached[1][..., :k]
 
-    def with_state(self, state: State) -> "View":
+    def with_state(self, state: State) -> View:
         """The same view with another state (the k-d tree and its queries, once made, are kept)."""
         new = View(self.poses, self.points, state, self.actions, self.steps, self.bounds)
         for key in ("points_tree", "_nearest"):

@@ -44,7 +44,12 @@ from swarmdeck.core.constants import CONTROL_PERIOD
 from swarmdeck.envs.neighbours import min_distance
 from swarmdeck.envs.observations import observation_bounds, observation_size, observe
 from swarmdeck.envs.tasks import (
-    TASKS, coverage_cells, coverage_reward, formation_reward, formation_slots, rendezvous_reward,
+    TASKS,
+    coverage_cells,
+    coverage_reward,
+    formation_reward,
+    formation_slots,
+    rendezvous_reward,
 )
 
 try:  # the optional extra: pip install 'swarmdeck[rl]'
@@ -157,6 +162,7 @@ class SwarmParallelEnv(ParallelEnv):
         x0, x1, y0, y1 = self.config.bounds
         k = self.config.n_bumps
         rng = self._rng
+        assert rng is not None, "reset() draws the generator first"
         mu = np.column_stack((rng.uniform(x0 + 0.3, x1 - 0.3, k), rng.uniform(y0 + 0.3, y1 - 0.3, k)))
         return GaussianMixture(floor=0.05, mu=mu, sigma=rng.uniform(0.2, 0.4, k), weight=rng.uniform(0.5, 1.0, k))
 

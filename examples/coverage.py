@@ -30,7 +30,7 @@ def coverage_experiment(arena: Arena, density: Density, law: str = "tvd-d1",
     """
     safety_distance = getattr(getattr(arena.safety, "config", None), "safety_distance", SAFETY_DISTANCE)
     cfg = CoverageConfig(law=law, kappa=kappa, max_speed=arena.params.max_speed,
-                         bounds=tuple(arena.config.bounds), safety_distance=safety_distance)
+                         bounds=tuple(arena.config.bounds), safety_distance=safety_distance)  # type: ignore[arg-type]  # 4 numbers: CoverageConfig checks
     ctrl = CoverageController(cfg, density)
     end = arena.duration if arena.duration is not None else 30.0
     ts, hs, ds, warnings, failures = [], [], [], [], 0
@@ -52,7 +52,7 @@ def coverage_experiment(arena: Arena, density: Density, law: str = "tvd-d1",
 
 def experiment(arena: Arena) -> dict[str, Any]:
     """TVD-D1 on the moving demo density; returns the mean and final H and ‖p − c‖."""
-    res = coverage_experiment(arena, moving_density(tuple(arena.config.bounds)))
+    res = coverage_experiment(arena, moving_density(tuple(arena.config.bounds)))  # type: ignore[arg-type]  # 4 numbers: checked above
     h, d = res["H"], res["distance"]
     return {
         "mean H / ∫φ": float(h.mean()) if h.size else float("nan"),

@@ -37,7 +37,8 @@ def run(env, policy: str, seed: int) -> tuple[float, float, float]:
     """One episode: (mean reward per agent and step, mean filter change m/s, share of actions the filter changed)."""
     env.reset(seed=seed)
     swarm = env.unwrapped
-    rewards, changes = [], []
+    rewards: list[float] = []
+    changes: list[float] = []
     while env.agents:
         acts = scripted(swarm) if policy == "scripted" else {a: env.action_space(a).sample() for a in env.agents}
         _, r, _, _, infos = env.step(acts)

@@ -19,8 +19,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from swarmdeck.core.config import check_keys, field_names
 from swarmdeck.core.bounds import DEFAULT_BOUNDS, Bounds, check_bounds
+from swarmdeck.core.config import check_keys, field_names
+
 
 @dataclass(frozen=True)
 class Calibration:
@@ -78,7 +79,7 @@ class Calibration:
         return np.asarray(duv, dtype=float) @ a.T
 
     @classmethod
-    def from_dict(cls, d: dict, bounds: tuple[float, float, float, float] | None = None) -> "Calibration":
+    def from_dict(cls, d: dict, bounds: tuple[float, float, float, float] | None = None) -> Calibration:
         """Build from a config mapping (keys as the attributes); unknown keys are an error."""
         kw = check_keys(d, field_names(cls) | {"rotation_deg"}, "calibration", error=ValueError)
         kw.pop("rotation_deg", None)

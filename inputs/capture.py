@@ -34,7 +34,7 @@ class Datagram:
                            "data": base64.b64encode(self.data).decode("ascii")})
 
     @classmethod
-    def from_json(cls, line: str) -> "Datagram":
+    def from_json(cls, line: str) -> Datagram:
         """Parse one JSON Lines record; ``ValueError`` naming the problem."""
         try:
             d = json.loads(line)

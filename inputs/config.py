@@ -35,6 +35,7 @@ from pathlib import Path
 from swarmdeck.core.bounds import DEFAULT_BOUNDS, Bounds, check_bounds
 from swarmdeck.core.checks import in_range
 from swarmdeck.core.config import ConfigError, check_keys, field_names, read_toml
+
 from .calibration import Calibration
 from .density import DensityConfig
 from .pointstream import PRESETS, PointStreamConfig
@@ -114,7 +115,7 @@ class ListenerConfig:
                               f"got {self.forget_after!r}")
 
     @classmethod
-    def from_preset(cls, preset: str, **overrides) -> "ListenerConfig":
+    def from_preset(cls, preset: str, **overrides) -> ListenerConfig:
         """A UDP listener for a gesture-bridge preset (``manososc``, ``leap-osc``,
         ``ultraleap-osc-sender``) or ``tuio``; ``overrides`` replace fields."""
         if preset == "tuio":
@@ -128,7 +129,7 @@ class ListenerConfig:
         return cls(**kw)
 
     @classmethod
-    def from_dict(cls, d: dict, bounds: tuple[float, float, float, float] | None = None) -> "ListenerConfig":
+    def from_dict(cls, d: dict, bounds: tuple[float, float, float, float] | None = None) -> ListenerConfig:
         """Build from a mapping (a ``[[inputs.listeners]]`` TOML table)."""
         kw = check_keys(d, field_names(cls) | {"preset"}, "listener")
         preset = kw.pop("preset", None)
@@ -136,7 +137,7 @@ class ListenerConfig:
             if "calibration" in kw:
                 kw["calibration"] = Calibration.from_dict(kw["calibration"], bounds)
             elif bounds is not None:
-                kw["calibration"] = Calibration(bounds=tuple(bounds))
+                kw["calibration"] = Calibration(bounds=tuple(bounds))  # type: ignore[arg-type]  # 4 numbers: Calibration checks
             if "source_calibrations" in kw:
                 sc = kw["source_calibrations"]
                 if not isinstance(sc, dict):
@@ -162,7 +163,7 @@ class InputConfig:
     bounds: Bounds = DEFAULT_BOUNDS
 
     @classmethod
-    def from_dict(cls, d: dict) -> "InputConfig":
+    def from_dict(cls, d: dict) -> InputConfig:
         """Build from the ``[inputs]`` mapping; unknown keys are an error."""
         check_keys(d, ("listeners", "density", "bounds"), "[inputs]")
         bounds = check_bounds(d.get("bounds", DEFAULT_BOUNDS), "[inputs] bounds", ConfigError)
@@ -177,6 +178,6 @@ class InputConfig:
         return cls(listeners, density, bounds)
 
     @classmethod
-    def load_toml(cls, path: str | Path, section: str = "inputs") -> "InputConfig":
+    def load_toml(cls, path: str | Path, section: str = "inputs") -> InputConfig:
         """Read ``[section]`` of a TOML file (defaults if the table is absent)."""
         return cls.from_dict(read_toml(path).get(section, {}))

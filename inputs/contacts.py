@@ -130,7 +130,8 @@ class HealthBook:
         Walks from the least recently heard and stops at the first recent one."""
         lim = now - self._forget_after
         entries = self._entries
-        gone, kept = [], []
+        gone: list[str] = []
+        kept: list[str] = []
         for name, h in entries.items():
             if h.last_seen >= lim:
                 break

@@ -80,7 +80,7 @@ class DensityConfig:
             raise ValueError(f"density max_bumps must be an int >= 1, got {self.max_bumps!r}")
 
     @classmethod
-    def from_dict(cls, d: dict) -> "DensityConfig":
+    def from_dict(cls, d: dict) -> DensityConfig:
         """Build from a mapping (``[inputs.density]``); unknown keys are an error."""
         return cls(**check_keys(d, field_names(cls), "density", error=ValueError))
 

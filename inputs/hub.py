@@ -39,7 +39,7 @@ class InputHub:
 
     @classmethod
     def from_config(cls, config: InputConfig, *, clock: Callable[[], float] = time.monotonic,
-                    on_datagram: DatagramHook | None = None) -> "InputHub":
+                    on_datagram: DatagramHook | None = None) -> InputHub:
         """One UDP/TCP listener per ``config.listeners`` entry (not started)."""
         return cls([make_listener(lc, clock=clock, on_datagram=on_datagram) for lc in config.listeners],
                    clock=clock, config=config)
@@ -53,7 +53,7 @@ class InputHub:
         """Merge one more source."""
         self._sources.append(source)
 
-    def start(self) -> "InputHub":
+    def start(self) -> InputHub:
         """Start every source (binds sockets); on failure, close what started and re-raise."""
         started = []
         try:
@@ -71,7 +71,7 @@ class InputHub:
         for s in self._sources:
             s.close()
 
-    def __enter__(self) -> "InputHub":
+    def __enter__(self) -> InputHub:
         return self.start()
 
     def __exit__(self, *exc: object) -> None:

@@ -30,7 +30,6 @@ from .oscparse import MalformedDatagram, parse_datagram
 from .pointstream import PointStreamDecoder
 from .tuio import TuioAssembler
 
-
 #: ``hook(data, peer, transport, t)``, called for every datagram before parsing.
 DatagramHook = Callable[[bytes, object, str, float], None]
 
@@ -244,14 +243,14 @@ class InputSource:
                                    "build the listener/hub with clock= the loop's clock")
 
     # lifetimes are no-ops for the socket-free core
-    def start(self) -> "InputSource":
+    def start(self) -> InputSource:
         """Nothing to start without a socket."""
         return self
 
     def close(self) -> None:
         """Nothing to close without a socket."""
 
-    def __enter__(self) -> "InputSource":
+    def __enter__(self) -> InputSource:
         return self.start()
 
     def __exit__(self, *exc: object) -> None:
@@ -274,7 +273,7 @@ class UdpListener(InputSource):
         self._service = ServiceThread(self._run, "swarmdeck-udp")
         self.address: tuple[str, int] | None = None
 
-    def start(self) -> "UdpListener":
+    def start(self) -> UdpListener:
         """Bind the socket and start the receive thread (idempotent)."""
         if self._service.started:
             return self
@@ -350,7 +349,7 @@ class TcpListener(InputSource):
         self._conn_lock = threading.Lock()
         self.address: tuple[str, int] | None = None
 
-    def start(self) -> "TcpListener":
+    def start(self) -> TcpListener:
         """Bind, listen and start the accept thread (idempotent)."""
         if self._sock is not None:
             return self

@@ -14,7 +14,6 @@ from .config import InputConfig
 from .contact import InputSnapshot
 from .hub import InputHub
 
-
 #: Rows of the page: sources and contacts beyond these are summarised in one line each.
 MAX_SOURCE_ROWS = 20
 MAX_CONTACT_ROWS = 20

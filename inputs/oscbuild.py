@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import struct
 from collections.abc import Sequence
+from typing import Any
 
 NTP_DELTA = 2208988800.0  # seconds from 1900-01-01 to 1970-01-01
 
@@ -35,7 +36,7 @@ def timetag(unix_seconds: float | None) -> bytes:
     return struct.pack(">II", sec & 0xFFFFFFFF, frac)
 
 
-def message(address: str, tags: str, *args: object) -> bytes:
+def message(address: str, tags: str, *args: Any) -> bytes:
     """One OSC message; ``tags`` without the leading comma, one letter per argument
     except ``T F N`` (no argument)."""
     out = [_str(address), _str("," + tags)]

@@ -18,6 +18,8 @@ from dataclasses import dataclass
 from pythonosc import osc_bundle, osc_message
 from pythonosc.parsing import osc_types
 
+from swarmdeck.core.errors import SwarmdeckError
+
 BUNDLE_PREFIX = b"#bundle\x00"
 #: Type tags python-osc can parse (``osc_message.OscMessage``).
 KNOWN_TAGS = b"ifsdbhrmtTFN[]"
@@ -25,7 +27,7 @@ _INT = struct.Struct(">i")
 _MAX_DEPTH = 8
 
 
-class MalformedDatagram(ValueError):
+class MalformedDatagram(ValueError, SwarmdeckError):
     """A datagram that is not valid OSC. ``reason`` is a short counter key
     (``empty``, ``too_large``, ``unaligned``, ``not_osc``, ``bad_bundle``,
     ``bad_message``, ``unknown_type``, ``too_many_arguments``, ``parse_error``);

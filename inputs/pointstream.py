@@ -98,7 +98,7 @@ class PointStreamConfig:
         return None if m is None else m.groupdict()
 
     @classmethod
-    def from_dict(cls, d: dict) -> "PointStreamConfig":
+    def from_dict(cls, d: dict) -> PointStreamConfig:
         """Build from a config mapping; unknown keys are an error."""
         kw = check_keys(d, field_names(cls), "point stream", error=ValueError)
         for k in ("x_range", "y_range"):
@@ -132,7 +132,7 @@ class PointStreamDecoder:
     def __init__(self, streams: tuple[PointStreamConfig, ...], problems: Problems) -> None:
         self._streams = tuple(streams)
         self._problems = problems
-        self._ids: dict[tuple, dict] = {}
+        self._ids: dict[str, dict[tuple, int]] = {}
         self._frames: dict[str, SourceFrame] = {}
         self._peer = ""
 

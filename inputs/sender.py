@@ -47,7 +47,7 @@ def run(host: str = "127.0.0.1", port: int = 3333, *, duration: float = 10.0, ra
     source = f"swarmdeck-demo@{socket.gethostname()}"
     if tcp:
         sock = socket.create_connection((host, port), timeout=5.0)
-        send = lambda d: sock.sendall(struct.pack(">I", len(d)) + d)  # noqa: E731
+        send: Callable[[bytes], object] = lambda d: sock.sendall(struct.pack(">I", len(d)) + d)  # noqa: E731
     else:
         sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
         send = lambda d: sock.sendto(d, (host, port))  # noqa: E731

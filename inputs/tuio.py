@@ -231,7 +231,8 @@ class TuioAssembler:
             if len(p) != 2 or not _is_int(p[1]):
                 self._err(1, src, "bad_args", f"/tuio/{profile} fseq expects one int32, got {p[1:]!r}")
                 return
-            buf = self._bufs.pop((src, profile), None) or _Buffer()
+            popped = self._bufs.pop((src, profile), None)
+            buf = popped if popped is not None else _Buffer()
             self._commit1(src, profile, buf, p[1])
         elif cmd == "source":
             if len(p) != 2 or not isinstance(p[1], str):
@@ -470,9 +471,10 @@ class TuioAssembler:
             g.last_fid = fid
             g.last_ftime = buf.ftime
         for comp in _ORDER_2:
-            st = g.profiles.get(comp)
-            if st is None:
-                st = g.profiles[comp] = _Profile()
+            found = g.profiles.get(comp)
+            if found is None:
+                found = g.profiles[comp] = _Profile()
+            st = found
             sub = _Buffer()
             sub.alive = buf.alive
             sub.sets = {sid: e for (k, sid), e in buf.sets.items() if k == comp}

@@ -13,8 +13,8 @@ from .config import BarrierConfig
 from .diagnostics import BarrierDiagnostics
 from .filter import SafetyFilter
 from .guard import GuardCheck, GuardConfig
-from .verifier import VerificationReport, verify
 from .unicycle import UnicycleSafetyFilter
+from .verifier import VerificationReport, verify
 
 __all__ = [
     "BarrierConfig",

@@ -113,7 +113,7 @@ def _dense_spd_solve(G: np.ndarray, rhs: np.ndarray) -> np.ndarray | None:
 class _Working:
     """Rows held at equality, as flat arrays (single-robot rows have cj = 0, aj = ai)."""
 
-    def __init__(self, ai, aj, aci, acj, b, n: int) -> None:
+    def __init__(self, ai: np.ndarray, aj: np.ndarray, aci: np.ndarray, acj: np.ndarray, b: np.ndarray, n: int) -> None:
         self.ai, self.aj, self.aci, self.acj, self.b, self.n = ai, aj, aci, acj, b, n
 
     def At(self, lam: np.ndarray) -> np.ndarray:
@@ -258,7 +258,7 @@ def solve_active_set(rows: Rows, nominal: np.ndarray, max_speed: float | None,
                 lam = np.zeros(0)
                 break
             rhs = work.A(uh) - work.b
-            lam = work.solve(None, rhs)
+            lam = work.solve(None, rhs)  # type: ignore[assignment]
             if lam is None or not np.all(np.isfinite(lam)):
                 return fail("singular working set", it)
             neg = lam < 0

@@ -28,7 +28,7 @@ def _import_numba():
         del sys.modules[name]
     missing = object()
     saved = sys.modules.get("coverage", missing)
-    sys.modules["coverage"] = None  # `import coverage` raises ImportError: numba runs without it
+    sys.modules["coverage"] = None  # type: ignore[assignment]  # `import coverage` raises ImportError: numba runs without it
     try:
         import numba
         return numba
@@ -38,7 +38,7 @@ def _import_numba():
         if saved is missing:
             del sys.modules["coverage"]
         else:
-            sys.modules["coverage"] = saved
+            sys.modules["coverage"] = saved  # type: ignore[assignment]
 
 
 _numba = _import_numba()

@@ -18,14 +18,17 @@ import math
 import numbers
 from dataclasses import dataclass, fields
 from functools import cached_property
-from typing import Literal
+from typing import TYPE_CHECKING, Any, Literal
 
 from swarmdeck.core.bounds import DEFAULT_BOUNDS, Bounds
 from swarmdeck.core.config import floats, from_mapping
 from swarmdeck.core.constants import CONTROL_PERIOD, MAX_LINEAR_SPEED, SAFETY_DISTANCE
 
+if TYPE_CHECKING:
+    import numpy as np
 
-def _real(owner, name: str, value, lower: float | None = None, strict: bool = False,
+
+def _real(owner: object, name: str, value: Any, lower: float | None = None, strict: bool = False,
           upper: float | None = None) -> None:
     """Refuse a setting that is not a finite real number in range (ValueError naming it)."""
     cls = type(owner).__name__
@@ -35,7 +38,7 @@ def _real(owner, name: str, value, lower: float | None = None, strict: bool = Fa
         raise ValueError(f"{cls}: {name} must be finite, got {value!r}")
     if lower is not None and (value <= lower if strict else value < lower):
         raise ValueError(f"{cls}: {name} must be {'>' if strict else '>='} {lower:g}, got {value!r}")
-    if upper is not None and value >= upper:
+    if upper is not None and value >= upper:  # type: ignore[operator]  # numbers.Real declares no operators
         raise ValueError(f"{cls}: {name} must be < {upper:g}, got {value!r}")
 
 
@@ -182,7 +185,7 @@ class BarrierConfig:
         return self.mode == "distributed" or (self.mode == "auto" and n > self.distributed_above)
 
     @classmethod
-    def from_dict(cls, data: dict) -> "BarrierConfig":
+    def from_dict(cls, data: dict) -> BarrierConfig:
         """Build from a plain mapping (e.g. a TOML ``[safety]`` table); unknown keys are refused."""
         return from_mapping(cls, data, "BarrierConfig", error=ValueError, convert={"bounds": floats},
                             template="{what}: unknown setting(s) {unknown}; known: {known}")
@@ -198,13 +201,13 @@ class BarrierConfig:
         """Wall margin in m (``wall_margin`` or D_s/2)."""
         return self.safety_distance / 2 if self.wall_margin is None else float(self.wall_margin)
 
-    def deep_overlap(self, h, kind_is_wall):
+    def deep_overlap(self, h: np.ndarray, kind_is_wall: np.ndarray) -> np.ndarray:
         """(m,) bool: rows whose h (pairs/obstacles m², walls m) is a deep overlap (see ``recovery_depth``)."""
         d = self.safety_distance - self.recovery_depth
         return (h < 0) & (((h < -self.recovery_depth) & kind_is_wall)
                           | ((h < d * d - self.safety_distance**2) & ~kind_is_wall))
 
-    def kappa(self, h):
+    def kappa(self, h: Any) -> Any:
         """Class-K function κ(h) (elementwise, keeps the sign of h)."""
         return h * h * h if self.class_k == "cubic" else h
 
@@ -216,7 +219,10 @@ class BarrierConfig:
         bisection (the gap is increasing in d for d > D_s).
         """
         d_lo, d_hi = self.safety_distance, self.safety_distance + 1.0
-        gap = lambda d: self.gamma * self.kappa(d * d - self.safety_distance**2) - 4 * d * self.max_speed
+
+        def gap(d: float) -> float:
+            return self.gamma * self.kappa(d * d - self.safety_distance**2) - 4 * d * self.max_speed
+
         while gap(d_hi) < 0:
             d_hi *= 2
         for _ in range(80):

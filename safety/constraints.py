@@ -62,16 +62,16 @@ class Rows:
         jj = self.jj
         return np.einsum("kd,kd->k", self.ci, u[self.i]) + np.einsum("kd,kd->k", self.cj, u[jj])
 
-    def select(self, mask: np.ndarray) -> "Rows":
+    def select(self, mask: np.ndarray) -> Rows:
         """The rows where ``mask`` is true (boolean or index array)."""
         return Rows(*(getattr(self, f)[mask] for f in _FIELDS))
 
     @staticmethod
-    def concat(parts: list["Rows"]) -> "Rows":
+    def concat(parts: list[Rows]) -> Rows:
         return Rows(*(np.concatenate([getattr(p, f) for p in parts]) for f in _FIELDS))
 
     @staticmethod
-    def empty() -> "Rows":
+    def empty() -> Rows:
         z = np.zeros(0)
         zi = np.zeros(0, dtype=np.int64)
         z2 = np.zeros((0, 2))

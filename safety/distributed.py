@@ -189,7 +189,7 @@ def solve_small_qps(owner: np.ndarray, a: np.ndarray, b: np.ndarray, nominal: np
     bad = np.zeros(n, dtype=bool)
     bad[owner[lhs > b]] = True
     disc = max_speed is not None
-    vmax = float(max_speed) if disc else None
+    vmax = float(max_speed) if max_speed is not None else None
     speed = np.sqrt(np.einsum("kd,kd->k", uh, uh))
     if disc:
         bad |= speed > vmax
@@ -231,7 +231,6 @@ def solve_small_qps(owner: np.ndarray, a: np.ndarray, b: np.ndarray, nominal: np
     where = np.full((s, K), -1, dtype=np.int64)  # position in the caller's arrays
     where[slot, col] = idx
     U = uh[robots]
-    rs = np.arange(s)
 
     # Π_D(û): û itself, or its radial projection on the speed disc; optimal when feasible
     sp = speed[robots]
@@ -293,7 +292,7 @@ def solve_small_qps(owner: np.ndarray, a: np.ndarray, b: np.ndarray, nominal: np
 
     # certify each robot's answer against all of its (kept) rows; the caller checks the rest
     got &= np.all(np.einsum("skd,sd->sk", A, best) <= B + _FEAS_TOL, axis=1)
-    if disc:  # remove rounding beyond the disc
+    if vmax is not None:  # remove rounding beyond the disc (``disc``)
         sp2 = np.einsum("sd,sd->s", best, best)
         got &= sp2 <= (vmax * (1 + 1e-9)) ** 2
         over = sp2 > vmax * vmax

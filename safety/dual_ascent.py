@@ -25,6 +25,7 @@ import numpy as np
 
 from .compiled import AVAILABLE, jit, warm_up_gram
 from .constraints import Rows
+
 OMEGA = 1.8  # over-relaxation of the coordinate steps (measured: ≈ 2× fewer sweeps than ω = 1)
 RESTRICT_SLACK = 3e-3  # m/s: between full sweeps, only rows with λ > 0 or within this of their bound
 FULL_EVERY = 20  # a full sweep over every row after this many restricted ones

@@ -38,8 +38,11 @@ from dataclasses import dataclass
 
 import numpy as np
 import scipy.sparse as sp
+from numpy.typing import ArrayLike
 from scipy.sparse.csgraph import connected_components
 from scipy.spatial import cKDTree
+
+from swarmdeck.core.errors import SwarmdeckError
 
 from . import dual_ascent
 from .active_set import FEAS_TOL, clip_speed, solve_active_set
@@ -61,11 +64,11 @@ _CLARABEL_FEAS = 1e-7  # m/s: an interior-point answer violating a row by more t
 _KIND_NAMES = {PAIR: "pair", WALL: "wall", OBSTACLE: "obstacle", LIMIT: "limit"}
 
 
-class InputError(ValueError):
+class InputError(ValueError, SwarmdeckError):
     """Malformed input to the filter (shape or non-finite values)."""
 
 
-def as_points(x, name: str, n: int | None = None) -> np.ndarray:
+def as_points(x: ArrayLike, name: str, n: int | None = None) -> np.ndarray:
     """``x`` as a float (n, 2) array, or InputError naming what is wrong."""
     try:
         arr = np.asarray(x, dtype=float)
@@ -81,7 +84,7 @@ def as_points(x, name: str, n: int | None = None) -> np.ndarray:
     return arr
 
 
-def robot_count(points, nominal) -> int:
+def robot_count(points: ArrayLike, nominal: ArrayLike) -> int:
     """Best guess of N for a fail-stop answer to malformed input."""
     for x in (nominal, points):
         try:
@@ -144,7 +147,8 @@ class SafetyFilter:
         self._lam = np.zeros(0)
 
     # ------------------------------------------------------------------ public
-    def filter(self, points, nominal, obstacles=None) -> tuple[np.ndarray, BarrierDiagnostics]:
+    def filter(self, points: ArrayLike, nominal: ArrayLike, obstacles: ArrayLike | None = None
+               ) -> tuple[np.ndarray, BarrierDiagnostics]:
         """Safe velocities for controlled points.
 
         points (N, 2) m, nominal (N, 2) m/s, obstacles (M, 2) m or None (fixed
@@ -171,7 +175,7 @@ class SafetyFilter:
         return None
 
     # ------------------------------------------------------------ for subclasses
-    def fail_stop(self, n: int, nominal, reason: str, t0: float, n_constraints: int = 0
+    def fail_stop(self, n: int, nominal: ArrayLike, reason: str, t0: float, n_constraints: int = 0
                   ) -> tuple[np.ndarray, BarrierDiagnostics]:
         """Zero commands for every robot and a diagnostic saying why."""
         self.reset()
@@ -296,7 +300,7 @@ class SafetyFilter:
                 solved = self._solve_dual(rows, U, max_speed)
                 if solved is not None:
                     return solved
-            if closed_loop:  # the previous tick's active rows: few iterations while they are few
+            if closed_loop and warm is not None:  # the previous tick's active rows: few iterations while they are few
                 start, limit, method = int(warm.sum()), cfg.warm_max_rows, "warm active-set"
             else:
                 start, limit, method = int(np.sum(rows.lhs(U) > rows.b)), cfg.active_set_max_rows, "active-set"
@@ -434,7 +438,7 @@ class SafetyFilter:
         speed = 0 if max_speed is None else int(np.sum(np.linalg.norm(out, axis=1) >= max_speed - _ACTIVE_TOL))
         return _Solved(out, hard.lhs(out) >= b_hard - _ACTIVE_TOL, speed, "clarabel", iterations)
 
-    def _solve_distributed(self, P, U, O, rows: Rows, max_speed: float | None, t0: float
+    def _solve_distributed(self, P: np.ndarray, U: np.ndarray, O: np.ndarray | None, rows: Rows, max_speed: float | None, t0: float
                            ) -> tuple[np.ndarray, BarrierDiagnostics]:
         """Every robot's own QP on half of each pair row (``safety.distributed``, REFERENCE.md §12)."""
         res = filter_distributed(rows, U, max_speed, self.config)
@@ -472,8 +476,9 @@ class SafetyFilter:
         graph = sp.coo_matrix((np.ones(int(two.sum())), (rows.i[two], rows.j[two])), shape=(n, n))
         return connected_components(graph, directed=False)
 
-    def _diag(self, ok, status, t0, rows: Rows, P, U, u, O, active, n_speed, was_safe, method,
-              iterations, n_clusters, n_unsafe) -> BarrierDiagnostics:
+    def _diag(self, ok: bool, status: str, t0: float, rows: Rows, P: np.ndarray, U: np.ndarray, u: np.ndarray,
+              O: np.ndarray | None, active: np.ndarray, n_speed: int, was_safe: bool, method: str,
+              iterations: int, n_clusters: int, n_unsafe: int) -> BarrierDiagnostics:
         cfg = self.config
         n = P.shape[0]
         pair = rows.kind == PAIR

@@ -93,7 +93,7 @@ def solve_qp(rows: Rows, nominal: np.ndarray, max_speed: float | None, *,
         parts_r += [sr, s_rows, m + k + np.arange(k)]
         parts_c += [sc, nv + np.arange(k), nv + np.arange(k)]
         parts_v += [sv, -np.ones(k), -np.ones(k)]
-        b_parts += [b_soft, np.zeros(k)]
+        b_parts += [b_soft, np.zeros(k)]  # type: ignore[list-item]
     n_lin = m + 2 * k
     cones: list = []
     if n_lin:

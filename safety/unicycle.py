@@ -15,8 +15,15 @@ import dataclasses
 import time
 
 import numpy as np
+from numpy.typing import ArrayLike
 
-from swarmdeck.core.kinematics import UnicycleParams, lookahead_points, si_to_unicycle, unicycle_to_si, unicycle_to_wheels
+from swarmdeck.core.kinematics import (
+    UnicycleParams,
+    lookahead_points,
+    si_to_unicycle,
+    unicycle_to_si,
+    unicycle_to_wheels,
+)
 
 from .config import BarrierConfig
 from .constraints import LIMIT, Rows
@@ -65,7 +72,7 @@ class UnicycleSafetyFilter:
         """Forget the warm start."""
         self._si.reset()
 
-    def filter(self, poses, v, w, obstacles=None) -> tuple[np.ndarray, np.ndarray, BarrierDiagnostics]:
+    def filter(self, poses: ArrayLike, v: ArrayLike, w: ArrayLike, obstacles: ArrayLike | None = None) -> tuple[np.ndarray, np.ndarray, BarrierDiagnostics]:
         """Safe (v (N,) m/s, ω (N,) rad/s) and diagnostics (intervention in point m/s)."""
         t0 = time.perf_counter()
         try:

@@ -24,8 +24,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 from scipy.spatial import cKDTree
-from swarmdeck.core.constants import CONTROL_PERIOD, MAX_LINEAR_SPEED, ROBOT_DIAMETER
 
+from swarmdeck.core.constants import CONTROL_PERIOD, MAX_LINEAR_SPEED, ROBOT_DIAMETER
 
 
 def first_contact_times(r0: np.ndarray, vr: np.ndarray, distance: float, dt: float) -> np.ndarray:
@@ -124,7 +124,7 @@ class ContactLog:
     n_robots: int
     dt: float
     contacts: list[Contact] = field(default_factory=list)
-    per_robot: np.ndarray = field(default=None)  # type: ignore[assignment]
+    per_robot: np.ndarray = field(default=None)  # type: ignore[arg-type]  # filled in __post_init__
     total_vn: float = 0.0
     steps: int = 0
     durations: list[int] = field(default_factory=list)
@@ -156,7 +156,7 @@ class ContactLog:
         s = 1.0 - self.total_vn / (max(self.n_robots, 1) * max(self.steps, 1) * v_max)
         return float(np.clip(s, 0.0, 1.0))
 
-    def report(self, v_max: float, final_positions: np.ndarray) -> "VerificationReport":
+    def report(self, v_max: float, final_positions: np.ndarray) -> VerificationReport:
         durations = self.durations + list(self.running.values())
         contacts = self.contacts
         return VerificationReport(

@@ -18,8 +18,8 @@ for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
     os.environ.setdefault(_var, "1")
 
 import numpy as np  # noqa: E402
-import pytest
-from hypothesis import settings
+import pytest  # noqa: E402
+from hypothesis import settings  # noqa: E402
 
 # The shared fixtures, registered once for every test module (the modules stay beside the tests;
 # a test imports only the helpers it calls by name): ``portal``, ``mosquitto``, ``jail_run``, ``env``.

@@ -8,13 +8,13 @@ in ``UnknownFields()``.
 """
 from __future__ import annotations
 
-from functools import lru_cache
+from functools import cache
 
 from google.protobuf import descriptor_pb2, descriptor_pool, message_factory
 from google.protobuf.unknown_fields import UnknownFieldSet
 
 
-@lru_cache(maxsize=None)
+@cache
 def message_class(schema_name: str, schema_data: bytes):
     """The protobuf message class for ``schema_name`` (e.g. ``foxglove.SceneUpdate``) from a FileDescriptorSet."""
     fds = descriptor_pb2.FileDescriptorSet.FromString(schema_data)

@@ -6,8 +6,8 @@ import pytest
 
 from swarmdeck.console.runtime.hardware import camera_source
 from swarmdeck.console.runtime.loop import ControlLoop, LoopConfig
-from swarmdeck.devices.simulated_robots import SimulatedRobots
 from swarmdeck.devices import ArenaConfig
+from swarmdeck.devices.simulated_robots import SimulatedRobots
 
 
 def test_tracked_poses_follow_the_simulation() -> None:

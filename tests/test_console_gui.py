@@ -5,8 +5,8 @@ import numpy as np
 import pytest
 import viser
 
-from swarmdeck.console.web.gui import ConsoleGui, ray_to_floor
 from swarmdeck.console.runtime.loop import ControlLoop, DensityParams, LoopConfig
+from swarmdeck.console.web.gui import ConsoleGui, ray_to_floor
 from swarmdeck.console.web.scene import ArenaScene
 
 

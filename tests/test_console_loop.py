@@ -270,8 +270,8 @@ class _FlakySource:
 
 
 def test_failing_pose_source_stops_robots_and_loop_survives() -> None:
-    from swarmdeck.devices.simulated_robots import SimulatedRobots
     from swarmdeck.devices import ArenaConfig
+    from swarmdeck.devices.simulated_robots import SimulatedRobots
 
     sim = SimulatedRobots(4, ArenaConfig(seed=1))
     src = _FlakySource(sim)

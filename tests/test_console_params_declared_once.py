@@ -9,8 +9,20 @@ import pytest
 from swarmdeck.console.runtime import params
 from swarmdeck.console.runtime.config import LOOP_KEYS, ConfigFileError, load_settings
 from swarmdeck.console.runtime.params import (
-    BehaviourParams, DensityParams, LoopConfig, SafetyParams, check_params, converters, frame_keys, frame_params,
-    from_dict, gui_fields, param, specs, to_dict, toml_keys,
+    BehaviourParams,
+    DensityParams,
+    LoopConfig,
+    SafetyParams,
+    check_params,
+    converters,
+    frame_keys,
+    frame_params,
+    from_dict,
+    gui_fields,
+    param,
+    specs,
+    to_dict,
+    toml_keys,
 )
 
 GROUPS = (BehaviourParams, SafetyParams, DensityParams, LoopConfig)

@@ -7,9 +7,9 @@ import numpy as np
 import pytest
 import viser
 
-from swarmdeck.console.web.app import FrameViewer
 from swarmdeck.console.runtime.frame import Frame
 from swarmdeck.console.runtime.loop import ControlLoop, DensityParams, LoopConfig
+from swarmdeck.console.web.app import FrameViewer
 from swarmdeck.console.web.scene import ArenaScene, heatmap, robot_colors
 from swarmdeck.coverage import GaussianMixture
 

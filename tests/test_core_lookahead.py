@@ -1,6 +1,7 @@
 """The look-ahead diffeomorphism: round trips and agreement with the true point velocity."""
 import numpy as np
-from hypothesis import given, settings, strategies as st
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from swarmdeck.core.kinematics import lookahead_points, si_to_unicycle, unicycle_step, unicycle_to_si
 

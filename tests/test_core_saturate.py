@@ -4,7 +4,8 @@ The defect this pins: devices' ``saturate_norm`` let a NaN row through (NaN > li
 its scale was 1) while coverage's ``saturate`` zeroed it; an inf row became NaN (inf · 0).
 """
 import numpy as np
-from hypothesis import example, given, settings, strategies as st
+from hypothesis import example, given, settings
+from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 
 from swarmdeck.core.kinematics import saturate

@@ -1,6 +1,7 @@
 """Wheel limits: one uniform scale per robot keeps the curvature and never exceeds 12.5 rad/s."""
 import numpy as np
-from hypothesis import given, settings, strategies as st
+from hypothesis import given, settings
+from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 
 from swarmdeck.core.kinematics import GritsBotParams, limit_unicycle, unicycle_to_wheels, wheels_to_unicycle

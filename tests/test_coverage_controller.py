@@ -8,8 +8,14 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from swarmdeck.coverage import (CoverageConfig, CoverageController, CoverageState, GaussianMixture,
-                                moving_density, s1_density)
+from swarmdeck.coverage import (
+    CoverageConfig,
+    CoverageController,
+    CoverageState,
+    GaussianMixture,
+    moving_density,
+    s1_density,
+)
 
 BOUNDS = (-1.6, 1.6, -1.0, 1.0)
 

@@ -8,9 +8,22 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from swarmdeck.coverage import (AnalyticDensity, Bump, Constant, Density, Fixed, GaussianMixture,
-                                Linear, Lissajous, Orbit, Pulse, Sine, merge_mixtures, moving_density,
-                                s1_density)
+from swarmdeck.coverage import (
+    AnalyticDensity,
+    Bump,
+    Constant,
+    Density,
+    Fixed,
+    GaussianMixture,
+    Linear,
+    Lissajous,
+    Orbit,
+    Pulse,
+    Sine,
+    merge_mixtures,
+    moving_density,
+    s1_density,
+)
 
 
 def _fd_dt(density: Density, q: np.ndarray, t: float, h: float = 1e-5) -> np.ndarray:

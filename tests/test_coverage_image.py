@@ -5,8 +5,7 @@ import cv2
 import numpy as np
 import pytest
 
-from swarmdeck.coverage import (CoverageConfig, CoverageController, GaussianMixture, image_density,
-                                letter_image)
+from swarmdeck.coverage import CoverageConfig, CoverageController, GaussianMixture, image_density, letter_image
 
 BOUNDS = (-1.6, 1.6, -1.0, 1.0)
 
@@ -49,7 +48,7 @@ def test_controller_drives_robots_onto_the_letter():
     p = p0 = rng.uniform([-1.5, -0.9], [1.5, 0.9], (20, 2))
     ctrl = CoverageController(CoverageConfig(law="lloyd", max_speed=None), g)
     h0 = None
-    for k in range(12):                         # discrete Lloyd: p ← c
+    for _k in range(12):                         # discrete Lloyd: p ← c
         _, st = ctrl(p, 0.0)
         h0 = st.cost_H if h0 is None else h0
         p = st.centroids.copy()

@@ -4,9 +4,17 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from swarmdeck.coverage import (EdgeOptions, GaussianMixture, QuadratureOptions, bounded_voronoi,
-                                cell_moments, centroid_jacobian, moving_density,
-                                precondition_positions, s1_density)
+from swarmdeck.coverage import (
+    EdgeOptions,
+    GaussianMixture,
+    QuadratureOptions,
+    bounded_voronoi,
+    cell_moments,
+    centroid_jacobian,
+    moving_density,
+    precondition_positions,
+    s1_density,
+)
 
 BOUNDS = (-1.6, 1.6, -1.0, 1.0)
 

@@ -5,8 +5,14 @@ import numpy as np
 import pytest
 from scipy.spatial import cKDTree
 
-from swarmdeck.coverage import (GaussianMixture, QuadratureOptions, bounded_voronoi, cell_moments,
-                                packing_warning, predicted_spacing)
+from swarmdeck.coverage import (
+    GaussianMixture,
+    QuadratureOptions,
+    bounded_voronoi,
+    cell_moments,
+    packing_warning,
+    predicted_spacing,
+)
 
 BOUNDS = (-1.6, 1.6, -1.0, 1.0)
 

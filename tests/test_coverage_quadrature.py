@@ -5,8 +5,16 @@ import numpy as np
 import pytest
 import shapely
 
-from swarmdeck.coverage import (GaussianMixture, QuadratureOptions, bounded_voronoi, cell_moments,
-                                moving_density, precondition_positions, raster_moments, s1_density)
+from swarmdeck.coverage import (
+    GaussianMixture,
+    QuadratureOptions,
+    bounded_voronoi,
+    cell_moments,
+    moving_density,
+    precondition_positions,
+    raster_moments,
+    s1_density,
+)
 from swarmdeck.coverage.quadrature import triangle_rule
 
 BOUNDS = (-1.6, 1.6, -1.0, 1.0)

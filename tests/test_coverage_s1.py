@@ -5,8 +5,7 @@ import numpy as np
 import pytest
 
 from swarmdeck.coverage import coverage_tick, s1_density
-from swarmdeck.coverage.scenario import (S1_REFERENCE, S1_T0, format_s1_table, run_s1_all,
-                                         s1_config, s1_start)
+from swarmdeck.coverage.scenario import S1_REFERENCE, S1_T0, format_s1_table, run_s1_all, s1_config, s1_start
 
 
 def test_t0_values():

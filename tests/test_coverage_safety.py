@@ -9,8 +9,8 @@ robot-steps are changed). The earlier scene (16 robots on the demo density) chan
 from __future__ import annotations
 
 from swarmdeck.coverage import AnalyticDensity, Bump, Constant, Orbit
-from swarmdeck.examples.coverage import coverage_experiment
 from swarmdeck.devices import Arena, ArenaConfig
+from swarmdeck.examples.coverage import coverage_experiment
 
 N = 30
 DENSITY = AnalyticDensity(0.005, (Bump(Orbit((0.0, 0.0), 0.5, 20.0), Constant(0.15), Constant(1.0)),))

@@ -50,8 +50,7 @@ def test_backwards_map_backs_off_and_turns_the_front_towards_a_target_behind():
 
 def test_differential_drive_certificate_keeps_wheels_within_limits_and_robots_apart():
     with rps_aliases():
-        from rps.utilities.barrier_certificates import (
-            create_unicycle_differential_drive_barrier_certificate)
+        from rps.utilities.barrier_certificates import create_unicycle_differential_drive_barrier_certificate
 
         f = create_unicycle_differential_drive_barrier_certificate(wheel_vel_limit=12.5)
     x = np.array([[-0.1, 0.1], [0.0, 0.0], [0.0, np.pi]])  # head-on, 0.2 m apart
@@ -68,7 +67,8 @@ def test_differential_drive_certificate_keeps_wheels_within_limits_and_robots_ap
     with pytest.raises(ValueError, match="disturbance"):
         with rps_aliases():
             from rps.utilities.barrier_certificates import (
-                create_unicycle_differential_drive_barrier_certificate as make)
+                create_unicycle_differential_drive_barrier_certificate as make,
+            )
 
             make(disturbance=float("nan"))
 

@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 
 from swarmdeck.console.cli import main as cli_main
-from swarmdeck.devices.runner import run_experiment
 from swarmdeck.devices.rps import rps_aliases
+from swarmdeck.devices.runner import run_experiment
 
 SCRIPT = Path(__file__).parent / "data" / "rps" / "si_barriers_with_boundary.py"
 

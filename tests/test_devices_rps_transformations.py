@@ -5,8 +5,11 @@ from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 
 from swarmdeck.devices.rps.utilities.transformations import (
-    create_si_to_uni_dynamics, create_si_to_uni_dynamics_with_backwards_motion, create_si_to_uni_mapping,
-    create_uni_to_si_dynamics)
+    create_si_to_uni_dynamics,
+    create_si_to_uni_dynamics_with_backwards_motion,
+    create_si_to_uni_mapping,
+    create_uni_to_si_dynamics,
+)
 
 finite = st.floats(-1.0, 1.0, allow_nan=False)
 

@@ -5,9 +5,9 @@ import numpy as np
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from swarmdeck.core.kinematics import GritsBotParams, unicycle_step
 from swarmdeck.devices.battery import BatteryParams
 from swarmdeck.devices.net.firmware import FirmwareParams, FleetState
-from swarmdeck.core.kinematics import GritsBotParams, unicycle_step
 
 
 def straight_fleet(n: int = 1) -> FleetState:

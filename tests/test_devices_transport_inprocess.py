@@ -3,9 +3,9 @@ from __future__ import annotations
 
 import numpy as np
 
+from swarmdeck.core.kinematics import unicycle_to_wheels
 from swarmdeck.core.ports import CommandSink, PoseSource
 from swarmdeck.devices import Arena, ArenaConfig, SimulatedArena
-from swarmdeck.core.kinematics import unicycle_to_wheels
 from swarmdeck.devices.net.console_robots import NetworkRobots
 from swarmdeck.devices.net.transport import PoseFeed, RobotTransport
 from swarmdeck.devices.net.transport_inprocess import InProcessTransport

@@ -1,6 +1,7 @@
 """Closed-form checks of the exact unicycle step (core.kinematics.unicycle_step)."""
 import numpy as np
-from hypothesis import given, settings, strategies as st
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from swarmdeck.devices import unicycle_step
 

@@ -8,7 +8,10 @@ import numpy as np
 
 import swarmdeck.envs as envs
 from swarmdeck.envs.neighbours import (
-    batched_min_distance, batched_nearest_neighbours, min_distance, nearest_neighbours,
+    batched_min_distance,
+    batched_nearest_neighbours,
+    min_distance,
+    nearest_neighbours,
 )
 from swarmdeck.envs.observations import observe
 

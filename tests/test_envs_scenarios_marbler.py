@@ -8,8 +8,8 @@ import subprocess
 import sys
 
 import numpy as np
-
 from marbler_fixtures import DATA, marbler_env
+
 from swarmdeck.core.kinematics import lookahead_points
 from swarmdeck.envs import Actions, BatchedEnv, Scenario, View, scenarios
 

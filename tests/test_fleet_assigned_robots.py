@@ -4,11 +4,11 @@ obstacle of the experiment's barrier — a script driving straight at a docked r
 import numpy as np
 import pytest
 
-from swarmdeck.devices.fleet.assigned import AssignedRobots
 from swarmdeck.console.runtime.loop import ControlLoop, LoopConfig, SafetyParams
 from swarmdeck.core.kinematics import GritsBotParams, lookahead_points
 from swarmdeck.devices import ArenaConfig
 from swarmdeck.devices.chargers import ChargerLayout
+from swarmdeck.devices.fleet.assigned import AssignedRobots
 from swarmdeck.devices.simulated_robots import SimulatedRobots
 
 ELL = GritsBotParams().lookahead

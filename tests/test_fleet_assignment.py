@@ -3,7 +3,8 @@ import itertools
 
 import numpy as np
 import pytest
-from hypothesis import given, settings, strategies as st
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from swarmdeck.devices.fleet import AssignmentError, AssignmentPolicy, assign
 
@@ -55,7 +56,9 @@ def test_with_goals_the_total_distance_is_the_least_possible():
     pos = rng.uniform(-1.5, 1.5, (6, 2))
     goals = rng.uniform(-1.0, 1.0, (4, 3))
     a = assign(4, np.arange(6), np.ones(6), 0.0, 0.0, positions=pos, goals=goals, policy=POLICY)
-    cost = lambda rows: np.hypot(*(pos[list(rows)] - goals[:, :2]).T).sum()
+    def cost(rows):
+        return np.hypot(*(pos[list(rows)] - goals[:, :2]).T).sum()
+
     best = min(itertools.permutations(range(6), 4), key=cost)
     assert np.isclose(cost(a.rows), cost(best))
 

@@ -1,6 +1,7 @@
 """The battery: CC-CV charging curve on the chargers, drain while driving (the firmware's model)."""
 import numpy as np
-from hypothesis import given, settings, strategies as st
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from swarmdeck.core.kinematics import GritsBotParams
 from swarmdeck.devices.fleet import BatteryParams, battery_step, charge_from_voltage, recharge

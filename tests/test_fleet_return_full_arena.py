@@ -3,7 +3,6 @@
 Before the return retraced a planned setup, 50 on 50 never finished within its limit (the corner
 slots and the crowd in front of the strips jammed); the 10-seed sweep is in bench/bench_fleet.py.
 """
-import numpy as np
 
 from swarmdeck.devices.fleet import FleetManager
 from swarmdeck.devices.initial_conditions import random_initial_poses

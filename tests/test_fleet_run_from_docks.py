@@ -5,8 +5,8 @@ import numpy as np
 import pytest
 
 from swarmdeck.console.cli import main
-from swarmdeck.devices import Arena, ArenaConfig, ExperimentFinished
 from swarmdeck.core.kinematics import wrap_angle
+from swarmdeck.devices import Arena, ArenaConfig, ExperimentFinished
 from swarmdeck.devices.rps.robotarium import Robotarium
 
 SCRIPT = """\

@@ -1,11 +1,12 @@
 """Setup from the chargers: every robot reaches its start pose (2 cm, 5 deg), no collision, bad input named."""
 import numpy as np
 import pytest
-from hypothesis import given, settings, strategies as st
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
+from swarmdeck.core.kinematics import wrap_angle
 from swarmdeck.devices.fleet import AssignmentError, FleetManager, SetupFailed
 from swarmdeck.devices.fleet.setup import ACCEPT_HEADING, ACCEPT_POSITION
-from swarmdeck.core.kinematics import wrap_angle
 from swarmdeck.devices.initial_conditions import random_initial_poses
 from swarmdeck.devices.simulator import ArenaConfig
 

@@ -12,13 +12,23 @@ import foxglove.messages as fm
 import jsonschema
 import numpy as np
 import pytest
+from foxglove_schemas import decode
 from mcap.reader import make_reader
 
-from foxglove_schemas import decode
 from swarmdeck.console.cli import main as cli
 from swarmdeck.console.recording.foxglove import (
-    METRICS_SCHEMA, TOPIC_BARRIER, TOPIC_CAMERA, TOPIC_CELLS, TOPIC_CONTACTS, TOPIC_DENSITY, TOPIC_LOG,
-    TOPIC_METRICS, TOPIC_POSES, TOPIC_ROBOTS, TOPIC_TF, TOPICS,
+    METRICS_SCHEMA,
+    TOPIC_BARRIER,
+    TOPIC_CAMERA,
+    TOPIC_CELLS,
+    TOPIC_CONTACTS,
+    TOPIC_DENSITY,
+    TOPIC_LOG,
+    TOPIC_METRICS,
+    TOPIC_POSES,
+    TOPIC_ROBOTS,
+    TOPIC_TF,
+    TOPICS,
 )
 from swarmdeck.console.recording.reader import open_recording
 from swarmdeck.console.recording.recorder import Recorder

@@ -13,10 +13,9 @@ import subprocess
 import sys
 
 import numpy as np
-import pytest
 import websockets
-
 from foxglove_schemas import decode
+
 from swarmdeck.console.cli import main as cli
 from swarmdeck.console.recording.foxglove import TOPIC_LOG, TOPIC_ROBOTS
 from swarmdeck.console.runtime.loop import ControlLoop, LoopConfig
@@ -34,7 +33,7 @@ class Client:
         self.subs: dict[int, dict] = {}
 
     @classmethod
-    async def connect(cls, url: str) -> "Client":
+    async def connect(cls, url: str) -> Client:
         c = cls(await websockets.connect(url, subprotocols=[SUBPROTOCOL]))
         assert c.ws.subprotocol == SUBPROTOCOL
         while len(c.channels) < 10:  # every channel is advertised at connection
@@ -48,7 +47,7 @@ class Client:
         self.subs.update({s["id"]: self.channels[t] for s, t in zip(subs, topics)})
         await self.ws.send(json.dumps({"op": "subscribe", "subscriptions": subs}))
 
-    async def message(self, timeout: float = 10.0):
+    async def message(self, timeout: float = 10.0):  # noqa: ASYNC109
         """(channel, log time ns, payload) of the next message data."""
         while True:
             data = await asyncio.wait_for(self.ws.recv(), timeout)
@@ -77,7 +76,7 @@ def test_bridge_sends_a_scene_update_per_tick():
             try:
                 await c.message(timeout=0.3)
                 break
-            except asyncio.TimeoutError:
+            except TimeoutError:
                 continue
         got = []
         for _ in range(5):
@@ -119,7 +118,7 @@ def test_events_of_skipped_frames_still_reach_the_log():
                 while True:
                     ch, _, payload = await c.message(timeout=0.3)
                     texts.append(_decode(ch, payload).message)
-            except asyncio.TimeoutError:
+            except TimeoutError:
                 pass
             if texts:
                 break

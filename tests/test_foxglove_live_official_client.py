@@ -16,8 +16,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 import websockets
-
 from foxglove_schemas import decode
+
 from swarmdeck.console.recording.foxglove import TOPIC_ROBOTS
 from swarmdeck.console.runtime.loop import ControlLoop, LoopConfig
 from swarmdeck.console.web.foxglove_live import FoxgloveBridge

@@ -8,10 +8,17 @@ import collections
 import foxglove.messages as fm
 import numpy as np
 import pytest
-
 from foxglove_schemas import decode
+
 from swarmdeck.console.recording.foxglove import (
-    TOPIC_BARRIER, TOPIC_CELLS, TOPIC_METRICS, TOPIC_POSES, TOPIC_ROBOTS, TOPIC_TF, FoxgloveConfig, FoxgloveEncoder,
+    TOPIC_BARRIER,
+    TOPIC_CELLS,
+    TOPIC_METRICS,
+    TOPIC_POSES,
+    TOPIC_ROBOTS,
+    TOPIC_TF,
+    FoxgloveConfig,
+    FoxgloveEncoder,
 )
 from swarmdeck.console.runtime.frame import Frame
 

@@ -11,7 +11,7 @@ import numpy as np
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from swarmdeck.inputs import InputSource, ListenerConfig, PRESETS
+from swarmdeck.inputs import PRESETS, InputSource, ListenerConfig
 from swarmdeck.inputs import oscbuild as ob
 
 PEER = ("10.9.9.9", 1)

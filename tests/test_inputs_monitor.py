@@ -4,9 +4,9 @@ from __future__ import annotations
 import argparse
 import io
 
+from swarmdeck.console.cli.inputs import add_arguments, config_from_args, main
 from swarmdeck.inputs import InputHub, InputSource
 from swarmdeck.inputs import oscbuild as ob
-from swarmdeck.console.cli.inputs import add_arguments, config_from_args, main
 from swarmdeck.inputs.monitor import render, run
 
 
@@ -52,8 +52,7 @@ def test_send_demo_fingers_reach_a_real_listener():
 
     import numpy as np
 
-    from swarmdeck.inputs import ListenerConfig, UdpListener
-    from swarmdeck.inputs import sender
+    from swarmdeck.inputs import ListenerConfig, UdpListener, sender
 
     with UdpListener(ListenerConfig(port=0), clock=lambda: 0.0) as lst:
         now = [0.0]  # virtual sender clock: advances only by the sender's sleeps

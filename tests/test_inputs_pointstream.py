@@ -1,7 +1,6 @@
 """Generic OSC point streams and the gesture-bridge presets."""
 from __future__ import annotations
 
-import socket
 import time
 
 import numpy as np

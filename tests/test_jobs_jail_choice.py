@@ -5,7 +5,13 @@ import textwrap
 
 import pytest
 
-from swarmdeck.console.jobs.confinement import ConfinementUnavailable, JailConfig, choose_jail, probe_bwrap, probe_unshare
+from swarmdeck.console.jobs.confinement import (
+    ConfinementUnavailable,
+    JailConfig,
+    choose_jail,
+    probe_bwrap,
+    probe_unshare,
+)
 from swarmdeck.console.jobs.executors import SerialExecutor
 from swarmdeck.console.jobs.plant import ArenaPlant
 from swarmdeck.console.jobs.sandbox import run_sandboxed

@@ -13,7 +13,6 @@ from swarmdeck.devices.arena import Arena
 from swarmdeck.devices.simulator import ArenaConfig
 
 
-
 def plant(n, initial):
     return ArenaPlant(Arena(n, initial_conditions=initial, config=ArenaConfig(seed=1), duration=0.2))
 

@@ -13,8 +13,8 @@ from swarmdeck.console.jobs.executors import SerialExecutor
 from swarmdeck.console.jobs.start_poses import MIN_SEPARATION, arena_start, check_initial_poses, perturb
 from swarmdeck.console.jobs.verification import ACCEPTED, BYPASS, REJECTED, VerificationConfig, verify
 from swarmdeck.console.portal.workers import VerificationWorkers
-from swarmdeck.devices.fleet.setup import ACCEPT_HEADING, ACCEPT_POSITION
 from swarmdeck.core.kinematics import wrap_angle
+from swarmdeck.devices.fleet.setup import ACCEPT_HEADING, ACCEPT_POSITION
 
 confined = pytest.mark.skipif(probe() is not None, reason=f"no confinement here: {probe()}")
 

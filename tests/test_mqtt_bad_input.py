@@ -8,9 +8,9 @@ import pytest
 from mqtt_broker import Collector, free_port, wait_until
 
 from swarmdeck.devices.net.mqtt_config import parse_broker_url
-from swarmdeck.devices.net.wire import encode_poses, encode_status
 from swarmdeck.devices.net.streamer import CommandStreamer, StreamerConfig
 from swarmdeck.devices.net.transport_mqtt import MqttTransport
+from swarmdeck.devices.net.wire import encode_poses, encode_status
 
 pytestmark = pytest.mark.mqtt
 TRACKER = "overhead_tracker/all_robot_pose_data"

@@ -7,9 +7,9 @@ import pytest
 from mqtt_broker import wait_until
 
 from swarmdeck.devices import lookahead_points, random_initial_poses, si_to_unicycle
+from swarmdeck.devices.net.console_robots import NetworkRobots
 from swarmdeck.devices.net.fleet import FleetNode
 from swarmdeck.devices.net.mqtt_config import parse_broker_url
-from swarmdeck.devices.net.console_robots import NetworkRobots
 from swarmdeck.devices.net.transport_mqtt import LinkTimeouts
 from swarmdeck.safety import BarrierConfig, SafetyFilter
 

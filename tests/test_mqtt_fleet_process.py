@@ -9,10 +9,10 @@ import numpy as np
 import pytest
 from mqtt_broker import wait_until
 
-from swarmdeck.devices import Arena
 from swarmdeck.core.kinematics import unicycle_step, wrap_angle
-from swarmdeck.devices.net.mqtt_config import parse_broker_url
+from swarmdeck.devices import Arena
 from swarmdeck.devices.net.console_robots import NetworkRobots
+from swarmdeck.devices.net.mqtt_config import parse_broker_url
 from swarmdeck.devices.net.transport_mqtt import LinkTimeouts, MqttTransport
 
 pytestmark = pytest.mark.mqtt

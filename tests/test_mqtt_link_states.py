@@ -8,8 +8,8 @@ import json
 import numpy as np
 
 from swarmdeck.devices.net.mqtt_config import parse_broker_url
-from swarmdeck.devices.net.wire import encode_status
 from swarmdeck.devices.net.transport_mqtt import MqttTransport
+from swarmdeck.devices.net.wire import encode_status
 
 
 class Clock:

@@ -10,10 +10,10 @@ from mqtt_broker import Collector, wait_until
 from swarmdeck.devices import ArenaConfig, SimulatedArena
 from swarmdeck.devices.clock import VirtualClock
 from swarmdeck.devices.net.mqtt_config import parse_broker_url
-from swarmdeck.devices.net.wire import encode_poses
 from swarmdeck.devices.net.streamer import CommandStreamer, StreamerConfig
 from swarmdeck.devices.net.transport_inprocess import InProcessTransport
 from swarmdeck.devices.net.transport_mqtt import MqttTransport
+from swarmdeck.devices.net.wire import encode_poses
 
 
 @pytest.mark.mqtt

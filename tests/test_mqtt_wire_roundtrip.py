@@ -9,6 +9,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from swarmdeck.devices.net.mqtt_config import parse_broker_url
+from swarmdeck.devices.net.transport import check_command
 from swarmdeck.devices.net.wire import (
     WireError,
     decode_command,
@@ -18,7 +19,6 @@ from swarmdeck.devices.net.wire import (
     encode_poses,
     encode_status,
 )
-from swarmdeck.devices.net.transport import check_command
 
 finite = st.floats(-5, 5, allow_nan=False, allow_infinity=False)
 

@@ -9,8 +9,8 @@ import foxglove.messages as fm
 import numpy as np
 import pytest
 import viser
-
 from foxglove_schemas import decode
+
 from swarmdeck.console.picture import PictureStyle, picture_of
 from swarmdeck.console.picture.colours import CHANGED
 from swarmdeck.console.picture.shapes import CHANGED_RING, ROBOT_RADIUS

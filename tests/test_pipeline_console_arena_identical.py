@@ -11,9 +11,9 @@ from __future__ import annotations
 import numpy as np
 
 from swarmdeck.console.runtime.loop import ControlLoop, LoopConfig
-from swarmdeck.devices.simulated_robots import SimulatedRobots
 from swarmdeck.devices import Arena, ArenaConfig, GritsBotParams, lookahead_points, unicycle_to_wheels
 from swarmdeck.devices.pipeline import barrier_filter, certify
+from swarmdeck.devices.simulated_robots import SimulatedRobots
 from swarmdeck.safety import UnicycleSafetyFilter
 
 # The nominal both drivers get: look-ahead points to a common goal, at most 0.15 m/s (inside the

@@ -11,11 +11,11 @@ import viser
 
 from swarmdeck.console.cli import main as cli
 from swarmdeck.console.cli.info import summarise
-from swarmdeck.console.web.export_html import export_html
 from swarmdeck.console.recording.reader import open_recording
 from swarmdeck.console.recording.recorder import Recorder
 from swarmdeck.console.runtime.frame import ContactsFrame
 from swarmdeck.console.runtime.loop import ControlLoop, LoopConfig
+from swarmdeck.console.web.export_html import export_html
 from swarmdeck.console.web.plots import PlotHistory, PlotsPanel
 from swarmdeck.console.web.scene import ArenaScene
 

@@ -4,7 +4,6 @@ a Content-Security-Policy that allows only this origin; /openapi.json documents 
 from html.parser import HTMLParser
 
 
-
 class Refs(HTMLParser):
     """Every src/href of the page's script, link, img, iframe; and whether a script has inline code."""
 

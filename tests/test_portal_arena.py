@@ -7,8 +7,8 @@ import csv
 import json
 
 import pytest
-from portal_fixtures import wait_for_state
 from mqtt_broker import wait_until
+from portal_fixtures import SPIN, portal, wait_for_state  # noqa: F401
 
 from swarmdeck.console.jobs.confinement import probe
 from swarmdeck.console.portal.runner import ArenaRunner, ArenaSettings

@@ -10,7 +10,7 @@ import sys
 from portal_fixtures import CLI
 
 HEAVY = ("numpy", "scipy", "viser", "cv2")
-PROBE = ("import json, sys\n"
+PROBE = ("import json, sys\n"  # noqa: UP031  (a %r of a tuple inside a program text)
          "from swarmdeck.console.cli import main\n"
          "code = main(sys.argv[1:])\n"
          "print(json.dumps({'code': code, 'heavy': [m for m in %r if m in sys.modules]}), file=sys.stderr)\n" % (HEAVY,))

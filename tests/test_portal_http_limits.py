@@ -35,7 +35,7 @@ def drip(sock: socket.socket, data: bytes) -> tuple[int, bytes]:
     """Send ``data`` a byte per STEP_S (then nothing) until the server closes the connection: (bytes sent, what it
     answered). Fails if the connection is still open after MAX_STEPS."""
     answer, sent = b"", 0
-    for step in range(MAX_STEPS):
+    for _step in range(MAX_STEPS):
         readable, _, _ = select.select([sock], [], [], STEP_S)
         if readable:
             try:

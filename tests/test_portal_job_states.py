@@ -7,7 +7,6 @@ from __future__ import annotations
 import sqlite3
 from pathlib import Path
 
-
 from swarmdeck.console.portal import client, db
 from swarmdeck.console.portal.states import ACTIVE, FINAL, JobState
 

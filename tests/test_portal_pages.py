@@ -11,13 +11,12 @@ import av
 import httpx
 import numpy as np
 import pytest
-from portal_fixtures import CSRF, SPIN, sign_in
+from portal_fixtures import CSRF, SPIN, manifest, portal, sign_in  # noqa: F401
+from recording_synth import simulated_frames, write_synthetic_session
 
 from swarmdeck.console.portal.live import scene_message
 from swarmdeck.console.recording.export_video import video_frame_count
 from swarmdeck.console.web.scene import robot_colors
-from recording_synth import simulated_frames, write_synthetic_session
-
 
 
 def upload(c: httpx.Client, csrf: str | None, fields: dict, filename: str = "spin.py", source: str = SPIN):
@@ -101,7 +100,7 @@ def test_another_researchers_job_is_not_found(portal):
     assert httpx.get(f"{portal.url}/jobs/{jid}/live").status_code == 401
     alice, _ = sign_in(portal, "alice")
     page = alice.get(f"/jobs/{jid}").text
-    assert "spin" in page and 'href="/jobs/%d/files/manifest.json"' % jid in page
+    assert "spin" in page and f'href="/jobs/{jid}/files/manifest.json"' in page
     assert alice.get(f"/jobs/{jid}/files/manifest.json").json()["name"] == "spin"
 
 
@@ -149,7 +148,7 @@ def test_a_scene_message_is_the_consoles_picture_of_the_frame():
     frame = list(simulated_frames(n_robots=5, n_ticks=2, dt=0.05, seed=1))[-1]
     m = scene_message(frame, 7)
     assert m["seq"] == 7 and m["run_state"] == "running" and m["bounds"] == list(frame.bounds)
-    assert m["colours"] == ["#%02x%02x%02x" % tuple(c) for c in robot_colors(frame)]
+    assert m["colours"] == ["#{:02x}{:02x}{:02x}".format(*c) for c in robot_colors(frame)]
     assert len(m["edges"]) == len(frame.coverage.edges) and m["density"].startswith("data:image/png;base64,")
     assert m["virtual"] == [] and m["moved"] == np.flatnonzero(frame.barrier.intervention > 1e-3).tolist()
     json.dumps(m, allow_nan=False)
@@ -164,7 +163,7 @@ def test_the_video_is_made_on_the_first_download(portal):
     assert r.status_code == 404 and "once the run is over" in r.text
     with portal.service.db.transaction() as tx:
         portal.service.db.transition(tx, jid, "done")
-    assert 'href="/jobs/%d/files/video.mp4"' % jid in alice.get(f"/jobs/{jid}").text
+    assert f'href="/jobs/{jid}/files/video.mp4"' in alice.get(f"/jobs/{jid}").text
     r = alice.get(f"/jobs/{jid}/files/video.mp4")
     assert r.status_code == 200 and r.headers["content-type"] == "video/mp4"
     path = portal.service.job_dir(jid) / "video.mp4"

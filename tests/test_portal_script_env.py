@@ -4,11 +4,10 @@ and runs scripts with it, ``GET /api/env``, the Libraries page and ``swarmdeck e
 import json
 import subprocess
 
+import httpx
 import pytest
 from portal_fixtures import CLI, CSRF, add_user, start_server, wait_for_state
 from script_env_fixtures import USES_THE_ENV
-
-import httpx
 
 from swarmdeck.console.jobs.import_policy import refusal
 

@@ -4,10 +4,10 @@ from __future__ import annotations
 import json
 
 import pytest
+from recording_synth import write_synthetic_session
 
 from swarmdeck.console.cli import main
 from swarmdeck.console.recording.schemas import RECORDING_FORMAT
-from recording_synth import write_synthetic_session
 
 
 @pytest.fixture(scope="module")

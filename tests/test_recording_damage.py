@@ -6,10 +6,10 @@ import json
 import pytest
 from mcap.reader import make_reader
 from mcap.writer import Writer
-
-from swarmdeck.console.recording.recorder import Recorder, RecorderConfig
-from swarmdeck.console.recording.reader import RecordingError, open_recording
 from recording_synth import as_recorded, simulated_frames
+
+from swarmdeck.console.recording.reader import RecordingError, open_recording
+from swarmdeck.console.recording.recorder import Recorder, RecorderConfig
 
 
 @pytest.fixture(scope="module")

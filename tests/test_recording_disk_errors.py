@@ -7,9 +7,10 @@ import subprocess
 import sys
 import textwrap
 
-from swarmdeck.console.recording.recorder import Recorder
-from swarmdeck.console.recording.reader import open_recording
 from recording_synth import simulated_frames
+
+from swarmdeck.console.recording.reader import open_recording
+from swarmdeck.console.recording.recorder import Recorder
 
 
 def test_unwritable_path_disables_recording_with_a_message(tmp_path):

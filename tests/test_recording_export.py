@@ -9,12 +9,12 @@ import msgspec
 import numpy as np
 import pytest
 import zstandard
+from recording_synth import as_recorded, simulated_frames
 
 from swarmdeck.console.recording.export_csv import ROBOT_COLUMNS, export_csv
-from swarmdeck.console.web.export_html import export_html
-from swarmdeck.console.recording.recorder import Recorder
 from swarmdeck.console.recording.reader import open_recording
-from recording_synth import as_recorded, simulated_frames
+from swarmdeck.console.recording.recorder import Recorder
+from swarmdeck.console.web.export_html import export_html
 
 
 @pytest.fixture(scope="module")

@@ -20,13 +20,13 @@ from mcap.reader import make_reader
 from mcap.records import Channel, Chunk, Message
 from mcap.stream_reader import StreamReader, breakup_chunk
 from mcap.writer import Writer
+from test_recording_prediction import walk
 
 from swarmdeck.console.recording.codec import decode_frame, encode_frame, unpack_array
 from swarmdeck.console.recording.reader import open_recording
 from swarmdeck.console.recording.recorder import Recorder, RecorderConfig
 from swarmdeck.console.recording.recover import recover
 from swarmdeck.console.recording.schemas import FRAME_SCHEMA, METADATA_NAME, PROFILE, TOPIC_FRAME
-from test_recording_prediction import walk
 
 DATA = Path(__file__).parent / "data"
 EXACT = ("ids", "poses", "v", "w")

@@ -6,11 +6,11 @@ import json
 import jsonschema
 import pytest
 from mcap.reader import make_reader
-
-from swarmdeck.console.recording.recorder import Recorder, RecorderConfig
-from swarmdeck.console.recording.codec import frame_message
-from swarmdeck.console.recording.schemas import CHANNELS, FRAME_SCHEMA_V1, PROFILE, RECORDING_FORMAT
 from recording_synth import simulated_frames
+
+from swarmdeck.console.recording.codec import frame_message
+from swarmdeck.console.recording.recorder import Recorder, RecorderConfig
+from swarmdeck.console.recording.schemas import CHANNELS, FRAME_SCHEMA_V1, PROFILE, RECORDING_FORMAT
 
 
 def test_mcap_reader_and_json_schemas(tmp_path):

@@ -3,9 +3,10 @@ from __future__ import annotations
 
 import threading
 
-from swarmdeck.console.recording.recorder import Recorder, RecorderConfig
-from swarmdeck.console.recording.reader import open_recording
 from recording_synth import retimed, simulated_frames
+
+from swarmdeck.console.recording.reader import open_recording
+from swarmdeck.console.recording.recorder import Recorder, RecorderConfig
 
 
 class StallingFile:

@@ -3,11 +3,11 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-
-from swarmdeck.console.web.player import PLOT_BACKFILL, PlayerApp
-from swarmdeck.console.recording.recorder import Recorder
-from swarmdeck.console.recording.reader import open_recording
 from recording_synth import simulated_frames
+
+from swarmdeck.console.recording.reader import open_recording
+from swarmdeck.console.recording.recorder import Recorder
+from swarmdeck.console.web.player import PLOT_BACKFILL, PlayerApp
 
 
 @pytest.fixture(scope="module")

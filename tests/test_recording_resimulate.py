@@ -3,12 +3,16 @@ from __future__ import annotations
 
 import pytest
 
-from swarmdeck.console.runtime.loop import ControlLoop, LoopConfig
-from swarmdeck.console.recording.recorder import Recorder
 from swarmdeck.console.recording.reader import open_recording
+from swarmdeck.console.recording.recorder import Recorder
 from swarmdeck.console.recording.resimulate import (
-    compare_frames, loop_config_from_dict, loop_config_to_dict, resimulate_and_compare, session_metadata,
+    compare_frames,
+    loop_config_from_dict,
+    loop_config_to_dict,
+    resimulate_and_compare,
+    session_metadata,
 )
+from swarmdeck.console.runtime.loop import ControlLoop, LoopConfig
 from swarmdeck.inputs import InputConfig, InputHub, InputSource
 from swarmdeck.inputs.oscbuild import cursor_sets, tuio_bundle
 

@@ -6,12 +6,12 @@ import math
 
 import numpy as np
 import pytest
-
-from swarmdeck.console.runtime.frame import BarrierFrame
-from swarmdeck.console.recording.recorder import Recorder, RecorderConfig
-from swarmdeck.console.recording.reader import open_recording
-from swarmdeck.console.recording.codec import CODEC_FORMAT
 from recording_synth import as_recorded, simulated_frames
+
+from swarmdeck.console.recording.codec import CODEC_FORMAT
+from swarmdeck.console.recording.reader import open_recording
+from swarmdeck.console.recording.recorder import Recorder, RecorderConfig
+from swarmdeck.console.runtime.frame import BarrierFrame
 
 
 @pytest.fixture(scope="module")

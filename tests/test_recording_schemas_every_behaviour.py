@@ -8,10 +8,10 @@ import json
 
 import jsonschema
 import pytest
+from foxglove_schemas import decode
 from mcap.reader import make_reader
 
 import swarmdeck.envs as envs
-from foxglove_schemas import decode
 from swarmdeck.console.recording.episodes import record_episodes
 from swarmdeck.console.recording.recorder import Recorder
 from swarmdeck.console.recording.schemas import TOPIC_FRAME

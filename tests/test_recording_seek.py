@@ -7,10 +7,10 @@ import struct
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
-
-from swarmdeck.console.recording.recorder import Recorder, RecorderConfig
-from swarmdeck.console.recording.reader import open_recording
 from recording_synth import simulated_frames
+
+from swarmdeck.console.recording.reader import open_recording
+from swarmdeck.console.recording.recorder import Recorder, RecorderConfig
 
 N_FRAMES = 240
 

@@ -11,7 +11,11 @@ import pytest
 
 from swarmdeck.console.cli import main
 from swarmdeck.console.recording.export_video import (
-    VideoExportError, VideoLayout, VideoStyle, export_video, video_frame_count,
+    VideoExportError,
+    VideoLayout,
+    VideoStyle,
+    export_video,
+    video_frame_count,
 )
 from swarmdeck.console.recording.reader import open_recording
 from swarmdeck.console.recording.recorder import Recorder

@@ -11,7 +11,9 @@ from swarmdeck.safety import BarrierConfig, UnicycleParams
                                  BarrierConfig(safety_distance=0.25, gamma=150.0, max_speed=0.15)])
 def test_bind_distance_is_where_rows_can_bind(cfg: BarrierConfig) -> None:
     d = cfg.pair_bind_distance()
-    bound = lambda r: cfg.gamma * cfg.kappa(r * r - cfg.safety_distance**2)
+    def bound(r):
+        return cfg.gamma * cfg.kappa(r * r - cfg.safety_distance**2)
+
     assert bound(d) == pytest.approx(4 * d * cfg.max_speed, rel=1e-9)
     assert bound(d * 1.01) > 4 * d * 1.01 * cfg.max_speed
     assert cfg.neighbour_radius() > d

@@ -12,7 +12,8 @@ Several robots are solved in one call, so the vectorisation is exercised too.
 from __future__ import annotations
 
 import numpy as np
-from hypothesis import given, settings, strategies as st
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from swarmdeck.safety.constraints import PAIR, Rows
 from swarmdeck.safety.distributed import solve_small_qps
@@ -56,7 +57,9 @@ def test_each_robot_matches_clarabel(seed: int, disc: bool) -> None:
         if ref.ok:
             assert res.solved[r], f"robot {r}: clarabel solved it, the enumeration found no answer"
             assert np.abs(res.u[r] - ref.u[0]).max() < 1e-5, (res.u[r], ref.u[0])
-            cost = lambda v: float(np.sum((v - uh) ** 2))
+            def cost(v, uh=uh):
+                return float(np.sum((v - uh) ** 2))
+
             assert cost(res.u[r]) <= cost(ref.u[0]) + 1e-9  # clarabel is feasible only to ~1e-9
         elif ref.reason == "infeasible":
             assert not res.solved[r] and np.all(res.u[r] == 0)

@@ -11,16 +11,15 @@ one, which the strategies respect) and every point inside the wall margin.
 from __future__ import annotations
 
 import numpy as np
-from hypothesis import given, settings, strategies as st
+from hypothesis import given, settings
+from hypothesis import strategies as st
 from scipy.spatial.distance import pdist
+from test_safety_invariance import DT, MODES, adversarial  # the same adversarial nominals as the centralised test
 
 from swarmdeck.core.kinematics import lookahead_points, si_to_unicycle
 from swarmdeck.safety import BarrierConfig, SafetyFilter, UnicycleParams, UnicycleSafetyFilter
 from swarmdeck.safety.constraints import barrier_rows
 from swarmdeck.safety.scenes import arena_for, grid_scene
-
-from test_safety_invariance import DT, MODES, adversarial  # the same adversarial nominals as the centralised test
-
 
 configs = st.builds(
     lambda cubic, gamma, ds, vmax: BarrierConfig(

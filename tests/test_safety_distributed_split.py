@@ -9,15 +9,15 @@ wheel limits) stay whole with their robot.
 from __future__ import annotations
 
 import numpy as np
-from hypothesis import given, settings, strategies as st
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
+from swarmdeck.core.kinematics import UnicycleParams
 from swarmdeck.safety import BarrierConfig
-from swarmdeck.safety.constraints import barrier_rows
+from swarmdeck.safety.constraints import Rows, barrier_rows
 from swarmdeck.safety.distributed import split_rows
 from swarmdeck.safety.scenes import grid_scene
 from swarmdeck.safety.unicycle import wheel_limit_rows
-from swarmdeck.core.kinematics import UnicycleParams
-from swarmdeck.safety.constraints import Rows
 
 
 @settings(max_examples=25, deadline=None)

@@ -6,7 +6,8 @@ Every pairwise distance stays ≥ D_s − 1e-3 and every point inside the arena
 from __future__ import annotations
 
 import numpy as np
-from hypothesis import given, settings, strategies as st
+from hypothesis import given, settings
+from hypothesis import strategies as st
 from scipy.spatial.distance import pdist
 
 from swarmdeck.safety import BarrierConfig, SafetyFilter

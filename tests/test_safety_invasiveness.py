@@ -2,7 +2,8 @@
 from __future__ import annotations
 
 import numpy as np
-from hypothesis import given, settings, strategies as st
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from swarmdeck.safety import BarrierConfig, SafetyFilter
 from swarmdeck.safety.scenes import grid_scene

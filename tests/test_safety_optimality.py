@@ -9,7 +9,8 @@ from __future__ import annotations
 import clarabel
 import numpy as np
 import scipy.sparse as sp
-from hypothesis import given, settings, strategies as st
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from swarmdeck.safety import BarrierConfig, SafetyFilter
 from swarmdeck.safety.scenes import grid_scene

@@ -25,7 +25,7 @@ def test_single_integrator_swap(jitter: float) -> None:
     goal = -x
     f = SafetyFilter(cfg)
     closest = np.inf
-    for step in range(2500):
+    for _step in range(2500):
         u, diag = f.filter(x, go_to(x, goal, cfg.max_speed))
         assert diag.ok
         x = x + u * DT
@@ -44,7 +44,7 @@ def test_unicycle_swap() -> None:
     poses = np.column_stack([START, heading + 0.01])
     goal = -START
     closest = np.inf
-    for step in range(3000):
+    for _step in range(3000):
         p = lookahead_points(poses, ell)
         u = go_to(p, goal, 0.15)
         c, s = np.cos(poses[:, 2]), np.sin(poses[:, 2])

@@ -2,7 +2,8 @@
 from __future__ import annotations
 
 import numpy as np
-from hypothesis import given, settings, strategies as st
+from hypothesis import given, settings
+from hypothesis import strategies as st
 from scipy.spatial.distance import pdist
 
 from swarmdeck.core.kinematics import lookahead_points, si_to_unicycle, unicycle_to_si, unicycle_to_wheels

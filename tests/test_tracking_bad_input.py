@@ -6,9 +6,21 @@ import numpy as np
 import pytest
 
 from swarmdeck.tracking import (
-    CameraCalibration, CameraError, CameraFrame, CameraPoseSource, ImageFolderSource, OpenCVCamera,
-    SyntheticCamera, SyntheticCameraConfig, SyntheticRenderer, Tracker, TrackerConfig, VideoFileSource,
-    open_source, random_poses)
+    CameraCalibration,
+    CameraError,
+    CameraFrame,
+    CameraPoseSource,
+    ImageFolderSource,
+    OpenCVCamera,
+    SyntheticCamera,
+    SyntheticCameraConfig,
+    SyntheticRenderer,
+    Tracker,
+    TrackerConfig,
+    VideoFileSource,
+    open_source,
+    random_poses,
+)
 
 
 @pytest.fixture(scope="module")

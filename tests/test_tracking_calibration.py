@@ -9,8 +9,18 @@ import pytest
 
 from swarmdeck.console.cli import main as cli
 from swarmdeck.tracking import (
-    CalibrationError, CameraCalibration, CameraFrame, CharucoSpec, ConfigError, SyntheticCameraConfig,
-    SyntheticRenderer, Tracker, TrackerConfig, calibrate_charuco, random_poses)
+    CalibrationError,
+    CameraCalibration,
+    CameraFrame,
+    CharucoSpec,
+    ConfigError,
+    SyntheticCameraConfig,
+    SyntheticRenderer,
+    Tracker,
+    TrackerConfig,
+    calibrate_charuco,
+    random_poses,
+)
 from swarmdeck.tracking.synthetic import charuco_views
 
 

@@ -5,7 +5,14 @@ import cv2
 import numpy as np
 import pytest
 
-from swarmdeck.tracking import CameraCalibration, CameraFrame, SyntheticCameraConfig, SyntheticRenderer, Tracker, TrackerConfig
+from swarmdeck.tracking import (
+    CameraCalibration,
+    CameraFrame,
+    SyntheticCameraConfig,
+    SyntheticRenderer,
+    Tracker,
+    TrackerConfig,
+)
 from swarmdeck.tracking.detector import MarkerDetector
 
 HEADINGS = np.array([0.0, np.pi / 2, np.pi, -np.pi / 2, np.pi / 6, -2 * np.pi / 3, 3 * np.pi / 4, -np.pi / 12])

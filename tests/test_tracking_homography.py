@@ -6,7 +6,11 @@ import pytest
 
 from swarmdeck.tracking.camera_model import overhead_camera
 from swarmdeck.tracking.homography import (
-    apply_homography, camera_centre_from_homography, correct_parallax, fit_floor_homography)
+    apply_homography,
+    camera_centre_from_homography,
+    correct_parallax,
+    fit_floor_homography,
+)
 from swarmdeck.tracking.markers import DEFAULT_REFERENCES, reference_corners
 
 

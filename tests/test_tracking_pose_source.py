@@ -7,8 +7,15 @@ import numpy as np
 import pytest
 
 from swarmdeck.tracking import (
-    CameraCalibration, CameraPoseSource, SyntheticCamera, SyntheticCameraConfig, SyntheticRenderer, Tracker,
-    TrackerConfig, random_poses)
+    CameraCalibration,
+    CameraPoseSource,
+    SyntheticCamera,
+    SyntheticCameraConfig,
+    SyntheticRenderer,
+    Tracker,
+    TrackerConfig,
+    random_poses,
+)
 
 
 class MovingRobots:

@@ -7,7 +7,14 @@ import numpy as np
 import pytest
 
 from swarmdeck.tracking import (
-    CameraCalibration, CameraFrame, SyntheticCameraConfig, SyntheticRenderer, Tracker, TrackerConfig, random_poses)
+    CameraCalibration,
+    CameraFrame,
+    SyntheticCameraConfig,
+    SyntheticRenderer,
+    Tracker,
+    TrackerConfig,
+    random_poses,
+)
 
 
 @pytest.fixture(scope="module")

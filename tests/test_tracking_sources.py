@@ -7,8 +7,17 @@ import numpy as np
 import pytest
 
 from swarmdeck.tracking import (
-    CameraCalibration, CameraPoseSource, ImageFolderSource, SyntheticCameraConfig, SyntheticRenderer, Tracker,
-    TrackerConfig, VideoFileSource, open_source, random_poses)
+    CameraCalibration,
+    CameraPoseSource,
+    ImageFolderSource,
+    SyntheticCameraConfig,
+    SyntheticRenderer,
+    Tracker,
+    TrackerConfig,
+    VideoFileSource,
+    open_source,
+    random_poses,
+)
 
 N_FRAMES = 6
 

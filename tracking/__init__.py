@@ -20,9 +20,21 @@ from swarmdeck.tracking.config import ConfigError, TrackerConfig
 from swarmdeck.tracking.markers import DEFAULT_REFERENCES, ReferenceMarker, marker_corners, poses_from_corners
 from swarmdeck.tracking.pose_source import CameraPoseSource, TrackedPoseSource
 from swarmdeck.tracking.sources import (
-    CameraError, CameraSource, ImageFolderSource, OpenCVCamera, VideoFileSource, open_source)
+    CameraError,
+    CameraSource,
+    ImageFolderSource,
+    OpenCVCamera,
+    VideoFileSource,
+    open_source,
+)
 from swarmdeck.tracking.synthetic import (
-    SyntheticCamera, SyntheticCameraConfig, SyntheticFrame, SyntheticRenderer, density_image, random_poses)
+    SyntheticCamera,
+    SyntheticCameraConfig,
+    SyntheticFrame,
+    SyntheticRenderer,
+    density_image,
+    random_poses,
+)
 from swarmdeck.tracking.tracker import Tracker, check_image
 from swarmdeck.tracking.types import CameraFrame, TrackedPoses
 

@@ -15,12 +15,13 @@ import cv2
 import numpy as np
 
 from swarmdeck.core.checks import in_range
+from swarmdeck.core.errors import SwarmdeckError
 from swarmdeck.tracking.camera_model import PinholeCamera
-from swarmdeck.tracking.jsonfile import read_json_object, write_json
 from swarmdeck.tracking.dictionaries import canonical_dictionary, dictionary
+from swarmdeck.tracking.jsonfile import read_json_object, write_json
 
 
-class CalibrationError(ValueError):
+class CalibrationError(ValueError, SwarmdeckError):
     """A calibration file or calibration input is unusable (message says why)."""
 
 
@@ -40,7 +41,7 @@ class CameraCalibration:
         if p.size == 0:
             return p.copy()
         crit = (cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS, 20, 1e-8)
-        out = cv2.undistortPointsIter(p.reshape(-1, 1, 2), self.camera_matrix, self.dist_coeffs,
+        out = cv2.undistortPointsIter(p.reshape(-1, 1, 2), self.camera_matrix, self.dist_coeffs,  # type: ignore[call-overload]  # cv2's stubs
                                       None, self.camera_matrix, crit)
         return out.reshape(p.shape)
 
@@ -56,9 +57,9 @@ class CameraCalibration:
         return out.reshape(p.shape)
 
     @staticmethod
-    def from_camera(camera: PinholeCamera) -> "CameraCalibration":
+    def from_camera(camera: PinholeCamera) -> CameraCalibration:
         """The exact intrinsics of a (synthetic) pinhole camera."""
-        return CameraCalibration(camera.K.copy(), camera.dist.copy(), tuple(camera.size), 0.0, 0)
+        return CameraCalibration(camera.K.copy(), camera.dist.copy(), tuple(camera.size), 0.0, 0)  # type: ignore[arg-type]  # (w, h)
 
     def to_dict(self) -> dict:
         """JSON-able form."""
@@ -67,7 +68,7 @@ class CameraCalibration:
                 "n_images": int(self.n_images)}
 
     @staticmethod
-    def from_dict(d: dict) -> "CameraCalibration":
+    def from_dict(d: dict) -> CameraCalibration:
         """Parse and check the JSON form (raises :class:`CalibrationError`)."""
         try:
             K = np.asarray(d["camera_matrix"], dtype=float)
@@ -88,7 +89,7 @@ class CameraCalibration:
         write_json(path, self.to_dict(), "calibration file", CalibrationError)
 
     @staticmethod
-    def load(path: str | Path) -> "CameraCalibration":
+    def load(path: str | Path) -> CameraCalibration:
         """Read a JSON calibration file (raises :class:`CalibrationError` naming the problem)."""
         d = read_json_object(path, "calibration file", CalibrationError)
         return CameraCalibration.from_dict(d)
@@ -140,7 +141,7 @@ def detect_charuco(image: np.ndarray, spec: CharucoSpec) -> tuple[np.ndarray, np
     ch_corners, ch_ids, _, _ = det.detectBoard(gray)
     if ch_ids is None or len(ch_ids) < 6:
         return np.zeros((0, 3)), np.zeros((0, 2))
-    obj, img = board.matchImagePoints(ch_corners, ch_ids)
+    obj, img = board.matchImagePoints(ch_corners, ch_ids)  # type: ignore[call-overload]  # cv2's stubs
     return obj.reshape(-1, 3), img.reshape(-1, 2)
 
 

@@ -57,7 +57,7 @@ class PinholeCamera:
         u, v = np.meshgrid(cu, cv_)
         pts = np.stack([u, v], axis=-1).reshape(-1, 1, 2)
         crit = (cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS, 40, 1e-10)
-        coarse = cv2.undistortPointsIter(pts, self.K, self.dist, None, None, crit).reshape(len(cv_), len(cu), 2)
+        coarse = cv2.undistortPointsIter(pts, self.K, self.dist, None, None, crit).reshape(len(cv_), len(cu), 2)  # type: ignore[call-overload]  # cv2's stubs
         if step == 1:
             return coarse[2:2 + h, 2:2 + w].astype(np.float64)
         fu, fv = np.meshgrid((np.arange(w) + 2 * step) / step, (np.arange(h) + 2 * step) / step)

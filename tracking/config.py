@@ -11,16 +11,17 @@ from __future__ import annotations
 
 from dataclasses import asdict, dataclass, fields, replace
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
+from swarmdeck.core.bounds import DEFAULT_BOUNDS, Bounds
 from swarmdeck.core.checks import in_range
 from swarmdeck.core.config import ConfigError, check_keys, field_names
-from swarmdeck.core.bounds import DEFAULT_BOUNDS, Bounds
 from swarmdeck.tracking.calibration import CalibrationError, CameraCalibration
+from swarmdeck.tracking.dictionaries import canonical_dictionary
 from swarmdeck.tracking.jsonfile import read_json_object, write_json
 from swarmdeck.tracking.markers import DEFAULT_REFERENCES, ReferenceMarker
-from swarmdeck.tracking.dictionaries import canonical_dictionary
 
 
 @dataclass(frozen=True, eq=False)
@@ -88,7 +89,7 @@ class TrackerConfig:
         if self.fallback_homography is not None and np.asarray(self.fallback_homography).shape != (3, 3):
             raise ConfigError("fallback_homography must be 3×3")
 
-    def with_(self, **changes: object) -> "TrackerConfig":
+    def with_(self, **changes: Any) -> TrackerConfig:
         """A copy with some fields replaced."""
         return replace(self, **changes)
 
@@ -106,7 +107,7 @@ class TrackerConfig:
         return d
 
     @staticmethod
-    def from_dict(d: dict) -> "TrackerConfig":
+    def from_dict(d: dict) -> TrackerConfig:
         """Parse the JSON form; unknown keys and bad values raise :class:`ConfigError`."""
         kw = check_keys(d, field_names(TrackerConfig), "tracker config")
         try:
@@ -143,7 +144,7 @@ class TrackerConfig:
         write_json(path, self.to_dict(), "tracker config", ConfigError)
 
     @staticmethod
-    def load(path: str | Path) -> "TrackerConfig":
+    def load(path: str | Path) -> TrackerConfig:
         """Read a JSON file written by :meth:`save` or ``swarmdeck calibrate arena``."""
         d = read_json_object(path, "tracker config", ConfigError)
         return TrackerConfig.from_dict(d)

@@ -12,8 +12,8 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
-from swarmdeck.tracking.markers import ReferenceMarker, reference_corners
 from swarmdeck.tracking.dictionaries import dictionary
+from swarmdeck.tracking.markers import ReferenceMarker, reference_corners
 
 
 @dataclass(frozen=True, eq=False)
@@ -69,7 +69,7 @@ class MarkerDetector:
         """Detect in a grey uint8 image; then re-find missing references among the rejected
         candidates (when at least one reference was found)."""
         corners, ids, rejected = self._det.detectMarkers(gray)
-        return self.recover_references(gray, corners, ids, rejected)
+        return self.recover_references(gray, corners, ids, rejected)  # type: ignore[arg-type]  # cv2's stubs
 
     def recover_references(self, gray: np.ndarray, corners: tuple, ids: np.ndarray | None,
                            rejected: tuple) -> Detections:
@@ -80,10 +80,10 @@ class MarkerDetector:
             found = np.isin(self._ref_ids, np.asarray(ids).ravel())
             if found.any() and not found.all():
                 if self._K is not None:
-                    corners, ids, rejected, rec = self._det.refineDetectedMarkers(
+                    corners, ids, rejected, rec = self._det.refineDetectedMarkers(  # type: ignore[assignment]  # cv2's stubs
                         gray, self._board, corners, ids, rejected, self._K, self._dist)
                 else:
-                    corners, ids, rejected, rec = self._det.refineDetectedMarkers(
+                    corners, ids, rejected, rec = self._det.refineDetectedMarkers(  # type: ignore[assignment]  # cv2's stubs
                         gray, self._board, corners, ids, rejected)
                 recovered = 0 if rec is None else len(rec)
         if ids is None or len(ids) == 0:

@@ -13,6 +13,8 @@ from pathlib import Path
 import cv2
 import numpy as np
 
+from swarmdeck.core.errors import SwarmdeckError
+
 IMAGE_SUFFIXES = (".png", ".jpg", ".jpeg", ".bmp", ".tif", ".tiff", ".webp")
 
 # ANYDEPTH keeps 16-bit/float samples; ANYCOLOR keeps grey as grey. Unlike IMREAD_UNCHANGED,
@@ -20,7 +22,7 @@ IMAGE_SUFFIXES = (".png", ".jpg", ".jpeg", ".bmp", ".tif", ".tiff", ".webp")
 _FLAGS = cv2.IMREAD_ANYDEPTH | cv2.IMREAD_ANYCOLOR
 
 
-class ImageReadError(ValueError):
+class ImageReadError(ValueError, SwarmdeckError):
     """An image file that cannot be read (the message names the file and why)."""
 
 

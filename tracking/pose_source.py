@@ -19,7 +19,7 @@ import cv2
 import numpy as np
 
 from swarmdeck.core.bounds import Bounds
-from swarmdeck.core.ports import SensedPoses
+from swarmdeck.core.ports import Closeable, SensedPoses
 from swarmdeck.tracking.calibration import CameraCalibration
 from swarmdeck.tracking.config import TrackerConfig
 from swarmdeck.tracking.homography import apply_homography
@@ -64,7 +64,7 @@ class CameraPoseSource:
     def open(cls, spec: str | int, *, get_poses: Callable[[float], np.ndarray] | None = None,
              ids: Sequence[int] | None = None, config: TrackerConfig | str | Path | None = None,
              get_density: Callable[[float], np.ndarray | None] | None = None,
-             synthetic: SyntheticCameraConfig | None = None, paced: bool = True) -> "CameraPoseSource":
+             synthetic: SyntheticCameraConfig | None = None, paced: bool = True) -> CameraPoseSource:
         """Build a camera + tracker from a command-line spec (``swarmdeck console --camera``).
 
         ``"synthetic"``: a :class:`SyntheticCamera` rendering ``get_poses(now)`` (robot ``ids``)
@@ -270,6 +270,5 @@ class TrackedPoseSource:
         return self.camera.rectified_image()
 
     def close(self) -> None:
-        close = getattr(self.camera.source, "close", None)
-        if close is not None:
-            close()
+        if isinstance(self.camera.source, Closeable):
+            self.camera.source.close()

@@ -10,6 +10,7 @@ import numpy as np
 
 from swarmdeck.tracking.dictionaries import dictionary
 
+
 def marker_image(dict_name: str, marker_id: int, px_per_bit: int = 24) -> np.ndarray:
     """(S, S) uint8 printed marker incl. its 1-bit black border, S = (bits + 2)·px_per_bit."""
     d = dictionary(dict_name)
@@ -28,14 +29,14 @@ def warp_into(dst: np.ndarray, src: np.ndarray, src_corners: np.ndarray, dst_cor
     """
     dst_corners = np.asarray(dst_corners, np.float64)
     H = cv2.getPerspectiveTransform(np.asarray(src_corners, np.float32), dst_corners.astype(np.float32))
-    shrink = np.linalg.norm(src_corners[1] - src_corners[0]) / max(
+    shrink = np.linalg.norm(src_corners[1] - src_corners[0]) / max(  # type: ignore[operator]
         np.linalg.norm(dst_corners[1] - dst_corners[0]), 1e-9)
     s = src.astype(np.float32)
     m = None if mask is None else mask.astype(np.float32)
     if shrink > 1.0:
         sig = 0.5 * shrink
-        s = cv2.GaussianBlur(s, (0, 0), sig)
-        m = None if m is None else cv2.GaussianBlur(m, (0, 0), sig)
+        s = cv2.GaussianBlur(s, (0, 0), sig)  # type: ignore[assignment]  # cv2's stubs
+        m = None if m is None else cv2.GaussianBlur(m, (0, 0), sig)  # type: ignore[assignment]  # cv2's stubs
     x0 = max(int(np.floor(dst_corners[:, 0].min())) - 2, 0)
     y0 = max(int(np.floor(dst_corners[:, 1].min())) - 2, 0)
     x1 = min(int(np.ceil(dst_corners[:, 0].max())) + 3, dst.shape[1])

@@ -17,18 +17,18 @@ import threading
 import time
 from collections.abc import Callable
 from pathlib import Path
-from typing import Protocol, runtime_checkable
+from typing import Any, Protocol, runtime_checkable
 
 import cv2
 import numpy as np
 
+from swarmdeck.core.errors import SwarmdeckError
 from swarmdeck.core.service_thread import ServiceThread
 from swarmdeck.tracking.imageread import IMAGE_SUFFIXES, ImageReadError, decoded_to_rgb, read_image
 from swarmdeck.tracking.types import CameraFrame
 
 
-
-class CameraError(ValueError):
+class CameraError(ValueError, SwarmdeckError):
     """A camera specification that cannot name any source (e.g. a path that does not exist)."""
 
 
@@ -312,7 +312,7 @@ def check_device(index: int) -> None:
 
 def open_source(spec: str | int, *, paced: bool = True, get_poses: Callable[[float], np.ndarray] | None = None,
                 ids: list[int] | None = None, size: tuple[int, int] | None = None,
-                **synthetic_kw: object) -> CameraSource:
+                **synthetic_kw: Any) -> CameraSource:
     """A source from a command-line style spec.
 
     ``"synthetic"`` → :class:`SyntheticCamera` (needs ``get_poses``); an int or digit string →

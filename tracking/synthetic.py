@@ -23,8 +23,8 @@ from swarmdeck.core.bounds import DEFAULT_BOUNDS, Bounds
 from swarmdeck.core.constants import ROBOT_RADIUS
 from swarmdeck.tracking.calibration import CharucoSpec
 from swarmdeck.tracking.camera_model import PinholeCamera, overhead_camera
-from swarmdeck.tracking.markers import DEFAULT_REFERENCES, ReferenceMarker, marker_corners
 from swarmdeck.tracking.dictionaries import dictionary
+from swarmdeck.tracking.markers import DEFAULT_REFERENCES, ReferenceMarker, marker_corners
 from swarmdeck.tracking.raster import disc_coverage, marker_image, pixel_edge_square, warp_into
 from swarmdeck.tracking.types import CameraFrame
 
@@ -213,7 +213,7 @@ class SyntheticRenderer:
             warp_into(color, rgb, pixel_edge_square(img.shape[0]), tag_tex)
             sp[..., :3] = color
             if sigma > 0.3:
-                sp = cv2.GaussianBlur(sp, (0, 0), sigma)
+                sp = cv2.GaussianBlur(sp, (0, 0), sigma)  # type: ignore[assignment]  # cv2's stubs
             # premultiply colour by alpha so bilinear lookups at the rim stay unbiased
             sp[..., :3] *= sp[..., 3:4] / 255.0
             rr, cc = divmod(k, self._cols)

@@ -14,7 +14,12 @@ import numpy as np
 from swarmdeck.tracking.config import TrackerConfig
 from swarmdeck.tracking.detector import Detections, MarkerDetector
 from swarmdeck.tracking.homography import (
-    HomographyFit, apply_homography, camera_centre_from_homography, correct_parallax, fit_floor_homography)
+    HomographyFit,
+    apply_homography,
+    camera_centre_from_homography,
+    correct_parallax,
+    fit_floor_homography,
+)
 from swarmdeck.tracking.markers import poses_from_corners, reference_corners
 from swarmdeck.tracking.types import CameraFrame, TrackedPoses
 

@@ -65,7 +65,7 @@ class TrackedPoses:
         return None if k.size == 0 else self.poses[k[0]].copy()
 
     @staticmethod
-    def empty(status: str) -> "TrackedPoses":
+    def empty(status: str) -> TrackedPoses:
         """No robots at all, with a status line."""
         return TrackedPoses(
             ids=np.zeros(0, dtype=int), poses=np.zeros((0, 3)), seen=np.zeros(0, dtype=bool),

@@ -16,6 +16,8 @@ from __future__ import annotations
 
 import os
 
+from swarmdeck.core.errors import SwarmdeckError
+
 # The control loop's matrices are small: multi-threaded BLAS only adds contention with
 # the loop, viser and camera threads (measured: 0.1 ms single-threaded vs 21 ms
 # threaded for one density evaluation on a busy 2-core machine). Set before numpy loads.
@@ -29,8 +31,7 @@ import sys  # noqa: E402
 from collections.abc import Sequence  # noqa: E402
 
 
-
-class UsageError(Exception):
+class UsageError(SwarmdeckError):
     """A mistake in the command line or in a file the user named."""
 
 

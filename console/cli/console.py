@@ -64,6 +64,7 @@ def main(args: argparse.Namespace) -> int:
     from swarmdeck.console.runtime.behaviours import BehaviourError, make_behaviour
     from swarmdeck.console.runtime.config import ConfigFileError, ConsoleSettings, load_settings
     from swarmdeck.console.runtime.loop import ControlLoop, LoopConfig
+    from swarmdeck.core.ports import ProvidesImage
 
     try:
         settings = load_settings(args.config) if args.config else ConsoleSettings(LoopConfig())
@@ -121,7 +122,8 @@ def main(args: argparse.Namespace) -> int:
 
         source_name = args.camera or (redact_url(args.robots_via) if args.robots_via else "simulation")
         fox = settings.foxglove_channels if args.foxglove_channels is None else args.foxglove_channels
-        rec = _recorder(args.record, config, settings.inputs, source_name, getattr(source, "image", None),
+        images = source.image if isinstance(source, ProvidesImage) else None
+        rec = _recorder(args.record, config, settings.inputs, source_name, images,
                         virtual=args.virtual or 0, foxglove_channels=fox)
     hub = None
     if not args.no_inputs:
@@ -150,7 +152,7 @@ def main(args: argparse.Namespace) -> int:
 
         try:
             bridge = FoxgloveBridge(config.bounds, host=host, port=args.foxglove, robot_radius=loop.robot.radius,
-                                    image_provider=getattr(source, "image", None))
+                                    image_provider=source.image if isinstance(source, ProvidesImage) else None)
         except FoxglovePortInUse as exc:
             loop.close()
             if rec is not None:

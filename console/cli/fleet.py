@@ -163,12 +163,12 @@ def _server_status(args: argparse.Namespace) -> int:
 def _status(loop: Any, frame: Any) -> list[dict[str, Any]]:
     """One JSON-able row per robot of ``frame``: battery, charge, charging, docked slot, link, ages."""
     from swarmdeck.console.runtime.batteries import battery_levels
+    from swarmdeck.core.ports import ReportsRobotHealth
     from swarmdeck.devices.chargers import ChargerLayout
 
     q, _ = battery_levels(frame.battery, frame.charging)
     slot = ChargerLayout(bounds=frame.bounds).docked_slot(frame.poses)
-    health = getattr(loop.sink, "robot_health", None)
-    table = health() if health is not None else {}
+    table = loop.sink.robot_health() if isinstance(loop.sink, ReportsRobotHealth) else {}
     rows = []
     for k, rid in enumerate(frame.ids.tolist()):  # a table for people, once
         h = table.get(str(rid), {})
@@ -197,8 +197,8 @@ def _print_status(rows: list[dict[str, Any]], as_json: bool) -> int:
         seen = f"{r['last_seen_s']:.1f} s" if isinstance(r["last_seen_s"], (int, float)) else "never"
         print(f"{r['id']:>5}  {volts:>8}  {charge:>6}  {'yes' if r['charging'] else 'no':>8}  {docked:>9}  "
               f"{r['link']:>8}  {seen:>9}")
-    docked = sum(r["docked_slot"] is not None for r in rows)
-    print(f"{docked}/{len(rows)} docked" + (" · ready" if docked == len(rows) else ""))
+    n_docked = sum(r["docked_slot"] is not None for r in rows)
+    print(f"{n_docked}/{len(rows)} docked" + (" · ready" if n_docked == len(rows) else ""))
     return 0
 
 

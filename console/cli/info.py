@@ -4,6 +4,7 @@ from __future__ import annotations
 import argparse
 import json
 import os
+from typing import Any
 
 from swarmdeck.console.cli import UsageError
 
@@ -31,9 +32,10 @@ def summarise(path: str) -> dict:
 
     with open_recording(path) as rec:
         cfg = rec.config()
-        first, last = rec.first_frame, rec.last_frame
+        first = rec.first_frame
         counts = rec.message_counts()
-        events, changes = [], []
+        events: list[str] = []
+        changes: list[dict[str, Any]] = []
         if first is not None:
             changes.append({"t": 0.0, "behaviour": first.behaviour})
         for e in rec.events():

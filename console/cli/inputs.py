@@ -12,8 +12,8 @@ from __future__ import annotations
 import argparse
 import sys
 
-from swarmdeck.inputs.config import ConfigError, InputConfig, ListenerConfig
 from swarmdeck.inputs import monitor, sender
+from swarmdeck.inputs.config import ConfigError, InputConfig, ListenerConfig
 
 NAME = "inputs"
 ORDER = 40

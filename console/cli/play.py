@@ -22,8 +22,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def main(args: argparse.Namespace) -> int:
-    from swarmdeck.console.web.player import RATE_MAX, RATE_MIN, PlayerApp
     from swarmdeck.console.recording.reader import RecordingError, open_recording
+    from swarmdeck.console.web.player import RATE_MAX, RATE_MIN, PlayerApp
 
     if not RATE_MIN <= args.rate <= RATE_MAX:
         raise UsageError(f"--rate must be between {RATE_MIN} and {RATE_MAX}, got {args.rate}")

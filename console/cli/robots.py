@@ -16,8 +16,9 @@ import time
 
 import numpy as np
 
-from swarmdeck.core.bounds import DEFAULT_BOUNDS
 from swarmdeck.console.cli import UsageError
+from swarmdeck.core.bounds import DEFAULT_BOUNDS
+from swarmdeck.devices.initial_conditions import random_initial_poses
 
 NAME = "robots"
 HELP = "run a simulated GRITSBot fleet that takes commands over MQTT (like the robots' firmware)"
@@ -90,7 +91,6 @@ def main(args: argparse.Namespace) -> int:
     from swarmdeck.devices.chargers import ChargerLayout
     from swarmdeck.devices.net.firmware import FirmwareParams
     from swarmdeck.devices.net.fleet import FleetNode
-    from swarmdeck.devices.initial_conditions import random_initial_poses
     from swarmdeck.devices.net.mqtt_config import parse_broker_url
 
     if args.ids is not None:

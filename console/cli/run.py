@@ -81,7 +81,7 @@ def _run_sandboxed(args: argparse.Namespace) -> int:
     check_run_arguments(args.robots, args.duration, seed=args.seed)
     config = ArenaConfig(seed=args.seed)
 
-    def make_plant(n, initial):  # type: ignore[no-untyped-def]
+    def make_plant(n, initial):
         return ArenaPlant(Arena(n, initial_conditions=initial, config=config,
                                 safety=not (args.no_safety or args.rps_semantics), duration=args.duration))
 

@@ -149,19 +149,18 @@ def check_arguments(args: argparse.Namespace) -> None:
 
 def main(args: argparse.Namespace) -> int:
     check_arguments(args)
+    from swarmdeck.console.cli.env import checked_script_env
     from swarmdeck.console.jobs.confinement import JailConfig, describe, probe
     from swarmdeck.console.portal.app import HttpSettings, bind, create_app, uvicorn_server
-    from swarmdeck.console.portal.quotas import Quotas
-    from swarmdeck.console.portal.retention import RetentionSweeper
     from swarmdeck.console.portal.db import SchemaError
     from swarmdeck.console.portal.livefeed import LiveFeed
+    from swarmdeck.console.portal.quotas import Quotas
+    from swarmdeck.console.portal.retention import RetentionSweeper
     from swarmdeck.console.portal.runner import ArenaRunner, ArenaSettings
     from swarmdeck.console.portal.service import PortalConfig, PortalService
     from swarmdeck.console.portal.submission import Limits
     from swarmdeck.console.portal.workers import VerificationWorkers, make_executor
     from swarmdeck.devices.chargers import ChargerLayout
-
-    from swarmdeck.console.cli.env import checked_script_env
 
     reason = probe(JailConfig(allow_no_cgroup=args.allow_no_cgroup))
     if reason is not None and not args.trusted:

@@ -37,7 +37,7 @@ def list_sessions(directory: str | os.PathLike[str]) -> list[dict]:
         except RecordingError as exc:
             row["state"] = f"unreadable: {exc}"
         rows.append(row)
-    rows.sort(key=lambda r: r["start"] or "", reverse=True)
+    rows.sort(key=lambda r: str(r["start"] or ""), reverse=True)
     return rows
 
 

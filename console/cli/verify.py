@@ -98,7 +98,7 @@ def _declared(args: argparse.Namespace) -> tuple[int | None, float, tuple | None
     return robots, 30.0 if duration is None else duration, poses, declared_by
 
 
-def _progress(total_runs: int):  # type: ignore[no-untyped-def]
+def _progress(total_runs: int):
     if not sys.stderr.isatty():
         return None, lambda: None
     from tqdm import tqdm

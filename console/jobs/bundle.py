@@ -78,18 +78,18 @@ class ScriptBundle:
         object.__setattr__(self, "files", tuple(sorted(zip(names, (bytes(d) for _, d in self.files)))))
 
     @classmethod
-    def single(cls, name: str, source: bytes) -> "ScriptBundle":
+    def single(cls, name: str, source: bytes) -> ScriptBundle:
         """One script file called ``name`` (its base name is used)."""
         base = PurePosixPath(str(name).replace("\\", "/")).name
         return cls(base, ((base, bytes(source)),))
 
     @classmethod
-    def from_files(cls, files: Mapping[str, bytes], entry: str = DEFAULT_ENTRY) -> "ScriptBundle":
+    def from_files(cls, files: Mapping[str, bytes], entry: str = DEFAULT_ENTRY) -> ScriptBundle:
         """From a mapping relative path → bytes (e.g. the members of an uploaded archive)."""
         return cls(entry, tuple(files.items()))
 
     @classmethod
-    def from_path(cls, path: str | Path, entry: str | None = None) -> "ScriptBundle":
+    def from_path(cls, path: str | Path, entry: str | None = None) -> ScriptBundle:
         """A ``.py`` file (``entry`` must be None), or a directory with its entry file (default ``main.py``).
 
         Hidden files and folders (names starting with '.') and ``__pycache__`` are left out;

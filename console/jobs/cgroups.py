@@ -33,6 +33,7 @@ from pathlib import Path
 
 from swarmdeck.console.jobs.confinement import kill_until_gone
 from swarmdeck.core.checks import require_positive
+from swarmdeck.core.errors import SwarmdeckError
 from swarmdeck.core.service_thread import ServiceThread
 
 CGROUP_ROOT = Path("/sys/fs/cgroup")
@@ -42,7 +43,7 @@ ACCOUNTING_V1 = "cpuacct"  # v1's CPU-time accounting (v2 has cpu.stat in every 
 CPU_PERIOD_US = 100_000
 
 
-class CgroupUnavailable(RuntimeError):
+class CgroupUnavailable(RuntimeError, SwarmdeckError):
     """No cgroup can be created for a run here (the message says why)."""
 
 
@@ -384,7 +385,7 @@ class OomGuard:
                 self.group.kill(timeout=2.0)
                 return
 
-    def __enter__(self) -> "OomGuard":
+    def __enter__(self) -> OomGuard:
         if self.group.version == 1:
             self._service.start()
         return self

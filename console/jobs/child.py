@@ -26,10 +26,10 @@ from numpy.typing import ArrayLike, NDArray
 from swarmdeck.console.jobs.import_policy import install as install_import_policy
 from swarmdeck.console.jobs.protocol import MESSAGE, FrameReader, decode, encode_commands, pack, write_frame
 from swarmdeck.console.jobs.protocol import poses as read_poses
-from swarmdeck.devices.arena import ExperimentFinished
 from swarmdeck.core.kinematics import GritsBotParams, unicycle_to_si
 from swarmdeck.core.ports import SensedPoses
-from swarmdeck.devices.runner import ScriptError, RunnerArenaError, run_experiment
+from swarmdeck.devices.arena import ExperimentFinished
+from swarmdeck.devices.runner import RunnerArenaError, ScriptError, run_experiment
 from swarmdeck.devices.simulator import ArenaConfig
 
 

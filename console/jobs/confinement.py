@@ -60,6 +60,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from swarmdeck.core.checks import require_positive
+from swarmdeck.core.errors import SwarmdeckError
 
 
 @dataclass(frozen=True)
@@ -135,7 +136,7 @@ class SandboxLimits:
                 "RLIMIT_FSIZE": int(self.file_size), "RLIMIT_CORE": 0}
 
 
-class ConfinementUnavailable(RuntimeError):
+class ConfinementUnavailable(RuntimeError, SwarmdeckError):
     """This machine cannot confine a child (the message says why); untrusted code is refused."""
 
 

@@ -32,8 +32,8 @@ class SerialExecutor:
         for k, task in enumerate(tasks):
             if cancelled():
                 break
-            results[k] = run_task(task)
-            on_done(k, results[k], k + 1)
+            results[k] = result = run_task(task)
+            on_done(k, result, k + 1)
         return results
 
 
@@ -96,9 +96,9 @@ class LocalPoolExecutor:
                     k = pending.pop(future)
                     if future.cancelled():
                         continue
-                    results[k] = future.result()
+                    results[k] = result = future.result()
                     finished += 1
-                    on_done(k, results[k], finished)
+                    on_done(k, result, finished)
                 if cancelled():  # running tasks see the cancel file and stop within a tick
                     for future in pending:
                         future.cancel()

@@ -15,6 +15,7 @@ import ctypes
 import functools
 import os
 import platform
+from collections.abc import Callable
 
 KEYCTL_GET_KEYRING_ID, KEYCTL_JOIN_SESSION_KEYRING, KEYCTL_CLEAR, KEYCTL_READ = 0, 1, 7, 11
 KEY_SPEC_SESSION_KEYRING, KEY_SPEC_USER_KEYRING, KEY_SPEC_USER_SESSION_KEYRING = -3, -4, -5
@@ -22,7 +23,7 @@ _SYS_KEYCTL = {"x86_64": 250, "aarch64": 219, "arm64": 219}
 
 
 @functools.lru_cache(maxsize=1)
-def _syscall() -> ctypes._CFuncPtr:
+def _syscall() -> Callable[..., int]:
     fn = ctypes.CDLL(None, use_errno=True).syscall
     fn.restype = ctypes.c_long
     return fn

@@ -66,7 +66,9 @@ def _check(result: int, what: str) -> None:
 
 
 def _mount(source: str | None, target: str | Path, fstype: str | None, flags: int, data: str | None = None) -> None:
-    enc = (lambda s: None if s is None else os.fsencode(s))
+    def enc(s: str | None) -> bytes | None:
+        return None if s is None else os.fsencode(s)
+
     _check(_libc().mount(enc(source), enc(str(target)), enc(fstype), ctypes.c_ulong(flags), enc(data)),
            f"mount {source or ''} on {target}")
 

@@ -22,10 +22,10 @@ from numpy.typing import ArrayLike, NDArray
 from scipy.spatial import cKDTree
 
 from swarmdeck.core.constants import ROBOT_DIAMETER
+from swarmdeck.core.kinematics import GritsBotParams, limit_unicycle, unicycle_to_si, wrap_angle
 from swarmdeck.core.ports import SensedPoses
 from swarmdeck.devices.arena import Arena
 from swarmdeck.devices.clock import RealTimePacer
-from swarmdeck.core.kinematics import GritsBotParams, limit_unicycle, unicycle_to_si, wrap_angle
 from swarmdeck.devices.simulator import SimulatedArena
 from swarmdeck.devices.validation import ValidationReport
 from swarmdeck.safety.verifier import ContactLog, step_contacts
@@ -193,7 +193,7 @@ class SandboxPlant:
         self.n, self._observe, self._step, self._finished, self.arena = int(n), observe, step, finished, arena
 
     @classmethod
-    def on_arena(cls, arena: Arena) -> "SandboxPlant":
+    def on_arena(cls, arena: Arena) -> SandboxPlant:
         """The plant on a trusted Arena."""
 
         def step(nominal: NDArray[np.float64] | None) -> None:
@@ -210,7 +210,7 @@ class SandboxPlant:
         return cls(arena.n, lambda: (arena.time, arena.poses()), step, finished, arena)
 
     @classmethod
-    def on_loop(cls, loop: Any, commands: Any, duration: float, pacer: RealTimePacer | None) -> "SandboxPlant":
+    def on_loop(cls, loop: Any, commands: Any, duration: float, pacer: RealTimePacer | None) -> SandboxPlant:
         """The plant on a ControlLoop whose behaviour is ``commands`` (``set(nominal)`` before each tick)."""
         n = int(loop.config.n_robots)
 

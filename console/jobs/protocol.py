@@ -37,6 +37,8 @@ import msgspec
 import numpy as np
 from numpy.typing import NDArray
 
+from swarmdeck.core.errors import SwarmdeckError
+
 MAX_FRAME = 1 << 20  # bytes; 50 robots' poses are 1.2 kB
 _HEADER = struct.Struct("<I")
 _POSES = struct.Struct("<Icqd")  # length, kind, k, time
@@ -46,7 +48,7 @@ _decoder = msgspec.msgpack.Decoder()
 MESSAGE, POSES, COMMANDS = b"M", b"P", b"C"
 
 
-class ProtocolError(Exception):
+class ProtocolError(SwarmdeckError):
     """The other side sent something that is not a valid frame or message."""
 
 

@@ -73,7 +73,6 @@ from numpy.typing import NDArray
 from swarmdeck.console.jobs import cgroups, uids
 from swarmdeck.console.jobs import seccomp as seccomp_filter
 from swarmdeck.console.jobs.bundle import ScriptBundle
-from swarmdeck.console.jobs.script_env import ScriptEnv
 from swarmdeck.console.jobs.confinement import (
     ConfinementUnavailable,
     JailConfig,
@@ -98,6 +97,7 @@ from swarmdeck.console.jobs.protocol import (
     floats,
     write_frame,
 )
+from swarmdeck.console.jobs.script_env import ScriptEnv
 from swarmdeck.console.jobs.zygote import CHILD_ENV, ForkServerError, shared_fork_server
 
 

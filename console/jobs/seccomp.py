@@ -42,6 +42,8 @@ import functools
 import os
 import platform
 
+from swarmdeck.core.errors import SwarmdeckError
+
 # libseccomp's constants (seccomp.h, libseccomp 2.5)
 SCMP_ACT_KILL_PROCESS = 0x80000000
 SCMP_ACT_ALLOW = 0x7FFF0000
@@ -73,7 +75,7 @@ DENIED = (
 """System calls refused outright (``EPERM``)."""
 
 
-class SeccompUnavailable(RuntimeError):
+class SeccompUnavailable(RuntimeError, SwarmdeckError):
     """libseccomp cannot be loaded or cannot build the filter here (the message says why)."""
 
 

@@ -26,8 +26,8 @@ from numpy.typing import ArrayLike, NDArray
 from scipy.spatial import cKDTree
 
 from swarmdeck.core.bounds import DEFAULT_BOUNDS, Bounds
-from swarmdeck.devices.fleet.setup import ACCEPT_HEADING, ACCEPT_POSITION
 from swarmdeck.core.kinematics import wrap_angle
+from swarmdeck.devices.fleet.setup import ACCEPT_HEADING, ACCEPT_POSITION
 from swarmdeck.devices.simulator import check_poses
 
 #: m between the centres of two initial poses: the look-ahead points (ℓ = 0.03 m) start outside

@@ -19,6 +19,7 @@ import secrets
 from pathlib import Path
 
 from swarmdeck.console.jobs.keyrings import clear_user_keyrings, uids_with_keys
+from swarmdeck.core.errors import SwarmdeckError
 
 UID_RANGE = (1 << 20, 1 << 31)
 """Half-open range of per-run uids: far above every distribution's system and login uids."""
@@ -26,7 +27,7 @@ STATE_DIR = Path("/run/swarmdeck/uids")
 """Where reservations live (root-only)."""
 
 
-class UidUnavailable(RuntimeError):
+class UidUnavailable(RuntimeError, SwarmdeckError):
     """No per-run uid could be reserved (the message says why)."""
 
 

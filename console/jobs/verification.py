@@ -44,9 +44,9 @@ from __future__ import annotations
 import math
 import os
 import re
-import time
 import shutil
 import tempfile
+import time
 from collections.abc import Callable, Sequence
 from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
@@ -56,10 +56,10 @@ import numpy as np
 
 from swarmdeck.console.jobs.bundle import ScriptBundle
 from swarmdeck.console.jobs.confinement import JailConfig, SandboxLimits
-from swarmdeck.core.checks import in_range
 from swarmdeck.console.jobs.plant import ArenaPlant, Disturbances, SandboxPlant, VerificationRobots
 from swarmdeck.console.jobs.sandbox import run_sandboxed
 from swarmdeck.console.jobs.start_poses import arena_start, check_initial_poses, perturb
+from swarmdeck.core.checks import in_range
 from swarmdeck.core.service_thread import ServiceThread
 from swarmdeck.devices.arena import Arena
 from swarmdeck.devices.initial_conditions import random_initial_poses

@@ -50,14 +50,22 @@ import msgspec
 
 from swarmdeck.console.jobs.cgroups import join as join_cgroup
 from swarmdeck.console.jobs.keyrings import join_session_keyring
-from swarmdeck.console.jobs.namespaces import PR_SET_PDEATHSIG, build_root, enter_root, prctl, probe_in_child, unshare_all
+from swarmdeck.console.jobs.namespaces import (
+    PR_SET_PDEATHSIG,
+    build_root,
+    enter_root,
+    prctl,
+    probe_in_child,
+    unshare_all,
+)
+from swarmdeck.core.errors import SwarmdeckError
 
 CHILD_ENV = {"PATH": "/usr/bin:/bin", "LANG": "C.UTF-8", "PYTHONHASHSEED": "0", "PYTHONDONTWRITEBYTECODE": "1",
              "PYTHONUNBUFFERED": "1", "OPENBLAS_NUM_THREADS": "1", "OMP_NUM_THREADS": "1", "MKL_NUM_THREADS": "1"}
 _MAX_MESSAGE = 1 << 16
 
 
-class ForkServerError(RuntimeError):
+class ForkServerError(RuntimeError, SwarmdeckError):
     """The fork server could not start or stopped answering."""
 
 

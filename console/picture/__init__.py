@@ -9,7 +9,13 @@ rules (:class:`PictureStyle`), ``heat`` the density image, ``picture`` the
 from swarmdeck.console.picture.colours import LUT, hex_colors, pair_colors
 from swarmdeck.console.picture.heat import heatmap
 from swarmdeck.console.picture.picture import (
-    Picture, active_pairs, cell_shades, changed_mask, picture_of, robot_colors, safety_distance,
+    Picture,
+    active_pairs,
+    cell_shades,
+    changed_mask,
+    picture_of,
+    robot_colors,
+    safety_distance,
 )
 from swarmdeck.console.picture.style import PictureStyle
 

@@ -20,7 +20,13 @@ import numpy as np
 from numpy.typing import NDArray
 
 from swarmdeck.console.picture.colours import (
-    CHANGED, PAUSED, ROBOT, STOPPED, UNSEEN, VIRTUAL_PALE, pair_colors,
+    CHANGED,
+    PAUSED,
+    ROBOT,
+    STOPPED,
+    UNSEEN,
+    VIRTUAL_PALE,
+    pair_colors,
 )
 from swarmdeck.console.picture.heat import heatmap
 from swarmdeck.console.picture.style import PictureStyle

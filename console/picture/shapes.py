@@ -7,7 +7,6 @@ import math
 import numpy as np
 from numpy.typing import NDArray
 
-from swarmdeck.core.constants import ROBOT_RADIUS  # the glyph's body radius, m (REFERENCE.md §1)
 CHANGED_RING = 1.7
 """radius of the ring round a robot the barrier changed, × robot radius"""
 VIRTUAL_RING_RADIUS = 1.35

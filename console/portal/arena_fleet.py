@@ -54,10 +54,10 @@ from swarmdeck.console.runtime.loop import ControlLoop, LoopConfig
 from swarmdeck.core.bounds import Bounds
 from swarmdeck.core.kinematics import GritsBotParams
 from swarmdeck.core.ports import SensedPoses
-from swarmdeck.devices.fleet.assigned import AssignedRobots
-from swarmdeck.devices.fleet.assignment import AssignmentError, assign
 from swarmdeck.devices.battery import recharge
 from swarmdeck.devices.chargers import ChargerLayout
+from swarmdeck.devices.fleet.assigned import AssignedRobots
+from swarmdeck.devices.fleet.assignment import AssignmentError, assign
 
 LoopHook = Callable[[ControlLoop | None], None]
 

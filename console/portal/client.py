@@ -16,9 +16,10 @@ import httpx
 
 from swarmdeck.console.portal.job import ExportState
 from swarmdeck.console.portal.states import FINAL as FINAL_STATES
+from swarmdeck.core.errors import SwarmdeckError
 
 
-class ClientError(Exception):
+class ClientError(SwarmdeckError):
     def __init__(self, status: int, message: str, field: str | None = None) -> None:
         super().__init__(message)
         self.status, self.message, self.field = status, message, field
@@ -39,7 +40,7 @@ class PortalClient:
     def close(self) -> None:
         self.http.close()
 
-    def __enter__(self) -> "PortalClient":
+    def __enter__(self) -> PortalClient:
         return self
 
     def __exit__(self, *exc: object) -> None:

@@ -38,6 +38,7 @@ from typing import Any
 
 from swarmdeck.console.portal.files import private_dir, private_file
 from swarmdeck.console.portal.states import ACTIVE, FINAL, RENAMED, JobState
+from swarmdeck.core.errors import SwarmdeckError
 
 __all__ = ["ACTIVE", "FINAL", "MIGRATIONS", "STATES", "TRANSITIONS", "Database", "JobState", "SchemaError",
            "TransitionConflict"]
@@ -173,11 +174,11 @@ MIGRATIONS: tuple[str, ...] = (
 )
 
 
-class SchemaError(RuntimeError):
+class SchemaError(RuntimeError, SwarmdeckError):
     """The database file was written by a newer swarmdeck (or is not a portal database)."""
 
 
-class TransitionConflict(Exception):
+class TransitionConflict(SwarmdeckError):
     """A conditional job transition changed nothing: the job is not in a state that allows it.
 
     ``state`` is the job's state now (None: no such job)."""

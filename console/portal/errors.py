@@ -10,8 +10,10 @@ from __future__ import annotations
 import threading
 from collections import Counter
 
+from swarmdeck.core.errors import SwarmdeckError
 
-class PortalError(Exception):
+
+class PortalError(SwarmdeckError):
     status = 400
 
     def __init__(self, message: str, field: str | None = None) -> None:

@@ -48,8 +48,8 @@ import json
 import math
 import secrets
 import time
-from pathlib import Path
 from collections.abc import Callable
+from pathlib import Path
 from typing import Any
 
 from fastapi import APIRouter, Depends, Request
@@ -60,12 +60,12 @@ from starlette.datastructures import FormData, UploadFile
 
 from swarmdeck.console.portal.accounts import Session
 from swarmdeck.console.portal.api import SESSION_COOKIE
-from swarmdeck.console.portal.states import ACTIVE, FINAL, JobState
 from swarmdeck.console.portal.errors import BadInput, PortalError, Unauthorized
 from swarmdeck.console.portal.live import scene_message
 from swarmdeck.console.portal.livefeed import LiveFeed
 from swarmdeck.console.portal.results import summary_lines
 from swarmdeck.console.portal.service import PortalService
+from swarmdeck.console.portal.states import ACTIVE, FINAL, JobState
 from swarmdeck.console.portal.submission import Limits, display_name, manifest_errors
 
 HERE = Path(__file__).resolve().parent

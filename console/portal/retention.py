@@ -23,7 +23,7 @@ class RetentionSweeper:
         self.swept: list[int] = []
         self.errors = 0
 
-    def start(self) -> "RetentionSweeper":
+    def start(self) -> RetentionSweeper:
         self._thread = threading.Thread(target=self._run, name="swarmdeck-portal-retention", daemon=True)
         self._thread.start()
         return self

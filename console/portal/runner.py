@@ -80,13 +80,13 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.spatial import cKDTree
 
+from swarmdeck.console.jobs.bundle import ScriptBundle
 from swarmdeck.console.jobs.confinement import ConfinementUnavailable, SandboxLimits
 from swarmdeck.console.jobs.plant import SandboxPlant
 from swarmdeck.console.jobs.sandbox import SandboxOutcome, run_sandboxed
 from swarmdeck.console.jobs.start_poses import arena_start
-from swarmdeck.console.portal.arena_fleet import ArenaFleet
-from swarmdeck.console.jobs.bundle import ScriptBundle
 from swarmdeck.console.jobs.verification import user_message, without_run_folder
+from swarmdeck.console.portal.arena_fleet import ArenaFleet
 from swarmdeck.console.portal.exports import JobExports, without_server_paths, write_run_json
 from swarmdeck.console.portal.files import write_private
 from swarmdeck.console.portal.job import Job
@@ -190,7 +190,7 @@ class ArenaRunner:
         self._log: tuple[int | None, bytearray] = (None, bytearray())  # the running job's script output so far
 
     # ------------------------------------------------------------------ control (any thread)
-    def start(self) -> "ArenaRunner":
+    def start(self) -> ArenaRunner:
         self._thread = threading.Thread(target=self._run, name="swarmdeck-portal-arena", daemon=True)
         self._thread.start()
         return self

@@ -42,7 +42,7 @@ class VerificationWorkers:
         self.verified = 0
         self.errors = 0
 
-    def start(self) -> "VerificationWorkers":
+    def start(self) -> VerificationWorkers:
         self._thread = threading.Thread(target=self._run, name="swarmdeck-portal-verify", daemon=True)
         self._thread.start()
         return self

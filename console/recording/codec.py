@@ -82,9 +82,9 @@ from typing import Any
 
 import numpy as np
 
-from swarmdeck.console.runtime.frame import (FRAME_FORMAT, BarrierFrame, CoverageFrame, Frame, _dec_float,
-                                             _enc_float)
 from swarmdeck.console.recording.prediction import predict_poses
+from swarmdeck.console.runtime.frame import FRAME_FORMAT, BarrierFrame, CoverageFrame, Frame, _dec_float, _enc_float
+from swarmdeck.core.errors import SwarmdeckError
 from swarmdeck.core.kinematics import lookahead_points, unicycle_to_si
 from swarmdeck.coverage.geometry import CoverageGeometry, GeometryConfig, coverage_geometry
 
@@ -291,7 +291,7 @@ def _barrier_scalars(b: BarrierFrame) -> dict[str, Any]:
 
 
 # ---------------------------------------------------------------------------- decode
-class MissingReference(ValueError):
+class MissingReference(ValueError, SwarmdeckError):
     """A predicted frame (format 3) was read without the frame it is coded against."""
 
 

@@ -47,17 +47,28 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from swarmdeck.core.bounds import Bounds
-from swarmdeck.console.recording.reader import Recording, RecordedEvent
-from swarmdeck.console.runtime.frame import Frame
 from swarmdeck.console.picture.colours import (
-    BOUNDARY, CENTROID, CHANGED, CONTACT, HEADING, LABEL, LUT, SAFETY_RING, STOPPED, VIRTUAL_RING, VORONOI,
+    BOUNDARY,
+    CENTROID,
+    CHANGED,
+    CONTACT,
+    HEADING,
+    LABEL,
+    LUT,
+    SAFETY_RING,
+    STOPPED,
+    VIRTUAL_RING,
+    VORONOI,
     pair_colors,
 )
 from swarmdeck.console.picture.heat import heatmap
 from swarmdeck.console.picture.picture import Picture, picture_of
 from swarmdeck.console.picture.shapes import CHANGED_RING, ROBOT_RADIUS, dashed_rings, robot_outline
 from swarmdeck.console.picture.style import PictureStyle
+from swarmdeck.console.recording.reader import RecordedEvent, Recording
+from swarmdeck.console.runtime.frame import Frame
+from swarmdeck.core.bounds import Bounds
+from swarmdeck.core.errors import SwarmdeckError
 
 #: H.264 encoders tried in this order (PyAV's wheels carry libx264).
 H264_ENCODERS = ("libx264", "libopenh264", "h264")
@@ -71,7 +82,7 @@ RING = tuple(int(c) for c in CHANGED)  # the ring round a robot the barrier chan
 ESTOP = tuple(int(c) for c in STOPPED)
 
 
-class VideoExportError(Exception):
+class VideoExportError(SwarmdeckError):
     """The video cannot be made: no H.264 encoder, a recording without frames, bad settings."""
 
 
@@ -121,7 +132,7 @@ class VideoLayout:
     panel: tuple[int, int, int, int] = (0, 0, 0, 0)
 
     @classmethod
-    def fit(cls, bounds: Bounds, width: int, height: int, panel: float = 0.0) -> "VideoLayout":
+    def fit(cls, bounds: Bounds, width: int, height: int, panel: float = 0.0) -> VideoLayout:
         """The arena as large as fits between a header and a footer band, centred, aspect kept; with
         ``panel`` > 0 that fraction of the width (right) is kept for the camera picture."""
         x0, x1, y0, y1 = (float(b) for b in bounds)

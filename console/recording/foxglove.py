@@ -61,8 +61,8 @@ from swarmdeck.console.picture.colours import BOUNDARY, CONTACT, HEADING, LABEL,
 from swarmdeck.console.picture.picture import active_pairs, changed_mask, robot_colors
 from swarmdeck.console.picture.shapes import ROBOT_RADIUS
 from swarmdeck.console.picture.style import PictureStyle
-from swarmdeck.core.bounds import DEFAULT_BOUNDS, Bounds
 from swarmdeck.console.runtime.frame import Frame
+from swarmdeck.core.bounds import DEFAULT_BOUNDS, Bounds
 
 TOPIC_ROBOTS = "/foxglove/robots"
 TOPIC_CELLS = "/foxglove/cells"

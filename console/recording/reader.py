@@ -30,19 +30,44 @@ from itertools import accumulate
 from pathlib import Path
 from typing import Any
 
-from swarmdeck.console.runtime.frame import Frame
-from swarmdeck.console.recording.codec import (CODEC_FORMAT, MissingReference, RecordedDatagram, RecordedEvent,
-                                               decode_config, decode_datagram, decode_event, decode_frame,
-                                               decode_metadata)
-from swarmdeck.console.recording.mcap_walk import (MAGIC, OP_CHANNEL, OP_CHUNK, OP_HEADER, OP_METADATA,
-                                                   ChunkRef, DamagedChunk, McapFile, channel_topic, parse_record)
+from swarmdeck.console.recording.codec import (
+    CODEC_FORMAT,
+    MissingReference,
+    RecordedDatagram,
+    RecordedEvent,
+    decode_config,
+    decode_datagram,
+    decode_event,
+    decode_frame,
+    decode_metadata,
+)
+from swarmdeck.console.recording.mcap_walk import (
+    MAGIC,
+    OP_CHANNEL,
+    OP_CHUNK,
+    OP_HEADER,
+    OP_METADATA,
+    ChunkRef,
+    DamagedChunk,
+    McapFile,
+    channel_topic,
+    parse_record,
+)
 from swarmdeck.console.recording.schemas import (
-    METADATA_NAME, PROFILE, RECORDING_FORMAT, TOPIC_CONFIG, TOPIC_DATAGRAM, TOPIC_EVENT, TOPIC_FRAME,
+    METADATA_NAME,
+    PROFILE,
+    RECORDING_FORMAT,
+    TOPIC_CONFIG,
+    TOPIC_DATAGRAM,
+    TOPIC_EVENT,
+    TOPIC_FRAME,
     TOPIC_OPERATOR,
 )
+from swarmdeck.console.runtime.frame import Frame
+from swarmdeck.core.errors import SwarmdeckError
 
 
-class RecordingError(Exception):
+class RecordingError(SwarmdeckError):
     """The file cannot be played: not MCAP, not a swarmdeck recording, a newer format, unreadable."""
 
 
@@ -448,7 +473,7 @@ class Recording:
     def close(self) -> None:
         self._f.close()
 
-    def __enter__(self) -> "Recording":
+    def __enter__(self) -> Recording:
         return self
 
     def __exit__(self, *exc: object) -> None:

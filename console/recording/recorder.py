@@ -44,16 +44,30 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, BinaryIO
 
+from swarmdeck.console.recording.codec import (
+    CODEC_FORMAT,
+    datagram_message,
+    encode_frame,
+    encode_json,
+    event_message,
+    metadata_record,
+)
+from swarmdeck.console.recording.foxglove import TOPIC_LOG, FoxgloveConfig, FoxgloveEncoder, channel_specs
+from swarmdeck.console.recording.schemas import (
+    CHANNELS,
+    METADATA_NAME,
+    OPERATOR_EVENTS,
+    PROFILE,
+    RECORDING_FORMAT,
+    TOPIC_CONFIG,
+    TOPIC_DATAGRAM,
+    TOPIC_EVENT,
+    TOPIC_FRAME,
+    TOPIC_OPERATOR,
+)
+from swarmdeck.console.runtime.frame import Frame
 from swarmdeck.core.bounds import DEFAULT_BOUNDS
 from swarmdeck.core.checks import require_in_range
-from swarmdeck.console.recording.foxglove import TOPIC_LOG, FoxgloveConfig, FoxgloveEncoder, channel_specs
-from swarmdeck.console.runtime.frame import Frame
-from swarmdeck.console.recording.codec import (CODEC_FORMAT, datagram_message, encode_frame, encode_json,
-                                               event_message, metadata_record)
-from swarmdeck.console.recording.schemas import (
-    CHANNELS, METADATA_NAME, OPERATOR_EVENTS, PROFILE, RECORDING_FORMAT, TOPIC_CONFIG, TOPIC_DATAGRAM, TOPIC_EVENT,
-    TOPIC_FRAME, TOPIC_OPERATOR,
-)
 from swarmdeck.core.service_thread import ServiceThread
 
 DEFAULT_DIR = "sessions"
@@ -107,7 +121,7 @@ class RecorderStatus:
 
 def default_path(directory: str | os.PathLike[str] = DEFAULT_DIR, now: float | None = None) -> Path:
     """``<directory>/<UTC timestamp>.mcap``, e.g. ``sessions/20261121-223012.mcap`` (suffixed if taken)."""
-    stamp = _dt.datetime.fromtimestamp(time.time() if now is None else now, _dt.timezone.utc)
+    stamp = _dt.datetime.fromtimestamp(time.time() if now is None else now, _dt.UTC)
     base = Path(directory) / stamp.strftime("%Y%m%d-%H%M%S")
     path = base.with_suffix(".mcap")
     k = 1
@@ -275,7 +289,7 @@ class Recorder:
         self._service.stop(timeout)
         return self.status()
 
-    def __enter__(self) -> "Recorder":
+    def __enter__(self) -> Recorder:
         return self
 
     def __exit__(self, *exc: object) -> None:
@@ -294,7 +308,7 @@ class Recorder:
         meta = {
             "recording_format": RECORDING_FORMAT,
             "frame_format": CODEC_FORMAT,
-            "created": _dt.datetime.fromtimestamp(self._start_ns / 1e9, _dt.timezone.utc).isoformat(),
+            "created": _dt.datetime.fromtimestamp(self._start_ns / 1e9, _dt.UTC).isoformat(),
             "start_unix_ns": self._start_ns,
             "versions": software_versions(),
             **{k: v for k, v in self._meta.items() if k != "config"},
@@ -320,7 +334,7 @@ class Recorder:
     def _write_config(self, first_t: float, frame: Frame | None) -> None:
         cfg = {
             "recording_format": RECORDING_FORMAT, "frame_format": CODEC_FORMAT,
-            "created": _dt.datetime.fromtimestamp(self._start_ns / 1e9, _dt.timezone.utc).isoformat(),
+            "created": _dt.datetime.fromtimestamp(self._start_ns / 1e9, _dt.UTC).isoformat(),
             "start_unix_ns": self._start_ns, "time_origin": first_t,
             "robots": list(self._meta.get("robots", frame.ids.tolist() if frame is not None else [])),
             "bounds": list(self._meta.get("bounds", frame.bounds if frame is not None else DEFAULT_BOUNDS)),

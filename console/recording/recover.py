@@ -37,11 +37,11 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from swarmdeck.console.recording.mcap_walk import (MAGIC, OP_CHUNK, OP_HEADER, DamagedChunk, McapFile, Stop,
-                                                   parse_record)
+from swarmdeck.console.recording.mcap_walk import MAGIC, OP_CHUNK, OP_HEADER, DamagedChunk, McapFile, Stop, parse_record
+from swarmdeck.core.errors import SwarmdeckError
 
 
-class RecoveryError(Exception):
+class RecoveryError(SwarmdeckError):
     """The input cannot be recovered (not MCAP, empty, cut inside the header) or the output cannot be written."""
 
 

@@ -29,10 +29,10 @@ from typing import Any
 
 import numpy as np
 
-from swarmdeck.console.runtime import params
-from swarmdeck.console.runtime.frame import Frame
 from swarmdeck.console.recording.codec import CODEC_FORMAT, COMPACT_FORMAT, decode_frame, encode_frame
 from swarmdeck.console.recording.reader import RecordedDatagram, Recording
+from swarmdeck.console.runtime import params
+from swarmdeck.console.runtime.frame import Frame
 from swarmdeck.safety.guard import GuardConfig
 
 #: Frame keys not compared: wall-clock measurements and free-text messages.
@@ -213,8 +213,8 @@ def resimulate(recording: Recording, *, max_frames: int | None = None,
     Raises ValueError when the recording lacks what a re-simulation needs (no frames, a
     configuration that does not rebuild)."""
     from swarmdeck.console.runtime.loop import ControlLoop
-    from swarmdeck.devices.simulated_robots import SimulatedRobots
     from swarmdeck.devices import ArenaConfig
+    from swarmdeck.devices.simulated_robots import SimulatedRobots
     from swarmdeck.inputs import ContactDensity, InputConfig, InputHub, InputSource
 
     first = recording.first_frame

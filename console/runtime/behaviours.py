@@ -16,10 +16,10 @@ import importlib.util
 import math
 import sys
 import weakref
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Protocol
+from typing import TYPE_CHECKING, Any, Protocol, runtime_checkable
 
 import numpy as np
 from numpy.typing import NDArray
@@ -30,6 +30,9 @@ from swarmdeck.core.bounds import Bounds
 from swarmdeck.core.graphs import complete_laplacian, rigid_formation
 from swarmdeck.coverage.group import consensus, formation_control
 from swarmdeck.devices.controllers import si_position_controller
+
+if TYPE_CHECKING:
+    from swarmdeck.coverage.density import Density
 
 FloatArray = NDArray[np.float64]
 BUILTIN = ("coverage", "rendezvous", "formation", "goto")
@@ -44,7 +47,7 @@ class TickInput:
     poses: FloatArray
     points: FloatArray
     t: float
-    density: Any
+    density: Density
     bounds: tuple[float, float, float, float]
     max_speed: float
     ids: NDArray[np.int64] | None = None
@@ -60,6 +63,31 @@ class Behaviour(Protocol):
     name: str
 
     def __call__(self, tick: TickInput) -> tuple[Any, Any | None]: ...
+
+
+# A behaviour's optional capabilities (the loop checks them with isinstance; closing is core.ports.Closeable).
+
+@runtime_checkable
+class HoldsRobots(Protocol):
+    """Holds some robots in place this tick (e.g. docked on a charger): the barrier keeps them as fixed obstacles."""
+
+    def fixed(self, ids: NDArray[np.int64]) -> NDArray[np.bool_]:
+        """``(N,)`` True for the robots ``ids`` (N,) held in place."""
+
+
+@runtime_checkable
+class ReportsHealth(Protocol):
+    """Has a line for the Frame's health, under the behaviour's name (a script's worker, a maneuver's progress)."""
+
+    def health(self) -> str: ...
+
+
+@runtime_checkable
+class HasBarrierSettings(Protocol):
+    """Runs with its own barrier settings (``BarrierConfig`` fields, e.g. ``{"class_k": "linear", "gamma": 20.0}``)
+    instead of the operator's, while it is the behaviour."""
+
+    barrier: Mapping[str, Any]
 
 
 class Coverage:

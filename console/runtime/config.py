@@ -24,7 +24,14 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from swarmdeck.console.runtime.params import BehaviourParams, DensityParams, LoopConfig, SafetyParams, converters, toml_keys
+from swarmdeck.console.runtime.params import (
+    BehaviourParams,
+    DensityParams,
+    LoopConfig,
+    SafetyParams,
+    converters,
+    toml_keys,
+)
 from swarmdeck.core.checks import in_range
 from swarmdeck.core.config import ConfigError, check_keys, from_mapping, read_toml
 

@@ -32,8 +32,10 @@ import time
 from collections.abc import Callable
 from typing import Any
 
+from swarmdeck.core.errors import SwarmdeckError
 
-class TickBudgetExceeded(RuntimeError):
+
+class TickBudgetExceeded(RuntimeError, SwarmdeckError):
     """A call was abandoned: it did not return within its budget, or an earlier call still runs."""
 
 
@@ -113,7 +115,9 @@ class DeadlineCaller:
                 raise RuntimeError(f"{self.name}: closed")
             if self._running is not None or self._pending is not None:
                 self.skipped += 1
-                if self._starved(self._running or self._pending, budget):  # the machine, not the script, is slow
+                in_flight = self._running or self._pending
+                assert in_flight is not None  # checked just above
+                if self._starved(in_flight, budget):  # the machine, not the script, is slow
                     if self._last_error is not None:
                         raise self._last_error  # what the script did when it last got the CPU
                     raise TickBudgetExceeded("still waiting for the CPU since an earlier tick (the machine is "

@@ -131,7 +131,7 @@ class BumpSet:
             b = self._bumps.get(bid)
             return None if b is None else Bump(**vars(b))
 
-    def copy(self) -> "BumpSet":
+    def copy(self) -> BumpSet:
         """An independent copy (the bumps as they are now: what one tick sees)."""
         with self._lock:
             return BumpSet(self.ramp, self.extrapolate, self.max_gap, self.sigma_range, self.weight_range,

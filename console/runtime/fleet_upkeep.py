@@ -43,13 +43,13 @@ from swarmdeck.core.bounds import Bounds
 from swarmdeck.core.checks import require_positive
 from swarmdeck.core.constants import SAFETY_DISTANCE
 from swarmdeck.core.kinematics import GritsBotParams
-from swarmdeck.core.ports import rows_of
-from swarmdeck.devices.fleet.assignment import assign
+from swarmdeck.core.ports import ReportsRobotHealth, rows_of
 from swarmdeck.devices.battery import BatteryParams, charge_from_voltage
 from swarmdeck.devices.chargers import ChargerLayout
+from swarmdeck.devices.fleet.assignment import assign
 from swarmdeck.devices.fleet.docking import choose_slots, return_maneuver
-from swarmdeck.devices.fleet.maneuver import Maneuver
 from swarmdeck.devices.fleet.manager import FleetConfig
+from swarmdeck.devices.fleet.maneuver import Maneuver
 from swarmdeck.devices.fleet.setup import ACCEPT_HEADING, ACCEPT_POSITION, check_start_poses
 from swarmdeck.devices.fleet.task import LOOP_WORDING, UpkeepTask
 from swarmdeck.devices.initial_conditions import random_initial_poses
@@ -112,7 +112,7 @@ class FleetView:
     firmware: NDArray[np.bool_]
 
     @classmethod
-    def of(cls, frame: Any, status_age: ArrayLike | None = None) -> "FleetView":
+    def of(cls, frame: Any, status_age: ArrayLike | None = None) -> FleetView:
         """From a Frame (or anything with its per-robot fields); ``status_age`` None: robots without
         firmware reports (simulated)."""
         n = len(frame.ids)
@@ -210,15 +210,14 @@ class FleetManeuver:
         return u, None
 
 
-def status_ages(sink: Any, view_ids: ArrayLike, is_virtual: ArrayLike) -> FloatArray | None:
+def status_ages(sink: object, view_ids: ArrayLike, is_virtual: ArrayLike) -> FloatArray | None:
     """``(M,)`` s since each robot's firmware last reported (the sink's ``robot_health()``, as
     ``NetworkRobots`` gives it; inf: never), 0 for virtual robots; None when the robots have no
     firmware (a simulation)."""
     ids = np.asarray(view_ids, dtype=np.int64).reshape(-1)
-    health = getattr(sink, "robot_health", None)
-    if health is None:
+    if not isinstance(sink, ReportsRobotHealth):
         return None
-    table = health()
+    table = sink.robot_health()
     ages = np.array([(table.get(str(int(i))) or {}).get("status_age") for i in ids.tolist()], dtype=object)
     out = np.array([np.inf if a is None else float(a) for a in ages.tolist()], dtype=float)
     return np.where(np.asarray(is_virtual, dtype=bool), 0.0, out)

@@ -178,7 +178,7 @@ class BarrierFrame:
         _set(self, "status", str(self.status))
 
     @classmethod
-    def from_diagnostics(cls, diag: Any, n: int, safety_distance: float, enabled: bool = True) -> "BarrierFrame":
+    def from_diagnostics(cls, diag: Any, n: int, safety_distance: float, enabled: bool = True) -> BarrierFrame:
         """Build from a ``BarrierDiagnostics``-like object (attributes per the safety contract)."""
         get = lambda k, d: getattr(diag, k, d)  # noqa: E731
         inter = get("intervention", None)
@@ -206,7 +206,7 @@ class BarrierFrame:
         return out
 
     @classmethod
-    def from_dict(cls, d: Mapping[str, Any]) -> "BarrierFrame":
+    def from_dict(cls, d: Mapping[str, Any]) -> BarrierFrame:
         return cls(
             enabled=d["enabled"], ok=d["ok"], status=d["status"], solve_time_s=_dec_float(d["solve_time_s"]),
             n_constraints=d["n_constraints"], n_active=d["n_active"],
@@ -261,7 +261,7 @@ class CoverageFrame:
             _set(self, "packing_warning", str(self.packing_warning))
 
     @classmethod
-    def from_state(cls, state: Any) -> "CoverageFrame":
+    def from_state(cls, state: Any) -> CoverageFrame:
         """Build from a ``CoverageState``-like object (attributes per the coverage contract)."""
         verts, offsets = _flat_cells(list(getattr(state, "cells", None) or []))
         return cls(
@@ -274,7 +274,7 @@ class CoverageFrame:
 
     @classmethod
     def from_geometry(cls, geometry: Any, cost_H: float, mean_centroid_distance: float,
-                      packing_warning: str | None = None) -> "CoverageFrame":
+                      packing_warning: str | None = None) -> CoverageFrame:
         """Build from a ``swarmdeck.coverage.CoverageGeometry`` that has a diagram (a recorded frame's
         cells, derived again) and the tick's scalars."""
         verts, offsets = _flat_cells(geometry.cells())
@@ -298,7 +298,7 @@ class CoverageFrame:
         }
 
     @classmethod
-    def from_dict(cls, d: Mapping[str, Any]) -> "CoverageFrame":
+    def from_dict(cls, d: Mapping[str, Any]) -> CoverageFrame:
         return cls(
             centroids=_dec_array(d["centroids"], float, (2,), "coverage.centroids"),
             masses=_dec_array(d["masses"], float, (), "coverage.masses"),
@@ -330,7 +330,7 @@ class ContactsFrame:
             raise ValueError("contacts: sources, ids, positions and velocities must have the same length")
 
     @classmethod
-    def from_contacts(cls, contacts: Any) -> "ContactsFrame":
+    def from_contacts(cls, contacts: Any) -> ContactsFrame:
         """From an iterable of ``Contact``-like objects (source, id, position, velocity)."""
         cs = list(contacts or [])
         if not cs:
@@ -350,7 +350,7 @@ class ContactsFrame:
                 "positions": _enc_array(self.positions), "velocities": _enc_array(self.velocities)}
 
     @classmethod
-    def from_dict(cls, d: Mapping[str, Any]) -> "ContactsFrame":
+    def from_dict(cls, d: Mapping[str, Any]) -> ContactsFrame:
         return cls(sources=tuple(d["sources"]), ids=_dec_array(d["ids"], np.int64, (), "contacts.ids"),
                    positions=_dec_array(d["positions"], float, (2,), "contacts.positions"),
                    velocities=_dec_array(d["velocities"], float, (2,), "contacts.velocities"))
@@ -492,7 +492,7 @@ class Frame:
         return out
 
     @classmethod
-    def from_dict(cls, d: Mapping[str, Any]) -> "Frame":
+    def from_dict(cls, d: Mapping[str, Any]) -> Frame:
         """Inverse of :meth:`to_dict`; raises ValueError naming the field for malformed data."""
         if not isinstance(d, Mapping):
             raise ValueError(f"a frame must be a dict, got {type(d).__name__}")

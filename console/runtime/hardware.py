@@ -31,8 +31,8 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from numpy.typing import NDArray
 
-from swarmdeck.core.constants import CONTROL_PERIOD
 from swarmdeck.core.bounds import DEFAULT_BOUNDS, Bounds, check_bounds
+from swarmdeck.core.constants import CONTROL_PERIOD
 from swarmdeck.core.kinematics import GritsBotParams
 from swarmdeck.core.ports import CommandSink, PoseSource
 
@@ -182,8 +182,16 @@ def camera_source(spec: str, ids: NDArray[np.int64], truth: Callable[[float], ND
                   bounds: tuple[float, float, float, float]) -> TrackedPoseSource:
     """A tracked pose source for ``--camera`` ``synthetic`` (rendering ``truth(now)``), a webcam index,
     a stream URL, a folder of images or a video file. Raises ValueError naming what is wrong."""
-    from swarmdeck.tracking import (CameraCalibration, CameraPoseSource, SyntheticCamera, SyntheticCameraConfig,
-                                    TrackedPoseSource, Tracker, TrackerConfig, open_source)
+    from swarmdeck.tracking import (
+        CameraCalibration,
+        CameraPoseSource,
+        SyntheticCamera,
+        SyntheticCameraConfig,
+        TrackedPoseSource,
+        Tracker,
+        TrackerConfig,
+        open_source,
+    )
 
     expected = tuple(int(i) for i in ids)
     if spec == "synthetic":

@@ -221,7 +221,7 @@ class ControlLoop(OperatorCommands):
                 self.post(f"frame listener failed: {type(exc).__name__}: {exc}")
 
     # ------------------------------------------------------------------ threaded running
-    def start(self) -> "ControlLoop":
+    def start(self) -> ControlLoop:
         """Run :meth:`tick` every ``dt`` seconds (monotonic clock) on a daemon thread."""
         if self._thread is not None and self._thread.is_alive():
             return self

@@ -26,10 +26,10 @@ from typing import Any, TypeVar
 
 import numpy as np
 
-from swarmdeck.core.constants import CONTROL_PERIOD, SAFETY_DISTANCE
 from swarmdeck.core.bounds import DEFAULT_BOUNDS, Bounds
 from swarmdeck.core.checks import in_range, require_in_range
 from swarmdeck.core.config import floats
+from swarmdeck.core.constants import CONTROL_PERIOD, SAFETY_DISTANCE
 from swarmdeck.coverage.densities import s1_density
 from swarmdeck.devices import ArenaConfig
 

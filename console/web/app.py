@@ -16,6 +16,7 @@ from swarmdeck.console.runtime.frame import Frame
 from swarmdeck.console.runtime.loop import ControlLoop
 from swarmdeck.console.web.gui import ConsoleGui
 from swarmdeck.console.web.scene import ArenaScene
+from swarmdeck.core.ports import ProvidesImage
 from swarmdeck.core.service_thread import ServiceThread
 
 
@@ -45,7 +46,7 @@ class FrameViewer:
             self.gui.record(frame)
         self._wake.set()
 
-    def start(self) -> "FrameViewer":
+    def start(self) -> FrameViewer:
         self._service.start()
         return self
 
@@ -94,7 +95,7 @@ class ConsoleApp:
         self.loop = loop
         self.server: viser.ViserServer = viser.ViserServer(host=host, port=port, verbose=verbose)
         self.scene = ArenaScene(self.server, loop.config.bounds, robot_radius=loop.robot.radius,
-                                image_provider=getattr(loop.source, "image", None))
+                                image_provider=loop.source.image if isinstance(loop.source, ProvidesImage) else None)
         self.gui = ConsoleGui(self.server, loop, self.scene)
         self.viewer = FrameViewer(self.scene, self.gui, on_error=loop.post)
         self._unsubscribe = loop.subscribe(self.viewer.offer)
@@ -109,7 +110,7 @@ class ConsoleApp:
         host = "127.0.0.1" if self.host in ("0.0.0.0", "") else self.host
         return f"http://{host}:{self.port}"
 
-    def start(self) -> "ConsoleApp":
+    def start(self) -> ConsoleApp:
         """Draw the first frame, then start the viewer and the loop threads."""
         frame = self.loop.tick() if self.loop.latest is None else self.loop.latest
         self.scene.draw(frame)

@@ -12,8 +12,16 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING, Any
 
-from swarmdeck.console.runtime.fleet_upkeep import (FleetManeuver, FleetView, UpkeepConfig, random_start_poses,
-                                                    read_poses_csv, return_to_chargers, set_up, status_ages)
+from swarmdeck.console.runtime.fleet_upkeep import (
+    FleetManeuver,
+    FleetView,
+    UpkeepConfig,
+    random_start_poses,
+    read_poses_csv,
+    return_to_chargers,
+    set_up,
+    status_ages,
+)
 from swarmdeck.console.runtime.frame import Frame
 from swarmdeck.console.runtime.loop import ControlLoop
 from swarmdeck.devices.chargers import ChargerLayout

@@ -26,16 +26,20 @@ from collections.abc import Callable
 from typing import Any
 
 from swarmdeck.console.recording.foxglove import (
-    TOPIC_LOG, FoxgloveConfig, FoxgloveEncoder, channel_specs,
+    TOPIC_LOG,
+    FoxgloveConfig,
+    FoxgloveEncoder,
+    channel_specs,
 )
 from swarmdeck.console.runtime.frame import Frame
 from swarmdeck.core.constants import ROBOT_RADIUS
+from swarmdeck.core.errors import SwarmdeckError
 from swarmdeck.core.service_thread import ServiceThread
 
 DEFAULT_PORT = 8765
 
 
-class FoxglovePortInUse(OSError):
+class FoxglovePortInUse(OSError, SwarmdeckError):
     """The Foxglove WebSocket server could not bind its port."""
 
 
@@ -137,7 +141,7 @@ class FoxgloveBridge:
             self.last_error = f"Foxglove bridge: {type(exc).__name__}: {exc}"
         return n
 
-    def start(self) -> "FoxgloveBridge":
+    def start(self) -> FoxgloveBridge:
         self._service.start()
         return self
 
@@ -154,6 +158,6 @@ class FoxgloveBridge:
         self.relay.close()
         if self.server is not None:
             self.server.stop()
-            self.server = None
+            self.server = None  # type: ignore[assignment]  # stopped: the attribute says so
         for ch in self.channels.values():
             ch.close()

@@ -365,7 +365,7 @@ class PlayerApp:
             elif not self.player.playing and self.play_button.label != "Play":
                 self.refresh(force=True)
 
-    def start(self, period: float = 1 / 30) -> "PlayerApp":
+    def start(self, period: float = 1 / 30) -> PlayerApp:
         """Start the playback thread (advances and draws every ``period`` s)."""
         self._period = period
         self._service.start()

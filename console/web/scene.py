@@ -39,15 +39,32 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from swarmdeck.console.picture.colours import (  # noqa: F401 - the palette, re-exported for the scene's callers
-    BATTERY_COLORS, BATTERY_TRACK, CHANGED, GOAL, LUT, PAIR, PAUSED, ROBOT, STOPPED, UNSEEN, VIRTUAL_PALE,
-    VIRTUAL_RING, BOUNDARY, CENTROID, CONTACT, NOMINAL, SAFE, SAFETY_RING, VORONOI,
+    BATTERY_COLORS,
+    BATTERY_TRACK,
+    BOUNDARY,
+    CENTROID,
+    CHANGED,
+    CONTACT,
+    GOAL,
+    LUT,
+    NOMINAL,
+    PAIR,
+    PAUSED,
+    ROBOT,
+    SAFE,
+    SAFETY_RING,
+    STOPPED,
+    UNSEEN,
+    VIRTUAL_PALE,
+    VIRTUAL_RING,
+    VORONOI,
 )
 from swarmdeck.console.picture.heat import heatmap  # noqa: F401 - re-exported for the scene's callers
 from swarmdeck.console.picture.picture import Picture, picture_of, robot_colors
 from swarmdeck.console.picture.shapes import ROBOT_RADIUS, dashed_rings, robot_outline
 from swarmdeck.console.picture.style import PictureStyle
-from swarmdeck.core.bounds import DEFAULT_BOUNDS, Bounds
 from swarmdeck.console.runtime.frame import Frame
+from swarmdeck.core.bounds import DEFAULT_BOUNDS, Bounds
 
 if TYPE_CHECKING:
     import viser

@@ -20,7 +20,6 @@ from typing import Any
 
 from swarmdeck.core.service_thread import ServiceThread
 
-
 #: The names a client may ask for, the SDK's own first (REFERENCE.md §13).
 SUBPROTOCOLS: tuple[str, ...] = ("foxglove.sdk.v1", "foxglove.websocket.v1")
 UPSTREAM_SUBPROTOCOL = "foxglove.sdk.v1"
@@ -74,7 +73,7 @@ class SubprotocolRelay:
         try:
             upstream = await connect(self.upstream, subprotocols=[UPSTREAM_SUBPROTOCOL],  # type: ignore[list-item]
                                      compression=None, max_size=None, proxy=None)
-        except (OSError, ConnectionClosed, asyncio.TimeoutError) as exc:
+        except (TimeoutError, OSError, ConnectionClosed) as exc:
             await client.close(1011, f"Foxglove server unavailable: {type(exc).__name__}")
             return
         self.clients += 1

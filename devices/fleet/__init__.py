@@ -12,8 +12,6 @@
 * :mod:`.retrace` — the return as the setup played backwards (a full arena docks every robot);
 * :mod:`.manager` — :class:`FleetManager`, the fleet between experiments over a simulated arena.
 """
-from swarmdeck.devices.fleet.assigned import AssignedRobots
-from swarmdeck.devices.fleet.assignment import Assignment, AssignmentError, AssignmentPolicy, assign, eligibility
 from swarmdeck.devices.battery import (
     BatteryParams,
     battery_step,
@@ -23,9 +21,11 @@ from swarmdeck.devices.battery import (
     recharge,
 )
 from swarmdeck.devices.chargers import WALLS, ChargerLayout
+from swarmdeck.devices.fleet.assigned import AssignedRobots
+from swarmdeck.devices.fleet.assignment import Assignment, AssignmentError, AssignmentPolicy, assign, eligibility
 from swarmdeck.devices.fleet.docking import choose_slots, return_maneuver
-from swarmdeck.devices.fleet.maneuver import Maneuver, ManeuverParams
 from swarmdeck.devices.fleet.manager import FleetConfig, FleetManager
+from swarmdeck.devices.fleet.maneuver import Maneuver, ManeuverParams
 from swarmdeck.devices.fleet.setup import ManeuverReport, SetupFailed, check_start_poses, drive
 from swarmdeck.devices.fleet.task import UpkeepTask
 

@@ -21,12 +21,13 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from swarmdeck.core.checks import require_in_range, require_positive
+from swarmdeck.core.errors import SwarmdeckError
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.intp]
 
 
-class AssignmentError(ValueError):
+class AssignmentError(ValueError, SwarmdeckError):
     """Not enough eligible robots; the message names every robot left out and why."""
 
 

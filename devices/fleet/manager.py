@@ -33,10 +33,10 @@ from numpy.typing import ArrayLike, NDArray
 from swarmdeck.core.constants import SAFETY_DISTANCE
 from swarmdeck.core.kinematics import GritsBotParams, lookahead_points
 from swarmdeck.core.ports import SensedPoses
-from swarmdeck.devices.fleet.assigned import AssignedRobots
-from swarmdeck.devices.fleet.assignment import Assignment, AssignmentPolicy, assign
 from swarmdeck.devices.battery import BatteryParams, battery_step, recharge
 from swarmdeck.devices.chargers import ChargerLayout
+from swarmdeck.devices.fleet.assigned import AssignedRobots
+from swarmdeck.devices.fleet.assignment import Assignment, AssignmentPolicy, assign
 from swarmdeck.devices.fleet.docking import choose_slots, return_maneuver
 from swarmdeck.devices.fleet.maneuver import Maneuver, ManeuverParams
 from swarmdeck.devices.fleet.setup import ManeuverReport, check_start_poses, drive
@@ -185,7 +185,7 @@ class FleetManager:
         """
         if self.assignment is not None:
             raise RuntimeError("the fleet is already set up for an experiment: return it to the chargers first")
-        check = dict(safety_distance=self.fleet.safety_distance)
+        check: dict[str, Any] = dict(safety_distance=self.fleet.safety_distance)
         g = check_start_poses(goals, self.config.bounds, self.params, **check)
         a = assign(len(g), self.ids, self.charge, pose_age, status_age, positions=self.poses()[:, :2], goals=g,
                    policy=self.fleet.policy)

@@ -181,9 +181,9 @@ class Maneuver:
         p = np.asarray(poses, dtype=float)
         pos = self.params.position_tolerance if position is None else position
         head = self.params.heading_tolerance if heading is None else heading
-        pos = np.where(self.reverse, self.params.dock_tolerance if position is None else position, pos)
+        reach = np.where(self.reverse, self.params.dock_tolerance if position is None else position, pos)
         d = np.hypot(*(p[:, :2] - self.goals[:, :2]).T)
-        ok = (d <= pos + 1e-9) & (np.abs(wrap_angle(p[:, 2] - self.goals[:, 2])) <= head + 1e-9)
+        ok = (d <= reach + 1e-9) & (np.abs(wrap_angle(p[:, 2] - self.goals[:, 2])) <= head + 1e-9)
         return ok & (~self.reverse | self._docking)
 
     def nominal(self, poses: ArrayLike, t: float) -> FloatArray:

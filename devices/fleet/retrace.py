@@ -39,8 +39,8 @@ from swarmdeck.core.kinematics import GritsBotParams, lookahead_points, unicycle
 from swarmdeck.devices.chargers import ChargerLayout
 from swarmdeck.devices.fleet.maneuver import Maneuver, ManeuverParams
 from swarmdeck.devices.fleet.setup import drive
-from swarmdeck.devices.simulated_robots import SimulatedRobots
 from swarmdeck.devices.pipeline import barrier_filter
+from swarmdeck.devices.simulated_robots import SimulatedRobots
 from swarmdeck.devices.simulator import ArenaConfig, SimulatedArena
 
 FloatArray = NDArray[np.float64]

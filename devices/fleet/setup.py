@@ -21,6 +21,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from swarmdeck.core.bounds import Bounds
 from swarmdeck.core.constants import SAFETY_DISTANCE
+from swarmdeck.core.errors import SwarmdeckError
 from swarmdeck.core.kinematics import GritsBotParams, lookahead_points
 from swarmdeck.core.ports import CommandSink, PoseSource
 from swarmdeck.devices.fleet.maneuver import Maneuver
@@ -72,7 +73,7 @@ class ManeuverReport:
                 "not_at_pose": list(self.not_at_pose)}
 
 
-class SetupFailed(RuntimeError):
+class SetupFailed(RuntimeError, SwarmdeckError):
     """A setup or return did not finish in its time limit; the robots were stopped.
 
     Attributes:

@@ -90,7 +90,7 @@ class NetworkRobots:
         timeouts: LinkTimeouts = LinkTimeouts(),
         streamer: StreamerConfig = StreamerConfig(),
         **mqtt: object,
-    ) -> "NetworkRobots":
+    ) -> NetworkRobots:
         """Connect to ``url`` and wait up to ``wait_for_poses`` s for the first pose of every robot.
 
         ``ids`` (or ``n_robots`` for ids 0..N−1) fixes the robots to control; with neither,

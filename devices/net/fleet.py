@@ -21,14 +21,14 @@ from typing import IO
 import numpy as np
 from numpy.typing import ArrayLike
 
+from swarmdeck.core.kinematics import GritsBotParams
 from swarmdeck.core.service_thread import ServiceThread
 from swarmdeck.devices.chargers import ChargerLayout
 from swarmdeck.devices.net.firmware import BatteryParams, FirmwareParams, FleetState
-from swarmdeck.core.kinematics import GritsBotParams
-from swarmdeck.devices.net.mqtt_config import MqttConfig
 from swarmdeck.devices.net.link import MqttLink
-from swarmdeck.devices.net.wire import WireError, decode_command, encode_poses, encode_status
+from swarmdeck.devices.net.mqtt_config import MqttConfig
 from swarmdeck.devices.net.transport import Counters
+from swarmdeck.devices.net.wire import WireError, decode_command, encode_poses, encode_status
 
 
 class FleetNode:
@@ -78,7 +78,7 @@ class FleetNode:
         self._topic_rows: dict[str, int] = {}
         self.link = MqttLink(
             config.with_client_id(config.client_id or f"{self.name}"),
-            subscriptions=[config.command_topic(i) for i in self.state.ids],
+            subscriptions=[config.command_topic(int(i)) for i in self.state.ids],
             on_message=self._on_message,
             counters=self.counters,
             name=self.name,
@@ -136,7 +136,7 @@ class FleetNode:
         self.state.receive(rows, v, w, t, leds)
 
     # ---------------------------------------------------------------- loop
-    def start(self) -> "FleetNode":
+    def start(self) -> FleetNode:
         """Connect and run the firmware loop in a background thread."""
         self.link.start()
         self._service.start()
@@ -181,7 +181,7 @@ class FleetNode:
         with self._lock:
             volts, charging, ages = st.battery_voltage(), st.charging(), st.command_age()
         self._seq += 1
-        topics = [self.config.status_topic(i) for i in st.ids]
+        topics = [self.config.status_topic(int(i)) for i in st.ids]
         payloads = [
             encode_status(b, c, cmd_age=a, seq=self._seq, node=self.name, stamp=now)
             for b, c, a in zip(volts.tolist(), charging.tolist(), ages.tolist())

@@ -18,8 +18,8 @@ from collections.abc import Callable, Sequence
 
 import paho.mqtt.client as mqtt
 from paho.mqtt.enums import CallbackAPIVersion
-from paho.mqtt.properties import Properties
 from paho.mqtt.packettypes import PacketTypes
+from paho.mqtt.properties import Properties
 
 from swarmdeck.devices.net.mqtt_config import MqttConfig
 from swarmdeck.devices.net.transport import Counters
@@ -97,7 +97,7 @@ class MqttLink:
             self._expiry.MessageExpiryInterval = 1
 
     # ---------------------------------------------------------------- lifetime
-    def start(self) -> "MqttLink":
+    def start(self) -> MqttLink:
         """Start connecting in the background (returns at once)."""
         try:
             if self.config.protocol == "5":
@@ -202,7 +202,7 @@ class MqttLink:
         try:
             if sock is not None:
                 raw = getattr(sock, "_socket", sock)
-                raw.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
+                raw.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)  # type: ignore[union-attr]  # paho's socket, maybe wrapped (AttributeError is caught)
         except (OSError, AttributeError):  # e.g. a TLS or websocket wrapper without the option
             pass
 
@@ -232,6 +232,6 @@ class MqttLink:
         if self._handler is None:
             return
         try:
-            self._handler(message.topic, message.payload, self._clock())
+            self._handler(message.topic, message.payload, self._clock())  # type: ignore[arg-type]  # paho gives bytes (bytearray only when built by hand)
         except Exception as exc:  # noqa: BLE001 - a bad message must not kill the network thread
             self.counters.add("handler_errors", f"message on {message.topic!r} could not be handled: {exc!r}")

@@ -106,7 +106,7 @@ class MqttConfig:
         scheme = "mqtts" if self.tls else "mqtt"
         return f"{scheme}://{self.host}:{self.port}"
 
-    def with_client_id(self, client_id: str) -> "MqttConfig":
+    def with_client_id(self, client_id: str) -> MqttConfig:
         return replace(self, client_id=client_id)
 
 

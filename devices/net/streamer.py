@@ -36,7 +36,7 @@ from numpy.typing import ArrayLike, NDArray
 from swarmdeck.core.checks import require_positive
 from swarmdeck.core.constants import CONTROL_PERIOD
 from swarmdeck.core.service_thread import ServiceThread
-from swarmdeck.devices.net.transport import Counters, PoseFeed, RobotTransport, check_command
+from swarmdeck.devices.net.transport import Counters, ExcludesRobots, PoseFeed, RobotTransport, check_command
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.intp]
@@ -191,10 +191,9 @@ class CommandStreamer:
                 self.counters.add("pose_source_errors", f"pose source failed: {exc!r}: all robots stopped")
                 stale_pose = np.ones(k, dtype=bool)
         excluded = np.zeros(k, dtype=bool)
-        excl_fn = getattr(self.transport, "excluded", None)
-        if excl_fn is not None:
+        if isinstance(self.transport, ExcludesRobots):
             try:
-                excluded = np.isin(ids, np.asarray(excl_fn(), dtype=np.intp))
+                excluded = np.isin(ids, np.asarray(self.transport.excluded(), dtype=np.intp))
             except Exception as exc:  # noqa: BLE001
                 self.counters.add("transport_errors", f"transport.excluded() failed: {exc!r}")
         zero = stale_pose | stale_input | excluded
@@ -213,7 +212,7 @@ class CommandStreamer:
     def _account(self, now: float, ids: IntArray, stale_pose: NDArray[np.bool_], stale_input: NDArray[np.bool_],
                  excluded: NDArray[np.bool_], delivered: bool) -> None:
         labels = {
-            "stale_pose": ("pose older than %.2f s: commanded to zero" % self.config.pose_timeout, "poses fresh again"),
+            "stale_pose": (f"pose older than {self.config.pose_timeout:.2f} s: commanded to zero", "poses fresh again"),
             "stale_input": ("commands older than their timeout: commanded to zero", "commands fresh again"),
             "excluded": ("missing or duplicated: excluded from control (fixed obstacle at last known position)",
                          "answering again: back under control"),
@@ -244,10 +243,9 @@ class CommandStreamer:
     # ---------------------------------------------------------------- views
     def obstacles(self) -> FloatArray:
         """``(M, 2)`` last known centres of the excluded robots (fixed obstacles for the barrier), m."""
-        excl_fn = getattr(self.transport, "excluded", None)
-        if excl_fn is None or self.poses is None:
+        if not isinstance(self.transport, ExcludesRobots) or self.poses is None:
             return np.empty((0, 2))
-        ids = np.asarray(excl_fn(), dtype=np.intp)
+        ids = np.asarray(self.transport.excluded(), dtype=np.intp)
         if not len(ids):
             return np.empty((0, 2))
         poses, _ = self.poses.latest_poses().select(ids)
@@ -256,14 +254,14 @@ class CommandStreamer:
 
     def health(self) -> StreamerHealth:
         st = self.transport.status()
-        excl_fn = getattr(self.transport, "excluded", None)
-        excluded = np.asarray(excl_fn(), dtype=np.intp) if excl_fn is not None else np.empty(0, dtype=np.intp)
+        excluded = (np.asarray(self.transport.excluded(), dtype=np.intp) if isinstance(self.transport, ExcludesRobots)
+                    else np.empty(0, dtype=np.intp))
         counters = dict(st.counters)
         counters.update({f"streamer_{k}": v for k, v in self.counters.snapshot().items()})
         return StreamerHealth(st.connected, st.state, counters, tuple(self.events), excluded)
 
     # ---------------------------------------------------------------- background streaming
-    def start(self) -> "CommandStreamer":
+    def start(self) -> CommandStreamer:
         """Keep commands flowing from a background thread until :meth:`stop`.
 
         The thread ticks whenever no tick happened for ``period`` s, so a loop that calls

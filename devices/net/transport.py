@@ -54,7 +54,7 @@ class PoseSample:
     stamps: FloatArray
 
     @staticmethod
-    def empty() -> "PoseSample":
+    def empty() -> PoseSample:
         return PoseSample(np.empty(0, dtype=np.intp), np.empty((0, 3)), np.empty(0))
 
     def ages(self, now: float) -> FloatArray:
@@ -108,7 +108,7 @@ class RobotStatusTable:
         return volts, charging
 
     @staticmethod
-    def empty() -> "RobotStatusTable":
+    def empty() -> RobotStatusTable:
         return RobotStatusTable(np.empty(0, dtype=np.intp), np.empty(0), np.zeros(0, bool), np.empty(0), np.empty(0), ())
 
     def to_dict(self) -> dict:
@@ -178,6 +178,15 @@ class RobotTransport(Protocol):
 
     def close(self) -> None:
         """Stop the robots where possible and release the link."""
+
+
+@runtime_checkable
+class ExcludesRobots(Protocol):
+    """A transport that takes robots out of control (missing or duplicated in the poses): the streamer sends them
+    zero and the barrier keeps them as fixed obstacles."""
+
+    def excluded(self) -> ArrayLike:
+        """Ids of the robots excluded now."""
 
 
 @runtime_checkable

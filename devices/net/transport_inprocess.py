@@ -13,7 +13,6 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from swarmdeck.devices.battery import BatteryParams, battery_step
-from swarmdeck.devices.simulator import SimulatedArena
 from swarmdeck.devices.net.transport import (
     LINK_OK,
     Counters,
@@ -22,6 +21,7 @@ from swarmdeck.devices.net.transport import (
     TransportStatus,
     check_command,
 )
+from swarmdeck.devices.simulator import SimulatedArena
 
 
 class InProcessTransport:

@@ -19,9 +19,8 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from swarmdeck.devices.net.mqtt_config import MqttConfig
 from swarmdeck.devices.net.link import MqttLink
-from swarmdeck.devices.net.wire import WireError, decode_poses, decode_status, encode_commands
+from swarmdeck.devices.net.mqtt_config import MqttConfig
 from swarmdeck.devices.net.transport import (
     LINK_MISSING,
     LINK_OK,
@@ -33,6 +32,7 @@ from swarmdeck.devices.net.transport import (
     TransportStatus,
     check_command,
 )
+from swarmdeck.devices.net.wire import WireError, decode_poses, decode_status, encode_commands
 
 LINK_DUPLICATE = "duplicate"  # two nodes claim this id: commands reach both, so it is not controlled
 
@@ -136,11 +136,11 @@ class MqttTransport:
         )
 
     # ---------------------------------------------------------------- lifetime
-    def start(self) -> "MqttTransport":
+    def start(self) -> MqttTransport:
         self.link.start()
         return self
 
-    def __enter__(self) -> "MqttTransport":
+    def __enter__(self) -> MqttTransport:
         return self.start()
 
     def __exit__(self, *exc: object) -> None:
@@ -181,7 +181,7 @@ class MqttTransport:
             known = np.isin(sel, self._expected_arr)
             if not known.all():
                 self.counters.add("unknown_id", f"command for unknown robot id(s) {sel[~known].tolist()} not sent "
-                                  f"(this console controls {sorted(self.expected)})")
+                                  f"(this console controls {sorted(self.expected or ())})")
                 sel, v_out, w_out = sel[known], v_out[known], w_out[known]
                 led_out = None if led_out is None else led_out[known]
                 ok = False
@@ -213,7 +213,7 @@ class MqttTransport:
         if self.expected is None or rid in self.expected:
             return True
         self.counters.add("unknown_id", f"message about unknown robot id {rid} ignored "
-                          f"(this console controls {sorted(self.expected)})")
+                          f"(this console controls {sorted(self.expected or ())})")
         return False
 
     def _on_status(self, rid: int, payload: bytes, t: float) -> None:

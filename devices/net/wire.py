@@ -22,8 +22,10 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from swarmdeck.core.errors import SwarmdeckError
 
-class WireError(ValueError):
+
+class WireError(ValueError, SwarmdeckError):
     """A payload that does not follow the wire format."""
 
 

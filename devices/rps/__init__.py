@@ -15,10 +15,10 @@ import importlib
 import importlib.abc
 import importlib.machinery
 import sys
+from collections.abc import Iterator
+from contextlib import contextmanager
 from types import ModuleType
 from typing import Any
-from contextlib import contextmanager
-from collections.abc import Iterator
 
 MODULES = (
     "robotarium",
@@ -61,7 +61,7 @@ def provide_get_cmap() -> None:
         cmap = matplotlib.colormaps[name if name is not None else matplotlib.rcParams["image.cmap"]]
         return cmap if lut is None else cmap.resampled(lut)
 
-    cm.get_cmap = _facade_get_cmap
+    cm.get_cmap = _facade_get_cmap  # type: ignore[attr-defined]  # matplotlib 3.9 removed it; rps scripts call it
 
 
 class _FacadeLoader(importlib.abc.Loader):

@@ -62,8 +62,7 @@ def count_errors(errors: dict[str, Any], poses: NDArray[np.float64], wheels_over
 def call_at_scripts_end_text(errors: dict[str, Any], iterations: int, time_step: float) -> str:
     """What rps 1.x's ``call_at_scripts_end()`` prints, line for line."""
     lines = ["##### DEBUG OUTPUT #####",
-             "Your simulation will take approximately {0} real seconds when deployed on the Robotarium. \n".format(
-                 math.ceil(iterations * time_step))]
+             f"Your simulation will take approximately {math.ceil(iterations * time_step)} real seconds when deployed on the Robotarium. \n"]
     if "boundary" in errors or "collision" in errors or "actuator" in errors:
         if "boundary" in errors:
             lines.append("\t Simulation had {0} {1}\n".format(max(errors["boundary"].values()), errors["boundary_string"]))

@@ -28,7 +28,7 @@ def pyplot() -> Any:
     return plt
 
 
-def arena_figure(boundaries: tuple[float, float, float, float]) -> "tuple[Figure, Axes]":
+def arena_figure(boundaries: tuple[float, float, float, float]) -> tuple[Figure, Axes]:
     """A figure and axes showing the arena ``(x_min, y_min, width, height)`` in metres, as rps sets up."""
     plt = pyplot()
     from matplotlib.patches import Rectangle

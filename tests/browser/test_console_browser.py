@@ -49,8 +49,8 @@ def wait_until(cond, timeout: float = 15.0) -> None:
 
 @pytest.fixture(scope="module")
 def console():
-    from swarmdeck.console.web.app import ConsoleApp
     from swarmdeck.console.runtime.loop import ControlLoop, LoopConfig
+    from swarmdeck.console.web.app import ConsoleApp
 
     app = ConsoleApp(ControlLoop(LoopConfig(seed=11, n_robots=8)), port=0).start()
     yield app

@@ -5,7 +5,6 @@ from __future__ import annotations
 import os
 
 import pytest
-
 from test_console_browser import ARGS, CHROMIUM, VIEW, wait_until
 
 pytestmark = [

@@ -5,10 +5,10 @@ from __future__ import annotations
 import os
 
 import pytest
+from recording_synth import simulated_frames
 
 from swarmdeck.console.cli import main as cli
 from swarmdeck.console.recording.recorder import Recorder
-from recording_synth import simulated_frames
 
 CHROMIUM = "/usr/bin/chromium"
 pytestmark = [pytest.mark.browser,

@@ -5,11 +5,11 @@ import os
 
 import numpy as np
 import pytest
-
-from swarmdeck.console.web.export_html import export_html
-from swarmdeck.console.recording.recorder import Recorder
-from swarmdeck.console.recording.reader import open_recording
 from recording_synth import simulated_frames
+
+from swarmdeck.console.recording.reader import open_recording
+from swarmdeck.console.recording.recorder import Recorder
+from swarmdeck.console.web.export_html import export_html
 
 CHROMIUM = "/usr/bin/chromium"
 pytestmark = [pytest.mark.browser,
@@ -36,7 +36,7 @@ def test_exported_html_replays_the_recording_without_a_server(tmp_path):
         try:
             page = browser.new_page(viewport={"width": 1000, "height": 700})
             page.goto(html.as_uri())  # a file: no viser server anywhere
-            page.wait_for_function(f"() => window.__viserSceneTree && window.__viserSceneTree.getState()['/robots']",
+            page.wait_for_function("() => window.__viserSceneTree && window.__viserSceneTree.getState()['/robots']",
                                    polling="raf", timeout=30_000)
             first = np.asarray(page.evaluate(f"() => {POSITIONS}")).reshape(-1, 3)[:, :2]
             page.wait_for_function(f"() => {{ const p = {POSITIONS}; return Math.abs(p[0] - ({first[0, 0]})) > 1e-5 "

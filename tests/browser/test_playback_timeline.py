@@ -5,10 +5,10 @@ import os
 
 import numpy as np
 import pytest
-
-from swarmdeck.console.recording.recorder import Recorder
-from swarmdeck.console.recording.reader import open_recording
 from recording_synth import simulated_frames
+
+from swarmdeck.console.recording.reader import open_recording
+from swarmdeck.console.recording.recorder import Recorder
 
 CHROMIUM = "/usr/bin/chromium"
 pytestmark = [pytest.mark.browser,

@@ -4,15 +4,15 @@ from __future__ import annotations
 import numpy as np
 
 from swarmdeck.core.constants import AXLE_LENGTH, WHEEL_RADIUS
-from swarmdeck.devices.rps.utilities.transformations import *  # noqa: F401,F403 - rps's module re-exports them
-from swarmdeck.devices.rps.utilities.transformations import __all__ as _TRANSFORMATIONS
-from swarmdeck.devices.rps.utilities.transformations import create_si_to_uni_mapping as _si_to_uni_mapping
 from swarmdeck.devices.controllers import (
     HybridPoseController,
     at_pose,
     clf_unicycle_pose_controller,
     clf_unicycle_position_controller,
 )
+from swarmdeck.devices.rps.utilities.transformations import *  # noqa: F401,F403 - rps's module re-exports them  # noqa: F401,F403 - rps's module re-exports them
+from swarmdeck.devices.rps.utilities.transformations import __all__ as _TRANSFORMATIONS
+from swarmdeck.devices.rps.utilities.transformations import create_si_to_uni_mapping as _si_to_uni_mapping
 
 
 def create_si_position_controller(x_velocity_gain: float = 1, y_velocity_gain: float = 1, velocity_magnitude_limit: float = 0.15):

@@ -6,10 +6,12 @@ import numpy as np
 from swarmdeck.core.graphs import (
     complete_laplacian,
     cycle_laplacian,
-    delta_disk_neighbors as _delta_disk_neighbors,
     line_laplacian,
     random_connected_laplacian,
     topological_neighbors,
+)
+from swarmdeck.core.graphs import (
+    delta_disk_neighbors as _delta_disk_neighbors,
 )
 
 

@@ -3,7 +3,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from swarmdeck.devices.controllers import at_pose as _at_pose, at_position as _at_position
+from swarmdeck.devices.controllers import at_pose as _at_pose
+from swarmdeck.devices.controllers import at_position as _at_position
 from swarmdeck.devices.initial_conditions import random_initial_poses
 
 
@@ -13,13 +14,13 @@ def generate_initial_conditions(N: int, spacing: float = 0.3, width: float = 3, 
     return random_initial_poses(N, bounds, spacing=spacing + 0.01, min_separation=spacing, wall_margin=0.0).T
 
 
-def at_pose(states, poses, position_error: float = 0.05, rotation_error: float = 0.2) -> np.ndarray:
+def at_pose(states, poses, position_error: float = 0.05, rotation_error: float = 0.2) -> tuple[np.ndarray, ...]:
     """Indices of robots at their goal pose (as rps: ``np.nonzero(...)``)."""
     return np.nonzero(_at_pose(np.asarray(states, dtype=float).T, np.asarray(poses, dtype=float).T,
                                position_error, rotation_error))
 
 
-def at_position(states, points, position_error: float = 0.02) -> np.ndarray:
+def at_position(states, points, position_error: float = 0.02) -> tuple[np.ndarray, ...]:
     """Indices of robots at their goal position."""
     return np.nonzero(_at_position(np.asarray(states, dtype=float)[:2].T, np.asarray(points, dtype=float)[:2].T,
                                    position_error))
