@@ -47,11 +47,11 @@ CLI = harness.swarmdeck_cli()
 
 
 def pipeline(n_jobs: int, workdir: Path) -> list[dict]:
-    from swarmdeck.console.jobs.executors import LocalPoolExecutor
     from swarmdeck.console.portal.runner import ArenaRunner, ArenaSettings
     from swarmdeck.console.portal.service import PortalConfig, PortalService
     from swarmdeck.console.portal.states import FINAL, JobState
     from swarmdeck.console.portal.workers import VerificationWorkers
+    from swarmdeck.console.sandbox.executors import LocalPoolExecutor
 
     service = PortalService(PortalConfig(data=workdir / "pipeline"))
     user, _ = service.accounts.add_user("bench", "researcher")

@@ -35,11 +35,11 @@ from pathlib import Path  # noqa: E402
 
 import harness  # first: pins BLAS/OpenMP to one thread, before numpy loads
 
-from swarmdeck.console.jobs import sandbox  # noqa: E402
-from swarmdeck.console.jobs.bundle import ScriptBundle  # noqa: E402
-from swarmdeck.console.jobs.confinement import JailConfig, SandboxLimits, choose_jail  # noqa: E402
-from swarmdeck.console.jobs.plant import ArenaPlant  # noqa: E402
-from swarmdeck.console.jobs.zygote import shared_fork_server  # noqa: E402
+from swarmdeck.console.sandbox import run as sandbox  # noqa: E402
+from swarmdeck.console.sandbox.bundle import ScriptBundle  # noqa: E402
+from swarmdeck.console.sandbox.confinement import JailConfig, SandboxLimits, choose_jail  # noqa: E402
+from swarmdeck.console.sandbox.plant import ArenaPlant  # noqa: E402
+from swarmdeck.console.sandbox.zygote import shared_fork_server  # noqa: E402
 from swarmdeck.devices.arena import Arena  # noqa: E402
 from swarmdeck.devices.simulator import ArenaConfig  # noqa: E402
 

@@ -39,12 +39,12 @@ from pathlib import Path  # noqa: E402
 
 import harness  # first: pins BLAS/OpenMP to one thread, before numpy loads
 
-from swarmdeck.console.jobs.confinement import JailConfig, choose_jail  # noqa: E402
-from swarmdeck.console.jobs.executors import LocalPoolExecutor, RayExecutor  # noqa: E402
-from swarmdeck.console.jobs.plant import ArenaPlant  # noqa: E402
-from swarmdeck.console.jobs.sandbox import run_sandboxed  # noqa: E402
-from swarmdeck.console.jobs.verification import VerificationConfig, verify  # noqa: E402
-from swarmdeck.console.jobs.zygote import shared_fork_server  # noqa: E402
+from swarmdeck.console.sandbox.confinement import JailConfig, choose_jail  # noqa: E402
+from swarmdeck.console.sandbox.executors import LocalPoolExecutor, RayExecutor  # noqa: E402
+from swarmdeck.console.sandbox.plant import ArenaPlant  # noqa: E402
+from swarmdeck.console.sandbox.run import run_sandboxed  # noqa: E402
+from swarmdeck.console.sandbox.verification import VerificationConfig, verify  # noqa: E402
+from swarmdeck.console.sandbox.zygote import shared_fork_server  # noqa: E402
 from swarmdeck.devices.arena import Arena  # noqa: E402
 from swarmdeck.devices.runner import run_experiment  # noqa: E402
 from swarmdeck.devices.simulator import ArenaConfig  # noqa: E402

@@ -25,7 +25,7 @@ and so does the experiment API — ``devices.arena.Arena`` drives any ports thro
 ``devices.stepped.SteppedRobots`` (``poses``, ``time``, ``step(v, w)`` one period at a time). A
 simulation says how much simulated time a reading is at (``SensedPoses.time``); robots in the real
 world leave it None and the adapter paces them to the period on the monotonic clock. A sink behind
-a trust boundary (the sandboxed script's robots, ``console/jobs/child.py``) is a
+a trust boundary (the sandboxed script's robots, ``console/sandbox/child.py``) is a
 :class:`NominalSink`: it takes the nominal look-ahead velocities and the far side certifies them.
 
 The wire below the ports keeps its own name: ``devices.net.transport.RobotTransport`` carries

@@ -445,7 +445,7 @@ class Arena:
         Robots whose nominal command is NaN or inf are stopped for this step and the
         event counted. If the safety filter fails, every robot is stopped. Robots behind a trust
         boundary (a :class:`~swarmdeck.core.ports.NominalSink`: the sandboxed child's robots,
-        console/jobs/child.py) get the nominal ``(N, 2)`` as it is instead: the trusted side across the
+        console/sandbox/child.py) get the nominal ``(N, 2)`` as it is instead: the trusted side across the
         pipe certifies it.
         """
         if self.duration is not None and self.time >= self.duration - 1e-9:

@@ -7,8 +7,8 @@ from mqtt_broker import wait_until
 from portal_fixtures import SPIN, wait_for_state
 
 from swarmdeck.console.cli import main
-from swarmdeck.console.jobs.confinement import probe
 from swarmdeck.console.portal.runner import ArenaRunner, ArenaSettings
+from swarmdeck.console.sandbox.confinement import probe
 
 pytestmark = pytest.mark.skipif(probe() is not None, reason=f"no confinement here: {probe()}")
 

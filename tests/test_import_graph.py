@@ -109,7 +109,7 @@ def test_lazy_and_relative_imports_are_seen(tmp_path: Path) -> None:
 #: up into the viser console (web) for a colour, and the picture reaches into no renderer.
 CONSOLE_FORBIDDEN: dict[str, set[str]] = {
     "recording": {"web"},
-    "picture": {"web", "recording", "portal", "cli", "jobs"},
+    "picture": {"web", "recording", "portal", "cli", "sandbox"},
 }
 
 

@@ -5,12 +5,12 @@ import textwrap
 
 import pytest
 
-from swarmdeck.console.jobs.bundle import MAX_BYTES, ScriptBundle
-from swarmdeck.console.jobs.confinement import probe
-from swarmdeck.console.jobs.executors import SerialExecutor
-from swarmdeck.console.jobs.plant import ArenaPlant
-from swarmdeck.console.jobs.sandbox import run_sandboxed
-from swarmdeck.console.jobs.verification import VerificationConfig, verify
+from swarmdeck.console.sandbox.bundle import MAX_BYTES, ScriptBundle
+from swarmdeck.console.sandbox.confinement import probe
+from swarmdeck.console.sandbox.executors import SerialExecutor
+from swarmdeck.console.sandbox.plant import ArenaPlant
+from swarmdeck.console.sandbox.run import run_sandboxed
+from swarmdeck.console.sandbox.verification import VerificationConfig, verify
 from swarmdeck.devices.arena import Arena
 from swarmdeck.devices.simulator import ArenaConfig
 

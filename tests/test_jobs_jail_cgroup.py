@@ -6,8 +6,8 @@ import os
 import pytest
 from jail_fixtures import plant
 
-from swarmdeck.console.jobs import cgroups
-from swarmdeck.console.jobs.confinement import ConfinementUnavailable, SandboxLimits
+from swarmdeck.console.sandbox import cgroups
+from swarmdeck.console.sandbox.confinement import ConfinementUnavailable, SandboxLimits
 
 needs_cgroup = pytest.mark.skipif(cgroups.probe() is not None, reason=f"no cgroup here: {cgroups.probe()}")
 

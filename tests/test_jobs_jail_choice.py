@@ -5,18 +5,18 @@ import textwrap
 
 import pytest
 
-from swarmdeck.console.jobs.confinement import (
+from swarmdeck.console.sandbox.confinement import (
     ConfinementUnavailable,
     JailConfig,
     choose_jail,
     probe_bwrap,
     probe_unshare,
 )
-from swarmdeck.console.jobs.executors import SerialExecutor
-from swarmdeck.console.jobs.plant import ArenaPlant
-from swarmdeck.console.jobs.sandbox import run_sandboxed
-from swarmdeck.console.jobs.verification import VerificationConfig, verify
-from swarmdeck.console.jobs.zygote import shared_fork_server
+from swarmdeck.console.sandbox.executors import SerialExecutor
+from swarmdeck.console.sandbox.plant import ArenaPlant
+from swarmdeck.console.sandbox.run import run_sandboxed
+from swarmdeck.console.sandbox.verification import VerificationConfig, verify
+from swarmdeck.console.sandbox.zygote import shared_fork_server
 from swarmdeck.devices.arena import Arena
 from swarmdeck.devices.simulator import ArenaConfig
 

@@ -8,8 +8,8 @@ import textwrap
 
 import pytest
 
-from swarmdeck.console.jobs import keyrings, uids
-from swarmdeck.console.jobs.confinement import JAILS, processes_of
+from swarmdeck.console.sandbox import keyrings, uids
+from swarmdeck.console.sandbox.confinement import JAILS, processes_of
 
 needs_root = pytest.mark.skipif(os.geteuid() != 0, reason="per-run uids and keyring clearing need root")
 
@@ -42,10 +42,10 @@ def experiment(arena):
 PLANTED = """
 import json, sys
 from pathlib import Path
-from swarmdeck.console.jobs import keyrings
-from swarmdeck.console.jobs.confinement import JailConfig
-from swarmdeck.console.jobs.plant import ArenaPlant
-from swarmdeck.console.jobs.sandbox import run_sandboxed
+from swarmdeck.console.sandbox import keyrings
+from swarmdeck.console.sandbox.confinement import JailConfig
+from swarmdeck.console.sandbox.plant import ArenaPlant
+from swarmdeck.console.sandbox.run import run_sandboxed
 from swarmdeck.devices.arena import Arena
 import ctypes
 keyrings.join_session_keyring()

@@ -1,7 +1,7 @@
 """Scratch is a tmpfs of the run's own in both jails, limited in bytes and in files: filling it is ENOSPC for
 the script, and nothing lands on the host's disk."""
 
-from swarmdeck.console.jobs.confinement import SandboxLimits
+from swarmdeck.console.sandbox.confinement import SandboxLimits
 
 FILL_BYTES = """
 import errno, os

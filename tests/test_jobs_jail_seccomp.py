@@ -6,7 +6,7 @@ import platform
 
 import pytest
 
-from swarmdeck.console.jobs.seccomp import filter_program
+from swarmdeck.console.sandbox.seccomp import filter_program
 
 pytestmark = pytest.mark.skipif(platform.machine() != "x86_64", reason="system call numbers below are x86_64's")
 

@@ -7,7 +7,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from swarmdeck.console.jobs.protocol import (
+from swarmdeck.console.sandbox.protocol import (
     COMMANDS,
     MAX_FRAME,
     MESSAGE,

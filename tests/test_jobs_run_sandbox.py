@@ -6,9 +6,9 @@ import numpy as np
 import pytest
 
 from swarmdeck.console.cli import main
-from swarmdeck.console.jobs.confinement import probe
-from swarmdeck.console.jobs.plant import ArenaPlant
-from swarmdeck.console.jobs.sandbox import run_sandboxed
+from swarmdeck.console.sandbox.confinement import probe
+from swarmdeck.console.sandbox.plant import ArenaPlant
+from swarmdeck.console.sandbox.run import run_sandboxed
 from swarmdeck.devices.arena import Arena
 from swarmdeck.devices.runner import run_experiment
 from swarmdeck.devices.simulator import ArenaConfig

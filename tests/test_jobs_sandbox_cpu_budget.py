@@ -5,10 +5,10 @@ import textwrap
 
 import pytest
 
-from swarmdeck.console.jobs import cgroups
-from swarmdeck.console.jobs.confinement import SandboxLimits, probe
-from swarmdeck.console.jobs.plant import ArenaPlant
-from swarmdeck.console.jobs.sandbox import run_sandboxed
+from swarmdeck.console.sandbox import cgroups
+from swarmdeck.console.sandbox.confinement import SandboxLimits, probe
+from swarmdeck.console.sandbox.plant import ArenaPlant
+from swarmdeck.console.sandbox.run import run_sandboxed
 from swarmdeck.devices.arena import Arena
 
 pytestmark = pytest.mark.skipif(probe() is not None or cgroups.probe() is not None,

@@ -6,9 +6,9 @@ import textwrap
 import numpy as np
 import pytest
 
-from swarmdeck.console.jobs.confinement import SandboxLimits, probe
-from swarmdeck.console.jobs.plant import ArenaPlant
-from swarmdeck.console.jobs.sandbox import run_sandboxed
+from swarmdeck.console.sandbox.confinement import SandboxLimits, probe
+from swarmdeck.console.sandbox.plant import ArenaPlant
+from swarmdeck.console.sandbox.run import run_sandboxed
 from swarmdeck.devices.arena import Arena
 from swarmdeck.devices.simulator import ArenaConfig
 

@@ -7,8 +7,8 @@ import sys
 import pytest
 from script_env_fixtures import USES_THE_ENV
 
-from swarmdeck.console.jobs.import_policy import refusal
-from swarmdeck.console.jobs.script_env import PROVIDED, ScriptEnv, create, format_listing, listing
+from swarmdeck.console.sandbox.import_policy import refusal
+from swarmdeck.console.sandbox.script_env import PROVIDED, ScriptEnv, create, format_listing, listing
 
 
 def test_a_script_imports_the_environments_packages(jail_run, env):
@@ -75,8 +75,8 @@ def test_create_makes_an_environment_that_follows_the_rule(tmp_path):
 
 
 def test_an_environment_gone_after_start_is_an_infrastructure_error_not_the_scripts(tmp_path):
-    from swarmdeck.console.jobs.confinement import ConfinementUnavailable, JailConfig
-    from swarmdeck.console.jobs.sandbox import run_sandboxed
+    from swarmdeck.console.sandbox.confinement import ConfinementUnavailable, JailConfig
+    from swarmdeck.console.sandbox.run import run_sandboxed
 
     script = tmp_path / "s.py"
     script.write_text(USES_THE_ENV)

@@ -5,9 +5,9 @@ import textwrap
 
 import pytest
 
-from swarmdeck.console.jobs.confinement import probe
-from swarmdeck.console.jobs.executors import SerialExecutor
-from swarmdeck.console.jobs.verification import REJECTED, VerificationConfig, verify
+from swarmdeck.console.sandbox.confinement import probe
+from swarmdeck.console.sandbox.executors import SerialExecutor
+from swarmdeck.console.sandbox.verification import REJECTED, VerificationConfig, verify
 
 pytestmark = pytest.mark.skipif(probe() is not None, reason=f"no confinement here: {probe()}")
 

@@ -3,9 +3,9 @@ import threading
 
 import pytest
 
-from swarmdeck.console.jobs.confinement import probe
-from swarmdeck.console.jobs.executors import SerialExecutor
-from swarmdeck.console.jobs.verification import VerificationCancelled, VerificationConfig, verify
+from swarmdeck.console.sandbox.confinement import probe
+from swarmdeck.console.sandbox.executors import SerialExecutor
+from swarmdeck.console.sandbox.verification import VerificationCancelled, VerificationConfig, verify
 
 pytestmark = pytest.mark.skipif(probe() is not None, reason=f"no confinement here: {probe()}")
 

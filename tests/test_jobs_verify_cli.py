@@ -5,10 +5,10 @@ from pathlib import Path
 import jsonschema
 import pytest
 
-import swarmdeck.console.jobs as jobs
+import swarmdeck.console.sandbox as jobs
 from swarmdeck.console.cli import main
-from swarmdeck.console.jobs import confinement
-from swarmdeck.console.jobs.confinement import ConfinementUnavailable, probe
+from swarmdeck.console.sandbox import confinement
+from swarmdeck.console.sandbox.confinement import ConfinementUnavailable, probe
 
 SCHEMA = json.loads((Path(jobs.__file__).parent / "verification_report.schema.json").read_text())
 SPIN = "import numpy as np\ndef experiment(arena):\n    while True:\n        arena.set_unicycle(np.zeros(arena.n), np.ones(arena.n))\n        arena.step()\n"
@@ -80,8 +80,8 @@ def test_without_confinement_untrusted_code_is_refused_unless_trusted(tmp_path, 
         assert main(args(script)) == 2
         err = capsys.readouterr().err
         assert "cannot confine untrusted code" in err and "--trusted" in err
-        from swarmdeck.console.jobs.executors import SerialExecutor
-        from swarmdeck.console.jobs.verification import VerificationConfig, verify
+        from swarmdeck.console.sandbox.executors import SerialExecutor
+        from swarmdeck.console.sandbox.verification import VerificationConfig, verify
 
         with pytest.raises(ConfinementUnavailable):
             verify([script], VerificationConfig(n_robots=2, duration=0.5, runs=1), SerialExecutor())

@@ -4,9 +4,9 @@ import textwrap
 
 import pytest
 
-from swarmdeck.console.jobs.confinement import probe
-from swarmdeck.console.jobs.executors import LocalPoolExecutor, RayExecutor, SerialExecutor
-from swarmdeck.console.jobs.verification import VerificationConfig, verify
+from swarmdeck.console.sandbox.confinement import probe
+from swarmdeck.console.sandbox.executors import LocalPoolExecutor, RayExecutor, SerialExecutor
+from swarmdeck.console.sandbox.verification import VerificationConfig, verify
 
 pytestmark = pytest.mark.skipif(probe() is not None, reason=f"no confinement here: {probe()}")
 

@@ -8,11 +8,11 @@ import numpy as np
 import pytest
 from portal_fixtures import wait_for_state
 
-from swarmdeck.console.jobs.confinement import probe
-from swarmdeck.console.jobs.executors import SerialExecutor
-from swarmdeck.console.jobs.start_poses import MIN_SEPARATION, arena_start, check_initial_poses, perturb
-from swarmdeck.console.jobs.verification import ACCEPTED, BYPASS, REJECTED, VerificationConfig, verify
 from swarmdeck.console.portal.workers import VerificationWorkers
+from swarmdeck.console.sandbox.confinement import probe
+from swarmdeck.console.sandbox.executors import SerialExecutor
+from swarmdeck.console.sandbox.start_poses import MIN_SEPARATION, arena_start, check_initial_poses, perturb
+from swarmdeck.console.sandbox.verification import ACCEPTED, BYPASS, REJECTED, VerificationConfig, verify
 from swarmdeck.core.kinematics import wrap_angle
 from swarmdeck.devices.fleet.setup import ACCEPT_HEADING, ACCEPT_POSITION
 

@@ -3,9 +3,9 @@ import textwrap
 
 import pytest
 
-from swarmdeck.console.jobs.confinement import SandboxLimits, probe
-from swarmdeck.console.jobs.executors import SerialExecutor
-from swarmdeck.console.jobs.verification import ACCEPTED, BYPASS, REJECTED, VerificationConfig, verify
+from swarmdeck.console.sandbox.confinement import SandboxLimits, probe
+from swarmdeck.console.sandbox.executors import SerialExecutor
+from swarmdeck.console.sandbox.verification import ACCEPTED, BYPASS, REJECTED, VerificationConfig, verify
 
 pytestmark = pytest.mark.skipif(probe() is not None, reason=f"no confinement here: {probe()}")
 

@@ -10,9 +10,9 @@ import pytest
 from mqtt_broker import wait_until
 from portal_fixtures import SPIN, portal, wait_for_state  # noqa: F401
 
-from swarmdeck.console.jobs.confinement import probe
 from swarmdeck.console.portal.runner import ArenaRunner, ArenaSettings
 from swarmdeck.console.recording.reader import open_recording
+from swarmdeck.console.sandbox.confinement import probe
 
 pytestmark = pytest.mark.skipif(probe() is not None, reason=f"no confinement here: {probe()}")
 

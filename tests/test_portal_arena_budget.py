@@ -8,9 +8,9 @@ import pytest
 from mqtt_broker import wait_until
 from portal_fixtures import wait_for_state
 
-from swarmdeck.console.jobs.confinement import probe
 from swarmdeck.console.portal.runner import ArenaRunner, ArenaSettings
 from swarmdeck.console.portal.service import PortalConfig
+from swarmdeck.console.sandbox.confinement import probe
 
 HICCUP = ("import time\n"  # two ticks late (80 ms > 33 ms), the rest on time
           "def experiment(arena):\n"

@@ -12,12 +12,12 @@ from mqtt_broker import wait_until
 from portal_fixtures import wait_for_state
 
 from swarmdeck.console.cli._client import job_line
-from swarmdeck.console.jobs.confinement import probe
-from swarmdeck.console.jobs.executors import SerialExecutor
 from swarmdeck.console.portal.runner import ArenaRunner, ArenaSettings
 from swarmdeck.console.portal.service import BYPASS_VERDICT, BYPASS_WAIT
 from swarmdeck.console.portal.workers import VerificationWorkers
 from swarmdeck.console.recording.reader import open_recording
+from swarmdeck.console.sandbox.confinement import probe
+from swarmdeck.console.sandbox.executors import SerialExecutor
 from swarmdeck.core.kinematics import lookahead_points
 from swarmdeck.safety.guard import GuardConfig
 

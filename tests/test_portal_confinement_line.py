@@ -4,8 +4,8 @@ import os
 
 from portal_fixtures import ServerProcess
 
-from swarmdeck.console.jobs import cgroups
-from swarmdeck.console.jobs.confinement import JailConfig, choose_jail, describe
+from swarmdeck.console.sandbox import cgroups
+from swarmdeck.console.sandbox.confinement import JailConfig, choose_jail, describe
 
 
 def test_describe_names_the_jail_the_filter_and_the_cgroup_version():

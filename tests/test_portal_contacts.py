@@ -8,10 +8,10 @@ import pytest
 from portal_fixtures import sign_in, wait_for_state
 
 from swarmdeck.console.cli._client import job_line
-from swarmdeck.console.jobs.confinement import probe
 from swarmdeck.console.portal.runner import ArenaRunner, ArenaSettings
 from swarmdeck.console.portal.service import BYPASS_VERDICT
 from swarmdeck.console.recording.reader import open_recording
+from swarmdeck.console.sandbox.confinement import probe
 
 pytestmark = pytest.mark.skipif(probe() is not None, reason=f"no confinement here: {probe()}")
 

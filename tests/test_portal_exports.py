@@ -13,10 +13,10 @@ from portal_fixtures import SPIN, manifest, wait_for_state
 from recording_synth import write_synthetic_session
 
 from swarmdeck.console.cli import main
-from swarmdeck.console.jobs.confinement import probe
 from swarmdeck.console.portal.exports import JobExports
 from swarmdeck.console.portal.runner import ArenaRunner, ArenaSettings
 from swarmdeck.console.portal.service import PortalConfig, PortalService
+from swarmdeck.console.sandbox.confinement import probe
 
 confined = pytest.mark.skipif(probe() is not None, reason=f"no confinement here: {probe()}")
 

@@ -10,8 +10,8 @@ import httpx
 import pytest
 from portal_fixtures import SPIN, add_user, manifest, start_server, wait_for_state
 
-from swarmdeck.console.jobs.confinement import probe
 from swarmdeck.console.portal.db import Database
+from swarmdeck.console.sandbox.confinement import probe
 
 pytestmark = pytest.mark.skipif(probe() is not None, reason=f"no confinement here: {probe()}")
 

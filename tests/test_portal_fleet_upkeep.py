@@ -10,10 +10,10 @@ import pytest
 from mqtt_broker import wait_until
 from portal_fixtures import sign_in, wait_for_state
 
-from swarmdeck.console.jobs.confinement import probe
 from swarmdeck.console.portal.runner import ArenaRunner, ArenaSettings
 from swarmdeck.console.recording.reader import open_recording
 from swarmdeck.console.runtime.fleet_upkeep import UpkeepConfig
+from swarmdeck.console.sandbox.confinement import probe
 from swarmdeck.devices.validation import colliding_pairs
 
 pytestmark = pytest.mark.skipif(probe() is not None, reason=f"no confinement here: {probe()}")

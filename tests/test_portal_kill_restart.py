@@ -11,9 +11,9 @@ import pytest
 from mqtt_broker import wait_until
 from portal_fixtures import SPIN, add_user, manifest, start_server, wait_for_state
 
-from swarmdeck.console.jobs.confinement import probe
 from swarmdeck.console.portal.db import Database
 from swarmdeck.console.recording.reader import open_recording
+from swarmdeck.console.sandbox.confinement import probe
 
 pytestmark = pytest.mark.skipif(probe() is not None, reason=f"no confinement here: {probe()}")
 

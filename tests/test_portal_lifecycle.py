@@ -8,8 +8,8 @@ import pytest
 from portal_fixtures import SPIN, add_user, start_server
 
 from swarmdeck.console.cli import main
-from swarmdeck.console.jobs.confinement import probe
 from swarmdeck.console.recording.reader import open_recording
+from swarmdeck.console.sandbox.confinement import probe
 
 pytestmark = pytest.mark.skipif(probe() is not None, reason=f"no confinement here: {probe()}")
 

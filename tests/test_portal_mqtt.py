@@ -13,9 +13,9 @@ import pytest
 from mqtt_broker import wait_until
 from portal_fixtures import wait_for_state
 
-from swarmdeck.console.jobs.confinement import probe
 from swarmdeck.console.portal.runner import ArenaRunner, ArenaSettings
 from swarmdeck.console.recording.reader import open_recording
+from swarmdeck.console.sandbox.confinement import probe
 from swarmdeck.devices.chargers import ChargerLayout
 from swarmdeck.devices.net.mqtt_config import parse_broker_url
 from swarmdeck.devices.net.transport_mqtt import MqttTransport

@@ -9,8 +9,8 @@ import pytest
 from mqtt_broker import wait_until
 from portal_fixtures import sign_in
 
-from swarmdeck.console.jobs.confinement import probe
 from swarmdeck.console.portal.runner import ArenaRunner, ArenaSettings
+from swarmdeck.console.sandbox.confinement import probe
 
 
 def _to(portal, jid, *states, **columns):  # noqa: F811

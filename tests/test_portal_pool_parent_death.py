@@ -11,7 +11,7 @@ import pytest
 from mqtt_broker import wait_until
 from portal_fixtures import add_user, manifest, start_server, wait_for_state
 
-from swarmdeck.console.jobs.confinement import probe
+from swarmdeck.console.sandbox.confinement import probe
 
 pytestmark = pytest.mark.skipif(probe() is not None, reason=f"no confinement here: {probe()}")
 
@@ -59,7 +59,7 @@ def test_the_verification_pool_ends_with_a_killed_server(tmp_path):
             workers = [p for p, cmd in children(server.proc.pid).items() if "multiprocessing" in cmd
                        and "resource_tracker" not in cmd]
             for worker in workers:
-                zygotes = [p for p, cmd in children(worker).items() if "swarmdeck.console.jobs.zygote" in cmd]
+                zygotes = [p for p, cmd in children(worker).items() if "swarmdeck.console.sandbox.zygote" in cmd]
                 if zygotes:
                     return worker, zygotes[0]
             return None

@@ -4,8 +4,8 @@ researchers and operators are not held up by one researcher's limit."""
 import pytest
 from portal_fixtures import make_portal, sign_in
 
-from swarmdeck.console.jobs.confinement import probe
 from swarmdeck.console.portal.quotas import Quotas
+from swarmdeck.console.sandbox.confinement import probe
 
 
 def test_the_26th_submission_in_a_row_is_refused_naming_the_limit(portal):
@@ -87,8 +87,8 @@ def test_a_nonsense_cpu_figure_is_not_recorded(portal, bad):
 def test_the_verification_worker_charges_each_jobs_cpu_to_its_owner(portal):
     from portal_fixtures import wait_for_state
 
-    from swarmdeck.console.jobs.executors import LocalPoolExecutor
     from swarmdeck.console.portal.workers import VerificationWorkers
+    from swarmdeck.console.sandbox.executors import LocalPoolExecutor
 
     workers = VerificationWorkers(portal.service, LocalPoolExecutor(1), poll_s=0.2).start()
     try:

@@ -6,8 +6,8 @@ next job at once: its set-up began from wherever the robots had stopped. tests/t
 about one run in ten.)"""
 import pytest
 
-from swarmdeck.console.jobs.confinement import probe
 from swarmdeck.console.portal.runner import ArenaRunner, ArenaSettings
+from swarmdeck.console.sandbox.confinement import probe
 
 pytestmark = pytest.mark.skipif(probe() is not None, reason=f"no confinement here: {probe()}")
 

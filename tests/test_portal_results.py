@@ -11,9 +11,9 @@ import pytest
 from mqtt_broker import wait_until
 from portal_fixtures import CLI, sign_in, wait_for_state
 
-from swarmdeck.console.jobs.confinement import probe
 from swarmdeck.console.portal.runner import ArenaRunner, ArenaSettings
 from swarmdeck.console.recording.reader import open_recording
+from swarmdeck.console.sandbox.confinement import probe
 
 pytestmark = pytest.mark.skipif(probe() is not None, reason=f"no confinement here: {probe()}")
 
@@ -95,8 +95,8 @@ def test_the_results_say_whether_the_barrier_stepped_in_and_how_close_robots_cam
 
 
 def test_submit_wait_ends_with_the_results(portal, tmp_path):  # noqa: F811
-    from swarmdeck.console.jobs.executors import SerialExecutor
     from swarmdeck.console.portal.workers import VerificationWorkers
+    from swarmdeck.console.sandbox.executors import SerialExecutor
 
     runner = runner_for(portal, fast=True, fleet=4, seed=5)
     workers = VerificationWorkers(portal.service, SerialExecutor(), poll_s=0.2).start()

@@ -9,7 +9,7 @@ import pytest
 from portal_fixtures import CLI, CSRF, add_user, start_server, wait_for_state
 from script_env_fixtures import USES_THE_ENV
 
-from swarmdeck.console.jobs.import_policy import refusal
+from swarmdeck.console.sandbox.import_policy import refusal
 
 
 def cli(*args, timeout=120):

@@ -3,9 +3,9 @@ report; a good one is approved and queued for the arena at once, or waits for an
 import pytest
 from portal_fixtures import CRASH, SPIN, wait_for_state
 
-from swarmdeck.console.jobs.confinement import probe
-from swarmdeck.console.jobs.executors import SerialExecutor
 from swarmdeck.console.portal.workers import VerificationWorkers
+from swarmdeck.console.sandbox.confinement import probe
+from swarmdeck.console.sandbox.executors import SerialExecutor
 
 pytestmark = pytest.mark.skipif(probe() is not None, reason=f"no confinement here: {probe()}")
 

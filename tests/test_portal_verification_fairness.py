@@ -7,9 +7,9 @@ import pytest
 from portal_fixtures import SPIN, wait_for_state
 from test_jobs_verify_budget import FIVE_HUNDRED, STALE_FOREVER
 
-from swarmdeck.console.jobs.confinement import probe
-from swarmdeck.console.jobs.executors import SerialExecutor
 from swarmdeck.console.portal.workers import VerificationWorkers
+from swarmdeck.console.sandbox.confinement import probe
+from swarmdeck.console.sandbox.executors import SerialExecutor
 
 confined = pytest.mark.skipif(probe() is not None, reason=f"no confinement here: {probe()}")
 

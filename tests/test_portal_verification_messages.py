@@ -10,9 +10,9 @@ import pytest
 from portal_fixtures import make_portal, sign_in, wait_for_state
 
 from swarmdeck.console.cli._client import job_line
-from swarmdeck.console.jobs.confinement import probe
-from swarmdeck.console.jobs.executors import SerialExecutor
 from swarmdeck.console.portal.workers import VerificationWorkers
+from swarmdeck.console.sandbox.confinement import probe
+from swarmdeck.console.sandbox.executors import SerialExecutor
 
 BAD = "import numpy as np\ndef experiment(arena):\n    x = = 1\n"
 CRASH = "def experiment(arena):\n    arena.step()\n    raise KeyError('oops')\n"

@@ -3,7 +3,7 @@
 ``swarmdeck env`` lists it: with ``--script-env PATH`` that environment; with ``--server URL`` (or
 ``$SWARMDECK_SERVER``) the portal's (``GET /api/env``); otherwise swarmdeck's own environment.
 ``swarmdeck env create PATH [--packages P ...]`` makes one that follows the rule
-(:mod:`swarmdeck.console.jobs.script_env`), for ``--script-env PATH`` of ``swarmdeck server``,
+(:mod:`swarmdeck.console.sandbox.script_env`), for ``--script-env PATH`` of ``swarmdeck server``,
 ``swarmdeck verify`` and ``swarmdeck run --sandbox``.
 """
 from __future__ import annotations
@@ -32,7 +32,7 @@ def checked_script_env(path: str | None) -> str | None:
     """``path`` when it names a script environment that follows the rule; UsageError saying what is wrong."""
     if path is None:
         return None
-    from swarmdeck.console.jobs.script_env import ScriptEnv
+    from swarmdeck.console.sandbox.script_env import ScriptEnv
 
     try:
         return str(ScriptEnv.open(path).root)
@@ -58,7 +58,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def main(args: argparse.Namespace) -> int:
-    from swarmdeck.console.jobs.script_env import ScriptEnv, create, format_listing, listing
+    from swarmdeck.console.sandbox.script_env import ScriptEnv, create, format_listing, listing
 
     if args.env_action == "create":
         try:

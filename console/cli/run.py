@@ -72,9 +72,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def _run_sandboxed(args: argparse.Namespace) -> int:
     from swarmdeck.console.cli.env import checked_script_env
-    from swarmdeck.console.jobs.confinement import ConfinementUnavailable, JailConfig
-    from swarmdeck.console.jobs.plant import ArenaPlant
-    from swarmdeck.console.jobs.sandbox import run_sandboxed
+    from swarmdeck.console.sandbox.confinement import ConfinementUnavailable, JailConfig
+    from swarmdeck.console.sandbox.plant import ArenaPlant
+    from swarmdeck.console.sandbox.run import run_sandboxed
     from swarmdeck.devices.arena import Arena
     from swarmdeck.devices.simulator import ArenaConfig
 

@@ -150,7 +150,6 @@ def check_arguments(args: argparse.Namespace) -> None:
 def main(args: argparse.Namespace) -> int:
     check_arguments(args)
     from swarmdeck.console.cli.env import checked_script_env
-    from swarmdeck.console.jobs.confinement import JailConfig, describe, probe
     from swarmdeck.console.portal.app import HttpSettings, bind, create_app, uvicorn_server
     from swarmdeck.console.portal.db import SchemaError
     from swarmdeck.console.portal.livefeed import LiveFeed
@@ -160,6 +159,7 @@ def main(args: argparse.Namespace) -> int:
     from swarmdeck.console.portal.service import PortalConfig, PortalService
     from swarmdeck.console.portal.submission import Limits
     from swarmdeck.console.portal.workers import VerificationWorkers, make_executor
+    from swarmdeck.console.sandbox.confinement import JailConfig, describe, probe
     from swarmdeck.devices.chargers import ChargerLayout
 
     reason = probe(JailConfig(allow_no_cgroup=args.allow_no_cgroup))

@@ -111,10 +111,10 @@ def main(args: argparse.Namespace) -> int:
     from swarmdeck.console.cli import UsageError
     from swarmdeck.console.cli.env import checked_script_env
     from swarmdeck.console.cli.run import check_run_arguments
-    from swarmdeck.console.jobs.confinement import ConfinementUnavailable, JailConfig, SandboxLimits
-    from swarmdeck.console.jobs.executors import LocalPoolExecutor, RayExecutor
-    from swarmdeck.console.jobs.report_html import render_html
-    from swarmdeck.console.jobs.verification import REJECTED, VerificationConfig, verify
+    from swarmdeck.console.sandbox.confinement import ConfinementUnavailable, JailConfig, SandboxLimits
+    from swarmdeck.console.sandbox.executors import LocalPoolExecutor, RayExecutor
+    from swarmdeck.console.sandbox.report_html import render_html
+    from swarmdeck.console.sandbox.verification import REJECTED, VerificationConfig, verify
 
     robots, duration, poses, declared_by = _declared(args)
     check_run_arguments(robots, duration, seed=args.seed)

@@ -70,7 +70,7 @@ def update_run_json(folder: Path, **fields: Any) -> dict[str, Any]:
 def without_server_paths(value: Any, folder: Path) -> Any:
     """``value`` (JSON-like) with the server's paths taken out of its strings: the job's folder (and the data
     folder it is in) and the sandbox's per-run folder, so a researcher's files name only their own files."""
-    from swarmdeck.console.jobs.verification import without_run_folder
+    from swarmdeck.console.sandbox.verification import without_run_folder
 
     if isinstance(value, str):
         data = folder.parent.parent
@@ -273,7 +273,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--parent", type=int, required=True)
     parser.add_argument("--no-video", action="store_true")
     args = parser.parse_args(argv)
-    from swarmdeck.console.jobs.namespaces import die_with_parent
+    from swarmdeck.console.sandbox.namespaces import die_with_parent
 
     die_with_parent(args.parent)
     os.umask(UMASK)  # what the exporters write is the researcher's: 0600 (files.py), whoever started us

@@ -8,7 +8,7 @@ Other local users of the machine must not read researchers' scripts, recordings 
   that libraries create on the portal's behalf (SQLite's WAL, the recorder, the exports) get the same modes.
 
 The jail's own copy of a script (outside the data folder, for the sandboxed uid to read) is made by
-:mod:`swarmdeck.console.jobs.sandbox` with the modes it needs.
+:mod:`swarmdeck.console.sandbox.run` with the modes it needs.
 """
 from __future__ import annotations
 

@@ -17,7 +17,7 @@ from typing import Any
 
 from swarmdeck.console.portal.states import JobState
 
-#: the verification verdicts (:data:`swarmdeck.console.jobs.verification.REJECTED`, ``BYPASS``; repeated here so
+#: the verification verdicts (:data:`swarmdeck.console.sandbox.verification.REJECTED`, ``BYPASS``; repeated here so
 #: that this module stays free of numpy for the CLI client): a refusal, and the one that allows running without the
 #: barrier
 REJECTED_VERDICT = "rejected"

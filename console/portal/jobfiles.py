@@ -21,13 +21,13 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from swarmdeck.console.jobs.bundle import ScriptBundle
 from swarmdeck.console.portal.errors import NotFound, Unavailable
 from swarmdeck.console.portal.exports import EXPORT_FILES
 from swarmdeck.console.portal.files import private_dir, write_private
 from swarmdeck.console.portal.job import ExportState, Job
 from swarmdeck.console.portal.states import FINAL
 from swarmdeck.console.portal.submission import Manifest, Upload
+from swarmdeck.console.sandbox.bundle import ScriptBundle
 
 #: result files a job may have, name -> what it is (the exports, :mod:`.exports`, write four of them after the run).
 RESULT_FILES: dict[str, str] = {

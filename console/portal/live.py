@@ -40,8 +40,9 @@ import numpy as np
 
 from swarmdeck.console.picture import colours as pal
 from swarmdeck.console.picture.picture import Picture, picture_of
-from swarmdeck.console.picture.shapes import CHANGED_RING, ROBOT_RADIUS, VIRTUAL_RING_RADIUS
+from swarmdeck.console.picture.shapes import CHANGED_RING, VIRTUAL_RING_RADIUS
 from swarmdeck.console.runtime.frame import Frame
+from swarmdeck.core.constants import ROBOT_RADIUS
 
 DENSITY_PX_PER_M = 20.0  # the canvas smooths the small image up; 64 × 40 px on the default arena
 

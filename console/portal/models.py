@@ -93,7 +93,7 @@ class PackageOut(BaseModel):
 
 
 class EnvOut(BaseModel):
-    """What scripts can import (:func:`swarmdeck.console.jobs.script_env.listing`)."""
+    """What scripts can import (:func:`swarmdeck.console.sandbox.script_env.listing`)."""
 
     script_env: str | None
     python: str

@@ -21,7 +21,7 @@ the audit log) live in one place.
 ``GET /jobs/{id}``                       state, verdict, the verification report, the live view and the
                                          script's output while it runs (``log.js``), the results in short
                                          when it has ended, downloads, cancel (``POST /jobs/{id}/cancel``)
-``GET /jobs/{id}/report``                the verification report page (``console/jobs/report_html.py``)
+``GET /jobs/{id}/report``                the verification report page (``console/sandbox/report_html.py``)
 ``GET /jobs/{id}/live``                  the live view's stream (Server-Sent Events): the runner's
                                          LiveFeed as :func:`~.live.scene_message` JSON, 10 a second at most;
                                          only the job's owner and operators
@@ -265,7 +265,7 @@ def router(service: PortalService, live: LiveFeed) -> APIRouter:
 
     @r.get("/jobs/{job_id}/report")
     def report_page(request: Request, job_id: int, s: Session = Depends(signed_in)) -> Response:
-        from swarmdeck.console.jobs.report_html import render_html
+        from swarmdeck.console.sandbox.report_html import render_html
 
         try:
             report = service.report(s.user, job_id)

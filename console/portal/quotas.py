@@ -7,7 +7,7 @@ A submission over a limit is refused with the limit named and the researcher's c
   to end or cancel one. Counted inside the submission's own transaction, so two submissions at once cannot
   both pass the last free place.
 * **verification CPU seconds in the last 24 h** (the trusted side's and the jail's CPU of every run, as
-  :func:`swarmdeck.console.jobs.verification.run_task` measures it, recorded when the verdict is) — 429,
+  :func:`swarmdeck.console.sandbox.verification.run_task` measures it, recorded when the verdict is) — 429,
   saying when new jobs are accepted again.
 * **results on disk** (every file under the researcher's jobs' folders) — 403: delete nothing yourself; the
   lab's retention policy (``swarmdeck server --retain-days D``) or an operator frees space.

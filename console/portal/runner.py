@@ -9,7 +9,7 @@ For each job the service hands over (``in arena queue → setting up``):
    are not ready and why (they charge on the strips; the job starts when they
    are). The assigned robots are set up at the job's start poses (the manifest's,
    else the script's initial conditions, else random valid ones:
-   :func:`~swarmdeck.console.jobs.start_poses.arena_start`, the rule verification
+   :func:`~swarmdeck.console.sandbox.start_poses.arena_start`, the rule verification
    uses too) under the barrier; the job then runs on them as robots 0…N−1
    (:class:`~swarmdeck.devices.fleet.assigned.AssignedRobots`), the
    docked robots fixed obstacles of its barrier. A set-up that fails (time limit,
@@ -31,8 +31,8 @@ For each job the service hands over (``in arena queue → setting up``):
    the operator page (:meth:`ArenaRunner.alerts`) and part of the result: ``run.json``'s
    ``bypass`` (granted, revoked: when and why) and ``contacts`` (count, robots, episodes),
    and the job's reason.
-3. **Script**: :func:`swarmdeck.console.jobs.sandbox.run_sandboxed` with
-   :meth:`SandboxPlant.on_loop <swarmdeck.console.jobs.plant.SandboxPlant.on_loop>` as its plant: each sandbox tick is one loop tick, paced
+3. **Script**: :func:`swarmdeck.console.sandbox.run.run_sandboxed` with
+   :meth:`SandboxPlant.on_loop <swarmdeck.console.sandbox.plant.SandboxPlant.on_loop>` as its plant: each sandbox tick is one loop tick, paced
    in real time (MQTT robots always; the simulated arena unless ``fast``). On the
    real-time arena the script's commands for a tick are due within
    :meth:`~.service.PortalConfig.arena_budget` (one control period, 33 ms, by
@@ -80,12 +80,6 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.spatial import cKDTree
 
-from swarmdeck.console.jobs.bundle import ScriptBundle
-from swarmdeck.console.jobs.confinement import ConfinementUnavailable, SandboxLimits
-from swarmdeck.console.jobs.plant import SandboxPlant
-from swarmdeck.console.jobs.sandbox import SandboxOutcome, run_sandboxed
-from swarmdeck.console.jobs.start_poses import arena_start
-from swarmdeck.console.jobs.verification import user_message, without_run_folder
 from swarmdeck.console.portal.arena_fleet import ArenaFleet
 from swarmdeck.console.portal.exports import JobExports, without_server_paths, write_run_json
 from swarmdeck.console.portal.files import write_private
@@ -97,6 +91,12 @@ from swarmdeck.console.runtime.behaviours import TickInput
 from swarmdeck.console.runtime.fleet_upkeep import UpkeepConfig, UpkeepResult
 from swarmdeck.console.runtime.frame import Frame
 from swarmdeck.console.runtime.loop import ControlLoop, DensityParams, LoopConfig, SafetyParams
+from swarmdeck.console.sandbox.bundle import ScriptBundle
+from swarmdeck.console.sandbox.confinement import ConfinementUnavailable, SandboxLimits
+from swarmdeck.console.sandbox.plant import SandboxPlant
+from swarmdeck.console.sandbox.run import SandboxOutcome, run_sandboxed
+from swarmdeck.console.sandbox.start_poses import arena_start
+from swarmdeck.console.sandbox.verification import user_message, without_run_folder
 from swarmdeck.core.bounds import DEFAULT_BOUNDS, Bounds
 from swarmdeck.devices.clock import RealTimePacer
 from swarmdeck.safety.guard import GuardConfig
@@ -497,7 +497,7 @@ class ArenaRunner:
 
 
 def _user_reason(reason: str, job: Job, folder: Path) -> str:
-    """The job's reason as verification words it (:func:`~swarmdeck.console.jobs.verification.user_message`): the
+    """The job's reason as verification words it (:func:`~swarmdeck.console.sandbox.verification.user_message`): the
     researcher's file name for the stored ``script.py``, and the line of their code an error names."""
     try:
         bundle = (ScriptBundle.single("script.py", (folder / "script.py").read_bytes()) if job.kind == "py"

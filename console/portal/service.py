@@ -60,8 +60,6 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Protocol
 
-from swarmdeck.console.jobs.confinement import JailConfig, SandboxLimits
-from swarmdeck.console.jobs.script_env import ScriptEnv, listing
 from swarmdeck.console.portal.accounts import Accounts, User
 from swarmdeck.console.portal.db import Database, TransitionConflict
 from swarmdeck.console.portal.errors import BadInput, Conflict, Forbidden, NotFound, Unavailable
@@ -81,6 +79,8 @@ from swarmdeck.console.portal.quotas import usage as quota_usage
 from swarmdeck.console.portal.results import results_summary
 from swarmdeck.console.portal.states import ACTIVE, FINAL, JobState
 from swarmdeck.console.portal.submission import Limits, Manifest, Upload, check_bundle, check_upload, parse_manifest
+from swarmdeck.console.sandbox.confinement import JailConfig, SandboxLimits
+from swarmdeck.console.sandbox.script_env import ScriptEnv, listing
 
 __all__ = ["BYPASS_VERDICT", "BYPASS_WAIT", "RESULT_FILES", "ArenaControl", "ArenaState", "PortalConfig",
            "PortalService"]
@@ -115,7 +115,7 @@ class PortalConfig:
         allow_no_cgroup: run scripts even where no cgroup can be created per run (``--allow-no-cgroup``).
         quotas: per-researcher limits (:mod:`.quotas`): unfinished jobs, verification CPU a day, results on disk.
         script_env: the lab's script environment (``--script-env PATH``): what users' scripts may import
-            (:mod:`swarmdeck.console.jobs.script_env`); None: what swarmdeck's own environment has.
+            (:mod:`swarmdeck.console.sandbox.script_env`); None: what swarmdeck's own environment has.
         retain_days: results of jobs that ended more than this many days ago are deleted by
             :meth:`PortalService.sweep_results` (the job's row stays, with ``results_deleted``); None: kept.
     """
@@ -361,7 +361,7 @@ class PortalService:
         self.store.record_verification_cpu(job_id, float(cpu_s))
 
     def environment(self) -> dict[str, Any]:
-        """What scripts can import here (:func:`swarmdeck.console.jobs.script_env.listing`), read now: packages
+        """What scripts can import here (:func:`swarmdeck.console.sandbox.script_env.listing`), read now: packages
         the lab adds show at once. Unavailable when the configured environment no longer follows its rule."""
         try:
             env = None if self.config.script_env is None else ScriptEnv.open(self.config.script_env)

@@ -3,7 +3,7 @@
 **Manifest** (JSON object; :func:`parse_manifest`): ``name`` (1-100 printable
 characters), ``robots`` (integer N, 1 … the arena's fleet), ``duration``
 (seconds, > 0 and at most the configured maximum), optional ``initial_poses``
-(N rows ``[x, y, θ]`` in m, rad: checked by ``console.jobs.start_poses.check_initial_poses``,
+(N rows ``[x, y, θ]`` in m, rad: checked by ``console.sandbox.start_poses.check_initial_poses``,
 inside the arena and pairwise at least ``MIN_SEPARATION`` apart — the same check as a script's own
 initial conditions), optional
 ``no_barrier`` (bool: the request to run without the barrier, granted only if
@@ -22,7 +22,7 @@ archive claims) or more than ``max_total_bytes`` in all are refused. The
 uploaded file's own name is used only for its suffix and is displayed
 sanitised; the job's files live under names the portal chooses.
 
-Archives become a :class:`~swarmdeck.console.jobs.bundle.ScriptBundle` (its
+Archives become a :class:`~swarmdeck.console.sandbox.bundle.ScriptBundle` (its
 checks and limits apply too): the entry script (manifest ``entry``, else
 ``main.py``, else the only ``.py`` file) runs with its sibling modules importable.
 """
@@ -39,9 +39,9 @@ from typing import Any
 
 import numpy as np
 
-from swarmdeck.console.jobs.bundle import MAX_BYTES, ScriptBundle
-from swarmdeck.console.jobs.start_poses import check_initial_poses
 from swarmdeck.console.portal.errors import BadInput, TooLarge, Unsupported
+from swarmdeck.console.sandbox.bundle import MAX_BYTES, ScriptBundle
+from swarmdeck.console.sandbox.start_poses import check_initial_poses
 from swarmdeck.core.bounds import DEFAULT_BOUNDS, Bounds
 
 MANIFEST_KEYS = ("name", "robots", "duration", "initial_poses", "no_barrier", "entry")

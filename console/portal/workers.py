@@ -3,7 +3,7 @@
 One thread (:class:`VerificationWorkers`) claims the next queued job (round-robin
 across researchers: :meth:`~.service.PortalService.claim_for_verification`) and
 verifies it — with the job's declared robot count and start poses, within a wall-time
-budget derived from its declared duration — with :func:`swarmdeck.console.jobs.verification.verify` on the
+budget derived from its declared duration — with :func:`swarmdeck.console.sandbox.verification.verify` on the
 executor (``--workers W``: a local process pool of W; ``--ray ADDRESS``: a Ray
 cluster), which runs the job's runs in parallel. The report goes to
 ``DIR/jobs/<id>/report.json`` and ``report.html``, the verdict to the job. A job
@@ -17,17 +17,17 @@ import json
 import threading
 from typing import Any
 
-from swarmdeck.console.jobs.confinement import ConfinementUnavailable, SandboxLimits
-from swarmdeck.console.jobs.report_html import render_html
-from swarmdeck.console.jobs.verification import VerificationCancelled, VerificationConfig, verify
 from swarmdeck.console.portal.files import write_private
 from swarmdeck.console.portal.job import Job
 from swarmdeck.console.portal.service import PortalService
+from swarmdeck.console.sandbox.confinement import ConfinementUnavailable, SandboxLimits
+from swarmdeck.console.sandbox.report_html import render_html
+from swarmdeck.console.sandbox.verification import VerificationCancelled, VerificationConfig, verify
 
 
 def make_executor(workers: int | None = None, ray: str | None = None) -> Any:
     """The verification executor: a Ray cluster at ``ray``, else a local pool of ``workers`` processes."""
-    from swarmdeck.console.jobs.executors import LocalPoolExecutor, RayExecutor
+    from swarmdeck.console.sandbox.executors import LocalPoolExecutor, RayExecutor
 
     return RayExecutor(ray) if ray else LocalPoolExecutor(workers)
 

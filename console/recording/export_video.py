@@ -63,11 +63,12 @@ from swarmdeck.console.picture.colours import (
 )
 from swarmdeck.console.picture.heat import heatmap
 from swarmdeck.console.picture.picture import Picture, picture_of
-from swarmdeck.console.picture.shapes import CHANGED_RING, ROBOT_RADIUS, dashed_rings, robot_outline
+from swarmdeck.console.picture.shapes import CHANGED_RING, dashed_rings, robot_outline
 from swarmdeck.console.picture.style import PictureStyle
 from swarmdeck.console.recording.reader import RecordedEvent, Recording
 from swarmdeck.console.runtime.frame import Frame
 from swarmdeck.core.bounds import Bounds
+from swarmdeck.core.constants import ROBOT_RADIUS
 from swarmdeck.core.errors import SwarmdeckError
 
 #: H.264 encoders tried in this order (PyAV's wheels carry libx264).

@@ -59,10 +59,10 @@ from numpy.typing import NDArray
 
 from swarmdeck.console.picture.colours import BOUNDARY, CONTACT, HEADING, LABEL, PAIR, VORONOI, pair_colors
 from swarmdeck.console.picture.picture import active_pairs, changed_mask, robot_colors
-from swarmdeck.console.picture.shapes import ROBOT_RADIUS
 from swarmdeck.console.picture.style import PictureStyle
 from swarmdeck.console.runtime.frame import Frame
 from swarmdeck.core.bounds import DEFAULT_BOUNDS, Bounds
+from swarmdeck.core.constants import ROBOT_RADIUS
 
 TOPIC_ROBOTS = "/foxglove/robots"
 TOPIC_CELLS = "/foxglove/cells"

@@ -61,10 +61,11 @@ from swarmdeck.console.picture.colours import (  # noqa: F401 - the palette, re-
 )
 from swarmdeck.console.picture.heat import heatmap  # noqa: F401 - re-exported for the scene's callers
 from swarmdeck.console.picture.picture import Picture, picture_of, robot_colors
-from swarmdeck.console.picture.shapes import ROBOT_RADIUS, dashed_rings, robot_outline
+from swarmdeck.console.picture.shapes import dashed_rings, robot_outline
 from swarmdeck.console.picture.style import PictureStyle
 from swarmdeck.console.runtime.frame import Frame
 from swarmdeck.core.bounds import DEFAULT_BOUNDS, Bounds
+from swarmdeck.core.constants import ROBOT_RADIUS
 
 if TYPE_CHECKING:
     import viser

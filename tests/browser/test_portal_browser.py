@@ -13,11 +13,11 @@ import pytest
 from mqtt_broker import wait_until
 from portal_fixtures import SPIN, browser_sign_in, make_portal, wait_for_state
 
-from swarmdeck.console.jobs.confinement import probe
-from swarmdeck.console.jobs.executors import LocalPoolExecutor
 from swarmdeck.console.portal.runner import ArenaRunner, ArenaSettings
 from swarmdeck.console.portal.workers import VerificationWorkers
 from swarmdeck.console.recording.reader import open_recording
+from swarmdeck.console.sandbox.confinement import probe
+from swarmdeck.console.sandbox.executors import LocalPoolExecutor
 
 CHROMIUM = "/usr/bin/chromium"
 ARTIFACTS = Path(__file__).resolve().parents[2] / "test-artifacts"

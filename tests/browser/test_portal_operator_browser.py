@@ -8,8 +8,8 @@ import pytest
 from mqtt_broker import wait_until
 from portal_fixtures import browser_sign_in, skip_verification
 
-from swarmdeck.console.jobs.confinement import probe
 from swarmdeck.console.portal.runner import ArenaRunner, ArenaSettings
+from swarmdeck.console.sandbox.confinement import probe
 
 CHROMIUM = "/usr/bin/chromium"
 ARGS = ["--no-sandbox", "--disable-background-networking", "--disable-component-update"]

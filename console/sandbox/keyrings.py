@@ -4,8 +4,8 @@ A child inherits its parent's session keyring across fork, exec and uid changes,
 jailed script could read or plant keys in the keyring of whoever started swarmdeck.
 Before any user code runs, the jail's first process joins a fresh anonymous session
 keyring (:func:`join_session_keyring`); the seccomp filter then refuses ``keyctl``,
-``add_key`` and ``request_key`` altogether (:mod:`swarmdeck.console.jobs.seccomp`).
-A run's uid is its own (:mod:`swarmdeck.console.jobs.uids`); after the run the trusted
+``add_key`` and ``request_key`` altogether (:mod:`swarmdeck.console.sandbox.seccomp`).
+A run's uid is its own (:mod:`swarmdeck.console.sandbox.uids`); after the run the trusted
 side empties that uid's user and user-session keyrings
 (:func:`clear_user_keyrings`), which otherwise outlive every process of the uid.
 """

@@ -1,9 +1,9 @@
 """The trusted side of a sandboxed run: start the jailed child, exchange poses and commands per tick.
 
-The user's script runs in :mod:`swarmdeck.console.jobs.child`, inside a jail
-chosen by :class:`~swarmdeck.console.jobs.confinement.JailConfig`: by default
+The user's script runs in :mod:`swarmdeck.console.sandbox.child`, inside a jail
+chosen by :class:`~swarmdeck.console.sandbox.confinement.JailConfig`: by default
 ``unshare`` — a fresh set of Linux namespaces around a fork of the worker's
-pre-imported fork server (:mod:`swarmdeck.console.jobs.zygote`), no Python start-up
+pre-imported fork server (:mod:`swarmdeck.console.sandbox.zygote`), no Python start-up
 per run — else bubblewrap (a new Python per run); where neither works, untrusted
 code is refused. This module owns the loop: each tick it sends the poses the
 script may see (one binary frame) and waits — at most the per-tick budget — for
@@ -21,9 +21,9 @@ started are killed.
 
 API (for the portal and other callers)::
 
-    from swarmdeck.console.jobs.bundle import ScriptBundle
-    from swarmdeck.console.jobs.sandbox import run_sandboxed
-    from swarmdeck.console.jobs.verification import VerificationConfig, verify
+    from swarmdeck.console.sandbox.bundle import ScriptBundle
+    from swarmdeck.console.sandbox.run import run_sandboxed
+    from swarmdeck.console.sandbox.verification import VerificationConfig, verify
 
     # one file, as before
     outcome = run_sandboxed("my_script.py", make_plant, n_robots=6, duration=30.0)
@@ -40,13 +40,13 @@ once the script asked for its Arena (raise ValueError to refuse it: the run ends
 with ``ended_by == "arena"``). The files are copied into a fresh folder that the
 jail binds read-only; the script's working directory is a private scratch tmpfs
 (the only writable place, limited in bytes and files, gone with the jail). Bundle limits and the checks on
-file names (relative paths only, no symlinks): :mod:`swarmdeck.console.jobs.bundle`;
+file names (relative paths only, no symlinks): :mod:`swarmdeck.console.sandbox.bundle`;
 invalid bundles raise ValueError naming the problem. Where this machine cannot
-confine code, :class:`~swarmdeck.console.jobs.confinement.ConfinementUnavailable`
+confine code, :class:`~swarmdeck.console.sandbox.confinement.ConfinementUnavailable`
 is raised unless ``trusted=True`` (or, for a missing cgroup, ``jail.allow_no_cgroup``).
 Around every confined run the trusted side reserves the run's uid, creates its cgroup
 and watches it for OOM kills, and afterwards removes the group, kills what is left of
-the uid and clears its keyrings (see :mod:`swarmdeck.console.jobs.confinement`).
+the uid and clears its keyrings (see :mod:`swarmdeck.console.sandbox.confinement`).
 """
 from __future__ import annotations
 
@@ -70,10 +70,10 @@ import msgspec
 import numpy as np
 from numpy.typing import NDArray
 
-from swarmdeck.console.jobs import cgroups, uids
-from swarmdeck.console.jobs import seccomp as seccomp_filter
-from swarmdeck.console.jobs.bundle import ScriptBundle
-from swarmdeck.console.jobs.confinement import (
+from swarmdeck.console.sandbox import cgroups, uids
+from swarmdeck.console.sandbox import seccomp as seccomp_filter
+from swarmdeck.console.sandbox.bundle import ScriptBundle
+from swarmdeck.console.sandbox.confinement import (
     ConfinementUnavailable,
     JailConfig,
     SandboxLimits,
@@ -82,11 +82,11 @@ from swarmdeck.console.jobs.confinement import (
     jail_layout,
     kill_all_of,
 )
-from swarmdeck.console.jobs.keyrings import join_session_keyring
-from swarmdeck.console.jobs.keyrings import warm as warm_keyctl
-from swarmdeck.console.jobs.namespaces import mount_scratch, private_mounts, scratch_options
-from swarmdeck.console.jobs.namespaces import warm as warm_mounts
-from swarmdeck.console.jobs.protocol import (
+from swarmdeck.console.sandbox.keyrings import join_session_keyring
+from swarmdeck.console.sandbox.keyrings import warm as warm_keyctl
+from swarmdeck.console.sandbox.namespaces import mount_scratch, private_mounts, scratch_options
+from swarmdeck.console.sandbox.namespaces import warm as warm_mounts
+from swarmdeck.console.sandbox.protocol import (
     COMMANDS,
     MESSAGE,
     FrameReader,
@@ -97,8 +97,8 @@ from swarmdeck.console.jobs.protocol import (
     floats,
     write_frame,
 )
-from swarmdeck.console.jobs.script_env import ScriptEnv
-from swarmdeck.console.jobs.zygote import CHILD_ENV, ForkServerError, shared_fork_server
+from swarmdeck.console.sandbox.script_env import ScriptEnv
+from swarmdeck.console.sandbox.zygote import CHILD_ENV, ForkServerError, shared_fork_server
 
 
 class Plant(Protocol):
@@ -359,7 +359,7 @@ class _Child:
                     scratch=None if tmpfs is None else (scratch.resolve(), tmpfs),
                     cgroup=setup.group.procs_files if setup.group is not None else [], keyring=setup.hardening.keyring)
             else:
-                argv = [sys.executable, "-s", "-m", "swarmdeck.console.jobs.child", str(to_child_r), str(from_child_w)]
+                argv = [sys.executable, "-s", "-m", "swarmdeck.console.sandbox.child", str(to_child_r), str(from_child_w)]
                 extra: tuple[int, ...] = ()
                 if jail == "bwrap":
                     seccomp_fd = None
@@ -491,7 +491,7 @@ def run_sandboxed(
     """Run ``script`` in a jailed child against the plant ``make_plant(n, initial_poses)`` builds.
 
     ``script``: a ``.py`` file; a directory with its ``entry`` file (default ``main.py``);
-    or a :class:`~swarmdeck.console.jobs.bundle.ScriptBundle`. ``source``: the bytes of a
+    or a :class:`~swarmdeck.console.sandbox.bundle.ScriptBundle`. ``source``: the bytes of a
     single-file script (then ``script`` only names it). The child sees a copy of the files
     alone in a fresh folder of its own, read-only, with that folder first on ``sys.path``
     (sibling modules import); nothing else of this machine's files but what Python needs.
@@ -502,7 +502,7 @@ def run_sandboxed(
     ``trusted``: run without a jail when none works here (resource limits still apply);
     otherwise :class:`ConfinementUnavailable` is raised.
     ``jail.script_env``: the lab's script environment, bound read-only and put in force before the
-    script's first line (:mod:`swarmdeck.console.jobs.script_env`); :class:`ConfinementUnavailable`
+    script's first line (:mod:`swarmdeck.console.sandbox.script_env`); :class:`ConfinementUnavailable`
     (naming what is wrong) when it breaks its rule.
     ``argv``: the script's arguments (its ``sys.argv[1:]``; it runs as ``__main__``);
     ``rps_semantics``/``rps_call_order``: the rps facade's modes in the child (``swarmdeck run --rps-semantics``,

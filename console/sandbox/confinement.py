@@ -9,7 +9,7 @@ read-only and a private scratch folder, the only writable place:
 
 * ``"unshare"`` — the namespaces made with the kernel's calls, as ``unshare(1)``
   does, around a fork of a pre-imported fork server
-  (:mod:`swarmdeck.console.jobs.namespaces`, :mod:`swarmdeck.console.jobs.zygote`):
+  (:mod:`swarmdeck.console.sandbox.namespaces`, :mod:`swarmdeck.console.sandbox.zygote`):
   no Python start-up per run. Needs root or unprivileged user namespaces.
 * ``"bwrap"`` — Debian's bubblewrap, a new Python process per run.
 
@@ -17,19 +17,19 @@ Both jails add, before any user code runs (issue 24):
 
 * **a fresh anonymous session keyring** (keyrings are not namespaced: the script
   would otherwise share the keyring of whoever started swarmdeck),
-  :mod:`swarmdeck.console.jobs.keyrings`;
-* **a seccomp filter** built with libseccomp (:mod:`swarmdeck.console.jobs.seccomp`):
+  :mod:`swarmdeck.console.sandbox.keyrings`;
+* **a seccomp filter** built with libseccomp (:mod:`swarmdeck.console.sandbox.seccomp`):
   no keyrings, no new namespaces (``unshare``, ``setns``, ``clone`` with ``CLONE_NEW*``,
   ``clone3``), no mounts, no io_uring, bpf, perf_event_open, userfaultfd, ptrace,
   process_vm_*, kexec or modules. bubblewrap loads it with ``--seccomp FD``; the
   ``unshare`` jail's script process loads it itself after its uid drop. (bubblewrap's
   ``--disable-userns`` needs ``--unshare-user``, which as root would map the script to
   host uid 0: not used; the filter refuses every way into a new user namespace.)
-* **a uid of the run's own** when swarmdeck runs as root (:mod:`swarmdeck.console.jobs.uids`:
+* **a uid of the run's own** when swarmdeck runs as root (:mod:`swarmdeck.console.sandbox.uids`:
   random in 2^20 … 2^31, reserved, never shared with a live holder; after the run all its
   processes are killed and its user keyrings cleared), so RLIMIT_NPROC bounds a fork
   bomb (the kernel never enforces it for uid 0), plus no_new_privs;
-* **a cgroup of the run's own** (:mod:`swarmdeck.console.jobs.cgroups`, v2 or v1): the
+* **a cgroup of the run's own** (:mod:`swarmdeck.console.sandbox.cgroups`, v2 or v1): the
   run's total memory without swap (:attr:`SandboxLimits.memory`; an OOM kill ends the run,
   ``ended_by == "memory"``), processes (``pids.max``), CPU bandwidth and the cores it was
   given (cpuset: widening its CPU affinity has no effect);
@@ -42,7 +42,7 @@ Both jails add, before any user code runs (issue 24):
 why none does — then untrusted code is refused unless the caller passes
 ``trusted=True``. Where no cgroup can be created (not root, no controllers), untrusted
 code is likewise refused unless the operator passed ``allow_no_cgroup``
-(``--allow-no-cgroup``); the run's :class:`~swarmdeck.console.jobs.sandbox.SandboxOutcome`
+(``--allow-no-cgroup``); the run's :class:`~swarmdeck.console.sandbox.run.SandboxOutcome`
 then says that it ran without one.
 """
 from __future__ import annotations
@@ -155,7 +155,7 @@ class JailConfig:
             An operator's choice (``--allow-no-cgroup``), never the default.
         script_env: the lab's script environment (``--script-env PATH``), a virtual environment bound
             read-only in the jail: scripts import only its packages besides the standard library,
-            swarmdeck and numpy (:mod:`swarmdeck.console.jobs.script_env`); None: what swarmdeck's own
+            swarmdeck and numpy (:mod:`swarmdeck.console.sandbox.script_env`); None: what swarmdeck's own
             environment has.
     """
 
@@ -189,7 +189,7 @@ def probe_bwrap(bwrap: str = "bwrap") -> str | None:
 
 def probe_unshare() -> str | None:
     """None when the fork server can build ``unshare`` jails here, else the reason it cannot."""
-    from swarmdeck.console.jobs.zygote import ForkServerError, shared_fork_server
+    from swarmdeck.console.sandbox.zygote import ForkServerError, shared_fork_server
 
     try:
         reason = shared_fork_server().unavailable
@@ -213,7 +213,7 @@ def probe(config: JailConfig = JailConfig()) -> str | None:
     """None when this machine can confine untrusted code as ``config`` asks, else why not: no jail of
     ``config`` works, the seccomp filter cannot be built, or no cgroup can be created for a run
     (unless ``config.allow_no_cgroup``)."""
-    from swarmdeck.console.jobs import cgroups, seccomp
+    from swarmdeck.console.sandbox import cgroups, seccomp
 
     reason = choose_jail(config)[1]
     if reason is not None:
@@ -229,7 +229,7 @@ def probe(config: JailConfig = JailConfig()) -> str | None:
 def describe(config: JailConfig = JailConfig()) -> str:
     """One line for a server's start-up: how untrusted code is confined here, e.g. "unshare jail, seccomp filter,
     cgroup v1 per run, a uid per run" — or what is missing ("NOT CONFINED: …", "no cgroup: …")."""
-    from swarmdeck.console.jobs import cgroups, seccomp
+    from swarmdeck.console.sandbox import cgroups, seccomp
 
     jail, reason = choose_jail(config)
     if jail is None:
@@ -337,7 +337,7 @@ def bwrap_command(child_argv: list[str], script_dir: Path, scratch: Path, bwrap:
 
     ``scratch`` is bound from the host's view at its own path (the trusted side mounts a
     limited tmpfs there in bwrap's private mount namespace first, see
-    :mod:`swarmdeck.console.jobs.sandbox`) — or, with ``scratch_size``, is a tmpfs of that
+    :mod:`swarmdeck.console.sandbox.run`) — or, with ``scratch_size``, is a tmpfs of that
     many bytes bwrap makes itself (``--size``; no inode limit: for runs without root).
     ``seccomp_fd``: a readable descriptor holding the filter's BPF (``--seccomp``).
     ``extra``: more folders bound read-only (the script environment).

@@ -8,7 +8,7 @@ of two — share kernel state that is keyed by uid (keyrings, process limits, si
 by its uid) and reserves it with an ``O_EXCL`` file in a root-only folder on ``/run``
 (a tmpfs: reservations live exactly as long as the kernel state they protect); a uid
 that has a live process or owns keys is skipped. :func:`release` ends every process of
-the uid, clears its keyrings (:func:`swarmdeck.console.jobs.keyrings.clear_user_keyrings`)
+the uid, clears its keyrings (:func:`swarmdeck.console.sandbox.keyrings.clear_user_keyrings`)
 and frees the reservation — or keeps it, so the uid is never handed out again, when
 something of the run survived.
 """
@@ -18,7 +18,7 @@ import os
 import secrets
 from pathlib import Path
 
-from swarmdeck.console.jobs.keyrings import clear_user_keyrings, uids_with_keys
+from swarmdeck.console.sandbox.keyrings import clear_user_keyrings, uids_with_keys
 from swarmdeck.core.errors import SwarmdeckError
 
 UID_RANGE = (1 << 20, 1 << 31)
@@ -32,7 +32,7 @@ class UidUnavailable(RuntimeError, SwarmdeckError):
 
 
 def _processes_of(uid: int) -> bool:
-    from swarmdeck.console.jobs.confinement import processes_of
+    from swarmdeck.console.sandbox.confinement import processes_of
 
     return bool(processes_of(uid))
 
@@ -68,7 +68,7 @@ def release(uid: int, state_dir: Path = STATE_DIR, *, processes_gone: bool = Fal
     every process of the run was born into, was removed: the kernel refuses that while it holds
     a task), so the scan of /proc is skipped.
     """
-    from swarmdeck.console.jobs.confinement import kill_all_of
+    from swarmdeck.console.sandbox.confinement import kill_all_of
 
     survivors = [] if processes_gone else kill_all_of(uid)
     if survivors:

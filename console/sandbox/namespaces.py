@@ -1,7 +1,7 @@
 """The ``unshare`` jail: Linux namespaces built with the kernel's own calls (unshare(2), mount(2), pivot_root(2)).
 
 What ``unshare(1)`` does on the command line, done inside a freshly forked
-process so that a pre-imported fork server (:mod:`swarmdeck.console.jobs.zygote`)
+process so that a pre-imported fork server (:mod:`swarmdeck.console.sandbox.zygote`)
 can start each sandboxed script in a jail of its own without starting Python
 again. Per run, three processes:
 
@@ -17,7 +17,7 @@ again. Per run, three processes:
   detached, the root remounted read-only — then it forks C and reaps orphans
   until C ends; when B ends, the kernel kills everything left in the namespace.
 * **C** (pid 2): the script (resource limits, the uid drop and the seccomp filter are the
-  child's own, see :mod:`swarmdeck.console.jobs.child`).
+  child's own, see :mod:`swarmdeck.console.sandbox.child`).
 
 The network namespace has only a loopback that is down: nothing, not even the
 host's 127.0.0.1, is reachable. Needs root (or unprivileged user namespaces).

@@ -168,7 +168,7 @@ class VerificationRobots:
 
 
 class SandboxPlant:
-    """The sandbox's one :class:`~swarmdeck.console.jobs.sandbox.Plant`: each tick, the script's nominal
+    """The sandbox's one :class:`~swarmdeck.console.sandbox.run.Plant`: each tick, the script's nominal
     look-ahead velocities (N, 2) go to a trusted driver that certifies them (wheel limits, the barrier,
     fail-stop, :func:`~swarmdeck.devices.pipeline.certify`) and drives the robots; the script sees the
     driver's time and poses. Two drivers, one plant:

@@ -1,7 +1,7 @@
 """Where verification runs execute: in this process, on a local process pool, or on a Ray cluster.
 
-An executor runs independent :class:`~swarmdeck.console.jobs.verification.RunTask`\\ s
-with :func:`~swarmdeck.console.jobs.verification.run_task` and returns their
+An executor runs independent :class:`~swarmdeck.console.sandbox.verification.RunTask`\\ s
+with :func:`~swarmdeck.console.sandbox.verification.run_task` and returns their
 results in task order, whatever order they finished in, so every executor gives
 the same report. ``run(tasks, on_done, cancelled)`` calls ``on_done(index,
 result, finished_count)`` as runs finish and stops starting runs once
@@ -17,7 +17,7 @@ from collections.abc import Callable, Sequence
 from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
 from typing import Any
 
-from swarmdeck.console.jobs.verification import RunTask, run_task
+from swarmdeck.console.sandbox.verification import RunTask, run_task
 
 OnDone = Callable[[int, dict[str, Any], int], None]
 
@@ -41,7 +41,7 @@ def _init_worker(parent: int, cpus: Any) -> None:
     """Pool initializer: the worker dies with the process that started the pool (also when that one is
     kill -9'd: its fork server and jails follow, see :mod:`.zygote`); with ``cpus`` (a queue of core
     numbers), it — and the fork server and jails it starts — runs on one core."""
-    from swarmdeck.console.jobs.namespaces import die_with_parent
+    from swarmdeck.console.sandbox.namespaces import die_with_parent
 
     die_with_parent(parent)
     if cpus is None:

@@ -3,9 +3,9 @@
 The lab makes a virtual environment for the researchers' libraries (scipy, torch,
 networkx, … — whatever it decides to support) and names it with ``--script-env PATH``
 (``swarmdeck server``, ``swarmdeck verify``, ``swarmdeck run --sandbox``). Every sandboxed
-run then binds it read-only in the jail (:func:`swarmdeck.console.jobs.confinement.jail_layout`)
+run then binds it read-only in the jail (:func:`swarmdeck.console.sandbox.confinement.jail_layout`)
 and the child puts it in force before the script's first line
-(:mod:`swarmdeck.console.jobs.import_policy`): the script imports the standard library,
+(:mod:`swarmdeck.console.sandbox.import_policy`): the script imports the standard library,
 ``swarmdeck`` / ``rps``, the packages swarmdeck provides itself (:data:`PROVIDED`) and the
 environment's packages; anything else is refused with a message naming the package and
 how to ask for it. Without ``--script-env`` scripts import what swarmdeck's own environment
@@ -37,7 +37,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from swarmdeck.console.jobs.import_policy import ALWAYS, refusal, top_level_modules
+from swarmdeck.console.sandbox.import_policy import ALWAYS, refusal, top_level_modules
 
 #: Packages swarmdeck's sandboxed side loads itself before the script runs: a script may always import
 #: them, at swarmdeck's versions (a copy in the script environment is not used).

@@ -1,14 +1,14 @@
 """The sandboxed side of the lab's script environment: what a user's script may import.
 
-Installed by :mod:`swarmdeck.console.jobs.child` (inside the jail, after the child has
+Installed by :mod:`swarmdeck.console.sandbox.child` (inside the jail, after the child has
 confined itself and before the script's first line) when the lab set a script
-environment (``--script-env PATH``, :mod:`swarmdeck.console.jobs.script_env`). Then:
+environment (``--script-env PATH``, :mod:`swarmdeck.console.sandbox.script_env`). Then:
 
 * the environment's ``site-packages`` (bound read-only in the jail) comes on ``sys.path``
   before swarmdeck's own installed packages;
 * code of the user — the script, its sibling modules, and the packages of the script
   environment — may import only the standard library, ``swarmdeck`` and ``rps``, the
-  packages swarmdeck provides itself (:data:`swarmdeck.console.jobs.script_env.PROVIDED`:
+  packages swarmdeck provides itself (:data:`swarmdeck.console.sandbox.script_env.PROVIDED`:
   ``numpy``), its own folder's modules and the environment's top-level modules. Any other
   import raises ``ModuleNotFoundError`` naming the package and how to ask for it
   (:func:`refusal`).

@@ -4,7 +4,7 @@ Starting a Python process that imports numpy and swarmdeck costs about 0.15 s
 of CPU, 8 % of a 20-robot, 60 s run: too much to pay per run. A
 :class:`ForkServer` starts one such process (the *zygote*, this module's
 ``main``) per worker process; for each run it forks, and the fork builds a new
-jail with :mod:`swarmdeck.console.jobs.namespaces` (new mount, network, pid, ipc
+jail with :mod:`swarmdeck.console.sandbox.namespaces` (new mount, network, pid, ipc
 and uts namespaces, a read-only root of its own) before the child's code runs.
 The zygote never runs user code and never receives any — only paths, limits and
 the run's pipe ends — so no script can see another's state: every script starts
@@ -22,7 +22,7 @@ maps, the pipe ends passed as file descriptors)::
 
 Process A joins the cgroup (its pid into each file) and, with ``keyring``, a fresh
 anonymous session keyring, before it builds the jail; the script's process loads the
-seccomp filter the zygote built once (:func:`swarmdeck.console.jobs.seccomp.filter_program`)
+seccomp filter the zygote built once (:func:`swarmdeck.console.sandbox.seccomp.filter_program`)
 when its ``start`` message asks it to.
 
 The run's status pipe gets one msgpack map when the jail's init ends:
@@ -48,9 +48,9 @@ from typing import Any
 
 import msgspec
 
-from swarmdeck.console.jobs.cgroups import join as join_cgroup
-from swarmdeck.console.jobs.keyrings import join_session_keyring
-from swarmdeck.console.jobs.namespaces import (
+from swarmdeck.console.sandbox.cgroups import join as join_cgroup
+from swarmdeck.console.sandbox.keyrings import join_session_keyring
+from swarmdeck.console.sandbox.namespaces import (
     PR_SET_PDEATHSIG,
     build_root,
     enter_root,
@@ -80,7 +80,7 @@ class ForkServer:
         ours, theirs = socket.socketpair(socket.AF_UNIX, socket.SOCK_SEQPACKET)
         try:
             self.proc = subprocess.Popen(
-                [sys.executable, "-s", "-m", "swarmdeck.console.jobs.zygote", str(theirs.fileno())],
+                [sys.executable, "-s", "-m", "swarmdeck.console.sandbox.zygote", str(theirs.fileno())],
                 pass_fds=(theirs.fileno(),), env=CHILD_ENV, cwd="/", stdin=subprocess.DEVNULL,
                 stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, start_new_session=True)
         finally:
@@ -149,7 +149,7 @@ class ForkServer:
 
 @functools.lru_cache(maxsize=4)
 def _server_of(pid: int) -> ForkServer:
-    from swarmdeck.console.jobs.cgroups import sweep
+    from swarmdeck.console.sandbox.cgroups import sweep
 
     sweep()  # once per worker process: the empty run groups a killed predecessor left behind
     return ForkServer()
@@ -206,7 +206,7 @@ def _run_c() -> None:
         import numpy as np
 
         np.random.seed()  # every fork starts from the zygote's image: fresh entropy for the script's generators
-        from swarmdeck.console.jobs.child import main
+        from swarmdeck.console.sandbox.child import main
 
         code = main(["3", "4"])
     except SystemExit as exc:
@@ -285,11 +285,11 @@ def main(argv: list[str]) -> int:
     sock = socket.socket(fileno=int(argv[0]))
     import numpy as np  # loaded once here, shared by every run's fork
 
-    import swarmdeck.console.jobs.child  # noqa: F401
+    import swarmdeck.console.sandbox.child  # noqa: F401
 
     np.random.seed()  # the first seeding loads its machinery (about 20 ms): once here, not in every run
     np.random.default_rng()
-    from swarmdeck.console.jobs.seccomp import SeccompUnavailable, filter_program
+    from swarmdeck.console.sandbox.seccomp import SeccompUnavailable, filter_program
 
     try:
         filter_program()  # built once here; every run's script process loads this copy

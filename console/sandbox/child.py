@@ -1,10 +1,10 @@
 """The sandboxed side: runs a user's script with robots that live on the other side of a pipe.
 
-Forked by the fork server (:mod:`swarmdeck.console.jobs.zygote`) inside its ``unshare``
-jail, or started by :mod:`swarmdeck.console.jobs.sandbox` as
-``python -m swarmdeck.console.jobs.child IN_FD OUT_FD`` inside bubblewrap. It
+Forked by the fork server (:mod:`swarmdeck.console.sandbox.zygote`) inside its ``unshare``
+jail, or started by :mod:`swarmdeck.console.sandbox.run` as
+``python -m swarmdeck.console.sandbox.child IN_FD OUT_FD`` inside bubblewrap. It
 reads the ``start`` message, applies its resource limits, drops to its run's own uid
-(when started as root), loads the seccomp filter (:mod:`swarmdeck.console.jobs.seccomp`;
+(when started as root), loads the seccomp filter (:mod:`swarmdeck.console.sandbox.seccomp`;
 bubblewrap has loaded it already), and runs the script with
 :func:`swarmdeck.devices.runner.run_experiment`: both ``experiment(arena)``
 scripts and unmodified rps scripts work, because every Arena the script builds
@@ -23,9 +23,9 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from swarmdeck.console.jobs.import_policy import install as install_import_policy
-from swarmdeck.console.jobs.protocol import MESSAGE, FrameReader, decode, encode_commands, pack, write_frame
-from swarmdeck.console.jobs.protocol import poses as read_poses
+from swarmdeck.console.sandbox.import_policy import install as install_import_policy
+from swarmdeck.console.sandbox.protocol import MESSAGE, FrameReader, decode, encode_commands, pack, write_frame
+from swarmdeck.console.sandbox.protocol import poses as read_poses
 from swarmdeck.core.kinematics import GritsBotParams, unicycle_to_si
 from swarmdeck.core.ports import SensedPoses
 from swarmdeck.devices.arena import ExperimentFinished
@@ -132,7 +132,7 @@ def _confine(start: dict[str, Any]) -> None:
         os.setresgid(uid, uid, uid)
         os.setresuid(uid, uid, uid)
     if start.get("seccomp"):
-        from swarmdeck.console.jobs.seccomp import filter_program, install
+        from swarmdeck.console.sandbox.seccomp import filter_program, install
 
         install(filter_program())
 

@@ -1,7 +1,7 @@
 """Simulation-based verification of untrusted experiment scripts (paper §IV-A, REFERENCE.md §2, §4).
 
 For each script, ``runs`` simulated runs with the disturbances of a real arena
-(:class:`~swarmdeck.console.jobs.plant.Disturbances`), each run twice in the sandbox:
+(:class:`~swarmdeck.console.sandbox.plant.Disturbances`), each run twice in the sandbox:
 
 * **raw** — no barrier: measures the safety score S and the contacts (first
   contact time, approach speeds, contact durations, counts per robot);
@@ -21,7 +21,7 @@ gives the same report, bit for bit. The report's JSON schema is
 robot count (else it is refused at once, before anything is simulated), and every run
 starts from the arena's start poses — the manifest's ``initial_poses``, else the
 script's own initial conditions (checked like the manifest's), else random valid ones:
-one rule, :func:`~swarmdeck.console.jobs.start_poses.arena_start`, shared with the
+one rule, :func:`~swarmdeck.console.sandbox.start_poses.arena_start`, shared with the
 arena runner — plus a seeded set-up error within the fleet's tolerance (2 cm, 5°).
 
 **Nothing stalls it.** A missing, late or stale answer is a missed tick (robots stopped,
@@ -54,11 +54,11 @@ from typing import Any
 
 import numpy as np
 
-from swarmdeck.console.jobs.bundle import ScriptBundle
-from swarmdeck.console.jobs.confinement import JailConfig, SandboxLimits
-from swarmdeck.console.jobs.plant import ArenaPlant, Disturbances, SandboxPlant, VerificationRobots
-from swarmdeck.console.jobs.sandbox import run_sandboxed
-from swarmdeck.console.jobs.start_poses import arena_start, check_initial_poses, perturb
+from swarmdeck.console.sandbox.bundle import ScriptBundle
+from swarmdeck.console.sandbox.confinement import JailConfig, SandboxLimits
+from swarmdeck.console.sandbox.plant import ArenaPlant, Disturbances, SandboxPlant, VerificationRobots
+from swarmdeck.console.sandbox.run import run_sandboxed
+from swarmdeck.console.sandbox.start_poses import arena_start, check_initial_poses, perturb
 from swarmdeck.core.checks import in_range
 from swarmdeck.core.service_thread import ServiceThread
 from swarmdeck.devices.arena import Arena
@@ -437,16 +437,16 @@ def verify(scripts: Sequence[str | Path | ScriptBundle], config: VerificationCon
     :class:`threading.Event` (or anything with ``is_set()``): once set, runs not yet finished
     are stopped and :class:`VerificationCancelled` is raised. ``scripts``: ``.py`` files,
     directories (each run from its ``entry`` file, default ``main.py``, with sibling modules
-    importable) or :class:`~swarmdeck.console.jobs.bundle.ScriptBundle`\\ s. ValueError for a
-    script that cannot be read or an invalid bundle; :class:`~swarmdeck.console.jobs.confinement.ConfinementUnavailable` when
+    importable) or :class:`~swarmdeck.console.sandbox.bundle.ScriptBundle`\\ s. ValueError for a
+    script that cannot be read or an invalid bundle; :class:`~swarmdeck.console.sandbox.confinement.ConfinementUnavailable` when
     this machine cannot confine untrusted code and ``config.trusted`` is False. ``names``: what to call each
     script's entry in the report (the file names the researcher uploaded; default the entries' own).
 
     Each entry script is compiled first (:func:`compile_check`): one that does not compile is rejected with its
     line and an excerpt, without any sandbox run.
     """
-    from swarmdeck.console.jobs.confinement import ConfinementUnavailable, probe
-    from swarmdeck.console.jobs.executors import LocalPoolExecutor
+    from swarmdeck.console.sandbox.confinement import ConfinementUnavailable, probe
+    from swarmdeck.console.sandbox.executors import LocalPoolExecutor
 
     loaded = [load_script(s, entry) for s in scripts]
     if not loaded:

@@ -20,7 +20,7 @@ starts is inside), and the trusted side removes it after the run
 (:attr:`RunCgroup.missing` names those that were not). :class:`CgroupUnavailable` says
 why no group could be created (not root, no controller mounted, …): then the sandbox
 refuses untrusted code unless the operator allowed runs without one
-(:attr:`swarmdeck.console.jobs.confinement.JailConfig.allow_no_cgroup`). Groups left by a
+(:attr:`swarmdeck.console.sandbox.confinement.JailConfig.allow_no_cgroup`). Groups left by a
 swarmdeck killed mid-run are removed by :func:`sweep` (the fork server runs it when it starts).
 """
 from __future__ import annotations
@@ -31,7 +31,7 @@ import time
 from dataclasses import dataclass
 from pathlib import Path
 
-from swarmdeck.console.jobs.confinement import kill_until_gone
+from swarmdeck.console.sandbox.confinement import kill_until_gone
 from swarmdeck.core.checks import require_positive
 from swarmdeck.core.errors import SwarmdeckError
 from swarmdeck.core.service_thread import ServiceThread

@@ -1,7 +1,7 @@
 """Verification runs, the sandbox for user code, and the executors that scale them out.
 
 * :mod:`.verification` — ``verify(scripts, config, executor) -> VerificationReport``, verdicts, the JSON report.
-* :mod:`.sandbox` — ``run_sandboxed``: the user's script in a jailed child, poses and commands over a pipe.
+* :mod:`.run` — ``run_sandboxed``: the user's script in a jailed child, poses and commands over a pipe.
 * :mod:`.confinement` — ``SandboxLimits``, ``JailConfig``, the two jails, ``probe()`` (can this machine confine?);
   the jail's parts: :mod:`.namespaces` and :mod:`.zygote` (the ``unshare`` jail), :mod:`.seccomp` (the filter),
   :mod:`.keyrings`, :mod:`.uids` (a uid per run), :mod:`.cgroups` (a cgroup per run).

@@ -1,6 +1,6 @@
 """The sandbox's seccomp filter: system calls a user's script may never make, built with libseccomp.
 
-One BPF program for both jails (:mod:`swarmdeck.console.jobs.confinement`): built once
+One BPF program for both jails (:mod:`swarmdeck.console.sandbox.confinement`): built once
 by :func:`filter_program` with Debian's ``libseccomp.so.2`` through :mod:`ctypes`
 (``seccomp_init`` / ``seccomp_rule_add_array`` / ``seccomp_export_bpf``: libseccomp
 writes the BPF, including the architecture check), then
