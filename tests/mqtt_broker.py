@@ -138,7 +138,7 @@ class Collector:
     def publish(self, topic: str, payload: bytes) -> None:
         self.client.publish(topic, payload).wait_for_publish(5)
 
-    def wait_for(self, predicate, timeout: float = 10.0) -> list[tuple[str, bytes]]:
+    def wait_for(self, predicate, timeout: float = 60.0) -> list[tuple[str, bytes]]:
         """Poll (with a deadline) until ``predicate(messages)`` is true; returns the messages."""
         deadline = time.monotonic() + timeout
         while time.monotonic() < deadline:
@@ -156,7 +156,7 @@ class Collector:
         self.client.loop_stop()
 
 
-def wait_until(predicate, timeout: float = 10.0, what: str = "condition"):
+def wait_until(predicate, timeout: float = 60.0, what: str = "condition"):
     """Poll ``predicate()`` until it returns something truthy (returned) or fail after ``timeout`` s."""
     deadline = time.monotonic() + timeout
     while True:
