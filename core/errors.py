@@ -5,7 +5,7 @@ always had (``ConfigError`` is still a ``ValueError``, ``SetupFailed`` a ``Runti
 SwarmdeckError`` catches anything swarmdeck raised on purpose while existing ``except ValueError`` clauses keep
 working. Two control-flow signals are deliberately not errors and do not derive from it:
 ``devices.ExperimentFinished`` (an experiment's normal end) and ``console.sandbox.verification.VerificationCancelled``.
-``tests/test_core_errors.py`` checks the rule over the whole source tree.
+``tests/core/test_core_errors.py`` checks the rule over the whole source tree.
 """
 from __future__ import annotations
 

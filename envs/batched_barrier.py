@@ -11,7 +11,7 @@ the fail-stop are decided per swarm: a swarm whose answer does not certify stops
 zero), the others carry on.
 
 Equal to E separate ``UnicycleSafetyFilter(BarrierConfig(mode="distributed"))`` calls bit for bit
-(tests/test_envs_batched_equal.py), except for exactly coincident look-ahead points, whose fallback
+(tests/envs/test_envs_batched_equal.py), except for exactly coincident look-ahead points, whose fallback
 direction is seeded from the row key (a different key here).
 """
 from __future__ import annotations

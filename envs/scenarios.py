@@ -6,7 +6,7 @@
 * :class:`PredatorCapturePrey`, :class:`Warehouse` — MARBLER's scenarios (Torbati et al., 2023,
   github.com/GT-STAR-Lab/MARBLER, commit 59c4923, ``robotarium_gym/scenarios``), their defaults from its
   ``config.yaml``: discrete moves of 0.2 m held for 29 ticks, −5 for every agent and the end of the episode on a
-  collision or a boundary violation. Rewards are MARBLER's (checked on its own code, tests/test_envs_scenarios_marbler.py).
+  collision or a boundary violation. Rewards are MARBLER's (checked on its own code, tests/envs/test_envs_scenarios_marbler.py).
   Differences: goals are driven by the arena's go-to-goal every tick (MARBLER recomputes every 15th) under
   swarmdeck's barrier; the reward is computed on the poses after the held step (MARBLER's on those one tick
   earlier); the start poses come from :func:`swarmdeck.devices.random_initial_poses` in MARBLER's regions.
