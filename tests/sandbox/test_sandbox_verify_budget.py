@@ -23,7 +23,6 @@ def experiment(arena):
 """
 SLEEPY = """
 import time
-from hostile_scripts import FIVE_HUNDRED, STALE_FOREVER
 def experiment(arena):
     while True:
         time.sleep(0.9)  # within the 1 s per-tick budget, but 27 wall s per simulated s
