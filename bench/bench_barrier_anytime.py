@@ -1,0 +1,122 @@
+"""Barrier closed loop, dense crossing (issue 27 item 1): worst and median tick per mode, same rows.
+
+Run: ``.venv/bin/python bench/bench_barrier_anytime.py [--n 100 1000] [--ticks 120]`` (≈ 10 min at
+N = 1000 on a loaded 2-core machine; BLAS threads pinned to one below).
+
+Scene: N robots on a jittered grid filling half of the floor's central disc, each driven by a
+proportional controller (gain 1, capped at v_max) to its point reflected through the centre: the
+swarm swaps through the centre, so the middle jams. The trajectory follows the anytime filter
+(``mode="anytime"``); on every tick, on the same points and nominal (so the same rows), each
+filter below is called once and timed (process CPU time, ``time.process_time``, one thread; the
+same process, so ratios hold under the machine's load):
+
+* *centralised*: today's warm-started exact filter (``mode="centralised"``, no caps);
+* *warm-capped*: the same with ``warm_max_solves`` (the warm paths stop and go to clarabel cold);
+* *anytime*: ``mode="anytime"`` with ``work_budget`` (distributed floor when the budget runs out);
+* *clarabel*: a fresh ``solver="clarabel"`` filter (cold interior point on the same rows);
+* *distributed*: ``mode="distributed"`` with and without the second pass.
+
+Invasiveness: Σ‖u − û‖² of each answer over the centralised optimum's on the same tick (ticks
+where the optimum intervenes). Timing is self-contained (no shared harness): ``timed`` below.
+"""
+from __future__ import annotations
+
+import os
+
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+os.environ.setdefault("OMP_NUM_THREADS", "1")
+
+import argparse  # noqa: E402
+import collections  # noqa: E402
+import dataclasses  # noqa: E402
+import datetime  # noqa: E402
+import platform  # noqa: E402
+import time  # noqa: E402
+
+import numpy as np  # noqa: E402
+
+from swarmdeck.safety import BarrierConfig, SafetyFilter  # noqa: E402
+from swarmdeck.safety.scenes import arena_for, grid_scene  # noqa: E402
+
+PITCH = 0.188
+WARM_CAP = 24
+BUDGET = 40
+
+
+def crossing(n: int, seed: int = 0) -> tuple[BarrierConfig, np.ndarray, np.ndarray]:
+    """(config, points (n, 2), goals (n, 2)): the dense crossing scene at N robots."""
+    cfg = BarrierConfig(bounds=arena_for(n, PITCH, fill=0.5))
+    pts, _ = grid_scene(n, np.random.default_rng(seed), cfg, pitch=PITCH)
+    return cfg, pts, -pts
+
+
+def nominal(cfg: BarrierConfig, x: np.ndarray, goals: np.ndarray) -> np.ndarray:
+    """Proportional controller to the goals, capped at v_max (m/s)."""
+    u = goals - x
+    s = np.linalg.norm(u, axis=1, keepdims=True)
+    return u * np.minimum(1.0, cfg.max_speed / np.maximum(s, 1e-12))
+
+
+def timed(fn, *args):
+    """(process CPU s, result)."""
+    t = time.process_time()
+    out = fn(*args)
+    return time.process_time() - t, out
+
+
+def run(n: int, ticks: int) -> dict:
+    cfg, x, goals = crossing(n)
+    filters = {
+        "centralised": SafetyFilter(dataclasses.replace(cfg, mode="centralised")),
+        "warm-capped": SafetyFilter(dataclasses.replace(cfg, mode="centralised", warm_max_solves=WARM_CAP)),
+        "anytime": SafetyFilter(dataclasses.replace(cfg, mode="anytime", warm_max_solves=WARM_CAP,
+                                                    work_budget=BUDGET)),
+        "distributed": SafetyFilter(dataclasses.replace(cfg, mode="distributed")),
+        "distributed 1 pass": SafetyFilter(dataclasses.replace(cfg, mode="distributed",
+                                                               distributed_second_pass=False)),
+    }
+    clar_cfg = dataclasses.replace(cfg, solver="clarabel")
+    times = collections.defaultdict(list)
+    cost = collections.defaultdict(list)
+    answers = collections.Counter()
+    for _ in range(ticks):
+        nom = nominal(cfg, x, goals)
+        out = {}
+        for name, flt in filters.items():
+            t, (u, d) = timed(flt.filter, x, nom)
+            assert d.ok, (name, d.status)
+            times[name].append(t)
+            out[name] = (u, d)
+        t, (u, d) = timed(SafetyFilter(clar_cfg).filter, x, nom)
+        assert d.ok, d.status
+        times["clarabel"].append(t)
+        answers[out["anytime"][1].answer] += 1
+        c_opt = float(np.sum((out["centralised"][0] - nom) ** 2))
+        if c_opt > 1e-12:
+            for name, (u, _) in out.items():
+                cost[name].append(float(np.sum((u - nom) ** 2)) / c_opt)
+        x = x + out["anytime"][0] * cfg.dt
+    return dict(n=n, times=times, cost=cost, answers=answers)
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--n", type=int, nargs="+", default=[100, 1000])
+    ap.add_argument("--ticks", type=int, default=120)
+    args = ap.parse_args()
+    print(f"{datetime.datetime.now(datetime.timezone.utc):%Y-%m-%d %H:%M} UTC, {platform.machine()}, "
+          f"{os.cpu_count()} cores, load {os.getloadavg()[0]:.1f}; warm cap {WARM_CAP}, budget {BUDGET}")
+    print("| N | filter | median ms | worst ms | worst / clarabel's worst | mean cost / optimum | worst cost / optimum |")
+    print("| --- | --- | --- | --- | --- | --- | --- |")
+    for n in args.n:
+        r = run(n, args.ticks)
+        worst_c = max(r["times"]["clarabel"])
+        for name, v in r["times"].items():
+            c = r["cost"].get(name, [])
+            print(f"| {n} | {name} | {1e3 * np.median(v):.1f} | {1e3 * max(v):.1f} | {max(v) / worst_c:.2f} | "
+                  + (f"{np.mean(c):.3f} | {max(c):.3f} |" if c else "– | – |"), flush=True)
+        print(f"anytime answers at N = {n}: {dict(r['answers'])}", flush=True)
+
+
+if __name__ == "__main__":
+    main()
