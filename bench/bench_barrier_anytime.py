@@ -36,25 +36,10 @@ import time  # noqa: E402
 import numpy as np  # noqa: E402
 
 from swarmdeck.safety import BarrierConfig, SafetyFilter  # noqa: E402
-from swarmdeck.safety.scenes import arena_for, grid_scene  # noqa: E402
+from swarmdeck.safety.scenes import crossing_scene, toward  # noqa: E402
 
-PITCH = 0.188
 WARM_CAP = 24
 BUDGET = 40
-
-
-def crossing(n: int, seed: int = 0) -> tuple[BarrierConfig, np.ndarray, np.ndarray]:
-    """(config, points (n, 2), goals (n, 2)): the dense crossing scene at N robots."""
-    cfg = BarrierConfig(bounds=arena_for(n, PITCH, fill=0.5))
-    pts, _ = grid_scene(n, np.random.default_rng(seed), cfg, pitch=PITCH)
-    return cfg, pts, -pts
-
-
-def nominal(cfg: BarrierConfig, x: np.ndarray, goals: np.ndarray) -> np.ndarray:
-    """Proportional controller to the goals, capped at v_max (m/s)."""
-    u = goals - x
-    s = np.linalg.norm(u, axis=1, keepdims=True)
-    return u * np.minimum(1.0, cfg.max_speed / np.maximum(s, 1e-12))
 
 
 def timed(fn, *args):
@@ -65,7 +50,7 @@ def timed(fn, *args):
 
 
 def run(n: int, ticks: int) -> dict:
-    cfg, x, goals = crossing(n)
+    cfg, x, goals = crossing_scene(n, np.random.default_rng(0))
     filters = {
         "centralised": SafetyFilter(dataclasses.replace(cfg, mode="centralised")),
         "warm-capped": SafetyFilter(dataclasses.replace(cfg, mode="centralised", warm_max_solves=WARM_CAP)),
@@ -80,7 +65,7 @@ def run(n: int, ticks: int) -> dict:
     cost = collections.defaultdict(list)
     answers = collections.Counter()
     for _ in range(ticks):
-        nom = nominal(cfg, x, goals)
+        nom = toward(goals, x, cfg.max_speed)
         out = {}
         for name, flt in filters.items():
             t, (u, d) = timed(flt.filter, x, nom)
