@@ -11,7 +11,7 @@ filter below is called once and timed (process CPU time, ``time.process_time``, 
 same process, so ratios hold under the machine's load):
 
 * *centralised*: today's warm-started exact filter (``mode="centralised"``, no caps);
-* *warm-capped*: the same with ``warm_max_solves`` (the warm paths stop and go to clarabel cold);
+* *warm-capped*: the same with ``active_set_max_solves`` (the warm paths stop and go to clarabel cold);
 * *anytime*: ``mode="anytime"`` with ``work_budget`` (distributed floor when the budget runs out);
 * *clarabel*: a fresh ``solver="clarabel"`` filter (cold interior point on the same rows);
 * *distributed*: ``mode="distributed"`` with and without the second pass.
@@ -53,8 +53,8 @@ def run(n: int, ticks: int) -> dict:
     cfg, x, goals = crossing_scene(n, np.random.default_rng(0))
     filters = {
         "centralised": SafetyFilter(dataclasses.replace(cfg, mode="centralised")),
-        "warm-capped": SafetyFilter(dataclasses.replace(cfg, mode="centralised", warm_max_solves=WARM_CAP)),
-        "anytime": SafetyFilter(dataclasses.replace(cfg, mode="anytime", warm_max_solves=WARM_CAP,
+        "warm-capped": SafetyFilter(dataclasses.replace(cfg, mode="centralised", active_set_max_solves=WARM_CAP)),
+        "anytime": SafetyFilter(dataclasses.replace(cfg, mode="anytime", active_set_max_solves=WARM_CAP,
                                                     work_budget=BUDGET)),
         "distributed": SafetyFilter(dataclasses.replace(cfg, mode="distributed")),
         "distributed 1 pass": SafetyFilter(dataclasses.replace(cfg, mode="distributed",

@@ -38,6 +38,16 @@ def _real(owner, name: str, value, lower: float | None = None, strict: bool = Fa
         raise ValueError(f"{cls}: {name} must be < {upper:g}, got {value!r}")
 
 
+def pipeline_defaults() -> dict[str, object]:
+    """The barrier settings the pipelines default to (``Arena``, ``swarmdeck run``, the console,
+    verification and the learning environments, through ``devices.pipeline.barrier_filter``):
+    ``mode="auto"`` (distributed above ``distributed_above`` robots, anytime at or below) with a
+    bounded amount of work per call — at most 12 factorisations per active-set stage, then clarabel
+    cold, and 120 in all, then the distributed floor (bench/RESULTS.md, "barrier: anytime").
+    A fresh dict; a ``BarrierConfig()`` built directly keeps ``mode="centralised"`` and no caps."""
+    return {"mode": "auto", "work_budget": 120, "active_set_max_solves": 12}
+
+
 @dataclass(frozen=True)
 class BarrierConfig:
     """Parameters of the single-integrator barrier QP (REFERENCE.md §3).
@@ -99,12 +109,11 @@ class BarrierConfig:
         iteration one KKT factorisation); None is unlimited. Deterministic (a count, never time).
     time_budget_s: anytime/auto: wall-time budget of the centralised part of one call, s (for the
         live console; None is unlimited). Depends on the machine's load: tests use ``work_budget``.
-    warm_max_solves: every mode: factorisations the closed-loop warm paths (dual prediction, warm
-        active set, pruned clarabel's polish) may spend in one call before the filter goes straight
-        to clarabel cold (the warm active set has no other bound on its work); None is unlimited.
-    sensing_radius: distributed mode: each robot sees the neighbours within this
-        distance (m); None → ``neighbour_radius()``. Refused when smaller than the
-        distance at which a pair row can bind (``pair_bind_distance()``).
+    active_set_max_solves: every mode: factorisations each active-set stage of one call may spend —
+        the closed-loop warm paths together (dual prediction, warm active set, pruned clarabel's
+        polish), and clarabel's polish; beyond it the warm paths go straight to clarabel cold and the
+        polish keeps clarabel's answer (the active set's inner Lawson–Hanson steps have no other
+        bound on their work). None is unlimited.
     distributed_second_pass: the distributed filter solves a second pass in which each pair row's
         margin unused by one robot goes to the other (:func:`safety.distributed.reallocate_halves`;
         certified as the first, never more invasive for any robot, ≈ 2× the distributed cost).
@@ -137,7 +146,7 @@ class BarrierConfig:
     distributed_above: int = 200
     work_budget: int | None = None
     time_budget_s: float | None = None
-    warm_max_solves: int | None = None
+    active_set_max_solves: int | None = None
     distributed_second_pass: bool = True
     sensing_radius: float | None = None
     pairs: bool = True
@@ -156,7 +165,7 @@ class BarrierConfig:
             _real(self, "sensing_radius", self.sensing_radius, lower=0.0, strict=True)
         if self.time_budget_s is not None:
             _real(self, "time_budget_s", self.time_budget_s, lower=0.0, strict=True)
-        for name in ("work_budget", "warm_max_solves"):
+        for name in ("work_budget", "active_set_max_solves"):
             value = getattr(self, name)
             if value is not None and (isinstance(value, bool) or not isinstance(value, numbers.Integral)
                                       or value < 1):

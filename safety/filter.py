@@ -121,7 +121,7 @@ class _Budget:
 
     total: factorisations (active-set Gram solves + clarabel iterations) the centralised QP may
     spend in this call (None: unlimited); warm: those the closed-loop warm paths may spend before
-    the filter goes to clarabel cold (None: unlimited); deadline: ``time.perf_counter()`` value
+    the filter goes to clarabel cold, and clarabel's polish on its own (None: unlimited); deadline: ``time.perf_counter()`` value
     (None: none). ``spent`` counts everything, ``warm_spent`` the warm paths' share.
     """
 
@@ -258,7 +258,7 @@ class SafetyFilter:
             return self._solve_distributed(P, U, O, rows, max_speed, t0)
         anytime = cfg.anytime_for(n)
         deadline = t0 + cfg.time_budget_s if anytime and cfg.time_budget_s is not None else None
-        budget = _Budget(cfg.work_budget if anytime else None, cfg.warm_max_solves, deadline)
+        budget = _Budget(cfg.work_budget if anytime else None, cfg.active_set_max_solves, deadline)
         unsafe = (rows.h < 0) & (rows.kind != LIMIT)
         n_unsafe = int(unsafe.sum())
         recovering = cfg.recovery and n_unsafe > 0
@@ -330,10 +330,15 @@ class SafetyFilter:
 
     @staticmethod
     def _active_set(rows: Rows, U: np.ndarray, max_speed: float | None, warm_rows: np.ndarray | None,
-                    max_iter: int, budget: _Budget, warm: bool = False, multipliers: np.ndarray | None = None):
-        """``solve_active_set`` within what ``budget`` has left (the warm cap too when ``warm``), tallied."""
+                    max_iter: int, budget: _Budget, warm: bool = False, multipliers: np.ndarray | None = None,
+                    polish: bool = False):
+        """``solve_active_set`` within what ``budget`` has left (the warm cap too when ``warm``; the
+        active-set cap alone, not shared, for clarabel's ``polish``), tallied."""
+        left = budget.left(warm)
+        if polish and budget.warm is not None:
+            left = budget.warm if left is None else min(left, budget.warm)
         res = solve_active_set(rows, U, max_speed, warm_rows, max_iter, multipliers=multipliers,
-                               max_solves=budget.left(warm), deadline=budget.deadline)
+                               max_solves=left, deadline=budget.deadline)
         budget.spend(res.solves, warm)
         return res
 
@@ -373,9 +378,8 @@ class SafetyFilter:
                 start, limit, method = int(warm.sum()), cfg.warm_max_rows, "warm active-set"
             else:
                 start, limit, method = int(np.sum(rows.lhs(U) > rows.b)), cfg.active_set_max_rows, "active-set"
-            if start <= limit and budget.left(closed_loop) != 0:
-                res = self._active_set(rows, U, max_speed, warm, cfg.max_active_set_iterations, budget,
-                                       closed_loop)
+            if start <= limit and budget.left(True) != 0:
+                res = self._active_set(rows, U, max_speed, warm, cfg.max_active_set_iterations, budget, True)
                 iterations += res.iterations
                 if res.ok:
                     return _Solved(res.u, res.active, int(res.speed_active.sum()), method, iterations,
@@ -393,7 +397,8 @@ class SafetyFilter:
             # numerical trouble at the tight tolerance: a longer cold active-set run (certified),
             # then clarabel at a 10× looser tolerance; still only a "Solved" answer is used
             if cfg.solver == "auto":
-                res = self._active_set(rows, U, max_speed, None, 4 * cfg.max_active_set_iterations, budget)
+                res = self._active_set(rows, U, max_speed, None, 4 * cfg.max_active_set_iterations, budget,
+                                       polish=True)
                 iterations += res.iterations
                 if res.ok:
                     return _Solved(res.u, res.active, int(res.speed_active.sum()), "active-set", iterations,
@@ -468,7 +473,7 @@ class SafetyFilter:
         cfg = self.config
         near = rows.lhs(u) >= rows.b - _ACTIVE_TOL
         if cfg.solver == "auto":
-            res = self._active_set(rows, U, max_speed, near, cfg.max_active_set_iterations, budget)
+            res = self._active_set(rows, U, max_speed, near, cfg.max_active_set_iterations, budget, polish=True)
             iterations += res.iterations
             if res.ok:
                 return _Solved(res.u, res.active, int(res.speed_active.sum()), "clarabel+active-set", iterations,

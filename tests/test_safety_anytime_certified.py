@@ -25,7 +25,7 @@ TICKS = 6
        warm_cap=st.sampled_from([1, 8, None]))
 def test_every_anytime_answer_meets_every_row(n: int, seed: int, budget: int | None, warm_cap: int | None) -> None:
     cfg, x, goals = crossing_scene(n, np.random.default_rng(seed))
-    cfg = dataclasses.replace(cfg, mode="anytime", work_budget=budget, warm_max_solves=warm_cap)
+    cfg = dataclasses.replace(cfg, mode="anytime", work_budget=budget, active_set_max_solves=warm_cap)
     flt = SafetyFilter(cfg)
     for _ in range(TICKS):
         nom = toward(goals, x, cfg.max_speed)

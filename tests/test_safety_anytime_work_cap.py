@@ -3,7 +3,7 @@
 A pinned dense scene (the crossing at N = 150 after 30 ticks of jamming): a budget of a few
 factorisations runs out on every run at the same count, and the answer is the distributed floor
 on the same rows, identical on every run, meeting every row; the warm cap alone
-(``warm_max_solves``) falls back to clarabel cold and still returns the optimum.
+(``active_set_max_solves``) falls back to clarabel cold and still returns the optimum.
 """
 from __future__ import annotations
 
@@ -53,7 +53,7 @@ def test_budget_runs_out_at_the_same_count_and_the_floor_is_certified(jammed) ->
 def test_warm_cap_falls_back_to_clarabel_cold_with_the_optimum(jammed) -> None:
     cfg, x, nom = jammed
     plain = SafetyFilter(cfg)
-    capped = SafetyFilter(dataclasses.replace(cfg, warm_max_solves=1))
+    capped = SafetyFilter(dataclasses.replace(cfg, active_set_max_solves=1))
     fell_back = 0
     for _ in range(5):
         u, d = plain.filter(x, nom)
