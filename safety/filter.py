@@ -546,8 +546,9 @@ class SafetyFilter:
         if not res.ok:
             return self.fail_stop(n, U, f"{reason}; distributed floor: {res.reason}", t0, rows.m)
         self.reset()
+        u = res.u if max_speed is None else clip_speed(res.u, float(max_speed))  # exactly inside the discs
         n_unsafe = int(np.sum((rows.h < 0) & (rows.kind != LIMIT)))
-        return res.u, self._diag(True, f"distributed floor ({reason})", t0, rows, P, U, res.u, O, res.active,
+        return u, self._diag(True, f"distributed floor ({reason})", t0, rows, P, U, res.u, O, res.active,
                                  res.n_speed, False, "distributed floor", 0, 0, n_unsafe, answer="floor",
                                  work=budget.spent)
 

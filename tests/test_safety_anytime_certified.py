@@ -3,7 +3,9 @@
 A hypothesis closed loop over the dense crossing (``safety.scenes.crossing_scene``) at N up to 300
 with work budgets from 1 factorisation (the distributed floor on nearly every tick) to unlimited:
 every tick's answer meets every pair and wall row the filter builds (robots already inside the
-unsafe set: "no further approach") and every speed bound, and says which answer it is.
+unsafe set: "no further approach") and every speed bound, and says which answer it is. Certified
+answers meet the rows to 2e-10 m/s; an interior-point answer whose polish hit the active-set cap
+(method "clarabel") to clarabel's acceptance tolerance, 1e-7 m/s, as before this mode.
 """
 from __future__ import annotations
 
@@ -36,6 +38,7 @@ def test_every_anytime_answer_meets_every_row(n: int, seed: int, budget: int | N
         rows = barrier_rows(x, cfg)
         unsafe = (rows.h < 0) & (rows.kind != LIMIT)
         bound = np.where(unsafe, np.maximum(rows.b, 0.0), rows.b)
-        assert np.all(rows.lhs(u) <= bound + 2e-10), float(np.max(rows.lhs(u) - bound))
+        tol = 1e-7 if diag.method == "clarabel" else 2e-10
+        assert np.all(rows.lhs(u) <= bound + tol), (diag.method, float(np.max(rows.lhs(u) - bound)))
         assert np.all(np.einsum("kd,kd->k", u, u) <= cfg.max_speed**2)
         x = x + u * cfg.dt
