@@ -12,7 +12,10 @@ same process, so ratios hold under the machine's load):
 
 * *centralised*: today's warm-started exact filter (``mode="centralised"``, no caps);
 * *warm-capped*: the same with ``active_set_max_solves`` (the warm paths stop and go to clarabel cold);
-* *anytime*: ``mode="anytime"`` with ``work_budget`` (distributed floor when the budget runs out);
+* *anytime*: ``mode="anytime"`` with the pipelines' caps (``safety.config.pipeline_defaults``:
+  clarabel cold after the active-set cap, the distributed floor when the work budget runs out);
+* *anytime, floor at the cap*: the same with ``work_budget`` equal to the active-set cap, so the
+  floor answers as soon as the warm paths give up (the alternative to clarabel cold);
 * *clarabel*: a fresh ``solver="clarabel"`` filter (cold interior point on the same rows);
 * *distributed*: ``mode="distributed"`` with and without the second pass.
 
@@ -36,10 +39,12 @@ import time  # noqa: E402
 import numpy as np  # noqa: E402
 
 from swarmdeck.safety import BarrierConfig, SafetyFilter  # noqa: E402
+from swarmdeck.safety.config import pipeline_defaults  # noqa: E402
 from swarmdeck.safety.scenes import crossing_scene, toward  # noqa: E402
 
-WARM_CAP = 24
-BUDGET = 40
+DEFAULTS = pipeline_defaults()
+WARM_CAP = int(DEFAULTS["active_set_max_solves"])
+BUDGET = int(DEFAULTS["work_budget"])
 
 
 def timed(fn, *args):
@@ -56,6 +61,8 @@ def run(n: int, ticks: int) -> dict:
         "warm-capped": SafetyFilter(dataclasses.replace(cfg, mode="centralised", active_set_max_solves=WARM_CAP)),
         "anytime": SafetyFilter(dataclasses.replace(cfg, mode="anytime", active_set_max_solves=WARM_CAP,
                                                     work_budget=BUDGET)),
+        "anytime, floor at the cap": SafetyFilter(dataclasses.replace(cfg, mode="anytime", active_set_max_solves=WARM_CAP,
+                                                                      work_budget=WARM_CAP)),
         "distributed": SafetyFilter(dataclasses.replace(cfg, mode="distributed")),
         "distributed 1 pass": SafetyFilter(dataclasses.replace(cfg, mode="distributed",
                                                                distributed_second_pass=False)),
@@ -63,7 +70,7 @@ def run(n: int, ticks: int) -> dict:
     clar_cfg = dataclasses.replace(cfg, solver="clarabel")
     times = collections.defaultdict(list)
     cost = collections.defaultdict(list)
-    answers = collections.Counter()
+    answers = collections.defaultdict(collections.Counter)
     for _ in range(ticks):
         nom = toward(goals, x, cfg.max_speed)
         out = {}
@@ -75,7 +82,8 @@ def run(n: int, ticks: int) -> dict:
         t, (u, d) = timed(SafetyFilter(clar_cfg).filter, x, nom)
         assert d.ok, d.status
         times["clarabel"].append(t)
-        answers[out["anytime"][1].answer] += 1
+        for name in ("anytime", "anytime, floor at the cap"):
+            answers[name][out[name][1].answer] += 1
         c_opt = float(np.sum((out["centralised"][0] - nom) ** 2))
         if c_opt > 1e-12:
             for name, (u, _) in out.items():
@@ -100,7 +108,7 @@ def main() -> None:
             c = r["cost"].get(name, [])
             print(f"| {n} | {name} | {1e3 * np.median(v):.1f} | {1e3 * max(v):.1f} | {max(v) / worst_c:.2f} | "
                   + (f"{np.mean(c):.3f} | {max(c):.3f} |" if c else "– | – |"), flush=True)
-        print(f"anytime answers at N = {n}: {dict(r['answers'])}", flush=True)
+        print(f"answers at N = {n}: " + "; ".join(f"{k}: {dict(v)}" for k, v in r["answers"].items()), flush=True)
 
 
 if __name__ == "__main__":
