@@ -169,6 +169,7 @@ class SafetyFilter:
         self._warm_shape: tuple[int, int] = (-1, -1)
         self._lam_keys = np.zeros(0, dtype=np.int64)
         self._lam = np.zeros(0)
+        self._skip_warm = False  # the previous call's warm paths reached the active-set cap
         if self.config.solver == "auto":
             dual_ascent.warm_up()  # numba's compile (or cache load) here, never in a tick
 
@@ -183,6 +184,7 @@ class SafetyFilter:
         self._warm_shape = (-1, -1)
         self._lam_keys = np.zeros(0, dtype=np.int64)
         self._lam = np.zeros(0)
+        self._skip_warm = False
 
     # ------------------------------------------------------------------ public
     def filter(self, points, nominal, obstacles=None) -> tuple[np.ndarray, BarrierDiagnostics]:
@@ -370,6 +372,13 @@ class SafetyFilter:
             if self._warm_shape == (n, n_obs) and self._warm_keys.size:
                 warm = np.isin(rows.key, self._warm_keys, assume_unique=True)
             closed_loop = warm is not None and bool(warm.any())
+            if closed_loop and self._skip_warm:
+                # last tick's warm paths spent the whole active-set cap and gave up: this tick goes
+                # to clarabel cold at once (its polished answer warm-starts the next tick, which tries again)
+                self._skip_warm = False
+                closed_loop, warm, skipped = False, None, True
+            else:
+                skipped = False
             if closed_loop and self._dual_enabled():
                 solved = self._solve_dual(rows, U, max_speed, budget)
                 if solved is not None:
@@ -378,7 +387,7 @@ class SafetyFilter:
                 start, limit, method = int(warm.sum()), cfg.warm_max_rows, "warm active-set"
             else:
                 start, limit, method = int(np.sum(rows.lhs(U) > rows.b)), cfg.active_set_max_rows, "active-set"
-            if start <= limit and budget.left(True) != 0:
+            if start <= limit and budget.left(True) != 0 and not skipped:
                 res = self._active_set(rows, U, max_speed, warm, cfg.max_active_set_iterations, budget, True)
                 iterations += res.iterations
                 if res.ok:
@@ -388,6 +397,8 @@ class SafetyFilter:
                 solved = self._solve_pruned(rows, U, max_speed, budget)
                 if solved is not None:
                     return solved
+        if budget.warm is not None and budget.warm_spent >= budget.warm:
+            self._skip_warm = True
         if budget.out():
             return f"{_BUDGET}: work cap reached before clarabel"
         qp = self._clarabel(rows, U, max_speed, cfg.clarabel_max_iter, cfg.clarabel_tol, budget)
