@@ -111,8 +111,8 @@ class BarrierConfig:
         live console; None is unlimited). Depends on the machine's load: tests use ``work_budget``.
     active_set_max_solves: every mode: factorisations each active-set stage of one call may spend —
         the closed-loop warm paths together (dual prediction, warm active set, pruned clarabel's
-        polish), and clarabel's polish; beyond it the warm paths go straight to clarabel cold and the
-        polish keeps clarabel's answer (the active set's inner Lawson–Hanson steps have no other
+        polish), and clarabel's polish (at most 4 of them); beyond it the warm paths go straight to
+        clarabel cold and the polish keeps clarabel's answer (the active set's inner Lawson–Hanson steps have no other
         bound on their work). None is unlimited.
     distributed_second_pass: the distributed filter solves a second pass in which each pair row's
         margin unused by one robot goes to the other (:func:`safety.distributed.reallocate_halves`;

@@ -58,6 +58,10 @@ _WARM_DISC_FRACTION = 0.8
 MAX_COORDINATE = 1e6
 _PASS_TOL = FEAS_TOL  # m/s: a row counts as met within the certification's tolerance (so answers are fixed points)
 _CLARABEL_FEAS = 1e-7  # m/s: an interior-point answer violating a row by more than this is refused
+# factorisations clarabel's polish may spend under an active-set cap: from clarabel's active rows it
+# certifies in one or two iterations or not at all (bench_barrier_anytime: a capped polish that failed
+# spent its whole cap on the worst ticks)
+_POLISH_SOLVES = 4
 _KIND_NAMES = {PAIR: "pair", WALL: "wall", OBSTACLE: "obstacle", LIMIT: "limit"}
 
 
@@ -334,11 +338,12 @@ class SafetyFilter:
     def _active_set(rows: Rows, U: np.ndarray, max_speed: float | None, warm_rows: np.ndarray | None,
                     max_iter: int, budget: _Budget, warm: bool = False, multipliers: np.ndarray | None = None,
                     polish: bool = False):
-        """``solve_active_set`` within what ``budget`` has left (the warm cap too when ``warm``; the
-        active-set cap alone, not shared, for clarabel's ``polish``), tallied."""
+        """``solve_active_set`` within what ``budget`` has left (the warm cap too when ``warm``; for
+        clarabel's ``polish`` its own allowance, at most ``_POLISH_SOLVES``, under an active-set cap), tallied."""
         left = budget.left(warm)
         if polish and budget.warm is not None:
-            left = budget.warm if left is None else min(left, budget.warm)
+            polish_cap = min(budget.warm, _POLISH_SOLVES)
+            left = polish_cap if left is None else min(left, polish_cap)
         res = solve_active_set(rows, U, max_speed, warm_rows, max_iter, multipliers=multipliers,
                                max_solves=left, deadline=budget.deadline)
         budget.spend(res.solves, warm)
