@@ -42,12 +42,12 @@ from scipy.sparse.csgraph import connected_components
 from scipy.spatial import cKDTree
 
 from . import dual_ascent
-from .active_set import FEAS_TOL, clip_speed, solve_active_set
+from .active_set import FEAS_TOL, ActiveSetResult, clip_speed, solve_active_set
 from .config import BarrierConfig
 from .constraints import LIMIT, OBSTACLE, PAIR, WALL, Rows, barrier_rows
 from .diagnostics import BarrierDiagnostics
 from .distributed import filter_distributed
-from .qp_clarabel import solve_qp
+from .qp_clarabel import QPResult, solve_qp
 
 _ACTIVE_TOL = 1e-7  # m/s: a row within this of its bound counts as active in clarabel answers
 # closed loop, pruned clarabel: speed cones only for robots whose nominal speed is at least this
@@ -148,6 +148,7 @@ class _Budget:
         return None if self.deadline is None else max(self.deadline - time.perf_counter(), 0.0)
 
     def spend(self, k: int, warm: bool = False) -> None:
+        """Count ``k`` factorisations (also against the warm cap when ``warm``)."""
         self.spent += int(k)
         if warm:
             self.warm_spent += int(k)
@@ -337,7 +338,7 @@ class SafetyFilter:
     @staticmethod
     def _active_set(rows: Rows, U: np.ndarray, max_speed: float | None, warm_rows: np.ndarray | None,
                     max_iter: int, budget: _Budget, warm: bool = False, multipliers: np.ndarray | None = None,
-                    polish: bool = False):
+                    polish: bool = False) -> ActiveSetResult:
         """``solve_active_set`` within what ``budget`` has left (the warm cap too when ``warm``; for
         clarabel's ``polish`` its own allowance, at most ``_POLISH_SOLVES``, under an active-set cap), tallied."""
         left = budget.left(warm)
@@ -351,7 +352,7 @@ class SafetyFilter:
 
     @staticmethod
     def _clarabel(rows: Rows, U: np.ndarray, max_speed: float | None, max_iter: int, tol: float,
-                  budget: _Budget, discs: np.ndarray | None = None, warm: bool = False):
+                  budget: _Budget, discs: np.ndarray | None = None, warm: bool = False) -> QPResult | None:
         """``solve_qp`` with at most the iterations (and wall time) ``budget`` has left, tallied."""
         left = budget.left(warm)
         if left is not None:
@@ -407,6 +408,8 @@ class SafetyFilter:
         if budget.out():
             return f"{_BUDGET}: work cap reached before clarabel"
         qp = self._clarabel(rows, U, max_speed, cfg.clarabel_max_iter, cfg.clarabel_tol, budget)
+        if qp is None:  # the deadline passed in between
+            return f"{_BUDGET}: deadline reached before clarabel"
         if not qp.ok and budget.out():
             return f"{_BUDGET}: work cap reached in clarabel ({qp.reason})"
         if not qp.ok and not qp.reason.startswith("infeasible"):
