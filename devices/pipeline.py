@@ -124,11 +124,13 @@ def barrier_filter(robot: GritsBotParams, bounds: tuple[float, float, float, flo
     """swarmdeck's unicycle barrier filter for this robot and arena.
 
     ``barrier``: further :class:`~swarmdeck.safety.BarrierConfig` fields (``safety_distance``,
-    ``gamma``, ``class_k``, ``max_speed``); their defaults are REFERENCE.md's.
+    ``gamma``, ``class_k``, ``max_speed``); their defaults are REFERENCE.md's, and the mode and
+    work caps default to ``safety.config.pipeline_defaults()`` (anytime, bounded work per tick).
     """
     from swarmdeck.safety import BarrierConfig, UnicycleSafetyFilter  # devices -> safety (one way)
+    from swarmdeck.safety.config import pipeline_defaults
 
-    return UnicycleSafetyFilter(BarrierConfig(bounds=bounds, dt=dt, **barrier), robot)
+    return UnicycleSafetyFilter(BarrierConfig(bounds=bounds, dt=dt, **{**pipeline_defaults(), **barrier}), robot)
 
 
 def is_unicycle_filter(filt: object) -> bool:

@@ -23,6 +23,7 @@ falls back to clarabel. Robots no row touches are solved in closed form.
 """
 from __future__ import annotations
 
+import time
 from dataclasses import dataclass
 
 import numpy as np
@@ -58,6 +59,7 @@ class ActiveSetResult:
     speed_active: np.ndarray
     iterations: int
     multipliers: np.ndarray | None = None
+    solves: int = 0  # factorisations of the working set's Gram matrix (the unit of the work cap)
 
 
 def _project(w: np.ndarray, vmax: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -171,9 +173,11 @@ class _Working:
             return None
 
 
-def _newton_discs(work: _Working, uh: np.ndarray, vmax: float, lam0: np.ndarray
-                  ) -> tuple[np.ndarray, np.ndarray] | None:
-    """Solve A_W Π_D(û − A_Wᵀλ) = b_W for λ (consistent working set), or None."""
+def _newton_discs(work: _Working, uh: np.ndarray, vmax: float, lam0: np.ndarray, count: list[int],
+                  cap: int | None) -> tuple[np.ndarray, np.ndarray] | None:
+    """Solve A_W Π_D(û − A_Wᵀλ) = b_W for λ (consistent working set), or None.
+
+    ``count`` (one int, this call's own tally) gains one per factorisation; None once it reaches ``cap``."""
     lam = lam0.copy()
     for _ in range(_NEWTON_STEPS):
         w = uh - work.At(lam)
@@ -181,6 +185,9 @@ def _newton_discs(work: _Working, uh: np.ndarray, vmax: float, lam0: np.ndarray
         F = work.A(u) - work.b
         if float(np.max(np.abs(F), initial=0.0)) <= 1e-12:
             return lam, u
+        if cap is not None and count[0] >= cap:
+            return None
+        count[0] += 1
         J = np.broadcast_to(_EYE, (work.n, 2, 2)).copy()
         if over.any():
             wh = w[over] / norms[:, None]
@@ -194,8 +201,14 @@ def _newton_discs(work: _Working, uh: np.ndarray, vmax: float, lam0: np.ndarray
 
 def solve_active_set(rows: Rows, nominal: np.ndarray, max_speed: float | None,
                      warm: np.ndarray | None = None, max_iter: int = 40,
-                     feas_tol: float = FEAS_TOL, multipliers: np.ndarray | None = None) -> ActiveSetResult:
+                     feas_tol: float = FEAS_TOL, multipliers: np.ndarray | None = None,
+                     max_solves: int | None = None, deadline: float | None = None) -> ActiveSetResult:
     """Solve the barrier QP for nominal (N, 2) from working set ``warm`` ((m,) bool or None).
+
+    ``max_solves``: the work cap, factorisations of the working set's Gram matrix (each iteration
+    and each disc Newton step is one); once it is reached the call fails at once with reason
+    "work cap" (deterministic: counts, never time). ``solves`` in the result is the count spent.
+    ``deadline`` (a ``time.perf_counter()`` value, for the live console only): the same, by wall time.
 
     ``multipliers`` ((m,) ≥ 0, e.g. a dual ascent's, positive on ``warm``): a dual-feasible start.
     Rows then leave the working set by Lawson–Hanson steps from it from the first iteration (the
@@ -226,9 +239,10 @@ def solve_active_set(rows: Rows, nominal: np.ndarray, max_speed: float | None,
     lam_rows = np.zeros(m) if multipliers is None else np.where(W, multipliers, 0.0)
     first_aggressive = 0 if multipliers is not None else _AGGRESSIVE_ITERS
     lam_cut = np.zeros(n)
+    count = [0]  # this call's factorisations
 
     def fail(reason: str, it: int) -> ActiveSetResult:
-        return ActiveSetResult(np.zeros((n, 2)), False, reason, W, cut, it)
+        return ActiveSetResult(np.zeros((n, 2)), False, reason, W, cut, it, solves=count[0])
 
     def certify(u: np.ndarray, work: _Working | None, lam: np.ndarray, it: int) -> ActiveSetResult | None:
         if np.any(rows.lhs(u) - rows.b > feas_tol):
@@ -243,7 +257,7 @@ def solve_active_set(rows: Rows, nominal: np.ndarray, max_speed: float | None,
         u = clip_speed(u, vmax)  # rounding only
         held = W & (lam_rows > 0)
         return ActiveSetResult(u, True, "certified", held, speed >= vmax * vmax * (1 - 1e-9), it,
-                               np.where(held, lam_rows, 0.0))
+                               np.where(held, lam_rows, 0.0), count[0])
 
     for it in range(1, max_iter + 1):
         aggressive = it <= first_aggressive
@@ -258,6 +272,10 @@ def solve_active_set(rows: Rows, nominal: np.ndarray, max_speed: float | None,
                 lam = np.zeros(0)
                 break
             rhs = work.A(uh) - work.b
+            if (max_solves is not None and count[0] >= max_solves) or (
+                    deadline is not None and time.perf_counter() >= deadline):
+                return fail("work cap", it)
+            count[0] += 1
             lam = work.solve(None, rhs)  # type: ignore[assignment]
             if lam is None or not np.all(np.isfinite(lam)):
                 return fail("singular working set", it)
@@ -293,7 +311,10 @@ def solve_active_set(rows: Rows, nominal: np.ndarray, max_speed: float | None,
                 return done if done is not None else fail("not certified", it)
             # the rows have settled: solve the discs exactly (Newton on u(λ) = Π_D(û − Aᵀλ))
             rw = _Working(rows.i[idx], jj[idx], rows.ci[idx], rows.cj[idx], rows.b[idx], n)
-            sol = _newton_discs(rw, uh, vmax, lam[: idx.size]) if idx.size else (np.zeros(0), _project(uh, vmax)[0])
+            sol = (_newton_discs(rw, uh, vmax, lam[: idx.size], count, max_solves) if idx.size
+                   else (np.zeros(0), _project(uh, vmax)[0]))
+            if sol is None and max_solves is not None and count[0] >= max_solves:
+                return fail("work cap", it)
             if sol is not None and np.all(sol[0] >= 0):
                 lam_rows[:] = 0.0
                 lam_rows[idx] = sol[0]

@@ -42,6 +42,16 @@ def _real(owner: object, name: str, value: Any, lower: float | None = None, stri
         raise ValueError(f"{cls}: {name} must be < {upper:g}, got {value!r}")
 
 
+def pipeline_defaults() -> dict[str, object]:
+    """The barrier settings the pipelines default to (``Arena``, ``swarmdeck run``, the console,
+    verification and the learning environments, through ``devices.pipeline.barrier_filter``):
+    ``mode="auto"`` (distributed above ``distributed_above`` robots, anytime at or below) with a
+    bounded amount of work per call — at most 12 factorisations per active-set stage, then clarabel
+    cold, and 120 in all, then the distributed floor (bench/RESULTS.md, "barrier: anytime").
+    A fresh dict; a ``BarrierConfig()`` built directly keeps ``mode="centralised"`` and no caps."""
+    return {"mode": "auto", "work_budget": 120, "active_set_max_solves": 12}
+
+
 @dataclass(frozen=True)
 class BarrierConfig:
     """Parameters of the single-integrator barrier QP (REFERENCE.md §3).
@@ -91,12 +101,26 @@ class BarrierConfig:
     clarabel_max_iter, clarabel_tol: clarabel's max_iter and tol_gap_abs/rel/tol_feas.
     mode: ``"centralised"`` (one QP over all robots), ``"distributed"`` (every robot
         solves its own QP on half of each pair row, REFERENCE.md §12,
-        :mod:`safety.distributed`) or ``"auto"`` (distributed above ``distributed_above`` robots).
+        :mod:`safety.distributed`), ``"anytime"`` (the centralised optimum within
+        ``work_budget``/``time_budget_s``; when the budget runs out the distributed answer on
+        the same rows, which is certified and cheap, is returned instead — ``diag.answer`` says
+        which) or ``"auto"`` (distributed above ``distributed_above`` robots, anytime at or below;
+        with both budgets None that is exactly the centralised filter there).
     distributed_above: robot count above which "auto" filters distributed (from
         ``bench/bench_safety.py``: where the centralised filter stops holding a 33 ms tick).
-    sensing_radius: distributed mode: each robot sees the neighbours within this
-        distance (m); None → ``neighbour_radius()``. Refused when smaller than the
-        distance at which a pair row can bind (``pair_bind_distance()``).
+    work_budget: anytime/auto: factorisations one call may spend on the centralised QP (each
+        active-set iteration or disc Newton step is one Gram factorisation, each clarabel
+        iteration one KKT factorisation); None is unlimited. Deterministic (a count, never time).
+    time_budget_s: anytime/auto: wall-time budget of the centralised part of one call, s (for the
+        live console; None is unlimited). Depends on the machine's load: tests use ``work_budget``.
+    active_set_max_solves: every mode: factorisations each active-set stage of one call may spend —
+        the closed-loop warm paths together (dual prediction, warm active set, pruned clarabel's
+        polish), and clarabel's polish (at most 4 of them); beyond it the warm paths go straight to
+        clarabel cold and the polish keeps clarabel's answer (the active set's inner Lawson–Hanson steps have no other
+        bound on their work). None is unlimited.
+    distributed_second_pass: the distributed filter solves a second pass in which each pair row's
+        margin unused by one robot goes to the other (:func:`safety.distributed.reallocate_halves`;
+        certified as the first, never more invasive for any robot, ≈ 2× the distributed cost).
     pairs: False builds no pair rows: the filter keeps the walls and the fixed obstacles
         (e.g. docked robots) only — the hard layer of a bypassed run (:mod:`safety.guard`).
     """
@@ -122,8 +146,12 @@ class BarrierConfig:
     warm_dual_iterations: int = 4
     clarabel_max_iter: int = 100
     clarabel_tol: float = 1e-9
-    mode: Literal["centralised", "distributed", "auto"] = "centralised"
+    mode: Literal["centralised", "distributed", "anytime", "auto"] = "centralised"
     distributed_above: int = 200
+    work_budget: int | None = None
+    time_budget_s: float | None = None
+    active_set_max_solves: int | None = None
+    distributed_second_pass: bool = True
     sensing_radius: float | None = None
     pairs: bool = True
 
@@ -139,6 +167,14 @@ class BarrierConfig:
             _real(self, "wall_margin", self.wall_margin, lower=0.0, strict=False)
         if self.sensing_radius is not None:
             _real(self, "sensing_radius", self.sensing_radius, lower=0.0, strict=True)
+        if self.time_budget_s is not None:
+            _real(self, "time_budget_s", self.time_budget_s, lower=0.0, strict=True)
+        for name in ("work_budget", "active_set_max_solves"):
+            value = getattr(self, name)
+            if value is not None and (isinstance(value, bool) or not isinstance(value, numbers.Integral)
+                                      or value < 1):
+                raise ValueError(f"BarrierConfig: {name} must be an integer >= 1 or None (unlimited), "
+                                 f"got {value!r}")
         _real(self, "clarabel_tol", self.clarabel_tol, lower=0.0, strict=True, upper=1e-3)
         for name, lower in (("max_active_set_iterations", 1), ("active_set_max_rows", 0), ("warm_max_rows", 0),
                             ("warm_dual_sweeps", 0), ("warm_dual_iterations", 1), ("clarabel_max_iter", 1),
@@ -146,7 +182,7 @@ class BarrierConfig:
             value = getattr(self, name)
             if isinstance(value, bool) or not isinstance(value, numbers.Integral) or value < lower:
                 raise ValueError(f"BarrierConfig: {name} must be an integer >= {lower}, got {value!r}")
-        for name in ("recovery", "pairs"):
+        for name in ("recovery", "pairs", "distributed_second_pass"):
             if not isinstance(getattr(self, name), bool):
                 raise ValueError(f"BarrierConfig: {name} must be true or false, got {getattr(self, name)!r}")
         checks = [
@@ -154,8 +190,8 @@ class BarrierConfig:
             (self.solver in ("auto", "clarabel"), "solver must be 'auto' or 'clarabel'"),
             (isinstance(self.bounds, (tuple, list)) and len(self.bounds) == 4,
              "bounds must be (x_min, x_max, y_min, y_max)"),
-            (self.mode in ("centralised", "distributed", "auto"),
-             "mode must be 'centralised', 'distributed' or 'auto'"),
+            (self.mode in ("centralised", "distributed", "anytime", "auto"),
+             "mode must be 'centralised', 'distributed', 'anytime' or 'auto'"),
         ]
         for ok, message in checks:
             if not ok:
@@ -183,6 +219,10 @@ class BarrierConfig:
     def distributed_for(self, n: int) -> bool:
         """Whether N robots are filtered by the distributed filter under this config's ``mode``."""
         return self.mode == "distributed" or (self.mode == "auto" and n > self.distributed_above)
+
+    def anytime_for(self, n: int) -> bool:
+        """Whether N robots are filtered in anytime mode (centralised within the budget, distributed floor)."""
+        return self.mode == "anytime" or (self.mode == "auto" and n <= self.distributed_above)
 
     @classmethod
     def from_dict(cls, data: dict) -> BarrierConfig:

@@ -34,6 +34,12 @@ class BarrierDiagnostics:
     components of the candidate-row graph, computed only when some robots are
     inside the unsafe set (their clusters are solved apart); 0 otherwise. n_unsafe: rows with h < 0 (robots
     already inside the unsafe set). min_obstacle_distance: m (inf without obstacles).
+    answer: which answer this is — "optimum" (the centralised QP's certified optimum, or the
+    nominal when it is safe), "floor" (anytime mode: the budget ran out first, so the distributed
+    answer on the same rows; certified, more invasive), "distributed" (distributed mode), "stopped"
+    (fail-stop). gap: how far the answer's cost ½Σ‖u − û‖² (m²/s²) is above the centralised
+    optimum's when known (0.0 for the optimum), None when unknown. work: factorisations spent on
+    the centralised QP (active-set Gram solves + clarabel iterations), the unit of ``work_budget``.
     """
 
     ok: bool
@@ -52,6 +58,9 @@ class BarrierDiagnostics:
     n_clusters: int = 0
     n_unsafe: int = 0
     min_obstacle_distance: float = field(default=math.inf)
+    answer: str = ""
+    gap: float | None = None
+    work: int = 0
 
     def to_dict(self) -> dict:
         """JSON-able dict (lists for arrays, None for infinities)."""
@@ -72,4 +81,7 @@ class BarrierDiagnostics:
             "n_clusters": int(self.n_clusters),
             "n_unsafe": int(self.n_unsafe),
             "min_obstacle_distance": _num(self.min_obstacle_distance),
+            "answer": self.answer,
+            "gap": None if self.gap is None else _num(self.gap),
+            "work": int(self.work),
         }

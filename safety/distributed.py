@@ -306,6 +306,35 @@ def solve_small_qps(owner: np.ndarray, a: np.ndarray, b: np.ndarray, nominal: np
     return SmallQPResult(u, solved, active, on_disc)
 
 
+def reallocate_halves(split: SplitRows, u: np.ndarray, n_pairs: int) -> tuple[np.ndarray, np.ndarray]:
+    """Second pass's split: each pair row's unused half goes to the robot that needed it.
+
+    split: a half/half split whose pair halves come first (robot i's ``[0, n_pairs)``, robot j's
+    ``[n_pairs, 2·n_pairs)``, as :func:`split_rows` orders them); u (N, 2) the first pass's answer.
+    Where robot i's half binds (usage ``a·u_i`` within 1e-10 m/s of ``b/2``) and robot j's does not,
+    i gets ``b − c_j`` and j exactly its usage ``c_j`` (and symmetrically); otherwise both keep
+    ``b/2``. The two bounds still add up to the row, and every robot's first answer is feasible for
+    its new rows, so the second pass is certified as the first and no robot's intervention grows.
+    Returns (b (M,) new bounds, loosened (N,) robots with a loosened half — the only ones to re-solve).
+    """
+    b = split.b.copy()
+    loosened = np.zeros(u.shape[0], dtype=bool)
+    if n_pairs == 0:
+        return b, loosened
+    use = np.einsum("kd,kd->k", split.a[: 2 * n_pairs], u[split.owner[: 2 * n_pairs]])
+    half = split.b[:n_pairs]  # = b/2 for both halves
+    ci, cj = use[:n_pairs], use[n_pairs:]
+    bind_i, bind_j = ci >= half - _FEAS_TOL, cj >= half - _FEAS_TOL
+    give_i = bind_i & ~bind_j  # j's half is slack: i gets it
+    give_j = bind_j & ~bind_i
+    total = 2.0 * half
+    b[:n_pairs] = np.where(give_i, total - cj, np.where(give_j, ci, half))
+    b[n_pairs:2 * n_pairs] = np.where(give_j, total - ci, np.where(give_i, cj, half))
+    loosened[split.owner[:n_pairs][give_i]] = True
+    loosened[split.owner[n_pairs:2 * n_pairs][give_j]] = True
+    return b, loosened
+
+
 @dataclass(frozen=True)
 class DistributedResult:
     """u (N, 2); ok; reason; active (m,) centralised rows with an active half (or whole row);
@@ -338,6 +367,15 @@ def filter_distributed(rows: Rows, nominal: np.ndarray, max_speed: float | None,
     res = solve_small_qps(split.owner, split.a, split.b, nominal, max_speed, reach)
     u, solved, act, on_disc = res.u, res.solved, res.active, res.on_disc
     n_fallback = 0
+    if cfg.distributed_second_pass and not recovering and solved.all():
+        # a second pass on a better split of each pair's margin (reallocate_halves): less invasive
+        b2, again = reallocate_halves(split, u, int(np.sum(rows.j >= 0)))
+        if again.any():
+            res2 = solve_small_qps(split.owner, split.a, b2, nominal, max_speed, reach, todo=again)
+            if res2.solved.all():
+                u = np.where(again[:, None], res2.u, u)
+                act = np.where(again[split.owner], res2.active, act)
+                on_disc = np.where(again, res2.on_disc, on_disc)
     if recovering and not solved.all():
         # conflicting separation targets: those robots hold "no further approach" instead
         retry = ~solved
@@ -368,5 +406,5 @@ def filter_distributed(rows: Rows, nominal: np.ndarray, max_speed: float | None,
     return DistributedResult(u, True, "optimal per robot", active, int(on_disc.sum()), n_fallback)
 
 
-__all__ = ["SplitRows", "split_rows", "SmallQPResult", "solve_small_qps", "DistributedResult",
+__all__ = ["SplitRows", "split_rows", "reallocate_halves", "SmallQPResult", "solve_small_qps", "DistributedResult",
            "filter_distributed"]

@@ -45,12 +45,12 @@ from scipy.spatial import cKDTree
 from swarmdeck.core.errors import SwarmdeckError
 
 from . import dual_ascent
-from .active_set import FEAS_TOL, clip_speed, solve_active_set
+from .active_set import FEAS_TOL, ActiveSetResult, clip_speed, solve_active_set
 from .config import BarrierConfig
 from .constraints import LIMIT, OBSTACLE, PAIR, WALL, Rows, barrier_rows
 from .diagnostics import BarrierDiagnostics
 from .distributed import filter_distributed
-from .qp_clarabel import solve_qp
+from .qp_clarabel import QPResult, solve_qp
 
 _ACTIVE_TOL = 1e-7  # m/s: a row within this of its bound counts as active in clarabel answers
 # closed loop, pruned clarabel: speed cones only for robots whose nominal speed is at least this
@@ -61,6 +61,10 @@ _WARM_DISC_FRACTION = 0.8
 MAX_COORDINATE = 1e6
 _PASS_TOL = FEAS_TOL  # m/s: a row counts as met within the certification's tolerance (so answers are fixed points)
 _CLARABEL_FEAS = 1e-7  # m/s: an interior-point answer violating a row by more than this is refused
+# factorisations clarabel's polish may spend under an active-set cap: from clarabel's active rows it
+# certifies in one or two iterations or not at all (bench_barrier_anytime: a capped polish that failed
+# spent its whole cap on the worst ticks)
+_POLISH_SOLVES = 4
 _KIND_NAMES = {PAIR: "pair", WALL: "wall", OBSTACLE: "obstacle", LIMIT: "limit"}
 
 
@@ -116,6 +120,48 @@ class _Solved:
     lam: np.ndarray | None = None  # (m,) the rows' multipliers when the solver certified them
 
 
+_BUDGET = "budget"  # reason prefix: the call's work cap or deadline ran out (anytime: the floor answers)
+
+
+class _Budget:
+    """One call's work tally against its caps; made per call, never shared or kept.
+
+    total: factorisations (active-set Gram solves + clarabel iterations) the centralised QP may
+    spend in this call (None: unlimited); warm: those the closed-loop warm paths may spend before
+    the filter goes to clarabel cold, and clarabel's polish on its own (None: unlimited); deadline: ``time.perf_counter()`` value
+    (None: none). ``spent`` counts everything, ``warm_spent`` the warm paths' share.
+    """
+
+    def __init__(self, total: int | None, warm: int | None, deadline: float | None) -> None:
+        self.total, self.warm, self.deadline = total, warm, deadline
+        self.spent = 0
+        self.warm_spent = 0
+
+    def left(self, warm: bool = False) -> int | None:
+        """Factorisations still allowed (None: unlimited); 0 once the deadline has passed."""
+        if self.deadline is not None and time.perf_counter() >= self.deadline:
+            return 0
+        caps = [] if self.total is None else [self.total - self.spent]
+        if warm and self.warm is not None:
+            caps.append(self.warm - self.warm_spent)
+        return max(min(caps), 0) if caps else None
+
+    def seconds_left(self) -> float | None:
+        """Wall time left to the deadline in s (None: no deadline)."""
+        return None if self.deadline is None else max(self.deadline - time.perf_counter(), 0.0)
+
+    def spend(self, k: int, warm: bool = False) -> None:
+        """Count ``k`` factorisations (also against the warm cap when ``warm``)."""
+        self.spent += int(k)
+        if warm:
+            self.warm_spent += int(k)
+
+    def out(self) -> bool:
+        """The total cap or the deadline is reached (the warm cap only ends the warm paths)."""
+        left = self.left()
+        return left is not None and left <= 0
+
+
 class SafetyFilter:
     """Barrier-certificate filter for single-integrator controlled points.
 
@@ -131,6 +177,7 @@ class SafetyFilter:
         self._warm_shape: tuple[int, int] = (-1, -1)
         self._lam_keys = np.zeros(0, dtype=np.int64)
         self._lam = np.zeros(0)
+        self._skip_warm = False  # the previous call's warm paths reached the active-set cap
         if self.config.solver == "auto":
             dual_ascent.warm_up()  # numba's compile (or cache load) here, never in a tick
 
@@ -145,6 +192,7 @@ class SafetyFilter:
         self._warm_shape = (-1, -1)
         self._lam_keys = np.zeros(0, dtype=np.int64)
         self._lam = np.zeros(0)
+        self._skip_warm = False
 
     # ------------------------------------------------------------------ public
     def filter(self, points: ArrayLike, nominal: ArrayLike, obstacles: ArrayLike | None = None
@@ -188,7 +236,7 @@ class SafetyFilter:
             ok=False, status=f"failed: {reason}", solve_time_s=time.perf_counter() - t0,
             n_constraints=n_constraints, n_active=0, active_pairs=np.zeros((0, 2), dtype=np.int64),
             active_h=np.zeros(0), min_distance=float("nan"), min_wall_clearance=float("nan"),
-            intervention=inter, nominal_was_safe=False, method="fail-stop",
+            intervention=inter, nominal_was_safe=False, method="fail-stop", answer="stopped",
         )
         return np.zeros((n, 2)), diag
 
@@ -219,6 +267,9 @@ class SafetyFilter:
                                   "(gains too large for these positions)", t0, rows.m)
         if cfg.distributed_for(n):
             return self._solve_distributed(P, U, O, rows, max_speed, t0)
+        anytime = cfg.anytime_for(n)
+        deadline = t0 + cfg.time_budget_s if anytime and cfg.time_budget_s is not None else None
+        budget = _Budget(cfg.work_budget if anytime else None, cfg.active_set_max_solves, deadline)
         unsafe = (rows.h < 0) & (rows.kind != LIMIT)
         n_unsafe = int(unsafe.sum())
         recovering = cfg.recovery and n_unsafe > 0
@@ -236,7 +287,7 @@ class SafetyFilter:
         if self._satisfies(rows, U, max_speed):
             self._remember(rows, np.zeros(rows.m, bool), n, n_obs, U)
             return U.copy(), self._diag(True, "nominal safe", t0, rows, P, U, U, O, np.zeros(rows.m, bool),
-                                        0, True, "pass-through", 0, 0, n_unsafe)
+                                        0, True, "pass-through", 0, 0, n_unsafe, answer="optimum")
 
         n_clusters = 0
         if recovering:  # clusters with unsafe rows are solved apart (their QP may be infeasible)
@@ -255,7 +306,9 @@ class SafetyFilter:
                 sub, keep = rows, np.ones(rows.m, dtype=bool)
             else:
                 sub, keep = restrict(rows, part, n)
-            solved = self._solve_plain(sub, U[part], max_speed, n, n_obs)
+            solved = self._solve_plain(sub, U[part], max_speed, n, n_obs, budget)
+            if isinstance(solved, str) and solved.startswith(_BUDGET):
+                return self._solve_floor(P, U, O, plain, max_speed, t0, budget, solved)
             if isinstance(solved, str) and part is in_bad and solved.startswith("infeasible"):
                 solved = self._solve_soft(restrict(plain, part, n)[0] if not part.all() else plain,
                                           unsafe[keep], U[part], max_speed)
@@ -276,7 +329,7 @@ class SafetyFilter:
         if recovering:
             status = f"optimal (recovering {n_unsafe} unsafe rows{', soft separation' if soft_used else ''})"
         return u, self._diag(True, status, t0, rows, P, U, u, O, active, n_speed, False, method,
-                             iterations, n_clusters, n_unsafe)
+                             iterations, n_clusters, n_unsafe, answer="optimum", work=budget.spent)
 
     # ---------------------------------------------------------------- helpers
     @staticmethod
@@ -286,9 +339,42 @@ class SafetyFilter:
             return False
         return bool(np.all(rows.lhs(U) <= rows.b + _PASS_TOL))
 
-    def _solve_plain(self, rows: Rows, U: np.ndarray, max_speed: float | None, n: int, n_obs: int
-                     ) -> _Solved | str:
-        """Exact QP on hard rows: warm active set (certified), else clarabel (polished), with retries."""
+    @staticmethod
+    def _active_set(rows: Rows, U: np.ndarray, max_speed: float | None, warm_rows: np.ndarray | None,
+                    max_iter: int, budget: _Budget, warm: bool = False, multipliers: np.ndarray | None = None,
+                    polish: bool = False) -> ActiveSetResult:
+        """``solve_active_set`` within what ``budget`` has left (the warm cap too when ``warm``; for
+        clarabel's ``polish`` its own allowance, at most ``_POLISH_SOLVES``, under an active-set cap), tallied."""
+        left = budget.left(warm)
+        if polish and budget.warm is not None:
+            polish_cap = min(budget.warm, _POLISH_SOLVES)
+            left = polish_cap if left is None else min(left, polish_cap)
+        res = solve_active_set(rows, U, max_speed, warm_rows, max_iter, multipliers=multipliers,
+                               max_solves=left, deadline=budget.deadline)
+        budget.spend(res.solves, warm)
+        return res
+
+    @staticmethod
+    def _clarabel(rows: Rows, U: np.ndarray, max_speed: float | None, max_iter: int, tol: float,
+                  budget: _Budget, discs: np.ndarray | None = None, warm: bool = False) -> QPResult | None:
+        """``solve_qp`` with at most the iterations (and wall time) ``budget`` has left, tallied."""
+        left = budget.left(warm)
+        if left is not None:
+            max_iter = min(max_iter, left)
+        if max_iter <= 0:
+            return None
+        qp = solve_qp(rows, U, max_speed, max_iter=max_iter, tol=tol, discs=discs,
+                      time_limit=budget.seconds_left())
+        budget.spend(qp.iterations, warm)
+        return qp
+
+    def _solve_plain(self, rows: Rows, U: np.ndarray, max_speed: float | None, n: int, n_obs: int,
+                     budget: _Budget) -> _Solved | str:
+        """Exact QP on hard rows: warm active set (certified), else clarabel (polished), with retries.
+
+        The warm paths stop at the budget's warm cap and go to clarabel cold at once; a reason
+        starting with ``_BUDGET`` says the total cap (or the deadline) ran out before a certified optimum.
+        """
         cfg = self.config
         iterations = 0
         if cfg.solver == "auto":
@@ -296,41 +382,60 @@ class SafetyFilter:
             if self._warm_shape == (n, n_obs) and self._warm_keys.size:
                 warm = np.isin(rows.key, self._warm_keys, assume_unique=True)
             closed_loop = warm is not None and bool(warm.any())
+            if closed_loop and self._skip_warm:
+                # last tick's warm paths spent the whole active-set cap and gave up: this tick goes
+                # to clarabel cold at once (its polished answer warm-starts the next tick, which tries again)
+                self._skip_warm = False
+                closed_loop, warm, skipped = False, None, True
+            else:
+                skipped = False
             if closed_loop and self._dual_enabled():
-                solved = self._solve_dual(rows, U, max_speed)
+                solved = self._solve_dual(rows, U, max_speed, budget)
                 if solved is not None:
                     return solved
             if closed_loop and warm is not None:  # the previous tick's active rows: few iterations while they are few
                 start, limit, method = int(warm.sum()), cfg.warm_max_rows, "warm active-set"
             else:
                 start, limit, method = int(np.sum(rows.lhs(U) > rows.b)), cfg.active_set_max_rows, "active-set"
-            if start <= limit:
-                res = solve_active_set(rows, U, max_speed, warm, cfg.max_active_set_iterations)
+            if start <= limit and budget.left(True) != 0 and not skipped:
+                res = self._active_set(rows, U, max_speed, warm, cfg.max_active_set_iterations, budget, True)
                 iterations += res.iterations
                 if res.ok:
                     return _Solved(res.u, res.active, int(res.speed_active.sum()), method, iterations,
                                    res.multipliers)
-            elif closed_loop and self._near_keys.size:
-                solved = self._solve_pruned(rows, U, max_speed)
+            elif start > limit and closed_loop and self._near_keys.size:
+                solved = self._solve_pruned(rows, U, max_speed, budget)
                 if solved is not None:
                     return solved
-        qp = solve_qp(rows, U, max_speed, max_iter=cfg.clarabel_max_iter, tol=cfg.clarabel_tol)
+        if budget.warm is not None and budget.warm_spent >= budget.warm:
+            self._skip_warm = True
+        if budget.out():
+            return f"{_BUDGET}: work cap reached before clarabel"
+        qp = self._clarabel(rows, U, max_speed, cfg.clarabel_max_iter, cfg.clarabel_tol, budget)
+        if qp is None:  # the deadline passed in between
+            return f"{_BUDGET}: deadline reached before clarabel"
+        if not qp.ok and budget.out():
+            return f"{_BUDGET}: work cap reached in clarabel ({qp.reason})"
         if not qp.ok and not qp.reason.startswith("infeasible"):
             # numerical trouble at the tight tolerance: a longer cold active-set run (certified),
             # then clarabel at a 10× looser tolerance; still only a "Solved" answer is used
             if cfg.solver == "auto":
-                res = solve_active_set(rows, U, max_speed, None, 4 * cfg.max_active_set_iterations)
+                res = self._active_set(rows, U, max_speed, None, 4 * cfg.max_active_set_iterations, budget,
+                                       polish=True)
                 iterations += res.iterations
                 if res.ok:
                     return _Solved(res.u, res.active, int(res.speed_active.sum()), "active-set", iterations,
                                    res.multipliers)
-            retry = solve_qp(rows, U, max_speed, max_iter=cfg.clarabel_max_iter, tol=10 * cfg.clarabel_tol)
+            retry = self._clarabel(rows, U, max_speed, cfg.clarabel_max_iter, 10 * cfg.clarabel_tol, budget)
+            if retry is None or (not retry.ok and budget.out()):
+                return f"{_BUDGET}: work cap reached in the retries ({qp.reason})"
             qp = retry if retry.ok else qp
         if not qp.ok:
             return qp.reason
-        return self._finish_clarabel(rows, U, qp.u, max_speed, iterations + qp.iterations)
+        return self._finish_clarabel(rows, U, qp.u, max_speed, iterations + qp.iterations, budget)
 
-    def _solve_pruned(self, rows: Rows, U: np.ndarray, max_speed: float | None) -> _Solved | None:
+    def _solve_pruned(self, rows: Rows, U: np.ndarray, max_speed: float | None, budget: _Budget
+                      ) -> _Solved | None:
         """Closed loop beyond ``warm_max_rows``: clarabel on the rows that were within ``warm_slack``
         of their bound last tick (and those û violates), speed cones only for robots whose nominal is
         near the bound, then the active set from its active rows on *all* rows (certified: KKT, every
@@ -341,18 +446,19 @@ class SafetyFilter:
         discs = None
         if max_speed is not None:
             discs = np.einsum("kd,kd->k", U, U) >= (_WARM_DISC_FRACTION * max_speed) ** 2
-        qp = solve_qp(rows.select(keep), U, max_speed, max_iter=cfg.clarabel_max_iter, tol=cfg.clarabel_tol,
-                      discs=discs)
-        if not qp.ok:
+        qp = self._clarabel(rows.select(keep), U, max_speed, cfg.clarabel_max_iter, cfg.clarabel_tol, budget,
+                            discs=discs, warm=True)
+        if qp is None or not qp.ok:
             return None
         near = rows.lhs(qp.u) >= rows.b - _ACTIVE_TOL
-        res = solve_active_set(rows, U, max_speed, near, cfg.max_active_set_iterations)
+        res = self._active_set(rows, U, max_speed, near, cfg.max_active_set_iterations, budget, True)
         if not res.ok:
             return None
         return _Solved(res.u, res.active, int(res.speed_active.sum()), "warm clarabel+active-set",
                        qp.iterations + res.iterations, res.multipliers)
 
-    def _solve_dual(self, rows: Rows, U: np.ndarray, max_speed: float | None) -> _Solved | None:
+    def _solve_dual(self, rows: Rows, U: np.ndarray, max_speed: float | None, budget: _Budget
+                    ) -> _Solved | None:
         """Closed loop: the compiled dual coordinate ascent from last tick's multipliers (by row key)
         predicts the active rows; the active set from them certifies the exact optimum (KKT, every
         row, every speed bound) within ``warm_dual_iterations``. None otherwise (the caller goes on)."""
@@ -363,7 +469,7 @@ class SafetyFilter:
             hit = self._lam_keys[at] == rows.key
             lam0[hit] = self._lam[at[hit]]
         guess = dual_ascent.ascend(rows, U, max_speed, lam0, cfg.warm_dual_sweeps)
-        res = solve_active_set(rows, U, max_speed, guess.predicted, cfg.warm_dual_iterations,
+        res = self._active_set(rows, U, max_speed, guess.predicted, cfg.warm_dual_iterations, budget, True,
                                multipliers=guess.lam)
         if not res.ok:
             return None
@@ -371,7 +477,7 @@ class SafetyFilter:
             # reproducible to the last bit whatever the warm history: the answer is the one the
             # active set gives from the optimum's own active rows (as every other warm path and a
             # second call on the same tick do), not one that depends on which wrong rows left when
-            again = solve_active_set(rows, U, max_speed, res.active, cfg.max_active_set_iterations)
+            again = self._active_set(rows, U, max_speed, res.active, cfg.max_active_set_iterations, budget, True)
             if again.ok:
                 return _Solved(again.u, again.active, int(again.speed_active.sum()), "warm dual+active-set",
                                res.iterations + again.iterations, again.multipliers)
@@ -379,7 +485,7 @@ class SafetyFilter:
                        res.iterations, res.multipliers)
 
     def _finish_clarabel(self, rows: Rows, U: np.ndarray, u: np.ndarray, max_speed: float | None,
-                         iterations: int) -> _Solved | str:
+                         iterations: int, budget: _Budget) -> _Solved | str:
         """Make an interior-point answer exact where possible.
 
         "auto": the active set started from clarabel's active rows usually certifies the exact
@@ -390,7 +496,7 @@ class SafetyFilter:
         cfg = self.config
         near = rows.lhs(u) >= rows.b - _ACTIVE_TOL
         if cfg.solver == "auto":
-            res = solve_active_set(rows, U, max_speed, near, cfg.max_active_set_iterations)
+            res = self._active_set(rows, U, max_speed, near, cfg.max_active_set_iterations, budget, polish=True)
             iterations += res.iterations
             if res.ok:
                 return _Solved(res.u, res.active, int(res.speed_active.sum()), "clarabel+active-set", iterations,
@@ -451,7 +557,23 @@ class SafetyFilter:
         if n_unsafe:
             status += f" (recovering {n_unsafe} unsafe rows, {res.n_fallback} robots holding)"
         return res.u, self._diag(True, status, t0, rows, P, U, res.u, O, res.active, res.n_speed, was_safe,
-                                 "distributed", 0, 0, n_unsafe)
+                                 "distributed", 0, 0, n_unsafe, answer="distributed")
+
+    def _solve_floor(self, P, U, O, rows: Rows, max_speed: float | None, t0: float, budget: _Budget,
+                     reason: str) -> tuple[np.ndarray, BarrierDiagnostics]:
+        """Anytime mode, the budget spent before a certified optimum: the distributed answer on the
+        same rows (every row certified, ``safety.distributed``) with ``answer == "floor"``. The warm
+        start is forgotten (the next tick starts cold, whose work is bounded by clarabel's)."""
+        res = filter_distributed(rows, U, max_speed, self.config)
+        n = P.shape[0]
+        if not res.ok:
+            return self.fail_stop(n, U, f"{reason}; distributed floor: {res.reason}", t0, rows.m)
+        self.reset()
+        u = res.u if max_speed is None else clip_speed(res.u, float(max_speed))  # exactly inside the discs
+        n_unsafe = int(np.sum((rows.h < 0) & (rows.kind != LIMIT)))
+        return u, self._diag(True, f"distributed floor ({reason})", t0, rows, P, U, res.u, O, res.active,
+                                 res.n_speed, False, "distributed floor", 0, 0, n_unsafe, answer="floor",
+                                 work=budget.spent)
 
     def _remember(self, rows: Rows, active: np.ndarray, n: int, n_obs: int, u: np.ndarray,
                   lam: np.ndarray | None = None) -> None:
@@ -478,7 +600,7 @@ class SafetyFilter:
 
     def _diag(self, ok: bool, status: str, t0: float, rows: Rows, P: np.ndarray, U: np.ndarray, u: np.ndarray,
               O: np.ndarray | None, active: np.ndarray, n_speed: int, was_safe: bool, method: str,
-              iterations: int, n_clusters: int, n_unsafe: int) -> BarrierDiagnostics:
+              iterations: int, n_clusters: int, n_unsafe: int, answer: str = "", work: int = 0) -> BarrierDiagnostics:
         cfg = self.config
         n = P.shape[0]
         pair = rows.kind == PAIR
@@ -510,6 +632,7 @@ class SafetyFilter:
             active_h=rows.h[act_pair].copy(), min_distance=min_d, min_wall_clearance=min_wall,
             intervention=inter, nominal_was_safe=was_safe, method=method, iterations=iterations,
             n_clusters=int(n_clusters), n_unsafe=n_unsafe, min_obstacle_distance=min_obs,
+            answer=answer, work=int(work), gap=0.0 if answer == "optimum" else None,
         )
 
 

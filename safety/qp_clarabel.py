@@ -62,12 +62,14 @@ def _row_triplets(rows: Rows, row_offset: int) -> tuple[np.ndarray, np.ndarray, 
 def solve_qp(rows: Rows, nominal: np.ndarray, max_speed: float | None, *,
              b_hard: np.ndarray | None = None, soft: np.ndarray | None = None,
              b_soft: np.ndarray | None = None, soft_weight: float = 100.0,
-             max_iter: int = 100, tol: float = 1e-9, discs: np.ndarray | None = None) -> QPResult:
+             max_iter: int = 100, tol: float = 1e-9, discs: np.ndarray | None = None,
+             time_limit: float | None = None) -> QPResult:
     """Solve the barrier QP for nominal (N, 2) m/s.
 
     rows: the linear rows; b_hard: their bounds (default rows.b); soft: indices
     of rows that also get a slack-penalised target b_soft (m/s); discs: (N,) bool robots
-    that get the speed cone (default all, when max_speed is given).
+    that get the speed cone (default all, when max_speed is given); time_limit: clarabel's own
+    wall-time limit in s (None: none; the answer is then refused as "time limit" when reached).
     """
     n = nominal.shape[0]
     nv = 2 * n
@@ -130,6 +132,8 @@ def solve_qp(rows: Rows, nominal: np.ndarray, max_speed: float | None, *,
     settings.tol_gap_rel = tol
     settings.tol_feas = tol
     settings.presolve_enable = False
+    if time_limit is not None:
+        settings.time_limit = max(float(time_limit), 1e-6)
     try:
         solver = clarabel.DefaultSolver(P, q, A, b, cones, settings)
         sol = solver.solve()

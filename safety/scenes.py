@@ -49,3 +49,20 @@ def grid_scene(n: int, rng: np.random.Generator, cfg: BarrierConfig | None = Non
     speed = rng.uniform(0, cfg.max_speed, n)
     nominal = np.stack([np.cos(ang), np.sin(ang)], axis=1) * speed[:, None]
     return pts, nominal
+
+
+def crossing_scene(n: int, rng: np.random.Generator, fill: float = 0.5, pitch: float = 0.188
+                   ) -> tuple[BarrierConfig, np.ndarray, np.ndarray]:
+    """(config, points (n, 2) m, goals (n, 2) m) of the dense crossing (issue 27): n robots on a
+    jittered grid at ``fill`` occupancy of an arena sized for them, each bound for its point
+    reflected through the centre, so the swarm swaps through the middle and jams there."""
+    cfg = BarrierConfig(bounds=arena_for(n, pitch, fill=fill))
+    points, _ = grid_scene(n, rng, cfg, pitch=pitch)
+    return cfg, points, -points
+
+
+def toward(goals: np.ndarray, points: np.ndarray, max_speed: float) -> np.ndarray:
+    """(n, 2) m/s nominal: proportional control (gain 1/s) to ``goals``, capped at ``max_speed``."""
+    u = goals - points
+    s = np.sqrt(np.einsum("kd,kd->k", u, u))[:, None]
+    return u * np.minimum(1.0, max_speed / np.maximum(s, 1e-12))

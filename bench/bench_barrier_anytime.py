@@ -1,0 +1,120 @@
+"""Barrier closed loop, dense crossing (issue 27 item 1): worst and median tick per mode, same rows.
+
+Run: ``.venv/bin/python bench/bench_barrier_anytime.py [--n 100 1000] [--ticks 120]`` (≈ 10 min at
+N = 1000 on a loaded 2-core machine; BLAS threads pinned to one below).
+
+Scene: N robots on a jittered grid filling half of the floor's central disc, each driven by a
+proportional controller (gain 1, capped at v_max) to its point reflected through the centre: the
+swarm swaps through the centre, so the middle jams. The trajectory follows the anytime filter
+(``mode="anytime"``); on every tick, on the same points and nominal (so the same rows), each
+filter below is called once and timed (process CPU time, ``time.process_time``, one thread; the
+same process, so ratios hold under the machine's load):
+
+* *centralised*: today's warm-started exact filter (``mode="centralised"``, no caps);
+* *warm-capped*: the same with ``active_set_max_solves`` (the warm paths stop and go to clarabel cold);
+* *anytime*: ``mode="anytime"`` with the pipelines' caps (``safety.config.pipeline_defaults``:
+  clarabel cold after the active-set cap, the distributed floor when the work budget runs out);
+* *anytime, floor at the cap*: the same with ``work_budget`` equal to the active-set cap, so the
+  floor answers as soon as the warm paths give up (the alternative to clarabel cold);
+* *clarabel*: a fresh ``solver="clarabel"`` filter (cold interior point on the same rows);
+* *distributed*: ``mode="distributed"`` with and without the second pass.
+
+Invasiveness: Σ‖u − û‖² of each answer over the centralised optimum's on the same tick (ticks
+where the optimum intervenes). Timing is self-contained (no shared harness): ``timed`` below.
+"""
+from __future__ import annotations
+
+import os
+
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+os.environ.setdefault("OMP_NUM_THREADS", "1")
+
+import argparse  # noqa: E402
+import collections  # noqa: E402
+import dataclasses  # noqa: E402
+import datetime  # noqa: E402
+import platform  # noqa: E402
+import time  # noqa: E402
+
+import numpy as np  # noqa: E402
+
+from swarmdeck.safety import SafetyFilter  # noqa: E402
+from swarmdeck.safety.config import pipeline_defaults  # noqa: E402
+from swarmdeck.safety.scenes import crossing_scene, toward  # noqa: E402
+
+DEFAULTS = pipeline_defaults()
+WARM_CAP = int(DEFAULTS["active_set_max_solves"])
+BUDGET = int(DEFAULTS["work_budget"])
+
+
+def timed(fn, *args):
+    """(process CPU s, result)."""
+    t = time.process_time()
+    out = fn(*args)
+    return time.process_time() - t, out
+
+
+def run(n: int, ticks: int, uncapped: bool = True) -> dict:
+    cfg, x, goals = crossing_scene(n, np.random.default_rng(0))
+    filters = {
+        "centralised": SafetyFilter(dataclasses.replace(cfg, mode="centralised")),
+        "warm-capped": SafetyFilter(dataclasses.replace(cfg, mode="centralised", active_set_max_solves=WARM_CAP)),
+        "anytime": SafetyFilter(dataclasses.replace(cfg, mode="anytime", active_set_max_solves=WARM_CAP,
+                                                    work_budget=BUDGET)),
+        "anytime, floor at the cap": SafetyFilter(dataclasses.replace(cfg, mode="anytime", active_set_max_solves=WARM_CAP,
+                                                                      work_budget=WARM_CAP)),
+        "distributed": SafetyFilter(dataclasses.replace(cfg, mode="distributed")),
+        "distributed 1 pass": SafetyFilter(dataclasses.replace(cfg, mode="distributed",
+                                                               distributed_second_pass=False)),
+    }
+    if not uncapped:  # --no-uncapped: the optimum for the cost ratios from the warm-capped filter
+        del filters["centralised"]
+    reference = "centralised" if uncapped else "warm-capped"
+    clar_cfg = dataclasses.replace(cfg, solver="clarabel")
+    times = collections.defaultdict(list)
+    cost = collections.defaultdict(list)
+    answers = collections.defaultdict(collections.Counter)
+    for _ in range(ticks):
+        nom = toward(goals, x, cfg.max_speed)
+        out = {}
+        for name, flt in filters.items():
+            t, (u, d) = timed(flt.filter, x, nom)
+            assert d.ok, (name, d.status)
+            times[name].append(t)
+            out[name] = (u, d)
+        t, (u, d) = timed(SafetyFilter(clar_cfg).filter, x, nom)
+        assert d.ok, d.status
+        times["clarabel"].append(t)
+        for name in ("anytime", "anytime, floor at the cap"):
+            answers[name][out[name][1].answer] += 1
+        c_opt = float(np.sum((out[reference][0] - nom) ** 2))
+        if c_opt > 1e-12:
+            for name, (u, _) in out.items():
+                cost[name].append(float(np.sum((u - nom) ** 2)) / c_opt)
+        x = x + out["anytime"][0] * cfg.dt
+    return dict(n=n, times=times, cost=cost, answers=answers)
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--n", type=int, nargs="+", default=[100, 1000])
+    ap.add_argument("--ticks", type=int, default=120)
+    ap.add_argument("--no-uncapped", action="store_true",
+                    help="leave out the uncapped centralised filter (seconds per tick at N = 1000)")
+    args = ap.parse_args()
+    print(f"{datetime.datetime.now(datetime.UTC):%Y-%m-%d %H:%M} UTC, {platform.machine()}, "
+          f"{os.cpu_count()} cores, load {os.getloadavg()[0]:.1f}; warm cap {WARM_CAP}, budget {BUDGET}")
+    print("| N | filter | median ms | worst ms | worst / clarabel's worst | mean cost / optimum | worst cost / optimum |")
+    print("| --- | --- | --- | --- | --- | --- | --- |")
+    for n in args.n:
+        r = run(n, args.ticks, not args.no_uncapped)
+        worst_c = max(r["times"]["clarabel"])
+        for name, v in r["times"].items():
+            c = r["cost"].get(name, [])
+            print(f"| {n} | {name} | {1e3 * np.median(v):.1f} | {1e3 * max(v):.1f} | {max(v) / worst_c:.2f} | "
+                  + (f"{np.mean(c):.3f} | {max(c):.3f} |" if c else "– | – |"), flush=True)
+        print(f"answers at N = {n}: " + "; ".join(f"{k}: {dict(v)}" for k, v in r["answers"].items()), flush=True)
+
+
+if __name__ == "__main__":
+    main()
