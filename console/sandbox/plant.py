@@ -83,7 +83,7 @@ class VerificationRobots:
     name = "verification (disturbed simulation)"
 
     def __post_init__(self) -> None:
-        self.n_robots = self.sim.n_robots
+        self.n_robots: int = len(self.sim.poses)  # the simulator's N (its n_robots field is set from its poses)
         self._ids = np.arange(self.n_robots, dtype=np.int64)
         self._seen = np.ones(self.n_robots, dtype=bool)
         self.params: GritsBotParams = self.sim.params

@@ -70,7 +70,7 @@ from swarmdeck.core.constants import ROBOT_RADIUS
 if TYPE_CHECKING:
     import viser
 
-ImageProvider = Callable[[str], "tuple[ArrayLike, Bounds] | None"]
+ImageProvider = Callable[[str], "tuple[ArrayLike, tuple[float, float, float, float]] | None"]
 """Maps a Frame's ``image_ref`` to (RGB image (H, W, 3), its bounds (x0, x1, y0, y1) m), or None."""
 
 LAYERS: tuple[str, ...] = (
