@@ -112,7 +112,7 @@ class JobStore:
 
     # ------------------------------------------------------------------ changing jobs
     def insert(self, tx: Tx, *, user_id: int, name: str, kind: str, script: str, entry: str, robots: int,
-               duration: float, initial_poses: builtins.list[builtins.list[float]] | None, no_barrier: bool, now: float) -> int:
+               duration: float, initial_poses: Sequence[Sequence[float]] | None, no_barrier: bool, now: float) -> int:
         """A new job, ``awaiting verification``, last in priority; its id."""
         top = tx.execute("SELECT COALESCE(MAX(priority), 0) FROM jobs").fetchone()[0]
         cur = tx.execute(

@@ -473,7 +473,7 @@ class ConsoleGui:
                     self.behaviour.options = tuple(o for o in self.behaviour.options
                                                    if not o.startswith("script:")) + (frame.behaviour,)
                 self.behaviour.value = frame.behaviour
-            if barrier_differs:
+            if barrier_differs and frame.barrier is not None:
                 self.barrier_on.value = frame.barrier.enabled
         finally:
             self._reverting = False
