@@ -14,7 +14,7 @@ robots by construction. Units: m, rad, m/s; N robots, K active pairs, E Voronoi 
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, TypeVar, cast
+from typing import TYPE_CHECKING, TypeVar
 
 import numpy as np
 from numpy.typing import NDArray
@@ -31,7 +31,7 @@ from swarmdeck.console.picture.colours import (
 from swarmdeck.console.picture.heat import heatmap
 from swarmdeck.console.picture.style import PictureStyle
 from swarmdeck.console.runtime.behaviours import goals_of_frame
-from swarmdeck.console.runtime.frame import Frame
+from swarmdeck.console.runtime.frame import Frame, filled
 from swarmdeck.core.bounds import Bounds
 
 if TYPE_CHECKING:
@@ -59,9 +59,8 @@ def robot_colors(frame: Frame, style: PictureStyle = DEFAULT_STYLE) -> NDArray[n
         cols[:] = STOPPED
     elif frame.run_state == "paused":
         cols[:] = PAUSED
-    # Frame.__post_init__ fills seen and is_virtual: (N,) bool arrays, never None on a built Frame
-    cols[~cast(NDArray[np.bool_], frame.seen)] = UNSEEN
-    virtual = cast(NDArray[np.bool_], frame.is_virtual)
+    cols[~filled(frame.seen)] = UNSEEN
+    virtual = filled(frame.is_virtual)
     if virtual.any():
         cols[virtual] = np.round(cols[virtual] * (1.0 - VIRTUAL_PALE) + 255.0 * VIRTUAL_PALE).astype(np.uint8)
     return cols
@@ -172,7 +171,7 @@ def picture_of(frame: Frame, style: PictureStyle = DEFAULT_STYLE) -> Picture:
     return Picture(
         bounds=frame.bounds, ids=frame.ids, poses=frame.poses, points=_frozen(pts),
         colors=_frozen(robot_colors(frame, style)), changed=_frozen(changed_mask(frame, style)),
-        virtual=cast(NDArray[np.bool_], frame.is_virtual), pairs=_frozen(pairs), pair_h=_frozen(h), pair_colors=_frozen(pair_colors(h, style.h_full)),
+        virtual=filled(frame.is_virtual), pairs=_frozen(pairs), pair_h=_frozen(h), pair_colors=_frozen(pair_colors(h, style.h_full)),
         ring_radius=0.5 * safety_distance(frame, style),
         nominal_tips=_frozen(pts + style.arrow_scale * frame.nominal),
         safe_tips=_frozen(pts + style.arrow_scale * frame.safe),

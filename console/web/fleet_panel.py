@@ -22,7 +22,7 @@ from swarmdeck.console.runtime.fleet_upkeep import (
     set_up,
     status_ages,
 )
-from swarmdeck.console.runtime.frame import Frame
+from swarmdeck.console.runtime.frame import Frame, filled
 from swarmdeck.console.runtime.loop import ControlLoop
 from swarmdeck.devices.chargers import ChargerLayout
 
@@ -60,7 +60,7 @@ class FleetPanel:
         frame = self.loop.latest
         if frame is None:
             raise ValueError("no robots seen yet")
-        return frame, FleetView.of(frame, status_ages(self.loop.sink, frame.ids, frame.is_virtual))
+        return frame, FleetView.of(frame, status_ages(self.loop.sink, frame.ids, filled(frame.is_virtual)))
 
     def set_up(self, path: str = "", client: viser.ClientHandle | None = None) -> FleetManeuver | None:
         """Plan and start a set-up (``path``: the start poses' CSV; empty: random); None if refused."""

@@ -63,7 +63,7 @@ from swarmdeck.console.picture.heat import heatmap  # noqa: F401 - re-exported f
 from swarmdeck.console.picture.picture import Picture, picture_of, robot_colors
 from swarmdeck.console.picture.shapes import dashed_rings, robot_outline
 from swarmdeck.console.picture.style import PictureStyle
-from swarmdeck.console.runtime.frame import Frame
+from swarmdeck.console.runtime.frame import Frame, filled
 from swarmdeck.core.bounds import DEFAULT_BOUNDS, Bounds
 from swarmdeck.core.constants import ROBOT_RADIUS
 
@@ -128,7 +128,7 @@ def battery_bars(frame: Frame, robot_radius: float) -> tuple[NDArray[np.float32]
     and their colours (2K, 2, 3) (:data:`BATTERY_COLORS`). A hidden stub when nobody reports."""
     from swarmdeck.console.runtime.batteries import battery_levels
 
-    q, level = battery_levels(frame.battery, frame.charging)
+    q, level = battery_levels(filled(frame.battery), filled(frame.charging))
     known = np.flatnonzero(~np.isnan(q))
     if not len(known):
         return _EMPTY_SEG, np.repeat(BATTERY_TRACK[None, None], 2, axis=1)
