@@ -52,9 +52,16 @@ class FleetPanel:
             self.set_up_button = gui.add_button("Set up", hint="Assign charged robots and drive them to the start poses")
             self.return_button = gui.add_button("Return to chargers", hint="Dock every robot on a free charger slot")
             self.status = gui.add_markdown("")
-        self.set_up_button.on_click(lambda event: self.set_up(str(self.poses_path.value).strip(),
-                                                               getattr(event, "client", None)))
-        self.return_button.on_click(lambda event: self.return_to_chargers(getattr(event, "client", None)))
+        self.set_up_button.on_click(self._on_set_up)
+        self.return_button.on_click(self._on_return)
+
+    def _on_set_up(self, event: Any) -> None:
+        """The Set up button: set up from the CSV named in the text box, notifying the clicking tab."""
+        self.set_up(str(self.poses_path.value).strip(), getattr(event, "client", None))
+
+    def _on_return(self, event: Any) -> None:
+        """The Return button: dock every robot, notifying the clicking tab."""
+        self.return_to_chargers(getattr(event, "client", None))
 
     def _view(self) -> tuple[Frame, FleetView]:
         frame = self.loop.latest

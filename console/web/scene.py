@@ -33,7 +33,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Literal
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -141,6 +141,10 @@ def battery_bars(frame: Frame, robot_radius: float) -> tuple[NDArray[np.float32]
     return segs, np.repeat(cols[:, None, :], 2, axis=1)
 
 
+PointLayer = Literal["centroids", "contacts", "goals"]
+"""The layers drawn as point clouds (:meth:`SceneNodes.point_layer`)."""
+
+
 @dataclass
 class SceneNodes:
     """The scene nodes the :class:`ArenaScene` updates, one field per layer (``LAYERS``; ``grid`` is the
@@ -169,6 +173,11 @@ class SceneNodes:
     def layer(self, name: str) -> viser.SceneNodeHandle | None:
         """The node of layer ``name`` (None while it has none; ``labels`` is a list: not here)."""
         return getattr(self, name)
+
+    def point_layer(self, name: PointLayer) -> viser.PointCloudHandle:
+        """The point-cloud node of the point layer ``name`` (made with the scene: never None)."""
+        handle: viser.PointCloudHandle = getattr(self, name)
+        return handle
 
 
 class ArenaScene:
@@ -375,11 +384,11 @@ class ArenaScene:
         if v["goals"]:
             self._points("goals", pic.goals, 0.002)
 
-    def _points(self, name: str, xy: NDArray[np.float64], z: float) -> None:
+    def _points(self, name: PointLayer, xy: NDArray[np.float64], z: float) -> None:
         """Put ``xy`` (K, 2) m at height ``z`` into the point layer ``name``; with no point the node is hidden."""
         was_empty, self._empty[name] = self._empty[name], not len(xy)
         if len(xy):
-            self.nodes.layer(name).points = np.column_stack((xy, np.full(len(xy), z))).astype(np.float32)
+            self.nodes.point_layer(name).points = np.column_stack((xy, np.full(len(xy), z))).astype(np.float32)
         if was_empty != self._empty[name]:
             self._apply_visibility(name)
 
