@@ -286,7 +286,7 @@ class ArenaFleet:
         charging = np.zeros(n, dtype=bool) if reading.charging is None else np.asarray(reading.charging, dtype=bool)
         q, _ = battery_levels(volts, charging)
         slot = self.chargers.docked_slot(reading.poses)
-        rows = []
+        rows: list[dict[str, Any]] = []
         for k, rid in enumerate(reading.ids.tolist()):  # a table for people, on request
             job = assigned.get(int(rid))
             if job is not None:
