@@ -45,6 +45,7 @@ from numpy.typing import ArrayLike, NDArray
 from swarmdeck.core.kinematics import GritsBotParams, limit_unicycle, lookahead_points, si_to_unicycle, unicycle_to_si
 
 if TYPE_CHECKING:
+    from swarmdeck.core.bounds import Bounds
     from swarmdeck.safety import UnicycleSafetyFilter
     from swarmdeck.safety.guard import GuardCheck, GuardConfig
 
@@ -119,7 +120,7 @@ class Certified:
         return ~same
 
 
-def barrier_filter(robot: GritsBotParams, bounds: tuple[float, float, float, float], dt: float,
+def barrier_filter(robot: GritsBotParams, bounds: Bounds, dt: float,
                    **barrier: Any) -> UnicycleSafetyFilter:
     """swarmdeck's unicycle barrier filter for this robot and arena.
 

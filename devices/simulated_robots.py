@@ -68,19 +68,19 @@ class SimulatedRobots:
     def _attach(self, sim: SimulatedArena, chargers: ChargerLayout | None, charge: Any,
                 battery: BatteryParams | None) -> None:
         self.sim = sim
-        self._ids = np.arange(self.sim.n_robots, dtype=np.int64)
-        self._seen = np.ones(self.sim.n_robots, dtype=bool)
+        self._ids = np.arange(self.sim.n, dtype=np.int64)
+        self._seen = np.ones(self.sim.n, dtype=np.bool_)
         self.chargers = chargers
         self.battery = battery if battery is not None else BatteryParams()
         self.charge: NDArray[np.float64] | None = None
         if chargers is not None:
-            self.charge = np.broadcast_to(np.asarray(charge, dtype=float), (self.sim.n_robots,)).copy()
+            self.charge = np.broadcast_to(np.asarray(charge, dtype=float), (self.sim.n,)).copy()
             if not np.all(((self.charge >= 0.0) & (self.charge <= 1.0)) | np.isnan(self.charge)):
                 raise ValueError(f"charge must be in [0, 1] (NaN: a battery that reads NaN), got {self.charge.tolist()}")
 
     @property
     def n_robots(self) -> int:
-        return int(self.sim.n_robots)
+        return self.sim.n
 
     @property
     def params(self) -> GritsBotParams:
@@ -118,7 +118,7 @@ class SimulatedRobots:
             raise ValueError(f"simulation expects commands for ids 0..{self.n_robots - 1} in order")
         docked = self.docked() if self.charge is not None else None
         self.sim.step(v, w)
-        if self.charge is not None:
+        if self.charge is not None and docked is not None:
             av, aw = self.sim.applied
             self.charge = battery_step(self.charge, self.sim.config.dt, av, aw, docked & self.docked(),
                                        self.sim.params, self.battery)

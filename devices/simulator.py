@@ -111,6 +111,11 @@ class SimulatedArena:
         self.last_collisions = np.empty((0, 2), dtype=np.intp)
 
     @property
+    def n(self) -> int:
+        """Number of robots N (what ``n_robots`` holds once the arena is built)."""
+        return int(self._poses.shape[0])
+
+    @property
     def poses(self) -> NDArray[np.float64]:
         """Current poses ``(N, 3)``; a copy, so callers can never alter the simulation."""
         return self._poses.copy()

@@ -26,7 +26,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 from functools import cached_property
-from typing import Literal
+from typing import Any, Literal
 
 import numpy as np
 from numpy.typing import NDArray
@@ -148,7 +148,7 @@ class Scenario:
 
         return random_initial_poses(self.n_agents, self.bounds, rng=rng), {}
 
-    def observe(self, view: View) -> FloatArray:
+    def observe(self, view: View) -> NDArray[np.floating[Any]]:
         """(E, N, D) observations. Default: own [x, y, cos θ, sin θ]."""
         p = view.poses
         return np.concatenate((p[..., :2], np.cos(p[..., 2:3]), np.sin(p[..., 2:3])), axis=-1)

@@ -18,6 +18,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import NDArray
 
+from swarmdeck.core.bounds import Bounds
 from swarmdeck.envs.observations import observation_bounds
 from swarmdeck.envs.scenario import Actions, Scenario, State, View
 from swarmdeck.envs.tasks import formation_slots
@@ -98,7 +99,7 @@ class Formation(Scenario):
 
 
 # ---------------------------------------------------------------------------- MARBLER's
-MARBLER_BOX = (-1.4, 1.4, -0.9, 0.9)  # LEFT, RIGHT, UP, DOWN of MARBLER's configs: goals stay inside, m
+MARBLER_BOX = Bounds(-1.4, 1.4, -0.9, 0.9)  # LEFT, RIGHT, UP, DOWN of MARBLER's configs: goals stay inside, m
 
 
 def _neighbour_rows(view: View, own: FloatArray, k: int) -> FloatArray:
@@ -155,9 +156,9 @@ class PredatorCapturePrey(Scenario):
         from swarmdeck.devices import random_initial_poses
 
         x0, x1, y0, y1 = MARBLER_BOX
-        poses = random_initial_poses(self.n_agents, (x0, -0.5, y0, y1), rng=rng, wall_margin=0.1)
+        poses = random_initial_poses(self.n_agents, Bounds(x0, -0.5, y0, y1), rng=rng, wall_margin=0.1)
         poses[:, 2] = 0.0
-        prey = random_initial_poses(self.n_prey, (0.5, x1, y0, y1), rng=rng, wall_margin=0.05)[:, :2]
+        prey = random_initial_poses(self.n_prey, Bounds(0.5, x1, y0, y1), rng=rng, wall_margin=0.05)[:, :2]
         return poses, {"prey": prey, "sensed": np.zeros(self.n_prey, dtype=bool),
                        "captured": np.zeros(self.n_prey, dtype=bool)}
 
@@ -170,7 +171,7 @@ class PredatorCapturePrey(Scenario):
         seen = (dist <= self.sensing[None, :, None]) & ~view.state["captured"][:, None, :]
         near = np.argmin(np.where(seen, dist, np.inf), axis=2)
         prey = np.take_along_axis(view.state["prey"], near[..., None].repeat(2, axis=-1), axis=1)
-        prey = np.where(seen.any(axis=2)[..., None], prey, -5.0)
+        prey = np.where(seen.any(axis=2, keepdims=True), prey, -5.0)
         own = np.concatenate((view.poses[..., :2], prey), axis=-1)
         return _neighbour_rows(view, own, self.num_neighbors).astype(np.float32)
 
@@ -187,7 +188,7 @@ class PredatorCapturePrey(Scenario):
         return np.repeat(r[:, None].astype(float), self.n_agents, axis=1), state
 
     def terminated(self, view: View) -> NDArray[np.bool_]:
-        return view.state["captured"].all(axis=1)
+        return np.all(view.state["captured"], axis=1)
 
 
 @dataclass(frozen=True)

@@ -16,6 +16,8 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from swarmdeck.core.bounds import Bounds
+
 TASKS = ("coverage", "formation", "rendezvous")
 
 FloatArray = NDArray[np.float64]
@@ -37,7 +39,7 @@ def formation_reward(points: FloatArray, slots: FloatArray) -> FloatArray:
     return -np.linalg.norm(points - slots, axis=1)
 
 
-def coverage_cells(points: FloatArray, density: Any, bounds: tuple[float, float, float, float],
+def coverage_cells(points: FloatArray, density: Any, bounds: Bounds,
                    wall_margin: float = 0.02, min_separation: float = 1e-3) -> Any:
     """Cell moments (``swarmdeck.coverage.CellMoments``: masses, centroids, cost H_i per robot) of ``points``
     under ``density`` (a ``GaussianMixture``), with the coverage package's pre-conditioning."""

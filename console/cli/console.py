@@ -5,6 +5,7 @@ import argparse
 import sys
 import time
 from dataclasses import replace
+from typing import Any
 
 from swarmdeck.console.cli import UsageError
 
@@ -261,7 +262,7 @@ def _recorder(path: str | None, config, inputs_table: dict | None, source: str, 
     from swarmdeck.console.recording.recorder import Recorder, RecorderConfig, default_path
     from swarmdeck.console.recording.resimulate import session_metadata
 
-    extra = {"virtual_robots": int(virtual)} if virtual else {}
+    extra: dict[str, Any] = {"virtual_robots": int(virtual)} if virtual else {}
     return Recorder(path or default_path(), session_metadata(config, inputs_table, source=source, **extra),
                     RecorderConfig(foxglove=foxglove_channels), image_provider=image_provider)
 

@@ -17,7 +17,7 @@ import time
 import numpy as np
 
 from swarmdeck.console.cli import UsageError
-from swarmdeck.core.bounds import DEFAULT_BOUNDS
+from swarmdeck.core.bounds import DEFAULT_BOUNDS, Bounds
 from swarmdeck.devices.initial_conditions import random_initial_poses
 
 NAME = "robots"
@@ -121,7 +121,7 @@ def main(args: argparse.Namespace) -> int:
         firmware = FirmwareParams(command_timeout=args.timeout, pose_period=1.0 / args.pose_rate,
                                   pose_decimals=args.pose_decimals)
         battery = BatteryParams(capacity_ah=args.battery_ah)
-        chargers = None if args.no_chargers else ChargerLayout(bounds=tuple(args.bounds))
+        chargers = None if args.no_chargers else ChargerLayout(bounds=Bounds(*args.bounds))
         if args.start == "docked":
             docks = chargers.dock_poses()
             if ids.max() >= len(docks):
@@ -129,7 +129,7 @@ def main(args: argparse.Namespace) -> int:
                                  f"{len(docks)} slots, ids 0..{len(docks) - 1})")
             poses = docks[ids]
         else:
-            poses = random_initial_poses(layout, tuple(args.bounds), rng=args.seed)[ids]
+            poses = random_initial_poses(layout, Bounds(*args.bounds), rng=args.seed)[ids]
     except ValueError as exc:
         raise UsageError(str(exc)) from None
     try:

@@ -193,6 +193,15 @@ def main(args: argparse.Namespace) -> int:
     return 0
 
 
+def _one_then_other(first: Callable[[Any], object], then: Callable[[Any], object]) -> Callable[[Any], None]:
+    """A per-step callback calling ``first`` and then ``then`` with the same Arena (a caller's ``on_step``
+    beside the progress bar)."""
+    def both(arena: Any) -> None:
+        first(arena)
+        then(arena)
+    return both
+
+
 def add_run_arguments(parser: argparse.ArgumentParser, robots: int, duration: float) -> None:
     """--robots, --duration, --seed and --no-safety with the given defaults (an example's)."""
     parser.add_argument("--robots", type=int, default=robots, metavar="N", help=f"number of robots (default {robots})")
@@ -232,8 +241,7 @@ def run_headless(experiment: Callable[..., Any] | str, args: argparse.Namespace,
     on_step, close = progress_bar(args.duration)
     also = kw.pop("on_step", None)
     if also is not None:
-        bar = on_step
-        on_step = also if bar is None else (lambda arena: (also(arena), bar(arena)))  # noqa: E731
+        on_step = also if on_step is None else _one_then_other(also, on_step)
     try:
         result = run_experiment(experiment, n_robots=args.robots, duration=args.duration, seed=args.seed,
                                 safety=not args.no_safety, on_step=on_step, **kw)

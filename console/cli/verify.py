@@ -92,7 +92,7 @@ def _declared(args: argparse.Namespace) -> tuple[int | None, float, tuple | None
         declared_by = "--robots" if args.robots is not None else "the manifest"
     if args.initial_poses:
         try:
-            poses = tuple(tuple(float(v) for v in row) for row in read_poses_csv(args.initial_poses))
+            poses = tuple((float(x), float(y), float(theta)) for x, y, theta in read_poses_csv(args.initial_poses))
         except ValueError as exc:
             raise UsageError(str(exc)) from None
     return robots, 30.0 if duration is None else duration, poses, declared_by

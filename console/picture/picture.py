@@ -14,7 +14,7 @@ robots by construction. Units: m, rad, m/s; N robots, K active pairs, E Voronoi 
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, TypeVar
 
 import numpy as np
 from numpy.typing import NDArray
@@ -31,13 +31,14 @@ from swarmdeck.console.picture.colours import (
 from swarmdeck.console.picture.heat import heatmap
 from swarmdeck.console.picture.style import PictureStyle
 from swarmdeck.console.runtime.behaviours import goals_of_frame
-from swarmdeck.console.runtime.frame import Frame
+from swarmdeck.console.runtime.frame import Frame, filled
 from swarmdeck.core.bounds import Bounds
 
 if TYPE_CHECKING:
     from swarmdeck.coverage.density import GaussianMixture
 
 DEFAULT_STYLE = PictureStyle()
+_Scalar = TypeVar("_Scalar", bound=np.generic)
 
 
 def changed_mask(frame: Frame, style: PictureStyle = DEFAULT_STYLE) -> NDArray[np.bool_]:
@@ -58,8 +59,8 @@ def robot_colors(frame: Frame, style: PictureStyle = DEFAULT_STYLE) -> NDArray[n
         cols[:] = STOPPED
     elif frame.run_state == "paused":
         cols[:] = PAUSED
-    cols[~frame.seen] = UNSEEN
-    virtual = frame.is_virtual
+    cols[~filled(frame.seen)] = UNSEEN
+    virtual = filled(frame.is_virtual)
     if virtual.any():
         cols[virtual] = np.round(cols[virtual] * (1.0 - VIRTUAL_PALE) + 255.0 * VIRTUAL_PALE).astype(np.uint8)
     return cols
@@ -86,7 +87,7 @@ def cell_shades(masses: NDArray[np.float64]) -> NDArray[np.float64]:
     return np.array([200, 220, 255])[None] * (1 - m[:, None]) + np.array([60, 110, 220])[None] * m[:, None]
 
 
-def _frozen(a: NDArray[np.generic]) -> NDArray[np.generic]:
+def _frozen(a: NDArray[_Scalar]) -> NDArray[_Scalar]:
     a = np.asarray(a)
     if a.flags.writeable:
         a = a.copy() if a.base is not None else a
@@ -170,7 +171,7 @@ def picture_of(frame: Frame, style: PictureStyle = DEFAULT_STYLE) -> Picture:
     return Picture(
         bounds=frame.bounds, ids=frame.ids, poses=frame.poses, points=_frozen(pts),
         colors=_frozen(robot_colors(frame, style)), changed=_frozen(changed_mask(frame, style)),
-        virtual=frame.is_virtual, pairs=_frozen(pairs), pair_h=_frozen(h), pair_colors=_frozen(pair_colors(h, style.h_full)),
+        virtual=filled(frame.is_virtual), pairs=_frozen(pairs), pair_h=_frozen(h), pair_colors=_frozen(pair_colors(h, style.h_full)),
         ring_radius=0.5 * safety_distance(frame, style),
         nominal_tips=_frozen(pts + style.arrow_scale * frame.nominal),
         safe_tips=_frozen(pts + style.arrow_scale * frame.safe),

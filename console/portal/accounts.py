@@ -171,7 +171,7 @@ class Accounts:
             uid = tx.execute("INSERT INTO users (name, role, created) VALUES (?, ?, ?)", (name, role, now)).lastrowid
             tx.execute("INSERT INTO tokens (user_id, hash, created, expires) VALUES (?, ?, ?, ?)",
                        (uid, digest(token), now, expires))
-        return User(int(uid), name, role), token
+        return User(int(uid or 0), name, role), token
 
     def _expiry(self, expires_in_s: float | None) -> float | None:
         if expires_in_s is None:
@@ -191,7 +191,7 @@ class Accounts:
         with self.db.transaction() as tx:
             tid = tx.execute("INSERT INTO tokens (user_id, hash, created, expires) VALUES (?, ?, ?, ?)",
                              (user.id, digest(token), now, expires)).lastrowid
-        return TokenInfo(int(tid), user.name, now, expires, None, None), token
+        return TokenInfo(int(tid or 0), user.name, now, expires, None, None), token
 
     def tokens(self, name: str) -> list[TokenInfo]:
         """User ``name``'s tokens, oldest first (ids, times and state; never the secret)."""

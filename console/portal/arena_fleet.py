@@ -42,7 +42,7 @@ import threading
 import time
 from collections.abc import Callable
 from dataclasses import replace
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -58,6 +58,7 @@ from swarmdeck.devices.battery import recharge
 from swarmdeck.devices.chargers import ChargerLayout
 from swarmdeck.devices.fleet.assigned import AssignedRobots
 from swarmdeck.devices.fleet.assignment import AssignmentError, assign
+from swarmdeck.devices.simulated_robots import SimulatedRobots
 
 LoopHook = Callable[[ControlLoop | None], None]
 
@@ -88,10 +89,10 @@ class ArenaFleet:
         self.robots_via, self.config, self.wait_for_poses = robots_via, config, float(wait_for_poses)
         self.robot = robot if robot is not None else GritsBotParams()
         self.ids = np.arange(m, dtype=np.int64)
-        self.sim = None
-        if robots_via is None:
+        self.sim: SimulatedRobots | None = None
+        if robots_via is None:  # no robots_via: open_robots opens a SimulatedRobots (one object, source and sink)
             charges = np.broadcast_to(np.asarray(charge, dtype=float), (m,))
-            self.sim = open_robots(replace(self._spec(), charge=tuple(charges.tolist()))).sink
+            self.sim = cast(SimulatedRobots, open_robots(replace(self._spec(), charge=tuple(charges.tolist()))).sink)
         self._net: Any = None
         self._lock = threading.Lock()
         self._reading: SensedPoses | None = None
@@ -285,7 +286,7 @@ class ArenaFleet:
         charging = np.zeros(n, dtype=bool) if reading.charging is None else np.asarray(reading.charging, dtype=bool)
         q, _ = battery_levels(volts, charging)
         slot = self.chargers.docked_slot(reading.poses)
-        rows = []
+        rows: list[dict[str, Any]] = []
         for k, rid in enumerate(reading.ids.tolist()):  # a table for people, on request
             job = assigned.get(int(rid))
             if job is not None:

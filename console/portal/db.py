@@ -283,7 +283,8 @@ class Database:
 
     def check(self) -> str:
         """SQLite's own integrity check: ``"ok"`` for an intact file."""
-        return str(self.query_one("PRAGMA integrity_check")[0])
+        row = self.query_one("PRAGMA integrity_check")
+        return "no answer" if row is None else str(row[0])
 
     # ------------------------------------------------------------------ jobs' state machine
     def transition(self, tx: sqlite3.Connection, job_id: int, target: str, *, sources: tuple[str, ...] | None = None,

@@ -10,6 +10,7 @@ Pure Python (the thin CLI client imports :class:`ExportState`: no numpy, no Fast
 from __future__ import annotations
 
 import json
+import sqlite3
 from collections.abc import Mapping
 from dataclasses import dataclass
 from enum import StrEnum
@@ -77,7 +78,7 @@ class Job:
     position: int | None = None
 
     @classmethod
-    def from_row(cls, row: Mapping[str, Any], position: int | None = None) -> Job:
+    def from_row(cls, row: sqlite3.Row | Mapping[str, Any], position: int | None = None) -> Job:
         """A job from a ``jobs`` row joined with its owner's name (``owner``; :data:`.jobstore.JOB_SELECT`)."""
         poses = row["initial_poses"]
         return cls(

@@ -9,6 +9,7 @@ machine). The schema and its migrations stay in :mod:`.db`; accounts, tokens and
 """
 from __future__ import annotations
 
+import builtins
 import json
 import sqlite3
 import time
@@ -74,7 +75,7 @@ class JobStore:
             rows = self.db.query(f"{JOB_SELECT} WHERE j.user_id = ? ORDER BY j.id DESC", (int(user_id),))
         return [Job.from_row(r, positions.get(int(r["id"]))) for r in rows]
 
-    def queue(self) -> list[Job]:
+    def queue(self) -> builtins.list[Job]:
         """The arena queue, in the order jobs will run."""
         rows = self.db.query(f"{JOB_SELECT} WHERE j.state = ? ORDER BY j.priority, j.id", (JobState.IN_ARENA_QUEUE,))
         return [Job.from_row(r, k) for k, r in enumerate(rows)]
@@ -91,7 +92,7 @@ class JobStore:
         row = self.db.query_one(f"{JOB_SELECT} WHERE j.state IN ({_marks(ACTIVE)}) ORDER BY j.id LIMIT 1", ACTIVE)
         return None if row is None else Job.from_row(row)
 
-    def queue_ids(self, tx: Tx) -> list[int]:
+    def queue_ids(self, tx: Tx) -> builtins.list[int]:
         """The ids of the arena queue, in the order jobs will run."""
         return [int(r["id"]) for r in tx.execute(f"SELECT id FROM jobs WHERE state = ? {QUEUE_ORDER}",
                                                  (JobState.IN_ARENA_QUEUE,)).fetchall()]
@@ -100,7 +101,7 @@ class JobStore:
         rows = conn.execute(f"SELECT id FROM jobs WHERE state = ? {QUEUE_ORDER}", (JobState.IN_ARENA_QUEUE,))
         return {int(r["id"]): k for k, r in enumerate(rows.fetchall())}
 
-    def ids_in(self, tx: Tx, states: Sequence[JobState]) -> list[int]:
+    def ids_in(self, tx: Tx, states: Sequence[JobState]) -> builtins.list[int]:
         """The ids of the jobs in ``states``, oldest first."""
         return [int(r["id"]) for r in tx.execute(f"SELECT id FROM jobs WHERE state IN ({_marks(states)}) ORDER BY id",
                                                  tuple(states)).fetchall()]
@@ -111,7 +112,7 @@ class JobStore:
 
     # ------------------------------------------------------------------ changing jobs
     def insert(self, tx: Tx, *, user_id: int, name: str, kind: str, script: str, entry: str, robots: int,
-               duration: float, initial_poses: list[list[float]] | None, no_barrier: bool, now: float) -> int:
+               duration: float, initial_poses: Sequence[Sequence[float]] | None, no_barrier: bool, now: float) -> int:
         """A new job, ``awaiting verification``, last in priority; its id."""
         top = tx.execute("SELECT COALESCE(MAX(priority), 0) FROM jobs").fetchone()[0]
         cur = tx.execute(
@@ -171,7 +172,7 @@ class JobStore:
                              (reason, int(job_id), JobState.IN_ARENA_QUEUE, reason))
         return cur.rowcount > 0
 
-    def reorder_queue(self, tx: Tx, ids: list[int]) -> None:
+    def reorder_queue(self, tx: Tx, ids: builtins.list[int]) -> None:
         """Give the queued jobs ``ids`` priorities in that order (from the queue's lowest on)."""
         base = tx.execute("SELECT COALESCE(MIN(priority), 0) FROM jobs WHERE state = ?",
                           (JobState.IN_ARENA_QUEUE,)).fetchone()[0]
@@ -191,12 +192,12 @@ class JobStore:
         with self.transaction() as tx:
             tx.execute("UPDATE jobs SET exports = ? WHERE id = ?", (ExportState(state), int(job_id)))
 
-    def exports_in(self, state: ExportState) -> list[int]:
+    def exports_in(self, state: ExportState) -> builtins.list[int]:
         """The ids of the jobs whose exports are in ``state``, oldest first."""
         return [int(r["id"]) for r in self.db.query("SELECT id FROM jobs WHERE exports = ? ORDER BY id",
                                                     (ExportState(state),))]
 
-    def ended_before(self, cutoff: float) -> list[int]:
+    def ended_before(self, cutoff: float) -> builtins.list[int]:
         """Jobs that ended before ``cutoff`` (UNIX s), still have their results and no exports being written."""
         rows = self.db.query(f"SELECT id FROM jobs WHERE state IN ({_marks(FINAL)}) AND ended IS NOT NULL AND "
                              "ended < ? AND results_deleted IS NULL AND COALESCE(exports, '') != ? ORDER BY id",
@@ -209,7 +210,7 @@ class JobStore:
             tx.execute("UPDATE jobs SET results_deleted = ? WHERE id = ?", (when, int(job_id)))
 
     # ------------------------------------------------------------------ what a researcher uses (quotas)
-    def kept_job_ids(self, user_id: int) -> list[int]:
+    def kept_job_ids(self, user_id: int) -> builtins.list[int]:
         """The user's jobs whose results were not deleted."""
         return [int(r["id"]) for r in self.db.query("SELECT id FROM jobs WHERE user_id = ? AND results_deleted IS NULL",
                                                     (int(user_id),))]
@@ -220,7 +221,7 @@ class JobStore:
         return int(conn.execute(f"SELECT COUNT(*) FROM jobs WHERE user_id = ? AND state NOT IN ({_marks(FINAL)})",
                                 (int(user_id), *FINAL)).fetchone()[0])
 
-    def verification_cpu(self, user_id: int, since: float, tx: Tx | None = None) -> list[tuple[float, float]]:
+    def verification_cpu(self, user_id: int, since: float, tx: Tx | None = None) -> builtins.list[tuple[float, float]]:
         """(when, CPU s) of the verification of each of the user's jobs recorded after ``since``, oldest first."""
         conn = tx if tx is not None else self.db.connection()
         rows = conn.execute("SELECT t, cpu_s FROM verification_usage WHERE user_id = ? AND t > ? ORDER BY t",

@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import json
 import threading
-from typing import Any
+from typing import Any, cast
 
 from swarmdeck.console.portal.files import write_private
 from swarmdeck.console.portal.job import Job
@@ -65,12 +65,13 @@ class VerificationWorkers:
         """The job's verification: its declared robots, duration and start poses (as the arena will run it);
         each run's wall time is bounded by the declared duration (``VerificationConfig.run_wall_s``)."""
         cfg = self.service.config
-        poses = job.initial_poses
+        # rows [x, y, θ]: submission stored them checked (N, 3) (console.sandbox.start_poses.check_initial_poses)
+        poses = cast("tuple[tuple[float, float, float], ...] | None", job.initial_poses)
         return VerificationConfig(n_robots=job.robots, duration=job.duration, runs=cfg.verify_runs,
                                   seed=cfg.verify_seed + int(job.id), trusted=cfg.trusted,
                                   jail=cfg.jail(),
                                   limits=SandboxLimits(tick_s=cfg.tick_budget_s),
-                                  initial_poses=None if poses is None else tuple(tuple(p) for p in poses))
+                                  initial_poses=poses)
 
     def verify_job(self, job: Job) -> None:
         """Verify one claimed job and record the verdict (never raises)."""

@@ -14,6 +14,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from swarmdeck.console.runtime.frame import BarrierFrame, Frame
+from swarmdeck.core.bounds import Bounds
 from swarmdeck.core.constants import SAFETY_DISTANCE
 from swarmdeck.core.kinematics import si_to_unicycle
 
@@ -60,7 +61,7 @@ class ArenaRecording:
         from swarmdeck.console.recording.resimulate import session_metadata
         from swarmdeck.console.runtime.loop import LoopConfig, SafetyParams
 
-        config = LoopConfig(n_robots=arena.n, dt=arena.config.dt, bounds=tuple(arena.config.bounds), seed=self.seed,
+        config = LoopConfig(n_robots=arena.n, dt=arena.config.dt, bounds=Bounds.of(arena.config.bounds), seed=self.seed,
                             behaviour=self.behaviour, safety=SafetyParams(enabled=arena.safety is not None))
         path = self._path(len(self._recorders))
         self.paths.append(path)

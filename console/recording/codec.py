@@ -83,7 +83,16 @@ from typing import Any
 import numpy as np
 
 from swarmdeck.console.recording.prediction import predict_poses
-from swarmdeck.console.runtime.frame import FRAME_FORMAT, BarrierFrame, CoverageFrame, Frame, _dec_float, _enc_float
+from swarmdeck.console.runtime.frame import (
+    FRAME_FORMAT,
+    BarrierFrame,
+    CoverageFrame,
+    Frame,
+    _dec_float,
+    _enc_float,
+    filled,
+)
+from swarmdeck.core.bounds import Bounds
 from swarmdeck.core.errors import SwarmdeckError
 from swarmdeck.core.kinematics import lookahead_points, unicycle_to_si
 from swarmdeck.coverage.geometry import CoverageGeometry, GeometryConfig, coverage_geometry
@@ -162,13 +171,14 @@ def frame_message(frame: Frame, previous: Frame | None = None) -> dict[str, Any]
     d["format"] = CODEC_FORMAT
     d["ids"] = pack_array(frame.ids, "<i8")
     d["poses"] = pack_array(frame.poses, "<f8")
-    d["seen"] = pack_array(frame.seen, "|b1")
-    if frame.is_virtual.any():
-        d["is_virtual"] = pack_array(frame.is_virtual, "|b1")
-    if np.isfinite(frame.battery).any():
-        d["battery"] = pack_array(frame.battery, "<f4")
-    if frame.charging.any():
-        d["charging"] = pack_array(frame.charging, "|b1")
+    d["seen"] = pack_array(filled(frame.seen), "|b1")
+    is_virtual, battery, charging = filled(frame.is_virtual), filled(frame.battery), filled(frame.charging)
+    if is_virtual.any():
+        d["is_virtual"] = pack_array(is_virtual, "|b1")
+    if np.isfinite(battery).any():
+        d["battery"] = pack_array(battery, "<f4")
+    if charging.any():
+        d["charging"] = pack_array(charging, "|b1")
     # nominal as float16 offsets from the derived safe command: zero where nothing changed it
     delta = frame.nominal - derived_safe(frame.poses, frame.v, frame.w, frame.lookahead)
     delta[np.abs(delta) < 1e-12] = 0.0
@@ -184,7 +194,7 @@ def frame_message(frame: Frame, previous: Frame | None = None) -> dict[str, Any]
     c = frame.coverage
     if c is not None:
         derived = bool(len(c.cell_vertices)) and frame.density is not None
-        cov = {"cost_H": _enc_float(c.cost_H), "mean_centroid_distance": _enc_float(c.mean_centroid_distance),
+        cov: dict[str, Any] = {"cost_H": _enc_float(c.cost_H), "mean_centroid_distance": _enc_float(c.mean_centroid_distance),
                "packing_warning": c.packing_warning, "geometry": "derived" if derived else "none"}
         changes = c.geometry_config.changes(frame.bounds) if c.geometry_config is not None else {}
         if changes:  # a non-default coverage config: what the cells are derived with on reading
@@ -396,23 +406,26 @@ def _decode_v2(d: Mapping[str, Any], exact: Mapping[str, np.ndarray]) -> Frame:
 
 
 def _decode_coverage(cd: Mapping[str, Any], poses: np.ndarray, shell: Frame, lookahead: float) -> CoverageFrame:
-    scalars = dict(cost_H=_dec_float(cd["cost_H"]), mean_centroid_distance=_dec_float(cd["mean_centroid_distance"]),
-                   packing_warning=cd.get("packing_warning"))
+    cost_h, mean_distance = _dec_float(cd["cost_H"]), _dec_float(cd["mean_centroid_distance"])
+    warning = cd.get("packing_warning")
     config = geometry_config(cd.get("config"), shell.bounds)
     if cd.get("geometry") == "derived" and len(poses) and shell.density is not None:
         derived = derived_coverage(poses, lookahead, shell.density, config)
         if derived is not None:
-            return CoverageFrame.from_geometry(derived, **scalars)
+            return CoverageFrame.from_geometry(derived, cost_H=cost_h, mean_centroid_distance=mean_distance,
+                                               packing_warning=warning)
     if "centroids" in cd:
         return CoverageFrame(centroids=unpack_array(cd["centroids"], "coverage.centroids").astype(float),
                              masses=unpack_array(cd["masses"], "coverage.masses").astype(float),
-                             edges=np.zeros((0, 2, 2)), neighbours=np.zeros((0, 2), dtype=np.int64), **scalars)
+                             edges=np.zeros((0, 2, 2)), neighbours=np.zeros((0, 2), dtype=np.int64),
+                             cost_H=cost_h, mean_centroid_distance=mean_distance, packing_warning=warning)
     n = len(poses)
     return CoverageFrame(centroids=np.zeros((n, 2)), masses=np.zeros(n), edges=np.zeros((0, 2, 2)),
-                         neighbours=np.zeros((0, 2), dtype=np.int64), **scalars)
+                         neighbours=np.zeros((0, 2), dtype=np.int64), cost_H=cost_h,
+                         mean_centroid_distance=mean_distance, packing_warning=warning)
 
 
-def geometry_config(changes: Any, bounds: tuple[float, float, float, float]) -> GeometryConfig:
+def geometry_config(changes: Any, bounds: Bounds) -> GeometryConfig:
     """The coverage geometry config a frame's ``coverage.config`` describes on the frame's ``bounds``
     (absent, as in every recording made before it was stored: the defaults). ValueError naming the field."""
     if changes is not None and not isinstance(changes, Mapping):

@@ -26,6 +26,7 @@ from pathlib import Path
 import numpy as np
 
 from swarmdeck.console.recording.reader import Recording
+from swarmdeck.console.runtime.frame import filled
 
 ROBOT_COLUMNS = ("t", "time", "tick", "id", "x", "y", "theta", "v", "w",
                  "nominal_x", "nominal_y", "safe_x", "safe_y", "seen")
@@ -49,7 +50,7 @@ def export_csv(recording: Recording, out_dir: str | os.PathLike[str], start: flo
             n = f.n
             block = np.column_stack((
                 np.full(n, t), np.full(n, f.time), np.full(n, f.tick), f.ids, f.poses, f.v, f.w,
-                f.nominal, f.safe, f.seen.astype(float),
+                f.nominal, f.safe, filled(f.seen).astype(float),
             ))
             fmt = ["%.17g", "%.17g", "%d", "%d"] + ["%.17g"] * 9 + ["%d"]
             np.savetxt(fr, block, fmt=fmt, delimiter=",")

@@ -145,7 +145,7 @@ class VideoLayout:
         aw, ah = max(2, int(scale * (x1 - x0))), max(2, int(scale * (y1 - y0)))
         top = band + (height - 2 * band - ah) // 2
         box = (width - pw, top, pw - margin, ah) if pw else (0, 0, 0, 0)
-        return cls((x0, x1, y0, y1), width, height, scale, (width - pw - aw) // 2, top, aw, ah, band, box)
+        return cls(Bounds(x0, x1, y0, y1), width, height, scale, (width - pw - aw) // 2, top, aw, ah, band, box)
 
     def to_px(self, xy: NDArray[np.float64]) -> NDArray[np.float64]:
         """(…, 2) arena points, m → (…, 2) pixel coordinates (column, row), float."""
@@ -382,7 +382,7 @@ class FrameRenderer:
         elif frame.run_state == "paused":
             self._text(img, "paused", max(x, lay.width - int(90 * self.font_scale / 0.6)), y, (170, 185, 210))
 
-    def _footer(self, img: NDArray[np.uint8], t: float, events: list[RecordedEvent]) -> None:
+    def _footer(self, img: NDArray[np.uint8], t: float, events: Sequence[RecordedEvent]) -> None:
         lay = self.layout
         if not events:
             return

@@ -367,7 +367,7 @@ class FoxgloveEncoder:
         w, h = max(1, int(round((x1 - x0) / cell))), max(1, int(round((y1 - y0) / cell)))
         dx, dy = (x1 - x0) / w, (y1 - y0) / h
         key = (x0, x1, y0, y1, cell)
-        if self._grid_key != key:
+        if self._grid_key != key or self._grid_pts is None:
             gx, gy = np.meshgrid(x0 + (np.arange(w) + 0.5) * dx, y0 + (np.arange(h) + 0.5) * dy)
             self._grid_pts, self._grid_key = np.stack((gx, gy), axis=-1), key
         phi = np.asarray(frame.density.evaluate(self._grid_pts), dtype="<f4")

@@ -22,9 +22,11 @@ from __future__ import annotations
 
 import io
 import struct
-from collections.abc import Iterator, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass, field
 from typing import Any, BinaryIO, Literal
+
+from swarmdeck.core.errors import SwarmdeckError
 
 MAGIC = bytes([137, 77, 67, 65, 80, 48, 13, 10])
 OP_HEADER, OP_FOOTER, OP_SCHEMA, OP_CHANNEL, OP_MESSAGE, OP_CHUNK = 0x01, 0x02, 0x03, 0x04, 0x05, 0x06
@@ -38,7 +40,7 @@ FOOTER_SIZE = 9 + 20 + len(MAGIC)
 StopReason = Literal["end", "cut", "damaged", "data_end"]
 
 
-class DamagedChunk(ValueError):
+class DamagedChunk(ValueError, SwarmdeckError):
     """A chunk record that cannot be read: a bad CRC, undecodable compression, a cut record inside."""
 
 
@@ -241,16 +243,17 @@ def parse_record(op: int, body: bytes) -> Any:
     from mcap import records as r
     from mcap.data_stream import ReadDataStream
 
-    kinds = {OP_HEADER: r.Header, OP_FOOTER: r.Footer, OP_SCHEMA: r.Schema, OP_CHANNEL: r.Channel,
-             OP_CHUNK: r.Chunk, OP_MESSAGE_INDEX: r.MessageIndex, OP_CHUNK_INDEX: r.ChunkIndex,
-             OP_ATTACHMENT: r.Attachment, OP_ATTACHMENT_INDEX: r.AttachmentIndex, OP_STATISTICS: r.Statistics,
-             OP_METADATA: r.Metadata, OP_METADATA_INDEX: r.MetadataIndex, OP_SUMMARY_OFFSET: r.SummaryOffset,
-             OP_DATA_END: r.DataEnd}
+    readers: dict[int, Callable[[ReadDataStream], Any]] = {
+        OP_HEADER: r.Header.read, OP_FOOTER: r.Footer.read, OP_SCHEMA: r.Schema.read, OP_CHANNEL: r.Channel.read,
+        OP_CHUNK: r.Chunk.read, OP_MESSAGE_INDEX: r.MessageIndex.read, OP_CHUNK_INDEX: r.ChunkIndex.read,
+        OP_ATTACHMENT: r.Attachment.read, OP_ATTACHMENT_INDEX: r.AttachmentIndex.read,
+        OP_STATISTICS: r.Statistics.read, OP_METADATA: r.Metadata.read, OP_METADATA_INDEX: r.MetadataIndex.read,
+        OP_SUMMARY_OFFSET: r.SummaryOffset.read, OP_DATA_END: r.DataEnd.read}
     stream = ReadDataStream(io.BytesIO(body))
     if op == OP_MESSAGE:
         return r.Message.read(stream, len(body))
-    kind = kinds.get(op)
-    return None if kind is None else kind.read(stream)
+    read = readers.get(op)
+    return None if read is None else read(stream)
 
 
 __all__ = ["MAGIC", "MAX_OPCODE", "ChunkRef", "DamagedChunk", "McapFile", "Record", "Stop", "Summary", "Walk",

@@ -187,7 +187,7 @@ def recover(source: str | os.PathLike[str], output: str | os.PathLike[str] | Non
             mf = McapFile(f, size)
             head = mf.head(len(MAGIC))
             header = parse_record(OP_HEADER, mf.body(head)) if head is not None and head.op == OP_HEADER else None
-            if not isinstance(header, Header):  # pragma: no cover - _check_head saw a complete header record
+            if head is None or not isinstance(header, Header):  # pragma: no cover - _check_head saw a complete header record
                 raise RecoveryError(f"{src} does not start with an MCAP header record")
             writer: Any = None
             copier: _Copier | None = None

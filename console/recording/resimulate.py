@@ -232,6 +232,7 @@ def resimulate(recording: Recording, *, max_frames: int | None = None,
     names = [lc.name for lc in inputs_cfg.listeners]
     now = [first.time]
     hub = InputHub(sources, clock=lambda: now[0], config=inputs_cfg)
+    robots: SimulatedRobots | None = None
     if loop_cfg.seed is not None:  # the same seeded initial conditions as the recorded run, bit for bit
         robots = SimulatedRobots(loop_cfg.n_robots, ArenaConfig(bounds=loop_cfg.bounds, dt=loop_cfg.dt,
                                                                 seed=loop_cfg.seed))

@@ -95,7 +95,7 @@ class Coverage:
 
     name = "coverage"
 
-    def __init__(self, params: BehaviourParams, bounds: tuple[float, float, float, float],
+    def __init__(self, params: BehaviourParams, bounds: Bounds,
                  max_speed: float, safety_distance: float) -> None:
         from swarmdeck.coverage import CoverageConfig, CoverageController
 
@@ -197,7 +197,7 @@ def goal_params(params: BehaviourParams) -> dict[str, Any]:
     return out
 
 
-def goals_of_frame(params: dict[str, Any], n: int, bounds: tuple[float, float, float, float]) -> FloatArray:
+def goals_of_frame(params: Mapping[str, Any], n: int, bounds: tuple[float, float, float, float]) -> FloatArray:
     """The goto goals of a Frame from its ``params`` (:func:`goal_params`); malformed entries are ignored."""
     goals = None
     text = params.get("goals")
@@ -282,7 +282,7 @@ def load_script(path: Path) -> Callable[..., Any]:
     return func
 
 
-def make_behaviour(name: str, params: BehaviourParams, bounds: tuple[float, float, float, float],
+def make_behaviour(name: str, params: BehaviourParams, bounds: Bounds,
                    max_speed: float, safety_distance: float, *, script_budget: float = 0.0165) -> Behaviour:
     """The behaviour called ``name`` (see the module docstring); BehaviourError for unknown names.
     ``script_budget``: s a ``script:`` behaviour may take per tick (:class:`Script`)."""

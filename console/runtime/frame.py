@@ -62,7 +62,7 @@ import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field, fields
 from types import MappingProxyType
-from typing import Any
+from typing import Any, TypeVar
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -77,6 +77,16 @@ RUN_STATES = ("running", "paused", "estop")
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
+_Scalar = TypeVar("_Scalar", bound=np.generic)
+
+
+def filled(array: NDArray[_Scalar] | None) -> NDArray[_Scalar]:
+    """A Frame's per-robot array that its constructor takes as optional (``seen``, ``is_virtual``, ``battery``,
+    ``charging``: None means the default) and ``__post_init__`` always fills, ``(N,)``, as the type checker
+    should see it on a built Frame. ValueError for None (a Frame whose ``__post_init__`` did not run)."""
+    if array is None:
+        raise ValueError("a Frame's per-robot array is None: the Frame was not built through its constructor")
+    return array
 
 
 # ---------------------------------------------------------------------------- JSON helpers
@@ -122,7 +132,7 @@ def _dec_array(data: Any, dtype: type, shape_tail: tuple[int, ...], name: str) -
 
 def _ro(a: ArrayLike, dtype: type, shape_tail: tuple[int, ...], name: str) -> NDArray[Any]:
     """A read-only copy of ``a`` with the given dtype and trailing shape."""
-    arr = np.array(a, dtype=dtype, copy=True)
+    arr: NDArray[Any] = np.array(a, dtype=dtype, copy=True)
     if arr.size == 0:
         arr = arr.reshape((0,) + shape_tail)
     if arr.ndim != 1 + len(shape_tail) or arr.shape[1:] != shape_tail:
@@ -180,7 +190,10 @@ class BarrierFrame:
     @classmethod
     def from_diagnostics(cls, diag: Any, n: int, safety_distance: float, enabled: bool = True) -> BarrierFrame:
         """Build from a ``BarrierDiagnostics``-like object (attributes per the safety contract)."""
-        get = lambda k, d: getattr(diag, k, d)  # noqa: E731
+
+        def get(key: str, default: Any) -> Any:
+            return getattr(diag, key, default)
+
         inter = get("intervention", None)
         return cls(
             enabled=enabled,
@@ -337,9 +350,9 @@ class ContactsFrame:
             return cls()
         return cls(
             sources=tuple(str(getattr(c, "source", "")) for c in cs),
-            ids=[int(getattr(c, "id", 0)) for c in cs],
-            positions=[np.asarray(c.position, dtype=float)[:2] for c in cs],
-            velocities=[np.asarray(getattr(c, "velocity", (0.0, 0.0)), dtype=float)[:2] for c in cs],
+            ids=np.array([int(getattr(c, "id", 0)) for c in cs], dtype=np.int64),
+            positions=np.array([np.asarray(c.position, dtype=float)[:2] for c in cs], dtype=float),
+            velocities=np.array([np.asarray(getattr(c, "velocity", (0.0, 0.0)), dtype=float)[:2] for c in cs], dtype=float),
         )
 
     def __len__(self) -> int:
@@ -458,7 +471,7 @@ class Frame:
             "lookahead": _enc_float(self.lookahead),
             "ids": self.ids.tolist(),
             "poses": _enc_array(self.poses),
-            "seen": self.seen.tolist(),
+            "seen": filled(self.seen).tolist(),
             "nominal": _enc_array(self.nominal),
             "safe": _enc_array(self.safe),
             "v": _enc_array(self.v),
@@ -483,12 +496,13 @@ class Frame:
         (some robot virtual, some battery known, some robot charging): older readers and recordings
         without them read as all physical, battery unknown, not charging."""
         out: dict[str, Any] = {}
-        if self.is_virtual.any():
-            out["is_virtual"] = self.is_virtual.tolist()
-        if np.isfinite(self.battery).any():
-            out["battery"] = _enc_array(self.battery)
-        if self.charging.any():
-            out["charging"] = self.charging.tolist()
+        is_virtual, battery, charging = filled(self.is_virtual), filled(self.battery), filled(self.charging)
+        if is_virtual.any():
+            out["is_virtual"] = is_virtual.tolist()
+        if np.isfinite(battery).any():
+            out["battery"] = _enc_array(battery)
+        if charging.any():
+            out["charging"] = charging.tolist()
         return out
 
     @classmethod

@@ -179,7 +179,7 @@ def mqtt_robots(url: str, ids: NDArray[np.int64] | None, wait_for_poses: float =
 
 
 def camera_source(spec: str, ids: NDArray[np.int64], truth: Callable[[float], NDArray[np.float64]] | None,
-                  bounds: tuple[float, float, float, float]) -> TrackedPoseSource:
+                  bounds: Bounds) -> TrackedPoseSource:
     """A tracked pose source for ``--camera`` ``synthetic`` (rendering ``truth(now)``), a webcam index,
     a stream URL, a folder of images or a video file. Raises ValueError naming what is wrong."""
     from swarmdeck.tracking import (

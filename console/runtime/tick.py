@@ -13,7 +13,7 @@ import time
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from dataclasses import replace
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
 from numpy.typing import NDArray
@@ -56,7 +56,8 @@ def _checked(sensed: Any) -> SensedPoses:
             if arr.shape != (n,):
                 raise ValueError(f"pose source gave {name} {arr.shape} for {n} robots; expected ({n},)")
             extra[name] = arr
-    return SensedPoses(ids, poses, seen, **extra)
+    return SensedPoses(ids, poses, seen, is_virtual=extra.get("is_virtual"), battery=extra.get("battery"),
+                       charging=extra.get("charging"))
 
 
 class Stage:
@@ -233,7 +234,7 @@ class Ticker:
             if behaviour_health is not None:  # a script's worker, a fleet maneuver's progress
                 name = behaviour.name
                 fns.append(("script" if name.startswith("script:") else name, behaviour_health))
-            if self.source is not self.sink:
+            if cast(object, self.source) is not self.sink:
                 fns.append(("commands", self.sink.health))
             fns += list(self.health_fns.items())
         health: dict[str, str] = {}

@@ -83,9 +83,9 @@ class VerificationRobots:
     name = "verification (disturbed simulation)"
 
     def __post_init__(self) -> None:
-        self.n_robots = self.sim.n_robots
+        self.n_robots = self.sim.n
         self._ids = np.arange(self.n_robots, dtype=np.int64)
-        self._seen = np.ones(self.n_robots, dtype=bool)
+        self._seen = np.ones(self.n_robots, dtype=np.bool_)
         self.params: GritsBotParams = self.sim.params
         self.contacts = ContactLog(self.n_robots, self.sim.config.dt)
         self._pending = (np.zeros(self.n_robots), np.zeros(self.n_robots))

@@ -215,7 +215,8 @@ def run_task(task: RunTask) -> dict[str, Any]:
         robots = VerificationRobots(sim, cfg.disturbances, np.random.default_rng(seeds[1]), contact_distance=sim.params.diameter)
         return ArenaPlant(Arena(backend=robots, config=arena_config, safety=task.mode == "wrapped", duration=cfg.duration))
 
-    cancelled = (lambda: os.path.exists(task.cancel_path)) if task.cancel_path else None
+    cancel_path = task.cancel_path
+    cancelled = (lambda: os.path.exists(cancel_path)) if cancel_path else None
     cpu0 = time.process_time()  # this worker's CPU (the trusted side: plant, barrier, protocol) for the run
     outcome = run_sandboxed(task.bundle, make_plant, n_robots=cfg.n_robots,
                             duration=cfg.duration, rps=cfg.rps, limits=cfg.run_limits, trusted=cfg.trusted,
@@ -364,7 +365,7 @@ def script_verdict(bundle: ScriptBundle, runs: Sequence[dict[str, Any]], cfg: Ve
             no_bypass.append(f"{touched} contacts without the barrier")
     verdict = REJECTED if reasons else (BYPASS if not no_bypass else ACCEPTED)
     spread = None
-    if len(scores) >= 2:
+    if score is not None and len(scores) >= 2:
         half = 1.96 * float(np.std(scores, ddof=1)) / math.sqrt(len(scores))
         spread = [max(0.0, score - half), min(1.0, score + half)]
     return {

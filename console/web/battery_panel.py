@@ -12,7 +12,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from swarmdeck.console.runtime.batteries import CHARGING, LEVELS, LOW, BatteryWatch, battery_levels
-from swarmdeck.console.runtime.frame import Frame
+from swarmdeck.console.runtime.frame import Frame, filled
 
 if TYPE_CHECKING:
     import viser
@@ -26,7 +26,8 @@ def battery_table(frame: Frame, watch: BatteryWatch = BatteryWatch(), max_rows: 
     n = frame.n
     if n == 0:
         return "no robots"
-    q, level = battery_levels(frame.battery, frame.charging, watch)
+    battery, is_virtual = filled(frame.battery), filled(frame.is_virtual)
+    q, level = battery_levels(battery, filled(frame.charging), watch)
     known = ~np.isnan(q)
     if not known.any():
         return "no battery reports (simulated robots have none; `--robots-via` robots report theirs)"
@@ -40,8 +41,8 @@ def battery_table(frame: Frame, watch: BatteryWatch = BatteryWatch(), max_rows: 
     lines += ["", "| robot | V | charge | state |", "|---:|---:|---:|:---|"]
     order = np.lexsort((ids, level != LOW))
     for k in order[:max_rows]:  # the panel's table (≤ max_rows rows, refreshed a few times a second)
-        name = f"{int(ids[k])}" + (" (virtual)" if frame.is_virtual[k] else "")
-        volts = f"{frame.battery[k]:.2f}" if known[k] else "–"
+        name = f"{int(ids[k])}" + (" (virtual)" if is_virtual[k] else "")
+        volts = f"{battery[k]:.2f}" if known[k] else "–"
         charge = f"{q[k]:.0%}" if known[k] else "–"
         lines.append(f"| {name} | {volts} | {charge} | {_MARK[LEVELS[level[k]]]} |")
     if n > max_rows:

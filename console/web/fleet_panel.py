@@ -22,7 +22,7 @@ from swarmdeck.console.runtime.fleet_upkeep import (
     set_up,
     status_ages,
 )
-from swarmdeck.console.runtime.frame import Frame
+from swarmdeck.console.runtime.frame import Frame, filled
 from swarmdeck.console.runtime.loop import ControlLoop
 from swarmdeck.devices.chargers import ChargerLayout
 
@@ -52,15 +52,22 @@ class FleetPanel:
             self.set_up_button = gui.add_button("Set up", hint="Assign charged robots and drive them to the start poses")
             self.return_button = gui.add_button("Return to chargers", hint="Dock every robot on a free charger slot")
             self.status = gui.add_markdown("")
-        self.set_up_button.on_click(lambda event: self.set_up(str(self.poses_path.value).strip(),
-                                                               getattr(event, "client", None)))
-        self.return_button.on_click(lambda event: self.return_to_chargers(getattr(event, "client", None)))
+        self.set_up_button.on_click(self._on_set_up)
+        self.return_button.on_click(self._on_return)
+
+    def _on_set_up(self, event: Any) -> None:
+        """The Set up button: set up from the CSV named in the text box, notifying the clicking tab."""
+        self.set_up(str(self.poses_path.value).strip(), getattr(event, "client", None))
+
+    def _on_return(self, event: Any) -> None:
+        """The Return button: dock every robot, notifying the clicking tab."""
+        self.return_to_chargers(getattr(event, "client", None))
 
     def _view(self) -> tuple[Frame, FleetView]:
         frame = self.loop.latest
         if frame is None:
             raise ValueError("no robots seen yet")
-        return frame, FleetView.of(frame, status_ages(self.loop.sink, frame.ids, frame.is_virtual))
+        return frame, FleetView.of(frame, status_ages(self.loop.sink, frame.ids, filled(frame.is_virtual)))
 
     def set_up(self, path: str = "", client: viser.ClientHandle | None = None) -> FleetManeuver | None:
         """Plan and start a set-up (``path``: the start poses' CSV; empty: random); None if refused."""

@@ -32,6 +32,7 @@ from swarmdeck.console.recording.foxglove import (
     channel_specs,
 )
 from swarmdeck.console.runtime.frame import Frame
+from swarmdeck.core.bounds import Bounds
 from swarmdeck.core.constants import ROBOT_RADIUS
 from swarmdeck.core.errors import SwarmdeckError
 from swarmdeck.core.service_thread import ServiceThread
@@ -58,7 +59,7 @@ class FoxgloveBridge:
     ``bridge.close()`` at exit.
     """
 
-    def __init__(self, bounds: tuple[float, float, float, float], host: str = "127.0.0.1", port: int = DEFAULT_PORT,
+    def __init__(self, bounds: Bounds, host: str = "127.0.0.1", port: int = DEFAULT_PORT,
                  robot_radius: float = ROBOT_RADIUS, config: FoxgloveConfig | None = None,
                  image_provider: Callable[[str], Any] | None = None) -> None:
         import foxglove

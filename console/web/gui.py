@@ -69,11 +69,14 @@ class TickRate:
 def add_param_widget(gui: viser.GuiApi, spec: Spec, value: Any) -> Any:
     """The widget a parameter's declaration asks for (:mod:`swarmdeck.console.runtime.params`): a dropdown
     of its choices, a checkbox for a bool, else a slider over its range with its step."""
+    label = spec.label
+    if label is None:
+        raise ValueError("a parameter without a label is not shown in the GUI (params.gui_fields lists those with one)")
     if spec.choices is not None:
-        return gui.add_dropdown(spec.label, spec.choices, initial_value=value)
+        return gui.add_dropdown(label, spec.choices, initial_value=value)
     if isinstance(value, bool):
-        return gui.add_checkbox(spec.label, initial_value=value)
-    return gui.add_slider(spec.label, min=spec.lo, max=spec.hi, step=spec.step, initial_value=value)
+        return gui.add_checkbox(label, initial_value=value)
+    return gui.add_slider(label, min=spec.lo, max=spec.hi, step=spec.step, initial_value=value)
 
 
 def widget_value(spec: Spec, handle: Any) -> Any:
@@ -105,6 +108,10 @@ class ConsoleGui:
         loop: the control loop to command.
         scene: the arena scene (for layer toggles).
     """
+
+    #: the density's σ and weight sliders (viser handles from ``_param_widgets``; read by their own callbacks)
+    bump_sigma: Any
+    bump_weight: Any
 
     def __init__(self, server: viser.ViserServer, loop: ControlLoop, scene: ArenaScene) -> None:
         self.server, self.loop, self.scene = server, loop, scene
@@ -466,7 +473,7 @@ class ConsoleGui:
                     self.behaviour.options = tuple(o for o in self.behaviour.options
                                                    if not o.startswith("script:")) + (frame.behaviour,)
                 self.behaviour.value = frame.behaviour
-            if barrier_differs:
+            if barrier_differs and frame.barrier is not None:
                 self.barrier_on.value = frame.barrier.enabled
         finally:
             self._reverting = False

@@ -33,7 +33,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Literal
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -63,14 +63,14 @@ from swarmdeck.console.picture.heat import heatmap  # noqa: F401 - re-exported f
 from swarmdeck.console.picture.picture import Picture, picture_of, robot_colors
 from swarmdeck.console.picture.shapes import dashed_rings, robot_outline
 from swarmdeck.console.picture.style import PictureStyle
-from swarmdeck.console.runtime.frame import Frame
+from swarmdeck.console.runtime.frame import Frame, filled
 from swarmdeck.core.bounds import DEFAULT_BOUNDS, Bounds
 from swarmdeck.core.constants import ROBOT_RADIUS
 
 if TYPE_CHECKING:
     import viser
 
-ImageProvider = Callable[[str], "tuple[ArrayLike, Bounds] | None"]
+ImageProvider = Callable[[str], "tuple[ArrayLike, tuple[float, float, float, float]] | None"]
 """Maps a Frame's ``image_ref`` to (RGB image (H, W, 3), its bounds (x0, x1, y0, y1) m), or None."""
 
 LAYERS: tuple[str, ...] = (
@@ -128,7 +128,7 @@ def battery_bars(frame: Frame, robot_radius: float) -> tuple[NDArray[np.float32]
     and their colours (2K, 2, 3) (:data:`BATTERY_COLORS`). A hidden stub when nobody reports."""
     from swarmdeck.console.runtime.batteries import battery_levels
 
-    q, level = battery_levels(frame.battery, frame.charging)
+    q, level = battery_levels(filled(frame.battery), filled(frame.charging))
     known = np.flatnonzero(~np.isnan(q))
     if not len(known):
         return _EMPTY_SEG, np.repeat(BATTERY_TRACK[None, None], 2, axis=1)
@@ -139,6 +139,10 @@ def battery_bars(frame: Frame, robot_radius: float) -> tuple[NDArray[np.float32]
     segs = np.concatenate((_segments_2d(left, track_end, 0.013), _segments_2d(left, fill_end, 0.014)))
     cols = np.concatenate((np.tile(BATTERY_TRACK, (len(known), 1)), BATTERY_COLORS[level[known]]))
     return segs, np.repeat(cols[:, None, :], 2, axis=1)
+
+
+PointLayer = Literal["centroids", "contacts", "goals"]
+"""The layers drawn as point clouds (:meth:`SceneNodes.point_layer`)."""
 
 
 @dataclass
@@ -169,6 +173,11 @@ class SceneNodes:
     def layer(self, name: str) -> viser.SceneNodeHandle | None:
         """The node of layer ``name`` (None while it has none; ``labels`` is a list: not here)."""
         return getattr(self, name)
+
+    def point_layer(self, name: PointLayer) -> viser.PointCloudHandle:
+        """The point-cloud node of the point layer ``name`` (made with the scene: never None)."""
+        handle: viser.PointCloudHandle = getattr(self, name)
+        return handle
 
 
 class ArenaScene:
@@ -375,11 +384,11 @@ class ArenaScene:
         if v["goals"]:
             self._points("goals", pic.goals, 0.002)
 
-    def _points(self, name: str, xy: NDArray[np.float64], z: float) -> None:
+    def _points(self, name: PointLayer, xy: NDArray[np.float64], z: float) -> None:
         """Put ``xy`` (K, 2) m at height ``z`` into the point layer ``name``; with no point the node is hidden."""
         was_empty, self._empty[name] = self._empty[name], not len(xy)
         if len(xy):
-            self.nodes.layer(name).points = np.column_stack((xy, np.full(len(xy), z))).astype(np.float32)
+            self.nodes.point_layer(name).points = np.column_stack((xy, np.full(len(xy), z))).astype(np.float32)
         if was_empty != self._empty[name]:
             self._apply_visibility(name)
 

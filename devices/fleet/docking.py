@@ -37,21 +37,21 @@ def choose_slots(positions: ArrayLike, free: ArrayLike, layout: ChargerLayout) -
     from scipy.optimize import linear_sum_assignment
 
     p = np.asarray(positions, dtype=float).reshape(-1, 2)
-    free = np.asarray(free, dtype=np.intp).reshape(-1)
-    occupied = np.setdiff1d(np.arange(layout.n_slots), free)
+    slots = np.asarray(free, dtype=np.intp).reshape(-1)
+    occupied = np.setdiff1d(np.arange(layout.n_slots), slots)
     if len(occupied):  # a free slot whose way in a docked robot blocks cannot be reached
-        free = free[~layout.dock_blocks()[np.ix_(occupied, free)].any(axis=0)]
-    if len(free) < len(p):
-        raise ValueError(f"{len(p)} robots must return but only {len(free)} charger slots are free and reachable "
+        slots = slots[~layout.dock_blocks()[np.ix_(occupied, slots)].any(axis=0)]
+    if len(slots) < len(p):
+        raise ValueError(f"{len(p)} robots must return but only {len(slots)} charger slots are free and reachable "
                          f"(the layout has {layout.n_slots})")
-    app = layout.approach_poses()[free, :2]
+    app = layout.approach_poses()[slots, :2]
     blocks = layout.dock_blocks() | layout.approaches_clash()
-    corner = (blocks.any(axis=0) | blocks.any(axis=1))[free]
+    corner = np.any(blocks, axis=0)[slots] | np.any(blocks, axis=1)[slots]
     # corner slots (docked in a set order) only when the others are taken: 2 m more cost each
     cost = np.hypot(*(p[:, None, :] - app[None, :, :]).transpose(2, 0, 1)) + 2.0 * corner[None, :]
     r, c = linear_sum_assignment(cost)
     out = np.empty(len(p), dtype=np.intp)
-    out[r] = free[c]
+    out[r] = slots[c]
     return out
 
 

@@ -111,7 +111,7 @@ class FleetManager:
         if n_robots is not None and len(slots) != n_robots:
             raise ValueError(f"{n_robots} robots but {len(slots)} slots given")
         self.sim = SimulatedArena(initial_poses=layout.dock_poses()[slots], config=self.config, params=self.params)
-        m = self.sim.n_robots
+        m = self.sim.n
         self.ids = np.arange(m, dtype=np.intp)
         self.charge = np.broadcast_to(np.asarray(charge, dtype=float), (m,)).copy()
         self.slot = slots.copy()  # (M,) slot each robot is docked on, −1 while away
@@ -128,7 +128,7 @@ class FleetManager:
     @property
     def n_robots(self) -> int:
         """M, robots in the fleet."""
-        return int(self.sim.n_robots)
+        return self.sim.n
 
     @property
     def time(self) -> float:
@@ -224,7 +224,7 @@ class FleetManager:
         return SensedPoses(self.ids.astype(np.int64), self.sim.poses, self._seen,
                            battery=self.fleet.battery.voltage(self.charge), charging=self.docked(), time=self.sim.time)
 
-    def send(self, ids: ArrayLike, v: ArrayLike, w: ArrayLike) -> None:
+    def send(self, ids: NDArray[np.int64], v: NDArray[np.float64], w: NDArray[np.float64]) -> None:
         """One period of ``(v, ω)`` for every robot of the fleet, in id order; batteries drain or charge."""
         if len(ids) != self.n_robots or np.any(np.asarray(ids) != self.ids):
             raise ValueError(f"the fleet expects commands for ids 0..{self.n_robots - 1} in order")

@@ -23,7 +23,7 @@ from swarmdeck.core.bounds import Bounds
 from swarmdeck.core.constants import SAFETY_DISTANCE
 from swarmdeck.core.errors import SwarmdeckError
 from swarmdeck.core.kinematics import GritsBotParams, lookahead_points
-from swarmdeck.core.ports import CommandSink, PoseSource
+from swarmdeck.core.ports import CommandSink, PoseSource, SensedPoses
 from swarmdeck.devices.fleet.maneuver import Maneuver
 from swarmdeck.devices.fleet.task import DONE, FLEET_WORDING, UpkeepTask
 from swarmdeck.devices.pipeline import certify
@@ -140,6 +140,9 @@ class UpkeepRobots(PoseSource, CommandSink, Protocol):
     """Robot ports a fleet maneuver can be driven over (:func:`drive`): on a simulated clock
     (``read(now).time``), with the robot model (``params``) and the simulator's validation counts
     (``report.steps_with_collision``) — ``FleetManager``, :class:`SimulatedRobots`."""
+
+    def read(self, now: float = 0.0) -> SensedPoses:
+        """The robots' poses on their own simulated clock (``now``, s, is not needed)."""
 
     @property
     def params(self) -> GritsBotParams: ...

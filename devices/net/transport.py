@@ -24,7 +24,7 @@ from __future__ import annotations
 import threading
 from collections.abc import Mapping
 from dataclasses import dataclass, field
-from typing import Protocol, runtime_checkable
+from typing import Any, Protocol, runtime_checkable
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -227,7 +227,7 @@ def _real_array(x: object) -> FloatArray:
         return np.empty(0)
 
 
-def _shape(x: object) -> object:
+def _shape(x: Any) -> object:
     try:
         return np.shape(x)
     except (TypeError, ValueError):

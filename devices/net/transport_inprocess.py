@@ -39,7 +39,7 @@ class InProcessTransport:
         self.arena = arena
         self.battery = battery
         self.counters = Counters()
-        n = arena.n_robots
+        n = arena.n
         self._ids = np.arange(n, dtype=np.intp)
         self._charge = np.ones(n)
         self._last_cmd = np.full(n, -np.inf)
@@ -55,7 +55,7 @@ class InProcessTransport:
         ok = not cmd.problems
         for p in cmd.problems:
             self.counters.add("bad_command", p)
-        n = self.arena.n_robots
+        n = self.arena.n
         known = cmd.ids < n
         if not known.all():
             self.counters.add("unknown_id", f"command for unknown robot id(s) {cmd.ids[~known].tolist()} ignored "
@@ -80,11 +80,11 @@ class InProcessTransport:
 
     def latest_poses(self) -> PoseSample:
         """Exact poses of every robot, stamped with the arena's time."""
-        n = self.arena.n_robots
+        n = self.arena.n
         return PoseSample(self._ids.copy(), self.arena.poses, np.full(n, self.arena.time))
 
     def status(self) -> TransportStatus:
-        n = self.arena.n_robots
+        n = self.arena.n
         table = RobotStatusTable(
             self._ids.copy(), self.battery.voltage(self._charge), np.zeros(n, dtype=bool),
             self.arena.time - self._last_cmd, np.zeros(n), tuple([LINK_OK] * n),

@@ -22,6 +22,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from swarmdeck.core.bounds import Bounds
 from swarmdeck.devices.validation import colliding_pairs, out_of_bounds
 
 BOUNDARY_STRING = "iteration(s) robots were outside the boundaries."
@@ -31,7 +32,7 @@ ACTUATOR_STRING = ("iteration(s) where the actuator limits of at least one robot
 
 
 def count_errors(errors: dict[str, Any], poses: NDArray[np.float64], wheels_over: bool,
-                 bounds: tuple[float, float, float, float], pairs: NDArray[np.intp] | None = None) -> None:
+                 bounds: Bounds, pairs: NDArray[np.intp] | None = None) -> None:
     """Add one step's errors to ``errors`` (rps's ``_errors``, updated in place: it is the facade's own).
 
     ``poses``: (N, 3) rows, the poses validated; ``wheels_over``: some wheel of the commanded velocities

@@ -91,7 +91,7 @@ class Robotarium:
         self.show_figure = show_figure
         self.time_step = config.dt
         b = Bounds.of(config.bounds)
-        x0, x1, y0, y1 = self._bounds = tuple(b)
+        x0, x1, y0, y1 = self._bounds = b
         self.boundaries = [x0, y0, b.width, b.height]  # rps 1.x: [x_min, y_min, width, height]
         self.BOUNDARIES = np.array([x0, x1, y0, y1])  # rps 2.0: [x_min, x_max, y_min, y_max]
         self._velocities = np.zeros((2, self.number_of_robots))
@@ -123,7 +123,8 @@ class Robotarium:
         if self._figure is None:
             from swarmdeck.devices.rps.figure import arena_figure
 
-            self._figure = arena_figure(tuple(self.boundaries))
+            x0, y0, w, h = self.boundaries
+            self._figure = arena_figure((x0, y0, w, h))
         return self._figure[0]
 
     @property

@@ -16,6 +16,7 @@ import numpy as np
 
 from swarmdeck.console.cli import UsageError
 from swarmdeck.console.cli.run import add_run_arguments, check_run_arguments, raise_if_failed, run_headless
+from swarmdeck.core.bounds import Bounds
 from swarmdeck.coverage import CoverageConfig, Density, image_density, letter_image, moving_density
 from swarmdeck.examples.coverage import coverage_experiment
 
@@ -36,7 +37,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="run scenario S1 (9 robots, no barrier) for every law and print the table")
 
 
-def make_density(spec: str, bounds: tuple[float, float, float, float]) -> Density:
+def make_density(spec: str, bounds: Bounds) -> Density:
     """The density named by ``--density``; raises UsageError for a bad spec or file."""
     kind, _, arg = spec.partition(":")
     try:

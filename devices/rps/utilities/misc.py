@@ -3,6 +3,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from swarmdeck.core.bounds import Bounds
 from swarmdeck.devices.controllers import at_pose as _at_pose
 from swarmdeck.devices.controllers import at_position as _at_position
 from swarmdeck.devices.initial_conditions import random_initial_poses
@@ -10,7 +11,7 @@ from swarmdeck.devices.initial_conditions import random_initial_poses
 
 def generate_initial_conditions(N: int, spacing: float = 0.3, width: float = 3, height: float = 1.8) -> np.ndarray:
     """(3, N) random float poses at least ``spacing`` apart in a width × height box at the centre."""
-    bounds = (-width / 2, width / 2, -height / 2, height / 2)
+    bounds = Bounds(-width / 2, width / 2, -height / 2, height / 2)
     return random_initial_poses(N, bounds, spacing=spacing + 0.01, min_separation=spacing, wall_margin=0.0).T
 
 
