@@ -34,6 +34,7 @@ def test_ci_sets_a_derandomized_profile_without_database(tmp_path):
     conftest.write_text((ROOT / "tests" / "conftest.py").read_text())
     env = {k: v for k, v in os.environ.items() if not k.startswith("HYPOTHESIS")}
     env["CI"] = "true"
+    env["PYTHONPATH"] = str(ROOT / "tests")  # the conftest registers the shared fixture modules (pytest_plugins)
     env["PYTEST_DISABLE_PLUGIN_AUTOLOAD"] = "1"  # hypothesis registers its plugin on import
     outs = []
     for _ in range(2):
