@@ -24,18 +24,12 @@ where the optimum intervenes). Timing is self-contained (no shared harness): ``t
 """
 from __future__ import annotations
 
-import os
-
-os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
-os.environ.setdefault("OMP_NUM_THREADS", "1")
-
 import argparse  # noqa: E402
 import collections  # noqa: E402
 import dataclasses  # noqa: E402
-import datetime  # noqa: E402
-import platform  # noqa: E402
 import time  # noqa: E402
 
+import harness  # first: pins BLAS/OpenMP to one thread, before numpy loads
 import numpy as np  # noqa: E402
 
 from swarmdeck.safety import SafetyFilter  # noqa: E402
@@ -102,8 +96,7 @@ def main() -> None:
     ap.add_argument("--no-uncapped", action="store_true",
                     help="leave out the uncapped centralised filter (seconds per tick at N = 1000)")
     args = ap.parse_args()
-    print(f"{datetime.datetime.now(datetime.UTC):%Y-%m-%d %H:%M} UTC, {platform.machine()}, "
-          f"{os.cpu_count()} cores, load {os.getloadavg()[0]:.1f}; warm cap {WARM_CAP}, budget {BUDGET}")
+    print(f"{harness.machine()}; warm cap {WARM_CAP}, budget {BUDGET}")
     print("| N | filter | median ms | worst ms | worst / clarabel's worst | mean cost / optimum | worst cost / optimum |")
     print("| --- | --- | --- | --- | --- | --- | --- |")
     for n in args.n:

@@ -23,6 +23,7 @@ import subprocess
 import sys
 import time
 
+import harness  # first: pins BLAS/OpenMP to one thread, before numpy loads
 import numpy as np
 
 from swarmdeck.devices import random_initial_poses
@@ -128,6 +129,7 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--vmas", metavar="PYTHON", help="an interpreter with vmas and torch installed")
     args = ap.parse_args()
+    print(harness.machine())
     print("| (E, N) | numpy unicycle | BatchedSwarm.tick, barrier off | BatchedSwarm.tick, barrier on | "
           "BatchedEnv.step, off | BatchedEnv.step, on | E separate envs, on | VMAS navigation (CPU) |")
     print("| --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: |")

@@ -32,7 +32,7 @@ from swarmdeck.core.kinematics import (
 from swarmdeck.envs.neighbours import lifted_tree
 from swarmdeck.safety import BarrierConfig
 from swarmdeck.safety.constraints import LIMIT, Rows, pair_rows, wall_rows
-from swarmdeck.safety.distributed import solve_small_qps, split_rows
+from swarmdeck.safety.distributed import reallocate_halves, solve_small_qps, split_rows
 from swarmdeck.safety.filter import MAX_COORDINATE
 from swarmdeck.safety.unicycle import max_point_speed, wheel_limit_rows
 
@@ -105,6 +105,19 @@ class BatchedDistributedBarrier:
         split = split_rows(rows, b_target)
         res = solve_small_qps(split.owner, split.a, split.b, U, None, reach)
         u, solved = res.u, res.solved
+        if cfg.distributed_second_pass:
+            # filter_distributed's second pass (reallocate_halves), per swarm: a swarm that is not recovering
+            # and solved every robot re-solves its loosened robots, and keeps the answer if all of them solved
+            whole = np.ones(n_swarms, dtype=bool)
+            whole[swarm_of[~solved]] = False
+            b2, again = reallocate_halves(split, u, int(np.sum(rows.j >= 0)))
+            again &= (whole & ~recovering)[swarm_of]
+            if again.any():
+                res2 = solve_small_qps(split.owner, split.a, b2, U, None, reach, todo=again)
+                kept = np.ones(n_swarms, dtype=bool)
+                kept[swarm_of[again & ~res2.solved]] = False
+                take = again & kept[swarm_of]
+                u = np.where(take[:, None], res2.u, u)
         retry = ~solved & recovering[swarm_of]
         if retry.any():
             hard = split_rows(rows, b_hard)
