@@ -559,7 +559,7 @@ class SafetyFilter:
         return res.u, self._diag(True, status, t0, rows, P, U, res.u, O, res.active, res.n_speed, was_safe,
                                  "distributed", 0, 0, n_unsafe, answer="distributed")
 
-    def _solve_floor(self, P, U, O, rows: Rows, max_speed: float | None, t0: float, budget: _Budget,
+    def _solve_floor(self, P: np.ndarray, U: np.ndarray, O: np.ndarray | None, rows: Rows, max_speed: float | None, t0: float, budget: _Budget,
                      reason: str) -> tuple[np.ndarray, BarrierDiagnostics]:
         """Anytime mode, the budget spent before a certified optimum: the distributed answer on the
         same rows (every row certified, ``safety.distributed``) with ``answer == "floor"``. The warm

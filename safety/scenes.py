@@ -10,18 +10,20 @@ import math
 
 import numpy as np
 
+from swarmdeck.core.bounds import Bounds
+
 from .config import BarrierConfig
 
 
 def arena_for(n: int, pitch: float, fill: float = 0.8, aspect: float = 1.6,
-              margin: float = 0.095) -> tuple[float, float, float, float]:
+              margin: float = 0.095) -> Bounds:
     """A centred arena (x_min, x_max, y_min, y_max) whose grid holds n robots at ``fill`` occupancy."""
     cells = n / fill
     rows = math.ceil(math.sqrt(cells / aspect))
     cols = math.ceil(cells / rows)
     half_w = (cols - 1) * pitch / 2 + margin + 1e-3
     half_h = (rows - 1) * pitch / 2 + margin + 1e-3
-    return (-half_w, half_w, -half_h, half_h)
+    return Bounds(-half_w, half_w, -half_h, half_h)
 
 
 def grid_scene(n: int, rng: np.random.Generator, cfg: BarrierConfig | None = None,
