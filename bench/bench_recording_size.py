@@ -5,7 +5,8 @@ barrier) at 30 Hz, written by the real Recorder (zstd chunks of ``chunk_frames``
 configuration recorded 3 times: file MB per minute of recorded time, and the writer's process CPU per
 frame, median (worst) of the 3 — beside the same-process baseline (harness.baseline) of the same run.
 Rows: Foxglove channels off; on with today's defaults (robot_rate 3000: every frame up to N = 100);
-on, thinned (robot_rate 1000: 10 scenes/s at N = 100, 1/s at N = 1000).
+on, thinned (robot_rate 1000: 10 scenes/s at N = 100, 1/s at N = 1000); on, packed (the robots as one
+PointCloud, Voronoi edges and barrier pairs every 0.5 s); packed and thinned.
 """
 from __future__ import annotations
 
@@ -24,7 +25,10 @@ from swarmdeck.console.runtime.loop import ControlLoop, LoopConfig
 SIZES = ((12, 300, None), (100, 150, None), (1000, 60, (-6.0, 6.0, -4.0, 4.0)))
 CONFIGS = (("off", RecorderConfig(foxglove=False), None),
            ("on (robot_rate 3000, default)", RecorderConfig(), FoxgloveConfig()),
-           ("on, thinned (robot_rate 1000)", RecorderConfig(), FoxgloveConfig(robot_rate=1000.0)))
+           ("on, thinned (robot_rate 1000)", RecorderConfig(), FoxgloveConfig(robot_rate=1000.0)),
+           ("on, packed (lines_period 0.5)", RecorderConfig(), FoxgloveConfig(packed=True, lines_period=0.5)),
+           ("on, packed + thinned (robot_rate 1000, lines_period 1)", RecorderConfig(),
+            FoxgloveConfig(packed=True, robot_rate=1000.0, lines_period=1.0)))
 
 
 def loop_frames(n: int, ticks: int, bounds: tuple[float, float, float, float] | None) -> list:

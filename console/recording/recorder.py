@@ -325,7 +325,7 @@ class Recorder:
             sid = w.register_schema(name=name, encoding="jsonschema", data=_json(schema))
             self._channels[topic] = w.register_channel(topic=topic, message_encoding="json", schema_id=sid)
         if self.config.foxglove:
-            for spec in channel_specs():
+            for spec in channel_specs(packed=self._foxglove_config is not None and self._foxglove_config.packed):
                 sid = w.register_schema(name=spec.schema_name, encoding=spec.schema_encoding, data=spec.schema_data)
                 self._channels[spec.topic] = w.register_channel(topic=spec.topic, message_encoding=spec.message_encoding,
                                                                 schema_id=sid)

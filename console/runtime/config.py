@@ -14,7 +14,9 @@ Tables (every key optional; defaults from REFERENCE.md)::
     [inputs]    see swarmdeck.inputs.InputConfig (listeners, density, bounds)
     [recording] foxglove_channels = true (as in [console]; give it in one table), chunk_frames = 8
                 (frames per MCAP chunk, each chunk starts with a keyframe), robot_rate = 3000 (robots per
-                second the per-robot Foxglove scene channels carry: N = 1000 → 3 scenes/s)
+                second the per-robot Foxglove scene channels carry: N = 1000 → 3 scenes/s), packed = false
+                (true: the robots as one packed PointCloud, /foxglove/robot_points), lines_period = 0 (s
+                between the Voronoi-edge and barrier-pair scenes; 0: with the robots')
 
 The keys of ``[behaviour]``, ``[safety]``, ``[density]`` and the loop's keys of ``[console]`` are the
 operator parameters declared in :mod:`swarmdeck.console.runtime.params` (units, ranges and defaults
@@ -39,7 +41,7 @@ from swarmdeck.core.checks import in_range
 from swarmdeck.core.config import ConfigError, check_keys, from_mapping, read_toml
 
 TABLES = ("console", "behaviour", "safety", "density", "inputs", "recording")
-RECORDING_KEYS = ("foxglove_channels", "chunk_frames", "robot_rate")
+RECORDING_KEYS = ("foxglove_channels", "chunk_frames", "robot_rate", "packed", "lines_period")
 # [console] key -> LoopConfig field (errors name the key, not the field), from the parameters' declarations
 LOOP_KEYS = toml_keys(LoopConfig)
 CONSOLE_KEYS = ("host", "port", *LOOP_KEYS, "arena", "foxglove_channels")
@@ -68,7 +70,7 @@ _UNKNOWN = "unknown key(s) {unknown} in {what}; expected some of {known}"
 class ConsoleSettings:
     """What the file says: the loop's config, server address, the raw ``[inputs]`` table (or None), and
     whether recordings carry Foxglove's channels (``foxglove_channels``), the recorder's chunking
-    (``chunk_frames``) and the Foxglove scene channels' ``robot_rate`` (``[recording]``)."""
+    (``chunk_frames``) and the Foxglove channels' ``robot_rate``, ``packed``, ``lines_period`` (``[recording]``)."""
 
     loop: LoopConfig
     host: str = "127.0.0.1"
@@ -77,6 +79,8 @@ class ConsoleSettings:
     foxglove_channels: bool = True
     chunk_frames: int = 8
     robot_rate: float = 3000.0
+    packed: bool = False
+    lines_period: float = 0.0
 
 
 def _build(cls: type, doc: dict, name: str, path: Path, convert: dict[str, Any] | None = None) -> Any:
@@ -139,4 +143,11 @@ def load_settings(path: str | Path) -> ConsoleSettings:
     inputs = doc.get("inputs")
     if inputs is not None and not isinstance(inputs, dict):
         raise ConfigFileError(f"{p}: [inputs] must be a table")
-    return ConsoleSettings(loop, host, port, inputs, fox, int(chunk_frames), float(robot_rate))
+    packed = rec.get("packed", False)
+    if not isinstance(packed, bool):
+        raise ConfigFileError(f"{p}: [recording] packed must be true or false, got {packed!r}")
+    lines_period = rec.get("lines_period", 0.0)
+    if isinstance(lines_period, bool) or not in_range(lines_period, 0, 1e6):
+        raise ConfigFileError(f"{p}: [recording] lines_period must be a number >= 0 (s), got {lines_period!r}")
+    return ConsoleSettings(loop, host, port, inputs, fox, int(chunk_frames), float(robot_rate), packed,
+                           float(lines_period))
