@@ -52,7 +52,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="write Foxglove's own channels (3D scene, poses, grid, log, metrics) into the "
                              "recording beside swarmdeck's (default on; --no-foxglove-channels: a file ≈ 6x "
                              "smaller at 100 robots that Foxglove still opens as raw messages; [console] "
-                             "foxglove_channels in --config)")
+                             "foxglove_channels in --config's [recording])")
     parser.add_argument("--foxglove", nargs="?", type=int, const=8765, default=None, metavar="PORT",
                         help="also serve the run live to Foxglove over its WebSocket protocol (default port 8765, "
                              "on --host; clients asking for foxglove.sdk.v1 or foxglove.websocket.v1 are both "
@@ -125,7 +125,9 @@ def main(args: argparse.Namespace) -> int:
         fox = settings.foxglove_channels if args.foxglove_channels is None else args.foxglove_channels
         images = source.image if isinstance(source, ProvidesImage) else None
         rec = _recorder(args.record, config, settings.inputs, source_name, images,
-                        virtual=args.virtual or 0, foxglove_channels=fox)
+                        virtual=args.virtual or 0, foxglove_channels=fox, chunk_frames=settings.chunk_frames,
+                        robot_rate=settings.robot_rate, packed=settings.packed,
+                        lines_period=settings.lines_period)
     hub = None
     if not args.no_inputs:
         hub = _start_inputs(settings.inputs, rec)
@@ -255,16 +257,22 @@ def _robots(config, camera: str | None, robots_via: str | None, virtual: int | N
 
 
 def _recorder(path: str | None, config, inputs_table: dict | None, source: str, image_provider=None,
-              virtual: int = 0, foxglove_channels: bool = True):
+              virtual: int = 0, foxglove_channels: bool = True, chunk_frames: int = 8, robot_rate: float = 3000.0,
+              packed: bool = False, lines_period: float = 0.0):
     """The session recorder (MCAP), writing in the background; never raises into the run. ``image_provider``
     (the camera source's ``image``) feeds the Foxglove camera channel; ``virtual``: how many virtual robots
-    (each Frame's ``is_virtual`` says which); ``foxglove_channels``: also write Foxglove's own channels."""
+    (each Frame's ``is_virtual`` says which); ``foxglove_channels``: also write Foxglove's own channels;
+    ``chunk_frames``: frames per chunk; ``robot_rate``, ``packed``, ``lines_period``: the Foxglove channels'
+    (``FoxgloveConfig``; the config file's [recording])."""
+    from swarmdeck.console.recording.foxglove import FoxgloveConfig
     from swarmdeck.console.recording.recorder import Recorder, RecorderConfig, default_path
     from swarmdeck.console.recording.resimulate import session_metadata
 
     extra: dict[str, Any] = {"virtual_robots": int(virtual)} if virtual else {}
     return Recorder(path or default_path(), session_metadata(config, inputs_table, source=source, **extra),
-                    RecorderConfig(foxglove=foxglove_channels), image_provider=image_provider)
+                    RecorderConfig(foxglove=foxglove_channels, chunk_frames=chunk_frames),
+                    image_provider=image_provider, foxglove=FoxgloveConfig(robot_rate=robot_rate, packed=packed,
+                                                                            lines_period=lines_period))
 
 
 def _start_inputs(table: dict | None, rec=None):

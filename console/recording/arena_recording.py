@@ -40,11 +40,14 @@ class ArenaRecording:
     """``on_create``/``on_step`` hooks for :func:`~swarmdeck.devices.runner.run_experiment` that record.
 
     ``path``: the MCAP file of the first Arena; ``script``: the script's path (names the behaviour);
-    ``seed``: the run's seed (in the metadata).
+    ``seed``: the run's seed (in the metadata); ``foxglove_channels``: also write Foxglove's own channels
+    (``swarmdeck run --record PATH --no-foxglove-channels``: only swarmdeck's).
     """
 
-    def __init__(self, path: str | Path, *, script: str | Path, seed: int | None = None) -> None:
+    def __init__(self, path: str | Path, *, script: str | Path, seed: int | None = None,
+                 foxglove_channels: bool = True) -> None:
         self.path = Path(path)
+        self.foxglove_channels = bool(foxglove_channels)
         self.behaviour = f"script:{Path(script).name}"
         self.seed = seed
         self._recorders: dict[int, Any] = {}
@@ -57,7 +60,7 @@ class ArenaRecording:
 
     def on_create(self, arena: Any) -> None:
         """Open the recording of a new Arena (its start poses are the first frame's)."""
-        from swarmdeck.console.recording.recorder import Recorder
+        from swarmdeck.console.recording.recorder import Recorder, RecorderConfig
         from swarmdeck.console.recording.resimulate import session_metadata
         from swarmdeck.console.runtime.loop import LoopConfig, SafetyParams
 
@@ -66,7 +69,8 @@ class ArenaRecording:
         path = self._path(len(self._recorders))
         self.paths.append(path)
         self._recorders[id(arena)] = Recorder(path, session_metadata(config, None, source="simulation",
-                                                                      run="swarmdeck run"))
+                                                                      run="swarmdeck run"),
+                                              RecorderConfig(foxglove=self.foxglove_channels))
         self._previous[id(arena)] = arena.poses()
         self._ticks[id(arena)] = 0
 

@@ -61,7 +61,7 @@ A format-2 message with ``"format": 3``, of one of two kinds:
   format 2 (and derived on reading from the reconstructed poses).
 
 The recorder writes a keyframe as the first frame of every chunk (it closes chunks itself:
-every ``flush_interval`` s of recorded or wall time and before ``chunk_size`` bytes) and after
+every ``chunk_frames`` frames, before ``chunk_size`` bytes, and after ``flush_interval`` s without input) and after
 any gap (a tick that does not follow the previous frame's, a change in the robot count, a time
 that does not increase, a frame that could not be written); so every chunk decodes on its
 own, and seeking, recovery of a cut-off file and re-simulation never need an earlier chunk.

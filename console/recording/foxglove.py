@@ -46,6 +46,12 @@ robots per second of recorded time: with N robots they are written every ``N / r
 N = 1000), and the id labels only up to ``max_labels`` robots (as in the console's scene). The
 other channels — transforms, contacts, metrics, log, density, camera — keep their rates.
 ``/swarmdeck/frame`` always has every frame (the full state; Foxglove plays it as raw messages).
+
+Packed (``FoxgloveConfig(packed=True)``, ``[recording] packed = true``): the robots are one
+``foxglove.PointCloud`` on ``/foxglove/robot_points`` (:data:`PACKED_TOPICS`; x, y, z, yaw float32 and
+rgba uint8, :data:`POINT_STRIDE` = 20 bytes a robot) instead of their primitives on ``/foxglove/robots``
+(which keeps the boundary) and ``/foxglove/poses`` (left out); ``lines_period`` thins the cells and
+barrier scenes (bench/RESULTS.md, "recording size": ≈ 3× smaller at N = 100).
 """
 from __future__ import annotations
 
@@ -86,6 +92,14 @@ TOPICS: dict[str, str | None] = {
     TOPIC_CAMERA: "CompressedImage", TOPIC_TF: "FrameTransforms", TOPIC_LOG: "Log", TOPIC_METRICS: None,
 }
 
+TOPIC_ROBOT_POINTS = "/foxglove/robot_points"
+
+#: Channels written only with ``FoxgloveConfig(packed=True)`` (topic -> schema, as :data:`TOPICS`).
+PACKED_TOPICS: dict[str, str | None] = {TOPIC_ROBOT_POINTS: "PointCloud"}
+
+#: The packed robots' point layout: x, y, z, yaw float32 (m, m, m, rad) then r, g, b, a uint8 (20 bytes a robot).
+POINT_STRIDE = 20
+
 #: The plottable fields of ``/swarmdeck/metrics`` (units in the names); null when not defined this tick.
 METRIC_FIELDS: dict[str, str] = {
     "t": "recording clock, s",
@@ -124,6 +138,12 @@ class FoxgloveConfig:
         frame). The default keeps 30 Hz up to 100 robots and writes 3 scenes per second at N = 1000
         (bench/RESULTS.md, "foxglove": ≈ 12 ms of writer CPU and 40 kB per scene at N = 1000).
     max_labels: id labels only up to this many robots (default: the picture's ``PictureStyle.max_labels``, 100).
+    packed: the robots as one packed ``foxglove.PointCloud`` on ``/foxglove/robot_points``
+        (:data:`POINT_STRIDE` = 20 bytes a robot: x, y, z, yaw float32, rgba uint8) instead of a
+        cylinder, an arrow and a label per robot; ``/foxglove/robots`` then carries the arena
+        boundary only and ``/foxglove/poses`` is left out (the heading is the cloud's ``yaw``).
+    lines_period: s of recorded time between the Voronoi-edge and barrier-pair scenes (0: with the
+        robots' scenes).
     """
 
     density_period: float = 0.25
@@ -134,13 +154,17 @@ class FoxgloveConfig:
     labels: bool = True
     robot_rate: float = 3000.0
     max_labels: int = PictureStyle.max_labels
+    packed: bool = False
+    lines_period: float = 0.0
 
     def scene_period(self, n: int) -> float:
         """s of recorded time between the per-robot scene messages of N robots (0: every frame)."""
         return n / self.robot_rate if self.robot_rate > 0 else 0.0
 
     def __post_init__(self) -> None:
-        for name in ("density_period", "camera_period", "robot_rate"):
+        if not isinstance(self.packed, bool):
+            raise ValueError(f"packed must be true or false, got {self.packed!r}")
+        for name in ("density_period", "camera_period", "robot_rate", "lines_period"):
             v = getattr(self, name)
             if not (isinstance(v, (int, float)) and math.isfinite(v) and v >= 0):
                 raise ValueError(f"{name} must be a finite number >= 0, got {v!r}")
@@ -165,14 +189,15 @@ class ChannelSpec:
     message_encoding: str
 
 
-def channel_specs() -> list[ChannelSpec]:
-    """The channels of :data:`TOPICS`, with the SDK's schemas (protobuf descriptors) and the metrics JSON Schema."""
+def channel_specs(packed: bool = False) -> list[ChannelSpec]:
+    """The channels of :data:`TOPICS` (and :data:`PACKED_TOPICS` with ``packed``), with the SDK's schemas
+    (protobuf descriptors) and the metrics JSON Schema."""
     import foxglove.messages as fm
 
     from swarmdeck.console.recording.recorder import encode_json
 
     out = []
-    for topic, cls in TOPICS.items():
+    for topic, cls in {**TOPICS, **(PACKED_TOPICS if packed else {})}.items():
         if cls is None:
             out.append(ChannelSpec(topic, METRICS_SCHEMA["title"], "jsonschema", encode_json(METRICS_SCHEMA), "json"))
         else:
@@ -255,6 +280,7 @@ class FoxgloveEncoder:
         self._next_density = -math.inf
         self._next_camera = -math.inf
         self._next_scene = -math.inf
+        self._next_lines = -math.inf
         self._scene_period = 0.0
         self._image_ref: str | None = None
         self._grid_key: tuple[float, ...] | None = None
@@ -319,6 +345,32 @@ class FoxgloveEncoder:
                      for x, y, i in zip(xs, ys, frame.ids.tolist())]
         return self._scene(self._entity(ns, "arena", lines=[border]),
                            self._entity(ns, "robots", cylinders=cyl, arrows=arrows, texts=texts))
+
+    def arena(self, ns: int) -> bytes:
+        """SceneUpdate: the arena boundary only (``/foxglove/robots`` of a packed recording)."""
+        fm = self.fm
+        x0, x1, y0, y1 = self.bounds
+        border = fm.LinePrimitive(type=fm.LinePrimitiveLineType.LineLoop, thickness=0.01,
+                                  points=[fm.Point3(x=x, y=y, z=0.0) for x, y in ((x0, y0), (x1, y0), (x1, y1), (x0, y1))],
+                                  color=self._color(BOUNDARY))
+        return self._scene(self._entity(ns, "arena", lines=[border]))
+
+    def robot_points(self, frame: Frame, ns: int) -> bytes:
+        """PointCloud: one point a robot at disc height, x, y, z, yaw (float32: m, m, m, rad) and its
+        picture colour r, g, b, a (uint8), :data:`POINT_STRIDE` bytes a robot, built with numpy."""
+        fm = self.fm
+        n = frame.n
+        rec = np.zeros(n, dtype=[("x", "<f4"), ("y", "<f4"), ("z", "<f4"), ("yaw", "<f4"), ("rgba", "u1", 4)])
+        rec["x"], rec["y"], rec["yaw"] = frame.poses[:, 0], frame.poses[:, 1], frame.poses[:, 2]
+        rec["z"] = 0.015
+        rec["rgba"][:, :3] = np.asarray(robot_colors(frame, self.picture), dtype=np.uint8).reshape(n, 3)
+        rec["rgba"][:, 3] = 255
+        f32, u8 = fm.PackedElementFieldNumericType.Float32, fm.PackedElementFieldNumericType.Uint8
+        fields = [fm.PackedElementField(name=k, offset=4 * i, type=f32) for i, k in enumerate(("x", "y", "z", "yaw"))]
+        fields += [fm.PackedElementField(name=k, offset=16 + i, type=u8) for i, k in enumerate(("red", "green", "blue", "alpha"))]
+        return fm.PointCloud(timestamp=self._ts(ns), frame_id=ARENA_FRAME,
+                             pose=fm.Pose(position=fm.Vector3(), orientation=fm.Quaternion(w=1.0)),
+                             point_stride=POINT_STRIDE, fields=fields, data=rec.tobytes()).encode()
 
     def cells(self, frame: Frame, ns: int) -> bytes:
         """SceneUpdate: the Voronoi edges (empty entity when there is no coverage state)."""
@@ -442,10 +494,17 @@ class FoxgloveEncoder:
         if frame.time + 0.5 * frame.dt >= self._next_scene or frame.time < self._next_scene - 2 * self._scene_period:
             self._scene_period = self.config.scene_period(frame.n)
             self._next_scene = frame.time + self._scene_period
-            yield TOPIC_ROBOTS, ns, self.robots(frame, ns)
-            yield TOPIC_POSES, ns, self.poses(frame, ns)
-            yield TOPIC_CELLS, ns, self.cells(frame, ns)
-            yield TOPIC_BARRIER, ns, self.barrier(frame, ns)
+            if self.config.packed:
+                yield TOPIC_ROBOTS, ns, self.arena(ns)
+                yield TOPIC_ROBOT_POINTS, ns, self.robot_points(frame, ns)
+            else:
+                yield TOPIC_ROBOTS, ns, self.robots(frame, ns)
+                yield TOPIC_POSES, ns, self.poses(frame, ns)
+            if frame.time + 0.5 * frame.dt >= self._next_lines or frame.time < self._next_lines - 2 * max(
+                    self._scene_period, self.config.lines_period):
+                self._next_lines = frame.time + self.config.lines_period
+                yield TOPIC_CELLS, ns, self.cells(frame, ns)
+                yield TOPIC_BARRIER, ns, self.barrier(frame, ns)
         yield TOPIC_CONTACTS, ns, self.contacts(frame, ns)
         yield TOPIC_METRICS, ns, self.metrics(frame, t)
         if frame.density is not None and frame.time >= self._next_density:

@@ -255,7 +255,8 @@ class Recording:
         """The frames of chunk ``i``, each format-3 predicted frame decoded from the one before it.
         swarmdeck starts every chunk with a keyframe; in a file another tool re-chunked, the first
         frames of a chunk may be predicted from the last frame of the chunk before: with
-        ``look_back`` that one is decoded (on its own, no further back) and used."""
+        ``look_back`` that one is decoded (itself looking back, through chunks that hold no keyframe,
+        to the last keyframe) and used."""
         frames: list[tuple[int, Frame]] = []
         previous: Frame | None = None
         tail: list[Frame | None] = []  # the chunk before's last frame, once looked up
@@ -267,8 +268,7 @@ class Recording:
                     if frames or previous is not None or not look_back or i == 0:
                         raise
                     if not tail:
-                        before = self._frame_cache.get(i - 1)
-                        before = self._decode_chunk(i - 1, look_back=False) if before is None else before
+                        before = self._chunk_frames(i - 1)
                         tail.append(before[-1][1] if before else None)
                     previous = decode_frame(data, tail[0])
                 frames.append((ns, previous))

@@ -4,9 +4,10 @@ The loop thread only *enqueues* (an append under a lock, a few µs); a
 background writer thread serialises (:func:`~swarmdeck.console.recording.codec.encode_frame`:
 compact JSON with binary per-robot arrays, frame format 3) and writes
 chunked, zstd-compressed MCAP (format in
-:mod:`swarmdeck.console.recording.schemas`). It closes the current chunk every
-``flush_interval`` seconds of wall time or of recorded time, whichever comes
-first, and before it grows past ``chunk_size`` bytes: a crash or ``kill -9`` loses at
+:mod:`swarmdeck.console.recording.schemas`). It closes the current chunk after
+``chunk_frames`` frames (counted, never timed: a slow live console writes the same keyframe
+cadence as a fast one), before it grows past ``chunk_size`` bytes, and when no item has arrived
+for ``flush_interval`` s of wall time (a paused loop): a crash or ``kill -9`` loses at
 most about that much (what was written sits in the OS page cache, which survives the
 process), and a seek decodes at most that much data, even in files written faster than
 real time. The first frame of every chunk is a self-contained keyframe and the others are
@@ -78,7 +79,11 @@ class RecorderConfig:
     """Recorder tuning.
 
     queue_size: items (frames + datagrams + events) waiting for the writer; beyond it the oldest are dropped.
-    flush_interval: s between chunk closes (bounds the data lost on a crash).
+    chunk_frames: frames per chunk: a chunk is closed after this many frames (8 ≈ 0.27 s at 30 Hz), so
+        every chunk starts with a keyframe at the same cadence in frames however fast the loop or the
+        disk runs (a slow live console writes the same file as a fast one).
+    flush_interval: wall s; a chunk holding data is also closed when no item has arrived for this
+        long (a paused loop, datagrams only) — with ``chunk_frames`` it bounds the data lost on a crash.
     chunk_size: bytes; a chunk is also closed when it reaches this (after the item that got it there).
     compression: "zstd", "lz4" or "none" (falls back to what is importable).
     foxglove: also write Foxglove's native channels (``recording/foxglove.py``: scene, poses, density,
@@ -86,6 +91,7 @@ class RecorderConfig:
     """
 
     queue_size: int = 4096
+    chunk_frames: int = 8
     flush_interval: float = 0.25
     chunk_size: int = 4 * 1024 * 1024
     compression: str = "zstd"
@@ -93,6 +99,7 @@ class RecorderConfig:
 
     def __post_init__(self) -> None:
         require_in_range(self.queue_size, "queue_size", 1, integer=True)
+        require_in_range(self.chunk_frames, "chunk_frames", 1, integer=True)
         require_in_range(self.flush_interval, "flush_interval", 0.0, unit="s", lo_open=True)
         if self.compression not in ("zstd", "lz4", "none"):
             raise ValueError(f"compression must be 'zstd', 'lz4' or 'none', got {self.compression!r}")
@@ -318,7 +325,7 @@ class Recorder:
             sid = w.register_schema(name=name, encoding="jsonschema", data=_json(schema))
             self._channels[topic] = w.register_channel(topic=topic, message_encoding="json", schema_id=sid)
         if self.config.foxglove:
-            for spec in channel_specs():
+            for spec in channel_specs(packed=self._foxglove_config is not None and self._foxglove_config.packed):
                 sid = w.register_schema(name=spec.schema_name, encoding=spec.schema_encoding, data=spec.schema_data)
                 self._channels[spec.topic] = w.register_channel(topic=spec.topic, message_encoding=spec.message_encoding,
                                                                 schema_id=sid)
@@ -406,10 +413,11 @@ class Recorder:
 
     def _run(self) -> None:
         interval = self.config.flush_interval
-        last_flush = time.monotonic()
+        last_item = time.monotonic()
         dirty = False
         reported_drops = 0
-        last_t = chunk_t0 = 0.0
+        last_t = 0.0
+        chunk_frames = 0
         try:
             while True:
                 stopping = self._service.stopping
@@ -425,21 +433,21 @@ class Recorder:
                         self._previous = None  # a gap: the next frame is a keyframe
                         continue
                     last_t = item[1].time if item[0] == "f" else (item[4] if item[0] == "d" else item[1])
-                    if not dirty:
-                        chunk_t0 = last_t
                     dirty = True
-                    # a chunk never spans more than `interval` s of data, nor grows past chunk_size
-                    if last_t - chunk_t0 >= interval or self._chunk_bytes >= self.config.chunk_size:
+                    chunk_frames += item[0] == "f"
+                    # a chunk holds at most chunk_frames frames (counted, never timed) and bytes up to chunk_size
+                    if chunk_frames >= self.config.chunk_frames or self._chunk_bytes >= self.config.chunk_size:
                         self._close_chunk()
-                        last_flush, dirty = time.monotonic(), False
+                        dirty, chunk_frames = False, 0
+                if items:
+                    last_item = time.monotonic()
                 if dropped > reported_drops and self._origin is not None:
                     self._add(TOPIC_EVENT, last_t, event_message(last_t, "recorder",
                                                                  f"queue full: {dropped - reported_drops} items dropped"))
                     reported_drops = dropped
-                now = time.monotonic()
-                if dirty and (stopping or now - last_flush >= interval):
+                if dirty and (stopping or time.monotonic() - last_item >= interval):  # idle: write what is open
                     self._close_chunk()
-                    last_flush, dirty = now, False
+                    dirty, chunk_frames = False, 0
                 if stopping:
                     break
                 self._service.wait(min(0.02, interval / 4))

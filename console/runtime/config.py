@@ -12,6 +12,11 @@ Tables (every key optional; defaults from REFERENCE.md)::
     [safety]    enabled, safety_distance, gamma, class_k, mode ("auto" | "centralised" | "distributed")
     [density]   moving, radius, period, sigma, weight, floor, bump_sigma, bump_weight
     [inputs]    see swarmdeck.inputs.InputConfig (listeners, density, bounds)
+    [recording] foxglove_channels = true (as in [console]; give it in one table), chunk_frames = 8
+                (frames per MCAP chunk, each chunk starts with a keyframe), robot_rate = 3000 (robots per
+                second the per-robot Foxglove scene channels carry: N = 1000 → 3 scenes/s), packed = false
+                (true: the robots as one packed PointCloud, /foxglove/robot_points), lines_period = 0 (s
+                between the Voronoi-edge and barrier-pair scenes; 0: with the robots')
 
 The keys of ``[behaviour]``, ``[safety]``, ``[density]`` and the loop's keys of ``[console]`` are the
 operator parameters declared in :mod:`swarmdeck.console.runtime.params` (units, ranges and defaults
@@ -35,7 +40,8 @@ from swarmdeck.console.runtime.params import (
 from swarmdeck.core.checks import in_range
 from swarmdeck.core.config import ConfigError, check_keys, from_mapping, read_toml
 
-TABLES = ("console", "behaviour", "safety", "density", "inputs")
+TABLES = ("console", "behaviour", "safety", "density", "inputs", "recording")
+RECORDING_KEYS = ("foxglove_channels", "chunk_frames", "robot_rate", "packed", "lines_period")
 # [console] key -> LoopConfig field (errors name the key, not the field), from the parameters' declarations
 LOOP_KEYS = toml_keys(LoopConfig)
 CONSOLE_KEYS = ("host", "port", *LOOP_KEYS, "arena", "foxglove_channels")
@@ -63,13 +69,18 @@ _UNKNOWN = "unknown key(s) {unknown} in {what}; expected some of {known}"
 @dataclass(frozen=True)
 class ConsoleSettings:
     """What the file says: the loop's config, server address, the raw ``[inputs]`` table (or None), and
-    whether recordings carry Foxglove's channels (``foxglove_channels``)."""
+    whether recordings carry Foxglove's channels (``foxglove_channels``), the recorder's chunking
+    (``chunk_frames``) and the Foxglove channels' ``robot_rate``, ``packed``, ``lines_period`` (``[recording]``)."""
 
     loop: LoopConfig
     host: str = "127.0.0.1"
     port: int = 8080
     inputs: dict | None = None
     foxglove_channels: bool = True
+    chunk_frames: int = 8
+    robot_rate: float = 3000.0
+    packed: bool = False
+    lines_period: float = 0.0
 
 
 def _build(cls: type, doc: dict, name: str, path: Path, convert: dict[str, Any] | None = None) -> Any:
@@ -114,10 +125,29 @@ def load_settings(path: str | Path) -> ConsoleSettings:
         raise ConfigFileError(f"{p}: [console] host must be a non-empty string, got {host!r}")
     if not in_range(port, 0, 65535, integer=True):
         raise ConfigFileError(f"{p}: [console] port must be an integer in [0, 65535], got {port!r}")
-    fox = con.get("foxglove_channels", True)
+    rec = check_keys(doc.get("recording", {}), RECORDING_KEYS, "[recording]", error=ConfigFileError,
+                     template=_UNKNOWN, source=p)
+    if "foxglove_channels" in con and "foxglove_channels" in rec:
+        raise ConfigFileError(f"{p}: foxglove_channels is in [console] and [recording]; give it once")
+    where = "recording" if "foxglove_channels" in rec else "console"
+    fox = rec.get("foxglove_channels", con.get("foxglove_channels", True))
     if not isinstance(fox, bool):
-        raise ConfigFileError(f"{p}: [console] foxglove_channels must be true or false, got {fox!r}")
+        raise ConfigFileError(f"{p}: [{where}] foxglove_channels must be true or false, got {fox!r}")
+    chunk_frames = rec.get("chunk_frames", 8)
+    if isinstance(chunk_frames, bool) or not in_range(chunk_frames, 1, 1_000_000, integer=True):
+        raise ConfigFileError(f"{p}: [recording] chunk_frames must be an integer >= 1 (frames), got {chunk_frames!r}")
+    robot_rate = rec.get("robot_rate", 3000.0)
+    if isinstance(robot_rate, bool) or not in_range(robot_rate, 0, 1e9):
+        raise ConfigFileError(f"{p}: [recording] robot_rate must be a number >= 0 (robots/s; 0: every frame), "
+                              f"got {robot_rate!r}")
     inputs = doc.get("inputs")
     if inputs is not None and not isinstance(inputs, dict):
         raise ConfigFileError(f"{p}: [inputs] must be a table")
-    return ConsoleSettings(loop, host, port, inputs, fox)
+    packed = rec.get("packed", False)
+    if not isinstance(packed, bool):
+        raise ConfigFileError(f"{p}: [recording] packed must be true or false, got {packed!r}")
+    lines_period = rec.get("lines_period", 0.0)
+    if isinstance(lines_period, bool) or not in_range(lines_period, 0, 1e6):
+        raise ConfigFileError(f"{p}: [recording] lines_period must be a number >= 0 (s), got {lines_period!r}")
+    return ConsoleSettings(loop, host, port, inputs, fox, int(chunk_frames), float(robot_rate), packed,
+                           float(lines_period))
