@@ -20,6 +20,7 @@ from numpy.typing import NDArray
 
 from swarmdeck.core.checks import in_range
 from swarmdeck.coverage.density import GaussianMixture
+from swarmdeck.coverage.kernels import cell_sums
 from swarmdeck.coverage.voronoi import BoundedVoronoi
 
 __all__ = ["CellMoments", "QuadratureOptions", "cell_moments", "triangle_rule"]
@@ -177,14 +178,7 @@ def cell_moments(vor: BoundedVoronoi, density: GaussianMixture,
     r = (bary[None, :, 0, None] * tri[:, None, 0] + bary[None, :, 1, None] * tri[:, None, 1]
          + bary[None, :, 2, None] * tri[:, None, 2])                        # (T, 7, 2) = q − p_i
     phi, phi_t = density.evaluate_both(r + p[cell][:, None, :])             # (T, 7)
-    wa = w[None, :] * area[:, None]
-    fw = phi * wa
-    gw = phi_t * wa
-    rx, ry = r[..., 0], r[..., 1]
-    acc = np.empty((9, n))
-    for row, val in enumerate((fw, fw * rx, fw * ry, fw * (rx * rx + ry * ry),
-                               gw, gw * rx, gw * ry, wa * rx, wa * ry)):
-        acc[row] = np.bincount(cell, weights=val.sum(axis=1), minlength=n)
+    acc = cell_sums(phi, phi_t, r, area, w, cell, n)                     # compiled (coverage/kernels.py)
     n_points = phi.size
     m, mx, my, m2, g0, gx, gy, ax, ay = acc
     if not (np.all(np.isfinite(acc))):
