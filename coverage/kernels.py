@@ -18,7 +18,8 @@ from numpy.typing import NDArray
 
 from swarmdeck.core.compiled import AVAILABLE, jit
 
-__all__ = ["AVAILABLE", "cell_sums", "cell_sums_numpy", "edge_blocks", "edge_blocks_numpy"]
+__all__ = ["AVAILABLE", "cell_sums", "cell_sums_numpy", "edge_blocks", "edge_blocks_numpy", "refine_need",
+           "refine_need_numpy"]
 
 
 def cell_sums_numpy(phi: NDArray[np.float64], phi_t: NDArray[np.float64], r: NDArray[np.float64],
@@ -169,3 +170,70 @@ def edge_blocks(fw: NDArray[np.float64], r: NDArray[np.float64], edge_q: NDArray
     c = np.ascontiguousarray
     return _edge_blocks_compiled(c(fw), c(r), c(edge_q, dtype=np.intp), c(mid), c(ci), c(cj), c(pi), c(pj),
                                  c(inv_i), c(inv_j))
+
+
+def refine_need_numpy(tri: NDArray[np.float64], cell: NDArray[np.intp], origin: NDArray[np.float64],
+                      mu: NDArray[np.float64], reach: NDArray[np.float64], res_sig: NDArray[np.float64]
+                      ) -> tuple[NDArray[np.bool_], NDArray[np.float64]]:
+    """Which triangles one round of the adaptive quadrature splits, and their squared edge lengths.
+
+    tri (T, 3, 2) m relative to ``origin[cell]``; mu (K, 2) m live bumps; reach (K,) m; res_sig (K,) m the
+    longest edge allowed near each bump. Returns need (T,) (within reach of a bump whose limit the
+    longest edge exceeds) and len2 (T, 3) m², the edge opposite each vertex.
+    """
+    g = tri.mean(axis=1)                                               # local centroid
+    rad = np.sqrt(((tri - g[:, None]) ** 2).sum(axis=2)).max(axis=1)
+    e = tri[:, [2, 0, 1]] - tri[:, [1, 2, 0]]                          # edge opposite vertex i
+    len2 = (e ** 2).sum(axis=2)
+    diam = np.sqrt(len2.max(axis=1))
+    gw = g + origin[cell]
+    dist = np.sqrt(((gw[:, None, :] - mu[None]) ** 2).sum(axis=2)) - rad[:, None]   # (T, K)
+    need = ((dist < reach[None]) & (diam[:, None] > res_sig[None])).any(axis=1)
+    return need, len2
+
+
+@jit
+def _refine_need_compiled(tri, cell, origin, mu, reach, res_sig):  # pragma: no cover - compiled
+    t_count = tri.shape[0]
+    need = np.zeros(t_count, np.bool_)
+    len2 = np.empty((t_count, 3))
+    for t in range(t_count):
+        gx = (tri[t, 0, 0] + tri[t, 1, 0] + tri[t, 2, 0]) / 3.0
+        gy = (tri[t, 0, 1] + tri[t, 1, 1] + tri[t, 2, 1]) / 3.0
+        rad = 0.0
+        for v in range(3):
+            dx = tri[t, v, 0] - gx
+            dy = tri[t, v, 1] - gy
+            r = np.sqrt(dx * dx + dy * dy)
+            if v == 0 or r > rad:
+                rad = r
+        big = 0.0
+        for v in range(3):
+            a = (v + 2) % 3
+            b = (v + 1) % 3
+            ex = tri[t, a, 0] - tri[t, b, 0]
+            ey = tri[t, a, 1] - tri[t, b, 1]
+            l2 = ex * ex + ey * ey
+            len2[t, v] = l2
+            if v == 0 or l2 > big:
+                big = l2
+        diam = np.sqrt(big)
+        wx = gx + origin[cell[t], 0]
+        wy = gy + origin[cell[t], 1]
+        for k in range(mu.shape[0]):
+            dx = wx - mu[k, 0]
+            dy = wy - mu[k, 1]
+            if np.sqrt(dx * dx + dy * dy) - rad < reach[k] and diam > res_sig[k]:
+                need[t] = True
+                break
+    return need, len2
+
+
+def refine_need(tri: NDArray[np.float64], cell: NDArray[np.intp], origin: NDArray[np.float64],
+                mu: NDArray[np.float64], reach: NDArray[np.float64], res_sig: NDArray[np.float64]
+                ) -> tuple[NDArray[np.bool_], NDArray[np.float64]]:
+    """:func:`refine_need_numpy`, compiled when numba is available (the same bits)."""
+    if not AVAILABLE:
+        return refine_need_numpy(tri, cell, origin, mu, reach, res_sig)
+    c = np.ascontiguousarray
+    return _refine_need_compiled(c(tri), c(cell, dtype=np.intp), c(origin), c(mu), c(reach), c(res_sig))

@@ -20,7 +20,7 @@ from numpy.typing import NDArray
 
 from swarmdeck.core.checks import in_range
 from swarmdeck.coverage.density import GaussianMixture
-from swarmdeck.coverage.kernels import cell_sums
+from swarmdeck.coverage.kernels import cell_sums, refine_need
 from swarmdeck.coverage.voronoi import BoundedVoronoi
 
 __all__ = ["CellMoments", "QuadratureOptions", "cell_moments", "triangle_rule"]
@@ -141,14 +141,7 @@ def _refine(tri: NDArray[np.float64], cell: NDArray[np.intp], origin: NDArray[np
     reach = opts.reach * sig
     done_t, done_c = [], []
     for _ in range(2 * (opts.max_level - opts.min_level)):
-        g = tri.mean(axis=1)                                               # local centroid
-        rad = np.sqrt(((tri - g[:, None]) ** 2).sum(axis=2)).max(axis=1)
-        e = tri[:, [2, 0, 1]] - tri[:, [1, 2, 0]]                          # edge opposite vertex i
-        len2 = (e ** 2).sum(axis=2)
-        diam = np.sqrt(len2.max(axis=1))
-        gw = g + origin[cell]
-        dist = np.sqrt(((gw[:, None, :] - mu[None]) ** 2).sum(axis=2)) - rad[:, None]   # (T, K)
-        need = ((dist < reach[None]) & (diam[:, None] > opts.resolution * sig[None])).any(axis=1)
+        need, len2 = refine_need(tri, cell, origin, mu, reach, opts.resolution * sig)   # coverage/kernels.py
         if not need.any():
             break
         done_t.append(tri[~need])

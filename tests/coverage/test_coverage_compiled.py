@@ -39,7 +39,7 @@ def _tick(p: np.ndarray, density: GaussianMixture, law: str):
     return u, state, jac
 
 
-@settings(max_examples=25, deadline=None)
+@settings(max_examples=40, deadline=None)
 @given(seed=st.integers(0, 2**32 - 1), n=st.integers(2, 200), k=st.integers(0, 12), anisotropic=st.booleans(),
        law=st.sampled_from(["lloyd-ff", "tvd-d1", "tvd-d3"]))
 def test_compiled_tick_equals_the_numpy_tick_bit_for_bit(seed: int, n: int, k: int, anisotropic: bool, law: str) -> None:
