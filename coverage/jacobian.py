@@ -19,7 +19,7 @@ import scipy.sparse as sp
 from numpy.typing import NDArray
 
 from swarmdeck.coverage.density import GaussianMixture
-from swarmdeck.coverage.kernels import edge_blocks
+from swarmdeck.coverage.kernels import edge_blocks, edge_nodes
 from swarmdeck.coverage.quadrature import CellMoments
 from swarmdeck.coverage.voronoi import BoundedVoronoi
 
@@ -82,18 +82,11 @@ def centroid_jacobian(vor: BoundedVoronoi, moments: CellMoments, density: Gaussi
     a, b = seg[:, 0], seg[:, 1]
     pieces = _pieces(a, b, density, opts)
     x, w = opts.gauss_legendre()
-    # Node positions along every edge: piece k of n_e, node x_l → s = (k + x_l) / n_e.
-    edge = np.repeat(np.arange(pairs.shape[0]), pieces)
-    first = np.repeat(np.cumsum(pieces) - pieces, pieces)
-    k = np.arange(edge.size) - first
-    npc = pieces[edge]
-    s = ((k[:, None] + x[None, :]) / npc[:, None]).ravel()                 # (Q,)
-    edge_q = np.repeat(edge, x.size)
+    # Node positions along every edge: piece k of n_e, node x_l → s = (k + x_l) / n_e (coverage/kernels.py).
     length = np.hypot(*(b - a).T)
-    wq = (np.tile(w, edge.size) / np.repeat(npc, x.size)) * length[edge_q]  # ds weights
     mid = 0.5 * (a + b)
-    r = (a[edge_q] - mid[edge_q]) + s[:, None] * (b - a)[edge_q]            # q − mid (Q, 2)
-    phi = density.evaluate(r + mid[edge_q])
+    r, wq, edge_q, nodes = edge_nodes(a, b, mid, length, pieces, x, w)       # r = q − mid (Q, 2)
+    phi = density.evaluate(nodes)
     fw = phi * wq
     i, j = pairs[:, 0], pairs[:, 1]
     p, c, m = vor.points, moments.centroids, moments.masses

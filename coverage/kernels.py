@@ -18,8 +18,8 @@ from numpy.typing import NDArray
 
 from swarmdeck.core.compiled import AVAILABLE, jit
 
-__all__ = ["AVAILABLE", "cell_sums", "cell_sums_numpy", "edge_blocks", "edge_blocks_numpy", "refine_need",
-           "refine_need_numpy"]
+__all__ = ["AVAILABLE", "cell_sums", "cell_sums_numpy", "edge_blocks", "edge_blocks_numpy", "edge_nodes",
+           "edge_nodes_numpy", "refine_need", "refine_need_numpy"]
 
 
 def cell_sums_numpy(phi: NDArray[np.float64], phi_t: NDArray[np.float64], r: NDArray[np.float64],
@@ -237,3 +237,67 @@ def refine_need(tri: NDArray[np.float64], cell: NDArray[np.intp], origin: NDArra
         return refine_need_numpy(tri, cell, origin, mu, reach, res_sig)
     c = np.ascontiguousarray
     return _refine_need_compiled(c(tri), c(cell, dtype=np.intp), c(origin), c(mu), c(reach), c(res_sig))
+
+
+def edge_nodes_numpy(a: NDArray[np.float64], b: NDArray[np.float64], mid: NDArray[np.float64],
+                     length: NDArray[np.float64], pieces: NDArray[np.intp], x: NDArray[np.float64],
+                     w: NDArray[np.float64]
+                     ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.intp], NDArray[np.float64]]:
+    """The Jacobian's edge quadrature nodes: edge e from a[e] to b[e] (m) cut into pieces[e] pieces, the
+    Gauss–Legendre nodes x (on [0, 1], weights w summing to 1) on each. Returns r (Q, 2) m the nodes
+    relative to their edge's midpoint ``mid``, wq (Q,) m the ds weights, edge_q (Q,) each node's edge, and
+    q (Q, 2) m the nodes themselves (r + mid)."""
+    edge = np.repeat(np.arange(a.shape[0]), pieces)
+    first = np.repeat(np.cumsum(pieces) - pieces, pieces)
+    k = np.arange(edge.size) - first
+    npc = pieces[edge]
+    s = ((k[:, None] + x[None, :]) / npc[:, None]).ravel()                 # (Q,)
+    edge_q = np.repeat(edge, x.size)
+    wq = (np.tile(w, edge.size) / np.repeat(npc, x.size)) * length[edge_q]  # ds weights
+    r = (a[edge_q] - mid[edge_q]) + s[:, None] * (b - a)[edge_q]            # q − mid (Q, 2)
+    return r, wq, edge_q, r + mid[edge_q]
+
+
+@jit
+def _edge_nodes_compiled(a, b, mid, length, pieces, x, w):  # pragma: no cover - compiled
+    nx = x.shape[0]
+    total = 0
+    for e in range(a.shape[0]):
+        total += pieces[e]
+    nq = total * nx
+    r = np.empty((nq, 2))
+    q = np.empty((nq, 2))
+    wq = np.empty(nq)
+    edge_q = np.empty(nq, np.intp)
+    i = 0
+    for e in range(a.shape[0]):
+        npc = pieces[e]
+        fn = float(npc)
+        dx = b[e, 0] - a[e, 0]
+        dy = b[e, 1] - a[e, 1]
+        ox = a[e, 0] - mid[e, 0]
+        oy = a[e, 1] - mid[e, 1]
+        for kk in range(npc):
+            for li in range(nx):
+                s = (float(kk) + x[li]) / fn
+                rx = ox + s * dx
+                ry = oy + s * dy
+                r[i, 0] = rx
+                r[i, 1] = ry
+                q[i, 0] = rx + mid[e, 0]
+                q[i, 1] = ry + mid[e, 1]
+                wq[i] = (w[li] / fn) * length[e]
+                edge_q[i] = e
+                i += 1
+    return r, wq, edge_q, q
+
+
+def edge_nodes(a: NDArray[np.float64], b: NDArray[np.float64], mid: NDArray[np.float64],
+               length: NDArray[np.float64], pieces: NDArray[np.intp], x: NDArray[np.float64],
+               w: NDArray[np.float64]
+               ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.intp], NDArray[np.float64]]:
+    """:func:`edge_nodes_numpy`, compiled when numba is available (the same bits)."""
+    if not AVAILABLE:
+        return edge_nodes_numpy(a, b, mid, length, pieces, x, w)
+    c = np.ascontiguousarray
+    return _edge_nodes_compiled(c(a), c(b), c(mid), c(length), c(pieces, dtype=np.intp), c(x), c(w))
