@@ -88,8 +88,8 @@ def delaunay_alternatives(sizes: list[int]) -> None:
     for n in sizes:
         p = rng.uniform([0.0, 0.0], [22.0, 13.0], (int(1.11 * n), 2))
         mp = shapely.multipoints(p)
-        a = harness.measure(lambda: Delaunay(p), 7, clock="thread", warmup=1)
-        b = harness.measure(lambda: shapely.delaunay_triangles(mp), 7, clock="thread", warmup=1)
+        a = harness.measure(lambda p=p: Delaunay(p), 7, clock="thread", warmup=1)
+        b = harness.measure(lambda mp=mp: shapely.delaunay_triangles(mp), 7, clock="thread", warmup=1)
         print(harness.table_row(n, a.ms(1), b.ms(1)))
 
 

@@ -81,9 +81,9 @@ def cell_sums(phi: NDArray[np.float64], phi_t: NDArray[np.float64], r: NDArray[n
 
 def _edge_moments_numpy(fw: NDArray[np.float64], r: NDArray[np.float64], edge_q: NDArray[np.intp], ne: int
                         ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
-    S0 = np.bincount(edge_q, weights=fw, minlength=ne)
-    S1 = np.column_stack([np.bincount(edge_q, weights=fw * r[:, c], minlength=ne) for c in (0, 1)])
-    S2 = np.empty((ne, 2, 2))
+    S0: NDArray[np.float64] = np.bincount(edge_q, weights=fw, minlength=ne)  # type: ignore[assignment]  # bincount with weights is float64
+    S1: NDArray[np.float64] = np.column_stack([np.bincount(edge_q, weights=fw * r[:, c], minlength=ne) for c in (0, 1)])
+    S2: NDArray[np.float64] = np.empty((ne, 2, 2))
     S2[:, 0, 0] = np.bincount(edge_q, weights=fw * r[:, 0] * r[:, 0], minlength=ne)
     S2[:, 1, 1] = np.bincount(edge_q, weights=fw * r[:, 1] * r[:, 1], minlength=ne)
     S2[:, 0, 1] = S2[:, 1, 0] = np.bincount(edge_q, weights=fw * r[:, 0] * r[:, 1], minlength=ne)
