@@ -19,6 +19,7 @@ import scipy.sparse as sp
 from numpy.typing import NDArray
 
 from swarmdeck.coverage.density import GaussianMixture
+from swarmdeck.coverage.kernels import edge_blocks, edge_nodes
 from swarmdeck.coverage.quadrature import CellMoments
 from swarmdeck.coverage.voronoi import BoundedVoronoi
 
@@ -81,46 +82,20 @@ def centroid_jacobian(vor: BoundedVoronoi, moments: CellMoments, density: Gaussi
     a, b = seg[:, 0], seg[:, 1]
     pieces = _pieces(a, b, density, opts)
     x, w = opts.gauss_legendre()
-    # Node positions along every edge: piece k of n_e, node x_l → s = (k + x_l) / n_e.
-    edge = np.repeat(np.arange(pairs.shape[0]), pieces)
-    first = np.repeat(np.cumsum(pieces) - pieces, pieces)
-    k = np.arange(edge.size) - first
-    npc = pieces[edge]
-    s = ((k[:, None] + x[None, :]) / npc[:, None]).ravel()                 # (Q,)
-    edge_q = np.repeat(edge, x.size)
+    # Node positions along every edge: piece k of n_e, node x_l → s = (k + x_l) / n_e (coverage/kernels.py).
     length = np.hypot(*(b - a).T)
-    wq = (np.tile(w, edge.size) / np.repeat(npc, x.size)) * length[edge_q]  # ds weights
     mid = 0.5 * (a + b)
-    r = (a[edge_q] - mid[edge_q]) + s[:, None] * (b - a)[edge_q]            # q − mid (Q, 2)
-    phi = density.evaluate(r + mid[edge_q])
+    r, wq, edge_q, nodes = edge_nodes(a, b, mid, length, pieces, x, w)       # r = q − mid (Q, 2)
+    phi = density.evaluate(nodes)
     fw = phi * wq
-    # Edge moments about the midpoint: S0 = ∫φ, S1 = ∫φ r, S2 = ∫φ r rᵀ.
-    ne = pairs.shape[0]
-    S0 = np.bincount(edge_q, weights=fw, minlength=ne)
-    S1 = np.column_stack([np.bincount(edge_q, weights=fw * r[:, c], minlength=ne) for c in (0, 1)])
-    S2 = np.empty((ne, 2, 2))
-    S2[:, 0, 0] = np.bincount(edge_q, weights=fw * r[:, 0] * r[:, 0], minlength=ne)
-    S2[:, 1, 1] = np.bincount(edge_q, weights=fw * r[:, 1] * r[:, 1], minlength=ne)
-    S2[:, 0, 1] = S2[:, 1, 0] = np.bincount(edge_q, weights=fw * r[:, 0] * r[:, 1], minlength=ne)
-
-    def f(av: NDArray[np.float64], vv: NDArray[np.float64]) -> NDArray[np.float64]:
-        """∫ φ (q − a)(v − q)ᵀ ds per edge (E, 2, 2) for points a, v (E, 2)."""
-        a_ = av - mid
-        v_ = vv - mid
-        return (S1[:, :, None] * v_[:, None, :] - S2 - S0[:, None, None] * a_[:, :, None] * v_[:, None, :]
-                + a_[:, :, None] * S1[:, None, :])
-
     i, j = pairs[:, 0], pairs[:, 1]
     p, c, m = vor.points, moments.centroids, moments.masses
     d = np.hypot(*(p[j] - p[i]).T)
     inv_i = np.where(moments.massless[i], 0.0, 1.0 / (np.where(moments.massless[i], 1.0, m[i]) * d))
     inv_j = np.where(moments.massless[j], 0.0, 1.0 / (np.where(moments.massless[j], 1.0, m[j]) * d))
-    blocks = np.concatenate([
-        inv_i[:, None, None] * f(c[i], p[j]),          # ∂c_i/∂p_j
-        -inv_i[:, None, None] * f(c[i], p[i]),         # contribution to ∂c_i/∂p_i
-        inv_j[:, None, None] * f(c[j], p[i]),          # ∂c_j/∂p_i
-        -inv_j[:, None, None] * f(c[j], p[j]),         # contribution to ∂c_j/∂p_j
-    ])                                                  # (4E, 2, 2)
+    # Edge moments about the midpoint (S0 = ∫φ, S1 = ∫φ r, S2 = ∫φ r rᵀ) and the (4E, 2, 2) blocks
+    # ∂c_i/∂p_j, −…∂c_i/∂p_i, ∂c_j/∂p_i, −…∂c_j/∂p_j: compiled (coverage/kernels.py).
+    blocks = edge_blocks(fw, r, edge_q, mid, c[i], c[j], p[i], p[j], inv_i, inv_j)
     brow = np.concatenate([i, i, j, j])
     bcol = np.concatenate([j, i, i, j])
     rows = (2 * brow[:, None, None] + np.arange(2)[None, :, None]) + np.zeros((1, 1, 2), dtype=np.intp)

@@ -20,6 +20,7 @@ from numpy.typing import NDArray
 
 from swarmdeck.core.checks import in_range
 from swarmdeck.coverage.density import GaussianMixture
+from swarmdeck.coverage.kernels import cell_sums, refine_need
 from swarmdeck.coverage.voronoi import BoundedVoronoi
 
 __all__ = ["CellMoments", "QuadratureOptions", "cell_moments", "triangle_rule"]
@@ -140,14 +141,7 @@ def _refine(tri: NDArray[np.float64], cell: NDArray[np.intp], origin: NDArray[np
     reach = opts.reach * sig
     done_t, done_c = [], []
     for _ in range(2 * (opts.max_level - opts.min_level)):
-        g = tri.mean(axis=1)                                               # local centroid
-        rad = np.sqrt(((tri - g[:, None]) ** 2).sum(axis=2)).max(axis=1)
-        e = tri[:, [2, 0, 1]] - tri[:, [1, 2, 0]]                          # edge opposite vertex i
-        len2 = (e ** 2).sum(axis=2)
-        diam = np.sqrt(len2.max(axis=1))
-        gw = g + origin[cell]
-        dist = np.sqrt(((gw[:, None, :] - mu[None]) ** 2).sum(axis=2)) - rad[:, None]   # (T, K)
-        need = ((dist < reach[None]) & (diam[:, None] > opts.resolution * sig[None])).any(axis=1)
+        need, len2 = refine_need(tri, cell, origin, mu, reach, opts.resolution * sig)   # coverage/kernels.py
         if not need.any():
             break
         done_t.append(tri[~need])
@@ -177,14 +171,7 @@ def cell_moments(vor: BoundedVoronoi, density: GaussianMixture,
     r = (bary[None, :, 0, None] * tri[:, None, 0] + bary[None, :, 1, None] * tri[:, None, 1]
          + bary[None, :, 2, None] * tri[:, None, 2])                        # (T, 7, 2) = q − p_i
     phi, phi_t = density.evaluate_both(r + p[cell][:, None, :])             # (T, 7)
-    wa = w[None, :] * area[:, None]
-    fw = phi * wa
-    gw = phi_t * wa
-    rx, ry = r[..., 0], r[..., 1]
-    acc = np.empty((9, n))
-    for row, val in enumerate((fw, fw * rx, fw * ry, fw * (rx * rx + ry * ry),
-                               gw, gw * rx, gw * ry, wa * rx, wa * ry)):
-        acc[row] = np.bincount(cell, weights=val.sum(axis=1), minlength=n)
+    acc = cell_sums(phi, phi_t, r, area, w, cell, n)                     # compiled (coverage/kernels.py)
     n_points = phi.size
     m, mx, my, m2, g0, gx, gy, ax, ay = acc
     if not (np.all(np.isfinite(acc))):

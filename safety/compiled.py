@@ -1,4 +1,4 @@
-"""numba, when importable: the one place that imports it, and the compiled Gram assembly.
+"""The barrier's compiled Gram assembly (numba through :mod:`swarmdeck.core.compiled`, the one place that imports it).
 
 numba is a dependency (pyproject), compiled with ``cache=True`` (the machine code is kept in
 ``__pycache__``; a process loads it in ≈ 0.5 s including numba's import, the first process
@@ -8,46 +8,9 @@ order), slower.
 """
 from __future__ import annotations
 
-import sys
-
 import numpy as np
 
-
-def _import_numba():
-    """numba, or None. numba imports ``coverage`` (coverage.py) if it can; with the repository
-    root on sys.path (a script or Ray worker started there) that name is swarmdeck's own
-    ``coverage/`` package and numba's import fails — so it is retried with ``coverage`` hidden."""
-    try:
-        import numba
-        return numba
-    except ImportError:
-        return None
-    except Exception:  # noqa: BLE001 - the shadowed coverage: AttributeError inside numba's import
-        pass
-    for name in [m for m in sys.modules if m == "numba" or m.startswith("numba.")]:
-        del sys.modules[name]
-    missing = object()
-    saved = sys.modules.get("coverage", missing)
-    sys.modules["coverage"] = None  # type: ignore[assignment]  # `import coverage` raises ImportError: numba runs without it
-    try:
-        import numba
-        return numba
-    except Exception:  # noqa: BLE001 - any other breakage: the numpy paths
-        return None
-    finally:
-        if saved is missing:
-            del sys.modules["coverage"]
-        else:
-            sys.modules["coverage"] = saved  # type: ignore[assignment]
-
-
-_numba = _import_numba()
-AVAILABLE = _numba is not None
-
-
-def jit(fn):
-    """``numba.njit(cache=True, nogil=True)(fn)``, or ``fn`` itself without numba."""
-    return _numba.njit(cache=True, nogil=True)(fn) if AVAILABLE else fn
+from swarmdeck.core.compiled import AVAILABLE, jit  # the one place numba is imported
 
 
 @jit
