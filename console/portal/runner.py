@@ -98,6 +98,7 @@ from swarmdeck.console.sandbox.run import SandboxOutcome, run_sandboxed
 from swarmdeck.console.sandbox.start_poses import arena_start
 from swarmdeck.console.sandbox.verification import user_message, without_run_folder
 from swarmdeck.core.bounds import DEFAULT_BOUNDS, Bounds
+from swarmdeck.core.constants import CONTROL_PERIOD
 from swarmdeck.devices.clock import RealTimePacer
 from swarmdeck.safety.guard import GuardConfig
 
@@ -125,7 +126,7 @@ class ArenaSettings:
     robots_via: str | None = None
     fleet: int = 12
     bounds: Bounds = DEFAULT_BOUNDS
-    dt: float = 0.033
+    dt: float = CONTROL_PERIOD
     fast: bool = False
     seed: int | None = None
     charge: float | tuple[float, ...] = 1.0

@@ -65,7 +65,8 @@ from swarmdeck.console.picture.heat import heatmap
 from swarmdeck.console.picture.picture import Picture, picture_of
 from swarmdeck.console.picture.shapes import CHANGED_RING, dashed_rings, robot_outline
 from swarmdeck.console.picture.style import PictureStyle
-from swarmdeck.console.recording.reader import RecordedEvent, Recording
+from swarmdeck.console.recording.codec import RecordedEvent
+from swarmdeck.console.recording.reader import Recording
 from swarmdeck.console.runtime.frame import Frame
 from swarmdeck.core.bounds import Bounds
 from swarmdeck.core.constants import ROBOT_RADIUS

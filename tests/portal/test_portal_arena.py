@@ -8,7 +8,7 @@ import json
 
 import pytest
 from mqtt_broker import wait_until
-from portal_fixtures import SPIN, portal, wait_for_state  # noqa: F401
+from portal_fixtures import wait_for_state
 
 from swarmdeck.console.portal.runner import ArenaRunner, ArenaSettings
 from swarmdeck.console.recording.reader import open_recording

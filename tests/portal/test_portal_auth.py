@@ -2,7 +2,6 @@
 mid-session, another user's job is 404, operator endpoints refused to researchers, cookie sessions with CSRF,
 sign-in rate limiting, tokens stored only hashed."""
 import httpx
-from portal_fixtures import portal  # noqa: F401
 
 from swarmdeck.console.portal.api import SESSION_COOKIE
 

@@ -11,7 +11,7 @@ import av
 import httpx
 import numpy as np
 import pytest
-from portal_fixtures import CSRF, SPIN, manifest, portal, sign_in  # noqa: F401
+from portal_fixtures import CSRF, SPIN, sign_in
 from recording_synth import simulated_frames, write_synthetic_session
 
 from swarmdeck.console.portal.live import scene_message
