@@ -26,6 +26,7 @@ from swarmdeck.console.runtime.behaviours import Behaviour, BehaviourError, make
 from swarmdeck.console.runtime.density import BumpSet, ConsoleDensity
 from swarmdeck.console.runtime.notices import Notices
 from swarmdeck.console.runtime.params import BehaviourParams, DensityParams, LoopConfig, SafetyParams
+from swarmdeck.core.bounds import Bounds
 from swarmdeck.core.kinematics import GritsBotParams
 from swarmdeck.devices.pipeline import barrier_filter
 from swarmdeck.safety.guard import GuardConfig
@@ -327,8 +328,7 @@ class OperatorCommands:
 
     def move_bump(self, bid: int, xy: Any) -> None:
         """Drag bump ``bid`` to ``xy`` (m; kept inside the arena)."""
-        x0, x1, y0, y1 = self.config.bounds
-        p = np.clip(np.asarray(xy, dtype=float).reshape(-1)[:2], [x0, y0], [x1, y1])
+        p = Bounds.of(self.config.bounds).clip(np.asarray(xy, dtype=float).reshape(-1)[:2])
         with self._lock:
             t = self._run_time_of()
             self.bumps.move(bid, p, t)
