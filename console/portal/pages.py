@@ -67,6 +67,7 @@ from swarmdeck.console.portal.results import summary_lines
 from swarmdeck.console.portal.service import PortalService
 from swarmdeck.console.portal.states import ACTIVE, FINAL, JobState
 from swarmdeck.console.portal.submission import Limits, display_name, manifest_errors
+from swarmdeck.core.errors import SwarmdeckError
 
 HERE = Path(__file__).resolve().parent
 STATIC = {"portal.css": "text/css", "live.js": "text/javascript", "refresh.js": "text/javascript",
@@ -421,7 +422,7 @@ def router(service: PortalService, live: LiveFeed) -> APIRouter:
     return r
 
 
-class SignInRequired(Exception):
+class SignInRequired(SwarmdeckError):
     """A page behind sign-in was asked for without a valid session: :func:`to_signin_page` answers it."""
 
 

@@ -26,6 +26,8 @@ from collections.abc import Iterator, Sequence
 from dataclasses import dataclass, field
 from typing import Any, BinaryIO, Literal
 
+from swarmdeck.core.errors import SwarmdeckError
+
 MAGIC = bytes([137, 77, 67, 65, 80, 48, 13, 10])
 OP_HEADER, OP_FOOTER, OP_SCHEMA, OP_CHANNEL, OP_MESSAGE, OP_CHUNK = 0x01, 0x02, 0x03, 0x04, 0x05, 0x06
 OP_MESSAGE_INDEX, OP_CHUNK_INDEX, OP_ATTACHMENT, OP_ATTACHMENT_INDEX = 0x07, 0x08, 0x09, 0x0A
@@ -38,7 +40,7 @@ FOOTER_SIZE = 9 + 20 + len(MAGIC)
 StopReason = Literal["end", "cut", "damaged", "data_end"]
 
 
-class DamagedChunk(ValueError):
+class DamagedChunk(SwarmdeckError, ValueError):
     """A chunk record that cannot be read: a bad CRC, undecodable compression, a cut record inside."""
 
 

@@ -30,6 +30,7 @@ from swarmdeck.core.bounds import DEFAULT_BOUNDS, Bounds
 from swarmdeck.core.checks import in_range, require_in_range
 from swarmdeck.core.config import floats
 from swarmdeck.core.constants import CONTROL_PERIOD, ROBOT_DIAMETER, SAFETY_DISTANCE
+from swarmdeck.core.errors import SwarmdeckError
 from swarmdeck.coverage.densities import s1_density
 from swarmdeck.devices import ArenaConfig
 
@@ -40,7 +41,7 @@ T = TypeVar("T")
 _KEY = "swarmdeck.param"
 
 
-class BehaviourError(ValueError):
+class BehaviourError(SwarmdeckError, ValueError):
     """A behaviour name, script or parameter that cannot be used."""
 
 
