@@ -54,6 +54,10 @@ class Bounds(NamedTuple):
         """The rectangle's centre ``(x, y)``, m."""
         return ((self.x_min + self.x_max) / 2, (self.y_min + self.y_max) / 2)
 
+    def shrunk(self, margin: float) -> Bounds:
+        """The rectangle shrunk by ``margin`` m on every side (grown for ``margin`` < 0), unchecked."""
+        return Bounds(self.x_min + margin, self.x_max - margin, self.y_min + margin, self.y_max - margin)
+
     def contains(self, points: ArrayLike, margin: float = 0.0) -> NDArray[np.bool_]:
         """Which of ``points`` (``(..., 2)`` rows ``[x, y]``, m; extra columns such as θ are ignored) lie
         in the rectangle shrunk by ``margin`` m on every side, edges included; shape ``points.shape[:-1]``."""

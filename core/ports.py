@@ -167,6 +167,15 @@ class ProvidesImage(Protocol):
         """The image for ``ref`` and the floor rectangle it shows ``(x_min, x_max, y_min, y_max)``, m."""
 
 
+@runtime_checkable
+class ReportsValidation(Protocol):
+    """Validates the commands it is given and counts what it found (the simulator's ``ValidationReport``)."""
+
+    @property
+    def report(self) -> Any:
+        """The validation report so far (None: not validating)."""
+
+
 def obstacles_of(port: object) -> NDArray[np.float64] | None:
     """``port.obstacles()`` when ``port`` reports obstacles (:class:`ReportsObstacles`), else None."""
     return port.obstacles() if isinstance(port, ReportsObstacles) else None

@@ -22,7 +22,15 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from swarmdeck.core.kinematics import GritsBotParams
-from swarmdeck.core.ports import CommandSink, NominalSink, PoseSource, SensedPoses, rows_of
+from swarmdeck.core.ports import (
+    CommandSink,
+    NominalSink,
+    PoseSource,
+    ReportsValidation,
+    SensedPoses,
+    obstacles_of,
+    rows_of,
+)
 from swarmdeck.devices.clock import RealTimePacer
 
 FloatArray = NDArray[np.float64]
@@ -114,10 +122,7 @@ class SteppedRobots:
 
     def obstacles(self) -> FloatArray | None:
         """``(M, 2)`` fixed obstacles the sink knows (robots excluded from control, docked robots), m."""
-        fn = getattr(self.sink, "obstacles", None)  # optional member of CommandSink (core/ports.py)
-        if fn is None:
-            return None
-        found = fn()
+        found = obstacles_of(self.sink)
         if found is None:
             return None
         obs = np.asarray(found, dtype=float).reshape(-1, 2)
@@ -145,7 +150,7 @@ class SteppedRobots:
     @property
     def report(self) -> Any:
         """The robots' validation report (the simulator's counts), or None where nobody validates."""
-        return getattr(self.sink, "report", None)
+        return self.sink.report if isinstance(self.sink, ReportsValidation) else None
 
     def close(self) -> None:
         """Stop the robots and release them (:func:`~swarmdeck.core.ports.close_ports`)."""

@@ -31,7 +31,6 @@ from __future__ import annotations
 import asyncio
 import json
 import socket
-import threading
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -50,6 +49,7 @@ from swarmdeck.console.portal.api import api_router
 from swarmdeck.console.portal.errors import PortalError, RejectionCounter, RequestTimeout, TooLarge
 from swarmdeck.console.portal.livefeed import LiveFeed
 from swarmdeck.console.portal.service import PortalService
+from swarmdeck.core.service_thread import ServiceThread
 
 FORM_OVERHEAD = 64 << 10  # multipart boundaries, headers and the manifest field on top of the script's bytes
 #: the API page: Swagger UI from this server (no inline script: docs.js starts it), under DOCS_CSP
@@ -336,13 +336,17 @@ class ServerThread:
         self.host, self.port = host, self.sock.getsockname()[1]
         self.url = f"http://{host}:{self.port}"
         self.server = uvicorn_server(app, http=http)
-        self.thread = threading.Thread(target=self.server.run, kwargs={"sockets": [self.sock]}, daemon=True,
-                                       name="swarmdeck-portal-http")
-        self.thread.start()
-        while not self.server.started and self.thread.is_alive():
-            self.thread.join(0.01)
+        self.thread = ServiceThread(self._serve, "swarmdeck-portal-http", join_timeout=10.0, wake=self._exit).start()
+        while not self.server.started and self.thread.alive:
+            self.thread.wait(0.01)
+
+    def _serve(self) -> None:
+        self.server.run(sockets=[self.sock])
+
+    def _exit(self) -> None:
+        self.server.should_exit = True
 
     def stop(self) -> None:
-        self.server.should_exit = True
-        self.thread.join(10)
+        """Shut the server down (its connections get ``timeout_graceful_shutdown``), join it, close the socket."""
+        self.thread.stop()
         self.sock.close()

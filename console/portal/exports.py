@@ -43,6 +43,7 @@ from typing import TYPE_CHECKING, Any
 
 from swarmdeck.console.portal.files import UMASK, private_dir, write_private
 from swarmdeck.console.portal.job import ExportState
+from swarmdeck.core.service_thread import ServiceThread
 
 if TYPE_CHECKING:
     from swarmdeck.console.portal.service import PortalService
@@ -156,8 +157,7 @@ class JobExports:
         self.service, self.video = service, bool(video)
         self._queue: queue.Queue[int | None] = queue.Queue()
         self._lock = threading.Lock()
-        self._stop = threading.Event()
-        self._thread: threading.Thread | None = None
+        self._thread = ServiceThread(self._run, "swarmdeck-portal-exports", join_timeout=5.0, wake=self._wake)
         self._proc: subprocess.Popen[str] | None = None
         self._busy = 0  # jobs queued or being written
         self._idle = threading.Condition(self._lock)
@@ -188,29 +188,28 @@ class JobExports:
 
     def stop(self, timeout: float = 5.0) -> None:
         """Stop now: the export being written is killed (and left ``"writing"``, redone on the next start)."""
-        self._stop.set()
+        self._thread.stop(timeout)
+
+    def _wake(self) -> None:
+        """Unblock the thread: end its wait on the queue, kill the export process it waits for."""
         self._queue.put(None)
         with self._lock:
             proc = self._proc
         if proc is not None and proc.poll() is None:
             proc.kill()
-        if self._thread is not None:
-            self._thread.join(timeout)
 
     def _enqueue(self, job_id: int) -> None:
         with self._lock:
-            if self._stop.is_set():
+            if self._thread.stopping:
                 return
             self._busy += 1
-            if self._thread is None:
-                self._thread = threading.Thread(target=self._run, name="swarmdeck-portal-exports", daemon=True)
-                self._thread.start()
+            self._thread.start()  # the first export starts the thread (idempotent)
         self._queue.put(job_id)
 
     def _run(self) -> None:
-        while not self._stop.is_set():
+        while not self._thread.stopping:
             job_id = self._queue.get()
-            if job_id is None or self._stop.is_set():
+            if job_id is None or self._thread.stopping:
                 break
             try:
                 self._export(job_id)
@@ -230,7 +229,7 @@ class JobExports:
                    "--parent", str(os.getpid())] + ([] if self.video else ["--no-video"])
         t = time.monotonic()
         with self._lock:
-            if self._stop.is_set():
+            if self._thread.stopping:
                 return
             self._proc = subprocess.Popen(command, stdin=subprocess.DEVNULL, stdout=subprocess.PIPE,
                                           stderr=subprocess.STDOUT, text=True, errors="replace", cwd="/")
@@ -239,7 +238,7 @@ class JobExports:
         finally:
             with self._lock:
                 code, self._proc = self._proc.returncode, None
-        if self._stop.is_set():
+        if self._thread.stopping:
             return  # killed by stop(): still "writing", redone on the next start
         result = _result(output)
         if result is None:

@@ -8,9 +8,9 @@ counted and tried again next period; it never stops the server.
 from __future__ import annotations
 
 import sqlite3
-import threading
 
 from swarmdeck.console.portal.service import PortalService
+from swarmdeck.core.service_thread import ServiceThread
 
 
 class RetentionSweeper:
@@ -18,25 +18,23 @@ class RetentionSweeper:
 
     def __init__(self, service: PortalService, *, period_s: float = 3600.0) -> None:
         self.service, self.period_s = service, float(period_s)
-        self._stop = threading.Event()
-        self._thread: threading.Thread | None = None
+        self._thread = ServiceThread(self._run, "swarmdeck-portal-retention", join_timeout=10.0)
         self.swept: list[int] = []
         self.errors = 0
 
     def start(self) -> RetentionSweeper:
-        self._thread = threading.Thread(target=self._run, name="swarmdeck-portal-retention", daemon=True)
+        """Start sweeping (the first sweep at once); idempotent."""
         self._thread.start()
         return self
 
     def stop(self, timeout: float = 10.0) -> None:
-        self._stop.set()
-        if self._thread is not None:
-            self._thread.join(timeout)
+        """Stop sweeping and join the thread (up to ``timeout`` s); idempotent."""
+        self._thread.stop(timeout)
 
     def _run(self) -> None:
-        while not self._stop.is_set():
+        while not self._thread.stopping:
             try:
                 self.swept.extend(self.service.sweep_results())
             except (OSError, sqlite3.Error):
                 self.errors += 1
-            self._stop.wait(self.period_s)
+            self._thread.wait(self.period_s)

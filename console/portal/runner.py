@@ -98,6 +98,8 @@ from swarmdeck.console.sandbox.run import SandboxOutcome, run_sandboxed
 from swarmdeck.console.sandbox.start_poses import arena_start
 from swarmdeck.console.sandbox.verification import user_message, without_run_folder
 from swarmdeck.core.bounds import DEFAULT_BOUNDS, Bounds
+from swarmdeck.core.constants import CONTROL_PERIOD
+from swarmdeck.core.service_thread import ServiceThread
 from swarmdeck.devices.clock import RealTimePacer
 from swarmdeck.safety.guard import GuardConfig
 
@@ -125,7 +127,7 @@ class ArenaSettings:
     robots_via: str | None = None
     fleet: int = 12
     bounds: Bounds = DEFAULT_BOUNDS
-    dt: float = 0.033
+    dt: float = CONTROL_PERIOD
     fast: bool = False
     seed: int | None = None
     charge: float | tuple[float, ...] = 1.0
@@ -168,9 +170,9 @@ class ArenaRunner:
         self.service, self.settings = service, settings
         self.live = live if live is not None else LiveFeed()
         self.poll_s = float(poll_s)
-        self._stop = threading.Event()
+        self._thread = ServiceThread(self._run, "swarmdeck-portal-arena", join_timeout=15.0)
+        self._stop = self._thread.stop_event  # set: the arena thread ends after this pass
         self._lock = threading.Lock()
-        self._thread: threading.Thread | None = None
         self._job: int | None = None
         self._end_job = threading.Event()  # the current job must end now (cancel, e-stop, shutdown)
         self._loop: ControlLoop | None = None
@@ -191,7 +193,7 @@ class ArenaRunner:
 
     # ------------------------------------------------------------------ control (any thread)
     def start(self) -> ArenaRunner:
-        self._thread = threading.Thread(target=self._run, name="swarmdeck-portal-arena", daemon=True)
+        """Start the arena thread (idempotent)."""
         self._thread.start()
         return self
 
@@ -201,8 +203,7 @@ class ArenaRunner:
         self._end_job.set()
         self._halt.set()
         self.service.notify()
-        if self._thread is not None:
-            self._thread.join(timeout)
+        self._thread.stop(timeout)
         self.fleet.close()
         self.exports.stop()
 

@@ -58,7 +58,7 @@ import time
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Protocol
+from typing import Any, Protocol, runtime_checkable
 
 from swarmdeck.console.portal.accounts import Accounts, User
 from swarmdeck.console.portal.db import Database, TransitionConflict
@@ -82,7 +82,7 @@ from swarmdeck.console.portal.submission import Limits, Manifest, Upload, check_
 from swarmdeck.console.sandbox.confinement import JailConfig, SandboxLimits
 from swarmdeck.console.sandbox.script_env import ScriptEnv, listing
 
-__all__ = ["BYPASS_VERDICT", "BYPASS_WAIT", "RESULT_FILES", "ArenaControl", "ArenaState", "PortalConfig",
+__all__ = ["BYPASS_VERDICT", "BYPASS_WAIT", "RESULT_FILES", "ArenaControl", "ArenaReports", "ArenaState", "PortalConfig",
            "PortalService"]
 
 
@@ -92,6 +92,23 @@ class ArenaControl(Protocol):
     def emergency_stop(self) -> None: ...
 
     def cancel(self, job_id: int) -> None: ...
+
+
+@runtime_checkable
+class ArenaReports(Protocol):
+    """What an arena runner that reports on itself offers the pages (:class:`~.runner.ArenaRunner` does)."""
+
+    def live_log(self, job_id: int) -> bytes | None:
+        """The script output of job ``job_id`` so far while it runs on the arena (None otherwise)."""
+        ...
+
+    def alerts(self) -> dict[str, Any]:
+        """The running (or last) job's guard and contact events: ``{"job", "messages"}``."""
+        ...
+
+    def fleet_status(self) -> dict[str, Any]:
+        """The fleet table: each robot docked/charging/assigned/away, its charge."""
+        ...
 
 
 @dataclass(frozen=True)
@@ -319,8 +336,8 @@ class PortalService:
         job = self._visible(user, job_id)
         if isinstance(since, bool) or not isinstance(since, int) or since < 0:
             raise BadInput(f"since must be an integer >= 0, got {since!r}", "since")
-        live = getattr(self.arena, "live_log", None)
-        data = live(job.id) if live is not None else None  # the runner's copy until script.log is written
+        arena = self.arena  # the runner's copy of the output until script.log is written
+        data = arena.live_log(job.id) if isinstance(arena, ArenaReports) else None
         if data is None:
             self._require_results(job)
             data = self.job_files.script_log(job.id)
@@ -563,12 +580,11 @@ class PortalService:
     def arena_state(self, user: User) -> ArenaState:
         """The arena, its queue, its alerts and its fleet as operators see it (:class:`ArenaState`)."""
         self._require_operator(user)
-        fleet_status = getattr(self.arena, "fleet_status", None)
-        alerts = getattr(self.arena, "alerts", None)
+        arena = self.arena if isinstance(self.arena, ArenaReports) else None
         return ArenaState(stopped=self.arena_stopped, needs_operator=self.store.attention(),
-                          alerts=None if alerts is None else alerts(), manual_approval=self.manual_approval,
+                          alerts=None if arena is None else arena.alerts(), manual_approval=self.manual_approval,
                           running=self.store.on_arena(), queue=tuple(self.store.queue()),
-                          fleet=None if fleet_status is None else fleet_status())
+                          fleet=None if arena is None else arena.fleet_status())
 
     def audit_log(self, user: User, limit: int = 200) -> list[dict[str, Any]]:
         self._require_operator(user)

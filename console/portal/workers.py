@@ -23,6 +23,7 @@ from swarmdeck.console.portal.service import PortalService
 from swarmdeck.console.sandbox.confinement import ConfinementUnavailable, SandboxLimits
 from swarmdeck.console.sandbox.report_html import render_html
 from swarmdeck.console.sandbox.verification import VerificationCancelled, VerificationConfig, verify
+from swarmdeck.core.service_thread import ServiceThread
 
 
 def make_executor(workers: int | None = None, ray: str | None = None) -> Any:
@@ -37,24 +38,22 @@ class VerificationWorkers:
 
     def __init__(self, service: PortalService, executor: Any, *, poll_s: float = 1.0) -> None:
         self.service, self.executor, self.poll_s = service, executor, float(poll_s)
-        self._stop = threading.Event()
-        self._thread: threading.Thread | None = None
+        self._thread = ServiceThread(self._run, "swarmdeck-portal-verify", join_timeout=10.0,
+                                      wake=self.service.notify)
         self.verified = 0
         self.errors = 0
 
     def start(self) -> VerificationWorkers:
-        self._thread = threading.Thread(target=self._run, name="swarmdeck-portal-verify", daemon=True)
+        """Start verifying queued jobs; idempotent."""
         self._thread.start()
         return self
 
     def stop(self, timeout: float = 10.0) -> None:
-        self._stop.set()
-        self.service.notify()
-        if self._thread is not None:
-            self._thread.join(timeout)
+        """Stop (a job being verified is cancelled within a tick) and join the thread (up to ``timeout`` s)."""
+        self._thread.stop(timeout)
 
     def _run(self) -> None:
-        while not self._stop.is_set():
+        while not self._thread.stopping:
             job = self.service.claim_for_verification()
             if job is None:
                 self.service.wait_for_change(self.poll_s)
@@ -77,16 +76,14 @@ class VerificationWorkers:
         """Verify one claimed job and record the verdict (never raises)."""
         service, job_id = self.service, int(job.id)
         cancel = threading.Event()
-        stop_watch = threading.Event()
 
         def watch() -> None:  # the job cancelled (or the service stopping) cancels the verification
-            while not stop_watch.wait(0.2):
-                if self._stop.is_set() or service.verifying_cancelled(job_id):
+            while not watcher.wait(0.2):
+                if self._thread.stopping or service.verifying_cancelled(job_id):
                     cancel.set()
                     return
 
-        watcher = threading.Thread(target=watch, daemon=True)
-        watcher.start()
+        watcher = ServiceThread(watch, f"swarmdeck-portal-verify-watch-{job_id}", join_timeout=None).start()
         try:
             script, entry = service.script(job)
             # messages name the file the researcher uploaded, not the name the portal stored it under
@@ -100,8 +97,7 @@ class VerificationWorkers:
             service.fail_verification(job_id, str(exc))
             return
         finally:
-            stop_watch.set()
-            watcher.join()
+            watcher.stop()
         data = report.to_dict()
         service.record_verification_cpu(job_id, report.cpu_s)
         folder = service.job_dir(job_id)

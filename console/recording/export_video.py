@@ -65,7 +65,8 @@ from swarmdeck.console.picture.heat import heatmap
 from swarmdeck.console.picture.picture import Picture, picture_of
 from swarmdeck.console.picture.shapes import CHANGED_RING, dashed_rings, robot_outline
 from swarmdeck.console.picture.style import PictureStyle
-from swarmdeck.console.recording.reader import RecordedEvent, Recording
+from swarmdeck.console.recording.codec import RecordedEvent
+from swarmdeck.console.recording.reader import Recording
 from swarmdeck.console.runtime.frame import Frame
 from swarmdeck.core.bounds import Bounds
 from swarmdeck.core.constants import ROBOT_RADIUS
@@ -136,16 +137,16 @@ class VideoLayout:
     def fit(cls, bounds: Bounds, width: int, height: int, panel: float = 0.0) -> VideoLayout:
         """The arena as large as fits between a header and a footer band, centred, aspect kept; with
         ``panel`` > 0 that fraction of the width (right) is kept for the camera picture."""
-        x0, x1, y0, y1 = (float(b) for b in bounds)
+        area = Bounds(*(float(b) for b in bounds))
         band = max(18, round(0.055 * height))
         margin = max(4, round(0.012 * height))
         pw = int(panel * width)
         avail_w, avail_h = width - pw - 2 * margin, height - 2 * band - 2 * margin
-        scale = min(avail_w / (x1 - x0), avail_h / (y1 - y0))
-        aw, ah = max(2, int(scale * (x1 - x0))), max(2, int(scale * (y1 - y0)))
+        scale = min(avail_w / area.width, avail_h / area.height)
+        aw, ah = max(2, int(scale * area.width)), max(2, int(scale * area.height))
         top = band + (height - 2 * band - ah) // 2
         box = (width - pw, top, pw - margin, ah) if pw else (0, 0, 0, 0)
-        return cls(Bounds(x0, x1, y0, y1), width, height, scale, (width - pw - aw) // 2, top, aw, ah, band, box)
+        return cls(area, width, height, scale, (width - pw - aw) // 2, top, aw, ah, band, box)
 
     def to_px(self, xy: NDArray[np.float64]) -> NDArray[np.float64]:
         """(…, 2) arena points, m → (…, 2) pixel coordinates (column, row), float."""

@@ -273,7 +273,7 @@ class FoxgloveEncoder:
         self.fm = fm
         self.config = config or FoxgloveConfig()
         self.picture = picture or PictureStyle()
-        self.bounds = tuple(float(b) for b in bounds)
+        self.bounds = Bounds(*(float(b) for b in bounds))
         self.radius = float(robot_radius)
         self.image_provider = image_provider
         self._alerts: frozenset[str] = frozenset()
@@ -414,10 +414,10 @@ class FoxgloveEncoder:
         if frame.density is None:
             return None
         fm = self.fm
-        x0, x1, y0, y1 = self.bounds
+        x0, x1, y0, y1 = b = self.bounds
         cell = self.config.density_cell
-        w, h = max(1, int(round((x1 - x0) / cell))), max(1, int(round((y1 - y0) / cell)))
-        dx, dy = (x1 - x0) / w, (y1 - y0) / h
+        w, h = max(1, int(round(b.width / cell))), max(1, int(round(b.height / cell)))
+        dx, dy = b.width / w, b.height / h
         key = (x0, x1, y0, y1, cell)
         if self._grid_key != key or self._grid_pts is None:
             gx, gy = np.meshgrid(x0 + (np.arange(w) + 0.5) * dx, y0 + (np.arange(h) + 0.5) * dy)
@@ -449,13 +449,13 @@ class FoxgloveEncoder:
     def transforms(self, ns: int) -> bytes:
         """FrameTransforms: world → arena (identity), arena → camera (above the centre, looking down: 180° about x)."""
         fm = self.fm
-        x0, x1, y0, y1 = self.bounds
+        cx, cy = self.bounds.centre
         ts = self._ts(ns)
         return fm.FrameTransforms(transforms=[
             fm.FrameTransform(timestamp=ts, parent_frame_id=WORLD_FRAME, child_frame_id=ARENA_FRAME,
                               translation=fm.Vector3(), rotation=fm.Quaternion(w=1.0)),
             fm.FrameTransform(timestamp=ts, parent_frame_id=ARENA_FRAME, child_frame_id=CAMERA_FRAME,
-                              translation=fm.Vector3(x=(x0 + x1) / 2, y=(y0 + y1) / 2, z=self.config.camera_height),
+                              translation=fm.Vector3(x=cx, y=cy, z=self.config.camera_height),
                               rotation=fm.Quaternion(x=1.0, w=0.0)),
         ]).encode()
 

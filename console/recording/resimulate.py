@@ -29,8 +29,14 @@ from typing import Any
 
 import numpy as np
 
-from swarmdeck.console.recording.codec import CODEC_FORMAT, COMPACT_FORMAT, decode_frame, encode_frame
-from swarmdeck.console.recording.reader import RecordedDatagram, Recording
+from swarmdeck.console.recording.codec import (
+    CODEC_FORMAT,
+    COMPACT_FORMAT,
+    RecordedDatagram,
+    decode_frame,
+    encode_frame,
+)
+from swarmdeck.console.recording.reader import Recording
 from swarmdeck.console.runtime import params
 from swarmdeck.console.runtime.frame import Frame
 from swarmdeck.safety.guard import GuardConfig

@@ -153,12 +153,12 @@ class Formation:
 def default_goals(n: int, bounds: tuple[float, float, float, float], margin: float = 0.3) -> FloatArray:
     """``(n, 2)`` goal positions on a grid filling the arena (m), as square as the arena allows."""
     b = Bounds.of(bounds)
-    x0, x1, y0, y1 = b
+    inner = b.shrunk(margin)
     w, h = b.width - 2 * margin, b.height - 2 * margin
     cols = max(1, int(math.ceil(math.sqrt(n * w / max(h, 1e-9)))))
     rows = int(math.ceil(n / cols))
-    xs = np.linspace(x0 + margin, x1 - margin, cols) if cols > 1 else np.array([b.centre[0]])
-    ys = np.linspace(y1 - margin, y0 + margin, rows) if rows > 1 else np.array([b.centre[1]])
+    xs = np.linspace(inner.x_min, inner.x_max, cols) if cols > 1 else np.array([b.centre[0]])
+    ys = np.linspace(inner.y_max, inner.y_min, rows) if rows > 1 else np.array([b.centre[1]])
     gx, gy = np.meshgrid(xs, ys)
     return np.column_stack((gx.ravel(), gy.ravel()))[:n]
 
@@ -171,9 +171,10 @@ def cluster_goals(n: int, centre: tuple[float, float], bounds: tuple[float, floa
     i, j = np.meshgrid(np.arange(-k, k + 1), np.arange(-k, k + 1))
     pts = np.column_stack(((i + 0.5 * (j % 2)).ravel() * spacing, (j * math.sqrt(3) / 2).ravel() * spacing))
     pts = pts[np.argsort(np.linalg.norm(pts, axis=1), kind="stable")[:n]] + np.asarray(centre, dtype=float)
-    x0, x1, y0, y1 = bounds
+    inner = Bounds.of(bounds).shrunk(margin)
     lo, hi = pts.min(axis=0), pts.max(axis=0)
-    shift = np.maximum(np.array([x0, y0]) + margin - lo, 0.0) + np.minimum(np.array([x1, y1]) - margin - hi, 0.0)
+    shift = (np.maximum(np.array([inner.x_min, inner.y_min]) - lo, 0.0)
+             + np.minimum(np.array([inner.x_max, inner.y_max]) - hi, 0.0))
     return pts + shift
 
 

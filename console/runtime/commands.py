@@ -22,11 +22,13 @@ from typing import Any
 import numpy as np
 
 from swarmdeck.console.runtime import operator_events as ev
-from swarmdeck.console.runtime.behaviours import Behaviour, BehaviourError, make_behaviour
+from swarmdeck.console.runtime.behaviours import Behaviour, BehaviourError, HasBarrierSettings, make_behaviour
 from swarmdeck.console.runtime.density import BumpSet, ConsoleDensity
 from swarmdeck.console.runtime.notices import Notices
 from swarmdeck.console.runtime.params import BehaviourParams, DensityParams, LoopConfig, SafetyParams
+from swarmdeck.core.bounds import Bounds
 from swarmdeck.core.kinematics import GritsBotParams
+from swarmdeck.core.ports import Closeable
 from swarmdeck.devices.pipeline import barrier_filter
 from swarmdeck.safety.guard import GuardConfig
 
@@ -63,9 +65,8 @@ def shown(value: Any) -> str:
 
 def close_behaviour(b: Behaviour) -> None:
     """Release what a replaced behaviour holds (a script's worker thread, once idle)."""
-    close = getattr(b, "close", None)
-    if close is not None:
-        close()
+    if isinstance(b, Closeable):
+        b.close()
 
 
 class OperatorCommands:
@@ -230,7 +231,7 @@ class OperatorCommands:
             self.notices.alert("behaviour", None)
             self.notices.post(f"behaviour: {b.name}")
             self._queue(ev.SwitchBehaviour(b.name))
-        self._behaviour_barrier(getattr(b, "barrier", None))
+        self._behaviour_barrier(b.barrier if isinstance(b, HasBarrierSettings) else None)
         if old is not b:
             close_behaviour(old)
 
@@ -327,8 +328,7 @@ class OperatorCommands:
 
     def move_bump(self, bid: int, xy: Any) -> None:
         """Drag bump ``bid`` to ``xy`` (m; kept inside the arena)."""
-        x0, x1, y0, y1 = self.config.bounds
-        p = np.clip(np.asarray(xy, dtype=float).reshape(-1)[:2], [x0, y0], [x1, y1])
+        p = Bounds.of(self.config.bounds).clip(np.asarray(xy, dtype=float).reshape(-1)[:2])
         with self._lock:
             t = self._run_time_of()
             self.bumps.move(bid, p, t)

@@ -262,8 +262,7 @@ def random_start_poses(n: int, bounds: Bounds, chargers: ChargerLayout, seed: in
     """``(N, 3)`` random start poses as rps generates them, kept clear of the charger slots' approach
     area (the robots that stay docked and the robots driving to their start poses)."""
     inner = chargers.dock_depth + chargers.approach_distance
-    x0, x1, y0, y1 = bounds
-    return random_initial_poses(int(n), Bounds(x0 + inner, x1 - inner, y0 + inner, y1 - inner), rng=seed)
+    return random_initial_poses(int(n), Bounds.of(bounds).shrunk(inner), rng=seed)
 
 
 # ---------------------------------------------------------------------------- planning

@@ -68,6 +68,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from swarmdeck.core.bounds import DEFAULT_BOUNDS, Bounds
+from swarmdeck.core.constants import CONTROL_PERIOD, LOOKAHEAD, SAFETY_DISTANCE
 from swarmdeck.core.kinematics import lookahead_points
 from swarmdeck.coverage.density import GaussianMixture
 from swarmdeck.coverage.geometry import GeometryConfig
@@ -173,7 +174,7 @@ class BarrierFrame:
     min_wall_clearance: float = math.inf
     intervention: FloatArray = field(default_factory=lambda: np.empty(0))
     nominal_was_safe: bool = True
-    safety_distance: float = 0.17
+    safety_distance: float = SAFETY_DISTANCE
 
     def __post_init__(self) -> None:
         _set(self, "active_pairs", _ro(self.active_pairs, np.int64, (2,), "barrier.active_pairs"))
@@ -386,10 +387,10 @@ class Frame:
     safe: FloatArray
     v: FloatArray
     w: FloatArray
-    dt: float = 0.033
+    dt: float = CONTROL_PERIOD
     run_time: float = 0.0
     bounds: Bounds = DEFAULT_BOUNDS
-    lookahead: float = 0.03
+    lookahead: float = LOOKAHEAD
     seen: NDArray[np.bool_] | None = None
     barrier: BarrierFrame | None = None
     coverage: CoverageFrame | None = None

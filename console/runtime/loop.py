@@ -66,7 +66,6 @@ tick (:mod:`swarmdeck.console.runtime.tick`), the messages and alerts
 """
 from __future__ import annotations
 
-import threading
 import time
 from collections.abc import Callable
 from typing import Any
@@ -80,6 +79,7 @@ from swarmdeck.console.runtime.params import DensityParams, LoopConfig, SafetyPa
 from swarmdeck.console.runtime.tick import Ticker
 from swarmdeck.core.kinematics import GritsBotParams
 from swarmdeck.core.ports import CommandSink, PoseSource, close_ports
+from swarmdeck.core.service_thread import ServiceThread
 from swarmdeck.devices import ArenaConfig
 from swarmdeck.devices.clock import RealTimePacer
 from swarmdeck.devices.simulated_robots import SimulatedRobots
@@ -131,8 +131,7 @@ class ControlLoop(OperatorCommands):
                               self.barrier_back_on)
         self._listeners: list[FrameListener] = []
         self.latest: Frame | None = None
-        self._thread: threading.Thread | None = None
-        self._stop = threading.Event()
+        self._thread = ServiceThread(self._run_forever, "swarmdeck-loop", join_timeout=2.0)
         self.overruns = 0
 
     # ------------------------------------------------------------------ what the ticks keep
@@ -223,19 +222,17 @@ class ControlLoop(OperatorCommands):
     # ------------------------------------------------------------------ threaded running
     def start(self) -> ControlLoop:
         """Run :meth:`tick` every ``dt`` seconds (monotonic clock) on a daemon thread."""
-        if self._thread is not None and self._thread.is_alive():
+        if self._thread.alive:
             return self
         if self._clock is None:
             t0 = time.monotonic() - self._ticker.index * self.config.dt
             self._clock = lambda: time.monotonic() - t0
-        self._stop.clear()
-        self._thread = threading.Thread(target=self._run_forever, name="swarmdeck-loop", daemon=True)
         self._thread.start()
         return self
 
     def _run_forever(self) -> None:
         pacer = RealTimePacer(self.config.dt)
-        while not self._stop.is_set():
+        while not self._thread.stopping:
             try:
                 self.tick()
             except Exception as exc:  # never let the thread die silently
@@ -250,10 +247,7 @@ class ControlLoop(OperatorCommands):
 
     def stop(self, timeout: float = 2.0) -> None:
         """Stop the thread (robots stop: the sink is closed by :meth:`close`)."""
-        self._stop.set()
-        if self._thread is not None:
-            self._thread.join(timeout)
-            self._thread = None
+        self._thread.stop(timeout)
 
     def close(self) -> None:
         """Stop the thread, stop the robots, close the sink, the inputs and the behaviour (a script's worker)."""

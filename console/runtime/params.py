@@ -29,7 +29,7 @@ import numpy as np
 from swarmdeck.core.bounds import DEFAULT_BOUNDS, Bounds
 from swarmdeck.core.checks import in_range, require_in_range
 from swarmdeck.core.config import floats
-from swarmdeck.core.constants import CONTROL_PERIOD, SAFETY_DISTANCE
+from swarmdeck.core.constants import CONTROL_PERIOD, ROBOT_DIAMETER, SAFETY_DISTANCE
 from swarmdeck.core.errors import SwarmdeckError
 from swarmdeck.coverage.densities import s1_density
 from swarmdeck.devices import ArenaConfig
@@ -182,7 +182,7 @@ class SafetyParams:
     ``mode``: "auto" is distributed above 200 robots (``swarmdeck.safety``)."""
 
     enabled: bool = param(True, label="Barrier on", frame="safety_enabled")
-    safety_distance: float = param(SAFETY_DISTANCE, unit="m", lo=0.11, hi=0.4, label="D_s (m)", step=0.01,
+    safety_distance: float = param(SAFETY_DISTANCE, unit="m", lo=ROBOT_DIAMETER, hi=0.4, label="D_s (m)", step=0.01,
                                    frame="safety_distance", shown="safety_distance (D_s)")
     gamma: float = param(100.0, lo=1.0, hi=1000.0, label="γ", step=1.0, frame="gamma")
     class_k: str = param("cubic", choices=("cubic", "linear"), label="κ(h)", frame="class_k")

@@ -20,7 +20,14 @@ from numpy.typing import NDArray
 from scipy.spatial import cKDTree
 
 from swarmdeck.console.runtime.batteries import BatteryWatch, low_battery_alert
-from swarmdeck.console.runtime.behaviours import Behaviour, BehaviourError, TickInput, goal_params
+from swarmdeck.console.runtime.behaviours import (
+    Behaviour,
+    BehaviourError,
+    HoldsRobots,
+    ReportsHealth,
+    TickInput,
+    goal_params,
+)
 from swarmdeck.console.runtime.commands import TickSettings
 from swarmdeck.console.runtime.contacts import ContactWatch
 from swarmdeck.console.runtime.density import ConsoleDensity
@@ -28,7 +35,7 @@ from swarmdeck.console.runtime.frame import BarrierFrame, ContactsFrame, Coverag
 from swarmdeck.console.runtime.notices import Notices
 from swarmdeck.console.runtime.params import LoopConfig, SafetyParams, frame_params
 from swarmdeck.core.kinematics import GritsBotParams, lookahead_points, saturate
-from swarmdeck.core.ports import CommandSink, PoseSource, SensedPoses
+from swarmdeck.core.ports import CommandSink, PoseSource, ProvidesImage, SensedPoses, obstacles_of
 from swarmdeck.coverage.density import GaussianMixture
 from swarmdeck.devices.pipeline import Certified, brake, certify, certify_bypassed
 from swarmdeck.safety.guard import GuardCheck, GuardConfig
@@ -167,9 +174,8 @@ class Ticker:
         nominal, coverage, movable = np.zeros((n, 2)), None, seen
         with self._stage("behaviour", f"{behaviour.name} failed") as control:
             nominal, coverage = self._control(behaviour, control, poses, points, ids, seen)
-            fixed = getattr(behaviour, "fixed", None)
-            if fixed is not None:  # robots the behaviour holds in place: fixed obstacles of the barrier
-                movable = seen & ~np.asarray(fixed(ids), dtype=bool).reshape(n)
+            if isinstance(behaviour, HoldsRobots):  # robots it holds in place: fixed obstacles of the barrier
+                movable = seen & ~np.asarray(behaviour.fixed(ids), dtype=bool).reshape(n)
         nominal[~movable] = 0.0
         nominal = saturate(nominal, self.config.max_speed)
         marks.append(time.perf_counter())
@@ -230,10 +236,9 @@ class Ticker:
         """One line per port and per registered health function (a failing one shows its error)."""
         with self._lock:
             fns = [("robots", self.source.health)]
-            behaviour_health = getattr(behaviour, "health", None)
-            if behaviour_health is not None:  # a script's worker, a fleet maneuver's progress
+            if isinstance(behaviour, ReportsHealth):  # a script's worker, a fleet maneuver's progress
                 name = behaviour.name
-                fns.append(("script" if name.startswith("script:") else name, behaviour_health))
+                fns.append(("script" if name.startswith("script:") else name, behaviour.health))
             if cast(object, self.source) is not self.sink:
                 fns.append(("commands", self.sink.health))
             fns += list(self.health_fns.items())
@@ -284,9 +289,7 @@ class Ticker:
             return certify(poses, nominal, self.robot, None, seen=seen), BarrierFrame(
                 enabled=False, status="off", min_distance=_min_distance(points), intervention=np.zeros(n),
                 safety_distance=d_s)
-        obstacles = getattr(self.sink, "obstacles", None)
-        cert = certify(poses, nominal, self.robot, filt, seen=seen,
-                       obstacles=None if obstacles is None else obstacles())
+        cert = certify(poses, nominal, self.robot, filt, seen=seen, obstacles=obstacles_of(self.sink))
         if cert.diagnostics is None:
             barrier = BarrierFrame(ok=cert.ok, status=cert.status, intervention=np.zeros(n), safety_distance=d_s)
         else:
@@ -311,9 +314,8 @@ class Ticker:
                          seen: NDArray[np.bool_], stage: Stage) -> tuple[Certified, BarrierFrame]:
         """A tick with the barrier off and the guard on (module docstring, stage 4)."""
         n, d_s = len(poses), sp.safety_distance
-        obstacles = getattr(self.sink, "obstacles", None)
         cert, full, check, stopped = certify_bypassed(poses, nominal, self.robot, hard, filt, guard, self.config.dt,
-                                                      seen=seen, obstacles=None if obstacles is None else obstacles(),
+                                                      seen=seen, obstacles=obstacles_of(self.sink),
                                                       names=ids)
         self.braking = True
         self._braked(stopped)
@@ -352,9 +354,8 @@ class Ticker:
     def _brake(self, cert: Certified, poses: NDArray[np.float64], seen: NDArray[np.bool_]) -> Certified:
         """The guard's last resort (stage 4): robots that would bring a pair closer than the guard distance stop."""
         assert self.guard is not None
-        obstacles = getattr(self.sink, "obstacles", None)
         out, stopped = brake(cert, poses, self.robot, self.config.dt, self.guard.guard_distance, seen=seen,
-                             obstacles=None if obstacles is None else obstacles())
+                             obstacles=obstacles_of(self.sink))
         self._braked(stopped)
         return out
 
@@ -380,7 +381,7 @@ class Ticker:
         timing = {name: b - a for name, a, b in zip(("sense", "inputs", "control", "safety", "actuate"),
                                                      marks, marks[1:])}
         timing["total"] = time.perf_counter() - marks[0]
-        image_ref = getattr(self.source, "image_ref", None)
+        image_ref = self.source.image_ref if isinstance(self.source, ProvidesImage) else None
         return Frame(
             tick=self.index, time=now, run_time=self.run_time, dt=self.config.dt, bounds=self.config.bounds,
             lookahead=self.robot.lookahead, poses=sensed.poses, ids=sensed.ids, seen=sensed.seen, nominal=nominal,

@@ -197,7 +197,7 @@ class ArenaScene:
         self.image_provider = image_provider
         self._image_ref: str | None = None
         self.scene = server.scene
-        self.bounds: Bounds = tuple(float(b) for b in bounds)  # type: ignore[assignment]
+        self.bounds: Bounds = Bounds(*(float(b) for b in bounds))
         self.style = style or SceneStyle()
         self.robot_radius = robot_radius
         self.visible = {name: name not in DEFAULT_OFF for name in LAYERS}
@@ -214,7 +214,7 @@ class ArenaScene:
     def _setup_static(self) -> None:
         sc = self.scene
         x0, x1, y0, y1 = self.bounds
-        cx, cy, w, h = (x0 + x1) / 2, (y0 + y1) / 2, x1 - x0, y1 - y0
+        (cx, cy), w, h = self.bounds.centre, self.bounds.width, self.bounds.height
         sc.configure_environment_map(None)
         sc.set_up_direction("+z")
         # Top-down: a narrow perspective from high above (viser has no orthographic camera). The view
@@ -398,13 +398,14 @@ class ArenaScene:
         got = None if self.image_provider is None else self.image_provider(ref)
         if got is None:
             return
-        img, (x0, x1, y0, y1) = got
+        img, covered = got
+        area = Bounds.of(covered)
         self._image_ref = ref
         h = self.nodes.camera
         if h is None:
             self.nodes.camera = self.scene.add_image(
-                "/camera", np.asarray(img), render_width=x1 - x0, render_height=y1 - y0, format="jpeg",
-                jpeg_quality=80, position=((x0 + x1) / 2, (y0 + y1) / 2, -0.012), wxyz=(0.0, 1.0, 0.0, 0.0),
+                "/camera", np.asarray(img), render_width=area.width, render_height=area.height, format="jpeg",
+                jpeg_quality=80, position=(*area.centre, -0.012), wxyz=(0.0, 1.0, 0.0, 0.0),
                 cast_shadow=False, receive_shadow=False, visible=self.visible["camera"])
         else:
             h.image = np.asarray(img)

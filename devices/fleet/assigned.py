@@ -33,7 +33,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from swarmdeck.core.bounds import Bounds
 from swarmdeck.core.kinematics import GritsBotParams, limit_unicycle, lookahead_points
-from swarmdeck.core.ports import SensedPoses, rows_of
+from swarmdeck.core.ports import SensedPoses, obstacles_of, rows_of
 from swarmdeck.devices.validation import ValidationReport
 
 FloatArray = NDArray[np.float64]
@@ -139,9 +139,9 @@ class AssignedRobots:
         full = self._full if self._full is not None else self.source.read(0.0)
         others = ~np.isin(np.asarray(full.ids, dtype=np.int64), self.fleet_ids)
         parts = [lookahead_points(np.asarray(full.poses, dtype=float)[others], self.lookahead)]
-        extra = getattr(self.sink, "obstacles", None)  # optional member of CommandSink (core/ports.py)
+        extra = obstacles_of(self.sink)
         if extra is not None:
-            parts.append(np.asarray(extra(), dtype=float).reshape(-1, 2))
+            parts.append(np.asarray(extra, dtype=float).reshape(-1, 2))
         return np.concatenate(parts)
 
     def close(self) -> None:

@@ -53,3 +53,12 @@ def test_clip_matches_per_column_np_clip_bit_for_bit():
     c = 0.137
     ref = np.column_stack((np.clip(p[:, 0], -1.6 + c, 1.6 - c), np.clip(p[:, 1], -1.0 + c, 1.0 - c)))
     np.testing.assert_array_equal(b.clip(p, c), ref)
+
+
+def test_shrunk_moves_every_side_in_by_the_margin_bit_for_bit():
+    b = Bounds(-1.6, 1.6, -1.0, 1.0)
+    inner = b.shrunk(0.3)
+    assert isinstance(inner, Bounds)
+    assert tuple(inner) == (-1.6 + 0.3, 1.6 - 0.3, -1.0 + 0.3, 1.0 - 0.3)
+    assert b.shrunk(-0.1) == (-1.7000000000000002, 1.7000000000000002, -1.1, 1.1)
+    assert np.all(b.contains(b.clip(np.array([[5.0, -5.0]]), 0.3), 0.3)) and tuple(b) == (-1.6, 1.6, -1.0, 1.0)

@@ -118,7 +118,7 @@ def test_stopping_kills_the_export_and_leaves_no_partial_file(portal):
     child = wait_until(lambda: exports._proc, timeout=30, what="the export process")
     wait_until(lambda: (folder / ".exports").is_dir(), timeout=60, what="the export to begin writing")
     exports.stop()
-    assert child.poll() is not None and not exports._thread.is_alive()  # killed, not waited for
+    assert child.poll() is not None and not exports._thread.alive  # killed, not waited for
     assert svc.exports_in("writing") == [jid]  # redone on the next start
     assert not (folder / "video.mp4").exists()  # a video cut short stays in .exports/, cleared on the next start
 

@@ -19,7 +19,7 @@ def test_ids_out_of_range_are_404_in_the_api(portal, job_id):
                              ("move", {"position": 0}), ("barrier", {"forbid": True})):
             r = c.post(f"/api/operator/jobs/{job_id}/{action}", json=body)
             assert r.status_code == 404 and r.json()["field"] == "job", (action, r.text)
-    assert portal.server.thread.is_alive()
+    assert portal.server.thread.alive
 
 
 @pytest.mark.parametrize("job_id", IDS[:2])
