@@ -42,19 +42,21 @@ def frames():
 
 
 def test_a_slow_console_writes_the_keyframes_a_fast_one_writes(tmp_path, frames):
-    config = RecorderConfig(foxglove=False, flush_interval=1.0)  # chunk_frames: the default, 8
+    # chunk_frames: the default, 8. The slow run spans ≈ 3.4 s > flush_interval (the old wall-time rule closes a
+    # chunk in it) while each gap (≈ 0.07 s) stays far below it, so a loaded machine's stall cannot close one either
+    config = RecorderConfig(foxglove=False, flush_interval=3.0)
     fast = tmp_path / "fast.mcap"
     with Recorder(fast, config=config) as rec:
         for f in frames:
             rec.write_frame(f)
     slow = tmp_path / "slow.mcap"
     with Recorder(slow, config=config) as rec:
-        for k, f in enumerate(frames):  # ≈ 1 s of wall time in all, one frame at a time
+        for k, f in enumerate(frames):  # ≈ 3.4 s of wall time in all, one frame at a time
             rec.write_frame(f)
             deadline = time.monotonic() + 60
             while rec.status().frames <= k and time.monotonic() < deadline:  # the writer has it
                 time.sleep(0.005)
-            time.sleep(0.02)
+            time.sleep(0.07)
     assert keyframe_ticks(fast) == keyframe_ticks(slow) == list(range(0, 48, 8))
 
 
