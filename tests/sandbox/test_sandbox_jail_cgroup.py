@@ -167,7 +167,10 @@ def test_groups_left_by_a_killed_server_are_swept_but_live_ones_are_not():
             for folder in set(group.folders.values()):
                 os.utime(folder, (1000.0, 1000.0))  # created long ago
         removed = set(cgroups.sweep())
-        assert removed == set(stale.folders.values())
+        # other swarmdecks' leftovers on a shared host (e.g. an earlier CI run killed mid-run) may be swept too
+        assert set(stale.folders.values()) <= removed
+        assert not removed & {f for g in (fresh, busy) for f in g.folders.values()}
+        assert all(f.name.startswith(("swarmdeck-run-", "run-")) for f in removed)
         assert all(f.exists() for g in (fresh, busy) for f in g.folders.values())
     finally:
         os.kill(sleeper, 9)
