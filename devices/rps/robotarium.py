@@ -27,6 +27,7 @@ from swarmdeck.core.constants import COLLISION_DISTANCE, COLLISION_SHIFT, CONTRO
 from swarmdeck.core.kinematics import limit_unicycle
 from swarmdeck.devices.arena import RUN_DEFAULTS, Arena
 from swarmdeck.devices.rps.errors import call_at_scripts_end_text, count_errors, debug_text
+from swarmdeck.devices.rps.sensors import RpsSensors, sensing_for
 from swarmdeck.devices.simulated_robots import SimulatedRobots
 from swarmdeck.devices.simulator import ArenaConfig
 
@@ -39,14 +40,16 @@ _IGNORED_2X = ("show_arena_boundaries", "show_robot_patches", "show_distance_end
                "show_obstacles")
 
 
-class Robotarium:
+class Robotarium(RpsSensors):
     """The rps experiment object: ``get_poses()`` → (3, N), ``set_velocities(ids, (2, N))``, ``step()``.
 
     Args (as rps, positional as in 1.x or keywords as in 2.0): number_of_robots (−1: the runner's
     ``--robots`` or 6), show_figure (ignored: use ``swarmdeck console`` to watch), sim_in_real_time
     (pace steps at 0.033 s of wall time; never under ``swarmdeck run``), initial_conditions ((3, N)
     floats). rps 2.0's ``skip_initialization`` and ``show_*`` flags are accepted (the robots start at
-    their initial conditions; nothing is drawn); ``use_distance_sensors=True`` and ``obstacles`` are refused.
+    their initial conditions; nothing is drawn). rps 2.0's sensors (:mod:`swarmdeck.devices.rps.sensors`):
+    ``use_distance_sensors=True`` simulates the seven ToF sensors; ``obstacles`` ``(M, 2, 2)`` are segments they
+    see (as in rps 2.0, for the sensors only); encoders, IMU and LEDs are always there.
     swarmdeck's keywords: ``from_docks=True`` (``swarmdeck run --from-docks``) starts the robots on the
     chargers and sets them up first; ``rps_semantics`` and ``enforce_call_order`` (None: the runner's,
     else False and True) choose the modes of the module docstring.
@@ -65,10 +68,7 @@ class Robotarium:
         unknown = sorted(set(kwargs) - set(_IGNORED_2X))
         if unknown:
             raise TypeError(f"Robotarium() got unexpected keyword argument(s) {unknown}")
-        if use_distance_sensors:
-            raise ValueError("use_distance_sensors=True: the rps facade does not simulate rps 2.0's distance sensors")
-        if obstacles is not None and np.asarray(obstacles).size:
-            raise ValueError("obstacles: the rps facade does not simulate rps 2.0's obstacles")
+        sensing = sensing_for(use_distance_sensors)
         ic = np.asarray(initial_conditions)
         defaults = RUN_DEFAULTS.get()
         n = None if number_of_robots is None or number_of_robots < 0 else int(number_of_robots)
@@ -88,6 +88,8 @@ class Robotarium:
         self._arena = Arena(n, initial_conditions=ic.T if ic.size else None, config=config, from_docks=from_docks,
                             safety=False if self.rps_semantics else None)
         self.number_of_robots = self._arena.n
+        self._arena.use_sensors(sensing, obstacles=obstacles)
+        self.obstacles = obstacles
         self.show_figure = show_figure
         self.time_step = config.dt
         b = Bounds.of(config.bounds)
@@ -231,13 +233,6 @@ class Robotarium:
         import matplotlib
 
         return matplotlib.colormaps["tab20"]
-
-    def _no_sensors(self, *_args: Any) -> None:
-        raise NotImplementedError("rps 2.0's simulated sensors (distances, encoders, IMU, magnetometer, orientation) "
-                                  "are not part of swarmdeck's rps facade")
-
-    get_distances = get_distance_endpoints = get_encoders = get_accelerations = _no_sensors
-    get_gyros = get_magnetic_fields = get_orientations = _no_sensors
 
     @property
     def _iteration(self) -> int:
