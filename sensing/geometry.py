@@ -15,15 +15,18 @@ from numpy.typing import ArrayLike, NDArray
 from scipy.spatial import cKDTree
 
 from swarmdeck.core.bounds import Bounds
+from swarmdeck.sensing import kernels
 from swarmdeck.sensing.config import SensingConfigError
 
-__all__ = ["cast_rays", "check_segments", "ray_box", "ray_circles", "ray_segments"]
+__all__ = ["cast_rays", "cast_sensor_rays", "check_segments", "ray_box", "ray_circles", "ray_segments"]
 
 FloatArray = NDArray[np.float64]
 #: Below this |cross(ray, segment)| a ray and a segment are parallel: no single crossing point.
 _PARALLEL = 1e-12
 #: The stages' reach as fractions of the range (the last is the whole range).
 _STAGES = (0.125, 0.375, 1.0)
+#: The same for :func:`cast_sensor_rays`, whose stages work on robots (open while any of its rays is).
+_SENSOR_STAGES = (0.25, 1.0)
 
 
 def check_segments(segments: ArrayLike | None, name: str = "obstacles") -> FloatArray:
@@ -53,6 +56,10 @@ def ray_segments(origins: FloatArray, directions: FloatArray, segments: FloatArr
     """
     out = np.full(len(origins), np.inf)
     if len(segments) == 0 or len(origins) == 0:
+        return out
+    if kernels.AVAILABLE:
+        kernels.segment_hits(np.ascontiguousarray(origins, dtype=float), np.ascontiguousarray(directions, dtype=float),
+                             np.ascontiguousarray(segments, dtype=float), _PARALLEL, out)
         return out
     p = segments[:, 0]  # (M, 2)
     d = segments[:, 1] - p  # (M, 2)
@@ -124,6 +131,79 @@ def _first_circle_hits(origins: FloatArray, directions: FloatArray, max_range: f
             break
     best[best > max_range] = np.inf
     return best
+
+
+def cast_sensor_rays(centres: ArrayLike, headings: ArrayLike, origins: ArrayLike, directions: ArrayLike,
+                     sensor_headings: ArrayLike, max_range: float, radius: float) -> FloatArray:
+    """The first hit ``(N, K)`` m of each robot's K sensor rays against the other robots' bodies (circles of
+    ``radius`` around ``centres`` ``(N, 2)``); inf where none lies within ``max_range``.
+
+    The rays of robot a start ``origins[a]`` ``(K, 2)`` within a mount radius m of ``centres[a]`` and point at
+    ``headings[a] + sensor_headings`` (``directions`` ``(N, K, 2)``). Candidates are robot pairs from a k-d tree
+    (in two stages: near pairs first; a far pair is kept only while some ray of its robot has found nothing
+    closer); of a pair (a, b) at centre distance d only the sensors
+    whose heading lies within asin((radius + m)/d) of the direction from a to b can hit b (every sensor when
+    d ≤ 2(radius + m)), found by a binary search over the sorted sensor headings — so the exact ray–circle test
+    runs on a few (pair, sensor) candidates, not on every pair times K.
+    """
+    c = np.asarray(centres, dtype=float).reshape(-1, 2)
+    th = np.asarray(headings, dtype=float).reshape(-1)
+    o = np.asarray(origins, dtype=float)
+    u = np.asarray(directions, dtype=float)
+    h = np.mod(np.asarray(sensor_headings, dtype=float).reshape(-1), 2 * np.pi)
+    n, k = o.shape[0], o.shape[1]
+    best = np.full(n * k, np.inf)
+    if n < 2:
+        return best.reshape(n, k)
+    mount = float(np.max(np.hypot(*(o - c[:, None, :]).reshape(-1, 2).T))) if n else 0.0
+    order = np.argsort(h, kind="stable")
+    sorted_h = h[order]
+    twice = np.concatenate((sorted_h, sorted_h + 2 * np.pi))
+    o_flat, u_flat = o.reshape(-1, 2), u.reshape(-1, 2)
+    tree = cKDTree(c)
+    near = radius + mount
+    if kernels.AVAILABLE:  # compiled: every sensor of every pair within reach, one loop
+        pairs = tree.query_pairs(max_range + near, output_type="ndarray").astype(np.intp)
+        a = np.ascontiguousarray(np.concatenate((pairs[:, 0], pairs[:, 1])))
+        b = np.ascontiguousarray(np.concatenate((pairs[:, 1], pairs[:, 0])))
+        kernels.pair_circle_hits(a, b, np.ascontiguousarray(o_flat), np.ascontiguousarray(u_flat), c, float(radius),
+                                 k, best)
+        best[best > max_range] = np.inf
+        return best.reshape(n, k)
+    done_within = 0.0  # pairs closer than this (centre distance) were tested already
+    for frac in _SENSOR_STAGES:
+        reach = max_range * frac + near
+        pairs = tree.query_pairs(reach, output_type="ndarray").astype(np.intp)
+        a = np.concatenate((pairs[:, 0], pairs[:, 1]))
+        b = np.concatenate((pairs[:, 1], pairs[:, 0]))
+        rel = c[b] - c[a]
+        d = np.hypot(rel[:, 0], rel[:, 1])
+        # a pair can still matter only if it is new and some ray of a has found nothing closer than b can be
+        open_to = best.reshape(n, k).max(axis=1)
+        keep = (d > done_within) & (d - near < open_to[a])
+        a, b, d, rel = a[keep], b[keep], d[keep], rel[keep]
+        done_within = reach
+        if not len(a):
+            continue
+        phi = np.arctan2(rel[:, 1], rel[:, 0]) - th[a]
+        close = d <= 2 * near
+        alpha = np.where(close, np.pi, np.arcsin(np.minimum(near / np.maximum(d, near), 1.0)) + 1e-9)
+        start = np.mod(phi - alpha, 2 * np.pi)
+        lo = np.searchsorted(twice, start, side="left")
+        hi = np.searchsorted(twice, start + 2 * alpha, side="right")
+        count = np.where(close, k, np.minimum(hi - lo, k))
+        lo = np.where(close, 0, lo)
+        total = int(count.sum())
+        if not total:
+            continue
+        pair = np.repeat(np.arange(len(a)), count)
+        first = np.cumsum(count) - count
+        slot = lo[pair] + (np.arange(total) - first[pair])
+        rays = a[pair] * k + order[slot % k]
+        t = ray_circles(o_flat, u_flat, rays, c, b[pair], radius)
+        np.minimum.at(best, rays, t)
+    best[best > max_range] = np.inf
+    return best.reshape(n, k)
 
 
 def cast_rays(origins: ArrayLike, directions: ArrayLike, max_range: float, *, centres: ArrayLike | None = None,

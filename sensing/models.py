@@ -16,7 +16,7 @@ from swarmdeck.core.bounds import Bounds
 from swarmdeck.core.constants import GRAVITY
 from swarmdeck.core.kinematics import UnicycleParams, unicycle_to_wheels, wrap_angle
 from swarmdeck.sensing.config import DistanceSensorConfig, ImuConfig, RangeBearingConfig, SensingConfigError
-from swarmdeck.sensing.geometry import cast_rays, check_segments
+from swarmdeck.sensing.geometry import cast_rays, cast_sensor_rays, check_segments
 
 __all__ = ["ImuReadings", "RangeBearing", "check_sensing_poses", "distance_endpoints", "encoder_increment",
            "imu_readings", "noisy_distances", "range_and_bearing", "sensor_rays", "true_distances"]
@@ -64,11 +64,11 @@ def true_distances(poses: ArrayLike, config: DistanceSensorConfig, *, obstacles:
     if n == 0:
         return np.empty((0, k))
     origins, directions = sensor_rays(p, config)
-    owners = np.repeat(np.arange(n), k)
-    t = cast_rays(origins.reshape(-1, 2), directions.reshape(-1, 2), config.max_range,
-                  centres=body_centres(p, config.body_offset), radius=config.body_radius, owners=owners,
-                  segments=check_segments(obstacles), bounds=bounds if config.walls else None)
-    return t.reshape(n, k)
+    t = cast_sensor_rays(body_centres(p, config.body_offset), p[:, 2], origins, directions,
+                         config.pose_array()[:, 2], config.max_range, config.body_radius)
+    rest = cast_rays(origins.reshape(-1, 2), directions.reshape(-1, 2), config.max_range,
+                     segments=check_segments(obstacles), bounds=bounds if config.walls else None)
+    return np.minimum(t, rest.reshape(n, k))
 
 
 def noisy_distances(true: ArrayLike, config: DistanceSensorConfig, rng: np.random.Generator) -> FloatArray:

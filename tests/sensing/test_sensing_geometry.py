@@ -113,3 +113,31 @@ def test_the_staged_tree_finds_the_same_first_hits_as_a_brute_force(n, seed, spr
     centres = poses[:, :2] + TOF_BODY_OFFSET * np.column_stack((np.cos(poses[:, 2]), np.sin(poses[:, 2])))
     got = cast_rays(o, u, TOF_RANGE, centres=centres, radius=ROBOT_RADIUS, owners=owners)
     assert np.array_equal(got, _brute(o, u, TOF_RANGE, centres, ROBOT_RADIUS, owners))
+
+
+@settings(max_examples=30)
+@given(n=st.integers(2, 80), seed=st.integers(0, 2**31 - 1), spread=st.floats(0.3, 3.0), m=st.integers(0, 6))
+def test_the_sensor_rays_compiled_and_numpy_paths_match_a_brute_force(n, seed, spread, m):
+    from swarmdeck.sensing import kernels
+
+    rng = np.random.default_rng(seed)
+    poses = np.column_stack((rng.uniform(-spread, spread, (n, 2)), rng.uniform(-math.pi, math.pi, n)))
+    segs = rng.uniform(-spread, spread, (m, 2, 2))
+    cfg = DistanceSensorConfig()
+    origins, dirs = sensor_rays(poses, cfg)
+    o, u = origins.reshape(-1, 2), dirs.reshape(-1, 2)
+    owners = np.repeat(np.arange(n), cfg.n_sensors)
+    centres = poses[:, :2] + TOF_BODY_OFFSET * np.column_stack((np.cos(poses[:, 2]), np.sin(poses[:, 2])))
+    expected = _brute(o, u, TOF_RANGE, centres, ROBOT_RADIUS, owners)
+    expected = np.minimum(expected, cast_rays(o, u, TOF_RANGE, segments=segs)).reshape(n, -1)
+    compiled = true_distances(poses, cfg, obstacles=segs)
+    saved = kernels.AVAILABLE
+    kernels.AVAILABLE = False
+    try:
+        plain = true_distances(poses, cfg, obstacles=segs)
+    finally:
+        kernels.AVAILABLE = saved
+    for got in (compiled, plain):
+        assert np.array_equal(np.isinf(got), np.isinf(expected))
+        fin = np.isfinite(expected)
+        np.testing.assert_allclose(got[fin], expected[fin], rtol=0, atol=1e-12)
