@@ -18,6 +18,24 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from swarmdeck.core.constants import (
+    ACCEL_NOISE,
+    ENCODER_COUNTS_PER_REV,
+    ENCODER_NOISE,
+    GYRO_NOISE,
+    IMU_OFFSET,
+    MAG_NOISE,
+    MAG_XY,
+    MAG_Z,
+    MOTOR_GEAR_RATIO,
+    ORIENTATION_NOISE_DEG,
+    TOF_BODY_OFFSET,
+    TOF_DROPOUT,
+    TOF_ERROR,
+    TOF_OUTLIER,
+    TOF_RANGE,
+    TOF_SENSOR_POSES,
+)
 from swarmdeck.core.errors import SwarmdeckError
 from swarmdeck.sensing import DistanceSensorConfig, SensingConfig, SensorReadings
 
@@ -44,6 +62,24 @@ class RpsSensors:
     _arena: Any
     number_of_robots: int
     _distances_warned: bool = False
+
+    # rps 2.0's sensor constants (rps/robotarium_abc.py; REFERENCE.md §15), read by its examples
+    DISTANCE_SENSOR_ERROR = TOF_ERROR
+    DISTANCE_SENSOR_DROPOUT_PROB = TOF_DROPOUT
+    DISTANCE_SENSOR_OUTLIER_PROB = TOF_OUTLIER
+    DISTANCE_SENSOR_RANGE = TOF_RANGE
+    DISTANCE_SENSORS_ORIENTATION = np.array(TOF_SENSOR_POSES).T  # (3, 7) [x; y; heading]
+    CENTER_OFFSET = TOF_BODY_OFFSET
+    ENCODER_COUNTS_PER_REVOLUTION = ENCODER_COUNTS_PER_REV
+    MOTOR_GEAR_RATIO = MOTOR_GEAR_RATIO
+    IMU_ORIENTATION = np.array([IMU_OFFSET[0], IMU_OFFSET[1], 0.0])
+    ENCODER_NOISE_STD = ENCODER_NOISE
+    ACCELEROMETER_NOISE_STDS = np.array(ACCEL_NOISE)
+    GYRO_NOISE_STDS = np.array(GYRO_NOISE)
+    MAGNETOMETER_NOISE_STDS = np.array(MAG_NOISE)
+    MAGNETOMETER_Z_AVG = MAG_Z
+    MAGNETOMETER_XY_AVG = MAG_XY
+    ORIENTATION_NOISE_STD = ORIENTATION_NOISE_DEG
 
     def _readings(self) -> SensorReadings:
         return self._arena.sense()

@@ -76,3 +76,32 @@ def test_encoders_imu_and_leds_have_rps_shapes():
     r.set_leds([0, 2], np.array([[255, 0], [0, 0], [0, 255]]))
     assert r._leds.T.tolist() == [[255, 0, 0], [0, 0, 0], [0, 0, 255]]
     assert r.arena.sense().leds[2].tolist() == [0, 0, 255]
+
+
+def test_dead_reckoning_from_the_encoders_follows_the_robot_as_in_rps_2_examples():
+    """rps 2.0's dead_reckoning example's arithmetic: wheel travel from count deltas with r.WHEEL_RADIUS,
+    r.BASE_LENGTH and r.ENCODER_COUNTS_PER_REVOLUTION · r.MOTOR_GEAR_RATIO tracks the true pose."""
+    ic = np.array([[-0.5], [0.0], [0.0]])
+    r = robotarium(number_of_robots=1, initial_conditions=ic)
+    per_rev = r.ENCODER_COUNTS_PER_REVOLUTION * r.MOTOR_GEAR_RATIO
+    est = ic[:, 0].copy()
+    prev = r.get_encoders().astype(float)[:, 0]
+    r.get_poses()
+    r.set_velocities(np.arange(1), np.array([[0.1], [0.6]]))
+    r.step()
+    for _ in range(200):
+        x = r.get_poses()
+        enc = r.get_encoders().astype(float)[:, 0]
+        d_left, d_right = (enc - prev) / per_rev * 2 * np.pi * r.WHEEL_RADIUS
+        prev = enc
+        d_c, d_th = (d_left + d_right) / 2, (d_right - d_left) / r.BASE_LENGTH
+        est += [d_c * np.cos(est[2] + d_th / 2), d_c * np.sin(est[2] + d_th / 2), d_th]
+        r.set_velocities(np.arange(1), np.array([[0.1], [0.6]]))
+        r.step()
+    x = r.get_poses()[:, 0]
+    enc = r.get_encoders().astype(float)[:, 0]
+    d_left, d_right = (enc - prev) / per_rev * 2 * np.pi * r.WHEEL_RADIUS
+    d_c, d_th = (d_left + d_right) / 2, (d_right - d_left) / r.BASE_LENGTH
+    est += [d_c * np.cos(est[2] + d_th / 2), d_c * np.sin(est[2] + d_th / 2), d_th]
+    assert np.hypot(*(est[:2] - x[:2])) < 0.05, (est, x)
+    assert abs(np.angle(np.exp(1j * (est[2] - x[2])))) < 0.1
