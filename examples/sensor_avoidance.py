@@ -22,7 +22,9 @@ def experiment(arena: Arena) -> dict:
     end = arena.duration if arena.duration is not None else 20.0
     turning_steps = 0
     while arena.time < end - 1e-9:
-        d = arena.sense().distances[:, FRONT]  # (N, 3) m; −1: nothing in range (or a dropout)
+        distances = arena.sense().distances  # (N, 7) m; −1: nothing in range (or a dropout)
+        assert distances is not None  # the arena has ToF sensors (above)
+        d = distances[:, FRONT]
         near = np.where(d >= 0, d, np.inf)
         blocked = near.min(axis=1) < 0.3
         # turn away from the nearer side: left sensor (+45°) closer → turn right
