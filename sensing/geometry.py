@@ -58,8 +58,9 @@ def ray_segments(origins: FloatArray, directions: FloatArray, segments: FloatArr
     if len(segments) == 0 or len(origins) == 0:
         return out
     if kernels.AVAILABLE:
-        kernels.segment_hits(np.ascontiguousarray(origins, dtype=float), np.ascontiguousarray(directions, dtype=float),
-                             np.ascontiguousarray(segments, dtype=float), _PARALLEL, out)
+        kernels.call(kernels.segment_hits, np.ascontiguousarray(origins, dtype=float),
+                     np.ascontiguousarray(directions, dtype=float), np.ascontiguousarray(segments, dtype=float),
+                     _PARALLEL, out)
         return out
     p = segments[:, 0]  # (M, 2)
     d = segments[:, 1] - p  # (M, 2)
@@ -166,8 +167,8 @@ def cast_sensor_rays(centres: ArrayLike, headings: ArrayLike, origins: ArrayLike
         pairs = tree.query_pairs(max_range + near, output_type="ndarray").astype(np.intp)
         a = np.ascontiguousarray(np.concatenate((pairs[:, 0], pairs[:, 1])))
         b = np.ascontiguousarray(np.concatenate((pairs[:, 1], pairs[:, 0])))
-        kernels.pair_circle_hits(a, b, np.ascontiguousarray(o_flat), np.ascontiguousarray(u_flat), c, float(radius),
-                                 k, best)
+        kernels.call(kernels.pair_circle_hits, a, b, np.ascontiguousarray(o_flat), np.ascontiguousarray(u_flat), c,
+                     float(radius), k, best)
         best[best > max_range] = np.inf
         return best.reshape(n, k)
     done_within = 0.0  # pairs closer than this (centre distance) were tested already

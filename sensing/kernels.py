@@ -6,13 +6,24 @@ paths of :mod:`swarmdeck.sensing.geometry`, one loop per candidate instead of on
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 
 import numpy as np
 from numpy.typing import NDArray
 
 from swarmdeck.core.compiled import AVAILABLE, jit
 
-__all__ = ["AVAILABLE", "pair_circle_hits", "segment_hits"]
+__all__ = ["AVAILABLE", "call", "pair_circle_hits", "segment_hits"]
+
+
+def call(kernel: Callable[..., None], *args: object) -> None:
+    """Run a compiled ``kernel``. Where its cache folder is read-only (the sandbox's jail: no ``__pycache__``
+    to write), numba compiles, keeps the compiled code and then fails to save it with an OSError before the kernel
+    ran: the call is made once more, from the code it kept."""
+    try:
+        kernel(*args)
+    except OSError:
+        kernel(*args)
 
 
 @jit
