@@ -265,14 +265,14 @@ class Arena:
     def use_sensors(self, sensing: SensingConfig | None, *, obstacles: ArrayLike | None = None,
                     seed: int | None = None) -> Sensors | None:
         """Give the robots these sensors from now on (None: none). ``obstacles`` ``(M, 2, 2)`` m: segments the
-        distance sensors see (default: the arena config's ``obstacles`` when it has them). The noise is seeded
+        distance sensors see (default: the arena config's obstacle ``segments`` when it has them). The noise is seeded
         from ``seed`` (default: the arena config's seed; None: fresh entropy). Returns the
         :class:`~swarmdeck.sensing.Sensors`."""
         if sensing is None:
             self.sensors, self._readings = None, None
             return None
-        if obstacles is None:
-            obstacles = getattr(self.config, "obstacles", None)
+        if obstacles is None:  # the arena's own obstacle segments (M, 2, 2), when its config has them
+            obstacles = getattr(self.config, "segments", None)
         seed = self.config.seed if seed is None else seed
         rng = np.random.default_rng(None if seed is None else [int(seed), _SENSING_STREAM])
         self.sensors = Sensors(self.n, sensing, rng=rng, params=self.params, bounds=self.config.bounds,

@@ -30,10 +30,11 @@ _SENSOR_STAGES = (0.25, 1.0)
 
 
 def check_segments(segments: ArrayLike | None, name: str = "obstacles") -> FloatArray:
-    """``segments`` as a finite ``(M, 2, 2)`` float array (``[k, 0]`` one end, ``[k, 1]`` the other), or an empty
-    one for None; raises :class:`~swarmdeck.sensing.config.SensingConfigError` naming what is wrong."""
+    """``segments`` (an array, or an object with a ``segments`` array such as ``core.obstacles.Obstacles``) as a
+    finite ``(M, 2, 2)`` float array (``[k, 0]`` one end, ``[k, 1]`` the other), or an empty one for None; raises :class:`~swarmdeck.sensing.config.SensingConfigError` naming what is wrong."""
     if segments is None:
         return np.empty((0, 2, 2))
+    segments = getattr(segments, "segments", segments)  # an obstacles object holding its (M, 2, 2) segments
     arr = np.asarray(segments)
     if arr.size == 0:
         return np.empty((0, 2, 2))

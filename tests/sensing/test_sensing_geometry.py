@@ -141,3 +141,13 @@ def test_the_sensor_rays_compiled_and_numpy_paths_match_a_brute_force(n, seed, s
         assert np.array_equal(np.isinf(got), np.isinf(expected))
         fin = np.isfinite(expected)
         np.testing.assert_allclose(got[fin], expected[fin], rtol=0, atol=1e-12)
+
+
+def test_an_obstacles_object_with_segments_is_taken_as_its_segments():
+    class Obstacles:  # the shape of core.obstacles.Obstacles (issue 28.3): an (M, 2, 2) array under .segments
+        segments = np.array([[[0.5, -0.8], [0.5, 0.8]]])
+
+    cfg = DistanceSensorConfig()
+    pose = np.array([[0.0, 0.0, 0.0]])
+    assert np.array_equal(true_distances(pose, cfg, obstacles=Obstacles()),
+                          true_distances(pose, cfg, obstacles=Obstacles.segments))
