@@ -186,6 +186,14 @@ class ReportsSensors(Protocol):
         when the robots reported none yet (the Arena then simulates them from the poses)."""
 
 
+@runtime_checkable
+class ShowsLeds(Protocol):
+    """Robots with an RGB LED the experiment can set (GRITSBots: carried with the commands; issue 28.1)."""
+
+    def set_leds(self, ids: NDArray[np.int64], rgb: NDArray[np.uint8]) -> None:
+        """Show ``rgb`` ``(K, 3)`` (0…255) on robots ``ids`` ``(K,)`` from the next command on, until set again."""
+
+
 def obstacles_of(port: object) -> NDArray[np.float64] | None:
     """``port.obstacles()`` when ``port`` reports obstacles (:class:`ReportsObstacles`), else None."""
     return port.obstacles() if isinstance(port, ReportsObstacles) else None

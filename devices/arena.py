@@ -32,7 +32,7 @@ from swarmdeck.core.kinematics import (
     unicycle_to_si,
     wheels_to_unicycle,
 )
-from swarmdeck.core.ports import ReportsSensors
+from swarmdeck.core.ports import ReportsSensors, ShowsLeds
 from swarmdeck.devices.controllers import (
     HybridPoseController,
     at_position,
@@ -291,13 +291,16 @@ class Arena:
 
     def set_leds(self, rgb: ArrayLike, ids: ArrayLike | None = None) -> None:
         """Set the robots' RGB LEDs: ``(N, 3)`` (or one row per id in ``ids``) of 0…255 (floats in [0, 1] are
-        scaled), at once (in :meth:`sense`, the Frame, the recording and every renderer)."""
+        scaled), at once (in :meth:`sense`, the Frame, the recording and every renderer); robots with real LEDs
+        (:class:`~swarmdeck.core.ports.ShowsLeds`, e.g. GRITSBots over MQTT) show them from the next command on."""
         if self.sensors is None:
             raise RuntimeError("this Arena has no sensors (and so no LEDs): build it with "
                                "Arena(..., sensing=SensingConfig())")
         self.sensors.set_leds(rgb, self._ids(ids))
         if self._readings is not None:
             self._readings = self.sensors.with_leds(self._readings)
+        if isinstance(self.backend, ShowsLeds):  # robots with real LEDs: they show them too
+            self.backend.set_leds(self.robots.ids, self.sensors.leds)
 
     def _sense_after_step(self, poses: FloatArray, v: ArrayLike, w: ArrayLike) -> None:
         """Update the readings after a step in which the robots ran ``(v, w)`` and arrived at ``poses``."""

@@ -73,6 +73,7 @@ class NetworkRobots:
         self.saturated = 0  # robot-commands the wheel limits scaled down
         self.invalid = 0  # robot-commands that were NaN/inf (sent as zero)
         self.ids = None if ids is None else np.asarray(ids, dtype=np.int64).reshape(-1).copy()
+        self._leds: dict[int, tuple[int, int, int]] = {}  # robot id -> the RGB the experiment set (ShowsLeds)
         self.streamer = CommandStreamer(transport, transport, streamer, clock)
         if background:
             self.streamer.start()
@@ -160,6 +161,16 @@ class NetworkRobots:
         return self.streamer.obstacles()
 
     # ---------------------------------------------------------------- command sink
+    def set_leds(self, ids: ArrayLike, rgb: ArrayLike) -> None:
+        """The robots' LEDs (:class:`~swarmdeck.core.ports.ShowsLeds`): ``rgb`` ``(K, 3)`` 0…255 for ``ids``
+        ``(K,)``, sent with every command from now on (both LEDs of a GRITSBot)."""
+        ids_arr = np.asarray(ids, dtype=np.int64).reshape(-1)
+        colours = np.clip(np.asarray(rgb, dtype=float).reshape(-1, 3), 0, 255).astype(np.uint8)
+        if len(colours) != len(ids_arr):
+            raise ValueError(f"LED colours must have one (R, G, B) row per id ({len(ids_arr)}), got {len(colours)}")
+        for i, c in zip(ids_arr.tolist(), colours.tolist()):  # once per call, not per tick
+            self._leds[int(i)] = (int(c[0]), int(c[1]), int(c[2]))
+
     def send(self, ids: ArrayLike, v: ArrayLike, w: ArrayLike, leds: ArrayLike | None = None) -> None:
         """Hand this tick's commands to the streamer and send them at once (watchdogs applied).
 
@@ -172,6 +183,9 @@ class NetworkRobots:
         v, w, saturated = limit_unicycle(np.where(bad, 0.0, v), np.where(bad, 0.0, w), self.params)
         self.saturated += int(saturated.sum())
         self.invalid += int(bad.sum())
+        if leds is None and self._leds:  # the LEDs the experiment set (ShowsLeds), unlit for the others
+            ids_arr = np.asarray(ids, dtype=np.int64).reshape(-1)
+            leds = np.array([self._leds.get(int(i), (0, 0, 0)) for i in ids_arr.tolist()], dtype=np.uint8).reshape(-1, 3)
         self.streamer.submit(ids, v, w, leds)
         self.streamer.tick()
 
