@@ -16,6 +16,7 @@ until replaced (as in rps); ``ids`` selects a subset of robots to update.
 from __future__ import annotations
 
 import contextvars
+import dataclasses
 from collections import deque
 from collections.abc import Sequence
 from dataclasses import dataclass, field
@@ -25,6 +26,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from swarmdeck.core.kinematics import GritsBotParams, lookahead_points, unicycle_to_si, wheels_to_unicycle
+from swarmdeck.core.obstacles import START_CLEARANCE
 from swarmdeck.devices.controllers import (
     HybridPoseController,
     at_position,
@@ -110,6 +112,11 @@ class Arena:
             (None otherwise), :meth:`return_to_chargers` docks the robots after the experiment.
             Setup errors (poses outside the arena or too close, too few charged robots, a setup
             that does not finish) raise and leave the robots stopped.
+        obstacles: line-segment obstacles (``(M, 2, 2)`` m, ``[[x0, y0], [x1, y1]]`` each, or an
+            :class:`~swarmdeck.core.obstacles.Obstacles`; ``Obstacles.from_polygons`` for polygons):
+            solid in the simulator, kept clear by the barrier (segment rows), counted as contacts by
+            validation. Replaces ``config.obstacles``. Refused (ObstacleError naming the segment)
+            when outside the arena or crossing a start pose.
 
     Example::
 
@@ -132,6 +139,7 @@ class Arena:
         duration: float | None = None,
         backend: Any = None,
         from_docks: Any = None,
+        obstacles: Any = None,
     ) -> None:
         defaults = RUN_DEFAULTS.get()
         if from_docks is None:
@@ -144,6 +152,8 @@ class Arena:
             safety = defaults.safety
         if config is None:
             config = ArenaConfig(seed=defaults.seed)
+        if obstacles is not None:
+            config = dataclasses.replace(config, obstacles=obstacles)  # checked inside the bounds there
         self.params = params if params is not None else GritsBotParams()
         self.config = config
         if duration is not None and not (np.isfinite(duration) and duration > 0):
@@ -159,6 +169,8 @@ class Arena:
                 raise ValueError(f"number_of_robots must be an integer, got {number_of_robots!r}")
             if initial_conditions is not None:
                 initial_conditions = check_poses(initial_conditions)
+                if config.obstacles is not None:
+                    config.obstacles.check_clear(initial_conditions, START_CLEARANCE, "start pose")
             elif number_of_robots is None:
                 number_of_robots = 6
             make = defaults.backend_factory if defaults.backend_factory is not None else _simulated_robots
@@ -170,7 +182,8 @@ class Arena:
         self.ell = self.params.lookahead
         if safety is True:
             self.safety: CommandFilter | UnicycleCommandFilter | None = barrier_filter(
-                self.params, config.bounds, config.dt, max_speed=self.params.max_speed)
+                self.params, config.bounds, config.dt, max_speed=self.params.max_speed,
+                **({} if config.obstacles is None else {"obstacles": config.obstacles}))
         elif safety is False:
             self.safety = None
         else:
