@@ -68,6 +68,8 @@ class RunDefaults:
     # calls it, rps's error counts) and rps's call order (get_poses() once per step())
     rps_semantics: bool = False
     rps_call_order: bool = True
+    # line-segment obstacles (core.obstacles.Obstacles) for Arenas built without their own (swarmdeck run --obstacles)
+    obstacles: Any = None
 
 
 RUN_DEFAULTS: contextvars.ContextVar[RunDefaults] = contextvars.ContextVar("swarmdeck_run_defaults", default=RunDefaults())  # noqa: B039  (frozen)
@@ -152,6 +154,8 @@ class Arena:
             safety = defaults.safety
         if config is None:
             config = ArenaConfig(seed=defaults.seed)
+        if obstacles is None and config.obstacles is None:
+            obstacles = defaults.obstacles
         if obstacles is not None:
             config = dataclasses.replace(config, obstacles=obstacles)  # checked inside the bounds there
         self.params = params if params is not None else GritsBotParams()

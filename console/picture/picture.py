@@ -13,7 +13,7 @@ robots by construction. Units: m, rad, m/s; N robots, K active pairs, E Voronoi 
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, TypeVar
 
 import numpy as np
@@ -120,6 +120,8 @@ class Picture:
         contacts: (M, 2) touch contacts. goals: (G, 2) goals of the goto behaviour (else empty).
         density: φ(·, t) for :meth:`heat_map`, or None.
         run_state, behaviour, events, alerts: the Frame's, for banners and logs.
+        obstacles: (S, 2, 2) line-segment obstacles on the floor, m (``Frame.obstacles``; empty without),
+            drawn in :data:`~.colours.OBSTACLE`, ``PictureStyle``-independent (always drawn).
     """
 
     bounds: Bounds
@@ -150,6 +152,7 @@ class Picture:
     behaviour: str
     events: tuple[str, ...]
     alerts: tuple[str, ...]
+    obstacles: NDArray[np.float64] = field(default_factory=lambda: _frozen(np.zeros((0, 2, 2))))
 
     @property
     def n(self) -> int:
@@ -185,4 +188,5 @@ def picture_of(frame: Frame, style: PictureStyle = DEFAULT_STYLE) -> Picture:
         contacts=frame.contacts.positions, goals=_frozen(np.asarray(goals, dtype=float)),
         density=frame.density, run_state=frame.run_state, behaviour=frame.behaviour,
         events=frame.events, alerts=frame.alerts,
+        obstacles=frame.obstacles.segments if frame.obstacles is not None else _frozen(np.zeros((0, 2, 2))),
     )

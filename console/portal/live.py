@@ -26,7 +26,8 @@ edges, K active pairs)::
     events       [str] messages of this tick
     robot_radius body radius of the robot glyph, m
     rings        {"changed": …, "virtual": …} ring radii round changed / virtual robots, × robot_radius
-    palette      {floor, grid, boundary, voronoi, centroid, changed, virtual, label, heading, stopped}: "#rrggbb"
+    palette      {floor, grid, boundary, voronoi, centroid, changed, virtual, label, heading, stopped, obstacle}: "#rrggbb"
+    obstacles    (S, 2, 2) line-segment obstacles, m ([] without)
 
 A message is a few kB (N = 12); the pages send at most ten a second.
 """
@@ -47,9 +48,10 @@ from swarmdeck.core.constants import ROBOT_RADIUS
 DENSITY_PX_PER_M = 20.0  # the canvas smooths the small image up; 64 × 40 px on the default arena
 
 PALETTE: dict[str, str] = dict(zip(
-    ("floor", "grid", "boundary", "voronoi", "centroid", "changed", "virtual", "label", "heading", "stopped"),
+    ("floor", "grid", "boundary", "voronoi", "centroid", "changed", "virtual", "label", "heading", "stopped",
+     "obstacle"),
     pal.hex_colors(np.array([pal.LUT[0], (150, 150, 150), pal.BOUNDARY, pal.VORONOI, pal.CENTROID, pal.CHANGED,
-                             pal.VIRTUAL_RING, pal.LABEL, pal.HEADING, pal.STOPPED], dtype=np.uint8)),
+                             pal.VIRTUAL_RING, pal.LABEL, pal.HEADING, pal.STOPPED, pal.OBSTACLE], dtype=np.uint8)),
     strict=True))
 """the picture's colours as the canvas needs them (``palette`` of every message)"""
 
@@ -91,4 +93,5 @@ def scene_message(frame: Frame, seq: int) -> dict[str, Any]:
         "density": density_png(pic), "events": list(pic.events),
         "robot_radius": ROBOT_RADIUS, "rings": {"changed": CHANGED_RING, "virtual": VIRTUAL_RING_RADIUS},
         "palette": PALETTE,
+        "obstacles": np.round(pic.obstacles, 4).tolist(),
     }

@@ -33,7 +33,8 @@ def arena_frame(arena: Any, poses: NDArray[np.float64], tick: int, behaviour: st
                if diag is not None else BarrierFrame(enabled=False, intervention=np.zeros(n)))
     return Frame(tick=tick, time=tick * dt, run_time=tick * dt, dt=dt, bounds=arena.config.bounds,
                  lookahead=arena.ell, poses=poses, ids=np.arange(n), nominal=arena.last_nominal, safe=safe, v=v, w=w,
-                 barrier=barrier, behaviour=behaviour, params=dict(params or {}), **extra)
+                 barrier=barrier, behaviour=behaviour, params=dict(params or {}),
+                 **{"obstacles": getattr(arena.config, "obstacles", None), **extra})
 
 
 class ArenaRecording:

@@ -52,6 +52,9 @@ active barrier pairs, B density bumps, C contacts)::
                   written only when some robot is virtual, absent (all physical) in older recordings
     battery       (N,) V battery voltage (NaN: unknown); written only when some robot reports one
     charging      (N,) bool, robot on a charger; written only when some robot is charging
+    obstacles     [[[x0, y0], [x1, y1]], ...] m, the line-segment obstacles on the floor
+                  (``core.obstacles.Obstacles``); written only when there are some (the recording codec
+                  writes them in keyframes and when they change, :func:`obstacles_dict`)
 
 The browser GUI's editing state (bump handles, plots) is not part of a Frame;
 the density the loop used is.
@@ -70,6 +73,7 @@ from numpy.typing import ArrayLike, NDArray
 from swarmdeck.core.bounds import DEFAULT_BOUNDS, Bounds
 from swarmdeck.core.constants import CONTROL_PERIOD, LOOKAHEAD, SAFETY_DISTANCE
 from swarmdeck.core.kinematics import lookahead_points
+from swarmdeck.core.obstacles import Obstacles
 from swarmdeck.coverage.density import GaussianMixture
 from swarmdeck.coverage.geometry import GeometryConfig
 
@@ -145,6 +149,20 @@ def _ro(a: ArrayLike, dtype: type, shape_tail: tuple[int, ...], name: str) -> ND
 
 def _freeze_map(m: Mapping[str, Any] | None) -> Mapping[str, Any]:
     return MappingProxyType(dict(m or {}))
+
+
+def obstacles_of(value: Any) -> Obstacles | None:
+    """A Frame's ``obstacles`` from what was given (Obstacles, an (M, 2, 2) array, nested lists, None):
+    None when there are none; ValueError naming the segment for a malformed one."""
+    if value is None:
+        return None
+    return Obstacles.of(value) or None
+
+
+def obstacles_dict(obstacles: Obstacles | None) -> dict[str, Any]:
+    """``{"obstacles": [[[x0, y0], [x1, y1]], ...]}`` when there are obstacles, else ``{}`` (older readers and
+    recordings without obstacles read as none)."""
+    return {} if obstacles is None else {"obstacles": obstacles.to_list()}
 
 
 def _set(obj: Any, name: str, value: Any) -> None:
@@ -407,8 +425,10 @@ class Frame:
     is_virtual: NDArray[np.bool_] | None = None
     battery: FloatArray | None = None
     charging: NDArray[np.bool_] | None = None
+    obstacles: Obstacles | None = None
 
     def __post_init__(self) -> None:
+        _set(self, "obstacles", obstacles_of(self.obstacles))
         _set(self, "tick", int(self.tick))
         _set(self, "time", float(self.time))
         _set(self, "dt", float(self.dt))
@@ -490,6 +510,7 @@ class Frame:
             "timing": _enc_map(self.timing),
             "image_ref": self.image_ref,
             **self.fleet_dict(),
+            **obstacles_dict(self.obstacles),
         }
 
     def fleet_dict(self) -> dict[str, Any]:
@@ -539,6 +560,7 @@ class Frame:
                 is_virtual=None if d.get("is_virtual") is None else _dec_array(d["is_virtual"], bool, (), "is_virtual"),
                 battery=None if d.get("battery") is None else _dec_array(d["battery"], float, (), "battery"),
                 charging=None if d.get("charging") is None else _dec_array(d["charging"], bool, (), "charging"),
+                obstacles=d.get("obstacles"),
             )
         except KeyError as exc:
             raise ValueError(f"frame is missing field {exc.args[0]!r}") from None

@@ -31,6 +31,7 @@ from swarmdeck.core.checks import in_range, require_in_range
 from swarmdeck.core.config import floats
 from swarmdeck.core.constants import CONTROL_PERIOD, ROBOT_DIAMETER, SAFETY_DISTANCE
 from swarmdeck.core.errors import SwarmdeckError
+from swarmdeck.core.obstacles import Obstacles
 from swarmdeck.coverage.densities import s1_density
 from swarmdeck.devices import ArenaConfig
 
@@ -228,6 +229,8 @@ class LoopConfig:
     safety: SafetyParams = field(default_factory=SafetyParams)
     density: DensityParams = field(default_factory=DensityParams)
     script_budget: float | None = param(None, unit="s", lo=0.0, hi=0.5, lo_open=True)
+    # line-segment obstacles on the floor ([arena] obstacles; core.obstacles): static for the run, not an operator knob
+    obstacles: Obstacles | None = None
 
     @property
     def script_budget_s(self) -> float:
@@ -238,7 +241,8 @@ class LoopConfig:
 
     def __post_init__(self) -> None:
         check_params(self)
-        ArenaConfig(bounds=self.bounds, dt=self.dt)  # validates bounds
+        arena = ArenaConfig(bounds=self.bounds, dt=self.dt, obstacles=self.obstacles)  # validates bounds, obstacles
+        object.__setattr__(self, "obstacles", arena.obstacles)
 
 
 #: The groups whose parameters a Frame carries, in ``Frame.params`` order.
@@ -258,6 +262,8 @@ def frame_keys(cls: type) -> dict[str, str]:
 
 # ---------------------------------------------------------------------------------------------- (de)serialising
 def _plain(value: Any) -> Any:
+    if isinstance(value, Obstacles):
+        return value.to_list()
     if isinstance(value, tuple):
         return [_plain(v) for v in value]
     return value
