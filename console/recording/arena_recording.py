@@ -66,7 +66,8 @@ class ArenaRecording:
         from swarmdeck.console.runtime.loop import LoopConfig, SafetyParams
 
         config = LoopConfig(n_robots=arena.n, dt=arena.config.dt, bounds=Bounds.of(arena.config.bounds), seed=self.seed,
-                            behaviour=self.behaviour, safety=SafetyParams(enabled=arena.safety is not None))
+                            behaviour=self.behaviour, safety=SafetyParams(enabled=arena.safety is not None),
+                            obstacles=getattr(arena.config, "obstacles", None))
         path = self._path(len(self._recorders))
         self.paths.append(path)
         self._recorders[id(arena)] = Recorder(path, session_metadata(config, None, source="simulation",

@@ -274,7 +274,7 @@ def to_dict(obj: Any) -> dict[str, Any]:
     out: dict[str, Any] = {}
     for f in dataclasses.fields(obj):
         v = getattr(obj, f.name)
-        out[f.name] = to_dict(v) if dataclasses.is_dataclass(v) else _plain(v)
+        out[f.name] = to_dict(v) if dataclasses.is_dataclass(v) and not isinstance(v, Obstacles) else _plain(v)
     return out
 
 
