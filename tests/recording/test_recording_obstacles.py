@@ -14,7 +14,7 @@ from swarmdeck.console.recording.reader import open_recording
 from swarmdeck.console.recording.recorder import Recorder, RecorderConfig
 from swarmdeck.console.recording.resimulate import resimulate_and_compare, session_metadata
 from swarmdeck.console.runtime.config import ConfigFileError, load_settings
-from swarmdeck.console.runtime.loop import ControlLoop, LoopConfig
+from swarmdeck.console.runtime.loop import ControlLoop
 from swarmdeck.core.obstacles import Obstacles, point_segment_distance
 
 WALL_TOML = """
