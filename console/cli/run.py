@@ -148,18 +148,27 @@ def _physical_robots(args: argparse.Namespace) -> tuple[Callable[..., Any], Any]
     return factory, ports
 
 
-def obstacles_argument(args: argparse.Namespace) -> Any:
-    """``--obstacles FILE``'s :class:`~swarmdeck.core.obstacles.Obstacles` (None without it); UsageError naming
-    the file, the key and the segment for a file that cannot be used."""
+def obstacles_argument(args: argparse.Namespace, chargers: bool = False) -> Any:
+    """``--obstacles FILE``'s :class:`~swarmdeck.core.obstacles.Obstacles` (None without it), checked inside the
+    default arena (and clear of its charger slots with ``chargers``); UsageError naming the file, the key and the
+    segment for a file that cannot be used."""
     path = getattr(args, "obstacles", None)
     if path is None:
         return None
     from swarmdeck.console.runtime.config import read_obstacles
+    from swarmdeck.core.bounds import DEFAULT_BOUNDS
+    from swarmdeck.devices.chargers import ChargerLayout
+    from swarmdeck.devices.fleet.routing import check_chargers_clear
 
     try:
-        return read_obstacles(path)
+        obstacles = read_obstacles(path)
+        if obstacles is not None:
+            obstacles.check_inside(DEFAULT_BOUNDS)
+            if chargers:
+                check_chargers_clear(obstacles, ChargerLayout())
+        return obstacles
     except ValueError as exc:
-        raise UsageError(str(exc)) from None
+        raise UsageError(f"--obstacles {path}: {exc}" if str(path) not in str(exc) else str(exc)) from None
 
 
 def _script_args(args: argparse.Namespace) -> list[str]:

@@ -40,6 +40,7 @@ from swarmdeck.devices.fleet.assigned import AssignedRobots
 from swarmdeck.devices.fleet.assignment import Assignment, AssignmentPolicy, assign
 from swarmdeck.devices.fleet.docking import choose_slots, return_maneuver
 from swarmdeck.devices.fleet.maneuver import Maneuver, ManeuverParams
+from swarmdeck.devices.fleet.routing import check_chargers_clear
 from swarmdeck.devices.fleet.setup import ManeuverReport, check_start_poses, drive
 from swarmdeck.devices.pipeline import barrier_filter
 from swarmdeck.devices.simulator import ArenaConfig, SimulatedArena
@@ -111,8 +112,7 @@ class FleetManager:
             raise ValueError(f"slots must be distinct slot indices 0..{m_slots - 1}, got {slots.tolist()}")
         if n_robots is not None and len(slots) != n_robots:
             raise ValueError(f"{n_robots} robots but {len(slots)} slots given")
-        if self.config.obstacles is not None:  # a charger slot behind or on a segment could never be reached
-            self.config.obstacles.check_clear(layout.dock_poses()[:, :2], START_CLEARANCE, "charger slot")
+        check_chargers_clear(self.config.obstacles, layout)  # a slot on a segment could never be reached
         self.sim = SimulatedArena(initial_poses=layout.dock_poses()[slots], config=self.config, params=self.params)
         m = self.sim.n
         self.ids = np.arange(m, dtype=np.intp)

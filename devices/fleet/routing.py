@@ -18,18 +18,30 @@ from scipy.sparse.csgraph import shortest_path
 
 from swarmdeck.core.bounds import Bounds
 from swarmdeck.core.obstacles import START_CLEARANCE, Obstacles, point_segment_distance
+from swarmdeck.devices.chargers import ChargerLayout
 
 FloatArray = NDArray[np.float64]
 
 _REACHED = 0.05  # m: a node this close to the robot is behind it: aim at the next one
 
 
+def check_chargers_clear(obstacles: Obstacles | None, layout: ChargerLayout) -> None:
+    """ObstacleError naming the first segment of ``obstacles`` within :data:`START_CLEARANCE` of a charger slot
+    or of its approach pose (where a returning robot turns before it reverses onto the slot: a segment that
+    near leaves it no room to turn, and the return could never finish)."""
+    if obstacles is None:
+        return
+    obstacles.check_clear(layout.dock_poses()[:, :2], START_CLEARANCE, "charger slot")
+    obstacles.check_clear(layout.approach_poses()[:, :2], START_CLEARANCE, "the approach pose of charger slot")
+
+
 def clear_paths(a: FloatArray, b: FloatArray, segments: FloatArray, clearance: float,
-                from_robot: bool = False) -> NDArray[np.bool_]:
+                from_robot: bool = False, to_goal: bool = False) -> NDArray[np.bool_]:
     """``(K,)`` whether each straight path ``a[k] → b[k]`` (``(K, 2)`` m) keeps ``clearance`` m from every
     segment ``(S, 2, 2)``: no crossing, and every end of either at least ``clearance`` from the other.
     ``from_robot``: ``a`` is where a robot is (it may be nearer a segment than ``clearance``: the barrier
-    lets it); its own distance is not asked, only that the path does not cross or pass a segment's end."""
+    lets it); ``to_goal``: ``b`` is a goal (a charger's approach pose may be that near too). Their own
+    distance is not asked then, only that the path does not cross or pass a segment's end."""
     k = a.shape[0]
     if k == 0 or segments.shape[0] == 0:
         return np.ones(k, dtype=bool)
@@ -46,9 +58,11 @@ def clear_paths(a: FloatArray, b: FloatArray, segments: FloatArray, clearance: f
         t = np.clip(np.sum((x - s0) * ab, axis=-1) / np.maximum(np.sum(ab * ab, axis=-1), 1e-300), 0.0, 1.0)
         return np.linalg.norm(x - (s0 + t[..., None] * ab), axis=-1)
 
-    near = np.minimum(dist(q, c, d), np.minimum(dist(c, p, q), dist(d, p, q)))
+    near = np.minimum(dist(c, p, q), dist(d, p, q))
     if not from_robot:
         near = np.minimum(near, dist(p, c, d))
+    if not to_goal:
+        near = np.minimum(near, dist(q, c, d))
     return ~np.any(crossing | (near < clearance), axis=1)
 
 
@@ -98,7 +112,8 @@ class Router:
         if p == 0 or k == 0:
             return RoutePlan(self, g, np.full((k, p), np.inf))
         gi, ni = np.repeat(np.arange(k), p), np.tile(np.arange(p), k)
-        vis = clear_paths(g[gi], self.nodes[ni], self.obstacles.segments, self.clearance).reshape(k, p)
+        vis = clear_paths(g[gi], self.nodes[ni], self.obstacles.segments, self.clearance,
+                          from_robot=True).reshape(k, p)  # the goal's own clearance is not asked
         direct = np.where(vis, np.linalg.norm(g[:, None] - self.nodes[None], axis=2), np.inf)  # (K, P)
         # to goal k from node n: the best node m that sees the goal, then the graph from n to m
         return RoutePlan(self, g, np.min(direct[:, None, :] + self._between[None, :, :], axis=2))
@@ -121,7 +136,7 @@ class RoutePlan:
         goal = self.goals
         wp, length = goal.copy(), np.linalg.norm(goal - pts, axis=1)
         seg = rt.obstacles.segments
-        blocked = np.flatnonzero(~clear_paths(pts, goal, seg, rt.clearance, from_robot=True))
+        blocked = np.flatnonzero(~clear_paths(pts, goal, seg, rt.clearance, from_robot=True, to_goal=True))
         p = rt.nodes.shape[0]
         if blocked.size == 0 or p == 0:
             return wp, length

@@ -54,6 +54,12 @@ def test_a_segment_over_a_charger_slot_is_refused() -> None:
         _fleet(2, Obstacles([[[-0.5, -0.95], [0.5, -0.95]]]))
 
 
+def test_a_segment_over_a_chargers_approach_pose_is_refused() -> None:
+    # 9 cm in front of the approach poses: a returning robot could not turn there to reverse onto its slot
+    with pytest.raises(ObstacleError, match=r"segment 0 .*crosses the approach pose of charger slot \d+"):
+        _fleet(2, Obstacles([[[-1.0, -0.45], [1.0, -0.45]]]))
+
+
 def test_a_start_pose_on_a_segment_is_refused() -> None:
     fleet = _fleet(2)
     with pytest.raises(ObstacleError, match=r"segment 0 .*crosses start pose 1"):
