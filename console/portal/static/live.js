@@ -86,7 +86,8 @@ document.addEventListener("DOMContentLoaded", () => {
     last = m;
     if (m.density && heat.src !== m.density) heat.src = m.density;
     draw(m);
-    Object.assign(drawn, { frames: drawn.frames + 1, seq: m.seq, tick: m.tick, poses: m.poses, runState: m.run_state });
+    Object.assign(drawn, { frames: drawn.frames + 1, seq: m.seq, tick: m.tick, poses: m.poses, runState: m.run_state,
+                           obstacles: (m.obstacles || []).length });
     const b = m.barrier;
     show(`t ${m.t.toFixed(2)} s · ${m.poses.length} robots · ${m.run_state}` +
          (b ? (b.enabled ? ` · barrier: ${b.n_active} active` + (b.min_distance !== null ? `, d_min ${b.min_distance.toFixed(3)} m` : "") : " · barrier OFF") : "") +
