@@ -16,6 +16,7 @@ until replaced (as in rps); ``ids`` selects a subset of robots to update.
 from __future__ import annotations
 
 import contextvars
+import dataclasses
 from collections import deque
 from collections.abc import Sequence
 from dataclasses import dataclass, field
@@ -32,6 +33,7 @@ from swarmdeck.core.kinematics import (
     unicycle_to_si,
     wheels_to_unicycle,
 )
+from swarmdeck.core.obstacles import START_CLEARANCE
 from swarmdeck.core.ports import ReportsSensors, ShowsLeds
 from swarmdeck.devices.controllers import (
     HybridPoseController,
@@ -75,6 +77,8 @@ class RunDefaults:
     # calls it, rps's error counts) and rps's call order (get_poses() once per step())
     rps_semantics: bool = False
     rps_call_order: bool = True
+    # line-segment obstacles (core.obstacles.Obstacles) for Arenas built without their own (swarmdeck run --obstacles)
+    obstacles: Any = None
 
 
 #: The sensors' noise stream beside the simulator's: Arena sensing seeds with (seed, this).
@@ -125,6 +129,11 @@ class Arena:
         sensing: the robots' sensors (:class:`~swarmdeck.sensing.SensingConfig`: ToF distance sensors,
             range and bearing, encoders and IMU, LEDs), or None (the default: no sensors). Read them with
             :meth:`sense` after each step; set the LEDs with :meth:`set_leds`; see :meth:`use_sensors`.
+        obstacles: line-segment obstacles (``(M, 2, 2)`` m, ``[[x0, y0], [x1, y1]]`` each, or an
+            :class:`~swarmdeck.core.obstacles.Obstacles`; ``Obstacles.from_polygons`` for polygons):
+            solid in the simulator, kept clear by the barrier (segment rows), counted as contacts by
+            validation. Replaces ``config.obstacles``. Refused (ObstacleError naming the segment)
+            when outside the arena or crossing a start pose.
 
     Example::
 
@@ -148,6 +157,7 @@ class Arena:
         backend: Any = None,
         from_docks: Any = None,
         sensing: SensingConfig | None = None,
+        obstacles: Any = None,
     ) -> None:
         defaults = RUN_DEFAULTS.get()
         if from_docks is None:
@@ -160,6 +170,10 @@ class Arena:
             safety = defaults.safety
         if config is None:
             config = ArenaConfig(seed=defaults.seed)
+        if obstacles is None and config.obstacles is None:
+            obstacles = defaults.obstacles
+        if obstacles is not None:
+            config = dataclasses.replace(config, obstacles=obstacles)  # checked inside the bounds there
         self.params = params if params is not None else GritsBotParams()
         self.config = config
         if duration is not None and not (np.isfinite(duration) and duration > 0):
@@ -175,6 +189,8 @@ class Arena:
                 raise ValueError(f"number_of_robots must be an integer, got {number_of_robots!r}")
             if initial_conditions is not None:
                 initial_conditions = check_poses(initial_conditions)
+                if config.obstacles is not None:
+                    config.obstacles.check_clear(initial_conditions, START_CLEARANCE, "start pose")
             elif number_of_robots is None:
                 number_of_robots = 6
             make = defaults.backend_factory if defaults.backend_factory is not None else _simulated_robots
@@ -186,7 +202,8 @@ class Arena:
         self.ell = self.params.lookahead
         if safety is True:
             self.safety: CommandFilter | UnicycleCommandFilter | None = barrier_filter(
-                self.params, config.bounds, config.dt, max_speed=self.params.max_speed)
+                self.params, config.bounds, config.dt, max_speed=self.params.max_speed,
+                **({} if config.obstacles is None else {"obstacles": config.obstacles}))
         elif safety is False:
             self.safety = None
         else:
@@ -272,7 +289,7 @@ class Arena:
             self.sensors, self._readings = None, None
             return None
         if obstacles is None:  # the arena's own obstacle segments (M, 2, 2), when its config has them
-            obstacles = getattr(self.config, "segments", None)
+            obstacles = None if self.config.obstacles is None else self.config.obstacles.segments
         seed = self.config.seed if seed is None else seed
         rng = np.random.default_rng(None if seed is None else [int(seed), _SENSING_STREAM])
         self.sensors = Sensors(self.n, sensing, rng=rng, params=self.params, bounds=self.config.bounds,

@@ -12,6 +12,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from swarmdeck.core.bounds import DEFAULT_BOUNDS, Bounds
+from swarmdeck.core.obstacles import START_CLEARANCE, segments_near
 
 
 def lattice_sites(bounds: Bounds, spacing: float, wall_margin: float) -> NDArray[np.float64]:
@@ -51,6 +52,8 @@ def random_initial_poses(
     wall_margin: float = 0.13,
     rng: np.random.Generator | int | None = None,
     avoid: NDArray[np.float64] | None = None,
+    obstacles: NDArray[np.float64] | None = None,
+    obstacle_clearance: float = START_CLEARANCE,
 ) -> NDArray[np.float64]:
     """``(n, 3)`` random poses, pairwise at least ``min_separation`` apart (m).
 
@@ -59,7 +62,9 @@ def random_initial_poses(
     in its safe set. ``avoid`` ``(M, 2)`` (m): robots already on the floor (e.g. the
     physical ones beside which virtual robots are placed); every new robot is at
     least ``min_separation`` from each of them too (the maximum then counts only the
-    lattice sites left free).
+    lattice sites left free). ``obstacles`` ``(S, 2, 2)`` (m): line segments
+    (:mod:`swarmdeck.core.obstacles`); every robot's centre stays at least
+    ``obstacle_clearance`` m from each.
 
     Raises:
         ValueError: ``n`` < 1, ``min_separation`` > ``spacing``, or more robots than fit
@@ -80,6 +85,9 @@ def random_initial_poses(
         if len(others):
             d = np.linalg.norm(sites[:, None, :] - others[None, :, :], axis=2).min(axis=1)
             sites = sites[d >= min_separation + jr]  # any jitter keeps >= min_separation
+    if obstacles is not None and len(obstacles) and len(sites):
+        i_near = segments_near(sites, obstacles, obstacle_clearance + jr)[0]  # any jitter keeps the clearance
+        sites = np.delete(sites, np.unique(i_near), axis=0)
     if n > len(sites):
         b = Bounds.of(bounds)
         raise ValueError(

@@ -368,6 +368,11 @@ def _no_rows(filt: SafetyFilterLike, points: FloatArray, fixed: FloatArray) -> B
     x, y = points[:, 0], points[:, 1]
     clearance = np.minimum(np.minimum(x1 - m - x, x - x0 - m), np.minimum(y1 - m - y, y - y0 - m))
     free = clearance > cfg.wall_radius() - m
+    obstacles = getattr(cfg, "obstacles", None)
+    if obstacles is not None and obstacles.m and free.any():  # segment rows are built within the wall radius
+        from swarmdeck.core.obstacles import segments_near
+
+        free[segments_near(points, obstacles.segments, cfg.wall_radius())[0]] = False
     if len(fixed) and free.any():
         from scipy.spatial import cKDTree  # here, not at import (see devices.validation)
 

@@ -4,7 +4,10 @@ REFERENCE.md §1–2: a robot is out of bounds when its centre leaves the arena
 rectangle; two robots collide when their centres, each shifted 0.025 m forward
 along its heading, are at most 0.135 m apart; an actuator error is a command
 whose wheel speeds exceed the limit. swarmdeck counts each per robot *and* per
-step, and keeps the acceptance rules of the Robotarium's verifier.
+step, and keeps the acceptance rules of the Robotarium's verifier. A robot touches a
+line-segment obstacle (:mod:`swarmdeck.core.obstacles`) when its shifted centre is at most
+half the collision distance from the segment (the same body as in the pair test); obstacle
+contacts are counted like collisions and the verifier's rule applies to them too.
 """
 from __future__ import annotations
 
@@ -17,6 +20,7 @@ from numpy.typing import ArrayLike, NDArray
 from swarmdeck.core.bounds import Bounds
 from swarmdeck.core.constants import COLLISION_DISTANCE, COLLISION_SHIFT
 from swarmdeck.core.kinematics import lookahead_points
+from swarmdeck.core.obstacles import Obstacles, segments_near
 
 
 @dataclass(frozen=True)
@@ -82,6 +86,20 @@ def colliding_pairs(poses: ArrayLike, rules: ValidationRules = ValidationRules()
     return cand[close][np.lexsort((cand[close][:, 1], cand[close][:, 0]))].astype(np.intp)
 
 
+def obstacle_contacts(poses: ArrayLike, obstacles: Obstacles, rules: ValidationRules = ValidationRules()
+                      ) -> NDArray[np.bool_]:
+    """``(N,)`` robots whose body — the centre shifted ``collision_shift`` forward, radius
+    ``collision_distance / 2`` (the pair test's body) — touches a segment of ``obstacles``."""
+    p = np.asarray(poses, dtype=float)
+    out = np.zeros(p.shape[0], dtype=bool)
+    if obstacles.m == 0 or p.shape[0] == 0:
+        return out
+    i, _, _ = segments_near(lookahead_points(p, rules.collision_shift), obstacles.segments,
+                            rules.collision_distance / 2)
+    out[i] = True
+    return out
+
+
 @dataclass
 class ValidationReport:
     """Running counts of a run: per robot (arrays of length N) and per step.
@@ -102,9 +120,13 @@ class ValidationReport:
     steps_with_actuator: int = 0
     collision_pairs: int = 0
     first_collision_time: float | None = None
+    obstacle_contacts_per_robot: NDArray[np.int64] = field(default=None)  # type: ignore[arg-type]
+    steps_with_obstacle_contact: int = 0
+    first_obstacle_contact_time: float | None = None
 
     def __post_init__(self) -> None:
-        for name in ("collisions_per_robot", "boundary_per_robot", "actuator_per_robot", "invalid_command_per_robot"):
+        for name in ("collisions_per_robot", "boundary_per_robot", "actuator_per_robot", "invalid_command_per_robot",
+                     "obstacle_contacts_per_robot"):
             if getattr(self, name) is None:
                 setattr(self, name, np.zeros(self.n_robots, dtype=np.int64))
 
@@ -116,9 +138,18 @@ class ValidationReport:
         invalid: NDArray[np.bool_],
         time: float,
         rules: ValidationRules = ValidationRules(),
+        obstacles: Obstacles | None = None,
     ) -> NDArray[np.intp]:
-        """Count one step's errors at the post-step ``poses``; returns the colliding pairs."""
+        """Count one step's errors at the post-step ``poses``; returns the colliding pairs.
+        ``obstacles``: the run's line segments, whose contacts (:func:`obstacle_contacts`) are counted."""
         pairs = colliding_pairs(poses, rules)
+        if obstacles is not None and obstacles.m:
+            touch = obstacle_contacts(poses, obstacles, rules)
+            if touch.any():
+                self.obstacle_contacts_per_robot += touch
+                self.steps_with_obstacle_contact += 1
+                if self.first_obstacle_contact_time is None:
+                    self.first_obstacle_contact_time = time
         oob = out_of_bounds(poses, bounds)
         self.steps += 1
         self.time = time
@@ -142,6 +173,9 @@ class ValidationReport:
         reasons = []
         if self.steps_with_collision > rules.max_violation_steps:
             reasons.append(f"robots too close in {self.steps_with_collision} steps (> {rules.max_violation_steps})")
+        if self.steps_with_obstacle_contact > rules.max_violation_steps:
+            reasons.append(f"robots touching obstacles in {self.steps_with_obstacle_contact} steps "
+                           f"(> {rules.max_violation_steps})")
         if self.steps_with_boundary > rules.max_violation_steps:
             reasons.append(f"robots out of bounds in {self.steps_with_boundary} steps (> {rules.max_violation_steps})")
         if declared_duration is not None and self.time > rules.max_time_factor * declared_duration:
@@ -165,6 +199,10 @@ class ValidationReport:
             "boundary_per_robot": self.boundary_per_robot.tolist(),
             "actuator_per_robot": self.actuator_per_robot.tolist(),
             "invalid_command_per_robot": self.invalid_command_per_robot.tolist(),
+            **({"steps_with_obstacle_contact": self.steps_with_obstacle_contact,
+                "first_obstacle_contact_time": self.first_obstacle_contact_time,
+                "obstacle_contacts_per_robot": self.obstacle_contacts_per_robot.tolist()}
+               if self.steps_with_obstacle_contact else {}),
         }
 
     def summary(self, invalid_upstream: int = 0, saturated_upstream: tuple[int, int] = (0, 0)) -> str:
@@ -185,4 +223,7 @@ class ValidationReport:
                f"{saturated_upstream[1]} steps" if saturated_upstream[0] else ""),
             f"invalid (NaN/inf) commands stopped: {int(self.invalid_command_per_robot.sum()) + int(invalid_upstream)} robot-steps",
         ]
+        if self.steps_with_obstacle_contact:
+            lines.insert(2, f"obstacle contacts: {int(self.obstacle_contacts_per_robot.sum())} robot-steps in "
+                            f"{self.steps_with_obstacle_contact} steps (first at {self.first_obstacle_contact_time:.2f} s)")
         return "\n".join(lines)

@@ -23,6 +23,7 @@ from typing import TYPE_CHECKING, Any, Literal
 from swarmdeck.core.bounds import DEFAULT_BOUNDS, Bounds
 from swarmdeck.core.config import floats, from_mapping
 from swarmdeck.core.constants import CONTROL_PERIOD, MAX_LINEAR_SPEED, SAFETY_DISTANCE
+from swarmdeck.core.obstacles import Obstacles
 
 if TYPE_CHECKING:
     import numpy as np
@@ -123,6 +124,10 @@ class BarrierConfig:
         certified as the first, never more invasive for any robot, ≈ 2× the distributed cost).
     pairs: False builds no pair rows: the filter keeps the walls and the fixed obstacles
         (e.g. docked robots) only — the hard layer of a bypassed run (:mod:`safety.guard`).
+    obstacles: line-segment obstacles on the floor (:class:`~swarmdeck.core.obstacles.Obstacles`, or
+        anything ``Obstacles.of`` reads), or None. Each controlled point keeps the wall margin from every
+        segment (segment rows, :func:`safety.constraints.segment_rows`). None (the default) builds
+        exactly the rows it always did.
     """
 
     safety_distance: float = SAFETY_DISTANCE
@@ -154,8 +159,14 @@ class BarrierConfig:
     distributed_second_pass: bool = True
     sensing_radius: float | None = None
     pairs: bool = True
+    obstacles: Obstacles | None = None
 
     def __post_init__(self) -> None:
+        if self.obstacles is not None:
+            try:
+                object.__setattr__(self, "obstacles", Obstacles.of(self.obstacles) or None)
+            except ValueError as exc:
+                raise ValueError(f"BarrierConfig: {exc}") from None
         # every gain, distance and speed finite and in range: TOML can say inf and nan, and an
         # infinite gain turns a row bound into inf·0 = NaN, which a QP silently drops
         positive = ("safety_distance", "gamma", "max_speed", "wall_gain", "recovery_weight")
@@ -234,6 +245,10 @@ class BarrierConfig:
         """Plain dict of the settings (JSON/TOML-able)."""
         out = {f.name: getattr(self, f.name) for f in fields(self)}
         out["bounds"] = list(self.bounds)
+        if self.obstacles is None:
+            del out["obstacles"]  # the table reads as it always did
+        else:
+            out["obstacles"] = self.obstacles.to_list()
         return out
 
     @property
@@ -242,7 +257,8 @@ class BarrierConfig:
         return self.safety_distance / 2 if self.wall_margin is None else float(self.wall_margin)
 
     def deep_overlap(self, h: np.ndarray, kind_is_wall: np.ndarray) -> np.ndarray:
-        """(m,) bool: rows whose h (pairs/obstacles m², walls m) is a deep overlap (see ``recovery_depth``)."""
+        """(m,) bool: rows whose h (pairs/obstacles m², walls and segments m: ``kind_is_wall``) is a deep
+        overlap (see ``recovery_depth``)."""
         d = self.safety_distance - self.recovery_depth
         return (h < 0) & (((h < -self.recovery_depth) & kind_is_wall)
                           | ((h < d * d - self.safety_distance**2) & ~kind_is_wall))

@@ -10,6 +10,11 @@ speed in m/s; this leaves the feasible set, and so the QP's solution, unchanged.
 * obstacle (fixed point o): −2(x_i − o)ᵀu_i ≤ γκ(h_io), the robot alone keeps the distance;
 * wall (rps): u_x ≤ g·γ·κ(x_max − m − x) and the three analogous rows, g = wall_gain,
   m = wall margin; here h is the clearance δ beyond the margin (m).
+* segment (a line-segment obstacle of ``cfg.obstacles``, :mod:`swarmdeck.core.obstacles`):
+  −n_ikᵀu_i ≤ g·γ·κ(h_ik), h_ik = ‖x_i − q_ik‖ − m with q_ik the nearest point of segment k and
+  n_ik the unit vector from q_ik to x_i (m, g as for the walls; the robot alone keeps it). The
+  distance to a segment is convex, so d(x + u·dt) ≥ d(x) + n_ᵀu·dt and the discrete closed loop
+  keeps h ≥ 0 under the same condition as the walls.
 
 Rows farther than the binding distance (``BarrierConfig.neighbour_radius`` /
 ``wall_radius``) cannot be active for any command with ‖u_i‖ ≤ v_max and are
@@ -22,9 +27,11 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.spatial import cKDTree
 
+from swarmdeck.core.obstacles import nearest_points, segments_near
+
 from .config import BarrierConfig
 
-PAIR, WALL, OBSTACLE, LIMIT = 0, 1, 2, 3
+PAIR, WALL, OBSTACLE, LIMIT, SEGMENT = 0, 1, 2, 3, 4
 _GOLDEN = 2.399963229728653  # golden angle, rad: deterministic directions for coincident points
 
 
@@ -33,10 +40,10 @@ class Rows:
     """Linear constraints ``ci·u_i + cj·u_j ≤ b`` (m rows), one or two robots each.
 
     i, j: (m,) int robot indices (j = −1 for single-robot rows); ci, cj: (m, 2);
-    b: (m,) m/s; h: (m,) barrier value (pair/obstacle: m², wall: m, limit: +inf);
-    kind: (m,) PAIR/WALL/OBSTACLE/LIMIT; key: (m,) int64 identity across ticks
+    b: (m,) m/s; h: (m,) barrier value (pair/obstacle: m², wall/segment: m, limit: +inf);
+    kind: (m,) PAIR/WALL/OBSTACLE/LIMIT/SEGMENT; key: (m,) int64 identity across ticks
     (pair i<j: i·N + j; wall: N² + 4i + side; obstacle: N² + 4N + i·M + k;
-    limit rows: N² + 4N + N·M + 4i + s).
+    limit rows: N² + 4N + N·M + 4i + s; segment: N² + 8N + N·M + i·S + k, S segments).
     """
 
     i: np.ndarray
@@ -168,13 +175,41 @@ def wall_rows(points: np.ndarray, cfg: BarrierConfig) -> Rows:
     return Rows(i, np.full_like(i, -1), ci, np.zeros_like(ci), b, delta, kind, key)
 
 
+def segment_rows(points: np.ndarray, cfg: BarrierConfig, n_obs: int = 0) -> Rows:
+    """Rows keeping each controlled point (N, 2) the wall margin from every segment of ``cfg.obstacles``
+    within ``cfg.wall_radius()`` (m) — found by :func:`~swarmdeck.core.obstacles.segments_near`, no N×S
+    array. ``n_obs``: the number of fixed points (M) this call's keys must stay clear of."""
+    obs = cfg.obstacles
+    n_robots = points.shape[0]
+    if obs is None or obs.m == 0 or n_robots == 0:
+        return Rows.empty()
+    seg = obs.segments
+    i, k, d = segments_near(points, seg, cfg.wall_radius())
+    if i.size == 0:
+        return Rows.empty()
+    e = points[i] - nearest_points(points[i], seg[k])
+    tiny = d < 1e-12
+    n = e / np.where(tiny, 1.0, d)[:, None]
+    if tiny.any():  # on the segment: its left normal (deterministic)
+        t = seg[k[tiny], 1] - seg[k[tiny], 0]
+        n[tiny] = np.stack([-t[:, 1], t[:, 0]], axis=1) / np.linalg.norm(t, axis=1)[:, None]
+    h = d - cfg.margin
+    b = cfg.wall_gain * cfg.gamma * cfg.kappa(h)
+    key = n_robots * n_robots + 8 * n_robots + n_robots * n_obs + i * obs.m + k
+    kind = np.full(i.shape[0], SEGMENT, dtype=np.int8)
+    return Rows(i, np.full_like(i, -1), -n, np.zeros_like(n), b, h, kind, key)
+
+
 def barrier_rows(points: np.ndarray, cfg: BarrierConfig, obstacles: np.ndarray | None = None,
                  tree: cKDTree | None = None) -> Rows:
-    """All candidate rows (pairs unless ``cfg.pairs`` is False, walls, obstacles) for controlled points (N, 2)."""
+    """All candidate rows (pairs unless ``cfg.pairs`` is False, walls, obstacles, segments of
+    ``cfg.obstacles``) for controlled points (N, 2)."""
     if points.shape[0] == 0:
         return Rows.empty()
     tree = cKDTree(points) if tree is None else tree
     parts = ([pair_rows(points, cfg, tree)] if cfg.pairs else []) + [wall_rows(points, cfg)]
     if obstacles is not None and obstacles.shape[0]:
         parts.append(obstacle_rows(points, obstacles, cfg, tree))
+    if cfg.obstacles is not None and cfg.obstacles.m:
+        parts.append(segment_rows(points, cfg, 0 if obstacles is None else obstacles.shape[0]))
     return Rows.concat(parts)

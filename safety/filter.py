@@ -47,7 +47,7 @@ from swarmdeck.core.errors import SwarmdeckError
 from . import dual_ascent
 from .active_set import FEAS_TOL, ActiveSetResult, clip_speed, solve_active_set
 from .config import BarrierConfig
-from .constraints import LIMIT, OBSTACLE, PAIR, WALL, Rows, barrier_rows
+from .constraints import LIMIT, OBSTACLE, PAIR, SEGMENT, WALL, Rows, barrier_rows
 from .diagnostics import BarrierDiagnostics
 from .distributed import filter_distributed
 from .qp_clarabel import QPResult, solve_qp
@@ -65,7 +65,7 @@ _CLARABEL_FEAS = 1e-7  # m/s: an interior-point answer violating a row by more t
 # certifies in one or two iterations or not at all (bench_barrier_anytime: a capped polish that failed
 # spent its whole cap on the worst ticks)
 _POLISH_SOLVES = 4
-_KIND_NAMES = {PAIR: "pair", WALL: "wall", OBSTACLE: "obstacle", LIMIT: "limit"}
+_KIND_NAMES = {PAIR: "pair", WALL: "wall", OBSTACLE: "obstacle", LIMIT: "limit", SEGMENT: "segment"}
 
 
 class InputError(ValueError, SwarmdeckError):
@@ -279,7 +279,7 @@ class SafetyFilter:
             # separation; the answer is the plain QP's), capped at recovery_speed; deep overlaps
             # demand recovery_speed exactly, so they end in a bounded time. Only when those rows
             # are jointly infeasible does the soft form run (BarrierConfig.recovery)
-            deep = unsafe & cfg.deep_overlap(rows.h, rows.kind == WALL)
+            deep = unsafe & cfg.deep_overlap(rows.h, (rows.kind == WALL) | (rows.kind == SEGMENT))
             b = np.where(unsafe, np.maximum(rows.b, -cfg.recovery_speed), rows.b)
             rows = dataclasses.replace(rows, b=np.where(deep, -cfg.recovery_speed, b))
 

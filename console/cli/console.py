@@ -258,7 +258,8 @@ def _robots(config, camera: str | None, robots_via: str | None, virtual: int | N
     from swarmdeck.console.runtime.hardware import RobotsSpec, open_robots
 
     ports = open_robots(RobotsSpec(n_robots=config.n_robots, bounds=config.bounds, dt=config.dt, seed=config.seed,
-                                   robots_via=robots_via, docked=docked, camera=camera, virtual=virtual or 0))
+                                   robots_via=robots_via, docked=docked, camera=camera, virtual=virtual or 0,
+                                   obstacles=config.obstacles))
     return ports.source, ports.sink
 
 

@@ -210,9 +210,11 @@ def _act(args: argparse.Namespace, loop: Any, pace: Any, frame: Any, goals: Any,
     view = fu.FleetView.of(frame, fu.status_ages(loop.sink, frame.ids, frame.is_virtual))
     try:
         if args.action == "setup":
-            maneuver = fu.set_up(view, goals, frame.bounds, chargers, loop.robot, config.fleet.safety_distance, config)
+            maneuver = fu.set_up(view, goals, frame.bounds, chargers, loop.robot, config.fleet.safety_distance, config,
+                                 obstacles=frame.obstacles)
         else:
-            maneuver = fu.return_to_chargers(view, frame.bounds, chargers, loop.robot, config, ids=ids)
+            maneuver = fu.return_to_chargers(view, frame.bounds, chargers, loop.robot, config, ids=ids,
+                                             obstacles=frame.obstacles)
     except ValueError as exc:
         raise UsageError(f"{args.action}: {exc}") from None
     result = fu.run_maneuver(loop, maneuver, pace)

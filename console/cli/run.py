@@ -35,6 +35,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                              "mqtt://127.0.0.1:1883 (try `swarmdeck robots --broker URL` for a simulated fleet): robots "
                              "0..N-1 of --robots N, through the same safety pipeline; they start where they are (a "
                              "script's initial conditions are not driven to) and each step lasts one period of wall time")
+    parser.add_argument("--obstacles", default=None, metavar="FILE",
+                        help="line-segment obstacles on the floor: a TOML file with an [arena] table, "
+                             "obstacles = [[[x0, y0], [x1, y1]], {polygon = [[x, y], ...]}] in m (as in the "
+                             "console's --config); solid in the simulator, kept clear by the barrier")
     parser.add_argument("--json", action="store_true", help="print the report as JSON")
     parser.add_argument("--record", default=None, metavar="PATH",
                         help="record the run to PATH (MCAP, as `swarmdeck console --record`: `swarmdeck play PATH`, "
@@ -83,7 +87,7 @@ def _run_sandboxed(args: argparse.Namespace) -> int:
     from swarmdeck.devices.simulator import ArenaConfig
 
     check_run_arguments(args.robots, args.duration, seed=args.seed)
-    config = ArenaConfig(seed=args.seed)
+    config = ArenaConfig(seed=args.seed, obstacles=obstacles_argument(args))
 
     def make_plant(n, initial):
         return ArenaPlant(Arena(n, initial_conditions=initial, config=config,
@@ -144,6 +148,29 @@ def _physical_robots(args: argparse.Namespace) -> tuple[Callable[..., Any], Any]
     return factory, ports
 
 
+def obstacles_argument(args: argparse.Namespace, chargers: bool = False) -> Any:
+    """``--obstacles FILE``'s :class:`~swarmdeck.core.obstacles.Obstacles` (None without it), checked inside the
+    default arena (and clear of its charger slots with ``chargers``); UsageError naming the file, the key and the
+    segment for a file that cannot be used."""
+    path = getattr(args, "obstacles", None)
+    if path is None:
+        return None
+    from swarmdeck.console.runtime.config import read_obstacles
+    from swarmdeck.core.bounds import DEFAULT_BOUNDS
+    from swarmdeck.devices.chargers import ChargerLayout
+    from swarmdeck.devices.fleet.routing import check_chargers_clear
+
+    try:
+        obstacles = read_obstacles(path)
+        if obstacles is not None:
+            obstacles.check_inside(DEFAULT_BOUNDS)
+            if chargers:
+                check_chargers_clear(obstacles, ChargerLayout())
+        return obstacles
+    except ValueError as exc:
+        raise UsageError(f"--obstacles {path}: {exc}" if str(path) not in str(exc) else str(exc)) from None
+
+
 def _script_args(args: argparse.Namespace) -> list[str]:
     return [str(a) for a in args.script_args or []]
 
@@ -170,6 +197,7 @@ def main(args: argparse.Namespace) -> int:
                                    foxglove_channels=args.foxglove_channels)
     try:
         result = run_headless(args.script, args, rps=args.rps, from_docks=args.from_docks, argv=_script_args(args),
+                              obstacles=obstacles_argument(args),
                               rps_semantics=args.rps_semantics, rps_call_order=args.rps_call_order,
                               on_create=None if recording is None else recording.on_create,
                               on_step=None if recording is None else recording.on_step, backend_factory=factory)

@@ -28,6 +28,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                              "charged robots set up at its start poses; afterwards they return to the chargers")
     parser.add_argument("--robots-via", default=None, metavar="URL",
                         help="drive GRITSBots over MQTT instead of simulating them, e.g. mqtt://127.0.0.1:1883")
+    parser.add_argument("--obstacles", default=None, metavar="FILE",
+                        help="the arena's line-segment obstacles: a TOML file with [arena] obstacles = [...] (as in the "
+                             "console's --config); in verification, the jobs' barrier, the set-up and return, the live view")
     parser.add_argument("--fast", action="store_true",
                         help="simulated arena: run jobs, and the robots' set-up and return, as fast as they compute instead of "
                              "in real time (tests, benchmarks)")
@@ -166,6 +169,9 @@ def main(args: argparse.Namespace) -> int:
     if reason is not None and not args.trusted:
         raise UsageError(f"cannot confine untrusted code on this machine: {reason}; install bubblewrap "
                          "or pass --trusted")
+    from swarmdeck.console.cli.run import obstacles_argument
+
+    obstacles = obstacles_argument(args, chargers=True)  # before anything is opened: a bad file is a usage error
     fleet = min(args.robots, ChargerLayout().n_slots)
     if fleet < args.robots:
         raise UsageError(f"--robots {args.robots}: at most {fleet} robots, one per slot of the arena's charging strips")
@@ -206,7 +212,7 @@ def main(args: argparse.Namespace) -> int:
 
     guard = GuardConfig(guard_distance=args.guard_distance, max_intervention=args.guard_intervention)
     runner = ArenaRunner(service, ArenaSettings(robots_via=args.robots_via, fleet=fleet, fast=args.fast,
-                                                seed=args.seed, guard=guard), live)
+                                                seed=args.seed, guard=guard, obstacles=obstacles), live)
     try:
         interrupted = runner.recover()
     except sqlite3.DatabaseError as exc:
@@ -229,7 +235,7 @@ def main(args: argparse.Namespace) -> int:
             raise UsageError(f"--console-port {args.console_port}: {exc.strerror or exc}") from None
         runner.frame_listeners.append(view.offer)
         print(f"swarmdeck server: operator view at {view.url}", flush=True)
-    workers = VerificationWorkers(service, executor).start()
+    workers = VerificationWorkers(service, executor, obstacles=obstacles).start()
     runner.start()
     sweeper = RetentionSweeper(service).start() if args.retain_days is not None else None
     app = create_app(service, live=live, http=http)

@@ -43,6 +43,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--paced-runs", type=int, default=1, metavar="K",
                         help="raw runs that tick in real time (33 ms per tick) like the arena, so timing alone does "
                              "not tell verification apart (default 1)")
+    parser.add_argument("--obstacles", default=None, metavar="FILE",
+                        help="the arena's line-segment obstacles: a TOML file with [arena] obstacles = [...] (as in "
+                             "the console's --config); a robot touching one is a contact")
     parser.add_argument("--runs", type=int, default=8, metavar="K", help="runs per script, each without and with the barrier (default 8)")
     parser.add_argument("--seed", type=int, default=0, help="base seed of the initial conditions and disturbances (default 0)")
     parser.add_argument("--workers", type=int, default=None, metavar="W", help="local worker processes (default: number of cores)")
@@ -110,7 +113,7 @@ def _progress(total_runs: int):
 def main(args: argparse.Namespace) -> int:
     from swarmdeck.console.cli import UsageError
     from swarmdeck.console.cli.env import checked_script_env
-    from swarmdeck.console.cli.run import check_run_arguments
+    from swarmdeck.console.cli.run import check_run_arguments, obstacles_argument
     from swarmdeck.console.sandbox.confinement import ConfinementUnavailable, JailConfig, SandboxLimits
     from swarmdeck.console.sandbox.executors import LocalPoolExecutor, RayExecutor
     from swarmdeck.console.sandbox.report_html import render_html
@@ -130,7 +133,7 @@ def main(args: argparse.Namespace) -> int:
                                                                    allow_no_cgroup=args.allow_no_cgroup,
                                                                    script_env=checked_script_env(args.script_env)),
                                     initial_poses=poses, declared_by=declared_by, wall_factor=args.wall_factor,
-                                    paced_runs=args.paced_runs)
+                                    paced_runs=args.paced_runs, obstacles=obstacles_argument(args))
         executor = RayExecutor(args.ray) if args.ray else LocalPoolExecutor(args.workers)
     except (ValueError, RuntimeError) as exc:
         raise UsageError(str(exc)) from exc

@@ -38,6 +38,8 @@ BOUNDARY = (40, 40, 40)
 """the arena outline"""
 VORONOI = (60, 60, 60)
 """Voronoi edges"""
+OBSTACLE = (110, 70, 30)
+"""line-segment obstacles on the floor (core.obstacles): dark brown, drawn thick"""
 CENTROID = (200, 30, 60)
 """cell centroids"""
 CONTACT = (200, 0, 200)

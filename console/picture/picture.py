@@ -13,7 +13,7 @@ robots by construction. Units: m, rad, m/s; N robots, K active pairs, E Voronoi 
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, TypeVar
 
 import numpy as np
@@ -122,6 +122,8 @@ class Picture:
         density: φ(·, t) for :meth:`heat_map`, or None.
         run_state, behaviour, events, alerts: the Frame's, for banners and logs.
         sensors: the sensors' layer (:class:`~.sensing.SensorLayer`: ToF rays, LEDs), None without sensors.
+        obstacles: (S, 2, 2) line-segment obstacles on the floor, m (``Frame.obstacles``; empty without),
+            drawn in :data:`~.colours.OBSTACLE`, ``PictureStyle``-independent (always drawn).
     """
 
     bounds: Bounds
@@ -153,6 +155,7 @@ class Picture:
     events: tuple[str, ...]
     alerts: tuple[str, ...]
     sensors: SensorLayer | None = None
+    obstacles: NDArray[np.float64] = field(default_factory=lambda: _frozen(np.zeros((0, 2, 2))))
 
     @property
     def n(self) -> int:
@@ -188,4 +191,5 @@ def picture_of(frame: Frame, style: PictureStyle = DEFAULT_STYLE) -> Picture:
         contacts=frame.contacts.positions, goals=_frozen(np.asarray(goals, dtype=float)),
         density=frame.density, run_state=frame.run_state, behaviour=frame.behaviour,
         events=frame.events, alerts=frame.alerts, sensors=sensor_layer(frame, style),
+        obstacles=frame.obstacles.segments if frame.obstacles is not None else _frozen(np.zeros((0, 2, 2))),
     )

@@ -53,6 +53,7 @@ from swarmdeck.console.runtime.hardware import RobotsSpec, open_robots
 from swarmdeck.console.runtime.loop import ControlLoop, LoopConfig
 from swarmdeck.core.bounds import Bounds
 from swarmdeck.core.kinematics import GritsBotParams
+from swarmdeck.core.obstacles import Obstacles
 from swarmdeck.core.ports import SensedPoses
 from swarmdeck.devices.battery import recharge
 from swarmdeck.devices.chargers import ChargerLayout
@@ -75,11 +76,15 @@ class ArenaFleet:
         config: the maneuvers' limits and the assignment policy.
         wait_for_poses: networked fleet: s to wait for every robot's first pose when connecting.
         fast: simulated fleet: compute the maneuvers as fast as they go instead of in real time.
+        obstacles: the floor's line-segment obstacles (solid for simulated robots, in every loop's barrier; the
+            maneuvers route round them).
     """
 
     def __init__(self, n_robots: int, bounds: Bounds, dt: float, *, robots_via: str | None = None,
                  seed: int | None = None, charge: ArrayLike = 1.0, config: fu.UpkeepConfig = fu.UpkeepConfig(),
-                 robot: GritsBotParams | None = None, wait_for_poses: float = 5.0, fast: bool = False) -> None:
+                 robot: GritsBotParams | None = None, wait_for_poses: float = 5.0, fast: bool = False,
+                 obstacles: Obstacles | None = None) -> None:
+        self.obstacles = obstacles
         self.chargers = ChargerLayout(bounds=bounds)
         m = int(n_robots)
         if not 1 <= m <= self.chargers.n_slots:
@@ -132,7 +137,8 @@ class ArenaFleet:
         batteries, or the networked fleet's ids 0…M−1 (going on with those that report in time)."""
         return RobotsSpec(n_robots=self.n_robots, bounds=self.bounds, dt=self.dt, seed=self.seed,
                           robots_via=self.robots_via, docked=self.robots_via is None,
-                          wait_for_poses=self.wait_for_poses, partial=True, params=self.robot)
+                          wait_for_poses=self.wait_for_poses, partial=True, params=self.robot,
+                          obstacles=self.obstacles)
 
     def _connect(self) -> tuple[Any, Any]:
         """The networked fleet's ports once every robot sent a pose, or at least one did within
@@ -165,7 +171,7 @@ class ArenaFleet:
 
         source, sink = self.ports()
         cfg = LoopConfig(n_robots=self.n_robots, dt=self.dt, bounds=self.bounds, seed=self.seed,
-                         behaviour="rendezvous")
+                         behaviour="rendezvous", obstacles=self.obstacles)
         loop = ControlLoop(cfg, source=source, sink=sink, clock=time.monotonic if self.real_time else None,
                            robot=self.robot)
         loop.subscribe(self._note_frame)
@@ -222,7 +228,7 @@ class ArenaFleet:
         source, sink = self.ports()
         frame = loop.tick()
         maneuver = fu.set_up(self._view(frame, sink), goals, self.bounds, self.chargers, self.robot,
-                             self.config.fleet.safety_distance, self.config)
+                             self.config.fleet.safety_distance, self.config, obstacles=frame.obstacles)
         with self._lock:
             self._assigned = {int(i): int(job_id) for i in maneuver.ids}
         result = self._run(loop, maneuver, pace, stop, on_loop)
@@ -242,7 +248,8 @@ class ArenaFleet:
         loop, pace = self._loop()
         _, sink = self.ports()
         frame = loop.tick()
-        maneuver = fu.return_to_chargers(self._view(frame, sink), self.bounds, self.chargers, self.robot, self.config)
+        maneuver = fu.return_to_chargers(self._view(frame, sink), self.bounds, self.chargers, self.robot, self.config,
+                                         obstacles=frame.obstacles)
         return self._run(loop, maneuver, pace, stop, on_loop)
 
     def _run(self, loop: ControlLoop, maneuver: fu.FleetManeuver, pace: Any, stop: Callable[[], bool],

@@ -27,9 +27,10 @@ edges, K active pairs)::
     robot_radius body radius of the robot glyph, m
     rings        {"changed": …, "virtual": …} ring radii round changed / virtual robots, × robot_radius
     palette      {floor, grid, boundary, voronoi, centroid, changed, virtual, label, heading, stopped, sensor_ray,
-                 sensor_hit}: "#rrggbb"
+                 sensor_hit, obstacle}: "#rrggbb"
     sensors      only when the Frame has sensors (the picture's sensor layer): {rays (R, 2, 2) ToF rays from
                  sensor to end point, rounded to 1 mm; leds (N,) "#rrggbb" or null for an unlit LED}
+    obstacles    (S, 2, 2) line-segment obstacles, m ([] without)
 
 A message is a few kB (N = 12); the pages send at most ten a second.
 """
@@ -51,10 +52,10 @@ DENSITY_PX_PER_M = 20.0  # the canvas smooths the small image up; 64 × 40 px on
 
 PALETTE: dict[str, str] = dict(zip(
     ("floor", "grid", "boundary", "voronoi", "centroid", "changed", "virtual", "label", "heading", "stopped",
-     "sensor_ray", "sensor_hit"),
+     "sensor_ray", "sensor_hit", "obstacle"),
     pal.hex_colors(np.array([pal.LUT[0], (150, 150, 150), pal.BOUNDARY, pal.VORONOI, pal.CENTROID, pal.CHANGED,
-                             pal.VIRTUAL_RING, pal.LABEL, pal.HEADING, pal.STOPPED, pal.SENSOR_RAY, pal.SENSOR_HIT],
-                            dtype=np.uint8)),
+                             pal.VIRTUAL_RING, pal.LABEL, pal.HEADING, pal.STOPPED, pal.SENSOR_RAY, pal.SENSOR_HIT,
+                             pal.OBSTACLE], dtype=np.uint8)),
     strict=True))
 """the picture's colours as the canvas needs them (``palette`` of every message)"""
 
@@ -96,6 +97,7 @@ def scene_message(frame: Frame, seq: int) -> dict[str, Any]:
         "density": density_png(pic), "events": list(pic.events),
         "robot_radius": ROBOT_RADIUS, "rings": {"changed": CHANGED_RING, "virtual": VIRTUAL_RING_RADIUS},
         "palette": PALETTE,
+        "obstacles": np.round(pic.obstacles, 4).tolist(),
     }
     if pic.sensors is not None:  # the sensors' layer, only when the Frame has sensors
         layer = pic.sensors

@@ -99,6 +99,7 @@ from swarmdeck.console.sandbox.start_poses import arena_start
 from swarmdeck.console.sandbox.verification import user_message, without_run_folder
 from swarmdeck.core.bounds import DEFAULT_BOUNDS, Bounds
 from swarmdeck.core.constants import CONTROL_PERIOD
+from swarmdeck.core.obstacles import Obstacles
 from swarmdeck.core.service_thread import ServiceThread
 from swarmdeck.devices.clock import RealTimePacer
 from swarmdeck.safety.guard import GuardConfig
@@ -122,6 +123,8 @@ class ArenaSettings:
         upkeep: set-up and return limits, which robots may be assigned (``min_charge``).
         guard: the guard of a bypassed barrier (guard distance, intervention threshold); None runs a bypass without
             it — for trusted tests only (contacts on purpose): no command-line option or file sets it.
+        obstacles: the floor's line-segment obstacles (``swarmdeck server --obstacles``): in the jobs' barrier, the
+            simulation, the fleet's maneuvers and the recordings.
     """
 
     robots_via: str | None = None
@@ -133,6 +136,7 @@ class ArenaSettings:
     charge: float | tuple[float, ...] = 1.0
     upkeep: UpkeepConfig = field(default_factory=UpkeepConfig)
     guard: GuardConfig | None = field(default_factory=GuardConfig)
+    obstacles: Obstacles | None = None
 
     @property
     def real_time(self) -> bool:
@@ -181,7 +185,7 @@ class ArenaRunner:
         self.exports = JobExports(service)  # CSV, replay, video of ended jobs, in a child process
         self.fleet = ArenaFleet(settings.fleet, settings.bounds, settings.dt, robots_via=settings.robots_via,
                                 seed=settings.seed, charge=np.asarray(settings.charge, dtype=float),
-                                config=settings.upkeep, fast=settings.fast)
+                                config=settings.upkeep, fast=settings.fast, obstacles=settings.obstacles)
         self.fleet.frame_listeners = self.frame_listeners  # the operator's view sees set-ups and returns too
         self._halt = threading.Event()  # fleet maneuvers must stop now (emergency stop, shutdown)
         self._idle_mark = time.monotonic()  # wall time the simulated fleet has charged up to
@@ -416,7 +420,8 @@ class ArenaRunner:
         bypass = bool(job.bypass)
         # the script's job knows nothing of the console's circling density: none is computed, drawn or recorded
         loop_config = LoopConfig(n_robots=n, dt=s.dt, bounds=s.bounds, seed=s.seed, behaviour="rendezvous",
-                                 safety=SafetyParams(enabled=True), density=DensityParams(moving=False))
+                                 safety=SafetyParams(enabled=True), density=DensityParams(moving=False),
+                                 obstacles=s.obstacles)
         state: dict[str, Any] = {"loop": None, "recorder": None, "setup_failed": None, "tally": None}
         notes: list[str] = []
 

@@ -23,6 +23,7 @@ from swarmdeck.console.portal.service import PortalService
 from swarmdeck.console.sandbox.confinement import ConfinementUnavailable, SandboxLimits
 from swarmdeck.console.sandbox.report_html import render_html
 from swarmdeck.console.sandbox.verification import VerificationCancelled, VerificationConfig, verify
+from swarmdeck.core.obstacles import Obstacles
 from swarmdeck.core.service_thread import ServiceThread
 
 
@@ -36,8 +37,10 @@ def make_executor(workers: int | None = None, ray: str | None = None) -> Any:
 class VerificationWorkers:
     """The thread that verifies queued jobs one after another (each job's runs in parallel on the executor)."""
 
-    def __init__(self, service: PortalService, executor: Any, *, poll_s: float = 1.0) -> None:
+    def __init__(self, service: PortalService, executor: Any, *, poll_s: float = 1.0,
+                 obstacles: Obstacles | None = None) -> None:
         self.service, self.executor, self.poll_s = service, executor, float(poll_s)
+        self.obstacles = obstacles  # the arena's line-segment obstacles: every verification run has them
         self._thread = ServiceThread(self._run, "swarmdeck-portal-verify", join_timeout=10.0,
                                       wake=self.service.notify)
         self.verified = 0
@@ -70,7 +73,7 @@ class VerificationWorkers:
                                   seed=cfg.verify_seed + int(job.id), trusted=cfg.trusted,
                                   jail=cfg.jail(),
                                   limits=SandboxLimits(tick_s=cfg.tick_budget_s),
-                                  initial_poses=poses)
+                                  initial_poses=poses, obstacles=self.obstacles)
 
     def verify_job(self, job: Job) -> None:
         """Verify one claimed job and record the verdict (never raises)."""

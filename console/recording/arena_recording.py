@@ -34,7 +34,8 @@ def arena_frame(arena: Any, poses: NDArray[np.float64], tick: int, behaviour: st
                if diag is not None else BarrierFrame(enabled=False, intervention=np.zeros(n)))
     return Frame(tick=tick, time=tick * dt, run_time=tick * dt, dt=dt, bounds=arena.config.bounds,
                  lookahead=arena.ell, poses=poses, ids=np.arange(n), nominal=arena.last_nominal, safe=safe, v=v, w=w,
-                 barrier=barrier, behaviour=behaviour, params=dict(params or {}), **extra)
+                 barrier=barrier, behaviour=behaviour, params=dict(params or {}),
+                 **{"obstacles": getattr(arena.config, "obstacles", None), **extra})
 
 
 def sensors_frame(arena: Any) -> SensorsFrame | None:
@@ -75,7 +76,8 @@ class ArenaRecording:
         from swarmdeck.console.runtime.loop import LoopConfig, SafetyParams
 
         config = LoopConfig(n_robots=arena.n, dt=arena.config.dt, bounds=Bounds.of(arena.config.bounds), seed=self.seed,
-                            behaviour=self.behaviour, safety=SafetyParams(enabled=arena.safety is not None))
+                            behaviour=self.behaviour, safety=SafetyParams(enabled=arena.safety is not None),
+                            obstacles=getattr(arena.config, "obstacles", None))
         path = self._path(len(self._recorders))
         self.paths.append(path)
         self._recorders[id(arena)] = Recorder(path, session_metadata(config, None, source="simulation",

@@ -70,6 +70,11 @@ own, and seeking, recovery of a cut-off file and re-simulation never need an ear
 :func:`decode_frame` takes the previous frame of the chunk (``previous=``) for a predicted
 frame and raises :class:`MissingReference` without it.
 
+Obstacles (formats 2 and 3): ``"obstacles": [[[x0, y0], [x1, y1]], ...]`` (m) in every keyframe of a
+frame with obstacles, and in a predicted frame only when they differ from its reference frame's
+(``[]``: none any more); a predicted frame without the key has its reference frame's. Obstacles are
+static in a run, so they cost one small array per chunk; absent in older recordings (none).
+
 Frame format 1 (recording format 1): ``Frame.to_dict()`` as plain JSON, every
 float with 17 digits; still read.
 """
@@ -93,6 +98,7 @@ from swarmdeck.console.runtime.frame import (
     _dec_float,
     _enc_float,
     filled,
+    obstacles_dict,
 )
 from swarmdeck.console.runtime.sensors_frame import SensorsFrame
 from swarmdeck.core.bounds import Bounds
@@ -208,11 +214,23 @@ def frame_message(frame: Frame, previous: Frame | None = None) -> dict[str, Any]
             cov["centroids"] = pack_array(c.centroids, "<f8")
             cov["masses"] = pack_array(c.masses, "<f8")
         d["coverage"] = cov
-    if previous is not None and can_predict(frame, previous):
+    predicted = previous is not None and can_predict(frame, previous)
+    d.update(_obstacles_message(frame, previous if predicted else None))
+    if previous is not None and predicted:
         d["pred"] = {"ref": int(previous.tick), "crc": exact_crc(frame.ids, frame.poses, frame.v, frame.w)}
         for name, dtype in EXACT_FIELDS:
             d[name] = pack_array(_zigzag(_bits(getattr(frame, name), dtype) - _predicted_bits(previous, name)), "<u8")
     return d
+
+
+def _obstacles_message(frame: Frame, reference: Frame | None) -> dict[str, Any]:
+    """The ``obstacles`` key of a keyframe (``reference`` None: when there are obstacles) or of a frame
+    predicted from ``reference`` (only when they changed; ``[]`` when they went away)."""
+    if reference is None:
+        return obstacles_dict(frame.obstacles)
+    if frame.obstacles == reference.obstacles:
+        return {}
+    return obstacles_dict(frame.obstacles) or {"obstacles": []}
 
 
 def encode_frame(frame: Frame, previous: Frame | None = None) -> bytes:
@@ -327,7 +345,10 @@ def decode_frame(data: bytes | Mapping[str, Any], previous: Frame | None = None)
     if fmt not in (COMPACT_FORMAT, CODEC_FORMAT):
         raise ValueError(f"unsupported frame format {fmt!r} (this swarmdeck reads formats {list(READABLE_FORMATS)})")
     try:
-        exact = _predicted_fields(d, previous) if fmt == CODEC_FORMAT and d.get("pred") is not None else {}
+        predicted = fmt == CODEC_FORMAT and d.get("pred") is not None
+        exact = _predicted_fields(d, previous) if predicted else {}
+        if predicted and "obstacles" not in d and previous is not None and previous.obstacles is not None:
+            d = {**d, "obstacles": previous.obstacles}  # unchanged since the reference frame
         return _decode_v2(d, exact)
     except KeyError as exc:
         raise ValueError(f"frame is missing field {exc.args[0]!r}") from None
@@ -409,6 +430,7 @@ def _decode_v2(d: Mapping[str, Any], exact: Mapping[str, np.ndarray]) -> Frame:
         behaviour=shell.behaviour, run_state=shell.run_state, params=shell.params, events=shell.events,
         alerts=shell.alerts, health=shell.health, timing=shell.timing, image_ref=shell.image_ref, **fleet,
         sensors=sensors,
+        obstacles=shell.obstacles,
     )
 
 

@@ -55,6 +55,7 @@ from swarmdeck.console.picture.colours import (
     HEADING,
     LABEL,
     LUT,
+    OBSTACLE,
     SAFETY_RING,
     SENSOR_HIT,
     SENSOR_RAY,
@@ -252,6 +253,9 @@ class FrameRenderer:
         aa, sh = cv2.LINE_AA, _SHIFT
         if len(pic.edges):
             cv2.polylines(img, list(lay.fixed(pic.edges)), False, VORONOI, 1, aa, sh)  # thick AA lines cost 4×
+        if len(pic.obstacles):  # line-segment obstacles: thick, 3 cm on the floor
+            thick = max(2, round(0.03 * lay.scale))
+            cv2.polylines(img, list(lay.fixed(pic.obstacles)), False, OBSTACLE, thick, aa, sh)
         if len(pic.centroids):
             d = 0.018 * np.array([[1.0, 0.0], [0.0, 1.0], [-1.0, 0.0], [0.0, -1.0]])
             cv2.fillPoly(img, list(lay.fixed(pic.centroids[:, None, :] + d[None])), CENTROID, aa, sh)

@@ -70,6 +70,7 @@ from swarmdeck.console.picture.colours import (
     CONTACT,
     HEADING,
     LABEL,
+    OBSTACLE,
     PAIR,
     SENSOR_HIT,
     SENSOR_RAY,
@@ -362,17 +363,24 @@ class FoxgloveEncoder:
             texts = [fm.TextPrimitive(pose=fm.Pose(position=fm.Vector3(x=x, y=y + 1.4 * r, z=0.05)),
                                       billboard=True, font_size=14.0, scale_invariant=True, color=ink, text=str(i))
                      for x, y, i in zip(xs, ys, frame.ids.tolist())]
-        return self._scene(self._entity(ns, "arena", lines=[border]),
+        return self._scene(self._entity(ns, "arena", lines=[border, *self._obstacle_lines(frame)]),
                            self._entity(ns, "robots", cylinders=cyl, arrows=arrows, texts=texts))
 
-    def arena(self, ns: int) -> bytes:
-        """SceneUpdate: the arena boundary only (``/foxglove/robots`` of a packed recording)."""
+    def _obstacle_lines(self, frame: Frame | None) -> list[Any]:
+        """The frame's line-segment obstacles (the picture's ``obstacles``) as one LINE_LIST, or none."""
+        if frame is None or frame.obstacles is None:
+            return []
+        return [self._line_list(frame.obstacles.segments, 0.005, 0.03, self._color(OBSTACLE))]
+
+    def arena(self, ns: int, frame: Frame | None = None) -> bytes:
+        """SceneUpdate: the arena boundary and the ``frame``'s obstacles only (``/foxglove/robots`` of a packed
+        recording)."""
         fm = self.fm
         x0, x1, y0, y1 = self.bounds
         border = fm.LinePrimitive(type=fm.LinePrimitiveLineType.LineLoop, thickness=0.01,
                                   points=[fm.Point3(x=x, y=y, z=0.0) for x, y in ((x0, y0), (x1, y0), (x1, y1), (x0, y1))],
                                   color=self._color(BOUNDARY))
-        return self._scene(self._entity(ns, "arena", lines=[border]))
+        return self._scene(self._entity(ns, "arena", lines=[border, *self._obstacle_lines(frame)]))
 
     def robot_points(self, frame: Frame, ns: int) -> bytes:
         """PointCloud: one point a robot at disc height, x, y, z, yaw (float32: m, m, m, rad) and its
@@ -538,7 +546,7 @@ class FoxgloveEncoder:
             self._scene_period = self.config.scene_period(frame.n)
             self._next_scene = frame.time + self._scene_period
             if self.config.packed:
-                yield TOPIC_ROBOTS, ns, self.arena(ns)
+                yield TOPIC_ROBOTS, ns, self.arena(ns, frame)
                 yield TOPIC_ROBOT_POINTS, ns, self.robot_points(frame, ns)
             else:
                 yield TOPIC_ROBOTS, ns, self.robots(frame, ns)

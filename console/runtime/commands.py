@@ -103,7 +103,8 @@ class OperatorCommands:
         ``pairs`` False: walls and obstacles only (the guard's hard layer)."""
         cfg = self.config
         return barrier_filter(self.robot, cfg.bounds, cfg.dt, safety_distance=p.safety_distance, gamma=p.gamma,
-                              class_k=p.class_k, max_speed=cfg.max_speed, mode=p.mode, pairs=pairs)
+                              class_k=p.class_k, max_speed=cfg.max_speed, mode=p.mode, pairs=pairs,
+                              **({} if cfg.obstacles is None else {"obstacles": cfg.obstacles}))
 
     def _queue(self, event: ev.OperatorEvent) -> None:
         with self._lock:

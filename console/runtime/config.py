@@ -12,6 +12,8 @@ Tables (every key optional; defaults from REFERENCE.md)::
     [safety]    enabled, safety_distance, gamma, class_k, mode ("auto" | "centralised" | "distributed")
     [density]   moving, radius, period, sigma, weight, floor, bump_sigma, bump_weight
     [inputs]    see swarmdeck.inputs.InputConfig (listeners, density, bounds)
+    [arena]     obstacles = [[[x0, y0], [x1, y1]], {polygon = [[x, y], ...]}, {polyline = [[x, y], ...]}]
+                (line-segment obstacles, m: solid in the simulator, kept clear by the barrier; core.obstacles)
     [recording] foxglove_channels = true (as in [console]; give it in one table), chunk_frames = 8
                 (frames per MCAP chunk, each chunk starts with a keyframe), robot_rate = 3000 (robots per
                 second the per-robot Foxglove scene channels carry: N = 1000 → 3 scenes/s), packed = false
@@ -39,8 +41,10 @@ from swarmdeck.console.runtime.params import (
 )
 from swarmdeck.core.checks import in_range
 from swarmdeck.core.config import ConfigError, check_keys, from_mapping, read_toml
+from swarmdeck.core.obstacles import ObstacleError, Obstacles
 
-TABLES = ("console", "behaviour", "safety", "density", "inputs", "recording")
+TABLES = ("console", "behaviour", "safety", "density", "inputs", "recording", "arena")
+ARENA_KEYS = ("obstacles",)
 RECORDING_KEYS = ("foxglove_channels", "chunk_frames", "robot_rate", "packed", "lines_period")
 # [console] key -> LoopConfig field (errors name the key, not the field), from the parameters' declarations
 LOOP_KEYS = toml_keys(LoopConfig)
@@ -88,6 +92,28 @@ def _build(cls: type, doc: dict, name: str, path: Path, convert: dict[str, Any] 
                         template=_UNKNOWN, source=path)
 
 
+def _arena_table(doc: dict, path: Path) -> dict[str, Any]:
+    """The ``[arena]`` table's LoopConfig fields: ``obstacles`` as :class:`~swarmdeck.core.obstacles.Obstacles`
+    (ConfigFileError naming the file, the key and the segment otherwise)."""
+    arena = check_keys(doc.get("arena", {}), ARENA_KEYS, "[arena]", error=ConfigFileError, template=_UNKNOWN,
+                       source=path)
+    if "obstacles" not in arena:
+        return {}
+    try:
+        return {"obstacles": Obstacles.from_config(arena["obstacles"])}
+    except ValueError as exc:
+        raise ConfigFileError(f"{path}: [arena] obstacles: {exc}") from None
+
+
+def read_obstacles(path: str | Path) -> Obstacles | None:
+    """The ``[arena] obstacles`` of TOML file ``path`` (other tables are ignored: a console config works), None
+    when it has none; ConfigFileError naming the file, the key and the segment otherwise (``swarmdeck run
+    --obstacles``). The segments are checked against the arena's bounds where the Arena is built."""
+    p = Path(path)
+    doc = read_toml(p, ConfigFileError)
+    return _arena_table(doc, p).get("obstacles")
+
+
 def load_settings(path: str | Path) -> ConsoleSettings:
     """Read and validate a console configuration file."""
     p = Path(path)
@@ -101,6 +127,7 @@ def load_settings(path: str | Path) -> ConsoleSettings:
     dp = _build(DensityParams, doc, "density", p, converters(DensityParams))
     convert = converters(LoopConfig)
     loop_kw: dict[str, Any] = {"behaviour_params": bp, "safety": sp, "density": dp}
+    loop_kw.update(_arena_table(doc, p))
     for key, target in LOOP_KEYS.items():  # one key at a time, so the error names the key written
         if key not in con:
             continue
@@ -117,6 +144,8 @@ def load_settings(path: str | Path) -> ConsoleSettings:
                 raise ValueError("give arena or bounds, not both")
             loop_kw["bounds"] = arena_bounds(con["arena"])
         loop = LoopConfig(**loop_kw)
+    except ObstacleError as exc:  # the segments against the arena's bounds
+        raise ConfigFileError(f"{p}: [arena] obstacles: {exc}") from None
     except (TypeError, ValueError) as exc:
         raise ConfigFileError(f"{p}: [console]: {exc}") from None
     host = con.get("host", "127.0.0.1")

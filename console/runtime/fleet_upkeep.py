@@ -43,6 +43,7 @@ from swarmdeck.core.bounds import Bounds
 from swarmdeck.core.checks import require_positive
 from swarmdeck.core.constants import SAFETY_DISTANCE
 from swarmdeck.core.kinematics import GritsBotParams
+from swarmdeck.core.obstacles import START_CLEARANCE, Obstacles
 from swarmdeck.core.ports import ReportsRobotHealth, rows_of
 from swarmdeck.devices.battery import BatteryParams, charge_from_voltage
 from swarmdeck.devices.chargers import ChargerLayout
@@ -268,9 +269,10 @@ def random_start_poses(n: int, bounds: Bounds, chargers: ChargerLayout, seed: in
 # ---------------------------------------------------------------------------- planning
 def set_up(view: FleetView, goals: ArrayLike, bounds: Bounds, chargers: ChargerLayout,
            robot: GritsBotParams = GritsBotParams(), safety_distance: float = SAFETY_DISTANCE,
-           config: UpkeepConfig = UpkeepConfig()) -> FleetManeuver:
+           config: UpkeepConfig = UpkeepConfig(), obstacles: Obstacles | None = None) -> FleetManeuver:
     """A :class:`FleetManeuver` that sets N assigned robots up at ``goals`` ``(N, 3)``; robot k of the
-    experiment is ``maneuver.ids[k]``.
+    experiment is ``maneuver.ids[k]``; ``obstacles``: the floor's line segments (the maneuver routes round them;
+    a goal on one is refused naming it).
 
     Raises ValueError naming the bad pose (outside, too close to another pose or to a docked robot)
     or, as :class:`~swarmdeck.devices.fleet.assignment.AssignmentError`, the robots left out and why
@@ -280,6 +282,8 @@ def set_up(view: FleetView, goals: ArrayLike, bounds: Bounds, chargers: ChargerL
     if g.dtype.kind in "iu":
         g = g.astype(float)
     goals_arr = check_start_poses(g, bounds, robot, safety_distance=safety_distance)
+    if obstacles is not None:
+        obstacles.check_clear(goals_arr, START_CLEARANCE, "start pose")
     n = len(goals_arr)
     if n > len(view.ids):
         raise ValueError(f"{n} start poses but only {len(view.ids)} robots in the arena")
@@ -290,16 +294,16 @@ def set_up(view: FleetView, goals: ArrayLike, bounds: Bounds, chargers: ChargerL
     if len(idle):  # the start poses must keep clear of the robots that stay where they are
         check_start_poses(goals_arr, bounds, robot, safety_distance=safety_distance, obstacles=view.poses[idle, :2],
                           obstacle_names=[f"robot {int(i)} (staying)" for i in view.ids[idle]])
-    maneuver = Maneuver(goals_arr, bounds, robot, config.fleet.maneuver)
+    maneuver = Maneuver(goals_arr, bounds, robot, config.fleet.maneuver).route_around(obstacles)
     return FleetManeuver(SET_UP, view.ids[a.rows], maneuver, config)
 
 
 def return_to_chargers(view: FleetView, bounds: Bounds, chargers: ChargerLayout,
                        robot: GritsBotParams = GritsBotParams(), config: UpkeepConfig = UpkeepConfig(),
-                       ids: ArrayLike | None = None) -> FleetManeuver:
+                       ids: ArrayLike | None = None, obstacles: Obstacles | None = None) -> FleetManeuver:
     """A :class:`FleetManeuver` docking every robot on the floor (or only ``ids``) on a free charger slot
-    (least total travel; docked robots keep theirs). ValueError when there are fewer free slots than
-    robots to dock, or ``ids`` names robots the arena does not have."""
+    (least total travel; docked robots keep theirs; round the line-segment ``obstacles``). ValueError when there
+    are fewer free slots than robots to dock, or ``ids`` names robots the arena does not have."""
     slot = chargers.docked_slot(view.poses)
     floor = slot < 0
     if ids is not None:
@@ -315,7 +319,8 @@ def return_to_chargers(view: FleetView, bounds: Bounds, chargers: ChargerLayout,
     slots = choose_slots(view.poses[rows, :2], free, chargers)  # ValueError when too few are free
     fleet = config.fleet  # the plan keeps the operator's D_s and γ; robots staying docked hold their slots
     maneuver = return_maneuver(view.poses[rows], slots, chargers, robot, fleet.maneuver, occupied=slot[slot >= 0],
-                               safety_distance=fleet.safety_distance, gamma=fleet.gamma)
+                               safety_distance=fleet.safety_distance, gamma=fleet.gamma,
+                               retrace=obstacles is None).route_around(obstacles)  # the retrace plan knows none
     return FleetManeuver(RETURN, view.ids[rows], maneuver, config)
 
 

@@ -54,6 +54,9 @@ active barrier pairs, B density bumps, C contacts)::
     charging      (N,) bool, robot on a charger; written only when some robot is charging
     sensors       what the robots sensed (ToF distances, LEDs, encoders, IMU): ``SensorsFrame``
                   (console/runtime/sensors_frame.py has its layout); written only when present
+    obstacles     [[[x0, y0], [x1, y1]], ...] m, the line-segment obstacles on the floor
+                  (``core.obstacles.Obstacles``); written only when there are some (the recording codec
+                  writes them in keyframes and when they change, :func:`obstacles_dict`)
 
 The browser GUI's editing state (bump handles, plots) is not part of a Frame;
 the density the loop used is.
@@ -73,6 +76,7 @@ from swarmdeck.console.runtime.sensors_frame import SensorsFrame
 from swarmdeck.core.bounds import DEFAULT_BOUNDS, Bounds
 from swarmdeck.core.constants import CONTROL_PERIOD, LOOKAHEAD, SAFETY_DISTANCE
 from swarmdeck.core.kinematics import lookahead_points
+from swarmdeck.core.obstacles import Obstacles
 from swarmdeck.coverage.density import GaussianMixture
 from swarmdeck.coverage.geometry import GeometryConfig
 
@@ -148,6 +152,20 @@ def _ro(a: ArrayLike, dtype: type, shape_tail: tuple[int, ...], name: str) -> ND
 
 def _freeze_map(m: Mapping[str, Any] | None) -> Mapping[str, Any]:
     return MappingProxyType(dict(m or {}))
+
+
+def obstacles_of(value: Any) -> Obstacles | None:
+    """A Frame's ``obstacles`` from what was given (Obstacles, an (M, 2, 2) array, nested lists, None):
+    None when there are none; ValueError naming the segment for a malformed one."""
+    if value is None:
+        return None
+    return Obstacles.of(value) or None
+
+
+def obstacles_dict(obstacles: Obstacles | None) -> dict[str, Any]:
+    """``{"obstacles": [[[x0, y0], [x1, y1]], ...]}`` when there are obstacles, else ``{}`` (older readers and
+    recordings without obstacles read as none)."""
+    return {} if obstacles is None else {"obstacles": obstacles.to_list()}
 
 
 def _set(obj: Any, name: str, value: Any) -> None:
@@ -411,8 +429,10 @@ class Frame:
     battery: FloatArray | None = None
     charging: NDArray[np.bool_] | None = None
     sensors: SensorsFrame | None = None
+    obstacles: Obstacles | None = None
 
     def __post_init__(self) -> None:
+        _set(self, "obstacles", obstacles_of(self.obstacles))
         _set(self, "tick", int(self.tick))
         _set(self, "time", float(self.time))
         _set(self, "dt", float(self.dt))
@@ -501,6 +521,7 @@ class Frame:
             "image_ref": self.image_ref,
             **self.fleet_dict(),
             **({} if self.sensors is None else {"sensors": self.sensors.to_dict(_enc_array)}),
+            **obstacles_dict(self.obstacles),
         }
 
     def fleet_dict(self) -> dict[str, Any]:
@@ -551,6 +572,7 @@ class Frame:
                 battery=None if d.get("battery") is None else _dec_array(d["battery"], float, (), "battery"),
                 charging=None if d.get("charging") is None else _dec_array(d["charging"], bool, (), "charging"),
                 sensors=None if d.get("sensors") is None else SensorsFrame.from_dict(d["sensors"], _dec_array),
+                obstacles=d.get("obstacles"),
             )
         except KeyError as exc:
             raise ValueError(f"frame is missing field {exc.args[0]!r}") from None

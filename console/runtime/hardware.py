@@ -34,6 +34,7 @@ from numpy.typing import NDArray
 from swarmdeck.core.bounds import DEFAULT_BOUNDS, Bounds, check_bounds
 from swarmdeck.core.constants import CONTROL_PERIOD
 from swarmdeck.core.kinematics import GritsBotParams
+from swarmdeck.core.obstacles import Obstacles
 from swarmdeck.core.ports import CommandSink, PoseSource
 
 if TYPE_CHECKING:
@@ -60,6 +61,8 @@ class RobotsSpec:
         wait_for_poses: MQTT: s to wait for the first pose of every robot.
         partial: MQTT with ``n_robots``: go on after the wait if at least one robot reported.
         params: the robot model.
+        obstacles: line-segment obstacles on the floor (:class:`~swarmdeck.core.obstacles.Obstacles`): solid for
+            simulated robots (and virtual ones); a charger slot on one is refused naming both.
     """
 
     n_robots: int | None = 12
@@ -75,6 +78,7 @@ class RobotsSpec:
     wait_for_poses: float = 5.0
     partial: bool = False
     params: GritsBotParams = field(default_factory=GritsBotParams)
+    obstacles: Obstacles | None = None
 
     def __post_init__(self) -> None:
         check_bounds(self.bounds, "RobotsSpec.bounds")
@@ -129,7 +133,7 @@ def open_robots(spec: RobotsSpec) -> RobotPorts:
     """
     from swarmdeck.devices.simulator import ArenaConfig
 
-    arena = ArenaConfig(bounds=spec.bounds, dt=spec.dt, seed=spec.seed)
+    arena = ArenaConfig(bounds=spec.bounds, dt=spec.dt, seed=spec.seed, obstacles=spec.obstacles)
     truth: Callable[[float], NDArray[np.float64]]
     if spec.robots_via is not None:
         net, _ = mqtt_robots(spec.robots_via, None if spec.n_robots is None else np.arange(spec.n_robots),
@@ -145,6 +149,9 @@ def open_robots(spec: RobotsSpec) -> RobotPorts:
             from swarmdeck.devices.chargers import ChargerLayout
 
             chargers = ChargerLayout(bounds=spec.bounds)
+            from swarmdeck.devices.fleet.routing import check_chargers_clear
+
+            check_chargers_clear(arena.obstacles, chargers)
         sim = SimulatedRobots(int(spec.n_robots or 0), arena, spec.params, chargers=chargers,
                               start_docked=spec.docked, charge=spec.charge)
         source = sink = sim

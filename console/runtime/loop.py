@@ -114,7 +114,8 @@ class ControlLoop(OperatorCommands):
         cfg = config if config is not None else LoopConfig()
         robot = robot if robot is not None else GritsBotParams()
         if source is None or sink is None:
-            sim = SimulatedRobots(cfg.n_robots, ArenaConfig(bounds=cfg.bounds, dt=cfg.dt, seed=cfg.seed), robot)
+            sim = SimulatedRobots(cfg.n_robots, ArenaConfig(bounds=cfg.bounds, dt=cfg.dt, seed=cfg.seed,
+                                                                  obstacles=cfg.obstacles), robot)
             source = source if source is not None else sim
             sink = sink if sink is not None else sim
         self.source, self.sink = source, sink

@@ -31,6 +31,7 @@ from swarmdeck.core.checks import in_range, require_in_range
 from swarmdeck.core.config import floats
 from swarmdeck.core.constants import CONTROL_PERIOD, ROBOT_DIAMETER, SAFETY_DISTANCE
 from swarmdeck.core.errors import SwarmdeckError
+from swarmdeck.core.obstacles import Obstacles
 from swarmdeck.coverage.densities import s1_density
 from swarmdeck.devices import ArenaConfig
 
@@ -231,6 +232,8 @@ class LoopConfig:
     # the robots' sensors in every Frame (issue 28.1: Robotarium 2.0's ToF sensors, encoders, IMU and LEDs;
     # swarmdeck.sensing), seeded from `seed`; robots whose firmware reports readings give theirs
     sensors: bool = param(False)
+    # line-segment obstacles on the floor ([arena] obstacles; core.obstacles): static for the run, not an operator knob
+    obstacles: Obstacles | None = None
 
     @property
     def script_budget_s(self) -> float:
@@ -241,7 +244,8 @@ class LoopConfig:
 
     def __post_init__(self) -> None:
         check_params(self)
-        ArenaConfig(bounds=self.bounds, dt=self.dt)  # validates bounds
+        arena = ArenaConfig(bounds=self.bounds, dt=self.dt, obstacles=self.obstacles)  # validates bounds, obstacles
+        object.__setattr__(self, "obstacles", arena.obstacles)
 
 
 #: The groups whose parameters a Frame carries, in ``Frame.params`` order.
@@ -261,6 +265,8 @@ def frame_keys(cls: type) -> dict[str, str]:
 
 # ---------------------------------------------------------------------------------------------- (de)serialising
 def _plain(value: Any) -> Any:
+    if isinstance(value, Obstacles):
+        return value.to_list()
     if isinstance(value, tuple):
         return [_plain(v) for v in value]
     return value
@@ -271,7 +277,7 @@ def to_dict(obj: Any) -> dict[str, Any]:
     out: dict[str, Any] = {}
     for f in dataclasses.fields(obj):
         v = getattr(obj, f.name)
-        out[f.name] = to_dict(v) if dataclasses.is_dataclass(v) else _plain(v)
+        out[f.name] = to_dict(v) if dataclasses.is_dataclass(v) and not isinstance(v, Obstacles) else _plain(v)
     return out
 
 

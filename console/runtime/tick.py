@@ -397,5 +397,6 @@ class Ticker:
             behaviour=behaviour, run_state=run_state, params=params, events=events, alerts=alerts, health=health,
             timing=timing, image_ref=image_ref if isinstance(image_ref, str) else None,
             is_virtual=sensed.is_virtual, battery=sensed.battery, charging=sensed.charging, sensors=sensors,
+            obstacles=self.config.obstacles,
         )
 

@@ -36,7 +36,8 @@ class TickSensing:
         seed = self.config.seed
         rng = np.random.default_rng(None if seed is None else [int(seed), _CONSOLE_SENSING_STREAM])
         self._v, self._w = np.zeros(n), np.zeros(n)
-        return Sensors(n, self.sensing, rng=rng, bounds=self.config.bounds)
+        obstacles = None if self.config.obstacles is None else self.config.obstacles.segments
+        return Sensors(n, self.sensing, rng=rng, bounds=self.config.bounds, obstacles=obstacles)
 
     def read(self, source: object, poses: NDArray[np.float64], v: NDArray[np.float64], w: NDArray[np.float64]
              ) -> SensorsFrame:

@@ -60,6 +60,7 @@ from swarmdeck.console.sandbox.plant import ArenaPlant, Disturbances, SandboxPla
 from swarmdeck.console.sandbox.run import run_sandboxed
 from swarmdeck.console.sandbox.start_poses import arena_start, check_initial_poses, perturb
 from swarmdeck.core.checks import in_range
+from swarmdeck.core.obstacles import START_CLEARANCE, Obstacles
 from swarmdeck.core.service_thread import ServiceThread
 from swarmdeck.devices.arena import Arena
 from swarmdeck.devices.initial_conditions import random_initial_poses
@@ -97,6 +98,9 @@ class VerificationConfig:
         boot_s: wall s each run may take on top for its start-up (jail, imports, the script's top level).
         paced_runs: raw runs (indices 0 … paced_runs − 1) that tick in real time, one control period
             per tick, like the arena.
+        obstacles: the arena's line-segment obstacles (:class:`~swarmdeck.core.obstacles.Obstacles`), or None:
+            solid in every run, kept clear by the barrier in the wrapped runs; a robot touching one is a contact
+            (a wrapped run with one is rejected, a raw run with one refuses the bypass); start poses on them refused.
     """
 
     n_robots: int | None = None
@@ -115,8 +119,11 @@ class VerificationConfig:
     wall_factor: float = 4.0
     boot_s: float = 30.0
     paced_runs: int = 1
+    obstacles: Obstacles | None = None
 
     def __post_init__(self) -> None:
+        if self.obstacles is not None:
+            object.__setattr__(self, "obstacles", ArenaConfig(obstacles=self.obstacles).obstacles)
         if self.n_robots is not None and not in_range(self.n_robots, 1, integer=True):
             raise ValueError(f"n_robots must be a positive integer, got {self.n_robots!r}")
         if not in_range(self.duration, 0.0, lo_open=True):
@@ -138,6 +145,8 @@ class VerificationConfig:
             poses = check_initial_poses(self.initial_poses, n, ArenaConfig().bounds, "initial_poses")
             object.__setattr__(self, "initial_poses", tuple((float(x), float(y), float(t)) for x, y, t in poses))
             object.__setattr__(self, "n_robots", n)
+            if self.obstacles is not None:
+                self.obstacles.check_clear(poses, START_CLEARANCE, "start pose")
 
     @property
     def run_wall_s(self) -> float:
@@ -160,6 +169,7 @@ class VerificationConfig:
                 "jail": list(self.jail.order), "allow_no_cgroup": self.jail.allow_no_cgroup,
                 "initial_poses": None if self.initial_poses is None else [list(p) for p in self.initial_poses],
                 "paced_runs": self.paced_runs,
+                **({} if self.obstacles is None else {"obstacles": self.obstacles.to_list()}),
                 "wall_budget": {"factor": float(self.wall_factor), "boot_s": float(self.boot_s),
                                 "run_s": self.run_wall_s, "job_s": self.job_wall_s()}}
 
@@ -199,16 +209,20 @@ def run_task(task: RunTask) -> dict[str, Any]:
     # (seed, index): 0 random start poses, 1 disturbances, 2 set-up error — raw and wrapped of one index alike
     seeds = np.random.SeedSequence(cfg.seed, spawn_key=(task.index,)).spawn(3)
     paced = task.mode == "raw" and task.index < cfg.paced_runs
-    arena_config = ArenaConfig(seed=None, real_time=paced)  # paced: each step waits for the next period
+    # paced: each step waits for the next period
+    arena_config = ArenaConfig(seed=None, real_time=paced, obstacles=cfg.obstacles)
     rules = cfg.rules
     start: dict[str, Any] = {}
 
     def random_poses(n: int) -> np.ndarray:
-        return random_initial_poses(n, arena_config.bounds, rng=np.random.default_rng(seeds[0]))
+        return random_initial_poses(n, arena_config.bounds, rng=np.random.default_rng(seeds[0]),
+                                    obstacles=arena_config.segments)
 
     def make_plant(n: int, initial: np.ndarray | None) -> SandboxPlant:
         chosen = arena_start(n, cfg.n_robots, cfg.initial_poses, initial, random_poses, arena_config.bounds,
                              declared_by=cfg.declared_by)
+        if arena_config.obstacles is not None:  # the script's own initial conditions too
+            arena_config.obstacles.check_clear(chosen.poses, START_CLEARANCE, "start pose")
         poses = perturb(chosen.poses, np.random.default_rng(seeds[2]))
         start.update(source=chosen.source, poses=poses)
         sim = SimulatedArena(n, poses, config=arena_config, rules=rules)
@@ -257,6 +271,7 @@ def run_task(task: RunTask) -> dict[str, Any]:
         contact_points=[[round(t, 6), round(x, 6), round(y, 6)] for t, x, y in robots.contact_points[:50]],
         validation=report["validation"], safety_filter=report["safety"], invalid_commands=report["invalid_commands"],
         rule_violations=robots.report.verdict(cfg.duration, rules),
+        obstacle_contact_steps=int(robots.report.steps_with_obstacle_contact),
     )
     return result
 
@@ -271,6 +286,8 @@ def _run_reasons(run: dict[str, Any], cfg: VerificationConfig) -> list[str]:
         reasons.append(f"the script sent {run['invalid_commands']} non-finite (NaN/inf) robot commands (robots stopped)")
     if run["mode"] == "wrapped" and run["contacts"] and run["contacts"]["count"]:
         reasons.append(f"robots touched {run['contacts']['count']} times with the barrier on")
+    if run["mode"] == "wrapped" and run.get("obstacle_contact_steps"):
+        reasons.append(f"robots touched obstacles in {run['obstacle_contact_steps']} steps with the barrier on")
     return reasons
 
 
@@ -359,10 +376,13 @@ def script_verdict(bundle: ScriptBundle, runs: Sequence[dict[str, Any]], cfg: Ve
         no_bypass = _grouped([(r["index"], why) for r in raw for why in _run_reasons(r, cfg)])
         low = [r["index"] for r in raw if r["safety_score"] is None or r["safety_score"] < cfg.bypass_threshold]
         touched = sum(r["contacts"]["count"] for r in raw if r["contacts"])
+        on_obstacles = sum(r.get("obstacle_contact_steps") or 0 for r in raw)
         if low:
             no_bypass.append(f"S below {cfg.bypass_threshold:g} without the barrier in runs {', '.join(map(str, low))}")
         if touched:
             no_bypass.append(f"{touched} contacts without the barrier")
+        if on_obstacles:
+            no_bypass.append(f"robots touched obstacles in {on_obstacles} steps without the barrier")
     verdict = REJECTED if reasons else (BYPASS if not no_bypass else ACCEPTED)
     spread = None
     if score is not None and len(scores) >= 2:

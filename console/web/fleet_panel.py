@@ -75,7 +75,7 @@ class FleetPanel:
             frame, view = self._view()
             goals = read_poses_csv(path) if path else random_start_poses(frame.n, frame.bounds, self.chargers)
             maneuver = set_up(view, goals, frame.bounds, self.chargers, self.loop.robot,
-                              self.config.fleet.safety_distance, self.config)
+                              self.config.fleet.safety_distance, self.config, obstacles=frame.obstacles)
         except ValueError as exc:
             self.notify(f"set up not started: {exc}", client)
             return None
@@ -85,7 +85,8 @@ class FleetPanel:
         """Plan and start the return of every robot on the floor; None if refused."""
         try:
             frame, view = self._view()
-            maneuver = return_to_chargers(view, frame.bounds, self.chargers, self.loop.robot, self.config)
+            maneuver = return_to_chargers(view, frame.bounds, self.chargers, self.loop.robot, self.config,
+                                          obstacles=frame.obstacles)
         except ValueError as exc:
             self.notify(f"return not started: {exc}", client)
             return None

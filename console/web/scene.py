@@ -48,6 +48,7 @@ from swarmdeck.console.picture.colours import (  # noqa: F401 - the palette, re-
     GOAL,
     LUT,
     NOMINAL,
+    OBSTACLE,
     PAIR,
     PAUSED,
     ROBOT,
@@ -76,7 +77,7 @@ ImageProvider = Callable[[str], "tuple[ArrayLike, tuple[float, float, float, flo
 
 LAYERS: tuple[str, ...] = (
     "camera", "grid", "density", "voronoi", "cells", "centroids", "robots", "labels", "nominal", "safe",
-    "barrier", "discs", "trails", "contacts", "virtual", "battery", "goals", "sensors",
+    "barrier", "discs", "trails", "contacts", "virtual", "battery", "goals", "sensors", "obstacles",
 )
 DEFAULT_OFF = frozenset({"cells"})
 
@@ -172,6 +173,7 @@ class SceneNodes:
     cells: viser.GlbHandle | None = None
     camera: viser.ImageHandle | None = None
     labels: list[viser.LabelHandle] = field(default_factory=list)
+    obstacles: viser.LineSegmentsHandle | None = None  # from the first Frame with obstacles (static in a run)
 
     def layer(self, name: str) -> viser.SceneNodeHandle | None:
         """The node of layer ``name`` (None while it has none; ``labels`` is a list: not here)."""
@@ -211,6 +213,7 @@ class ArenaScene:
         self._trail: NDArray[np.float64] | None = None
         self._trail_count = 0
         self.frames_drawn = 0
+        self._obstacles: object = None  # the Frame.obstacles drawn (static in a run: redrawn only when they change)
         self._setup_static()
 
     # ------------------------------------------------------------------ setup
@@ -314,6 +317,17 @@ class ArenaScene:
         if name == "sensors" and self.nodes.leds is not None:
             self.nodes.leds.visible = self.visible[name]
 
+    def _draw_obstacles(self, pic: Picture) -> None:
+        """The line-segment obstacles (``pic.obstacles``, m) as thick segments just above the floor."""
+        seg = pic.obstacles
+        if self.nodes.obstacles is not None:
+            self.nodes.obstacles.remove()
+            self.nodes.obstacles = None
+        if len(seg):
+            self.nodes.obstacles = self.scene.add_line_segments(
+                "/obstacles", _segments_2d(seg[:, 0], seg[:, 1], 0.005), OBSTACLE, thickness=0.03)
+            self._apply_visibility("obstacles")
+
     def set_layer(self, name: str, visible: bool) -> None:
         """Show or hide one layer (``LAYERS``); ValueError for unknown names."""
         if name not in LAYERS:
@@ -339,6 +353,9 @@ class ArenaScene:
         pic = picture_of(frame, st)
         pts = pic.points
         poses = frame.poses
+        if frame.obstacles != self._obstacles:
+            self._draw_obstacles(pic)
+            self._obstacles = frame.obstacles
         if v["robots"]:
             robots = self.nodes.robots
             assert robots is not None  # made by _setup_robots above

@@ -32,6 +32,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from swarmdeck.core.constants import SAFETY_DISTANCE
 from swarmdeck.core.kinematics import GritsBotParams, lookahead_points
+from swarmdeck.core.obstacles import START_CLEARANCE
 from swarmdeck.core.ports import SensedPoses
 from swarmdeck.devices.battery import BatteryParams, battery_step, recharge
 from swarmdeck.devices.chargers import ChargerLayout
@@ -39,6 +40,7 @@ from swarmdeck.devices.fleet.assigned import AssignedRobots
 from swarmdeck.devices.fleet.assignment import Assignment, AssignmentPolicy, assign
 from swarmdeck.devices.fleet.docking import choose_slots, return_maneuver
 from swarmdeck.devices.fleet.maneuver import Maneuver, ManeuverParams
+from swarmdeck.devices.fleet.routing import check_chargers_clear
 from swarmdeck.devices.fleet.setup import ManeuverReport, check_start_poses, drive
 from swarmdeck.devices.pipeline import barrier_filter
 from swarmdeck.devices.simulator import ArenaConfig, SimulatedArena
@@ -110,6 +112,7 @@ class FleetManager:
             raise ValueError(f"slots must be distinct slot indices 0..{m_slots - 1}, got {slots.tolist()}")
         if n_robots is not None and len(slots) != n_robots:
             raise ValueError(f"{n_robots} robots but {len(slots)} slots given")
+        check_chargers_clear(self.config.obstacles, layout)  # a slot on a segment could never be reached
         self.sim = SimulatedArena(initial_poses=layout.dock_poses()[slots], config=self.config, params=self.params)
         m = self.sim.n
         self.ids = np.arange(m, dtype=np.intp)
@@ -117,7 +120,8 @@ class FleetManager:
         self.slot = slots.copy()  # (M,) slot each robot is docked on, −1 while away
         self.assignment: Assignment | None = None
         self.filter = barrier_filter(self.params, self.config.bounds, self.config.dt, class_k="linear",
-                                     gamma=self.fleet.gamma, safety_distance=self.fleet.safety_distance)
+                                     gamma=self.fleet.gamma, safety_distance=self.fleet.safety_distance,
+                                     **({} if self.config.obstacles is None else {"obstacles": self.config.obstacles}))
         self.experiment_end: float | None = None  # fleet time the last experiment ended (return began)
         self.last_setup: ManeuverReport | None = None
         self.last_return: ManeuverReport | None = None
@@ -187,13 +191,15 @@ class FleetManager:
             raise RuntimeError("the fleet is already set up for an experiment: return it to the chargers first")
         check: dict[str, Any] = dict(safety_distance=self.fleet.safety_distance)
         g = check_start_poses(goals, self.config.bounds, self.params, **check)
+        if self.config.obstacles is not None:
+            self.config.obstacles.check_clear(g, START_CLEARANCE, "start pose")
         a = assign(len(g), self.ids, self.charge, pose_age, status_age, positions=self.poses()[:, :2], goals=g,
                    policy=self.fleet.policy)
         idle_pts = lookahead_points(self.poses()[a.idle], self.params.lookahead)
         names = [f"robot {int(self.ids[k])} docked on charger slot {int(self.slot[k])} (it stays there)" for k in a.idle]
         goals_ok = check_start_poses(g, self.config.bounds, self.params, obstacles=idle_pts, obstacle_names=names,
                                      **check)
-        man = Maneuver(goals_ok, self.config.bounds, self.params, self.fleet.maneuver)
+        man = Maneuver(goals_ok, self.config.bounds, self.params, self.fleet.maneuver).route_around(self.config.obstacles)
         self.assignment = a
         self.experiment_end = None
         self.slot[a.rows] = -1
@@ -265,9 +271,11 @@ class FleetManager:
         free = np.setdiff1d(np.arange(layout.n_slots), self.slot[self.slot >= 0])
         poses = self.poses()
         slots = choose_slots(poses[away, :2], free, layout)
+        obstacles = self.config.obstacles
         man = return_maneuver(poses[away], slots, layout, self.params, self.fleet.maneuver,
                               occupied=self.slot[self.slot >= 0], safety_distance=self.fleet.safety_distance,
-                              gamma=self.fleet.gamma, dt=self.config.dt)
+                              gamma=self.fleet.gamma, dt=self.config.dt,
+                              retrace=obstacles is None).route_around(obstacles)  # the retrace plan knows no obstacles
         limit = self.fleet.time_limit(len(away)) if time_limit is None else float(time_limit)
         try:
             report = drive(self, man, away, self.filter, time_limit=limit, labels=self.ids[away],

@@ -47,7 +47,9 @@ from numpy.typing import ArrayLike, NDArray
 
 from swarmdeck.core.bounds import DEFAULT_BOUNDS, Bounds
 from swarmdeck.core.kinematics import GritsBotParams, unicycle_to_si, wrap_angle
+from swarmdeck.core.obstacles import Obstacles
 from swarmdeck.devices.controllers import HybridPoseController
+from swarmdeck.devices.fleet.routing import RoutePlan, Router
 
 FloatArray = NDArray[np.float64]
 BoolArray = NDArray[np.bool_]
@@ -164,6 +166,26 @@ class Maneuver:
         self._attempts = np.zeros(n, dtype=np.int64)
         self.escapes = 0
         self.escaped = np.zeros(n, dtype=bool)
+        self._router: Router | None = None
+        self._plan: tuple[bytes, RoutePlan] | None = None
+        self._route_len: FloatArray | None = None
+
+    def route_around(self, obstacles: Obstacles | None) -> Maneuver:
+        """Self, steering round the line-segment ``obstacles`` (None: none) by waypoints
+        (:mod:`~swarmdeck.devices.fleet.routing`): a robot whose straight way to its target passes a segment
+        aims at the next corner of the shortest way round instead, and its progress is measured along it."""
+        self._router = None if obstacles is None or not obstacles.m else Router(obstacles, Bounds.of(self.bounds))
+        self._plan = None
+        return self
+
+    def _routed(self, p: FloatArray, tgt: FloatArray) -> tuple[FloatArray, FloatArray] | None:
+        """Waypoints ``(N, 2)`` and route lengths ``(N,)`` towards ``tgt``, or None without obstacles."""
+        if self._router is None:
+            return None
+        key = tgt[:, :2].tobytes()
+        if self._plan is None or self._plan[0] != key:  # the targets change with the phases only
+            self._plan = (key, self._router.for_goals(tgt[:, :2]))
+        return self._plan[1].waypoints(p[:, :2])
 
     @property
     def n(self) -> int:
@@ -207,6 +229,12 @@ class Maneuver:
         tgt = self.targets()
         aim = tgt.copy()
         aim[:, :2] = np.where(escaping[:, None], self._esc_goal, tgt[:, :2])
+        routed = self._routed(p, tgt)
+        self._route_len = None
+        if routed is not None:  # round the obstacles: the next corner instead of the target
+            free = ~escaping & ~self._docking
+            aim[:, :2] = np.where(free[:, None], routed[0], aim[:, :2])
+            self._route_len = np.where(free, routed[1], np.inf)
         v, w = self._hybrid(p, aim)
         u = unicycle_to_si(p, v, w, ell)
         if self._docking.any():
@@ -252,7 +280,10 @@ class Maneuver:
     def _watch(self, p: FloatArray, tgt: FloatArray, escaping: BoolArray, t: float, active: BoolArray) -> None:
         prm = self.params
         aim = np.where(escaping[:, None], self._esc_goal, tgt[:, :2])
-        err = np.hypot(*(p[:, :2] - aim).T) + 0.05 * np.abs(wrap_angle(p[:, 2] - tgt[:, 2])) * ~escaping
+        dist = np.hypot(*(p[:, :2] - aim).T)
+        if self._route_len is not None:  # progress along the way round the obstacles
+            dist = np.where(np.isfinite(self._route_len), self._route_len, dist)
+        err = dist + 0.05 * np.abs(wrap_angle(p[:, 2] - tgt[:, 2])) * ~escaping
         done = self.at_goal(p) | (escaping & (np.hypot(*(p[:, :2] - aim).T) <= 2 * prm.position_tolerance))
         better = err < self._best - prm.progress
         reset = better | done | ~active  # robots told to stand still are not stuck

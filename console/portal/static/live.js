@@ -38,6 +38,13 @@ document.addEventListener("DOMContentLoaded", () => {
     ctx.beginPath();
     for (const [[ax, ay], [bx, by]] of m.edges) { ctx.moveTo(X(ax), Y(ay)); ctx.lineTo(X(bx), Y(by)); }
     ctx.stroke();
+    if (m.obstacles && m.obstacles.length) {  // line-segment obstacles, 3 cm thick
+      ctx.strokeStyle = P.obstacle; ctx.lineWidth = Math.max(2, 0.03 * s); ctx.lineCap = "round";
+      ctx.beginPath();
+      for (const [[ax, ay], [bx, by]] of m.obstacles) { ctx.moveTo(X(ax), Y(ay)); ctx.lineTo(X(bx), Y(by)); }
+      ctx.stroke();
+      ctx.lineCap = "butt";
+    }
     ctx.fillStyle = P.centroid;
     for (const [cx, cy] of m.centroids) ctx.fillRect(X(cx) - 3, Y(cy) - 3, 6, 6);
     ctx.lineWidth = 3;  // active barrier pairs, coloured by h
@@ -89,7 +96,8 @@ document.addEventListener("DOMContentLoaded", () => {
     last = m;
     if (m.density && heat.src !== m.density) heat.src = m.density;
     draw(m);
-    Object.assign(drawn, { frames: drawn.frames + 1, seq: m.seq, tick: m.tick, poses: m.poses, runState: m.run_state });
+    Object.assign(drawn, { frames: drawn.frames + 1, seq: m.seq, tick: m.tick, poses: m.poses, runState: m.run_state,
+                           obstacles: (m.obstacles || []).length });
     const b = m.barrier;
     show(`t ${m.t.toFixed(2)} s · ${m.poses.length} robots · ${m.run_state}` +
          (b ? (b.enabled ? ` · barrier: ${b.n_active} active` + (b.min_distance !== null ? `, d_min ${b.min_distance.toFixed(3)} m` : "") : " · barrier OFF") : "") +
