@@ -38,6 +38,7 @@ from swarmdeck.devices.pipeline import CommandFilter, FilterDiagnostics, Unicycl
 from swarmdeck.devices.simulated_robots import SimulatedRobots
 from swarmdeck.devices.simulator import ArenaConfig, SimulatedArena, check_poses
 from swarmdeck.devices.stepped import SteppedRobots
+from swarmdeck.network.errors import IsolationError
 
 FloatArray = NDArray[np.float64]
 GoalController = Literal["si", "clf", "pose", "hybrid"]
@@ -187,6 +188,7 @@ class Arena:
         self.last_nominal = np.zeros((self.n, 2))
         self.last_safe = np.zeros((self.n, 2))
         self._on_step = defaults.on_step
+        self._sealed_for: str | None = None  # set while a decentralised controller runs (devices/decentralised.py)
         self.robots.start_clock()  # real robots: the run starts now, not when the robots were opened
         if defaults.on_create is not None:
             defaults.on_create(self)
@@ -235,11 +237,19 @@ class Arena:
 
     def poses(self) -> FloatArray:
         """Current poses ``(N, 3)`` ``[x, y, θ]`` (a fresh copy every call)."""
+        self._refuse_if_sealed("poses()")
         return self.robots.poses
 
     def positions(self) -> FloatArray:
         """Look-ahead points ``(N, 2)``: the points single-integrator commands move."""
+        self._refuse_if_sealed("positions()")
         return lookahead_points(self.robots.poses, self.ell)
+
+    def _refuse_if_sealed(self, what: str) -> None:
+        """IsolationError while a decentralised controller runs (:mod:`swarmdeck.devices.decentralised`)."""
+        if self._sealed_for is not None:
+            raise IsolationError(f"{self._sealed_for} read arena.{what}: a decentralised controller sees only its "
+                                 "own view (view.pose, view.inbox, view.readings, view.state), not other robots' poses")
 
     # ------------------------------------------------------------------ commanding
     def _ids(self, ids: ArrayLike | None) -> NDArray[np.intp] | None:

@@ -20,11 +20,12 @@ ALLOWED: dict[str, set[str]] = {
     "coverage": {"core"},
     "tracking": {"core"},
     "inputs": {"coverage", "core"},
-    "devices": {"safety", "core"},
-    "envs": {"core", "safety", "coverage", "tracking", "inputs", "devices"},
+    "network": {"core"},
+    "devices": {"safety", "core", "network"},
+    "envs": {"core", "safety", "coverage", "tracking", "inputs", "devices", "network"},
     # experiments to copy: user code at the top, like a script `swarmdeck run` runs (one records with the console's recorder)
-    "examples": {"core", "safety", "coverage", "tracking", "inputs", "devices", "envs", "console"},
-    "console": {"core", "safety", "coverage", "tracking", "inputs", "devices", "envs", "examples"},
+    "examples": {"core", "safety", "coverage", "tracking", "inputs", "devices", "envs", "console", "network"},
+    "console": {"core", "safety", "coverage", "tracking", "inputs", "devices", "envs", "examples", "network"},
 }
 
 

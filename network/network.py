@@ -1,0 +1,262 @@
+"""Robot-to-robot messaging over a topology with latency, loss and bandwidth (REFERENCE.md §16).
+
+One :class:`Network` per experiment, stepped once per control tick by whoever owns the robots' poses (the
+trusted side). During a tick robots queue messages with :meth:`Network.send` / :meth:`Network.broadcast`;
+:meth:`Network.step` then, in send order: drops messages without a link in this tick's topology
+("unreachable"), drops a sender's messages beyond its bandwidth ("over_bandwidth"), draws the loss model
+("lost"), and schedules the rest ``latency + U{0..jitter}`` ticks later. What is due lands in the inboxes,
+read with :meth:`Network.inbox` during the next tick. Everything random comes from one generator seeded by
+:attr:`NetworkConfig.seed`.
+
+Refusals at ``send`` (an unknown receiver or sender, a message to itself, a payload that is not serialisable
+or too big, more than ``max_messages_per_tick`` in one tick) raise :class:`MessageError` naming the robot, the
+tick and what was wrong, and are counted in :attr:`Network.stats` under ``refused:<reason>``; the network
+itself is unchanged by a refused message.
+"""
+from __future__ import annotations
+
+from collections import Counter, deque
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from swarmdeck.network.config import NetworkConfig
+from swarmdeck.network.errors import MessageError, PayloadError
+from swarmdeck.network.loss import LossState
+from swarmdeck.network.payload import decode_payload, encode_payload
+
+__all__ = ["Message", "Network", "NetworkTraffic"]
+
+
+@dataclass(frozen=True)
+class Message:
+    """A delivered message: ``sender`` → ``receiver`` (robot indices), sent in tick ``sent_tick``; ``payload`` is a copy."""
+
+    sender: int
+    receiver: int
+    sent_tick: int
+    payload: Any
+
+
+@dataclass(frozen=True)
+class NetworkTraffic:
+    """One tick's communication graph and what crossed it.
+
+    ``links`` ``(E, 2)`` int directed (sender, receiver) of this tick's topology; ``messages`` and ``bytes``
+    ``(E,)`` int: messages delivered over each link in this tick and their encoded bytes.
+    """
+
+    links: NDArray[np.intp]
+    messages: NDArray[np.int64]
+    bytes: NDArray[np.int64]
+
+
+def _index(name: str, value: object, n: int) -> int:
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)):
+        raise MessageError(f"{name} must be a robot index (int), got {type(value).__name__} {value!r}")
+    if not 0 <= int(value) < n:
+        raise MessageError(f"{name} {int(value)} does not exist: the robots are 0..{n - 1}")
+    return int(value)
+
+
+class Network:
+    """The messages between ``n`` robots under ``config``; see the module docstring for one tick.
+
+    Args:
+        n: number of robots.
+        config: the network's configuration.
+        positions: ``(n, 2)`` m, the robots' positions for the first tick's topology (none before the first
+            :meth:`step` when omitted).
+    """
+
+    def __init__(self, n: int, config: NetworkConfig | None = None, positions: ArrayLike | None = None) -> None:
+        if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 1:
+            raise ValueError(f"Network: number of robots must be an integer >= 1, got {n!r}")
+        self.n = int(n)
+        self.config = config if config is not None else NetworkConfig()
+        self.tick = 0
+        self.stats: Counter[str] = Counter()
+        self.errors: deque[str] = deque(maxlen=50)  # the most recent refusals, for a report
+        self._rng = np.random.default_rng(self.config.seed)
+        self._loss_state = LossState()
+        self._links = np.empty((0, 2), dtype=np.intp)
+        self._queue: list[tuple[int, int, bytes]] = []  # this tick's sends: (sender, receiver, encoding)
+        self._queued = np.zeros(self.n, dtype=np.int64)
+        self._pending: dict[int, list[tuple[int, int, int, bytes]]] = {}  # due tick -> (s, r, sent, data)
+        self._inbox: list[list[tuple[int, int, bytes]]] = [[] for _ in range(self.n)]
+        self._traffic = NetworkTraffic(self._links, np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64))
+        if positions is not None:
+            self._links = self._topology(positions)
+            self._traffic = NetworkTraffic(self._links, np.zeros(len(self._links), np.int64), np.zeros(len(self._links), np.int64))
+
+    # -- sending -------------------------------------------------------------------------------------
+    def _refuse(self, reason: str, message: str) -> MessageError:
+        self.stats[f"refused:{reason}"] += 1
+        self.errors.append(message)
+        return PayloadError(message) if reason in ("unserialisable", "too_big") else MessageError(message)
+
+    def _encode(self, sender: int, payload: Any) -> bytes:
+        try:
+            return encode_payload(payload, self.config.max_message_bytes)
+        except PayloadError as exc:
+            reason = "too_big" if "exceeds" in str(exc) else "unserialisable"
+            raise self._refuse(reason, f"robot {sender}, tick {self.tick}: {exc}") from None
+
+    def _sender(self, i: object) -> int:
+        try:
+            return _index("sender", i, self.n)
+        except MessageError as exc:
+            raise self._refuse("unknown_robot", f"tick {self.tick}: {exc}") from None
+
+    def _room(self, i: int, count: int) -> None:
+        cap = self.config.max_messages_per_tick
+        if self._queued[i] + count > cap:
+            raise self._refuse("too_many", f"robot {i}, tick {self.tick}: more than {cap} messages in one tick "
+                                           f"(max_messages_per_tick); this one is dropped")
+
+    def send(self, i: int, j: int, payload: Any) -> None:
+        """Queue ``payload`` from robot ``i`` to robot ``j`` for this tick; :class:`MessageError` if refused."""
+        i, j = self._pair(i, j)
+        self._room(i, 1)
+        self._queue.append((i, j, self._encode(i, payload)))
+        self._queued[i] += 1
+
+    def broadcast(self, i: int, payload: Any) -> int:
+        """Queue ``payload`` from ``i`` to each of its current :meth:`neighbours`; returns how many were queued."""
+        i = self._sender(i)
+        receivers = self.neighbours(i)
+        if not len(receivers):
+            return 0
+        self._room(i, len(receivers))
+        data = self._encode(i, payload)
+        self._queue.extend((i, int(j), data) for j in receivers)
+        self._queued[i] += len(receivers)
+        return len(receivers)
+
+    def send_encoded(self, i: int, j: int, data: bytes) -> None:
+        """:meth:`send` of a payload already encoded by :func:`~swarmdeck.network.payload.encode_payload`."""
+        i, j = self._pair(i, j)
+        self._room(i, 1)
+        self._queue.append((i, j, self._sized(i, data)))
+        self._queued[i] += 1
+
+    def broadcast_encoded(self, i: int, data: bytes) -> int:
+        """:meth:`broadcast` of a payload already encoded."""
+        i = self._sender(i)
+        receivers = self.neighbours(i)
+        if len(receivers):
+            self._room(i, len(receivers))
+            data = self._sized(i, data)
+            self._queue.extend((i, int(j), data) for j in receivers)
+            self._queued[i] += len(receivers)
+        return len(receivers)
+
+    def _pair(self, i: object, j: object) -> tuple[int, int]:
+        s = self._sender(i)
+        try:
+            r = _index("receiver", j, self.n)
+        except MessageError as exc:
+            raise self._refuse("unknown_robot", f"robot {s}, tick {self.tick}: {exc}") from None
+        if s == r:
+            raise self._refuse("to_itself", f"robot {s}, tick {self.tick}: a robot cannot send a message to itself")
+        return s, r
+
+    def _sized(self, i: int, data: bytes) -> bytes:
+        if not isinstance(data, bytes) or len(data) > self.config.max_message_bytes:
+            raise self._refuse("too_big", f"robot {i}, tick {self.tick}: encoded message of "
+                                          f"{len(data) if isinstance(data, bytes) else '?'} bytes exceeds "
+                                          f"{self.config.max_message_bytes} bytes")
+        return data
+
+    def neighbours(self, i: int) -> NDArray[np.intp]:
+        """Robots ``i`` can send to under the current topology (the last :meth:`step`'s links), ascending."""
+        i = _index("robot", i, self.n)
+        lo, hi = np.searchsorted(self._links[:, 0], [i, i + 1])
+        return self._links[lo:hi, 1].copy()
+
+    # -- one tick --------------------------------------------------------------------------------------
+    def _topology(self, positions: ArrayLike) -> NDArray[np.intp]:
+        p = np.asarray(positions, dtype=float)
+        if p.shape != (self.n, 2) or not np.all(np.isfinite(p)):
+            raise ValueError(f"Network.step: positions must be finite, shape ({self.n}, 2), got shape {p.shape}")
+        return self.config.topology.links(p)
+
+    def step(self, positions: ArrayLike) -> None:
+        """Close this tick: the topology at ``positions`` ``(n, 2)`` m, bandwidth, loss, latency; fill the inboxes."""
+        links = self._topology(positions)
+        queue, self._queue = self._queue, []
+        self._queued[:] = 0
+        n, tick, cfg = self.n, self.tick, self.config
+        link_keys = links[:, 0].astype(np.int64) * n + links[:, 1]
+        if cfg.loss is not None:
+            self._loss_state = cfg.loss.advance(self._loss_state, link_keys, self._rng)
+        if queue:
+            s = np.fromiter((m[0] for m in queue), dtype=np.int64, count=len(queue))
+            r = np.fromiter((m[1] for m in queue), dtype=np.int64, count=len(queue))
+            size = np.fromiter((len(m[2]) for m in queue), dtype=np.int64, count=len(queue))
+            keys = s * n + r
+            pos = np.minimum(np.searchsorted(link_keys, keys), max(len(link_keys) - 1, 0))
+            ok = (link_keys[pos] == keys) if len(link_keys) else np.zeros(len(keys), dtype=bool)
+            self.stats["sent"] += len(queue)
+            self.stats["unreachable"] += int((~ok).sum())
+            if cfg.bandwidth is not None:  # cumulative bytes per sender, in send order, over reachable messages
+                order = np.argsort(s, kind="stable")
+                spent = np.where(ok, size, 0)[order]
+                starts = np.r_[0, np.flatnonzero(np.diff(s[order])) + 1]
+                run = np.cumsum(spent) - np.repeat(np.cumsum(spent)[starts] - spent[starts], np.diff(np.r_[starts, len(s)]))
+                over = np.zeros(len(s), dtype=bool)
+                over[order] = run > cfg.bandwidth
+                over &= ok
+                self.stats["over_bandwidth"] += int(over.sum())
+                ok &= ~over
+            if cfg.loss is not None and ok.any():
+                lost = np.zeros(len(keys), dtype=bool)
+                lost[ok] = cfg.loss.lost(self._loss_state, keys[ok], self._rng)
+                self.stats["lost"] += int(lost.sum())
+                ok &= ~lost
+            delay = np.full(len(keys), cfg.latency, dtype=np.int64)
+            if cfg.jitter:
+                delay += self._rng.integers(0, cfg.jitter + 1, size=len(keys))
+            for k in np.flatnonzero(ok):
+                sk, rk, data = queue[k]
+                self._pending.setdefault(tick + int(delay[k]), []).append((sk, rk, tick, data))
+        due = self._pending.pop(tick, [])
+        inbox: list[list[tuple[int, int, bytes]]] = [[] for _ in range(n)]
+        for sk, rk, sent, data in due:
+            inbox[rk].append((sk, sent, data))
+        self._inbox = inbox
+        self.stats["delivered"] += len(due)
+        counts = np.zeros(len(links), dtype=np.int64)
+        nbytes = np.zeros(len(links), dtype=np.int64)
+        if due and len(links):
+            dk = np.array([d[0] * n + d[1] for d in due], dtype=np.int64)
+            at = np.searchsorted(link_keys, dk)
+            on = (at < len(link_keys))
+            on[on] = link_keys[at[on]] == dk[on]
+            np.add.at(counts, at[on], 1)
+            np.add.at(nbytes, at[on], np.array([len(d[3]) for d in due], dtype=np.int64)[on])
+        self._links = links
+        self._traffic = NetworkTraffic(links, counts, nbytes)
+        self.tick = tick + 1
+
+    # -- reading ---------------------------------------------------------------------------------------
+    def inbox(self, i: int) -> tuple[Message, ...]:
+        """Messages delivered to robot ``i`` by the last :meth:`step`, in delivery order; fresh copies each call."""
+        i = _index("robot", i, self.n)
+        return tuple(Message(s, i, sent, decode_payload(data)) for s, sent, data in self._inbox[i])
+
+    def traffic(self) -> NetworkTraffic:
+        """The last step's links and the messages and bytes delivered over each."""
+        return self._traffic
+
+    @property
+    def links(self) -> NDArray[np.intp]:
+        """The last step's directed links ``(E, 2)``."""
+        return self._links.copy()
+
+    @property
+    def refused(self) -> int:
+        """How many messages were refused at send."""
+        return sum(v for k, v in self.stats.items() if k.startswith("refused:"))
