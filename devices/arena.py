@@ -189,6 +189,7 @@ class Arena:
         self.last_safe = np.zeros((self.n, 2))
         self._on_step = defaults.on_step
         self._sealed_for: str | None = None  # set while a decentralised controller runs (devices/decentralised.py)
+        self.network: Any = None  # the robots' swarmdeck.network.Network in a decentralised run: recorded and drawn
         self.robots.start_clock()  # real robots: the run starts now, not when the robots were opened
         if defaults.on_create is not None:
             defaults.on_create(self)

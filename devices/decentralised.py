@@ -58,6 +58,7 @@ class Decentralised:
         self.controller = controller
         self.config = config if config is not None else NetworkConfig()
         self.network = Network(arena.n, self.config, positions=arena.poses()[:, :2])
+        arena.network = self.network  # `swarmdeck run --record` records its traffic (console/recording/arena_recording.py)
         self.sensors = sensors if sensors is not None else _arena_readings(arena)
         self.strict = strict
         self.tick = 0

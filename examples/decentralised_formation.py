@@ -63,7 +63,7 @@ def experiment(arena: Arena, edge_length: float = 0.4, alpha: float = 4.0, loss:
 
 
 if __name__ == "__main__":
-    arena = Arena(6, duration=40.0)
+    arena = Arena()  # `swarmdeck run --robots N --duration S` sets them; 6 robots, 40 s otherwise
     results = experiment(arena)
     arena.call_at_scripts_end()
     for name, value in results.items():

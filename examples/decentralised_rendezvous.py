@@ -56,7 +56,7 @@ def experiment(arena: Arena, loss: float = 0.1, latency: int = 1, seed: int = 0)
 
 
 if __name__ == "__main__":
-    arena = Arena(6, duration=30.0)
+    arena = Arena()  # `swarmdeck run --robots N --duration S` sets them; 6 robots, 30 s otherwise
     results = experiment(arena)
     arena.call_at_scripts_end()
     for name, value in results.items():

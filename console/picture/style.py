@@ -29,6 +29,8 @@ class PictureStyle:
         label_offset: robot ids sit this far above the robot, m.
         max_labels: robot ids only up to this many robots.
         max_glyphs: per-robot glyphs (arrows, safety rings, trails) only up to this many robots.
+        show_network: draw the robots' communication graph when a Frame has one (console/picture/network.py).
+        network_rate_full: a link is drawn fully busy at this many messages per second (both directions).
     """
 
     changed_threshold: float = 1e-3
@@ -40,6 +42,8 @@ class PictureStyle:
     label_offset: float = 0.07
     max_labels: int = 100
     max_glyphs: int = 300
+    show_network: bool = True
+    network_rate_full: float = 60.0
 
     def heatmap_px(self, bounds: tuple[float, float, float, float]) -> float:
         """Heat-map px per m on the arena ``bounds`` (x_min, x_max, y_min, y_max) m: ``heatmap_px_per_m``,
