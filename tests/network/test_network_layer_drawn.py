@@ -24,7 +24,10 @@ LINKS = [[0, 1], [1, 0], [1, 2], [2, 3]]
 RATE = [30.0, 30.0, 0.0, 15.0]
 
 
-def _frame(network: NetworkFrame | None = NetworkFrame(np.array(LINKS), np.array(RATE))) -> Frame:
+NETWORK = NetworkFrame(np.array(LINKS), np.array(RATE))
+
+
+def _frame(network: NetworkFrame | None = NETWORK) -> Frame:
     n = len(POSES)
     return Frame(tick=3, time=0.1, poses=POSES, ids=np.arange(n), nominal=np.zeros((n, 2)), safe=np.zeros((n, 2)),
                  v=np.zeros(n), w=np.zeros(n), network=network)
