@@ -17,7 +17,7 @@ from __future__ import annotations
 
 from collections import Counter, deque
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -30,8 +30,7 @@ from swarmdeck.network.payload import decode_payload, encode_payload
 __all__ = ["Message", "Network", "NetworkTraffic"]
 
 
-@dataclass(frozen=True)
-class Message:
+class Message(NamedTuple):
     """A delivered message: ``sender`` → ``receiver`` (robot indices), sent in tick ``sent_tick``; ``payload`` is a copy."""
 
     sender: int
@@ -82,10 +81,18 @@ class Network:
         self._rng = np.random.default_rng(self.config.seed)
         self._loss_state = LossState()
         self._links = np.empty((0, 2), dtype=np.intp)
-        self._queue: list[tuple[int, int, bytes]] = []  # this tick's sends: (sender, receiver, encoding)
+        # this tick's sends, in send order: senders, receivers, encodings
+        self._qs: list[int] = []
+        self._qr: list[int] = []
+        self._qd: list[bytes] = []
         self._queued = np.zeros(self.n, dtype=np.int64)
-        self._pending: dict[int, list[tuple[int, int, int, bytes]]] = {}  # due tick -> (s, r, sent, data)
-        self._inbox: list[list[tuple[int, int, bytes]]] = [[] for _ in range(self.n)]
+        # due tick -> batches (senders, receivers, sent ticks, encodings) in flight
+        self._pending: dict[int, list[tuple[NDArray[np.int64], NDArray[np.int64], NDArray[np.int64], list[bytes]]]] = {}
+        # the last step's deliveries sorted by receiver (stable): senders, sent ticks, encodings, receiver row starts
+        self._in_s = np.zeros(0, dtype=np.int64)
+        self._in_sent = np.zeros(0, dtype=np.int64)
+        self._in_data: list[bytes] = []
+        self._in_start = np.zeros(self.n + 1, dtype=np.int64)
         self._traffic = NetworkTraffic(self._links, np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64))
         if positions is not None:
             self._links = self._topology(positions)
@@ -120,8 +127,7 @@ class Network:
         """Queue ``payload`` from robot ``i`` to robot ``j`` for this tick; :class:`MessageError` if refused."""
         i, j = self._pair(i, j)
         self._room(i, 1)
-        self._queue.append((i, j, self._encode(i, payload)))
-        self._queued[i] += 1
+        self._enqueue(i, [j], self._encode(i, payload))
 
     def broadcast(self, i: int, payload: Any) -> int:
         """Queue ``payload`` from ``i`` to each of its current :meth:`neighbours`; returns how many were queued."""
@@ -130,17 +136,14 @@ class Network:
         if not len(receivers):
             return 0
         self._room(i, len(receivers))
-        data = self._encode(i, payload)
-        self._queue.extend((i, int(j), data) for j in receivers)
-        self._queued[i] += len(receivers)
+        self._enqueue(i, receivers.tolist(), self._encode(i, payload))
         return len(receivers)
 
     def send_encoded(self, i: int, j: int, data: bytes) -> None:
         """:meth:`send` of a payload already encoded by :func:`~swarmdeck.network.payload.encode_payload`."""
         i, j = self._pair(i, j)
         self._room(i, 1)
-        self._queue.append((i, j, self._sized(i, data)))
-        self._queued[i] += 1
+        self._enqueue(i, [j], self._sized(i, data))
 
     def broadcast_encoded(self, i: int, data: bytes) -> int:
         """:meth:`broadcast` of a payload already encoded."""
@@ -148,10 +151,15 @@ class Network:
         receivers = self.neighbours(i)
         if len(receivers):
             self._room(i, len(receivers))
-            data = self._sized(i, data)
-            self._queue.extend((i, int(j), data) for j in receivers)
-            self._queued[i] += len(receivers)
+            self._enqueue(i, receivers.tolist(), self._sized(i, data))
         return len(receivers)
+
+    def _enqueue(self, i: int, receivers: list[int], data: bytes) -> None:
+        k = len(receivers)
+        self._qs.extend([i] * k)
+        self._qr.extend(receivers)
+        self._qd.extend([data] * k)
+        self._queued[i] += k
 
     def _pair(self, i: object, j: object) -> tuple[int, int]:
         s = self._sender(i)
@@ -186,28 +194,30 @@ class Network:
     def step(self, positions: ArrayLike) -> None:
         """Close this tick: the topology at ``positions`` ``(n, 2)`` m, bandwidth, loss, latency; fill the inboxes."""
         links = self._topology(positions)
-        queue, self._queue = self._queue, []
+        s = np.array(self._qs, dtype=np.int64)
+        r = np.array(self._qr, dtype=np.int64)
+        data = self._qd
+        self._qs, self._qr, self._qd = [], [], []
         self._queued[:] = 0
         n, tick, cfg = self.n, self.tick, self.config
         link_keys = links[:, 0].astype(np.int64) * n + links[:, 1]
         if cfg.loss is not None:
             self._loss_state = cfg.loss.advance(self._loss_state, link_keys, self._rng)
-        if queue:
-            s = np.fromiter((m[0] for m in queue), dtype=np.int64, count=len(queue))
-            r = np.fromiter((m[1] for m in queue), dtype=np.int64, count=len(queue))
-            size = np.fromiter((len(m[2]) for m in queue), dtype=np.int64, count=len(queue))
+        if len(s):
+            size = np.fromiter(map(len, data), dtype=np.int64, count=len(data))
             keys = s * n + r
             pos = np.minimum(np.searchsorted(link_keys, keys), max(len(link_keys) - 1, 0))
             ok = (link_keys[pos] == keys) if len(link_keys) else np.zeros(len(keys), dtype=bool)
-            self.stats["sent"] += len(queue)
+            self.stats["sent"] += len(s)
             self.stats["unreachable"] += int((~ok).sum())
             if cfg.bandwidth is not None:  # cumulative bytes per sender, in send order, over reachable messages
                 order = np.argsort(s, kind="stable")
                 spent = np.where(ok, size, 0)[order]
+                total = np.cumsum(spent)
                 starts = np.r_[0, np.flatnonzero(np.diff(s[order])) + 1]
-                run = np.cumsum(spent) - np.repeat(np.cumsum(spent)[starts] - spent[starts], np.diff(np.r_[starts, len(s)]))
+                before = np.repeat(total[starts] - spent[starts], np.diff(np.r_[starts, len(s)]))
                 over = np.zeros(len(s), dtype=bool)
-                over[order] = run > cfg.bandwidth
+                over[order] = total - before > cfg.bandwidth
                 over &= ok
                 self.stats["over_bandwidth"] += int(over.sum())
                 ok &= ~over
@@ -219,33 +229,49 @@ class Network:
             delay = np.full(len(keys), cfg.latency, dtype=np.int64)
             if cfg.jitter:
                 delay += self._rng.integers(0, cfg.jitter + 1, size=len(keys))
-            for k in np.flatnonzero(ok):
-                sk, rk, data = queue[k]
-                self._pending.setdefault(tick + int(delay[k]), []).append((sk, rk, tick, data))
-        due = self._pending.pop(tick, [])
-        inbox: list[list[tuple[int, int, bytes]]] = [[] for _ in range(n)]
-        for sk, rk, sent, data in due:
-            inbox[rk].append((sk, sent, data))
-        self._inbox = inbox
-        self.stats["delivered"] += len(due)
+            keep = np.flatnonzero(ok)
+            for d in np.unique(delay[keep]).tolist():
+                sel = keep[delay[keep] == d]
+                self._pending.setdefault(tick + int(d), []).append(
+                    (s[sel], r[sel], np.full(len(sel), tick, dtype=np.int64), [data[k] for k in sel.tolist()]))
+        self._deliver(self._pending.pop(tick, []))
         counts = np.zeros(len(links), dtype=np.int64)
         nbytes = np.zeros(len(links), dtype=np.int64)
-        if due and len(links):
-            dk = np.array([d[0] * n + d[1] for d in due], dtype=np.int64)
-            at = np.searchsorted(link_keys, dk)
-            on = (at < len(link_keys))
-            on[on] = link_keys[at[on]] == dk[on]
+        if len(self._in_s) and len(links):
+            receivers = np.repeat(np.arange(n, dtype=np.int64), np.diff(self._in_start))
+            dk = self._in_s * n + receivers
+            at = np.minimum(np.searchsorted(link_keys, dk), len(link_keys) - 1)
+            on = link_keys[at] == dk  # a message whose link is gone since it was sent is not on this tick's graph
             np.add.at(counts, at[on], 1)
-            np.add.at(nbytes, at[on], np.array([len(d[3]) for d in due], dtype=np.int64)[on])
+            sizes = np.fromiter(map(len, self._in_data), dtype=np.int64, count=len(self._in_data))
+            np.add.at(nbytes, at[on], sizes[on])
         self._links = links
         self._traffic = NetworkTraffic(links, counts, nbytes)
         self.tick = tick + 1
+
+    def _deliver(self, batches: list[tuple[NDArray[np.int64], NDArray[np.int64], NDArray[np.int64], list[bytes]]]) -> None:
+        """The inboxes of this tick: the batches due now, sorted by receiver (stable: delivery order kept)."""
+        if not batches:
+            self._in_s, self._in_sent, self._in_data = np.zeros(0, np.int64), np.zeros(0, np.int64), []
+            self._in_start = np.zeros(self.n + 1, dtype=np.int64)
+            return
+        s = np.concatenate([b[0] for b in batches])
+        r = np.concatenate([b[1] for b in batches])
+        sent = np.concatenate([b[2] for b in batches])
+        data = [d for b in batches for d in b[3]]
+        order = np.argsort(r, kind="stable")
+        self._in_s, self._in_sent = s[order], sent[order]
+        self._in_data = [data[k] for k in order.tolist()]
+        self._in_start = np.searchsorted(r[order], np.arange(self.n + 1))
+        self.stats["delivered"] += len(s)
 
     # -- reading ---------------------------------------------------------------------------------------
     def inbox(self, i: int) -> tuple[Message, ...]:
         """Messages delivered to robot ``i`` by the last :meth:`step`, in delivery order; fresh copies each call."""
         i = _index("robot", i, self.n)
-        return tuple(Message(s, i, sent, decode_payload(data)) for s, sent, data in self._inbox[i])
+        lo, hi = int(self._in_start[i]), int(self._in_start[i + 1])
+        senders, sent = self._in_s[lo:hi].tolist(), self._in_sent[lo:hi].tolist()
+        return tuple(Message(s, i, t, decode_payload(d)) for s, t, d in zip(senders, sent, self._in_data[lo:hi]))
 
     def traffic(self) -> NetworkTraffic:
         """The last step's links and the messages and bytes delivered over each."""

@@ -57,21 +57,25 @@ def _check(value: Any, depth: int, where: str) -> None:
 
 def _enc_hook(value: Any) -> Any:
     if isinstance(value, np.ndarray):
-        a = np.ascontiguousarray(value)
-        dtype = a.dtype.newbyteorder("<") if a.dtype.itemsize > 1 else a.dtype
-        head = msgspec.msgpack.encode([dtype.str, list(a.shape)])
-        return msgspec.msgpack.Ext(_ARRAY_EXT, struct.pack("<I", len(head)) + head + a.astype(dtype).tobytes())
+        dtype = value.dtype.newbyteorder("<") if value.dtype.itemsize > 1 else value.dtype
+        code = dtype.str.encode()
+        head = struct.pack(f"<B{len(code)}sB{value.ndim}q", len(code), code, value.ndim, *value.shape)
+        return msgspec.msgpack.Ext(_ARRAY_EXT, head + value.astype(dtype, copy=False).tobytes(order="C"))
     if isinstance(value, np.generic):
         return value.item()
     raise NotImplementedError(type(value).__name__)
 
 
 def _ext_hook(code: int, data: memoryview) -> Any:
+    """An array from its extension: dtype string length (u8), dtype string, ndim (u8), shape (int64 × ndim), bytes."""
     if code != _ARRAY_EXT:
         raise PayloadError(f"unknown payload extension {code}")
-    (length,) = struct.unpack_from("<I", data)
-    dtype, shape = msgspec.msgpack.decode(bytes(data[4:4 + length]))
-    return np.frombuffer(bytes(data[4 + length:]), dtype=np.dtype(dtype)).reshape(shape).copy()
+    length = data[0]
+    dtype = np.dtype(bytes(data[1:1 + length]).decode())
+    ndim = data[1 + length]
+    offset = 2 + length + 8 * ndim
+    shape = struct.unpack_from(f"<{ndim}q", data, 2 + length)
+    return np.frombuffer(data, dtype=dtype, offset=offset).reshape(shape).copy()
 
 
 _encoder = msgspec.msgpack.Encoder(enc_hook=_enc_hook)

@@ -88,3 +88,21 @@ def test_proximity_topologies_match_brute_force(pts, delta, k):
         others = np.sort(np.delete(d[r], r))
         assert d[r, s] <= others[min(k, n - 1) - 1] + 1e-12
     assert (np.lexsort((links[:, 1], links[:, 0])) == np.arange(len(links))).all()
+
+
+arrays = st.sampled_from(["<f8", ">f4", "<i8", ">i2", "|u1", "|b1", "<f2"]).flatmap(
+    lambda dt: st.lists(st.integers(0, 3), min_size=0, max_size=3).map(
+        lambda shape: np.asarray(np.arange(int(np.prod(shape)), dtype=np.int64).reshape(shape) % 7).astype(dt)))
+
+
+@settings(max_examples=40)
+@given(arrays, st.booleans())
+def test_arrays_arrive_with_their_values_shape_and_kind(a, transpose):
+    sent = a.T if transpose else a  # non-contiguous views travel too
+    net = Network(2, NetworkConfig(topology=DiskTopology(1.0)), positions=LINE[:2])
+    net.send(0, 1, {"a": sent, "n": [sent]})
+    net.step(LINE[:2])
+    (m,) = net.inbox(1)
+    for got in (m.payload["a"], m.payload["n"][0]):
+        assert got.shape == sent.shape and got.dtype.kind == sent.dtype.kind and got.dtype.itemsize == sent.dtype.itemsize
+        assert np.array_equal(got, sent) and got.flags.writeable
