@@ -2,8 +2,9 @@
 
 One :class:`Network` per experiment, stepped once per control tick by whoever owns the robots' poses (the
 trusted side). During a tick robots queue messages with :meth:`Network.send` / :meth:`Network.broadcast`;
-:meth:`Network.step` then, in send order: drops messages without a link in this tick's topology
-("unreachable"), drops a sender's messages beyond its bandwidth ("over_bandwidth"), draws the loss model
+:meth:`Network.step` then, in send order: drops messages without a link in the topology at the positions
+``step`` is given — where the robots are when the tick closes — ("unreachable"; :meth:`Network.neighbours`, which
+``broadcast`` uses, is the previous step's topology: a robot's neighbour table lags one tick), drops a sender's messages beyond its bandwidth ("over_bandwidth"), draws the loss model
 ("lost"), and schedules the rest ``latency + U{0..jitter}`` ticks later. What is due lands in the inboxes,
 read with :meth:`Network.inbox` during the next tick. Everything random comes from one generator seeded by
 :attr:`NetworkConfig.seed`.
