@@ -459,6 +459,7 @@ class Arena:
         console/sandbox/child.py) get the nominal ``(N, 2)`` as it is instead: the trusted side across the
         pipe certifies it.
         """
+        self._refuse_if_sealed("step()")
         if self.duration is not None and self.time >= self.duration - 1e-9:
             raise ExperimentFinished(f"declared duration {self.duration} s is over")
         poses = self.robots.poses

@@ -9,7 +9,7 @@ outboxes, drives the arena one step (wheel limits, barrier: the same pipeline as
 network at the new positions, which fills the inboxes of the next tick.
 
 Isolation: the view holds no reference to anything shared; reading anything else on it, or
-``arena.poses()``/``arena.positions()`` while a controller runs, raises
+``arena.poses()``/``arena.positions()``/``arena.step()`` while a controller runs, raises
 :class:`~swarmdeck.network.errors.IsolationError` naming the robot and what it reached for. A controller
 that raises, returns something other than a finite ``(2,)`` velocity, or sends a message the network refuses
 is counted in :attr:`Decentralised.errors` (kind → count), its message kept in :attr:`Decentralised.events`,

@@ -28,8 +28,9 @@ _ARRAY_EXT = 1
 _KINDS = "biuf"  # bool, signed, unsigned, float
 
 
-def _check(value: Any, depth: int, where: str) -> None:
-    """Raise PayloadError naming the first value (by its path) that is not a message value."""
+def _check(value: Any, depth: int, where: str, max_bytes: int) -> None:
+    """Raise PayloadError naming the first value (by its path) that is not a message value, or for a container
+    with more items than ``max_bytes`` (each item encodes to at least one byte: too big, found without walking it)."""
     if depth > MAX_DEPTH:
         raise PayloadError(f"payload nests deeper than {MAX_DEPTH} levels at {where}")
     if value is None or isinstance(value, (bool, int, float, str, bytes, np.bool_, np.integer, np.floating)):
@@ -41,15 +42,18 @@ def _check(value: Any, depth: int, where: str) -> None:
             raise PayloadError(f"payload array at {where} has dtype {value.dtype} and {value.ndim} dimensions; "
                                f"only bool, integer and float arrays of at most {MAX_ARRAY_DIMS} dimensions travel")
         return
+    if isinstance(value, (list, tuple, dict)) and len(value) > max_bytes:
+        raise PayloadError(f"payload container at {where} has {len(value)} items: it exceeds the largest message, "
+                           f"{max_bytes} bytes")
     if isinstance(value, (list, tuple)):
         for k, item in enumerate(value):
-            _check(item, depth + 1, f"{where}[{k}]")
+            _check(item, depth + 1, f"{where}[{k}]", max_bytes)
         return
     if isinstance(value, dict):
         for key, item in value.items():
             if not isinstance(key, str):
                 raise PayloadError(f"payload dict at {where} has a key of type {type(key).__name__}; keys must be str")
-            _check(item, depth + 1, f"{where}[{key!r}]")
+            _check(item, depth + 1, f"{where}[{key!r}]", max_bytes)
         return
     raise PayloadError(f"payload value at {where} is a {type(value).__module__}.{type(value).__qualname__}, which is "
                        "not serialisable: send None, bool, int, float, str, bytes, lists, str-keyed dicts or numpy arrays")
@@ -96,7 +100,7 @@ def encode_payload(payload: Any, max_bytes: int) -> bytes:
     size = _quick_size(payload)
     if size > max_bytes:
         raise PayloadError(f"payload of at least {size} bytes exceeds the largest message, {max_bytes} bytes")
-    _check(payload, 0, "payload")
+    _check(payload, 0, "payload", max_bytes)
     try:
         data = _encoder.encode(payload)
     except (TypeError, ValueError, OverflowError, NotImplementedError) as exc:

@@ -21,6 +21,7 @@ def _net() -> Network:
 @pytest.mark.parametrize(("send", "error", "words", "counter"), [
     (lambda n: n.send(0, 1, TEN_MB), PayloadError, ["robot 0", "10485760 bytes", "4096"], "refused:too_big"),
     (lambda n: n.send(0, 1, {"big": np.zeros(2_000_000)}), PayloadError, ["robot 0", "exceeds"], "refused:too_big"),
+    (lambda n: n.send(0, 1, list(range(10_000_000))), PayloadError, ["10000000 items", "exceeds"], "refused:too_big"),
     (lambda n: n.send(0, 7, "hi"), MessageError, ["robot 0", "receiver 7 does not exist", "0..2"], "refused:unknown_robot"),
     (lambda n: n.send(-1, 0, "hi"), MessageError, ["sender -1 does not exist"], "refused:unknown_robot"),
     (lambda n: n.send(0, "1", "hi"), MessageError, ["receiver must be a robot index"], "refused:unknown_robot"),

@@ -23,16 +23,20 @@ def test_reading_another_robots_pose_is_refused_and_named():
             return arena.poses()[0, :2] - view.pose[:2]  # robot 1 peeks at robot 0
         if i == 2:
             return view.poses[0, :2]  # robot 2 asks its view for everybody's poses
+        if view.tick == 1:
+            arena.step()  # robot 0 tries to step the arena (it would return everybody's poses)
         return np.array([0.05, 0.0])
 
     run = Decentralised(arena, robot, NetworkConfig(topology=DiskTopology(2.0)))
-    for _ in range(2):
+    for _ in range(3):
         run.step()
-    assert run.errors["IsolationError"] == 4
+    assert run.errors["IsolationError"] == 7  # robots 1 and 2 every tick, robot 0 at tick 1
     texts = list(run.events)
+    assert any("robot 0's controller read arena.step()" in t for t in texts)
     assert any("robot 1's controller read arena.poses()" in t for t in texts)
     assert any("robot 2's controller read 'poses'" in t for t in texts)
     assert run.last_commands[1:].tolist() == [[0.0, 0.0], [0.0, 0.0]] and run.last_commands[0, 0] == 0.05
+    assert run.tick == 3 and arena.time == pytest.approx(3 * arena.config.dt)  # the refused step did not happen
     assert arena.poses().shape == (3, 3)  # outside the controllers the experimenter may read them
 
 
