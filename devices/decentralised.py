@@ -168,6 +168,9 @@ class Decentralised:
         self.network = self.robots.network
         self.config = self.robots.config
         arena.network = self.network  # `swarmdeck run --record` records its traffic (console/recording/arena_recording.py)
+        attach = getattr(arena.backend, "attach_network", None)
+        if callable(attach):  # robots behind a trust boundary report the traffic to the trusted side (sandbox child)
+            attach(self.network)
 
     def _seal(self, who: str | None) -> None:
         self.arena._sealed_for = who
