@@ -48,6 +48,7 @@ from swarmdeck.devices.pipeline import CommandFilter, FilterDiagnostics, Unicycl
 from swarmdeck.devices.simulated_robots import SimulatedRobots
 from swarmdeck.devices.simulator import ArenaConfig, SimulatedArena, check_poses
 from swarmdeck.devices.stepped import SteppedRobots
+from swarmdeck.network.errors import IsolationError
 from swarmdeck.sensing import SensingConfig, SensorReadings, Sensors
 
 FloatArray = NDArray[np.float64]
@@ -224,6 +225,8 @@ class Arena:
         self._readings: SensorReadings | None = None
         if sensing is not None:
             self.use_sensors(sensing)
+        self._sealed_for: str | None = None  # set while a decentralised controller runs (devices/decentralised.py)
+        self.network: Any = None  # the robots' swarmdeck.network.Network in a decentralised run: recorded and drawn
         self.robots.start_clock()  # real robots: the run starts now, not when the robots were opened
         if defaults.on_create is not None:
             defaults.on_create(self)
@@ -272,10 +275,12 @@ class Arena:
 
     def poses(self) -> FloatArray:
         """Current poses ``(N, 3)`` ``[x, y, θ]`` (a fresh copy every call)."""
+        self._refuse_if_sealed("poses()")
         return self.robots.poses
 
     def positions(self) -> FloatArray:
         """Look-ahead points ``(N, 2)``: the points single-integrator commands move."""
+        self._refuse_if_sealed("positions()")
         return lookahead_points(self.robots.poses, self.ell)
 
     # ------------------------------------------------------------------ the robots' own sensors (issue 28.1)
@@ -328,6 +333,12 @@ class Arena:
         if isinstance(port, ReportsSensors):
             readings = port.sensor_readings()
         self._readings = readings if readings is not None else self.sensors.update(poses, v, w, self.config.dt)
+
+    def _refuse_if_sealed(self, what: str) -> None:
+        """IsolationError while a decentralised controller runs (:mod:`swarmdeck.devices.decentralised`)."""
+        if self._sealed_for is not None:
+            raise IsolationError(f"{self._sealed_for} read arena.{what}: a decentralised controller sees only its "
+                                 "own view (view.pose, view.inbox, view.readings, view.state), not other robots' poses")
 
     # ------------------------------------------------------------------ commanding
     def _ids(self, ids: ArrayLike | None) -> NDArray[np.intp] | None:
@@ -536,6 +547,7 @@ class Arena:
         console/sandbox/child.py) get the nominal ``(N, 2)`` as it is instead: the trusted side across the
         pipe certifies it.
         """
+        self._refuse_if_sealed("step()")
         if self.duration is not None and self.time >= self.duration - 1e-9:
             raise ExperimentFinished(f"declared duration {self.duration} s is over")
         poses = self.robots.poses

@@ -23,7 +23,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--arena", default=None, metavar="WxH",
                         help="arena size in metres, centred on the origin (default 3.2x2)")
     parser.add_argument("--behaviour", "--behavior", default=None,
-                        help="coverage (default) | rendezvous | formation | goto | script:PATH "
+                        help="coverage (default) | rendezvous | formation | goto | decentralised (rendezvous by "
+                             "messages only, over a lossy network: docs/network.md) | script:PATH "
                              "(PATH defines behaviour(poses, t) -> (N, 2) velocities in m/s)")
     parser.add_argument("--config", default=None, metavar="FILE", help="TOML file ([console], [behaviour], "
                         "[safety], [density], [inputs] tables)")

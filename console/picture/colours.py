@@ -59,6 +59,9 @@ NOMINAL = (130, 130, 130)
 SAFE = (20, 150, 60)
 """the safe (certified) command's arrow"""
 
+#: communication links (console/picture/network.py): idle (nothing crossed this tick) → busy
+LINK_IDLE = (175, 190, 215)
+LINK_BUSY = (0, 150, 200)
 #: bar colours by battery level (LEVELS of console.runtime.batteries: unknown, low, fair, good, charging)
 BATTERY_COLORS = _rgb(160, 160, 160, 220, 30, 30, 235, 160, 20, 40, 170, 60, 40, 120, 230)
 BATTERY_TRACK = _rgb(200, 200, 200)

@@ -29,6 +29,7 @@ from swarmdeck.console.picture.colours import (
     pair_colors,
 )
 from swarmdeck.console.picture.heat import heatmap
+from swarmdeck.console.picture.network import NetworkLayer, network_layer
 from swarmdeck.console.picture.sensing import SensorLayer, sensor_layer
 from swarmdeck.console.picture.style import PictureStyle
 from swarmdeck.console.runtime.behaviours import goals_of_frame
@@ -124,6 +125,7 @@ class Picture:
         sensors: the sensors' layer (:class:`~.sensing.SensorLayer`: ToF rays, LEDs), None without sensors.
         obstacles: (S, 2, 2) line-segment obstacles on the floor, m (``Frame.obstacles``; empty without),
             drawn in :data:`~.colours.OBSTACLE`, ``PictureStyle``-independent (always drawn).
+        network: the communication graph (:class:`~.network.NetworkLayer`), None when the Frame has none.
     """
 
     bounds: Bounds
@@ -156,6 +158,7 @@ class Picture:
     alerts: tuple[str, ...]
     sensors: SensorLayer | None = None
     obstacles: NDArray[np.float64] = field(default_factory=lambda: _frozen(np.zeros((0, 2, 2))))
+    network: NetworkLayer | None = None
 
     @property
     def n(self) -> int:
@@ -192,4 +195,5 @@ def picture_of(frame: Frame, style: PictureStyle = DEFAULT_STYLE) -> Picture:
         density=frame.density, run_state=frame.run_state, behaviour=frame.behaviour,
         events=frame.events, alerts=frame.alerts, sensors=sensor_layer(frame, style),
         obstacles=frame.obstacles.segments if frame.obstacles is not None else _frozen(np.zeros((0, 2, 2))),
+        network=network_layer(frame, style),
     )

@@ -30,6 +30,8 @@ class PictureStyle:
         max_labels: robot ids only up to this many robots.
         max_glyphs: per-robot glyphs (arrows, safety rings, trails, sensor rays) only up to this many robots.
         sensors: draw the sensors' layer (ToF rays and end points, LED colours) when a Frame has sensors.
+        show_network: draw the robots' communication graph when a Frame has one (console/picture/network.py).
+        network_rate_full: a link is drawn fully busy at this many messages per second (both directions).
     """
 
     changed_threshold: float = 1e-3
@@ -42,6 +44,8 @@ class PictureStyle:
     max_labels: int = 100
     max_glyphs: int = 300
     sensors: bool = True
+    show_network: bool = True
+    network_rate_full: float = 60.0
 
     def heatmap_px(self, bounds: tuple[float, float, float, float]) -> float:
         """Heat-map px per m on the arena ``bounds`` (x_min, x_max, y_min, y_max) m: ``heatmap_px_per_m``,

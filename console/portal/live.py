@@ -21,6 +21,8 @@ edges, K active pairs)::
     edges        (E, 2, 2) Voronoi edges, or [] when the behaviour has no cells
     centroids    (N, 2) or []
     pairs        (K, 2) active barrier pairs (look-ahead point indices); pair_colours (K,) "#rrggbb" by h
+    links        (P, 2) robot pairs with a communication link (a decentralised run; else []); link_colours (P,)
+                 "#rrggbb" idle → busy by messages/s (console/picture/network.py)
     barrier      null | {enabled, ok, n_active, min_distance, safety_distance}
     density      null | "data:image/png;base64,…" the heat map, row 0 at y_max, covering ``bounds``
     events       [str] messages of this tick
@@ -94,6 +96,8 @@ def scene_message(frame: Frame, seq: int) -> dict[str, Any]:
         "edges": np.round(pic.edges, 3).tolist() if frame.coverage is not None else [],
         "centroids": np.round(pic.centroids, 3).tolist() if frame.coverage is not None else [],
         "pairs": pic.pairs.tolist(), "pair_colours": pal.hex_colors(pic.pair_colors), "barrier": barrier,
+        "links": [] if pic.network is None else pic.network.pairs.tolist(),
+        "link_colours": [] if pic.network is None else pal.hex_colors(pic.network.colors),
         "density": density_png(pic), "events": list(pic.events),
         "robot_radius": ROBOT_RADIUS, "rings": {"changed": CHANGED_RING, "virtual": VIRTUAL_RING_RADIUS},
         "palette": PALETTE,

@@ -91,6 +91,7 @@ from swarmdeck.console.runtime.behaviours import TickInput
 from swarmdeck.console.runtime.fleet_upkeep import UpkeepConfig, UpkeepResult
 from swarmdeck.console.runtime.frame import Frame
 from swarmdeck.console.runtime.loop import ControlLoop, DensityParams, LoopConfig, SafetyParams
+from swarmdeck.console.runtime.network_frame import NetworkFrame
 from swarmdeck.console.sandbox.bundle import ScriptBundle
 from swarmdeck.console.sandbox.confinement import ConfinementUnavailable, SandboxLimits
 from swarmdeck.console.sandbox.plant import SandboxPlant
@@ -153,6 +154,11 @@ class SandboxCommands:
 
     def __init__(self) -> None:
         self._nominal: NDArray[np.float64] | None = None
+        self.network: NetworkFrame | None = None  # a decentralised script's traffic (SandboxPlant.show_network)
+
+    def network_frame(self, dt: float) -> NetworkFrame | None:
+        """The script's last account of its robots' links and traffic: the Frame's ``network`` (live view, recording)."""
+        return self.network
 
     def set(self, nominal: NDArray[np.float64] | None) -> None:
         self._nominal = None if nominal is None else np.asarray(nominal, dtype=float)

@@ -14,6 +14,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from swarmdeck.console.runtime.frame import BarrierFrame, Frame
+from swarmdeck.console.runtime.network_frame import NetworkFrame
 from swarmdeck.console.runtime.sensors_frame import SensorsFrame
 from swarmdeck.core.bounds import Bounds
 from swarmdeck.core.constants import SAFETY_DISTANCE
@@ -32,6 +33,10 @@ def arena_frame(arena: Any, poses: NDArray[np.float64], tick: int, behaviour: st
     d_s = float(getattr(getattr(arena.safety, "config", None), "safety_distance", SAFETY_DISTANCE))
     barrier = (BarrierFrame.from_diagnostics(diag, n, d_s)
                if diag is not None else BarrierFrame(enabled=False, intervention=np.zeros(n)))
+    network = getattr(arena, "network", None)  # a decentralised run's messages (devices/decentralised.py)
+    if network is not None and "network" not in extra:
+        traffic = network.traffic()
+        extra["network"] = NetworkFrame.from_traffic(traffic.links, traffic.messages, dt)
     return Frame(tick=tick, time=tick * dt, run_time=tick * dt, dt=dt, bounds=arena.config.bounds,
                  lookahead=arena.ell, poses=poses, ids=np.arange(n), nominal=arena.last_nominal, safe=safe, v=v, w=w,
                  barrier=barrier, behaviour=behaviour, params=dict(params or {}),

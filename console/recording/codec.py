@@ -40,6 +40,8 @@ A JSON object (message encoding ``json``), :meth:`Frame.to_dict`'s layout with
 * the fleet's per-robot state, each only when it says something (as in
   :meth:`Frame.fleet_dict`; absent in older recordings, which read as all physical,
   battery unknown, not charging): ``is_virtual`` bool, ``battery`` float32 V, ``charging`` bool.
+* ``network`` only when the frame has one (console/runtime/network_frame.py): ``{"links": int16 (E, 2)
+  (int32 beyond 32 767 robots), "rate": float32 (E,) messages/s}``.
 
 Frame format 3 (recording format 3) — format 2, predicted from the previous frame
 ---------------------------------------------------------------------------------
@@ -100,6 +102,7 @@ from swarmdeck.console.runtime.frame import (
     filled,
     obstacles_dict,
 )
+from swarmdeck.console.runtime.network_frame import NetworkFrame
 from swarmdeck.console.runtime.sensors_frame import SensorsFrame
 from swarmdeck.core.bounds import Bounds
 from swarmdeck.core.errors import SwarmdeckError
@@ -190,6 +193,8 @@ def frame_message(frame: Frame, previous: Frame | None = None) -> dict[str, Any]
         d["charging"] = pack_array(charging, "|b1")
     if frame.sensors is not None:  # written only when present (console/runtime/sensors_frame.py)
         d["sensors"] = frame.sensors.packed(pack_array)
+    if frame.network is not None:
+        d["network"] = _network_message(frame)
     # nominal as float16 offsets from the derived safe command: zero where nothing changed it
     delta = frame.nominal - derived_safe(frame.poses, frame.v, frame.w, frame.lookahead)
     delta[np.abs(delta) < 1e-12] = 0.0
@@ -279,7 +284,25 @@ def _unzigzag(z: np.ndarray) -> np.ndarray:
 
 
 _BIG = ("ids", "poses", "seen", "nominal", "nominal_minus_safe", "safe", "v", "w", "barrier", "coverage",
-        "is_virtual", "battery", "charging", "sensors")
+        "is_virtual", "battery", "charging", "sensors", "network")
+
+
+def _network_message(frame: Frame) -> dict[str, Any]:
+    """``network``: the communication graph, ``links`` int16 (int32 beyond 32 767 robots), ``rate`` float32."""
+    net = frame.network
+    assert net is not None
+    return {"links": pack_array(net.links, "<i2" if frame.n <= 32767 else "<i4"), "rate": pack_array(net.rate, "<f4")}
+
+
+def _decode_network(nd: Any, n: int) -> NetworkFrame:
+    if not isinstance(nd, Mapping) or "links" not in nd or "rate" not in nd:
+        raise ValueError("frame field 'network' must be an object {links, rate}")
+    net = NetworkFrame(unpack_array(nd["links"], "network.links").astype(np.int64).reshape(-1, 2),
+                       unpack_array(nd["rate"], "network.rate").astype(float))
+    net.check_robots(n)
+    return net
+
+
 _FLEET = (("is_virtual", bool), ("battery", float), ("charging", bool))
 
 
@@ -422,6 +445,7 @@ def _decode_v2(d: Mapping[str, Any], exact: Mapping[str, np.ndarray]) -> Frame:
                 raise ValueError(f"frame field {name!r} must have shape ({n},), got {arr.shape}")
             fleet[name] = arr
     sensors = None if d.get("sensors") is None else SensorsFrame.unpacked(d["sensors"], unpack_array, n)
+    network = None if d.get("network") is None else _decode_network(d["network"], n)
     return Frame(
         tick=shell.tick, time=shell.time, run_time=shell.run_time, dt=shell.dt, bounds=shell.bounds,
         lookahead=lookahead, poses=poses, ids=exact["ids"] if exact else unpack_array(d["ids"], "ids").astype(np.int64),
@@ -431,6 +455,7 @@ def _decode_v2(d: Mapping[str, Any], exact: Mapping[str, np.ndarray]) -> Frame:
         alerts=shell.alerts, health=shell.health, timing=shell.timing, image_ref=shell.image_ref, **fleet,
         sensors=sensors,
         obstacles=shell.obstacles,
+        network=network,
     )
 
 

@@ -65,6 +65,7 @@ from swarmdeck.console.picture.colours import (
     pair_colors,
 )
 from swarmdeck.console.picture.heat import heatmap
+from swarmdeck.console.picture.network import NetworkLayer, link_colors
 from swarmdeck.console.picture.picture import Picture, picture_of
 from swarmdeck.console.picture.shapes import CHANGED_RING, dashed_rings, robot_outline
 from swarmdeck.console.picture.style import PictureStyle
@@ -259,6 +260,8 @@ class FrameRenderer:
         if len(pic.centroids):
             d = 0.018 * np.array([[1.0, 0.0], [0.0, 1.0], [-1.0, 0.0], [0.0, -1.0]])
             cv2.fillPoly(img, list(lay.fixed(pic.centroids[:, None, :] + d[None])), CENTROID, aa, sh)
+        if pic.network is not None and len(pic.network.pairs):
+            self._network(img, pic.network)
         pts = pic.points
         if pic.glyphs and pic.n:
             discs = pts[:, None, :] + pic.ring_radius * self.unit_ring[None]
@@ -320,6 +323,17 @@ class FrameRenderer:
         which = np.asarray(which).reshape(-1)
         for k, col in enumerate(uniq):  # one call per distinct colour, not per robot
             self.cv2.fillPoly(img, list(dots[which == k]), tuple(int(v) for v in col), self.cv2.LINE_AA, _SHIFT)
+
+    def _network(self, img: NDArray[np.uint8], layer: NetworkLayer) -> None:
+        """The communication links (console/picture/network.py), one ``polylines`` call per colour (rate in 5 levels)."""
+        full = self.picture_style.network_rate_full
+        level = np.round(np.clip(layer.rate / full, 0.0, 1.0) * 4) / 4
+        cols = link_colors(level * full, full)
+        segs = self.layout.fixed(layer.segments)
+        for k in np.unique(level):
+            sel = level == k
+            col = tuple(int(v) for v in cols[np.flatnonzero(sel)[0]])
+            self.cv2.polylines(img, list(segs[sel]), False, col, self.thick, self.cv2.LINE_AA, _SHIFT)
 
     def _robots(self, img: NDArray[np.uint8], frame: Frame, pic: Picture) -> None:
         cv2, lay = self.cv2, self.layout

@@ -20,6 +20,9 @@ topic                     schema                      content (frame ``arena``: 
 ``/foxglove/cells``       ``foxglove.SceneUpdate``    Voronoi edges (a line list) of the coverage state
 ``/foxglove/barrier``     ``foxglove.SceneUpdate``    active barrier pairs between look-ahead points, a
                                                       line list coloured by h (red h ≤ 0 → yellow)
+``/foxglove/network``     ``foxglove.SceneUpdate``    the robots' communication links (a line list, idle →
+                                                      busy by messages/s; only in decentralised runs,
+                                                      :data:`NETWORK_TOPICS`)
 ``/foxglove/contacts``    ``foxglove.SceneUpdate``    touch contacts as spheres
 ``/foxglove/poses``       ``foxglove.PosesInFrame``   robot poses [x, y, θ] in ``arena``
 ``/foxglove/density``     ``foxglove.Grid``           φ(q, t) on a 0.1 m grid (float32 field ``phi``; the
@@ -70,6 +73,7 @@ from swarmdeck.console.picture.colours import (
     CONTACT,
     HEADING,
     LABEL,
+    LINK_IDLE,
     OBSTACLE,
     PAIR,
     SENSOR_HIT,
@@ -77,6 +81,7 @@ from swarmdeck.console.picture.colours import (
     VORONOI,
     pair_colors,
 )
+from swarmdeck.console.picture.network import network_layer
 from swarmdeck.console.picture.picture import active_pairs, changed_mask, robot_colors
 from swarmdeck.console.picture.sensing import sensor_layer
 from swarmdeck.console.picture.style import PictureStyle
@@ -107,6 +112,10 @@ TOPICS: dict[str, str | None] = {
 }
 
 TOPIC_ROBOT_POINTS = "/foxglove/robot_points"
+
+TOPIC_NETWORK = "/foxglove/network"
+#: Channels declared always and written only when a Frame has what they show (a decentralised run's links).
+NETWORK_TOPICS: dict[str, str | None] = {TOPIC_NETWORK: "SceneUpdate"}
 
 #: Channels written only with ``FoxgloveConfig(packed=True)`` (topic -> schema, as :data:`TOPICS`).
 PACKED_TOPICS: dict[str, str | None] = {TOPIC_ROBOT_POINTS: "PointCloud"}
@@ -217,7 +226,7 @@ def channel_specs(packed: bool = False) -> list[ChannelSpec]:
     from swarmdeck.console.recording.recorder import encode_json
 
     out = []
-    for topic, cls in {**TOPICS, **OPTIONAL_TOPICS, **(PACKED_TOPICS if packed else {})}.items():
+    for topic, cls in {**TOPICS, **OPTIONAL_TOPICS, **NETWORK_TOPICS, **(PACKED_TOPICS if packed else {})}.items():
         if cls is None:
             out.append(ChannelSpec(topic, METRICS_SCHEMA["title"], "jsonschema", encode_json(METRICS_SCHEMA), "json"))
         else:
@@ -442,6 +451,15 @@ class FoxgloveEncoder:
                      for (x, y), c in zip(frame.poses[lit, :2].tolist(), layer.leds[lit].tolist())]
         return self._scene(self._entity(ns, "sensors", lines=lines, spheres=spheres, cylinders=discs))
 
+    def network(self, frame: Frame, ns: int) -> bytes:
+        """SceneUpdate: the picture's communication links between robot centres, coloured idle → busy."""
+        layer = network_layer(frame, self.picture)
+        lines = []
+        if layer is not None and len(layer.pairs):
+            colors = [self._color(c) for c in np.repeat(layer.colors, 2, axis=0)]
+            lines = [self._line_list(layer.segments, 0.003, 0.005, self._color(LINK_IDLE), colors)]
+        return self._scene(self._entity(ns, "network", lines=lines))
+
     def contacts(self, frame: Frame, ns: int) -> bytes:
         """SceneUpdate: touch contacts as spheres (⌀ 6 cm)."""
         fm = self.fm
@@ -556,6 +574,8 @@ class FoxgloveEncoder:
                 self._next_lines = frame.time + self.config.lines_period
                 yield TOPIC_CELLS, ns, self.cells(frame, ns)
                 yield TOPIC_BARRIER, ns, self.barrier(frame, ns)
+                if frame.network is not None:
+                    yield TOPIC_NETWORK, ns, self.network(frame, ns)
             if frame.sensors is not None:
                 data = self.sensors(frame, ns)
                 if data is not None:

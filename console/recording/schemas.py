@@ -114,6 +114,9 @@ FRAME_SCHEMA_V1: dict[str, Any] = {
         "is_virtual": _arr({"type": "boolean"}),
         "battery": _arr(_NUM),
         "charging": _arr({"type": "boolean"}),
+        "network": {"type": "object", "required": ["links", "rate"], "description": "the robots' communication "
+                    "graph this tick: directed links (sender, receiver) and messages per second over each",
+                    "properties": {"links": _arr(_arr(_INT, 2)), "rate": _arr(_NUM)}},
     },
 }
 
@@ -145,6 +148,8 @@ FRAME_SCHEMA: dict[str, Any] = {
                  "properties": {"ref": _INT, "crc": {"type": "integer", "minimum": 0}}},
         "ids": _ND, "poses": _ND, "seen": _ND, "nominal_minus_safe": _ND, "v": _ND, "w": _ND,
         "is_virtual": _ND, "battery": _ND, "charging": _ND,
+        "network": {"type": "object", "required": ["links", "rate"],
+                    "properties": {"links": _ND, "rate": _ND}},
         "barrier": {"oneOf": [{"type": "null"}, {
             "type": "object", "required": ["enabled", "ok", "status", "active_pairs", "intervention", "safety_distance"],
             "properties": {

@@ -7,7 +7,8 @@ safety filter, so a behaviour never has to be safe itself.
 
 Names (``--behaviour``): ``coverage`` (TVD-D1 or another law on the console's
 density), ``rendezvous`` (consensus, paper §V-A), ``formation`` (rigid polygon,
-paper §V-B), ``goto`` (go to goal positions) and ``script:PATH`` (a user's
+paper §V-B), ``goto`` (go to goal positions), ``decentralised`` (rendezvous by messages only over a lossy
+network, console/runtime/decentralised_behaviour.py) and ``script:PATH`` (a user's
 Python file defining ``behaviour(poses, t) -> (N, 2)``).
 """
 from __future__ import annotations
@@ -35,7 +36,7 @@ if TYPE_CHECKING:
     from swarmdeck.coverage.density import Density
 
 FloatArray = NDArray[np.float64]
-BUILTIN = ("coverage", "rendezvous", "formation", "goto")
+BUILTIN = ("coverage", "rendezvous", "formation", "goto", "decentralised")
 
 
 @dataclass(frozen=True)
@@ -80,6 +81,13 @@ class ReportsHealth(Protocol):
     """Has a line for the Frame's health, under the behaviour's name (a script's worker, a maneuver's progress)."""
 
     def health(self) -> str: ...
+
+
+@runtime_checkable
+class ReportsNetwork(Protocol):
+    """Runs the robots over a network (``swarmdeck.network``): the Frame's ``network`` is its links and traffic."""
+
+    def network_frame(self, dt: float) -> Any: ...
 
 
 @runtime_checkable
@@ -295,6 +303,10 @@ def make_behaviour(name: str, params: BehaviourParams, bounds: Bounds,
         return Formation(params)
     if name == "goto":
         return GoTo(params, bounds)
+    if name == "decentralised":
+        from swarmdeck.console.runtime.decentralised_behaviour import DecentralisedRendezvous
+
+        return DecentralisedRendezvous(params)
     if name.startswith("script:"):
         path = name[len("script:"):]
         if not path:

@@ -57,6 +57,8 @@ active barrier pairs, B density bumps, C contacts)::
     obstacles     [[[x0, y0], [x1, y1]], ...] m, the line-segment obstacles on the floor
                   (``core.obstacles.Obstacles``); written only when there are some (the recording codec
                   writes them in keyframes and when they change, :func:`obstacles_dict`)
+    network       {links (E,2) int, rate (E,) messages/s}: the robots' communication graph this tick
+                  (console/runtime/network_frame.py); written only when present (a decentralised run)
 
 The browser GUI's editing state (bump handles, plots) is not part of a Frame;
 the density the loop used is.
@@ -72,6 +74,7 @@ from typing import Any, TypeVar
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from swarmdeck.console.runtime.network_frame import NetworkFrame
 from swarmdeck.console.runtime.sensors_frame import SensorsFrame
 from swarmdeck.core.bounds import DEFAULT_BOUNDS, Bounds
 from swarmdeck.core.constants import CONTROL_PERIOD, LOOKAHEAD, SAFETY_DISTANCE
@@ -430,6 +433,7 @@ class Frame:
     charging: NDArray[np.bool_] | None = None
     sensors: SensorsFrame | None = None
     obstacles: Obstacles | None = None
+    network: NetworkFrame | None = None
 
     def __post_init__(self) -> None:
         _set(self, "obstacles", obstacles_of(self.obstacles))
@@ -464,6 +468,10 @@ class Frame:
             rows = self.sensors.n_rows()
             if rows is not None and rows != n:
                 raise ValueError(f"frame field 'sensors' has {rows} rows but there are {n} poses")
+        if self.network is not None:
+            if not isinstance(self.network, NetworkFrame):
+                raise ValueError(f"frame network must be a NetworkFrame, got {type(self.network).__name__}")
+            self.network.check_robots(n)
         if self.run_state not in RUN_STATES:
             raise ValueError(f"run_state must be one of {RUN_STATES}, got {self.run_state!r}")
         if self.density is not None and not isinstance(self.density, GaussianMixture):
@@ -522,6 +530,7 @@ class Frame:
             **self.fleet_dict(),
             **({} if self.sensors is None else {"sensors": self.sensors.to_dict(_enc_array)}),
             **obstacles_dict(self.obstacles),
+            **({} if self.network is None else {"network": self.network.to_dict()}),
         }
 
     def fleet_dict(self) -> dict[str, Any]:
@@ -573,6 +582,7 @@ class Frame:
                 charging=None if d.get("charging") is None else _dec_array(d["charging"], bool, (), "charging"),
                 sensors=None if d.get("sensors") is None else SensorsFrame.from_dict(d["sensors"], _dec_array),
                 obstacles=d.get("obstacles"),
+                network=None if d.get("network") is None else NetworkFrame.from_dict(d["network"]),
             )
         except KeyError as exc:
             raise ValueError(f"frame is missing field {exc.args[0]!r}") from None

@@ -25,6 +25,7 @@ from swarmdeck.console.runtime.behaviours import (
     BehaviourError,
     HoldsRobots,
     ReportsHealth,
+    ReportsNetwork,
     TickInput,
     goal_params,
 )
@@ -32,6 +33,7 @@ from swarmdeck.console.runtime.commands import TickSettings
 from swarmdeck.console.runtime.contacts import ContactWatch
 from swarmdeck.console.runtime.density import ConsoleDensity
 from swarmdeck.console.runtime.frame import BarrierFrame, ContactsFrame, CoverageFrame, Frame
+from swarmdeck.console.runtime.network_frame import NetworkFrame
 from swarmdeck.console.runtime.notices import Notices
 from swarmdeck.console.runtime.params import LoopConfig, SafetyParams, frame_params
 from swarmdeck.console.runtime.sensors_frame import SensorsFrame
@@ -218,8 +220,12 @@ class Ticker:
         if self.sensing is not None:
             with self._stage("sensors", "sensors failed", stops=False):
                 sensors = self.sensing.read(self.source, poses, v, w)
+        network = None
+        if isinstance(behaviour, ReportsNetwork):  # the robots' communication graph (a decentralised behaviour)
+            with self._stage("network", "network layer failed", stops=False):
+                network = behaviour.network_frame(self.config.dt)
         frame = self._frame(now, sensed, points, nominal, safe, v, w, barrier, coverage, snapshot, contacts,
-                            behaviour.name, run_state, s, health, marks, sensors)
+                            behaviour.name, run_state, s, health, marks, sensors, network)
         self.index += 1
         if active:
             self.run_time += self.config.dt
@@ -380,7 +386,7 @@ class Ticker:
                safe: NDArray[np.float64], v: NDArray[np.float64], w: NDArray[np.float64], barrier: BarrierFrame,
                coverage: CoverageFrame | None, snapshot: GaussianMixture | None, contacts: ContactsFrame,
                behaviour: str, run_state: str, s: TickSettings, health: dict[str, str], marks: list[float],
-               sensors: SensorsFrame | None = None) -> Frame:
+               sensors: SensorsFrame | None = None, network: NetworkFrame | None = None) -> Frame:
         events, alerts = self.notices.take()
         bp = s.behaviour_params
         params = frame_params(bp, s.safety, s.density, self.config)
@@ -397,6 +403,6 @@ class Ticker:
             behaviour=behaviour, run_state=run_state, params=params, events=events, alerts=alerts, health=health,
             timing=timing, image_ref=image_ref if isinstance(image_ref, str) else None,
             is_virtual=sensed.is_virtual, battery=sensed.battery, charging=sensed.charging, sensors=sensors,
-            obstacles=self.config.obstacles,
+            obstacles=self.config.obstacles, network=network,
         )
 

@@ -24,7 +24,15 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from swarmdeck.console.sandbox.import_policy import install as install_import_policy
-from swarmdeck.console.sandbox.protocol import MESSAGE, FrameReader, decode, encode_commands, pack, write_frame
+from swarmdeck.console.sandbox.protocol import (
+    MAX_NETWORK_LINKS,
+    MESSAGE,
+    FrameReader,
+    decode,
+    encode_commands,
+    pack,
+    write_frame,
+)
 from swarmdeck.console.sandbox.protocol import poses as read_poses
 from swarmdeck.core.kinematics import GritsBotParams, unicycle_to_si
 from swarmdeck.core.ports import SensedPoses
@@ -74,6 +82,7 @@ class PipeRobots:
         self.link, self.n_robots, self.params, self.config = link, n, params, config
         self._ids = np.arange(n, dtype=np.int64)
         self._seen = np.ones(n, dtype=bool)
+        self._network: Any = None  # a decentralised run's swarmdeck.network.Network (attach_network)
         link.send({"t": "arena", "n": n, "initial": None if ic is None else pack(ic)})
         self._take()
 
@@ -90,8 +99,18 @@ class PipeRobots:
         """The poses and time the trusted side sent last (every robot seen)."""
         return SensedPoses(self._ids, self._poses.copy(), self._seen, time=self._time)
 
+    def attach_network(self, network: Any) -> None:
+        """A decentralised run's network (``devices.decentralised``): its traffic goes to the trusted side, which shows
+        and records it, before every tick's commands."""
+        self._network = network
+
     def send_nominal(self, ids: NDArray[np.int64], nominal: NDArray[np.float64]) -> None:
         """Send the nominal ``(N, 2)`` for the current poses; waits for the next poses."""
+        if self._network is not None:
+            traffic = self._network.traffic()
+            if len(traffic.links) <= MAX_NETWORK_LINKS:
+                self.link.send({"t": "network", "k": self._k, "links": pack(traffic.links.astype(float)),
+                                "rate": pack(traffic.messages / self.config.dt)})
         self.link.send(encode_commands(self._k, nominal))
         self._take()
 

@@ -21,6 +21,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.spatial import cKDTree
 
+from swarmdeck.console.runtime.network_frame import NetworkFrame
 from swarmdeck.core.constants import ROBOT_DIAMETER
 from swarmdeck.core.kinematics import GritsBotParams, limit_unicycle, unicycle_to_si, wrap_angle
 from swarmdeck.core.ports import SensedPoses
@@ -191,6 +192,8 @@ class SandboxPlant:
                  step: Callable[[NDArray[np.float64] | None], None], finished: Callable[[], bool],
                  arena: Arena | None = None) -> None:
         self.n, self._observe, self._step, self._finished, self.arena = int(n), observe, step, finished, arena
+        self.network: NetworkFrame | None = None  # the script's last account of its robots' traffic (display only)
+        self.on_network: Callable[[NetworkFrame], None] | None = None
 
     @classmethod
     def on_arena(cls, arena: Arena) -> SandboxPlant:
@@ -224,7 +227,10 @@ class SandboxPlant:
             if pacer is not None:
                 pacer.wait()
 
-        return cls(n, observe, step, lambda: loop.run_time >= duration - 1e-9)
+        plant = cls(n, observe, step, lambda: loop.run_time >= duration - 1e-9)
+        if hasattr(commands, "network"):  # a behaviour that reports it puts it in the loop's Frames (behaviours.ReportsNetwork)
+            plant.on_network = lambda frame: setattr(commands, "network", frame)
+        return plant
 
     def observe(self) -> tuple[float, NDArray[np.float64]]:
         return self._observe()
@@ -235,6 +241,13 @@ class SandboxPlant:
 
     def finished(self) -> bool:
         return self._finished()
+
+    def show_network(self, links: NDArray[np.int64], rate: NDArray[np.float64]) -> None:
+        """The sandboxed script's account of its network this tick (checked by ``protocol.network_traffic``):
+        links (E, 2), messages/s (E,). Shown and recorded; nothing else depends on it."""
+        self.network = NetworkFrame(links, rate)
+        if self.on_network is not None:
+            self.on_network(self.network)
 
 
 #: the plant on a trusted Arena (``ArenaPlant(arena)``: ``swarmdeck run --sandbox``, verification, the tests)

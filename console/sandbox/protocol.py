@@ -24,6 +24,9 @@ Child → parent:
     ``{"t": "arena", "n": N, "initial": bytes | None}`` the script built its Arena;
     ``C`` frames: commands for the poses of tick k (one per ``P`` frame; a ``k`` other than the last ``P``
     frame's is a missed tick for the trusted side: robots stopped, simulated time goes on);
+    ``{"t": "network", "k": k, "links": bytes, "rate": bytes}`` before the ``C`` frame of tick k of a decentralised
+    run (``swarmdeck.devices.decentralised``): its network's last links E × 2 (float64 robot indices) and messages
+    per second over each (E,) — the script's own account, shown and recorded, never trusted for anything else;
     ``{"t": "done", "error": str | None, "error_line": str | None, "cpu_s": s}`` the script finished
     (``cpu_s``: the child's own CPU time, as it reports it: informational only).
 """
@@ -111,6 +114,26 @@ def floats(message: dict[str, Any], key: str, shape: tuple[int, ...]) -> NDArray
     if len(raw) != expected:
         raise ProtocolError(f"{message.get('t')!r} message: {key!r} has {len(raw)} bytes, expected {expected} for shape {shape}")
     return np.frombuffer(raw, dtype="<f8").reshape(shape).astype(np.float64)
+
+
+#: most links a ``network`` message may carry (a complete graph of 141 robots)
+MAX_NETWORK_LINKS = 20_000
+
+
+def network_traffic(message: dict[str, Any], n: int) -> tuple[NDArray[np.int64], NDArray[np.float64]]:
+    """(links (E, 2) int, rate (E,) messages/s) of a ``network`` message for ``n`` robots; ProtocolError unless the
+    links are whole robot indices 0..n−1 (at most :data:`MAX_NETWORK_LINKS`) and the rates finite and >= 0."""
+    raw = message.get("links")
+    if not isinstance(raw, (bytes, bytearray)) or len(raw) % 16 or len(raw) // 16 > MAX_NETWORK_LINKS:
+        raise ProtocolError(f"'network' message: 'links' must be the bytes of at most {MAX_NETWORK_LINKS} float64 pairs")
+    e = len(raw) // 16
+    links = floats(message, "links", (e, 2))
+    rate = floats(message, "rate", (e,))
+    if not (np.all(np.isfinite(links)) and np.all(links == np.round(links)) and (links >= 0).all() and (links < n).all()):
+        raise ProtocolError(f"'network' message: links must be robot indices 0..{n - 1}")
+    if not (np.all(np.isfinite(rate)) and (rate >= 0).all()):
+        raise ProtocolError("'network' message: rates must be finite and >= 0 messages/s")
+    return links.astype(np.int64), rate
 
 
 def write_frame(fd: int, frame: bytes | dict[str, Any]) -> None:

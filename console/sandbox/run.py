@@ -95,6 +95,7 @@ from swarmdeck.console.sandbox.protocol import (
     decode,
     encode_poses,
     floats,
+    network_traffic,
     write_frame,
 )
 from swarmdeck.console.sandbox.script_env import ScriptEnv
@@ -752,6 +753,12 @@ def _loop(child: _Child, script: Path, scratch: Path, uid: int | None, make_plan
                         break
                     if t == "ready" and ready is None:
                         ready = time.monotonic()
+                        continue
+                    if t == "network" and plant is not None and outstanding:  # display only (protocol.py)
+                        traffic = network_traffic(message, plant.n)  # checked whatever the plant does with it
+                        show = getattr(plant, "show_network", None)  # SandboxPlant: the loop's Frames show it
+                        if callable(show):
+                            show(*traffic)
                         continue
                     if t != "arena" or plant is not None or ready is None:
                         raise ProtocolError(f"unexpected {t!r} message")

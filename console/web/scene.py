@@ -16,7 +16,8 @@ contacts, goals (green crosses at the goals of ``goto``, from the Frame's params
 virtual (a dashed violet ring around each virtual robot, which is
 also drawn pale), battery (a bar under each robot that reports its battery: its
 length the state of charge, green/amber/red by level, blue while charging, on a
-grey full-length track; :mod:`swarmdeck.console.runtime.batteries`). It scales to a thousand robots: robots are one batched mesh and the
+grey full-length track; :mod:`swarmdeck.console.runtime.batteries`), network (the robots' communication
+links of a decentralised run, pale when idle, cyan by messages per second; :mod:`swarmdeck.console.picture.network`). It scales to a thousand robots: robots are one batched mesh and the
 Voronoi edges one line-segment node whatever N; labels exist only up to
 ``SceneStyle.max_labels`` robots and the per-robot glyphs (arrows, safety discs,
 trails) only up to ``max_glyphs``; the heat map keeps under ``heatmap_max_px`` pixels. Colours: robots blue; robots whose command the barrier changed
@@ -46,6 +47,7 @@ from swarmdeck.console.picture.colours import (  # noqa: F401 - the palette, re-
     CHANGED,
     CONTACT,
     GOAL,
+    LINK_IDLE,
     LUT,
     NOMINAL,
     OBSTACLE,
@@ -77,7 +79,7 @@ ImageProvider = Callable[[str], "tuple[ArrayLike, tuple[float, float, float, flo
 
 LAYERS: tuple[str, ...] = (
     "camera", "grid", "density", "voronoi", "cells", "centroids", "robots", "labels", "nominal", "safe",
-    "barrier", "discs", "trails", "contacts", "virtual", "battery", "goals", "sensors", "obstacles",
+    "barrier", "discs", "trails", "contacts", "virtual", "battery", "goals", "sensors", "obstacles", "network",
 )
 DEFAULT_OFF = frozenset({"cells"})
 
@@ -169,6 +171,7 @@ class SceneNodes:
     goals: viser.PointCloudHandle
     sensors: viser.LineSegmentsHandle | None = None  # the ToF rays (issue 28.1); made with the static nodes
     leds: viser.PointCloudHandle | None = None  # lit LEDs, shown with the sensors layer
+    network: viser.LineSegmentsHandle | None = None  # the communication graph (made by _setup_static)
     robots: viser.BatchedMeshHandle | None = None
     cells: viser.GlbHandle | None = None
     camera: viser.ImageHandle | None = None
@@ -273,6 +276,7 @@ class ArenaScene:
                                 centroids=centroids, trails=trails, discs=discs, barrier=barrier,
                                 nominal=nominal, safe=safe, contacts=contacts, virtual=virtual, battery=battery,
                                 goals=goals, sensors=sensors, leds=leds)
+        self.nodes.network = sc.add_line_segments("/network", _EMPTY_SEG, LINK_IDLE, thickness=0.005)
         for name in LAYERS:
             self._apply_visibility(name)
 
@@ -410,6 +414,8 @@ class ArenaScene:
             self._points("goals", pic.goals, 0.002)
         if v["sensors"]:
             self._draw_sensors(pic)
+        if v["network"] and self.nodes.network is not None:
+            self._draw_network(pic)
 
     def _draw_sensors(self, pic: Picture) -> None:
         """The picture's sensors' layer: ToF rays from sensor to end point, lit LEDs as coloured points."""
@@ -426,6 +432,17 @@ class ArenaScene:
             leds.colors = layer.leds[lit]
         else:
             leds.points = np.zeros((1, 3), np.float32) - np.array([0, 0, 5], np.float32)
+
+    def _draw_network(self, pic: Picture) -> None:
+        """The picture's communication links (:mod:`~swarmdeck.console.picture.network`), idle → busy colours."""
+        node = self.nodes.network
+        assert node is not None
+        layer = pic.network
+        if layer is None or not len(layer.pairs):
+            node.points, node.colors = _EMPTY_SEG, np.array(LINK_IDLE, dtype=np.uint8)
+            return
+        node.points = _segments_2d(layer.segments[:, 0], layer.segments[:, 1], 0.001)
+        node.colors = np.repeat(layer.colors[:, None, :], 2, axis=1)
 
     def _points(self, name: PointLayer, xy: NDArray[np.float64], z: float) -> None:
         """Put ``xy`` (K, 2) m at height ``z`` into the point layer ``name``; with no point the node is hidden."""

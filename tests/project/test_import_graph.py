@@ -21,11 +21,12 @@ ALLOWED: dict[str, set[str]] = {
     "tracking": {"core"},
     "inputs": {"coverage", "core"},
     "sensing": {"core"},
-    "devices": {"safety", "sensing", "core"},
-    "envs": {"core", "safety", "sensing", "coverage", "tracking", "inputs", "devices"},
+    "network": {"core"},
+    "devices": {"safety", "sensing", "core", "network"},
+    "envs": {"core", "safety", "sensing", "coverage", "tracking", "inputs", "devices", "network"},
     # experiments to copy: user code at the top, like a script `swarmdeck run` runs (one records with the console's recorder)
-    "examples": {"core", "safety", "sensing", "coverage", "tracking", "inputs", "devices", "envs", "console"},
-    "console": {"core", "safety", "sensing", "coverage", "tracking", "inputs", "devices", "envs", "examples"},
+    "examples": {"core", "safety", "sensing", "coverage", "tracking", "inputs", "devices", "envs", "console", "network"},
+    "console": {"core", "safety", "sensing", "coverage", "tracking", "inputs", "devices", "envs", "examples", "network"},
 }
 
 

@@ -41,7 +41,8 @@ def validate_every_message(path) -> dict[str, int]:
     return counts
 
 
-@pytest.mark.parametrize("behaviour", ["coverage", "rendezvous", "formation", "goto", "script", "failing script"])
+@pytest.mark.parametrize("behaviour", ["coverage", "rendezvous", "formation", "goto", "decentralised", "script",
+                                       "failing script"])
 def test_a_console_session_of_every_behaviour_conforms(tmp_path, behaviour):
     name = behaviour
     if behaviour.endswith("script"):
@@ -58,6 +59,7 @@ def test_a_console_session_of_every_behaviour_conforms(tmp_path, behaviour):
     loop.close()
     counts = validate_every_message(path)
     assert counts[TOPIC_FRAME] == 6 and "/foxglove/robots" in counts
+    assert ("/foxglove/network" in counts) == (behaviour == "decentralised")  # its links, validated too
 
 
 @pytest.mark.parametrize("task", envs.TASKS)

@@ -10,7 +10,7 @@ document.addEventListener("DOMContentLoaded", () => {
   const status = document.getElementById("live-status");
   if (!canvas) return;
   const ctx = canvas.getContext("2d");
-  const drawn = (window.swarmdeckLive = { frames: 0, seq: null, tick: null, poses: null, runState: null, state: null, ended: false });
+  const drawn = (window.swarmdeckLive = { frames: 0, seq: null, tick: null, poses: null, runState: null, state: null, ended: false, links: 0 });
   const heat = new Image();
   let last = null;
   heat.onload = () => { if (last) draw(last); };
@@ -47,6 +47,15 @@ document.addEventListener("DOMContentLoaded", () => {
     }
     ctx.fillStyle = P.centroid;
     for (const [cx, cy] of m.centroids) ctx.fillRect(X(cx) - 3, Y(cy) - 3, 6, 6);
+    const links = document.getElementById("live-network");
+    if (m.links && m.links.length && (!links || links.checked)) {  // communication links, idle → busy
+      ctx.lineWidth = 1.5;
+      m.links.forEach(([i, j], k) => {
+        ctx.strokeStyle = m.link_colours[k];
+        ctx.beginPath(); ctx.moveTo(X(m.poses[i][0]), Y(m.poses[i][1])); ctx.lineTo(X(m.poses[j][0]), Y(m.poses[j][1])); ctx.stroke();
+      });
+      drawn.links = m.links.length;
+    } else drawn.links = 0;
     ctx.lineWidth = 3;  // active barrier pairs, coloured by h
     m.pairs.forEach(([i, j], k) => {
       ctx.strokeStyle = m.pair_colours[k];
