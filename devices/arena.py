@@ -24,6 +24,8 @@ from typing import Any, Literal
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from swarmdeck.core.annotations import EMPTY, Annotations
+from swarmdeck.core.annotator import Annotator
 from swarmdeck.core.kinematics import GritsBotParams, lookahead_points, unicycle_to_si, wheels_to_unicycle
 from swarmdeck.devices.controllers import (
     HybridPoseController,
@@ -186,6 +188,11 @@ class Arena:
         self._poses_cache: FloatArray | None = None
         self.last_nominal = np.zeros((self.n, 2))
         self.last_safe = np.zeros((self.n, 2))
+        self.draw = Annotator(config.bounds)
+        """What the experiment draws on the arena (:class:`~swarmdeck.core.annotator.Annotator`: points, lines,
+        polylines, circles, polygons, text in arena metres, with colour and lifetime): shown in the console,
+        the recording, the video, the portal's live view and on the projector."""
+        self.last_annotations: Annotations = EMPTY
         self._on_step = defaults.on_step
         self.robots.start_clock()  # real robots: the run starts now, not when the robots were opened
         if defaults.on_create is not None:
@@ -454,6 +461,7 @@ class Arena:
         nominal = self.nominal_velocities(poses)
         if self.robots.nominal_sink is not None:  # robots behind a trust boundary: the far side certifies
             self.last_nominal = nominal
+            self._annotate(self.time + self.config.dt)
             new_poses = self.robots.step_nominal(nominal)
             if self._on_step is not None:
                 self._on_step(self)
@@ -477,6 +485,7 @@ class Arena:
         self.last_nominal = np.where(cert.invalid[:, None], 0.0, nominal)
         self.last_safe = cert.safe
         new_poses = self.robots.step(cert.v, cert.w)
+        self._annotate(self.time)
         if self._on_step is not None:
             self._on_step(self)
         return new_poses
@@ -495,9 +504,21 @@ class Arena:
         w = np.asarray(w, dtype=float)
         self.last_nominal = self.last_safe = unicycle_to_si(self.robots.poses, v, w, self.ell)
         new_poses = self.robots.step(v, w)
+        self._annotate(self.time)
         if self._on_step is not None:
             self._on_step(self)
         return new_poses
+
+    def _annotate(self, time: float) -> None:
+        """What :attr:`draw` holds for the step ending at ``time`` s → :attr:`last_annotations` (and, for robots
+        behind a trust boundary, across it: their sink's ``send_annotations``); cap hits become events."""
+        warnings = self.draw.warnings
+        self.last_annotations = self.draw.collect(time)
+        if self.draw.warnings != warnings:
+            self.events.extend(f"t={time:.3f}: {m}" for m in list(self.draw.messages)[-(self.draw.warnings - warnings):])
+        send = getattr(self.backend, "send_annotations", None)
+        if send is not None:
+            send(self.last_annotations)
 
     # ------------------------------------------------------------------ reporting
     def report(self) -> ArenaReport:

@@ -32,6 +32,7 @@ from swarmdeck.console.picture.heat import heatmap
 from swarmdeck.console.picture.style import PictureStyle
 from swarmdeck.console.runtime.behaviours import goals_of_frame
 from swarmdeck.console.runtime.frame import Frame, filled
+from swarmdeck.core.annotations import EMPTY, Annotations
 from swarmdeck.core.bounds import Bounds
 
 if TYPE_CHECKING:
@@ -120,6 +121,8 @@ class Picture:
         contacts: (M, 2) touch contacts. goals: (G, 2) goals of the goto behaviour (else empty).
         density: φ(·, t) for :meth:`heat_map`, or None.
         run_state, behaviour, events, alerts: the Frame's, for banners and logs.
+        annotations: what the experiment drew (arena metres, RGBA; :mod:`.annotations` turns it into
+            segments, filled polygons and texts), empty when it drew nothing.
     """
 
     bounds: Bounds
@@ -150,6 +153,7 @@ class Picture:
     behaviour: str
     events: tuple[str, ...]
     alerts: tuple[str, ...]
+    annotations: Annotations = EMPTY
 
     @property
     def n(self) -> int:
@@ -185,4 +189,5 @@ def picture_of(frame: Frame, style: PictureStyle = DEFAULT_STYLE) -> Picture:
         contacts=frame.contacts.positions, goals=_frozen(np.asarray(goals, dtype=float)),
         density=frame.density, run_state=frame.run_state, behaviour=frame.behaviour,
         events=frame.events, alerts=frame.alerts,
+        annotations=frame.annotations if frame.annotations is not None else EMPTY,
     )

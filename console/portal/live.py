@@ -27,6 +27,9 @@ edges, K active pairs)::
     robot_radius body radius of the robot glyph, m
     rings        {"changed": …, "virtual": …} ring radii round changed / virtual robots, × robot_radius
     palette      {floor, grid, boundary, voronoi, centroid, changed, virtual, label, heading, stopped}: "#rrggbb"
+    annotations  only when the experiment drew something (:func:`annotations_message`): {kinds (P,),
+                 offsets (P+1,), vertices (V, 2) m rounded to 0.1 mm, sizes (P,) m, colours (P,) "rgba(…)",
+                 filled (P,), texts (P,)} — kinds 0 point, 1 polyline, 2 circle, 3 polygon, 4 text
 
 A message is a few kB (N = 12); the pages send at most ten a second.
 """
@@ -39,6 +42,7 @@ from typing import Any
 import numpy as np
 
 from swarmdeck.console.picture import colours as pal
+from swarmdeck.console.picture.annotations import annotations_json
 from swarmdeck.console.picture.picture import Picture, picture_of
 from swarmdeck.console.picture.shapes import CHANGED_RING, VIRTUAL_RING_RADIUS
 from swarmdeck.console.runtime.frame import Frame
@@ -90,5 +94,10 @@ def scene_message(frame: Frame, seq: int) -> dict[str, Any]:
         "pairs": pic.pairs.tolist(), "pair_colours": pal.hex_colors(pic.pair_colors), "barrier": barrier,
         "density": density_png(pic), "events": list(pic.events),
         "robot_radius": ROBOT_RADIUS, "rings": {"changed": CHANGED_RING, "virtual": VIRTUAL_RING_RADIUS},
-        "palette": PALETTE,
+        "palette": PALETTE, **annotations_message(pic),
     }
+
+
+def annotations_message(pic: Picture) -> dict[str, Any]:
+    """``{"annotations": …}`` (module docstring) when the picture has annotations, else ``{}``."""
+    return {"annotations": annotations_json(pic.annotations)} if len(pic.annotations) else {}

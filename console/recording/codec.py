@@ -39,6 +39,10 @@ A JSON object (message encoding ``json``), :meth:`Frame.to_dict`'s layout with
   :meth:`Frame.fleet_dict`; absent in older recordings, which read as all physical,
   battery unknown, not charging): ``is_virtual`` bool, ``battery`` float32 V, ``charging`` bool.
 
+* what the experiment drew (``annotations``, only when it drew something; absent in older
+  recordings: nothing drawn): ``{"kinds": |u1, "offsets": <i4, "vertices": <f8 (V, 2),
+  "sizes": <f8, "colors": |u1 (P, 4), "filled": |b1, "texts": [str]}`` (:func:`annotations_message`).
+
 Frame format 3 (recording format 3) — format 2, predicted from the previous frame
 ---------------------------------------------------------------------------------
 A format-2 message with ``"format": 3``, of one of two kinds:
@@ -92,6 +96,7 @@ from swarmdeck.console.runtime.frame import (
     _enc_float,
     filled,
 )
+from swarmdeck.core.annotations import Annotations
 from swarmdeck.core.bounds import Bounds
 from swarmdeck.core.errors import SwarmdeckError
 from swarmdeck.core.kinematics import lookahead_points, unicycle_to_si
@@ -203,11 +208,42 @@ def frame_message(frame: Frame, previous: Frame | None = None) -> dict[str, Any]
             cov["centroids"] = pack_array(c.centroids, "<f8")
             cov["masses"] = pack_array(c.masses, "<f8")
         d["coverage"] = cov
+    d.update(annotations_message(frame))
     if previous is not None and can_predict(frame, previous):
         d["pred"] = {"ref": int(previous.tick), "crc": exact_crc(frame.ids, frame.poses, frame.v, frame.w)}
         for name, dtype in EXACT_FIELDS:
             d[name] = pack_array(_zigzag(_bits(getattr(frame, name), dtype) - _predicted_bits(previous, name)), "<u8")
     return d
+
+
+def annotations_message(frame: Frame) -> dict[str, Any]:
+    """``{"annotations": {...}}`` (binary arrays, module docstring) when the frame has any, else ``{}``."""
+    a = frame.annotations
+    if a is None or not len(a):
+        return {}
+    return {"annotations": {"kinds": pack_array(a.kinds, "|u1"), "offsets": pack_array(a.offsets, "<i4"),
+                            "vertices": pack_array(a.vertices, "<f8"), "sizes": pack_array(a.sizes, "<f8"),
+                            "colors": pack_array(a.colors, "|u1"), "filled": pack_array(a.filled, "|b1"),
+                            "texts": list(a.texts)}}
+
+
+def decode_annotations(ad: Any) -> Annotations:
+    """The :class:`~swarmdeck.core.annotations.Annotations` of a format-2/3 ``annotations`` object; ValueError
+    naming what is wrong."""
+    if not isinstance(ad, Mapping):
+        raise ValueError(f"frame field 'annotations' must be an object, got {type(ad).__name__}")
+    try:
+        texts = ad["texts"]
+        if not isinstance(texts, list):
+            raise ValueError("frame field 'annotations.texts' must be a list of strings")
+        return Annotations(kinds=unpack_array(ad["kinds"], "annotations.kinds").astype(np.int64),
+                           offsets=unpack_array(ad["offsets"], "annotations.offsets").astype(np.int64),
+                           vertices=unpack_array(ad["vertices"], "annotations.vertices").astype(float).reshape(-1, 2),
+                           sizes=unpack_array(ad["sizes"], "annotations.sizes").astype(float),
+                           colors=unpack_array(ad["colors"], "annotations.colors").astype(np.uint8).reshape(-1, 4),
+                           filled=unpack_array(ad["filled"], "annotations.filled").astype(bool), texts=tuple(texts))
+    except KeyError as exc:
+        raise ValueError(f"frame field 'annotations' is missing {exc.args[0]!r}") from None
 
 
 def encode_frame(frame: Frame, previous: Frame | None = None) -> bytes:
@@ -256,7 +292,7 @@ def _unzigzag(z: np.ndarray) -> np.ndarray:
 
 
 _BIG = ("ids", "poses", "seen", "nominal", "nominal_minus_safe", "safe", "v", "w", "barrier", "coverage",
-        "is_virtual", "battery", "charging")
+        "is_virtual", "battery", "charging", "annotations")
 _FLEET = (("is_virtual", bool), ("battery", float), ("charging", bool))
 
 
@@ -402,6 +438,7 @@ def _decode_v2(d: Mapping[str, Any], exact: Mapping[str, np.ndarray]) -> Frame:
         barrier=barrier, coverage=coverage, density=shell.density, contacts=shell.contacts,
         behaviour=shell.behaviour, run_state=shell.run_state, params=shell.params, events=shell.events,
         alerts=shell.alerts, health=shell.health, timing=shell.timing, image_ref=shell.image_ref, **fleet,
+        annotations=None if d.get("annotations") is None else decode_annotations(d["annotations"]),
     )
 
 

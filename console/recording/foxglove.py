@@ -21,6 +21,10 @@ topic                     schema                      content (frame ``arena``: 
 ``/foxglove/barrier``     ``foxglove.SceneUpdate``    active barrier pairs between look-ahead points, a
                                                       line list coloured by h (red h ≤ 0 → yellow)
 ``/foxglove/contacts``    ``foxglove.SceneUpdate``    touch contacts as spheres
+``/foxglove/annotations`` ``foxglove.SceneUpdate``    what the experiment drew (entity ``annotations``):
+                                                      outlines as a line list, filled shapes as
+                                                      triangles, points as spheres, texts as texts,
+                                                      in their RGBA; with the cells' cadence
 ``/foxglove/poses``       ``foxglove.PosesInFrame``   robot poses [x, y, θ] in ``arena``
 ``/foxglove/density``     ``foxglove.Grid``           φ(q, t) on a 0.1 m grid (float32 field ``phi``; the
                                                       layout interpolates), every ``density_period`` s
@@ -63,10 +67,12 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from swarmdeck.console.picture.annotations import annotation_segments, annotation_texts, filled_polygons
 from swarmdeck.console.picture.colours import BOUNDARY, CONTACT, HEADING, LABEL, PAIR, VORONOI, pair_colors
 from swarmdeck.console.picture.picture import active_pairs, changed_mask, robot_colors
 from swarmdeck.console.picture.style import PictureStyle
 from swarmdeck.console.runtime.frame import Frame
+from swarmdeck.core.annotations import EMPTY as EMPTY_ANNOTATIONS
 from swarmdeck.core.bounds import DEFAULT_BOUNDS, Bounds
 from swarmdeck.core.constants import ROBOT_RADIUS
 
@@ -80,6 +86,7 @@ TOPIC_CAMERA = "/foxglove/camera"
 TOPIC_TF = "/foxglove/tf"
 TOPIC_LOG = "/foxglove/log"
 TOPIC_METRICS = "/swarmdeck/metrics"
+TOPIC_ANNOTATIONS = "/foxglove/annotations"
 
 ARENA_FRAME = "arena"
 WORLD_FRAME = "world"
@@ -90,6 +97,7 @@ TOPICS: dict[str, str | None] = {
     TOPIC_ROBOTS: "SceneUpdate", TOPIC_CELLS: "SceneUpdate", TOPIC_BARRIER: "SceneUpdate",
     TOPIC_CONTACTS: "SceneUpdate", TOPIC_POSES: "PosesInFrame", TOPIC_DENSITY: "Grid",
     TOPIC_CAMERA: "CompressedImage", TOPIC_TF: "FrameTransforms", TOPIC_LOG: "Log", TOPIC_METRICS: None,
+    TOPIC_ANNOTATIONS: "SceneUpdate",
 }
 
 TOPIC_ROBOT_POINTS = "/foxglove/robot_points"
@@ -391,6 +399,35 @@ class FoxgloveEncoder:
             lines = [self._line_list(segs, 0.04, 0.012, self._color(PAIR), colors)]
         return self._scene(self._entity(ns, "barrier", lines=lines))
 
+    def annotations(self, frame: Frame, ns: int) -> bytes:
+        """SceneUpdate: what the experiment drew (entity ``annotations``, empty when nothing): the picture's
+        outlines (:func:`~swarmdeck.console.picture.annotations.annotation_segments`) as one line list,
+        filled polygons / circles / points as triangle fans, texts as texts; colours with their alpha."""
+        fm = self.fm
+        ann = frame.annotations if frame.annotations is not None else EMPTY_ANNOTATIONS
+        segs, seg_cols, _ = annotation_segments(ann)
+        lines = []
+        if len(segs):
+            colors = [self._color(c, float(c[3]) / 255.0) for c in np.repeat(seg_cols, 2, axis=0)]
+            lines = [self._line_list(segs, 0.003, 0.01, self._color(seg_cols[0], 1.0), colors)]
+        polys, poly_cols = filled_polygons(ann, 16)
+        triangles = []
+        if polys:
+            pts: list[Any] = []
+            cols: list[Any] = []
+            for poly, c in zip(polys, poly_cols):
+                k = len(poly)
+                fan = np.stack((np.repeat(poly[:1], k - 2, axis=0), poly[1:-1], poly[2:]), axis=1).reshape(-1, 2)
+                pts.extend(fm.Point3(x=x, y=y, z=0.002) for x, y in fan.tolist())
+                cols.extend([self._color(c, float(c[3]) / 255.0)] * len(fan))
+            triangles = [fm.TriangleListPrimitive(points=pts, colors=cols)]
+        anchors, heights, text_cols, strings = annotation_texts(ann)
+        texts = [fm.TextPrimitive(pose=fm.Pose(position=fm.Vector3(x=x, y=y, z=0.006)), billboard=True,
+                                  font_size=float(h), scale_invariant=False, color=self._color(c, float(c[3]) / 255.0),
+                                  text=t)
+                 for (x, y), h, c, t in zip(anchors.tolist(), heights.tolist(), text_cols, strings)]
+        return self._scene(self._entity(ns, "annotations", lines=lines, triangles=triangles, texts=texts))
+
     def contacts(self, frame: Frame, ns: int) -> bytes:
         """SceneUpdate: touch contacts as spheres (⌀ 6 cm)."""
         fm = self.fm
@@ -505,6 +542,7 @@ class FoxgloveEncoder:
                 self._next_lines = frame.time + self.config.lines_period
                 yield TOPIC_CELLS, ns, self.cells(frame, ns)
                 yield TOPIC_BARRIER, ns, self.barrier(frame, ns)
+                yield TOPIC_ANNOTATIONS, ns, self.annotations(frame, ns)
         yield TOPIC_CONTACTS, ns, self.contacts(frame, ns)
         yield TOPIC_METRICS, ns, self.metrics(frame, t)
         if frame.density is not None and frame.time >= self._next_density:

@@ -52,6 +52,9 @@ active barrier pairs, B density bumps, C contacts)::
                   written only when some robot is virtual, absent (all physical) in older recordings
     battery       (N,) V battery voltage (NaN: unknown); written only when some robot reports one
     charging      (N,) bool, robot on a charger; written only when some robot is charging
+    annotations   what the experiment drew this tick (``swarmdeck.core.annotations.Annotations.to_dict``:
+                  kinds, offsets, vertices m, sizes m, colors RGBA, filled, texts); written only when it drew
+                  something, absent (nothing drawn) in older recordings
 
 The browser GUI's editing state (bump handles, plots) is not part of a Frame;
 the density the loop used is.
@@ -67,6 +70,7 @@ from typing import Any, TypeVar
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from swarmdeck.core.annotations import Annotations
 from swarmdeck.core.bounds import DEFAULT_BOUNDS, Bounds
 from swarmdeck.core.constants import CONTROL_PERIOD, LOOKAHEAD, SAFETY_DISTANCE
 from swarmdeck.core.kinematics import lookahead_points
@@ -407,6 +411,7 @@ class Frame:
     is_virtual: NDArray[np.bool_] | None = None
     battery: FloatArray | None = None
     charging: NDArray[np.bool_] | None = None
+    annotations: Annotations | None = None
 
     def __post_init__(self) -> None:
         _set(self, "tick", int(self.tick))
@@ -444,6 +449,8 @@ class Frame:
         _set(self, "params", _freeze_map(self.params))
         _set(self, "health", _freeze_map({str(k): str(v) for k, v in dict(self.health).items()}))
         _set(self, "timing", _freeze_map({str(k): float(v) for k, v in dict(self.timing).items()}))
+        if self.annotations is not None and not isinstance(self.annotations, Annotations):
+            raise ValueError(f"frame annotations must be Annotations, got {type(self.annotations).__name__}")
 
     @property
     def n(self) -> int:
@@ -490,7 +497,14 @@ class Frame:
             "timing": _enc_map(self.timing),
             "image_ref": self.image_ref,
             **self.fleet_dict(),
+            **self.annotations_dict(),
         }
+
+    def annotations_dict(self) -> dict[str, Any]:
+        """``{"annotations": ...}`` when the experiment drew something this tick, else ``{}`` (older readers and
+        recordings without it read as nothing drawn)."""
+        return {} if self.annotations is None or not len(self.annotations) else {
+            "annotations": self.annotations.to_dict()}
 
     def fleet_dict(self) -> dict[str, Any]:
         """``is_virtual``, ``battery``, ``charging`` as JSON lists, each only when it says something
@@ -539,6 +553,7 @@ class Frame:
                 is_virtual=None if d.get("is_virtual") is None else _dec_array(d["is_virtual"], bool, (), "is_virtual"),
                 battery=None if d.get("battery") is None else _dec_array(d["battery"], float, (), "battery"),
                 charging=None if d.get("charging") is None else _dec_array(d["charging"], bool, (), "charging"),
+                annotations=None if d.get("annotations") is None else Annotations.from_dict(d["annotations"]),
             )
         except KeyError as exc:
             raise ValueError(f"frame is missing field {exc.args[0]!r}") from None

@@ -16,7 +16,8 @@ contacts, goals (green crosses at the goals of ``goto``, from the Frame's params
 virtual (a dashed violet ring around each virtual robot, which is
 also drawn pale), battery (a bar under each robot that reports its battery: its
 length the state of charge, green/amber/red by level, blue while charging, on a
-grey full-length track; :mod:`swarmdeck.console.runtime.batteries`). It scales to a thousand robots: robots are one batched mesh and the
+grey full-length track; :mod:`swarmdeck.console.runtime.batteries`), annotations (what the experiment drew:
+:mod:`swarmdeck.console.web.scene_annotations`). It scales to a thousand robots: robots are one batched mesh and the
 Voronoi edges one line-segment node whatever N; labels exist only up to
 ``SceneStyle.max_labels`` robots and the per-robot glyphs (arrows, safety discs,
 trails) only up to ``max_glyphs``; the heat map keeps under ``heatmap_max_px`` pixels. Colours: robots blue; robots whose command the barrier changed
@@ -64,6 +65,7 @@ from swarmdeck.console.picture.picture import Picture, picture_of, robot_colors
 from swarmdeck.console.picture.shapes import dashed_rings, robot_outline
 from swarmdeck.console.picture.style import PictureStyle
 from swarmdeck.console.runtime.frame import Frame, filled
+from swarmdeck.console.web.scene_annotations import AnnotationNodes
 from swarmdeck.core.bounds import DEFAULT_BOUNDS, Bounds
 from swarmdeck.core.constants import ROBOT_RADIUS
 
@@ -75,7 +77,7 @@ ImageProvider = Callable[[str], "tuple[ArrayLike, tuple[float, float, float, flo
 
 LAYERS: tuple[str, ...] = (
     "camera", "grid", "density", "voronoi", "cells", "centroids", "robots", "labels", "nominal", "safe",
-    "barrier", "discs", "trails", "contacts", "virtual", "battery", "goals",
+    "barrier", "discs", "trails", "contacts", "virtual", "battery", "goals", "annotations",
 )
 DEFAULT_OFF = frozenset({"cells"})
 
@@ -165,6 +167,7 @@ class SceneNodes:
     virtual: viser.LineSegmentsHandle
     battery: viser.LineSegmentsHandle
     goals: viser.PointCloudHandle
+    annotations: AnnotationNodes
     robots: viser.BatchedMeshHandle | None = None
     cells: viser.GlbHandle | None = None
     camera: viser.ImageHandle | None = None
@@ -263,7 +266,7 @@ class ArenaScene:
         self.nodes = SceneNodes(boundary=boundary, grid=grid, density=density_image, voronoi=voronoi,
                                 centroids=centroids, trails=trails, discs=discs, barrier=barrier,
                                 nominal=nominal, safe=safe, contacts=contacts, virtual=virtual, battery=battery,
-                                goals=goals)
+                                goals=goals, annotations=AnnotationNodes(sc))
         for name in LAYERS:
             self._apply_visibility(name)
 
@@ -383,6 +386,8 @@ class ArenaScene:
             self._points("contacts", pic.contacts, 0.012)
         if v["goals"]:
             self._points("goals", pic.goals, 0.002)
+        if v["annotations"] and (len(pic.annotations) or self.nodes.annotations.drawn):
+            self.nodes.annotations.draw(pic.annotations)
 
     def _points(self, name: PointLayer, xy: NDArray[np.float64], z: float) -> None:
         """Put ``xy`` (K, 2) m at height ``z`` into the point layer ``name``; with no point the node is hidden."""
