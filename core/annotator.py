@@ -134,11 +134,19 @@ class Annotator:
         self.messages: deque[str] = deque(maxlen=_MESSAGES_KEPT)
         """the most recent cap messages"""
         self.last_report = AnnotationReport()
+        self._new: list[str] = []
 
     # ---------------------------------------------------------------- lifetime bookkeeping
     def _warn(self, message: str) -> None:
         self.warnings += 1
         self.messages.append(message)
+        if len(self._new) < _MESSAGES_KEPT:
+            self._new.append(message)
+
+    def take_messages(self) -> list[str]:
+        """The cap messages since the last call (at most the 50 first), for a log or the run's events."""
+        new, self._new = self._new, []
+        return new
 
     def _room(self, wanted: int) -> int:
         """How many of ``wanted`` new primitives fit under ``max_primitives``; counts and says the rest."""
@@ -190,8 +198,8 @@ class Annotator:
         out, report = sanitize(ann, self.bounds, self.limits)
         self.last_report = report
         if report.changed:
-            self.warnings += report.warnings
-            self.messages.extend(report.messages(self.limits))
+            for message in report.messages(self.limits):
+                self._warn(message)
         for g in live:
             if g.ticks_left is not None:
                 g.ticks_left -= 1
@@ -209,7 +217,20 @@ class Annotator:
                            vertices=vertices, sizes=size_arr, colors=np.tile(rgba, (p, 1)),
                            filled=np.full(p, bool(filled)), texts=texts if texts is not None else ("",) * p)
 
-    def _xy(self, xy: ArrayLike, name: str, rows: int | None = None) -> NDArray[np.float64]:
+    def _many(self, xy: Any, name: str) -> NDArray[np.float64]:
+        """(M, 2) rows of ``xy`` ((2,) or (M, 2)) that fit under the cap — cut before converting, so a
+        million rows cost no more than the rows kept."""
+        if isinstance(xy, np.ndarray):
+            many = xy.ndim == 2
+        else:
+            try:
+                many = len(xy) > 0 and np.ndim(xy[0]) > 0
+            except TypeError:
+                raise ValueError(f"{name} must be (x, y) or an (M, 2) array of points in metres") from None
+        m = self._room(len(xy) if many else 1)
+        return self._xy(xy[:m] if many else xy, name)[:m]
+
+    def _xy(self, xy: ArrayLike, name: str) -> NDArray[np.float64]:
         arr = np.asarray(xy, dtype=float)
         if arr.ndim == 1 and arr.shape == (2,):
             arr = arr[None]
@@ -228,9 +249,7 @@ class Annotator:
     def points(self, xy: ArrayLike, *, radius: Any = POINT_RADIUS, color: Any = None, alpha: float | None = None,
                ticks: int | None = None, seconds: float | None = None, key: str | None = None) -> None:
         """Dots at ``xy`` ((2,) or (M, 2), m) of ``radius`` m (one or (M,))."""
-        raw = np.asarray(xy)
-        m = self._room(len(raw) if raw.ndim == 2 else 1)
-        arr = self._xy(raw[:m] if raw.ndim == 2 else raw, "points")
+        arr = self._many(xy, "points")
         self._add(self._batch(POINT, arr, np.ones(len(arr), dtype=np.int64), self._sizes(radius, len(arr), "radius"),
                               color, alpha, True), key, ticks, seconds)
 
@@ -241,9 +260,7 @@ class Annotator:
                 key: str | None = None) -> None:
         """Circles round ``centres`` ((2,) or (M, 2), m) of ``radius`` m (one or (M,)); ``fill`` or an outline
         ``width`` m wide (the outline's width is not stored separately: a circle's size is its radius)."""
-        raw = np.asarray(centres)
-        m = self._room(len(raw) if raw.ndim == 2 else 1)
-        arr = self._xy(raw[:m] if raw.ndim == 2 else raw, "centres")
+        arr = self._many(centres, "centres")
         self._add(self._batch(CIRCLE, arr, np.ones(len(arr), dtype=np.int64), self._sizes(radius, len(arr), "radius"),
                               color, alpha, fill), key, ticks, seconds)
 
@@ -267,14 +284,14 @@ class Annotator:
         self.polyline(np.vstack((np.asarray(start, dtype=float).reshape(2), np.asarray(end, dtype=float).reshape(2))),
                       **kwargs)
 
-    def lines(self, segments: ArrayLike, *, color: Any = None, alpha: float | None = None, width: float = LINE_WIDTH,
+    def lines(self, segments: Any, *, color: Any = None, alpha: float | None = None, width: float = LINE_WIDTH,
               ticks: int | None = None, seconds: float | None = None, key: str | None = None) -> None:
         """Segments ``(M, 2, 2)`` m (start, end), one primitive each."""
-        raw = np.asarray(segments)
-        if raw.ndim != 3 or raw.shape[1:] != (2, 2):
+        m = self._room(len(segments) if hasattr(segments, "__len__") else 0)
+        raw = np.asarray(segments[:m] if hasattr(segments, "__getitem__") else segments, dtype=float)
+        if raw.size and (raw.ndim != 3 or raw.shape[1:] != (2, 2)):
             raise ValueError(f"segments must have shape (M, 2, 2), got {raw.shape}")
-        m = self._room(len(raw))
-        arr = np.asarray(raw[:m], dtype=float).reshape(-1, 2)
+        arr = raw.reshape(-1, 2)
         self._add(self._batch(POLYLINE, arr, np.full(m, 2, dtype=np.int64), width, color, alpha, False),
                   key, ticks, seconds)
 

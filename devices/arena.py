@@ -512,10 +512,8 @@ class Arena:
     def _annotate(self, time: float) -> None:
         """What :attr:`draw` holds for the step ending at ``time`` s → :attr:`last_annotations` (and, for robots
         behind a trust boundary, across it: their sink's ``send_annotations``); cap hits become events."""
-        warnings = self.draw.warnings
         self.last_annotations = self.draw.collect(time)
-        if self.draw.warnings != warnings:
-            self.events.extend(f"t={time:.3f}: {m}" for m in list(self.draw.messages)[-(self.draw.warnings - warnings):])
+        self.events.extend(f"t={time:.3f}: {m}" for m in self.draw.take_messages())
         send = getattr(self.backend, "send_annotations", None)
         if send is not None:
             send(self.last_annotations)

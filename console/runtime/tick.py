@@ -23,6 +23,7 @@ from swarmdeck.console.runtime.batteries import BatteryWatch, low_battery_alert
 from swarmdeck.console.runtime.behaviours import (
     Behaviour,
     BehaviourError,
+    DrawsAnnotations,
     HoldsRobots,
     ReportsHealth,
     TickInput,
@@ -34,6 +35,7 @@ from swarmdeck.console.runtime.density import ConsoleDensity
 from swarmdeck.console.runtime.frame import BarrierFrame, ContactsFrame, CoverageFrame, Frame
 from swarmdeck.console.runtime.notices import Notices
 from swarmdeck.console.runtime.params import LoopConfig, SafetyParams, frame_params
+from swarmdeck.core.annotations import Annotations
 from swarmdeck.core.kinematics import GritsBotParams, lookahead_points, saturate
 from swarmdeck.core.ports import CommandSink, PoseSource, ProvidesImage, SensedPoses, obstacles_of
 from swarmdeck.coverage.density import GaussianMixture
@@ -211,8 +213,9 @@ class Ticker:
         marks.append(time.perf_counter())
 
         # 6. the Frame (the loop hands it to every subscriber)
+        drawn = behaviour.annotations(self.run_time) if isinstance(behaviour, DrawsAnnotations) else None
         frame = self._frame(now, sensed, points, nominal, safe, v, w, barrier, coverage, snapshot, contacts,
-                            behaviour.name, run_state, s, health, marks)
+                            behaviour.name, run_state, s, health, marks, drawn)
         self.index += 1
         if active:
             self.run_time += self.config.dt
@@ -372,7 +375,8 @@ class Ticker:
     def _frame(self, now: float, sensed: SensedPoses, points: NDArray[np.float64], nominal: NDArray[np.float64],
                safe: NDArray[np.float64], v: NDArray[np.float64], w: NDArray[np.float64], barrier: BarrierFrame,
                coverage: CoverageFrame | None, snapshot: GaussianMixture | None, contacts: ContactsFrame,
-               behaviour: str, run_state: str, s: TickSettings, health: dict[str, str], marks: list[float]) -> Frame:
+               behaviour: str, run_state: str, s: TickSettings, health: dict[str, str], marks: list[float],
+               annotations: Annotations | None = None) -> Frame:
         events, alerts = self.notices.take()
         bp = s.behaviour_params
         params = frame_params(bp, s.safety, s.density, self.config)
@@ -389,5 +393,6 @@ class Ticker:
             behaviour=behaviour, run_state=run_state, params=params, events=events, alerts=alerts, health=health,
             timing=timing, image_ref=image_ref if isinstance(image_ref, str) else None,
             is_virtual=sensed.is_virtual, battery=sensed.battery, charging=sensed.charging,
+            annotations=annotations if annotations is not None and len(annotations) else None,
         )
 

@@ -24,8 +24,18 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from swarmdeck.console.sandbox.import_policy import install as install_import_policy
-from swarmdeck.console.sandbox.protocol import MESSAGE, FrameReader, decode, encode_commands, pack, write_frame
+from swarmdeck.console.sandbox.protocol import (
+    MESSAGE,
+    FrameReader,
+    decode,
+    encode_annotations,
+    encode_commands,
+    pack,
+    write_frame,
+)
 from swarmdeck.console.sandbox.protocol import poses as read_poses
+from swarmdeck.core.annotations import EMPTY as EMPTY_ANNOTATIONS
+from swarmdeck.core.annotations import Annotations
 from swarmdeck.core.kinematics import GritsBotParams, unicycle_to_si
 from swarmdeck.core.ports import SensedPoses
 from swarmdeck.devices.arena import ExperimentFinished
@@ -74,6 +84,7 @@ class PipeRobots:
         self.link, self.n_robots, self.params, self.config = link, n, params, config
         self._ids = np.arange(n, dtype=np.int64)
         self._seen = np.ones(n, dtype=bool)
+        self._drawn: dict[str, Any] = encode_annotations(EMPTY_ANNOTATIONS)
         link.send({"t": "arena", "n": n, "initial": None if ic is None else pack(ic)})
         self._take()
 
@@ -94,6 +105,14 @@ class PipeRobots:
         """Send the nominal ``(N, 2)`` for the current poses; waits for the next poses."""
         self.link.send(encode_commands(self._k, nominal))
         self._take()
+
+    def send_annotations(self, ann: Annotations) -> None:
+        """What the script draws from this tick on (``Arena.draw``), sent before the commands — only when it
+        changed since the last tick."""
+        message = encode_annotations(ann)
+        if message != self._drawn:
+            self.link.send(message)
+            self._drawn = message
 
     def send(self, ids: NDArray[np.int64], v: ArrayLike, w: ArrayLike) -> None:
         """Unicycle commands (for callers without the nominal): sent as the velocities they give."""

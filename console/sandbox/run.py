@@ -93,6 +93,7 @@ from swarmdeck.console.sandbox.protocol import (
     ProtocolError,
     commands,
     decode,
+    decode_draw,
     encode_poses,
     floats,
     write_frame,
@@ -752,6 +753,11 @@ def _loop(child: _Child, script: Path, scratch: Path, uid: int | None, make_plan
                         break
                     if t == "ready" and ready is None:
                         ready = time.monotonic()
+                        continue
+                    if t == "draw" and plant is not None:
+                        draw = getattr(plant, "draw", None)
+                        if draw is not None:
+                            draw(decode_draw(message))
                         continue
                     if t != "arena" or plant is not None or ready is None:
                         raise ProtocolError(f"unexpected {t!r} message")

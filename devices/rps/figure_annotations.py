@@ -91,7 +91,9 @@ def figure_annotations(axes: Any, bounds: Bounds | tuple[float, float, float, fl
 
     def data(xy: Any, transform: Any) -> NDArray[np.float64]:
         pts = np.asarray(xy, dtype=float).reshape(-1, 2)
-        return np.asarray(to_data.transform(transform.transform(pts)), dtype=float) if len(pts) else pts
+        if transform is axes.transData or not len(pts):  # data coordinates already: exact
+            return pts
+        return np.asarray(to_data.transform(transform.transform(pts)), dtype=float)
 
     for artist in axes.get_children():
         if not artist.get_visible() or artist.get_gid() == SWARMDECK_GID or artist in spines:
