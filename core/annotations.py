@@ -126,6 +126,8 @@ class Annotations:
         for name in ("sizes", "colors", "filled", "texts"):
             if len(getattr(self, name)) != p:
                 raise ValueError(f"annotations: {name} has {len(getattr(self, name))} rows for {p} primitives")
+        if p and (np.diff(o) < 0).any():
+            raise ValueError("annotations: offsets must not decrease")
         if p:
             counts = np.diff(o)
             lo = np.array([c[0] for c in _VERTEX_COUNTS])[self.kinds]

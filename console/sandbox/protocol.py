@@ -148,14 +148,18 @@ def decode_draw(message: dict[str, Any]) -> Annotations:
     texts = message.get("texts")
     if not isinstance(texts, list) or not all(isinstance(t, str) for t in texts):
         raise ProtocolError("'draw' message: 'texts' must be a list of strings")
+    arrays = {}
+    for key, dtype, width in (("kinds", "|u1", 1), ("offsets", "<i4", 1), ("vertices", "<f4", 2), ("sizes", "<f4", 1),
+                              ("colors", "|u1", 4), ("filled", "|u1", 1)):
+        item = np.dtype(dtype).itemsize * width
+        if len(raw[key]) % item:
+            raise ProtocolError(f"'draw' message: {key!r} has {len(raw[key])} bytes, not a multiple of {item}")
+        arrays[key] = np.frombuffer(raw[key], dtype).reshape(-1, width) if width > 1 else np.frombuffer(raw[key], dtype)
     try:
-        return Annotations(kinds=np.frombuffer(raw["kinds"], "|u1"),
-                           offsets=np.frombuffer(raw["offsets"], "<i4").astype(np.int64),
-                           vertices=np.frombuffer(raw["vertices"], "<f4").astype(np.float64).reshape(-1, 2),
-                           sizes=np.frombuffer(raw["sizes"], "<f4").astype(np.float64),
-                           colors=np.frombuffer(raw["colors"], "|u1").reshape(-1, 4),
-                           filled=np.frombuffer(raw["filled"], "|u1").astype(bool), texts=tuple(texts))
-    except ValueError as exc:  # sizes that do not divide, shapes and offsets that disagree
+        return Annotations(kinds=arrays["kinds"], offsets=arrays["offsets"].astype(np.int64),
+                           vertices=arrays["vertices"].astype(np.float64), sizes=arrays["sizes"].astype(np.float64),
+                           colors=arrays["colors"], filled=arrays["filled"].astype(bool), texts=tuple(texts))
+    except ValueError as exc:  # shapes and offsets that disagree
         raise ProtocolError(f"'draw' message: {exc}") from None
 
 
