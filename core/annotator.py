@@ -330,4 +330,46 @@ class Annotator:
         self._add(ann, key, ticks, seconds)
 
 
-__all__ = ["COLOR_NAMES", "DEFAULT_COLOR", "EMPTY", "Annotator", "parse_color"]
+class RobotDrawing:
+    """One robot's pen on a shared :class:`Annotator` (the decentralised style's ``view.draw``): the same
+    drawing calls, each robot's keys its own (robot 3's ``key="goal"`` does not replace robot 5's), and
+    :meth:`clear` clears only what this robot drew with a key. Everything a robot draws is drawn on the one
+    arena (annotations are global, in arena metres): a robot's drawing is not a message to the others."""
+
+    _CALLS = ("points", "point", "circles", "circle", "polyline", "line", "lines", "polygon", "text")
+
+    def __init__(self, annotator: Annotator, robot: int) -> None:
+        self._annotator = annotator
+        self._prefix = f"robot {int(robot)}: "
+        self._keys: set[str] = set()
+
+    def __getattr__(self, name: str) -> Any:
+        if name not in self._CALLS:
+            raise AttributeError(f"a robot's drawing has {', '.join(self._CALLS)}, remove and clear; not {name!r}")
+        call = getattr(self._annotator, name)
+
+        def draw(*args: Any, key: str | None = None, **kwargs: Any) -> None:
+            if key is not None:
+                key = self._prefix + str(key)
+                self._keys.add(key)
+            call(*args, key=key, **kwargs)
+
+        return draw
+
+    def remove(self, key: str) -> None:
+        """Remove what this robot drew with ``key``."""
+        self._annotator.remove(self._prefix + str(key))
+
+    def clear(self) -> None:
+        """Remove what this robot drew with a key (what it drew with a lifetime expires by itself)."""
+        for key in self._keys:
+            self._annotator.remove(key)
+        self._keys.clear()
+
+
+def robot_drawing(annotator: Annotator, robot: int) -> RobotDrawing:
+    """Robot ``robot``'s pen on ``annotator`` (:class:`RobotDrawing`)."""
+    return RobotDrawing(annotator, robot)
+
+
+__all__ = ["COLOR_NAMES", "DEFAULT_COLOR", "EMPTY", "Annotator", "RobotDrawing", "parse_color", "robot_drawing"]

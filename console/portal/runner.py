@@ -151,13 +151,19 @@ class SandboxCommands:
 
     name = "script (sandboxed)"
 
-    def __init__(self, bounds: Bounds = DEFAULT_BOUNDS) -> None:
+    def __init__(self, bounds: Bounds = DEFAULT_BOUNDS, on_warning: Callable[[str], None] | None = None) -> None:
         self._nominal: NDArray[np.float64] | None = None
         self.draw = Annotator(bounds)
+        self._on_warning = on_warning
 
     def annotations(self, time: float) -> Annotations:
-        """What the script draws in the tick at ``time`` s (``DrawsAnnotations``)."""
-        return self.draw.collect(time)
+        """What the script draws in the tick at ``time`` s (``DrawsAnnotations``); the caps it hit go to
+        ``on_warning`` (the loop's events: the job's log and recording)."""
+        drawn = self.draw.collect(time)
+        for message in self.draw.take_messages():
+            if self._on_warning is not None:
+                self._on_warning(message)
+        return drawn
 
     def set(self, nominal: NDArray[np.float64] | None) -> None:
         self._nominal = None if nominal is None else np.asarray(nominal, dtype=float)
@@ -464,7 +470,7 @@ class ArenaRunner:
             loop.subscribe(self._watch_events)
             for listener in self.frame_listeners:
                 loop.subscribe(listener)
-            commands = SandboxCommands(loop_config.bounds)
+            commands = SandboxCommands(loop_config.bounds, on_warning=loop.post)
             loop.use_behaviour(commands)
             if bypass:
                 loop.set_safety(enabled=False)  # the guard stays on (the loop's guard, set above)

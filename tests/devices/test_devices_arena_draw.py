@@ -85,3 +85,19 @@ def test_bad_arguments_name_what_is_wrong(arena):
     assert parse_color("#abc").tolist() == [170, 187, 204, 255]
     assert parse_color((10, 20, 30)).tolist() == [10, 20, 30, 255]
     assert parse_color((0.5, 0.5, 0.5, 1.0)).tolist() == [128, 128, 128, 255]
+
+
+def test_each_robots_pen_keeps_its_own_keys(arena):
+    from swarmdeck.core.annotator import robot_drawing
+
+    pens = [robot_drawing(arena.draw, i) for i in range(3)]
+    for i, pen in enumerate(pens):
+        pen.point((0.1 * i, 0.0), key="me")
+    pens[1].point((0.5, 0.5), key="me")  # replaces robot 1's only
+    arena.step()
+    assert sorted(map(tuple, arena.last_annotations.anchors().tolist())) == [(0.0, 0.0), (0.2, 0.0), (0.5, 0.5)]
+    pens[0].clear()
+    arena.step()
+    assert len(arena.last_annotations) == 2
+    with pytest.raises(AttributeError, match="not 'collect'"):
+        pens[2].collect(0.0)
