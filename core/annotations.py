@@ -138,6 +138,20 @@ class Annotations:
                 raise ValueError(f"annotations: primitive {i} ({KIND_NAMES[self.kinds[i]]}) has {int(counts[i])} "
                                  f"vertices (a point, circle or text has 1, a polyline ≥ 2, a polygon ≥ 3)")
 
+    @classmethod
+    def _unchecked(cls, kinds: NDArray[np.uint8], offsets: NDArray[np.int64], vertices: NDArray[np.float64],
+                   sizes: NDArray[np.float64], colors: NDArray[np.uint8], filled: NDArray[np.bool_],
+                   texts: tuple[str, ...]) -> Annotations:
+        """A batch from arrays of the right dtypes and shapes that the caller built itself (the drawing API's
+        own primitives): no structural check, arrays made read-only in place. Never for outside data."""
+        out = object.__new__(cls)
+        for name, value in (("kinds", kinds), ("offsets", offsets), ("vertices", vertices), ("sizes", sizes),
+                            ("colors", colors), ("filled", filled)):
+            value.setflags(write=False)
+            object.__setattr__(out, name, value)
+        object.__setattr__(out, "texts", texts)
+        return out
+
     def __len__(self) -> int:
         return len(self.kinds)
 

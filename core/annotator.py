@@ -24,6 +24,7 @@ from __future__ import annotations
 import math
 from collections import deque
 from dataclasses import dataclass
+from functools import lru_cache
 from typing import Any
 
 import numpy as np
@@ -67,6 +68,17 @@ _MESSAGES_KEPT = 50
 
 def parse_color(color: Any, alpha: float | None = None) -> NDArray[np.uint8]:
     """``color`` (module docstring) as (4,) uint8 RGBA; ValueError naming the colour when it is not one."""
+    if isinstance(color, str) and alpha is None:
+        return _named(color).copy()
+    return _parse_color(color, alpha)
+
+
+@lru_cache(maxsize=256)
+def _named(color: str) -> NDArray[np.uint8]:
+    return _parse_color(color, None)
+
+
+def _parse_color(color: Any, alpha: float | None) -> NDArray[np.uint8]:
     rgba: tuple[float, ...]
     if color is None:
         rgba = tuple(float(c) for c in DEFAULT_COLOR)
@@ -135,6 +147,7 @@ class Annotator:
         """the most recent cap messages"""
         self.last_report = AnnotationReport()
         self._new: list[str] = []
+        self._cache: tuple[tuple[int, ...], Annotations, list[_Group]] | None = None
 
     # ---------------------------------------------------------------- lifetime bookkeeping
     def _warn(self, message: str) -> None:
@@ -194,8 +207,12 @@ class Annotator:
         drawing time + s). Call once per tick."""
         self._time = float(time)
         live = [g for g in self._groups if g.until is None or self._time <= g.until + 1e-9]
-        ann = Annotations.concat([g.ann for g in live])
-        out, report = sanitize(ann, self.bounds, self.limits)
+        key = tuple(id(g) for g in live)
+        if self._cache is not None and self._cache[0] == key:  # the same drawing as the last tick: checked already
+            out, report = self._cache[1], AnnotationReport(given=len(self._cache[1]), kept=len(self._cache[1]))
+        else:
+            out, report = sanitize(Annotations.concat([g.ann for g in live]), self.bounds, self.limits)
+            self._cache = (key, out, live)
         self.last_report = report
         if report.changed:
             for message in report.messages(self.limits):
@@ -212,10 +229,13 @@ class Annotator:
                alpha: float | None, filled: bool, texts: tuple[str, ...] | None = None) -> Annotations:
         p = len(counts)
         rgba = parse_color(color, alpha)
-        size_arr = np.broadcast_to(np.asarray(sizes, dtype=float), (p,)) if np.ndim(sizes) else np.full(p, float(sizes))
-        return Annotations(kinds=np.full(p, kind, dtype=np.uint8), offsets=np.concatenate(([0], np.cumsum(counts))),
-                           vertices=vertices, sizes=size_arr, colors=np.tile(rgba, (p, 1)),
-                           filled=np.full(p, bool(filled)), texts=texts if texts is not None else ("",) * p)
+        size_arr = np.array(np.broadcast_to(np.asarray(sizes, dtype=float), (p,)), dtype=np.float64)
+        offsets = np.zeros(p + 1, dtype=np.int64)
+        np.cumsum(counts, out=offsets[1:])
+        return Annotations._unchecked(np.full(p, kind, dtype=np.uint8), offsets,
+                                      np.array(vertices, dtype=np.float64).reshape(-1, 2), size_arr,
+                                      np.tile(rgba, (p, 1)), np.full(p, bool(filled)),
+                                      texts if texts is not None else ("",) * p)
 
     def _many(self, xy: Any, name: str) -> NDArray[np.float64]:
         """(M, 2) rows of ``xy`` ((2,) or (M, 2)) that fit under the cap — cut before converting, so a

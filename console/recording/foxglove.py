@@ -73,6 +73,7 @@ from swarmdeck.console.picture.picture import active_pairs, changed_mask, robot_
 from swarmdeck.console.picture.style import PictureStyle
 from swarmdeck.console.runtime.frame import Frame
 from swarmdeck.core.annotations import EMPTY as EMPTY_ANNOTATIONS
+from swarmdeck.core.annotations import POINT, Annotations
 from swarmdeck.core.bounds import DEFAULT_BOUNDS, Bounds
 from swarmdeck.core.constants import ROBOT_RADIUS
 
@@ -286,6 +287,8 @@ class FoxgloveEncoder:
         self.image_provider = image_provider
         self._alerts: frozenset[str] = frozenset()
         self._next_density = -math.inf
+        self._next_annotations = -math.inf
+        self._drawn: Annotations | None = None
         self._next_camera = -math.inf
         self._next_scene = -math.inf
         self._next_lines = -math.inf
@@ -399,10 +402,20 @@ class FoxgloveEncoder:
             lines = [self._line_list(segs, 0.04, 0.012, self._color(PAIR), colors)]
         return self._scene(self._entity(ns, "barrier", lines=lines))
 
+    def _drawing_changed(self, frame: Frame) -> bool:
+        """True when ``frame``'s annotations differ from those last looked at (then remembers them)."""
+        a, b = frame.annotations, self._drawn
+        same = (a is b) or (a is not None and b is not None and len(a) == len(b) and a.texts == b.texts and all(
+            np.array_equal(getattr(a, k), getattr(b, k)) for k in ("kinds", "offsets", "vertices", "sizes", "colors",
+                                                                   "filled")))
+        self._drawn = a
+        return not same
+
     def annotations(self, frame: Frame, ns: int) -> bytes:
         """SceneUpdate: what the experiment drew (entity ``annotations``, empty when nothing): the picture's
         outlines (:func:`~swarmdeck.console.picture.annotations.annotation_segments`) as one line list,
-        filled polygons / circles / points as triangle fans, texts as texts; colours with their alpha."""
+        filled polygons and circles as triangle fans (convex shapes exact), points as flat spheres, texts as
+        texts; colours with their alpha. :meth:`encode` writes it when the drawing changed, else once a second."""
         fm = self.fm
         ann = frame.annotations if frame.annotations is not None else EMPTY_ANNOTATIONS
         segs, seg_cols, _ = annotation_segments(ann)
@@ -410,7 +423,12 @@ class FoxgloveEncoder:
         if len(segs):
             colors = [self._color(c, float(c[3]) / 255.0) for c in np.repeat(seg_cols, 2, axis=0)]
             lines = [self._line_list(segs, 0.003, 0.01, self._color(seg_cols[0], 1.0), colors)]
-        polys, poly_cols = filled_polygons(ann, 16)
+        dots = ann.kinds == POINT
+        spheres = [fm.SpherePrimitive(pose=fm.Pose(position=fm.Vector3(x=x, y=y, z=0.002)),
+                                      size=fm.Vector3(x=2 * r, y=2 * r, z=0.002), color=self._color(c, float(c[3]) / 255.0))
+                   for (x, y), r, c in zip(ann.vertices[ann.offsets[:-1][dots]].tolist(), ann.sizes[dots].tolist(),
+                                           ann.colors[dots])]
+        polys, poly_cols = filled_polygons(ann.select(~dots), 16)
         triangles = []
         if polys:
             pts: list[Any] = []
@@ -426,7 +444,8 @@ class FoxgloveEncoder:
                                   font_size=float(h), scale_invariant=False, color=self._color(c, float(c[3]) / 255.0),
                                   text=t)
                  for (x, y), h, c, t in zip(anchors.tolist(), heights.tolist(), text_cols, strings)]
-        return self._scene(self._entity(ns, "annotations", lines=lines, triangles=triangles, texts=texts))
+        return self._scene(self._entity(ns, "annotations", lines=lines, triangles=triangles, spheres=spheres,
+                                        texts=texts))
 
     def contacts(self, frame: Frame, ns: int) -> bytes:
         """SceneUpdate: touch contacts as spheres (⌀ 6 cm)."""
@@ -542,7 +561,10 @@ class FoxgloveEncoder:
                 self._next_lines = frame.time + self.config.lines_period
                 yield TOPIC_CELLS, ns, self.cells(frame, ns)
                 yield TOPIC_BARRIER, ns, self.barrier(frame, ns)
-                yield TOPIC_ANNOTATIONS, ns, self.annotations(frame, ns)
+                if self._drawing_changed(frame) or frame.time >= self._next_annotations or \
+                        frame.time < self._next_annotations - 2.0:
+                    self._next_annotations = frame.time + 1.0
+                    yield TOPIC_ANNOTATIONS, ns, self.annotations(frame, ns)
         yield TOPIC_CONTACTS, ns, self.contacts(frame, ns)
         yield TOPIC_METRICS, ns, self.metrics(frame, t)
         if frame.density is not None and frame.time >= self._next_density:

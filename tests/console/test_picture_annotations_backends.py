@@ -68,7 +68,9 @@ def test_foxglove_draws_them_as_one_entity():
     assert len(lines.points) == 2 * (2 + 32)
     assert round(lines.colors[0].r * 255) == 200 and round(lines.colors[0].b * 255) == 200
     (triangles,) = entity.triangles
-    assert len(triangles.points) == 3 * (2 + 14)  # the square (2 triangles) and the dot (a 16-gon)
+    assert len(triangles.points) == 3 * 2  # the square (2 triangles)
+    (dot,) = entity.spheres  # the translucent dot
+    assert (dot.pose.position.x, dot.size.x, round(dot.color.a, 2)) == (0.2, 0.1, 0.5)
     assert [t.text for t in entity.texts] == ["hello"]
     assert (entity.texts[0].pose.position.x, entity.texts[0].pose.position.y) == (1.0, 0.7)
     empty = decode("foxglove.SceneUpdate", fm.SceneUpdate.get_schema().data,
