@@ -25,6 +25,8 @@ from typing import Any, Literal
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from swarmdeck.core.annotations import EMPTY, Annotations
+from swarmdeck.core.annotator import Annotator
 from swarmdeck.core.kinematics import (
     GritsBotParams,
     limit_unicycle,
@@ -220,6 +222,11 @@ class Arena:
         self._poses_cache: FloatArray | None = None
         self.last_nominal = np.zeros((self.n, 2))
         self.last_safe = np.zeros((self.n, 2))
+        self.draw = Annotator(config.bounds)
+        """What the experiment draws on the arena (:class:`~swarmdeck.core.annotator.Annotator`: points, lines,
+        polylines, circles, polygons, text in arena metres, with colour and lifetime): shown in the console,
+        the recording, the video, the portal's live view and on the projector."""
+        self.last_annotations: Annotations = EMPTY
         self._on_step = defaults.on_step
         self.sensors: Sensors | None = None
         self._readings: SensorReadings | None = None
@@ -554,6 +561,7 @@ class Arena:
         nominal = self.nominal_velocities(poses)
         if self.robots.nominal_sink is not None:  # robots behind a trust boundary: the far side certifies
             self.last_nominal = nominal
+            self._annotate(self.time + self.config.dt)
             new_poses = self.robots.step_nominal(nominal)
             if self.sensors is not None:  # the commands the far side certified are not known here: the nominal's
                 v_n, w_n = si_to_unicycle(poses, nominal, self.ell)
@@ -581,6 +589,7 @@ class Arena:
         self.last_safe = cert.safe
         new_poses = self.robots.step(cert.v, cert.w)
         self._sense_after_step(new_poses, cert.v, cert.w)
+        self._annotate(self.time)
         if self._on_step is not None:
             self._on_step(self)
         return new_poses
@@ -601,9 +610,19 @@ class Arena:
         new_poses = self.robots.step(v, w)
         if self.sensors is not None:  # the robots' wheel limits scale what they run
             self._sense_after_step(new_poses, *limit_unicycle(v, w, self.params)[:2])
+        self._annotate(self.time)
         if self._on_step is not None:
             self._on_step(self)
         return new_poses
+
+    def _annotate(self, time: float) -> None:
+        """What :attr:`draw` holds for the step ending at ``time`` s → :attr:`last_annotations` (and, for robots
+        behind a trust boundary, across it: their sink's ``send_annotations``); cap hits become events."""
+        self.last_annotations = self.draw.collect(time)
+        self.events.extend(f"t={time:.3f}: {m}" for m in self.draw.take_messages())
+        send = getattr(self.backend, "send_annotations", None)
+        if send is not None:
+            send(self.last_annotations)
 
     # ------------------------------------------------------------------ reporting
     def report(self) -> ArenaReport:

@@ -42,7 +42,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--json", action="store_true", help="print the report as JSON")
     parser.add_argument("--record", default=None, metavar="PATH",
                         help="record the run to PATH (MCAP, as `swarmdeck console --record`: `swarmdeck play PATH`, "
-                             "Foxglove); a script that builds more Arenas records the k-th to PATH-k.mcap")
+                             "Foxglove), with what the script draws (arena.draw, an rps script's plots on r.axes: "
+                             "docs/drawing.md); a script that builds more Arenas records the k-th to PATH-k.mcap")
     parser.add_argument("--foxglove-channels", action=argparse.BooleanOptionalAction, default=True,
                         help="with --record: write Foxglove's own channels (scene, poses, metrics, log) beside "
                              "swarmdeck's (default on; --no-foxglove-channels: a file ≈ 6x smaller at 100 robots, "

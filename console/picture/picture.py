@@ -34,6 +34,7 @@ from swarmdeck.console.picture.sensing import SensorLayer, sensor_layer
 from swarmdeck.console.picture.style import PictureStyle
 from swarmdeck.console.runtime.behaviours import goals_of_frame
 from swarmdeck.console.runtime.frame import Frame, filled
+from swarmdeck.core.annotations import EMPTY, Annotations
 from swarmdeck.core.bounds import Bounds
 
 if TYPE_CHECKING:
@@ -126,6 +127,8 @@ class Picture:
         obstacles: (S, 2, 2) line-segment obstacles on the floor, m (``Frame.obstacles``; empty without),
             drawn in :data:`~.colours.OBSTACLE`, ``PictureStyle``-independent (always drawn).
         network: the communication graph (:class:`~.network.NetworkLayer`), None when the Frame has none.
+        annotations: what the experiment drew (arena metres, RGBA; :mod:`.annotations` turns it into
+            segments, filled polygons and texts), empty when it drew nothing.
     """
 
     bounds: Bounds
@@ -159,6 +162,7 @@ class Picture:
     sensors: SensorLayer | None = None
     obstacles: NDArray[np.float64] = field(default_factory=lambda: _frozen(np.zeros((0, 2, 2))))
     network: NetworkLayer | None = None
+    annotations: Annotations = EMPTY
 
     @property
     def n(self) -> int:
@@ -196,4 +200,5 @@ def picture_of(frame: Frame, style: PictureStyle = DEFAULT_STYLE) -> Picture:
         events=frame.events, alerts=frame.alerts, sensors=sensor_layer(frame, style),
         obstacles=frame.obstacles.segments if frame.obstacles is not None else _frozen(np.zeros((0, 2, 2))),
         network=network_layer(frame, style),
+        annotations=frame.annotations if frame.annotations is not None else EMPTY,
     )

@@ -33,6 +33,9 @@ edges, K active pairs)::
     sensors      only when the Frame has sensors (the picture's sensor layer): {rays (R, 2, 2) ToF rays from
                  sensor to end point, rounded to 1 mm; leds (N,) "#rrggbb" or null for an unlit LED}
     obstacles    (S, 2, 2) line-segment obstacles, m ([] without)
+    annotations  only when the experiment drew something (:func:`annotations_message`): {kinds (P,),
+                 offsets (P+1,), vertices (V, 2) m rounded to 0.1 mm, sizes (P,) m, colours (P,) "rgba(…)",
+                 filled (P,), texts (P,)} — kinds 0 point, 1 polyline, 2 circle, 3 polygon, 4 text
 
 A message is a few kB (N = 12); the pages send at most ten a second.
 """
@@ -45,6 +48,7 @@ from typing import Any
 import numpy as np
 
 from swarmdeck.console.picture import colours as pal
+from swarmdeck.console.picture.annotations import annotations_json
 from swarmdeck.console.picture.picture import Picture, picture_of
 from swarmdeck.console.picture.shapes import CHANGED_RING, VIRTUAL_RING_RADIUS
 from swarmdeck.console.runtime.frame import Frame
@@ -101,7 +105,7 @@ def scene_message(frame: Frame, seq: int) -> dict[str, Any]:
         "density": density_png(pic), "events": list(pic.events),
         "robot_radius": ROBOT_RADIUS, "rings": {"changed": CHANGED_RING, "virtual": VIRTUAL_RING_RADIUS},
         "palette": PALETTE,
-        "obstacles": np.round(pic.obstacles, 4).tolist(),
+        "obstacles": np.round(pic.obstacles, 4).tolist(), **annotations_message(pic),
     }
     if pic.sensors is not None:  # the sensors' layer, only when the Frame has sensors
         layer = pic.sensors
@@ -112,3 +116,8 @@ def scene_message(frame: Frame, seq: int) -> dict[str, Any]:
         message["sensors"] = {"rays": np.round(np.stack((layer.ray_starts, layer.ray_ends), axis=1), 3).tolist(),
                               "leds": leds}
     return message
+
+
+def annotations_message(pic: Picture) -> dict[str, Any]:
+    """``{"annotations": …}`` (module docstring) when the picture has annotations, else ``{}``."""
+    return {"annotations": annotations_json(pic.annotations)} if len(pic.annotations) else {}

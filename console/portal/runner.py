@@ -98,6 +98,8 @@ from swarmdeck.console.sandbox.plant import SandboxPlant
 from swarmdeck.console.sandbox.run import SandboxOutcome, run_sandboxed
 from swarmdeck.console.sandbox.start_poses import arena_start
 from swarmdeck.console.sandbox.verification import user_message, without_run_folder
+from swarmdeck.core.annotations import Annotations
+from swarmdeck.core.annotator import Annotator
 from swarmdeck.core.bounds import DEFAULT_BOUNDS, Bounds
 from swarmdeck.core.constants import CONTROL_PERIOD
 from swarmdeck.core.obstacles import Obstacles
@@ -147,18 +149,31 @@ class ArenaSettings:
 class SandboxCommands:
     """The loop behaviour that plays the sandboxed script's commands: its nominal look-ahead velocities.
 
-    ``set(nominal)`` (array (N, 2), m/s, or None: the script missed the tick → zero) before each tick.
+    ``set(nominal)`` (array (N, 2), m/s, or None: the script missed the tick → zero) before each tick;
+    :attr:`draw` holds what the script draws (the plant puts its ``draw`` messages there, capped), which
+    the loop's Frames carry (:meth:`annotations`).
     """
 
     name = "script (sandboxed)"
 
-    def __init__(self) -> None:
+    def __init__(self, bounds: Bounds = DEFAULT_BOUNDS, on_warning: Callable[[str], None] | None = None) -> None:
         self._nominal: NDArray[np.float64] | None = None
         self.network: NetworkFrame | None = None  # a decentralised script's traffic (SandboxPlant.show_network)
+        self.draw = Annotator(bounds)
+        self._on_warning = on_warning
 
     def network_frame(self, dt: float) -> NetworkFrame | None:
         """The script's last account of its robots' links and traffic: the Frame's ``network`` (live view, recording)."""
         return self.network
+
+    def annotations(self, time: float) -> Annotations:
+        """What the script draws in the tick at ``time`` s (``DrawsAnnotations``); the caps it hit go to
+        ``on_warning`` (the loop's events: the job's log and recording)."""
+        drawn = self.draw.collect(time)
+        for message in self.draw.take_messages():
+            if self._on_warning is not None:
+                self._on_warning(message)
+        return drawn
 
     def set(self, nominal: NDArray[np.float64] | None) -> None:
         self._nominal = None if nominal is None else np.asarray(nominal, dtype=float)
@@ -466,7 +481,7 @@ class ArenaRunner:
             loop.subscribe(self._watch_events)
             for listener in self.frame_listeners:
                 loop.subscribe(listener)
-            commands = SandboxCommands()
+            commands = SandboxCommands(loop_config.bounds, on_warning=loop.post)
             loop.use_behaviour(commands)
             if bypass:
                 loop.set_safety(enabled=False)  # the guard stays on (the loop's guard, set above)

@@ -37,6 +37,9 @@ def arena_frame(arena: Any, poses: NDArray[np.float64], tick: int, behaviour: st
     if network is not None and "network" not in extra:
         traffic = network.traffic()
         extra["network"] = NetworkFrame.from_traffic(traffic.links, traffic.messages, dt)
+    drawn = getattr(arena, "last_annotations", None)
+    if drawn is not None and len(drawn) and "annotations" not in extra:
+        extra = {**extra, "annotations": drawn}  # what the script drew this step (Arena.draw)
     return Frame(tick=tick, time=tick * dt, run_time=tick * dt, dt=dt, bounds=arena.config.bounds,
                  lookahead=arena.ell, poses=poses, ids=np.arange(n), nominal=arena.last_nominal, safe=safe, v=v, w=w,
                  barrier=barrier, behaviour=behaviour, params=dict(params or {}),

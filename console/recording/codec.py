@@ -43,6 +43,10 @@ A JSON object (message encoding ``json``), :meth:`Frame.to_dict`'s layout with
 * ``network`` only when the frame has one (console/runtime/network_frame.py): ``{"links": int16 (E, 2)
   (int32 beyond 32 767 robots), "rate": float32 (E,) messages/s}``.
 
+* what the experiment drew (``annotations``, only when it drew something; absent in older
+  recordings: nothing drawn): ``{"kinds": |u1, "offsets": <i4, "vertices": <f8 (V, 2),
+  "sizes": <f8, "colors": |u1 (P, 4), "filled": |b1, "texts": [str]}`` (:func:`annotations_message`).
+
 Frame format 3 (recording format 3) — format 2, predicted from the previous frame
 ---------------------------------------------------------------------------------
 A format-2 message with ``"format": 3``, of one of two kinds:
@@ -104,6 +108,7 @@ from swarmdeck.console.runtime.frame import (
 )
 from swarmdeck.console.runtime.network_frame import NetworkFrame
 from swarmdeck.console.runtime.sensors_frame import SensorsFrame
+from swarmdeck.core.annotations import Annotations
 from swarmdeck.core.bounds import Bounds
 from swarmdeck.core.errors import SwarmdeckError
 from swarmdeck.core.kinematics import lookahead_points, unicycle_to_si
@@ -221,6 +226,7 @@ def frame_message(frame: Frame, previous: Frame | None = None) -> dict[str, Any]
         d["coverage"] = cov
     predicted = previous is not None and can_predict(frame, previous)
     d.update(_obstacles_message(frame, previous if predicted else None))
+    d.update(annotations_message(frame))
     if previous is not None and predicted:
         d["pred"] = {"ref": int(previous.tick), "crc": exact_crc(frame.ids, frame.poses, frame.v, frame.w)}
         for name, dtype in EXACT_FIELDS:
@@ -236,6 +242,36 @@ def _obstacles_message(frame: Frame, reference: Frame | None) -> dict[str, Any]:
     if frame.obstacles == reference.obstacles:
         return {}
     return obstacles_dict(frame.obstacles) or {"obstacles": []}
+
+
+def annotations_message(frame: Frame) -> dict[str, Any]:
+    """``{"annotations": {...}}`` (binary arrays, module docstring) when the frame has any, else ``{}``."""
+    a = frame.annotations
+    if a is None or not len(a):
+        return {}
+    return {"annotations": {"kinds": pack_array(a.kinds, "|u1"), "offsets": pack_array(a.offsets, "<i4"),
+                            "vertices": pack_array(a.vertices, "<f8"), "sizes": pack_array(a.sizes, "<f8"),
+                            "colors": pack_array(a.colors, "|u1"), "filled": pack_array(a.filled, "|b1"),
+                            "texts": list(a.texts)}}
+
+
+def decode_annotations(ad: Any) -> Annotations:
+    """The :class:`~swarmdeck.core.annotations.Annotations` of a format-2/3 ``annotations`` object; ValueError
+    naming what is wrong."""
+    if not isinstance(ad, Mapping):
+        raise ValueError(f"frame field 'annotations' must be an object, got {type(ad).__name__}")
+    try:
+        texts = ad["texts"]
+        if not isinstance(texts, list):
+            raise ValueError("frame field 'annotations.texts' must be a list of strings")
+        return Annotations(kinds=unpack_array(ad["kinds"], "annotations.kinds").astype(np.int64),
+                           offsets=unpack_array(ad["offsets"], "annotations.offsets").astype(np.int64),
+                           vertices=unpack_array(ad["vertices"], "annotations.vertices").astype(float).reshape(-1, 2),
+                           sizes=unpack_array(ad["sizes"], "annotations.sizes").astype(float),
+                           colors=unpack_array(ad["colors"], "annotations.colors").astype(np.uint8).reshape(-1, 4),
+                           filled=unpack_array(ad["filled"], "annotations.filled").astype(bool), texts=tuple(texts))
+    except KeyError as exc:
+        raise ValueError(f"frame field 'annotations' is missing {exc.args[0]!r}") from None
 
 
 def encode_frame(frame: Frame, previous: Frame | None = None) -> bytes:
@@ -284,7 +320,7 @@ def _unzigzag(z: np.ndarray) -> np.ndarray:
 
 
 _BIG = ("ids", "poses", "seen", "nominal", "nominal_minus_safe", "safe", "v", "w", "barrier", "coverage",
-        "is_virtual", "battery", "charging", "sensors", "network")
+        "is_virtual", "battery", "charging", "sensors", "network", "annotations")
 
 
 def _network_message(frame: Frame) -> dict[str, Any]:
@@ -456,6 +492,7 @@ def _decode_v2(d: Mapping[str, Any], exact: Mapping[str, np.ndarray]) -> Frame:
         sensors=sensors,
         obstacles=shell.obstacles,
         network=network,
+        annotations=None if d.get("annotations") is None else decode_annotations(d["annotations"]),
     )
 
 

@@ -71,6 +71,7 @@ from swarmdeck.console.picture.shapes import CHANGED_RING, dashed_rings, robot_o
 from swarmdeck.console.picture.style import PictureStyle
 from swarmdeck.console.recording.codec import RecordedEvent
 from swarmdeck.console.recording.reader import Recording
+from swarmdeck.console.recording.video_annotations import draw_annotations
 from swarmdeck.console.runtime.frame import Frame
 from swarmdeck.core.bounds import Bounds
 from swarmdeck.core.constants import ROBOT_RADIUS
@@ -277,6 +278,8 @@ class FrameRenderer:
             cv2.fillPoly(img, list(lay.fixed(dots)), CONTACT, aa, sh)
         if pic.sensors is not None and len(pic.sensors.ray_starts):
             self._rays(img, pic)
+        if len(pic.annotations):  # what the experiment drew, under the robots
+            draw_annotations(img, pic.annotations, lay.to_px, lay.scale)
         if pic.n:
             self._robots(img, frame, pic)
             if pic.sensors is not None and pic.sensors.leds is not None:

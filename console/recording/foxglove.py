@@ -24,6 +24,10 @@ topic                     schema                      content (frame ``arena``: 
                                                       busy by messages/s; only in decentralised runs,
                                                       :data:`NETWORK_TOPICS`)
 ``/foxglove/contacts``    ``foxglove.SceneUpdate``    touch contacts as spheres
+``/foxglove/annotations`` ``foxglove.SceneUpdate``    what the experiment drew (entity ``annotations``):
+                                                      outlines as a line list, filled shapes as
+                                                      triangles, points as spheres, texts as texts,
+                                                      in their RGBA; with the cells' cadence
 ``/foxglove/poses``       ``foxglove.PosesInFrame``   robot poses [x, y, θ] in ``arena``
 ``/foxglove/density``     ``foxglove.Grid``           φ(q, t) on a 0.1 m grid (float32 field ``phi``; the
                                                       layout interpolates), every ``density_period`` s
@@ -68,6 +72,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from swarmdeck.console.picture.annotations import annotation_segments, annotation_texts, filled_polygons
 from swarmdeck.console.picture.colours import (
     BOUNDARY,
     CONTACT,
@@ -86,6 +91,8 @@ from swarmdeck.console.picture.picture import active_pairs, changed_mask, robot_
 from swarmdeck.console.picture.sensing import sensor_layer
 from swarmdeck.console.picture.style import PictureStyle
 from swarmdeck.console.runtime.frame import Frame
+from swarmdeck.core.annotations import EMPTY as EMPTY_ANNOTATIONS
+from swarmdeck.core.annotations import POINT, Annotations
 from swarmdeck.core.bounds import DEFAULT_BOUNDS, Bounds
 from swarmdeck.core.constants import ROBOT_RADIUS
 
@@ -99,6 +106,7 @@ TOPIC_CAMERA = "/foxglove/camera"
 TOPIC_TF = "/foxglove/tf"
 TOPIC_LOG = "/foxglove/log"
 TOPIC_METRICS = "/swarmdeck/metrics"
+TOPIC_ANNOTATIONS = "/foxglove/annotations"
 
 ARENA_FRAME = "arena"
 WORLD_FRAME = "world"
@@ -109,6 +117,7 @@ TOPICS: dict[str, str | None] = {
     TOPIC_ROBOTS: "SceneUpdate", TOPIC_CELLS: "SceneUpdate", TOPIC_BARRIER: "SceneUpdate",
     TOPIC_CONTACTS: "SceneUpdate", TOPIC_POSES: "PosesInFrame", TOPIC_DENSITY: "Grid",
     TOPIC_CAMERA: "CompressedImage", TOPIC_TF: "FrameTransforms", TOPIC_LOG: "Log", TOPIC_METRICS: None,
+    TOPIC_ANNOTATIONS: "SceneUpdate",
 }
 
 TOPIC_ROBOT_POINTS = "/foxglove/robot_points"
@@ -307,6 +316,8 @@ class FoxgloveEncoder:
         self.image_provider = image_provider
         self._alerts: frozenset[str] = frozenset()
         self._next_density = -math.inf
+        self._next_annotations = -math.inf
+        self._drawn: Annotations | None = None
         self._next_camera = -math.inf
         self._next_scene = -math.inf
         self._next_lines = -math.inf
@@ -460,6 +471,51 @@ class FoxgloveEncoder:
             lines = [self._line_list(layer.segments, 0.003, 0.005, self._color(LINK_IDLE), colors)]
         return self._scene(self._entity(ns, "network", lines=lines))
 
+    def _drawing_changed(self, frame: Frame) -> bool:
+        """True when ``frame``'s annotations differ from those last looked at (then remembers them)."""
+        a, b = frame.annotations, self._drawn
+        same = (a is b) or (a is not None and b is not None and len(a) == len(b) and a.texts == b.texts and all(
+            np.array_equal(getattr(a, k), getattr(b, k)) for k in ("kinds", "offsets", "vertices", "sizes", "colors",
+                                                                   "filled")))
+        self._drawn = a
+        return not same
+
+    def annotations(self, frame: Frame, ns: int) -> bytes:
+        """SceneUpdate: what the experiment drew (entity ``annotations``, empty when nothing): the picture's
+        outlines (:func:`~swarmdeck.console.picture.annotations.annotation_segments`) as one line list,
+        filled polygons and circles as triangle fans (convex shapes exact), points as flat spheres, texts as
+        texts; colours with their alpha. :meth:`encode` writes it when the drawing changed, else once a second."""
+        fm = self.fm
+        ann = frame.annotations if frame.annotations is not None else EMPTY_ANNOTATIONS
+        segs, seg_cols, _ = annotation_segments(ann)
+        lines = []
+        if len(segs):
+            colors = [self._color(c, float(c[3]) / 255.0) for c in np.repeat(seg_cols, 2, axis=0)]
+            lines = [self._line_list(segs, 0.003, 0.01, self._color(seg_cols[0], 1.0), colors)]
+        dots = ann.kinds == POINT
+        spheres = [fm.SpherePrimitive(pose=fm.Pose(position=fm.Vector3(x=x, y=y, z=0.002)),
+                                      size=fm.Vector3(x=2 * r, y=2 * r, z=0.002), color=self._color(c, float(c[3]) / 255.0))
+                   for (x, y), r, c in zip(ann.vertices[ann.offsets[:-1][dots]].tolist(), ann.sizes[dots].tolist(),
+                                           ann.colors[dots])]
+        polys, poly_cols = filled_polygons(ann.select(~dots), 16)
+        triangles = []
+        if polys:
+            pts: list[Any] = []
+            cols: list[Any] = []
+            for poly, c in zip(polys, poly_cols):
+                k = len(poly)
+                fan = np.stack((np.repeat(poly[:1], k - 2, axis=0), poly[1:-1], poly[2:]), axis=1).reshape(-1, 2)
+                pts.extend(fm.Point3(x=x, y=y, z=0.002) for x, y in fan.tolist())
+                cols.extend([self._color(c, float(c[3]) / 255.0)] * len(fan))
+            triangles = [fm.TriangleListPrimitive(points=pts, colors=cols)]
+        anchors, heights, text_cols, strings = annotation_texts(ann)
+        texts = [fm.TextPrimitive(pose=fm.Pose(position=fm.Vector3(x=x, y=y, z=0.006)), billboard=True,
+                                  font_size=float(h), scale_invariant=False, color=self._color(c, float(c[3]) / 255.0),
+                                  text=t)
+                 for (x, y), h, c, t in zip(anchors.tolist(), heights.tolist(), text_cols, strings)]
+        return self._scene(self._entity(ns, "annotations", lines=lines, triangles=triangles, spheres=spheres,
+                                        texts=texts))
+
     def contacts(self, frame: Frame, ns: int) -> bytes:
         """SceneUpdate: touch contacts as spheres (⌀ 6 cm)."""
         fm = self.fm
@@ -576,6 +632,10 @@ class FoxgloveEncoder:
                 yield TOPIC_BARRIER, ns, self.barrier(frame, ns)
                 if frame.network is not None:
                     yield TOPIC_NETWORK, ns, self.network(frame, ns)
+                if self._drawing_changed(frame) or frame.time >= self._next_annotations or \
+                        frame.time < self._next_annotations - 2.0:
+                    self._next_annotations = frame.time + 1.0
+                    yield TOPIC_ANNOTATIONS, ns, self.annotations(frame, ns)
             if frame.sensors is not None:
                 data = self.sensors(frame, ns)
                 if data is not None:

@@ -27,6 +27,7 @@ from numpy.typing import NDArray
 
 from swarmdeck.console.runtime.deadline import DeadlineCaller
 from swarmdeck.console.runtime.params import BehaviourError, BehaviourParams
+from swarmdeck.core.annotations import Annotations
 from swarmdeck.core.bounds import Bounds
 from swarmdeck.core.graphs import complete_laplacian, rigid_formation
 from swarmdeck.coverage.group import consensus, formation_control
@@ -74,6 +75,14 @@ class HoldsRobots(Protocol):
 
     def fixed(self, ids: NDArray[np.int64]) -> NDArray[np.bool_]:
         """``(N,)`` True for the robots ``ids`` (N,) held in place."""
+
+
+@runtime_checkable
+class DrawsAnnotations(Protocol):
+    """Draws on the arena: the Frame's ``annotations`` of this tick (e.g. a sandboxed script's drawing)."""
+
+    def annotations(self, time: float) -> Annotations:
+        """What to draw in the tick at run time ``time`` s (within the caps: ``Annotator.collect``)."""
 
 
 @runtime_checkable

@@ -59,6 +59,9 @@ active barrier pairs, B density bumps, C contacts)::
                   writes them in keyframes and when they change, :func:`obstacles_dict`)
     network       {links (E,2) int, rate (E,) messages/s}: the robots' communication graph this tick
                   (console/runtime/network_frame.py); written only when present (a decentralised run)
+    annotations   what the experiment drew this tick (``swarmdeck.core.annotations.Annotations.to_dict``:
+                  kinds, offsets, vertices m, sizes m, colors RGBA, filled, texts); written only when it drew
+                  something, absent (nothing drawn) in older recordings
 
 The browser GUI's editing state (bump handles, plots) is not part of a Frame;
 the density the loop used is.
@@ -76,6 +79,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from swarmdeck.console.runtime.network_frame import NetworkFrame
 from swarmdeck.console.runtime.sensors_frame import SensorsFrame
+from swarmdeck.core.annotations import Annotations
 from swarmdeck.core.bounds import DEFAULT_BOUNDS, Bounds
 from swarmdeck.core.constants import CONTROL_PERIOD, LOOKAHEAD, SAFETY_DISTANCE
 from swarmdeck.core.kinematics import lookahead_points
@@ -434,6 +438,7 @@ class Frame:
     sensors: SensorsFrame | None = None
     obstacles: Obstacles | None = None
     network: NetworkFrame | None = None
+    annotations: Annotations | None = None
 
     def __post_init__(self) -> None:
         _set(self, "obstacles", obstacles_of(self.obstacles))
@@ -482,6 +487,8 @@ class Frame:
         _set(self, "params", _freeze_map(self.params))
         _set(self, "health", _freeze_map({str(k): str(v) for k, v in dict(self.health).items()}))
         _set(self, "timing", _freeze_map({str(k): float(v) for k, v in dict(self.timing).items()}))
+        if self.annotations is not None and not isinstance(self.annotations, Annotations):
+            raise ValueError(f"frame annotations must be Annotations, got {type(self.annotations).__name__}")
 
     @property
     def n(self) -> int:
@@ -531,7 +538,14 @@ class Frame:
             **({} if self.sensors is None else {"sensors": self.sensors.to_dict(_enc_array)}),
             **obstacles_dict(self.obstacles),
             **({} if self.network is None else {"network": self.network.to_dict()}),
+            **self.annotations_dict(),
         }
+
+    def annotations_dict(self) -> dict[str, Any]:
+        """``{"annotations": ...}`` when the experiment drew something this tick, else ``{}`` (older readers and
+        recordings without it read as nothing drawn)."""
+        return {} if self.annotations is None or not len(self.annotations) else {
+            "annotations": self.annotations.to_dict()}
 
     def fleet_dict(self) -> dict[str, Any]:
         """``is_virtual``, ``battery``, ``charging`` as JSON lists, each only when it says something
@@ -583,6 +597,7 @@ class Frame:
                 sensors=None if d.get("sensors") is None else SensorsFrame.from_dict(d["sensors"], _dec_array),
                 obstacles=d.get("obstacles"),
                 network=None if d.get("network") is None else NetworkFrame.from_dict(d["network"]),
+                annotations=None if d.get("annotations") is None else Annotations.from_dict(d["annotations"]),
             )
         except KeyError as exc:
             raise ValueError(f"frame is missing field {exc.args[0]!r}") from None

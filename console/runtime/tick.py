@@ -23,6 +23,7 @@ from swarmdeck.console.runtime.batteries import BatteryWatch, low_battery_alert
 from swarmdeck.console.runtime.behaviours import (
     Behaviour,
     BehaviourError,
+    DrawsAnnotations,
     HoldsRobots,
     ReportsHealth,
     ReportsNetwork,
@@ -38,6 +39,7 @@ from swarmdeck.console.runtime.notices import Notices
 from swarmdeck.console.runtime.params import LoopConfig, SafetyParams, frame_params
 from swarmdeck.console.runtime.sensors_frame import SensorsFrame
 from swarmdeck.console.runtime.tick_sensing import TickSensing
+from swarmdeck.core.annotations import Annotations
 from swarmdeck.core.kinematics import GritsBotParams, lookahead_points, saturate
 from swarmdeck.core.ports import CommandSink, PoseSource, ProvidesImage, SensedPoses, obstacles_of
 from swarmdeck.coverage.density import GaussianMixture
@@ -224,8 +226,9 @@ class Ticker:
         if isinstance(behaviour, ReportsNetwork):  # the robots' communication graph (a decentralised behaviour)
             with self._stage("network", "network layer failed", stops=False):
                 network = behaviour.network_frame(self.config.dt)
+        drawn = behaviour.annotations(self.run_time) if isinstance(behaviour, DrawsAnnotations) else None
         frame = self._frame(now, sensed, points, nominal, safe, v, w, barrier, coverage, snapshot, contacts,
-                            behaviour.name, run_state, s, health, marks, sensors, network)
+                            behaviour.name, run_state, s, health, marks, sensors, network, drawn)
         self.index += 1
         if active:
             self.run_time += self.config.dt
@@ -386,7 +389,8 @@ class Ticker:
                safe: NDArray[np.float64], v: NDArray[np.float64], w: NDArray[np.float64], barrier: BarrierFrame,
                coverage: CoverageFrame | None, snapshot: GaussianMixture | None, contacts: ContactsFrame,
                behaviour: str, run_state: str, s: TickSettings, health: dict[str, str], marks: list[float],
-               sensors: SensorsFrame | None = None, network: NetworkFrame | None = None) -> Frame:
+               sensors: SensorsFrame | None = None, network: NetworkFrame | None = None,
+               annotations: Annotations | None = None) -> Frame:
         events, alerts = self.notices.take()
         bp = s.behaviour_params
         params = frame_params(bp, s.safety, s.density, self.config)
@@ -404,5 +408,6 @@ class Ticker:
             timing=timing, image_ref=image_ref if isinstance(image_ref, str) else None,
             is_virtual=sensed.is_virtual, battery=sensed.battery, charging=sensed.charging, sensors=sensors,
             obstacles=self.config.obstacles, network=network,
+            annotations=annotations if annotations is not None and len(annotations) else None,
         )
 

@@ -29,11 +29,14 @@ from swarmdeck.console.sandbox.protocol import (
     MESSAGE,
     FrameReader,
     decode,
+    encode_annotations,
     encode_commands,
     pack,
     write_frame,
 )
 from swarmdeck.console.sandbox.protocol import poses as read_poses
+from swarmdeck.core.annotations import EMPTY as EMPTY_ANNOTATIONS
+from swarmdeck.core.annotations import Annotations
 from swarmdeck.core.kinematics import GritsBotParams, unicycle_to_si
 from swarmdeck.core.ports import SensedPoses
 from swarmdeck.devices.arena import ExperimentFinished
@@ -83,6 +86,7 @@ class PipeRobots:
         self._ids = np.arange(n, dtype=np.int64)
         self._seen = np.ones(n, dtype=bool)
         self._network: Any = None  # a decentralised run's swarmdeck.network.Network (attach_network)
+        self._drawn: dict[str, Any] = encode_annotations(EMPTY_ANNOTATIONS)
         link.send({"t": "arena", "n": n, "initial": None if ic is None else pack(ic)})
         self._take()
 
@@ -113,6 +117,14 @@ class PipeRobots:
                                 "rate": pack(traffic.messages / self.config.dt)})
         self.link.send(encode_commands(self._k, nominal))
         self._take()
+
+    def send_annotations(self, ann: Annotations) -> None:
+        """What the script draws from this tick on (``Arena.draw``), sent before the commands — only when it
+        changed since the last tick."""
+        message = encode_annotations(ann)
+        if message != self._drawn:
+            self.link.send(message)
+            self._drawn = message
 
     def send(self, ids: NDArray[np.int64], v: ArrayLike, w: ArrayLike) -> None:
         """Unicycle commands (for callers without the nominal): sent as the velocities they give."""

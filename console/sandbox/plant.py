@@ -22,6 +22,8 @@ from numpy.typing import ArrayLike, NDArray
 from scipy.spatial import cKDTree
 
 from swarmdeck.console.runtime.network_frame import NetworkFrame
+from swarmdeck.core.annotations import Annotations
+from swarmdeck.core.annotator import Annotator
 from swarmdeck.core.constants import ROBOT_DIAMETER
 from swarmdeck.core.kinematics import GritsBotParams, limit_unicycle, unicycle_to_si, wrap_angle
 from swarmdeck.core.ports import SensedPoses
@@ -190,10 +192,12 @@ class SandboxPlant:
 
     def __init__(self, n: int, observe: Callable[[], tuple[float, NDArray[np.float64]]],
                  step: Callable[[NDArray[np.float64] | None], None], finished: Callable[[], bool],
-                 arena: Arena | None = None) -> None:
+                 arena: Arena | None = None, drawer: Annotator | None = None) -> None:
         self.n, self._observe, self._step, self._finished, self.arena = int(n), observe, step, finished, arena
         self.network: NetworkFrame | None = None  # the script's last account of its robots' traffic (display only)
         self.on_network: Callable[[NetworkFrame], None] | None = None
+        self.drawer = drawer if drawer is not None else (arena.draw if arena is not None else None)
+        """where what the script draws goes (its Frames' annotations), capped there; None: dropped"""
 
     @classmethod
     def on_arena(cls, arena: Arena) -> SandboxPlant:
@@ -216,6 +220,7 @@ class SandboxPlant:
     def on_loop(cls, loop: Any, commands: Any, duration: float, pacer: RealTimePacer | None) -> SandboxPlant:
         """The plant on a ControlLoop whose behaviour is ``commands`` (``set(nominal)`` before each tick)."""
         n = int(loop.config.n_robots)
+        drawer = getattr(commands, "draw", None)
 
         def observe() -> tuple[float, NDArray[np.float64]]:
             frame = loop.latest
@@ -227,13 +232,21 @@ class SandboxPlant:
             if pacer is not None:
                 pacer.wait()
 
-        plant = cls(n, observe, step, lambda: loop.run_time >= duration - 1e-9)
+        plant = cls(n, observe, step, lambda: loop.run_time >= duration - 1e-9,
+                    drawer=drawer if isinstance(drawer, Annotator) else None)
         if hasattr(commands, "network"):  # a behaviour that reports it puts it in the loop's Frames (behaviours.ReportsNetwork)
             plant.on_network = lambda frame: setattr(commands, "network", frame)
         return plant
 
     def observe(self) -> tuple[float, NDArray[np.float64]]:
         return self._observe()
+
+    def draw(self, ann: Annotations) -> None:
+        """What the script draws from the next tick on (its ``draw`` message, structure checked by the
+        protocol): replaces what it drew before; the caps (NaN refused, clipped to the arena, at most
+        ``max_primitives`` …) apply in the drawer, which counts every cap hit."""
+        if self.drawer is not None:
+            self.drawer.add(ann, key="sandboxed script")
 
     def apply(self, nominal: NDArray[np.float64] | None) -> None:
         """One tick: the script's nominal look-ahead velocities (N, 2) through the driver's pipeline; None: stop."""

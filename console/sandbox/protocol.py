@@ -22,6 +22,10 @@ Messages, parent → child:
 Child → parent:
     ``{"t": "ready"}`` swarmdeck's side of the child is loaded and confined; the script starts now;
     ``{"t": "arena", "n": N, "initial": bytes | None}`` the script built its Arena;
+    ``{"t": "draw", "kinds", "offsets", "vertices", "sizes", "colors", "filled": bytes, "texts": [str]}``
+    what the script draws from its next ``C`` frame on (sent before it, only when the drawing changed;
+    :func:`encode_annotations` / :func:`decode_draw`: the arrays as raw little-endian bytes, vertices and
+    sizes float32), checked and capped on the trusted side;
     ``C`` frames: commands for the poses of tick k (one per ``P`` frame; a ``k`` other than the last ``P``
     frame's is a missed tick for the trusted side: robots stopped, simulated time goes on);
     ``{"t": "network", "k": k, "links": bytes, "rate": bytes}`` before the ``C`` frame of tick k of a decentralised
@@ -40,6 +44,7 @@ import msgspec
 import numpy as np
 from numpy.typing import NDArray
 
+from swarmdeck.core.annotations import Annotations
 from swarmdeck.core.errors import SwarmdeckError
 
 MAX_FRAME = 1 << 20  # bytes; 50 robots' poses are 1.2 kB
@@ -134,6 +139,51 @@ def network_traffic(message: dict[str, Any], n: int) -> tuple[NDArray[np.int64],
     if not (np.all(np.isfinite(rate)) and (rate >= 0).all()):
         raise ProtocolError("'network' message: rates must be finite and >= 0 messages/s")
     return links.astype(np.int64), rate
+
+
+#: the bytes of a ``draw`` message the child sends at most (its arrays and texts; the frame cap is MAX_FRAME)
+MAX_DRAW_BYTES = MAX_FRAME - (64 << 10)
+
+
+def encode_annotations(ann: Annotations) -> dict[str, Any]:
+    """The ``draw`` message of ``ann``; primitives past :data:`MAX_DRAW_BYTES` are left out (the child's
+    side of the caps: the trusted side caps again)."""
+    counts = ann.vertex_counts()
+    cost = np.cumsum(counts * 8 + 15 + np.fromiter((len(t.encode("utf-8", "replace")) for t in ann.texts),
+                                                    dtype=np.int64, count=len(ann)))
+    if len(ann) and cost[-1] > MAX_DRAW_BYTES:
+        ann = ann.select(cost <= MAX_DRAW_BYTES)
+    return {"t": "draw", "kinds": ann.kinds.astype("|u1").tobytes(), "offsets": ann.offsets.astype("<i4").tobytes(),
+            "vertices": ann.vertices.astype("<f4").tobytes(), "sizes": ann.sizes.astype("<f4").tobytes(),
+            "colors": ann.colors.astype("|u1").tobytes(), "filled": ann.filled.astype("|u1").tobytes(),
+            "texts": list(ann.texts)}
+
+
+def decode_draw(message: dict[str, Any]) -> Annotations:
+    """The :class:`~swarmdeck.core.annotations.Annotations` of a ``draw`` message, structure checked (the
+    values are capped by :func:`~swarmdeck.core.annotations.sanitize`); ProtocolError naming what is wrong."""
+    raw = {}
+    for key in ("kinds", "offsets", "vertices", "sizes", "colors", "filled"):
+        value = message.get(key)
+        if not isinstance(value, (bytes, bytearray)):
+            raise ProtocolError(f"'draw' message: {key!r} must be bytes, got {type(value).__name__}")
+        raw[key] = bytes(value)
+    texts = message.get("texts")
+    if not isinstance(texts, list) or not all(isinstance(t, str) for t in texts):
+        raise ProtocolError("'draw' message: 'texts' must be a list of strings")
+    arrays = {}
+    for key, dtype, width in (("kinds", "|u1", 1), ("offsets", "<i4", 1), ("vertices", "<f4", 2), ("sizes", "<f4", 1),
+                              ("colors", "|u1", 4), ("filled", "|u1", 1)):
+        item = np.dtype(dtype).itemsize * width
+        if len(raw[key]) % item:
+            raise ProtocolError(f"'draw' message: {key!r} has {len(raw[key])} bytes, not a multiple of {item}")
+        arrays[key] = np.frombuffer(raw[key], dtype).reshape(-1, width) if width > 1 else np.frombuffer(raw[key], dtype)
+    try:
+        return Annotations(kinds=arrays["kinds"], offsets=arrays["offsets"].astype(np.int64),
+                           vertices=arrays["vertices"].astype(np.float64), sizes=arrays["sizes"].astype(np.float64),
+                           colors=arrays["colors"], filled=arrays["filled"].astype(bool), texts=tuple(texts))
+    except ValueError as exc:  # shapes and offsets that disagree
+        raise ProtocolError(f"'draw' message: {exc}") from None
 
 
 def write_frame(fd: int, frame: bytes | dict[str, Any]) -> None:

@@ -93,6 +93,7 @@ from swarmdeck.console.sandbox.protocol import (
     ProtocolError,
     commands,
     decode,
+    decode_draw,
     encode_poses,
     floats,
     network_traffic,
@@ -759,6 +760,10 @@ def _loop(child: _Child, script: Path, scratch: Path, uid: int | None, make_plan
                         show = getattr(plant, "show_network", None)  # SandboxPlant: the loop's Frames show it
                         if callable(show):
                             show(*traffic)
+                    if t == "draw" and plant is not None:
+                        draw = getattr(plant, "draw", None)
+                        if draw is not None:
+                            draw(decode_draw(message))
                         continue
                     if t != "arena" or plant is not None or ready is None:
                         raise ProtocolError(f"unexpected {t!r} message")

@@ -17,7 +17,8 @@ virtual (a dashed violet ring around each virtual robot, which is
 also drawn pale), battery (a bar under each robot that reports its battery: its
 length the state of charge, green/amber/red by level, blue while charging, on a
 grey full-length track; :mod:`swarmdeck.console.runtime.batteries`), network (the robots' communication
-links of a decentralised run, pale when idle, cyan by messages per second; :mod:`swarmdeck.console.picture.network`). It scales to a thousand robots: robots are one batched mesh and the
+links of a decentralised run, pale when idle, cyan by messages per second; :mod:`swarmdeck.console.picture.network`),
+annotations (what the experiment drew: :mod:`swarmdeck.console.web.scene_annotations`). It scales to a thousand robots: robots are one batched mesh and the
 Voronoi edges one line-segment node whatever N; labels exist only up to
 ``SceneStyle.max_labels`` robots and the per-robot glyphs (arrows, safety discs,
 trails) only up to ``max_glyphs``; the heat map keeps under ``heatmap_max_px`` pixels. Colours: robots blue; robots whose command the barrier changed
@@ -68,6 +69,7 @@ from swarmdeck.console.picture.picture import Picture, picture_of, robot_colors
 from swarmdeck.console.picture.shapes import dashed_rings, robot_outline
 from swarmdeck.console.picture.style import PictureStyle
 from swarmdeck.console.runtime.frame import Frame, filled
+from swarmdeck.console.web.scene_annotations import AnnotationNodes
 from swarmdeck.core.bounds import DEFAULT_BOUNDS, Bounds
 from swarmdeck.core.constants import ROBOT_RADIUS
 
@@ -80,6 +82,7 @@ ImageProvider = Callable[[str], "tuple[ArrayLike, tuple[float, float, float, flo
 LAYERS: tuple[str, ...] = (
     "camera", "grid", "density", "voronoi", "cells", "centroids", "robots", "labels", "nominal", "safe",
     "barrier", "discs", "trails", "contacts", "virtual", "battery", "goals", "sensors", "obstacles", "network",
+    "annotations",
 )
 DEFAULT_OFF = frozenset({"cells"})
 
@@ -169,6 +172,7 @@ class SceneNodes:
     virtual: viser.LineSegmentsHandle
     battery: viser.LineSegmentsHandle
     goals: viser.PointCloudHandle
+    annotations: AnnotationNodes
     sensors: viser.LineSegmentsHandle | None = None  # the ToF rays (issue 28.1); made with the static nodes
     leds: viser.PointCloudHandle | None = None  # lit LEDs, shown with the sensors layer
     network: viser.LineSegmentsHandle | None = None  # the communication graph (made by _setup_static)
@@ -275,7 +279,7 @@ class ArenaScene:
         self.nodes = SceneNodes(boundary=boundary, grid=grid, density=density_image, voronoi=voronoi,
                                 centroids=centroids, trails=trails, discs=discs, barrier=barrier,
                                 nominal=nominal, safe=safe, contacts=contacts, virtual=virtual, battery=battery,
-                                goals=goals, sensors=sensors, leds=leds)
+                                goals=goals, sensors=sensors, leds=leds, annotations=AnnotationNodes(sc))
         self.nodes.network = sc.add_line_segments("/network", _EMPTY_SEG, LINK_IDLE, thickness=0.005)
         for name in LAYERS:
             self._apply_visibility(name)
@@ -416,6 +420,8 @@ class ArenaScene:
             self._draw_sensors(pic)
         if v["network"] and self.nodes.network is not None:
             self._draw_network(pic)
+        if v["annotations"] and (len(pic.annotations) or self.nodes.annotations.drawn):
+            self.nodes.annotations.draw(pic.annotations)
 
     def _draw_sensors(self, pic: Picture) -> None:
         """The picture's sensors' layer: ToF rays from sensor to end point, lit LEDs as coloured points."""

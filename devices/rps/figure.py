@@ -3,11 +3,14 @@
 rps draws the arena in a matplotlib window and its plotting examples add goal markers,
 captions and images to ``r.axes``. Under swarmdeck nothing is shown (watch runs in
 ``swarmdeck console`` or a recording); the figure is real but on matplotlib's non-interactive
-Agg backend, so those calls work unchanged and cost little.
+Agg backend, so those calls work unchanged and cost little. What the script draws inside the arena
+is drawn on the arena as the Robotarium 2.0 projects it (:mod:`.figure_annotations`; every ``step()``).
 """
 from __future__ import annotations
 
 from typing import TYPE_CHECKING, Any
+
+from swarmdeck.devices.rps.figure_annotations import SWARMDECK_GID
 
 if TYPE_CHECKING:
     from matplotlib.axes import Axes
@@ -35,7 +38,7 @@ def arena_figure(boundaries: tuple[float, float, float, float]) -> tuple[Figure,
 
     figure, axes = plt.subplots()
     x0, y0, w, h = boundaries
-    axes.add_patch(Rectangle((x0, y0), w, h, fill=False))
+    axes.add_patch(Rectangle((x0, y0), w, h, fill=False, gid=SWARMDECK_GID))  # the arena, not the script's
     axes.set_xlim(x0 - 0.1, x0 + w + 0.1)
     axes.set_ylim(y0 - 0.1, y0 + h + 0.1)
     axes.set_aspect("equal")

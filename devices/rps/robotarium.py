@@ -27,6 +27,7 @@ from swarmdeck.core.constants import COLLISION_DISTANCE, COLLISION_SHIFT, CONTRO
 from swarmdeck.core.kinematics import limit_unicycle
 from swarmdeck.devices.arena import RUN_DEFAULTS, Arena
 from swarmdeck.devices.rps.errors import call_at_scripts_end_text, count_errors, debug_text
+from swarmdeck.devices.rps.figure_annotations import figure_annotations
 from swarmdeck.devices.rps.sensors import RpsSensors, sensing_for
 from swarmdeck.devices.simulated_robots import SimulatedRobots
 from swarmdeck.devices.simulator import ArenaConfig
@@ -190,10 +191,19 @@ class Robotarium(RpsSensors):
         self._checked_poses_already = False
         self._errors = self._validate(self._errors)
         self._iterations += 1
+        self._project_figure()
         if self.rps_semantics:  # as rps: the velocities go to the robots as they are (wheel limits apply)
             self._arena.step_unicycle(self._velocities[0], self._velocities[1])
         else:
             self._arena.step()
+
+    def _project_figure(self) -> None:
+        """What the script plotted on :attr:`axes` inside the arena → the arena's annotations for this step
+        (the Robotarium 2.0 projects it onto the testbed); nothing when the script never touched the figure."""
+        if self._figure is None:
+            return
+        x0, x1, y0, y1 = self._bounds
+        self._arena.draw.add(figure_annotations(self._figure[1], (x0, x1, y0, y1)), key="rps-figure")
 
     def _validate(self, errors: dict | None = None) -> dict:
         """rps's validation of the current poses and commanded velocities, counted into ``errors``

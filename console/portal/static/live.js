@@ -10,7 +10,7 @@ document.addEventListener("DOMContentLoaded", () => {
   const status = document.getElementById("live-status");
   if (!canvas) return;
   const ctx = canvas.getContext("2d");
-  const drawn = (window.swarmdeckLive = { frames: 0, seq: null, tick: null, poses: null, runState: null, state: null, ended: false, links: 0 });
+  const drawn = (window.swarmdeckLive = { frames: 0, seq: null, tick: null, poses: null, runState: null, state: null, ended: false, links: 0, annotations: 0, texts: [] });
   const heat = new Image();
   let last = null;
   heat.onload = () => { if (last) draw(last); };
@@ -69,6 +69,7 @@ document.addEventListener("DOMContentLoaded", () => {
       ctx.fillStyle = P.sensor_hit;
       for (const [, [bx, by]] of m.sensors.rays) ctx.fillRect(X(bx) - 2, Y(by) - 2, 4, 4);
     }
+    drawAnnotations(m.annotations, X, Y, s);
     ctx.strokeStyle = P.changed; ctx.lineWidth = 2;  // robots whose command the filter changed
     for (const i of m.moved) { ctx.beginPath(); ctx.arc(X(m.poses[i][0]), Y(m.poses[i][1]), m.rings.changed * r, 0, 2 * Math.PI); ctx.stroke(); }
     const rv = m.rings.virtual * r, dash = (2 * Math.PI * rv) / 16;  // virtual robots: every other of 16 arcs
@@ -96,6 +97,36 @@ document.addEventListener("DOMContentLoaded", () => {
       ctx.fillStyle = P.stopped; ctx.font = "bold 22px system-ui, sans-serif"; ctx.textAlign = "right"; ctx.textBaseline = "top";
       ctx.fillText("EMERGENCY STOP", W - 16, 14);
     }
+  }
+
+  // What the experiment drew (portal/live.py annotations_message): kinds 0 point, 1 polyline, 2 circle,
+  // 3 polygon, 4 text; vertices in metres, sizes in metres (radius, line width, text height), colours given.
+  function drawAnnotations(a, X, Y, s) {
+    drawn.annotations = a ? a.kinds.length : 0;
+    drawn.texts = [];
+    if (!a) return;
+    ctx.save();
+    ctx.lineCap = "round"; ctx.lineJoin = "round"; ctx.textAlign = "center"; ctx.textBaseline = "middle";
+    a.kinds.forEach((kind, i) => {
+      const v = a.vertices.slice(a.offsets[i], a.offsets[i + 1]), size = a.sizes[i], colour = a.colours[i];
+      ctx.fillStyle = colour; ctx.strokeStyle = colour;
+      ctx.lineWidth = Math.max(1, size * s);
+      ctx.beginPath();
+      if (kind === 0 || kind === 2) {
+        ctx.lineWidth = Math.max(1, 0.01 * s);
+        ctx.arc(X(v[0][0]), Y(v[0][1]), Math.max(1, size * s), 0, 2 * Math.PI);
+        if (kind === 0 || a.filled[i]) ctx.fill(); else ctx.stroke();
+      } else if (kind === 1 || kind === 3) {
+        v.forEach(([x, y], k) => (k ? ctx.lineTo(X(x), Y(y)) : ctx.moveTo(X(x), Y(y))));
+        if (kind === 3) ctx.closePath();
+        if (kind === 3 && a.filled[i]) ctx.fill(); else ctx.stroke();
+      } else if (kind === 4) {
+        ctx.font = `${Math.max(8, Math.round(size * s))}px system-ui, sans-serif`;
+        ctx.fillText(a.texts[i], X(v[0][0]), Y(v[0][1]));
+        drawn.texts.push(a.texts[i]);
+      }
+    });
+    ctx.restore();
   }
 
   function show(text) { status.textContent = text; }

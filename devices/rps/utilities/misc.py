@@ -27,14 +27,26 @@ def at_position(states, points, position_error: float = 0.02) -> tuple[np.ndarra
                                    position_error))
 
 
+def _points_per_metre(robotarium) -> float | None:
+    """Typographic points per arena metre on ``robotarium``'s (headless) figure, None without one."""
+    axes = getattr(robotarium, "axes", None)
+    if axes is None:
+        return None
+    origin, unit = axes.transData.transform([[0.0, 0.0], [1.0, 0.0]])
+    return abs(float(unit[0] - origin[0])) * 72.0 / axes.figure.dpi
+
+
 def determine_marker_size(robotarium, marker_size_meters: float) -> float:
-    """rps sizes matplotlib markers; there is no figure here, so the size in metres is returned."""
-    return float(marker_size_meters)
+    """rps: the ``scatter`` size (points², an area) of a marker ``marker_size_meters`` m across on the figure —
+    what is drawn on the arena then is that many metres across (``swarmdeck.devices.rps.figure_annotations``)."""
+    per_m = _points_per_metre(robotarium)
+    return float(marker_size_meters) if per_m is None else (float(marker_size_meters) * per_m) ** 2
 
 
 def determine_font_size(robotarium, font_height_meters: float) -> float:
-    """rps sizes matplotlib fonts; there is no figure here, so the height in metres is returned."""
-    return float(font_height_meters)
+    """rps: the font size (points) of text ``font_height_meters`` m tall on the figure (and on the arena)."""
+    per_m = _points_per_metre(robotarium)
+    return float(font_height_meters) if per_m is None else float(font_height_meters) * per_m
 
 
 # rps 2.0's names (rps/utilities/misc.py on `master`)

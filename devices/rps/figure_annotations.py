@@ -1,0 +1,171 @@
+"""What an rps script plots on its figure, as annotations on the arena (the Robotarium 2.0's projector rule).
+
+The Robotarium's guide: "anything that you plot within the boundaries … will be projected onto the
+testbed". :func:`figure_annotations` reads the script's artists on ``r.axes`` — patches (circles,
+rectangles, polygons, any path), lines (``plot``: polylines, or dots when drawn with markers and no line),
+collections (``scatter``, line and polygon collections) and texts — and turns those inside the arena
+into :class:`~swarmdeck.core.annotations.Annotations`: every coordinate through the artist's own transform
+and back through the axes' data transform (so positions in axes or figure coordinates land where the
+figure shows them), sizes in points (line widths, marker sizes, font sizes) converted to metres at the
+figure's scale, colours as RGBA with the artist's alpha. An artist wholly outside the arena, invisible,
+or of another kind (images, legends) is skipped; a primitive reaching outside is clipped to the arena
+later (:func:`~swarmdeck.core.annotations.sanitize`). Arena artists swarmdeck itself adds are marked with
+:data:`SWARMDECK_GID` and skipped.
+"""
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from swarmdeck.core.annotations import CIRCLE, EMPTY, POINT, POLYGON, POLYLINE, TEXT, Annotations
+from swarmdeck.core.bounds import Bounds
+
+#: the gid of the artists swarmdeck draws on the rps figure itself (not the script's)
+SWARMDECK_GID = "swarmdeck-arena"
+
+
+class _Builder:
+    def __init__(self) -> None:
+        self.kinds: list[NDArray[np.uint8]] = []
+        self.counts: list[NDArray[np.int64]] = []
+        self.vertices: list[NDArray[np.float64]] = []
+        self.sizes: list[NDArray[np.float64]] = []
+        self.colors: list[NDArray[np.uint8]] = []
+        self.filled: list[NDArray[np.bool_]] = []
+        self.texts: list[str] = []
+
+    def add(self, kind: int, vertices: NDArray[np.float64], counts: NDArray[np.int64], sizes: Any, colors: Any,
+            filled: bool, texts: list[str] | None = None) -> None:
+        p = len(counts)
+        if not p:
+            return
+        self.kinds.append(np.full(p, kind, dtype=np.uint8))
+        self.counts.append(np.asarray(counts, dtype=np.int64))
+        self.vertices.append(np.asarray(vertices, dtype=float).reshape(-1, 2))
+        self.sizes.append(np.broadcast_to(np.asarray(sizes, dtype=float), (p,)).copy())
+        self.colors.append(np.broadcast_to(np.asarray(colors, dtype=np.uint8), (p, 4)).copy())
+        self.filled.append(np.full(p, bool(filled)))
+        self.texts.extend(texts if texts is not None else [""] * p)
+
+    def build(self) -> Annotations:
+        if not self.kinds:
+            return EMPTY
+        counts = np.concatenate(self.counts)
+        return Annotations(kinds=np.concatenate(self.kinds), offsets=np.concatenate(([0], np.cumsum(counts))),
+                           vertices=np.concatenate(self.vertices), sizes=np.concatenate(self.sizes),
+                           colors=np.concatenate(self.colors), filled=np.concatenate(self.filled),
+                           texts=tuple(self.texts))
+
+
+def _rgba(colors: Any, alpha: float | None) -> NDArray[np.uint8]:
+    """matplotlib colour(s) → (K, 4) uint8; the artist's alpha multiplies in when set."""
+    from matplotlib.colors import to_rgba_array
+
+    c = to_rgba_array(colors)
+    if alpha is not None:
+        c[:, 3] = float(alpha)
+    return np.clip(np.round(c * 255.0), 0, 255).astype(np.uint8)
+
+
+def _inside(xy: NDArray[np.float64], b: Bounds) -> NDArray[np.bool_]:
+    return np.asarray((xy[..., 0] >= b.x_min) & (xy[..., 0] <= b.x_max) & (xy[..., 1] >= b.y_min)
+                      & (xy[..., 1] <= b.y_max))
+
+
+def figure_annotations(axes: Any, bounds: Bounds | tuple[float, float, float, float]) -> Annotations:
+    """The annotations of what the script drew on ``axes`` inside the arena ``bounds`` (module docstring)."""
+    from matplotlib.collections import Collection, LineCollection, PathCollection
+    from matplotlib.lines import Line2D
+    from matplotlib.patches import Circle, Patch
+    from matplotlib.text import Text
+
+    b = Bounds.of(bounds)
+    to_data = axes.transData.inverted()
+    origin, unit = axes.transData.transform([[0.0, 0.0], [1.0, 0.0]])
+    px_per_m = max(abs(float(unit[0] - origin[0])), 1e-9)
+    m_per_pt = axes.figure.dpi / 72.0 / px_per_m
+    out = _Builder()
+    spines = list(axes.spines.values())
+
+    def data(xy: Any, transform: Any) -> NDArray[np.float64]:
+        pts = np.asarray(xy, dtype=float).reshape(-1, 2)
+        if transform is axes.transData or not len(pts):  # data coordinates already: exact
+            return pts
+        return np.asarray(to_data.transform(transform.transform(pts)), dtype=float)
+
+    for artist in axes.get_children():
+        if not artist.get_visible() or artist.get_gid() == SWARMDECK_GID or artist in spines:
+            continue
+        if isinstance(artist, Patch) and artist is not axes.patch:
+            filled = bool(artist.get_fill())
+            colour = _rgba(artist.get_facecolor() if filled else artist.get_edgecolor(), artist.get_alpha())
+            width = artist.get_linewidth() * m_per_pt
+            if isinstance(artist, Circle):
+                c = data([artist.center], artist.get_data_transform())
+                edge = data([[artist.center[0] + artist.radius, artist.center[1]]], artist.get_data_transform())
+                if _inside(c, b).all():
+                    out.add(CIRCLE, c, np.ones(1, dtype=np.int64), float(np.linalg.norm(edge - c)), colour, filled)
+                continue
+            for poly in artist.get_path().to_polygons(artist.get_patch_transform()):
+                xy = data(poly, artist.get_data_transform())
+                if len(xy) > 1 and np.allclose(xy[0], xy[-1]):
+                    xy = xy[:-1]
+                if len(xy) >= 3 and _inside(xy, b).any():
+                    out.add(POLYGON, xy, np.array([len(xy)]), width, colour, filled)
+        elif isinstance(artist, Line2D):
+            xy = data(artist.get_xydata(), artist.get_transform())
+            xy = xy[np.isfinite(xy).all(axis=1)]
+            if not len(xy) or not _inside(xy, b).any():
+                continue
+            colour = _rgba(artist.get_color(), artist.get_alpha())
+            if artist.get_linestyle() not in ("None", "", " ", "none") and len(xy) >= 2:
+                out.add(POLYLINE, xy, np.array([len(xy)]), artist.get_linewidth() * m_per_pt, colour, False)
+            if artist.get_marker() not in (None, "None", "", " ", "none"):
+                inside = xy[_inside(xy, b)]
+                out.add(POINT, inside, np.ones(len(inside), dtype=np.int64), artist.get_markersize() / 2 * m_per_pt,
+                        _rgba(artist.get_markerfacecolor(), artist.get_alpha()), True)
+        elif isinstance(artist, Collection):
+            alpha = artist.get_alpha()
+            if isinstance(artist, PathCollection):  # scatter
+                offsets = data(artist.get_offsets(), artist.get_offset_transform())
+                keep = _inside(offsets, b) & np.isfinite(offsets).all(axis=1)
+                if not keep.any():
+                    continue
+                k = len(offsets)
+                sizes = np.resize(np.asarray(artist.get_sizes(), dtype=float), k) if len(artist.get_sizes()) else np.full(k, 36.0)
+                faces = artist.get_facecolor()
+                colours = _rgba(faces if len(faces) else artist.get_edgecolor(), alpha)
+                colours = np.resize(colours, (k, 4)) if len(colours) else np.zeros((k, 4), dtype=np.uint8)
+                out.add(POINT, offsets[keep], np.ones(int(keep.sum()), dtype=np.int64),
+                        np.sqrt(sizes[keep]) / 2 * m_per_pt, colours[keep], True)
+            elif isinstance(artist, LineCollection):
+                segs = artist.get_segments()
+                cols = _rgba(artist.get_colors(), alpha) if len(artist.get_colors()) else np.zeros((1, 4), dtype=np.uint8)
+                widths = np.atleast_1d(np.asarray(artist.get_linewidth(), dtype=np.float64))
+                for i, seg in enumerate(segs):
+                    xy = data(seg, artist.get_transform())
+                    if len(xy) >= 2 and _inside(xy, b).any():
+                        out.add(POLYLINE, xy, np.array([len(xy)]), widths[i % len(widths)] * m_per_pt if len(widths) else 0.01,
+                                cols[i % len(cols)], False)
+            else:  # polygon / patch collections
+                faces = artist.get_facecolor()
+                filled = bool(len(faces))
+                cols = _rgba(faces if filled else artist.get_edgecolor(), alpha) if len(faces) or len(artist.get_edgecolor()) else np.zeros((1, 4), dtype=np.uint8)
+                for i, path in enumerate(artist.get_paths()):
+                    for poly in path.to_polygons():
+                        xy = data(poly, artist.get_transform())
+                        if len(xy) > 1 and np.allclose(xy[0], xy[-1]):
+                            xy = xy[:-1]
+                        if len(xy) >= 3 and _inside(xy, b).any():
+                            out.add(POLYGON, xy, np.array([len(xy)]), 0.01, cols[i % len(cols)], filled)
+        elif isinstance(artist, Text):
+            text = artist.get_text()
+            if not text:
+                continue
+            xy = data([artist.get_position()], artist.get_transform())
+            if _inside(xy, b).all():
+                out.add(TEXT, xy, np.ones(1, dtype=np.int64), artist.get_fontsize() * m_per_pt,
+                        _rgba(artist.get_color(), artist.get_alpha()), False, [text])
+    return out.build()
