@@ -1,0 +1,93 @@
+"""The projector's picture of one Frame: the layers the operator chose, as the JSON the projector page draws.
+
+:func:`projector_message` serialises the renderer-neutral picture of the Frame
+(:func:`~swarmdeck.console.picture.picture.picture_of`) layer by layer, keeping only the layers switched on in
+:class:`~swarmdeck.console.runtime.params.ProjectorParams` (a layer switched off costs nothing to send or draw).
+Keys (units m, s, rad; N robots, E Voronoi edges, C centroids, G goals)::
+
+    seq, tick, t     the feed's sequence number, the Frame's tick and run time s
+    stamp            wall-clock time the loop handed the Frame over, ms since the epoch (tick → pixels latency)
+    run_state        "running" | "paused" | "estop"
+    bounds           [x_min, x_max, y_min, y_max]
+    n                number of robots N
+    density          null | "data:image/png;base64,…" heat map covering ``bounds`` (row 0 at y_max)
+    edges            (E, 2, 2) Voronoi edges          — layer "cells"
+    centroids        (C, 2)                           — layer "centroids"
+    goals            (G, 2) goto goals                — layer "goals"
+    halos            {xy (N, 2), colours (N,) "#rrggbb", radius m} — layer "halos"
+    safety           {xy (N, 2) look-ahead points, radius D_s / 2 m} — layer "safety"
+    graph            (L, 2, 2) communication links, when the picture has them — layer "graph"
+    annotations      [..] the experiment's drawings, when the picture has them — layer "annotations"
+    palette          the picture's colours (``console.portal.live.PALETTE``)
+
+The page learns the homography, the projector's size and the settings from the stream's ``config`` event
+(:func:`config_message`).
+"""
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from swarmdeck.console.picture.colours import hex_colors
+from swarmdeck.console.picture.picture import picture_of
+from swarmdeck.console.portal.live import PALETTE, density_png
+from swarmdeck.console.runtime.frame import Frame
+from swarmdeck.console.runtime.params import ProjectorParams, to_dict
+from swarmdeck.core.bounds import Bounds
+from swarmdeck.core.constants import ROBOT_RADIUS
+from swarmdeck.tracking.projector import ProjectorCalibration
+
+#: Heat-map sampling of the projected density, px per m (the page smooths it up).
+DENSITY_PX_PER_M = 25.0
+#: A robot's halo radius, × the robot's radius.
+HALO_SCALE = 1.6
+
+
+def _xy(a: Any, digits: int = 3) -> list[Any]:
+    return np.round(np.asarray(a, dtype=float), digits).tolist()
+
+
+def projector_message(frame: Frame, seq: int, settings: ProjectorParams, stamp_ms: float) -> dict[str, Any]:
+    """The JSON-able projector picture of ``frame`` with the layers ``settings`` switches on (module docstring)."""
+    pic = picture_of(frame)
+    s = settings
+    msg: dict[str, Any] = {
+        "seq": int(seq), "tick": int(frame.tick), "t": round(float(frame.run_time), 3), "stamp": float(stamp_ms),
+        "run_state": pic.run_state, "bounds": list(pic.bounds), "n": pic.n, "palette": PALETTE,
+        "density": None, "edges": [], "centroids": [], "goals": [], "halos": None, "safety": None,
+        "graph": [], "annotations": [],
+    }
+    if s.blackout:
+        return msg
+    if s.density:
+        msg["density"] = density_png(pic, DENSITY_PX_PER_M)
+    if s.cells and frame.coverage is not None:
+        msg["edges"] = _xy(pic.edges)
+    if s.centroids and frame.coverage is not None:
+        msg["centroids"] = _xy(pic.centroids)
+    if s.goals:
+        msg["goals"] = _xy(pic.goals)
+    if s.halos:
+        msg["halos"] = {"xy": _xy(pic.poses[:, :2]), "colours": hex_colors(pic.colors),
+                        "radius": HALO_SCALE * ROBOT_RADIUS}
+    if s.safety:
+        msg["safety"] = {"xy": _xy(pic.points), "radius": float(pic.ring_radius)}
+    graph = getattr(pic, "graph_edges", None)  # the communication-graph layer, when the picture has one
+    if s.graph and graph is not None:
+        msg["graph"] = _xy(graph)
+    notes = getattr(pic, "annotations", None)  # the experiment's drawings, when the picture has them
+    if s.annotations and notes is not None:
+        msg["annotations"] = notes if isinstance(notes, list) else getattr(notes, "to_json", lambda: [])()
+    return msg
+
+
+def config_message(bounds: Bounds, calibration: ProjectorCalibration | None, settings: ProjectorParams,
+                   version: int) -> dict[str, Any]:
+    """The page's configuration: the arena ``bounds``, the homography ``H`` (3 × 3 floor m → projector px, or
+    null: the page says "no homography — run swarmdeck calibrate projector" on the floor), the projector's
+    ``size`` [w, h] px, the ``settings`` (:class:`ProjectorParams` as a dict) and their ``version``."""
+    return {"bounds": list(bounds), "version": int(version), "settings": to_dict(settings),
+            "H": None if calibration is None else calibration.homography.tolist(),
+            "size": None if calibration is None else list(calibration.size),
+            "palette": PALETTE}

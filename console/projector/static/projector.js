@@ -1,0 +1,205 @@
+// The projector page: the arena drawn top-down on a canvas in floor metres, warped onto the projector's image
+// by the floor → projector homography H (a CSS matrix3d), fed by the console's stream (Server-Sent Events: a
+// `config` event — H, the projector's size, the layers, brightness and blackout — then the newest Frame's
+// picture, swarmdeck.console.projector.message). Messages are only stored; one requestAnimationFrame draws the
+// newest, so a slow page skips frames and never lags. If drawing takes longer than BUDGET_MS the page drops
+// layers (DROP_ORDER) until it fits, and takes them back when there is room. Without H it writes
+// "no homography — run swarmdeck calibrate projector" across the screen. window.swarmdeckProjector tells tests
+// and the bench what was drawn and when.
+"use strict";
+(() => {
+  const floor = document.getElementById("floor");
+  const notice = document.getElementById("notice");
+  const ctx = floor.getContext("2d");
+  const nctx = notice.getContext("2d");
+  const PX_PER_M = 400;           // the floor canvas's resolution before the warp
+  const BUDGET_MS = 20;           // a frame's drawing budget (30 frames/s with room for the browser)
+  const DROP_ORDER = ["safety", "halos", "graph", "centroids", "annotations", "cells", "goals"];
+  const st = (window.swarmdeckProjector = {
+    frames: 0, seq: null, tick: null, config: null, drawn: [], latency: [], drawMs: [], dropped: [],
+    message: "", connected: false, lastDraw: null, layersDrawn: [],
+  });
+  let config = null, pending = null, last = null, ema = 0;
+  const heat = new Image();
+  heat.onload = () => { if (last) pending = pending || last; };
+
+  function fitNotice() {
+    notice.width = window.innerWidth; notice.height = window.innerHeight;
+  }
+  function say(text) {  // full-screen text, not warped (there may be no homography)
+    fitNotice();
+    nctx.clearRect(0, 0, notice.width, notice.height);
+    st.message = text;
+    if (!text) return;
+    nctx.fillStyle = "#ffffff";
+    nctx.font = `bold ${Math.max(18, Math.round(notice.width / 32))}px system-ui, sans-serif`;
+    nctx.textAlign = "center"; nctx.textBaseline = "middle";
+    const lines = text.split("\n");
+    lines.forEach((line, k) => nctx.fillText(line, notice.width / 2, notice.height / 2 + (k - (lines.length - 1) / 2) * notice.width / 24));
+  }
+
+  function applyConfig(c) {
+    config = c;
+    st.config = c;
+    const [x0, x1, y0, y1] = c.bounds;
+    floor.width = Math.round((x1 - x0) * PX_PER_M); floor.height = Math.round((y1 - y0) * PX_PER_M);
+    floor.style.width = floor.width + "px"; floor.style.height = floor.height + "px";
+    floor.style.opacity = String(c.settings.opacity);
+    if (!c.H) {
+      floor.style.display = "none";
+      say("no homography — run swarmdeck calibrate projector");
+      return;
+    }
+    // CSS px (edge coordinates) of the floor canvas → metres → projector px (centres) → CSS px of the page
+    const s = 1 / PX_PER_M, dpr = window.devicePixelRatio || 1;
+    const A = [[s, 0, x0], [0, -s, y1], [0, 0, 1]];
+    const T = [[1 / dpr, 0, 0.5 / dpr], [0, 1 / dpr, 0.5 / dpr], [0, 0, 1]];
+    const mul = (P, Q) => P.map((r) => [0, 1, 2].map((j) => r[0] * Q[0][j] + r[1] * Q[1][j] + r[2] * Q[2][j]));
+    const M = mul(T, mul(c.H, A));
+    floor.style.transform = `matrix3d(${M[0][0]},${M[1][0]},0,${M[2][0]},${M[0][1]},${M[1][1]},0,${M[2][1]},` +
+      `0,0,1,0,${M[0][2]},${M[1][2]},0,${M[2][2]})`;
+    floor.style.display = c.settings.blackout ? "none" : "block";
+    say("");
+    if (last) pending = last;
+  }
+
+  function on(layer) {
+    return config && config.settings[layer] && !st.dropped.includes(layer);
+  }
+
+  function draw(m) {
+    const t0 = performance.now();
+    const [x0, x1, y0, y1] = m.bounds;
+    const X = (x) => (x - x0) * PX_PER_M, Y = (y) => (y1 - y) * PX_PER_M;
+    const P = m.palette, W = floor.width, H = floor.height;
+    const drawnLayers = [];
+    ctx.fillStyle = "#000000";
+    ctx.fillRect(0, 0, W, H);
+    if (config.settings.blackout) { st.layersDrawn = []; return performance.now() - t0; }
+    if (m.density && config.settings.density && heat.complete && heat.naturalWidth) {
+      ctx.imageSmoothingEnabled = true;
+      ctx.drawImage(heat, 0, 0, W, H);
+      drawnLayers.push("density");
+    }
+    if (on("cells") && m.edges.length) {
+      ctx.strokeStyle = P.voronoi; ctx.lineWidth = 4;
+      ctx.beginPath();
+      for (const [[ax, ay], [bx, by]] of m.edges) { ctx.moveTo(X(ax), Y(ay)); ctx.lineTo(X(bx), Y(by)); }
+      ctx.stroke();
+      drawnLayers.push("cells");
+    }
+    if (on("centroids") && m.centroids.length) {
+      ctx.fillStyle = P.centroid;
+      for (const [cx, cy] of m.centroids) ctx.fillRect(X(cx) - 8, Y(cy) - 8, 16, 16);
+      drawnLayers.push("centroids");
+    }
+    if (on("goals") && m.goals.length) {
+      ctx.strokeStyle = "#ffffff"; ctx.lineWidth = 4;
+      ctx.beginPath();
+      for (const [gx, gy] of m.goals) { ctx.moveTo(X(gx) - 12, Y(gy) - 12); ctx.lineTo(X(gx) + 12, Y(gy) + 12);
+        ctx.moveTo(X(gx) - 12, Y(gy) + 12); ctx.lineTo(X(gx) + 12, Y(gy) - 12); }
+      ctx.stroke();
+      drawnLayers.push("goals");
+    }
+    if (on("graph") && m.graph.length) {
+      ctx.strokeStyle = "#9be7ff"; ctx.lineWidth = 3;
+      ctx.beginPath();
+      for (const [[ax, ay], [bx, by]] of m.graph) { ctx.moveTo(X(ax), Y(ay)); ctx.lineTo(X(bx), Y(by)); }
+      ctx.stroke();
+      drawnLayers.push("graph");
+    }
+    if (on("safety") && m.safety) {
+      const r = m.safety.radius * PX_PER_M;
+      ctx.strokeStyle = P.changed; ctx.lineWidth = 3;
+      ctx.beginPath();
+      for (const [px, py] of m.safety.xy) { ctx.moveTo(X(px) + r, Y(py)); ctx.arc(X(px), Y(py), r, 0, 2 * Math.PI); }
+      ctx.stroke();
+      drawnLayers.push("safety");
+    }
+    if (on("halos") && m.halos) {
+      const r = m.halos.radius * PX_PER_M;
+      ctx.lineWidth = 6;
+      m.halos.xy.forEach(([px, py], i) => {
+        ctx.strokeStyle = m.halos.colours[i];
+        ctx.beginPath(); ctx.arc(X(px), Y(py), r, 0, 2 * Math.PI); ctx.stroke();
+      });
+      drawnLayers.push("halos");
+    }
+    if (on("annotations") && m.annotations.length) {
+      drawAnnotations(m.annotations, X, Y);
+      drawnLayers.push("annotations");
+    }
+    ctx.strokeStyle = P.boundary; ctx.lineWidth = 4;
+    ctx.strokeRect(2, 2, W - 4, H - 4);
+    if (m.run_state === "estop") {
+      ctx.strokeStyle = P.stopped; ctx.lineWidth = 24; ctx.strokeRect(12, 12, W - 24, H - 24);
+    }
+    st.layersDrawn = drawnLayers;
+    return performance.now() - t0;
+  }
+
+  // The experiment's drawings (annotations, when the picture has them): {kind, points|centre, radius, text,
+  // colour} in metres; unknown kinds are skipped.
+  function drawAnnotations(list, X, Y) {
+    for (const a of list) {
+      ctx.strokeStyle = ctx.fillStyle = a.colour || a.color || "#ffffff";
+      ctx.lineWidth = 4;
+      const pts = a.points || [];
+      if ((a.kind === "line" || a.kind === "polyline" || a.kind === "polygon") && pts.length) {
+        ctx.beginPath(); ctx.moveTo(X(pts[0][0]), Y(pts[0][1]));
+        for (const [px, py] of pts.slice(1)) ctx.lineTo(X(px), Y(py));
+        if (a.kind === "polygon") ctx.closePath();
+        ctx.stroke();
+      } else if (a.kind === "circle" && a.centre) {
+        ctx.beginPath(); ctx.arc(X(a.centre[0]), Y(a.centre[1]), a.radius * PX_PER_M, 0, 2 * Math.PI); ctx.stroke();
+      } else if (a.kind === "points") {
+        for (const [px, py] of pts) ctx.fillRect(X(px) - 5, Y(py) - 5, 10, 10);
+      } else if (a.kind === "text" && a.centre) {
+        ctx.font = "bold 40px system-ui, sans-serif"; ctx.textAlign = "center"; ctx.textBaseline = "middle";
+        ctx.fillText(String(a.text || ""), X(a.centre[0]), Y(a.centre[1]));
+      }
+    }
+  }
+
+  function adapt(ms) {  // degrade by dropping layers, never by lagging
+    ema = st.frames < 2 ? ms : 0.8 * ema + 0.2 * ms;
+    if (ema > BUDGET_MS) {
+      const next = DROP_ORDER.find((l) => !st.dropped.includes(l));
+      if (next) { st.dropped.push(next); ema = BUDGET_MS / 2; }
+    } else if (ema < BUDGET_MS / 4 && st.dropped.length && st.frames % 60 === 0) {
+      st.dropped.pop();
+    }
+  }
+
+  function tick() {
+    if (pending && config) {
+      const m = pending;
+      pending = null;
+      if (config.H) {
+        const ms = draw(m);
+        adapt(ms);
+        const now = performance.timeOrigin + performance.now();
+        st.frames += 1; st.seq = m.seq; st.tick = m.tick; st.lastDraw = now;
+        st.drawn.push(now); st.latency.push(now - m.stamp); st.drawMs.push(ms);
+        if (st.drawn.length > 2000) { st.drawn.shift(); st.latency.shift(); st.drawMs.shift(); }
+      }
+    }
+    requestAnimationFrame(tick);
+  }
+
+  const source = new EventSource("/projector/stream");
+  source.addEventListener("config", (ev) => { st.connected = true; applyConfig(JSON.parse(ev.data)); });
+  source.addEventListener("frame", (ev) => {
+    const m = JSON.parse(ev.data);
+    last = pending = m;
+    if (m.density && heat.src !== m.density) heat.src = m.density;
+  });
+  source.onerror = () => {  // the console stopped or restarted: black, and say so; EventSource reconnects
+    st.connected = false;
+    floor.style.display = "none";
+    say("swarmdeck projector: waiting for the console…");
+  };
+  say("swarmdeck projector: waiting for the console…");
+  window.addEventListener("resize", () => { if (config) applyConfig(config); });
+  requestAnimationFrame(tick);
+})();
