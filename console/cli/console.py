@@ -57,6 +57,14 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="also serve the run live to Foxglove over its WebSocket protocol (default port 8765, "
                              "on --host; clients asking for foxglove.sdk.v1 or foxglove.websocket.v1 are both "
                              "served): open ws://127.0.0.1:PORT in Foxglove and import `swarmdeck foxglove-layout`")
+    parser.add_argument("--projector", nargs="?", type=int, const=8090, default=None, metavar="PORT",
+                        help="also serve the overhead projector's page on http://HOST:PORT/projector (default port "
+                             "8090): open it full screen on the projector (`chromium --kiosk --app=URL`); it "
+                             "draws the density, cells, goals, halos… warped onto the floor (layers, brightness "
+                             "and blackout in the panel's Projector folder)")
+    parser.add_argument("--projector-calibration", default=None, metavar="FILE",
+                        help="the projector's homography from `swarmdeck calibrate projector` (default "
+                             "projector.json if it exists; without one the page says to calibrate)")
     parser.add_argument("--no-inputs", action="store_true",
                         help="do not open the TUIO/OSC input listeners (UDP 3333 by default)")
 
@@ -105,6 +113,15 @@ def main(args: argparse.Namespace) -> int:
     if args.virtual is not None and args.virtual < 1:
         raise UsageError(f"--virtual must be a number of robots >= 1, got {args.virtual}")
 
+    if args.projector is not None and not 0 <= args.projector <= 65535:
+        raise UsageError(f"--projector port must be in [0, 65535], got {args.projector}")
+    projector_cal = _projector_calibration(args.projector, args.projector_calibration)
+    if projector_cal is not None:
+        from swarmdeck.tracking.projector import check_projector_homography
+
+        why = check_projector_homography(projector_cal.homography, config.bounds, projector_cal.size)
+        if why is not None:
+            raise UsageError(f"--projector-calibration on the {args.arena or 'default'} arena: {why}")
     if args.record and args.no_record:
         raise UsageError("--record and --no-record exclude each other")
     _check_address(host, port)
@@ -168,6 +185,26 @@ def main(args: argparse.Namespace) -> int:
         if bridge is not None:
             bridge.close()
         raise UsageError(f"cannot serve on {host}:{port}: {exc}") from None
+    projector = None
+    if args.projector is not None:
+        from swarmdeck.console.projector.server import ProjectorServer
+        from swarmdeck.console.web.projector_panel import ProjectorPanel
+
+        try:
+            projector = ProjectorServer(config.bounds, projector_cal, host=host, port=args.projector)
+        except OSError as exc:
+            app.close()
+            if bridge is not None:
+                bridge.close()
+            if rec is not None:
+                rec.close()
+            raise UsageError(f"--projector: cannot serve on {host}:{args.projector}: {exc}") from None
+        loop.subscribe(projector.offer)
+        ProjectorPanel(app.gui.gui, projector)
+        projector.start()
+        print(f"swarmdeck console: projector page at {projector.url}" +
+              ("" if projector_cal is not None else " (no homography: run `swarmdeck calibrate projector`)"),
+              flush=True)
     if bridge is not None:
         loop.subscribe(bridge.offer)
         bridge.start()
@@ -187,6 +224,8 @@ def main(args: argparse.Namespace) -> int:
         restore()
         frame = loop.latest
         app.close()
+        if projector is not None:
+            projector.close()
         if bridge is not None:
             bridge.close()
         if rec is not None:
@@ -197,6 +236,24 @@ def main(args: argparse.Namespace) -> int:
         print(f"ran {frame.tick + 1} ticks, t = {frame.run_time:.1f} s; "
               f"min distance {b.min_distance:.3f} m" if b is not None else "")
     return 0
+
+
+def _projector_calibration(port: int | None, path: str | None):
+    """The projector's calibration: ``path`` (UsageError when unusable), else ./projector.json when --projector
+    is on and it exists, else None (the page then asks for one)."""
+    from pathlib import Path
+
+    from swarmdeck.tracking.projector import ProjectorCalibration, ProjectorCalibrationError
+
+    if path is None:
+        if port is None or not Path("projector.json").is_file():
+            return None
+    elif port is None:
+        raise UsageError("--projector-calibration needs --projector")
+    try:
+        return ProjectorCalibration.load(path or "projector.json")
+    except ProjectorCalibrationError as exc:
+        raise UsageError(f"--projector-calibration: {exc}") from None
 
 
 def _stop_on_signals():
