@@ -115,7 +115,8 @@ class ProjectorCalibration:
             if not isinstance(size_v, (list, tuple)) or not isinstance(bounds_v, (list, tuple)):
                 raise TypeError("size and bounds must be lists")
             size = (int(size_v[0]), int(size_v[1]))
-            bounds = Bounds.of(tuple(float(v) for v in bounds_v))
+            bx0, bx1, by0, by1 = (float(v) for v in bounds_v)
+            bounds = Bounds(bx0, bx1, by0, by1)
             rms = d.get("rms_mm")
             n = d.get("n_markers", 0)
             return ProjectorCalibration(H, size, bounds, float(rms) if isinstance(rms, (int, float)) else float("nan"),

@@ -6,9 +6,12 @@ every Frame (:meth:`ProjectorServer.offer`, O(1) on the loop thread: it keeps on
 skips the ones it had no time for — a slow page drops frames, it never lags. Serialisation happens once per
 Frame and settings version, on the first stream thread that needs it, never on the loop thread.
 
-Routes: ``/projector`` (the page), ``/projector/projector.js``, ``/projector/stream`` (SSE: a ``config`` event on
-connect and after every settings change, then ``frame`` events), ``/projector/state`` (JSON: seq, settings,
-calibrated, pages served, frames sent and skipped).
+Routes: ``/projector`` (the page), ``/projector/projector.js``, ``/projector/next`` (what the page uses: a long
+poll answering the newest config and Frame; the page asks again on each answer, so at most one message is on its
+way — Server-Sent Events have no back-pressure, and a page slower than the loop would fall behind on a buffered
+stream), ``/projector/stream`` (the same as SSE: a ``config`` event on connect and after every settings change,
+then ``frame`` events, for tools), ``/projector/state`` (JSON: seq, settings, calibrated, pages served, frames
+sent and skipped).
 """
 from __future__ import annotations
 
@@ -125,6 +128,7 @@ def _static(name: str) -> bytes:
 class _Handler(BaseHTTPRequestHandler):
     server: _Server
     protocol_version = "HTTP/1.1"
+    disable_nagle_algorithm = True  # headers and body are two writes: Nagle + delayed ACK would add 40 ms each
 
     def log_message(self, format: str, *args: Any) -> None:  # noqa: A002 - the stdlib's signature
         """Quiet: the console prints its own lines."""
@@ -139,6 +143,11 @@ class _Handler(BaseHTTPRequestHandler):
 
     def do_GET(self) -> None:  # noqa: N802 - the stdlib's name
         path = self.path.split("?", 1)[0].rstrip("/") or "/"
+        if self.server.owner.feed.closed:  # kept-alive connections outlive the listening socket: end them
+            self.close_connection = True
+            self._send(b"the projector server has stopped\n", "text/plain; charset=utf-8",
+                       HTTPStatus.SERVICE_UNAVAILABLE)
+            return
         if path in ("/", "/projector"):
             self._send(_static("projector.html"), "text/html; charset=utf-8")
         elif path == "/projector/projector.js":
@@ -147,9 +156,49 @@ class _Handler(BaseHTTPRequestHandler):
             self._send(json.dumps(self.server.owner.state()).encode(), "application/json")
         elif path == "/projector/stream":
             self._stream()
+        elif path == "/projector/next":
+            self._next()
         else:
             self._send(b"not found: the projector page is /projector\n", "text/plain; charset=utf-8",
                        HTTPStatus.NOT_FOUND)
+
+    def _next(self) -> None:
+        """Long poll: ``?seq=S&version=V`` → the config (when newer than V) and the newest Frame (when newer than
+        S or with new settings) as one JSON ``{"config": …|null, "frame": …|null}``, waiting up to
+        :data:`KEEPALIVE_S` for one. The page asks again when it has the answer, so at most one message is ever
+        on its way: a slow page skips Frames, it never lags behind."""
+        owner = self.server.owner
+        feed = owner.feed
+        query = dict(p.split("=", 1) for p in (self.path.split("?", 1) + [""])[1].split("&") if "=" in p)
+        try:
+            seq, version = int(query.get("seq", "0")), int(query.get("version", "-1"))
+        except ValueError:
+            self._send(b"seq and version must be whole numbers\n", "text/plain; charset=utf-8",
+                       HTTPStatus.BAD_REQUEST)
+            return
+        if seq == 0 and version == -1:
+            owner.count("pages")
+        if feed.version() == version:
+            got = feed.message()
+            if got is None or got[0] <= seq:
+                feed.wait_newer(seq, version, KEEPALIVE_S)
+        config = None
+        if feed.version() != version:
+            config = feed.config_json()[1]
+        got = feed.message()
+        frame = None
+        if got is not None and (got[0] > seq or config is not None):
+            if seq > 0 and got[0] > seq + 1:
+                owner.count("skipped", got[0] - seq - 1)
+            frame = got[2]
+            owner.count("sent")
+        if feed.closed:
+            self.close_connection = True
+            self._send(b"the projector server has stopped\n", "text/plain; charset=utf-8",
+                       HTTPStatus.SERVICE_UNAVAILABLE)
+            return
+        body = f'{{"config": {config or "null"}, "frame": {frame or "null"}}}'.encode()
+        self._send(body, "application/json")
 
     def _stream(self) -> None:
         owner = self.server.owner

@@ -1,7 +1,7 @@
 // The projector page: the arena drawn top-down on a canvas in floor metres, warped onto the projector's image
-// by the floor → projector homography H (a CSS matrix3d), fed by the console's stream (Server-Sent Events: a
-// `config` event — H, the projector's size, the layers, brightness and blackout — then the newest Frame's
-// picture, swarmdeck.console.projector.message). Messages are only stored; one requestAnimationFrame draws the
+// by the floor → projector homography H (a CSS matrix3d), fed by the console (a long poll of /projector/next, one
+// request at a time: the config — H, the projector's size, the layers, brightness and blackout — and the newest
+// Frame's picture, swarmdeck.console.projector.message). Messages are only stored; one requestAnimationFrame draws the
 // newest, so a slow page skips frames and never lags. If drawing takes longer than BUDGET_MS the page drops
 // layers (DROP_ORDER) until it fits, and takes them back when there is room. Without H it writes
 // "no homography — run swarmdeck calibrate projector" across the screen. window.swarmdeckProjector tells tests
@@ -12,7 +12,8 @@
   const notice = document.getElementById("notice");
   const ctx = floor.getContext("2d");
   const nctx = notice.getContext("2d");
-  const PX_PER_M = 400;           // the floor canvas's resolution before the warp
+  let PX_PER_M = 400;             // the floor canvas's resolution before the warp (lowered on big arenas)
+  let K = 1;                      // line widths and glyph sizes × K (drawn at 400 px/m)
   const BUDGET_MS = 20;           // a frame's drawing budget (30 frames/s with room for the browser)
   const DROP_ORDER = ["safety", "halos", "graph", "centroids", "annotations", "cells", "goals"];
   const st = (window.swarmdeckProjector = {
@@ -42,6 +43,8 @@
     config = c;
     st.config = c;
     const [x0, x1, y0, y1] = c.bounds;
+    PX_PER_M = Math.min(400, 1600 / Math.max(x1 - x0, y1 - y0));  // ≈ the projector's own resolution
+    K = PX_PER_M / 400;
     floor.width = Math.round((x1 - x0) * PX_PER_M); floor.height = Math.round((y1 - y0) * PX_PER_M);
     floor.style.width = floor.width + "px"; floor.style.height = floor.height + "px";
     floor.style.opacity = String(c.settings.opacity);
@@ -82,7 +85,7 @@
       drawnLayers.push("density");
     }
     if (on("cells") && m.edges.length) {
-      ctx.strokeStyle = P.voronoi; ctx.lineWidth = 4;
+      ctx.strokeStyle = P.voronoi; ctx.lineWidth = 4 * K;
       ctx.beginPath();
       for (const [[ax, ay], [bx, by]] of m.edges) { ctx.moveTo(X(ax), Y(ay)); ctx.lineTo(X(bx), Y(by)); }
       ctx.stroke();
@@ -90,11 +93,11 @@
     }
     if (on("centroids") && m.centroids.length) {
       ctx.fillStyle = P.centroid;
-      for (const [cx, cy] of m.centroids) ctx.fillRect(X(cx) - 8, Y(cy) - 8, 16, 16);
+      for (const [cx, cy] of m.centroids) ctx.fillRect(X(cx) - 8 * K, Y(cy) - 8 * K, 16 * K, 16 * K);
       drawnLayers.push("centroids");
     }
     if (on("goals") && m.goals.length) {
-      ctx.strokeStyle = "#ffffff"; ctx.lineWidth = 4;
+      ctx.strokeStyle = "#ffffff"; ctx.lineWidth = 4 * K;
       ctx.beginPath();
       for (const [gx, gy] of m.goals) { ctx.moveTo(X(gx) - 12, Y(gy) - 12); ctx.lineTo(X(gx) + 12, Y(gy) + 12);
         ctx.moveTo(X(gx) - 12, Y(gy) + 12); ctx.lineTo(X(gx) + 12, Y(gy) - 12); }
@@ -102,7 +105,7 @@
       drawnLayers.push("goals");
     }
     if (on("graph") && m.graph.length) {
-      ctx.strokeStyle = "#9be7ff"; ctx.lineWidth = 3;
+      ctx.strokeStyle = "#9be7ff"; ctx.lineWidth = 3 * K;
       ctx.beginPath();
       for (const [[ax, ay], [bx, by]] of m.graph) { ctx.moveTo(X(ax), Y(ay)); ctx.lineTo(X(bx), Y(by)); }
       ctx.stroke();
@@ -110,7 +113,7 @@
     }
     if (on("safety") && m.safety) {
       const r = m.safety.radius * PX_PER_M;
-      ctx.strokeStyle = P.changed; ctx.lineWidth = 3;
+      ctx.strokeStyle = P.changed; ctx.lineWidth = 3 * K;
       ctx.beginPath();
       for (const [px, py] of m.safety.xy) { ctx.moveTo(X(px) + r, Y(py)); ctx.arc(X(px), Y(py), r, 0, 2 * Math.PI); }
       ctx.stroke();
@@ -118,7 +121,7 @@
     }
     if (on("halos") && m.halos) {
       const r = m.halos.radius * PX_PER_M;
-      ctx.lineWidth = 6;
+      ctx.lineWidth = 6 * K;
       m.halos.xy.forEach(([px, py], i) => {
         ctx.strokeStyle = m.halos.colours[i];
         ctx.beginPath(); ctx.arc(X(px), Y(py), r, 0, 2 * Math.PI); ctx.stroke();
@@ -129,10 +132,10 @@
       drawAnnotations(m.annotations, X, Y);
       drawnLayers.push("annotations");
     }
-    ctx.strokeStyle = P.boundary; ctx.lineWidth = 4;
+    ctx.strokeStyle = P.boundary; ctx.lineWidth = 4 * K;
     ctx.strokeRect(2, 2, W - 4, H - 4);
     if (m.run_state === "estop") {
-      ctx.strokeStyle = P.stopped; ctx.lineWidth = 24; ctx.strokeRect(12, 12, W - 24, H - 24);
+      ctx.strokeStyle = P.stopped; ctx.lineWidth = 24 * K; ctx.strokeRect(12 * K, 12 * K, W - 24 * K, H - 24 * K);
     }
     st.layersDrawn = drawnLayers;
     return performance.now() - t0;
@@ -143,7 +146,7 @@
   function drawAnnotations(list, X, Y) {
     for (const a of list) {
       ctx.strokeStyle = ctx.fillStyle = a.colour || a.color || "#ffffff";
-      ctx.lineWidth = 4;
+      ctx.lineWidth = 4 * K;
       const pts = a.points || [];
       if ((a.kind === "line" || a.kind === "polyline" || a.kind === "polygon") && pts.length) {
         ctx.beginPath(); ctx.moveTo(X(pts[0][0]), Y(pts[0][1]));
@@ -187,18 +190,31 @@
     requestAnimationFrame(tick);
   }
 
-  const source = new EventSource("/projector/stream");
-  source.addEventListener("config", (ev) => { st.connected = true; applyConfig(JSON.parse(ev.data)); });
-  source.addEventListener("frame", (ev) => {
-    const m = JSON.parse(ev.data);
-    last = pending = m;
-    if (m.density && heat.src !== m.density) heat.src = m.density;
-  });
-  source.onerror = () => {  // the console stopped or restarted: black, and say so; EventSource reconnects
-    st.connected = false;
-    floor.style.display = "none";
-    say("swarmdeck projector: waiting for the console…");
-  };
+  // Long poll: one request at a time, each answered with the newest config / Frame, asked again at once.
+  let seqHave = 0, versionHave = -1;
+  async function poll() {
+    for (;;) {
+      try {
+        const r = await fetch(`/projector/next?seq=${seqHave}&version=${versionHave}`, { cache: "no-store" });
+        if (!r.ok) throw new Error(`HTTP ${r.status}`);
+        const answer = await r.json();
+        if (!st.connected) { st.connected = true; if (config) applyConfig(config); }
+        if (answer.config) { versionHave = answer.config.version; applyConfig(answer.config); }
+        if (answer.frame) {
+          const m = answer.frame;
+          seqHave = m.seq;
+          last = pending = m;
+          if (m.density && heat.src !== m.density) heat.src = m.density;
+        }
+      } catch (err) {  // the console stopped or restarted: black, and say so; ask again in a second
+        st.connected = false;
+        floor.style.display = "none";
+        say("swarmdeck projector: waiting for the console…");
+        await new Promise((res) => setTimeout(res, 1000));
+      }
+    }
+  }
+  poll();
   say("swarmdeck projector: waiting for the console…");
   window.addEventListener("resize", () => { if (config) applyConfig(config); });
   requestAnimationFrame(tick);
