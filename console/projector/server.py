@@ -28,6 +28,7 @@ from swarmdeck.console.projector.message import config_message, projector_messag
 from swarmdeck.console.runtime.frame import Frame
 from swarmdeck.console.runtime.params import ProjectorParams
 from swarmdeck.core.bounds import Bounds
+from swarmdeck.core.service_thread import ServiceThread
 from swarmdeck.tracking.projector import ProjectorCalibration
 
 #: A stream with nothing new sends a comment this often, s (finds pages that went away).
@@ -259,7 +260,8 @@ class ProjectorServer:
         self._httpd.owner = self
         self._counts = {"pages": 0, "sent": 0, "skipped": 0}
         self._lock = threading.Lock()
-        self._thread = threading.Thread(target=self._httpd.serve_forever, name="swarmdeck-projector", daemon=True)
+        self._service = ServiceThread(self._httpd.serve_forever, "swarmdeck-projector", join_timeout=5.0,
+                                      wake=self._httpd.shutdown)
 
     @property
     def port(self) -> int:
@@ -301,12 +303,12 @@ class ProjectorServer:
 
     def start(self) -> ProjectorServer:
         """Serve on a background thread."""
-        self._thread.start()
+        self._service.start()
         return self
 
     def close(self) -> None:
         """End every stream and stop serving."""
         self.feed.close()
-        self._httpd.shutdown()
+        if self._service.started:
+            self._service.stop()  # wakes serve_forever through shutdown()
         self._httpd.server_close()
-        self._thread.join(timeout=5.0)
