@@ -166,3 +166,24 @@ def test_calibrated_projection_of_the_density_lands_where_the_density_is(browser
     centre_seen = (pts * hot[:, None]).sum(0) / hot.sum()
     centre_want = (pts * hot_want[:, None]).sum(0) / hot_want.sum()
     assert np.linalg.norm(centre_seen - centre_want) < 0.03, (centre_seen, centre_want)
+
+
+def test_a_slow_page_drops_layers_instead_of_lagging(browser, loop):
+    srv = _serve(loop, ProjectorCalibration(PROJ.homography(), PROJ.size, DEFAULT_BOUNDS))
+    try:
+        srv.set(safety=True)
+        page = browser.new_page(viewport={"width": PROJ.width, "height": PROJ.height})
+        # every arc costs 3 ms: the safety discs and halos of 12 robots put a frame far over the 20 ms budget
+        page.add_init_script("""(() => { const arc = CanvasRenderingContext2D.prototype.arc;
+            CanvasRenderingContext2D.prototype.arc = function (...a) {
+              const t = performance.now(); while (performance.now() - t < 3) {} return arc.apply(this, a); }; })()""")
+        page.goto(srv.url)
+        for k in range(1, 40):
+            loop.tick()
+            if k % 4 == 0:
+                wait_until(lambda k=k: _state(page)["seq"] == k, 30.0)
+        st = _state(page)
+        assert st["dropped"][:2] == ["safety", "halos"], st
+        assert "density" in st["layers"] and "safety" not in st["layers"] and "halos" not in st["layers"]
+    finally:
+        srv.close()
