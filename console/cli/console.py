@@ -113,15 +113,7 @@ def main(args: argparse.Namespace) -> int:
     if args.virtual is not None and args.virtual < 1:
         raise UsageError(f"--virtual must be a number of robots >= 1, got {args.virtual}")
 
-    if args.projector is not None and not 0 <= args.projector <= 65535:
-        raise UsageError(f"--projector port must be in [0, 65535], got {args.projector}")
-    projector_cal = _projector_calibration(args.projector, args.projector_calibration)
-    if projector_cal is not None:
-        from swarmdeck.tracking.projector import check_projector_homography
-
-        why = check_projector_homography(projector_cal.homography, config.bounds, projector_cal.size)
-        if why is not None:
-            raise UsageError(f"--projector-calibration on the {args.arena or 'default'} arena: {why}")
+    projector_cal = _projector(args, config.bounds)
     if args.record and args.no_record:
         raise UsageError("--record and --no-record exclude each other")
     _check_address(host, port)
@@ -238,20 +230,19 @@ def main(args: argparse.Namespace) -> int:
     return 0
 
 
-def _projector_calibration(port: int | None, path: str | None):
-    """The projector's calibration: ``path`` (UsageError when unusable), else ./projector.json when --projector
-    is on and it exists, else None (the page then asks for one)."""
-    from pathlib import Path
+def _projector(args: argparse.Namespace, bounds):
+    """The projector's calibration for ``--projector`` (None: none yet), or UsageError naming the problem."""
+    if args.projector is None:
+        if args.projector_calibration is not None:
+            raise UsageError("--projector-calibration needs --projector")
+        return None
+    if not 0 <= args.projector <= 65535:
+        raise UsageError(f"--projector port must be in [0, 65535], got {args.projector}")
+    from swarmdeck.console.projector.server import projector_calibration
+    from swarmdeck.tracking.projector import ProjectorCalibrationError
 
-    from swarmdeck.tracking.projector import ProjectorCalibration, ProjectorCalibrationError
-
-    if path is None:
-        if port is None or not Path("projector.json").is_file():
-            return None
-    elif port is None:
-        raise UsageError("--projector-calibration needs --projector")
     try:
-        return ProjectorCalibration.load(path or "projector.json")
+        return projector_calibration(args.projector_calibration, bounds)
     except ProjectorCalibrationError as exc:
         raise UsageError(f"--projector-calibration: {exc}") from None
 

@@ -29,7 +29,7 @@ from swarmdeck.console.runtime.frame import Frame
 from swarmdeck.console.runtime.params import ProjectorParams
 from swarmdeck.core.bounds import Bounds
 from swarmdeck.core.service_thread import ServiceThread
-from swarmdeck.tracking.projector import ProjectorCalibration
+from swarmdeck.tracking.projector import ProjectorCalibration, ProjectorCalibrationError, check_projector_homography
 
 #: A stream with nothing new sends a comment this often, s (finds pages that went away).
 KEEPALIVE_S = 1.0
@@ -312,3 +312,20 @@ class ProjectorServer:
         if self._service.started:
             self._service.stop()  # wakes serve_forever through shutdown()
         self._httpd.server_close()
+
+
+def projector_calibration(path: str | None, bounds: Bounds) -> ProjectorCalibration | None:
+    """The calibration a ``--projector`` command uses: ``path``, else ``./projector.json`` when it exists, else
+    None (the page then asks for one). :class:`ProjectorCalibrationError` naming the problem when the file is
+    unusable or its homography does not put the arena ``bounds`` on the projector's image."""
+    from pathlib import Path
+
+    if path is None:
+        if not Path("projector.json").is_file():
+            return None
+        path = "projector.json"
+    cal = ProjectorCalibration.load(path)
+    why = check_projector_homography(cal.homography, bounds, cal.size)
+    if why is not None:
+        raise ProjectorCalibrationError(f"{path} on the arena {tuple(Bounds.of(bounds))}: {why}")
+    return cal
