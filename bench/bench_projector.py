@@ -4,9 +4,12 @@ Real ``ControlLoop`` Frames (coverage on the moving density, N = 12, 100, 1000) 
 to a real :class:`~swarmdeck.console.projector.server.ProjectorServer` at ``--rate`` Hz (default 60, twice the
 loop's 30 Hz, so the page's own limit shows) while one page (1280 × 800, every layer on, the safety discs too)
 draws them. In the page: ``drawn`` (wall time after each frame's drawing, ms), ``latency`` (that time − the
-server's wall time when the Frame was offered: serialisation + SSE + parse + wait for the animation frame +
+server's wall time when the Frame was offered: serialisation + long poll + parse + wait for the animation frame +
 drawing), ``drawMs`` (the drawing alone) and the layers it dropped to keep up. Server side: one Frame's
-serialisation (``projector_message`` + JSON), ms.
+serialisation (``projector_message`` + JSON), ms. On a shared, loaded machine the wall-clock rate says little, so
+the CPU time every process below this one (Chromium: renderer, GPU/compositor, network) and this process (the
+server, the feeder, Playwright's client) spent per Frame sent is reported too, and the frames per second one idle
+core could give from it.
 
 Rerun: ``.venv/bin/python bench/bench_projector.py [N ...]`` (≈ 1 min).
 """
@@ -31,6 +34,33 @@ CHROMIUM = "/usr/bin/chromium"
 ARENAS = {12: (-1.6, 1.6, -1.0, 1.0), 100: (-1.6, 1.6, -1.0, 1.0), 1000: (-5.0, 5.0, -3.0, 3.0)}
 SECONDS = 6.0
 FRAMES = 40
+
+
+def _descendants_cpu_s() -> float:
+    """CPU time (user + system) of every process below this one (the Playwright driver and Chromium), s."""
+    import os
+
+    tick = os.sysconf("SC_CLK_TCK")
+    parent: dict[int, int] = {}
+    cpu: dict[int, float] = {}
+    for d in os.listdir("/proc"):
+        if not d.isdigit():
+            continue
+        try:
+            with open(f"/proc/{d}/stat") as f:
+                fields = f.read().rsplit(")", 1)[1].split()
+        except OSError:
+            continue
+        parent[int(d)] = int(fields[1])
+        cpu[int(d)] = (int(fields[11]) + int(fields[12])) / tick
+    me, total = os.getpid(), 0.0
+    for pid in cpu:
+        p = parent.get(pid)
+        while p and p != me:
+            p = parent.get(p)
+        if p == me:
+            total += cpu[pid]
+    return total
 
 
 def run(n: int, browser, rate: float = 60.0) -> dict:
@@ -59,7 +89,9 @@ def run(n: int, browser, rate: float = 60.0) -> dict:
     t.start()
     time.sleep(1.0)  # warm-up
     page.evaluate("(() => { const s = window.swarmdeckProjector; s.drawn = []; s.latency = []; s.drawMs = []; })()")
+    cpu0, own0, sent0 = _descendants_cpu_s(), time.process_time(), srv.state()["sent"]
     time.sleep(SECONDS)
+    cpu1, own1, sent1 = _descendants_cpu_s(), time.process_time(), srv.state()["sent"]
     st = page.evaluate("(() => { const s = window.swarmdeckProjector; return {drawn: s.drawn, latency: s.latency, "
                        "drawMs: s.drawMs, dropped: s.dropped}; })()")
     stop.set()
@@ -73,7 +105,9 @@ def run(n: int, browser, rate: float = 60.0) -> dict:
     return {"n": n, "fps": fps, "lat_med": float(np.median(lat)), "lat_p95": float(np.percentile(lat, 95)),
             "draw_med": float(np.median(st["drawMs"])), "draw_max": float(np.max(st["drawMs"])),
             "ser": ser.median_ms, "dropped": ",".join(st["dropped"]) or "none", "skipped": state["skipped"],
-            "sent": state["sent"]}
+            "sent": state["sent"],
+            "browser_cpu": 1000.0 * (cpu1 - cpu0) / max(sent1 - sent0, 1),
+            "server_cpu": 1000.0 * (own1 - own0) / max(sent1 - sent0, 1)}
 
 
 def main(argv: list[str]) -> int:
@@ -82,15 +116,17 @@ def main(argv: list[str]) -> int:
     ns = [int(a) for a in argv] or [12, 100, 1000]
     print(harness.machine())
     print("| N | page frames/s | tick → pixels ms, median (p95) | drawing ms, median (max) | serialisation ms | "
-          "layers dropped | frames sent / skipped |")
-    print("| ---: | ---: | ---: | ---: | ---: | --- | ---: |")
+          "CPU ms per frame: browser + server | frames/s one core could give | layers dropped | frames sent / skipped |")
+    print("| ---: | ---: | ---: | ---: | ---: | ---: | ---: | --- | ---: |")
     with sync_playwright() as pw:
         browser = pw.chromium.launch(executable_path=CHROMIUM, args=["--no-sandbox"])
         try:
             for n in ns:
                 r = run(n, browser)
                 print(f"| {r['n']} | {r['fps']:.1f} | {r['lat_med']:.1f} ({r['lat_p95']:.1f}) | "
-                      f"{r['draw_med']:.2f} ({r['draw_max']:.1f}) | {r['ser']:.2f} | {r['dropped']} | "
+                      f"{r['draw_med']:.2f} ({r['draw_max']:.1f}) | {r['ser']:.2f} | "
+                      f"{r['browser_cpu']:.1f} + {r['server_cpu']:.1f} | "
+                      f"{1000.0 / (r['browser_cpu'] + r['server_cpu']):.0f} | {r['dropped']} | "
                       f"{r['sent']} / {r['skipped']} |", flush=True)
         finally:
             browser.close()

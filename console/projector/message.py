@@ -10,7 +10,8 @@ Keys (units m, s, rad; N robots, E Voronoi edges, C centroids, G goals)::
     run_state        "running" | "paused" | "estop"
     bounds           [x_min, x_max, y_min, y_max]
     n                number of robots N
-    density          null | "data:image/png;base64,…" heat map covering ``bounds`` (row 0 at y_max)
+    density          null | {w, h, rgb}: the console's heat map covering ``bounds`` (row 0 at y_max), w × h px,
+                     ``rgb`` the raw RGB bytes row by row, base64 (no image to decode: the page puts the pixels)
     edges            (E, 2, 2) Voronoi edges          — layer "cells"
     centroids        (C, 2)                           — layer "centroids"
     goals            (G, 2) goto goals                — layer "goals"
@@ -25,13 +26,14 @@ The page learns the homography, the projector's size and the settings from the s
 """
 from __future__ import annotations
 
+import base64
 from typing import Any
 
 import numpy as np
 
 from swarmdeck.console.picture.colours import hex_colors
 from swarmdeck.console.picture.picture import picture_of
-from swarmdeck.console.portal.live import PALETTE, density_png
+from swarmdeck.console.portal.live import PALETTE
 from swarmdeck.console.runtime.frame import Frame
 from swarmdeck.console.runtime.params import ProjectorParams, to_dict
 from swarmdeck.core.bounds import Bounds
@@ -61,7 +63,10 @@ def projector_message(frame: Frame, seq: int, settings: ProjectorParams, stamp_m
     if s.blackout:
         return msg
     if s.density:
-        msg["density"] = density_png(pic, DENSITY_PX_PER_M)
+        heat = pic.heat_map(DENSITY_PX_PER_M)
+        if heat is not None:
+            msg["density"] = {"w": int(heat.shape[1]), "h": int(heat.shape[0]),
+                              "rgb": base64.b64encode(np.ascontiguousarray(heat).tobytes()).decode("ascii")}
     if s.cells and frame.coverage is not None:
         msg["edges"] = _xy(pic.edges)
     if s.centroids and frame.coverage is not None:

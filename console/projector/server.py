@@ -240,6 +240,16 @@ class _Server(ThreadingHTTPServer):
     allow_reuse_address = True
     owner: ProjectorServer
 
+    def handle_error(self, request: Any, client_address: Any) -> None:
+        """A page that went away mid-answer is normal (no traceback); anything else is counted."""
+        import sys
+
+        exc = sys.exc_info()[1]
+        if isinstance(exc, (ConnectionError, TimeoutError)):
+            return
+        self.owner.feed.errors += 1
+        self.owner.feed.last_error = f"{type(exc).__name__}: {exc}"
+
 
 class ProjectorServer:
     """The projector page on ``http://host:port/projector`` (port 0: a free one), fed by :meth:`offer`.

@@ -9,6 +9,9 @@
 "use strict";
 (() => {
   const floor = document.getElementById("floor");
+  const warp = document.getElementById("warp");
+  const heatCanvas = document.getElementById("heat");
+  const hctx = heatCanvas.getContext("2d");
   const notice = document.getElementById("notice");
   const ctx = floor.getContext("2d");
   const nctx = notice.getContext("2d");
@@ -21,8 +24,6 @@
     message: "", connected: false, lastDraw: null, layersDrawn: [],
   });
   let config = null, pending = null, last = null, ema = 0;
-  const heat = new Image();
-  heat.onload = () => { if (last) pending = pending || last; };
 
   function fitNotice() {
     notice.width = window.innerWidth; notice.height = window.innerHeight;
@@ -43,13 +44,15 @@
     config = c;
     st.config = c;
     const [x0, x1, y0, y1] = c.bounds;
-    PX_PER_M = Math.min(400, 1600 / Math.max(x1 - x0, y1 - y0));  // ≈ the projector's own resolution
+    const asked = Number(new URLSearchParams(location.search).get("ppm"));  // ?ppm=N: another resolution
+    PX_PER_M = asked > 0 ? Math.min(asked, 800) : Math.min(400, 1600 / Math.max(x1 - x0, y1 - y0));
     K = PX_PER_M / 400;
     floor.width = Math.round((x1 - x0) * PX_PER_M); floor.height = Math.round((y1 - y0) * PX_PER_M);
     floor.style.width = floor.width + "px"; floor.style.height = floor.height + "px";
-    floor.style.opacity = String(c.settings.opacity);
+    heatCanvas.style.width = floor.style.width; heatCanvas.style.height = floor.style.height;
+    warp.style.opacity = String(c.settings.opacity);
     if (!c.H) {
-      floor.style.display = "none";
+      warp.style.display = "none";
       say("no homography — run swarmdeck calibrate projector");
       return;
     }
@@ -59,9 +62,9 @@
     const T = [[1 / dpr, 0, 0.5 / dpr], [0, 1 / dpr, 0.5 / dpr], [0, 0, 1]];
     const mul = (P, Q) => P.map((r) => [0, 1, 2].map((j) => r[0] * Q[0][j] + r[1] * Q[1][j] + r[2] * Q[2][j]));
     const M = mul(T, mul(c.H, A));
-    floor.style.transform = `matrix3d(${M[0][0]},${M[1][0]},0,${M[2][0]},${M[0][1]},${M[1][1]},0,${M[2][1]},` +
+    warp.style.transform = `matrix3d(${M[0][0]},${M[1][0]},0,${M[2][0]},${M[0][1]},${M[1][1]},0,${M[2][1]},` +
       `0,0,1,0,${M[0][2]},${M[1][2]},0,${M[2][2]})`;
-    floor.style.display = c.settings.blackout ? "none" : "block";
+    warp.style.display = c.settings.blackout ? "none" : "block";
     say("");
     if (last) pending = last;
   }
@@ -76,13 +79,21 @@
     const X = (x) => (x - x0) * PX_PER_M, Y = (y) => (y1 - y) * PX_PER_M;
     const P = m.palette, W = floor.width, H = floor.height;
     const drawnLayers = [];
-    ctx.fillStyle = "#000000";
-    ctx.fillRect(0, 0, W, H);
+    ctx.clearRect(0, 0, W, H);
     if (config.settings.blackout) { st.layersDrawn = []; return performance.now() - t0; }
-    if (m.density && config.settings.density && heat.complete && heat.naturalWidth) {
-      ctx.imageSmoothingEnabled = true;
-      ctx.drawImage(heat, 0, 0, W, H);
+    if (m.density && config.settings.density) {  // raw RGB, a few thousand pixels: the compositor smooths it up
+      const d = m.density, raw = atob(d.rgb), n = d.w * d.h;
+      if (heatCanvas.width !== d.w || heatCanvas.height !== d.h) { heatCanvas.width = d.w; heatCanvas.height = d.h; }
+      const img = hctx.createImageData(d.w, d.h), px = img.data;
+      for (let i = 0, j = 0; i < n; i += 1, j += 3) {
+        px[4 * i] = raw.charCodeAt(j); px[4 * i + 1] = raw.charCodeAt(j + 1); px[4 * i + 2] = raw.charCodeAt(j + 2);
+        px[4 * i + 3] = 255;
+      }
+      hctx.putImageData(img, 0, 0);
+      heatCanvas.style.display = "block";
       drawnLayers.push("density");
+    } else {
+      heatCanvas.style.display = "none";
     }
     if (on("cells") && m.edges.length) {
       ctx.strokeStyle = P.voronoi; ctx.lineWidth = 4 * K;
@@ -204,11 +215,10 @@
           const m = answer.frame;
           seqHave = m.seq;
           last = pending = m;
-          if (m.density && heat.src !== m.density) heat.src = m.density;
         }
       } catch (err) {  // the console stopped or restarted: black, and say so; ask again in a second
         st.connected = false;
-        floor.style.display = "none";
+        warp.style.display = "none";
         say("swarmdeck projector: waiting for the console…");
         await new Promise((res) => setTimeout(res, 1000));
       }
