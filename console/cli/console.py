@@ -192,7 +192,7 @@ def main(args: argparse.Namespace) -> int:
                 rec.close()
             raise UsageError(f"--projector: cannot serve on {host}:{args.projector}: {exc}") from None
         loop.subscribe(projector.offer)
-        ProjectorPanel(app.gui.gui, projector)
+        ProjectorPanel(app.gui.gui, projector, on_error=loop.post)
         projector.start()
         print(f"swarmdeck console: projector page at {projector.url}" +
               ("" if projector_cal is not None else " (no homography: run `swarmdeck calibrate projector`)"),

@@ -6,6 +6,7 @@ pages redraw at once. Shown only when the console runs with ``--projector``.
 """
 from __future__ import annotations
 
+from collections.abc import Callable
 from typing import TYPE_CHECKING, Any
 
 from swarmdeck.console.runtime.params import ProjectorParams, gui_fields
@@ -18,10 +19,14 @@ if TYPE_CHECKING:
 
 
 class ProjectorPanel:
-    """The folder's widgets (``widgets``: field name → handle) bound to ``projector``."""
+    """The folder's widgets (``widgets``: field name → handle) bound to ``projector``; ``on_error`` gets the
+    message of a refused change."""
 
-    def __init__(self, gui: viser.GuiApi, projector: ProjectorServer) -> None:
+    def __init__(self, gui: viser.GuiApi, projector: ProjectorServer,
+                 on_error: Callable[[str], None] | None = None) -> None:
         self.projector = projector
+        self._on_error = on_error
+        self.refused = 0
         self.widgets: dict[str, Any] = {}
         settings = projector.settings
         calibrated = projector.feed.calibration is not None
@@ -35,8 +40,11 @@ class ProjectorPanel:
                 self.widgets[name] = handle
 
     def set(self, **changes: Any) -> None:
-        """Apply a widget's change (a bad value is refused by ProjectorParams and leaves the settings as they were)."""
+        """Apply a widget's change; a bad value is refused by ProjectorParams (settings unchanged), counted, and
+        its message goes to ``on_error`` (the console: the loop's event line)."""
         try:
             self.projector.set(**changes)
-        except ValueError:
-            pass
+        except ValueError as exc:
+            self.refused += 1
+            if self._on_error is not None:
+                self._on_error(f"projector setting not changed: {exc}")
