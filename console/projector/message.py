@@ -17,8 +17,11 @@ Keys (units m, s, rad; N robots, E Voronoi edges, C centroids, G goals)::
     goals            (G, 2) goto goals                — layer "goals"
     halos            {xy (N, 2), colours (N,) "#rrggbb", radius m} — layer "halos"
     safety           {xy (N, 2) look-ahead points, radius D_s / 2 m} — layer "safety"
-    graph            (L, 2, 2) communication links, when the picture has them — layer "graph"
-    annotations      [..] the experiment's drawings, when the picture has them — layer "annotations"
+    graph            null | {segments (L, 2, 2) m, colours (L,) "#rrggbb"}: the communication graph, when the
+                     picture has one (``Picture.network``, a NetworkLayer) — layer "graph"
+    annotations      null | the experiment's drawings as ``console.picture.annotations.annotations_json`` gives
+                     them ({kinds, offsets, vertices m, sizes m, colours, filled, texts}), when the picture has
+                     them (``Picture.annotations``) — layer "annotations"
     palette          the picture's colours (``console.portal.live.PALETTE``)
 
 The page learns the homography, the projector's size and the settings from the stream's ``config`` event
@@ -27,6 +30,7 @@ The page learns the homography, the projector's size and the settings from the s
 from __future__ import annotations
 
 import base64
+import importlib
 from typing import Any
 
 import numpy as np
@@ -58,7 +62,7 @@ def projector_message(frame: Frame, seq: int, settings: ProjectorParams, stamp_m
         "seq": int(seq), "tick": int(frame.tick), "t": round(float(frame.run_time), 3), "stamp": float(stamp_ms),
         "run_state": pic.run_state, "bounds": list(pic.bounds), "n": pic.n, "palette": PALETTE,
         "density": None, "edges": [], "centroids": [], "goals": [], "halos": None, "safety": None,
-        "graph": [], "annotations": [],
+        "graph": None, "annotations": None,
     }
     if s.blackout:
         return msg
@@ -78,13 +82,29 @@ def projector_message(frame: Frame, seq: int, settings: ProjectorParams, stamp_m
                         "radius": HALO_SCALE * ROBOT_RADIUS}
     if s.safety:
         msg["safety"] = {"xy": _xy(pic.points), "radius": float(pic.ring_radius)}
-    graph = getattr(pic, "graph_edges", None)  # the communication-graph layer, when the picture has one
-    if s.graph and graph is not None:
-        msg["graph"] = _xy(graph)
-    notes = getattr(pic, "annotations", None)  # the experiment's drawings, when the picture has them
-    if s.annotations and notes is not None:
-        msg["annotations"] = notes if isinstance(notes, list) else getattr(notes, "to_json", lambda: [])()
+    if s.graph:
+        msg["graph"] = _graph(getattr(pic, "network", None))
+    if s.annotations:
+        msg["annotations"] = _annotations(getattr(pic, "annotations", None))
     return msg
+
+
+def _graph(layer: Any) -> dict[str, Any] | None:
+    """The communication graph (the picture's ``network``: a NetworkLayer with ``segments`` (L, 2, 2) m and
+    ``colors`` (L, 3) uint8), or None when the picture has none (a Frame without a network)."""
+    if layer is None or not len(layer.segments):
+        return None
+    return {"segments": _xy(layer.segments), "colours": hex_colors(np.asarray(layer.colors, dtype=np.uint8))}
+
+
+def _annotations(ann: Any) -> dict[str, Any] | None:
+    """The experiment's drawings (the picture's ``annotations``) in the canvases' one JSON form, or None when
+    there are none."""
+    if ann is None or not len(ann):
+        return None
+    module = importlib.import_module("swarmdeck.console.picture.annotations")  # beside the picture (issue 29.3)
+    out: dict[str, Any] = module.annotations_json(ann)
+    return out
 
 
 def config_message(bounds: Bounds, calibration: ProjectorCalibration | None, settings: ProjectorParams,

@@ -115,11 +115,12 @@
       ctx.stroke();
       drawnLayers.push("goals");
     }
-    if (on("graph") && m.graph.length) {
-      ctx.strokeStyle = "#9be7ff"; ctx.lineWidth = 3 * K;
-      ctx.beginPath();
-      for (const [[ax, ay], [bx, by]] of m.graph) { ctx.moveTo(X(ax), Y(ay)); ctx.lineTo(X(bx), Y(by)); }
-      ctx.stroke();
+    if (on("graph") && m.graph) {  // the communication graph: one segment per linked pair, coloured by traffic
+      ctx.lineWidth = 3 * K;
+      m.graph.segments.forEach(([[ax, ay], [bx, by]], i) => {
+        ctx.strokeStyle = m.graph.colours[i];
+        ctx.beginPath(); ctx.moveTo(X(ax), Y(ay)); ctx.lineTo(X(bx), Y(by)); ctx.stroke();
+      });
       drawnLayers.push("graph");
     }
     if (on("safety") && m.safety) {
@@ -139,7 +140,7 @@
       });
       drawnLayers.push("halos");
     }
-    if (on("annotations") && m.annotations.length) {
+    if (on("annotations") && m.annotations) {
       drawAnnotations(m.annotations, X, Y);
       drawnLayers.push("annotations");
     }
@@ -152,27 +153,32 @@
     return performance.now() - t0;
   }
 
-  // The experiment's drawings (annotations, when the picture has them): {kind, points|centre, radius, text,
-  // colour} in metres; unknown kinds are skipped.
-  function drawAnnotations(list, X, Y) {
-    for (const a of list) {
-      ctx.strokeStyle = ctx.fillStyle = a.colour || a.color || "#ffffff";
-      ctx.lineWidth = 4 * K;
-      const pts = a.points || [];
-      if ((a.kind === "line" || a.kind === "polyline" || a.kind === "polygon") && pts.length) {
-        ctx.beginPath(); ctx.moveTo(X(pts[0][0]), Y(pts[0][1]));
-        for (const [px, py] of pts.slice(1)) ctx.lineTo(X(px), Y(py));
-        if (a.kind === "polygon") ctx.closePath();
-        ctx.stroke();
-      } else if (a.kind === "circle" && a.centre) {
-        ctx.beginPath(); ctx.arc(X(a.centre[0]), Y(a.centre[1]), a.radius * PX_PER_M, 0, 2 * Math.PI); ctx.stroke();
-      } else if (a.kind === "points") {
-        for (const [px, py] of pts) ctx.fillRect(X(px) - 5, Y(py) - 5, 10, 10);
-      } else if (a.kind === "text" && a.centre) {
-        ctx.font = "bold 40px system-ui, sans-serif"; ctx.textAlign = "center"; ctx.textBaseline = "middle";
-        ctx.fillText(String(a.text || ""), X(a.centre[0]), Y(a.centre[1]));
+  // What the experiment drew (console.picture.annotations.annotations_json, as the portal's live view draws it):
+  // kinds 0 point, 1 polyline, 2 circle, 3 polygon, 4 text; vertices and sizes (radius, line width, text height)
+  // in metres, colours given.
+  function drawAnnotations(a, X, Y) {
+    const s = PX_PER_M;
+    ctx.save();
+    ctx.lineCap = "round"; ctx.lineJoin = "round"; ctx.textAlign = "center"; ctx.textBaseline = "middle";
+    a.kinds.forEach((kind, i) => {
+      const v = a.vertices.slice(a.offsets[i], a.offsets[i + 1]), size = a.sizes[i], colour = a.colours[i];
+      ctx.fillStyle = colour; ctx.strokeStyle = colour;
+      ctx.lineWidth = Math.max(1, size * s);
+      ctx.beginPath();
+      if (kind === 0 || kind === 2) {
+        ctx.lineWidth = Math.max(1, 0.01 * s);
+        ctx.arc(X(v[0][0]), Y(v[0][1]), Math.max(1, size * s), 0, 2 * Math.PI);
+        if (kind === 0 || a.filled[i]) ctx.fill(); else ctx.stroke();
+      } else if (kind === 1 || kind === 3) {
+        v.forEach(([x, y], k) => (k ? ctx.lineTo(X(x), Y(y)) : ctx.moveTo(X(x), Y(y))));
+        if (kind === 3) ctx.closePath();
+        if (kind === 3 && a.filled[i]) ctx.fill(); else ctx.stroke();
+      } else if (kind === 4) {
+        ctx.font = `${Math.max(8, Math.round(size * s))}px system-ui, sans-serif`;
+        ctx.fillText(a.texts[i], X(v[0][0]), Y(v[0][1]));
       }
-    }
+    });
+    ctx.restore();
   }
 
   function adapt(ms) {  // degrade by dropping layers, never by lagging
