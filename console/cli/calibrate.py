@@ -270,10 +270,12 @@ def _arena(args: argparse.Namespace) -> int:
 
 
 def _size(text: str, option: str) -> tuple[int, int]:
+    """``WxH`` → (w, h) whole numbers > 0 (UsageError naming ``option``)."""
     try:
         w, h = (int(v) for v in text.lower().split("x"))
     except ValueError:
-        raise UsageError(f"{option} must look like 1280x800, got {text!r}") from None
+        raise UsageError(f"{option} must look like {'8x5' if option == '--markers' else '1280x800'}, "
+                         f"got {text!r}") from None
     if w < 1 or h < 1:
         raise UsageError(f"{option} must be positive, got {text!r}")
     return w, h
@@ -299,6 +301,9 @@ def _projector(args: argparse.Namespace) -> int:
     if synthetic:
         if not (math.isfinite(args.synthetic_light) and 0.0 < args.synthetic_light <= 1.0):
             raise UsageError(f"--synthetic-light must be in (0, 1], got {args.synthetic_light}")
+        for option, value in (("--synthetic-tilt", args.synthetic_tilt), ("--synthetic-roll", args.synthetic_roll)):
+            if not (math.isfinite(value) and abs(value) < 1.2):
+                raise UsageError(f"{option} must be an angle in (-1.2, 1.2) rad, got {value}")
         sp = SyntheticProjector(tilt=args.synthetic_tilt, roll=args.synthetic_roll)
         size = sp.size if args.size is None else _size(args.size, "--size")
         if size != sp.size:
@@ -306,7 +311,9 @@ def _projector(args: argparse.Namespace) -> int:
         truth = sp.homography()
     else:
         size = _size(args.size or "1280x800", "--size")
-    cols, rows = _squares(args.markers) if args.markers else (8, 5)
+    cols, rows = _size(args.markers, "--markers")
+    if cols < 2 or rows < 2:
+        raise UsageError(f"--markers needs at least 2x2 markers, got {args.markers!r}")
     try:
         pattern = marker_pattern(size, cols, rows)
     except ProjectorCalibrationError as exc:
