@@ -39,7 +39,9 @@ class SyntheticCameraConfig:
     ``distortion`` is OpenCV's (k1, k2, p1, p2, k3). Robots: ``tag_size`` m tags, white plate
     ``plate_scale``×tag, on a disc of ``body_radius`` m at ``tag_height`` m. Degradations:
     Gaussian blur ``blur_sigma`` px, noise ``noise_sigma`` grey levels, JPEG ``jpeg_quality``
-    (None: off), ``vignetting`` (fractional darkening at the corners).
+    (None: off), ``vignetting`` (fractional darkening at the corners). A projector's image (``render``'s
+    ``projection``) lights floor and robots: a pixel's brightness is scaled by ``1 − k + k·light`` with
+    ``k = projection_strength`` (the projector's share of the light: low under strong ambient light).
     """
 
     width: int = 1280
@@ -67,6 +69,7 @@ class SyntheticCameraConfig:
     jpeg_quality: int | None = 85
     vignetting: float = 0.15
     density_strength: float = 0.6
+    projection_strength: float = 0.7
     seed: int = 0
 
     def camera(self) -> PinholeCamera:
@@ -122,6 +125,7 @@ class SyntheticRenderer:
         extent = self._sprite_side * config.sprite_texel / 2
         self._window = int(np.ceil(2 * extent / float(top_step.min()))) + 3
         self._density_maps: dict[tuple[int, int], tuple[np.ndarray, np.ndarray, np.ndarray]] = {}
+        self._projection_map: tuple[tuple[bytes, tuple[int, ...]], np.ndarray, np.ndarray] | None = None
         pad = 32
         self._noise = (np.random.default_rng(config.seed + 7).standard_normal((h + pad, w + pad, 3), dtype=np.float32)
                        * np.float32(config.noise_sigma)) if config.noise_sigma > 0 else None
@@ -291,11 +295,32 @@ class SyntheticRenderer:
         outf[idx] = outf[idx] * keep[:, None] + premult * gain[:, None]
         return visible
 
+    def _projection_layer(self, image: np.ndarray, H: np.ndarray, out: np.ndarray) -> None:
+        """Light the scene with a projector's image (ph, pw[, 3]) uint8 through H (floor m → projector px),
+        in place: floor and robot tops alike (the tops through the floor's mapping: the few-mm parallax of
+        the tag height is ignored); black outside the projector's image."""
+        a = np.asarray(image)
+        if a.ndim == 2:
+            a = np.repeat(a[..., None], 3, axis=2)
+        key = (np.asarray(H, np.float64).tobytes(), a.shape[:2])
+        cached = self._projection_map
+        if cached is None or cached[0] != key:
+            uv = _apply_h(np.asarray(H, np.float64), self._floor_xy.astype(np.float64)).astype(np.float32)
+            cached = (key, np.ascontiguousarray(uv[..., 0]), np.ascontiguousarray(uv[..., 1]))
+            self._projection_map = cached
+        _, mu, mv = cached
+        light = cv2.remap(np.ascontiguousarray(a, dtype=np.uint8), mu, mv, cv2.INTER_LINEAR,
+                          borderMode=cv2.BORDER_CONSTANT, borderValue=(0, 0, 0)).astype(np.float32)
+        k = np.float32(self.config.projection_strength)
+        out *= (np.float32(1.0) - k) + light * (k / np.float32(255.0))
+
     # -- public ----------------------------------------------------------------------------
     def render(self, ids: Sequence[int] | np.ndarray, poses: np.ndarray, density: np.ndarray | None = None,
-               rng: np.random.Generator | None = None) -> SyntheticFrame:
+               rng: np.random.Generator | None = None,
+               projection: tuple[np.ndarray, np.ndarray] | None = None) -> SyntheticFrame:
         """Render robots ``ids`` (N,) at ``poses`` (N, 3) (and a density image covering the
-        arena bounds, optional) → :class:`SyntheticFrame` (RGB uint8 image + exact truth)."""
+        arena bounds, optional; a projector's ``(image, H floor m → projector px)``, optional)
+        → :class:`SyntheticFrame` (RGB uint8 image + exact truth)."""
         cfg = self.config
         ids = np.asarray(ids, dtype=int).reshape(-1)
         poses = np.asarray(poses, dtype=float).reshape(-1, 3)
@@ -306,6 +331,8 @@ class SyntheticRenderer:
         if density is not None:
             self._density_layer(density, out)
         visible = self._robot_layer(ids, poses, out)
+        if projection is not None:
+            self._projection_layer(projection[0], projection[1], out)
         h, w = out.shape[:2]
         if self._noise is not None:          # a random window of a fixed Gaussian noise field
             dy, dx = rng.integers(0, self._noise.shape[0] - h + 1), rng.integers(0, self._noise.shape[1] - w + 1)

@@ -9,6 +9,12 @@ camera / video / folder / the synthetic camera), fits the floor homography from 
 positions, reports the residuals and writes the tracker config (references, fallback homography,
 camera position, calibration) that ``swarmdeck console --camera …`` loads. ``--measure IDS``
 adds markers lying on the floor as further references at their measured positions.
+
+``calibrate projector``: the projector shows an ArUco marker grid (``--write-pattern`` writes it), the camera
+sees it, the camera's floor homography puts the markers on the floor, and the floor → projector homography is
+fitted, its reprojection error reported in mm and saved (``projector.json`` next to the camera's config) for
+``swarmdeck console --projector``. ``--camera synthetic`` runs the whole chain in simulation (a synthetic
+projector lights the synthetic camera's floor).
 """
 from __future__ import annotations
 
@@ -23,12 +29,12 @@ import numpy as np
 from swarmdeck.console.cli import UsageError
 
 NAME = "calibrate"
-HELP = "calibrate the overhead camera (ChArUco intrinsics) or the arena (reference markers)"
+HELP = "calibrate the overhead camera (ChArUco intrinsics), the arena (reference markers) or the projector"
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """``camera`` and ``arena`` sub-subcommands."""
-    sub = parser.add_subparsers(dest="what", metavar="camera|arena", required=True)
+    sub = parser.add_subparsers(dest="what", metavar="camera|arena|projector", required=True)
     cam = sub.add_parser("camera", help="intrinsics from ChArUco board images in a folder")
     cam.add_argument("--images", type=Path, help="folder of board images (png/jpg/…)")
     cam.add_argument("--out", type=Path, default=Path("camera_calibration.json"), help="calibration JSON to write")
@@ -52,6 +58,30 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     ar.add_argument("--tag-height", type=float, help="robot tag height above the floor, m")
     ar.add_argument("--measure", default="", help="comma-separated marker ids on the floor to add as references")
     ar.add_argument("--timeout", type=float, default=5.0, help="seconds to wait for a camera frame")
+
+    pr = sub.add_parser("projector", help="fit the floor → projector homography from a projected marker grid",
+                        description="Show the pattern on the projector (--write-pattern, then open it full screen "
+                        "on the projector's display), then run this with the camera (or a photo) to fit the floor "
+                        "→ projector homography; --camera synthetic does it all in simulation.")
+    psrc = pr.add_mutually_exclusive_group()
+    psrc.add_argument("--image", type=Path, help="a camera image of the projected pattern")
+    psrc.add_argument("--camera", help="camera spec: webcam index, stream URL, video file, folder, or 'synthetic' "
+                      "(a synthetic projector lights the synthetic camera's floor)")
+    pr.add_argument("--config", type=Path, help="tracker config from `calibrate arena` (its homography and "
+                    "calibration; without one the reference markers in the image give the floor homography)")
+    pr.add_argument("--size", default=None, metavar="WxH",
+                    help="the projector's resolution in px (default 1280x800; synthetic: the synthetic projector's)")
+    pr.add_argument("--markers", default="8x5", metavar="COLSxROWS", help="pattern grid (default 8x5)")
+    pr.add_argument("--out", type=Path, default=None,
+                    help="projector calibration JSON to write (default projector.json next to --config, else here)")
+    pr.add_argument("--write-pattern", type=Path, metavar="PNG", help="write the pattern image and exit")
+    pr.add_argument("--timeout", type=float, default=5.0, help="seconds to wait for a camera frame")
+    pr.add_argument("--synthetic-tilt", type=float, default=0.12, metavar="RAD",
+                    help="synthetic projector's tilt from vertical (default 0.12 rad)")
+    pr.add_argument("--synthetic-roll", type=float, default=0.0, metavar="RAD", help="synthetic projector's roll")
+    pr.add_argument("--synthetic-light", type=float, default=0.7, metavar="K",
+                    help="the projector's share of the light on the synthetic floor, 0–1 (default 0.7; "
+                         "low = strong ambient light)")
 
 
 def _squares(text: str) -> tuple[int, int]:
@@ -239,6 +269,135 @@ def _arena(args: argparse.Namespace) -> int:
     return 0
 
 
+def _size(text: str, option: str) -> tuple[int, int]:
+    """``WxH`` → (w, h) whole numbers > 0 (UsageError naming ``option``)."""
+    try:
+        w, h = (int(v) for v in text.lower().split("x"))
+    except ValueError:
+        raise UsageError(f"{option} must look like {'8x5' if option == '--markers' else '1280x800'}, "
+                         f"got {text!r}") from None
+    if w < 1 or h < 1:
+        raise UsageError(f"{option} must be positive, got {text!r}")
+    return w, h
+
+
+def _projector(args: argparse.Namespace) -> int:
+    from swarmdeck.tracking import CalibrationError, ConfigError, TrackerConfig
+    from swarmdeck.tracking.projector import (
+        ProjectorCalibration,
+        ProjectorCalibrationError,
+        SyntheticProjector,
+        find_pattern,
+        fit_projector,
+        marker_pattern,
+    )
+
+    try:
+        cfg = TrackerConfig.load(args.config) if args.config else TrackerConfig()
+    except (ConfigError, CalibrationError) as exc:
+        raise UsageError(str(exc)) from exc
+    synthetic = args.camera == "synthetic"
+    truth = None
+    if synthetic:
+        if not (math.isfinite(args.synthetic_light) and 0.0 < args.synthetic_light <= 1.0):
+            raise UsageError(f"--synthetic-light must be in (0, 1], got {args.synthetic_light}")
+        for option, value in (("--synthetic-tilt", args.synthetic_tilt), ("--synthetic-roll", args.synthetic_roll)):
+            if not (math.isfinite(value) and abs(value) < 1.2):
+                raise UsageError(f"{option} must be an angle in (-1.2, 1.2) rad, got {value}")
+        sp = SyntheticProjector(tilt=args.synthetic_tilt, roll=args.synthetic_roll)
+        size = sp.size if args.size is None else _size(args.size, "--size")
+        if size != sp.size:
+            sp = SyntheticProjector(width=size[0], height=size[1], tilt=args.synthetic_tilt, roll=args.synthetic_roll)
+        truth = sp.homography()
+    else:
+        size = _size(args.size or "1280x800", "--size")
+    cols, rows = _size(args.markers, "--markers")
+    if cols < 2 or rows < 2:
+        raise UsageError(f"--markers needs at least 2x2 markers, got {args.markers!r}")
+    try:
+        pattern = marker_pattern(size, cols, rows)
+    except ProjectorCalibrationError as exc:
+        raise UsageError(str(exc)) from exc
+    if args.write_pattern:
+        _write_image(args.write_pattern, pattern.image, "--write-pattern")
+        print(f"wrote {args.write_pattern} ({size[0]}×{size[1]} px, {cols}×{rows} {pattern.dictionary} markers): "
+              "show it full screen on the projector, then run `swarmdeck calibrate projector --camera …`")
+        return 0
+    if not (math.isfinite(args.timeout) and args.timeout > 0):
+        raise UsageError(f"--timeout must be a finite number of seconds > 0, got {args.timeout}")
+    cal = cfg.calibration
+    if synthetic:
+        from swarmdeck.tracking import CameraCalibration
+        from swarmdeck.tracking.synthetic import SyntheticCameraConfig, SyntheticRenderer
+
+        renderer = SyntheticRenderer(SyntheticCameraConfig(bounds=cfg.bounds, projection_strength=args.synthetic_light))
+        cal = cal or CameraCalibration.from_camera(renderer.camera)
+        dark = renderer.render([], np.zeros((0, 3))).image          # the projector off: the references
+        lit = renderer.render([], np.zeros((0, 3)), projection=(pattern.image, truth)).image
+    elif args.image is not None:
+        if not args.image.is_file():
+            raise UsageError(f"no such image {args.image}")
+        from swarmdeck.tracking.imageread import ImageReadError, read_image
+        try:
+            lit = read_image(args.image)
+        except ImageReadError as exc:
+            raise UsageError(f"cannot read image {exc}") from None
+        dark = lit
+    elif args.camera is not None:
+        lit = dark = _grab(args.camera, args.timeout)
+    else:
+        raise UsageError("give --camera SPEC or --image PNG (or --write-pattern PNG)")
+    floor_h = _floor_homography(cfg, cal, dark)
+    gray = cv2.cvtColor(lit, cv2.COLOR_RGB2GRAY)
+    seen = find_pattern(gray, pattern, floor_h, None if cal is None else cal.undistort)
+    n_all = len(pattern.ids)
+    print(f"found {len(seen.ids)}/{n_all} pattern markers")
+    fit = fit_projector(seen.floor_corners, seen.pattern_corners, cfg.bounds, size)
+    if not fit.ok or fit.H is None:
+        why = ("; is the projector on and showing the pattern full screen, is the room dark enough?"
+               if len(seen.ids) < n_all // 2 else "")
+        raise UsageError(f"cannot calibrate the projector: {fit.reason}{why}")
+    out = args.out or (args.config.parent / "projector.json" if args.config else Path("projector.json"))
+    try:
+        ProjectorCalibration(fit.H, size, cfg.bounds, fit.rms_mm, len(seen.ids)).save(out)
+    except ProjectorCalibrationError as exc:
+        raise UsageError(f"--out: {exc}") from exc
+    print(f"projector homography from {len(seen.ids)} markers ({fit.n_inliers} corners), reprojection error "
+          f"{fit.rms_mm:.2f} mm RMS on the floor → {out}")
+    if truth is not None:
+        from swarmdeck.tracking.projector import homography_error_mm
+
+        print(f"synthetic projector: {homography_error_mm(fit.H, truth, cfg.bounds):.2f} mm max from the truth "
+              "over the arena")
+    return 0
+
+
+def _floor_homography(cfg, cal, image: np.ndarray) -> np.ndarray:
+    """The camera's floor homography (undistorted px → m): the tracker config's, else fitted from the reference
+    markers in ``image`` (UsageError naming why not)."""
+    if cfg.fallback_homography is not None:
+        return np.asarray(cfg.fallback_homography, dtype=float)
+    from swarmdeck.tracking.detector import MarkerDetector
+    from swarmdeck.tracking.homography import fit_floor_homography
+    from swarmdeck.tracking.markers import reference_corners
+
+    det = MarkerDetector(cfg.dictionary, cfg.references, None if cal is None else cal.camera_matrix,
+                         None if cal is None else cal.dist_coeffs, cfg.threshold_windows).detect(
+                             cv2.cvtColor(image, cv2.COLOR_RGB2GRAY))
+    und = det.corners if cal is None else cal.undistort(det.corners)
+    ref_ids, ref_c = reference_corners(cfg.references)
+    found = [k for k, i in enumerate(ref_ids) if int(np.sum(det.ids == i)) == 1]
+    rows = [int(np.flatnonzero(det.ids == ref_ids[k])[0]) for k in found]
+    fit = fit_floor_homography(und[rows], ref_c[found], (image.shape[1], image.shape[0]), cfg.min_references,
+                               cfg.max_reference_rms_m, cfg.max_anisotropy)
+    if not fit.ok or fit.H is None:
+        raise UsageError(f"no floor homography for the camera: {fit.reason} (run `swarmdeck calibrate arena` and "
+                         "pass its --config)")
+    return np.asarray(fit.H, dtype=float)
+
+
 def main(args: argparse.Namespace) -> int:
-    """Run ``calibrate camera`` or ``calibrate arena``."""
+    """Run ``calibrate camera``, ``calibrate arena`` or ``calibrate projector``."""
+    if args.what == "projector":
+        return _projector(args)
     return _camera(args) if args.what == "camera" else _arena(args)

@@ -62,6 +62,14 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="give the robots Robotarium 2.0's sensors (seven ToF distance sensors, encoders, IMU, "
                              "LEDs; docs/sensing.md): every Frame carries their readings, the scene draws the rays "
                              "(layer 'sensors'), recordings keep them ([console] sensors = true in --config)")
+    parser.add_argument("--projector", nargs="?", type=int, const=8090, default=None, metavar="PORT",
+                        help="also serve the overhead projector's page on http://HOST:PORT/projector (default port "
+                             "8090): open it full screen on the projector (`chromium --kiosk --app=URL`); it "
+                             "draws the density, cells, goals, halos… warped onto the floor (layers, brightness "
+                             "and blackout in the panel's Projector folder)")
+    parser.add_argument("--projector-calibration", default=None, metavar="FILE",
+                        help="the projector's homography from `swarmdeck calibrate projector` (default "
+                             "projector.json if it exists; without one the page says to calibrate)")
     parser.add_argument("--no-inputs", action="store_true",
                         help="do not open the TUIO/OSC input listeners (UDP 3333 by default)")
 
@@ -112,6 +120,7 @@ def main(args: argparse.Namespace) -> int:
     if args.virtual is not None and args.virtual < 1:
         raise UsageError(f"--virtual must be a number of robots >= 1, got {args.virtual}")
 
+    projector_cal = _projector(args, config.bounds)
     if args.record and args.no_record:
         raise UsageError("--record and --no-record exclude each other")
     _check_address(host, port)
@@ -175,6 +184,26 @@ def main(args: argparse.Namespace) -> int:
         if bridge is not None:
             bridge.close()
         raise UsageError(f"cannot serve on {host}:{port}: {exc}") from None
+    projector = None
+    if args.projector is not None:
+        from swarmdeck.console.projector.server import ProjectorServer
+        from swarmdeck.console.web.projector_panel import ProjectorPanel
+
+        try:
+            projector = ProjectorServer(config.bounds, projector_cal, host=host, port=args.projector)
+        except OSError as exc:
+            app.close()
+            if bridge is not None:
+                bridge.close()
+            if rec is not None:
+                rec.close()
+            raise UsageError(f"--projector: cannot serve on {host}:{args.projector}: {exc}") from None
+        loop.subscribe(projector.offer)
+        ProjectorPanel(app.gui.gui, projector, on_error=loop.post)
+        projector.start()
+        print(f"swarmdeck console: projector page at {projector.url}" +
+              ("" if projector_cal is not None else " (no homography: run `swarmdeck calibrate projector`)"),
+              flush=True)
     if bridge is not None:
         loop.subscribe(bridge.offer)
         bridge.start()
@@ -194,6 +223,8 @@ def main(args: argparse.Namespace) -> int:
         restore()
         frame = loop.latest
         app.close()
+        if projector is not None:
+            projector.close()
         if bridge is not None:
             bridge.close()
         if rec is not None:
@@ -204,6 +235,23 @@ def main(args: argparse.Namespace) -> int:
         print(f"ran {frame.tick + 1} ticks, t = {frame.run_time:.1f} s; "
               f"min distance {b.min_distance:.3f} m" if b is not None else "")
     return 0
+
+
+def _projector(args: argparse.Namespace, bounds):
+    """The projector's calibration for ``--projector`` (None: none yet), or UsageError naming the problem."""
+    if args.projector is None:
+        if args.projector_calibration is not None:
+            raise UsageError("--projector-calibration needs --projector")
+        return None
+    if not 0 <= args.projector <= 65535:
+        raise UsageError(f"--projector port must be in [0, 65535], got {args.projector}")
+    from swarmdeck.console.projector.server import projector_calibration
+    from swarmdeck.tracking.projector import ProjectorCalibrationError
+
+    try:
+        return projector_calibration(args.projector_calibration, bounds)
+    except ProjectorCalibrationError as exc:
+        raise UsageError(f"--projector-calibration: {exc}") from None
 
 
 def _stop_on_signals():

@@ -67,6 +67,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     add_script_env_argument(parser)
     parser.add_argument("--console-port", type=int, default=None, metavar="P",
                         help="also show the running job in the operator's viser view on port P (on --host)")
+    parser.add_argument("--projector", nargs="?", type=int, const=8090, default=None, metavar="PORT",
+                        help="also serve the overhead projector's page for the arena on http://HOST:PORT/projector "
+                             "(default port 8090; `chromium --kiosk --app=URL` on the projector's screen)")
+    parser.add_argument("--projector-calibration", default=None, metavar="FILE",
+                        help="the projector's homography from `swarmdeck calibrate projector` (default "
+                             "projector.json if it exists)")
     quota = parser.add_argument_group("per-researcher limits (0: no limit; operators are not limited)")
     quota.add_argument("--max-jobs", type=int, default=25, metavar="N",
                        help="jobs a researcher may have not yet finished (queued … running); the next submission "
@@ -120,6 +126,7 @@ def check_arguments(args: argparse.Namespace) -> None:
         raise UsageError(f"--guard-intervention must be in (0, 1] m/s, got {args.guard_intervention}")
     if args.console_port is not None and not 0 <= args.console_port <= 65535:
         raise UsageError(f"--console-port must be in [0, 65535], got {args.console_port}")
+    _projector_calibration(args)  # checked before anything opens; loaded again where it is used
     for flag, value in (("--max-jobs", args.max_jobs), ("--verify-cpu", args.verify_cpu),
                         ("--disk-quota", args.disk_quota)):
         if not value >= 0:
@@ -235,6 +242,25 @@ def main(args: argparse.Namespace) -> int:
             raise UsageError(f"--console-port {args.console_port}: {exc.strerror or exc}") from None
         runner.frame_listeners.append(view.offer)
         print(f"swarmdeck server: operator view at {view.url}", flush=True)
+    projector = None
+    if args.projector is not None:
+        from swarmdeck.console.projector.server import ProjectorServer
+
+        try:
+            projector = ProjectorServer(runner.settings.bounds, _projector_calibration(args), host=args.host, port=args.projector)
+        except OSError as exc:
+            if view is not None:
+                view.close()
+            sock.close()
+            service.close()
+            raise UsageError(f"--projector: cannot serve on {args.host}:{args.projector}: "
+                             f"{exc.strerror or exc}") from None
+
+        runner.frame_listeners.append(projector.offer)
+        projector.start()
+        print(f"swarmdeck server: projector page at {projector.url}" + (
+            "" if projector.feed.calibration is not None else " (no homography: run `swarmdeck calibrate projector`)"),
+            flush=True)
     workers = VerificationWorkers(service, executor, obstacles=obstacles).start()
     runner.start()
     sweeper = RetentionSweeper(service).start() if args.retain_days is not None else None
@@ -263,10 +289,31 @@ def main(args: argparse.Namespace) -> int:
             sweeper.stop()
         if view is not None:
             view.close()
+        if projector is not None:
+            projector.close()
         sock.close()
         service.close()
         print("swarmdeck server: stopped (robots stopped)", file=sys.stderr)
     return 0
+
+
+def _projector_calibration(args: argparse.Namespace):
+    """The arena's projector calibration (None: no --projector, or no calibration yet); UsageError naming a bad
+    port, a --projector-calibration without --projector, or an unusable calibration."""
+    if args.projector is None:
+        if args.projector_calibration is not None:
+            raise UsageError("--projector-calibration needs --projector")
+        return None
+    if not 0 <= args.projector <= 65535:
+        raise UsageError(f"--projector port must be in [0, 65535], got {args.projector}")
+    from swarmdeck.console.projector.server import projector_calibration
+    from swarmdeck.core.bounds import DEFAULT_BOUNDS
+    from swarmdeck.tracking.projector import ProjectorCalibrationError
+
+    try:
+        return projector_calibration(args.projector_calibration, DEFAULT_BOUNDS)  # the portal's arena floor
+    except ProjectorCalibrationError as exc:
+        raise UsageError(f"--projector-calibration: {exc}") from None
 
 
 def _redacted(url: str) -> str:

@@ -248,6 +248,28 @@ class LoopConfig:
         object.__setattr__(self, "obstacles", arena.obstacles)
 
 
+@dataclass(frozen=True)
+class ProjectorParams:
+    """What the overhead projector draws on the floor (``swarmdeck console --projector``; the console panel's
+    "Projector" folder): one switch per layer of the picture, the opacity of the whole image (0: dark, 1: full
+    brightness) and the blackout switch (the projector shows black). Not part of the Frame: the projector
+    only shows the run, it does not change it."""
+
+    density: bool = param(True, label="Density")
+    cells: bool = param(True, label="Voronoi cells")
+    centroids: bool = param(True, label="Centroids")
+    goals: bool = param(True, label="Goals")
+    halos: bool = param(True, label="Robot halos")
+    safety: bool = param(False, label="Safety discs")
+    graph: bool = param(True, label="Communication graph")
+    annotations: bool = param(True, label="Annotations")
+    opacity: float = param(1.0, lo=0.0, hi=1.0, label="Brightness", step=0.05)
+    blackout: bool = param(False, label="Blackout")
+
+    def __post_init__(self) -> None:
+        check_params(self)
+
+
 #: The groups whose parameters a Frame carries, in ``Frame.params`` order.
 FRAME_GROUPS: tuple[type, ...] = (BehaviourParams, SafetyParams, DensityParams, LoopConfig)
 

@@ -139,3 +139,17 @@ def test_scene_video_foxglove_and_live_view_draw_the_same_picture(server, name: 
     assert video["changed"] == changed and fox["n_changed"] == sum(changed) and live["moved"] == [1]
     if name == "a pair naming a robot the frame lacks":
         assert len(segments) == 0  # the guard: no pair rather than a wrong one, in every backend
+
+
+@pytest.mark.parametrize("name", list(FRAMES))
+def test_the_projector_draws_the_same_robot_colours_and_safety_discs(name: str) -> None:
+    from swarmdeck.console.projector.message import projector_message
+    from swarmdeck.console.runtime.params import ProjectorParams
+
+    frame = FRAMES[name]
+    pic = picture_of(frame, PictureStyle())
+    m = projector_message(frame, 1, ProjectorParams(safety=True), 0.0)
+    assert [_rgb(c) for c in m["halos"]["colours"]] == [tuple(c) for c in pic.colors.tolist()]
+    np.testing.assert_allclose(m["halos"]["xy"], pic.poses[:, :2], atol=1e-3)
+    np.testing.assert_allclose(m["safety"]["xy"], pic.points, atol=1e-3)
+    assert m["safety"]["radius"] == pic.ring_radius

@@ -27,6 +27,9 @@ from swarmdeck.console.cli import main
     (["--header-timeout", "0"], "--header-timeout must be in (0, 3600]"),
     (["--body-timeout", "inf"], "--body-timeout must be in (0, 3600]"),
     (["--trust-proxy", "proxy.example.org"], "is not an IP address"),
+    (["--projector", "70000"], "--projector port must be in [0, 65535]"),
+    (["--projector-calibration", "p.json"], "--projector-calibration needs --projector"),
+    (["--projector", "0", "--projector-calibration", "/nonexistent/p.json"], "cannot read projector calibration"),
 ])
 def test_bad_options_exit_2_in_one_line(tmp_path, capsys, argv, words):
     assert main(["server", "--data", str(tmp_path / "lab"), *argv]) == 2

@@ -1,0 +1,137 @@
+"""The projector page (issue 29): frames per second drawn and tick → pixels latency in headless Chromium.
+
+Real ``ControlLoop`` Frames (coverage on the moving density, N = 12, 100, 1000) are computed first, then handed
+to a real :class:`~swarmdeck.console.projector.server.ProjectorServer` at ``--rate`` Hz (default 60, twice the
+loop's 30 Hz, so the page's own limit shows) while one page (1280 × 800, every layer on, the safety discs too)
+draws them. In the page: ``drawn`` (wall time after each frame's drawing, ms), ``latency`` (that time − the
+server's wall time when the Frame was offered: serialisation + long poll + parse + wait for the animation frame +
+drawing), ``drawMs`` (the drawing alone) and the layers it dropped to keep up. Server side: one Frame's
+serialisation (``projector_message`` + JSON), ms. On a shared, loaded machine the wall-clock rate says little, so
+the CPU time every process below this one (Chromium: renderer, GPU/compositor, network) and this process (the
+server, the feeder, Playwright's client) spent per Frame sent is reported too, and the frames per second one idle
+core could give from it.
+
+Rerun: ``.venv/bin/python bench/bench_projector.py [N ...]`` (≈ 1 min).
+"""
+from __future__ import annotations
+
+import json
+import sys
+import threading
+import time
+
+import harness  # first: pins BLAS/OpenMP to one thread, before numpy loads
+import numpy as np
+
+from swarmdeck.console.projector.message import projector_message
+from swarmdeck.console.projector.server import ProjectorServer
+from swarmdeck.console.runtime.loop import ControlLoop, LoopConfig
+from swarmdeck.console.runtime.params import ProjectorParams
+from swarmdeck.core.bounds import Bounds
+from swarmdeck.tracking.projector import ProjectorCalibration, SyntheticProjector
+
+CHROMIUM = "/usr/bin/chromium"
+ARENAS = {12: (-1.6, 1.6, -1.0, 1.0), 100: (-1.6, 1.6, -1.0, 1.0), 1000: (-5.0, 5.0, -3.0, 3.0)}
+SECONDS = 6.0
+FRAMES = 40
+
+
+def _descendants_cpu_s() -> float:
+    """CPU time (user + system) of every process below this one (the Playwright driver and Chromium), s."""
+    import os
+
+    tick = os.sysconf("SC_CLK_TCK")
+    parent: dict[int, int] = {}
+    cpu: dict[int, float] = {}
+    for d in os.listdir("/proc"):
+        if not d.isdigit():
+            continue
+        try:
+            with open(f"/proc/{d}/stat") as f:
+                fields = f.read().rsplit(")", 1)[1].split()
+        except OSError:
+            continue
+        parent[int(d)] = int(fields[1])
+        cpu[int(d)] = (int(fields[11]) + int(fields[12])) / tick
+    me, total = os.getpid(), 0.0
+    for pid in cpu:
+        p = parent.get(pid)
+        while p and p != me:
+            p = parent.get(p)
+        if p == me:
+            total += cpu[pid]
+    return total
+
+
+def run(n: int, browser, rate: float = 60.0) -> dict:
+    b = Bounds.of(ARENAS[n])
+    loop = ControlLoop(LoopConfig(n_robots=n, bounds=b, seed=1))
+    frames = [loop.tick() for _ in range(FRAMES)]
+    loop.close()
+    settings = ProjectorParams(safety=True)
+    ser = harness.measure(lambda: json.dumps(projector_message(frames[-1], 1, settings, 0.0)), 15, clock="thread")
+    m = 0.05 * max(b.width, b.height)
+    proj = SyntheticProjector(view_bounds=(b.x_min - m, b.x_max + m, b.y_min - m, b.y_max + m))
+    srv = ProjectorServer(b, ProjectorCalibration(proj.homography(), proj.size, b), port=0, settings=settings).start()
+    page = browser.new_page(viewport={"width": proj.width, "height": proj.height})
+    page.goto(srv.url)
+    page.wait_for_function("window.swarmdeckProjector && window.swarmdeckProjector.connected", timeout=30000)
+    stop = threading.Event()
+
+    def feed() -> None:
+        k = 0
+        while not stop.is_set():
+            srv.offer(frames[k % len(frames)])
+            k += 1
+            time.sleep(1.0 / rate)
+
+    t = threading.Thread(target=feed, daemon=True)
+    t.start()
+    time.sleep(1.0)  # warm-up
+    page.evaluate("(() => { const s = window.swarmdeckProjector; s.drawn = []; s.latency = []; s.drawMs = []; })()")
+    cpu0, own0, sent0 = _descendants_cpu_s(), time.process_time(), srv.state()["sent"]
+    time.sleep(SECONDS)
+    cpu1, own1, sent1 = _descendants_cpu_s(), time.process_time(), srv.state()["sent"]
+    st = page.evaluate("(() => { const s = window.swarmdeckProjector; return {drawn: s.drawn, latency: s.latency, "
+                       "drawMs: s.drawMs, dropped: s.dropped}; })()")
+    stop.set()
+    t.join()
+    state = srv.state()
+    page.close()
+    srv.close()
+    drawn = np.asarray(st["drawn"])
+    fps = (len(drawn) - 1) / ((drawn[-1] - drawn[0]) / 1000.0) if len(drawn) > 1 else 0.0
+    lat = np.asarray(st["latency"])
+    return {"n": n, "fps": fps, "lat_med": float(np.median(lat)), "lat_p95": float(np.percentile(lat, 95)),
+            "draw_med": float(np.median(st["drawMs"])), "draw_max": float(np.max(st["drawMs"])),
+            "ser": ser.median_ms, "dropped": ",".join(st["dropped"]) or "none", "skipped": state["skipped"],
+            "sent": state["sent"],
+            "browser_cpu": 1000.0 * (cpu1 - cpu0) / max(sent1 - sent0, 1),
+            "server_cpu": 1000.0 * (own1 - own0) / max(sent1 - sent0, 1)}
+
+
+def main(argv: list[str]) -> int:
+    from playwright.sync_api import sync_playwright
+
+    ns = [int(a) for a in argv] or [12, 100, 1000]
+    print(harness.machine())
+    print("| N | page frames/s | tick → pixels ms, median (p95) | drawing ms, median (max) | serialisation ms | "
+          "CPU ms per frame: browser + server | frames/s one core could give | layers dropped | frames sent / skipped |")
+    print("| ---: | ---: | ---: | ---: | ---: | ---: | ---: | --- | ---: |")
+    with sync_playwright() as pw:
+        browser = pw.chromium.launch(executable_path=CHROMIUM, args=["--no-sandbox"])
+        try:
+            for n in ns:
+                r = run(n, browser)
+                print(f"| {r['n']} | {r['fps']:.1f} | {r['lat_med']:.1f} ({r['lat_p95']:.1f}) | "
+                      f"{r['draw_med']:.2f} ({r['draw_max']:.1f}) | {r['ser']:.2f} | "
+                      f"{r['browser_cpu']:.1f} + {r['server_cpu']:.1f} | "
+                      f"{1000.0 / (r['browser_cpu'] + r['server_cpu']):.0f} | {r['dropped']} | "
+                      f"{r['sent']} / {r['skipped']} |", flush=True)
+        finally:
+            browser.close()
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main(sys.argv[1:]))
