@@ -66,6 +66,16 @@ class RunDefaults:
     # calls it, rps's error counts) and rps's call order (get_poses() once per step())
     rps_semantics: bool = False
     rps_call_order: bool = True
+    # the arena a script built without a config sees, m (None: DEFAULT_BOUNDS): its region of a shared floor
+    # (devices/fleet/regions.py), so an unmodified script cannot tell it shares the floor
+    bounds: Any = None
+
+    def arena_config(self, **kw: Any) -> ArenaConfig:
+        """The :class:`ArenaConfig` of an Arena (or rps Robotarium) a script builds without one: these defaults'
+        seed and bounds, plus ``kw``."""
+        if self.bounds is not None:
+            kw.setdefault("bounds", self.bounds)
+        return ArenaConfig(seed=self.seed, **kw)
 
 
 RUN_DEFAULTS: contextvars.ContextVar[RunDefaults] = contextvars.ContextVar("swarmdeck_run_defaults", default=RunDefaults())  # noqa: B039  (frozen)
@@ -143,7 +153,7 @@ class Arena:
         if safety is None:
             safety = defaults.safety
         if config is None:
-            config = ArenaConfig(seed=defaults.seed)
+            config = defaults.arena_config()
         self.params = params if params is not None else GritsBotParams()
         self.config = config
         if duration is not None and not (np.isfinite(duration) and duration > 0):

@@ -120,6 +120,7 @@ def run_experiment(
     argv: Sequence[str] = (),
     rps_semantics: bool = False,
     rps_call_order: bool = True,
+    bounds: Any = None,
 ) -> RunResult:
     """Run a script file (or an ``experiment(arena)`` callable) and return its :class:`RunResult`.
 
@@ -135,6 +136,8 @@ def run_experiment(
     the script). A script file runs as ``__main__``, as ``python script.py`` runs it; ``experiment(arena)``
     is then called unless the script built its own Arena already.
     ``rps_semantics``/``rps_call_order``: the rps facade's modes (:class:`~swarmdeck.devices.rps.robotarium.Robotarium`).
+    ``bounds``: the arena ``(x_min, x_max, y_min, y_max)`` (m) Arenas and Robotariums the script builds without a
+    config see (its region of a shared floor, :mod:`swarmdeck.devices.fleet.floor`); None: the default floor.
     """
     result = RunResult()
 
@@ -145,7 +148,8 @@ def run_experiment(
 
     defaults = RunDefaults(n_robots=n_robots, duration=duration, seed=seed, safety=safety,
                            on_create=created, on_step=on_step, backend_factory=backend_factory,
-                           from_docks=from_docks, rps_semantics=rps_semantics, rps_call_order=rps_call_order)
+                           from_docks=from_docks, rps_semantics=rps_semantics, rps_call_order=rps_call_order,
+                           bounds=bounds)
     token = RUN_DEFAULTS.set(defaults)
     script = None if callable(target) else str(target)
     try:

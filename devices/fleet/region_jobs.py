@@ -1,0 +1,120 @@
+"""Run an unmodified experiment script in one region of a shared floor: set up, run, return (issue 30.1).
+
+:func:`run_in_region` is what a runner does for each region's job, on its own thread (one per region; the
+floor's ticks are lockstep, :mod:`swarmdeck.devices.fleet.floor`):
+
+1. when the script builds its Arena (or rps Robotarium) with N robots, region ``name`` is opened with N of
+   the robots standing in it (:meth:`SharedFloor.open_region`), and they are **set up** at the script's
+   initial conditions (region-local), else at ``start_poses``, else at random valid poses inside the
+   region's start area — driven there through the floor's one barrier (:func:`drive_to`);
+2. the script runs on the region's ports (:class:`~swarmdeck.devices.fleet.floor.RegionRobots`) with the
+   region as its arena (``run_experiment(..., bounds=region.local_bounds)``): its own bounds, origin and
+   robot ids; :func:`~swarmdeck.devices.runner.run_experiment` gives the same result as a solo run;
+3. its robots **return** to where they stood before the set-up, and the region is closed — also when the
+   script failed or the region was stopped (then they stay where they stopped).
+"""
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from swarmdeck.core.bounds import Bounds
+from swarmdeck.devices.controllers import HybridPoseController, at_pose
+from swarmdeck.devices.fleet.floor import FloorClosed, RegionRobots, SharedFloor
+from swarmdeck.devices.initial_conditions import random_initial_poses
+from swarmdeck.devices.runner import RunResult, run_experiment
+
+FloatArray = NDArray[np.float64]
+
+#: s a region's set-up or return may take before it is given up (the robots then stop where they are)
+UPKEEP_LIMIT_S = 60.0
+
+
+@dataclass
+class RegionJobResult:
+    """What :func:`run_in_region` did: the region, the floor ids of the job's robots, the script's
+    :class:`~swarmdeck.devices.runner.RunResult` (as a solo run's), the set-up and return (``ok``, ``seconds`` of
+    floor time, ``robots`` not there) and why the job could not run (``error``)."""
+
+    region: str
+    fleet_ids: list[int] = field(default_factory=list)
+    run: RunResult | None = None
+    setup: dict[str, Any] = field(default_factory=dict)
+    returned: dict[str, Any] = field(default_factory=dict)
+    error: str | None = None
+
+
+def drive_to(view: RegionRobots, goals: ArrayLike, limit_s: float = UPKEEP_LIMIT_S,
+             stop: Callable[[], bool] | None = None) -> dict[str, Any]:
+    """Drive the region's robots to ``goals`` ``(N, 3)`` (region frame, m/rad) through the floor's barrier;
+    ``{"ok", "seconds", "robots"}`` (robots not at their goal when it ended: the time limit, ``stop`` or a
+    stopped region)."""
+    goals = np.asarray(goals, dtype=float).reshape(view.n_robots, 3)
+    ctrl = HybridPoseController()
+    dt = view.floor.dt
+    ticks, limit = 0, int(np.ceil(limit_s / dt))
+    ids = np.arange(view.n_robots, dtype=np.int64)
+    poses = view.read().poses
+    while not np.all(at_pose(poses, goals)) and ticks < limit:
+        if (stop is not None and stop()) or view.floor.stopped(view.region.name):
+            break
+        v, w = ctrl(poses, goals)
+        view.send(ids, v, w)
+        ticks += 1
+        poses = view.read().poses
+    missing = np.flatnonzero(~at_pose(poses, goals))
+    return {"ok": not len(missing), "seconds": round(ticks * dt, 3), "robots": missing.tolist()}
+
+
+def run_in_region(floor: SharedFloor, name: str, target: str | Path | Callable[..., Any], *,
+                  n_robots: int | None = None, duration: float | None = None, seed: int | None = None,
+                  start_poses: ArrayLike | None = None, argv: tuple[str, ...] = (),
+                  upkeep_limit_s: float = UPKEEP_LIMIT_S) -> RegionJobResult:
+    """Run ``target`` (a script file or an ``experiment(arena)`` callable, unmodified) in region ``name`` of
+    ``floor`` (module docstring). Never raises for the script's own failures (they are in ``result.run``)."""
+    region = floor.layout.region(name)
+    result = RegionJobResult(region=name)
+    held: dict[str, Any] = {}
+
+    def robots(n: int, initial: Any, config: Any = None, params: Any = None) -> RegionRobots:
+        if "view" in held:
+            raise ValueError(f"region {name}: the job already has its robots (one Arena per job)")
+        view = floor.open_region(name, int(n))
+        held["view"] = view
+        result.fleet_ids = view.fleet_ids.tolist()
+        held["parked"] = view.read().poses.copy()
+        if initial is not None:
+            goals = np.asarray(initial, dtype=float).reshape(int(n), 3)
+        elif start_poses is not None:
+            goals = np.asarray(start_poses, dtype=float).reshape(int(n), 3)
+        else:
+            a, (ox, oy) = floor.layout.start_area(name), region.origin
+            local = Bounds(a.x_min - ox, a.x_max - ox, a.y_min - oy, a.y_max - oy)
+            goals = random_initial_poses(int(n), local, rng=seed)
+        result.setup = drive_to(view, goals, upkeep_limit_s)
+        if not result.setup["ok"]:
+            raise ValueError(f"region {name}: set-up failed, robots {result.setup['robots']} did not reach their "
+                             "start poses")
+        return view
+
+    try:
+        result.run = run_experiment(target, n_robots=n_robots, duration=duration, seed=seed, backend_factory=robots,
+                                    bounds=region.local_bounds, argv=argv)
+    except (ValueError, FloorClosed) as exc:
+        result.error = str(exc)
+    finally:
+        view = held.get("view")
+        if view is not None:
+            try:
+                if not floor.stopped(name):
+                    result.returned = drive_to(view, held["parked"], upkeep_limit_s)
+            except FloorClosed as exc:
+                result.returned = {"ok": False, "message": str(exc)}
+            finally:
+                view.close()
+    return result
