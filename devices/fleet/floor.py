@@ -36,7 +36,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.spatial import cKDTree
 
-from swarmdeck.core.constants import CONTROL_PERIOD
+from swarmdeck.core.constants import CONTROL_PERIOD, SAFETY_DISTANCE
 from swarmdeck.core.kinematics import GritsBotParams, lookahead_points, unicycle_to_si
 from swarmdeck.core.ports import SensedPoses, rows_of
 from swarmdeck.devices.fleet.regions import Region, RegionLayout
@@ -339,3 +339,24 @@ class RegionRobots:
         if not self._closed:
             self._closed = True
             self.floor._leave(self.region.name)
+
+
+def simulated_floor(layout: RegionLayout, per_region: int | dict[str, int], *, params: GritsBotParams | None = None,
+                    dt: float = CONTROL_PERIOD, spacing: float = 0.3) -> SharedFloor:
+    """A :class:`SharedFloor` over simulated robots parked in every region: ``per_region`` robots (one count, or
+    one per region name) on a lattice of pitch ``spacing`` m inside each region's start area, heading +x; floor
+    ids region by region in layout order. ValueError naming the region that cannot hold its count."""
+    from swarmdeck.devices.initial_conditions import lattice_sites
+    from swarmdeck.devices.simulated_robots import SimulatedRobots
+    from swarmdeck.devices.simulator import ArenaConfig
+
+    parts = []
+    for r in layout.regions:  # a handful of regions, once
+        n = per_region if isinstance(per_region, int) else int(per_region.get(r.name, 0))
+        sites = lattice_sites(layout.start_area(r.name), spacing, SAFETY_DISTANCE)
+        if len(sites) < n:
+            raise ValueError(f"region {r.name}: its start area holds {len(sites)} parked robots at {spacing} m, not {n}")
+        parts.append(np.column_stack([sites[:n], np.zeros(n)]))
+    poses = np.vstack(parts)
+    robots = SimulatedRobots(len(poses), ArenaConfig(bounds=layout.floor, dt=dt), params, initial_poses=poses)
+    return SharedFloor(robots, layout, params=params, dt=dt)

@@ -71,12 +71,23 @@ def drive_to(view: RegionRobots, goals: ArrayLike, limit_s: float = UPKEEP_LIMIT
     return {"ok": not len(missing), "seconds": round(ticks * dt, 3), "robots": missing.tolist()}
 
 
+def _idle_in(view: RegionRobots) -> FloatArray:
+    """``(K, 2)`` region-frame positions of the floor's other robots standing in the region (start poses avoid them)."""
+    full = view.floor.reading()
+    xy = np.asarray(full.poses, dtype=float)[:, :2]
+    others = ~np.isin(np.asarray(full.ids, dtype=np.int64), view.fleet_ids) & view.region.bounds.contains(xy)
+    return view.region.to_local(xy[others])
+
+
 def run_in_region(floor: SharedFloor, name: str, target: str | Path | Callable[..., Any], *,
                   n_robots: int | None = None, duration: float | None = None, seed: int | None = None,
                   start_poses: ArrayLike | None = None, argv: tuple[str, ...] = (),
-                  upkeep_limit_s: float = UPKEEP_LIMIT_S) -> RegionJobResult:
+                  upkeep_limit_s: float = UPKEEP_LIMIT_S,
+                  on_start: Callable[[RegionRobots], None] | None = None) -> RegionJobResult:
     """Run ``target`` (a script file or an ``experiment(arena)`` callable, unmodified) in region ``name`` of
-    ``floor`` (module docstring). Never raises for the script's own failures (they are in ``result.run``)."""
+    ``floor`` (module docstring). ``on_start(view)`` is called once the robots are set up, before the script's
+    first step (e.g. to mark the job running). Never raises for the script's own failures (they are in
+    ``result.run``)."""
     region = floor.layout.region(name)
     result = RegionJobResult(region=name)
     held: dict[str, Any] = {}
@@ -95,11 +106,13 @@ def run_in_region(floor: SharedFloor, name: str, target: str | Path | Callable[.
         else:
             a, (ox, oy) = floor.layout.start_area(name), region.origin
             local = Bounds(a.x_min - ox, a.x_max - ox, a.y_min - oy, a.y_max - oy)
-            goals = random_initial_poses(int(n), local, rng=seed)
+            goals = random_initial_poses(int(n), local, rng=seed, avoid=_idle_in(view))
         result.setup = drive_to(view, goals, upkeep_limit_s)
         if not result.setup["ok"]:
             raise ValueError(f"region {name}: set-up failed, robots {result.setup['robots']} did not reach their "
                              "start poses")
+        if on_start is not None:
+            on_start(view)
         return view
 
     try:
