@@ -45,6 +45,10 @@ from swarmdeck.devices.pipeline import barrier_filter, certify
 FloatArray = NDArray[np.float64]
 
 
+#: m between parked simulated robots (:func:`simulated_floor`): wide enough to drive back between neighbours
+PARKING_SPACING = 0.3
+
+
 class FloorClosed(RuntimeError):
     """The floor was closed (or its region ended) while a job waited for its tick."""
 
@@ -342,10 +346,11 @@ class RegionRobots:
 
 
 def simulated_floor(layout: RegionLayout, per_region: int | dict[str, int], *, params: GritsBotParams | None = None,
-                    dt: float = CONTROL_PERIOD, spacing: float = 0.3) -> SharedFloor:
+                    dt: float = CONTROL_PERIOD, spacing: float = PARKING_SPACING) -> SharedFloor:
     """A :class:`SharedFloor` over simulated robots parked in every region: ``per_region`` robots (one count, or
-    one per region name) on a lattice of pitch ``spacing`` m inside each region's start area, heading +x; floor
-    ids region by region in layout order. ValueError naming the region that cannot hold its count."""
+    one per region name) on a lattice of pitch ``spacing`` m inside each region (D_s from its edges), heading +x,
+    the sites nearest the region's floor walls first; floor ids region by region in layout order. ValueError naming
+    the region that cannot hold its count."""
     from swarmdeck.devices.initial_conditions import lattice_sites
     from swarmdeck.devices.simulated_robots import SimulatedRobots
     from swarmdeck.devices.simulator import ArenaConfig
@@ -353,10 +358,13 @@ def simulated_floor(layout: RegionLayout, per_region: int | dict[str, int], *, p
     parts = []
     for r in layout.regions:  # a handful of regions, once
         n = per_region if isinstance(per_region, int) else int(per_region.get(r.name, 0))
-        sites = lattice_sites(layout.start_area(r.name), spacing, SAFETY_DISTANCE)
+        sites = lattice_sites(r.bounds, spacing, SAFETY_DISTANCE)
         if len(sites) < n:
-            raise ValueError(f"region {r.name}: its start area holds {len(sites)} parked robots at {spacing} m, not {n}")
-        parts.append(np.column_stack([sites[:n], np.zeros(n)]))
+            raise ValueError(f"region {r.name}: it holds {len(sites)} parked robots {spacing} m apart, not {n}")
+        f = layout.floor
+        to_wall = np.minimum.reduce([sites[:, 0] - f.x_min, f.x_max - sites[:, 0], sites[:, 1] - f.y_min,
+                                     f.y_max - sites[:, 1]])
+        parts.append(np.column_stack([sites[np.argsort(to_wall, kind="stable")[:n]], np.zeros(n)]))
     poses = np.vstack(parts)
     robots = SimulatedRobots(len(poses), ArenaConfig(bounds=layout.floor, dt=dt), params, initial_poses=poses)
     return SharedFloor(robots, layout, params=params, dt=dt)

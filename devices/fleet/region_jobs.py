@@ -106,7 +106,10 @@ def run_in_region(floor: SharedFloor, name: str, target: str | Path | Callable[.
         else:
             a, (ox, oy) = floor.layout.start_area(name), region.origin
             local = Bounds(a.x_min - ox, a.x_max - ox, a.y_min - oy, a.y_max - oy)
-            goals = random_initial_poses(int(n), local, rng=seed, avoid=_idle_in(view))
+            try:
+                goals = random_initial_poses(int(n), local, rng=seed, avoid=_idle_in(view))
+            except ValueError:  # the region's start area is crowded with idle robots: start where they stand
+                goals = held["parked"]
         result.setup = drive_to(view, goals, upkeep_limit_s)
         if not result.setup["ok"]:
             raise ValueError(f"region {name}: set-up failed, robots {result.setup['robots']} did not reach their "
@@ -131,3 +134,52 @@ def run_in_region(floor: SharedFloor, name: str, target: str | Path | Callable[.
             finally:
                 view.close()
     return result
+
+
+@dataclass(frozen=True)
+class QueuedJob:
+    """A job of a queue on a shared floor: ``target`` (script file or ``experiment(arena)`` callable), its robots
+    and declared duration (s), and a ``name`` for the report."""
+
+    name: str
+    target: Any
+    robots: int
+    duration: float
+    seed: int | None = None
+
+
+def run_queue(floor: SharedFloor, jobs: list[QueuedJob], *, regions: tuple[str, ...] | None = None,
+              upkeep_limit_s: float = UPKEEP_LIMIT_S) -> list[tuple[QueuedJob, RegionJobResult]]:
+    """Run ``jobs`` in queue order, one per region at a time, every region busy while jobs wait (one worker
+    thread per region; a job goes to the first free region that holds it, :meth:`RegionLayout.capacity`).
+    ``regions``: the regions to use (default: all). Returns ``(job, result)`` in the order the jobs ended.
+    ValueError before anything moves when a job fits no region (:meth:`RegionLayout.never_fits`)."""
+    import threading
+
+    names = regions if regions is not None else floor.layout.names
+    cap = floor.layout.capacity()
+    for job in jobs:
+        if not any(cap[n] >= job.robots for n in names):
+            raise ValueError(f"job {job.name}: {floor.layout.never_fits(job.robots) or 'fits none of ' + str(names)}")
+    lock = threading.Lock()
+    waiting = list(jobs)
+    done: list[tuple[QueuedJob, RegionJobResult]] = []
+
+    def worker(region: str) -> None:
+        while True:
+            with lock:
+                job = next((j for j in waiting if j.robots <= cap[region]), None)
+                if job is None:
+                    return
+                waiting.remove(job)
+            result = run_in_region(floor, region, job.target, n_robots=job.robots, duration=job.duration,
+                                   seed=job.seed, upkeep_limit_s=upkeep_limit_s)
+            with lock:
+                done.append((job, result))
+
+    threads = [threading.Thread(target=worker, args=(n,), name=f"swarmdeck-region-{n}") for n in names]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    return done

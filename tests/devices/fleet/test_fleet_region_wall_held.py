@@ -91,7 +91,8 @@ def test_an_emergency_stop_stops_one_region_and_the_other_runs_on(tmp_path):
     assert floor.stats.stopped == ["r0c0"]
     west, east = np.array(seen["r0c0"]), np.array(seen["r0c1"])
     assert len(west) > 10
-    assert np.array_equal(west[1], west[-1])  # stopped from the tick after the stop, and no return (it stays)
+    # stopped from the tick after the stop (headings only re-wrapped: 1e-15 rad), and no return (it stays)
+    assert np.abs(west[1] - west[-1]).max() < 1e-12
     assert not np.allclose(east[1], east[-1])  # the other region ran on
     assert got["r0c0"].returned == {} and got["r0c1"].returned["ok"]
 
@@ -114,5 +115,5 @@ def test_an_emergency_stop_of_the_floor_stops_every_region(tmp_path):
     paths = _scripts(tmp_path)
     got = _run(floor, paths, duration=20.0, started=started)
     assert sorted(floor.stats.stopped) == ["r0c0", "r0c1"]
-    assert np.array_equal(seen[1], seen[-1])
+    assert np.abs(seen[1] - seen[-1]).max() < 1e-12
     assert all(r.returned == {} and r.run.error is None for r in got.values())
