@@ -103,7 +103,8 @@ def _run(layout: Any, jobs: dict[str, Path], args: argparse.Namespace) -> int:
         t.start()
     for t in threads:
         t.join()
-    out = {"floor": floor.stats.to_dict(), "contacts": int(floor.ports.report.collision_pairs), "jobs": {}}
+    out: dict[str, Any] = {"floor": floor.stats.to_dict(), "contacts": int(floor.ports.report.collision_pairs),
+                           "jobs": {}}
     failed = False
     for region, r in results.items():
         error = r.error or (r.run.error_line if r.run is not None else None)
