@@ -59,6 +59,7 @@ from swarmdeck.console.sandbox.confinement import JailConfig, SandboxLimits
 from swarmdeck.console.sandbox.plant import ArenaPlant, Disturbances, SandboxPlant, VerificationRobots
 from swarmdeck.console.sandbox.run import run_sandboxed
 from swarmdeck.console.sandbox.start_poses import arena_start, check_initial_poses, perturb
+from swarmdeck.core.bounds import DEFAULT_BOUNDS, Bounds, check_bounds
 from swarmdeck.core.checks import in_range
 from swarmdeck.core.service_thread import ServiceThread
 from swarmdeck.devices.arena import Arena
@@ -92,6 +93,9 @@ class VerificationConfig:
         initial_poses: the manifest's start poses ``(N, 3)`` [x, y, θ] (m, rad), as the arena will use
             them (None: the script's initial conditions, else random ones).
         declared_by: who declared ``n_robots``, for the refusal's message ("the manifest", "--robots").
+        bounds: the arena the job will get, m: the floor, or its region of a shared floor as the script will see
+            it (:attr:`swarmdeck.devices.fleet.regions.Region.local_bounds`) — the runs' walls, the random start
+            poses and the script's ``arena.config.bounds`` are these.
         wall_factor: wall s each run may take per declared simulated s (above 1: paced runs tick in
             real time).
         boot_s: wall s each run may take on top for its start-up (jail, imports, the script's top level).
@@ -115,8 +119,10 @@ class VerificationConfig:
     wall_factor: float = 4.0
     boot_s: float = 30.0
     paced_runs: int = 1
+    bounds: Bounds = DEFAULT_BOUNDS
 
     def __post_init__(self) -> None:
+        object.__setattr__(self, "bounds", check_bounds(self.bounds, "bounds"))
         if self.n_robots is not None and not in_range(self.n_robots, 1, integer=True):
             raise ValueError(f"n_robots must be a positive integer, got {self.n_robots!r}")
         if not in_range(self.duration, 0.0, lo_open=True):
@@ -135,7 +141,7 @@ class VerificationConfig:
             raise ValueError(f"paced_runs must be a non-negative integer, got {self.paced_runs!r}")
         if self.initial_poses is not None:
             n = self.n_robots if self.n_robots is not None else len(self.initial_poses)
-            poses = check_initial_poses(self.initial_poses, n, ArenaConfig().bounds, "initial_poses")
+            poses = check_initial_poses(self.initial_poses, n, self.bounds, "initial_poses")
             object.__setattr__(self, "initial_poses", tuple((float(x), float(y), float(t)) for x, y, t in poses))
             object.__setattr__(self, "n_robots", n)
 
@@ -159,7 +165,7 @@ class VerificationConfig:
                 "limits": asdict(self.run_limits), "rules": asdict(self.rules), "trusted": self.trusted,
                 "jail": list(self.jail.order), "allow_no_cgroup": self.jail.allow_no_cgroup,
                 "initial_poses": None if self.initial_poses is None else [list(p) for p in self.initial_poses],
-                "paced_runs": self.paced_runs,
+                "paced_runs": self.paced_runs, "bounds": list(self.bounds),
                 "wall_budget": {"factor": float(self.wall_factor), "boot_s": float(self.boot_s),
                                 "run_s": self.run_wall_s, "job_s": self.job_wall_s()}}
 
@@ -199,7 +205,7 @@ def run_task(task: RunTask) -> dict[str, Any]:
     # (seed, index): 0 random start poses, 1 disturbances, 2 set-up error — raw and wrapped of one index alike
     seeds = np.random.SeedSequence(cfg.seed, spawn_key=(task.index,)).spawn(3)
     paced = task.mode == "raw" and task.index < cfg.paced_runs
-    arena_config = ArenaConfig(seed=None, real_time=paced)  # paced: each step waits for the next period
+    arena_config = ArenaConfig(seed=None, real_time=paced, bounds=cfg.bounds)  # paced: each step waits a period
     rules = cfg.rules
     start: dict[str, Any] = {}
 
@@ -220,7 +226,8 @@ def run_task(task: RunTask) -> dict[str, Any]:
     cpu0 = time.process_time()  # this worker's CPU (the trusted side: plant, barrier, protocol) for the run
     outcome = run_sandboxed(task.bundle, make_plant, n_robots=cfg.n_robots,
                             duration=cfg.duration, rps=cfg.rps, limits=cfg.run_limits, trusted=cfg.trusted,
-                            jail=cfg.jail, cancelled=cancelled)
+                            jail=cfg.jail, cancelled=cancelled,
+                            bounds=None if cfg.bounds == DEFAULT_BOUNDS else cfg.bounds)
     error = outcome.error_line
     if outcome.ended_by == "wall":
         reached = "" if outcome.plant is None else f" at t = {outcome.plant.arena.time:.2f} s of {cfg.duration:g} s"
