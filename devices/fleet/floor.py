@@ -10,7 +10,8 @@ and a :class:`~swarmdeck.devices.fleet.regions.RegionLayout`. A job placed in re
 * ``send(ids, v, w)`` — its unicycle commands for the next period (a translation leaves ``(v, ω)``
   unchanged), held until the floor's tick;
 * ``obstacles`` — the look-ahead points of every other robot on the floor, in R's frame;
-* ``close`` — the region leaves the floor's ticks; its robots stand still.
+* ``close`` — one period of zero commands; ``leave`` — the region leaves the floor's ticks (its robots stand
+  still, fixed points of the barrier).
 
 **The tick** (lockstep: it runs, on the thread of the last region to send, once every open region sent
 its period's commands): the commands of all regions are put together (robots of no open region, and of a
@@ -339,6 +340,15 @@ class RegionRobots:
         return self.region.to_local(points[np.all(np.isfinite(points), axis=1)])
 
     def close(self) -> None:
+        """One period of zero commands (as :class:`~swarmdeck.devices.fleet.assigned.AssignedRobots` closes); the
+        region stays open (its robots are returned next, then :meth:`leave`)."""
+        if not self._closed:
+            try:
+                self.hold()
+            except FloorClosed:
+                pass
+
+    def leave(self) -> None:
         """The job is over: the region leaves the floor's ticks (its robots stand still). Idempotent."""
         if not self._closed:
             self._closed = True

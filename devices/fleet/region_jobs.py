@@ -132,7 +132,7 @@ def run_in_region(floor: SharedFloor, name: str, target: str | Path | Callable[.
             except FloorClosed as exc:
                 result.returned = {"ok": False, "message": str(exc)}
             finally:
-                view.close()
+                view.leave()
     return result
 
 
