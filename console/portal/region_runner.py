@@ -73,7 +73,7 @@ class RegionFleet:
                ) -> tuple[UpkeepResult, RegionRobots | None]:
         """Open the region with ``len(goals)`` of its robots and drive them to ``goals`` (region frame)."""
         goals_arr = np.asarray(goals, dtype=float).reshape(-1, 3)
-        view = self.floor.open_region(self.name, len(goals_arr))
+        view = self.floor.open_region(self.name, len(goals_arr), goals=goals_arr)
         self._view, self._parked = view, view.read().poses.copy()
         report = drive_to(view, goals_arr, UPKEEP_LIMIT_S, stop)
         result = _result(report, view.fleet_ids, "set up in region " + self.name)

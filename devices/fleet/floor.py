@@ -132,10 +132,12 @@ class SharedFloor:
         order = np.flatnonzero(here)[np.argsort(d[here], kind="stable")]
         return ids[order]
 
-    def open_region(self, name: str, robots: int | ArrayLike) -> RegionRobots:
+    def open_region(self, name: str, robots: int | ArrayLike, goals: ArrayLike | None = None) -> RegionRobots:
         """Region ``name``'s ports for a job: ``robots`` (a count: the free robots standing in the region, nearest
-        its centre first; or floor ids) as robots 0…N−1. ValueError when the region is busy, does not exist or has
-        too few free robots."""
+        its centre first; or floor ids) as robots 0…N−1 — with ``goals`` ``(N, 2+)`` (region frame, m: where the
+        job's robots will be set up) ordered so that robot k is the one whose way to goal k is short (the
+        assignment of least total distance: crossing paths deadlock under the barrier). ValueError when the
+        region is busy, does not exist or has too few free robots."""
         region = self.layout.region(name)
         with self._cv:
             if self._closed:
@@ -149,6 +151,8 @@ class SharedFloor:
             fleet_ids = free[:int(robots)]
         else:
             fleet_ids = np.asarray(robots, dtype=np.int64).reshape(-1)
+        if goals is not None:
+            fleet_ids = self._assigned(region, fleet_ids, np.asarray(goals, dtype=float).reshape(len(fleet_ids), -1))
         view = RegionRobots(self, region, fleet_ids)
         with self._cv:
             if name in self._open:
@@ -156,6 +160,22 @@ class SharedFloor:
             self._open[name] = view
             self._stopped.discard(name)
         return view
+
+    def _assigned(self, region: Region, fleet_ids: NDArray[np.int64], goals: FloatArray) -> NDArray[np.int64]:
+        """``fleet_ids`` reordered so that robot k goes to ``goals[k]`` (region frame) on the assignment of least
+        total distance (:func:`scipy.optimize.linear_sum_assignment`, once per job)."""
+        from scipy.optimize import linear_sum_assignment
+
+        reading = self.reading()
+        rows, present = rows_of(reading.ids, fleet_ids)
+        if not present.all():
+            raise ValueError(f"region {region.name}: robots {fleet_ids[~present].tolist()} are not on the floor")
+        here = region.to_local(np.asarray(reading.poses, dtype=float)[rows, :2])
+        cost = np.linalg.norm(here[:, None, :] - goals[None, :, :2], axis=2)  # (N, N): N is one job's robots
+        robot, goal = linear_sum_assignment(cost)
+        out = np.empty_like(fleet_ids)
+        out[goal] = fleet_ids[robot]
+        return out
 
     def _leave(self, name: str) -> None:
         with self._cv:

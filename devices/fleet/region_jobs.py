@@ -26,6 +26,7 @@ from numpy.typing import ArrayLike, NDArray
 from swarmdeck.core.bounds import Bounds
 from swarmdeck.devices.controllers import HybridPoseController, at_pose
 from swarmdeck.devices.fleet.floor import FloorClosed, RegionRobots, SharedFloor
+from swarmdeck.devices.fleet.regions import Region
 from swarmdeck.devices.initial_conditions import random_initial_poses
 from swarmdeck.devices.runner import RunResult, run_experiment
 
@@ -71,12 +72,13 @@ def drive_to(view: RegionRobots, goals: ArrayLike, limit_s: float = UPKEEP_LIMIT
     return {"ok": not len(missing), "seconds": round(ticks * dt, 3), "robots": missing.tolist()}
 
 
-def _idle_in(view: RegionRobots) -> FloatArray:
-    """``(K, 2)`` region-frame positions of the floor's other robots standing in the region (start poses avoid them)."""
-    full = view.floor.reading()
+def _staying(floor: SharedFloor, region: Region, chosen: NDArray[np.int64]) -> FloatArray:
+    """``(K, 2)`` region-frame positions of the floor's robots standing in ``region`` other than ``chosen`` (the
+    job's start poses avoid them)."""
+    full = floor.reading()
     xy = np.asarray(full.poses, dtype=float)[:, :2]
-    others = ~np.isin(np.asarray(full.ids, dtype=np.int64), view.fleet_ids) & view.region.bounds.contains(xy)
-    return view.region.to_local(xy[others])
+    others = ~np.isin(np.asarray(full.ids, dtype=np.int64), chosen) & region.bounds.contains(xy)
+    return region.to_local(xy[others])
 
 
 def run_in_region(floor: SharedFloor, name: str, target: str | Path | Callable[..., Any], *,
@@ -95,10 +97,10 @@ def run_in_region(floor: SharedFloor, name: str, target: str | Path | Callable[.
     def robots(n: int, initial: Any, config: Any = None, params: Any = None) -> RegionRobots:
         if "view" in held:
             raise ValueError(f"region {name}: the job already has its robots (one Arena per job)")
-        view = floor.open_region(name, int(n))
-        held["view"] = view
-        result.fleet_ids = view.fleet_ids.tolist()
-        held["parked"] = view.read().poses.copy()
+        free = floor.free_robots(name)
+        if len(free) < int(n):
+            raise ValueError(f"region {name} has {len(free)} free robot(s), the job asks for {int(n)}")
+        chosen = free[:int(n)]
         if initial is not None:
             goals = np.asarray(initial, dtype=float).reshape(int(n), 3)
         elif start_poses is not None:
@@ -107,10 +109,14 @@ def run_in_region(floor: SharedFloor, name: str, target: str | Path | Callable[.
             a, (ox, oy) = floor.layout.start_area(name), region.origin
             local = Bounds(a.x_min - ox, a.x_max - ox, a.y_min - oy, a.y_max - oy)
             try:
-                goals = random_initial_poses(int(n), local, rng=seed, avoid=_idle_in(view))
+                goals = random_initial_poses(int(n), local, rng=seed, avoid=_staying(floor, region, chosen))
             except ValueError:  # the region's start area is crowded with idle robots: start where they stand
-                goals = held["parked"]
-        result.setup = drive_to(view, goals, upkeep_limit_s)
+                goals = None
+        view = floor.open_region(name, chosen, goals=goals)
+        held["view"] = view
+        result.fleet_ids = view.fleet_ids.tolist()
+        held["parked"] = view.read().poses.copy()
+        result.setup = drive_to(view, held["parked"] if goals is None else goals, upkeep_limit_s)
         if not result.setup["ok"]:
             raise ValueError(f"region {name}: set-up failed, robots {result.setup['robots']} did not reach their "
                              "start poses")
