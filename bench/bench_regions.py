@@ -11,6 +11,7 @@ contacts (both 0 expected).
 
     .venv/bin/python bench/bench_regions.py            # 8 jobs (≈ 3 min on a loaded 2-core machine)
     .venv/bin/python bench/bench_regions.py --jobs 4   # quicker
+    .venv/bin/python bench/bench_regions.py --start parked   # jobs start where their robots stand
 """
 from __future__ import annotations
 
@@ -28,9 +29,9 @@ from swarmdeck.examples.rendezvous import experiment
 ROBOTS, DURATION, FLOOR_ROBOTS = 6, 30.0, 50
 
 
-def run(layout: RegionLayout, per_region: dict[str, int], jobs: int) -> dict:
+def run(layout: RegionLayout, per_region: dict[str, int], jobs: int, start: str | None) -> dict:
     floor = simulated_floor(layout, per_region)
-    queue = [QueuedJob(f"job{k}", experiment, ROBOTS, DURATION, seed=k) for k in range(jobs)]
+    queue = [QueuedJob(f"job{k}", experiment, ROBOTS, DURATION, seed=k, start_poses=start) for k in range(jobs)]
     t0 = time.perf_counter()
     done = run_queue(floor, queue)
     wall = time.perf_counter() - t0
@@ -47,14 +48,19 @@ def run(layout: RegionLayout, per_region: dict[str, int], jobs: int) -> dict:
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--jobs", type=int, default=8)
+    parser.add_argument("--start", choices=("random", "parked"), default="random",
+                        help="the jobs' start poses: random valid ones in the region (set up by driving there) or "
+                             "where the robots stand (no set-up drive)")
     args = parser.parse_args()
     print(harness.machine())
     whole = RegionLayout.grid(DEFAULT_BOUNDS, 1, 1)
     quad = RegionLayout.grid(DEFAULT_BOUNDS, 2, 2)
     split = {"r0c0": 13, "r0c1": 13, "r1c0": 12, "r1c1": 12}
-    rows = {"one at a time": run(whole, {"r0c0": FLOOR_ROBOTS}, args.jobs),
-            "2 × 2 regions": run(quad, split, args.jobs)}
-    print(f"{args.jobs} jobs of {ROBOTS} robots, {DURATION:g} s each, on a {FLOOR_ROBOTS}-robot floor "
+    start = None if args.start == "random" else args.start
+    rows = {"one at a time": run(whole, {"r0c0": FLOOR_ROBOTS}, args.jobs, start),
+            "2 × 2 regions": run(quad, split, args.jobs, start)}
+    print(f"{args.jobs} jobs of {ROBOTS} robots, {DURATION:g} s each, start poses {args.start}, on a "
+          f"{FLOOR_ROBOTS}-robot floor "
           f"(baseline {harness.baseline().median * 1e3:.1f} ms)")
     print("| mode | jobs ok | floor time (s) | jobs ok per hour | set-up (s, mean) | return (s, mean) | outside | contacts "
           "| wall time (s) |")

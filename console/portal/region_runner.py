@@ -28,10 +28,10 @@ from swarmdeck.console.portal.runner import ArenaRunner, ArenaSettings
 from swarmdeck.console.portal.service import PortalService
 from swarmdeck.console.runtime.fleet_upkeep import UpkeepResult
 from swarmdeck.core.bounds import Bounds
+from swarmdeck.core.ports import rows_of
 from swarmdeck.devices.fleet.floor import FloorClosed, RegionRobots, SharedFloor, simulated_floor
-from swarmdeck.devices.fleet.region_jobs import UPKEEP_LIMIT_S, drive_to
+from swarmdeck.devices.fleet.region_jobs import UPKEEP_LIMIT_S, drive_to, region_start_poses
 from swarmdeck.devices.fleet.regions import RegionLayout
-from swarmdeck.devices.initial_conditions import random_initial_poses
 
 
 class RegionFleet:
@@ -58,16 +58,17 @@ class RegionFleet:
         return None if free >= int(n) else f"region {self.name}: {free} free robot(s), the job needs {int(n)}"
 
     def start_poses(self, n: int) -> NDArray[np.float64]:
-        """``(n, 3)`` random valid start poses in the region's start area (region frame), clear of the region's
-        robots that stay parked."""
+        """``(n, 3)`` random valid start poses for the region's next ``n`` robots (region frame,
+        :func:`~swarmdeck.devices.fleet.region_jobs.region_start_poses`; where they stand when it is crowded)."""
         self._starts += 1
-        a, (ox, oy) = self.floor.layout.start_area(self.name), self.region.origin
-        local = Bounds(a.x_min - ox, a.x_max - ox, a.y_min - oy, a.y_max - oy)
-        free = self.floor.free_robots(self.name)
-        reading = self.floor.reading()
-        stay = np.isin(np.asarray(reading.ids), free[int(n):]) & self.region.bounds.contains(reading.poses)
         seed = None if self.seed is None else self.seed + self._starts
-        return random_initial_poses(int(n), local, rng=seed, avoid=self.region.to_local(reading.poses[stay, :2]))
+        chosen = self.floor.free_robots(self.name)[:int(n)]
+        poses = region_start_poses(self.floor, self.name, chosen, seed)
+        if poses is None:
+            reading = self.floor.reading()
+            rows, _ = rows_of(reading.ids, chosen)
+            poses = self.region.to_local(np.asarray(reading.poses, dtype=float)[rows])
+        return poses
 
     def set_up(self, job_id: int, goals: ArrayLike, *, stop: Callable[[], bool], on_loop: Any
                ) -> tuple[UpkeepResult, RegionRobots | None]:

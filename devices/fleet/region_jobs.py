@@ -5,7 +5,8 @@ floor's ticks are lockstep, :mod:`swarmdeck.devices.fleet.floor`):
 
 1. when the script builds its Arena (or rps Robotarium) with N robots, region ``name`` is opened with N of
    the robots standing in it (:meth:`SharedFloor.open_region`), and they are **set up** at the script's
-   initial conditions (region-local), else at ``start_poses``, else at random valid poses inside the
+   initial conditions (region-local), else at ``start_poses`` (``"parked"``: where they stand), else at random
+   valid poses inside the
    region's start area — driven there through the floor's one barrier (:func:`drive_to`);
 2. the script runs on the region's ports (:class:`~swarmdeck.devices.fleet.floor.RegionRobots`) with the
    region as its arena (``run_experiment(..., bounds=region.local_bounds)``): its own bounds, origin and
@@ -24,6 +25,8 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from swarmdeck.core.bounds import Bounds
+from swarmdeck.core.kinematics import si_to_unicycle
+from swarmdeck.core.ports import rows_of
 from swarmdeck.devices.controllers import HybridPoseController, at_pose
 from swarmdeck.devices.fleet.floor import FloorClosed, RegionRobots, SharedFloor
 from swarmdeck.devices.fleet.regions import Region
@@ -34,6 +37,11 @@ FloatArray = NDArray[np.float64]
 
 #: s a region's set-up or return may take before it is given up (the robots then stop where they are)
 UPKEEP_LIMIT_S = 60.0
+#: a robot that moved less than STUCK_DISTANCE m in STUCK_S s on its way is deadlocked: it sidesteps for ESCAPE_S s
+#: at ESCAPE_SPEED m/s (the barrier keeps the sidestep safe)
+STUCK_DISTANCE, STUCK_S, ESCAPE_S, ESCAPE_SPEED = 0.01, 3.0, 1.0, 0.1
+#: m around the chosen robots where a job's random start poses are drawn first (:func:`region_start_poses`)
+NEAR_M = 0.25
 
 
 @dataclass
@@ -53,23 +61,66 @@ class RegionJobResult:
 def drive_to(view: RegionRobots, goals: ArrayLike, limit_s: float = UPKEEP_LIMIT_S,
              stop: Callable[[], bool] | None = None) -> dict[str, Any]:
     """Drive the region's robots to ``goals`` ``(N, 3)`` (region frame, m/rad) through the floor's barrier;
-    ``{"ok", "seconds", "robots"}`` (robots not at their goal when it ended: the time limit, ``stop`` or a
-    stopped region)."""
+    ``{"ok", "seconds", "robots", "escapes"}`` (robots not at their goal when it ended: the time limit, ``stop`` or a
+    stopped region). A robot that made no progress for :data:`STUCK_S` (a deadlock of the barrier) sidesteps for
+    :data:`ESCAPE_S` (its way to the goal turned by 90°), then goes on."""
     goals = np.asarray(goals, dtype=float).reshape(view.n_robots, 3)
     ctrl = HybridPoseController()
     dt = view.floor.dt
     ticks, limit = 0, int(np.ceil(limit_s / dt))
     ids = np.arange(view.n_robots, dtype=np.int64)
     poses = view.read().poses
-    while not np.all(at_pose(poses, goals)) and ticks < limit:
+    stuck_ticks, escape_ticks = int(round(STUCK_S / dt)), int(round(ESCAPE_S / dt))
+    anchor, since = poses[:, :2].copy(), np.zeros(view.n_robots, dtype=np.int64)
+    escaping = np.zeros(view.n_robots, dtype=np.int64)  # ticks of sidestep left
+    escapes = 0
+    while not np.all(arrived := at_pose(poses, goals)) and ticks < limit:
         if (stop is not None and stop()) or view.floor.stopped(view.region.name):
             break
         v, w = ctrl(poses, goals)
+        moved = np.linalg.norm(poses[:, :2] - anchor, axis=1) > STUCK_DISTANCE
+        anchor[moved], since[moved] = poses[moved, :2], 0
+        since[~moved] += 1
+        start = (since >= stuck_ticks) & ~arrived & (escaping == 0)
+        escaping[start], since[start] = escape_ticks, 0
+        escapes += int(start.sum())
+        side = escaping > 0
+        if side.any():  # sidestep: the way to the goal turned by +90°, at a walking pace
+            to_goal = goals[side, :2] - poses[side, :2]
+            norm = np.maximum(np.linalg.norm(to_goal, axis=1, keepdims=True), 1e-9)
+            u = np.column_stack([-to_goal[:, 1], to_goal[:, 0]]) / norm * ESCAPE_SPEED
+            v[side], w[side] = si_to_unicycle(poses[side], u, view.floor.params.lookahead)
+            escaping[side] -= 1
         view.send(ids, v, w)
         ticks += 1
         poses = view.read().poses
     missing = np.flatnonzero(~at_pose(poses, goals))
-    return {"ok": not len(missing), "seconds": round(ticks * dt, 3), "robots": missing.tolist()}
+    return {"ok": not len(missing), "seconds": round(ticks * dt, 3), "robots": missing.tolist(), "escapes": escapes}
+
+
+def region_start_poses(floor: SharedFloor, name: str, chosen: ArrayLike, seed: int | None = None) -> FloatArray | None:
+    """Random valid start poses ``(N, 3)`` (region frame) for the floor robots ``chosen`` of region ``name``: inside
+    the region's start area, clear of the region's other robots, and first near where the chosen robots stand (their
+    box grown by :data:`NEAR_M`: short ways that cross no parked robot); None when the region is too crowded (then
+    the job starts where its robots stand)."""
+    region = floor.layout.region(name)
+    chosen = np.asarray(chosen, dtype=np.int64)
+    reading = floor.reading()
+    rows, _ = rows_of(reading.ids, chosen)
+    here = region.to_local(np.asarray(reading.poses, dtype=float)[rows, :2])
+    a, (ox, oy) = floor.layout.start_area(name), region.origin
+    area = Bounds(a.x_min - ox, a.x_max - ox, a.y_min - oy, a.y_max - oy)
+    lo, hi = here.min(axis=0) - NEAR_M, here.max(axis=0) + NEAR_M
+    near = Bounds(max(area.x_min, lo[0]), min(area.x_max, hi[0]), max(area.y_min, lo[1]), min(area.y_max, hi[1]))
+    avoid = _staying(floor, region, chosen)
+    for box in (near, area):
+        if box.width <= 0 or box.height <= 0:
+            continue
+        try:
+            return random_initial_poses(len(chosen), box, rng=seed, avoid=avoid)
+        except ValueError:  # more robots than fit there
+            continue
+    return None
 
 
 def _staying(floor: SharedFloor, region: Region, chosen: NDArray[np.int64]) -> FloatArray:
@@ -101,17 +152,16 @@ def run_in_region(floor: SharedFloor, name: str, target: str | Path | Callable[.
         if len(free) < int(n):
             raise ValueError(f"region {name} has {len(free)} free robot(s), the job asks for {int(n)}")
         chosen = free[:int(n)]
+        goals: FloatArray | None = None
         if initial is not None:
             goals = np.asarray(initial, dtype=float).reshape(int(n), 3)
+        elif isinstance(start_poses, str):
+            if start_poses != "parked":
+                raise ValueError(f"start_poses must be poses or 'parked', got {start_poses!r}")
         elif start_poses is not None:
             goals = np.asarray(start_poses, dtype=float).reshape(int(n), 3)
         else:
-            a, (ox, oy) = floor.layout.start_area(name), region.origin
-            local = Bounds(a.x_min - ox, a.x_max - ox, a.y_min - oy, a.y_max - oy)
-            try:
-                goals = random_initial_poses(int(n), local, rng=seed, avoid=_staying(floor, region, chosen))
-            except ValueError:  # the region's start area is crowded with idle robots: start where they stand
-                goals = None
+            goals = region_start_poses(floor, name, chosen, seed)
         view = floor.open_region(name, chosen, goals=goals)
         held["view"] = view
         result.fleet_ids = view.fleet_ids.tolist()
@@ -152,6 +202,7 @@ class QueuedJob:
     robots: int
     duration: float
     seed: int | None = None
+    start_poses: Any = None  # run_in_region's: None (random valid ones), "parked" or (N, 3) poses
 
 
 def run_queue(floor: SharedFloor, jobs: list[QueuedJob], *, regions: tuple[str, ...] | None = None,
@@ -179,7 +230,7 @@ def run_queue(floor: SharedFloor, jobs: list[QueuedJob], *, regions: tuple[str, 
                     return
                 waiting.remove(job)
             result = run_in_region(floor, region, job.target, n_robots=job.robots, duration=job.duration,
-                                   seed=job.seed, upkeep_limit_s=upkeep_limit_s)
+                                   seed=job.seed, upkeep_limit_s=upkeep_limit_s, start_poses=job.start_poses)
             with lock:
                 done.append((job, result))
 
