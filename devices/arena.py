@@ -82,6 +82,16 @@ class RunDefaults:
     rps_call_order: bool = True
     # line-segment obstacles (core.obstacles.Obstacles) for Arenas built without their own (swarmdeck run --obstacles)
     obstacles: Any = None
+    # the arena a script built without a config sees, m (None: DEFAULT_BOUNDS): its region of a shared floor
+    # (devices/fleet/regions.py), so an unmodified script cannot tell it shares the floor
+    bounds: Any = None
+
+    def arena_config(self, **kw: Any) -> ArenaConfig:
+        """The :class:`ArenaConfig` of an Arena (or rps Robotarium) a script builds without one: these defaults'
+        seed and bounds, plus ``kw``."""
+        if self.bounds is not None:
+            kw.setdefault("bounds", self.bounds)
+        return ArenaConfig(seed=self.seed, **kw)
 
 
 #: The sensors' noise stream beside the simulator's: Arena sensing seeds with (seed, this).
@@ -172,7 +182,7 @@ class Arena:
         if safety is None:
             safety = defaults.safety
         if config is None:
-            config = ArenaConfig(seed=defaults.seed)
+            config = defaults.arena_config()
         if obstacles is None and config.obstacles is None:
             obstacles = defaults.obstacles
         if obstacles is not None:

@@ -142,7 +142,8 @@ def is_unicycle_filter(filt: object) -> bool:
 
 
 def certify(poses: ArrayLike, nominal: ArrayLike, robot: GritsBotParams, filt: SafetyFilterLike | None = None, *,
-            seen: ArrayLike | None = None, obstacles: ArrayLike | None = None) -> Certified:
+            seen: ArrayLike | None = None, obstacles: ArrayLike | None = None,
+            robot_bounds: ArrayLike | None = None) -> Certified:
     """Nominal look-ahead velocities → the unicycle commands to send (see the module docstring).
 
     Args:
@@ -153,6 +154,9 @@ def certify(poses: ArrayLike, nominal: ArrayLike, robot: GritsBotParams, filt: S
             or an SI filter ``filter(points, u[, obstacles]) -> (u, diag)``.
         seen: ``(N,)`` robots with a fresh pose (default: all).
         obstacles: ``(M, 2)`` further fixed points (e.g. robots excluded from control), m.
+        robot_bounds: ``(N, 4)`` each robot's own wall rectangle ``[x_min, x_max, y_min, y_max]``, m (its
+            region when several experiments share the floor, :mod:`swarmdeck.devices.fleet.regions`); None:
+            the filter's bounds. Only swarmdeck's barrier filters take it.
     """
     poses = np.asarray(poses, dtype=float)
     nominal = np.asarray(nominal, dtype=float)
@@ -160,6 +164,8 @@ def certify(poses: ArrayLike, nominal: ArrayLike, robot: GritsBotParams, filt: S
     if poses.shape != (n, 3) or nominal.shape != (n, 2):
         raise ValueError(f"certify: poses {poses.shape} and nominal {nominal.shape} must be (N, 3) and (N, 2)")
     seen_mask = np.ones(n, dtype=bool) if seen is None else np.asarray(seen, dtype=bool).reshape(n)
+    if robot_bounds is not None and np.shape(robot_bounds) != (n, 4):
+        raise ValueError(f"certify: robot_bounds {np.shape(robot_bounds)} must be (N, 4) for {n} robots")
     invalid = ~np.all(np.isfinite(nominal), axis=1)
     u = np.where((invalid | ~seen_mask)[:, None], 0.0, nominal)
     ell = robot.lookahead
@@ -167,7 +173,7 @@ def certify(poses: ArrayLike, nominal: ArrayLike, robot: GritsBotParams, filt: S
     if filt is None:
         v, w, ok, status, diag = v0, w0, True, "off", None
     else:
-        v, w, ok, status, diag = _filter(filt, poses, v0, w0, seen_mask, obstacles, robot)
+        v, w, ok, status, diag = _filter(filt, poses, v0, w0, seen_mask, obstacles, robot, robot_bounds)
     if not seen_mask.all():
         v, w = np.where(seen_mask, v, 0.0), np.where(seen_mask, w, 0.0)
     safe = unicycle_to_si(np.where(seen_mask[:, None], poses, 0.0), v, w, ell)
@@ -175,9 +181,12 @@ def certify(poses: ArrayLike, nominal: ArrayLike, robot: GritsBotParams, filt: S
 
 
 def _filter(filt: SafetyFilterLike, poses: FloatArray, v: FloatArray, w: FloatArray, seen: BoolArray,
-            obstacles: ArrayLike | None, robot: GritsBotParams
+            obstacles: ArrayLike | None, robot: GritsBotParams, robot_bounds: ArrayLike | None = None
             ) -> tuple[FloatArray, FloatArray, bool, str, FilterDiagnostics | None]:
     """The barrier over the seen robots; unseen ones and ``obstacles`` are fixed points. Fail-stop."""
+    walls: dict[str, Any] = {}
+    if robot_bounds is not None:
+        walls["robot_bounds"] = np.asarray(robot_bounds, dtype=float).reshape(-1, 4)[seen]
     n, ell = len(poses), robot.lookahead
     extra = None if obstacles is None else np.asarray(obstacles, dtype=float).reshape(-1, 2)
     extra = None if extra is None or len(extra) == 0 else extra
@@ -192,13 +201,14 @@ def _filter(filt: SafetyFilterLike, poses: FloatArray, v: FloatArray, w: FloatAr
         poses, v, w = poses[idx], v[idx], w[idx]
     k = len(idx)
     if is_unicycle_filter(filt):
-        vs, ws, diag = cast(UnicycleCommandFilter, filt).filter(poses, v, w, extra)
+        vs, ws, diag = cast(Any, filt).filter(poses, v, w, extra, **walls)
         vs, ws = np.asarray(vs, dtype=float), np.asarray(ws, dtype=float)
     else:
         si = cast(CommandFilter, filt)
         u = unicycle_to_si(poses, v, w, ell)
         points = lookahead_points(poses, ell)
-        safe_u, diag = si.filter(points, u) if extra is None else si.filter(points, u, extra)
+        safe_u, diag = (cast(Any, si).filter(points, u, extra, **walls) if walls else
+                        si.filter(points, u) if extra is None else si.filter(points, u, extra))
         safe_u = np.asarray(safe_u, dtype=float)
         vs, ws = (np.zeros(0), np.zeros(0)) if safe_u.shape != (k, 2) else si_to_unicycle(poses, safe_u, ell)
         vs, ws, _ = limit_unicycle(vs, ws, robot)

@@ -121,6 +121,7 @@ def run_experiment(
     rps_semantics: bool = False,
     rps_call_order: bool = True,
     obstacles: Any = None,
+    bounds: Any = None,
 ) -> RunResult:
     """Run a script file (or an ``experiment(arena)`` callable) and return its :class:`RunResult`.
 
@@ -138,6 +139,8 @@ def run_experiment(
     ``rps_semantics``/``rps_call_order``: the rps facade's modes (:class:`~swarmdeck.devices.rps.robotarium.Robotarium`).
     ``obstacles``: line-segment obstacles (:class:`~swarmdeck.core.obstacles.Obstacles`) of every Arena the
     script builds without its own.
+    ``bounds``: the arena ``(x_min, x_max, y_min, y_max)`` (m) Arenas and Robotariums the script builds without a
+    config see (its region of a shared floor, :mod:`swarmdeck.devices.fleet.floor`); None: the default floor.
     """
     result = RunResult()
 
@@ -149,7 +152,7 @@ def run_experiment(
     defaults = RunDefaults(n_robots=n_robots, duration=duration, seed=seed, safety=safety,
                            on_create=created, on_step=on_step, backend_factory=backend_factory,
                            from_docks=from_docks, rps_semantics=rps_semantics, rps_call_order=rps_call_order,
-                           obstacles=obstacles)
+                           obstacles=obstacles, bounds=bounds)
     token = RUN_DEFAULTS.set(defaults)
     script = None if callable(target) else str(target)
     try:

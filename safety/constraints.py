@@ -155,10 +155,22 @@ def _coincident(points: np.ndarray, obstacles: np.ndarray, tree: cKDTree) -> tup
     return idx[hit].astype(np.int64), hit.astype(np.int64)
 
 
-def wall_rows(points: np.ndarray, cfg: BarrierConfig) -> Rows:
-    """Wall rows for robots within ``cfg.wall_radius()`` of a wall (sides +x, −x, +y, −y)."""
+def wall_rows(points: np.ndarray, cfg: BarrierConfig, bounds: np.ndarray | None = None) -> Rows:
+    """Wall rows for robots within ``cfg.wall_radius()`` of a wall (sides +x, −x, +y, −y).
+
+    ``bounds``: None (every robot inside ``cfg.bounds``) or ``(N, 4)`` per-robot rectangles
+    ``[x_min, x_max, y_min, y_max]`` in m — the region each robot must stay in when several
+    experiments share one floor (:mod:`swarmdeck.devices.fleet.regions`); the margin and gain are
+    ``cfg``'s for every robot. Vectorised: one comparison per robot and side.
+    """
     n_robots = points.shape[0]
-    x_min, x_max, y_min, y_max = cfg.bounds
+    if bounds is None:
+        x_min, x_max, y_min, y_max = (np.full(n_robots, float(v)) for v in cfg.bounds)
+    else:
+        per = np.asarray(bounds, dtype=float)
+        if per.shape != (n_robots, 4):
+            raise ValueError(f"per-robot bounds must have shape ({n_robots}, 4), got {per.shape}")
+        x_min, x_max, y_min, y_max = per.T
     m = cfg.margin
     x, y = points[:, 0], points[:, 1]
     clearance = np.stack([x_max - m - x, x - x_min - m, y_max - m - y, y - y_min - m], axis=1)  # (N,4)
@@ -201,13 +213,14 @@ def segment_rows(points: np.ndarray, cfg: BarrierConfig, n_obs: int = 0) -> Rows
 
 
 def barrier_rows(points: np.ndarray, cfg: BarrierConfig, obstacles: np.ndarray | None = None,
-                 tree: cKDTree | None = None) -> Rows:
+                 tree: cKDTree | None = None, robot_bounds: np.ndarray | None = None) -> Rows:
     """All candidate rows (pairs unless ``cfg.pairs`` is False, walls, obstacles, segments of
-    ``cfg.obstacles``) for controlled points (N, 2)."""
+    ``cfg.obstacles``) for controlled points (N, 2);
+    ``robot_bounds`` ``(N, 4)``: each robot's own wall rectangle (:func:`wall_rows`), None: ``cfg.bounds``."""
     if points.shape[0] == 0:
         return Rows.empty()
     tree = cKDTree(points) if tree is None else tree
-    parts = ([pair_rows(points, cfg, tree)] if cfg.pairs else []) + [wall_rows(points, cfg)]
+    parts = ([pair_rows(points, cfg, tree)] if cfg.pairs else []) + [wall_rows(points, cfg, robot_bounds)]
     if obstacles is not None and obstacles.shape[0]:
         parts.append(obstacle_rows(points, obstacles, cfg, tree))
     if cfg.obstacles is not None and cfg.obstacles.m:

@@ -88,6 +88,22 @@ def as_points(x: ArrayLike, name: str, n: int | None = None) -> np.ndarray:
     return arr
 
 
+def as_robot_bounds(x: ArrayLike, n: int) -> np.ndarray:
+    """``x`` as per-robot wall rectangles, a float (n, 4) array of ``[x_min, x_max, y_min, y_max]`` (m) with
+    finite values and min < max, or InputError naming what is wrong."""
+    try:
+        arr = np.asarray(x, dtype=float)
+    except (TypeError, ValueError) as exc:
+        raise InputError(f"robot_bounds must be a numeric (N, 4) array: {exc}") from None
+    if arr.shape != (n, 4):
+        raise InputError(f"robot_bounds must have shape ({n}, 4) like points, got {arr.shape}")
+    bad = ~(np.all(np.isfinite(arr), axis=1) & (arr[:, 0] < arr[:, 1]) & (arr[:, 2] < arr[:, 3]))
+    if bad.any():
+        raise InputError(f"robot_bounds rows {np.flatnonzero(bad)[:10].tolist()} are not finite rectangles "
+                         "[x_min, x_max, y_min, y_max] with min < max")
+    return arr
+
+
 def robot_count(points: ArrayLike, nominal: ArrayLike) -> int:
     """Best guess of N for a fail-stop answer to malformed input."""
     for x in (nominal, points):
@@ -178,6 +194,7 @@ class SafetyFilter:
         self._lam_keys = np.zeros(0, dtype=np.int64)
         self._lam = np.zeros(0)
         self._skip_warm = False  # the previous call's warm paths reached the active-set cap
+        self._walls: np.ndarray | None = None  # this call's per-robot wall rectangles (N, 4), for its diagnostics
         if self.config.solver == "auto":
             dual_ascent.warm_up()  # numba's compile (or cache load) here, never in a tick
 
@@ -195,22 +212,25 @@ class SafetyFilter:
         self._skip_warm = False
 
     # ------------------------------------------------------------------ public
-    def filter(self, points: ArrayLike, nominal: ArrayLike, obstacles: ArrayLike | None = None
-               ) -> tuple[np.ndarray, BarrierDiagnostics]:
+    def filter(self, points: ArrayLike, nominal: ArrayLike, obstacles: ArrayLike | None = None, *,
+               robot_bounds: ArrayLike | None = None) -> tuple[np.ndarray, BarrierDiagnostics]:
         """Safe velocities for controlled points.
 
         points (N, 2) m, nominal (N, 2) m/s, obstacles (M, 2) m or None (fixed
-        points every robot keeps D_s from). Returns (safe (N, 2) new array,
-        diagnostics). Never raises for bad input: zeros and ``diag.ok`` False.
+        points every robot keeps D_s from), robot_bounds (N, 4) m or None: each robot's own wall
+        rectangle ``[x_min, x_max, y_min, y_max]`` (its region of a shared floor) instead of
+        ``config.bounds``. Returns (safe (N, 2) new array, diagnostics). Never raises for bad
+        input: zeros and ``diag.ok`` False.
         """
         t0 = time.perf_counter()
         try:
             P = as_points(points, "points")
             U = as_points(nominal, "nominal", P.shape[0])
             O = None if obstacles is None else as_points(obstacles, "obstacles")
+            W = None if robot_bounds is None else as_robot_bounds(robot_bounds, P.shape[0])
         except InputError as exc:
             return self.fail_stop(robot_count(points, nominal), nominal, f"invalid input: {exc}", t0)
-        return self.solve(P, U, O, None, self.config.max_speed, t0)
+        return self.solve(P, U, O, None, self.config.max_speed, t0, robot_bounds=W)
 
     @staticmethod
     def coordinate_problem(P: np.ndarray, O: np.ndarray | None) -> str | None:
@@ -241,9 +261,12 @@ class SafetyFilter:
         return np.zeros((n, 2)), diag
 
     def solve(self, P: np.ndarray, U: np.ndarray, O: np.ndarray | None, extra: Rows | None,
-              max_speed: float | None, t0: float) -> tuple[np.ndarray, BarrierDiagnostics]:
-        """Filter validated arrays; ``extra`` rows (e.g. wheel limits) are added to the barrier rows."""
+              max_speed: float | None, t0: float, *, robot_bounds: np.ndarray | None = None
+              ) -> tuple[np.ndarray, BarrierDiagnostics]:
+        """Filter validated arrays; ``extra`` rows (e.g. wheel limits) are added to the barrier rows;
+        ``robot_bounds`` (N, 4): per-robot wall rectangles (validated by :func:`as_robot_bounds`)."""
         cfg = self.config
+        self._walls = robot_bounds
         n = P.shape[0]
         n_obs = 0 if O is None else O.shape[0]
         if n == 0:
@@ -254,7 +277,7 @@ class SafetyFilter:
             return self.fail_stop(n, U, problem, t0)
         try:
             with np.errstate(over="ignore", invalid="ignore"):
-                rows = barrier_rows(P, cfg, O, cKDTree(P))
+                rows = barrier_rows(P, cfg, O, cKDTree(P), robot_bounds)
         except (ValueError, FloatingPointError, OverflowError) as exc:  # never out of the filter
             return self.fail_stop(n, U, f"cannot build the barrier rows: {exc}", t0)
         if extra is not None and extra.m:
@@ -611,7 +634,7 @@ class SafetyFilter:
             min_d = float(cKDTree(P).query(P, k=2)[0][:, 1].min())
         else:
             min_d = float("inf")
-        x_min, x_max, y_min, y_max = cfg.bounds
+        x_min, x_max, y_min, y_max = cfg.bounds if self._walls is None else self._walls.T
         if n:
             clear = np.stack([P[:, 0] - x_min, x_max - P[:, 0], P[:, 1] - y_min, y_max - P[:, 1]], axis=1)
             min_wall = float(clear.min())
@@ -636,4 +659,4 @@ class SafetyFilter:
         )
 
 
-__all__ = ["SafetyFilter", "InputError", "as_points", "robot_count", "restrict"]
+__all__ = ["SafetyFilter", "InputError", "as_points", "as_robot_bounds", "robot_count", "restrict"]

@@ -28,7 +28,7 @@ from swarmdeck.core.kinematics import (
 from .config import BarrierConfig
 from .constraints import LIMIT, Rows
 from .diagnostics import BarrierDiagnostics
-from .filter import InputError, SafetyFilter, as_points, robot_count
+from .filter import InputError, SafetyFilter, as_points, as_robot_bounds, robot_count
 
 
 def wheel_limit_rows(poses: np.ndarray, params: UnicycleParams, n_obs: int = 0) -> Rows:
@@ -72,8 +72,10 @@ class UnicycleSafetyFilter:
         """Forget the warm start."""
         self._si.reset()
 
-    def filter(self, poses: ArrayLike, v: ArrayLike, w: ArrayLike, obstacles: ArrayLike | None = None) -> tuple[np.ndarray, np.ndarray, BarrierDiagnostics]:
-        """Safe (v (N,) m/s, ω (N,) rad/s) and diagnostics (intervention in point m/s)."""
+    def filter(self, poses: ArrayLike, v: ArrayLike, w: ArrayLike, obstacles: ArrayLike | None = None, *,
+               robot_bounds: ArrayLike | None = None) -> tuple[np.ndarray, np.ndarray, BarrierDiagnostics]:
+        """Safe (v (N,) m/s, ω (N,) rad/s) and diagnostics (intervention in point m/s); ``robot_bounds``
+        (N, 4) m: each robot's own wall rectangle (its region of a shared floor) instead of the config's."""
         t0 = time.perf_counter()
         try:
             X = np.asarray(poses, dtype=float)
@@ -87,6 +89,7 @@ class UnicycleSafetyFilter:
             if not (np.all(np.isfinite(X)) and np.all(np.isfinite(V)) and np.all(np.isfinite(Wc))):
                 raise InputError("poses, v or w contain NaN or inf")
             O = None if obstacles is None else as_points(obstacles, "obstacles")
+            B = None if robot_bounds is None else as_robot_bounds(robot_bounds, n)
         except (InputError, TypeError, ValueError) as exc:
             n = robot_count(v, poses)  # the poses' row count first
             _, diag = self._si.fail_stop(n, np.zeros((n, 2)), f"invalid input: {exc}", t0)
@@ -95,7 +98,7 @@ class UnicycleSafetyFilter:
         P = lookahead_points(X, ell)
         U = unicycle_to_si(X, V, Wc, ell)
         extra = wheel_limit_rows(X, self.params, 0 if O is None else O.shape[0])
-        u, diag = self._si.solve(P, U, O, extra, None, t0)
+        u, diag = self._si.solve(P, U, O, extra, None, t0, robot_bounds=B)
         if not diag.ok:
             return np.zeros(n), np.zeros(n), diag
         if diag.nominal_was_safe:

@@ -3,6 +3,7 @@ from __future__ import annotations
 
 import argparse
 import sys
+from typing import Any
 
 from swarmdeck.console.cli import UsageError
 from swarmdeck.core.constants import CONTROL_PERIOD, SAFETY_DISTANCE
@@ -31,6 +32,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--obstacles", default=None, metavar="FILE",
                         help="the arena's line-segment obstacles: a TOML file with [arena] obstacles = [...] (as in the "
                              "console's --config); in verification, the jobs' barrier, the set-up and return, the live view")
+    parser.add_argument("--regions", default=None, metavar="LAYOUT",
+                        help="divide the simulated floor into regions and run one job per region at once: a TOML "
+                             "file with a [regions] table or COLSxROWS, e.g. 2x2 (see `swarmdeck regions`); --robots "
+                             "robots are parked, shared out between the regions")
     parser.add_argument("--fast", action="store_true",
                         help="simulated arena: run jobs, and the robots' set-up and return, as fast as they compute instead of "
                              "in real time (tests, benchmarks)")
@@ -148,6 +153,8 @@ def check_arguments(args: argparse.Namespace) -> None:
             raise UsageError(f"--trust-proxy: {addr!r} is not an IP address or network") from None
     if args.fast and args.robots_via:
         raise UsageError("--fast is for the simulated arena: networked robots run in real time")
+    if args.regions is not None and args.robots_via:
+        raise UsageError("--regions runs on the simulated floor for now: it does not combine with --robots-via")
     if args.robots_via is not None:
         from swarmdeck.devices.net.mqtt_config import parse_broker_url
 
@@ -155,6 +162,21 @@ def check_arguments(args: argparse.Namespace) -> None:
             parse_broker_url(args.robots_via)
         except ValueError as exc:
             raise UsageError(f"--robots-via: {exc}") from None
+
+
+def _region_runner(service: Any, settings: Any, spec: str, robots: int, live: Any) -> Any:
+    """The portal's arena as regions of one simulated floor: ``robots`` parked, shared out between them."""
+    from swarmdeck.console.cli.regions import load_layout
+    from swarmdeck.console.portal.region_runner import RegionRunner
+
+    layout = load_layout(spec)
+    names = layout.names
+    share = {name: robots // len(names) + (1 if k < robots % len(names) else 0) for k, name in enumerate(names)}
+    try:
+        return RegionRunner(service, settings, layout, share, live)
+    except ValueError as exc:
+        service.close()
+        raise UsageError(f"--regions {spec}: {exc}") from None
 
 
 def main(args: argparse.Namespace) -> int:
@@ -218,8 +240,10 @@ def main(args: argparse.Namespace) -> int:
     from swarmdeck.safety.guard import GuardConfig
 
     guard = GuardConfig(guard_distance=args.guard_distance, max_intervention=args.guard_intervention)
-    runner = ArenaRunner(service, ArenaSettings(robots_via=args.robots_via, fleet=fleet, fast=args.fast,
-                                                seed=args.seed, guard=guard, obstacles=obstacles), live)
+    settings = ArenaSettings(robots_via=args.robots_via, fleet=fleet, fast=args.fast, seed=args.seed, guard=guard,
+                             obstacles=obstacles)
+    runner: Any = ArenaRunner(service, settings, live) if args.regions is None else _region_runner(
+        service, settings, args.regions, args.robots, live)
     try:
         interrupted = runner.recover()
     except sqlite3.DatabaseError as exc:

@@ -191,7 +191,7 @@ class ArenaRunner:
     """
 
     def __init__(self, service: PortalService, settings: ArenaSettings, live: LiveFeed | None = None, *,
-                 poll_s: float = 1.0) -> None:
+                 poll_s: float = 1.0, fleet: Any = None) -> None:
         self.service, self.settings = service, settings
         self.live = live if live is not None else LiveFeed()
         self.poll_s = float(poll_s)
@@ -204,9 +204,11 @@ class ArenaRunner:
         self.runs = 0
         self.frame_listeners: list[Callable[[Any], None]] = []  # e.g. the operator's viser console
         self.exports = JobExports(service)  # CSV, replay, video of ended jobs, in a child process
-        self.fleet = ArenaFleet(settings.fleet, settings.bounds, settings.dt, robots_via=settings.robots_via,
-                                seed=settings.seed, charge=np.asarray(settings.charge, dtype=float),
-                                config=settings.upkeep, fast=settings.fast, obstacles=settings.obstacles)
+        # fleet: the arena's ArenaFleet, or one region's robots of a shared floor (console/portal/region_runner.py)
+        self.fleet: Any = fleet if fleet is not None else ArenaFleet(
+            settings.fleet, settings.bounds, settings.dt, robots_via=settings.robots_via, seed=settings.seed,
+            charge=np.asarray(settings.charge, dtype=float), config=settings.upkeep, fast=settings.fast,
+            obstacles=settings.obstacles)
         self.fleet.frame_listeners = self.frame_listeners  # the operator's view sees set-ups and returns too
         self._halt = threading.Event()  # fleet maneuvers must stop now (emergency stop, shutdown)
         self._idle_mark = time.monotonic()  # wall time the simulated fleet has charged up to
@@ -496,13 +498,14 @@ class ArenaRunner:
 
         # the wall-time limit covers the set-up too (its own time limit; the script waits for it)
         tick_s, overruns = cfg.arena_budget(s.dt, s.real_time)  # real time: one control period by default
+        region = None if s.bounds == DEFAULT_BOUNDS else s.bounds  # a region of a shared floor: the script's arena
         limits = SandboxLimits(tick_s=tick_s, max_overruns=overruns, tick_clock="wall" if s.real_time else "cpu",
                                wall_s=duration + cfg.grace_s + s.upkeep.limit(n))
         try:
             script, entry = self.service.script(job)
             outcome = run_sandboxed(script, make_plant, entry=entry, n_robots=n, duration=duration,
                                     limits=limits, trusted=cfg.trusted, cancelled=stopped,
-                                    jail=cfg.jail(),
+                                    jail=cfg.jail(), bounds=region,
                                     on_log=lambda chunk: self._append_log(job.id, chunk))
         finally:
             loop = state["loop"]

@@ -489,6 +489,7 @@ def run_sandboxed(
     rps_semantics: bool = False,
     rps_call_order: bool = True,
     on_log: Callable[[bytes], None] | None = None,
+    bounds: tuple[float, float, float, float] | None = None,
 ) -> SandboxOutcome:
     """Run ``script`` in a jailed child against the plant ``make_plant(n, initial_poses)`` builds.
 
@@ -510,6 +511,8 @@ def run_sandboxed(
     ``rps_semantics``/``rps_call_order``: the rps facade's modes in the child (``swarmdeck run --rps-semantics``,
     ``--no-rps-call-order``). ``on_log(bytes)``: each piece of the script's output
     (stdout and stderr, within ``limits.log_bytes``) as it comes, on a reader thread.
+    ``bounds``: the arena ``(x_min, x_max, y_min, y_max)`` (m) the script's Arena sees when it builds one without a
+    config — its region of a shared floor (:mod:`swarmdeck.devices.fleet.regions`); None: the default floor.
     """
     if isinstance(script, ScriptBundle):
         bundle = script
@@ -520,8 +523,10 @@ def run_sandboxed(
             bundle = ScriptBundle.from_path(script, entry)
         except OSError as exc:
             raise ValueError(f"cannot read the script {str(script)!r}: {exc}") from exc
-    script_options = {"argv": [str(a) for a in argv], "rps_semantics": bool(rps_semantics),
-                      "rps_call_order": bool(rps_call_order)}
+    script_options: dict[str, Any] = {"argv": [str(a) for a in argv], "rps_semantics": bool(rps_semantics),
+                                      "rps_call_order": bool(rps_call_order)}
+    if bounds is not None:
+        script_options["bounds"] = [float(v) for v in bounds]
     return _run_sandboxed(bundle, make_plant, n_robots=n_robots, duration=duration, rps=rps, limits=limits,
                           trusted=trusted, cancelled=cancelled, jail=jail, hardening=_FULL, script_options=script_options,
                           on_log=on_log)

@@ -59,6 +59,7 @@ from swarmdeck.console.sandbox.confinement import JailConfig, SandboxLimits
 from swarmdeck.console.sandbox.plant import ArenaPlant, Disturbances, SandboxPlant, VerificationRobots
 from swarmdeck.console.sandbox.run import run_sandboxed
 from swarmdeck.console.sandbox.start_poses import arena_start, check_initial_poses, perturb
+from swarmdeck.core.bounds import DEFAULT_BOUNDS, Bounds, check_bounds
 from swarmdeck.core.checks import in_range
 from swarmdeck.core.obstacles import START_CLEARANCE, Obstacles
 from swarmdeck.core.service_thread import ServiceThread
@@ -93,6 +94,9 @@ class VerificationConfig:
         initial_poses: the manifest's start poses ``(N, 3)`` [x, y, θ] (m, rad), as the arena will use
             them (None: the script's initial conditions, else random ones).
         declared_by: who declared ``n_robots``, for the refusal's message ("the manifest", "--robots").
+        bounds: the arena the job will get, m: the floor, or its region of a shared floor as the script will see
+            it (:attr:`swarmdeck.devices.fleet.regions.Region.local_bounds`) — the runs' walls, the random start
+            poses and the script's ``arena.config.bounds`` are these.
         wall_factor: wall s each run may take per declared simulated s (above 1: paced runs tick in
             real time).
         boot_s: wall s each run may take on top for its start-up (jail, imports, the script's top level).
@@ -120,10 +124,12 @@ class VerificationConfig:
     boot_s: float = 30.0
     paced_runs: int = 1
     obstacles: Obstacles | None = None
+    bounds: Bounds = DEFAULT_BOUNDS
 
     def __post_init__(self) -> None:
+        object.__setattr__(self, "bounds", check_bounds(self.bounds, "bounds"))
         if self.obstacles is not None:
-            object.__setattr__(self, "obstacles", ArenaConfig(obstacles=self.obstacles).obstacles)
+            object.__setattr__(self, "obstacles", ArenaConfig(obstacles=self.obstacles, bounds=self.bounds).obstacles)
         if self.n_robots is not None and not in_range(self.n_robots, 1, integer=True):
             raise ValueError(f"n_robots must be a positive integer, got {self.n_robots!r}")
         if not in_range(self.duration, 0.0, lo_open=True):
@@ -142,7 +148,7 @@ class VerificationConfig:
             raise ValueError(f"paced_runs must be a non-negative integer, got {self.paced_runs!r}")
         if self.initial_poses is not None:
             n = self.n_robots if self.n_robots is not None else len(self.initial_poses)
-            poses = check_initial_poses(self.initial_poses, n, ArenaConfig().bounds, "initial_poses")
+            poses = check_initial_poses(self.initial_poses, n, self.bounds, "initial_poses")
             object.__setattr__(self, "initial_poses", tuple((float(x), float(y), float(t)) for x, y, t in poses))
             object.__setattr__(self, "n_robots", n)
             if self.obstacles is not None:
@@ -168,7 +174,7 @@ class VerificationConfig:
                 "limits": asdict(self.run_limits), "rules": asdict(self.rules), "trusted": self.trusted,
                 "jail": list(self.jail.order), "allow_no_cgroup": self.jail.allow_no_cgroup,
                 "initial_poses": None if self.initial_poses is None else [list(p) for p in self.initial_poses],
-                "paced_runs": self.paced_runs,
+                "paced_runs": self.paced_runs, "bounds": list(self.bounds),
                 **({} if self.obstacles is None else {"obstacles": self.obstacles.to_list()}),
                 "wall_budget": {"factor": float(self.wall_factor), "boot_s": float(self.boot_s),
                                 "run_s": self.run_wall_s, "job_s": self.job_wall_s()}}
@@ -210,7 +216,7 @@ def run_task(task: RunTask) -> dict[str, Any]:
     seeds = np.random.SeedSequence(cfg.seed, spawn_key=(task.index,)).spawn(3)
     paced = task.mode == "raw" and task.index < cfg.paced_runs
     # paced: each step waits for the next period
-    arena_config = ArenaConfig(seed=None, real_time=paced, obstacles=cfg.obstacles)
+    arena_config = ArenaConfig(seed=None, real_time=paced, obstacles=cfg.obstacles, bounds=cfg.bounds)
     rules = cfg.rules
     start: dict[str, Any] = {}
 
@@ -234,7 +240,8 @@ def run_task(task: RunTask) -> dict[str, Any]:
     cpu0 = time.process_time()  # this worker's CPU (the trusted side: plant, barrier, protocol) for the run
     outcome = run_sandboxed(task.bundle, make_plant, n_robots=cfg.n_robots,
                             duration=cfg.duration, rps=cfg.rps, limits=cfg.run_limits, trusted=cfg.trusted,
-                            jail=cfg.jail, cancelled=cancelled)
+                            jail=cfg.jail, cancelled=cancelled,
+                            bounds=None if cfg.bounds == DEFAULT_BOUNDS else cfg.bounds)
     error = outcome.error_line
     if outcome.ended_by == "wall":
         reached = "" if outcome.plant is None else f" at t = {outcome.plant.arena.time:.2f} s of {cfg.duration:g} s"

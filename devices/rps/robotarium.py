@@ -30,7 +30,6 @@ from swarmdeck.devices.rps.errors import call_at_scripts_end_text, count_errors,
 from swarmdeck.devices.rps.figure_annotations import figure_annotations
 from swarmdeck.devices.rps.sensors import RpsSensors, sensing_for
 from swarmdeck.devices.simulated_robots import SimulatedRobots
-from swarmdeck.devices.simulator import ArenaConfig
 
 RELAX_HINT = ("swarmdeck enforces rps's call order as the Robotarium does; Robotarium(..., enforce_call_order=False) "
               "or `swarmdeck run --no-rps-call-order` relaxes it")
@@ -85,7 +84,7 @@ class Robotarium(RpsSensors):
         self.rps_semantics = defaults.rps_semantics if rps_semantics is None else bool(rps_semantics)
         self.enforce_call_order = defaults.rps_call_order if enforce_call_order is None else bool(enforce_call_order)
         real_time = bool(sim_in_real_time) and defaults.on_create is None  # never pace under `swarmdeck run`
-        config = ArenaConfig(real_time=real_time, seed=defaults.seed)
+        config = defaults.arena_config(real_time=real_time)
         self._arena = Arena(n, initial_conditions=ic.T if ic.size else None, config=config, from_docks=from_docks,
                             safety=False if self.rps_semantics else None)
         self.number_of_robots = self._arena.n
