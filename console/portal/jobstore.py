@@ -27,6 +27,11 @@ JOB_SELECT = "SELECT j.*, u.name AS owner FROM jobs j JOIN users u ON u.id = j.u
 PENDING_SQL = (f"(COALESCE(verdict, '') = '{BYPASS_VERDICT}' AND request_no_barrier = 1 "
                "AND barrier_forbidden = 0 AND bypass_decision IS NULL)")
 QUEUE_ORDER = "ORDER BY priority, id"
+#: jobs waiting for an arena (or before it): where fair share places a new job
+WAITING: tuple[JobState, ...] = (JobState.AWAITING_VERIFICATION, JobState.VERIFYING, JobState.AWAITING_APPROVAL,
+                                 JobState.IN_ARENA_QUEUE, JobState.HELD)
+#: jobs on their way to the arena queue (planned after it, for their estimated times)
+PRE_QUEUE: tuple[JobState, ...] = (JobState.AWAITING_VERIFICATION, JobState.VERIFYING, JobState.AWAITING_APPROVAL)
 Tx = sqlite3.Connection
 
 
@@ -112,15 +117,77 @@ class JobStore:
 
     # ------------------------------------------------------------------ changing jobs
     def insert(self, tx: Tx, *, user_id: int, name: str, kind: str, script: str, entry: str, robots: int,
-               duration: float, initial_poses: Sequence[Sequence[float]] | None, no_barrier: bool, now: float) -> int:
-        """A new job, ``awaiting verification``, last in priority; its id."""
-        top = tx.execute("SELECT COALESCE(MAX(priority), 0) FROM jobs").fetchone()[0]
+               duration: float, initial_poses: Sequence[Sequence[float]] | None, no_barrier: bool, now: float,
+               arena: str | None = None, needs: str = "either") -> int:
+        """A new job, ``awaiting verification``, at its fair-share place (:meth:`fair_priority`); its id."""
         cur = tx.execute(
             "INSERT INTO jobs (user_id, name, state, kind, script_name, entry, n_robots, duration, initial_poses, "
-            "request_no_barrier, priority, created, updated) VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)",
+            "request_no_barrier, priority, created, updated, arena, needs) "
+            "VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)",
             (user_id, name, JobState.AWAITING_VERIFICATION, kind, script, entry, robots, duration,
-             None if initial_poses is None else json.dumps(initial_poses), int(no_barrier), top + 1, now, now))
+             None if initial_poses is None else json.dumps(initial_poses), int(no_barrier),
+             self.fair_priority(tx, user_id), now, now, arena, needs))
         return int(cur.lastrowid or 0)
+
+    def fair_priority(self, tx: Tx, user_id: int) -> float:
+        """The priority of a new job of ``user_id``: fair share between researchers (issue 30).
+
+        Start-time fair queueing over job counts: the head of the waiting jobs (the lowest priority of any job
+        not yet on an arena; with none, after every job so far), or one after the owner's own last waiting job,
+        whichever is later. A researcher who submits a batch of ten gets ten consecutive places; another's
+        single job submitted afterwards goes in at the head, level with the batch's first (the id breaks the
+        tie), so batches interleave one job each instead of one researcher's batch starving the others. With one
+        researcher this is first come, first served, as before."""
+        head = tx.execute(f"SELECT MIN(priority) FROM jobs WHERE state IN ({_marks(WAITING)})", WAITING).fetchone()[0]
+        if head is None:
+            head = tx.execute("SELECT COALESCE(MAX(priority), 0) + 1 FROM jobs").fetchone()[0]
+        own = tx.execute(f"SELECT MAX(priority) FROM jobs WHERE user_id = ? AND state IN ({_marks(WAITING)})",
+                         (int(user_id), *WAITING)).fetchone()[0]
+        return float(head if own is None else max(head, own + 1))
+
+    # ------------------------------------------------------------------ several arenas (issue 30)
+    def waiting_in_order(self) -> builtins.list[Job]:
+        """Every job not yet on an arena and not held, in the order the plan takes them: the arena queue first,
+        then the jobs still in verification or awaiting approval (by priority)."""
+        rows = self.db.query(f"{JOB_SELECT} WHERE j.state IN ({_marks(PRE_QUEUE)}) ORDER BY j.priority, j.id",
+                             PRE_QUEUE)
+        return [*self.queue(), *(Job.from_row(r) for r in rows)]
+
+    def active_on(self, arena: str, default: str, tx: Tx | None = None) -> builtins.list[Job]:
+        """The jobs on ``arena`` now (setting up or running); jobs placed before there were several arenas count
+        on ``default``."""
+        conn = tx if tx is not None else self.db.connection()
+        rows = conn.execute(f"{JOB_SELECT} WHERE j.state IN ({_marks(ACTIVE)}) AND COALESCE(j.placed, ?) = ? "
+                            "ORDER BY j.id", (*ACTIVE, default, arena)).fetchall()
+        return [Job.from_row(r) for r in rows]
+
+    def recent_runs(self, arena: str, default: str, limit: int) -> builtins.list[tuple[float, float, float]]:
+        """(started, ended, declared duration) of the last ``limit`` jobs ``done`` on ``arena``, oldest first."""
+        rows = self.db.query("SELECT started, ended, duration FROM jobs WHERE state = ? AND COALESCE(placed, ?) = ? "
+                             "AND started IS NOT NULL AND ended IS NOT NULL ORDER BY ended DESC LIMIT ?",
+                             (JobState.DONE, default, arena, int(limit)))
+        return [(float(r["started"]), float(r["ended"]), float(r["duration"])) for r in reversed(rows)]
+
+    def set_holder(self, tx: Tx, job_id: int, holder: str | None) -> None:
+        """Record which remote runner lease holds the job (None: none, or an in-process runner)."""
+        tx.execute("UPDATE jobs SET holder = ? WHERE id = ?", (holder, int(job_id)))
+
+    def held_by(self, holder: str, tx: Tx | None = None) -> builtins.list[int]:
+        """The ids of the active jobs a remote runner lease holds."""
+        conn = tx if tx is not None else self.db.connection()
+        return [int(r["id"]) for r in conn.execute(f"SELECT id FROM jobs WHERE holder = ? AND state IN "
+                                                   f"({_marks(ACTIVE)})", (holder, *ACTIVE)).fetchall()]
+
+    def holder_of(self, job_id: int) -> str | None:
+        row = self.db.query_one("SELECT holder FROM jobs WHERE id = ?", (int(job_id),))
+        return None if row is None else row["holder"]
+
+    def arena_stopped_named(self, arena: str) -> bool:
+        """One arena's emergency-stop latch (the whole portal's: :meth:`arena_stopped`)."""
+        return self.db.setting(f"arena_stopped:{arena}", "0") == "1"
+
+    def set_arena_stopped_named(self, tx: Tx, arena: str, stopped: bool) -> None:
+        self.db.set_setting(tx, f"arena_stopped:{arena}", "1" if stopped else "0")
 
     def transition(self, tx: Tx, job_id: int, target: JobState, *, sources: tuple[JobState, ...] | None = None,
                    **columns: Any) -> None:

@@ -322,7 +322,7 @@ def router(service: PortalService, live: LiveFeed) -> APIRouter:
                     yield _sse("state", {"state": state, "final": state in FINAL})
                 if state in FINAL:
                     return
-            new, running, frame = live.latest()
+            new, running, frame = live.latest_of(job_id)  # several arenas publish into one feed
             if new != seq and running == job_id and frame is not None:
                 yield frame_event(new, frame)
                 idle = 0
