@@ -100,9 +100,9 @@ def remote_router(remote: RemoteArenas, user: Callable[[Request], Awaitable[User
         return remote.claim(u, b.arena, b.lease, b.job, b.wait)
 
     @router.get("/jobs/{job_id}/bundle", response_class=Response,
-                responses={200: {"content": {"application/zip": {}}, "description": "the job's files"}})
+                responses={200: {"content": {"application/octet-stream": {}}, "description": "the job files (zip)"}})
     def bundle(job_id: int, arena: str, lease: str, u: User = Depends(user)) -> Response:
-        return Response(remote.script(u, arena, lease, job_id), media_type="application/zip")
+        return Response(remote.script(u, arena, lease, job_id), media_type="application/octet-stream")
 
     @router.post("/jobs/{job_id}/running", response_model=OkOut)
     def running(job_id: int, b: LeaseIn | None = None, u: User = Depends(user)) -> dict[str, Any]:
