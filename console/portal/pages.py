@@ -393,6 +393,14 @@ def router(service: PortalService, live: LiveFeed) -> APIRouter:
     async def release(request: Request, s: Session = Depends(signed_in)) -> Response:
         return await operator_post(request, s, lambda s, form: service.release_arena(s.user))
 
+    @r.post("/operator/arenas/{name}/estop")
+    async def arena_estop(request: Request, name: str, s: Session = Depends(signed_in)) -> Response:
+        return await operator_post(request, s, lambda s, form: service.emergency_stop(s.user, name))
+
+    @r.post("/operator/arenas/{name}/release")
+    async def arena_release(request: Request, name: str, s: Session = Depends(signed_in)) -> Response:
+        return await operator_post(request, s, lambda s, form: service.release_arena(s.user, name))
+
     @r.post("/operator/approval")
     async def approval(request: Request, s: Session = Depends(signed_in)) -> Response:
         def act(s: Session, form: FormData) -> None:
