@@ -74,7 +74,7 @@ from swarmdeck.console.portal.job import (
     bypass_decided,
 )
 from swarmdeck.console.portal.jobfiles import RESULT_FILES, JobFiles, ResultFile
-from swarmdeck.console.portal.jobstore import PRE_QUEUE, JobStore
+from swarmdeck.console.portal.jobstore import PRE_QUEUE, JobStore, JobStoreAPI
 from swarmdeck.console.portal.labstore import LabStore, Reservation
 from swarmdeck.console.portal.notify import SmtpSettings, check_email, check_webhook
 from swarmdeck.console.portal.quotas import DAY_S, Quotas, check_counts, check_disk
@@ -220,7 +220,7 @@ class PortalService:
         self.data = Path(config.data)
         self.db = db if db is not None else Database(self.data)
         self.accounts = accounts if accounts is not None else Accounts(self.db)
-        self.store = JobStore(self.db)
+        self.store: JobStoreAPI = JobStore(self.db)  # the one interface to the jobs' rows (JobStoreAPI)
         self.job_files = JobFiles(self.data / "jobs")  # the data folder itself is made 0700 by the Database
         self.changed = threading.Condition()  # notified after every change workers/runner/live views wait on
         self.arena: ArenaControl | None = None
