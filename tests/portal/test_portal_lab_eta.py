@@ -46,3 +46,22 @@ def test_etas_match_the_starts_the_queue_then_makes(lab, jitter):
         else:  # each job ahead can move a start by at most its own jitter
             assert err <= (k + 1) * jitter + 1e-6, (job_id, k, err)
     # and the queue's ETAs are on the API and in `swarmdeck jobs` (not here: the virtual clock is in the past)
+
+
+def test_the_api_and_swarmdeck_jobs_show_the_estimates(lab):
+    import time
+
+    from swarmdeck.console.cli._client import job_line
+
+    first = queued(lab, "alice", robots=6, duration=30.0)
+    second = queued(lab, "bob", robots=6, duration=30.0)  # only the floor has 6 robots: after the first
+    with lab.client("bob") as c:
+        jobs = {j["id"]: j for j in c.get("/api/jobs").json()}
+    assert set(jobs) == {second}  # bob sees his own job, with its estimate
+    with lab.client("op1") as c:
+        everyone = {j["id"]: j for j in c.get("/api/jobs").json()}
+    a, b = everyone[first], everyone[second]
+    assert a["eta_arena"] == b["eta_arena"] == "floor"
+    assert abs(a["eta_start"] - time.time()) < 60 and b["eta_start"] >= a["eta_end"] - 1e-6
+    line = job_line(jobs[second])
+    assert "starts ~" in line and "on floor" in line and "queue position 2" in line
