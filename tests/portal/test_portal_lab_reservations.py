@@ -3,7 +3,11 @@ only their jobs run there then, the queue plans around it; a reservation that ov
 past is refused naming why."""
 import time
 
+from hypothesis import given, settings
+from hypothesis import strategies as st
 from lab_fixtures import queued
+
+from swarmdeck.console.portal.scheduler import Lane, Pending, Window, plan
 
 
 def reserve(op, **body):
@@ -55,3 +59,20 @@ def test_only_their_jobs_run_in_a_reserved_window_and_the_queue_plans_around_it(
     # both short jobs fill the gap before the window (carol's first: fair share puts her first job at the head)
     assert placed[group].eta_start < now + 5 and placed[group].eta_end <= placed[short].eta_start
     assert placed[short].eta_end <= now + 300
+
+
+@settings(max_examples=40, deadline=None)
+@given(st.lists(st.tuples(st.integers(1, 3), st.floats(1, 200)), max_size=20),
+       st.lists(st.tuples(st.sampled_from(["a", "b"]), st.floats(0, 1000), st.floats(10, 300), st.integers(1, 3)),
+                max_size=4))
+def test_no_planned_job_crosses_a_reservation_that_excludes_its_owner(jobs, windows):
+    lanes = [Lane("a", 0, "simulated", 8), Lane("b", 0, "simulated", 8)]
+    ws = [Window(arena, start, start + length, frozenset({user})) for arena, start, length, user in windows]
+    pending = [Pending(k + 1, user, 2, d) for k, (user, d) in enumerate(jobs)]
+    placed = plan(pending, lanes, ws, 0.0, {"a": 5.0, "b": 5.0})
+    assert set(placed) == {p.id for p in pending}  # a gap always comes: after the last reservation
+    owner = {p.id: p.user_id for p in pending}
+    for jid, p in placed.items():
+        for w in ws:
+            if w.arena == p.arena and owner[jid] not in w.user_ids:
+                assert p.end <= w.start or p.start >= w.end, (jid, p, w)
