@@ -165,10 +165,12 @@ class LabStore:
                    "UPDATE SET lease = excluded.lease, last_seen = excluded.last_seen, since = excluded.since",
                    (arena, lease, now, now))
 
-    def touch(self, arena: str, lease: str, now: float) -> bool:
-        """The runner holding ``lease`` is alive; False when the lease is not (or no longer) ``arena``'s."""
+    def touch(self, arena: str, lease: str, now: float, seen_after: float) -> bool:
+        """The runner holding ``lease`` is alive; False when the lease is not ``arena``'s or ran out (its runner
+        was last heard from before ``seen_after``: a runner coming back after that must connect again)."""
         with self.db.transaction() as tx:
-            cur = tx.execute("UPDATE runners SET last_seen = ? WHERE arena = ? AND lease = ?", (now, arena, lease))
+            cur = tx.execute("UPDATE runners SET last_seen = ? WHERE arena = ? AND lease = ? AND last_seen >= ?",
+                             (now, arena, lease, seen_after))
         return cur.rowcount == 1
 
     def drop_lease(self, tx: Tx, arena: str) -> None:

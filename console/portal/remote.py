@@ -77,7 +77,9 @@ class RemoteArenas:
                 "grace_s": cfg.grace_s, "tick_budget_s": cfg.arena_tick_budget_s, "interrupted": expired}
 
     def _check(self, arena: str, lease: str) -> None:
-        if not isinstance(lease, str) or not self.service.lab.touch(arena, lease, time.time()):
+        now = time.time()
+        if not isinstance(lease, str) or not self.service.lab.touch(arena, lease, now,
+                                                                    now - self.service.config.runner_lease_s):
             raise Conflict(f"this runner no longer holds arena {arena!r} (its lease ended): stop and connect again",
                            "lease")
 

@@ -165,3 +165,22 @@ def test_a_runner_killed_mid_job_leaves_it_interrupted_with_its_recording_and_th
     finally:
         stop(proc)
     assert SPIN  # the jobs ran the portal fixtures' spinning script
+
+
+def test_a_runner_that_comes_back_after_its_lease_ran_out_cannot_finish_its_stale_job(lab2):
+    svc = lab2.service
+    job = queued(lab2, "alice", robots=2, duration=5.0, arena="annex")
+    with lab2.client("op1") as op:
+        old = {"arena": "annex", "lease": op.post("/api/runner/connect", json={"arena": "annex"}).json()["lease"]}
+        assert op.post("/api/runner/claim", json={**old, "job": job}).json()["claimed"] is True
+        assert op.post(f"/api/runner/jobs/{job}/running", json=old).json()["ok"] is True
+        # the runner goes silent (a network cut): the reaper interrupts its job once the lease is 3 s old
+        until(lambda: svc.job_state(job) == "interrupted", timeout=60, what="the lease to run out")
+        assert op.post("/api/runner/heartbeat", json={**old, "job": job}).status_code == 409
+        new = op.post("/api/runner/connect", json={"arena": "annex"}).json()
+        assert new["lease"] != old["lease"]
+        mine = {"arena": "annex", "lease": new["lease"]}
+        assert op.post("/api/runner/heartbeat", json={**mine, "job": job}).json()["end_job"] is True
+        r = op.post(f"/api/runner/jobs/{job}/finish", json={**mine, "state": "done"})
+        assert r.status_code == 409 and r.json()["field"] == "job"
+    assert svc.job_state(job) == "interrupted"
