@@ -215,6 +215,7 @@ class ArenaInfoOut(BaseModel):
     stopped: bool = Field(description="emergency-stopped (its own latch or the whole portal's)")
     connected: bool = Field(description="can take jobs now (a remote runner was heard from lately)")
     running: list[int] = Field(description="the ids of the jobs on it now")
+    fleet: dict[str, Any] | None = Field(default=None, description="its fleet table (in-process arenas)")
 
 
 class ReservationIn(BaseModel):

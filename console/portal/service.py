@@ -629,7 +629,8 @@ class PortalService:
     def arena_state(self, user: User) -> ArenaState:
         """The arena, its queue, its alerts and its fleet as operators see it (:class:`ArenaState`)."""
         self._require_operator(user)
-        arena = self.arena if isinstance(self.arena, ArenaReports) else None
+        first = self.arena if self.arena is not None else next(iter(self.runners.values()), None)
+        arena = first if isinstance(first, ArenaReports) else None
         return ArenaState(stopped=self.arena_stopped, needs_operator=self.store.attention(),
                           alerts=None if arena is None else arena.alerts(), manual_approval=self.manual_approval,
                           running=self.store.on_arena(), queue=tuple(self.with_eta(self.store.queue())),
@@ -884,11 +885,14 @@ class PortalService:
 
     def arenas_state(self) -> list[dict[str, Any]]:
         """Each arena: its spec, whether it is stopped and connected, and the jobs on it now."""
+        controls = dict(self._named_controls())
         out = []
         for spec in self.config.arena_specs():
             on = self.store.active_on(spec.name, self._default)
+            control = controls.get(spec.name)
+            fleet = control.fleet_status() if isinstance(control, ArenaReports) else None
             out.append({**spec.to_dict(), "stopped": self._stopped(spec.name), "connected": self.connected(spec.name),
-                        "running": [j.id for j in on]})
+                        "running": [j.id for j in on], "fleet": fleet})
         return out
 
     # ------------------------------------------------------------------ reservations

@@ -32,3 +32,25 @@ def test_stopping_one_arena_leaves_the_others_running(lab):
     assert svc.job_state(waiting) == JobState.CANCELLED and svc.job_state(later) == JobState.CANCELLED
     assert [e["action"] for e in svc.audit_log(svc.accounts.user_named("op1"))][:3] == [
         "emergency stop", "release emergency stop of arena lab", "emergency stop of arena lab"]
+
+
+def test_the_operator_page_lists_the_arenas_with_their_own_stop(lab):
+    from portal_fixtures import sign_in
+
+    job = queued(lab, "alice", robots=2, duration=30.0, arena="lab")
+    c, csrf = sign_in(lab, "op1")
+    try:
+        page = c.get("/operator").text
+        assert 'id="arenas"' in page and 'id="arena-floor"' in page and 'action="/operator/arenas/lab/estop"' in page
+        r = c.post("/operator/arenas/lab/estop", data={"csrf": csrf})
+        assert r.status_code in (200, 303)
+        assert lab.service.store.arena_stopped_named("lab") and not lab.service.store.arena_stopped()
+        page = c.get("/operator").text
+        assert 'action="/operator/arenas/lab/release"' in page
+        assert c.post("/operator/arenas/lab/release", data={"csrf": "forged"}).status_code == 403
+        assert lab.service.store.arena_stopped_named("lab")
+    finally:
+        c.close()
+    with lab.client("alice") as researcher:
+        assert researcher.post("/api/operator/arenas/lab/release").status_code == 403
+    assert lab.service.job_state(job) == "in arena queue"
