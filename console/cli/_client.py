@@ -55,6 +55,14 @@ def shorten(text: str, width: int) -> str:
     return (cut[:space] if space > width // 2 else cut).rstrip(" ,;:") + "…"
 
 
+def _clock(t: float) -> str:
+    """A time as ``HH:MM`` UTC (``MM-DD HH:MM`` when not today)."""
+    import time
+
+    now, then = time.gmtime(), time.gmtime(t)
+    return time.strftime("%H:%M" if then[:3] == now[:3] else "%m-%d %H:%M", then)
+
+
 def job_line(job: dict[str, Any]) -> str:
     """One job as ``swarmdeck jobs`` lists it (queue positions counted from 1, as on the pages)."""
     extra = ""
@@ -62,6 +70,10 @@ def job_line(job: dict[str, Any]) -> str:
         extra += f"  [{job['verdict']}]"
     if job.get("position") is not None:
         extra += f"  (queue position {job['position'] + 1})"
+    if job.get("eta_start") is not None:
+        extra += f"  starts ~{_clock(job['eta_start'])}, ends ~{_clock(job['eta_end'])} UTC on {job['eta_arena']}"
+    elif job.get("placed") and job.get("state") in ("setting up", "running"):
+        extra += f"  on {job['placed']}"
     if job.get("reason"):
         extra += f"  {shorten(job['reason'], 200)}"
     if job.get("results_deleted"):

@@ -27,6 +27,14 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="robots the arena has, docked on its charging strips at start (at most one per charger "
                              "slot, 50): simulated ones, or the MQTT fleet's ids 0..N-1 (default 12). Each job gets "
                              "charged robots set up at its start poses; afterwards they return to the chargers")
+    parser.add_argument("--arena", action="append", default=[], metavar="NAME=SPEC",
+                        help="an arena behind this portal; repeat for several (one queue, one set of accounts, one "
+                             "operator page). SPEC: sim[,robots=N][,fast] (simulated, in this process), "
+                             "mqtt://HOST:PORT[,robots=N] (GRITSBots), remote[,robots=N][,kind=physical|simulated] "
+                             "(a `swarmdeck runner --portal URL --arena NAME` on another machine), and slots=K (jobs "
+                             "at once: regions). E.g. --arena floor=sim,robots=50 --arena annex=remote,robots=12,"
+                             "kind=physical. Without --arena: one arena from --robots/--robots-via/--fast. Jobs "
+                             "choose with the manifest's \"arena\" and \"needs\" (physical|simulated|either)")
     parser.add_argument("--robots-via", default=None, metavar="URL",
                         help="drive GRITSBots over MQTT instead of simulating them, e.g. mqtt://127.0.0.1:1883")
     parser.add_argument("--obstacles", default=None, metavar="FILE",
@@ -78,6 +86,13 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--projector-calibration", default=None, metavar="FILE",
                         help="the projector's homography from `swarmdeck calibrate projector` (default "
                              "projector.json if it exists)")
+    note = parser.add_argument_group("notifications (researchers set their webhook/e-mail: PUT /api/me/notifications)")
+    note.add_argument("--smtp", default=None, metavar="HOST:PORT",
+                      help="send e-mail notifications (a job verified, started, ended, rejected) through this SMTP "
+                           "server (default: none; webhooks work without it)")
+    note.add_argument("--smtp-from", default="swarmdeck@localhost", metavar="ADDR",
+                      help="the notifications' sender address (default swarmdeck@localhost)")
+    note.add_argument("--smtp-starttls", action="store_true", help="use STARTTLS with the SMTP server")
     quota = parser.add_argument_group("per-researcher limits (0: no limit; operators are not limited)")
     quota.add_argument("--max-jobs", type=int, default=25, metavar="N",
                        help="jobs a researcher may have not yet finished (queued … running); the next submission "
@@ -155,6 +170,28 @@ def check_arguments(args: argparse.Namespace) -> None:
         raise UsageError("--fast is for the simulated arena: networked robots run in real time")
     if args.regions is not None and args.robots_via:
         raise UsageError("--regions runs on the simulated floor for now: it does not combine with --robots-via")
+    if args.arena and args.regions is not None:
+        raise UsageError("--regions divides the single arena's floor: it does not combine with --arena (yet)")
+    if args.arena:
+        from swarmdeck.console.portal.arenas import check_unique, parse_arena_spec
+
+        try:
+            specs = [parse_arena_spec(a) for a in args.arena]
+            check_unique(specs)
+        except ValueError as exc:
+            raise UsageError(str(exc)) from None
+        if args.robots_via or args.fast or args.robots != 12:
+            raise UsageError("--arena describes each arena's robots: leave out --robots, --robots-via and --fast")
+        args.arena_specs = tuple(specs)
+    else:
+        args.arena_specs = ()
+    if args.smtp is not None:
+        from swarmdeck.console.portal.notify import parse_smtp
+
+        try:
+            args.smtp_host = parse_smtp(args.smtp)
+        except ValueError as exc:
+            raise UsageError(str(exc)) from None
     if args.robots_via is not None:
         from swarmdeck.devices.net.mqtt_config import parse_broker_url
 
@@ -204,7 +241,17 @@ def main(args: argparse.Namespace) -> int:
     fleet = min(args.robots, ChargerLayout().n_slots)
     if fleet < args.robots:
         raise UsageError(f"--robots {args.robots}: at most {fleet} robots, one per slot of the arena's charging strips")
-    config = PortalConfig(data=args.data, limits=Limits(fleet=fleet, max_duration=args.max_duration,
+    for spec in args.arena_specs:
+        if not spec.remote and spec.robots > ChargerLayout().n_slots:
+            raise UsageError(f"--arena {spec.name}: at most {ChargerLayout().n_slots} robots, one per charger slot")
+    if args.arena_specs:
+        fleet = max(s.robots for s in args.arena_specs)  # the most any job may ask for; each arena checks its own
+    from swarmdeck.console.portal.notify import SmtpSettings
+
+    smtp = None if args.smtp is None else SmtpSettings(args.smtp_host[0], args.smtp_host[1], sender=args.smtp_from,
+                                                       starttls=args.smtp_starttls)
+    config = PortalConfig(data=args.data, arenas=args.arena_specs, smtp=smtp,
+                          limits=Limits(fleet=fleet, max_duration=args.max_duration,
                                                         max_upload_bytes=args.max_upload),
                           verify_runs=args.verify_runs, grace_s=args.grace, trusted=args.trusted,
                           allow_no_cgroup=args.allow_no_cgroup, script_env=checked_script_env(args.script_env),
@@ -240,12 +287,27 @@ def main(args: argparse.Namespace) -> int:
     from swarmdeck.safety.guard import GuardConfig
 
     guard = GuardConfig(guard_distance=args.guard_distance, max_intervention=args.guard_intervention)
-    settings = ArenaSettings(robots_via=args.robots_via, fleet=fleet, fast=args.fast, seed=args.seed, guard=guard,
-                             obstacles=obstacles)
-    runner: Any = ArenaRunner(service, settings, live) if args.regions is None else _region_runner(
-        service, settings, args.regions, args.robots, live)
+    runners = []
+    for spec in args.arena_specs or ():
+        if not spec.remote:
+            runners.append(ArenaRunner(service, ArenaSettings(robots_via=spec.robots_via, fleet=spec.robots,
+                                                              fast=spec.fast, seed=args.seed, guard=guard,
+                                                              name=spec.name), live))
+    if not args.arena_specs:
+        settings = ArenaSettings(robots_via=args.robots_via, fleet=fleet, fast=args.fast, seed=args.seed,
+                                 guard=guard, obstacles=obstacles)
+        runners.append(ArenaRunner(service, settings, live) if args.regions is None else _region_runner(
+            service, settings, args.regions, args.robots, live))
+    # one recovery for the whole portal (every in-process arena's jobs); remote runners' jobs follow their leases
+    from swarmdeck.console.portal.exports import JobExports
+    from swarmdeck.console.portal.remote import LeaseReaper, RemoteArenas
+    from swarmdeck.console.portal.runner import recover_recordings
+
+    exports = runners[0].exports if runners else JobExports(service)
     try:
-        interrupted = runner.recover()
+        interrupted = service.recover_on_start()
+        exports.resume()
+        recover_recordings(service, exports, interrupted)
     except sqlite3.DatabaseError as exc:
         sock.close()
         service.close()
@@ -253,7 +315,15 @@ def main(args: argparse.Namespace) -> int:
     for job_id in interrupted:
         print(f"swarmdeck server: job {job_id} was on the arena when the server stopped: interrupted "
               "(partial recording kept)", file=sys.stderr)
-    service.arena = runner
+    if args.arena_specs:
+        service.runners = {r.settings.name or "": r for r in runners}
+    else:
+        service.arena = runners[0]
+    from swarmdeck.console.portal.notify import Notifier
+
+    notifier = Notifier(service.lab, smtp).start()
+    service.remote = remote = RemoteArenas(service, exports)
+    reaper = LeaseReaper(remote).start()  # remote runners that went silent: their jobs interrupted
     view = None
     if args.console_port is not None:
         from swarmdeck.console.portal.operator_view import OperatorView
@@ -264,14 +334,16 @@ def main(args: argparse.Namespace) -> int:
             sock.close()
             service.close()
             raise UsageError(f"--console-port {args.console_port}: {exc.strerror or exc}") from None
-        runner.frame_listeners.append(view.offer)
+        for r in runners:
+            r.frame_listeners.append(view.offer)
         print(f"swarmdeck server: operator view at {view.url}", flush=True)
     projector = None
     if args.projector is not None:
         from swarmdeck.console.projector.server import ProjectorServer
 
         try:
-            projector = ProjectorServer(runner.settings.bounds, _projector_calibration(args), host=args.host, port=args.projector)
+            projector = ProjectorServer(runners[0].settings.bounds, _projector_calibration(args), host=args.host,
+                                        port=args.projector)
         except OSError as exc:
             if view is not None:
                 view.close()
@@ -280,19 +352,22 @@ def main(args: argparse.Namespace) -> int:
             raise UsageError(f"--projector: cannot serve on {args.host}:{args.projector}: "
                              f"{exc.strerror or exc}") from None
 
-        runner.frame_listeners.append(projector.offer)
+        runners[0].frame_listeners.append(projector.offer)
         projector.start()
         print(f"swarmdeck server: projector page at {projector.url}" + (
             "" if projector.feed.calibration is not None else " (no homography: run `swarmdeck calibrate projector`)"),
             flush=True)
     workers = VerificationWorkers(service, executor, obstacles=obstacles).start()
-    runner.start()
+    for r in runners:
+        r.start()
     sweeper = RetentionSweeper(service).start() if args.retain_days is not None else None
     app = create_app(service, live=live, http=http)
     server = uvicorn_server(app, log_level=args.log_level, http=http)
     host = f"[{args.host}]" if ":" in args.host else args.host
     arena = args.robots_via and f"MQTT robots 0..{fleet - 1} via {_redacted(args.robots_via)}" or \
         f"{fleet} simulated robots docked on the chargers{' (fast)' if args.fast else ''}"
+    if args.arena_specs:
+        arena = "arenas " + "; ".join(s.describe() for s in args.arena_specs)
     print(f"swarmdeck server: http://{host}:{sock.getsockname()[1]}  ({arena}; data in {args.data}; "
           "API docs at /docs; Ctrl-C to stop)", flush=True)
     print(f"swarmdeck server: user code confined by: {describe(JailConfig(allow_no_cgroup=args.allow_no_cgroup))}",
@@ -307,7 +382,12 @@ def main(args: argparse.Namespace) -> int:
     finally:
         for sig, handler in saved.items():
             signal.signal(sig, handler)
-        runner.stop()
+        for r in runners:
+            r.stop()
+        if not runners:
+            exports.stop()
+        reaper.stop()
+        notifier.stop()
         workers.stop()
         if sweeper is not None:
             sweeper.stop()

@@ -51,6 +51,7 @@ from starlette.datastructures import UploadFile
 
 from swarmdeck.console.portal.accounts import User
 from swarmdeck.console.portal.errors import BadInput, Forbidden, RejectionCounter, Unauthorized
+from swarmdeck.console.portal.lab_api import lab_router
 from swarmdeck.console.portal.models import (
     ArenaOut,
     AuditOut,
@@ -71,6 +72,8 @@ from swarmdeck.console.portal.models import (
     StatsOut,
     TokenIn,
 )
+from swarmdeck.console.portal.remote import MAX_PIECE, RemoteArenas
+from swarmdeck.console.portal.remote_api import remote_router
 from swarmdeck.console.portal.service import PortalService
 
 _Body = TypeVar("_Body")
@@ -298,6 +301,10 @@ def api_router(service: PortalService, counter: RejectionCounter, *, max_upload_
         """Counts of rejected requests by status and field."""
         return {"rejected": counter.snapshot()}
 
+    router.include_router(lab_router(service, user))  # several arenas, reservations, notifications (issue 30)
+    remote = service.remote if isinstance(service.remote, RemoteArenas) else RemoteArenas(service)
+    service.remote = remote
+    router.include_router(remote_router(remote, user, min(MAX_PIECE, max_upload_bytes)))  # remote runners
     return router
 
 

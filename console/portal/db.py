@@ -171,6 +171,55 @@ MIGRATIONS: tuple[str, ...] = (
     # approval, waiting -> in arena queue; a held job's state to go back to too
     ";".join(f"UPDATE jobs SET {col} = '{new}' WHERE {col} = '{old}'"
              for old, new in RENAMED.items() for col in ("state", "held_from")),
+    # 6: several arenas behind one portal (issue 30): what a job asks for (an arena by name, physical/simulated
+    # robots), where it ran and which remote runner holds it; users' group and where they are told of their jobs
+    # (webhook, e-mail); operators' reservations; the notifications' outbox; the remote runners' leases
+    """
+    ALTER TABLE jobs ADD COLUMN arena TEXT;
+    ALTER TABLE jobs ADD COLUMN needs TEXT NOT NULL DEFAULT 'either' CHECK (needs IN ('either', 'physical', 'simulated'));
+    ALTER TABLE jobs ADD COLUMN placed TEXT;
+    ALTER TABLE jobs ADD COLUMN holder TEXT;
+    CREATE INDEX jobs_placed ON jobs (placed, state);
+    ALTER TABLE users ADD COLUMN grp TEXT;
+    ALTER TABLE users ADD COLUMN webhook TEXT;
+    ALTER TABLE users ADD COLUMN email TEXT;
+    CREATE TABLE reservations (
+        id INTEGER PRIMARY KEY,
+        arena TEXT NOT NULL,
+        user_id INTEGER REFERENCES users(id),
+        grp TEXT,
+        start REAL NOT NULL,
+        end REAL NOT NULL,
+        note TEXT NOT NULL DEFAULT '',
+        created_by INTEGER REFERENCES users(id),
+        created REAL NOT NULL,
+        CHECK ((user_id IS NULL) != (grp IS NULL)),
+        CHECK (end > start)
+    );
+    CREATE INDEX reservations_arena ON reservations (arena, end);
+    CREATE TABLE outbox (
+        id INTEGER PRIMARY KEY,
+        job_id INTEGER REFERENCES jobs(id),
+        user_id INTEGER NOT NULL REFERENCES users(id),
+        event TEXT NOT NULL,
+        channel TEXT NOT NULL CHECK (channel IN ('webhook', 'email')),
+        target TEXT NOT NULL,
+        body TEXT NOT NULL,
+        attempts INTEGER NOT NULL DEFAULT 0,
+        next_try REAL NOT NULL,
+        sent REAL,
+        gave_up REAL,
+        error TEXT,
+        created REAL NOT NULL
+    );
+    CREATE INDEX outbox_due ON outbox (next_try) WHERE sent IS NULL AND gave_up IS NULL;
+    CREATE TABLE runners (
+        arena TEXT PRIMARY KEY,
+        lease TEXT NOT NULL,
+        last_seen REAL NOT NULL,
+        since REAL NOT NULL
+    );
+    """,
 )
 
 

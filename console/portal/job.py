@@ -76,6 +76,14 @@ class Job:
     exports: ExportState | None
     results_deleted: float | None
     position: int | None = None
+    # several arenas (issue 30): the arena the manifest asked for (None: any), physical/simulated/either, the arena
+    # it was placed on when it started; the plan's estimate (:mod:`.scheduler`; None: not planned) — UNIX s
+    arena: str | None = None
+    needs: str = "either"
+    placed: str | None = None
+    eta_start: float | None = None
+    eta_end: float | None = None
+    eta_arena: str | None = None
 
     @classmethod
     def from_row(cls, row: sqlite3.Row | Mapping[str, Any], position: int | None = None) -> Job:
@@ -93,7 +101,7 @@ class Job:
             bypass_decision=None if row["bypass_decision"] is None else BypassDecision(row["bypass_decision"]),
             created=float(row["created"]), updated=float(row["updated"]), started=row["started"], ended=row["ended"],
             exports=None if row["exports"] is None else ExportState(row["exports"]),
-            results_deleted=row["results_deleted"], position=position)
+            results_deleted=row["results_deleted"], position=position, **_lab_columns(row))
 
     @property
     def bypass_pending(self) -> bool:
@@ -121,7 +129,15 @@ class Job:
             "bypass_decision": self.bypass_decision, "bypass_pending": self.bypass_pending,
             "position": self.position, "created": self.created, "updated": self.updated, "started": self.started,
             "ended": self.ended, "exports": self.exports, "results_deleted": self.results_deleted,
+            "arena": self.arena, "needs": self.needs, "placed": self.placed, "eta_start": self.eta_start,
+            "eta_end": self.eta_end, "eta_arena": self.eta_arena,
         }
+
+
+def _lab_columns(row: sqlite3.Row | Mapping[str, Any]) -> dict[str, Any]:
+    """The columns of migration 6 (an arena asked for, needs, where it ran), when the row has them."""
+    keys = row.keys()
+    return {k: row[k] for k in ("arena", "needs", "placed") if k in keys and row[k] is not None}
 
 
 def bypass_decided(verdict: str | None, request_no_barrier: bool, barrier_forbidden: bool,

@@ -15,7 +15,7 @@ import sqlite3
 import time
 from collections.abc import Iterator, Sequence
 from contextlib import contextmanager
-from typing import Any
+from typing import Any, Protocol
 
 from swarmdeck.console.portal.db import Database
 from swarmdeck.console.portal.job import BYPASS_VERDICT, BYPASS_WAIT, ExportState, Job, valid_id
@@ -27,6 +27,11 @@ JOB_SELECT = "SELECT j.*, u.name AS owner FROM jobs j JOIN users u ON u.id = j.u
 PENDING_SQL = (f"(COALESCE(verdict, '') = '{BYPASS_VERDICT}' AND request_no_barrier = 1 "
                "AND barrier_forbidden = 0 AND bypass_decision IS NULL)")
 QUEUE_ORDER = "ORDER BY priority, id"
+#: jobs waiting for an arena (or before it): where fair share places a new job
+WAITING: tuple[JobState, ...] = (JobState.AWAITING_VERIFICATION, JobState.VERIFYING, JobState.AWAITING_APPROVAL,
+                                 JobState.IN_ARENA_QUEUE, JobState.HELD)
+#: jobs on their way to the arena queue (planned after it, for their estimated times)
+PRE_QUEUE: tuple[JobState, ...] = (JobState.AWAITING_VERIFICATION, JobState.VERIFYING, JobState.AWAITING_APPROVAL)
 Tx = sqlite3.Connection
 
 
@@ -112,15 +117,77 @@ class JobStore:
 
     # ------------------------------------------------------------------ changing jobs
     def insert(self, tx: Tx, *, user_id: int, name: str, kind: str, script: str, entry: str, robots: int,
-               duration: float, initial_poses: Sequence[Sequence[float]] | None, no_barrier: bool, now: float) -> int:
-        """A new job, ``awaiting verification``, last in priority; its id."""
-        top = tx.execute("SELECT COALESCE(MAX(priority), 0) FROM jobs").fetchone()[0]
+               duration: float, initial_poses: Sequence[Sequence[float]] | None, no_barrier: bool, now: float,
+               arena: str | None = None, needs: str = "either") -> int:
+        """A new job, ``awaiting verification``, at its fair-share place (:meth:`fair_priority`); its id."""
         cur = tx.execute(
             "INSERT INTO jobs (user_id, name, state, kind, script_name, entry, n_robots, duration, initial_poses, "
-            "request_no_barrier, priority, created, updated) VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)",
+            "request_no_barrier, priority, created, updated, arena, needs) "
+            "VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)",
             (user_id, name, JobState.AWAITING_VERIFICATION, kind, script, entry, robots, duration,
-             None if initial_poses is None else json.dumps(initial_poses), int(no_barrier), top + 1, now, now))
+             None if initial_poses is None else json.dumps(initial_poses), int(no_barrier),
+             self.fair_priority(tx, user_id), now, now, arena, needs))
         return int(cur.lastrowid or 0)
+
+    def fair_priority(self, tx: Tx, user_id: int) -> float:
+        """The priority of a new job of ``user_id``: fair share between researchers (issue 30).
+
+        Start-time fair queueing over job counts: the head of the waiting jobs (the lowest priority of any job
+        not yet on an arena; with none, after every job so far), or one after the owner's own last waiting job,
+        whichever is later. A researcher who submits a batch of ten gets ten consecutive places; another's
+        single job submitted afterwards goes in at the head, level with the batch's first (the id breaks the
+        tie), so batches interleave one job each instead of one researcher's batch starving the others. With one
+        researcher this is first come, first served, as before."""
+        head = tx.execute(f"SELECT MIN(priority) FROM jobs WHERE state IN ({_marks(WAITING)})", WAITING).fetchone()[0]
+        if head is None:
+            head = tx.execute("SELECT COALESCE(MAX(priority), 0) + 1 FROM jobs").fetchone()[0]
+        own = tx.execute(f"SELECT MAX(priority) FROM jobs WHERE user_id = ? AND state IN ({_marks(WAITING)})",
+                         (int(user_id), *WAITING)).fetchone()[0]
+        return float(head if own is None else max(head, own + 1))
+
+    # ------------------------------------------------------------------ several arenas (issue 30)
+    def waiting_in_order(self) -> builtins.list[Job]:
+        """Every job not yet on an arena and not held, in the order the plan takes them: the arena queue first,
+        then the jobs still in verification or awaiting approval (by priority)."""
+        rows = self.db.query(f"{JOB_SELECT} WHERE j.state IN ({_marks(PRE_QUEUE)}) ORDER BY j.priority, j.id",
+                             PRE_QUEUE)
+        return [*self.queue(), *(Job.from_row(r) for r in rows)]
+
+    def active_on(self, arena: str, default: str, tx: Tx | None = None) -> builtins.list[Job]:
+        """The jobs on ``arena`` now (setting up or running); jobs placed before there were several arenas count
+        on ``default``."""
+        conn = tx if tx is not None else self.db.connection()
+        rows = conn.execute(f"{JOB_SELECT} WHERE j.state IN ({_marks(ACTIVE)}) AND COALESCE(j.placed, ?) = ? "
+                            "ORDER BY j.id", (*ACTIVE, default, arena)).fetchall()
+        return [Job.from_row(r) for r in rows]
+
+    def recent_runs(self, arena: str, default: str, limit: int) -> builtins.list[tuple[float, float, float]]:
+        """(started, ended, declared duration) of the last ``limit`` jobs ``done`` on ``arena``, oldest first."""
+        rows = self.db.query("SELECT started, ended, duration FROM jobs WHERE state = ? AND COALESCE(placed, ?) = ? "
+                             "AND started IS NOT NULL AND ended IS NOT NULL ORDER BY ended DESC LIMIT ?",
+                             (JobState.DONE, default, arena, int(limit)))
+        return [(float(r["started"]), float(r["ended"]), float(r["duration"])) for r in reversed(rows)]
+
+    def set_holder(self, tx: Tx, job_id: int, holder: str | None) -> None:
+        """Record which remote runner lease holds the job (None: none, or an in-process runner)."""
+        tx.execute("UPDATE jobs SET holder = ? WHERE id = ?", (holder, int(job_id)))
+
+    def held_by(self, holder: str, tx: Tx | None = None) -> builtins.list[int]:
+        """The ids of the active jobs a remote runner lease holds."""
+        conn = tx if tx is not None else self.db.connection()
+        return [int(r["id"]) for r in conn.execute(f"SELECT id FROM jobs WHERE holder = ? AND state IN "
+                                                   f"({_marks(ACTIVE)})", (holder, *ACTIVE)).fetchall()]
+
+    def holder_of(self, job_id: int) -> str | None:
+        row = self.db.query_one("SELECT holder FROM jobs WHERE id = ?", (int(job_id),))
+        return None if row is None else row["holder"]
+
+    def arena_stopped_named(self, arena: str) -> bool:
+        """One arena's emergency-stop latch (the whole portal's: :meth:`arena_stopped`)."""
+        return self.db.setting(f"arena_stopped:{arena}", "0") == "1"
+
+    def set_arena_stopped_named(self, tx: Tx, arena: str, stopped: bool) -> None:
+        self.db.set_setting(tx, f"arena_stopped:{arena}", "1" if stopped else "0")
 
     def transition(self, tx: Tx, job_id: int, target: JobState, *, sources: tuple[JobState, ...] | None = None,
                    **columns: Any) -> None:
@@ -264,3 +331,107 @@ class JobStore:
     def set_last_verified_owner(self, tx: Tx, user_id: int) -> None:
         """Record whose job verification took last."""
         self.db.set_setting(tx, "verify_last_owner", str(int(user_id)))
+
+
+class JobStoreAPI(Protocol):
+    """What the service (:mod:`.service`) asks of the jobs' store: every method of :class:`JobStore`, which is the
+    SQLite one. Moving to another database (PostgreSQL: docs/lab.md) is a new class with these methods (and its
+    ``transaction()`` yielding that database's transaction handle), not a change to the rules."""
+
+    db: Database
+
+    @contextmanager
+    def transaction(self) -> Iterator[Tx]: ...
+
+    def get(self, job_id: int, tx: Tx | None = None) -> Job | None: ...
+
+    def state(self, job_id: int) -> JobState | None: ...
+
+    def list(self, user_id: int | None = None) -> list[Job]: ...
+
+    def queue(self) -> builtins.list[Job]: ...
+
+    def first_in_queue(self, tx: Tx | None = None) -> Job | None: ...
+
+    def on_arena(self) -> Job | None: ...
+
+    def queue_ids(self, tx: Tx) -> builtins.list[int]: ...
+
+    def ids_in(self, tx: Tx, states: Sequence[JobState]) -> builtins.list[int]: ...
+
+    def bypass_pending(self, tx: Tx, job_id: int) -> bool: ...
+
+    def insert(self, tx: Tx, *, user_id: int, name: str, kind: str, script: str, entry: str, robots: int,
+               duration: float, initial_poses: Sequence[Sequence[float]] | None, no_barrier: bool, now: float,
+               arena: str | None = None, needs: str = "either") -> int: ...
+
+    def fair_priority(self, tx: Tx, user_id: int) -> float: ...
+
+    def waiting_in_order(self) -> builtins.list[Job]: ...
+
+    def active_on(self, arena: str, default: str, tx: Tx | None = None) -> builtins.list[Job]: ...
+
+    def recent_runs(self, arena: str, default: str, limit: int) -> builtins.list[tuple[float, float, float]]: ...
+
+    def set_holder(self, tx: Tx, job_id: int, holder: str | None) -> None: ...
+
+    def held_by(self, holder: str, tx: Tx | None = None) -> builtins.list[int]: ...
+
+    def holder_of(self, job_id: int) -> str | None: ...
+
+    def arena_stopped_named(self, arena: str) -> bool: ...
+
+    def set_arena_stopped_named(self, tx: Tx, arena: str, stopped: bool) -> None: ...
+
+    def transition(self, tx: Tx, job_id: int, target: JobState, *, sources: tuple[JobState, ...] | None = None,
+                   **columns: Any) -> None: ...
+
+    def state_in(self, tx: Tx, job_id: int) -> JobState | None: ...
+
+    def set_barrier_forbidden(self, tx: Tx, job_id: int, forbid: bool) -> bool: ...
+
+    def requeue_bypass_wait(self, tx: Tx, job_id: int) -> None: ...
+
+    def back_to_bypass_wait(self, tx: Tx, job_id: int) -> None: ...
+
+    def release_approved(self, tx: Tx) -> None: ...
+
+    def decide_bypass_in_place(self, tx: Tx, job_id: int, decision: str, forbidden: bool) -> bool: ...
+
+    def set_reason(self, tx: Tx, job_id: int, reason: str | None) -> None: ...
+
+    def set_waiting_reason(self, job_id: int, reason: str) -> bool: ...
+
+    def reorder_queue(self, tx: Tx, ids: builtins.list[int]) -> None: ...
+
+    def next_for_verification(self, tx: Tx, last_owner: int) -> tuple[int, int] | None: ...
+
+    def set_exports(self, job_id: int, state: ExportState) -> None: ...
+
+    def exports_in(self, state: ExportState) -> builtins.list[int]: ...
+
+    def ended_before(self, cutoff: float) -> builtins.list[int]: ...
+
+    def mark_results_deleted(self, job_id: int, when: float) -> None: ...
+
+    def kept_job_ids(self, user_id: int) -> builtins.list[int]: ...
+
+    def unfinished_count(self, user_id: int, tx: Tx | None = None) -> int: ...
+
+    def verification_cpu(self, user_id: int, since: float, tx: Tx | None = None) -> builtins.list[tuple[float, float]]: ...
+
+    def record_verification_cpu(self, job_id: int, cpu_s: float) -> None: ...
+
+    def manual_approval(self) -> bool: ...
+
+    def set_manual_approval(self, tx: Tx, on: bool) -> None: ...
+
+    def arena_stopped(self) -> bool: ...
+
+    def set_arena_stopped(self, tx: Tx, stopped: bool, attention: str | None = None) -> None: ...
+
+    def attention(self) -> str | None: ...
+
+    def last_verified_owner(self) -> int: ...
+
+    def set_last_verified_owner(self, tx: Tx, user_id: int) -> None: ...

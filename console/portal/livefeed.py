@@ -21,20 +21,35 @@ class LiveFeed:
         self._seq = 0
         self._job: int | None = None
         self._frame: Any = None
+        self._jobs: dict[int, tuple[int, Any]] = {}  # several arenas: each running job's newest (seq, Frame)
 
     def publish(self, job_id: int, frame: Any) -> None:
         """The newest Frame of job ``job_id`` (called on the loop thread)."""
         with self._cond:
             self._seq += 1
             self._job, self._frame = int(job_id), frame
+            self._jobs[int(job_id)] = (self._seq, frame)
             self._cond.notify_all()
 
-    def clear(self) -> None:
-        """No job is running (the next reader sees ``(seq, None, None)``)."""
+    def clear(self, job_id: int | None = None) -> None:
+        """Job ``job_id`` ended (None: every job): the next reader of it sees ``(seq, None, None)`` — of
+        :meth:`latest` too when it was the newest publisher."""
         with self._cond:
             self._seq += 1
-            self._job, self._frame = None, None
+            if job_id is None:
+                self._jobs.clear()
+            else:
+                self._jobs.pop(int(job_id), None)
+            if job_id is None or self._job == int(job_id):
+                self._job, self._frame = None, None
             self._cond.notify_all()
+
+    def latest_of(self, job_id: int) -> tuple[int, int | None, Any]:
+        """``(seq, job_id, frame)`` of job ``job_id`` (several arenas publish into one feed); job_id and frame
+        None when it is not running."""
+        with self._cond:
+            seq, frame = self._jobs.get(int(job_id), (self._seq, None))
+            return seq, (None if frame is None else int(job_id)), frame
 
     def latest(self) -> tuple[int, int | None, Any]:
         """``(seq, job_id, frame)``; job_id and frame are None when no job runs."""

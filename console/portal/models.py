@@ -132,6 +132,12 @@ class JobOut(BaseModel):
     ended: float | None
     exports: ExportState | None = Field(description="the CSV, replay and video: writing | ready | failed")
     results_deleted: float | None = Field(description="when the retention sweep deleted the files")
+    arena: str | None = Field(default=None, description="the arena the manifest asked for; null: any")
+    needs: str = Field(default="either", description="either | physical | simulated robots")
+    placed: str | None = Field(default=None, description="the arena the job was placed on when it started")
+    eta_start: float | None = Field(default=None, description="estimated start, UNIX s (null: not planned)")
+    eta_end: float | None = Field(default=None, description="estimated end (after the robots' return), UNIX s")
+    eta_arena: str | None = Field(default=None, description="the arena the plan puts the waiting job on")
 
 
 class ReportOut(_Open):
@@ -197,6 +203,68 @@ class AlertsOut(BaseModel):
     messages: list[str]
 
 
+class ArenaInfoOut(BaseModel):
+    """One arena behind the portal (``swarmdeck server --arena NAME=SPEC``) and how it is now."""
+
+    name: str
+    kind: str = Field(description="physical | simulated")
+    robots: int
+    remote: bool = Field(description="its runner is another process (swarmdeck runner)")
+    slots: int = Field(description="jobs it runs at once")
+    fast: bool
+    stopped: bool = Field(description="emergency-stopped (its own latch or the whole portal's)")
+    connected: bool = Field(description="can take jobs now (a remote runner was heard from lately)")
+    running: list[int] = Field(description="the ids of the jobs on it now")
+    fleet: dict[str, Any] | None = Field(default=None, description="its fleet table (in-process arenas)")
+
+
+class ReservationIn(BaseModel):
+    """``POST /api/operator/reservations``: book an arena for a researcher or a group."""
+
+    arena: str
+    start: float = Field(description="UNIX s")
+    end: float = Field(description="UNIX s, after start and after now")
+    user: str | None = Field(default=None, description="the researcher it is for (or group)")
+    group: str | None = Field(default=None, description="the group it is for (or user)")
+    note: str = ""
+
+
+class ReservationOut(BaseModel):
+    id: int
+    arena: str
+    user: str | None
+    group: str | None
+    start: float
+    end: float
+    note: str
+    created_by: str | None
+
+
+class GroupIn(BaseModel):
+    """``PUT /api/operator/users/{name}/group``."""
+
+    group: str | None = Field(description="the group's name; null: none")
+
+
+class GroupOut(BaseModel):
+    user: str
+    group: str | None
+
+
+class NotifyIn(BaseModel):
+    """``PUT /api/me/notifications``: where you are told when your jobs are verified, start, end or are rejected."""
+
+    webhook: str | None = Field(default=None, description="http(s) URL the portal POSTs each event to (JSON)")
+    email: str | None = Field(default=None, description="address (sent through the lab's SMTP server)")
+
+
+class NotifyOut(BaseModel):
+    webhook: str | None
+    email: str | None
+    email_configured: bool = Field(description="the lab configured an SMTP server (else no e-mail is sent)")
+    sent: list[dict[str, Any]] = Field(description="your latest notifications: event, channel, attempts, sent, error")
+
+
 class ArenaOut(BaseModel):
     """The arena as operators see it (:class:`~swarmdeck.console.portal.service.ArenaState`)."""
 
@@ -207,6 +275,7 @@ class ArenaOut(BaseModel):
     running: JobOut | None
     queue: list[JobOut]
     fleet: dict[str, Any] | None = Field(description="the fleet table (robots, charge, slots); null without a fleet")
+    arenas: list[ArenaInfoOut] = Field(default_factory=list, description="every arena behind the portal")
 
 
 class AuditOut(BaseModel):

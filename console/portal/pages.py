@@ -322,7 +322,7 @@ def router(service: PortalService, live: LiveFeed) -> APIRouter:
                     yield _sse("state", {"state": state, "final": state in FINAL})
                 if state in FINAL:
                     return
-            new, running, frame = live.latest()
+            new, running, frame = live.latest_of(job_id)  # several arenas publish into one feed
             if new != seq and running == job_id and frame is not None:
                 yield frame_event(new, frame)
                 idle = 0
@@ -392,6 +392,14 @@ def router(service: PortalService, live: LiveFeed) -> APIRouter:
     @r.post("/operator/release")
     async def release(request: Request, s: Session = Depends(signed_in)) -> Response:
         return await operator_post(request, s, lambda s, form: service.release_arena(s.user))
+
+    @r.post("/operator/arenas/{name}/estop")
+    async def arena_estop(request: Request, name: str, s: Session = Depends(signed_in)) -> Response:
+        return await operator_post(request, s, lambda s, form: service.emergency_stop(s.user, name))
+
+    @r.post("/operator/arenas/{name}/release")
+    async def arena_release(request: Request, name: str, s: Session = Depends(signed_in)) -> Response:
+        return await operator_post(request, s, lambda s, form: service.release_arena(s.user, name))
 
     @r.post("/operator/approval")
     async def approval(request: Request, s: Session = Depends(signed_in)) -> Response:

@@ -23,6 +23,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from swarmdeck.console.portal.exports import JobExports
 from swarmdeck.console.portal.livefeed import LiveFeed
 from swarmdeck.console.portal.runner import ArenaRunner, ArenaSettings
 from swarmdeck.console.portal.service import PortalService
@@ -131,7 +132,7 @@ class RegionRunner:
                  per_region: int | dict[str, int], live: LiveFeed | None = None, *, poll_s: float = 1.0) -> None:
         if settings.robots_via is not None:
             raise ValueError("regions run on the simulated floor for now (no --robots-via)")
-        self.service, self.layout = service, layout
+        self.service, self.layout, self.settings = service, layout, settings
         self.floor = simulated_floor(layout, per_region, dt=settings.dt)
         self.live = live if live is not None else LiveFeed()
         cap = {k: min(v, len(self.floor.free_robots(k))) for k, v in layout.capacity().items()}
@@ -144,6 +145,11 @@ class RegionRunner:
         for lane in self.lanes.values():
             lane.frame_listeners = self.frame_listeners
             lane.fleet.frame_listeners = self.frame_listeners
+
+    @property
+    def exports(self) -> JobExports:
+        """The first region's exports process (the portal resumes unfinished exports through it at start)."""
+        return next(iter(self.lanes.values())).exports
 
     # ------------------------------------------------------------------ what the service asks
     def start(self) -> RegionRunner:

@@ -128,6 +128,8 @@ class ArenaSettings:
             it — for trusted tests only (contacts on purpose): no command-line option or file sets it.
         obstacles: the floor's line-segment obstacles (``swarmdeck server --obstacles``): in the jobs' barrier, the
             simulation, the fleet's maneuvers and the recordings.
+        name: the arena's name behind a portal of several (``--arena NAME=SPEC``; :mod:`.arenas`); None: the
+            portal's first arena.
     """
 
     robots_via: str | None = None
@@ -140,6 +142,7 @@ class ArenaSettings:
     upkeep: UpkeepConfig = field(default_factory=UpkeepConfig)
     guard: GuardConfig | None = field(default_factory=GuardConfig)
     obstacles: Obstacles | None = None
+    name: str | None = None
 
     @property
     def real_time(self) -> bool:
@@ -191,11 +194,12 @@ class ArenaRunner:
     """
 
     def __init__(self, service: PortalService, settings: ArenaSettings, live: LiveFeed | None = None, *,
-                 poll_s: float = 1.0, fleet: Any = None) -> None:
+                 poll_s: float = 1.0, fleet: Any = None, exports: JobExports | None = None) -> None:
         self.service, self.settings = service, settings
         self.live = live if live is not None else LiveFeed()
         self.poll_s = float(poll_s)
-        self._thread = ServiceThread(self._run, "swarmdeck-portal-arena", join_timeout=15.0)
+        self._thread = ServiceThread(self._run, f"swarmdeck-portal-arena{'-' + settings.name if settings.name else ''}",
+                                     join_timeout=15.0)
         self._stop = self._thread.stop_event  # set: the arena thread ends after this pass
         self._lock = threading.Lock()
         self._job: int | None = None
@@ -203,7 +207,8 @@ class ArenaRunner:
         self._loop: ControlLoop | None = None
         self.runs = 0
         self.frame_listeners: list[Callable[[Any], None]] = []  # e.g. the operator's viser console
-        self.exports = JobExports(service)  # CSV, replay, video of ended jobs, in a child process
+        # CSV, replay, video of ended jobs, in a child process (a remote runner's are the portal's: .remote_runner)
+        self.exports = exports if exports is not None else JobExports(service)
         # fleet: the arena's ArenaFleet, or one region's robots of a shared floor (console/portal/region_runner.py)
         self.fleet: Any = fleet if fleet is not None else ArenaFleet(
             settings.fleet, settings.bounds, settings.dt, robots_via=settings.robots_via, seed=settings.seed,
@@ -282,7 +287,7 @@ class ArenaRunner:
                 tidy = False
             # a release landing after _between_jobs saw the arena stopped must not let a job start with robots
             # still on the floor: only claim after a pass that found the arena running (and returned them)
-            job = self.service.claim_for_arena(self._admit) if tidy else None
+            job = self.service.claim_for_arena(self._admit, arena=self.settings.name) if tidy else None
             if job is None:
                 self.service.wait_for_change(self.poll_s)
                 continue
@@ -360,24 +365,9 @@ class ArenaRunner:
 
     def recover(self) -> list[int]:
         """Mark jobs left on the arena ``interrupted`` and recover their partial recordings; their ids."""
-        from swarmdeck.console.recording.recover import RecoveryError, recover
-
         ids = self.service.recover_on_start()
         self.exports.resume()
-        for job_id in ids:
-            folder = self.service.job_dir(job_id)
-            partial, out = folder / "recording.partial.mcap", folder / "recording.mcap"
-            if not out.is_file():
-                continue
-            out.replace(partial)
-            try:
-                report = recover(partial, out)
-                note = report.summary()
-            except (RecoveryError, OSError) as exc:
-                note = f"the partial recording could not be recovered: {exc}"
-            write_run_json(folder, {"ended_by": "interrupted", "recovery": note})
-            if out.is_file():
-                self.exports.submit(job_id)
+        recover_recordings(self.service, self.exports, ids)
         return ids
 
     def run_job(self, job: Job) -> JobState | None:
@@ -406,7 +396,7 @@ class ArenaRunner:
         finally:
             with self._lock:
                 self._loop = None
-            self.live.clear()
+            self.live.clear(job_id)
         if outcome is None:
             state, reason = JobState.FAILED, note
         elif outcome.ended_by in ENDED_OK:
@@ -524,6 +514,28 @@ class ArenaRunner:
         if state["setup_failed"] is not None:
             return None, state["setup_failed"]
         return outcome, "; ".join(notes) or None
+
+
+def recover_recordings(service: PortalService, exports: JobExports, ids: list[int]) -> None:
+    """The partial recordings of interrupted jobs ``ids`` recovered
+    (:func:`swarmdeck.console.recording.recover.recover` into ``recording.mcap``, the damaged original kept as
+    ``recording.partial.mcap``), ``run.json`` saying so, and their exports submitted."""
+    from swarmdeck.console.recording.recover import RecoveryError, recover
+
+    for job_id in ids:
+        folder = service.job_dir(job_id)
+        partial, out = folder / "recording.partial.mcap", folder / "recording.mcap"
+        if not out.is_file():
+            continue
+        out.replace(partial)
+        try:
+            report = recover(partial, out)
+            note = report.summary()
+        except (RecoveryError, OSError) as exc:
+            note = f"the partial recording could not be recovered: {exc}"
+        write_run_json(folder, {"ended_by": "interrupted", "recovery": note})
+        if out.is_file():
+            exports.submit(job_id)
 
 
 def _user_reason(reason: str, job: Job, folder: Path) -> str:

@@ -56,11 +56,12 @@ import math
 import threading
 import time
 from collections.abc import Callable, Mapping
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any, Protocol, runtime_checkable
 
 from swarmdeck.console.portal.accounts import Accounts, User
+from swarmdeck.console.portal.arenas import DEFAULT_ARENA, ArenaSpec, check_request
 from swarmdeck.console.portal.db import Database, TransitionConflict
 from swarmdeck.console.portal.errors import BadInput, Conflict, Forbidden, NotFound, Unavailable
 from swarmdeck.console.portal.job import (
@@ -73,10 +74,22 @@ from swarmdeck.console.portal.job import (
     bypass_decided,
 )
 from swarmdeck.console.portal.jobfiles import RESULT_FILES, JobFiles, ResultFile
-from swarmdeck.console.portal.jobstore import JobStore
+from swarmdeck.console.portal.jobstore import PRE_QUEUE, JobStore, JobStoreAPI
+from swarmdeck.console.portal.labstore import LabStore, Reservation
+from swarmdeck.console.portal.notify import SmtpSettings, check_email, check_webhook
 from swarmdeck.console.portal.quotas import DAY_S, Quotas, check_counts, check_disk
 from swarmdeck.console.portal.quotas import usage as quota_usage
 from swarmdeck.console.portal.results import results_summary
+from swarmdeck.console.portal.scheduler import (
+    OVERHEAD_RUNS,
+    Lane,
+    Pending,
+    Placement,
+    Window,
+    occupancy,
+    overhead,
+    plan,
+)
 from swarmdeck.console.portal.states import ACTIVE, FINAL, JobState
 from swarmdeck.console.portal.submission import Limits, Manifest, Upload, check_bundle, check_upload, parse_manifest
 from swarmdeck.console.sandbox.confinement import JailConfig, SandboxLimits
@@ -135,6 +148,9 @@ class PortalConfig:
             (:mod:`swarmdeck.console.sandbox.script_env`); None: what swarmdeck's own environment has.
         retain_days: results of jobs that ended more than this many days ago are deleted by
             :meth:`PortalService.sweep_results` (the job's row stays, with ``results_deleted``); None: kept.
+        arenas: the arenas behind the portal (:mod:`.arenas`; ``--arena NAME=SPEC``); empty: one.
+        smtp: the SMTP server notifications by e-mail go through (:mod:`.notify`); None: no e-mail.
+        runner_lease_s: a remote runner not heard from for this long has lost its arena; its job is interrupted.
     """
 
     data: Path
@@ -150,6 +166,14 @@ class PortalConfig:
     quotas: Quotas = field(default_factory=Quotas)
     retain_days: float | None = None
     script_env: str | None = None
+    arenas: tuple[ArenaSpec, ...] = ()
+    smtp: SmtpSettings | None = None
+    runner_lease_s: float = 20.0
+
+    def arena_specs(self) -> tuple[ArenaSpec, ...]:
+        """The arenas behind the portal (``--arena``); without any, one simulated arena of ``limits.fleet`` robots
+        named :data:`~.arenas.DEFAULT_ARENA`."""
+        return self.arenas or (ArenaSpec(DEFAULT_ARENA, robots=self.limits.fleet),)
 
     def jail(self) -> JailConfig:
         """The jail every verification and arena run uses (``allow_no_cgroup``, ``script_env``)."""
@@ -179,12 +203,13 @@ class ArenaState:
     running: Job | None
     queue: tuple[Job, ...]
     fleet: dict[str, Any] | None
+    arenas: tuple[dict[str, Any], ...] = ()
 
     def to_dict(self) -> dict[str, Any]:
         return {"stopped": self.stopped, "needs_operator": self.needs_operator, "alerts": self.alerts,
                 "manual_approval": self.manual_approval,
                 "running": None if self.running is None else self.running.to_dict(),
-                "queue": [j.to_dict() for j in self.queue], "fleet": self.fleet}
+                "queue": [j.to_dict() for j in self.queue], "fleet": self.fleet, "arenas": list(self.arenas)}
 
 
 class PortalService:
@@ -195,10 +220,13 @@ class PortalService:
         self.data = Path(config.data)
         self.db = db if db is not None else Database(self.data)
         self.accounts = accounts if accounts is not None else Accounts(self.db)
-        self.store = JobStore(self.db)
+        self.store: JobStoreAPI = JobStore(self.db)  # the one interface to the jobs' rows (JobStoreAPI)
         self.job_files = JobFiles(self.data / "jobs")  # the data folder itself is made 0700 by the Database
         self.changed = threading.Condition()  # notified after every change workers/runner/live views wait on
         self.arena: ArenaControl | None = None
+        self.lab = LabStore(self.db)  # reservations, notifications, remote runners' leases
+        self.runners: dict[str, ArenaControl] = {}  # arena name -> its in-process runner (several arenas)
+        self.remote: object | None = None  # the remote runners' rules (.remote.RemoteArenas), made by the API
 
     # ------------------------------------------------------------------ helpers
     def job_dir(self, job_id: int) -> Path:
@@ -255,6 +283,7 @@ class PortalService:
             if isinstance(manifest, dict):
                 manifest = {**manifest, "entry": str(entry).strip()}
         m = parse_manifest(manifest, self.config.limits)
+        check_request(self.config.arena_specs(), m.robots, m.needs, m.arena)
         entry = self._entry(m, upload)
         if not user.is_operator:
             check_disk(self.store.kept_job_ids(user.id), self.config.quotas, self.job_files.root)
@@ -265,7 +294,8 @@ class PortalService:
                              self.store.verification_cpu(user.id, now - DAY_S, tx), now)
             job_id = self.store.insert(tx, user_id=user.id, name=m.name, kind=upload.kind, script=upload.display_name,
                                        entry=entry, robots=m.robots, duration=m.duration,
-                                       initial_poses=m.initial_poses, no_barrier=m.no_barrier, now=now)
+                                       initial_poses=m.initial_poses, no_barrier=m.no_barrier, now=now,
+                                       arena=m.arena, needs=m.needs)
             self.job_files.store(job_id, upload, m, entry)  # inside the transaction: no job row without its files
         self.notify()
         return self.job(user, job_id)
@@ -283,11 +313,12 @@ class PortalService:
         return self.job_files.script(job)
 
     def jobs(self, user: User, *, mine: bool = False) -> list[Job]:
-        """A researcher's own jobs; an operator's view of all jobs (``mine``: only their own). Newest first."""
-        return self.store.list(None if user.is_operator and not mine else user.id)
+        """A researcher's own jobs; an operator's view of all jobs (``mine``: only their own). Newest first, the
+        waiting ones with their estimated start and end (:meth:`with_eta`)."""
+        return self.with_eta(self.store.list(None if user.is_operator and not mine else user.id))
 
     def job(self, user: User, job_id: int) -> Job:
-        return self._visible(user, job_id)
+        return self.with_eta([self._visible(user, job_id)])[0]
 
     def cancel(self, user: User, job_id: int) -> Job:
         """Cancel a job that has not ended (its owner, or an operator); 409 if it has ended."""
@@ -303,8 +334,10 @@ class PortalService:
                 raise Conflict(str(exc), "job") from None
             if user.is_operator and job.user_id != user.id:
                 self.accounts.audit(user, "cancel", job.id, tx=tx)
-        if job.state in ACTIVE and self.arena is not None:
-            self.arena.cancel(job.id)
+            self._event(tx, job.id, "ended")
+        if job.state in ACTIVE:
+            for control in self._controls():
+                control.cancel(job.id)
         self.notify()
         return self.job(user, job_id)
 
@@ -551,40 +584,57 @@ class PortalService:
     def arena_stopped(self) -> bool:
         return self.store.arena_stopped()
 
-    def emergency_stop(self, user: User) -> ArenaState:
-        """Stop the robots now, end the running job, latch the arena stopped (see the module docstring)."""
+    def emergency_stop(self, user: User, arena: str | None = None) -> ArenaState:
+        """Stop the robots now, end the running job, latch the arena stopped (see the module docstring).
+        ``arena``: only that arena (its robots, its jobs, its latch); None: every arena."""
         self._require_operator(user)
+        spec = None if arena is None else self._spec(arena)
         with self.store.transaction() as tx:
-            self.store.set_arena_stopped(tx, True)
-            active = self.store.ids_in(tx, ACTIVE)
+            if spec is None:
+                self.store.set_arena_stopped(tx, True)
+                active = self.store.ids_in(tx, ACTIVE)
+            else:
+                self.store.set_arena_stopped_named(tx, spec.name, True)
+                active = [j.id for j in self.store.active_on(spec.name, self._default, tx)]
             for job_id in active:
                 self.store.transition(tx, job_id, JobState.CANCELLED, ended=time.time(),
                                       reason=f"emergency stop by operator {user.name}")
-            self.accounts.audit(user, "emergency stop", None if not active else active[0], tx=tx)
-        if self.arena is not None:
-            self.arena.emergency_stop()
+                self._event(tx, job_id, "ended")
+            self.accounts.audit(user, "emergency stop" if spec is None else f"emergency stop of arena {spec.name}",
+                                None if not active else active[0], tx=tx)
+        for name, control in self._named_controls():
+            if spec is None or name == spec.name:
+                control.emergency_stop()
         self.notify()
         return self.arena_state(user)
 
-    def release_arena(self, user: User) -> ArenaState:
-        """Release the emergency stop: the arena takes the next waiting job."""
+    def release_arena(self, user: User, arena: str | None = None) -> ArenaState:
+        """Release the emergency stop (of every arena, or of ``arena``): the arena takes the next waiting job."""
         self._require_operator(user)
+        spec = None if arena is None else self._spec(arena)
         with self.store.transaction() as tx:
-            if not self.store.arena_stopped():
-                raise Conflict("the arena is not stopped", "arena")
-            self.store.set_arena_stopped(tx, False, attention="")
-            self.accounts.audit(user, "release emergency stop", tx=tx)
+            if spec is None:
+                if not self.store.arena_stopped():
+                    raise Conflict("the arena is not stopped", "arena")
+                self.store.set_arena_stopped(tx, False, attention="")
+            else:
+                if not self.store.arena_stopped_named(spec.name):
+                    raise Conflict(f"arena {spec.name} is not stopped", "arena")
+                self.store.set_arena_stopped_named(tx, spec.name, False)
+            self.accounts.audit(user, "release emergency stop" + ("" if spec is None else f" of arena {spec.name}"),
+                                tx=tx)
         self.notify()
         return self.arena_state(user)
 
     def arena_state(self, user: User) -> ArenaState:
         """The arena, its queue, its alerts and its fleet as operators see it (:class:`ArenaState`)."""
         self._require_operator(user)
-        arena = self.arena if isinstance(self.arena, ArenaReports) else None
+        first = self.arena if self.arena is not None else next(iter(self.runners.values()), None)
+        arena = first if isinstance(first, ArenaReports) else None
         return ArenaState(stopped=self.arena_stopped, needs_operator=self.store.attention(),
                           alerts=None if arena is None else arena.alerts(), manual_approval=self.manual_approval,
-                          running=self.store.on_arena(), queue=tuple(self.store.queue()),
-                          fleet=None if arena is None else arena.fleet_status())
+                          running=self.store.on_arena(), queue=tuple(self.with_eta(self.store.queue())),
+                          fleet=None if arena is None else arena.fleet_status(), arenas=tuple(self.arenas_state()))
 
     def audit_log(self, user: User, limit: int = 200) -> list[dict[str, Any]]:
         self._require_operator(user)
@@ -625,6 +675,7 @@ class PortalService:
                 self.store.set_reason(tx, job_id, BYPASS_WAIT)
             elif accepted and not self.store.manual_approval():
                 self.store.transition(tx, job_id, JobState.IN_ARENA_QUEUE, sources=(JobState.AWAITING_APPROVAL,))
+            self._event(tx, job_id, "verified" if accepted else "rejected")
         self.notify()
 
     def fail_verification(self, job_id: int, reason: str) -> None:
@@ -643,18 +694,24 @@ class PortalService:
         return bypass_decided(job.get("verdict"), bool(job.get("request_no_barrier")),
                               bool(job.get("barrier_forbidden")), job.get("bypass_decision"), BypassDecision.APPROVED)
 
-    def claim_for_arena(self, admit: Callable[[Job], str | None] | None = None) -> Job | None:
-        """The first job of the arena queue, now ``setting up`` — None when there is none or the arena is stopped.
+    def claim_for_arena(self, admit: Callable[[Job], str | None] | None = None, arena: str | None = None,
+                        holder: str | None = None, only: int | None = None) -> Job | None:
+        """The first job of the arena queue the plan puts on ``arena`` now (:meth:`next_for`; None: the portal's
+        first arena), now ``setting up`` on it — None when there is none or the arena is stopped. Of several
+        arenas claiming at once each job goes to exactly one (the conditional transition).
 
         ``admit(job)`` (the arena: are N charged robots free?) returns None to go ahead, or why the job
         must wait: it stays first in the queue with that ``reason`` (jobs run in queue order:
         a smaller job behind it does not overtake it). ``admit`` runs outside the database transaction.
+        ``holder``: the remote runner's lease that will hold the job; ``only``: claim that job or none (the
+        remote runner checked its robots for it; :mod:`.remote`).
         """
+        name = self._default if arena is None else arena
         admitted = None
         if admit is not None:
-            if self.arena_stopped:
+            if self._stopped(name):
                 return None
-            first = self.store.first_in_queue()
+            first = self.next_for(name)
             if first is None:
                 return None
             why = admit(first)
@@ -664,13 +721,14 @@ class PortalService:
                 return None
             admitted = first.id
         with self.store.transaction() as tx:
-            if self.store.arena_stopped():
+            if self._stopped(name):
                 return None
-            job = self.store.first_in_queue(tx)
-            if job is None or (admit is not None and job.id != admitted):
+            job = self.next_for(name)  # this thread's connection is tx's: the plan reads what tx sees
+            if job is None or (admit is not None and job.id != admitted) or (only is not None and job.id != only):
                 return None  # the queue changed meanwhile: the arena asks again
             self.store.transition(tx, job.id, JobState.SETTING_UP, sources=(JobState.IN_ARENA_QUEUE,),
-                                  started=time.time(), bypass=int(job.bypass_allowed), reason=None)
+                                  started=time.time(), bypass=int(job.bypass_allowed), reason=None, placed=name,
+                                  holder=holder)
         self.notify()
         return self.store.get(job.id)
 
@@ -689,6 +747,7 @@ class PortalService:
                 self.store.transition(tx, job_id, JobState.RUNNING, sources=(JobState.SETTING_UP,))
             except TransitionConflict:
                 return False
+            self._event(tx, job_id, "started")
         self.notify()
         return True
 
@@ -700,6 +759,7 @@ class PortalService:
                 self.store.transition(tx, job_id, state, sources=ACTIVE, ended=time.time(), reason=reason)
             except TransitionConflict as exc:
                 return None if exc.state is None else JobState(exc.state)
+            self._event(tx, job_id, "ended")
         self.notify()
         return JobState(state)
 
@@ -720,12 +780,226 @@ class PortalService:
         runner to recover their recordings); jobs found ``verifying`` go back to ``awaiting verification``."""
         with self.store.transaction() as tx:
             ids = self.store.ids_in(tx, ACTIVE)
+            ids = [i for i in ids if self.store.holder_of(i) is None]  # remote runners' jobs: their leases decide
             for jid in ids:
                 self.store.transition(tx, jid, JobState.INTERRUPTED, sources=ACTIVE, ended=time.time(),
                                       reason="the server stopped during the run (partial recording kept)")
+                self._event(tx, jid, "ended")
             for jid in self.store.ids_in(tx, (JobState.VERIFYING,)):
                 self.store.transition(tx, jid, JobState.AWAITING_VERIFICATION, sources=(JobState.VERIFYING,))
         return ids
 
     def close(self) -> None:
         self.db.close()
+
+    # ------------------------------------------------------------------ several arenas (issue 30)
+    @property
+    def _default(self) -> str:
+        return self.config.arena_specs()[0].name
+
+    def _spec(self, name: str) -> ArenaSpec:
+        for spec in self.config.arena_specs():
+            if spec.name == name:
+                return spec
+        raise NotFound(f"there is no arena {name!r} (arenas: "
+                       f"{', '.join(a.name for a in self.config.arena_specs())})", "arena")
+
+    def _named_controls(self) -> list[tuple[str, ArenaControl]]:
+        named = list(self.runners.items())
+        if self.arena is not None and all(c is not self.arena for _, c in named):
+            named.append((self._default, self.arena))
+        return named
+
+    def _controls(self) -> list[ArenaControl]:
+        return [c for _, c in self._named_controls()]
+
+    def _user_named(self, name: str) -> User | None:
+        try:
+            return self.accounts.user_named(name)
+        except NotFound:
+            return None
+
+    def _stopped(self, arena: str) -> bool:
+        """Whether ``arena`` may not start a job: the portal's latch or its own."""
+        return self.store.arena_stopped() or self.store.arena_stopped_named(arena)
+
+    def connected(self, arena: str, now: float | None = None) -> bool:
+        """Whether ``arena`` can take jobs now: in-process, or its remote runner was heard from within the
+        lease time (:attr:`PortalConfig.runner_lease_s`)."""
+        spec = self._spec(arena)
+        if not spec.remote:
+            return True
+        lease = self.lab.lease(arena)
+        now = time.time() if now is None else now
+        return lease is not None and now - lease[1] <= self.config.runner_lease_s
+
+    def _windows(self, now: float) -> list[Window]:
+        out = []
+        for r in self.lab.reservations(now):
+            users = {r.user_id} if r.user_id is not None else set(self.lab.members(r.group or ""))
+            out.append(Window(r.arena, r.start, r.end, frozenset(users)))
+        return out
+
+    def plan(self, jobs: list[Job], now: float) -> dict[int, Placement]:
+        """Where and when each of ``jobs`` (in queue order) is planned (:func:`.scheduler.plan`) over the arenas
+        that can take jobs now (not stopped; remote ones connected), their running jobs and the reservations."""
+        default = self._default
+        lanes: list[Lane] = []
+        overheads: dict[str, float] = {}
+        for spec in self.config.arena_specs():
+            if self._stopped(spec.name) or not self.connected(spec.name, now):
+                continue
+            est = overheads[spec.name] = overhead(self.store.recent_runs(spec.name, default, OVERHEAD_RUNS))
+            busy: list[list[tuple[float, float]]] = [[] for _ in range(spec.slots)]
+            for k, j in enumerate(self.store.active_on(spec.name, default)):
+                t0 = j.started if j.started is not None else now
+                busy[k % spec.slots].append((t0, t0 + occupancy(j.duration, est)))
+            per = spec.robots if spec.slots == 1 else spec.robots // spec.slots
+            lanes += [Lane(spec.name, k, spec.kind, per, busy[k]) for k in range(spec.slots)]
+        pending = [Pending(j.id, j.user_id, j.robots, j.duration, j.arena, j.needs) for j in jobs]
+        return plan(pending, lanes, self._windows(now), now, overheads)
+
+    def next_for(self, arena: str, now: float | None = None) -> Job | None:
+        """The first job of the arena queue the plan starts on ``arena`` now (None: none)."""
+        now = time.time() if now is None else now
+        queue = self.store.queue()
+        placements = self.plan(queue, now)
+        for job in queue:
+            p = placements.get(job.id)
+            if p is not None and p.arena == arena and p.start <= now:
+                return job
+        return None
+
+    def with_eta(self, jobs: list[Job]) -> list[Job]:
+        """``jobs`` with the estimated start, end and arena of those waiting (the arena queue, verification and
+        approval: :meth:`plan` over every waiting job, the queue first)."""
+        planned = (JobState.IN_ARENA_QUEUE, *PRE_QUEUE)
+        if not any(j.state in planned for j in jobs):
+            return jobs
+        placements = self.plan(self.store.waiting_in_order(), time.time())
+        out = []
+        for j in jobs:
+            p = placements.get(j.id) if j.state in planned else None
+            out.append(j if p is None else replace(j, eta_start=p.start, eta_end=p.end, eta_arena=p.arena))
+        return out
+
+    def arenas_state(self) -> list[dict[str, Any]]:
+        """Each arena: its spec, whether it is stopped and connected, and the jobs on it now."""
+        controls = dict(self._named_controls())
+        out = []
+        for spec in self.config.arena_specs():
+            on = self.store.active_on(spec.name, self._default)
+            control = controls.get(spec.name)
+            fleet = control.fleet_status() if isinstance(control, ArenaReports) else None
+            out.append({**spec.to_dict(), "stopped": self._stopped(spec.name), "connected": self.connected(spec.name),
+                        "running": [j.id for j in on], "fleet": fleet})
+        return out
+
+    # ------------------------------------------------------------------ reservations
+    def reservations(self, user: User) -> list[Reservation]:
+        """The reservations that have not ended (everyone sees them: the queue plans around them)."""
+        return self.lab.reservations(time.time())
+
+    def reserve(self, user: User, *, arena: Any, start: Any, end: Any, for_user: Any = None, group: Any = None,
+                note: Any = "") -> Reservation:
+        """An operator books ``arena`` over [start, end) (UNIX s) for a researcher (``for_user``, a name) or a
+        ``group``: only their jobs run there then, and the queue plans around it. 409 when it overlaps another
+        reservation of that arena; 400 when it lies in the past, ends before it starts, names no one or an
+        unknown arena or user."""
+        self._require_operator(user)
+        if not isinstance(arena, str):
+            raise BadInput("arena must be an arena's name", "arena")
+        spec = self._spec(arena)
+        for key, v in (("start", start), ("end", end)):
+            if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
+                raise BadInput(f"{key} must be a time in UNIX seconds, got {v!r}", key)
+        start, end = float(start), float(end)
+        now = time.time()
+        if end <= start:
+            raise BadInput(f"the reservation ends ({end:.0f}) before it starts ({start:.0f})", "end")
+        if end <= now:
+            raise BadInput("the reservation lies in the past (it ends before now)", "end")
+        if (for_user is None) == (group is None):
+            raise BadInput("name either a researcher (user) or a group the reservation is for", "user")
+        user_id = None
+        if for_user is not None:
+            target = self._user_named(for_user) if isinstance(for_user, str) else None
+            if target is None:
+                raise BadInput(f"there is no user {for_user!r}", "user")
+            user_id = target.id
+        elif not isinstance(group, str) or not group.strip() or len(group) > 64:
+            raise BadInput(f"group must be a group's name, got {group!r}", "group")
+        if not isinstance(note, str) or len(note) > 200:
+            raise BadInput("note must be a text of at most 200 characters", "note")
+        with self.store.transaction() as tx:
+            clash = self.lab.overlapping(tx, spec.name, max(start, now), end)
+            if clash is not None:
+                raise Conflict(f"arena {spec.name} is already reserved from {_clock(clash.start)} to "
+                               f"{_clock(clash.end)} UTC for {clash.user or 'group ' + str(clash.group)} "
+                               f"(reservation {clash.id})", "start")
+            res_id = self.lab.add_reservation(tx, arena=spec.name, user_id=user_id, group=group, start=start,
+                                              end=end, note=note, created_by=user.id)
+            self.accounts.audit(user, "reserve", None, f"arena {spec.name} {_clock(start)}–{_clock(end)} for "
+                                f"{for_user if for_user is not None else 'group ' + str(group)}", tx=tx)
+        self.notify()
+        found = self.lab.reservation(res_id)
+        assert found is not None
+        return found
+
+    def cancel_reservation(self, user: User, res_id: int) -> None:
+        self._require_operator(user)
+        with self.store.transaction() as tx:
+            if not self.lab.delete_reservation(tx, res_id):
+                raise NotFound(f"no reservation {res_id}", "reservation")
+            self.accounts.audit(user, "cancel reservation", None, str(res_id), tx=tx)
+        self.notify()
+
+    def set_group(self, user: User, name: str, group: str | None) -> dict[str, Any]:
+        """An operator puts researcher ``name`` in ``group`` (None: none): reservations for a group cover them."""
+        self._require_operator(user)
+        target = self._user_named(name)
+        if target is None:
+            raise NotFound(f"no user {name!r}", "user")
+        if group is not None and (not isinstance(group, str) or not group.strip() or len(group) > 64):
+            raise BadInput(f"group must be a name of at most 64 characters, got {group!r}", "group")
+        with self.store.transaction() as tx:
+            self.lab.set_group(tx, target.id, group)
+            self.accounts.audit(user, "set group", None, f"{name}: {group}", tx=tx)
+        self.notify()
+        return {"user": name, "group": group}
+
+    # ------------------------------------------------------------------ notifications
+    def notification_targets(self, user: User) -> dict[str, Any]:
+        webhook, email = self.lab.targets(user.id)
+        return {"webhook": webhook, "email": email, "email_configured": self.config.smtp is not None,
+                "sent": self.lab.notices(user.id, 20)}
+
+    def set_notification_targets(self, user: User, webhook: Any, email: Any) -> dict[str, Any]:
+        """Where ``user`` is told when their jobs are verified, start, end or are rejected (None: nowhere)."""
+        webhook = None if webhook in (None, "") else check_webhook(webhook)
+        email = None if email in (None, "") else check_email(email)
+        self.lab.set_targets(user.id, webhook, email)
+        return self.notification_targets(user)
+
+    def _event(self, tx: Any, job_id: int, event: str) -> None:
+        """Queue the owner's notifications of ``event`` (verified, rejected, started, ended) in ``tx``: sent by
+        :class:`.notify.Notifier` off the queue's path, with the change they report committed."""
+        job = self.store.get(job_id, tx)
+        if job is None:
+            return
+        webhook, email = self.lab.targets(job.user_id, tx)
+        if webhook is None and (email is None or self.config.smtp is None):
+            return
+        now = time.time()
+        body = json.dumps({"event": event, "job": job.id, "name": job.name, "owner": job.owner, "state": job.state,
+                           "reason": job.reason, "arena": job.placed, "time": now})
+        if webhook is not None:
+            self.lab.enqueue(tx, job_id=job.id, user_id=job.user_id, event=event, channel="webhook", target=webhook,
+                             body=body, now=now)
+        if email is not None and self.config.smtp is not None:
+            self.lab.enqueue(tx, job_id=job.id, user_id=job.user_id, event=event, channel="email", target=email,
+                             body=body, now=now)
+
+
+def _clock(t: float) -> str:
+    return time.strftime("%Y-%m-%d %H:%M", time.gmtime(t))

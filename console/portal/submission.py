@@ -39,12 +39,13 @@ from typing import Any
 
 import numpy as np
 
+from swarmdeck.console.portal.arenas import NAME_RE, NEEDS
 from swarmdeck.console.portal.errors import BadInput, TooLarge, Unsupported
 from swarmdeck.console.sandbox.bundle import MAX_BYTES, ScriptBundle
 from swarmdeck.console.sandbox.start_poses import check_initial_poses
 from swarmdeck.core.bounds import DEFAULT_BOUNDS, Bounds
 
-MANIFEST_KEYS = ("name", "robots", "duration", "initial_poses", "no_barrier", "entry")
+MANIFEST_KEYS = ("name", "robots", "duration", "initial_poses", "no_barrier", "entry", "arena", "needs")
 COMPONENT_RE = re.compile(r"^[A-Za-z0-9_][A-Za-z0-9_.-]{0,99}$")
 MANIFEST_NAME = "manifest.json"
 
@@ -70,6 +71,8 @@ class Manifest:
     initial_poses: tuple[tuple[float, float, float], ...] | None = None
     no_barrier: bool = False
     entry: str | None = None
+    arena: str | None = None  # the arena the job must run on (None: any that fits; issue 30)
+    needs: str = "either"  # physical | simulated | either robots
 
     def to_dict(self) -> dict[str, Any]:
         d: dict[str, Any] = {"name": self.name, "robots": self.robots, "duration": self.duration,
@@ -78,6 +81,10 @@ class Manifest:
             d["initial_poses"] = [list(p) for p in self.initial_poses]
         if self.entry is not None:
             d["entry"] = self.entry
+        if self.arena is not None:
+            d["arena"] = self.arena
+        if self.needs != "either":
+            d["needs"] = self.needs
         return d
 
 
@@ -143,13 +150,15 @@ def _checked(data: dict[str, Any], limits: Limits, first: int = 0) -> tuple[Mani
     duration = check("duration", lambda: _duration(data, limits))
     no_barrier = check("no_barrier", lambda: _no_barrier(data))
     entry = check("entry", lambda: _entry(data))
+    arena = check("arena", lambda: _arena(data))
+    needs = check("needs", lambda: _needs(data))
     poses = data.get("initial_poses")
     if poses is not None:  # with a bad robot count the poses are still checked (against their own count)
         n = robots if robots is not None else (len(poses) if isinstance(poses, list) else 0)
         poses = check("initial_poses", lambda: _initial_poses(poses, n, limits.bounds, first))
     if errors:
         return None, errors
-    return Manifest(name, robots, float(duration), poses, no_barrier, entry), []
+    return Manifest(name, robots, float(duration), poses, no_barrier, entry, arena, needs), []
 
 
 def _required(data: dict[str, Any], key: str) -> Any:
@@ -189,6 +198,23 @@ def _no_barrier(data: dict[str, Any]) -> bool:
     if not isinstance(no_barrier, bool):
         raise BadInput(f"no_barrier must be true or false, got {no_barrier!r}", "no_barrier")
     return no_barrier
+
+
+def _arena(data: dict[str, Any]) -> str | None:
+    """The arena the job asks for by name (None: any); whether this portal has it is the service's check."""
+    arena = data.get("arena")
+    if arena is None:
+        return None
+    if not isinstance(arena, str) or not NAME_RE.match(arena):
+        raise BadInput(f"arena must be an arena's name (lower-case letters, digits, '-', '_'), got {arena!r}", "arena")
+    return arena
+
+
+def _needs(data: dict[str, Any]) -> str:
+    needs = data.get("needs", "either")
+    if needs not in NEEDS:
+        raise BadInput(f"needs must be one of {', '.join(NEEDS)}, got {needs!r}", "needs")
+    return str(needs)
 
 
 def _entry(data: dict[str, Any]) -> str | None:

@@ -91,7 +91,7 @@ def test_service_threads_start_through_core_service_thread():
 
 
 def test_tests_take_shared_fixtures_from_conftest():
-    fixture_modules = ("portal_fixtures", "mqtt_broker", "jail_fixtures", "script_env_fixtures")
+    fixture_modules = ("portal_fixtures", "mqtt_broker", "jail_fixtures", "script_env_fixtures", "lab_fixtures")
     pattern = re.compile(rf"^from ({'|'.join(fixture_modules)}) import .*# noqa: F401", re.MULTILINE)
     offenders = [rel(p) for p in sorted((ROOT / "tests").rglob("test_*.py")) if pattern.search(p.read_text())]
     assert not offenders, offenders

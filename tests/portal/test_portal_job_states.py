@@ -35,7 +35,7 @@ def test_a_version_4_database_gets_the_new_names(tmp_path):
     conn.commit()
     conn.close()
     d = db.Database(tmp_path)
-    assert d.version == len(db.MIGRATIONS) == 5 and d.check() == "ok"
+    assert d.version == len(db.MIGRATIONS) >= 5 and d.check() == "ok"
     got = {r["name"]: (r["state"], r["held_from"]) for r in d.query("SELECT name, state, held_from FROM jobs")}
     assert got == {"a": ("awaiting verification", None), "b": ("awaiting approval", None),
                    "c": ("in arena queue", None), "d": ("held", "in arena queue"), "e": ("done", None),

@@ -16,7 +16,7 @@ ROOT = Path(__file__).resolve().parents[2]
 PORTAL = ROOT / "console" / "portal"
 SQL = re.compile(r"\b(SELECT\b.+\bFROM|UPDATE\s+\w+\s+SET|INSERT\s+(OR\s+\w+\s+)?INTO|DELETE\s+FROM)\b")
 #: the modules that may hold SQL: the schema and its connections, the jobs' store, the accounts' tables
-SQL_HOMES = {"db.py", "jobstore.py", "accounts.py"}
+SQL_HOMES = {"db.py", "jobstore.py", "accounts.py", "labstore.py"}
 CLIENT = [ROOT / "console" / "cli" / f"{name}.py" for name in ("submit", "jobs", "cancel", "results", "_client")]
 #: states whose names say nothing else in this code (a sandbox run also ends "cancelled", an export "failed")
 UNAMBIGUOUS = [s for s in JobState if " " in s.value or s in (JobState.VERIFYING, JobState.HELD)]

@@ -1,0 +1,151 @@
+"""The arenas behind one portal: ``swarmdeck server --arena NAME=SPEC`` (repeatable), one :class:`ArenaSpec` each.
+
+SPEC is comma-separated, its first item says where the robots are:
+
+* ``sim`` — a simulated fleet in the server's process (``fast``: as fast as it computes);
+* ``mqtt://HOST:PORT`` — GRITSBots over MQTT, driven by the server's process (physical);
+* ``remote`` — an arena runner on another machine (``swarmdeck runner --portal URL --arena NAME --token T``) that
+  pulls this arena's jobs over HTTP and pushes their results (:mod:`.remote`);
+
+then ``robots=N`` (default 12), ``kind=physical|simulated`` (``remote`` only; ``sim`` is simulated, ``mqtt``
+physical), ``fast``, and ``slots=K`` (jobs the arena runs at once: regions on one floor; default 1).
+
+Examples: ``--arena floor=sim,robots=50,fast``, ``--arena lab=mqtt://127.0.0.1:1883,robots=20``,
+``--arena annex=remote,robots=12,kind=physical``. Pure Python (the thin CLI client may import it).
+"""
+from __future__ import annotations
+
+import re
+from dataclasses import dataclass
+
+from swarmdeck.console.portal.errors import BadInput
+from swarmdeck.devices.net.mqtt_config import parse_broker_url
+
+#: what a job may ask for: physical robots, simulated ones, or either (the manifest's ``needs``)
+NEEDS = ("either", "physical", "simulated")
+KINDS = ("physical", "simulated")
+#: an arena's name: what a manifest's ``arena``, URLs and the runner's ``--arena`` use
+NAME_RE = re.compile(r"^[a-z][a-z0-9_-]{0,31}$")
+#: the arena of a portal started without ``--arena`` (the one arena of earlier versions)
+DEFAULT_ARENA = "arena"
+
+
+@dataclass(frozen=True)
+class ArenaSpec:
+    """One arena behind the portal (module docstring).
+
+    Attributes:
+        name: its name (:data:`NAME_RE`).
+        kind: ``simulated`` or ``physical``.
+        robots: robots its fleet has (the most a job placed on it may use).
+        robots_via: ``mqtt://HOST:PORT`` of an in-process MQTT fleet; None otherwise.
+        fast: simulated, in-process: jobs tick as fast as they compute.
+        remote: its runner is another process that connects over HTTP (:mod:`.remote`).
+        slots: jobs it runs at once (regions of one floor; 1: one job at a time).
+    """
+
+    name: str
+    kind: str = "simulated"
+    robots: int = 12
+    robots_via: str | None = None
+    fast: bool = False
+    remote: bool = False
+    slots: int = 1
+
+    def fits(self, robots: int, needs: str = "either", arena: str | None = None) -> bool:
+        """Whether a job of ``robots`` robots that ``needs`` that kind (and asked for ``arena``) can run here."""
+        return robots <= self.robots and needs in ("either", self.kind) and arena in (None, self.name)
+
+    def describe(self) -> str:
+        where = "remote runner" if self.remote else (f"MQTT robots via {self.robots_via}" if self.robots_via
+                                                     else "simulated" + (", fast" if self.fast else ""))
+        return f"{self.name}: {self.robots} {self.kind} robots ({where}{f', {self.slots} slots' if self.slots > 1 else ''})"
+
+    def to_dict(self) -> dict[str, object]:
+        return {"name": self.name, "kind": self.kind, "robots": self.robots, "remote": self.remote,
+                "slots": self.slots, "fast": self.fast}
+
+
+def parse_arena_spec(text: str) -> ArenaSpec:
+    """``NAME=SPEC`` (module docstring) -> :class:`ArenaSpec`; :class:`ValueError` naming what is wrong."""
+    name, sep, spec = str(text).partition("=")
+    name = name.strip()
+    if not sep or not spec.strip():
+        raise ValueError(f"--arena {text!r}: write NAME=SPEC, e.g. floor=sim,robots=50")
+    if not NAME_RE.match(name):
+        raise ValueError(f"--arena {text!r}: the name {name!r} must be lower-case letters, digits, '-' or '_' "
+                         "(at most 32, starting with a letter)")
+    items = [s.strip() for s in spec.split(",")]
+    where, options = items[0], items[1:]
+    kind, robots_via, remote = "simulated", None, False
+    if where == "sim":
+        pass
+    elif where.startswith("mqtt://"):
+        parse_broker_url(where)  # ValueError naming the URL's problem
+        kind, robots_via = "physical", where
+    elif where == "remote":
+        remote = True
+    else:
+        raise ValueError(f"--arena {name}: {where!r} is not sim, mqtt://HOST:PORT or remote")
+    robots, fast, slots, kind_set = 12, False, 1, None
+    for opt in options:
+        key, eq, value = opt.partition("=")
+        try:
+            if key == "robots" and eq:
+                robots = int(value)
+            elif key == "slots" and eq:
+                slots = int(value)
+            elif key == "kind" and eq:
+                kind_set = value
+            elif key == "fast" and not eq:
+                fast = True
+            else:
+                raise ValueError
+        except ValueError:
+            raise ValueError(f"--arena {name}: unknown or malformed option {opt!r} (robots=N, slots=K, "
+                             "kind=physical|simulated, fast)") from None
+    if robots < 1:
+        raise ValueError(f"--arena {name}: robots must be >= 1, got {robots}")
+    if slots < 1:
+        raise ValueError(f"--arena {name}: slots must be >= 1, got {slots}")
+    if kind_set is not None:
+        if not remote:
+            raise ValueError(f"--arena {name}: kind= is for a remote arena (sim is simulated, mqtt physical)")
+        if kind_set not in KINDS:
+            raise ValueError(f"--arena {name}: kind must be physical or simulated, got {kind_set!r}")
+        kind = kind_set
+    if fast and (robots_via is not None or remote):
+        raise ValueError(f"--arena {name}: fast is for an in-process simulated arena")
+    return ArenaSpec(name=name, kind=kind, robots=robots, robots_via=robots_via, fast=fast, remote=remote,
+                     slots=slots)
+
+
+def check_unique(specs: list[ArenaSpec]) -> None:
+    """ValueError when two arenas share a name."""
+    seen: set[str] = set()
+    for s in specs:
+        if s.name in seen:
+            raise ValueError(f"--arena {s.name}: two arenas are named {s.name!r}")
+        seen.add(s.name)
+
+
+def check_request(arenas: tuple[ArenaSpec, ...], robots: int, needs: str, arena: str | None) -> None:
+    """:class:`~.errors.BadInput` when no arena of this portal can ever run such a job (naming why)."""
+    if needs not in NEEDS:
+        raise BadInput(f"needs must be one of {', '.join(NEEDS)}, got {needs!r}", "needs")
+    if arena is not None:
+        named = [a for a in arenas if a.name == arena]
+        if not named:
+            raise BadInput(f"there is no arena {arena!r} (arenas: {', '.join(a.name for a in arenas)})", "arena")
+        a = named[0]
+        if needs not in ("either", a.kind):
+            raise BadInput(f"arena {arena!r} is {a.kind}, the manifest needs {needs}", "needs")
+        if robots > a.robots:
+            raise BadInput(f"arena {arena!r} has {a.robots} robots, the manifest asks for {robots}", "robots")
+        return
+    kinds = [a for a in arenas if needs in ("either", a.kind)]
+    if not kinds:
+        raise BadInput(f"no arena here is {needs} (arenas: {', '.join(a.describe() for a in arenas)})", "needs")
+    if not any(robots <= a.robots for a in kinds):
+        raise BadInput(f"no {'' if needs == 'either' else needs + ' '}arena has {robots} robots (the largest has "
+                       f"{max(a.robots for a in kinds)})", "robots")
