@@ -32,3 +32,10 @@ SAFETY_DISTANCE: float = 0.17
 COLLISION_SHIFT: float = 0.025
 #: rps validator: two robots collide when their shifted centres are at most this far apart, m (REFERENCE.md §1).
 COLLISION_DISTANCE: float = 0.135
+
+# ---------------------------------------------------------------- the GTernal (Robotarium 2.x, REFERENCE.md §15)
+#: GTernal base (axle) length L, m (REFERENCE.md §15; rps 2.x ``ARobotarium.BASE_LENGTH``). Its diameter (0.11 m),
+#: wheel radius (0.016 m), top speed (0.2 m/s), collision diameter and offset are the GRITSBot's numbers above.
+GTERNAL_BASE_LENGTH: float = 0.11
+#: rps 2.x's limit on the robots of one simulation (REFERENCE.md §1, §15: ``0 <= number_of_robots <= 50``).
+RPS_MAX_ROBOTS: int = 50

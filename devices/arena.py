@@ -25,6 +25,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from swarmdeck.core.kinematics import GritsBotParams, lookahead_points, unicycle_to_si, wheels_to_unicycle
+from swarmdeck.core.robot_models import DEFAULT_ROBOT_MODEL, robot_params
 from swarmdeck.devices.controllers import (
     HybridPoseController,
     at_position,
@@ -66,6 +67,10 @@ class RunDefaults:
     # calls it, rps's error counts) and rps's call order (get_poses() once per step())
     rps_semantics: bool = False
     rps_call_order: bool = True
+    # the robot model of Arenas built without params (core/robot_models.py; None: the GRITSBot, and for the
+    # rps facade the model of the script's rps generation) and that generation (devices/rps/generation.py)
+    robot_model: str | None = None
+    rps_generation: int | None = None
 
 
 RUN_DEFAULTS: contextvars.ContextVar[RunDefaults] = contextvars.ContextVar("swarmdeck_run_defaults", default=RunDefaults())  # noqa: B039  (frozen)
@@ -144,7 +149,7 @@ class Arena:
             safety = defaults.safety
         if config is None:
             config = ArenaConfig(seed=defaults.seed)
-        self.params = params if params is not None else GritsBotParams()
+        self.params = params if params is not None else robot_params(defaults.robot_model or DEFAULT_ROBOT_MODEL)
         self.config = config
         if duration is not None and not (np.isfinite(duration) and duration > 0):
             raise ValueError(f"duration must be a positive number of seconds, got {duration!r}")

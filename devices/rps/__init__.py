@@ -14,9 +14,11 @@ import contextvars
 import importlib
 import importlib.abc
 import importlib.machinery
+import importlib.util
 import sys
 from collections.abc import Iterator
 from contextlib import contextmanager
+from pathlib import Path
 from types import ModuleType
 from typing import Any
 
@@ -77,8 +79,23 @@ class _FacadeLoader(importlib.abc.Loader):
         pass  # imported already by create_module
 
 
+class _EmptyPackageLoader(importlib.abc.Loader):
+    """Loads an empty package (``rps.examples`` and its folders: their modules are the script's own files)."""
+
+    def create_module(self, spec: importlib.machinery.ModuleSpec) -> None:
+        return None  # the default module
+
+    def exec_module(self, module: ModuleType) -> None:
+        pass
+
+
 class _FacadeFinder(importlib.abc.MetaPathFinder):
-    """Finds ``rps`` and the ``rps.*`` names of :data:`MODULES` in the facade."""
+    """Finds ``rps`` and the ``rps.*`` names of :data:`MODULES` in the facade, and ``rps.examples.….NAME`` as the
+    file ``NAME.py`` beside the script (rps's examples import their helpers so, e.g. the EKF example's
+    ``from rps.examples.state_estimation.extended_kalman_filter.uni_ekf import UnicycleEKF``)."""
+
+    def __init__(self, script_dir: Path | None = None) -> None:
+        self.script_dir = script_dir
 
     def find_spec(self, fullname: str, path: Any = None, target: Any = None) -> importlib.machinery.ModuleSpec | None:
         if fullname == "rps":
@@ -87,12 +104,21 @@ class _FacadeFinder(importlib.abc.MetaPathFinder):
             sub = fullname[4:]
             return importlib.machinery.ModuleSpec(fullname, _FacadeLoader(f"{__name__}.{sub}"),
                                                   is_package=sub == "utilities")
+        if fullname == "rps.examples" or fullname.startswith("rps.examples."):
+            name = fullname.rsplit(".", 1)[1]
+            file = None if self.script_dir is None else self.script_dir / f"{name}.py"
+            if file is not None and file.is_file():
+                return importlib.util.spec_from_file_location(fullname, file)
+            spec = importlib.machinery.ModuleSpec(fullname, _EmptyPackageLoader(), is_package=True)
+            spec.submodule_search_locations = []
+            return spec
         return None
 
 
 @contextmanager
-def rps_aliases() -> Iterator[list[str]]:
-    """Within the block, ``rps`` and ``rps.*`` import these facade modules.
+def rps_aliases(script_dir: Path | None = None) -> Iterator[list[str]]:
+    """Within the block, ``rps`` and ``rps.*`` import these facade modules (and ``rps.examples.….NAME`` the file
+    ``NAME.py`` in ``script_dir``, the folder of the script that runs).
 
     Also the numpy 1 API rps scripts rely on: ``np.mat`` (removed in numpy 2) is
     ``np.asmatrix`` within the block only; likewise matplotlib's ``cm.get_cmap(name, lut)`` (removed
@@ -105,7 +131,7 @@ def rps_aliases() -> Iterator[list[str]]:
     token = None
     saved = {k: v for k, v in sys.modules.items() if k == "rps" or k.startswith("rps.")}
     add_mat = not hasattr(np, "mat")
-    finder = _FacadeFinder()
+    finder = _FacadeFinder(script_dir)
     try:
         for k in saved:
             del sys.modules[k]

@@ -59,21 +59,26 @@ def generate_initial_poses(N: int, width: float = 3.0, height: float = 1.0) -> n
 
 
 def create_at_pose(position_error: float = 0.05, rotation_error: float = 0.2):
-    """rps 2.0: f(states (3, N), poses (3, N)) → (all robots there, indices of those there)."""
+    """rps 2.x: f(states (3, N), poses (3, N)) → (all robots there, (N,) bool: which are there) — a mask, as
+    rps 2.x returns (its examples combine it with ``&`` and ``~``), not 1.x's indices."""
 
     def check_at_pose(states, poses):
-        idxs = at_pose(states, poses, position_error, rotation_error)[0]
-        return bool(len(idxs) == np.asarray(states).shape[1]), idxs
+        states = np.asarray(states, dtype=float)
+        there = np.zeros(states.shape[1], dtype=bool)
+        there[at_pose(states, poses, position_error, rotation_error)[0]] = True
+        return bool(there.all()), there
 
     return check_at_pose
 
 
 def create_at_position(position_error: float = 0.05):
-    """rps 2.0: f(states (2+, N), positions (2, N)) → (all robots there, indices of those there)."""
+    """rps 2.x: f(states (2+, N), positions (2, N)) → (all robots there, (N,) bool: which are there)."""
 
     def check_at_position(states, positions):
-        idxs = at_position(states, positions, position_error)[0]
-        return bool(len(idxs) == np.asarray(states).shape[1]), idxs
+        states = np.asarray(states, dtype=float)
+        there = np.zeros(states.shape[1], dtype=bool)
+        there[at_position(states, positions, position_error)[0]] = True
+        return bool(there.all()), there
 
     return check_at_position
 
@@ -88,7 +93,7 @@ def unique_filename(file_name: str) -> str:
     """rps 2.0: ``file_name`` with the current time, ``.npy``."""
     from datetime import datetime
 
-    return f"{file_name}_{datetime.now().strftime('%Y%m%d_%H%M%S')}.npy"
+    return f"{file_name}_{datetime.now().strftime('%Y_%m_%d_%H_%M_%S')}.npy"
 
 
 def __getattr__(name: str):
