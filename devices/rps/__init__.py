@@ -104,14 +104,16 @@ class _FacadeFinder(importlib.abc.MetaPathFinder):
             sub = fullname[4:]
             return importlib.machinery.ModuleSpec(fullname, _FacadeLoader(f"{__name__}.{sub}"),
                                                   is_package=sub == "utilities")
-        if fullname == "rps.examples" or fullname.startswith("rps.examples."):
+        if (fullname == "rps.examples" or fullname.startswith("rps.examples.")) and self.script_dir is not None:
             name = fullname.rsplit(".", 1)[1]
-            file = None if self.script_dir is None else self.script_dir / f"{name}.py"
-            if file is not None and file.is_file():
+            file = self.script_dir / f"{name}.py"
+            if fullname != "rps.examples" and file.is_file():
                 return importlib.util.spec_from_file_location(fullname, file)
-            spec = importlib.machinery.ModuleSpec(fullname, _EmptyPackageLoader(), is_package=True)
-            spec.submodule_search_locations = []
-            return spec
+            # the folders the script is in are rps.examples' packages (rps/examples/<topic>/<example>/)
+            if fullname == "rps.examples" or name in (self.script_dir.name, *(p.name for p in self.script_dir.parents)):
+                spec = importlib.machinery.ModuleSpec(fullname, _EmptyPackageLoader(), is_package=True)
+                spec.submodule_search_locations = []
+                return spec
         return None
 
 

@@ -10,9 +10,12 @@ from swarmdeck.devices.initial_conditions import random_initial_poses
 
 
 def generate_initial_conditions(N: int, spacing: float = 0.3, width: float = 3, height: float = 1.8) -> np.ndarray:
-    """(3, N) random float poses at least ``spacing`` apart in a width × height box at the centre."""
+    """(3, N) random float poses at least ``spacing`` apart in a width × height box at the centre — drawn from
+    numpy's global generator, as rps draws them, so a script that calls ``np.random.seed`` gets the same poses on
+    every run."""
     bounds = Bounds(-width / 2, width / 2, -height / 2, height / 2)
-    return random_initial_poses(N, bounds, spacing=spacing + 0.01, min_separation=spacing, wall_margin=0.0).T
+    rng = np.random.default_rng(np.random.randint(0, 2**63 - 1, dtype=np.int64))
+    return random_initial_poses(N, bounds, spacing=spacing + 0.01, min_separation=spacing, wall_margin=0.0, rng=rng).T
 
 
 def at_pose(states, poses, position_error: float = 0.05, rotation_error: float = 0.2) -> tuple[np.ndarray, ...]:
