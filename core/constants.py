@@ -6,6 +6,8 @@ rectangle is :data:`swarmdeck.core.bounds.DEFAULT_BOUNDS`.
 """
 from __future__ import annotations
 
+import math
+
 #: Control (camera) period, s: ~30 Hz (REFERENCE.md §1).
 CONTROL_PERIOD: float = 0.033
 
@@ -39,3 +41,42 @@ COLLISION_DISTANCE: float = 0.135
 GTERNAL_BASE_LENGTH: float = 0.11
 #: rps 2.x's limit on the robots of one simulation (REFERENCE.md §1, §15: ``0 <= number_of_robots <= 50``).
 RPS_MAX_ROBOTS: int = 50
+# ---------------------------------------------------------------- Robotarium 2.0's sensors (REFERENCE.md §15)
+# (rps/robotarium_abc.py of robotarium/robotarium_python_simulator 2.0; swarmdeck.sensing takes its defaults here)
+#: The seven ToF distance sensors' poses on the body, ``(x, y, heading)`` in m, m, rad, in the body frame centred
+#: :data:`TOF_BODY_OFFSET` ahead of the axle (x forward, y left) (REFERENCE.md §15).
+TOF_SENSOR_POSES: tuple[tuple[float, float, float], ...] = (
+    (-0.04, 0.04, math.pi), (0.0, 0.06, math.pi / 2), (0.04, 0.05, math.pi / 4), (0.05, 0.0, 0.0),
+    (0.04, -0.05, -math.pi / 4), (0.0, -0.06, -math.pi / 2), (-0.04, -0.04, -math.pi))
+#: ToF range, m (REFERENCE.md §15): nothing farther is seen.
+TOF_RANGE: float = 1.2
+#: ToF error, the fractional standard deviation σ/d of a reading (REFERENCE.md §15).
+TOF_ERROR: float = 0.03
+#: Probability that a ToF reading of something in range is dropped (reads −1) (REFERENCE.md §15).
+TOF_DROPOUT: float = 0.035
+#: Probability that a kept ToF reading is an outlier, uniform on [0, range] (REFERENCE.md §15).
+TOF_OUTLIER: float = 0.014
+#: rps 2.0's CENTER_OFFSET, m: the body circle (and the sensors' frame) sits this far ahead of the axle.
+TOF_BODY_OFFSET: float = 0.01
+#: Wheel encoder counts per motor revolution (REFERENCE.md §15).
+ENCODER_COUNTS_PER_REV: int = 28
+#: Motor gear ratio: motor revolutions per wheel revolution (REFERENCE.md §15).
+MOTOR_GEAR_RATIO: float = 100.37
+#: Encoder noise σ, counts per √count of a step (at least one count) (REFERENCE.md §15).
+ENCODER_NOISE: float = 0.25
+#: Accelerometer noise σ (x, y, z), m/s² (REFERENCE.md §15).
+ACCEL_NOISE: tuple[float, float, float] = (0.012929, 0.012127, 0.052979)
+#: Gyro noise σ (x, y, z), rad/s (REFERENCE.md §15).
+GYRO_NOISE: tuple[float, float, float] = (0.001663, 0.001216, 0.002372)
+#: Magnetometer noise σ (x, y, z), µT (REFERENCE.md §15).
+MAG_NOISE: tuple[float, float, float] = (3.275843, 2.365798, 5.232685)
+#: Mean horizontal magnetic field, µT (REFERENCE.md §15: xy 6.07 µT).
+MAG_XY: float = 6.0712
+#: Mean vertical magnetic field, µT (REFERENCE.md §15: z −39.86 µT).
+MAG_Z: float = -39.8594
+#: Orientation noise σ, degrees (REFERENCE.md §15).
+ORIENTATION_NOISE_DEG: float = 0.310830
+#: The IMU's position on the body (x, y) from the axle centre, m (rps 2.0 IMU_ORIENTATION).
+IMU_OFFSET: tuple[float, float] = (0.0594 - 0.00319, 0.0344628 - 0.0475)
+#: Standard gravity, m/s² (the accelerometer's z reads −g at rest).
+GRAVITY: float = 9.81

@@ -176,6 +176,16 @@ class ReportsValidation(Protocol):
         """The validation report so far (None: not validating)."""
 
 
+@runtime_checkable
+class ReportsSensors(Protocol):
+    """Robots whose firmware reports what their own sensors read (ToF distances, encoders, IMU; issue 28.1): the
+    experiment API hands these readings out instead of simulating them."""
+
+    def sensor_readings(self) -> Any:
+        """The latest readings as a ``swarmdeck.sensing.SensorReadings`` (rows in the port's robot order), or None
+        when the robots reported none yet (the Arena then simulates them from the poses)."""
+
+
 def obstacles_of(port: object) -> NDArray[np.float64] | None:
     """``port.obstacles()`` when ``port`` reports obstacles (:class:`ReportsObstacles`), else None."""
     return port.obstacles() if isinstance(port, ReportsObstacles) else None

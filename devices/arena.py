@@ -24,7 +24,15 @@ from typing import Any, Literal
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from swarmdeck.core.kinematics import GritsBotParams, lookahead_points, unicycle_to_si, wheels_to_unicycle
+from swarmdeck.core.kinematics import (
+    GritsBotParams,
+    limit_unicycle,
+    lookahead_points,
+    si_to_unicycle,
+    unicycle_to_si,
+    wheels_to_unicycle,
+)
+from swarmdeck.core.ports import ReportsSensors
 from swarmdeck.core.robot_models import DEFAULT_ROBOT_MODEL, robot_params
 from swarmdeck.devices.controllers import (
     HybridPoseController,
@@ -39,6 +47,7 @@ from swarmdeck.devices.pipeline import CommandFilter, FilterDiagnostics, Unicycl
 from swarmdeck.devices.simulated_robots import SimulatedRobots
 from swarmdeck.devices.simulator import ArenaConfig, SimulatedArena, check_poses
 from swarmdeck.devices.stepped import SteppedRobots
+from swarmdeck.sensing import SensingConfig, SensorReadings, Sensors
 
 FloatArray = NDArray[np.float64]
 GoalController = Literal["si", "clf", "pose", "hybrid"]
@@ -72,6 +81,9 @@ class RunDefaults:
     robot_model: str | None = None
     rps_generation: int | None = None
 
+
+#: The sensors' noise stream beside the simulator's: Arena sensing seeds with (seed, this).
+_SENSING_STREAM = 0x5E45
 
 RUN_DEFAULTS: contextvars.ContextVar[RunDefaults] = contextvars.ContextVar("swarmdeck_run_defaults", default=RunDefaults())  # noqa: B039  (frozen)
 
@@ -115,6 +127,9 @@ class Arena:
             (None otherwise), :meth:`return_to_chargers` docks the robots after the experiment.
             Setup errors (poses outside the arena or too close, too few charged robots, a setup
             that does not finish) raise and leave the robots stopped.
+        sensing: the robots' sensors (:class:`~swarmdeck.sensing.SensingConfig`: ToF distance sensors,
+            range and bearing, encoders and IMU, LEDs), or None (the default: no sensors). Read them with
+            :meth:`sense` after each step; set the LEDs with :meth:`set_leds`; see :meth:`use_sensors`.
 
     Example::
 
@@ -137,6 +152,7 @@ class Arena:
         duration: float | None = None,
         backend: Any = None,
         from_docks: Any = None,
+        sensing: SensingConfig | None = None,
     ) -> None:
         defaults = RUN_DEFAULTS.get()
         if from_docks is None:
@@ -192,6 +208,10 @@ class Arena:
         self.last_nominal = np.zeros((self.n, 2))
         self.last_safe = np.zeros((self.n, 2))
         self._on_step = defaults.on_step
+        self.sensors: Sensors | None = None
+        self._readings: SensorReadings | None = None
+        if sensing is not None:
+            self.use_sensors(sensing)
         self.robots.start_clock()  # real robots: the run starts now, not when the robots were opened
         if defaults.on_create is not None:
             defaults.on_create(self)
@@ -245,6 +265,54 @@ class Arena:
     def positions(self) -> FloatArray:
         """Look-ahead points ``(N, 2)``: the points single-integrator commands move."""
         return lookahead_points(self.robots.poses, self.ell)
+
+    # ------------------------------------------------------------------ the robots' own sensors (issue 28.1)
+    def use_sensors(self, sensing: SensingConfig | None, *, obstacles: ArrayLike | None = None,
+                    seed: int | None = None) -> Sensors | None:
+        """Give the robots these sensors from now on (None: none). ``obstacles`` ``(M, 2, 2)`` m: segments the
+        distance sensors see (default: the arena config's ``obstacles`` when it has them). The noise is seeded
+        from ``seed`` (default: the arena config's seed; None: fresh entropy). Returns the
+        :class:`~swarmdeck.sensing.Sensors`."""
+        if sensing is None:
+            self.sensors, self._readings = None, None
+            return None
+        if obstacles is None:
+            obstacles = getattr(self.config, "obstacles", None)
+        seed = self.config.seed if seed is None else seed
+        rng = np.random.default_rng(None if seed is None else [int(seed), _SENSING_STREAM])
+        self.sensors = Sensors(self.n, sensing, rng=rng, params=self.params, bounds=self.config.bounds,
+                               obstacles=obstacles)
+        self._readings = self.sensors.first(self.robots.poses)
+        return self.sensors
+
+    def sense(self) -> SensorReadings:
+        """What the robots sensed in the last step (:class:`~swarmdeck.sensing.SensorReadings`; before the first
+        step: distances NaN, encoders 0). Robots whose firmware reports readings
+        (:class:`~swarmdeck.core.ports.ReportsSensors`) give theirs. RuntimeError when the Arena has no sensors."""
+        if self.sensors is None or self._readings is None:
+            raise RuntimeError("this Arena has no sensors: build it with Arena(..., sensing=SensingConfig(...)) "
+                               "(e.g. SensingConfig(distance=DistanceSensorConfig()) for the ToF sensors)")
+        return self._readings
+
+    def set_leds(self, rgb: ArrayLike, ids: ArrayLike | None = None) -> None:
+        """Set the robots' RGB LEDs: ``(N, 3)`` (or one row per id in ``ids``) of 0…255 (floats in [0, 1] are
+        scaled), at once (in :meth:`sense`, the Frame, the recording and every renderer)."""
+        if self.sensors is None:
+            raise RuntimeError("this Arena has no sensors (and so no LEDs): build it with "
+                               "Arena(..., sensing=SensingConfig())")
+        self.sensors.set_leds(rgb, self._ids(ids))
+        if self._readings is not None:
+            self._readings = self.sensors.with_leds(self._readings)
+
+    def _sense_after_step(self, poses: FloatArray, v: ArrayLike, w: ArrayLike) -> None:
+        """Update the readings after a step in which the robots ran ``(v, w)`` and arrived at ``poses``."""
+        if self.sensors is None:
+            return
+        readings = None
+        port = self.backend
+        if isinstance(port, ReportsSensors):
+            readings = port.sensor_readings()
+        self._readings = readings if readings is not None else self.sensors.update(poses, v, w, self.config.dt)
 
     # ------------------------------------------------------------------ commanding
     def _ids(self, ids: ArrayLike | None) -> NDArray[np.intp] | None:
@@ -460,6 +528,9 @@ class Arena:
         if self.robots.nominal_sink is not None:  # robots behind a trust boundary: the far side certifies
             self.last_nominal = nominal
             new_poses = self.robots.step_nominal(nominal)
+            if self.sensors is not None:  # the commands the far side certified are not known here: the nominal's
+                v_n, w_n = si_to_unicycle(poses, nominal, self.ell)
+                self._sense_after_step(new_poses, *limit_unicycle(v_n, w_n, self.params)[:2])
             if self._on_step is not None:
                 self._on_step(self)
             return new_poses
@@ -482,6 +553,7 @@ class Arena:
         self.last_nominal = np.where(cert.invalid[:, None], 0.0, nominal)
         self.last_safe = cert.safe
         new_poses = self.robots.step(cert.v, cert.w)
+        self._sense_after_step(new_poses, cert.v, cert.w)
         if self._on_step is not None:
             self._on_step(self)
         return new_poses
@@ -500,6 +572,8 @@ class Arena:
         w = np.asarray(w, dtype=float)
         self.last_nominal = self.last_safe = unicycle_to_si(self.robots.poses, v, w, self.ell)
         new_poses = self.robots.step(v, w)
+        if self.sensors is not None:  # the robots' wheel limits scale what they run
+            self._sense_after_step(new_poses, *limit_unicycle(v, w, self.params)[:2])
         if self._on_step is not None:
             self._on_step(self)
         return new_poses

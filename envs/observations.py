@@ -11,6 +11,8 @@ neighbours                 2k     p_j − p_i of the k nearest robots, nearest f
 walls                      4      x_i − x_min, x_max − x_i, y_i − y_min, y_max − y_i
 task                       0 / 2  formation: g_i − p_i (own slot); others: nothing
 density (optional)         9      φ at p_i + (dx, dy), dx, dy ∈ {−s, 0, s}, divided by max φ
+ToF sensors (optional)     K      the robot's own distance readings divided by their range, in [0, 1];
+                                  1 where nothing is in range or the reading dropped out (:func:`tof_block`)
 =========================  =====  ============================================================
 """
 from __future__ import annotations
@@ -28,9 +30,18 @@ FloatArray = NDArray[np.float64]
 DENSITY_OFFSETS = np.array([(dx, dy) for dy in (-1.0, 0.0, 1.0) for dx in (-1.0, 0.0, 1.0)])
 
 
-def observation_size(k: int, task: str, density: bool) -> int:
-    """Length of one robot's observation."""
-    return 4 + 2 * k + 4 + (2 if task == "formation" else 0) + (9 if density else 0)
+def observation_size(k: int, task: str, density: bool, sensors: int = 0) -> int:
+    """Length of one robot's observation (``sensors``: K ToF readings at the end, 0: none)."""
+    return 4 + 2 * k + 4 + (2 if task == "formation" else 0) + (9 if density else 0) + sensors
+
+
+def tof_block(distances: FloatArray, max_range: float) -> NDArray[np.float32]:
+    """The ToF block ``(N, K)`` of the observations: readings (m; −1 nothing, NaN not read yet) / ``max_range``,
+    with nothing in range, dropouts and not-yet-read as 1 (as far as the sensor sees)."""
+    d = np.asarray(distances, dtype=float)
+    with np.errstate(invalid="ignore"):
+        seen = d >= 0.0
+    return np.where(seen, np.clip(d / max_range, 0.0, 1.0), 1.0).astype(np.float32)
 
 
 def observe(poses: FloatArray, points: FloatArray, bounds: tuple[float, float, float, float], k: int,
@@ -55,8 +66,8 @@ def observe(poses: FloatArray, points: FloatArray, bounds: tuple[float, float, f
     return np.concatenate(parts, axis=1).astype(np.float32)
 
 
-def observation_bounds(k: int, task: str, density: bool, bounds: tuple[float, float, float, float]
-                       ) -> tuple[NDArray[np.float32], NDArray[np.float32]]:
+def observation_bounds(k: int, task: str, density: bool, bounds: tuple[float, float, float, float],
+                       sensors: int = 0) -> tuple[NDArray[np.float32], NDArray[np.float32]]:
     """(low, high) of one observation: positions within the arena, differences within its diagonal."""
     b = Bounds.of(bounds)
     x0, x1, y0, y1 = b
@@ -70,4 +81,6 @@ def observation_bounds(k: int, task: str, density: bool, bounds: tuple[float, fl
     if density:
         lo += [0.0] * 9
         hi += [1.0] * 9
+    lo += [0.0] * sensors
+    hi += [1.0] * sensors
     return np.asarray(lo, dtype=np.float32), np.asarray(hi, dtype=np.float32)

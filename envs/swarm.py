@@ -42,7 +42,7 @@ from numpy.typing import NDArray
 from swarmdeck.core.bounds import DEFAULT_BOUNDS, Bounds
 from swarmdeck.core.constants import CONTROL_PERIOD
 from swarmdeck.envs.neighbours import min_distance
-from swarmdeck.envs.observations import observation_bounds, observation_size, observe
+from swarmdeck.envs.observations import observation_bounds, observation_size, observe, tof_block
 from swarmdeck.envs.tasks import (
     TASKS,
     coverage_cells,
@@ -51,6 +51,7 @@ from swarmdeck.envs.tasks import (
     formation_slots,
     rendezvous_reward,
 )
+from swarmdeck.sensing import DistanceSensorConfig, SensingConfig
 
 try:  # the optional extra: pip install 'swarmdeck[rl]'
     from gymnasium import spaces
@@ -73,6 +74,9 @@ class EnvConfig:
     formation_radius: m. n_bumps: Gaussian bumps of the coverage density (drawn per episode).
     barrier: "centralised" (one QP over the swarm) or "distributed" (every robot its own QP, REFERENCE.md §12;
         what the batched environment runs, :mod:`swarmdeck.envs.batched`).
+    sensors: the robots' ToF distance sensors (:class:`~swarmdeck.sensing.DistanceSensorConfig`, e.g. the
+        Robotarium 2.0's seven) as an optional observation block (their readings / range), None: none. The noise
+        is seeded from ``reset(seed)``.
     """
 
     n_robots: int = 6
@@ -87,6 +91,7 @@ class EnvConfig:
     formation_radius: float = 0.6
     n_bumps: int = 2
     barrier: str = "centralised"
+    sensors: DistanceSensorConfig | None = None
 
     def __post_init__(self) -> None:
         def intlike(v: Any) -> bool:
@@ -108,6 +113,8 @@ class EnvConfig:
             raise ValueError(f"formation_radius must be > 0 m, got {self.formation_radius!r}")
         if self.barrier not in BARRIERS:
             raise ValueError(f"barrier must be one of {BARRIERS}, got {self.barrier!r}")
+        if self.sensors is not None and not isinstance(self.sensors, DistanceSensorConfig):
+            raise ValueError(f"sensors must be a DistanceSensorConfig or None, got {self.sensors!r}")
         if self.density_obs and self.task != "coverage":
             raise ValueError("density_obs needs task='coverage' (the other tasks have no density)")
 
@@ -126,7 +133,8 @@ class SwarmParallelEnv(ParallelEnv):
         self.possible_agents = [f"robot_{i}" for i in range(cfg.n_robots)]
         self.agents: list[str] = []
         self._index = {a: i for i, a in enumerate(self.possible_agents)}
-        lo, hi = observation_bounds(cfg.k_neighbours, cfg.task, cfg.density_obs, cfg.bounds)
+        self._k_tof = 0 if cfg.sensors is None else cfg.sensors.n_sensors
+        lo, hi = observation_bounds(cfg.k_neighbours, cfg.task, cfg.density_obs, cfg.bounds, self._k_tof)
         self._obs_lo, self._obs_hi = lo, hi
         self._obs_space = {a: spaces.Box(lo, hi, dtype=np.float32) for a in self.possible_agents}
         if cfg.action == "velocity":
@@ -146,7 +154,7 @@ class SwarmParallelEnv(ParallelEnv):
         self.steps = 0
         self.moments: Any = None
         self._density_scale = 1.0
-        assert observation_size(cfg.k_neighbours, cfg.task, cfg.density_obs) == len(lo)
+        assert observation_size(cfg.k_neighbours, cfg.task, cfg.density_obs, self._k_tof) == len(lo)
 
     # ------------------------------------------------------------------ spaces
     def observation_space(self, agent: str) -> spaces.Box:
@@ -180,6 +188,9 @@ class SwarmParallelEnv(ParallelEnv):
             self._density_scale = float(self.density.evaluate(self.density.mu).max()) or 1.0
         self.arena = Arena(initial_conditions=poses, config=ArenaConfig(bounds=cfg.bounds, dt=cfg.dt),
                            params=self.params, safety=self._safety())
+        if cfg.sensors is not None:
+            self.arena.use_sensors(SensingConfig(distance=cfg.sensors, imu=None, leds=False),
+                                   seed=int(self._rng.integers(2**31)))
         self.agents = list(self.possible_agents)
         self.steps = 0
         self.moments = None
@@ -201,6 +212,8 @@ class SwarmParallelEnv(ParallelEnv):
         obs = observe(poses, self.arena.positions(), self.config.bounds, self.config.k_neighbours,
                       self.slots if self.config.task == "formation" else None,
                       self.density if self.config.density_obs else None, density_scale=self._density_scale)
+        if self.config.sensors is not None:  # the robots' own ToF readings (optional block, last)
+            obs = np.concatenate((obs, tof_block(self.arena.sense().distances, self.config.sensors.max_range)), axis=1)
         obs = np.clip(obs, self._obs_lo, self._obs_hi)
         return {a: obs[i] for i, a in enumerate(self.possible_agents)}
 

@@ -57,6 +57,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="also serve the run live to Foxglove over its WebSocket protocol (default port 8765, "
                              "on --host; clients asking for foxglove.sdk.v1 or foxglove.websocket.v1 are both "
                              "served): open ws://127.0.0.1:PORT in Foxglove and import `swarmdeck foxglove-layout`")
+    parser.add_argument("--sensors", action="store_true", default=None,
+                        help="give the robots Robotarium 2.0's sensors (seven ToF distance sensors, encoders, IMU, "
+                             "LEDs; docs/sensing.md): every Frame carries their readings, the scene draws the rays "
+                             "(layer 'sensors'), recordings keep them ([console] sensors = true in --config)")
     parser.add_argument("--no-inputs", action="store_true",
                         help="do not open the TUIO/OSC input listeners (UDP 3333 by default)")
 
@@ -80,6 +84,8 @@ def main(args: argparse.Namespace) -> int:
         changes["behaviour"] = args.behaviour
     if args.seed is not None:
         changes["seed"] = args.seed
+    if args.sensors:
+        changes["sensors"] = True
     if args.arena is not None:
         from swarmdeck.console.runtime.config import arena_bounds
 

@@ -87,3 +87,9 @@ def pair_colors(h: NDArray[np.float64], h_full: float = 0.1) -> NDArray[np.uint8
 def hex_colors(colours: NDArray[np.uint8]) -> list[str]:
     """``"#rrggbb"`` of every colour in ``colours`` (…, 3), for HTML canvases."""
     return [f"#{int(r):02x}{int(g):02x}{int(b):02x}" for r, g, b in np.asarray(colours).reshape(-1, 3)]
+
+# ---------------------------------------------------------------- the sensors' layer (issue 28.1)
+#: A ToF ray from its sensor to what it hit.
+SENSOR_RAY = (0, 150, 160)
+#: Where a ToF reading ends.
+SENSOR_HIT = (0, 110, 120)

@@ -29,6 +29,7 @@ from swarmdeck.console.picture.colours import (
     pair_colors,
 )
 from swarmdeck.console.picture.heat import heatmap
+from swarmdeck.console.picture.sensing import SensorLayer, sensor_layer
 from swarmdeck.console.picture.style import PictureStyle
 from swarmdeck.console.runtime.behaviours import goals_of_frame
 from swarmdeck.console.runtime.frame import Frame, filled
@@ -120,6 +121,7 @@ class Picture:
         contacts: (M, 2) touch contacts. goals: (G, 2) goals of the goto behaviour (else empty).
         density: φ(·, t) for :meth:`heat_map`, or None.
         run_state, behaviour, events, alerts: the Frame's, for banners and logs.
+        sensors: the sensors' layer (:class:`~.sensing.SensorLayer`: ToF rays, LEDs), None without sensors.
     """
 
     bounds: Bounds
@@ -150,6 +152,7 @@ class Picture:
     behaviour: str
     events: tuple[str, ...]
     alerts: tuple[str, ...]
+    sensors: SensorLayer | None = None
 
     @property
     def n(self) -> int:
@@ -184,5 +187,5 @@ def picture_of(frame: Frame, style: PictureStyle = DEFAULT_STYLE) -> Picture:
         cell_shades=_frozen(cell_shades(cov.masses)) if cov is not None and len(cov.masses) else np.zeros((0, 3)),
         contacts=frame.contacts.positions, goals=_frozen(np.asarray(goals, dtype=float)),
         density=frame.density, run_state=frame.run_state, behaviour=frame.behaviour,
-        events=frame.events, alerts=frame.alerts,
+        events=frame.events, alerts=frame.alerts, sensors=sensor_layer(frame, style),
     )

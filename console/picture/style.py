@@ -28,7 +28,8 @@ class PictureStyle:
         arrow_scale: an arrow is the distance its command travels in this time, s.
         label_offset: robot ids sit this far above the robot, m.
         max_labels: robot ids only up to this many robots.
-        max_glyphs: per-robot glyphs (arrows, safety rings, trails) only up to this many robots.
+        max_glyphs: per-robot glyphs (arrows, safety rings, trails, sensor rays) only up to this many robots.
+        sensors: draw the sensors' layer (ToF rays and end points, LED colours) when a Frame has sensors.
     """
 
     changed_threshold: float = 1e-3
@@ -40,6 +41,7 @@ class PictureStyle:
     label_offset: float = 0.07
     max_labels: int = 100
     max_glyphs: int = 300
+    sensors: bool = True
 
     def heatmap_px(self, bounds: tuple[float, float, float, float]) -> float:
         """Heat-map px per m on the arena ``bounds`` (x_min, x_max, y_min, y_max) m: ``heatmap_px_per_m``,

@@ -26,7 +26,10 @@ edges, K active pairs)::
     events       [str] messages of this tick
     robot_radius body radius of the robot glyph, m
     rings        {"changed": …, "virtual": …} ring radii round changed / virtual robots, × robot_radius
-    palette      {floor, grid, boundary, voronoi, centroid, changed, virtual, label, heading, stopped}: "#rrggbb"
+    palette      {floor, grid, boundary, voronoi, centroid, changed, virtual, label, heading, stopped, sensor_ray,
+                 sensor_hit}: "#rrggbb"
+    sensors      only when the Frame has sensors (the picture's sensor layer): {rays (R, 2, 2) ToF rays from
+                 sensor to end point, rounded to 1 mm; leds (N,) "#rrggbb" or null for an unlit LED}
 
 A message is a few kB (N = 12); the pages send at most ten a second.
 """
@@ -47,9 +50,11 @@ from swarmdeck.core.constants import ROBOT_RADIUS
 DENSITY_PX_PER_M = 20.0  # the canvas smooths the small image up; 64 × 40 px on the default arena
 
 PALETTE: dict[str, str] = dict(zip(
-    ("floor", "grid", "boundary", "voronoi", "centroid", "changed", "virtual", "label", "heading", "stopped"),
+    ("floor", "grid", "boundary", "voronoi", "centroid", "changed", "virtual", "label", "heading", "stopped",
+     "sensor_ray", "sensor_hit"),
     pal.hex_colors(np.array([pal.LUT[0], (150, 150, 150), pal.BOUNDARY, pal.VORONOI, pal.CENTROID, pal.CHANGED,
-                             pal.VIRTUAL_RING, pal.LABEL, pal.HEADING, pal.STOPPED], dtype=np.uint8)),
+                             pal.VIRTUAL_RING, pal.LABEL, pal.HEADING, pal.STOPPED, pal.SENSOR_RAY, pal.SENSOR_HIT],
+                            dtype=np.uint8)),
     strict=True))
 """the picture's colours as the canvas needs them (``palette`` of every message)"""
 
@@ -79,7 +84,7 @@ def scene_message(frame: Frame, seq: int) -> dict[str, Any]:
     if b is not None:
         barrier = {"enabled": b.enabled, "ok": b.ok, "n_active": b.n_active,
                    "min_distance": _num(b.min_distance), "safety_distance": b.safety_distance}
-    return {
+    message = {
         "seq": int(seq), "tick": frame.tick, "t": round(frame.run_time, 3), "run_state": pic.run_state,
         "bounds": list(pic.bounds), "ids": pic.ids.tolist(),
         "poses": np.round(pic.poses, 4).tolist(), "colours": pal.hex_colors(pic.colors),
@@ -92,3 +97,12 @@ def scene_message(frame: Frame, seq: int) -> dict[str, Any]:
         "robot_radius": ROBOT_RADIUS, "rings": {"changed": CHANGED_RING, "virtual": VIRTUAL_RING_RADIUS},
         "palette": PALETTE,
     }
+    if pic.sensors is not None:  # the sensors' layer, only when the Frame has sensors
+        layer = pic.sensors
+        leds = None
+        if layer.leds is not None:
+            hexes = pal.hex_colors(layer.leds)
+            leds = [h if on else None for h, on in zip(hexes, layer.led_on.tolist())]
+        message["sensors"] = {"rays": np.round(np.stack((layer.ray_starts, layer.ray_ends), axis=1), 3).tolist(),
+                              "leds": leds}
+    return message

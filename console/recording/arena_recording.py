@@ -14,6 +14,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from swarmdeck.console.runtime.frame import BarrierFrame, Frame
+from swarmdeck.console.runtime.sensors_frame import SensorsFrame
 from swarmdeck.core.bounds import Bounds
 from swarmdeck.core.constants import SAFETY_DISTANCE
 from swarmdeck.core.kinematics import si_to_unicycle
@@ -36,6 +37,14 @@ def arena_frame(arena: Any, poses: NDArray[np.float64], tick: int, behaviour: st
                  barrier=barrier, behaviour=behaviour, params=dict(params or {}), **extra)
 
 
+def sensors_frame(arena: Any) -> SensorsFrame | None:
+    """What ``arena``'s robots sensed at their current poses (None: the Arena has no sensors)."""
+    sensors = getattr(arena, "sensors", None)
+    if sensors is None:
+        return None
+    return SensorsFrame.of(arena.sense(), sensors.config)
+
+
 class ArenaRecording:
     """``on_create``/``on_step`` hooks for :func:`~swarmdeck.devices.runner.run_experiment` that record.
 
@@ -53,6 +62,7 @@ class ArenaRecording:
         self._recorders: dict[int, Any] = {}
         self._previous: dict[int, NDArray[np.float64]] = {}
         self._ticks: dict[int, int] = {}
+        self._sensed: dict[int, SensorsFrame | None] = {}  # what the robots sensed at the poses of _previous
         self.paths: list[Path] = []
 
     def _path(self, k: int) -> Path:
@@ -73,6 +83,7 @@ class ArenaRecording:
                                               RecorderConfig(foxglove=self.foxglove_channels))
         self._previous[id(arena)] = arena.poses()
         self._ticks[id(arena)] = 0
+        self._sensed[id(arena)] = sensors_frame(arena)
 
     def on_step(self, arena: Any) -> None:
         """Write the step ``arena`` just took."""
@@ -80,8 +91,10 @@ class ArenaRecording:
         if rec is None:
             return
         tick = self._ticks[id(arena)]
-        rec.write_frame(arena_frame(arena, self._previous[id(arena)], tick, self.behaviour))
+        sensed = self._sensed.get(id(arena))
+        rec.write_frame(arena_frame(arena, self._previous[id(arena)], tick, self.behaviour, sensors=sensed))
         self._previous[id(arena)] = arena.poses()
+        self._sensed[id(arena)] = sensors_frame(arena)
         self._ticks[id(arena)] = tick + 1
 
     def close(self) -> list[str]:

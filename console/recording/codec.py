@@ -35,6 +35,8 @@ A JSON object (message encoding ``json``), :meth:`Frame.to_dict`'s layout with
   ``nominal_minus_safe`` (zero where neither the wheel limits nor the barrier changed
   the command; error ≤ 5e-4 of that difference), ``barrier.intervention`` float16.
   ``timing`` is rounded to 1 µs.
+* ``sensors`` (what the robots sensed), only when present: :class:`SensorsFrame`'s packed form (distances and
+  IMU float32, LEDs uint8, encoders int32; the rays are derived from the poses on drawing).
 * the fleet's per-robot state, each only when it says something (as in
   :meth:`Frame.fleet_dict`; absent in older recordings, which read as all physical,
   battery unknown, not charging): ``is_virtual`` bool, ``battery`` float32 V, ``charging`` bool.
@@ -92,6 +94,7 @@ from swarmdeck.console.runtime.frame import (
     _enc_float,
     filled,
 )
+from swarmdeck.console.runtime.sensors_frame import SensorsFrame
 from swarmdeck.core.bounds import Bounds
 from swarmdeck.core.errors import SwarmdeckError
 from swarmdeck.core.kinematics import lookahead_points, unicycle_to_si
@@ -179,6 +182,8 @@ def frame_message(frame: Frame, previous: Frame | None = None) -> dict[str, Any]
         d["battery"] = pack_array(battery, "<f4")
     if charging.any():
         d["charging"] = pack_array(charging, "|b1")
+    if frame.sensors is not None:  # written only when present (console/runtime/sensors_frame.py)
+        d["sensors"] = frame.sensors.packed(pack_array)
     # nominal as float16 offsets from the derived safe command: zero where nothing changed it
     delta = frame.nominal - derived_safe(frame.poses, frame.v, frame.w, frame.lookahead)
     delta[np.abs(delta) < 1e-12] = 0.0
@@ -256,7 +261,7 @@ def _unzigzag(z: np.ndarray) -> np.ndarray:
 
 
 _BIG = ("ids", "poses", "seen", "nominal", "nominal_minus_safe", "safe", "v", "w", "barrier", "coverage",
-        "is_virtual", "battery", "charging")
+        "is_virtual", "battery", "charging", "sensors")
 _FLEET = (("is_virtual", bool), ("battery", float), ("charging", bool))
 
 
@@ -395,6 +400,7 @@ def _decode_v2(d: Mapping[str, Any], exact: Mapping[str, np.ndarray]) -> Frame:
             if arr.shape != (n,):
                 raise ValueError(f"frame field {name!r} must have shape ({n},), got {arr.shape}")
             fleet[name] = arr
+    sensors = None if d.get("sensors") is None else SensorsFrame.unpacked(d["sensors"], unpack_array, n)
     return Frame(
         tick=shell.tick, time=shell.time, run_time=shell.run_time, dt=shell.dt, bounds=shell.bounds,
         lookahead=lookahead, poses=poses, ids=exact["ids"] if exact else unpack_array(d["ids"], "ids").astype(np.int64),
@@ -402,6 +408,7 @@ def _decode_v2(d: Mapping[str, Any], exact: Mapping[str, np.ndarray]) -> Frame:
         barrier=barrier, coverage=coverage, density=shell.density, contacts=shell.contacts,
         behaviour=shell.behaviour, run_state=shell.run_state, params=shell.params, events=shell.events,
         alerts=shell.alerts, health=shell.health, timing=shell.timing, image_ref=shell.image_ref, **fleet,
+        sensors=sensors,
     )
 
 

@@ -56,6 +56,8 @@ from swarmdeck.console.picture.colours import (
     LABEL,
     LUT,
     SAFETY_RING,
+    SENSOR_HIT,
+    SENSOR_RAY,
     STOPPED,
     VIRTUAL_RING,
     VORONOI,
@@ -266,8 +268,12 @@ class FrameRenderer:
         if len(c):
             dots = c[:, None, :] + 0.03 * self.unit_ring[None]
             cv2.fillPoly(img, list(lay.fixed(dots)), CONTACT, aa, sh)
+        if pic.sensors is not None and len(pic.sensors.ray_starts):
+            self._rays(img, pic)
         if pic.n:
             self._robots(img, frame, pic)
+            if pic.sensors is not None and pic.sensors.leds is not None:
+                self._leds(img, pic)
         if frame.run_state == "estop":
             cv2.rectangle(img, (left - 3, top - 3), (left + aw + 2, top + ah + 2), ESTOP, 6)
         if self._picture is not None:
@@ -288,6 +294,28 @@ class FrameRenderer:
             sel = keys == k
             col = tuple(int(v) for v in cols[np.flatnonzero(sel)[0]])
             self.cv2.polylines(img, list(segs[sel]), False, col, 2 * self.thick + 1, self.cv2.LINE_AA, _SHIFT)
+
+    def _rays(self, img: NDArray[np.uint8], pic: Picture) -> None:
+        """The sensors' layer: ToF rays from sensor to end point and a dot at each end point."""
+        layer = pic.sensors
+        assert layer is not None
+        segs = self.layout.fixed(np.stack((layer.ray_starts, layer.ray_ends), axis=1))
+        self.cv2.polylines(img, list(segs), False, SENSOR_RAY, 1, self.cv2.LINE_AA, _SHIFT)
+        dots = layer.ray_ends[:, None, :] + 0.012 * self.unit_ring[None]
+        self.cv2.fillPoly(img, list(self.layout.fixed(dots)), SENSOR_HIT, self.cv2.LINE_AA, _SHIFT)
+
+    def _leds(self, img: NDArray[np.uint8], pic: Picture) -> None:
+        """Each lit LED as a small disc in its colour at the robot's centre, one ``fillPoly`` per colour."""
+        layer = pic.sensors
+        assert layer is not None and layer.leds is not None
+        lit = np.flatnonzero(layer.led_on)
+        if not len(lit):
+            return
+        dots = self.layout.fixed(pic.poses[lit, None, :2] + 0.45 * self.style.robot_radius * self.unit_ring[None])
+        uniq, which = np.unique(layer.leds[lit], axis=0, return_inverse=True)
+        which = np.asarray(which).reshape(-1)
+        for k, col in enumerate(uniq):  # one call per distinct colour, not per robot
+            self.cv2.fillPoly(img, list(dots[which == k]), tuple(int(v) for v in col), self.cv2.LINE_AA, _SHIFT)
 
     def _robots(self, img: NDArray[np.uint8], frame: Frame, pic: Picture) -> None:
         cv2, lay = self.cv2, self.layout

@@ -29,6 +29,8 @@ topic                     schema                      content (frame ``arena``: 
 ``/foxglove/tf``          ``foxglove.FrameTransforms``  ``world → arena`` (identity) and ``arena → camera``
                                                       (overhead, looking down)
 ``/foxglove/log``         ``foxglove.Log``            frame events (info), alerts when they appear
+``/foxglove/sensors``     ``foxglove.SceneUpdate``    the sensors' layer: ToF rays and end points, lit LEDs (only for
+                                                      Frames with sensors; :data:`OPTIONAL_TOPICS`)
                                                       (warning) and clear (info), operator actions
 ``/swarmdeck/metrics``    JSON (``swarmdeck.Metrics``)  plottable scalars: min distance, wall clearance,
                                                       H, mean ‖p − c‖, tick time, solver time, …
@@ -63,8 +65,19 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from swarmdeck.console.picture.colours import BOUNDARY, CONTACT, HEADING, LABEL, PAIR, VORONOI, pair_colors
+from swarmdeck.console.picture.colours import (
+    BOUNDARY,
+    CONTACT,
+    HEADING,
+    LABEL,
+    PAIR,
+    SENSOR_HIT,
+    SENSOR_RAY,
+    VORONOI,
+    pair_colors,
+)
 from swarmdeck.console.picture.picture import active_pairs, changed_mask, robot_colors
+from swarmdeck.console.picture.sensing import sensor_layer
 from swarmdeck.console.picture.style import PictureStyle
 from swarmdeck.console.runtime.frame import Frame
 from swarmdeck.core.bounds import DEFAULT_BOUNDS, Bounds
@@ -96,6 +109,12 @@ TOPIC_ROBOT_POINTS = "/foxglove/robot_points"
 
 #: Channels written only with ``FoxgloveConfig(packed=True)`` (topic -> schema, as :data:`TOPICS`).
 PACKED_TOPICS: dict[str, str | None] = {TOPIC_ROBOT_POINTS: "PointCloud"}
+
+TOPIC_SENSORS = "/foxglove/sensors"
+
+#: Channels declared always and written only for Frames that carry what they show (topic -> schema): the sensors'
+#: layer (ToF rays as a line list, their end points as spheres, lit LEDs as discs; issue 28.1).
+OPTIONAL_TOPICS: dict[str, str | None] = {TOPIC_SENSORS: "SceneUpdate"}
 
 #: The packed robots' point layout: x, y, z, yaw float32 (m, m, m, rad) then r, g, b, a uint8 (20 bytes a robot).
 POINT_STRIDE = 20
@@ -197,7 +216,7 @@ def channel_specs(packed: bool = False) -> list[ChannelSpec]:
     from swarmdeck.console.recording.recorder import encode_json
 
     out = []
-    for topic, cls in {**TOPICS, **(PACKED_TOPICS if packed else {})}.items():
+    for topic, cls in {**TOPICS, **OPTIONAL_TOPICS, **(PACKED_TOPICS if packed else {})}.items():
         if cls is None:
             out.append(ChannelSpec(topic, METRICS_SCHEMA["title"], "jsonschema", encode_json(METRICS_SCHEMA), "json"))
         else:
@@ -391,6 +410,30 @@ class FoxgloveEncoder:
             lines = [self._line_list(segs, 0.04, 0.012, self._color(PAIR), colors)]
         return self._scene(self._entity(ns, "barrier", lines=lines))
 
+    def sensors(self, frame: Frame, ns: int) -> bytes | None:
+        """SceneUpdate: the picture's sensors' layer — ToF rays (a line list) with spheres at their end points and
+        each lit LED as a disc on its robot; None when the Frame has no sensors or the layer is off."""
+        layer = sensor_layer(frame, self.picture)
+        if layer is None:
+            return None
+        fm = self.fm
+        lines = []
+        if len(layer.ray_starts):
+            lines = [self._line_list(np.stack((layer.ray_starts, layer.ray_ends), axis=1), 0.035, 0.004,
+                                     self._color(SENSOR_RAY))]
+        size = fm.Vector3(x=0.02, y=0.02, z=0.02)
+        hit = self._color(SENSOR_HIT)
+        spheres = [fm.SpherePrimitive(pose=fm.Pose(position=fm.Vector3(x=x, y=y, z=0.035)), size=size, color=hit)
+                   for x, y in layer.ray_ends.tolist()]
+        discs = []
+        if layer.leds is not None:
+            disc = fm.Vector3(x=self.radius, y=self.radius, z=0.035)
+            lit = np.flatnonzero(layer.led_on)
+            discs = [fm.CylinderPrimitive(pose=fm.Pose(position=fm.Vector3(x=float(x), y=float(y), z=0.03)), size=disc,
+                                          color=self._color(c))
+                     for (x, y), c in zip(frame.poses[lit, :2].tolist(), layer.leds[lit].tolist())]
+        return self._scene(self._entity(ns, "sensors", lines=lines, spheres=spheres, cylinders=discs))
+
     def contacts(self, frame: Frame, ns: int) -> bytes:
         """SceneUpdate: touch contacts as spheres (⌀ 6 cm)."""
         fm = self.fm
@@ -505,6 +548,10 @@ class FoxgloveEncoder:
                 self._next_lines = frame.time + self.config.lines_period
                 yield TOPIC_CELLS, ns, self.cells(frame, ns)
                 yield TOPIC_BARRIER, ns, self.barrier(frame, ns)
+            if frame.sensors is not None:
+                data = self.sensors(frame, ns)
+                if data is not None:
+                    yield TOPIC_SENSORS, ns, data
         yield TOPIC_CONTACTS, ns, self.contacts(frame, ns)
         yield TOPIC_METRICS, ns, self.metrics(frame, t)
         if frame.density is not None and frame.time >= self._next_density:

@@ -52,6 +52,8 @@ active barrier pairs, B density bumps, C contacts)::
                   written only when some robot is virtual, absent (all physical) in older recordings
     battery       (N,) V battery voltage (NaN: unknown); written only when some robot reports one
     charging      (N,) bool, robot on a charger; written only when some robot is charging
+    sensors       what the robots sensed (ToF distances, LEDs, encoders, IMU): ``SensorsFrame``
+                  (console/runtime/sensors_frame.py has its layout); written only when present
 
 The browser GUI's editing state (bump handles, plots) is not part of a Frame;
 the density the loop used is.
@@ -67,6 +69,7 @@ from typing import Any, TypeVar
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from swarmdeck.console.runtime.sensors_frame import SensorsFrame
 from swarmdeck.core.bounds import DEFAULT_BOUNDS, Bounds
 from swarmdeck.core.constants import CONTROL_PERIOD, LOOKAHEAD, SAFETY_DISTANCE
 from swarmdeck.core.kinematics import lookahead_points
@@ -407,6 +410,7 @@ class Frame:
     is_virtual: NDArray[np.bool_] | None = None
     battery: FloatArray | None = None
     charging: NDArray[np.bool_] | None = None
+    sensors: SensorsFrame | None = None
 
     def __post_init__(self) -> None:
         _set(self, "tick", int(self.tick))
@@ -434,6 +438,12 @@ class Frame:
             if len(arr) != n:
                 raise ValueError(f"frame field {name!r} has {len(arr)} rows but there are {n} poses")
             _set(self, name, arr)
+        if self.sensors is not None:
+            if not isinstance(self.sensors, SensorsFrame):
+                raise ValueError(f"frame sensors must be a SensorsFrame, got {type(self.sensors).__name__}")
+            rows = self.sensors.n_rows()
+            if rows is not None and rows != n:
+                raise ValueError(f"frame field 'sensors' has {rows} rows but there are {n} poses")
         if self.run_state not in RUN_STATES:
             raise ValueError(f"run_state must be one of {RUN_STATES}, got {self.run_state!r}")
         if self.density is not None and not isinstance(self.density, GaussianMixture):
@@ -490,6 +500,7 @@ class Frame:
             "timing": _enc_map(self.timing),
             "image_ref": self.image_ref,
             **self.fleet_dict(),
+            **({} if self.sensors is None else {"sensors": self.sensors.to_dict(_enc_array)}),
         }
 
     def fleet_dict(self) -> dict[str, Any]:
@@ -539,6 +550,7 @@ class Frame:
                 is_virtual=None if d.get("is_virtual") is None else _dec_array(d["is_virtual"], bool, (), "is_virtual"),
                 battery=None if d.get("battery") is None else _dec_array(d["battery"], float, (), "battery"),
                 charging=None if d.get("charging") is None else _dec_array(d["charging"], bool, (), "charging"),
+                sensors=None if d.get("sensors") is None else SensorsFrame.from_dict(d["sensors"], _dec_array),
             )
         except KeyError as exc:
             raise ValueError(f"frame is missing field {exc.args[0]!r}") from None

@@ -228,6 +228,9 @@ class LoopConfig:
     safety: SafetyParams = field(default_factory=SafetyParams)
     density: DensityParams = field(default_factory=DensityParams)
     script_budget: float | None = param(None, unit="s", lo=0.0, hi=0.5, lo_open=True)
+    # the robots' sensors in every Frame (issue 28.1: Robotarium 2.0's ToF sensors, encoders, IMU and LEDs;
+    # swarmdeck.sensing), seeded from `seed`; robots whose firmware reports readings give theirs
+    sensors: bool = param(False)
 
     @property
     def script_budget_s(self) -> float:

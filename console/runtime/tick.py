@@ -34,6 +34,8 @@ from swarmdeck.console.runtime.density import ConsoleDensity
 from swarmdeck.console.runtime.frame import BarrierFrame, ContactsFrame, CoverageFrame, Frame
 from swarmdeck.console.runtime.notices import Notices
 from swarmdeck.console.runtime.params import LoopConfig, SafetyParams, frame_params
+from swarmdeck.console.runtime.sensors_frame import SensorsFrame
+from swarmdeck.console.runtime.tick_sensing import TickSensing
 from swarmdeck.core.kinematics import GritsBotParams, lookahead_points, saturate
 from swarmdeck.core.ports import CommandSink, PoseSource, ProvidesImage, SensedPoses, obstacles_of
 from swarmdeck.coverage.density import GaussianMixture
@@ -112,6 +114,7 @@ class Ticker:
         self.contacts = ContactWatch()
         self.battery_watch = BatteryWatch()
         self.last_sensed: SensedPoses | None = None
+        self.sensing = TickSensing(config) if config.sensors else None  # the robots' sensors (issue 28.1)
 
     @contextmanager
     def _stage(self, key: str, failure: str, *, stops: bool = True) -> Iterator[Stage]:
@@ -210,9 +213,13 @@ class Ticker:
                 self.sink.hold()
         marks.append(time.perf_counter())
 
-        # 6. the Frame (the loop hands it to every subscriber)
+        # 6. the Frame (the loop hands it to every subscriber), with what the robots sensed at these poses
+        sensors = None
+        if self.sensing is not None:
+            with self._stage("sensors", "sensors failed", stops=False):
+                sensors = self.sensing.read(self.source, poses, v, w)
         frame = self._frame(now, sensed, points, nominal, safe, v, w, barrier, coverage, snapshot, contacts,
-                            behaviour.name, run_state, s, health, marks)
+                            behaviour.name, run_state, s, health, marks, sensors)
         self.index += 1
         if active:
             self.run_time += self.config.dt
@@ -372,7 +379,8 @@ class Ticker:
     def _frame(self, now: float, sensed: SensedPoses, points: NDArray[np.float64], nominal: NDArray[np.float64],
                safe: NDArray[np.float64], v: NDArray[np.float64], w: NDArray[np.float64], barrier: BarrierFrame,
                coverage: CoverageFrame | None, snapshot: GaussianMixture | None, contacts: ContactsFrame,
-               behaviour: str, run_state: str, s: TickSettings, health: dict[str, str], marks: list[float]) -> Frame:
+               behaviour: str, run_state: str, s: TickSettings, health: dict[str, str], marks: list[float],
+               sensors: SensorsFrame | None = None) -> Frame:
         events, alerts = self.notices.take()
         bp = s.behaviour_params
         params = frame_params(bp, s.safety, s.density, self.config)
@@ -388,6 +396,6 @@ class Ticker:
             safe=safe, v=v, w=w, barrier=barrier, coverage=coverage, density=snapshot, contacts=contacts,
             behaviour=behaviour, run_state=run_state, params=params, events=events, alerts=alerts, health=health,
             timing=timing, image_ref=image_ref if isinstance(image_ref, str) else None,
-            is_virtual=sensed.is_virtual, battery=sensed.battery, charging=sensed.charging,
+            is_virtual=sensed.is_virtual, battery=sensed.battery, charging=sensed.charging, sensors=sensors,
         )
 

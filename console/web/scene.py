@@ -53,6 +53,7 @@ from swarmdeck.console.picture.colours import (  # noqa: F401 - the palette, re-
     ROBOT,
     SAFE,
     SAFETY_RING,
+    SENSOR_RAY,
     STOPPED,
     UNSEEN,
     VIRTUAL_PALE,
@@ -75,7 +76,7 @@ ImageProvider = Callable[[str], "tuple[ArrayLike, tuple[float, float, float, flo
 
 LAYERS: tuple[str, ...] = (
     "camera", "grid", "density", "voronoi", "cells", "centroids", "robots", "labels", "nominal", "safe",
-    "barrier", "discs", "trails", "contacts", "virtual", "battery", "goals",
+    "barrier", "discs", "trails", "contacts", "virtual", "battery", "goals", "sensors",
 )
 DEFAULT_OFF = frozenset({"cells"})
 
@@ -165,6 +166,8 @@ class SceneNodes:
     virtual: viser.LineSegmentsHandle
     battery: viser.LineSegmentsHandle
     goals: viser.PointCloudHandle
+    sensors: viser.LineSegmentsHandle | None = None  # the ToF rays (issue 28.1); made with the static nodes
+    leds: viser.PointCloudHandle | None = None  # lit LEDs, shown with the sensors layer
     robots: viser.BatchedMeshHandle | None = None
     cells: viser.GlbHandle | None = None
     camera: viser.ImageHandle | None = None
@@ -260,10 +263,13 @@ class ArenaScene:
         battery = sc.add_line_segments("/battery", _EMPTY_SEG, BATTERY_TRACK, thickness=0.018)
         goals = sc.add_point_cloud("/goals", np.zeros((1, 3), np.float32), GOAL, point_size=0.05,
                                    point_shape="diamond", precision="float32", visible=False)
+        sensors = sc.add_line_segments("/sensors/rays", _EMPTY_SEG, SENSOR_RAY, thickness=0.003)
+        leds = sc.add_point_cloud("/sensors/leds", np.zeros((1, 3), np.float32) - [0, 0, 5], (0, 0, 0),
+                                  point_size=0.045, point_shape="circle", precision="float32")
         self.nodes = SceneNodes(boundary=boundary, grid=grid, density=density_image, voronoi=voronoi,
                                 centroids=centroids, trails=trails, discs=discs, barrier=barrier,
                                 nominal=nominal, safe=safe, contacts=contacts, virtual=virtual, battery=battery,
-                                goals=goals)
+                                goals=goals, sensors=sensors, leds=leds)
         for name in LAYERS:
             self._apply_visibility(name)
 
@@ -305,6 +311,8 @@ class ArenaScene:
         h = self.nodes.layer(name)
         if h is not None:
             h.visible = self.visible[name] and not (self._many and name in _PER_ROBOT_GLYPHS)
+        if name == "sensors" and self.nodes.leds is not None:
+            self.nodes.leds.visible = self.visible[name]
 
     def set_layer(self, name: str, visible: bool) -> None:
         """Show or hide one layer (``LAYERS``); ValueError for unknown names."""
@@ -383,6 +391,24 @@ class ArenaScene:
             self._points("contacts", pic.contacts, 0.012)
         if v["goals"]:
             self._points("goals", pic.goals, 0.002)
+        if v["sensors"]:
+            self._draw_sensors(pic)
+
+    def _draw_sensors(self, pic: Picture) -> None:
+        """The picture's sensors' layer: ToF rays from sensor to end point, lit LEDs as coloured points."""
+        rays, leds = self.nodes.sensors, self.nodes.leds
+        assert rays is not None and leds is not None  # made with the static nodes
+        layer = pic.sensors
+        if layer is None or not len(layer.ray_starts):
+            rays.points = _EMPTY_SEG
+        else:
+            rays.points = _segments_2d(layer.ray_starts, layer.ray_ends, 0.02)
+        lit = np.zeros(0, dtype=np.intp) if layer is None or layer.leds is None else np.flatnonzero(layer.led_on)
+        if len(lit) and layer is not None and layer.leds is not None:
+            leds.points = np.column_stack((pic.poses[lit, :2], np.full(len(lit), 0.03))).astype(np.float32)
+            leds.colors = layer.leds[lit]
+        else:
+            leds.points = np.zeros((1, 3), np.float32) - np.array([0, 0, 5], np.float32)
 
     def _points(self, name: PointLayer, xy: NDArray[np.float64], z: float) -> None:
         """Put ``xy`` (K, 2) m at height ``z`` into the point layer ``name``; with no point the node is hidden."""

@@ -66,6 +66,34 @@ def provide_get_cmap() -> None:
     cm.get_cmap = _facade_get_cmap  # type: ignore[attr-defined]  # matplotlib 3.9 removed it; rps scripts call it
 
 
+def quiet_canvas() -> None:
+    """Within :func:`rps_aliases`: matplotlib's ``canvas.draw_idle()`` does nothing, for the block only.
+
+    rps scripts ask for a redraw of their figures after every step (rps 2.x's EKF example: three figures). A window
+    would coalesce those requests; headless (Agg) each one renders the whole figure, seconds per simulated second,
+    for a picture nobody sees. ``savefig`` and an explicit ``canvas.draw()`` still render. Called where matplotlib
+    is loaded already: on entering the block, when the facade hands out pyplot and when a Robotarium is built."""
+    if _NOTES.get() is None or "matplotlib.backend_bases" not in sys.modules:
+        return
+    from matplotlib.backend_bases import FigureCanvasBase
+
+    if FigureCanvasBase.draw_idle.__name__ == "_facade_draw_idle":
+        return
+
+    def _facade_draw_idle(self: Any, *args: Any, **kwargs: Any) -> None:
+        """Nothing shows a figure under swarmdeck run: the redraw is skipped (savefig still draws)."""
+
+    _facade_draw_idle.original = FigureCanvasBase.draw_idle  # type: ignore[attr-defined]
+    FigureCanvasBase.draw_idle = _facade_draw_idle  # type: ignore[method-assign]
+
+
+def _restore_canvas() -> None:
+    bases = sys.modules.get("matplotlib.backend_bases")
+    canvas = getattr(bases, "FigureCanvasBase", None)
+    if canvas is not None and canvas.draw_idle.__name__ == "_facade_draw_idle":
+        canvas.draw_idle = canvas.draw_idle.original
+
+
 class _FacadeLoader(importlib.abc.Loader):
     """Loads ``rps.X`` as the facade's module ``swarmdeck.devices.rps.X`` (the same module object)."""
 
@@ -153,12 +181,14 @@ def rps_aliases(script_dir: Path | None = None) -> Iterator[list[str]]:
         token = _NOTES.set(notes)
         if "matplotlib.cm" in sys.modules:  # else when the facade hands out pyplot (figure.pyplot)
             provide_get_cmap()
+        quiet_canvas()
         yield notes
     finally:
         if finder in sys.meta_path:
             sys.meta_path.remove(finder)
         if add_mat and getattr(np, "mat", None) is mat:
             del np.mat  # type: ignore[attr-defined]
+        _restore_canvas()
         if token is not None:
             _NOTES.reset(token)
         cm = sys.modules.get("matplotlib.cm")

@@ -27,8 +27,10 @@ from swarmdeck.core.constants import RPS_MAX_ROBOTS
 from swarmdeck.core.kinematics import limit_unicycle
 from swarmdeck.core.robot_models import DEFAULT_ROBOT_MODEL, model_name, robot_params
 from swarmdeck.devices.arena import RUN_DEFAULTS, Arena
+from swarmdeck.devices.rps import quiet_canvas
 from swarmdeck.devices.rps.errors import call_at_scripts_end_text, count_errors, debug_text
 from swarmdeck.devices.rps.robotarium_abc import ARobotarium
+from swarmdeck.devices.rps.sensors import RpsSensors, sensing_for
 from swarmdeck.devices.simulated_robots import SimulatedRobots
 from swarmdeck.devices.simulator import ArenaConfig
 
@@ -86,7 +88,7 @@ def unsupported_argument_message(names: list[str]) -> str:
     return ("Robotarium() got argument(s) swarmdeck's rps facade does not support: " + "; ".join(parts))
 
 
-class Robotarium(ARobotarium):
+class Robotarium(RpsSensors, ARobotarium):
     """The rps experiment object: ``get_poses()`` → (3, N), ``set_velocities(ids, (2, N))``, ``step()``.
 
     Args (as rps, positional as in 1.x or keywords as in 2.x — every name of 2.x's ``robotarium.py`` and
@@ -95,8 +97,10 @@ class Robotarium(ARobotarium):
     time; never under ``swarmdeck run``), initial_conditions ((3, N) floats). rps 2.x's ``skip_initialization``
     and ``show_*`` flags are accepted (the robots start at their initial conditions — ``swarmdeck run
     --from-docks`` drives them there from the chargers, as 2.x's initialisation phase does; nothing is drawn);
-    ``obstacles`` (M × 2 × 2) is checked; ``use_distance_sensors`` belongs to the sensing layer. Flags must be
-    bools (rps 2.x's own checks); any other keyword is refused, named, with what to use instead.
+    ``obstacles`` (M × 2 × 2, checked) are segments the sensors see (as in rps 2.0). rps 2.0's sensors
+    (:mod:`swarmdeck.devices.rps.sensors`): ``use_distance_sensors=True`` simulates the seven ToF sensors; encoders,
+    IMU and LEDs are always there. Flags must be bools (rps 2.x's own checks); any other keyword is refused, named,
+    with what to use instead.
     swarmdeck's keywords: ``from_docks=True`` (``swarmdeck run --from-docks``) starts the robots on the
     chargers and sets them up first; ``rps_semantics`` and ``enforce_call_order`` (None: the runner's,
     else False and True) choose the modes of the module docstring; ``robot_model`` (``"gritsbot"`` or
@@ -119,11 +123,9 @@ class Robotarium(ARobotarium):
             if not isinstance(value, (bool, np.bool_)):  # as rps 2.x's strict checks (rps/robotarium.py)
                 raise TypeError(f"Robotarium({flag}=...) must be True or False, got {value!r}")
         self.show_flags = {name: bool(kwargs.get(name, name != "show_distance_rays")) for name in SHOW_FLAGS_2X}
-        if use_distance_sensors:
-            raise ValueError("use_distance_sensors=True: the rps facade does not simulate rps 2.0's distance sensors")
-        self._obstacles = None if obstacles is None else check_obstacles(obstacles)
-        if self._obstacles is not None and len(self._obstacles):
-            raise ValueError("obstacles: the rps facade does not simulate rps 2.0's obstacles")
+        sensing = sensing_for(use_distance_sensors)
+        quiet_canvas()  # a script that imported pyplot first: its figures' redraws cost nothing either
+        obstacles = None if obstacles is None else check_obstacles(obstacles)
         ic = np.asarray(initial_conditions)
         defaults = RUN_DEFAULTS.get()
         n = None if number_of_robots is None or number_of_robots < 0 else int(number_of_robots)
@@ -149,6 +151,8 @@ class Robotarium(ARobotarium):
                             safety=False if self.rps_semantics else None, params=robot_params(robot_model))
         self.robot_model = model_name(self._arena.params) or robot_model
         self.number_of_robots = self._arena.n
+        self._arena.use_sensors(sensing, obstacles=obstacles)
+        self.obstacles = obstacles
         self.show_figure = show_figure
         self.time_step = config.dt
         b = Bounds.of(config.bounds)
@@ -202,11 +206,6 @@ class Robotarium(ARobotarium):
     def _fig(self) -> Any:
         """rps 2.0's name of the figure (headless: ``canvas.draw_idle()``, ``mpl_connect`` work, nothing shows)."""
         return self.figure
-
-    @property
-    def obstacles(self) -> Any:
-        """rps 2.0: the ``obstacles`` given to the constructor (M × 2 × 2 segment endpoints, m), or None."""
-        return self._obstacles
 
     @property
     def arena(self) -> Arena:
@@ -312,13 +311,6 @@ class Robotarium(ARobotarium):
         import matplotlib
 
         return matplotlib.colormaps["tab20"]
-
-    def _no_sensors(self, *_args: Any) -> None:
-        raise NotImplementedError("rps 2.0's simulated sensors (distances, encoders, IMU, magnetometer, orientation) "
-                                  "are not part of swarmdeck's rps facade")
-
-    get_distances = get_distance_endpoints = get_encoders = get_accelerations = _no_sensors
-    get_gyros = get_magnetic_fields = get_orientations = _no_sensors
 
     @property
     def _iteration(self) -> int:

@@ -1,7 +1,7 @@
 """The dependency rules of DESIGN.md hold for every import, at module level or inside a function.
 
-core imports no other swarmdeck package; safety, coverage and tracking import only core; inputs
-imports coverage and core; devices imports safety and core; the learning environments (envs) import
+core imports no other swarmdeck package; safety, sensing, coverage and tracking import only core; inputs
+imports coverage and core; devices imports safety, sensing and core; the learning environments (envs) import
 anything but the console; only the console and the examples (user code, at the top) import the console. Imports are read with ``ast`` from the source
 folders named in pyproject.toml, so lazy imports (inside functions, ``importlib.import_module``
 with a literal name) count too.
@@ -20,11 +20,12 @@ ALLOWED: dict[str, set[str]] = {
     "coverage": {"core"},
     "tracking": {"core"},
     "inputs": {"coverage", "core"},
-    "devices": {"safety", "core"},
-    "envs": {"core", "safety", "coverage", "tracking", "inputs", "devices"},
+    "sensing": {"core"},
+    "devices": {"safety", "sensing", "core"},
+    "envs": {"core", "safety", "sensing", "coverage", "tracking", "inputs", "devices"},
     # experiments to copy: user code at the top, like a script `swarmdeck run` runs (one records with the console's recorder)
-    "examples": {"core", "safety", "coverage", "tracking", "inputs", "devices", "envs", "console"},
-    "console": {"core", "safety", "coverage", "tracking", "inputs", "devices", "envs", "examples"},
+    "examples": {"core", "safety", "sensing", "coverage", "tracking", "inputs", "devices", "envs", "console"},
+    "console": {"core", "safety", "sensing", "coverage", "tracking", "inputs", "devices", "envs", "examples"},
 }
 
 

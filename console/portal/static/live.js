@@ -45,6 +45,14 @@ document.addEventListener("DOMContentLoaded", () => {
       ctx.strokeStyle = m.pair_colours[k];
       ctx.beginPath(); ctx.moveTo(X(m.points[i][0]), Y(m.points[i][1])); ctx.lineTo(X(m.points[j][0]), Y(m.points[j][1])); ctx.stroke();
     });
+    if (m.sensors) {  // the sensors' layer: ToF rays to their end points
+      ctx.strokeStyle = P.sensor_ray; ctx.lineWidth = 1;
+      ctx.beginPath();
+      for (const [[ax, ay], [bx, by]] of m.sensors.rays) { ctx.moveTo(X(ax), Y(ay)); ctx.lineTo(X(bx), Y(by)); }
+      ctx.stroke();
+      ctx.fillStyle = P.sensor_hit;
+      for (const [, [bx, by]] of m.sensors.rays) ctx.fillRect(X(bx) - 2, Y(by) - 2, 4, 4);
+    }
     ctx.strokeStyle = P.changed; ctx.lineWidth = 2;  // robots whose command the filter changed
     for (const i of m.moved) { ctx.beginPath(); ctx.arc(X(m.poses[i][0]), Y(m.poses[i][1]), m.rings.changed * r, 0, 2 * Math.PI); ctx.stroke(); }
     const rv = m.rings.virtual * r, dash = (2 * Math.PI * rv) / 16;  // virtual robots: every other of 16 arcs
@@ -60,6 +68,8 @@ document.addEventListener("DOMContentLoaded", () => {
       ctx.strokeStyle = P.heading; ctx.lineWidth = 2;  // heading
       ctx.beginPath(); ctx.moveTo(px + 0.2 * r * Math.cos(th), py - 0.2 * r * Math.sin(th));
       ctx.lineTo(px + 1.4 * r * Math.cos(th), py - 1.4 * r * Math.sin(th)); ctx.stroke();
+      const led = m.sensors && m.sensors.leds ? m.sensors.leds[i] : null;
+      if (led) { ctx.fillStyle = led; ctx.beginPath(); ctx.arc(px, py, 0.45 * r, 0, 2 * Math.PI); ctx.fill(); }
       ctx.fillStyle = P.label;
       ctx.fillText(String(m.ids[i]), px, py - 1.2 * r);
     });

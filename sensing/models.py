@@ -1,0 +1,187 @@
+"""The sensor models: ToF distances, range and bearing, wheel encoders and the IMU (REFERENCE.md §15, §16).
+
+Pure functions of the poses and commands; every random draw comes from the ``numpy.random.Generator`` passed in
+(the same seed, the same readings), and the number of draws depends only on the array shapes. Arrays have one row
+per robot: poses ``(N, 3)`` ``[x, y, θ]`` (m, rad), commands ``v`` (m/s), ``w`` (rad/s) ``(N,)``.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+from scipy.spatial import cKDTree
+
+from swarmdeck.core.bounds import Bounds
+from swarmdeck.core.constants import GRAVITY
+from swarmdeck.core.kinematics import UnicycleParams, unicycle_to_wheels, wrap_angle
+from swarmdeck.sensing.config import DistanceSensorConfig, ImuConfig, RangeBearingConfig, SensingConfigError
+from swarmdeck.sensing.geometry import cast_rays, cast_sensor_rays, check_segments
+
+__all__ = ["ImuReadings", "RangeBearing", "check_sensing_poses", "distance_endpoints", "encoder_increment",
+           "imu_readings", "noisy_distances", "range_and_bearing", "sensor_rays", "true_distances"]
+
+FloatArray = NDArray[np.float64]
+
+
+def check_sensing_poses(poses: ArrayLike) -> FloatArray:
+    """``poses`` as a finite ``(N, 3)`` float array; raises :class:`SensingConfigError` naming what is wrong."""
+    arr = np.asarray(poses, dtype=float)
+    if arr.ndim != 2 or arr.shape[1] != 3:
+        raise SensingConfigError(f"poses must have shape (N, 3) [x, y, theta], got {arr.shape}")
+    if not np.isfinite(arr).all():
+        raise SensingConfigError(f"poses of robot(s) {np.flatnonzero(~np.isfinite(arr).all(axis=1)).tolist()} "
+                                 "are NaN or infinite")
+    return arr
+
+
+def body_centres(poses: FloatArray, offset: float) -> FloatArray:
+    """``(N, 2)`` centres of the bodies ``offset`` m ahead of the axles."""
+    th = poses[:, 2]
+    return poses[:, :2] + offset * np.column_stack((np.cos(th), np.sin(th)))
+
+
+def sensor_rays(poses: ArrayLike, config: DistanceSensorConfig) -> tuple[FloatArray, FloatArray]:
+    """Each robot's sensor rays: origins ``(N, K, 2)`` m and unit directions ``(N, K, 2)`` in the arena frame."""
+    p = check_sensing_poses(poses)
+    s = config.pose_array()  # (K, 3)
+    th = p[:, 2:3]  # (N, 1)
+    c, sn = np.cos(th), np.sin(th)
+    centre = body_centres(p, config.body_offset)
+    ox = centre[:, 0:1] + c * s[None, :, 0] - sn * s[None, :, 1]
+    oy = centre[:, 1:2] + sn * s[None, :, 0] + c * s[None, :, 1]
+    heading = th + s[None, :, 2]
+    return np.stack((ox, oy), axis=-1), np.stack((np.cos(heading), np.sin(heading)), axis=-1)
+
+
+def true_distances(poses: ArrayLike, config: DistanceSensorConfig, *, obstacles: ArrayLike | None = None,
+                   bounds: Bounds | None = None) -> FloatArray:
+    """Noise-free ``(N, K)`` distance, m, from each sensor to the first thing its ray meets: another robot's body
+    (a circle of ``body_radius`` centred ``body_offset`` ahead of its axle), an obstacle segment ``(M, 2, 2)`` or —
+    when ``config.walls`` and ``bounds`` are given — a wall; inf where nothing lies within ``max_range``."""
+    p = check_sensing_poses(poses)
+    n, k = len(p), config.n_sensors
+    if n == 0:
+        return np.empty((0, k))
+    origins, directions = sensor_rays(p, config)
+    t = cast_sensor_rays(body_centres(p, config.body_offset), p[:, 2], origins, directions,
+                         config.pose_array()[:, 2], config.max_range, config.body_radius)
+    rest = cast_rays(origins.reshape(-1, 2), directions.reshape(-1, 2), config.max_range,
+                     segments=check_segments(obstacles), bounds=bounds if config.walls else None)
+    return np.minimum(t, rest.reshape(n, k))
+
+
+def noisy_distances(true: ArrayLike, config: DistanceSensorConfig, rng: np.random.Generator) -> FloatArray:
+    """rps 2.0's reading model over true distances ``(N, K)`` (inf: nothing in range): a hit closer than
+    ``max_range`` is dropped (−1) with probability ``dropout``; a kept one is an outlier, uniform on
+    [0, max_range], with probability ``outlier``; otherwise ``d + error·d·ε`` clipped to [0, max_range]. Nothing
+    in range reads −1. Returns ``(N, K)`` m."""
+    d = np.asarray(true, dtype=float)
+    rmax = config.max_range
+    drop = rng.random(d.shape) < config.dropout
+    outlier = rng.random(d.shape) < config.outlier
+    wild = rng.uniform(0.0, rmax, d.shape)
+    eps = rng.standard_normal(d.shape)
+    seen = d < rmax
+    with np.errstate(invalid="ignore"):
+        noisy = np.clip(d + config.error * d * eps, 0.0, rmax)
+    out = np.where(outlier, wild, noisy)
+    return np.where(seen & ~drop, out, -1.0)
+
+
+def distance_endpoints(poses: ArrayLike, readings: ArrayLike, config: DistanceSensorConfig) -> FloatArray:
+    """Where each reading ends: ``(N, K, 2)`` m, NaN where the reading is −1 (nothing) or NaN."""
+    origins, directions = sensor_rays(poses, config)
+    r = np.asarray(readings, dtype=float)
+    with np.errstate(invalid="ignore"):
+        ok = (r >= 0.0)[..., None]
+    return np.where(ok, origins + np.where(ok, r[..., None], 0.0) * directions, np.nan)
+
+
+@dataclass(frozen=True)
+class RangeBearing:
+    """Range-and-bearing measurements, one row per (observer, neighbour) pair, sorted by observer then neighbour.
+
+    Attributes:
+        i: ``(P,)`` observing robot (row index).
+        j: ``(P,)`` observed neighbour (row index).
+        range: ``(P,)`` measured centre distance, m.
+        bearing: ``(P,)`` measured direction of j in i's body frame, rad in (−π, π] (0: straight ahead).
+    """
+
+    i: NDArray[np.intp]
+    j: NDArray[np.intp]
+    range: FloatArray
+    bearing: FloatArray
+
+    def of(self, robot: int) -> tuple[NDArray[np.intp], FloatArray, FloatArray]:
+        """``(neighbours, ranges, bearings)`` robot ``robot`` measured."""
+        lo, hi = np.searchsorted(self.i, [robot, robot + 1])
+        return self.j[lo:hi], self.range[lo:hi], self.bearing[lo:hi]
+
+
+def range_and_bearing(poses: ArrayLike, config: RangeBearingConfig, rng: np.random.Generator) -> RangeBearing:
+    """Range and bearing from every robot to each neighbour within ``config.radius`` (centre to centre) and inside
+    its field of view, with Gaussian noise and dropout (a k-d tree finds the pairs). See :class:`RangeBearing`."""
+    p = check_sensing_poses(poses)
+    empty = RangeBearing(np.empty(0, np.intp), np.empty(0, np.intp), np.empty(0), np.empty(0))
+    if len(p) < 2:
+        return empty
+    pairs = cKDTree(p[:, :2]).query_pairs(config.radius, output_type="ndarray").astype(np.intp)
+    i = np.concatenate((pairs[:, 0], pairs[:, 1]))
+    j = np.concatenate((pairs[:, 1], pairs[:, 0]))
+    order = np.lexsort((j, i))
+    i, j = i[order], j[order]
+    rel = p[j, :2] - p[i, :2]
+    dist = np.hypot(rel[:, 0], rel[:, 1])
+    bearing = wrap_angle(np.arctan2(rel[:, 1], rel[:, 0]) - p[i, 2])
+    m = len(i)
+    r_noise = rng.standard_normal(m)
+    b_noise = rng.standard_normal(m)
+    kept = rng.random(m) >= config.dropout
+    if config.fov < 2 * np.pi:
+        kept &= np.abs(bearing) <= config.fov / 2
+    return RangeBearing(i[kept], j[kept], np.maximum(dist + config.range_sigma * r_noise, 0.0)[kept],
+                        wrap_angle(bearing + config.bearing_sigma * b_noise)[kept])
+
+
+def encoder_increment(v: ArrayLike, w: ArrayLike, dt: float, params: UnicycleParams, config: ImuConfig,
+                      rng: np.random.Generator) -> FloatArray:
+    """One step's encoder counts ``(N, 2)`` [left, right] while the wheels turn at the speeds of ``(v, w)`` for
+    ``dt`` s: ω_wheel·dt·counts_per_rev·gear_ratio/2π, plus N(0, (σ·√max(|Δ|, 1))²), rounded (rps 2.0's model)."""
+    right, left = unicycle_to_wheels(v, w, params)
+    delta = np.column_stack((left, right)) * dt * config.counts_per_radian
+    sigma = config.encoder_sigma * np.sqrt(np.maximum(np.abs(delta), 1.0))
+    return np.round(delta + sigma * rng.standard_normal(delta.shape))
+
+
+@dataclass(frozen=True)
+class ImuReadings:
+    """One step's IMU: accel ``(N, 3)`` m/s² (body x, y, z; z reads −g at rest), gyro ``(N, 3)`` rad/s,
+    mag ``(N, 3)`` µT, orientation ``(N,)`` degrees in [0, 360)."""
+
+    accel: FloatArray
+    gyro: FloatArray
+    mag: FloatArray
+    orientation: FloatArray
+
+
+def imu_readings(v: ArrayLike, w: ArrayLike, v_prev: ArrayLike, w_prev: ArrayLike, theta: ArrayLike, dt: float,
+                 config: ImuConfig, rng: np.random.Generator) -> ImuReadings:
+    """rps 2.0's IMU models: the accelerometer at ``imu_offset`` sees the linear and tangential acceleration of
+    the commands' change over ``dt`` plus the centripetal part and gravity; the gyro ω about z; the magnetometer
+    a fixed field turned by θ; the orientation θ in degrees. Each with its Gaussian noise (``config``)."""
+    v, w = np.asarray(v, dtype=float), np.asarray(w, dtype=float)
+    th = np.asarray(theta, dtype=float)
+    n = len(v)
+    lin = (v - np.asarray(v_prev, dtype=float)) / dt
+    ang = (w - np.asarray(w_prev, dtype=float)) / dt
+    ox, oy = config.imu_offset
+    zero = np.zeros(n)
+    accel = np.column_stack((lin - ang * oy - w * w * ox, ang * ox - w * w * oy, np.full(n, -GRAVITY)))
+    accel = accel + np.asarray(config.accel_sigma) * rng.standard_normal((n, 3))
+    gyro = np.column_stack((zero, zero, w)) + np.asarray(config.gyro_sigma) * rng.standard_normal((n, 3))
+    mag = np.column_stack((config.mag_xy * np.cos(th), -config.mag_xy * np.sin(th), np.full(n, config.mag_z)))
+    mag = mag + np.asarray(config.mag_sigma) * rng.standard_normal((n, 3))
+    orientation = np.mod(np.degrees(th) + config.orientation_sigma_deg * rng.standard_normal(n), 360.0)
+    return ImuReadings(accel, gyro, mag, orientation)
