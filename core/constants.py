@@ -35,6 +35,12 @@ COLLISION_SHIFT: float = 0.025
 #: rps validator: two robots collide when their shifted centres are at most this far apart, m (REFERENCE.md §1).
 COLLISION_DISTANCE: float = 0.135
 
+# ---------------------------------------------------------------- the GTernal (Robotarium 2.x, REFERENCE.md §15)
+#: GTernal base (axle) length L, m (REFERENCE.md §15; rps 2.x ``ARobotarium.BASE_LENGTH``). Its diameter (0.11 m),
+#: wheel radius (0.016 m), top speed (0.2 m/s), collision diameter and offset are the GRITSBot's numbers above.
+GTERNAL_BASE_LENGTH: float = 0.11
+#: rps 2.x's limit on the robots of one simulation (REFERENCE.md §1, §15: ``0 <= number_of_robots <= 50``).
+RPS_MAX_ROBOTS: int = 50
 # ---------------------------------------------------------------- Robotarium 2.0's sensors (REFERENCE.md §15)
 # (rps/robotarium_abc.py of robotarium/robotarium_python_simulator 2.0; swarmdeck.sensing takes its defaults here)
 #: The seven ToF distance sensors' poses on the body, ``(x, y, heading)`` in m, m, rad, in the body frame centred

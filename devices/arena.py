@@ -37,6 +37,7 @@ from swarmdeck.core.kinematics import (
 )
 from swarmdeck.core.obstacles import START_CLEARANCE
 from swarmdeck.core.ports import ReportsSensors, ShowsLeds
+from swarmdeck.core.robot_models import DEFAULT_ROBOT_MODEL, robot_params
 from swarmdeck.devices.controllers import (
     HybridPoseController,
     at_position,
@@ -92,6 +93,10 @@ class RunDefaults:
         if self.bounds is not None:
             kw.setdefault("bounds", self.bounds)
         return ArenaConfig(seed=self.seed, **kw)
+    # the robot model of Arenas built without params (core/robot_models.py; None: the GRITSBot, and for the
+    # rps facade the model of the script's rps generation) and that generation (devices/rps/generation.py)
+    robot_model: str | None = None
+    rps_generation: int | None = None
 
 
 #: The sensors' noise stream beside the simulator's: Arena sensing seeds with (seed, this).
@@ -187,7 +192,7 @@ class Arena:
             obstacles = defaults.obstacles
         if obstacles is not None:
             config = dataclasses.replace(config, obstacles=obstacles)  # checked inside the bounds there
-        self.params = params if params is not None else GritsBotParams()
+        self.params = params if params is not None else robot_params(defaults.robot_model or DEFAULT_ROBOT_MODEL)
         self.config = config
         if duration is not None and not (np.isfinite(duration) and duration > 0):
             raise ValueError(f"duration must be a positive number of seconds, got {duration!r}")

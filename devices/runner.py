@@ -16,6 +16,7 @@ script's error handling, so a bad ``--robots`` is a plain :class:`ValueError`.
 from __future__ import annotations
 
 import contextlib
+import dataclasses
 import importlib.util
 import re
 import runpy
@@ -27,9 +28,11 @@ from pathlib import Path
 from typing import Any
 
 from swarmdeck.core.errors import SwarmdeckError
+from swarmdeck.core.robot_models import robot_params
 from swarmdeck.devices.arena import RUN_DEFAULTS, Arena, ArenaReport, ExperimentFinished, RunDefaults
 from swarmdeck.devices.fleet.setup import SetupFailed
 from swarmdeck.devices.rps import rps_aliases
+from swarmdeck.devices.rps.generation import script_generation
 
 
 class ScriptError(SwarmdeckError):
@@ -122,6 +125,8 @@ def run_experiment(
     rps_call_order: bool = True,
     obstacles: Any = None,
     bounds: Any = None,
+    robot_model: str | None = None,
+    rps_generation: int | None = None,
 ) -> RunResult:
     """Run a script file (or an ``experiment(arena)`` callable) and return its :class:`RunResult`.
 
@@ -141,7 +146,14 @@ def run_experiment(
     script builds without its own.
     ``bounds``: the arena ``(x_min, x_max, y_min, y_max)`` (m) Arenas and Robotariums the script builds without a
     config see (its region of a shared floor, :mod:`swarmdeck.devices.fleet.floor`); None: the default floor.
+    ``robot_model``: the robots of Arenas built without params (:mod:`swarmdeck.core.robot_models`; None: the
+    GRITSBot, and for the rps facade the model of the script's generation). ``rps_generation``: 1 or 2, the rps
+    the script was written for (None: read from its source, :func:`~swarmdeck.devices.rps.generation.script_generation`).
     """
+    if robot_model is not None:
+        robot_params(robot_model)  # a bad name is the caller's error, named before anything runs
+    if rps_generation not in (None, 1, 2):
+        raise ValueError(f"rps_generation must be 1 or 2 (rps 1.x or 2.x), got {rps_generation!r}")
     result = RunResult()
 
     def created(arena: Arena) -> None:
@@ -152,7 +164,7 @@ def run_experiment(
     defaults = RunDefaults(n_robots=n_robots, duration=duration, seed=seed, safety=safety,
                            on_create=created, on_step=on_step, backend_factory=backend_factory,
                            from_docks=from_docks, rps_semantics=rps_semantics, rps_call_order=rps_call_order,
-                           obstacles=obstacles, bounds=bounds)
+                           obstacles=obstacles, bounds=bounds, robot_model=robot_model, rps_generation=rps_generation)
     token = RUN_DEFAULTS.set(defaults)
     script = None if callable(target) else str(target)
     try:
@@ -162,6 +174,8 @@ def run_experiment(
             else:
                 path = Path(target)
                 source = _load(path)["source"]
+                if rps_generation is None:
+                    RUN_DEFAULTS.set(dataclasses.replace(defaults, rps_generation=script_generation(source)))
                 if rps is None:  # also for scripts that import rps only through their own modules (MARBLER)
                     rps = importlib.util.find_spec("rps") is None
                 sys.path.insert(0, str(path.parent.resolve()))
@@ -169,7 +183,7 @@ def run_experiment(
                 sys.argv = [str(path), *argv]  # as `python script.py ARGS…` sees them
                 try:
                     aliases: contextlib.AbstractContextManager[list[str]] = (
-                        rps_aliases() if rps else contextlib.nullcontext([]))
+                        rps_aliases(path.parent.resolve()) if rps else contextlib.nullcontext([]))
                     with aliases as notes:
                         result.notes = notes  # the facade adds to it while the script runs
                         # as `python script.py` runs it: code under `if __name__ == "__main__":` runs too

@@ -147,3 +147,40 @@ def solve_qp(rows: Rows, nominal: np.ndarray, max_speed: float | None, *,
     if x.shape != (nv + k,) or not np.all(np.isfinite(x)):
         return QPResult(np.zeros((n, 2)), False, "solver returned a non-finite answer", iters)
     return QPResult(x[:nv].reshape(n, 2), True, "solved", iters)
+
+
+def project_onto_polytope(nominal: np.ndarray, a: np.ndarray, b: np.ndarray, *, max_iter: int = 100,
+                          tol: float = 1e-9) -> QPResult:
+    """The point nearest ``nominal`` (n,) within ``a x ≤ b`` (a: (m, n) dense, b: (m,)): min ½‖x − x̂‖².
+
+    rps 2.x's ``_solve_qp`` and scripts that build their own barrier rows use it (a dense QP of a few
+    variables). ``u`` of the result is the (n,) answer (zeros when not ok); the status is checked as in
+    :func:`solve_qp`.
+    """
+    x_hat = np.asarray(nominal, dtype=float).reshape(-1)
+    a = np.asarray(a, dtype=float)
+    b = np.asarray(b, dtype=float).reshape(-1)
+    n = x_hat.size
+    if a.ndim != 2 or a.shape != (b.size, n):
+        return QPResult(np.zeros(n), False, f"constraint shapes {a.shape} and {b.shape} do not fit {n} variables", 0)
+    if not (np.all(np.isfinite(a)) and np.all(np.isfinite(b)) and np.all(np.isfinite(x_hat))):
+        return QPResult(np.zeros(n), False, "non-finite QP data", 0)
+    if b.size == 0:
+        return QPResult(x_hat.copy(), True, "unconstrained", 0)
+    settings = clarabel.DefaultSettings()
+    settings.verbose = False
+    settings.max_iter = int(max_iter)
+    settings.tol_gap_abs = settings.tol_gap_rel = settings.tol_feas = tol
+    try:
+        sol = clarabel.DefaultSolver(sp.identity(n, format="csc"), -x_hat, sp.csc_matrix(a), b,
+                                     [clarabel.NonnegativeConeT(b.size)], settings).solve()
+    except Exception as exc:  # clarabel raises on malformed data
+        return QPResult(np.zeros(n), False, f"solver error: {exc}", 0)
+    status = str(sol.status)
+    iters = int(getattr(sol, "iterations", 0))
+    x = np.asarray(sol.x, dtype=float)
+    if status != "Solved":
+        return QPResult(np.zeros(n), False, _STATUS_REASON.get(status, status), iters)
+    if x.shape != (n,) or not np.all(np.isfinite(x)):
+        return QPResult(np.zeros(n), False, "solver returned a non-finite answer", iters)
+    return QPResult(x, True, "solved", iters)

@@ -124,13 +124,17 @@ def main(args: argparse.Namespace) -> int:
     if args.record and args.no_record:
         raise UsageError("--record and --no-record exclude each other")
     _check_address(host, port)
+    from swarmdeck.core.robot_models import robot_params
+
+    robot = robot_params(settings.robot_model)  # [arena] robot_model (the GRITSBot by default)
     try:  # check the behaviour (name, script) before opening anything
         make_behaviour(config.behaviour, config.behaviour_params, config.bounds, config.max_speed,
                        config.safety.safety_distance)
     except BehaviourError as exc:
         raise UsageError(str(exc)) from None
     try:
-        source, sink = _robots(config, args.camera, args.robots_via, args.virtual, docked=args.start == "docked")
+        source, sink = _robots(config, args.camera, args.robots_via, args.virtual, docked=args.start == "docked",
+                               robot=robot)
     except (ValueError, OSError) as exc:
         raise UsageError(str(exc)) from None
     rec = None
@@ -150,7 +154,7 @@ def main(args: argparse.Namespace) -> int:
     try:
         # One monotonic clock for the loop and the input listeners' receive stamps.
         loop = ControlLoop(config, source=source, sink=sink, inputs=hub, contact_density=_contact_density(hub),
-                           clock=time.monotonic)
+                           clock=time.monotonic, robot=robot)
     except (BehaviourError, ValueError) as exc:
         sink.close()
         if hub is not None:
@@ -300,15 +304,17 @@ def _check_address(host: str, port: int) -> None:
             raise UsageError(f"cannot serve on {host}:{port}: {exc.strerror or exc}") from None
 
 
-def _robots(config, camera: str | None, robots_via: str | None, virtual: int | None = None, docked: bool = False):
+def _robots(config, camera: str | None, robots_via: str | None, virtual: int | None = None, docked: bool = False,
+            robot=None):
     """(pose source, command sink) from the one robots factory (:func:`~swarmdeck.console.runtime.hardware.open_robots`):
     simulation by default, MQTT robots with --robots-via, camera poses with --camera, plus ``virtual`` virtual
     robots simulated here. Raises ValueError/OSError naming what could not be opened."""
     from swarmdeck.console.runtime.hardware import RobotsSpec, open_robots
 
+    extra = {} if robot is None else {"params": robot}  # the robot model of [arena] robot_model
     ports = open_robots(RobotsSpec(n_robots=config.n_robots, bounds=config.bounds, dt=config.dt, seed=config.seed,
                                    robots_via=robots_via, docked=docked, camera=camera, virtual=virtual or 0,
-                                   obstacles=config.obstacles))
+                                   obstacles=config.obstacles, **extra))
     return ports.source, ports.sink
 
 

@@ -14,6 +14,7 @@ from collections.abc import Callable
 from typing import Any
 
 from swarmdeck.console.cli import UsageError
+from swarmdeck.core.robot_models import ROBOT_MODELS
 
 NAME = "run"
 HELP = "run an experiment script headless on the simulated arena and print its report"
@@ -58,6 +59,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--no-rps-call-order", dest="rps_call_order", action="store_false",
                         help="let the rps facade accept get_poses() twice per step() and step() twice in a row "
                              "(rps and the Robotarium raise an AssertionError)")
+    parser.add_argument("--robot-model", choices=sorted(ROBOT_MODELS), default=None,
+                        help="the simulated robots: gritsbot (the default) or gternal (Robotarium 2.x: base 0.11 m); "
+                             "default for an rps script: the robot of its rps generation (gternal for a 2.x script, "
+                             "which ends with r.debug(); gritsbot for 1.x, which ends with r.call_at_scripts_end())")
+    parser.add_argument("--rps-generation", type=int, choices=(1, 2), default=None,
+                        help="the Robotarium simulator the rps script was written for (default: read from the script)")
     parser.add_argument("--sandbox", action="store_true",
                         help="run the script in a confined child process (no network, read-only files, resource limits); "
                              "swarmdeck keeps the simulator and the safety filter")
@@ -84,20 +91,24 @@ def _run_sandboxed(args: argparse.Namespace) -> int:
     from swarmdeck.console.sandbox.confinement import ConfinementUnavailable, JailConfig
     from swarmdeck.console.sandbox.plant import ArenaPlant
     from swarmdeck.console.sandbox.run import run_sandboxed
+    from swarmdeck.core.robot_models import robot_params
     from swarmdeck.devices.arena import Arena
     from swarmdeck.devices.simulator import ArenaConfig
 
     check_run_arguments(args.robots, args.duration, seed=args.seed)
     config = ArenaConfig(seed=args.seed, obstacles=obstacles_argument(args))
+    model = args.robot_model or _script_robot_model(args)
 
     def make_plant(n, initial):
         return ArenaPlant(Arena(n, initial_conditions=initial, config=config,
-                                safety=not (args.no_safety or args.rps_semantics), duration=args.duration))
+                                safety=not (args.no_safety or args.rps_semantics), duration=args.duration,
+                                params=robot_params(model)))
 
     try:
         outcome = run_sandboxed(args.script, make_plant, entry=args.entry, n_robots=args.robots, duration=args.duration, rps=args.rps,
                                 argv=_script_args(args), rps_semantics=args.rps_semantics,
                                 rps_call_order=args.rps_call_order,
+                                robot_model=model, rps_generation=args.rps_generation,
                                 trusted=args.trusted, jail=JailConfig(order=(args.jail,) if args.jail else JailConfig().order,
                                                                      allow_no_cgroup=args.allow_no_cgroup,
                                                                      script_env=checked_script_env(args.script_env)))
@@ -118,6 +129,25 @@ def _run_sandboxed(args: argparse.Namespace) -> int:
     if outcome.error_line:
         raise UsageError(f"the sandboxed script ended, robots were stopped: {outcome.error_line}")
     return 0
+
+
+def _script_robot_model(args: argparse.Namespace) -> str:
+    """The robot model the script expects (the GTernal for an rps 2.x script, else the GRITSBot), read on the trusted
+    side from the script's text (the entry file of a directory) before the run — its plant drives that model."""
+    from pathlib import Path
+
+    from swarmdeck.core.robot_models import DEFAULT_ROBOT_MODEL
+    from swarmdeck.devices.rps.generation import robot_model_for
+
+    path = Path(args.script)
+    if path.is_dir():
+        path = path / (args.entry or "main.py")
+    if args.rps_generation is not None:
+        return "gternal" if args.rps_generation == 2 else DEFAULT_ROBOT_MODEL
+    try:
+        return robot_model_for(path.read_text(encoding="utf-8", errors="replace"))
+    except OSError:
+        return DEFAULT_ROBOT_MODEL  # run_sandboxed names the unreadable script
 
 
 def _physical_robots(args: argparse.Namespace) -> tuple[Callable[..., Any], Any]:
@@ -200,6 +230,7 @@ def main(args: argparse.Namespace) -> int:
         result = run_headless(args.script, args, rps=args.rps, from_docks=args.from_docks, argv=_script_args(args),
                               obstacles=obstacles_argument(args),
                               rps_semantics=args.rps_semantics, rps_call_order=args.rps_call_order,
+                              robot_model=args.robot_model, rps_generation=args.rps_generation,
                               on_create=None if recording is None else recording.on_create,
                               on_step=None if recording is None else recording.on_step, backend_factory=factory)
     finally:

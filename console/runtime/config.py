@@ -14,6 +14,8 @@ Tables (every key optional; defaults from REFERENCE.md)::
     [inputs]    see swarmdeck.inputs.InputConfig (listeners, density, bounds)
     [arena]     obstacles = [[[x0, y0], [x1, y1]], {polygon = [[x, y], ...]}, {polyline = [[x, y], ...]}]
                 (line-segment obstacles, m: solid in the simulator, kept clear by the barrier; core.obstacles)
+    [arena]     robot_model = "gritsbot" (or "gternal": Robotarium 2.x's robot, base length 0.11 m;
+                swarmdeck.core.robot_models)
     [recording] foxglove_channels = true (as in [console]; give it in one table), chunk_frames = 8
                 (frames per MCAP chunk, each chunk starts with a keyframe), robot_rate = 3000 (robots per
                 second the per-robot Foxglove scene channels carry: N = 1000 → 3 scenes/s), packed = false
@@ -42,9 +44,10 @@ from swarmdeck.console.runtime.params import (
 from swarmdeck.core.checks import in_range
 from swarmdeck.core.config import ConfigError, check_keys, from_mapping, read_toml
 from swarmdeck.core.obstacles import ObstacleError, Obstacles
+from swarmdeck.core.robot_models import DEFAULT_ROBOT_MODEL, robot_params
 
 TABLES = ("console", "behaviour", "safety", "density", "inputs", "recording", "arena")
-ARENA_KEYS = ("obstacles",)
+ARENA_KEYS = ("obstacles", "robot_model")
 RECORDING_KEYS = ("foxglove_channels", "chunk_frames", "robot_rate", "packed", "lines_period")
 # [console] key -> LoopConfig field (errors name the key, not the field), from the parameters' declarations
 LOOP_KEYS = toml_keys(LoopConfig)
@@ -74,7 +77,8 @@ _UNKNOWN = "unknown key(s) {unknown} in {what}; expected some of {known}"
 class ConsoleSettings:
     """What the file says: the loop's config, server address, the raw ``[inputs]`` table (or None), and
     whether recordings carry Foxglove's channels (``foxglove_channels``), the recorder's chunking
-    (``chunk_frames``) and the Foxglove channels' ``robot_rate``, ``packed``, ``lines_period`` (``[recording]``)."""
+    (``chunk_frames``) and the Foxglove channels' ``robot_rate``, ``packed``, ``lines_period`` (``[recording]``), and the
+    simulated robots' model (``[arena] robot_model``, :mod:`swarmdeck.core.robot_models`)."""
 
     loop: LoopConfig
     host: str = "127.0.0.1"
@@ -85,6 +89,7 @@ class ConsoleSettings:
     robot_rate: float = 3000.0
     packed: bool = False
     lines_period: float = 0.0
+    robot_model: str = DEFAULT_ROBOT_MODEL
 
 
 def _build(cls: type, doc: dict, name: str, path: Path, convert: dict[str, Any] | None = None) -> Any:
@@ -179,4 +184,16 @@ def load_settings(path: str | Path) -> ConsoleSettings:
     if isinstance(lines_period, bool) or not in_range(lines_period, 0, 1e6):
         raise ConfigFileError(f"{p}: [recording] lines_period must be a number >= 0 (s), got {lines_period!r}")
     return ConsoleSettings(loop, host, port, inputs, fox, int(chunk_frames), float(robot_rate), packed,
-                           float(lines_period))
+                           float(lines_period), _robot_model(doc, p))
+
+
+def _robot_model(doc: dict, path: Path) -> str:
+    """``[arena] robot_model``: a name of :data:`~swarmdeck.core.robot_models.ROBOT_MODELS` (default the GRITSBot)."""
+    arena = check_keys(doc.get("arena", {}), ARENA_KEYS, "[arena]", error=ConfigFileError, template=_UNKNOWN,
+                       source=path)
+    model = arena.get("robot_model", DEFAULT_ROBOT_MODEL)
+    try:
+        robot_params(model)
+    except ValueError as exc:
+        raise ConfigFileError(f"{path}: [arena] {exc}") from None
+    return str(model).strip().lower()

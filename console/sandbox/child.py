@@ -188,6 +188,7 @@ def main(argv: list[str]) -> int:
             safety=False, rps=start.get("rps"), argv=[str(a) for a in start.get("argv") or []],
             rps_semantics=bool(start.get("rps_semantics", False)), rps_call_order=bool(start.get("rps_call_order", True)),
             bounds=tuple(start["bounds"]) if start.get("bounds") else None,
+            robot_model=start.get("robot_model"), rps_generation=start.get("rps_generation"),
             backend_factory=lambda n, ic, config, params: PipeRobots(link, n, ic, config=config, params=params),
         )
         error, error_line = result.error, result.error_line

@@ -101,6 +101,7 @@ from swarmdeck.console.sandbox.protocol import (
 )
 from swarmdeck.console.sandbox.script_env import ScriptEnv
 from swarmdeck.console.sandbox.zygote import CHILD_ENV, ForkServerError, shared_fork_server
+from swarmdeck.core.robot_models import DEFAULT_ROBOT_MODEL
 
 
 class Plant(Protocol):
@@ -490,6 +491,8 @@ def run_sandboxed(
     rps_call_order: bool = True,
     on_log: Callable[[bytes], None] | None = None,
     bounds: tuple[float, float, float, float] | None = None,
+    robot_model: str | None = DEFAULT_ROBOT_MODEL,
+    rps_generation: int | None = None,
 ) -> SandboxOutcome:
     """Run ``script`` in a jailed child against the plant ``make_plant(n, initial_poses)`` builds.
 
@@ -509,7 +512,10 @@ def run_sandboxed(
     (naming what is wrong) when it breaks its rule.
     ``argv``: the script's arguments (its ``sys.argv[1:]``; it runs as ``__main__``);
     ``rps_semantics``/``rps_call_order``: the rps facade's modes in the child (``swarmdeck run --rps-semantics``,
-    ``--no-rps-call-order``). ``on_log(bytes)``: each piece of the script's output
+    ``--no-rps-call-order``); ``robot_model``/``rps_generation``: the robot model the child's Arena and rps facade
+    assume (:mod:`swarmdeck.core.robot_models`; default the GRITSBot, the robots of the lab's arena and of
+    verification; None: the facade's choice by the script's rps generation) — give the plant's, so the script's
+    constants match the robots ``make_plant`` drives. ``on_log(bytes)``: each piece of the script's output
     (stdout and stderr, within ``limits.log_bytes``) as it comes, on a reader thread.
     ``bounds``: the arena ``(x_min, x_max, y_min, y_max)`` (m) the script's Arena sees when it builds one without a
     config — its region of a shared floor (:mod:`swarmdeck.devices.fleet.regions`); None: the default floor.
@@ -524,7 +530,8 @@ def run_sandboxed(
         except OSError as exc:
             raise ValueError(f"cannot read the script {str(script)!r}: {exc}") from exc
     script_options: dict[str, Any] = {"argv": [str(a) for a in argv], "rps_semantics": bool(rps_semantics),
-                                      "rps_call_order": bool(rps_call_order)}
+                                      "rps_call_order": bool(rps_call_order), "robot_model": robot_model,
+                                      "rps_generation": rps_generation}
     if bounds is not None:
         script_options["bounds"] = [float(v) for v in bounds]
     return _run_sandboxed(bundle, make_plant, n_robots=n_robots, duration=duration, rps=rps, limits=limits,

@@ -24,9 +24,10 @@ def pyplot() -> Any:
     matplotlib.use("Agg")  # before pyplot is imported; a script's later plt.show() is then a no-op
     import matplotlib.pyplot as plt
 
-    from swarmdeck.devices.rps import provide_get_cmap
+    from swarmdeck.devices.rps import provide_get_cmap, quiet_canvas
 
     provide_get_cmap()  # rps-era scripts colour with plt.cm.get_cmap
+    quiet_canvas()  # nothing shows the figure: its redraw requests cost nothing
 
     return plt
 

@@ -23,11 +23,14 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from swarmdeck.core.bounds import Bounds
-from swarmdeck.core.constants import COLLISION_DISTANCE, COLLISION_SHIFT, CONTROL_PERIOD
+from swarmdeck.core.constants import RPS_MAX_ROBOTS
 from swarmdeck.core.kinematics import limit_unicycle
+from swarmdeck.core.robot_models import DEFAULT_ROBOT_MODEL, model_name, robot_params
 from swarmdeck.devices.arena import RUN_DEFAULTS, Arena
+from swarmdeck.devices.rps import quiet_canvas
 from swarmdeck.devices.rps.errors import call_at_scripts_end_text, count_errors, debug_text
 from swarmdeck.devices.rps.figure_annotations import figure_annotations
+from swarmdeck.devices.rps.robotarium_abc import ARobotarium
 from swarmdeck.devices.rps.sensors import RpsSensors, sensing_for
 from swarmdeck.devices.simulated_robots import SimulatedRobots
 
@@ -36,42 +39,99 @@ RELAX_HINT = ("swarmdeck enforces rps's call order as the Robotarium does; Robot
 # rps's own messages (1.x `dev` branch / 2.0 `master`: the same rule, worded slightly differently)
 GET_POSES_TWICE = "Can only call get_poses() once per call of step()!"
 STEP_TWICE = "Make sure you call get_poses before calling step()!"
-_IGNORED_2X = ("show_arena_boundaries", "show_robot_patches", "show_distance_endpoints", "show_distance_rays",
-               "show_obstacles")
+#: rps 2.x's drawing flags (``show_*``): accepted, nothing is drawn (watch in ``swarmdeck console`` or a recording)
+SHOW_FLAGS_2X = ("show_arena_boundaries", "show_robot_patches", "show_distance_endpoints", "show_distance_rays",
+                 "show_obstacles")
+#: every keyword the facade's constructor takes: rps 1.x and 2.x (robotarium.py, robotarium_abc.py) and swarmdeck's
+KNOWN_ARGUMENTS = ("number_of_robots", "show_figure", "sim_in_real_time", "initial_conditions", "use_distance_sensors",
+                   "obstacles", "skip_initialization", *SHOW_FLAGS_2X, "from_docks", "rps_semantics",
+                   "enforce_call_order", "robot_model")
+#: arguments of other Robotarium front ends that swarmdeck does not take, and what to use instead
+INSTEAD = {
+    "robot_type": "robot_model='gritsbot' or 'gternal' (or `swarmdeck run --robot-model`)",
+    "boundaries": "the arena's bounds: `swarmdeck console --config` ([console] bounds/arena)",
+    "time_step": "the control period is fixed at 0.033 s (REFERENCE.md §1)",
+    "seed": "`swarmdeck run --seed N`",
+    "show_robot_ids": "`swarmdeck console` or `swarmdeck play` (labels)",
+}
 
 
-class Robotarium(RpsSensors):
+def check_obstacles(obstacles: Any) -> NDArray[np.float64]:
+    """rps 2.x's ``obstacles``: an (M, 2, 2) float array of segment endpoints ``[[x0, y0], [x1, y1]]``, m — a copy;
+    a ValueError naming the argument, the shape and the first bad segment otherwise."""
+    try:
+        arr = np.array(obstacles, dtype=float)
+    except (TypeError, ValueError):
+        raise ValueError(f"obstacles must be an (M, 2, 2) array of segment endpoints in m, got {obstacles!r:.80}") from None
+    if arr.size == 0:
+        return np.zeros((0, 2, 2))
+    if arr.ndim != 3 or arr.shape[1:] != (2, 2):
+        raise ValueError(f"obstacles must be an (M, 2, 2) array of segment endpoints [[x0, y0], [x1, y1]] in m, "
+                         f"got shape {arr.shape}")
+    bad = np.flatnonzero(~np.isfinite(arr).all(axis=(1, 2)))
+    if bad.size:
+        raise ValueError(f"obstacles[{bad[0]}] has a NaN or infinite coordinate: {arr[bad[0]].tolist()}")
+    return arr
+
+
+def unsupported_argument_message(names: list[str]) -> str:
+    """The error for constructor keywords the facade does not take: each named, with what to use instead."""
+    import difflib
+
+    parts = []
+    for name in names:
+        hint = INSTEAD.get(name)
+        if hint is None:
+            close = difflib.get_close_matches(name, KNOWN_ARGUMENTS, n=1)
+            hint = f"did you mean {close[0]!r}?" if close else f"it takes {', '.join(KNOWN_ARGUMENTS)}"
+        parts.append(f"{name!r} (use {hint})" if name in INSTEAD else f"{name!r} ({hint})")
+    return ("Robotarium() got argument(s) swarmdeck's rps facade does not support: " + "; ".join(parts))
+
+
+class Robotarium(RpsSensors, ARobotarium):
     """The rps experiment object: ``get_poses()`` → (3, N), ``set_velocities(ids, (2, N))``, ``step()``.
 
-    Args (as rps, positional as in 1.x or keywords as in 2.0): number_of_robots (−1: the runner's
-    ``--robots`` or 6), show_figure (ignored: use ``swarmdeck console`` to watch), sim_in_real_time
-    (pace steps at 0.033 s of wall time; never under ``swarmdeck run``), initial_conditions ((3, N)
-    floats). rps 2.0's ``skip_initialization`` and ``show_*`` flags are accepted (the robots start at
-    their initial conditions; nothing is drawn). rps 2.0's sensors (:mod:`swarmdeck.devices.rps.sensors`):
-    ``use_distance_sensors=True`` simulates the seven ToF sensors; ``obstacles`` ``(M, 2, 2)`` are segments they
-    see (as in rps 2.0, for the sensors only); encoders, IMU and LEDs are always there.
+    Args (as rps, positional as in 1.x or keywords as in 2.x — every name of 2.x's ``robotarium.py`` and
+    ``robotarium_abc.py``): number_of_robots (−1: the runner's ``--robots`` or 6; at most 50 as in rps),
+    show_figure (ignored: use ``swarmdeck console`` to watch), sim_in_real_time (pace steps at 0.033 s of wall
+    time; never under ``swarmdeck run``), initial_conditions ((3, N) floats). rps 2.x's ``skip_initialization``
+    and ``show_*`` flags are accepted (the robots start at their initial conditions — ``swarmdeck run
+    --from-docks`` drives them there from the chargers, as 2.x's initialisation phase does; nothing is drawn);
+    ``obstacles`` (M × 2 × 2, checked) are segments the sensors see (as in rps 2.0). rps 2.0's sensors
+    (:mod:`swarmdeck.devices.rps.sensors`): ``use_distance_sensors=True`` simulates the seven ToF sensors; encoders,
+    IMU and LEDs are always there. Flags must be bools (rps 2.x's own checks); any other keyword is refused, named,
+    with what to use instead.
     swarmdeck's keywords: ``from_docks=True`` (``swarmdeck run --from-docks``) starts the robots on the
     chargers and sets them up first; ``rps_semantics`` and ``enforce_call_order`` (None: the runner's,
-    else False and True) choose the modes of the module docstring.
+    else False and True) choose the modes of the module docstring; ``robot_model`` (``"gritsbot"`` or
+    ``"gternal"``; None: ``swarmdeck run --robot-model``, else the GTernal for a 2.x script and the GRITSBot
+    for a 1.x one, :mod:`swarmdeck.devices.rps.generation`) the robots' drive and body, and with them the
+    constants (``BASE_LENGTH``, ``MAX_ANGULAR_VELOCITY``, …) the instance reports.
     """
-
-    # rps 2.0's class constants (rps/robotarium_abc.py), with swarmdeck's robot (REFERENCE.md §1)
-    TIME_STEP = CONTROL_PERIOD
-    COLLISION_DIAMETER = COLLISION_DISTANCE
-    COLLISION_OFFSET = COLLISION_SHIFT
 
     def __init__(self, number_of_robots: int = -1, show_figure: bool = True, sim_in_real_time: bool = True,
                  initial_conditions: ArrayLike = np.array([]), *, from_docks: bool | None = None,
                  rps_semantics: bool | None = None, enforce_call_order: bool | None = None,
                  use_distance_sensors: bool = False, obstacles: Any = None, skip_initialization: bool = False,
-                 **kwargs: Any) -> None:
-        unknown = sorted(set(kwargs) - set(_IGNORED_2X))
+                 robot_model: str | None = None, **kwargs: Any) -> None:
+        unknown = sorted(set(kwargs) - set(SHOW_FLAGS_2X))
         if unknown:
-            raise TypeError(f"Robotarium() got unexpected keyword argument(s) {unknown}")
+            raise TypeError(unsupported_argument_message(unknown))
+        for flag, value in (("show_figure", show_figure), ("sim_in_real_time", sim_in_real_time),
+                            ("use_distance_sensors", use_distance_sensors),
+                            ("skip_initialization", skip_initialization), *kwargs.items()):
+            if not isinstance(value, (bool, np.bool_)):  # as rps 2.x's strict checks (rps/robotarium.py)
+                raise TypeError(f"Robotarium({flag}=...) must be True or False, got {value!r}")
+        self.show_flags = {name: bool(kwargs.get(name, name != "show_distance_rays")) for name in SHOW_FLAGS_2X}
         sensing = sensing_for(use_distance_sensors)
+        quiet_canvas()  # a script that imported pyplot first: its figures' redraws cost nothing either
+        obstacles = None if obstacles is None else check_obstacles(obstacles)
         ic = np.asarray(initial_conditions)
         defaults = RUN_DEFAULTS.get()
         n = None if number_of_robots is None or number_of_robots < 0 else int(number_of_robots)
+        if n is not None and n > RPS_MAX_ROBOTS:
+            raise ValueError(f"number_of_robots={n}: rps simulates at most {RPS_MAX_ROBOTS} robots (the Robotarium "
+                             "runs at most 20); for larger swarms use swarmdeck's Arena or `swarmdeck console`")
         if ic.size:
             if ic.ndim != 2 or ic.shape[0] != 3:
                 raise ValueError(f"initial_conditions must have shape (3, N) [x; y; theta], got {ic.shape}")
@@ -85,8 +145,11 @@ class Robotarium(RpsSensors):
         self.enforce_call_order = defaults.rps_call_order if enforce_call_order is None else bool(enforce_call_order)
         real_time = bool(sim_in_real_time) and defaults.on_create is None  # never pace under `swarmdeck run`
         config = defaults.arena_config(real_time=real_time)
+        if robot_model is None:
+            robot_model = defaults.robot_model or ("gternal" if defaults.rps_generation == 2 else DEFAULT_ROBOT_MODEL)
         self._arena = Arena(n, initial_conditions=ic.T if ic.size else None, config=config, from_docks=from_docks,
-                            safety=False if self.rps_semantics else None)
+                            safety=False if self.rps_semantics else None, params=robot_params(robot_model))
+        self.robot_model = model_name(self._arena.params) or robot_model
         self.number_of_robots = self._arena.n
         self._arena.use_sensors(sensing, obstacles=obstacles)
         self.obstacles = obstacles
@@ -116,6 +179,8 @@ class Robotarium(RpsSensors):
         self.robot_length, self.robot_width = 0.095, 0.09  # rps 1.x's drawing sizes
         self.initial_conditions = ic.astype(float) if ic.size else self._arena.poses().T
         self.initializing = False
+        self.skip_initialization = bool(skip_initialization)
+        self._sim_in_real_time = real_time
         self._figure: Any = None
 
     # ------------------------------------------------------------------ figure
@@ -138,11 +203,24 @@ class Robotarium(RpsSensors):
     _axes_handle = axes  # rps 2.0's name
 
     @property
+    def _fig(self) -> Any:
+        """rps 2.0's name of the figure (headless: ``canvas.draw_idle()``, ``mpl_connect`` work, nothing shows)."""
+        return self.figure
+
+    @property
     def arena(self) -> Arena:
         """The swarmdeck Arena underneath."""
         return self._arena
 
     # ------------------------------------------------------------------ rps's API
+    def initialize(self, initial_conditions: ArrayLike) -> None:
+        """rps 2.x's initialisation phase, which drives the robots to ``initial_conditions`` before the experiment.
+        Here the robots are at their initial conditions when the constructor returns (``swarmdeck run --from-docks``
+        drives them there from the chargers), so a second call is refused with what to do instead."""
+        raise RuntimeError("Robotarium.initialize(): the robots are at their initial conditions already (give them as "
+                           "Robotarium(initial_conditions=...); `swarmdeck run --from-docks` drives them there from "
+                           "the chargers as the Robotarium's initialisation phase does)")
+
     @property
     def poses(self) -> NDArray[np.float64]:
         """rps 1.x's ``poses`` attribute: (3, N), a copy (reading it is not a ``get_poses()`` call)."""

@@ -86,7 +86,8 @@ def test_star_imported_2x_helpers_work():
         assert si[0, 0] < 0.2
         dxu = create_uni_position_controller()(poses, np.array([[0.5, 0.3], [0.0, 0.5]]))
         assert dxu.shape == (2, 2) and dxu[0, 0] > 0
-        assert create_at_pose()(poses, poses) == (True, pytest.approx(np.array([0, 1])))
+        done, there = create_at_pose()(poses, poses)  # rps 2.x: a (N,) bool mask, not 1.x's indices
+        assert done is True and there.dtype == bool and there.tolist() == [True, True]
         assert generate_initial_poses(4).shape == (3, 4)
         si_to_uni, uni_to_si = create_si_to_uni_mapping()
         assert uni_to_si(poses).shape == (2, 2)

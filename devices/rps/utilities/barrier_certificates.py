@@ -14,6 +14,7 @@ from swarmdeck.core.kinematics import lookahead_points, si_to_unicycle, unicycle
 from swarmdeck.devices.rps.utilities.transformations import *  # noqa: F401,F403 - rps's module re-exports them
 from swarmdeck.devices.rps.utilities.transformations import __all__ as _TRANSFORMATIONS
 from swarmdeck.safety import BarrierConfig, SafetyFilter
+from swarmdeck.safety.qp_clarabel import project_onto_polytope
 
 _OPEN = (-1e6, 1e6, -1e6, 1e6)  # "no walls" for the variants without a boundary
 
@@ -180,6 +181,13 @@ def create_uni_barrier_certificate_with_boundary(safety_radius: float = 0.12, ba
         return inner(dxu, x)
 
     return barrier_unicycle
+
+
+def _solve_qp(N: int, vhat, A, b):
+    """rps 2.x: min ‖v − v̂‖² s.t. A v ≤ b for the (2, N) velocities ``vhat`` (stacked column by column, as rps
+    does); the (2, N) answer, or None when the QP has no solution (rps returns None then too)."""
+    result = project_onto_polytope(np.asarray(vhat, dtype=float).reshape(-1, order="F"), A, b)
+    return result.u.reshape((2, int(N)), order="F") if result.ok else None
 
 
 __all__ = [

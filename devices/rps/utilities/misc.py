@@ -10,9 +10,12 @@ from swarmdeck.devices.initial_conditions import random_initial_poses
 
 
 def generate_initial_conditions(N: int, spacing: float = 0.3, width: float = 3, height: float = 1.8) -> np.ndarray:
-    """(3, N) random float poses at least ``spacing`` apart in a width × height box at the centre."""
+    """(3, N) random float poses at least ``spacing`` apart in a width × height box at the centre — drawn from
+    numpy's global generator, as rps draws them, so a script that calls ``np.random.seed`` gets the same poses on
+    every run."""
     bounds = Bounds(-width / 2, width / 2, -height / 2, height / 2)
-    return random_initial_poses(N, bounds, spacing=spacing + 0.01, min_separation=spacing, wall_margin=0.0).T
+    rng = np.random.default_rng(np.random.randint(0, 2**63 - 1, dtype=np.int64))
+    return random_initial_poses(N, bounds, spacing=spacing + 0.01, min_separation=spacing, wall_margin=0.0, rng=rng).T
 
 
 def at_pose(states, poses, position_error: float = 0.05, rotation_error: float = 0.2) -> tuple[np.ndarray, ...]:
@@ -71,21 +74,26 @@ def generate_initial_poses(N: int, width: float = 3.0, height: float = 1.0) -> n
 
 
 def create_at_pose(position_error: float = 0.05, rotation_error: float = 0.2):
-    """rps 2.0: f(states (3, N), poses (3, N)) → (all robots there, indices of those there)."""
+    """rps 2.x: f(states (3, N), poses (3, N)) → (all robots there, (N,) bool: which are there) — a mask, as
+    rps 2.x returns (its examples combine it with ``&`` and ``~``), not 1.x's indices."""
 
     def check_at_pose(states, poses):
-        idxs = at_pose(states, poses, position_error, rotation_error)[0]
-        return bool(len(idxs) == np.asarray(states).shape[1]), idxs
+        states = np.asarray(states, dtype=float)
+        there = np.zeros(states.shape[1], dtype=bool)
+        there[at_pose(states, poses, position_error, rotation_error)[0]] = True
+        return bool(there.all()), there
 
     return check_at_pose
 
 
 def create_at_position(position_error: float = 0.05):
-    """rps 2.0: f(states (2+, N), positions (2, N)) → (all robots there, indices of those there)."""
+    """rps 2.x: f(states (2+, N), positions (2, N)) → (all robots there, (N,) bool: which are there)."""
 
     def check_at_position(states, positions):
-        idxs = at_position(states, positions, position_error)[0]
-        return bool(len(idxs) == np.asarray(states).shape[1]), idxs
+        states = np.asarray(states, dtype=float)
+        there = np.zeros(states.shape[1], dtype=bool)
+        there[at_position(states, positions, position_error)[0]] = True
+        return bool(there.all()), there
 
     return check_at_position
 
@@ -100,7 +108,7 @@ def unique_filename(file_name: str) -> str:
     """rps 2.0: ``file_name`` with the current time, ``.npy``."""
     from datetime import datetime
 
-    return f"{file_name}_{datetime.now().strftime('%Y%m%d_%H%M%S')}.npy"
+    return f"{file_name}_{datetime.now().strftime('%Y_%m_%d_%H_%M_%S')}.npy"
 
 
 def __getattr__(name: str):

@@ -1,0 +1,158 @@
+"""The Robotarium 2.0 examples (tests/data/rps2_examples/master) under swarmdeck vs under rps 2.0 itself.
+
+Each example runs unchanged, in a fresh process, from a copy of its folder, with ``np.random.seed(1)``, for the same
+simulated experiment time (``--duration``, default 10 s = 303 steps of 0.033 s; shorter examples end by themselves),
+on matplotlib's Agg backend (no window), in these modes, interleaved:
+
+* ``rps`` — the Robotarium's own simulator (``robotarium_python_simulator`` at b23069e, cvxopt) as the script asks:
+  its figure drawn every step, ``sim_in_real_time`` as the script sets it (each step waits for 0.033 s of wall time),
+  and its initialisation phase (the robots drive from the chargers to the initial conditions first);
+* ``rps unpaced`` — the same with ``sim_in_real_time=False`` (forced; what a user can do to get results fast);
+* ``rps headless`` — unpaced and ``show_figure=False`` (forced; only for examples that never touch the figure);
+* ``swarmdeck`` — ``swarmdeck run SCRIPT --duration D``: the arena's barrier on every step, headless;
+* ``swarmdeck rps`` — ``swarmdeck run --rps-semantics`` (the script's own barrier only).
+
+The rps runs stop at the same experiment time by counting ``step()`` calls after rps's initialisation (the script is
+not edited; the count is a wrapper around rps's ``step``). Wall time of the whole script run (import excluded).
+
+Get rps 2.0 and cvxopt beside it (any folders)::
+
+    git -C <clone of robotarium/robotarium_python_simulator> archive b23069e | tar -x -C /tmp/rps2_src
+    pip install --target /tmp/rps2_deps cvxopt
+    python bench/bench_rps2_examples.py --rps-path /tmp/rps2_src --rps-path /tmp/rps2_deps
+
+Results: bench/RESULTS.md, "Robotarium 2.x examples".
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import shutil
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import harness  # first: pins BLAS/OpenMP to one thread, before numpy loads
+
+HERE = Path(__file__).resolve().parent
+EXAMPLES = HERE.parent / "tests" / "data" / "rps2_examples" / "master"
+#: (example, touches the figure)
+CASES = [
+    ("go_to_goal/go_to_point_si.py", False),
+    ("go_to_goal/go_to_pose_hybrid.py", False),
+    ("barrier_certificates/si_barriers.py", False),
+    ("barrier_certificates/uni_barriers.py", False),
+    ("consensus/consensus_fewer_errors.py", False),
+    ("formation_control/formation_control.py", False),
+    ("leader_follower/leader_follower.py", False),
+    ("plotting/barriers_with_plotting.py", True),
+    ("plotting/leader_follower_with_plotting.py", True),
+]
+MODES = ("rps", "rps unpaced", "rps headless", "swarmdeck", "swarmdeck rps")
+
+
+class _Enough(Exception):
+    """The experiment time is over (rps side)."""
+
+
+def _child_rps(mode: str, script: Path, duration: float) -> dict:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import runpy
+
+    import numpy as np
+    import rps.robotarium as rr
+
+    steps = int(round(duration / rr.Robotarium.TIME_STEP))
+    counted = {"n": 0}
+    init, step = rr.Robotarium.__init__, rr.Robotarium.step
+
+    def patched_init(self, **kwargs):
+        if mode != "rps":
+            kwargs["sim_in_real_time"] = False
+        if mode == "rps headless":
+            kwargs["show_figure"] = False
+        init(self, **kwargs)
+
+    def patched_step(self):
+        step(self)
+        if not self.initializing:
+            counted["n"] += 1
+            if counted["n"] >= steps:
+                raise _Enough
+
+    rr.Robotarium.__init__, rr.Robotarium.step = patched_init, patched_step
+    np.random.seed(1)
+    sys.argv = [str(script)]
+    start = time.perf_counter()
+    try:
+        runpy.run_path(str(script), run_name="__main__")
+    except _Enough:
+        pass
+    return {"seconds": time.perf_counter() - start, "steps": counted["n"]}
+
+
+def _child_swarmdeck(mode: str, script: Path, duration: float) -> dict:
+    import numpy as np
+
+    from swarmdeck.devices.runner import run_experiment
+
+    np.random.seed(1)
+    start = time.perf_counter()
+    result = run_experiment(script, duration=duration, seed=1, rps=True, rps_semantics=mode == "swarmdeck rps")
+    seconds = time.perf_counter() - start
+    if not result.ok:
+        raise SystemExit(result.error)
+    report = result.reports[0]
+    return {"seconds": seconds, "steps": report.validation.steps, "collisions": report.validation.steps_with_collision}
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--rps-path", action="append", default=[], metavar="DIR",
+                        help="a folder with rps 2.0 (and one with cvxopt); without: swarmdeck only")
+    parser.add_argument("--duration", type=float, default=10.0, help="simulated experiment seconds per run")
+    parser.add_argument("--repeats", type=int, default=1)
+    parser.add_argument("--only", default=None, help="run the examples whose path contains this")
+    parser.add_argument("--child", nargs=3, metavar=("MODE", "SCRIPT", "DURATION"), help=argparse.SUPPRESS)
+    args = parser.parse_args()
+    if args.child:
+        mode, script, duration = args.child[0], Path(args.child[1]), float(args.child[2])
+        run = _child_rps if mode.startswith("rps") else _child_swarmdeck
+        out = run(mode, script, duration)
+        print("RESULT " + json.dumps(out))
+        return
+    print(harness.machine())
+    cases = [(n, fig) for n, fig in CASES if args.only is None or args.only in n]
+    modes = [m for m in MODES if args.rps_path or not m.startswith("rps")]
+    print(harness.table_header(["example", *[f"{m} (s)" for m in modes], "rps unpaced / swarmdeck"]))
+    for name, uses_figure in cases:
+        best: dict[str, float] = {}
+        for _ in range(args.repeats):
+            for mode in modes:  # interleaved: a change of the machine's load hits every mode alike
+                if mode == "rps headless" and uses_figure:
+                    continue
+                with tempfile.TemporaryDirectory() as tmp:
+                    folder = Path(tmp) / Path(name).parent
+                    shutil.copytree((EXAMPLES / name).parent, folder)
+                    env = dict(os.environ, MPLBACKEND="Agg")
+                    if mode.startswith("rps"):
+                        env["PYTHONPATH"] = os.pathsep.join([*args.rps_path, env.get("PYTHONPATH", "")]).rstrip(os.pathsep)
+                    done = subprocess.run([*harness.python(), __file__, "--child", mode, str(folder / Path(name).name),
+                                           str(args.duration)], env=env, capture_output=True, text=True, cwd=folder,
+                                          check=False)
+                if done.returncode != 0:
+                    raise SystemExit(f"{name} under {mode} failed:\n{done.stdout[-2000:]}\n{done.stderr[-4000:]}")
+                result = json.loads(next(x for x in done.stdout.splitlines() if x.startswith("RESULT "))[7:])
+                best[mode] = min(best.get(mode, float("inf")), result["seconds"])
+        cells = [f"{best[m]:.2f}" if m in best else "—" for m in modes]
+        ratio = f"{best['rps unpaced'] / best['swarmdeck']:.1f}×" if "rps unpaced" in best else "—"
+        print(harness.table_row(name, *cells, ratio), flush=True)
+
+
+if __name__ == "__main__":
+    main()
