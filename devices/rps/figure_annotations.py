@@ -39,7 +39,8 @@ class _Builder:
     def add(self, kind: int, vertices: NDArray[np.float64], counts: NDArray[np.int64], sizes: Any, colors: Any,
             filled: bool, texts: list[str] | None = None) -> None:
         p = len(counts)
-        if not p:
+        colors = np.asarray(colors, dtype=np.uint8)
+        if not p or not colors.size:  # nothing, or an invisible colour ("none")
             return
         self.kinds.append(np.full(p, kind, dtype=np.uint8))
         self.counts.append(np.asarray(counts, dtype=np.int64))
@@ -124,8 +125,10 @@ def figure_annotations(axes: Any, bounds: Bounds | tuple[float, float, float, fl
                 out.add(POLYLINE, xy, np.array([len(xy)]), artist.get_linewidth() * m_per_pt, colour, False)
             if artist.get_marker() not in (None, "None", "", " ", "none"):
                 inside = xy[_inside(xy, b)]
+                face = _rgba(artist.get_markerfacecolor(), artist.get_alpha())
+                hollow = not len(face)  # markerfacecolor "none": an outlined marker in its edge colour
                 out.add(POINT, inside, np.ones(len(inside), dtype=np.int64), artist.get_markersize() / 2 * m_per_pt,
-                        _rgba(artist.get_markerfacecolor(), artist.get_alpha()), True)
+                        _rgba(artist.get_markeredgecolor(), artist.get_alpha()) if hollow else face, not hollow)
         elif isinstance(artist, Collection):
             alpha = artist.get_alpha()
             if isinstance(artist, PathCollection):  # scatter
