@@ -296,6 +296,7 @@ def _system_paths() -> tuple[Path, ...]:
     import swarmdeck.core
     import swarmdeck.coverage
     import swarmdeck.devices
+    import swarmdeck.network
     import swarmdeck.safety
 
     roots = {Path("/usr")}
@@ -303,7 +304,9 @@ def _system_paths() -> tuple[Path, ...]:
     roots |= {Path(sys.prefix), Path(sys.base_prefix), Path(sys.executable).resolve().parent.parent}
     for key in ("stdlib", "platstdlib", "purelib", "platlib"):
         roots.add(Path(sysconfig.get_paths()[key]))
-    for module in (swarmdeck.console, swarmdeck.core, swarmdeck.coverage, swarmdeck.devices, swarmdeck.safety):
+    # every top-level subpackage the child imports (devices imports network): a missing one crashes bwrap's child
+    for module in (swarmdeck.console, swarmdeck.core, swarmdeck.coverage, swarmdeck.devices, swarmdeck.network,
+                   swarmdeck.safety):
         roots.add(Path(module.__file__).resolve().parent)  # editable installs live outside site-packages
     paths = [p.resolve() for p in sorted(roots) if p.exists()]
     # drop paths inside another bound path

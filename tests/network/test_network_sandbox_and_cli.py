@@ -11,6 +11,7 @@ PEEK = """
     import numpy as np
     from swarmdeck.devices import Arena
     from swarmdeck.devices.decentralised import Decentralised
+    from swarmdeck.network import KNearestTopology, NetworkConfig
 
     arena = Arena()
 
@@ -20,7 +21,7 @@ PEEK = """
         view.broadcast(view.position)
         return np.zeros(2)
 
-    run = Decentralised(arena, robot)
+    run = Decentralised(arena, robot, NetworkConfig(topology=KNearestTopology(2)))  # linked wherever they start
     try:
         while True:
             run.step()
@@ -33,7 +34,7 @@ PEEK = """
 def test_a_peeking_controller_is_refused_inside_the_sandbox_and_the_run_goes_on(tmp_path, capsys):
     script = tmp_path / "peek.py"
     script.write_text(textwrap.dedent(PEEK))
-    assert main(["run", "--sandbox", str(script), "--robots", "3", "--duration", "0.5"]) == 0
+    assert main(["run", "--sandbox", str(script), "--robots", "3", "--duration", "0.5", "--seed", "4"]) == 0
     out = capsys.readouterr().out
     assert "isolation errors: 16" in out  # every tick of 0.5 s (16 steps) refused robot 0
     assert "robot 0's controller read arena.poses()" in out
