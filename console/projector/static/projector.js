@@ -134,9 +134,13 @@
     if (on("halos") && m.halos) {
       const r = m.halos.radius * PX_PER_M;
       ctx.lineWidth = 6 * K;
-      m.halos.xy.forEach(([px, py], i) => {
-        ctx.strokeStyle = m.halos.colours[i];
-        ctx.beginPath(); ctx.arc(X(px), Y(py), r, 0, 2 * Math.PI); ctx.stroke();
+      m.halos.palette.forEach((colour, c) => {  // one path per colour
+        ctx.strokeStyle = colour;
+        ctx.beginPath();
+        m.halos.xy.forEach(([px, py], i) => {
+          if (m.halos.colour[i] === c) { ctx.moveTo(X(px) + r, Y(py)); ctx.arc(X(px), Y(py), r, 0, 2 * Math.PI); }
+        });
+        ctx.stroke();
       });
       drawnLayers.push("halos");
     }
