@@ -15,12 +15,12 @@ Rerun: ``.venv/bin/python bench/bench_projector.py [N ...]`` (≈ 1 min).
 """
 from __future__ import annotations
 
-import json
 import sys
 import threading
 import time
 
 import harness  # first: pins BLAS/OpenMP to one thread, before numpy loads
+import msgspec
 import numpy as np
 
 from swarmdeck.console.projector.message import projector_message
@@ -69,7 +69,8 @@ def run(n: int, browser, rate: float = 60.0) -> dict:
     frames = [loop.tick() for _ in range(FRAMES)]
     loop.close()
     settings = ProjectorParams(safety=True)
-    ser = harness.measure(lambda: json.dumps(projector_message(frames[-1], 1, settings, 0.0)), 15, clock="thread")
+    ser = harness.measure(lambda: msgspec.json.encode(projector_message(frames[-1], 1, settings, 0.0)), 15,
+                          clock="thread")  # what the server does once per Frame
     m = 0.05 * max(b.width, b.height)
     proj = SyntheticProjector(view_bounds=(b.x_min - m, b.x_max + m, b.y_min - m, b.y_max + m))
     srv = ProjectorServer(b, ProjectorCalibration(proj.homography(), proj.size, b), port=0, settings=settings).start()

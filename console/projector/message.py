@@ -15,7 +15,7 @@ Keys (units m, s, rad; N robots, E Voronoi edges, C centroids, G goals)::
     edges            (E, 2, 2) Voronoi edges          — layer "cells"
     centroids        (C, 2)                           — layer "centroids"
     goals            (G, 2) goto goals                — layer "goals"
-    halos            {xy (N, 2), colours (N,) "#rrggbb", radius m} — layer "halos"
+    halos            {xy (N, 2), palette [C] "#rrggbb", colour (N,) index into palette, radius m} — layer "halos"
     safety           {xy (N, 2) look-ahead points, radius D_s / 2 m} — layer "safety"
     graph            null | {segments (L, 2, 2) m, colours (L,) "#rrggbb"}: the communication graph, when the
                      picture has one (``Picture.network``, a NetworkLayer) — layer "graph"
@@ -78,8 +78,9 @@ def projector_message(frame: Frame, seq: int, settings: ProjectorParams, stamp_m
     if s.goals:
         msg["goals"] = _xy(pic.goals)
     if s.halos:
-        msg["halos"] = {"xy": _xy(pic.poses[:, :2]), "colours": hex_colors(pic.colors),
-                        "radius": HALO_SCALE * ROBOT_RADIUS}
+        palette, index = np.unique(np.asarray(pic.colors, dtype=np.uint8).reshape(-1, 3), axis=0, return_inverse=True)
+        msg["halos"] = {"xy": _xy(pic.poses[:, :2]), "palette": hex_colors(palette),
+                        "colour": np.asarray(index).reshape(-1).tolist(), "radius": HALO_SCALE * ROBOT_RADIUS}
     if s.safety:
         msg["safety"] = {"xy": _xy(pic.points), "radius": float(pic.ring_radius)}
     if s.graph:

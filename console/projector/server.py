@@ -16,6 +16,7 @@ sent and skipped).
 from __future__ import annotations
 
 import json
+import secrets
 import threading
 import time
 from dataclasses import replace
@@ -23,6 +24,8 @@ from http import HTTPStatus
 from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
 from importlib import resources
 from typing import Any
+
+import msgspec
 
 from swarmdeck.console.projector.message import config_message, projector_message
 from swarmdeck.console.runtime.frame import Frame
@@ -51,6 +54,7 @@ class ProjectorFeed:
         self._cache: tuple[tuple[int, int], str] | None = None
         self._cond = threading.Condition()
         self.closed = False
+        self.instance = secrets.token_hex(6)  # a page polling a restarted server starts again from scratch
         self.errors = 0
         self.last_error: str | None = None
 
@@ -91,7 +95,7 @@ class ProjectorFeed:
         """(version, the ``config`` event's JSON)."""
         with self._cond:
             v, s = self._version, self._settings
-        return v, json.dumps(config_message(self.bounds, self.calibration, s, v))
+        return v, json.dumps({**config_message(self.bounds, self.calibration, s, v), "instance": self.instance})
 
     def wait_newer(self, seq: int, version: int, timeout: float) -> tuple[int, int] | None:
         """Block until a Frame newer than ``seq`` or settings newer than ``version`` (or ``timeout`` s, or
@@ -112,8 +116,8 @@ class ProjectorFeed:
         if cached is not None and cached[0] == (seq, v):
             return seq, v, cached[1]
         try:
-            text = json.dumps(projector_message(frame, seq, s, stamp), allow_nan=False)
-        except (ValueError, TypeError) as exc:  # a Frame that cannot be drawn must not end the stream
+            text = msgspec.json.encode(projector_message(frame, seq, s, stamp)).decode()  # ≈ 6× json's speed
+        except (ValueError, TypeError, msgspec.EncodeError) as exc:  # a Frame that cannot be drawn must not end the stream
             self.errors += 1
             self.last_error = f"{type(exc).__name__}: {exc}"
             return None
@@ -164,10 +168,11 @@ class _Handler(BaseHTTPRequestHandler):
                        HTTPStatus.NOT_FOUND)
 
     def _next(self) -> None:
-        """Long poll: ``?seq=S&version=V`` → the config (when newer than V) and the newest Frame (when newer than
+        """Long poll: ``?seq=S&version=V&instance=I`` → the config (when newer than V) and the newest Frame (when newer than
         S or with new settings) as one JSON ``{"config": …|null, "frame": …|null}``, waiting up to
         :data:`KEEPALIVE_S` for one. The page asks again when it has the answer, so at most one message is ever
-        on its way: a slow page skips Frames, it never lags behind."""
+        on its way: a slow page skips Frames, it never lags behind. ``instance`` is the config's: a page that knew
+        another server (this one restarted) is answered as a new page."""
         owner = self.server.owner
         feed = owner.feed
         query = dict(p.split("=", 1) for p in (self.path.split("?", 1) + [""])[1].split("&") if "=" in p)
@@ -177,6 +182,8 @@ class _Handler(BaseHTTPRequestHandler):
             self._send(b"seq and version must be whole numbers\n", "text/plain; charset=utf-8",
                        HTTPStatus.BAD_REQUEST)
             return
+        if query.get("instance", feed.instance) != feed.instance:  # the page knew a server that has since restarted
+            seq, version = 0, -1
         if seq == 0 and version == -1:
             owner.count("pages")
         if feed.version() == version:

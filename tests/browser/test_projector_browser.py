@@ -1,6 +1,6 @@
 """The projector page in a real browser (Debian's chromium) against the real projector server on loopback, fed by
 a real control loop: it draws the newest Frame warped onto the floor, in two pages at once, from before the loop
-starts to after the server stops; without a homography it says so on the floor; blackout goes black; and the
+starts to after the server stops (and when it comes back); without a homography it says so on the floor; blackout goes black; and the
 whole chain — calibrate the synthetic projector, show the page's pixels through it, look with the synthetic
 camera — puts the projected density where the density is."""
 from __future__ import annotations
@@ -90,6 +90,17 @@ def test_two_pages_opened_before_the_loop_starts_draw_its_newest_frames_and_surv
     for page in pages:  # the server went away: the pages go black and say so
         wait_until(lambda page=page: not _state(page)["connected"], 30.0)
         assert "waiting for the console" in _state(page)["message"]
+    # the console comes back on the same port: the pages draw its frames from its first one (its seq restarts)
+    again = ProjectorServer(loop.config.bounds, ProjectorCalibration(PROJ.homography(), PROJ.size, DEFAULT_BOUNDS),
+                            port=srv.port).start()
+    try:
+        loop.subscribe(again.offer)
+        loop.tick()
+        for page in pages:
+            wait_until(lambda page=page: _state(page)["connected"] and _state(page)["seq"] == 1, 30.0)
+            assert _state(page)["message"] == ""
+    finally:
+        again.close()
 
 
 def test_without_a_homography_the_floor_says_to_calibrate(browser, loop):

@@ -99,3 +99,31 @@ def test_console_refuses_a_projector_calibration_it_cannot_use(tmp_path, capsys)
     assert cli_main(["console", "--projector", "0", "--projector-calibration", str(path), "--duration", "1",
                      "--no-record", "--port", "0", "--no-inputs"]) != 0
     assert "must hold a JSON object" in capsys.readouterr().err
+
+
+def test_the_event_stream_sends_the_config_then_the_newest_frame(served):
+    loop, srv, base = served
+    loop.tick()
+    loop.tick()
+    with urllib.request.urlopen(f"{base}/stream", timeout=30) as r:
+        assert r.headers["Content-Type"] == "text/event-stream"
+        events: list[tuple[str, dict]] = []
+        name = None
+        while len(events) < 2:
+            line = r.readline().decode().rstrip("\n")
+            if line.startswith("event: "):
+                name = line[7:]
+            elif line.startswith("data: "):
+                events.append((name or "", json.loads(line[6:])))
+    assert events[0][0] == "config" and events[0][1]["size"] == [1280, 800]
+    assert events[1][0] == "frame" and events[1][1]["seq"] == 2
+
+
+def test_a_page_that_knew_a_restarted_server_starts_again(served):
+    loop, srv, base = served
+    loop.tick()
+    got = _get(f"{base}/next?seq=0&version=-1")
+    assert got["config"]["instance"] == srv.feed.instance and got["frame"]["seq"] == 1
+    # a page that had seen frame 57 of an earlier server: answered as a new page, not left waiting for frame 58
+    again = _get(f"{base}/next?seq=57&version=0&instance=0123456789ab")
+    assert again["config"]["instance"] == srv.feed.instance and again["frame"]["seq"] == 1

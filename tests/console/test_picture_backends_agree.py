@@ -149,7 +149,8 @@ def test_the_projector_draws_the_same_robot_colours_and_safety_discs(name: str) 
     frame = FRAMES[name]
     pic = picture_of(frame, PictureStyle())
     m = projector_message(frame, 1, ProjectorParams(safety=True), 0.0)
-    assert [_rgb(c) for c in m["halos"]["colours"]] == [tuple(c) for c in pic.colors.tolist()]
+    halos = m["halos"]
+    assert [_rgb(halos["palette"][k]) for k in halos["colour"]] == [tuple(c) for c in pic.colors.tolist()]
     np.testing.assert_allclose(m["halos"]["xy"], pic.poses[:, :2], atol=1e-3)
     np.testing.assert_allclose(m["safety"]["xy"], pic.points, atol=1e-3)
     assert m["safety"]["radius"] == pic.ring_radius

@@ -131,3 +131,16 @@ def test_calibration_file_round_trips_and_bad_files_name_the_problem(tmp_path):
     bad.write_text("{not json")
     with pytest.raises(ProjectorCalibrationError, match="not JSON"):
         ProjectorCalibration.load(bad)
+
+
+@pytest.mark.parametrize("argv,words", [
+    (["--markers", "3"], "--markers must look like 8x5"),
+    (["--markers", "1x5"], "--markers needs at least 2x2"),
+    (["--size", "100x50"], "6 px markers"),
+    (["--synthetic-tilt", "nan"], "--synthetic-tilt must be an angle"),
+    (["--synthetic-light", "0"], "--synthetic-light must be in (0, 1]"),
+])
+def test_cli_bad_options_name_the_option(tmp_path, capsys, argv, words):
+    assert cli_main(["calibrate", "projector", "--camera", "synthetic", "--out", str(tmp_path / "p.json"), *argv]) != 0
+    assert words in capsys.readouterr().err
+    assert not (tmp_path / "p.json").exists()

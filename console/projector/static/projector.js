@@ -134,9 +134,13 @@
     if (on("halos") && m.halos) {
       const r = m.halos.radius * PX_PER_M;
       ctx.lineWidth = 6 * K;
-      m.halos.xy.forEach(([px, py], i) => {
-        ctx.strokeStyle = m.halos.colours[i];
-        ctx.beginPath(); ctx.arc(X(px), Y(py), r, 0, 2 * Math.PI); ctx.stroke();
+      m.halos.palette.forEach((colour, c) => {  // one path per colour
+        ctx.strokeStyle = colour;
+        ctx.beginPath();
+        m.halos.xy.forEach(([px, py], i) => {
+          if (m.halos.colour[i] === c) { ctx.moveTo(X(px) + r, Y(py)); ctx.arc(X(px), Y(py), r, 0, 2 * Math.PI); }
+        });
+        ctx.stroke();
       });
       drawnLayers.push("halos");
     }
@@ -208,15 +212,18 @@
   }
 
   // Long poll: one request at a time, each answered with the newest config / Frame, asked again at once.
-  let seqHave = 0, versionHave = -1;
+  let seqHave = 0, versionHave = -1, instance = "";
   async function poll() {
     for (;;) {
       try {
-        const r = await fetch(`/projector/next?seq=${seqHave}&version=${versionHave}`, { cache: "no-store" });
+        const r = await fetch(`/projector/next?seq=${seqHave}&version=${versionHave}&instance=${instance}`,
+                              { cache: "no-store" });
         if (!r.ok) throw new Error(`HTTP ${r.status}`);
         const answer = await r.json();
         if (!st.connected) { st.connected = true; if (config) applyConfig(config); }
-        if (answer.config) { versionHave = answer.config.version; applyConfig(answer.config); }
+        if (answer.config) {
+          versionHave = answer.config.version; instance = answer.config.instance; applyConfig(answer.config);
+        }
         if (answer.frame) {
           const m = answer.frame;
           seqHave = m.seq;
@@ -224,6 +231,7 @@
         }
       } catch (err) {  // the console stopped or restarted: black, and say so; ask again in a second
         st.connected = false;
+        seqHave = 0; versionHave = -1;  // a restarted console counts from 0 again
         warp.style.display = "none";
         say("swarmdeck projector: waiting for the console…");
         await new Promise((res) => setTimeout(res, 1000));
