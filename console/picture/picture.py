@@ -32,7 +32,7 @@ from swarmdeck.console.picture.heat import heatmap
 from swarmdeck.console.picture.style import PictureStyle
 from swarmdeck.console.runtime.behaviours import goals_of_frame
 from swarmdeck.console.runtime.frame import Frame, filled
-from swarmdeck.core.annotations import EMPTY, Annotations
+from swarmdeck.core.annotations import EMPTY, Annotations, sanitize
 from swarmdeck.core.bounds import Bounds
 
 if TYPE_CHECKING:
@@ -189,5 +189,14 @@ def picture_of(frame: Frame, style: PictureStyle = DEFAULT_STYLE) -> Picture:
         contacts=frame.contacts.positions, goals=_frozen(np.asarray(goals, dtype=float)),
         density=frame.density, run_state=frame.run_state, behaviour=frame.behaviour,
         events=frame.events, alerts=frame.alerts,
-        annotations=frame.annotations if frame.annotations is not None else EMPTY,
+        annotations=drawn(frame),
     )
+
+
+def drawn(frame: Frame) -> Annotations:
+    """What the Frame's experiment drew, within the caps (``swarmdeck.core.annotations.sanitize`` with the default
+    limits on the Frame's bounds: a recording from elsewhere cannot make a renderer draw a million primitives);
+    the Frame's own annotations when they are within them, EMPTY when it has none."""
+    if frame.annotations is None or not len(frame.annotations):
+        return EMPTY
+    return sanitize(frame.annotations, frame.bounds)[0]
