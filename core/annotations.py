@@ -211,7 +211,7 @@ class Annotations:
                        filled=np.asarray(d["filled"], dtype=bool), texts=tuple(d["texts"]))
         except KeyError as exc:
             raise ValueError(f"annotations are missing field {exc.args[0]!r}") from None
-        except TypeError as exc:
+        except (TypeError, ValueError) as exc:
             raise ValueError(f"annotations: {exc}") from None
 
 
@@ -303,7 +303,7 @@ def sanitize(ann: Annotations, bounds: Bounds,
     In order: primitives past ``max_primitives`` are dropped; then those with a non-finite vertex or size
     (or a negative size) are refused; then primitives past ``max_vertices`` vertices and texts past
     ``max_total_text`` characters are dropped; vertices are clipped into the arena, sizes to the cap,
-    texts cut to ``max_text``. Never mutates ``ann``.
+    texts cut to ``max_text``. Never mutates ``ann``; returns ``ann`` itself when nothing needed changing.
     """
     b = Bounds.of(bounds)
     given = len(ann)
@@ -338,9 +338,11 @@ def sanitize(ann: Annotations, bounds: Bounds,
     for i in np.flatnonzero(ann.kinds == TEXT):
         texts[i], cut = clean_text(texts[i], limits.max_text)
         n_cut += cut
-    out = Annotations(kinds=ann.kinds, offsets=ann.offsets, vertices=clipped, sizes=np.minimum(ann.sizes, cap),
-                      colors=ann.colors, filled=ann.filled, texts=tuple(texts))
-    report = AnnotationReport(given=given, kept=len(out), non_finite=int(bad.sum()), clipped_to_arena=n_clipped,
+    report = AnnotationReport(given=given, kept=len(ann), non_finite=int(bad.sum()), clipped_to_arena=n_clipped,
                               clipped_size=int(big.sum()), cut_text=n_cut, over_primitives=over_p,
                               over_vertices=int(over_v_mask.sum()), over_text=int(over_t_mask.sum()))
+    if not report.changed and tuple(texts) == ann.texts:
+        return ann, report  # nothing to change: the batch itself
+    out = Annotations(kinds=ann.kinds, offsets=ann.offsets, vertices=clipped, sizes=np.minimum(ann.sizes, cap),
+                      colors=ann.colors, filled=ann.filled, texts=tuple(texts))
     return out, report

@@ -64,6 +64,8 @@ LINE_WIDTH = 0.01
 #: a text's height when none is given, m
 TEXT_HEIGHT = 0.06
 _MESSAGES_KEPT = 50
+#: s of run time before the same kind of cap hit is said again (it is counted every time)
+REPEAT_S = 1.0
 
 
 def parse_color(color: Any, alpha: float | None = None) -> NDArray[np.uint8]:
@@ -142,16 +144,24 @@ class Annotator:
         self._time = 0.0
         self._dropped = 0
         self.warnings = 0
-        """cap hits so far (one per drawing call or tick that hit a cap)"""
+        """cap hits so far (one per tick and kind of cap hit, and one per text cut)"""
         self.messages: deque[str] = deque(maxlen=_MESSAGES_KEPT)
         """the most recent cap messages"""
         self.last_report = AnnotationReport()
         self._new: list[str] = []
+        self._said: dict[str, float] = {}
         self._cache: tuple[tuple[int, ...], Annotations, list[_Group]] | None = None
 
     # ---------------------------------------------------------------- lifetime bookkeeping
     def _warn(self, message: str) -> None:
+        """Count a cap hit; say it (:attr:`messages`, :meth:`take_messages`) unless the same kind of hit was
+        said less than :data:`REPEAT_S` s of run time ago (a script that hits a cap every tick is one line a
+        second, not thirty)."""
         self.warnings += 1
+        kind = message.split(" ", 2)[-1]
+        if self._time - self._said.get(kind, -math.inf) < REPEAT_S:
+            return
+        self._said[kind] = self._time
         self.messages.append(message)
         if len(self._new) < _MESSAGES_KEPT:
             self._new.append(message)
@@ -165,9 +175,7 @@ class Annotator:
         """How many of ``wanted`` new primitives fit under ``max_primitives``; counts and says the rest."""
         room = max(0, self.limits.max_primitives - self._alive)
         if wanted > room:
-            self._dropped += wanted - room
-            self._warn(f"annotations: {wanted - room} primitive(s) over the cap of {self.limits.max_primitives} "
-                       "alive at once dropped (give them a lifetime or a key, or clear())")
+            self._dropped += wanted - room  # said once, at the next collect
         return min(wanted, room)
 
     def _add(self, ann: Annotations, key: str | None, ticks: int | None, seconds: float | None) -> None:
@@ -206,6 +214,10 @@ class Annotator:
         by one tick (a ``ticks=k`` primitive is in k collects; a ``seconds=s`` one in those at times ≤ its
         drawing time + s). Call once per tick."""
         self._time = float(time)
+        if self._dropped:
+            self._warn(f"annotations: {self._dropped} primitive(s) over the cap of {self.limits.max_primitives} "
+                       "alive at once dropped (give them a lifetime or a key, or clear())")
+            self._dropped = 0
         live = [g for g in self._groups if g.until is None or self._time <= g.until + 1e-9]
         key = tuple(id(g) for g in live)
         if self._cache is not None and self._cache[0] == key:  # the same drawing as the last tick: checked already

@@ -34,7 +34,7 @@ from swarmdeck.console.picture.sensing import SensorLayer, sensor_layer
 from swarmdeck.console.picture.style import PictureStyle
 from swarmdeck.console.runtime.behaviours import goals_of_frame
 from swarmdeck.console.runtime.frame import Frame, filled
-from swarmdeck.core.annotations import EMPTY, Annotations
+from swarmdeck.core.annotations import EMPTY, Annotations, sanitize
 from swarmdeck.core.bounds import Bounds
 
 if TYPE_CHECKING:
@@ -200,5 +200,14 @@ def picture_of(frame: Frame, style: PictureStyle = DEFAULT_STYLE) -> Picture:
         events=frame.events, alerts=frame.alerts, sensors=sensor_layer(frame, style),
         obstacles=frame.obstacles.segments if frame.obstacles is not None else _frozen(np.zeros((0, 2, 2))),
         network=network_layer(frame, style),
-        annotations=frame.annotations if frame.annotations is not None else EMPTY,
+        annotations=drawn(frame),
     )
+
+
+def drawn(frame: Frame) -> Annotations:
+    """What the Frame's experiment drew, within the caps (``swarmdeck.core.annotations.sanitize`` with the default
+    limits on the Frame's bounds: a recording from elsewhere cannot make a renderer draw a million primitives);
+    the Frame's own annotations when they are within them, EMPTY when it has none."""
+    if frame.annotations is None or not len(frame.annotations):
+        return EMPTY
+    return sanitize(frame.annotations, frame.bounds)[0]

@@ -87,11 +87,10 @@ from swarmdeck.console.picture.colours import (
     pair_colors,
 )
 from swarmdeck.console.picture.network import network_layer
-from swarmdeck.console.picture.picture import active_pairs, changed_mask, robot_colors
+from swarmdeck.console.picture.picture import active_pairs, changed_mask, drawn, robot_colors
 from swarmdeck.console.picture.sensing import sensor_layer
 from swarmdeck.console.picture.style import PictureStyle
 from swarmdeck.console.runtime.frame import Frame
-from swarmdeck.core.annotations import EMPTY as EMPTY_ANNOTATIONS
 from swarmdeck.core.annotations import POINT, Annotations
 from swarmdeck.core.bounds import DEFAULT_BOUNDS, Bounds
 from swarmdeck.core.constants import ROBOT_RADIUS
@@ -486,7 +485,7 @@ class FoxgloveEncoder:
         filled polygons and circles as triangle fans (convex shapes exact), points as flat spheres, texts as
         texts; colours with their alpha. :meth:`encode` writes it when the drawing changed, else once a second."""
         fm = self.fm
-        ann = frame.annotations if frame.annotations is not None else EMPTY_ANNOTATIONS
+        ann = drawn(frame)  # within the caps, whatever the recording holds
         segs, seg_cols, _ = annotation_segments(ann)
         lines = []
         if len(segs):

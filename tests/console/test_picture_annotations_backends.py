@@ -110,3 +110,15 @@ def test_the_viser_scene_draws_them():
         assert np.asarray(nodes.lines.points)[0, 0, 2] < 0 and not any(lab.visible for lab in nodes.labels)
     finally:
         server.stop()
+
+
+def test_a_recording_from_elsewhere_cannot_make_a_renderer_draw_a_million_primitives():
+    n = 1_000_000  # a crafted file: the Frame holds them (it is data), the picture keeps the caps
+    hostile = Annotations(kinds=np.zeros(n, dtype=np.uint8), offsets=np.arange(n + 1), vertices=np.full((n, 2), 9.0),
+                          sizes=np.full(n, 0.01), colors=np.zeros((n, 4), dtype=np.uint8), filled=np.ones(n, dtype=bool),
+                          texts=("",) * n)
+    frame = Frame(tick=0, time=0.0, poses=np.zeros((0, 3)), ids=[], nominal=np.zeros((0, 2)), safe=np.zeros((0, 2)),
+                  v=[], w=[], annotations=hostile)
+    pic = picture_of(frame)
+    assert len(pic.annotations) == 4096 and pic.annotations.vertices.max() == 1.6  # capped and clipped
+    assert len(scene_message(frame, 1)["annotations"]["kinds"]) == 4096

@@ -63,7 +63,7 @@ def test_caps_hit_are_counted_and_become_events_without_stopping_the_run(arena):
     d.line((0, 0), (np.nan, 1.0), ticks=1)
     arena.step()
     assert len(arena.last_annotations) == 4096
-    assert d.warnings >= 2
+    assert d.warnings == 1  # one tick, one kind of hit: 1e6 - 4096 points, the text and the line over the cap
     assert any("over the cap of 4096" in e for e in arena.events)
     d.line((0, 0), (np.nan, 1.0), ticks=1)
     d.circle((5.0, 0.0), 100.0, ticks=1)
@@ -101,3 +101,12 @@ def test_each_robots_pen_keeps_its_own_keys(arena):
     assert len(arena.last_annotations) == 2
     with pytest.raises(AttributeError, match="not 'collect'"):
         pens[2].collect(0.0)
+
+
+def test_a_cap_hit_every_step_is_counted_every_step_and_said_once_a_second(arena):
+    for _ in range(60):  # 60 steps of 0.033 s: about 2 s of run time
+        arena.draw.circle((0.0, 0.0), 1e3, ticks=1)  # clipped every step
+        arena.step()
+    said = [e for e in arena.events if "arena diagonal" in e]
+    assert arena.draw.warnings == 60
+    assert 2 <= len(said) <= 3
