@@ -72,7 +72,7 @@ def job_line(job: dict[str, Any]) -> str:
         extra += f"  (queue position {job['position'] + 1})"
     if job.get("eta_start") is not None:
         extra += f"  starts ~{_clock(job['eta_start'])}, ends ~{_clock(job['eta_end'])} UTC on {job['eta_arena']}"
-    elif job.get("placed") and job.get("state") in ("setting up", "running"):
+    elif job.get("placed"):
         extra += f"  on {job['placed']}"
     if job.get("reason"):
         extra += f"  {shorten(job['reason'], 200)}"

@@ -59,8 +59,7 @@ def main(args: argparse.Namespace) -> int:
     config = PortalConfig(data=work, trusted=args.trusted, allow_no_cgroup=args.allow_no_cgroup)
     settings = ArenaSettings(robots_via=args.robots_via, fast=args.fast, seed=args.seed)
     stop = threading.Event()
-    for sig in (signal.SIGINT, signal.SIGTERM):
-        signal.signal(sig, lambda signum, frame: stop.set())
+    saved = {sig: signal.signal(sig, lambda signum, frame: stop.set()) for sig in (signal.SIGINT, signal.SIGTERM)}
     try:
         return run_remote(args.portal, token, args.arena, work, config, settings, stop,
                           on_connect=lambda spec: print(f"swarmdeck runner: arena {args.arena} of {args.portal}: "
@@ -69,3 +68,6 @@ def main(args: argparse.Namespace) -> int:
     except ClientError as exc:
         print(f"swarmdeck runner: error: {exc.line()}", file=sys.stderr)
         return 1
+    finally:
+        for sig, handler in saved.items():
+            signal.signal(sig, handler)

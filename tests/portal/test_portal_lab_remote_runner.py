@@ -184,3 +184,15 @@ def test_a_runner_that_comes_back_after_its_lease_ran_out_cannot_finish_its_stal
         r = op.post(f"/api/runner/jobs/{job}/finish", json={**mine, "state": "done"})
         assert r.status_code == 409 and r.json()["field"] == "job"
     assert svc.job_state(job) == "interrupted"
+
+
+def test_the_runner_command_says_what_is_missing_or_unreachable(tmp_path, capsys, monkeypatch):
+    from swarmdeck.console.cli import main
+
+    monkeypatch.delenv("SWARMDECK_TOKEN", raising=False)
+    assert main(["runner", "--portal", "http://127.0.0.1:9", "--arena", "annex", "--work", str(tmp_path)]) == 2
+    assert "no access token" in capsys.readouterr().err
+    if probe() is None:
+        assert main(["runner", "--portal", "http://127.0.0.1:9", "--arena", "annex", "--token", "sdk_x",
+                     "--work", str(tmp_path)]) == 1
+        assert "cannot reach the portal" in capsys.readouterr().err
