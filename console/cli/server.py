@@ -53,6 +53,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="verify on a Ray cluster ('auto', 'local' or ray://HOST:PORT); needs swarmdeck[ray]")
     parser.add_argument("--verify-runs", type=int, default=4, metavar="K",
                         help="verification runs per job, each without and with the barrier (default 4)")
+    parser.add_argument("--verify-epsilon", type=float, default=None, metavar="EPS",
+                        help="a job may bypass the barrier only if its report's upper bound on P(contact per run) "
+                             "(Clopper-Pearson from the raw runs) is at most EPS; 0.01 at 95 %% confidence needs "
+                             "--verify-runs 299 (default: the bound is stated, not required)")
+    parser.add_argument("--verify-confidence", type=float, default=0.95, metavar="C",
+                        help="confidence of that bound, in (0, 1) (default 0.95)")
     parser.add_argument("--max-duration", type=float, default=600.0, metavar="S",
                         help="longest experiment a researcher may declare, s (default 600)")
     parser.add_argument("--max-upload", type=int, default=4 << 20, metavar="BYTES",
@@ -131,6 +137,12 @@ def check_arguments(args: argparse.Namespace) -> None:
         raise UsageError(f"--workers must be >= 1, got {args.workers}")
     if args.verify_runs < 1:
         raise UsageError(f"--verify-runs must be >= 1, got {args.verify_runs}")
+    try:
+        from swarmdeck.console.sandbox.guarantee import Guarantee
+
+        Guarantee(1, 0, args.verify_confidence, args.verify_epsilon)
+    except ValueError as exc:
+        raise UsageError(f"--verify-epsilon/--verify-confidence: {exc}") from None
     if not args.max_duration > 0:
         raise UsageError(f"--max-duration must be > 0 s, got {args.max_duration}")
     if args.max_upload < 1024:
@@ -253,7 +265,8 @@ def main(args: argparse.Namespace) -> int:
     config = PortalConfig(data=args.data, arenas=args.arena_specs, smtp=smtp,
                           limits=Limits(fleet=fleet, max_duration=args.max_duration,
                                                         max_upload_bytes=args.max_upload),
-                          verify_runs=args.verify_runs, grace_s=args.grace, trusted=args.trusted,
+                          verify_runs=args.verify_runs, verify_epsilon=args.verify_epsilon,
+                          verify_confidence=args.verify_confidence, grace_s=args.grace, trusted=args.trusted,
                           allow_no_cgroup=args.allow_no_cgroup, script_env=checked_script_env(args.script_env),
                           arena_tick_budget_s=args.tick_budget,
                           quotas=Quotas(max_unfinished_jobs=args.max_jobs or None,

@@ -46,13 +46,22 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--obstacles", default=None, metavar="FILE",
                         help="the arena's line-segment obstacles: a TOML file with [arena] obstacles = [...] (as in "
                              "the console's --config); a robot touching one is a contact")
-    parser.add_argument("--runs", type=int, default=8, metavar="K", help="runs per script, each without and with the barrier (default 8)")
+    parser.add_argument("--runs", type=int, default=None, metavar="K",
+                        help="runs per script, each without and with the barrier (default 8; with --epsilon: the fewest "
+                             "that can reach it, e.g. 299 for --epsilon 0.01 --confidence 0.95)")
     parser.add_argument("--seed", type=int, default=0, help="base seed of the initial conditions and disturbances (default 0)")
     parser.add_argument("--workers", type=int, default=None, metavar="W", help="local worker processes (default: number of cores)")
     parser.add_argument("--ray", default=None, metavar="auto|ADDRESS|local",
                         help="run on a Ray cluster ('auto': the running one; 'local': start one here); needs swarmdeck[ray]")
     parser.add_argument("--bypass-threshold", type=float, default=0.99, metavar="S",
                         help="safety score every raw run must reach, with no contact, to bypass the barrier (default 0.99)")
+    parser.add_argument("--epsilon", type=float, default=None, metavar="EPS",
+                        help="the largest P(contact per run) a bypass may have: the report's upper bound on it "
+                             "(Clopper-Pearson from the raw runs; the rule of three when none had a contact) above EPS "
+                             "refuses the bypass; without --runs, picks the fewest runs with (1-EPS)^n <= 1-confidence "
+                             "(those all without contact; each contact needs more runs, and the report says how many)")
+    parser.add_argument("--confidence", type=float, default=0.95, metavar="C",
+                        help="confidence of the stated bound on P(contact per run), in (0, 1) (default 0.95)")
     parser.add_argument("--tick-budget", type=float, default=1.0, metavar="S",
                         help="per-tick compute budget of the script: CPU seconds it may use per tick, counted by its "
                              "cgroup (wall seconds where it has none); a tick ends after max(10 x S, S + 5) wall "
@@ -101,6 +110,32 @@ def _declared(args: argparse.Namespace) -> tuple[int | None, float, tuple | None
     return robots, 30.0 if duration is None else duration, poses, declared_by
 
 
+def _runs(args: argparse.Namespace) -> int:
+    """Runs per script: --runs, else with --epsilon the fewest that can reach it (REFERENCE.md §17), else 8;
+    UsageError naming a bad --runs, --epsilon or --confidence."""
+    from swarmdeck.console.cli import UsageError
+    from swarmdeck.console.sandbox.guarantee import runs_needed
+
+    if args.runs is not None and args.runs < 1:
+        raise UsageError(f"--runs must be >= 1, got {args.runs}")
+    try:
+        needed = None if args.epsilon is None else runs_needed(args.epsilon, args.confidence)
+        if needed is None:
+            runs_needed(0.5, args.confidence)  # checks --confidence alone
+    except ValueError as exc:
+        raise UsageError(f"--epsilon/--confidence: {exc}") from None
+    if args.runs is not None:
+        if needed is not None and args.runs < needed:
+            print(f"note: {args.runs} runs cannot bound P(contact per run) by {args.epsilon:g} at {args.confidence:g} "
+                  f"confidence (that needs {needed} runs without contact): no bypass", file=sys.stderr)
+        return int(args.runs)
+    if needed is not None:
+        print(f"{needed} runs per script: the fewest with (1 - {args.epsilon:g})^n <= 1 - {args.confidence:g}",
+              file=sys.stderr)
+        return needed
+    return 8
+
+
 def _progress(total_runs: int):
     if not sys.stderr.isatty():
         return None, lambda: None
@@ -121,14 +156,13 @@ def main(args: argparse.Namespace) -> int:
 
     robots, duration, poses, declared_by = _declared(args)
     check_run_arguments(robots, duration, seed=args.seed)
-    if args.runs < 1:
-        raise UsageError(f"--runs must be >= 1, got {args.runs}")
+    runs = _runs(args)
     if args.workers is not None and args.workers < 1:
         raise UsageError(f"--workers must be >= 1, got {args.workers}")
     try:
         limits = SandboxLimits(tick_s=args.tick_budget)
-        config = VerificationConfig(n_robots=robots, duration=duration, runs=args.runs, seed=args.seed,
-                                    bypass_threshold=args.bypass_threshold, limits=limits, trusted=args.trusted,
+        config = VerificationConfig(n_robots=robots, duration=duration, runs=runs, seed=args.seed,
+                                    epsilon=args.epsilon, confidence=args.confidence, bypass_threshold=args.bypass_threshold, limits=limits, trusted=args.trusted,
                                     rps=args.rps, jail=JailConfig(order=(args.jail,) if args.jail else JailConfig().order,
                                                                    allow_no_cgroup=args.allow_no_cgroup,
                                                                    script_env=checked_script_env(args.script_env)),
@@ -137,7 +171,7 @@ def main(args: argparse.Namespace) -> int:
         executor = RayExecutor(args.ray) if args.ray else LocalPoolExecutor(args.workers)
     except (ValueError, RuntimeError) as exc:
         raise UsageError(str(exc)) from exc
-    on_progress, close = _progress(2 * args.runs * len(args.scripts))
+    on_progress, close = _progress(2 * runs * len(args.scripts))
     try:
         report = verify(args.scripts, config, executor, on_progress=on_progress, entry=args.entry)
     except (ValueError, ConfinementUnavailable) as exc:
@@ -163,8 +197,10 @@ def main(args: argparse.Namespace) -> int:
                 print(f"{s['script']}: {s['verdict']}")
             else:
                 score = "n/a" if s["safety_score"] is None else f"{s['safety_score']:.4f}"
-                print(f"{s['script']}: {s['verdict']} (safety score S = {score} over {args.runs} runs without the "
+                print(f"{s['script']}: {s['verdict']} (safety score S = {score} over {runs} runs without the "
                       "barrier)")
+            if s.get("contact_bound"):
+                print(f"  {s['contact_bound']['statement']}")
             for reason in s["reasons"]:
                 print(f"  rejected: {reason}")
             for reason in s["bypass_refused_because"]:

@@ -132,6 +132,10 @@ class PortalConfig:
         data: the data folder (database, ``jobs/<id>/``).
         limits: what a submission may be (fleet size, maximum duration, upload sizes).
         verify_runs: verification runs per job (each without and with the barrier).
+        verify_epsilon: the largest bound on P(contact per run) (at ``verify_confidence``, from the raw runs,
+            REFERENCE.md §17) a job's bypass may have; above it the bypass is refused with the bound (None: the
+            bound is stated in the report, not required).
+        verify_confidence: the confidence of that bound, in (0, 1).
         verify_seed: base seed of verification (job i uses ``verify_seed + i``).
         tick_budget_s: the script's per-tick compute budget in verification (and on the ``--fast`` simulated
             arena, where nothing waits in real time), wall s.
@@ -156,6 +160,8 @@ class PortalConfig:
     data: Path
     limits: Limits = field(default_factory=Limits)
     verify_runs: int = 4
+    verify_epsilon: float | None = None
+    verify_confidence: float = 0.95
     verify_seed: int = 0
     tick_budget_s: float = 1.0
     arena_tick_budget_s: float | None = None

@@ -70,6 +70,7 @@ class VerificationWorkers:
         # rows [x, y, θ]: submission stored them checked (N, 3) (console.sandbox.start_poses.check_initial_poses)
         poses = cast("tuple[tuple[float, float, float], ...] | None", job.initial_poses)
         return VerificationConfig(n_robots=job.robots, duration=job.duration, runs=cfg.verify_runs,
+                                  epsilon=cfg.verify_epsilon, confidence=cfg.verify_confidence,
                                   seed=cfg.verify_seed + int(job.id), trusted=cfg.trusted,
                                   jail=cfg.jail(),
                                   limits=SandboxLimits(tick_s=cfg.tick_budget_s),

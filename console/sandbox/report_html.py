@@ -119,6 +119,19 @@ def _run_table(runs: list[dict[str, Any]]) -> str:
     return "<table>" + "".join(rows) + "</table>"
 
 
+def _bound(bound: dict[str, Any] | None) -> str:
+    """The stated guarantee (REFERENCE.md §17): "P(contact per run) ≤ 1.0 % at 95 % confidence (299 runs, 0 contacts)"."""
+    if not bound:
+        return ""
+    target = ""
+    if bound.get("epsilon") is not None:
+        target = (f"; required for a bypass: ≤ {100 * bound['epsilon']:g} % — "
+                  + ("met" if bound["met"] else "not met" + (f" ({bound['runs_needed']} runs would be needed)"
+                                                             if bound.get("runs_needed") else "")))
+    return (f"<p class='bound'>guarantee: <b>{_esc(bound['statement'])}</b> "
+            f"({_esc(bound['method'])}, from the raw runs without the barrier){_esc(target)}</p>")
+
+
 def render_html(report: dict[str, Any]) -> str:
     """The page for a report dict (:meth:`VerificationReport.to_dict`)."""
     duration = report["config"]["duration"]
@@ -130,6 +143,7 @@ def render_html(report: dict[str, Any]) -> str:
         sections.append(
             f"<section><h2>{_esc(s['script'])}: {_esc(s['verdict'])}</h2>"
             f"<p>safety score S (mean over raw runs): <b>{score}</b>; sha256 {_esc(s['sha256'][:16])}…</p>"
+            + _bound(s.get("contact_bound"))
             + (f"<ul>{reasons}</ul>" if reasons else "")
             + "<h3>S per run (no barrier)</h3>" + _score_bars(s["runs"])
             + "<h3>Minimum distance between robots over time (no barrier)</h3>" + _distance_plot(s["runs"], duration)

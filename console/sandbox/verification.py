@@ -12,7 +12,10 @@ For each script, ``runs`` simulated runs with the disturbances of a real arena
 
 Verdicts: ``rejected`` (with the reasons), ``accepted`` (runs with the barrier),
 ``accepted, may bypass the barrier`` (every raw run clean, S ≥ the threshold in
-every raw run, and no contact at all). Every run is a pure function of the
+every raw run, no contact at all, and — with an ``epsilon`` configured — the bound on
+P(contact per run) at most ``epsilon``). Every script's report states that bound from its
+raw runs (:mod:`.guarantee`: Clopper–Pearson, the rule of three when none had a contact):
+"P(contact per run) ≤ 1.0 % at 95 % confidence (299 runs, 0 contacts)". Every run is a pure function of the
 script's commands, the config and its index (:func:`run_task`), so any executor
 gives the same report, bit for bit. The report's JSON schema is
 ``verification_report.schema.json`` beside this module (versioned by ``schema``).
@@ -56,6 +59,7 @@ import numpy as np
 
 from swarmdeck.console.sandbox.bundle import ScriptBundle
 from swarmdeck.console.sandbox.confinement import JailConfig, SandboxLimits
+from swarmdeck.console.sandbox.guarantee import Guarantee
 from swarmdeck.console.sandbox.plant import ArenaPlant, Disturbances, SandboxPlant, VerificationRobots
 from swarmdeck.console.sandbox.run import run_sandboxed
 from swarmdeck.console.sandbox.start_poses import arena_start, check_initial_poses, perturb
@@ -105,6 +109,9 @@ class VerificationConfig:
         obstacles: the arena's line-segment obstacles (:class:`~swarmdeck.core.obstacles.Obstacles`), or None:
             solid in every run, kept clear by the barrier in the wrapped runs; a robot touching one is a contact
             (a wrapped run with one is rejected, a raw run with one refuses the bypass); start poses on them refused.
+        epsilon: the largest P(contact per run) a bypass may have: the upper bound at ``confidence`` from the
+            raw runs (REFERENCE.md §17) above it refuses the bypass (None: the bound is stated, not required).
+        confidence: the confidence 1 − δ of the stated bound, in (0, 1).
     """
 
     n_robots: int | None = None
@@ -125,8 +132,11 @@ class VerificationConfig:
     paced_runs: int = 1
     obstacles: Obstacles | None = None
     bounds: Bounds = DEFAULT_BOUNDS
+    epsilon: float | None = None
+    confidence: float = 0.95
 
     def __post_init__(self) -> None:
+        Guarantee(1, 0, self.confidence, self.epsilon)  # ValueError naming a bad confidence or epsilon
         object.__setattr__(self, "bounds", check_bounds(self.bounds, "bounds"))
         if self.obstacles is not None:
             object.__setattr__(self, "obstacles", ArenaConfig(obstacles=self.obstacles, bounds=self.bounds).obstacles)
@@ -175,6 +185,7 @@ class VerificationConfig:
                 "jail": list(self.jail.order), "allow_no_cgroup": self.jail.allow_no_cgroup,
                 "initial_poses": None if self.initial_poses is None else [list(p) for p in self.initial_poses],
                 "paced_runs": self.paced_runs, "bounds": list(self.bounds),
+                "epsilon": self.epsilon, "confidence": float(self.confidence),
                 **({} if self.obstacles is None else {"obstacles": self.obstacles.to_list()}),
                 "wall_budget": {"factor": float(self.wall_factor), "boot_s": float(self.boot_s),
                                 "run_s": self.run_wall_s, "job_s": self.job_wall_s()}}
@@ -356,7 +367,7 @@ def _rejected_unrun(bundle: ScriptBundle, shown: str, reason: str) -> dict[str, 
     """The report entry of a script refused before any run (:func:`compile_check`)."""
     return {"script": shown, "sha256": bundle.sha256, "verdict": REJECTED, "safety_score": None,
             "safety_score_min": None, "safety_score_ci95": None, "reasons": [reason], "bypass_refused_because": [],
-            "runs": []}
+            "contact_bound": None, "runs": []}
 
 
 def _grouped(pairs: list[tuple[int, str]]) -> list[str]:
@@ -365,6 +376,17 @@ def _grouped(pairs: list[tuple[int, str]]) -> list[str]:
     for index, reason in pairs:
         by_reason.setdefault(reason, []).append(index)
     return [f"{reason} (run{'s' if len(ix) > 1 else ''} {', '.join(map(str, ix))})" for reason, ix in by_reason.items()]
+
+
+def guarantee(raw: Sequence[dict[str, Any]], cfg: VerificationConfig) -> Guarantee | None:
+    """The stated bound on P(contact per run) from the raw runs (None: no raw run). A raw run with a contact, or
+    that measured nothing (it ended before the plant existed), or that touched an obstacle segment, counts as a
+    contact: the bound never flatters."""
+    if not raw:
+        return None
+    failed = sum(1 for r in raw if not r.get("contacts") or r["contacts"]["count"] > 0
+                 or (r.get("obstacle_contact_steps") or 0) > 0)
+    return Guarantee(len(raw), failed, cfg.confidence, cfg.epsilon)
 
 
 def script_verdict(bundle: ScriptBundle, runs: Sequence[dict[str, Any]], cfg: VerificationConfig,
@@ -390,6 +412,9 @@ def script_verdict(bundle: ScriptBundle, runs: Sequence[dict[str, Any]], cfg: Ve
             no_bypass.append(f"{touched} contacts without the barrier")
         if on_obstacles:
             no_bypass.append(f"robots touched obstacles in {on_obstacles} steps without the barrier")
+    bound = guarantee(raw, cfg)
+    if not reasons and bound is not None and (short := bound.shortfall()) is not None:
+        no_bypass.append(short)
     verdict = REJECTED if reasons else (BYPASS if not no_bypass else ACCEPTED)
     spread = None
     if score is not None and len(scores) >= 2:
@@ -399,6 +424,7 @@ def script_verdict(bundle: ScriptBundle, runs: Sequence[dict[str, Any]], cfg: Ve
         "script": shown or bundle.name, "sha256": bundle.sha256, "verdict": verdict,
         "safety_score": score, "safety_score_min": min(scores) if scores else None, "safety_score_ci95": spread,
         "reasons": reasons, "bypass_refused_because": no_bypass if verdict == ACCEPTED else [],
+        "contact_bound": None if bound is None else bound.to_dict(),
         "runs": list(runs),
     }
 
