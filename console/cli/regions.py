@@ -84,9 +84,9 @@ def main(args: argparse.Namespace) -> int:
 
 
 def _run(layout: Any, jobs: dict[str, Path], args: argparse.Namespace) -> int:
+    from swarmdeck.console.runtime.region_jobs import RegionJobResult, run_in_region
     from swarmdeck.core.service_thread import ServiceThread
     from swarmdeck.devices.fleet.floor import simulated_floor
-    from swarmdeck.devices.fleet.region_jobs import RegionJobResult, run_in_region
 
     try:
         floor = simulated_floor(layout, {name: (args.parked or args.robots) if name in jobs else 0

@@ -8,11 +8,11 @@ from pathlib import Path
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
+from swarmdeck.console.runtime.region_jobs import run_in_region
 from swarmdeck.core.bounds import DEFAULT_BOUNDS
 from swarmdeck.core.constants import ROBOT_DIAMETER
 from swarmdeck.devices.chargers import ChargerLayout
 from swarmdeck.devices.fleet.floor import simulated_floor
-from swarmdeck.devices.fleet.region_jobs import run_in_region
 from swarmdeck.devices.fleet.regions import RegionLayout
 from swarmdeck.devices.runner import run_experiment
 
