@@ -20,9 +20,9 @@ import time
 
 import harness  # before numpy loads: pins BLAS
 
+from swarmdeck.console.runtime.region_jobs import QueuedJob, run_queue
 from swarmdeck.core.bounds import DEFAULT_BOUNDS
 from swarmdeck.devices.fleet.floor import simulated_floor
-from swarmdeck.devices.fleet.region_jobs import QueuedJob, run_queue
 from swarmdeck.devices.fleet.regions import RegionLayout
 from swarmdeck.examples.rendezvous import experiment
 

@@ -10,9 +10,9 @@ robot certified by the floor's one barrier, and prints each job's result and wha
 from __future__ import annotations
 
 import argparse
+import functools
 import json
 import re
-import threading
 from pathlib import Path
 from typing import Any
 
@@ -84,8 +84,9 @@ def main(args: argparse.Namespace) -> int:
 
 
 def _run(layout: Any, jobs: dict[str, Path], args: argparse.Namespace) -> int:
+    from swarmdeck.console.runtime.region_jobs import RegionJobResult, run_in_region
+    from swarmdeck.core.service_thread import ServiceThread
     from swarmdeck.devices.fleet.floor import simulated_floor
-    from swarmdeck.devices.fleet.region_jobs import RegionJobResult, run_in_region
 
     try:
         floor = simulated_floor(layout, {name: (args.parked or args.robots) if name in jobs else 0
@@ -98,11 +99,12 @@ def _run(layout: Any, jobs: dict[str, Path], args: argparse.Namespace) -> int:
         results[region] = run_in_region(floor, region, path, n_robots=args.robots, duration=args.duration,
                                         seed=args.seed)
 
-    threads = [threading.Thread(target=job, args=item, name=f"swarmdeck-region-{item[0]}") for item in jobs.items()]
+    threads = [ServiceThread(functools.partial(job, *item), f"swarmdeck-region-{item[0]}", join_timeout=None)
+               for item in jobs.items()]
     for t in threads:
         t.start()
     for t in threads:
-        t.join()
+        t.stop()  # joins: each job ends with its duration
     out: dict[str, Any] = {"floor": floor.stats.to_dict(), "contacts": int(floor.ports.report.collision_pairs),
                            "jobs": {}}
     failed = False

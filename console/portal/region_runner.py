@@ -28,10 +28,10 @@ from swarmdeck.console.portal.livefeed import LiveFeed
 from swarmdeck.console.portal.runner import ArenaRunner, ArenaSettings
 from swarmdeck.console.portal.service import PortalService
 from swarmdeck.console.runtime.fleet_upkeep import UpkeepResult
+from swarmdeck.console.runtime.region_jobs import UPKEEP_LIMIT_S, drive_to, region_start_poses
 from swarmdeck.core.bounds import Bounds
 from swarmdeck.core.ports import rows_of
 from swarmdeck.devices.fleet.floor import FloorClosed, RegionRobots, SharedFloor, simulated_floor
-from swarmdeck.devices.fleet.region_jobs import UPKEEP_LIMIT_S, drive_to, region_start_poses
 from swarmdeck.devices.fleet.regions import RegionLayout
 
 
@@ -60,7 +60,7 @@ class RegionFleet:
 
     def start_poses(self, n: int) -> NDArray[np.float64]:
         """``(n, 3)`` random valid start poses for the region's next ``n`` robots (region frame,
-        :func:`~swarmdeck.devices.fleet.region_jobs.region_start_poses`; where they stand when it is crowded)."""
+        :func:`~swarmdeck.console.runtime.region_jobs.region_start_poses`; where they stand when it is crowded)."""
         self._starts += 1
         seed = None if self.seed is None else self.seed + self._starts
         chosen = self.floor.free_robots(self.name)[:int(n)]

@@ -41,7 +41,10 @@ from swarmdeck.core.constants import CONTROL_PERIOD, SAFETY_DISTANCE
 from swarmdeck.core.kinematics import GritsBotParams, lookahead_points, unicycle_to_si
 from swarmdeck.core.ports import SensedPoses, rows_of
 from swarmdeck.devices.fleet.regions import Region, RegionLayout
+from swarmdeck.devices.initial_conditions import lattice_sites
 from swarmdeck.devices.pipeline import barrier_filter, certify
+from swarmdeck.devices.simulated_robots import SimulatedRobots
+from swarmdeck.devices.simulator import ArenaConfig
 
 FloatArray = NDArray[np.float64]
 
@@ -381,10 +384,6 @@ def simulated_floor(layout: RegionLayout, per_region: int | dict[str, int], *, p
     one per region name) on a lattice of pitch ``spacing`` m inside each region (D_s from its edges), heading +x,
     the sites nearest the region's floor walls first; floor ids region by region in layout order. ValueError naming
     the region that cannot hold its count."""
-    from swarmdeck.devices.initial_conditions import lattice_sites
-    from swarmdeck.devices.simulated_robots import SimulatedRobots
-    from swarmdeck.devices.simulator import ArenaConfig
-
     parts = []
     for r in layout.regions:  # a handful of regions, once
         n = per_region if isinstance(per_region, int) else int(per_region.get(r.name, 0))

@@ -7,9 +7,9 @@ from pathlib import Path
 
 import numpy as np
 
+from swarmdeck.console.runtime.region_jobs import run_in_region
 from swarmdeck.core.constants import ROBOT_DIAMETER, ROBOT_RADIUS
 from swarmdeck.devices.fleet.floor import simulated_floor
-from swarmdeck.devices.fleet.region_jobs import run_in_region
 from swarmdeck.devices.fleet.regions import RegionLayout
 
 RAM = """

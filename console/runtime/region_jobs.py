@@ -211,7 +211,10 @@ def run_queue(floor: SharedFloor, jobs: list[QueuedJob], *, regions: tuple[str, 
     thread per region; a job goes to the first free region that holds it, :meth:`RegionLayout.capacity`).
     ``regions``: the regions to use (default: all). Returns ``(job, result)`` in the order the jobs ended.
     ValueError before anything moves when a job fits no region (:meth:`RegionLayout.never_fits`)."""
+    import functools
     import threading
+
+    from swarmdeck.core.service_thread import ServiceThread
 
     names = regions if regions is not None else floor.layout.names
     cap = floor.layout.capacity()
@@ -234,9 +237,9 @@ def run_queue(floor: SharedFloor, jobs: list[QueuedJob], *, regions: tuple[str, 
             with lock:
                 done.append((job, result))
 
-    threads = [threading.Thread(target=worker, args=(n,), name=f"swarmdeck-region-{n}") for n in names]
+    threads = [ServiceThread(functools.partial(worker, n), f"swarmdeck-region-{n}", join_timeout=None) for n in names]
     for t in threads:
         t.start()
     for t in threads:
-        t.join()
+        t.stop()  # joins: each worker ends when no waiting job fits its region
     return done
