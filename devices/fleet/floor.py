@@ -38,6 +38,7 @@ from numpy.typing import ArrayLike, NDArray
 from scipy.spatial import cKDTree
 
 from swarmdeck.core.constants import CONTROL_PERIOD, SAFETY_DISTANCE
+from swarmdeck.core.errors import SwarmdeckError
 from swarmdeck.core.kinematics import GritsBotParams, lookahead_points, unicycle_to_si
 from swarmdeck.core.ports import SensedPoses, rows_of
 from swarmdeck.devices.fleet.regions import Region, RegionLayout
@@ -53,7 +54,7 @@ FloatArray = NDArray[np.float64]
 PARKING_SPACING = 0.3
 
 
-class FloorClosed(RuntimeError):
+class FloorClosed(RuntimeError, SwarmdeckError):
     """The floor was closed (or its region ended) while a job waited for its tick."""
 
 
