@@ -50,6 +50,8 @@ CASES = [
     ("leader_follower/leader_follower.py", False),
     ("plotting/barriers_with_plotting.py", True),
     ("plotting/leader_follower_with_plotting.py", True),
+    ("sensors/sensor_readings.py", False),
+    ("state_estimation/dead_reckoning/dead_reckoning.py", True),
 ]
 MODES = ("rps", "rps unpaced", "rps headless", "swarmdeck", "swarmdeck rps")
 
