@@ -50,6 +50,8 @@ CASES = [
     ("leader_follower/leader_follower.py", False),
     ("plotting/barriers_with_plotting.py", True),
     ("plotting/leader_follower_with_plotting.py", True),
+    ("sensors/sensor_readings.py", False),
+    ("state_estimation/dead_reckoning/dead_reckoning.py", True),
 ]
 MODES = ("rps", "rps unpaced", "rps headless", "swarmdeck", "swarmdeck rps")
 
@@ -118,6 +120,7 @@ def main() -> None:
     parser.add_argument("--duration", type=float, default=10.0, help="simulated experiment seconds per run")
     parser.add_argument("--repeats", type=int, default=1)
     parser.add_argument("--only", default=None, help="run the examples whose path contains this")
+    parser.add_argument("--modes", default=",".join(MODES), help=f"comma-separated, of {', '.join(MODES)}")
     parser.add_argument("--child", nargs=3, metavar=("MODE", "SCRIPT", "DURATION"), help=argparse.SUPPRESS)
     args = parser.parse_args()
     if args.child:
@@ -128,7 +131,11 @@ def main() -> None:
         return
     print(harness.machine())
     cases = [(n, fig) for n, fig in CASES if args.only is None or args.only in n]
-    modes = [m for m in MODES if args.rps_path or not m.startswith("rps")]
+    chosen = [m.strip() for m in args.modes.split(",")]
+    unknown = sorted(set(chosen) - set(MODES))
+    if unknown:
+        raise SystemExit(f"--modes: unknown mode(s) {unknown}; choose from {', '.join(MODES)}")
+    modes = [m for m in MODES if m in chosen and (args.rps_path or not m.startswith("rps"))]
     print(harness.table_header(["example", *[f"{m} (s)" for m in modes], "rps unpaced / swarmdeck"]))
     for name, uses_figure in cases:
         best: dict[str, float] = {}
@@ -150,7 +157,7 @@ def main() -> None:
                 result = json.loads(next(x for x in done.stdout.splitlines() if x.startswith("RESULT "))[7:])
                 best[mode] = min(best.get(mode, float("inf")), result["seconds"])
         cells = [f"{best[m]:.2f}" if m in best else "—" for m in modes]
-        ratio = f"{best['rps unpaced'] / best['swarmdeck']:.1f}×" if "rps unpaced" in best else "—"
+        ratio = f"{best['rps unpaced'] / best['swarmdeck']:.1f}×" if {"rps unpaced", "swarmdeck"} <= set(best) else "—"
         print(harness.table_row(name, *cells, ratio), flush=True)
 
 

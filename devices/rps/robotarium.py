@@ -62,11 +62,12 @@ def check_obstacles(obstacles: Any) -> NDArray[np.float64]:
     try:
         arr = np.array(obstacles, dtype=float)
     except (TypeError, ValueError):
-        raise ValueError(f"obstacles must be an (M, 2, 2) array of segment endpoints in m, got {obstacles!r:.80}") from None
+        raise ValueError(f"obstacles must have shape (M, 2, 2) (segment endpoints [[x0, y0], [x1, y1]] in m), got "
+                         f"{obstacles!r:.80}") from None
     if arr.size == 0:
         return np.zeros((0, 2, 2))
     if arr.ndim != 3 or arr.shape[1:] != (2, 2):
-        raise ValueError(f"obstacles must be an (M, 2, 2) array of segment endpoints [[x0, y0], [x1, y1]] in m, "
+        raise ValueError(f"obstacles must have shape (M, 2, 2) (segment endpoints [[x0, y0], [x1, y1]] in m), "
                          f"got shape {arr.shape}")
     bad = np.flatnonzero(~np.isfinite(arr).all(axis=(1, 2)))
     if bad.size:
@@ -121,7 +122,7 @@ class Robotarium(RpsSensors, ARobotarium):
                             ("use_distance_sensors", use_distance_sensors),
                             ("skip_initialization", skip_initialization), *kwargs.items()):
             if not isinstance(value, (bool, np.bool_)):  # as rps 2.x's strict checks (rps/robotarium.py)
-                raise TypeError(f"Robotarium({flag}=...) must be True or False, got {value!r}")
+                raise TypeError(f"Robotarium(): {flag} must be True or False (rps 2.x checks it too), got {value!r}")
         self.show_flags = {name: bool(kwargs.get(name, name != "show_distance_rays")) for name in SHOW_FLAGS_2X}
         sensing = sensing_for(use_distance_sensors)
         quiet_canvas()  # a script that imported pyplot first: its figures' redraws cost nothing either

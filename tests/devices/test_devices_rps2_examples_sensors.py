@@ -2,8 +2,8 @@
 ``swarmdeck run`` and end as under rps 2.0: every robot reaches its goals (the script's own loop ends), no collision,
 no robot outside the arena, and ``debug()`` says the script will run on the Robotarium (issue 28 items 1, 3, 4).
 
-They need the sensing layer (issue 28.1) and the obstacles layer (issue 28.3) behind the rps facade: until both have
-landed these fail, visibly (never skipped). The examples that need neither are in test_devices_rps2_examples.py.
+They need the sensing layer (issue 28.1) behind the rps facade; a script's ``obstacles`` are segments the sensors see,
+as in rps 2.0 (distance_sensor_avoidance.py). The examples that need neither are in test_devices_rps2_examples.py.
 """
 from __future__ import annotations
 
