@@ -30,16 +30,18 @@ The page learns the homography, the projector's size and the settings from the s
 from __future__ import annotations
 
 import base64
-import importlib
 from typing import Any
 
 import numpy as np
 
+from swarmdeck.console.picture.annotations import annotations_json
 from swarmdeck.console.picture.colours import hex_colors
+from swarmdeck.console.picture.network import NetworkLayer
 from swarmdeck.console.picture.picture import picture_of
 from swarmdeck.console.portal.live import PALETTE
 from swarmdeck.console.runtime.frame import Frame
 from swarmdeck.console.runtime.params import ProjectorParams, to_dict
+from swarmdeck.core.annotations import Annotations
 from swarmdeck.core.bounds import Bounds
 from swarmdeck.core.constants import ROBOT_RADIUS
 from swarmdeck.tracking.projector import ProjectorCalibration
@@ -84,13 +86,13 @@ def projector_message(frame: Frame, seq: int, settings: ProjectorParams, stamp_m
     if s.safety:
         msg["safety"] = {"xy": _xy(pic.points), "radius": float(pic.ring_radius)}
     if s.graph:
-        msg["graph"] = _graph(getattr(pic, "network", None))
+        msg["graph"] = _graph(pic.network)
     if s.annotations:
-        msg["annotations"] = _annotations(getattr(pic, "annotations", None))
+        msg["annotations"] = _annotations(pic.annotations)
     return msg
 
 
-def _graph(layer: Any) -> dict[str, Any] | None:
+def _graph(layer: NetworkLayer | None) -> dict[str, Any] | None:
     """The communication graph (the picture's ``network``: a NetworkLayer with ``segments`` (L, 2, 2) m and
     ``colors`` (L, 3) uint8), or None when the picture has none (a Frame without a network)."""
     if layer is None or not len(layer.segments):
@@ -98,14 +100,12 @@ def _graph(layer: Any) -> dict[str, Any] | None:
     return {"segments": _xy(layer.segments), "colours": hex_colors(np.asarray(layer.colors, dtype=np.uint8))}
 
 
-def _annotations(ann: Any) -> dict[str, Any] | None:
+def _annotations(ann: Annotations) -> dict[str, Any] | None:
     """The experiment's drawings (the picture's ``annotations``) in the canvases' one JSON form, or None when
     there are none."""
-    if ann is None or not len(ann):
+    if not len(ann):
         return None
-    module = importlib.import_module("swarmdeck.console.picture.annotations")  # beside the picture (issue 29.3)
-    out: dict[str, Any] = module.annotations_json(ann)
-    return out
+    return annotations_json(ann)
 
 
 def config_message(bounds: Bounds, calibration: ProjectorCalibration | None, settings: ProjectorParams,
