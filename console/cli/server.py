@@ -40,6 +40,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--obstacles", default=None, metavar="FILE",
                         help="the arena's line-segment obstacles: a TOML file with [arena] obstacles = [...] (as in the "
                              "console's --config); in verification, the jobs' barrier, the set-up and return, the live view")
+    parser.add_argument("--sensors", action="store_true",
+                        help="record the robots' sensors in every job's Frames (Robotarium 2.0's seven ToF distance "
+                             "sensors, encoders, IMU, LEDs): in the recording, the live view, the video and the replay")
     parser.add_argument("--regions", default=None, metavar="LAYOUT",
                         help="divide the simulated floor into regions and run one job per region at once: a TOML "
                              "file with a [regions] table or COLSxROWS, e.g. 2x2 (see `swarmdeck regions`); --robots "
@@ -305,10 +308,10 @@ def main(args: argparse.Namespace) -> int:
         if not spec.remote:
             runners.append(ArenaRunner(service, ArenaSettings(robots_via=spec.robots_via, fleet=spec.robots,
                                                               fast=spec.fast, seed=args.seed, guard=guard,
-                                                              name=spec.name), live))
+                                                              name=spec.name, sensors=args.sensors), live))
     if not args.arena_specs:
         settings = ArenaSettings(robots_via=args.robots_via, fleet=fleet, fast=args.fast, seed=args.seed,
-                                 guard=guard, obstacles=obstacles)
+                                 guard=guard, obstacles=obstacles, sensors=args.sensors)
         runners.append(ArenaRunner(service, settings, live) if args.regions is None else _region_runner(
             service, settings, args.regions, args.robots, live))
     # one recovery for the whole portal (every in-process arena's jobs); remote runners' jobs follow their leases

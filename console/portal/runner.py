@@ -130,6 +130,9 @@ class ArenaSettings:
             simulation, the fleet's maneuvers and the recordings.
         name: the arena's name behind a portal of several (``--arena NAME=SPEC``; :mod:`.arenas`); None: the
             portal's first arena.
+        sensors: the robots' sensors in every job's Frames (``swarmdeck server --sensors``; issue 28.1: Robotarium
+            2.0's seven ToF sensors, encoders, IMU and LEDs, :mod:`swarmdeck.console.runtime.tick_sensing`): in the
+            recording, the live view (rays and end points), the video and the replay.
     """
 
     robots_via: str | None = None
@@ -143,6 +146,7 @@ class ArenaSettings:
     guard: GuardConfig | None = field(default_factory=GuardConfig)
     obstacles: Obstacles | None = None
     name: str | None = None
+    sensors: bool = False
 
     @property
     def real_time(self) -> bool:
@@ -434,7 +438,7 @@ class ArenaRunner:
         # the script's job knows nothing of the console's circling density: none is computed, drawn or recorded
         loop_config = LoopConfig(n_robots=n, dt=s.dt, bounds=s.bounds, seed=s.seed, behaviour="rendezvous",
                                  safety=SafetyParams(enabled=True), density=DensityParams(moving=False),
-                                 obstacles=s.obstacles)
+                                 obstacles=s.obstacles, sensors=s.sensors)
         state: dict[str, Any] = {"loop": None, "recorder": None, "setup_failed": None, "tally": None}
         notes: list[str] = []
 

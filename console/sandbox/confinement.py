@@ -48,6 +48,7 @@ then says that it ran without one.
 from __future__ import annotations
 
 import functools
+import importlib.util
 import os
 import shutil
 import signal
@@ -289,25 +290,29 @@ def kill_all_of(uid: int, timeout: float = 10.0) -> list[int]:
     return kill_until_gone(lambda: processes_of(uid), timeout)
 
 
+#: Every top-level swarmdeck package (pyproject.toml's ``[tool.setuptools] packages``, first level):
+#: the jail binds each one's folder (editable installs live outside site-packages), so a package
+#: missing here is a crash of every jailed script that imports it. One list; a test keeps it equal
+#: to pyproject.toml's (tests/sandbox/test_sandbox_jail_packages.py).
+SWARMDECK_PACKAGES: tuple[str, ...] = (
+    "console", "core", "coverage", "devices", "envs", "examples", "inputs", "network", "safety", "sensing",
+    "tracking",
+)
+
+
 @functools.lru_cache(maxsize=1)
 def _system_paths() -> tuple[Path, ...]:
     """What Python and swarmdeck need, read-only (computed once: sysconfig and resolving are slow)."""
-    import swarmdeck.console
-    import swarmdeck.core
-    import swarmdeck.coverage
-    import swarmdeck.devices
-    import swarmdeck.network
-    import swarmdeck.safety
-
     roots = {Path("/usr")}
     roots |= {p for p in map(Path, ("/lib", "/lib64", "/bin", "/lib32", "/libx32")) if p.exists() and not p.is_symlink()}
     roots |= {Path(sys.prefix), Path(sys.base_prefix), Path(sys.executable).resolve().parent.parent}
     for key in ("stdlib", "platstdlib", "purelib", "platlib"):
         roots.add(Path(sysconfig.get_paths()[key]))
-    # every top-level subpackage the child imports (devices imports network): a missing one crashes bwrap's child
-    for module in (swarmdeck.console, swarmdeck.core, swarmdeck.coverage, swarmdeck.devices, swarmdeck.network,
-                   swarmdeck.safety):
-        roots.add(Path(module.__file__).resolve().parent)  # editable installs live outside site-packages
+    for name in SWARMDECK_PACKAGES:  # editable installs live outside site-packages
+        spec = importlib.util.find_spec(f"swarmdeck.{name}")
+        if spec is None or not spec.submodule_search_locations:
+            raise RuntimeError(f"swarmdeck.{name} (in SWARMDECK_PACKAGES) is not an installed package")
+        roots |= {Path(location).resolve() for location in spec.submodule_search_locations}
     paths = [p.resolve() for p in sorted(roots) if p.exists()]
     # drop paths inside another bound path
     return tuple(p for p in paths if not any(p != q and p.is_relative_to(q) for q in paths))

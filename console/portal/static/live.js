@@ -10,7 +10,7 @@ document.addEventListener("DOMContentLoaded", () => {
   const status = document.getElementById("live-status");
   if (!canvas) return;
   const ctx = canvas.getContext("2d");
-  const drawn = (window.swarmdeckLive = { frames: 0, seq: null, tick: null, poses: null, runState: null, state: null, ended: false, links: 0, annotations: 0, texts: [] });
+  const drawn = (window.swarmdeckLive = { frames: 0, seq: null, tick: null, poses: null, runState: null, state: null, ended: false, links: 0, rays: 0, annotations: 0, texts: [] });
   const heat = new Image();
   let last = null;
   heat.onload = () => { if (last) draw(last); };
@@ -61,6 +61,7 @@ document.addEventListener("DOMContentLoaded", () => {
       ctx.strokeStyle = m.pair_colours[k];
       ctx.beginPath(); ctx.moveTo(X(m.points[i][0]), Y(m.points[i][1])); ctx.lineTo(X(m.points[j][0]), Y(m.points[j][1])); ctx.stroke();
     });
+    drawn.rays = m.sensors ? m.sensors.rays.length : 0;
     if (m.sensors) {  // the sensors' layer: ToF rays to their end points
       ctx.strokeStyle = P.sensor_ray; ctx.lineWidth = 1;
       ctx.beginPath();
