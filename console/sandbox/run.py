@@ -772,6 +772,7 @@ def _loop(child: _Child, script: Path, scratch: Path, uid: int | None, make_plan
                         show = getattr(plant, "show_network", None)  # SandboxPlant: the loop's Frames show it
                         if callable(show):
                             show(*traffic)
+                        continue
                     if t == "draw" and plant is not None:
                         draw = getattr(plant, "draw", None)
                         if draw is not None:
