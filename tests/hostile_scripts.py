@@ -7,12 +7,12 @@ def experiment(arena):
         arena.step()
 """
 
+# an Arena (not rps's Robotarium, which refuses more than 50 robots itself, as rps does) of 500 robots
 FIVE_HUNDRED = """
 import numpy as np
-import rps.robotarium as robotarium
+from swarmdeck.devices import Arena
 x, y = np.meshgrid(np.linspace(-1.5, 1.5, 25), np.linspace(-0.95, 0.95, 20))
-r = robotarium.Robotarium(number_of_robots=500, initial_conditions=np.vstack((x.ravel(), y.ravel(), np.zeros(500))))
+arena = Arena(500, initial_conditions=np.column_stack((x.ravel(), y.ravel(), np.zeros(500))))
 while True:
-    r.set_velocities(np.arange(500), np.zeros((2, 500)))
-    r.step()
+    arena.step_unicycle(np.zeros(500), np.zeros(500))
 """
