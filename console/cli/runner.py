@@ -54,20 +54,23 @@ def main(args: argparse.Namespace) -> int:
     if reason is not None and not args.trusted:
         raise UsageError(f"cannot confine untrusted code on this machine: {reason}; install bubblewrap "
                          "or pass --trusted")
-    os.umask(UMASK)
-    work = private_dir(Path(args.work))
-    config = PortalConfig(data=work, trusted=args.trusted, allow_no_cgroup=args.allow_no_cgroup)
-    settings = ArenaSettings(robots_via=args.robots_via, fast=args.fast, seed=args.seed)
-    stop = threading.Event()
-    saved = {sig: signal.signal(sig, lambda signum, frame: stop.set()) for sig in (signal.SIGINT, signal.SIGTERM)}
+    previous_umask = os.umask(UMASK)  # what the runner writes is private; the caller's umask comes back after
     try:
-        return run_remote(args.portal, token, args.arena, work, config, settings, stop,
-                          on_connect=lambda spec: print(f"swarmdeck runner: arena {args.arena} of {args.portal}: "
-                                                        f"{spec['robots']} {spec['kind']} robots; Ctrl-C to stop",
-                                                        flush=True))
-    except ClientError as exc:
-        print(f"swarmdeck runner: error: {exc.line()}", file=sys.stderr)
-        return 1
+        work = private_dir(Path(args.work))
+        config = PortalConfig(data=work, trusted=args.trusted, allow_no_cgroup=args.allow_no_cgroup)
+        settings = ArenaSettings(robots_via=args.robots_via, fast=args.fast, seed=args.seed)
+        stop = threading.Event()
+        saved = {sig: signal.signal(sig, lambda signum, frame: stop.set()) for sig in (signal.SIGINT, signal.SIGTERM)}
+        try:
+            return run_remote(args.portal, token, args.arena, work, config, settings, stop,
+                              on_connect=lambda spec: print(f"swarmdeck runner: arena {args.arena} of {args.portal}: "
+                                                            f"{spec['robots']} {spec['kind']} robots; Ctrl-C to stop",
+                                                            flush=True))
+        except ClientError as exc:
+            print(f"swarmdeck runner: error: {exc.line()}", file=sys.stderr)
+            return 1
+        finally:
+            for sig, handler in saved.items():
+                signal.signal(sig, handler)
     finally:
-        for sig, handler in saved.items():
-            signal.signal(sig, handler)
+        os.umask(previous_umask)

@@ -196,3 +196,20 @@ def test_the_runner_command_says_what_is_missing_or_unreachable(tmp_path, capsys
         assert main(["runner", "--portal", "http://127.0.0.1:9", "--arena", "annex", "--token", "sdk_x",
                      "--work", str(tmp_path)]) == 1
         assert "cannot reach the portal" in capsys.readouterr().err
+
+
+def test_the_runner_cli_gives_the_callers_umask_back(tmp_path, monkeypatch):
+    """`swarmdeck runner` writes privately (umask 077) but restores the caller's umask: run in-process (as the CLI
+    tests do) it left 077 behind, and every later test of that worker made files no jail could read."""
+    import os
+
+    from swarmdeck.console.cli import main
+
+    monkeypatch.delenv("SWARMDECK_TOKEN", raising=False)
+    before = os.umask(0o022)
+    try:
+        main(["runner", "--portal", "http://127.0.0.1:9", "--arena", "annex", "--token", "sdk_x",
+              "--work", str(tmp_path / "w"), "--trusted"])
+        assert os.umask(0o022) == 0o022
+    finally:
+        os.umask(before)
