@@ -9,7 +9,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from portal_fixtures import browser_sign_in, make_portal
+from portal_fixtures import browser_sign_in, make_portal, skip_verification
 
 from swarmdeck.console.picture.colours import OBSTACLE
 from swarmdeck.console.portal.runner import ArenaRunner, ArenaSettings
@@ -47,11 +47,7 @@ def test_the_live_view_of_a_running_job_draws_its_sensors_rays_and_the_obstacle(
     runner.start()
     try:
         jid = portal.submit("alice", source=STILL, robots=2, duration=30.0, initial_poses=POSES).json()["id"]
-        with svc.db.transaction() as tx:
-            svc.db.transition(tx, jid, "verifying")
-            svc.db.transition(tx, jid, "awaiting approval", verdict="accepted")
-            svc.db.transition(tx, jid, "in arena queue")
-        svc.notify()
+        skip_verification(portal, jid)
         with sync_playwright() as pw:
             browser = pw.chromium.launch(executable_path=CHROMIUM, args=ARGS)
             try:
