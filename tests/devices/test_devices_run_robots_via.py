@@ -7,8 +7,11 @@ import subprocess
 import sys
 
 import pytest
+from mqtt_broker import wait_until
 
 from swarmdeck.console.cli import main
+from swarmdeck.devices.net.mqtt_config import parse_broker_url
+from swarmdeck.devices.net.transport_mqtt import MqttTransport
 
 pytestmark = pytest.mark.mqtt
 
@@ -31,6 +34,13 @@ def test_a_script_runs_on_the_mqtt_robots(mosquitto, tmp_path, capsys):
                               "robots", "--broker", mosquitto.url, "--robots", "3", "--seed", "5", "--quiet"],
                              stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     try:
+        # the fleet's process is up before the run looks for it (the run waits 5 s for the first poses; a loaded
+        # machine can take longer than that just to start a Python process)
+        watcher = MqttTransport(parse_broker_url(mosquitto.url), ids=range(3)).start()
+        try:
+            wait_until(lambda: len(watcher.latest_poses().ids) == 3, 60, "the fleet's poses")
+        finally:
+            watcher.close()
         code = main(["run", str(script), "--robots-via", mosquitto.url, "--robots", "3", "--json"])
     finally:
         fleet.terminate()
