@@ -3,6 +3,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import sys
 
 NAME = "compare"
 HELP = ("compare recorded runs: duration, robots, contacts, minimum distance, barrier interventions, coverage "
@@ -21,7 +22,7 @@ def main(args: argparse.Namespace) -> int:
     from swarmdeck.console.cli.play import open_runs
     from swarmdeck.console.recording.metrics import comparison, run_letter, run_metrics, table
 
-    runs = open_runs(args.file)
+    runs = open_runs(args.file, warnings=sys.stderr)  # stdout stays the table / the JSON
     try:
         metrics = [run_metrics(r) for r in runs]
     finally:

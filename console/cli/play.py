@@ -3,9 +3,10 @@ from __future__ import annotations
 
 import argparse
 import os
+import sys
 import threading
 from collections.abc import Sequence
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, TextIO
 
 from swarmdeck.console.cli import UsageError
 
@@ -39,9 +40,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                              "default) or side (each in its own arena, in a row)")
 
 
-def open_runs(paths: Sequence[str]) -> list[Recording]:
+def open_runs(paths: Sequence[str], warnings: TextIO | None = None) -> list[Recording]:
     """Open every recording for playing together; UsageError naming the file that cannot be played (not found,
-    not a recording, no readable frame) or given twice. Damage warnings are printed with the file's name."""
+    not a recording, no readable frame) or given twice. Damage warnings are printed (to ``warnings``, default
+    stdout) with the file's name."""
     from swarmdeck.console.recording.reader import RecordingError, open_recording
 
     seen: dict[tuple[int, int], str] = {}
@@ -66,7 +68,7 @@ def open_runs(paths: Sequence[str]) -> list[Recording]:
             if rec.empty:
                 raise UsageError(f"{p} holds no readable frame" + (f" ({rec.warnings[0]})" if rec.warnings else ""))
             for w in rec.warnings:
-                print(f"warning: {w}" if len(paths) == 1 else f"warning: {p}: {w}")
+                print(f"warning: {w}" if len(paths) == 1 else f"warning: {p}: {w}", file=warnings or sys.stdout)
     except UsageError:
         for r in runs:
             r.close()

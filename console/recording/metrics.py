@@ -157,7 +157,7 @@ def run_metrics(recording: Recording) -> RunMetrics:
         interventions += changed
         intervention_frames += changed > 0
         failures += f.barrier is not None and f.barrier.enabled and not f.barrier.ok
-        stopped += f.stopped
+        stopped += f.run_state == "estop"
         if f.coverage is not None and math.isfinite(f.coverage.cost_H):
             h_last = float(f.coverage.cost_H)
             h_sum += h_last
