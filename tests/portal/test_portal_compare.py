@@ -7,7 +7,7 @@ import time
 
 import pytest
 from compare_synth import straight_run
-from portal_fixtures import portal, sign_in  # noqa: F401
+from portal_fixtures import sign_in
 
 ENDED = ("verifying", "awaiting approval", "in arena queue", "setting up", "running", "done")
 
