@@ -12,6 +12,7 @@ from swarmdeck.console.cli import UsageError
 
 if TYPE_CHECKING:
     from swarmdeck.console.recording.reader import Recording
+    from swarmdeck.console.web.player import PlayerApp
 
 NAME = "play"
 HELP = ("replay a recorded session in the browser: the console's scene with a timeline (seek, play, step, rate, "
@@ -76,7 +77,10 @@ def open_runs(paths: Sequence[str], warnings: TextIO | None = None) -> list[Reco
     return runs
 
 
-def main(args: argparse.Namespace) -> int:
+def open_player(args: argparse.Namespace) -> tuple[PlayerApp, list[Recording]]:
+    """Everything ``play`` does before serving: check the options, open and align the recordings, make the
+    player at ``--start`` with ``--rate``/``--loop`` (playing unless ``--paused``) and start its thread.
+    UsageError for bad options or recordings (every file opened is closed again)."""
     from swarmdeck.console.recording.align import align, anchors_for
     from swarmdeck.console.web.player import RATE_MAX, RATE_MIN, PlayerApp
 
@@ -94,15 +98,14 @@ def main(args: argparse.Namespace) -> int:
     runs = open_runs(files)
     try:
         offsets = align(runs, anchors) if len(runs) > 1 else None
+        if len(runs) > 1:
+            _say_differences(runs)
+        app = PlayerApp(runs if len(runs) > 1 else runs[0], host=args.host, port=args.port, offsets=offsets,
+                        layout=args.layout)
     except ValueError as exc:
         for r in runs:
             r.close()
         raise UsageError(str(exc)) from exc
-    if len(runs) > 1:
-        _say_differences(runs)
-    try:
-        app = PlayerApp(runs if len(runs) > 1 else runs[0], host=args.host, port=args.port, offsets=offsets,
-                        layout=args.layout)
     except OSError as exc:
         for r in runs:
             r.close()
@@ -113,9 +116,16 @@ def main(args: argparse.Namespace) -> int:
     app.rate.value = f"{args.rate:g}x" if args.rate in (0.1, 0.25, 0.5, 1.0, 2.0, 4.0) else app.rate.value
     app.loop.value = args.loop
     p.seek(args.start)
+    app.refresh()  # the frame at --start (paused, the playback thread draws nothing until something changes)
     if not args.paused:
         p.play()
     app.start()
+    return app, runs
+
+
+def main(args: argparse.Namespace) -> int:
+    app, runs = open_player(args)
+    p = app.player
     if len(runs) == 1:
         print(f"playing {runs[0].path} ({runs[0].duration:.1f} s, {p.frame.n} robots) at http://{args.host}:{app.port} "
               "— Ctrl-C to quit")
