@@ -190,14 +190,15 @@ def frame_setup(frame: Frame) -> dict[str, str]:
     return {"arena (m)": arena_text(frame.bounds), "robots": str(frame.n), "control period (s)": f"{frame.dt:.4g}"}
 
 
-def differences(setups: Sequence[Mapping[str, str]]) -> list[str]:
+def differences(setups: Sequence[Mapping[str, str]], names: Sequence[str] | None = None) -> list[str]:
     """What differs between runs (their :meth:`RunMetrics.setup` or :func:`frame_setup`), one line per item
-    naming every run's value by its letter ([] when all agree)."""
+    naming every run's value by its name (default its letter, A, B, …; [] when all agree)."""
+    called = [run_letter(i) for i in range(len(setups))] if names is None else list(names)
     out: list[str] = []
     for label in dict.fromkeys(k for s in setups for k in s):
         values = [s.get(label, "–") for s in setups]
         if len(set(values)) > 1:
-            out.append(f"{label} differ: " + "; ".join(f"{run_letter(i)} {v}" for i, v in enumerate(values)))
+            out.append(f"{label} differ: " + "; ".join(f"{n} {v}" for n, v in zip(called, values)))
     return out
 
 
@@ -242,6 +243,6 @@ def comparison(runs: Sequence[RunMetrics], names: Sequence[str] | None = None) -
     letters = [run_letter(i) for i in range(len(runs))] if names is None else list(names)
     return {
         "runs": [{"name": n, **r.to_dict()} for n, r in zip(letters, runs)],
-        "differences": differences([r.setup() for r in runs]),
+        "differences": differences([r.setup() for r in runs], letters),
         "metrics": [{"key": k, "label": label} for k, label in METRICS],
     }

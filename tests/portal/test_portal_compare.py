@@ -45,7 +45,7 @@ def test_a_researcher_compares_two_of_her_jobs(portal, jobs):  # noqa: F811
     assert [r["name"] for r in body["runs"]] == [f"job {a}", f"job {b}"]
     assert [r["robots"] for r in body["runs"]] == [3, 4] and [r["contacts"] for r in body["runs"]] == [1, 0]
     assert body["runs"][0]["file"] == "recording.mcap"  # not the lab's folders
-    assert "robots differ: A 3; B 4" in body["differences"]
+    assert f"robots differ: job {a} 3; job {b} 4" in body["differences"]
     t0, t1 = body["tracks"]
     assert len(t0["t"]) == 21 and len(t1["t"]) == 11  # every 0.1 s of 2 s and of 1 s
     assert len(t0["poses"][0]) == 3 and len(t1["poses"][0]) == 4 and t1["bounds"] == [-1.2, 1.2, -0.8, 0.8]
@@ -84,7 +84,7 @@ def test_the_job_page_offers_her_own_ended_jobs_and_shows_the_comparison(portal,
         shown = client.get(f"/jobs/{a}/compare", params={"with": b})
         assert shown.status_code == 200
         assert 'id="metrics"' in shown.text and "contacts (onsets)" in shown.text and 'id="compare-tracks"' in shown.text
-        assert "robots differ: A 3; B 4" in shown.text and "/static/compare.js" in shown.text
+        assert f"robots differ: job {a} 3; job {b} 4" in shown.text and "/static/compare.js" in shown.text
         assert client.get(f"/jobs/{a}/compare", params={"with": bob}).status_code == 404
         assert client.get(f"/jobs/{a}/compare", params={"with": "x"}).status_code == 422
         assert client.get("/static/compare.js").status_code == 200
