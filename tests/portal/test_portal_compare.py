@@ -7,7 +7,7 @@ import time
 
 import pytest
 from compare_synth import straight_run
-from portal_fixtures import sign_in
+from portal_fixtures import make_portal, sign_in
 
 ENDED = ("verifying", "awaiting approval", "in arena queue", "setting up", "running", "done")
 
@@ -28,7 +28,17 @@ def ended_job(portal, who: str, **run) -> int:  # noqa: F811
     return jid
 
 
-@pytest.fixture
+@pytest.fixture(scope="module")
+def portal(tmp_path_factory):  # noqa: F811 - one portal for the module (the tests only read, but for one job)
+    p = make_portal(tmp_path_factory.mktemp("compare"), fleet=6, max_duration=60.0, max_upload_bytes=64 << 10)
+    try:
+        yield p
+    finally:
+        p.server.stop()
+        p.service.close()
+
+
+@pytest.fixture(scope="module")
 def jobs(portal):  # noqa: F811
     a = ended_job(portal, "alice", ticks=33)
     b = ended_job(portal, "alice", ticks=17, n=4, bounds=(-1.2, 1.2, -0.8, 0.8))
