@@ -60,6 +60,10 @@ def test_a_researcher_compares_two_of_her_jobs(portal, jobs):  # noqa: F811
     assert len(t0["t"]) == 21 and len(t1["t"]) == 11  # every 0.1 s of 2 s and of 1 s
     assert len(t0["poses"][0]) == 3 and len(t1["poses"][0]) == 4 and t1["bounds"] == [-1.2, 1.2, -0.8, 0.8]
     assert t0["poses"][-1][1][0] == pytest.approx(0.1)  # robot 1 at x = 0.5 − 0.2 × 2 s
+    reads = portal.service.run_cache.reads
+    with portal.client("alice") as c:
+        again = c.get(f"/api/jobs/{b}/compare/{a}").json()  # the other way round: the same runs, not read again
+    assert portal.service.run_cache.reads == reads and again["runs"][0]["robots"] == 4
 
 
 def test_another_researchers_job_is_not_found(portal, jobs):  # noqa: F811
