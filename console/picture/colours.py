@@ -98,3 +98,8 @@ def hex_colors(colours: NDArray[np.uint8]) -> list[str]:
 SENSOR_RAY = (0, 150, 160)
 #: Where a ToF reading ends.
 SENSOR_HIT = (0, 110, 120)
+
+#: One colour per run when several recordings are shown together (``swarmdeck play A B …``, the portal's
+#: comparison): run 1 (solid) the robots' blue, the others (ghosts) in turn; cycles after eight runs.
+RUN_COLORS = _rgb(20, 70, 170, 214, 39, 40, 44, 160, 44, 148, 103, 189, 255, 127, 14, 23, 190, 207,
+                  140, 86, 75, 227, 119, 194)

@@ -57,6 +57,7 @@ from swarmdeck.console.portal.models import (
     AuditOut,
     BarrierIn,
     BypassIn,
+    CompareOut,
     EnvOut,
     FileOut,
     JobOut,
@@ -210,6 +211,13 @@ def api_router(service: PortalService, counter: RejectionCounter, *, max_upload_
         """An ended job's results in short: did the barrier step in (how often, which robots), the minimum
         distance between robots, contacts, the files and the command that downloads them."""
         return service.results(u, job_id)
+
+    @router.get("/jobs/{job_id}/compare/{other_id}", tags=["results"], response_model=CompareOut)
+    def compare(job_id: int, other_id: int, u: User = Depends(user)) -> dict[str, Any]:
+        """Two ended jobs compared: the metric table (duration, robots, contacts, minimum distance, barrier
+        interventions, coverage cost H, distance travelled …), what differs between them and both runs' robot
+        poses every 0.1 s (or coarser) for an overlaid view. Your own jobs only: another researcher's is 404."""
+        return service.compare(u, job_id, other_id)
 
     @router.get("/jobs/{job_id}/log", tags=["results"], response_model=LogOut)
     def script_log(job_id: int, since: int = 0, u: User = Depends(user)) -> dict[str, Any]:

@@ -295,3 +295,44 @@ class RejectionsOut(BaseModel):
 
 class StatsOut(BaseModel):
     rejected: RejectionsOut
+
+
+class RunMetricsOut(_Open):
+    """One job's run in a comparison (:class:`~swarmdeck.console.recording.metrics.RunMetrics`)."""
+
+    name: str = Field(description="job N")
+    file: str
+    duration_s: float
+    frames: int
+    robots: int
+    bounds: list[float] = Field(description="x_min, x_max, y_min, y_max (m)")
+    contacts: int
+    min_distance_m: float | None
+    interventions: int
+    coverage_cost_final: float | None
+    distance_m: float
+
+
+class MetricRowOut(BaseModel):
+    key: str
+    label: str
+
+
+class TracksOut(BaseModel):
+    """A run's robot poses sampled every ``period`` s (:mod:`~swarmdeck.console.recording.tracks`)."""
+
+    name: str
+    period: float
+    t: list[float]
+    ids: list[int]
+    bounds: list[float]
+    poses: list[list[list[float]]] = Field(description="(T, N, 3): x, y (m), θ (rad)")
+
+
+class CompareOut(BaseModel):
+    """Two jobs compared: the metric table (``runs`` × ``metrics``), what differs, both runs' tracks."""
+
+    runs: list[RunMetricsOut]
+    differences: list[str]
+    metrics: list[MetricRowOut]
+    tracks: list[TracksOut]

@@ -71,7 +71,8 @@ from swarmdeck.core.errors import SwarmdeckError
 
 HERE = Path(__file__).resolve().parent
 STATIC = {"portal.css": "text/css", "live.js": "text/javascript", "refresh.js": "text/javascript",
-          "forms.js": "text/javascript", "docs.js": "text/javascript", "log.js": "text/javascript"}
+          "forms.js": "text/javascript", "docs.js": "text/javascript", "log.js": "text/javascript",
+          "compare.js": "text/javascript"}
 SIGNIN_COOKIE = "swarmdeck_signin"
 LIVE_PERIOD = 0.1  # s: the live view gets at most 10 Frames a second (the newest at each send)
 CHECK_PERIOD = 1.0  # s: the live stream re-checks the session and the job's state this often
@@ -250,8 +251,31 @@ def router(service: PortalService, live: LiveFeed) -> APIRouter:
         results = None
         if job.state in FINAL and job.state != JobState.REJECTED and not job.results_deleted:
             results = summary_lines(service.results(s.user, job_id))
+        others = comparable(s, job_id) if job.state in FINAL and not job.results_deleted else []
         return page(request, "job.html", s, job=job, files=files, report=report, run=run, results=results,
-                    live=job.state in ACTIVE, final=job.state in FINAL, live_states=ACTIVE, final_states=FINAL)
+                    live=job.state in ACTIVE, final=job.state in FINAL, live_states=ACTIVE, final_states=FINAL,
+                    others=others)
+
+    def comparable(s: Session, job_id: int) -> list[Any]:
+        """The user's own other ended jobs whose results are kept: what a job can be compared with."""
+        return [j for j in service.jobs(s.user, mine=True)
+                if j.id != job_id and j.state in FINAL and j.results_deleted is None][:200]
+
+    @r.get("/jobs/{job_id}/compare")
+    async def compare_page(request: Request, job_id: int, s: Session = Depends(signed_in)) -> Response:
+        """Job ``job_id`` compared with ``?with=K``: the metric table and the two runs overlaid (compare.js)."""
+        raw = request.query_params.get("with", "")
+        try:
+            job = service.job(s.user, job_id)
+            if not raw.strip().isdigit():
+                raise BadInput(f"choose a job to compare job {job_id} with (?with=JOB, got {raw[:40]!r})", "with")
+            result = await run_in_threadpool(service.compare, s.user, job_id, int(raw))
+        except PortalError as exc:
+            return refused(request, s, exc.message, exc.status)
+        rows = [{"label": m["label"], "values": [_metric_text(run.get(m["key"]), m["key"]) for run in result["runs"]]}
+                for m in result["metrics"]]
+        return page(request, "compare.html", s, job=job, other=int(raw), result=result, rows=rows,
+                    tracks=result["tracks"])
 
     @r.post("/jobs/{job_id}/cancel")
     async def cancel(request: Request, job_id: int, s: Session = Depends(signed_in)) -> Response:
@@ -428,6 +452,17 @@ def router(service: PortalService, live: LiveFeed) -> APIRouter:
                             headers={"Cache-Control": "no-cache", "X-Content-Type-Options": "nosniff"})
 
     return r
+
+
+def _metric_text(value: Any, key: str) -> str:
+    """A metric as the comparison table shows it ("–" where undefined)."""
+    if value is None:
+        return "–"
+    if key == "bounds" or isinstance(value, list):
+        return ", ".join(str(v) for v in value)
+    if isinstance(value, float):
+        return f"{value:.4g}"
+    return str(value)
 
 
 class SignInRequired(SwarmdeckError):

@@ -62,6 +62,7 @@ from typing import Any, Protocol, runtime_checkable
 
 from swarmdeck.console.portal.accounts import Accounts, User
 from swarmdeck.console.portal.arenas import DEFAULT_ARENA, ArenaSpec, check_request
+from swarmdeck.console.portal.compare import RunCache, compare_recordings
 from swarmdeck.console.portal.db import Database, TransitionConflict
 from swarmdeck.console.portal.errors import BadInput, Conflict, Forbidden, NotFound, Unavailable
 from swarmdeck.console.portal.job import (
@@ -231,6 +232,7 @@ class PortalService:
         self.changed = threading.Condition()  # notified after every change workers/runner/live views wait on
         self.arena: ArenaControl | None = None
         self.lab = LabStore(self.db)  # reservations, notifications, remote runners' leases
+        self.run_cache = RunCache()  # job comparisons: the metrics and tracks of recordings read lately
         self.runners: dict[str, ArenaControl] = {}  # arena name -> its in-process runner (several arenas)
         self.remote: object | None = None  # the remote runners' rules (.remote.RemoteArenas), made by the API
 
@@ -368,6 +370,23 @@ class PortalService:
             raise NotFound(f"job {job_id} is {job.state}: its results come when it has ended", "job")
         return results_summary(job.to_dict(), self.job_files.run_summary(job.id),
                                [f.to_dict() for f in self.job_files.listing(job.id)])
+
+    def compare(self, user: User, job_id: int, other_id: int) -> dict[str, Any]:
+        """Job ``job_id`` compared with job ``other_id`` (:func:`.compare.compare_recordings`: the metric table,
+        what differs, both runs' tracks). Both must be visible to ``user`` (a researcher's own: another
+        researcher's job is 404, as everywhere), ended, with their results kept and a recording."""
+        from swarmdeck.console.portal.jobfiles import RECORDING
+
+        if job_id == other_id:
+            raise BadInput(f"compare job {job_id} with another job, not with itself", "with")
+        jobs = [self._visible(user, j) for j in (job_id, other_id)]
+        paths = []
+        for job in jobs:
+            if job.state not in FINAL:
+                raise NotFound(f"job {job.id} is {job.state}: it can be compared when it has ended", "job")
+            self._require_results(job)
+            paths.append(self.job_files.path(job, RECORDING))
+        return compare_recordings(paths, [f"job {j.id}" for j in jobs], self.run_cache)
 
     def script_log(self, user: User, job_id: int, since: int = 0) -> dict[str, Any]:
         """The job's script output from byte ``since`` on: ``{"text", "next", "live"}`` — while it runs, what the

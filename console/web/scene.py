@@ -200,12 +200,15 @@ class ArenaScene:
         bounds: the arena rectangle (x_min, x_max, y_min, y_max), m.
         robot_radius: body radius for the robot glyph, m.
         style: sizes and sampling.
+        root: a prefix of every node's name (``/runB``: the scene of a run drawn beside others, moved as one by
+            the frame node ``/runB``; ``swarmdeck play A B --layout side``).
     """
 
     def __init__(self, server: viser.ViserServer, bounds: Bounds = DEFAULT_BOUNDS,
                  robot_radius: float = ROBOT_RADIUS, style: SceneStyle | None = None,
-                 image_provider: ImageProvider | None = None) -> None:
+                 image_provider: ImageProvider | None = None, root: str = "") -> None:
         self.server = server
+        self.root = root  # every node's name starts with it ("" — the console; "/runB" — a run beside others)
         self.image_provider = image_provider
         self._image_ref: str | None = None
         self.scene = server.scene
@@ -224,12 +227,10 @@ class ArenaScene:
         self._setup_static()
 
     # ------------------------------------------------------------------ setup
-    def _setup_static(self) -> None:
-        sc = self.scene
-        x0, x1, y0, y1 = self.bounds
-        (cx, cy), w, h = self.bounds.centre, self.bounds.width, self.bounds.height
-        sc.configure_environment_map(None)
-        sc.set_up_direction("+z")
+    def look_at(self, bounds: Bounds) -> None:
+        """Point the initial camera top-down at ``bounds`` (x_min, x_max, y_min, y_max, m): the arena, or the
+        row of arenas of runs shown side by side."""
+        (cx, cy), w, h = bounds.centre, bounds.width, bounds.height
         # Top-down: a narrow perspective from high above (viser has no orthographic camera). The view
         # is shifted right by ~half the control panel so the arena sits in the visible part of a
         # 1280×800 window (REFERENCE.md §8).
@@ -241,46 +242,54 @@ class ArenaScene:
         cam.look_at = (cx + shift, cy, 0.0)
         cam.position = (cx + shift, cy, 0.5 * view_h / math.tan(fov / 2))
         cam.up = (0.0, 1.0, 0.0)
+
+    def _setup_static(self) -> None:
+        sc = self.scene
+        x0, x1, y0, y1 = self.bounds
+        (cx, cy), w, h = self.bounds.centre, self.bounds.width, self.bounds.height
+        sc.configure_environment_map(None)
+        sc.set_up_direction("+z")
+        self.look_at(self.bounds)
         corners = np.array([[x0, y0], [x1, y0], [x1, y1], [x0, y1]])
         boundary = sc.add_line_segments(
-            "/arena/boundary", _segments_2d(corners, np.roll(corners, -1, axis=0), 0.004), BOUNDARY,
+            f"{self.root}/arena/boundary", _segments_2d(corners, np.roll(corners, -1, axis=0), 0.004), BOUNDARY,
             thickness=0.015)
-        grid = sc.add_grid("/arena/grid", width=w, height=h, plane="xy", cell_size=0.1, section_size=0.5,
+        grid = sc.add_grid(f"{self.root}/arena/grid", width=w, height=h, plane="xy", cell_size=0.1, section_size=0.5,
                            cell_color=(215, 215, 215), section_color=(170, 170, 170),
                            position=(cx, cy, -0.004), shadow_opacity=0.0)
         blank = np.full((8, 8, 3), 250, dtype=np.uint8)
         # format "auto": JPEG for the opaque heat map, PNG (keeps alpha) for the translucent one over the
         # camera picture, which lies below it (z = -0.012)
-        density_image = sc.add_image("/density", blank, render_width=w, render_height=h, format="auto",
+        density_image = sc.add_image(f"{self.root}/density", blank, render_width=w, render_height=h, format="auto",
                                      jpeg_quality=90, position=(cx, cy, -0.01), wxyz=(0.0, 1.0, 0.0, 0.0),
                                      cast_shadow=False, receive_shadow=False)
-        voronoi = sc.add_line_segments("/voronoi", _EMPTY_SEG, VORONOI, thickness=0.006)
-        centroids = sc.add_point_cloud("/centroids", np.zeros((1, 3), np.float32) - [0, 0, 5],
+        voronoi = sc.add_line_segments(f"{self.root}/voronoi", _EMPTY_SEG, VORONOI, thickness=0.006)
+        centroids = sc.add_point_cloud(f"{self.root}/centroids", np.zeros((1, 3), np.float32) - [0, 0, 5],
                                        CENTROID, point_size=0.035, point_shape="diamond",
                                        precision="float32")
-        trails = sc.add_line_segments("/trails", _EMPTY_SEG, (120, 160, 220), thickness=0.006)
-        discs = sc.add_line_segments("/discs", _EMPTY_SEG, SAFETY_RING, thickness=0.004)
-        barrier = sc.add_line_segments("/barrier", _EMPTY_SEG, PAIR, thickness=0.014)
+        trails = sc.add_line_segments(f"{self.root}/trails", _EMPTY_SEG, (120, 160, 220), thickness=0.006)
+        discs = sc.add_line_segments(f"{self.root}/discs", _EMPTY_SEG, SAFETY_RING, thickness=0.004)
+        barrier = sc.add_line_segments(f"{self.root}/barrier", _EMPTY_SEG, PAIR, thickness=0.014)
         stub = np.array([[[0, 0, -5], [0.001, 0, -5]]], dtype=np.float32)
-        nominal = sc.add_arrows("/arrows/nominal", stub, NOMINAL, shaft_radius=0.006,
+        nominal = sc.add_arrows(f"{self.root}/arrows/nominal", stub, NOMINAL, shaft_radius=0.006,
                                 head_radius=0.016, head_length=0.03)
-        safe = sc.add_arrows("/arrows/safe", stub, SAFE, shaft_radius=0.007,
+        safe = sc.add_arrows(f"{self.root}/arrows/safe", stub, SAFE, shaft_radius=0.007,
                              head_radius=0.018, head_length=0.03)
-        contacts = sc.add_point_cloud("/contacts", np.zeros((1, 3), np.float32) - [0, 0, 5],
+        contacts = sc.add_point_cloud(f"{self.root}/contacts", np.zeros((1, 3), np.float32) - [0, 0, 5],
                                       CONTACT, point_size=0.07, point_shape="circle",
                                       precision="float32")
-        virtual = sc.add_line_segments("/virtual", _EMPTY_SEG, VIRTUAL_RING, thickness=0.008)
-        battery = sc.add_line_segments("/battery", _EMPTY_SEG, BATTERY_TRACK, thickness=0.018)
-        goals = sc.add_point_cloud("/goals", np.zeros((1, 3), np.float32), GOAL, point_size=0.05,
+        virtual = sc.add_line_segments(f"{self.root}/virtual", _EMPTY_SEG, VIRTUAL_RING, thickness=0.008)
+        battery = sc.add_line_segments(f"{self.root}/battery", _EMPTY_SEG, BATTERY_TRACK, thickness=0.018)
+        goals = sc.add_point_cloud(f"{self.root}/goals", np.zeros((1, 3), np.float32), GOAL, point_size=0.05,
                                    point_shape="diamond", precision="float32", visible=False)
-        sensors = sc.add_line_segments("/sensors/rays", _EMPTY_SEG, SENSOR_RAY, thickness=0.003)
-        leds = sc.add_point_cloud("/sensors/leds", np.zeros((1, 3), np.float32) - [0, 0, 5], (0, 0, 0),
+        sensors = sc.add_line_segments(f"{self.root}/sensors/rays", _EMPTY_SEG, SENSOR_RAY, thickness=0.003)
+        leds = sc.add_point_cloud(f"{self.root}/sensors/leds", np.zeros((1, 3), np.float32) - [0, 0, 5], (0, 0, 0),
                                   point_size=0.045, point_shape="circle", precision="float32")
         self.nodes = SceneNodes(boundary=boundary, grid=grid, density=density_image, voronoi=voronoi,
                                 centroids=centroids, trails=trails, discs=discs, barrier=barrier,
                                 nominal=nominal, safe=safe, contacts=contacts, virtual=virtual, battery=battery,
-                                goals=goals, sensors=sensors, leds=leds, annotations=AnnotationNodes(sc))
-        self.nodes.network = sc.add_line_segments("/network", _EMPTY_SEG, LINK_IDLE, thickness=0.005)
+                                goals=goals, sensors=sensors, leds=leds, annotations=AnnotationNodes(sc, root=self.root))
+        self.nodes.network = sc.add_line_segments(f"{self.root}/network", _EMPTY_SEG, LINK_IDLE, thickness=0.005)
         for name in LAYERS:
             self._apply_visibility(name)
 
@@ -290,12 +299,12 @@ class ArenaScene:
         verts, faces = robot_mesh(self.robot_radius)
         pos = np.column_stack((frame.poses[:, :2], np.full(n, 0.01))).astype(np.float32)
         self.nodes.robots = sc.add_batched_meshes_simple(
-            "/robots", verts, faces, batched_wxyzs=_yaw_wxyz(frame.poses[:, 2]), batched_positions=pos,
+            f"{self.root}/robots", verts, faces, batched_wxyzs=_yaw_wxyz(frame.poses[:, 2]), batched_positions=pos,
             batched_colors=robot_colors(frame), flat_shading=True, cast_shadow=False, receive_shadow=False)
         for lab in self.nodes.labels:
             lab.remove()
         self.nodes.labels = [
-            sc.add_label(f"/labels/r{int(i)}", str(int(i)), position=(float(p[0]), float(p[1]) + self.style.label_offset, 0.02),
+            sc.add_label(f"{self.root}/labels/r{int(i)}", str(int(i)), position=(float(p[0]), float(p[1]) + self.style.label_offset, 0.02),
                          font_size_mode="screen", font_screen_scale=0.8, anchor="center-center",
                          visible=self.visible["labels"])
             for i, p in zip(frame.ids, frame.poses)
@@ -333,7 +342,7 @@ class ArenaScene:
             self.nodes.obstacles = None
         if len(seg):
             self.nodes.obstacles = self.scene.add_line_segments(
-                "/obstacles", _segments_2d(seg[:, 0], seg[:, 1], 0.005), OBSTACLE, thickness=0.03)
+                f"{self.root}/obstacles", _segments_2d(seg[:, 0], seg[:, 1], 0.005), OBSTACLE, thickness=0.03)
             self._apply_visibility("obstacles")
 
     def set_layer(self, name: str, visible: bool) -> None:
@@ -470,7 +479,7 @@ class ArenaScene:
         h = self.nodes.camera
         if h is None:
             self.nodes.camera = self.scene.add_image(
-                "/camera", np.asarray(img), render_width=area.width, render_height=area.height, format="jpeg",
+                f"{self.root}/camera", np.asarray(img), render_width=area.width, render_height=area.height, format="jpeg",
                 jpeg_quality=80, position=(*area.centre, -0.012), wxyz=(0.0, 1.0, 0.0, 0.0),
                 cast_shadow=False, receive_shadow=False, visible=self.visible["camera"])
         else:
@@ -552,4 +561,4 @@ class ArenaScene:
         shade = pic.cell_shades
         face_colors = np.column_stack((shade[cell_of], np.full(len(cell_of), 90))).astype(np.uint8)
         mesh = trimesh.Trimesh(vertices=verts, faces=faces, face_colors=face_colors, process=False)
-        self.nodes.cells = self.scene.add_mesh_trimesh("/cells", mesh)
+        self.nodes.cells = self.scene.add_mesh_trimesh(f"{self.root}/cells", mesh)

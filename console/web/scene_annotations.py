@@ -28,10 +28,11 @@ _HIDDEN = np.array([[[0.0, 0.0, -5.0], [0.0, 0.0, -5.0]]], dtype=np.float32)
 class AnnotationNodes:
     """The ``annotations`` layer's nodes in ``scene`` (module docstring); :attr:`visible` shows or hides all."""
 
-    def __init__(self, scene: viser.SceneApi) -> None:
+    def __init__(self, scene: viser.SceneApi, root: str = "") -> None:
         self.scene = scene
-        self.lines = scene.add_line_segments("/annotations/lines", _HIDDEN, (0, 0, 0), thickness=0.008)
-        self.points = scene.add_point_cloud("/annotations/points", np.zeros((1, 3), np.float32) - [0, 0, 5],
+        self.root = root  # a prefix of the nodes' names (the ArenaScene's root)
+        self.lines = scene.add_line_segments(f"{root}/annotations/lines", _HIDDEN, (0, 0, 0), thickness=0.008)
+        self.points = scene.add_point_cloud(f"{root}/annotations/points", np.zeros((1, 3), np.float32) - [0, 0, 5],
                                             (0, 0, 0), point_size=0.03, point_shape="circle", precision="float32")
         self.labels: list[viser.LabelHandle] = []
         self._shown_labels = 0
@@ -69,7 +70,7 @@ class AnnotationNodes:
         anchors, heights, _, texts = annotation_texts(ann)
         shown = min(len(texts), MAX_LABELS)
         while len(self.labels) < shown:
-            self.labels.append(self.scene.add_label(f"/annotations/text{len(self.labels)}", "", font_size_mode="scene",
+            self.labels.append(self.scene.add_label(f"{self.root}/annotations/text{len(self.labels)}", "", font_size_mode="scene",
                                                     anchor="center-center", visible=False))
         for i, label in enumerate(self.labels):
             if i < shown:
