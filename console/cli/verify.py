@@ -169,6 +169,8 @@ def main(args: argparse.Namespace) -> int:
     runs = _runs(args)
     if args.workers is not None and args.workers < 1:
         raise UsageError(f"--workers must be >= 1, got {args.workers}")
+    if args.falsify_budget < 0:
+        raise UsageError(f"--falsify-budget must be >= 0, got {args.falsify_budget}")
     try:
         limits = SandboxLimits(tick_s=args.tick_budget)
         config = VerificationConfig(n_robots=robots, duration=duration, runs=runs, seed=args.seed,
@@ -182,8 +184,6 @@ def main(args: argparse.Namespace) -> int:
         executor = RayExecutor(args.ray) if args.ray else LocalPoolExecutor(args.workers)
     except (ValueError, RuntimeError) as exc:
         raise UsageError(str(exc)) from exc
-    if args.falsify_budget < 0:
-        raise UsageError(f"--falsify-budget must be >= 0, got {args.falsify_budget}")
     worst_case_dir = None
     if args.falsify_budget:
         worst_case_dir = Path(args.worst_case_dir)
