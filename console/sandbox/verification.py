@@ -506,7 +506,8 @@ def script_verdict(bundle: ScriptBundle, runs: Sequence[dict[str, Any]], cfg: Ve
 
 def _falsify(bundle: ScriptBundle, runs: Sequence[dict[str, Any]], entry: dict[str, Any], config: VerificationConfig,
              executor: Any, cancel_path: str, cancelled: Callable[[], bool], record_dir: str | Path | None,
-             cpu: list[float], on_done: Callable[[RunTask, dict[str, Any], int], None]) -> dict[str, Any]:
+             cpu: list[float], on_done: Callable[[RunTask, dict[str, Any], int], None],
+             record_name: str | None = None) -> dict[str, Any]:
     """The falsifier's entry of one script (:mod:`.falsification`): skipped for a rejected script or one whose raw
     runs never built an Arena; VerificationCancelled when cancelled meanwhile."""
     from swarmdeck.console.sandbox.falsification import SearchCancelled, falsify_script, skipped
@@ -523,7 +524,7 @@ def _falsify(bundle: ScriptBundle, runs: Sequence[dict[str, Any]], entry: dict[s
         return results
 
     try:
-        return falsify_script(bundle, config, int(n), run_batch, cancel_path, record_dir)
+        return falsify_script(bundle, config, int(n), run_batch, cancel_path, record_dir, record_name)
     except SearchCancelled as exc:
         raise VerificationCancelled("verification was cancelled", cpu[0]) from exc
 
@@ -584,7 +585,7 @@ def verify(scripts: Sequence[str | Path | ScriptBundle], config: VerificationCon
            executor: Any = None, *, on_progress: Callable[[Progress], None] | None = None,
            cancel: Any = None, entry: str | None = None,
            names: Sequence[str | None] | None = None,
-           worst_case_dir: str | Path | None = None) -> VerificationReport:
+           worst_case_dir: str | Path | None = None, worst_case_name: str | None = None) -> VerificationReport:
     """Verify ``scripts`` under ``config`` on ``executor`` (default: a local process pool).
 
     ``on_progress(Progress)`` is called after each run; ``cancel`` is a
@@ -601,7 +602,7 @@ def verify(scripts: Sequence[str | Path | ScriptBundle], config: VerificationCon
 
     With ``config.falsify_budget`` > 0, every script not rejected is then searched for its worst case
     (:mod:`.falsification`, on the same executor); ``worst_case_dir``: where its recording is kept
-    (``<entry stem>-worst-case.mcap``; None: not recorded).
+    (``worst_case_name``, default ``<entry stem>-worst-case.mcap``; None: not recorded).
     """
     from swarmdeck.console.sandbox.confinement import ConfinementUnavailable, probe
     from swarmdeck.console.sandbox.executors import LocalPoolExecutor
@@ -668,7 +669,7 @@ def verify(scripts: Sequence[str | Path | ScriptBundle], config: VerificationCon
             verdict = script_verdict(bundle, runs, config, shown[k])
             if config.falsify_budget:
                 found = _falsify(bundle, runs, verdict, config, executor, cancel_path, cancelled, worst_case_dir,
-                                 searched_cpu, partial(done_searched, shown[k]))
+                                 searched_cpu, partial(done_searched, shown[k]), worst_case_name)
                 verdict = script_verdict(bundle, runs, config, shown[k], found)
             reports.append(verdict)
     finally:
