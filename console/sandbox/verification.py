@@ -51,6 +51,7 @@ import shutil
 import tempfile
 import time
 from collections.abc import Callable, Sequence
+from contextlib import nullcontext
 from dataclasses import asdict, dataclass, field, replace
 from functools import partial
 from pathlib import Path
@@ -653,25 +654,27 @@ def verify(scripts: Sequence[str | Path | ScriptBundle], config: VerificationCon
     watcher = ServiceThread(watch, "swarmdeck-verification-cancel", join_timeout=None)
     watcher.start()
     searched_cpu = [0.0]
+    kept = getattr(executor, "kept", None)  # with a search: one pool for the runs and every generation
     try:
-        results = executor.run(tasks, done, cancelled)
-        cpu_s = sum(float(r.pop("cpu_s", 0.0)) for r in results if r is not None)  # a timing: not in the report
-        if (cancel is not None and cancel.is_set()) or any(r is None or r["ended_by"] == "cancelled" for r in results):
-            raise VerificationCancelled("verification was cancelled", cpu_s)
-        searched_cpu[0] = cpu_s  # the searched runs' CPU adds to it
-        reports = []
-        for k, bundle in enumerate(loaded):
-            if k in unrunnable:
-                reports.append(_rejected_unrun(bundle, shown[k], unrunnable[k]))
-                continue
-            s = runnable.index(k)
-            runs = results[s * 2 * config.runs : (s + 1) * 2 * config.runs]
-            verdict = script_verdict(bundle, runs, config, shown[k])
-            if config.falsify_budget:
-                found = _falsify(bundle, runs, verdict, config, executor, cancel_path, cancelled, worst_case_dir,
-                                 searched_cpu, partial(done_searched, shown[k]), worst_case_name)
-                verdict = script_verdict(bundle, runs, config, shown[k], found)
-            reports.append(verdict)
+        with kept() if kept is not None and config.falsify_budget else nullcontext():
+            results = executor.run(tasks, done, cancelled)
+            cpu_s = sum(float(r.pop("cpu_s", 0.0)) for r in results if r is not None)  # a timing: not in the report
+            if (cancel is not None and cancel.is_set()) or any(r is None or r["ended_by"] == "cancelled" for r in results):
+                raise VerificationCancelled("verification was cancelled", cpu_s)
+            searched_cpu[0] = cpu_s  # the searched runs' CPU adds to it
+            reports = []
+            for k, bundle in enumerate(loaded):
+                if k in unrunnable:
+                    reports.append(_rejected_unrun(bundle, shown[k], unrunnable[k]))
+                    continue
+                s = runnable.index(k)
+                runs = results[s * 2 * config.runs : (s + 1) * 2 * config.runs]
+                verdict = script_verdict(bundle, runs, config, shown[k])
+                if config.falsify_budget:
+                    found = _falsify(bundle, runs, verdict, config, executor, cancel_path, cancelled, worst_case_dir,
+                                     searched_cpu, partial(done_searched, shown[k]), worst_case_name)
+                    verdict = script_verdict(bundle, runs, config, shown[k], found)
+                reports.append(verdict)
     finally:
         watcher.stop()
         shutil.rmtree(cancel_dir, ignore_errors=True)
