@@ -23,7 +23,15 @@ START_X = 0.3
 SPEED = 0.18
 
 
-arena = Arena(number_of_robots=2, initial_conditions=np.array([[-START_X, 0.0, 0.0], [START_X, LANE_GAP, np.pi]]))
-while True:  # straight ahead until the run's declared duration is over
-    arena.set_unicycle(np.full(arena.n, SPEED), np.zeros(arena.n))
-    arena.step()
+
+
+def main() -> None:
+    """Both robots straight ahead until the run's declared duration is over (``--duration``)."""
+    arena = Arena(number_of_robots=2, initial_conditions=np.array([[-START_X, 0.0, 0.0], [START_X, LANE_GAP, np.pi]]))
+    while True:
+        arena.set_unicycle(np.full(arena.n, SPEED), np.zeros(arena.n))
+        arena.step()
+
+
+if __name__ == "__main__":
+    main()
