@@ -23,8 +23,7 @@ from hypothesis import settings  # noqa: E402
 
 # The shared fixtures, registered once for every test module (the modules stay beside the tests;
 # a test imports only the helpers it calls by name): ``portal``, ``mosquitto``, ``jail_run``, ``env``.
-pytest_plugins = ("portal_fixtures", "mqtt_broker", "jail_fixtures", "script_env_fixtures", "lab_fixtures",
-                  "falsify_fixtures")
+pytest_plugins = ("portal_fixtures", "mqtt_broker", "jail_fixtures", "script_env_fixtures", "lab_fixtures")
 
 settings.register_profile("ci", derandomize=True, database=None, deadline=None, print_blob=True)
 settings.register_profile("dev", deadline=None)
