@@ -3,6 +3,8 @@ cross-entropy method is deterministic given its seed and keeps to its budget, an
 (examples/near_miss.py: two robots pass 75 mm clear unless the set-up errors line up in one corner of the tolerance)
 it finds the contact that uniform sampling with the same budget misses. The runs are the verification plant in this
 process (tests/falsify_fixtures.py); tests/sandbox/test_sandbox_verify_falsify.py runs the same search jailed."""
+from pathlib import Path
+
 import numpy as np
 import pytest
 from falsify_fixtures import NEAR_MISS_SPACE, near_miss_objective, near_miss_run
@@ -10,9 +12,10 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 
+from swarmdeck.console.sandbox.falsification import SearchCancelled, falsify_script
 from swarmdeck.console.sandbox.falsify import OFFSET_SIGMAS, SearchSpace, cross_entropy, uniform_search
 from swarmdeck.console.sandbox.plant import Disturbances
-from swarmdeck.console.sandbox.verification import VerificationConfig
+from swarmdeck.console.sandbox.verification import VerificationConfig, load_script
 from swarmdeck.devices.fleet.setup import ACCEPT_HEADING, ACCEPT_POSITION
 
 BUDGET = 40
@@ -76,3 +79,21 @@ def test_the_falsifier_finds_the_contact_that_uniform_sampling_misses_with_the_s
     uniform = uniform_search(near_miss_objective, NEAR_MISS_SPACE.dim, BUDGET, 3)
     assert uniform.first_at_most(0.0) is None and len(uniform.values) == BUDGET
     assert uniform.values.min() > 0.005  # not even close: 5 mm or more to spare in every one of the 40 runs
+
+
+NEAR_MISS_CONFIG = VerificationConfig(n_robots=2, duration=2.2, runs=1, seed=4, paced_runs=0, falsify_budget=20)
+
+
+def test_a_cancelled_searched_run_stops_the_search():
+    bundle = load_script(Path(__file__).parents[2] / "examples" / "near_miss.py")
+    with pytest.raises(SearchCancelled, match="a searched run was cancelled"):
+        falsify_script(bundle, NEAR_MISS_CONFIG, 2, lambda tasks: [None] * len(tasks))
+
+
+def test_searched_runs_that_measured_nothing_are_reported_not_ranked():
+    bundle = load_script(Path(__file__).parents[2] / "examples" / "near_miss.py")
+    crashed = {"ended_by": "error", "error": "boom", "contacts": None}  # what run_task gives when no Arena was built
+    entry = falsify_script(bundle, NEAR_MISS_CONFIG, 2, lambda tasks: [dict(crashed) for _ in tasks])
+    assert entry["worst_case"] is None and entry["runs"] == 20 and not entry["found_contact"]
+    assert entry["statement"] == ("falsification skipped: no searched run measured a clearance (see the raw runs' "
+                                  "errors)")
