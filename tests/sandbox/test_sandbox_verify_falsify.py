@@ -13,7 +13,7 @@ import swarmdeck.console.sandbox as jobs
 from swarmdeck.console.cli import main
 from swarmdeck.console.recording.reader import open_recording
 from swarmdeck.console.sandbox.confinement import probe
-from swarmdeck.console.sandbox.executors import SerialExecutor
+from swarmdeck.console.sandbox.executors import LocalPoolExecutor
 from swarmdeck.console.sandbox.report_html import render_html
 from swarmdeck.console.sandbox.verification import ACCEPTED, VerificationConfig, load_script, script_verdict, verify
 from swarmdeck.core.constants import ROBOT_DIAMETER
@@ -28,7 +28,8 @@ CONFIG = VerificationConfig(n_robots=2, duration=2.2, runs=1, seed=4, paced_runs
 @pytest.fixture(scope="module")
 def verified(tmp_path_factory):
     folder = tmp_path_factory.mktemp("worst")
-    return verify([NEAR_MISS], CONFIG, SerialExecutor(), worst_case_dir=folder), folder
+    # a local pool of one worker, kept for the runs and every generation (LocalPoolExecutor.kept)
+    return verify([NEAR_MISS], CONFIG, LocalPoolExecutor(1), worst_case_dir=folder), folder
 
 
 def test_the_falsifier_finds_the_contact_and_refuses_the_bypass_saying_where(verified):
