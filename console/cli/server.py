@@ -62,6 +62,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                              "--verify-runs 299 (default: the bound is stated, not required)")
     parser.add_argument("--verify-confidence", type=float, default=0.95, metavar="C",
                         help="confidence of that bound, in (0, 1) (default 0.95)")
+    parser.add_argument("--verify-falsify-budget", type=int, default=0, metavar="N",
+                        help="per job, up to N more verification runs (no barrier) searching the set-up tolerance and "
+                             "the tracking noise for the run closest to a contact; the report gives the worst case "
+                             "beside the bound (never in it), its recording is the job's worst-case.mcap, and a "
+                             "contact found refuses the bypass (default 0: no search)")
     parser.add_argument("--max-duration", type=float, default=600.0, metavar="S",
                         help="longest experiment a researcher may declare, s (default 600)")
     parser.add_argument("--max-upload", type=int, default=4 << 20, metavar="BYTES",
@@ -146,6 +151,8 @@ def check_arguments(args: argparse.Namespace) -> None:
         Guarantee(1, 0, args.verify_confidence, args.verify_epsilon)
     except ValueError as exc:
         raise UsageError(f"--verify-epsilon/--verify-confidence: {exc}") from None
+    if args.verify_falsify_budget < 0:
+        raise UsageError(f"--verify-falsify-budget must be >= 0, got {args.verify_falsify_budget}")
     if not args.max_duration > 0:
         raise UsageError(f"--max-duration must be > 0 s, got {args.max_duration}")
     if args.max_upload < 1024:
@@ -269,7 +276,8 @@ def main(args: argparse.Namespace) -> int:
                           limits=Limits(fleet=fleet, max_duration=args.max_duration,
                                                         max_upload_bytes=args.max_upload),
                           verify_runs=args.verify_runs, verify_epsilon=args.verify_epsilon,
-                          verify_confidence=args.verify_confidence, grace_s=args.grace, trusted=args.trusted,
+                          verify_confidence=args.verify_confidence,
+                          verify_falsify_budget=args.verify_falsify_budget, grace_s=args.grace, trusted=args.trusted,
                           allow_no_cgroup=args.allow_no_cgroup, script_env=checked_script_env(args.script_env),
                           arena_tick_budget_s=args.tick_budget,
                           quotas=Quotas(max_unfinished_jobs=args.max_jobs or None,

@@ -9,6 +9,7 @@ from __future__ import annotations
 import argparse
 import json
 import sys
+from pathlib import Path
 
 NAME = "verify"
 HELP = "verify experiment scripts in sandboxed simulation: safety score, verdict, JSON/HTML report"
@@ -62,6 +63,15 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                              "(those all without contact; each contact needs more runs, and the report says how many)")
     parser.add_argument("--confidence", type=float, default=0.95, metavar="C",
                         help="confidence of the stated bound on P(contact per run), in (0, 1) (default 0.95)")
+    parser.add_argument("--falsify-budget", type=int, default=0, metavar="N",
+                        help="after the random runs, spend up to N more runs per script (no barrier) searching the "
+                             "set-up tolerance (2 cm, 5 degrees) and the tracking noise for the run closest to a "
+                             "contact (cross-entropy method); the report gives the worst case found (mm, which "
+                             "robots, when) beside the bound, which it never enters; a contact found refuses the "
+                             "bypass (default 0: no search)")
+    parser.add_argument("--worst-case-dir", default=".", metavar="DIR",
+                        help="with --falsify-budget: where the worst case's recording is kept, "
+                             "SCRIPT-worst-case.mcap (`swarmdeck play` it; default the current folder)")
     parser.add_argument("--tick-budget", type=float, default=1.0, metavar="S",
                         help="per-tick compute budget of the script: CPU seconds it may use per tick, counted by its "
                              "cgroup (wall seconds where it has none); a tick ends after max(10 x S, S + 5) wall "
@@ -159,6 +169,8 @@ def main(args: argparse.Namespace) -> int:
     runs = _runs(args)
     if args.workers is not None and args.workers < 1:
         raise UsageError(f"--workers must be >= 1, got {args.workers}")
+    if args.falsify_budget < 0:
+        raise UsageError(f"--falsify-budget must be >= 0, got {args.falsify_budget}")
     try:
         limits = SandboxLimits(tick_s=args.tick_budget)
         config = VerificationConfig(n_robots=robots, duration=duration, runs=runs, seed=args.seed,
@@ -167,13 +179,20 @@ def main(args: argparse.Namespace) -> int:
                                                                    allow_no_cgroup=args.allow_no_cgroup,
                                                                    script_env=checked_script_env(args.script_env)),
                                     initial_poses=poses, declared_by=declared_by, wall_factor=args.wall_factor,
-                                    paced_runs=args.paced_runs, obstacles=obstacles_argument(args))
+                                    paced_runs=args.paced_runs, obstacles=obstacles_argument(args),
+                                    falsify_budget=args.falsify_budget)
         executor = RayExecutor(args.ray) if args.ray else LocalPoolExecutor(args.workers)
     except (ValueError, RuntimeError) as exc:
         raise UsageError(str(exc)) from exc
-    on_progress, close = _progress(2 * runs * len(args.scripts))
+    worst_case_dir = None
+    if args.falsify_budget:
+        worst_case_dir = Path(args.worst_case_dir)
+        if not worst_case_dir.is_dir():
+            raise UsageError(f"--worst-case-dir {args.worst_case_dir!r} is not a folder")
+    on_progress, close = _progress((2 * runs + args.falsify_budget) * len(args.scripts))
     try:
-        report = verify(args.scripts, config, executor, on_progress=on_progress, entry=args.entry)
+        report = verify(args.scripts, config, executor, on_progress=on_progress, entry=args.entry,
+                        worst_case_dir=worst_case_dir)
     except (ValueError, ConfinementUnavailable) as exc:
         raise UsageError(str(exc)) from exc
     except ConnectionError as exc:
@@ -201,6 +220,10 @@ def main(args: argparse.Namespace) -> int:
                       "barrier)")
             if s.get("contact_bound"):
                 print(f"  {s['contact_bound']['statement']}")
+            if s.get("falsification"):
+                found = s["falsification"]
+                where = f": {worst_case_dir / found['recording']}" if found.get("recording") and worst_case_dir else ""
+                print(f"  {found['statement']}{where}")
             for reason in s["reasons"]:
                 print(f"  rejected: {reason}")
             for reason in s["bypass_refused_because"]:

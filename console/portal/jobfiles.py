@@ -4,7 +4,7 @@
 path):
 
 * the submission: ``script.py``, or ``src/<checked member names>`` for a ``.zip``; ``manifest.json``;
-* verification: ``report.json``, ``report.html`` (:mod:`.workers`);
+* verification: ``report.json``, ``report.html``, ``worst-case.mcap`` (the falsifier's worst case) (:mod:`.workers`);
 * the arena run: ``recording.mcap`` (``recording.partial.mcap`` after a recovery), ``script.log``, ``run.json``
   (:mod:`.runner`), and the exports ``robots.csv``, ``frames.csv``, ``replay.html``, ``video.mp4``
   (:mod:`.exports`).
@@ -40,11 +40,13 @@ RESULT_FILES: dict[str, str] = {
     "script.log": "the script's output (stdout and stderr)",
     "report.json": "the verification report (JSON)",
     "report.html": "the verification report (HTML)",
+    "worst-case.mcap": "the worst case the verification's falsifier found, no barrier (MCAP: swarmdeck play)",
     "run.json": "how the run ended (JSON)",
     "manifest.json": "the manifest as accepted",
 }
 VIDEO = "video.mp4"
 RECORDING = "recording.mcap"
+WORST_CASE = "worst-case.mcap"
 
 
 @dataclass(frozen=True)

@@ -137,6 +137,9 @@ class PortalConfig:
             REFERENCE.md §17) a job's bypass may have; above it the bypass is refused with the bound (None: the
             bound is stated in the report, not required).
         verify_confidence: the confidence of that bound, in (0, 1).
+        verify_falsify_budget: runs per job the falsifier may spend searching the set-up tolerance for the run
+            closest to a contact (``VerificationConfig.falsify_budget``; 0: no search); the worst case's recording
+            is the job's ``worst-case.mcap``, a contact found refuses the bypass.
         verify_seed: base seed of verification (job i uses ``verify_seed + i``).
         tick_budget_s: the script's per-tick compute budget in verification (and on the ``--fast`` simulated
             arena, where nothing waits in real time), wall s.
@@ -163,6 +166,7 @@ class PortalConfig:
     verify_runs: int = 4
     verify_epsilon: float | None = None
     verify_confidence: float = 0.95
+    verify_falsify_budget: int = 0
     verify_seed: int = 0
     tick_budget_s: float = 1.0
     arena_tick_budget_s: float | None = None

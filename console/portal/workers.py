@@ -19,6 +19,7 @@ from typing import Any, cast
 
 from swarmdeck.console.portal.files import write_private
 from swarmdeck.console.portal.job import Job
+from swarmdeck.console.portal.jobfiles import WORST_CASE
 from swarmdeck.console.portal.service import PortalService
 from swarmdeck.console.sandbox.confinement import ConfinementUnavailable, SandboxLimits
 from swarmdeck.console.sandbox.report_html import render_html
@@ -71,6 +72,7 @@ class VerificationWorkers:
         poses = cast("tuple[tuple[float, float, float], ...] | None", job.initial_poses)
         return VerificationConfig(n_robots=job.robots, duration=job.duration, runs=cfg.verify_runs,
                                   epsilon=cfg.verify_epsilon, confidence=cfg.verify_confidence,
+                                  falsify_budget=cfg.verify_falsify_budget,
                                   seed=cfg.verify_seed + int(job.id), trusted=cfg.trusted,
                                   jail=cfg.jail(),
                                   limits=SandboxLimits(tick_s=cfg.tick_budget_s),
@@ -92,7 +94,8 @@ class VerificationWorkers:
             script, entry = service.script(job)
             # messages name the file the researcher uploaded, not the name the portal stored it under
             names = [job.script] if job.kind == "py" else None
-            report = verify([script], self.config_for(job), self.executor, cancel=cancel, entry=entry, names=names)
+            report = verify([script], self.config_for(job), self.executor, cancel=cancel, entry=entry, names=names,
+                            worst_case_dir=service.job_dir(job_id), worst_case_name=WORST_CASE)
         except VerificationCancelled as exc:
             service.record_verification_cpu(job_id, exc.cpu_s)  # a cancel does not make the CPU free
             return  # cancelled: the job is already cancelled (or requeued on restart)
@@ -105,6 +108,8 @@ class VerificationWorkers:
         data = report.to_dict()
         service.record_verification_cpu(job_id, report.cpu_s)
         folder = service.job_dir(job_id)
+        if (folder / WORST_CASE).is_file():
+            (folder / WORST_CASE).chmod(0o600)  # like every result file (.files)
         write_private(folder / "report.json", json.dumps(data, indent=1))
         try:
             write_private(folder / "report.html", render_html(data))

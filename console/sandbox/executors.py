@@ -13,8 +13,9 @@ from __future__ import annotations
 import multiprocessing
 import os
 import queue
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
+from contextlib import contextmanager
 from typing import Any
 
 from swarmdeck.console.sandbox.verification import RunTask, run_task
@@ -73,35 +74,59 @@ class LocalPoolExecutor:
             raise ValueError(f"workers must be a positive integer, got {workers!r}")
         self.workers = workers or os.cpu_count() or 1
         self.pin = pin
+        self._kept: ProcessPoolExecutor | None = None
 
-    def run(self, tasks: Sequence[RunTask], on_done: OnDone, cancelled: Callable[[], bool]) -> list[dict | None]:
-        results: list[dict | None] = [None] * len(tasks)
-        if not tasks:
-            return results
+    def _pool(self, workers: int) -> ProcessPoolExecutor:
         context = multiprocessing.get_context("spawn")  # no fork of a threaded caller (the portal)
-        workers = min(self.workers, len(tasks))
         cpus = None
         if self.pin and hasattr(os, "sched_getaffinity"):
             cores = sorted(os.sched_getaffinity(0))
             cpus = context.Queue()
             for k in range(workers):
                 cpus.put(cores[k % len(cores)])
-        with ProcessPoolExecutor(max_workers=workers, mp_context=context, initializer=_init_worker,
-                                 initargs=(os.getpid(), cpus)) as pool:
-            pending: dict[Future, int] = {pool.submit(run_task, t): k for k, t in enumerate(tasks)}
-            finished = 0
-            while pending:
-                done, _ = wait(pending, timeout=0.5, return_when=FIRST_COMPLETED)
-                for future in done:
-                    k = pending.pop(future)
-                    if future.cancelled():
-                        continue
-                    results[k] = result = future.result()
-                    finished += 1
-                    on_done(k, result, finished)
-                if cancelled():  # running tasks see the cancel file and stop within a tick
-                    for future in pending:
-                        future.cancel()
+        return ProcessPoolExecutor(max_workers=workers, mp_context=context, initializer=_init_worker,
+                                   initargs=(os.getpid(), cpus))
+
+    @contextmanager
+    def kept(self) -> Iterator[LocalPoolExecutor]:
+        """Keep one pool of ``workers`` processes (and their warm fork servers) for every :meth:`run` inside the
+        block — the falsifier's generations are many small batches; without it each run starts a pool."""
+        if self._kept is not None:
+            yield self
+            return
+        self._kept = self._pool(self.workers)
+        try:
+            yield self
+        finally:
+            pool, self._kept = self._kept, None
+            pool.shutdown(wait=True, cancel_futures=True)
+
+    def run(self, tasks: Sequence[RunTask], on_done: OnDone, cancelled: Callable[[], bool]) -> list[dict | None]:
+        results: list[dict | None] = [None] * len(tasks)
+        if not tasks:
+            return results
+        if self._kept is not None:
+            return self._run_on(self._kept, tasks, on_done, cancelled, results)
+        with self._pool(min(self.workers, len(tasks))) as pool:
+            return self._run_on(pool, tasks, on_done, cancelled, results)
+
+    @staticmethod
+    def _run_on(pool: ProcessPoolExecutor, tasks: Sequence[RunTask], on_done: OnDone, cancelled: Callable[[], bool],
+                results: list[dict | None]) -> list[dict | None]:
+        pending: dict[Future, int] = {pool.submit(run_task, t): k for k, t in enumerate(tasks)}
+        finished = 0
+        while pending:
+            done, _ = wait(pending, timeout=0.5, return_when=FIRST_COMPLETED)
+            for future in done:
+                k = pending.pop(future)
+                if future.cancelled():
+                    continue
+                results[k] = result = future.result()
+                finished += 1
+                on_done(k, result, finished)
+            if cancelled():  # running tasks see the cancel file and stop within a tick
+                for future in pending:
+                    future.cancel()
         return results
 
 

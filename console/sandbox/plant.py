@@ -26,6 +26,7 @@ from swarmdeck.core.annotations import Annotations
 from swarmdeck.core.annotator import Annotator
 from swarmdeck.core.constants import ROBOT_DIAMETER
 from swarmdeck.core.kinematics import GritsBotParams, limit_unicycle, unicycle_to_si, wrap_angle
+from swarmdeck.core.obstacles import segments_near
 from swarmdeck.core.ports import SensedPoses
 from swarmdeck.devices.arena import Arena
 from swarmdeck.devices.clock import RealTimePacer
@@ -64,6 +65,32 @@ class Disturbances:
                 "latency_ticks": self.latency_ticks, "drop_probability": self.drop_probability}
 
 
+#: m of clearance within which a robot's distance to an obstacle segment is watched (:class:`Closest`)
+OBSTACLE_WATCH = 0.5
+
+
+@dataclass(frozen=True)
+class Closest:
+    """The closest approach of a run so far: clearance (m: centre distance minus the robot diameter between two
+    robots, minus the radius to an obstacle segment; 0 or less is a contact), what came that close — robots
+    ``(i, j)`` or robot ``i`` and segment ``k`` — and when (simulated s). Infinite before anything was near
+    (obstacles are watched within :data:`OBSTACLE_WATCH`)."""
+
+    clearance: float = float("inf")
+    kind: str = ""  # "robots" or "obstacle"
+    first: int = -1
+    second: int = -1
+    time: float = 0.0
+
+    def robots(self, clearance: float, i: int, j: int, time: float) -> Closest:
+        """This, or robots ``i``, ``j`` at ``clearance`` when they came strictly closer."""
+        return Closest(clearance, "robots", min(i, j), max(i, j), time) if clearance < self.clearance else self
+
+    def obstacle(self, clearance: float, robot: int, segment: int, time: float) -> Closest:
+        """This, or robot ``robot`` at ``clearance`` from segment ``segment`` when it came strictly closer."""
+        return Closest(clearance, "obstacle", robot, segment, time) if clearance < self.clearance else self
+
+
 @dataclass
 class VerificationRobots:
     """Robot ports (:mod:`swarmdeck.core.ports`) for the Arena: the simulator with disturbances and contacts.
@@ -73,6 +100,8 @@ class VerificationRobots:
         disturbances: noise, latency, drops.
         rng: the run's generator for the disturbances.
         contact_distance: centre distance at which two robots touch, m (the robot diameter).
+        offset: a constant tracking offset ``(N, 3)`` [x, y, θ] (m, rad) added to every tracked pose on top of
+            the noise (the falsifier's probe, :mod:`.falsify`), or None.
     """
 
     sim: SimulatedArena
@@ -82,6 +111,8 @@ class VerificationRobots:
     contacts: ContactLog = field(init=False)
     min_distance: list[float] = field(init=False, default_factory=list)  # per step, m (centres)
     contact_points: list[tuple[float, float, float]] = field(init=False, default_factory=list)  # (t, x, y)
+    offset: NDArray[np.float64] | None = None  # (N, 3) constant tracking offset (the falsifier's probe), or None
+    closest: Closest = field(init=False)  # the closest approach of the run (the falsifier's objective)
 
     name = "verification (disturbed simulation)"
 
@@ -93,6 +124,9 @@ class VerificationRobots:
         self.contacts = ContactLog(self.n_robots, self.sim.config.dt)
         self._pending = (np.zeros(self.n_robots), np.zeros(self.n_robots))
         self._applied = (np.zeros(self.n_robots), np.zeros(self.n_robots))
+        if self.offset is not None:
+            self.offset = np.array(self.offset, dtype=float).reshape(self.n_robots, 3)
+        self.closest = Closest()
         self._observe()
 
     @property
@@ -116,6 +150,8 @@ class VerificationRobots:
         d = self.disturbances
         noise = self.rng.normal(size=(self.n_robots, 3)) * np.array([d.pose_noise_xy, d.pose_noise_xy, d.pose_noise_theta])
         observed = self.sim.poses + noise
+        if self.offset is not None:
+            observed = observed + self.offset
         observed[:, 2] = wrap_angle(observed[:, 2])
         self._observed = observed
 
@@ -164,8 +200,18 @@ class VerificationRobots:
         scale = t_stop / dt  # non-penetration: robots in contact stop at the contact instant
         self.sim.step(v * scale, w * scale)
         if self.n_robots >= 2:
-            d, _ = cKDTree(self.sim.poses[:, :2]).query(self.sim.poses[:, :2], k=2)
+            d, nearest = cKDTree(self.sim.poses[:, :2]).query(self.sim.poses[:, :2], k=2)
             self.min_distance.append(float(d[:, 1].min()))
+            i = int(np.argmin(d[:, 1]))
+            self.closest = self.closest.robots(float(d[i, 1]) - self.contact_distance, i, int(nearest[i, 1]),
+                                               self.sim.time)
+        segments = self.sim.config.segments
+        if len(segments):
+            near, seg, dist = segments_near(self.sim.poses[:, :2], segments, 0.5 * self.contact_distance + OBSTACLE_WATCH)
+            if len(dist):
+                j = int(np.argmin(dist))
+                self.closest = self.closest.obstacle(float(dist[j]) - 0.5 * self.contact_distance, int(near[j]),
+                                                     int(seg[j]), self.sim.time)
         self._observe()
         return self._observed.copy()
 

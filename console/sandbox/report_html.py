@@ -132,6 +132,17 @@ def _bound(bound: dict[str, Any] | None) -> str:
             f"({_esc(bound['method'])}, from the raw runs without the barrier){_esc(target)}</p>")
 
 
+def _falsification(found: dict[str, Any] | None) -> str:
+    """The falsifier's worst case beside the bound: its statement, the runs it spent, the replay's file."""
+    if not found:
+        return ""
+    spent = (f" ({found['runs']} of {found['budget']} searched runs, {_esc(found['method'])}; "
+             f"{_esc(found['not_in_bound'])})")
+    replay = (f" — replay: <code>{_esc(found['recording'])}</code> (<code>swarmdeck play</code>)"
+              if found.get("recording") else "")
+    return f"<p class='falsification'>falsification: <b>{_esc(found['statement'])}</b>{spent}{replay}</p>"
+
+
 def render_html(report: dict[str, Any]) -> str:
     """The page for a report dict (:meth:`VerificationReport.to_dict`)."""
     duration = report["config"]["duration"]
@@ -143,7 +154,7 @@ def render_html(report: dict[str, Any]) -> str:
         sections.append(
             f"<section><h2>{_esc(s['script'])}: {_esc(s['verdict'])}</h2>"
             f"<p>safety score S (mean over raw runs): <b>{score}</b>; sha256 {_esc(s['sha256'][:16])}…</p>"
-            + _bound(s.get("contact_bound"))
+            + _bound(s.get("contact_bound")) + _falsification(s.get("falsification"))
             + (f"<ul>{reasons}</ul>" if reasons else "")
             + "<h3>S per run (no barrier)</h3>" + _score_bars(s["runs"])
             + "<h3>Minimum distance between robots over time (no barrier)</h3>" + _distance_plot(s["runs"], duration)

@@ -51,20 +51,25 @@ import shutil
 import tempfile
 import time
 from collections.abc import Callable, Sequence
+from contextlib import nullcontext
 from dataclasses import asdict, dataclass, field, replace
+from functools import partial
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
+from swarmdeck.console.recording.arena_recording import ArenaRecording
 from swarmdeck.console.sandbox.bundle import ScriptBundle
 from swarmdeck.console.sandbox.confinement import JailConfig, SandboxLimits
+from swarmdeck.console.sandbox.falsify import Probe
 from swarmdeck.console.sandbox.guarantee import Guarantee
 from swarmdeck.console.sandbox.plant import ArenaPlant, Disturbances, SandboxPlant, VerificationRobots
 from swarmdeck.console.sandbox.run import run_sandboxed
 from swarmdeck.console.sandbox.start_poses import arena_start, check_initial_poses, perturb
 from swarmdeck.core.bounds import DEFAULT_BOUNDS, Bounds, check_bounds
 from swarmdeck.core.checks import in_range
+from swarmdeck.core.kinematics import wrap_angle
 from swarmdeck.core.obstacles import START_CLEARANCE, Obstacles
 from swarmdeck.core.service_thread import ServiceThread
 from swarmdeck.devices.arena import Arena
@@ -112,6 +117,8 @@ class VerificationConfig:
         epsilon: the largest P(contact per run) a bypass may have: the upper bound at ``confidence`` from the
             raw runs (REFERENCE.md §17) above it refuses the bypass (None: the bound is stated, not required).
         confidence: the confidence 1 − δ of the stated bound, in (0, 1).
+        falsify_budget: runs the falsifier may spend per script searching the set-up errors and tracking offsets
+            for the run closest to a contact (:mod:`.falsification`; 0: no search). Never counted in the bound.
     """
 
     n_robots: int | None = None
@@ -134,8 +141,11 @@ class VerificationConfig:
     bounds: Bounds = DEFAULT_BOUNDS
     epsilon: float | None = None
     confidence: float = 0.95
+    falsify_budget: int = 0
 
     def __post_init__(self) -> None:
+        if not in_range(self.falsify_budget, 0, integer=True):
+            raise ValueError(f"falsify_budget must be a non-negative integer number of runs, got {self.falsify_budget!r}")
         Guarantee(1, 0, self.confidence, self.epsilon)  # ValueError naming a bad confidence or epsilon
         object.__setattr__(self, "bounds", check_bounds(self.bounds, "bounds"))
         if self.obstacles is not None:
@@ -171,7 +181,8 @@ class VerificationConfig:
 
     def job_wall_s(self, scripts: int = 1) -> float:
         """The most worker time a verification of ``scripts`` scripts can take, s (every run at its budget)."""
-        return 2 * self.runs * scripts * self.run_wall_s
+        searched = self.falsify_budget + 1 if self.falsify_budget else 0  # the search and the worst case's replay
+        return (2 * self.runs + searched) * scripts * self.run_wall_s
 
     @property
     def run_limits(self) -> SandboxLimits:
@@ -187,6 +198,7 @@ class VerificationConfig:
                 "paced_runs": self.paced_runs, "bounds": list(self.bounds),
                 "epsilon": self.epsilon, "confidence": float(self.confidence),
                 **({} if self.obstacles is None else {"obstacles": self.obstacles.to_list()}),
+                **({"falsify_budget": self.falsify_budget} if self.falsify_budget else {}),
                 "wall_budget": {"factor": float(self.wall_factor), "boot_s": float(self.boot_s),
                                 "run_s": self.run_wall_s, "job_s": self.job_wall_s()}}
 
@@ -198,8 +210,10 @@ class RunTask:
     bundle: ScriptBundle
     config: VerificationConfig
     index: int
-    mode: str  # "raw" or "wrapped"
+    mode: str  # "raw", "wrapped" or "falsify" (a searched run: raw, from ``probe``)
     cancel_path: str | None = None  # the run stops when this file exists
+    probe: Probe | None = None  # a searched run's set-up error and tracking offset (mode "falsify")
+    record: str | None = None  # record the run to this MCAP file (the worst case's replay)
 
 
 def load_script(path: str | Path | ScriptBundle, entry: str | None = None) -> ScriptBundle:
@@ -223,8 +237,14 @@ def _series(values: list[float]) -> list[float]:
 def run_task(task: RunTask) -> dict[str, Any]:
     """Run one task in the sandbox and summarise it as a JSON-ready dict (the same on any executor)."""
     cfg = task.config
-    # (seed, index): 0 random start poses, 1 disturbances, 2 set-up error — raw and wrapped of one index alike
-    seeds = np.random.SeedSequence(cfg.seed, spawn_key=(task.index,)).spawn(3)
+    # (seed, index): 0 random start poses, 1 disturbances, 2 set-up error — raw and wrapped of one index alike;
+    # a searched run starts from run 0's start poses plus its probe, with disturbances of its own stream
+    searched = task.mode == "falsify"
+    if searched and task.probe is None:
+        raise ValueError("a searched run needs its probe")
+    seeds = np.random.SeedSequence(cfg.seed, spawn_key=(0 if searched else task.index,)).spawn(3)
+    if searched:
+        seeds[1] = np.random.SeedSequence(cfg.seed, spawn_key=(FALSIFY_STREAM, task.index))
     paced = task.mode == "raw" and task.index < cfg.paced_runs
     # paced: each step waits for the next period
     arena_config = ArenaConfig(seed=None, real_time=paced, obstacles=cfg.obstacles, bounds=cfg.bounds)
@@ -240,12 +260,22 @@ def run_task(task: RunTask) -> dict[str, Any]:
                              declared_by=cfg.declared_by)
         if arena_config.obstacles is not None:  # the script's own initial conditions too
             arena_config.obstacles.check_clear(chosen.poses, START_CLEARANCE, "start pose")
-        poses = perturb(chosen.poses, np.random.default_rng(seeds[2]))
+        if task.probe is not None:
+            poses = np.array(chosen.poses, dtype=float) + np.array(task.probe.setup, dtype=float).reshape(n, 3)
+            poses[:, 2] = wrap_angle(poses[:, 2])
+        else:
+            poses = perturb(chosen.poses, np.random.default_rng(seeds[2]))
         start.update(source=chosen.source, poses=poses)
         sim = SimulatedArena(n, poses, config=arena_config, rules=rules)
-        robots = VerificationRobots(sim, cfg.disturbances, np.random.default_rng(seeds[1]), contact_distance=sim.params.diameter)
-        return ArenaPlant(Arena(backend=robots, config=arena_config, safety=task.mode == "wrapped", duration=cfg.duration))
+        robots = VerificationRobots(sim, cfg.disturbances, np.random.default_rng(seeds[1]), contact_distance=sim.params.diameter,
+                                    offset=None if task.probe is None else np.array(task.probe.offset, dtype=float))
+        arena = Arena(backend=robots, config=arena_config, safety=task.mode == "wrapped", duration=cfg.duration)
+        if task.record is None:
+            return ArenaPlant(arena)
+        return recorded_plant(arena, recording.setdefault("hooks", ArenaRecording(
+            task.record, script=task.bundle.entry, seed=cfg.seed, foxglove_channels=False)))
 
+    recording: dict[str, ArenaRecording] = {}
     cancel_path = task.cancel_path
     cancelled = (lambda: os.path.exists(cancel_path)) if cancel_path else None
     cpu0 = time.process_time()  # this worker's CPU (the trusted side: plant, barrier, protocol) for the run
@@ -253,6 +283,7 @@ def run_task(task: RunTask) -> dict[str, Any]:
                             duration=cfg.duration, rps=cfg.rps, limits=cfg.run_limits, trusted=cfg.trusted,
                             jail=cfg.jail, cancelled=cancelled,
                             bounds=None if cfg.bounds == DEFAULT_BOUNDS else cfg.bounds)
+    recorded = recording["hooks"].close() if "hooks" in recording else []
     error = outcome.error_line
     if outcome.ended_by == "wall":
         reached = "" if outcome.plant is None else f" at t = {outcome.plant.arena.time:.2f} s of {cfg.duration:g} s"
@@ -268,6 +299,8 @@ def run_task(task: RunTask) -> dict[str, Any]:
         # CPU s of the run, trusted side and jail: what the portal charges to the researcher's daily limit
         "cpu_s": round(time.process_time() - cpu0 + (outcome.child_cpu_s or 0.0), 3),
     }
+    if task.record is not None:
+        result["recorded"] = recorded
     plant = outcome.plant
     if plant is None:
         result.update(time=0.0, safety_score=None, contacts=None, min_distance=None, min_distance_series=[],
@@ -291,7 +324,41 @@ def run_task(task: RunTask) -> dict[str, Any]:
         rule_violations=robots.report.verdict(cfg.duration, rules),
         obstacle_contact_steps=int(robots.report.steps_with_obstacle_contact),
     )
+    if searched or task.record is not None:
+        result["closest"] = closest_of(robots, result)
     return result
+
+
+#: the first spawn-key entry of the searched runs' disturbance streams (raw runs use (index,) and its children)
+FALSIFY_STREAM = 2**31
+
+
+def closest_of(robots: VerificationRobots, result: dict[str, Any]) -> dict[str, Any]:
+    """The closest approach of a run as the report gives it: clearance m (0 at a contact), kind ("robots",
+    "obstacle" or "" when nothing came near), the two robots or the robot and the segment, and when (s)."""
+    c = robots.closest
+    touched = bool(result["contacts"] and result["contacts"]["count"]) or bool(result.get("obstacle_contact_steps"))
+    clearance = 0.0 if touched else (None if not math.isfinite(c.clearance) else round(max(c.clearance, 0.0), 9))
+    entry: dict[str, Any] = {"clearance": clearance, "kind": c.kind, "time": round(c.time, 6)}
+    if c.kind == "robots":
+        entry["robots"] = [c.first, c.second]
+    elif c.kind == "obstacle":
+        entry.update(robot=c.first, segment=c.second)
+    if touched and result["contacts"] and result["contacts"]["first_time"] is not None:
+        entry["contact_time"] = result["contacts"]["first_time"]
+    return entry
+
+
+def recorded_plant(arena: Arena, recording: ArenaRecording) -> SandboxPlant:
+    """The plant on ``arena`` with every tick recorded (the worst case's replay, ``swarmdeck play``)."""
+    plant = ArenaPlant(arena)
+    recording.on_create(arena)
+
+    def step(nominal: np.ndarray | None) -> None:
+        plant.apply(nominal)
+        recording.on_step(arena)
+
+    return SandboxPlant(plant.n, plant.observe, step, plant.finished, arena)
 
 
 def _run_reasons(run: dict[str, Any], cfg: VerificationConfig) -> list[str]:
@@ -390,9 +457,11 @@ def guarantee(raw: Sequence[dict[str, Any]], cfg: VerificationConfig) -> Guarant
 
 
 def script_verdict(bundle: ScriptBundle, runs: Sequence[dict[str, Any]], cfg: VerificationConfig,
-                   shown: str | None = None) -> dict[str, Any]:
+                   shown: str | None = None, falsification: dict[str, Any] | None = None) -> dict[str, Any]:
     """The verdict of one script from its raw and wrapped runs (ordered by index); ``shown``: what to call the
-    entry in messages (the researcher's file name; default the entry's)."""
+    entry in messages (the researcher's file name; default the entry's). ``falsification``: the falsifier's
+    entry (:func:`~swarmdeck.console.sandbox.falsification.falsify_script`), reported beside the bound (which
+    it never enters); a contact it found refuses the bypass."""
     runs = [dict(r, error=user_message(r["error"], bundle, shown), log=_RUN_FOLDER.sub("", r.get("log") or ""))
             for r in runs]
     wrapped = [r for r in runs if r["mode"] == "wrapped"]
@@ -415,6 +484,12 @@ def script_verdict(bundle: ScriptBundle, runs: Sequence[dict[str, Any]], cfg: Ve
     bound = guarantee(raw, cfg)
     if not reasons and bound is not None and (short := bound.shortfall()) is not None:
         no_bypass.append(short)
+    if not reasons and falsification is not None and falsification.get("found_contact"):
+        worst = falsification["worst_case"]
+        replay = f"; replay {falsification['recording']}" if falsification.get("recording") else ""
+        no_bypass.append(f"the falsifier found a contact without the barrier within the set-up tolerance: "
+                         f"{worst['where']} "
+                         f"(searched run {worst['run']} of {falsification['runs']}{replay})")
     verdict = REJECTED if reasons else (BYPASS if not no_bypass else ACCEPTED)
     spread = None
     if score is not None and len(scores) >= 2:
@@ -425,8 +500,34 @@ def script_verdict(bundle: ScriptBundle, runs: Sequence[dict[str, Any]], cfg: Ve
         "safety_score": score, "safety_score_min": min(scores) if scores else None, "safety_score_ci95": spread,
         "reasons": reasons, "bypass_refused_because": no_bypass if verdict == ACCEPTED else [],
         "contact_bound": None if bound is None else bound.to_dict(),
+        **({} if falsification is None else {"falsification": falsification}),
         "runs": list(runs),
     }
+
+
+def _falsify(bundle: ScriptBundle, runs: Sequence[dict[str, Any]], entry: dict[str, Any], config: VerificationConfig,
+             executor: Any, cancel_path: str, cancelled: Callable[[], bool], record_dir: str | Path | None,
+             cpu: list[float], on_done: Callable[[RunTask, dict[str, Any], int], None],
+             record_name: str | None = None) -> dict[str, Any]:
+    """The falsifier's entry of one script (:mod:`.falsification`): skipped for a rejected script or one whose raw
+    runs never built an Arena; VerificationCancelled when cancelled meanwhile."""
+    from swarmdeck.console.sandbox.falsification import SearchCancelled, falsify_script, skipped
+
+    if entry["verdict"] == REJECTED:
+        return skipped("the script is rejected", config.falsify_budget)
+    n = next((r["n_robots"] for r in runs if r["mode"] == "raw" and r.get("n_robots")), None)
+    if n is None:
+        return skipped("no raw run built an Arena", config.falsify_budget)
+
+    def run_batch(batch: Sequence[RunTask]) -> list[dict[str, Any] | None]:
+        results = executor.run(batch, lambda k, r, f: on_done(batch[k], r, f), cancelled)
+        cpu[0] += sum(float(r.pop("cpu_s", 0.0)) for r in results if r is not None)
+        return results
+
+    try:
+        return falsify_script(bundle, config, int(n), run_batch, cancel_path, record_dir, record_name)
+    except SearchCancelled as exc:
+        raise VerificationCancelled("verification was cancelled", cpu[0]) from exc
 
 
 @dataclass
@@ -484,7 +585,8 @@ class Progress:
 def verify(scripts: Sequence[str | Path | ScriptBundle], config: VerificationConfig = VerificationConfig(),
            executor: Any = None, *, on_progress: Callable[[Progress], None] | None = None,
            cancel: Any = None, entry: str | None = None,
-           names: Sequence[str | None] | None = None) -> VerificationReport:
+           names: Sequence[str | None] | None = None,
+           worst_case_dir: str | Path | None = None, worst_case_name: str | None = None) -> VerificationReport:
     """Verify ``scripts`` under ``config`` on ``executor`` (default: a local process pool).
 
     ``on_progress(Progress)`` is called after each run; ``cancel`` is a
@@ -498,6 +600,10 @@ def verify(scripts: Sequence[str | Path | ScriptBundle], config: VerificationCon
 
     Each entry script is compiled first (:func:`compile_check`): one that does not compile is rejected with its
     line and an excerpt, without any sandbox run.
+
+    With ``config.falsify_budget`` > 0, every script not rejected is then searched for its worst case
+    (:mod:`.falsification`, on the same executor); ``worst_case_dir``: where its recording is kept
+    (``worst_case_name``, default ``<entry stem>-worst-case.mcap``; None: not recorded).
     """
     from swarmdeck.console.sandbox.confinement import ConfinementUnavailable, probe
     from swarmdeck.console.sandbox.executors import LocalPoolExecutor
@@ -522,10 +628,18 @@ def verify(scripts: Sequence[str | Path | ScriptBundle], config: VerificationCon
     tasks = [RunTask(loaded[k], config, i, mode, cancel_path)
              for k in runnable for i in range(config.runs) for mode in ("raw", "wrapped")]
 
+    total = len(tasks) + config.falsify_budget * len(runnable)
+    searched_done = [0]
+
     def done(k: int, result: dict[str, Any], finished: int) -> None:
         if on_progress is not None:
             t = tasks[k]
-            on_progress(Progress(finished, len(tasks), t.bundle.name, t.index, t.mode))
+            on_progress(Progress(finished, total, t.bundle.name, t.index, t.mode))
+
+    def done_searched(name: str, task: RunTask, result: dict[str, Any], finished: int) -> None:
+        searched_done[0] += 1
+        if on_progress is not None:
+            on_progress(Progress(len(tasks) + searched_done[0], total, name, task.index, task.mode))
 
     def cancelled() -> bool:
         if cancel is not None and cancel.is_set():
@@ -539,20 +653,29 @@ def verify(scripts: Sequence[str | Path | ScriptBundle], config: VerificationCon
 
     watcher = ServiceThread(watch, "swarmdeck-verification-cancel", join_timeout=None)
     watcher.start()
+    searched_cpu = [0.0]
+    kept = getattr(executor, "kept", None)  # with a search: one pool for the runs and every generation
     try:
-        results = executor.run(tasks, done, cancelled)
+        with kept() if kept is not None and config.falsify_budget else nullcontext():
+            results = executor.run(tasks, done, cancelled)
+            cpu_s = sum(float(r.pop("cpu_s", 0.0)) for r in results if r is not None)  # a timing: not in the report
+            if (cancel is not None and cancel.is_set()) or any(r is None or r["ended_by"] == "cancelled" for r in results):
+                raise VerificationCancelled("verification was cancelled", cpu_s)
+            searched_cpu[0] = cpu_s  # the searched runs' CPU adds to it
+            reports = []
+            for k, bundle in enumerate(loaded):
+                if k in unrunnable:
+                    reports.append(_rejected_unrun(bundle, shown[k], unrunnable[k]))
+                    continue
+                s = runnable.index(k)
+                runs = results[s * 2 * config.runs : (s + 1) * 2 * config.runs]
+                verdict = script_verdict(bundle, runs, config, shown[k])
+                if config.falsify_budget:
+                    found = _falsify(bundle, runs, verdict, config, executor, cancel_path, cancelled, worst_case_dir,
+                                     searched_cpu, partial(done_searched, shown[k]), worst_case_name)
+                    verdict = script_verdict(bundle, runs, config, shown[k], found)
+                reports.append(verdict)
     finally:
         watcher.stop()
         shutil.rmtree(cancel_dir, ignore_errors=True)
-    cpu_s = sum(float(r.pop("cpu_s", 0.0)) for r in results if r is not None)  # a timing: not in the report
-    if (cancel is not None and cancel.is_set()) or any(r is None or r["ended_by"] == "cancelled" for r in results):
-        raise VerificationCancelled("verification was cancelled", cpu_s)
-    reports = []
-    for k, bundle in enumerate(loaded):
-        if k in unrunnable:
-            reports.append(_rejected_unrun(bundle, shown[k], unrunnable[k]))
-            continue
-        s = runnable.index(k)
-        runs = results[s * 2 * config.runs : (s + 1) * 2 * config.runs]
-        reports.append(script_verdict(bundle, runs, config, shown[k]))
-    return VerificationReport(config, reports, getattr(executor, "name", type(executor).__name__), cpu_s)
+    return VerificationReport(config, reports, getattr(executor, "name", type(executor).__name__), searched_cpu[0])
