@@ -200,6 +200,8 @@ class RunTask:
     index: int
     mode: str  # "raw" or "wrapped"
     cancel_path: str | None = None  # the run stops when this file exists
+    #: the script's parameter values (``swarmdeck.devices.params``; a sweep's point), None: its defaults
+    params: tuple[tuple[str, Any], ...] | None = None
 
 
 def load_script(path: str | Path | ScriptBundle, entry: str | None = None) -> ScriptBundle:
@@ -222,6 +224,12 @@ def _series(values: list[float]) -> list[float]:
 
 def run_task(task: RunTask) -> dict[str, Any]:
     """Run one task in the sandbox and summarise it as a JSON-ready dict (the same on any executor)."""
+    return run_task_plant(task)[0]
+
+
+def run_task_plant(task: RunTask) -> tuple[dict[str, Any], SandboxPlant | None]:
+    """:func:`run_task`'s summary and the run's plant (None: the script built no Arena), for callers that measure
+    more of the run's end (``console/sweep``); the plant stays in the worker."""
     cfg = task.config
     # (seed, index): 0 random start poses, 1 disturbances, 2 set-up error — raw and wrapped of one index alike
     seeds = np.random.SeedSequence(cfg.seed, spawn_key=(task.index,)).spawn(3)
@@ -252,7 +260,8 @@ def run_task(task: RunTask) -> dict[str, Any]:
     outcome = run_sandboxed(task.bundle, make_plant, n_robots=cfg.n_robots,
                             duration=cfg.duration, rps=cfg.rps, limits=cfg.run_limits, trusted=cfg.trusted,
                             jail=cfg.jail, cancelled=cancelled,
-                            bounds=None if cfg.bounds == DEFAULT_BOUNDS else cfg.bounds)
+                            bounds=None if cfg.bounds == DEFAULT_BOUNDS else cfg.bounds,
+                            params=None if task.params is None else dict(task.params))
     error = outcome.error_line
     if outcome.ended_by == "wall":
         reached = "" if outcome.plant is None else f" at t = {outcome.plant.arena.time:.2f} s of {cfg.duration:g} s"
@@ -268,12 +277,14 @@ def run_task(task: RunTask) -> dict[str, Any]:
         # CPU s of the run, trusted side and jail: what the portal charges to the researcher's daily limit
         "cpu_s": round(time.process_time() - cpu0 + (outcome.child_cpu_s or 0.0), 3),
     }
+    if outcome.metrics:  # the script's own (record_metrics): only when it recorded any
+        result["metrics"] = dict(outcome.metrics)
     plant = outcome.plant
     if plant is None:
         result.update(time=0.0, safety_score=None, contacts=None, min_distance=None, min_distance_series=[],
                       contact_points=[], validation=None, safety_filter=None, invalid_commands=0,
                       rule_violations=[])
-        return result
+        return result, None
     robots: VerificationRobots = plant.arena.backend
     contacts = robots.contacts.report(plant.arena.params.max_speed, robots.true_poses[:, :2])
     report = plant.arena.report().to_dict()
@@ -291,7 +302,7 @@ def run_task(task: RunTask) -> dict[str, Any]:
         rule_violations=robots.report.verdict(cfg.duration, rules),
         obstacle_contact_steps=int(robots.report.steps_with_obstacle_contact),
     )
-    return result
+    return result, plant
 
 
 def _run_reasons(run: dict[str, Any], cfg: VerificationConfig) -> list[str]:
