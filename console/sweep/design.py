@@ -192,15 +192,15 @@ def random_points(axes: Sequence[Axis], declared: Mapping[str, Value], samples: 
 
 def check_size(axes: Sequence[Axis], design: str, samples: int | None, robots: int, seeds: int) -> int:
     """The number of runs, checked before any point is built: DesignError for more than :data:`MAX_POINTS` points
-    or :data:`MAX_RUNS` runs, with the count and a hint."""
-    points = math.prod(len(a.values) for a in axes) if design == "grid" else int(samples or 0)
+    (the design's points × the robot counts) or :data:`MAX_RUNS` runs, with the count and a hint."""
+    points = (math.prod(len(a.values) for a in axes) if design == "grid" else int(samples or 0)) * robots
     if points > MAX_POINTS:
         hint = ("use --design random --samples M to draw M points instead of every combination, or give fewer "
-                "values per --param" if design == "grid" else "draw fewer --samples")
-        raise DesignError(f"the sweep has {points:,} {design} points, more than the {MAX_POINTS:,} one sweep may have: "
-                          f"{hint}")
-    runs = points * robots * seeds
+                "values per --param or --robots" if design == "grid" else "draw fewer --samples or --robots")
+        raise DesignError(f"the sweep has {points:,} {design} points (with the robot counts), more than the "
+                          f"{MAX_POINTS:,} one sweep may have: {hint}")
+    runs = points * seeds
     if runs > MAX_RUNS:
-        raise DesignError(f"the sweep has {runs:,} runs ({points:,} points x {robots} robot counts x {seeds} seeds), "
-                          f"more than the {MAX_RUNS:,} one sweep may have: fewer points or --seeds")
+        raise DesignError(f"the sweep has {runs:,} runs ({points:,} points x {seeds} seeds), more than the "
+                          f"{MAX_RUNS:,} one sweep may have: fewer points or --seeds")
     return runs

@@ -92,6 +92,8 @@ def test_a_million_grid_points_are_refused_with_the_count_and_a_hint():
     with pytest.raises(DesignError) as exc:
         check_size(axes, "grid", None, 1, 30)
     assert "1,000,000 grid points" in str(exc.value) and "--design random --samples" in str(exc.value)
+    with pytest.raises(DesignError, match="200,000 grid points"):  # robot counts are points of the grid too
+        check_size(axes[:2], "grid", None, 20, 1)
     assert check_size(axes[:2], "grid", None, 2, 3) == 100 * 100 * 2 * 3
     source = b"from swarmdeck.devices import params\np = params(a=0.0, b=0.0, c=0.0)\n"
     with pytest.raises(DesignError, match=f"more than the {MAX_POINTS:,}"):  # refused before any point is built
