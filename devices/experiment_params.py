@@ -19,7 +19,7 @@ declaration from the source without running the script (:func:`declared_in_sourc
 
 :func:`record_metrics` hands values (finite numbers, names that are identifiers) to the run's sink —
 in a sandboxed run the pipe to the trusted side, which checks them again (:func:`check_metrics`) and puts
-them in the sweep's table; run alone, the values are printed (one ``metrics:`` line on stderr).
+them in the sweep's table; run alone, the values are checked and go nowhere (a script prints what it wants seen).
 """
 from __future__ import annotations
 
@@ -28,7 +28,6 @@ import contextvars
 import json
 import math
 import os
-import sys
 from collections.abc import Callable, Iterator, Mapping
 from typing import Any
 
@@ -42,7 +41,7 @@ MAX_NAME = 64
 
 Value = bool | int | float | str
 
-#: where :func:`record_metrics` sends values in this run (None: printed); set by the sandbox's child
+#: where :func:`record_metrics` sends values in this run (None: nowhere); set by the sandbox's child
 METRICS_SINK: contextvars.ContextVar[Callable[[dict[str, float]], None] | None] = contextvars.ContextVar(
     "swarmdeck_metrics_sink", default=None)  # noqa: B039  (a callable, never mutated)
 
@@ -162,12 +161,10 @@ def check_metrics(values: Any) -> dict[str, float]:
 def record_metrics(**values: float) -> None:
     """Report metrics of this run (finite numbers): the sweep's table gets a column per name, the last value of
     each name counting. Call it as values become known — a run may end at its declared duration in any step.
-    Run alone, the values are printed on stderr."""
+    Run alone (no sweep collects them), the values are checked and kept nowhere."""
     checked = check_metrics(values)
     sink = METRICS_SINK.get()
-    if sink is None:
-        print("metrics: " + ", ".join(f"{k}={v:g}" for k, v in checked.items()), file=sys.stderr)
-    else:
+    if sink is not None:
         sink(checked)
 
 
