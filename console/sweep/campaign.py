@@ -15,7 +15,8 @@ The output folder (``-o DIR``)::
 swarmdeck's version). An interrupted sweep (Ctrl-C, a cancel, a Ray cluster gone, a killed process) continues
 where it stopped when the same command runs again; a changed script or configuration runs anew. Runs cancelled
 half-way leave nothing behind. A run whose script fails is a ``failed`` row with its error (cached: it fails the
-same way again) and the sweep goes on.
+same way again) and the sweep goes on; a run that failed for a reason of the machine (:data:`TRANSIENT`: the jail did
+not start in time, the wall-time budget) is a row of this table but is run again by the next invocation.
 
 **Deterministic.** A run is a pure function of its task (verification's seeding), and the table is written in the
 plan's order, so any executor — serial, the local pool, Ray — gives the same table, byte for byte.
@@ -39,6 +40,9 @@ from swarmdeck.core.service_thread import ServiceThread
 from swarmdeck.devices.experiment_params import ParamError, Value, declared_in_source
 
 #: columns of every row; a script parameter may not be called so (``robots`` is the robot count: see :class:`SweepSpec`)
+#: how a run may end for a reason of the machine rather than the script (the jail did not start in time, the wall-time
+#: budget on a loaded machine): such a row is in this sweep's table but not cached, so running the sweep again retries it
+TRANSIENT = frozenset({"boot", "wall"})
 RESERVED = frozenset({"key", "point", "seed", "status", "error", "ended_by", "time_s", "contacts", "min_distance",
                       "barrier_interventions", "coverage_cost_H", "time_to_goal", "cpu_s"})
 
@@ -252,7 +256,8 @@ def run_sweep(spec: SweepSpec, out: str | Path, executor: Any = None, *,
                 return  # stopped half-way: nothing to keep
             cpu.append(float(row.get("cpu_s") or 0.0))
             kept = _table_row(row)
-            cache.put(kept)
+            if kept.get("ended_by") not in TRANSIENT:
+                cache.put(kept)
             rows[todo[i]] = kept
             finished[0] += 1
             if on_progress is not None:

@@ -82,3 +82,13 @@ def test_a_sweep_stopped_twice_continues_where_it_stopped(tmp_path):
     again = run_sweep(spec, tmp_path, SerialExecutor())
     assert (again.ran, again.cached) == (0, 3)
     assert (tmp_path / "runs").is_dir() and len(list((tmp_path / "runs").glob("*.json"))) == 3
+
+
+def test_a_run_the_machine_failed_is_a_row_but_is_tried_again(tmp_path):
+    slow = b"import time\ntime.sleep(30)\n" + SCRIPT  # never builds its Arena within the run's 0.5 s of wall time
+    spec = SweepSpec(ScriptBundle.single("gather.py", slow), robots=(3,),
+                     config=VerificationConfig(duration=0.5, wall_factor=1.0001, boot_s=1e-3))
+    first = run_sweep(spec, tmp_path, SerialExecutor())
+    assert (first.rows[0]["status"], first.rows[0]["ended_by"]) == ("failed", "wall")
+    assert not list((tmp_path / "runs").glob("*.json"))  # not cached: the wall budget may be the machine's fault
+    assert run_sweep(spec, tmp_path, SerialExecutor()).ran == 1  # the next invocation runs it again
