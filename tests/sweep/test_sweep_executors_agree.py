@@ -58,6 +58,7 @@ def test_a_crashing_point_is_a_failed_row_and_the_sweep_goes_on(serial):
     assert (out / "results.parquet").exists()
 
 
+@pytest.mark.slow
 def test_the_local_pool_and_ray_write_the_same_table(serial, tmp_path):
     import pyarrow.parquet as pq
 
