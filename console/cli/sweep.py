@@ -102,6 +102,8 @@ def main(args: argparse.Namespace) -> int:
     spec = spec_from(args)
     if args.workers is not None and args.workers < 1:
         raise UsageError(f"--workers must be >= 1, got {args.workers}")
+    if args.workers is not None and args.ray:
+        raise UsageError("--workers is for the local pool; with --ray the cluster decides (give one of them)")
     try:
         the_plan = plan(spec)  # refused before any run or any executor starts
         executor = RayExecutor(args.ray) if args.ray else LocalPoolExecutor(args.workers)

@@ -157,7 +157,7 @@ class RayExecutor:
                 except ray.exceptions.RayError as exc:  # e.g. a node without bubblewrap: infrastructure, not a verdict
                     for other in refs:
                         ray.cancel(other, force=True)
-                    raise RuntimeError(f"a Ray worker could not run the verification: {exc}") from exc
+                    raise RuntimeError(f"a Ray worker could not run its task (a verification or sweep run): {exc}") from exc
                 finished += 1
                 on_done(k, results[k], finished)
         return results

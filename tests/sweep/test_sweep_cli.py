@@ -37,6 +37,7 @@ def script(tmp_path):
     (["--design", "random"], ["--design random needs --samples"]),
     (["--param", "robots=2,3", "--robots", "4"], ["give the robot counts once"]),
     (["--seeds", "0"], ["--seeds must be >= 1"]),
+    (["--workers", "2", "--ray", "auto"], ["give one of them"]),
 ])
 def test_bad_input_is_refused_before_anything_runs(script, tmp_path, capsys, extra, words):
     out = tmp_path / "out"
