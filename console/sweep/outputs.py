@@ -85,8 +85,9 @@ def write_parquet(path: Path, rows: Sequence[dict[str, Any]], cols: Sequence[str
 
 
 def write_plots(folder: Path, rows: Sequence[dict[str, Any]], names: Sequence[str]) -> list[str]:
-    """``folder/plots/METRIC-vs-PARAM.png`` for every numeric swept parameter and metric: the mean over the runs at
-    each value (other parameters pooled), one line per robot count, the 95 % CI as a band. Returns the file names
+    """``folder/plots/METRIC-vs-PARAM.png`` for every numeric swept parameter (and the robot count, when several) and
+    metric: the mean over the runs at each value (other parameters pooled), one line per robot count, the 95 % CI as
+    a band. Returns the file names
     (relative to ``folder``)."""
     import matplotlib
 
@@ -98,6 +99,8 @@ def write_plots(folder: Path, rows: Sequence[dict[str, Any]], names: Sequence[st
     plots.mkdir(exist_ok=True)
     numeric = [n for n in names if all(isinstance(r.get(n), (int, float)) and not isinstance(r.get(n), bool)
                                        for r in rows if r.get(n) is not None)]
+    if "robots" not in numeric and len({r.get("robots") for r in rows} - {None}) > 1:
+        numeric.append("robots")  # the robot counts are an axis of the grid too
     for axis in numeric:
         for metric in metric_columns(rows):
             series = by_value(rows, axis, metric)

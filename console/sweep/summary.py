@@ -57,12 +57,13 @@ def summarise(rows: Sequence[dict[str, Any]], names: Sequence[str]) -> list[dict
 
 
 def by_value(rows: Sequence[dict[str, Any]], axis: str, metric: str) -> dict[Any, list[tuple[Any, float, float | None, float | None]]]:
-    """For a plot of ``metric`` against parameter ``axis``: per robot count, sorted (value, mean, low, high) over
-    every ``ok`` run at that value (the other parameters pooled)."""
+    """For a plot of ``metric`` against parameter ``axis``: per robot count (one series, key None, when ``axis`` is
+    ``robots``), sorted (value, mean, low, high) over every ``ok`` run at that value (the other parameters pooled)."""
     series: dict[Any, dict[Any, list[float]]] = {}
     for r in rows:
         if r["status"] == "ok" and r.get(metric) is not None and r.get(axis) is not None:
-            series.setdefault(r.get("robots"), {}).setdefault(r[axis], []).append(r[metric])
+            group = None if axis == "robots" else r.get("robots")
+            series.setdefault(group, {}).setdefault(r[axis], []).append(r[metric])
     out: dict[Any, list[tuple[Any, float, float | None, float | None]]] = {}
     for robots, values in series.items():
         points = []

@@ -47,6 +47,9 @@ def test_table_plots_and_report(tmp_path):
     assert table.column_names == cols and table.column("metric_err").to_pylist()[-1] is None
     made = write_plots(tmp_path, data, ["gain"])
     assert "plots/metric_err-vs-gain.png" in made and "plots/min_distance-vs-gain.png" in made
+    assert not any("vs-robots" in m for m in made)  # one robot count: no such axis
+    more = [dict(r, robots=8 if r["seed"] == 1 else 4) for r in data]
+    assert "plots/metric_err-vs-robots.png" in write_plots(tmp_path, more, ["gain"])
     assert (tmp_path / made[0]).read_bytes().startswith(b"\x89PNG")
     page = report_html({"script": "a<b>.py", "axes": [{"name": "gain", "values": [0.5, 1.0, 2.0]}]}, data,
                        summarise(data, ["gain"]), made, total=12)
