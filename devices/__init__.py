@@ -29,6 +29,7 @@ from swarmdeck.devices.controllers import (
     clf_unicycle_position_controller,
     si_position_controller,
 )
+from swarmdeck.devices.experiment_params import params, record_metrics
 from swarmdeck.devices.initial_conditions import max_robots, random_initial_poses
 from swarmdeck.devices.simulated_robots import SimulatedRobots
 from swarmdeck.devices.simulator import ArenaConfig, SimulatedArena
@@ -59,7 +60,7 @@ __all__ = [*_LAZY,  # noqa: PLE0604  (the lazily imported names)
     "Arena", "ArenaConfig", "ArenaReport", "ExperimentFinished", "GritsBotParams", "HybridPoseController",
     "RunDefaults", "RUN_DEFAULTS", "SimulatedArena", "SimulatedRobots", "SteppedRobots", "ValidationReport", "ValidationRules",
     "at_pose", "at_position", "clf_unicycle_pose_controller", "clf_unicycle_position_controller",
-    "colliding_pairs", "limit_unicycle", "lookahead_points", "max_robots", "out_of_bounds",
-    "random_initial_poses", "saturate", "si_position_controller", "si_to_unicycle", "unicycle_step",
+    "colliding_pairs", "limit_unicycle", "lookahead_points", "max_robots", "out_of_bounds", "params",
+    "random_initial_poses", "record_metrics", "saturate", "si_position_controller", "si_to_unicycle", "unicycle_step",
     "unicycle_to_si", "unicycle_to_wheels", "wheel_scale", "wheels_to_unicycle", "wrap_angle",
 ]

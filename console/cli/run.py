@@ -7,10 +7,12 @@ Also the plumbing every headless run shares (``swarmdeck example NAME`` uses it 
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
 import math
+import os
 import sys
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from typing import Any
 
 from swarmdeck.console.cli import UsageError
@@ -81,9 +83,50 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--entry", default=None, metavar="FILE",
                         help="with --sandbox and a directory SCRIPT: the file to run, relative to it (default main.py); "
                              "sibling modules are importable")
+    parser.add_argument("--param", action="append", default=[], metavar="NAME=VALUE",
+                        help="a value for a parameter the script declares with swarmdeck.devices.params(...) (repeat "
+                             "for each; default: the script's own defaults), as one point of `swarmdeck sweep`")
     parser.add_argument("script_args", nargs="*", metavar="ARGS",
                         help="arguments for the script after `--` (its sys.argv[1:], as `python SCRIPT.py ARGS`); "
                              "the script runs as __main__, so code under `if __name__ == \"__main__\":` runs")
+
+
+def _params(args: argparse.Namespace) -> dict[str, Any] | None:
+    """--param NAME=VALUE as {name: value} (None: none given); UsageError for a range or a malformed one."""
+    from swarmdeck.console.sweep.design import DesignError, parse_axis
+
+    if not args.param:
+        return None
+    values: dict[str, Any] = {}
+    for spec in args.param:
+        try:
+            axis = parse_axis(spec)
+        except DesignError as exc:
+            raise UsageError(str(exc)) from None
+        if len(axis.values) != 1:
+            raise UsageError(f"--param {spec!r}: one value per parameter here (`swarmdeck sweep` sweeps ranges)")
+        values[axis.name] = axis.values[0]
+    return values
+
+
+@contextlib.contextmanager
+def _params_env(values: dict[str, Any] | None) -> Iterator[None]:
+    """The script's parameter values in its environment (swarmdeck.devices.experiment_params.PARAMS_ENV) while it
+    runs in this process; the caller's environment given back after."""
+    from swarmdeck.devices.experiment_params import PARAMS_ENV
+
+    if values is None:
+        yield
+        return
+    saved = os.environ.get(PARAMS_ENV)
+    os.environ[PARAMS_ENV] = json.dumps(values)
+    try:
+        yield
+    finally:
+        if saved is None:
+            os.environ.pop(PARAMS_ENV, None)
+        else:
+            os.environ[PARAMS_ENV] = saved
 
 
 def _run_sandboxed(args: argparse.Namespace) -> int:
@@ -108,7 +151,7 @@ def _run_sandboxed(args: argparse.Namespace) -> int:
         outcome = run_sandboxed(args.script, make_plant, entry=args.entry, n_robots=args.robots, duration=args.duration, rps=args.rps,
                                 argv=_script_args(args), rps_semantics=args.rps_semantics,
                                 rps_call_order=args.rps_call_order,
-                                robot_model=model, rps_generation=args.rps_generation,
+                                robot_model=model, rps_generation=args.rps_generation, params=_params(args),
                                 trusted=args.trusted, jail=JailConfig(order=(args.jail,) if args.jail else JailConfig().order,
                                                                      allow_no_cgroup=args.allow_no_cgroup,
                                                                      script_env=checked_script_env(args.script_env)))
@@ -227,12 +270,13 @@ def main(args: argparse.Namespace) -> int:
         recording = ArenaRecording(args.record, script=args.script, seed=args.seed,
                                    foxglove_channels=args.foxglove_channels)
     try:
-        result = run_headless(args.script, args, rps=args.rps, from_docks=args.from_docks, argv=_script_args(args),
-                              obstacles=obstacles_argument(args),
-                              rps_semantics=args.rps_semantics, rps_call_order=args.rps_call_order,
-                              robot_model=args.robot_model, rps_generation=args.rps_generation,
-                              on_create=None if recording is None else recording.on_create,
-                              on_step=None if recording is None else recording.on_step, backend_factory=factory)
+        with _params_env(_params(args)):
+            result = run_headless(args.script, args, rps=args.rps, from_docks=args.from_docks, argv=_script_args(args),
+                                  obstacles=obstacles_argument(args),
+                                  rps_semantics=args.rps_semantics, rps_call_order=args.rps_call_order,
+                                  robot_model=args.robot_model, rps_generation=args.rps_generation,
+                                  on_create=None if recording is None else recording.on_create,
+                                  on_step=None if recording is None else recording.on_step, backend_factory=factory)
     finally:
         if ports is not None:
             ports.close()  # robots stopped, link closed

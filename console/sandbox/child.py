@@ -16,6 +16,7 @@ process sends as untrusted.
 """
 from __future__ import annotations
 
+import json
 import os
 import sys
 from typing import Any
@@ -40,6 +41,7 @@ from swarmdeck.core.annotations import Annotations
 from swarmdeck.core.kinematics import GritsBotParams, unicycle_to_si
 from swarmdeck.core.ports import SensedPoses
 from swarmdeck.devices.arena import ExperimentFinished
+from swarmdeck.devices.experiment_params import METRICS_SINK, PARAMS_ENV
 from swarmdeck.devices.runner import RunnerArenaError, ScriptError, run_experiment
 from swarmdeck.devices.simulator import ArenaConfig
 
@@ -65,6 +67,26 @@ class Link:
         return decode(body)
 
 
+class MetricsBox:
+    """The metrics the script recorded (``record_metrics``): the last value of each name, and whether any changed
+    since they were last sent (they go to the trusted side before a tick's commands and with ``done``)."""
+
+    def __init__(self) -> None:
+        self.values: dict[str, float] = {}
+        self.changed = False
+
+    def record(self, values: dict[str, float]) -> None:
+        self.values.update(values)
+        self.changed = True
+
+    def take(self) -> dict[str, float] | None:
+        """The values when they changed since the last call, else None."""
+        if not self.changed:
+            return None
+        self.changed = False
+        return dict(self.values)
+
+
 class PipeRobots:
     """Robot ports (:mod:`swarmdeck.core.ports`) whose robots are on the trusted side: a
     :class:`~swarmdeck.core.ports.NominalSink`.
@@ -76,7 +98,7 @@ class PipeRobots:
     name = "the trusted side's robots"
 
     def __init__(self, link: Link, n_robots: int | None, initial_poses: ArrayLike | None, *,
-                 config: ArenaConfig, params: GritsBotParams) -> None:
+                 config: ArenaConfig, params: GritsBotParams, metrics: MetricsBox | None = None) -> None:
         link.arenas += 1
         if link.arenas > 1:
             raise RuntimeError("a sandboxed script may build one Arena (or Robotarium) per run")
@@ -85,6 +107,7 @@ class PipeRobots:
         self.link, self.n_robots, self.params, self.config = link, n, params, config
         self._ids = np.arange(n, dtype=np.int64)
         self._seen = np.ones(n, dtype=bool)
+        self._metrics = metrics
         self._network: Any = None  # a decentralised run's swarmdeck.network.Network (attach_network)
         self._drawn: dict[str, Any] = encode_annotations(EMPTY_ANNOTATIONS)
         link.send({"t": "arena", "n": n, "initial": None if ic is None else pack(ic)})
@@ -115,6 +138,9 @@ class PipeRobots:
             if len(traffic.links) <= MAX_NETWORK_LINKS:
                 self.link.send({"t": "network", "k": self._k, "links": pack(traffic.links.astype(float)),
                                 "rate": pack(traffic.messages / self.config.dt)})
+        values = None if self._metrics is None else self._metrics.take()
+        if values is not None:
+            self.link.send({"t": "metrics", "k": self._k, "values": values})
         self.link.send(encode_commands(self._k, nominal))
         self._take()
 
@@ -179,6 +205,10 @@ def main(argv: list[str]) -> int:
     env = start.get("script_env")
     if env:  # the lab's script environment: from here on the script imports only what it lists
         install_import_policy(env["site"], env["modules"], [os.path.dirname(os.path.abspath(start["script"]))])
+    if start.get("params") is not None:  # the sweep's values: swarmdeck.devices.params() reads them
+        os.environ[PARAMS_ENV] = json.dumps(start["params"])
+    metrics = MetricsBox()
+    METRICS_SINK.set(metrics.record)
     link.send({"t": "ready"})
     error: str | None = None
     error_line: str | None = None
@@ -189,7 +219,8 @@ def main(argv: list[str]) -> int:
             rps_semantics=bool(start.get("rps_semantics", False)), rps_call_order=bool(start.get("rps_call_order", True)),
             bounds=tuple(start["bounds"]) if start.get("bounds") else None,
             robot_model=start.get("robot_model"), rps_generation=start.get("rps_generation"),
-            backend_factory=lambda n, ic, config, params: PipeRobots(link, n, ic, config=config, params=params),
+            backend_factory=lambda n, ic, config, params: PipeRobots(link, n, ic, config=config, params=params,
+                                                                     metrics=metrics),
         )
         error, error_line = result.error, result.error_line
     except (ScriptError, RunnerArenaError) as exc:
@@ -200,7 +231,8 @@ def main(argv: list[str]) -> int:
         import resource
 
         usage = resource.getrusage(resource.RUSAGE_SELF)
-        link.send({"t": "done", "error": error, "error_line": error_line, "cpu_s": usage.ru_utime + usage.ru_stime})
+        link.send({"t": "done", "error": error, "error_line": error_line, "cpu_s": usage.ru_utime + usage.ru_stime,
+                   "metrics": metrics.values})
     except OSError:
         pass
     return 0

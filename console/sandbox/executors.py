@@ -1,7 +1,8 @@
 """Where verification runs execute: in this process, on a local process pool, or on a Ray cluster.
 
 An executor runs independent :class:`~swarmdeck.console.sandbox.verification.RunTask`\\ s
-with :func:`~swarmdeck.console.sandbox.verification.run_task` and returns their
+with :func:`~swarmdeck.console.sandbox.verification.run_task` (or another task function ``fn``: a sweep's
+points) and returns their
 results in task order, whatever order they finished in, so every executor gives
 the same report. ``run(tasks, on_done, cancelled)`` calls ``on_done(index,
 result, finished_count)`` as runs finish and stops starting runs once
@@ -21,6 +22,9 @@ from typing import Any
 from swarmdeck.console.sandbox.verification import RunTask, run_task
 
 OnDone = Callable[[int, dict[str, Any], int], None]
+#: what runs one task in a worker (default :func:`run_task`; a sweep's ``console.sweep.runs.run_point``): a
+#: module-level function of one picklable task returning a JSON-ready dict
+TaskFn = Callable[[Any], dict[str, Any]]
 
 
 class SerialExecutor:
@@ -28,12 +32,13 @@ class SerialExecutor:
 
     name = "serial"
 
-    def run(self, tasks: Sequence[RunTask], on_done: OnDone, cancelled: Callable[[], bool]) -> list[dict | None]:
+    def run(self, tasks: Sequence[RunTask], on_done: OnDone, cancelled: Callable[[], bool],
+            fn: TaskFn = run_task) -> list[dict | None]:
         results: list[dict | None] = [None] * len(tasks)
         for k, task in enumerate(tasks):
             if cancelled():
                 break
-            results[k] = result = run_task(task)
+            results[k] = result = fn(task)
             on_done(k, result, k + 1)
         return results
 
@@ -101,19 +106,20 @@ class LocalPoolExecutor:
             pool, self._kept = self._kept, None
             pool.shutdown(wait=True, cancel_futures=True)
 
-    def run(self, tasks: Sequence[RunTask], on_done: OnDone, cancelled: Callable[[], bool]) -> list[dict | None]:
+    def run(self, tasks: Sequence[RunTask], on_done: OnDone, cancelled: Callable[[], bool],
+            fn: TaskFn = run_task) -> list[dict | None]:
         results: list[dict | None] = [None] * len(tasks)
         if not tasks:
             return results
         if self._kept is not None:
-            return self._run_on(self._kept, tasks, on_done, cancelled, results)
+            return self._run_on(self._kept, tasks, on_done, cancelled, results, fn)
         with self._pool(min(self.workers, len(tasks))) as pool:
-            return self._run_on(pool, tasks, on_done, cancelled, results)
+            return self._run_on(pool, tasks, on_done, cancelled, results, fn)
 
     @staticmethod
     def _run_on(pool: ProcessPoolExecutor, tasks: Sequence[RunTask], on_done: OnDone, cancelled: Callable[[], bool],
-                results: list[dict | None]) -> list[dict | None]:
-        pending: dict[Future, int] = {pool.submit(run_task, t): k for k, t in enumerate(tasks)}
+                results: list[dict | None], fn: TaskFn) -> list[dict | None]:
+        pending: dict[Future, int] = {pool.submit(fn, t): k for k, t in enumerate(tasks)}
         finished = 0
         while pending:
             done, _ = wait(pending, timeout=0.5, return_when=FIRST_COMPLETED)
@@ -155,10 +161,11 @@ class RayExecutor:
         else:
             ray.init(address=self.address, **kwargs)
 
-    def run(self, tasks: Sequence[RunTask], on_done: OnDone, cancelled: Callable[[], bool]) -> list[dict | None]:
+    def run(self, tasks: Sequence[RunTask], on_done: OnDone, cancelled: Callable[[], bool],
+            fn: TaskFn = run_task) -> list[dict | None]:
         ray = self.ray
         self._connect()
-        remote = ray.remote(num_cpus=1, max_retries=0)(run_task)
+        remote = ray.remote(num_cpus=1, max_retries=0)(fn)
         refs = {remote.remote(t): k for k, t in enumerate(tasks)}
         results: list[dict | None] = [None] * len(tasks)
         finished = 0
@@ -175,7 +182,7 @@ class RayExecutor:
                 except ray.exceptions.RayError as exc:  # e.g. a node without bubblewrap: infrastructure, not a verdict
                     for other in refs:
                         ray.cancel(other, force=True)
-                    raise RuntimeError(f"a Ray worker could not run the verification: {exc}") from exc
+                    raise RuntimeError(f"a Ray worker could not run its task (a verification or sweep run): {exc}") from exc
                 finished += 1
                 on_done(k, results[k], finished)
         return results

@@ -31,8 +31,11 @@ Child → parent:
     ``{"t": "network", "k": k, "links": bytes, "rate": bytes}`` before the ``C`` frame of tick k of a decentralised
     run (``swarmdeck.devices.decentralised``): its network's last links E × 2 (float64 robot indices) and messages
     per second over each (E,) — the script's own account, shown and recorded, never trusted for anything else;
-    ``{"t": "done", "error": str | None, "error_line": str | None, "cpu_s": s}`` the script finished
-    (``cpu_s``: the child's own CPU time, as it reports it: informational only).
+    ``{"t": "metrics", "k": k, "values": {name: float}}`` before the ``C`` frame of tick k, at most once per tick and
+    only when they changed: what the script recorded with ``swarmdeck.devices.record_metrics`` (checked by
+    ``check_metrics``: its own account, for a sweep's table);
+    ``{"t": "done", "error": str | None, "error_line": str | None, "cpu_s": s, "metrics": {...}}`` the script finished
+    (``cpu_s``: the child's own CPU time, as it reports it: informational only; ``metrics``: the last ones).
 """
 from __future__ import annotations
 

@@ -61,7 +61,7 @@ import sys
 import tempfile
 import threading
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Protocol
@@ -102,6 +102,7 @@ from swarmdeck.console.sandbox.protocol import (
 from swarmdeck.console.sandbox.script_env import ScriptEnv
 from swarmdeck.console.sandbox.zygote import CHILD_ENV, ForkServerError, shared_fork_server
 from swarmdeck.core.robot_models import DEFAULT_ROBOT_MODEL
+from swarmdeck.devices.experiment_params import check_metrics
 
 
 class Plant(Protocol):
@@ -141,6 +142,7 @@ class SandboxOutcome:
     (None when swarmdeck is not root or the run was unconfined). ``cgroup``: ``"v1"`` or ``"v2"``,
     the run's cgroup, or None when it ran without one (``unhardened`` says why).
     ``unhardened``: what of the hardening this run went without, one line each (empty normally).
+    ``metrics``: the last values the script recorded (``swarmdeck.devices.record_metrics``; its own account).
     """
 
     ended_by: str = "script"
@@ -157,6 +159,8 @@ class SandboxOutcome:
     log: str = ""
     log_bytes: int = 0
     plant: Any = field(default=None, repr=False)
+    #: what the script reported with ``swarmdeck.devices.record_metrics`` (checked: names, finite numbers)
+    metrics: dict[str, float] = field(default_factory=dict)
 
     @property
     def ok(self) -> bool:
@@ -457,6 +461,16 @@ def _note_cpu(outcome: SandboxOutcome, message: dict[str, Any]) -> None:
     cpu = message.get("cpu_s")
     if isinstance(cpu, float) and np.isfinite(cpu) and cpu >= 0:
         outcome.child_cpu_s = cpu
+    if message.get("metrics"):
+        _note_metrics(outcome, message["metrics"])
+
+
+def _note_metrics(outcome: SandboxOutcome, values: Any) -> None:
+    """The script's metrics (``metrics`` message, or with ``done``), checked; ProtocolError naming what is wrong."""
+    try:
+        outcome.metrics = check_metrics(values)
+    except ValueError as exc:
+        raise ProtocolError(f"'metrics': {exc}") from None
 
 
 def _write_private(bundle: ScriptBundle, folder: Path, uid: int | None) -> Path:
@@ -493,6 +507,7 @@ def run_sandboxed(
     bounds: tuple[float, float, float, float] | None = None,
     robot_model: str | None = DEFAULT_ROBOT_MODEL,
     rps_generation: int | None = None,
+    params: Mapping[str, Any] | None = None,
 ) -> SandboxOutcome:
     """Run ``script`` in a jailed child against the plant ``make_plant(n, initial_poses)`` builds.
 
@@ -519,6 +534,8 @@ def run_sandboxed(
     (stdout and stderr, within ``limits.log_bytes``) as it comes, on a reader thread.
     ``bounds``: the arena ``(x_min, x_max, y_min, y_max)`` (m) the script's Arena sees when it builds one without a
     config — its region of a shared floor (:mod:`swarmdeck.devices.fleet.regions`); None: the default floor.
+    ``params``: the values ``swarmdeck.devices.params()`` returns in the script (JSON-able; a sweep's point);
+    the script's recorded metrics come back in ``SandboxOutcome.metrics``.
     """
     if isinstance(script, ScriptBundle):
         bundle = script
@@ -534,6 +551,8 @@ def run_sandboxed(
                                       "rps_generation": rps_generation}
     if bounds is not None:
         script_options["bounds"] = [float(v) for v in bounds]
+    if params is not None:
+        script_options["params"] = dict(params)
     return _run_sandboxed(bundle, make_plant, n_robots=n_robots, duration=duration, rps=rps, limits=limits,
                           trusted=trusted, cancelled=cancelled, jail=jail, hardening=_FULL, script_options=script_options,
                           on_log=on_log)
@@ -655,6 +674,7 @@ def _loop(child: _Child, script: Path, scratch: Path, uid: int | None, make_plan
         outstanding = False  # poses sent, commands not yet received
         sent = -1  # the tick number of the poses last sent
         consecutive = 0
+        metrics_tick = -1  # the tick of the last 'metrics' message (one per tick at most)
         charged_from = (0.0, 0.0)  # (wall, CPU s) when the current tick's budget started
 
         def cpu_now() -> float:
@@ -773,6 +793,12 @@ def _loop(child: _Child, script: Path, scratch: Path, uid: int | None, make_plan
                         if callable(show):
                             show(*traffic)
                         continue
+                    if t == "metrics" and plant is not None and outstanding:  # before tick k's commands
+                        if message.get("k") != sent or metrics_tick == sent:
+                            raise ProtocolError("'metrics' at most once per tick, before its commands")
+                        metrics_tick = sent
+                        _note_metrics(outcome, message.get("values"))
+                        continue
                     if t == "draw" and plant is not None:
                         draw = getattr(plant, "draw", None)
                         if draw is not None:
@@ -803,7 +829,7 @@ def _loop(child: _Child, script: Path, scratch: Path, uid: int | None, make_plan
                         message = decode(last[1])
                         if message.get("t") == "done":
                             _note_cpu(outcome, message)
-                except (EOFError, ProtocolError):
+                except (EOFError, ProtocolError):  # (bad metrics with 'done': the run's own ones are kept)
                     pass
                 end("duration", None)
                 break

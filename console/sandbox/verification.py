@@ -214,6 +214,8 @@ class RunTask:
     cancel_path: str | None = None  # the run stops when this file exists
     probe: Probe | None = None  # a searched run's set-up error and tracking offset (mode "falsify")
     record: str | None = None  # record the run to this MCAP file (the worst case's replay)
+    #: the script's parameter values (``swarmdeck.devices.params``; a sweep's point), None: its defaults
+    params: tuple[tuple[str, Any], ...] | None = None
 
 
 def load_script(path: str | Path | ScriptBundle, entry: str | None = None) -> ScriptBundle:
@@ -236,6 +238,12 @@ def _series(values: list[float]) -> list[float]:
 
 def run_task(task: RunTask) -> dict[str, Any]:
     """Run one task in the sandbox and summarise it as a JSON-ready dict (the same on any executor)."""
+    return run_task_plant(task)[0]
+
+
+def run_task_plant(task: RunTask) -> tuple[dict[str, Any], SandboxPlant | None]:
+    """:func:`run_task`'s summary and the run's plant (None: the script built no Arena), for callers that measure
+    more of the run's end (``console/sweep``); the plant stays in the worker."""
     cfg = task.config
     # (seed, index): 0 random start poses, 1 disturbances, 2 set-up error — raw and wrapped of one index alike;
     # a searched run starts from run 0's start poses plus its probe, with disturbances of its own stream
@@ -282,7 +290,8 @@ def run_task(task: RunTask) -> dict[str, Any]:
     outcome = run_sandboxed(task.bundle, make_plant, n_robots=cfg.n_robots,
                             duration=cfg.duration, rps=cfg.rps, limits=cfg.run_limits, trusted=cfg.trusted,
                             jail=cfg.jail, cancelled=cancelled,
-                            bounds=None if cfg.bounds == DEFAULT_BOUNDS else cfg.bounds)
+                            bounds=None if cfg.bounds == DEFAULT_BOUNDS else cfg.bounds,
+                            params=None if task.params is None else dict(task.params))
     recorded = recording["hooks"].close() if "hooks" in recording else []
     error = outcome.error_line
     if outcome.ended_by == "wall":
@@ -301,12 +310,14 @@ def run_task(task: RunTask) -> dict[str, Any]:
     }
     if task.record is not None:
         result["recorded"] = recorded
+    if outcome.metrics:  # the script's own (record_metrics): only when it recorded any
+        result["metrics"] = dict(outcome.metrics)
     plant = outcome.plant
     if plant is None:
         result.update(time=0.0, safety_score=None, contacts=None, min_distance=None, min_distance_series=[],
                       contact_points=[], validation=None, safety_filter=None, invalid_commands=0,
                       rule_violations=[])
-        return result
+        return result, None
     robots: VerificationRobots = plant.arena.backend
     contacts = robots.contacts.report(plant.arena.params.max_speed, robots.true_poses[:, :2])
     report = plant.arena.report().to_dict()
@@ -326,7 +337,7 @@ def run_task(task: RunTask) -> dict[str, Any]:
     )
     if searched or task.record is not None:
         result["closest"] = closest_of(robots, result)
-    return result
+    return result, plant
 
 
 #: the first spawn-key entry of the searched runs' disturbance streams (raw runs use (index,) and its children)
