@@ -9,8 +9,8 @@ sandbox against it (the limits of a fast arena), and pairs its Frames with the r
 :func:`~swarmdeck.console.recording.capsule_run.compare_pairs`.
 
 Not reproduced, and named in the notes: a job on physical robots (``source`` not "simulation") and the fleet's
-batteries (the reproduction's robots have none: the ``battery``, ``charging`` and ``health`` keys are left out of the
-comparison when the reproduction lacks them).
+batteries (the reproduction's robots start fully charged, the fleet's did not: ``battery`` and ``charging`` are left
+out of the comparison, :data:`FLEET_ONLY_KEYS`).
 """
 from __future__ import annotations
 
@@ -21,17 +21,16 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from swarmdeck.console.recording.codec import CODEC_FORMAT, COMPACT_FORMAT, decode_frame, encode_frame
 from swarmdeck.console.runtime.frame import Frame
 
-#: Frame keys of the fleet's hardware a simulated reproduction does not model (compared only when both have them).
+#: Frame keys of the fleet's hardware a simulated reproduction does not model (not compared).
 FLEET_ONLY_KEYS = ("battery", "charging")
 
 
-def _without_fleet(recorded: Frame, reproduced: Frame) -> Frame:
-    """``recorded`` without the fleet-only keys the reproduction lacks."""
-    drop = {k: None for k in FLEET_ONLY_KEYS
-            if getattr(reproduced, k, None) is None and getattr(recorded, k, None) is not None}
-    return dataclasses.replace(recorded, **drop) if drop else recorded
+def _without_fleet(frame: Frame) -> Frame:
+    """``frame`` with the fleet-only keys at their defaults (battery unknown, not charging)."""
+    return dataclasses.replace(frame, battery=None, charging=None)
 
 
 def resimulate_job(recording: Any, opened: Any, *, notes: list[str],
@@ -94,11 +93,14 @@ def resimulate_job(recording: Any, opened: Any, *, notes: list[str],
         notes.append(f"the reproduced script ended: {outcome.error_line}")
     if cfg.get("source", "simulation") != "simulation":
         notes.append(f"the job ran on robots from {cfg.get('source')!r}; the reproduction simulates them")
+    notes.append("the fleet's batteries (battery, charging) are not compared: the reproduction's robots start charged")
     if counts is not None:
         counts["reproduced"] = len(frames)
+    compact = recording.metadata.get("frame_format") in (COMPACT_FORMAT, CODEC_FORMAT)
     recorded = (f for _, f in recording.frames())
     for rec, new in zip(recorded, frames):
-        yield _without_fleet(rec, new), new
+        # compared at the recording's precision: the new frame as it would have been recorded (as resimulate does)
+        yield _without_fleet(rec), _without_fleet(decode_frame(encode_frame(new)) if compact else new)
 
 
 __all__ = ["FLEET_ONLY_KEYS", "resimulate_job"]
