@@ -238,6 +238,14 @@ def _run_capsule(args: argparse.Namespace) -> int:
     import tempfile
     from pathlib import Path
 
+    given = [f"--{name.replace('_', '-')}" for name in ("robots", "duration", "seed", "record", "obstacles", "robots_via",
+                                                         "robot_model", "rps_generation", "entry", "script_env")
+             if getattr(args, name, None) is not None]
+    given += [f"--{name.replace('_', '-')}" for name in ("no_safety", "from_docks", "sandbox", "rps_semantics")
+              if getattr(args, name, False)]
+    if given or args.script_args:
+        raise UsageError(f"a capsule runs with the arguments it recorded: drop {' '.join(given) or 'the script arguments'}")
+
     from swarmdeck.console.recording.capsule_run import reproduce
     from swarmdeck.console.recording.capsule_zip import CapsuleError, open_capsule
 

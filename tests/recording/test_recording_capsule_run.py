@@ -151,3 +151,8 @@ def test_a_recording_without_a_capsule_is_refused_by_swarmdeck_capsule(tmp_path,
     assert cli(["capsule", str(before), "-o", str(tmp_path / "x.zip")]) == 2
     assert "carries no capsule" in capsys.readouterr().err
     assert not (tmp_path / "x.zip").exists()
+
+
+def test_options_that_would_change_the_run_are_refused_with_a_capsule(capsule, capsys) -> None:
+    assert cli(["run", str(capsule), "--robots", "5", "--no-safety"]) == 2
+    assert "a capsule runs with the arguments it recorded: drop --robots --no-safety" in capsys.readouterr().err
