@@ -25,7 +25,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("script", help="Python file defining experiment(arena), or an rps-style script that builds "
                                        "Arena(); or a capsule run.zip (`swarmdeck capsule`): re-executed in simulation "
                                        "and compared with its recording (exit 0 bit-identical, 1 different, 3 identical "
-                                       "frames in another environment)")
+                                       "frames in another environment; with --sandbox its script runs in the jail: do "
+                                       "that for a capsule you did not make)")
     parser.add_argument("--robots", type=int, default=None, metavar="N", help="number of robots (default: the script's, else 6)")
     parser.add_argument("--duration", type=float, default=None, metavar="S", help="stop after S simulated seconds")
     parser.add_argument("--seed", type=int, default=None, help="seed for random initial conditions")
@@ -241,7 +242,7 @@ def _run_capsule(args: argparse.Namespace) -> int:
     given = [f"--{name.replace('_', '-')}" for name in ("robots", "duration", "seed", "record", "obstacles", "robots_via",
                                                          "robot_model", "rps_generation", "entry", "script_env")
              if getattr(args, name, None) is not None]
-    given += [f"--{name.replace('_', '-')}" for name in ("no_safety", "from_docks", "sandbox", "rps_semantics")
+    given += [f"--{name.replace('_', '-')}" for name in ("no_safety", "from_docks", "rps_semantics")
               if getattr(args, name, False)]
     if given or args.script_args:
         raise UsageError(f"a capsule runs with the arguments it recorded: drop {' '.join(given) or 'the script arguments'}")
@@ -252,7 +253,7 @@ def _run_capsule(args: argparse.Namespace) -> int:
     with tempfile.TemporaryDirectory(prefix="swarmdeck-capsule-") as tmp:
         try:
             opened = open_capsule(args.script, Path(tmp) / "capsule")
-            verdict = reproduce(opened, tmp)
+            verdict = reproduce(opened, tmp, sandbox=args.sandbox)
         except CapsuleError as exc:
             raise UsageError(str(exc)) from None
     print(json.dumps(verdict.to_dict(), indent=2) if args.json else verdict.summary())

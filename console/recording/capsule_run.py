@@ -3,7 +3,8 @@
 ``swarmdeck run run.zip`` (:func:`reproduce`):
 
 * a ``swarmdeck run`` capsule (kind ``run``) re-runs the script file with the recorded arguments through
-  :func:`~swarmdeck.devices.runner.run_experiment` (as ``swarmdeck run`` does) and records it with
+  :func:`~swarmdeck.devices.runner.run_experiment` (as ``swarmdeck run`` does; with ``sandbox``, in the jail against
+  a trusted Arena, as ``swarmdeck run --sandbox`` does) and records it with
   :class:`~swarmdeck.console.recording.arena_recording.ArenaRecording`; the two recordings are compared frame by
   frame;
 * a console session (kind ``console``) is re-simulated by
@@ -180,9 +181,10 @@ def compare_recordings(recorded: Path, reproduced: Path) -> tuple[int, int, int,
     return compared, n_a, n_b, first
 
 
-def _rerun_script(opened: OpenedCapsule, workdir: Path) -> tuple[Path, list[str]]:
-    """Re-run a ``swarmdeck run`` capsule's script as ``swarmdeck run`` ran it; the reproduced recording of the same
-    Arena (``run.arena``) and notes."""
+def _rerun_script(opened: OpenedCapsule, workdir: Path, sandbox: bool = False) -> tuple[Path, list[str]]:
+    """Re-run a ``swarmdeck run`` capsule's script as ``swarmdeck run`` ran it (``sandbox``: in the jail of
+    ``swarmdeck run --sandbox``, the simulator and the safety filter on this side); the reproduced recording of the
+    same Arena (``run.arena``) and notes."""
     from swarmdeck.console.recording.arena_recording import ArenaRecording
     from swarmdeck.console.runtime.config import read_obstacles
     from swarmdeck.devices.runner import ScriptError, run_experiment
@@ -192,24 +194,27 @@ def _rerun_script(opened: OpenedCapsule, workdir: Path) -> tuple[Path, list[str]
     script = opened.entry_path
     if script is None:
         raise CapsuleError("the capsule names no script to run (its manifest has no entry)")
-    if run.get("sandbox"):
-        raise CapsuleError("re-executing a sandboxed `swarmdeck run` capsule is not supported yet")
     obstacles = None
     if run.get("obstacles"):
         obstacles = read_obstacles(opened.folder / str(run["obstacles"]))
     out = workdir / "reproduced.mcap"
     recording = ArenaRecording(out, script=script, seed=run.get("seed"), foxglove_channels=False)
     notes = []
+    if run.get("robots_via"):
+        notes.append("the run drove physical robots (--robots-via): the reproduction simulates them")
     try:
-        result = run_experiment(script, n_robots=run.get("robots"), duration=run.get("duration"), seed=run.get("seed"),
-                                safety=bool(run.get("safety", True)), rps=run.get("rps"),
-                                from_docks=bool(run.get("from_docks", False)), argv=list(run.get("argv") or []),
-                                obstacles=obstacles, rps_semantics=bool(run.get("rps_semantics", False)),
-                                rps_call_order=bool(run.get("rps_call_order", True)),
-                                robot_model=run.get("robot_model"), rps_generation=run.get("rps_generation"),
-                                on_create=recording.on_create, on_step=recording.on_step)
-        if result.error_line:
-            notes.append(f"the reproduced run raised: {result.error_line}")
+        if sandbox or run.get("sandbox"):
+            notes += _rerun_sandboxed(opened, recording, obstacles)
+        else:
+            result = run_experiment(script, n_robots=run.get("robots"), duration=run.get("duration"),
+                                    seed=run.get("seed"), safety=bool(run.get("safety", True)), rps=run.get("rps"),
+                                    from_docks=bool(run.get("from_docks", False)), argv=list(run.get("argv") or []),
+                                    obstacles=obstacles, rps_semantics=bool(run.get("rps_semantics", False)),
+                                    rps_call_order=bool(run.get("rps_call_order", True)),
+                                    robot_model=run.get("robot_model"), rps_generation=run.get("rps_generation"),
+                                    on_create=recording.on_create, on_step=recording.on_step)
+            if result.error_line:
+                notes.append(f"the reproduced run raised: {result.error_line}")
     except (ScriptError, ValueError) as exc:
         notes.append(f"the reproduced run could not start: {exc}")
     finally:
@@ -220,14 +225,58 @@ def _rerun_script(opened: OpenedCapsule, workdir: Path) -> tuple[Path, list[str]
     return recording.paths[k], notes
 
 
-def reproduce(opened: OpenedCapsule, workdir: str | Path) -> Verdict:
+def _rerun_sandboxed(opened: OpenedCapsule, recording: Any, obstacles: Any) -> list[str]:
+    """The capsule's script in the jail against a trusted Arena built as ``swarmdeck run --sandbox`` builds it,
+    recorded by ``recording``; notes (how the script ended)."""
+    from swarmdeck.console.sandbox.confinement import ConfinementUnavailable
+    from swarmdeck.console.sandbox.plant import ArenaPlant
+    from swarmdeck.console.sandbox.run import run_sandboxed
+    from swarmdeck.core.robot_models import DEFAULT_ROBOT_MODEL, robot_params
+    from swarmdeck.devices.arena import RUN_DEFAULTS, Arena, RunDefaults
+    from swarmdeck.devices.rps.generation import robot_model_for
+    from swarmdeck.devices.simulator import ArenaConfig
+
+    run = opened.manifest.run
+    script = opened.entry_path
+    assert script is not None
+    if run.get("from_docks"):
+        raise CapsuleError("a run from the docks cannot be re-executed in the sandbox (swarmdeck run --from-docks "
+                           "does not combine with --sandbox): re-run it without --sandbox")
+    model = run.get("robot_model") or (
+        "gternal" if run.get("rps_generation") == 2 else DEFAULT_ROBOT_MODEL if run.get("rps_generation") == 1
+        else robot_model_for(script.read_text(encoding="utf-8", errors="replace")))
+    config = ArenaConfig(seed=run.get("seed"), obstacles=obstacles)
+    safety = bool(run.get("safety", True)) and not run.get("rps_semantics")
+
+    def make_plant(n: int, initial: Any) -> Any:
+        token = RUN_DEFAULTS.set(RunDefaults(on_create=recording.on_create, on_step=recording.on_step))
+        try:
+            arena = Arena(n, initial_conditions=initial, config=config, safety=safety, duration=run.get("duration"),
+                          params=robot_params(model))
+        finally:
+            RUN_DEFAULTS.reset(token)
+        return ArenaPlant(arena)
+
+    try:
+        outcome = run_sandboxed(script, make_plant, n_robots=run.get("robots"), duration=run.get("duration"),
+                                rps=run.get("rps"), argv=list(run.get("argv") or []),
+                                rps_semantics=bool(run.get("rps_semantics", False)),
+                                rps_call_order=bool(run.get("rps_call_order", True)), robot_model=model,
+                                rps_generation=run.get("rps_generation"))
+    except ConfinementUnavailable as exc:
+        raise CapsuleError(f"cannot sandbox the capsule's script here: {exc}") from None
+    return [f"the reproduced script ended: {outcome.error_line}"] if outcome.error_line else []
+
+
+def reproduce(opened: OpenedCapsule, workdir: str | Path, *, sandbox: bool = False) -> Verdict:
     """Re-execute ``opened`` in simulation (module docstring) with scratch files in ``workdir``; its :class:`Verdict`.
+    ``sandbox``: run a ``swarmdeck run`` capsule's script in the jail (a portal job's always runs there).
     CapsuleError for a capsule this swarmdeck cannot re-execute."""
     work = Path(workdir)
     m = opened.manifest
     env = tuple(environment_differences(m.environment, environment()))
     if m.kind == "run":
-        reproduced, notes = _rerun_script(opened, work)
+        reproduced, notes = _rerun_script(opened, work, sandbox)
         compared, n_a, n_b, first = compare_recordings(opened.recording, reproduced)
         return Verdict(compared, n_a, n_b, first, env, tuple(notes))
     if m.kind in ("console", "portal"):
