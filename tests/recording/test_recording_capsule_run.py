@@ -156,3 +156,18 @@ def test_a_recording_without_a_capsule_is_refused_by_swarmdeck_capsule(tmp_path,
 def test_options_that_would_change_the_run_are_refused_with_a_capsule(capsule, capsys) -> None:
     assert cli(["run", str(capsule), "--robots", "5", "--no-safety"]) == 2
     assert "a capsule runs with the arguments it recorded: drop --robots --no-safety" in capsys.readouterr().err
+
+
+def test_a_newer_capsule_format_is_refused_naming_both_formats(capsule, tmp_path, capsys) -> None:
+    def newer(m):
+        m["format"] = 7
+        return m
+
+    assert cli(["run", str(_rewrite(capsule, tmp_path / "f.zip", manifest=newer))]) == 2
+    assert "is in capsule format 7, written by a newer swarmdeck; this swarmdeck reads format 1" in capsys.readouterr().err
+
+
+def test_swarmdeck_info_names_the_capsule(capsule, capsys) -> None:
+    capsys.readouterr()
+    assert cli(["info", str(capsule.parent / "r.mcap")]) == 0
+    assert "capsule     run: 2 script file(s), key " in capsys.readouterr().out
