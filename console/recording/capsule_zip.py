@@ -167,7 +167,7 @@ MAX_SCRIPT_BYTES = 64 * 1024**2
 
 def script_files(script: str | os.PathLike[str], entry: str | None = None) -> tuple[dict[str, bytes], str]:
     """The files of a script and its entry point: a file → ``{its name: bytes}``; a folder → every regular file below
-    it (no links, no ``__pycache__``, no hidden files), entry ``entry`` or ``main.py``. CapsuleError for a script
+    it (hidden ones too: the sandbox sees them; no links, no ``__pycache__``), entry ``entry`` or ``main.py``. CapsuleError for a script
     that cannot be read or a folder over :data:`MAX_SCRIPT_BYTES`."""
     p = Path(script)
     try:
@@ -177,8 +177,7 @@ def script_files(script: str | os.PathLike[str], entry: str | None = None) -> tu
         total = 0
         for f in sorted(p.rglob("*")):
             rel = f.relative_to(p)
-            if f.is_symlink() or not f.is_file() or "__pycache__" in rel.parts or any(
-                    part.startswith(".") for part in rel.parts):
+            if f.is_symlink() or not f.is_file() or "__pycache__" in rel.parts:
                 continue
             data = f.read_bytes()
             total += len(data)

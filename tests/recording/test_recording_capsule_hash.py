@@ -85,3 +85,20 @@ def test_versions_and_environment_differences() -> None:
     assert f"python: recorded 2.7.18, here {env['python']}" in diffs
     assert any(d.startswith("package numpy: recorded 0.1") for d in diffs)
     assert "package newpkg: recorded 1, here not installed" in diffs
+
+
+def test_a_script_folder_is_taken_whole_but_links_and_caches(tmp_path) -> None:
+    from swarmdeck.console.recording.capsule_zip import CapsuleError, script_files
+
+    (tmp_path / "lib").mkdir()
+    (tmp_path / "__pycache__").mkdir()
+    (tmp_path / "main.py").write_text("import lib.u\n")
+    (tmp_path / "lib" / "u.py").write_text("X = 1\n")
+    (tmp_path / ".params.toml").write_text("gain = 2\n")
+    (tmp_path / "__pycache__" / "main.cpython-311.pyc").write_bytes(b"\0")
+    (tmp_path / "passwd").symlink_to("/etc/passwd")
+    files, entry = script_files(tmp_path)
+    assert entry == "main.py" and sorted(files) == [".params.toml", "lib/u.py", "main.py"]
+    assert script_files(tmp_path / "lib" / "u.py") == ({"u.py": b"X = 1\n"}, "u.py")
+    with pytest.raises(CapsuleError, match="no entry file 'run.py'"):
+        script_files(tmp_path, "run.py")
