@@ -280,6 +280,12 @@ def main(args: argparse.Namespace) -> int:
     if args.record:
         from swarmdeck.console.recording.arena_recording import ArenaRecording
 
+        if args.seed is None:  # the random start is drawn from a recorded seed, so the capsule reproduces it
+            import secrets
+
+            args.seed = secrets.randbelow(2**31)
+            print(f"swarmdeck run: --seed {args.seed} (drawn for the recording: its capsule reproduces the run)",
+                  file=sys.stderr)
         capsule, capsule_files = _capsule_of(args)
         recording = ArenaRecording(args.record, script=args.script, seed=args.seed,
                                    foxglove_channels=args.foxglove_channels, capsule=capsule,

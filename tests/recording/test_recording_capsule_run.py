@@ -171,3 +171,14 @@ def test_swarmdeck_info_names_the_capsule(capsule, capsys) -> None:
     capsys.readouterr()
     assert cli(["info", str(capsule.parent / "r.mcap")]) == 0
     assert "capsule     run: 2 script file(s), key " in capsys.readouterr().out
+
+
+def test_an_unseeded_recorded_run_draws_and_records_its_seed(tmp_path, capsys) -> None:
+    """Random start poses without --seed: the seed is drawn, said and recorded, so the capsule reproduces them."""
+    (tmp_path / "goals.py").write_text(SCRIPT)
+    assert cli(["run", str(tmp_path / "goals.py"), "--robots", "2", "--duration", "0.1", "--record",
+                str(tmp_path / "u.mcap"), "--no-foxglove-channels"]) == 0
+    seed = read_recorded_capsule(tmp_path / "u.mcap").manifest.run["seed"]
+    assert isinstance(seed, int) and f"--seed {seed} (drawn for the recording" in capsys.readouterr().err
+    assert cli(["capsule", str(tmp_path / "u.mcap"), "-o", str(tmp_path / "u.zip")]) == 0
+    assert cli(["run", str(tmp_path / "u.zip")]) == 0
