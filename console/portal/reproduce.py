@@ -46,6 +46,7 @@ def resimulate_job(recording: Any, opened: Any, *, notes: list[str],
     from swarmdeck.console.sandbox.confinement import ConfinementUnavailable, JailConfig, SandboxLimits
     from swarmdeck.console.sandbox.plant import SandboxPlant
     from swarmdeck.console.sandbox.run import run_sandboxed
+    from swarmdeck.core.bounds import DEFAULT_BOUNDS
     from swarmdeck.devices import ArenaConfig
     from swarmdeck.devices.simulated_robots import SimulatedRobots
 
@@ -79,8 +80,10 @@ def resimulate_job(recording: Any, opened: Any, *, notes: list[str],
 
     state: dict[str, Any] = {"loop": None}
     try:
+        region = None if loop_cfg.bounds == DEFAULT_BOUNDS else loop_cfg.bounds  # a region of a shared floor
         outcome = run_sandboxed(script, make_plant, entry=entry, n_robots=int(run["robots"]),
-                                duration=float(run["duration"]), limits=SandboxLimits(), jail=JailConfig())
+                                duration=float(run["duration"]), limits=SandboxLimits(), jail=JailConfig(),
+                                bounds=region)
     except ConfinementUnavailable as exc:
         raise ValueError(f"the job's script cannot be sandboxed here: {exc}") from None
     finally:
