@@ -326,15 +326,18 @@ def _recorder(path: str | None, config, inputs_table: dict | None, source: str, 
     (each Frame's ``is_virtual`` says which); ``foxglove_channels``: also write Foxglove's own channels;
     ``chunk_frames``: frames per chunk; ``robot_rate``, ``packed``, ``lines_period``: the Foxglove channels'
     (``FoxgloveConfig``; the config file's [recording])."""
+    from swarmdeck.console.recording.capsule import session_capsule
     from swarmdeck.console.recording.foxglove import FoxgloveConfig
     from swarmdeck.console.recording.recorder import Recorder, RecorderConfig, default_path
     from swarmdeck.console.recording.resimulate import session_metadata
 
     extra: dict[str, Any] = {"virtual_robots": int(virtual)} if virtual else {}
-    return Recorder(path or default_path(), session_metadata(config, inputs_table, source=source, **extra),
+    metadata = session_metadata(config, inputs_table, source=source, **extra)
+    return Recorder(path or default_path(), metadata,
                     RecorderConfig(foxglove=foxglove_channels, chunk_frames=chunk_frames),
                     image_provider=image_provider, foxglove=FoxgloveConfig(robot_rate=robot_rate, packed=packed,
-                                                                            lines_period=lines_period))
+                                                                            lines_period=lines_period),
+                    capsule=session_capsule(metadata))
 
 
 def _start_inputs(table: dict | None, rec=None):

@@ -71,7 +71,21 @@ def summarise(path: str) -> dict:
             "closed_cleanly": rec.indexed,
             "warnings": list(rec.warnings),
             "first_events": events,
+            "capsule": _capsule(path),
         }
+
+
+def _capsule(path: str) -> dict[str, Any] | None:
+    """What reproduces the recording (``swarmdeck capsule``): kind, files with SHA-256, run key; None without one,
+    ``{"error": ...}`` for a capsule that does not match its files."""
+    from swarmdeck.console.recording.capsule_zip import CapsuleError, read_recorded_capsule
+
+    try:
+        m = read_recorded_capsule(path).manifest
+    except CapsuleError as exc:
+        return {"error": str(exc)}
+    return None if m is None else {"kind": m.kind, "files": m.files, "entry": m.entry, "key": m.key,
+                                   "swarmdeck": m.swarmdeck}
 
 
 def main(args: argparse.Namespace) -> int:
@@ -103,6 +117,11 @@ def main(args: argparse.Namespace) -> int:
     print(f"  size        {s['size_bytes'] / 1e6:.2f} MB in {s['chunks']} chunks"
           f"{'' if s['closed_cleanly'] else ' (not closed cleanly: recovered by scanning)'}")
     print(f"  format      recording {s['recording_format']}, frame {s['frame_format']}, written by {s['writer']}")
+    cap = s["capsule"]
+    if cap is not None:
+        print("  capsule     " + (cap["error"].splitlines()[0] if "error" in cap else
+                                  f"{cap['kind']}: {len(cap['files'])} script file(s), key {cap['key'][:16]}… "
+                                  f"(swarmdeck capsule {s['file']} -o run.zip)"))
     for w in s["warnings"]:
         print(f"  warning     {w}")
     if s["first_events"]:

@@ -24,7 +24,11 @@ ORDER = 20
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument("script", help="Python file defining experiment(arena), or an rps-style script that builds Arena()")
+    parser.add_argument("script", help="Python file defining experiment(arena), or an rps-style script that builds "
+                                       "Arena(); or a capsule run.zip (`swarmdeck capsule`): re-executed in simulation "
+                                       "and compared with its recording (exit 0 bit-identical, 1 different, 3 identical "
+                                       "frames in another environment; with --sandbox its script runs in the jail: do "
+                                       "that for a capsule you did not make)")
     parser.add_argument("--robots", type=int, default=None, metavar="N", help="number of robots (default: the script's, else 6)")
     parser.add_argument("--duration", type=float, default=None, metavar="S", help="stop after S simulated seconds")
     parser.add_argument("--seed", type=int, default=None, help="seed for random initial conditions")
@@ -249,7 +253,59 @@ def _script_args(args: argparse.Namespace) -> list[str]:
     return [str(a) for a in args.script_args or []]
 
 
+def _capsule_of(args: argparse.Namespace) -> tuple[Any, dict[str, bytes]]:
+    """What reproduces this ``swarmdeck run --record`` (a ``capsule.Manifest``) and its files: the script, and the
+    ``--obstacles`` file as ``_capsule/obstacles.toml``."""
+    from pathlib import Path
+
+    from swarmdeck.console.recording.capsule import manifest_for
+    from swarmdeck.console.recording.capsule_zip import CapsuleError, script_files
+
+    try:
+        files, entry = script_files(args.script)
+        obstacles = None
+        if args.obstacles is not None:
+            obstacles = "_capsule/obstacles.toml"
+            files[obstacles] = Path(args.obstacles).read_bytes()
+    except (CapsuleError, OSError) as exc:
+        raise UsageError(str(exc)) from None
+    run = {"robots": args.robots, "duration": args.duration, "seed": args.seed, "safety": not args.no_safety,
+           "from_docks": bool(args.from_docks), "rps": args.rps, "rps_semantics": bool(args.rps_semantics),
+           "rps_call_order": bool(args.rps_call_order), "robot_model": args.robot_model,
+           "rps_generation": args.rps_generation, "argv": _script_args(args), "sandbox": False,
+           "obstacles": obstacles, "robots_via": args.robots_via is not None}
+    return manifest_for("run", files, entry=entry, run=run), files
+
+
+def _run_capsule(args: argparse.Namespace) -> int:
+    """``swarmdeck run run.zip``: check, extract to a temporary folder, re-execute, print the verdict."""
+    import tempfile
+    from pathlib import Path
+
+    given = [f"--{name.replace('_', '-')}" for name in ("robots", "duration", "seed", "record", "obstacles", "robots_via",
+                                                         "robot_model", "rps_generation", "entry", "script_env")
+             if getattr(args, name, None) is not None]
+    given += [f"--{name.replace('_', '-')}" for name in ("no_safety", "from_docks", "rps_semantics")
+              if getattr(args, name, False)]
+    if given or args.script_args:
+        raise UsageError(f"a capsule runs with the arguments it recorded: drop {' '.join(given) or 'the script arguments'}")
+
+    from swarmdeck.console.recording.capsule_run import reproduce
+    from swarmdeck.console.recording.capsule_zip import CapsuleError, open_capsule
+
+    with tempfile.TemporaryDirectory(prefix="swarmdeck-capsule-") as tmp:
+        try:
+            opened = open_capsule(args.script, Path(tmp) / "capsule")
+            verdict = reproduce(opened, tmp, sandbox=args.sandbox)
+        except CapsuleError as exc:
+            raise UsageError(str(exc)) from None
+    print(json.dumps(verdict.to_dict(), indent=2) if args.json else verdict.summary())
+    return verdict.exit_code
+
+
 def main(args: argparse.Namespace) -> int:
+    if str(args.script).endswith(".zip"):
+        return _run_capsule(args)
     if args.script_env is not None and not args.sandbox:
         raise UsageError("--script-env needs --sandbox (the script environment is the jail's)")
     if args.entry is not None and not args.sandbox:
@@ -267,8 +323,16 @@ def main(args: argparse.Namespace) -> int:
     if args.record:
         from swarmdeck.console.recording.arena_recording import ArenaRecording
 
+        if args.seed is None:  # the random start is drawn from a recorded seed, so the capsule reproduces it
+            import secrets
+
+            args.seed = secrets.randbelow(2**31)
+            print(f"swarmdeck run: --seed {args.seed} (drawn for the recording: its capsule reproduces the run)",
+                  file=sys.stderr)
+        capsule, capsule_files = _capsule_of(args)
         recording = ArenaRecording(args.record, script=args.script, seed=args.seed,
-                                   foxglove_channels=args.foxglove_channels)
+                                   foxglove_channels=args.foxglove_channels, capsule=capsule,
+                                   capsule_files=capsule_files)
     try:
         with _params_env(_params(args)):
             result = run_headless(args.script, args, rps=args.rps, from_docks=args.from_docks, argv=_script_args(args),

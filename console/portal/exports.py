@@ -9,6 +9,9 @@ writes, from ``recording.mcap``:
 * ``robots.csv`` and ``frames.csv`` (:func:`~swarmdeck.console.recording.export_csv.export_csv`),
 * ``replay.html`` (:func:`~swarmdeck.console.web.export_html.export_html`),
 * ``video.mp4`` (:func:`~swarmdeck.console.recording.export_video.export_video`),
+* ``capsule.zip`` (:func:`~swarmdeck.console.recording.capsule_zip.write_capsule`: the script files with their
+  SHA-256, the run's settings and versions, and the recording; ``swarmdeck run capsule.zip`` re-executes it), when
+  the recording carries a capsule,
 
 each into ``.exports/`` first and then renamed into the job's folder, so a file
 is listed (:meth:`.PortalService.files`) only once it is whole, and the
@@ -49,7 +52,7 @@ if TYPE_CHECKING:
     from swarmdeck.console.portal.service import PortalService
 
 #: what the exports write into the job's folder, in order (robots.csv and frames.csv together)
-EXPORT_FILES = ("robots.csv", "frames.csv", "replay.html", "video.mp4")
+EXPORT_FILES = ("robots.csv", "frames.csv", "replay.html", "video.mp4", "capsule.zip")
 STAGING = ".exports"
 RESULT_MARK = "swarmdeck-exports: "  # the child's last line on stdout: this and a JSON object
 NICE = 10
@@ -123,6 +126,7 @@ def write_exports(folder: Path, video: bool = True) -> dict[str, Any]:
         with open_recording(folder / "recording.mcap") as rec:
             if rec.empty:
                 return {"files": [], "errors": ["the recording holds no readable frame"]}
+            attempt("capsule", lambda: _capsule(folder / "recording.mcap", staging / "capsule.zip", publish))
             attempt("CSV", lambda: export_csv(rec, staging), "robots.csv", "frames.csv")
             attempt("HTML replay", lambda: _html(rec, staging / "replay.html"), "replay.html")
             if video:
@@ -132,6 +136,16 @@ def write_exports(folder: Path, video: bool = True) -> dict[str, Any]:
     finally:
         shutil.rmtree(staging, ignore_errors=True)
     return {"files": files, "errors": errors}
+
+
+def _capsule(recording: Path, out: Path, publish: Callable[..., None]) -> None:
+    """``capsule.zip`` of a recording that carries a capsule (one recorded before capsules: none, no error)."""
+    from swarmdeck.console.recording.capsule_zip import read_recorded_capsule, write_capsule
+
+    recorded = read_recorded_capsule(recording)
+    if recorded.manifest is not None:
+        write_capsule(recording, out, capsule=recorded)
+        publish(out.name)
 
 
 def _html(rec: Any, out: Path) -> None:

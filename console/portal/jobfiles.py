@@ -6,8 +6,8 @@ path):
 * the submission: ``script.py``, or ``src/<checked member names>`` for a ``.zip``; ``manifest.json``;
 * verification: ``report.json``, ``report.html``, ``worst-case.mcap`` (the falsifier's worst case) (:mod:`.workers`);
 * the arena run: ``recording.mcap`` (``recording.partial.mcap`` after a recovery), ``script.log``, ``run.json``
-  (:mod:`.runner`), and the exports ``robots.csv``, ``frames.csv``, ``replay.html``, ``video.mp4``
-  (:mod:`.exports`).
+  (:mod:`.runner`), and the exports ``robots.csv``, ``frames.csv``, ``replay.html``, ``video.mp4``,
+  ``capsule.zip`` (:mod:`.exports`).
 
 Folders are ``0700`` and files ``0600`` (:mod:`.files`). The rules — who may read which job, whether its results
 still exist — are the service's (:mod:`.service`); this module only knows files.
@@ -43,6 +43,8 @@ RESULT_FILES: dict[str, str] = {
     "worst-case.mcap": "the worst case the verification's falsifier found, no barrier (MCAP: swarmdeck play)",
     "run.json": "how the run ended (JSON)",
     "manifest.json": "the manifest as accepted",
+    "capsule.zip": "what reproduces the run: script files with SHA-256, settings, versions and the recording "
+                   "(swarmdeck run capsule.zip re-executes it and says whether it is bit-identical)",
 }
 VIDEO = "video.mp4"
 RECORDING = "recording.mcap"

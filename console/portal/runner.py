@@ -445,6 +445,8 @@ class ArenaRunner:
         def stopped() -> bool:
             return self._end_job.is_set()
 
+        capsule, capsule_files = _job_capsule(self.service, job, bypass)
+
         def make_plant(n_script: int, script_initial: NDArray[np.float64] | None) -> SandboxPlant:
             poses = arena_start(n_script, n, initial, script_initial, self.fleet.start_poses, s.bounds).poses
             try:
@@ -462,7 +464,8 @@ class ArenaRunner:
             fleet_ids = robots.fleet_ids.tolist()
             rec = Recorder(folder / "recording.mcap", session_metadata(loop_config, None, source=source, guard=s.guard,
                                                                       job=job.id, bypass=bypass,
-                                                                      fleet_ids=fleet_ids))
+                                                                      fleet_ids=fleet_ids),
+                           capsule=None if capsule is None else capsule.to_dict(), capsule_files=capsule_files)
             loop.post(f"robots 0..{n - 1} are the fleet's robots {', '.join(map(str, fleet_ids))}")
             state["recorder"] = rec
             tally = state["tally"] = BarrierTally(n)
@@ -613,6 +616,23 @@ def _safety_note(report: dict[str, Any]) -> str:
         pairs = ", ".join(f"{e['robots'][0]}–{e['robots'][1]}" for e in contacts["episodes"][:10])
         parts.append(f"{contacts['count']} contact(s) between robots ({pairs})")
     return "; ".join(parts)
+
+
+def _job_capsule(service: PortalService, job: Job, bypass: bool) -> tuple[Any, dict[str, bytes]]:
+    """What reproduces ``job`` (``swarmdeck capsule``, the job's ``capsule.zip``): its stored script files (with
+    their SHA-256), entry, robots, duration, bypass; the loop, guard and start poses are in its recording.
+    (None, {}) when the stored script cannot be read (the run names that itself)."""
+    from swarmdeck.console.recording.capsule import manifest_for
+    from swarmdeck.console.recording.capsule_zip import CapsuleError, script_files
+
+    try:
+        path, entry = service.script(job)
+        files, main = script_files(path, entry)
+    except (CapsuleError, OSError, ValueError):
+        return None, {}
+    run = {"robots": int(job.robots), "duration": float(job.duration), "bypass": bool(bypass), "job": int(job.id),
+           "single": not path.is_dir(), "sandbox": True}
+    return manifest_for("portal", files, entry=main, run=run), files
 
 
 def _record_stop(loop: ControlLoop) -> None:

@@ -59,12 +59,17 @@ class ArenaRecording:
 
     ``path``: the MCAP file of the first Arena; ``script``: the script's path (names the behaviour);
     ``seed``: the run's seed (in the metadata); ``foxglove_channels``: also write Foxglove's own channels
-    (``swarmdeck run --record PATH --no-foxglove-channels``: only swarmdeck's).
+    (``swarmdeck run --record PATH --no-foxglove-channels``: only swarmdeck's); ``capsule``/``capsule_files``: what
+    reproduces the run (a ``capsule.Manifest`` and the script files, relative path → bytes), written into every
+    recording with ``run.arena`` set to the Arena's index (``swarmdeck capsule PATH -o run.zip``).
     """
 
     def __init__(self, path: str | Path, *, script: str | Path, seed: int | None = None,
-                 foxglove_channels: bool = True) -> None:
+                 foxglove_channels: bool = True, capsule: Any = None,
+                 capsule_files: dict[str, bytes] | None = None) -> None:
         self.path = Path(path)
+        self.capsule = capsule
+        self.capsule_files = dict(capsule_files or {})
         self.foxglove_channels = bool(foxglove_channels)
         self.behaviour = f"script:{Path(script).name}"
         self.seed = seed
@@ -86,11 +91,18 @@ class ArenaRecording:
         config = LoopConfig(n_robots=arena.n, dt=arena.config.dt, bounds=Bounds.of(arena.config.bounds), seed=self.seed,
                             behaviour=self.behaviour, safety=SafetyParams(enabled=arena.safety is not None),
                             obstacles=getattr(arena.config, "obstacles", None))
-        path = self._path(len(self._recorders))
+        k = len(self._recorders)
+        path = self._path(k)
         self.paths.append(path)
+        capsule = None
+        if self.capsule is not None:
+            from dataclasses import replace
+
+            capsule = replace(self.capsule, run={**self.capsule.run, "arena": k}).to_dict()
         self._recorders[id(arena)] = Recorder(path, session_metadata(config, None, source="simulation",
                                                                       run="swarmdeck run"),
-                                              RecorderConfig(foxglove=self.foxglove_channels))
+                                              RecorderConfig(foxglove=self.foxglove_channels), capsule=capsule,
+                                              capsule_files=self.capsule_files if capsule is not None else None)
         self._previous[id(arena)] = arena.poses()
         self._ticks[id(arena)] = 0
         self._sensed[id(arena)] = sensors_frame(arena)

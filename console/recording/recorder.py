@@ -185,6 +185,10 @@ class Recorder:
             file that stalls like a slow disk). Needs ``write``, ``flush``, ``tell``, ``close``.
         image_provider: the camera source's ``image(ref)`` for the Foxglove camera channel, if a camera runs.
         foxglove: options of the Foxglove channels (``FoxgloveConfig``).
+        capsule: what reproduces the run (``capsule.Manifest.to_dict()``), written as the
+            ``swarmdeck.capsule`` metadata record right after the header; ``capsule_files`` (relative path →
+            bytes: the script files it names) as MCAP attachments ``capsule/<path>``
+            (:mod:`~swarmdeck.console.recording.capsule`; ``swarmdeck capsule`` reads both back).
 
     Every method is safe to call from any thread and never raises on I/O problems.
     """
@@ -192,8 +196,11 @@ class Recorder:
     def __init__(self, path: str | os.PathLike[str] | None = None, metadata: Mapping[str, Any] | None = None,
                  config: RecorderConfig | None = None, *, wallclock: Callable[[], float] = time.time,
                  opener: Callable[[Path], BinaryIO] | None = None, image_provider: Callable[[str], Any] | None = None,
-                 foxglove: FoxgloveConfig | None = None) -> None:
+                 foxglove: FoxgloveConfig | None = None, capsule: Mapping[str, Any] | None = None,
+                 capsule_files: Mapping[str, bytes] | None = None) -> None:
         self.config = config or RecorderConfig()
+        self._capsule = None if capsule is None else dict(capsule)
+        self._capsule_files = {str(k): bytes(v) for k, v in (capsule_files or {}).items()}
         self.path = Path(default_path() if path is None else path)
         self._meta = dict(metadata or {})
         self._lock = threading.Lock()
@@ -321,6 +328,7 @@ class Recorder:
             **{k: v for k, v in self._meta.items() if k != "config"},
         }
         w.add_metadata(METADATA_NAME, metadata_record(meta))
+        self._write_capsule(w)
         for topic, (name, schema) in CHANNELS.items():
             sid = w.register_schema(name=name, encoding="jsonschema", data=_json(schema))
             self._channels[topic] = w.register_channel(topic=topic, message_encoding="json", schema_id=sid)
@@ -332,6 +340,17 @@ class Recorder:
         self._writer = w
         self._file.flush()
         self._bytes = self._file.tell()
+
+    def _write_capsule(self, w: Any) -> None:
+        """The capsule's manifest (a metadata record) and its files (attachments), before any message."""
+        from swarmdeck.console.recording.capsule import ATTACHMENT_PREFIX, CAPSULE_METADATA_NAME
+
+        if self._capsule is None:
+            return
+        w.add_metadata(CAPSULE_METADATA_NAME, metadata_record({"manifest": self._capsule}))
+        for name in sorted(self._capsule_files):
+            w.add_attachment(self._start_ns, self._start_ns, ATTACHMENT_PREFIX + name, "application/octet-stream",
+                             self._capsule_files[name])
 
     def _log_ns(self, t: float) -> int:
         if self._origin is None:

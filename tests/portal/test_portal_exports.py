@@ -74,7 +74,7 @@ def test_the_next_job_runs_while_the_exports_wait_and_a_restart_writes_them(port
         assert svc.job(svc.accounts.user_named("alice"), jid).exports == "ready"
         run = run_json(portal, jid)
         assert run["ended_by"] == "duration" and run["export_error"] is None
-        assert run["exports"] == ["robots.csv", "frames.csv", "replay.html", "video.mp4"] and run["exports_s"] > 0
+        assert run["exports"] == ["capsule.zip", "robots.csv", "frames.csv", "replay.html", "video.mp4"] and run["exports_s"] > 0
         folder = svc.job_dir(jid)
         with open(folder / "frames.csv") as f:
             assert len(list(csv.DictReader(f))) == run["ticks"] + 1  # every tick and the starting poses
