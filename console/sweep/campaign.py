@@ -143,7 +143,7 @@ def plan(spec: SweepSpec) -> Plan:
                 key = run_key(spec.bundle.sha256, values, robots, s, cfg.to_dict(), mode, version)
                 params = tuple(values.items()) if declared else None
                 runs.append(SweepRun(key, p, tuple(values.items()), robots, s,
-                                     RunTask(spec.bundle, cfg, 0, mode, None, params)))
+                                     RunTask(spec.bundle, cfg, 0, mode, params=params)))
     return Plan(tuple(runs), declared, axes)
 
 
