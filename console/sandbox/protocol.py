@@ -21,7 +21,8 @@ Messages, parent → child:
     ``{"t": "end", "reason": str}`` the run is over (the script's next step ends it).
 Child → parent:
     ``{"t": "ready"}`` swarmdeck's side of the child is loaded and confined; the script starts now;
-    ``{"t": "arena", "n": N, "initial": bytes | None}`` the script built its Arena;
+    ``{"t": "arena", "n": N, "initial": bytes | None[, "m": M, "obstacles": bytes]}`` the script built its Arena
+    (``obstacles``: the M × 2 × 2 segments it declared, m — made solid on the trusted side, :func:`obstacles`);
     ``{"t": "draw", "kinds", "offsets", "vertices", "sizes", "colors", "filled": bytes, "texts": [str]}``
     what the script draws from its next ``C`` frame on (sent before it, only when the drawing changed;
     :func:`encode_annotations` / :func:`decode_draw`: the arrays as raw little-endian bytes, vertices and
@@ -184,6 +185,22 @@ def decode_draw(message: dict[str, Any]) -> Annotations:
                            colors=arrays["colors"], filled=arrays["filled"].astype(bool), texts=tuple(texts))
     except ValueError as exc:  # shapes and offsets that disagree
         raise ProtocolError(f"'draw' message: {exc}") from None
+
+
+MAX_OBSTACLES = 4096  # segments a script may declare
+
+
+def obstacles(message: dict[str, Any]) -> NDArray[np.float64] | None:
+    """The ``(M, 2, 2)`` segments (m) of an ``arena`` message, None when it declares none; ProtocolError when
+    ``m`` and the bytes disagree or M is out of 1..MAX_OBSTACLES (the segments themselves are checked by
+    :class:`~swarmdeck.core.obstacles.Obstacles` where they are used)."""
+    if message.get("obstacles") is None:
+        return None
+    m = message.get("m")
+    if not isinstance(m, int) or not 1 <= m <= MAX_OBSTACLES:
+        raise ProtocolError(f"'arena' message: m (the number of obstacle segments) must be an integer in "
+                            f"1..{MAX_OBSTACLES}, got {m!r}")
+    return floats(message, "obstacles", (m, 2, 2))
 
 
 def write_frame(fd: int, frame: bytes | dict[str, Any]) -> None:
