@@ -130,3 +130,28 @@ def test_declared_obstacles_are_checked_before_they_are_solid():
         _make_plant(plant, 3, POSES, np.array([[[1.0, np.nan], [1.2, 0.5]]]))
     made = _make_plant(plant, 3, POSES, np.array([[[1.0, -0.5], [1.0, 0.5]]]))
     assert made.arena.config.obstacles.m == 1 and made.arena.safety is not None
+
+
+def test_the_portal_loop_plant_senses_for_a_script_from_its_frames():
+    from swarmdeck.console.portal.runner import SandboxCommands
+    from swarmdeck.console.runtime.loop import ControlLoop, LoopConfig
+    from swarmdeck.console.sandbox.plant import SandboxPlant
+
+    loop = ControlLoop(LoopConfig(n_robots=3, seed=1))
+    try:
+        commands = SandboxCommands()
+        loop.use_behaviour(commands)
+        loop.pause()
+        loop.tick()
+        loop.run()
+        plant = SandboxPlant.on_loop(loop, commands, 1.0, None)
+        assert plant.readings() is None  # no sensors asked for
+        plant.use_sensors(SensingConfig(distance=DistanceSensorConfig()))
+        assert np.isnan(plant.readings().distances).all()  # before the first step, as rps 2.0
+        for _ in range(3):
+            plant.apply(np.tile([0.1, 0.0], (3, 1)))
+        sensed = plant.readings()
+        assert sensed.distances.shape == (3, 7) and not np.isnan(sensed.distances).any()
+        assert np.abs(sensed.encoders).sum() > 0  # the wheels turned as the loop commanded them
+    finally:
+        loop.close()
