@@ -360,6 +360,16 @@ class SandboxPlant:
             self.on_network(self.network)
 
 
+def with_obstacles(config: Any, obstacles: ArrayLike) -> Any:
+    """``config.obstacles`` (an Obstacles or None) with the segments ``obstacles`` ``(M, 2, 2)`` m added, as one
+    :class:`~swarmdeck.core.obstacles.Obstacles` (ObstacleError, a ValueError, naming a bad segment)."""
+    from swarmdeck.core.obstacles import Obstacles
+
+    new = Obstacles.of(np.asarray(obstacles, dtype=float))
+    old = config.obstacles
+    return new if old is None else Obstacles(np.concatenate([Obstacles.of(old).segments, new.segments]))
+
+
 def script_obstacles_config(config: Any, obstacles: ArrayLike, poses: ArrayLike) -> Any:
     """``config`` (a frozen configuration with ``obstacles`` and ``bounds``, e.g. a ``LoopConfig``) with the
     obstacle segments a sandboxed script declared (``(M, 2, 2)`` m) added to its own: the portal's loop is built
@@ -368,11 +378,9 @@ def script_obstacles_config(config: Any, obstacles: ArrayLike, poses: ArrayLike)
     from dataclasses import replace
 
     from swarmdeck.core.bounds import Bounds
-    from swarmdeck.core.obstacles import START_CLEARANCE, Obstacles
+    from swarmdeck.core.obstacles import START_CLEARANCE
 
-    new = Obstacles.of(np.asarray(obstacles, dtype=float)).check_inside(Bounds.of(config.bounds))
-    old = config.obstacles
-    merged = new if old is None else Obstacles(np.concatenate([Obstacles.of(old).segments, new.segments]))
+    merged = with_obstacles(config, obstacles).check_inside(Bounds.of(config.bounds))
     merged.check_clear(np.asarray(poses, dtype=float), START_CLEARANCE, "start pose")
     return replace(config, obstacles=merged)
 

@@ -93,3 +93,28 @@ def test_an_rps2_scripts_obstacle_stops_its_robots_in_the_sandbox(tmp_path):
     front = next(line for line in out.log.splitlines() if line.startswith("front")).split()[1]
     assert 0.0 < float(front) < 0.3, out.log  # its sensors saw the wall ahead
     assert float(front) == pytest.approx(_front(None, arena))  # the trusted side's readings, sent to the script
+
+
+# four robots at random start poses among five walls across the arena: random starts must know the script's walls
+WALLS = """
+import numpy as np
+import rps.robotarium as robotarium
+
+walls = np.array([[[-1.5, y], [1.5, y]] for y in (-0.8, -0.4, 0.0, 0.4, 0.8)])
+r = robotarium.Robotarium(number_of_robots=4, show_figure=False, sim_in_real_time=False, obstacles=walls)
+for _ in range(5):
+    r.get_poses()
+    r.step()
+print("walls", r.obstacles.shape[0])
+r.debug()
+"""
+
+
+@pytest.mark.skipif(probe() is not None, reason=f"no confinement here: {probe()}")
+def test_random_start_poses_of_a_sandboxed_run_keep_clear_of_the_scripts_obstacles(tmp_path, capsys):
+    from swarmdeck.console.cli import main
+
+    script = tmp_path / "walls.py"
+    script.write_text(textwrap.dedent(WALLS))
+    assert main(["run", "--sandbox", str(script), "--duration", "0.3", "--seed", "2", "--rps-generation", "2"]) == 0
+    assert "walls 5" in capsys.readouterr().out
