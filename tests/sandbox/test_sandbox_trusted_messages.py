@@ -155,3 +155,17 @@ def test_the_portal_loop_plant_senses_for_a_script_from_its_frames():
         assert np.abs(sensed.encoders).sum() > 0  # the wheels turned as the loop commanded them
     finally:
         loop.close()
+
+
+def test_the_portal_builds_its_loop_with_the_scripts_obstacles():
+    from swarmdeck.console.runtime.loop import LoopConfig
+    from swarmdeck.console.sandbox.plant import script_obstacles_config
+    from swarmdeck.core.obstacles import ObstacleError, Obstacles
+
+    lab = LoopConfig(n_robots=3, obstacles=Obstacles([[[1.2, -0.5], [1.2, 0.5]]]))
+    config = script_obstacles_config(lab, [[[1.0, -0.5], [1.0, 0.5]]], POSES)
+    assert config.obstacles.m == 2 and lab.obstacles.m == 1  # the lab's and the script's; the lab's config unchanged
+    with pytest.raises(ObstacleError, match="segment 1 .*start pose 1"):
+        script_obstacles_config(lab, [[[0.0, -0.3], [0.0, 0.3]]], POSES)
+    with pytest.raises(ObstacleError, match="outside the arena"):
+        script_obstacles_config(lab, [[[5.0, 0.0], [6.0, 0.0]]], POSES)
