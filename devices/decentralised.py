@@ -208,7 +208,8 @@ class Decentralised:
             else None.
         strict: raise the first controller error instead of counting it and stopping that robot.
         isolate: run each robot's controller in its own process (:mod:`swarmdeck.devices.isolated_controllers`):
-            no controller can read another's memory; None: as the robots ask (the sandbox always isolates).
+            no controller can read another's memory; None: not in process. Robots that ask for it (the sandbox's
+            ``PipeRobots.isolate_controllers``) always get it, whatever is passed here.
     """
 
     def __init__(self, arena: Arena, controller: Controller, config: NetworkConfig | None = None, *,
@@ -219,8 +220,8 @@ class Decentralised:
         self.robots = RobotControllers(arena.n, controller, config, positions=arena.poses()[:, :2],
                                        sensors=sensors if sensors is not None else _arena_readings(arena),
                                        strict=strict, seal=self._seal, network=network)
-        if isolate is None:  # the sandbox's child always isolates (PipeRobots.isolate_controllers)
-            isolate = bool(getattr(arena.backend, "isolate_controllers", False))
+        if getattr(arena.backend, "isolate_controllers", False):  # the sandbox's child always isolates (PipeRobots)
+            isolate = True
         if isolate:
             self.robots.isolate(in_worker=self._seal_for_good)
         self.robots.on_event = arena.events.append
