@@ -167,7 +167,8 @@ class Robotarium(RpsSensors, ARobotarium):
         self.robot_model = model_name(self._arena.params) or robot_model
         self.number_of_robots = self._arena.n
         self._arena.use_sensors(sensing)  # the Arena's segments: the script's and the lab's
-        self.obstacles = None if solid is None else np.array(solid.segments)  # rps 2.x: what is on the floor
+        # rps 2.x: what is on the floor, (M, 2, 2) (an empty array stays one); None when neither gave any
+        self.obstacles = np.array(solid.segments) if solid is not None else obstacles
         self.show_figure = show_figure
         self.time_step = config.dt
         b = Bounds.of(config.bounds)
