@@ -18,7 +18,10 @@ types and shapes, so a child that writes garbage gets a clear
 Messages, parent → child:
     ``{"t": "start", ...}`` the run's settings (see :mod:`.child`);
     ``P`` frames: the poses the script sees;
-    ``{"t": "end", "reason": str}`` the run is over (the script's next step ends it).
+    ``{"t": "end", "reason": str}`` the run is over (the script's next step ends it);
+    ``{"t": "readings", ...}`` before a ``P`` frame: what the robots sensed (:mod:`.senses`), when the script has sensors;
+    ``{"t": "inboxes", ...}`` before a ``P`` frame, and once in answer to ``decentralised``: the trusted network's
+    deliveries (:mod:`.network_link`).
 Child → parent:
     ``{"t": "ready"}`` swarmdeck's side of the child is loaded and confined; the script starts now;
     ``{"t": "arena", "n": N, "initial": bytes | None[, "m": M, "obstacles": bytes]}`` the script built its Arena
@@ -32,6 +35,11 @@ Child → parent:
     ``{"t": "network", "k": k, "links": bytes, "rate": bytes}`` before the ``C`` frame of tick k of a decentralised
     run (``swarmdeck.devices.decentralised``): its network's last links E × 2 (float64 robot indices) and messages
     per second over each (E,) — the script's own account, shown and recorded, never trusted for anything else;
+    ``{"t": "sensors", "config": {...} | None}``, ``{"t": "leds", "rgb": bytes}`` the script's sensors and LEDs
+    (:mod:`.senses`: the readings are computed on the trusted side);
+    ``{"t": "decentralised", ...}`` once, ``{"t": "outbox", "k", "messages"}`` before tick k's ``C`` frame: a
+    decentralised run's network configuration and its robots' messages (:mod:`.network_link`: the network lives on
+    the trusted side);
     ``{"t": "done", "error": str | None, "error_line": str | None, "cpu_s": s}`` the script finished
     (``cpu_s``: the child's own CPU time, as it reports it: informational only).
 """
