@@ -1,6 +1,7 @@
 """An rps 2.x script's ``obstacles`` are solid for swarmdeck's barrier, in process and in the sandbox: a script that
 drives its robots straight into its own obstacle is stopped in front of it (no obstacle contact), and the lab's
-``[arena] obstacles`` given to an rps script are solid and seen by its distance sensors too."""
+``[arena] obstacles`` given to an rps script are solid and seen by its distance sensors too. Sandboxed, the script's
+readings are the trusted side's and the LEDs it sets are shown there."""
 from __future__ import annotations
 
 import textwrap
@@ -25,6 +26,7 @@ obstacles = np.array([[[0.0, -0.6], [0.0, 0.6]]])  # a wall across the robots' w
 ic = np.array([[-0.35, -0.35], [-0.3, 0.3], [0.0, 0.0]])
 r = robotarium.Robotarium(number_of_robots=2, show_figure=False, initial_conditions=ic, sim_in_real_time=False,
                           obstacles=obstacles, use_distance_sensors=True)
+r.set_leds(np.arange(2), np.array([[255, 0], [0, 128], [0, 0]]))  # (3, N): red, then green
 for _ in range(100):
     r.get_poses()
     r.set_velocities(np.arange(2), np.array([[0.15, 0.15], [0.0, 0.0]]))
@@ -93,6 +95,7 @@ def test_an_rps2_scripts_obstacle_stops_its_robots_in_the_sandbox(tmp_path):
     front = next(line for line in out.log.splitlines() if line.startswith("front")).split()[1]
     assert 0.0 < float(front) < 0.3, out.log  # its sensors saw the wall ahead
     assert float(front) == pytest.approx(_front(None, arena))  # the trusted side's readings, sent to the script
+    assert arena.sensors.leds.tolist() == [[255, 0, 0], [0, 128, 0]]  # the LEDs it set, shown on the trusted side
 
 
 # four robots at random start poses among five walls across the arena: random starts must know the script's walls
