@@ -194,6 +194,15 @@ class ShowsLeds(Protocol):
         """Show ``rgb`` ``(K, 3)`` (0…255) on robots ``ids`` ``(K,)`` from the next command on, until set again."""
 
 
+@runtime_checkable
+class SensesElsewhere(Protocol):
+    """Robots whose sensors are simulated on the far side of a trust boundary (the sandbox's trusted side, issue 28):
+    the Arena tells them which sensors the experiment uses, and takes their readings (:class:`ReportsSensors`)."""
+
+    def use_sensors(self, config: Any) -> None:
+        """The experiment's ``swarmdeck.sensing.SensingConfig`` from now on (None: no sensors)."""
+
+
 def obstacles_of(port: object) -> NDArray[np.float64] | None:
     """``port.obstacles()`` when ``port`` reports obstacles (:class:`ReportsObstacles`), else None."""
     return port.obstacles() if isinstance(port, ReportsObstacles) else None

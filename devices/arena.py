@@ -36,7 +36,7 @@ from swarmdeck.core.kinematics import (
     wheels_to_unicycle,
 )
 from swarmdeck.core.obstacles import START_CLEARANCE
-from swarmdeck.core.ports import ReportsSensors, ShowsLeds
+from swarmdeck.core.ports import ReportsSensors, SensesElsewhere, ShowsLeds
 from swarmdeck.core.robot_models import DEFAULT_ROBOT_MODEL, robot_params
 from swarmdeck.devices.controllers import (
     HybridPoseController,
@@ -218,10 +218,9 @@ class Arena:
         self.robots = SteppedRobots(source, sink, params=self.params, dt=config.dt)
         self.n = int(self.robots.n_robots)
         self.ell = self.params.lookahead
+        self._own_barrier = safety is True  # add_obstacles rebuilds it
         if safety is True:
-            self.safety: CommandFilter | UnicycleCommandFilter | None = barrier_filter(
-                self.params, config.bounds, config.dt, max_speed=self.params.max_speed,
-                **({} if config.obstacles is None else {"obstacles": config.obstacles}))
+            self.safety: CommandFilter | UnicycleCommandFilter | None = self._barrier()
         elif safety is False:
             self.safety = None
         else:
@@ -305,6 +304,38 @@ class Arena:
         self._refuse_if_sealed("positions()")
         return lookahead_points(self.robots.poses, self.ell)
 
+    # ------------------------------------------------------------------ obstacles declared later (issue 28.3)
+    def _barrier(self) -> UnicycleCommandFilter:
+        """swarmdeck's barrier for this Arena's robots, bounds, period and obstacle segments."""
+        config = self.config
+        return barrier_filter(self.params, config.bounds, config.dt, max_speed=self.params.max_speed,
+                              **({} if config.obstacles is None else {"obstacles": config.obstacles}))
+
+    def add_obstacles(self, obstacles: Any) -> None:
+        """Make these line segments (``(M, 2, 2)`` m, ``[[x0, y0], [x1, y1]]`` each, or an
+        :class:`~swarmdeck.core.obstacles.Obstacles`) solid from now on, beside the Arena's own: the barrier keeps
+        the robots off them (when it is swarmdeck's), the simulator blocks them, validation counts contacts, the
+        sensors see them. The trusted side of a sandboxed run calls it with the obstacles the script declared (an rps
+        2.x ``Robotarium(obstacles=...)``). ObstacleError (a ValueError) naming the segment when one is invalid,
+        outside the arena or within START_CLEARANCE of a robot."""
+        from swarmdeck.core.obstacles import Obstacles
+
+        new = Obstacles.of(obstacles)
+        if not new:
+            return
+        old = self.config.obstacles
+        merged = new if old is None else Obstacles(np.concatenate([old.segments, new.segments]))
+        config = dataclasses.replace(self.config, obstacles=merged)  # checked inside the bounds there
+        merged.check_clear(self.robots.poses, START_CLEARANCE, "robot")
+        self.config = config
+        sim = getattr(self.backend, "sim", None)  # simulated robots (and verification's): contact, validation
+        if isinstance(sim, SimulatedArena):
+            sim.config = dataclasses.replace(sim.config, obstacles=merged)
+        if self._own_barrier:
+            self.safety = self._barrier()
+        if self.sensors is not None:
+            self.use_sensors(self.sensors.config, obstacles=merged.segments)
+
     # ------------------------------------------------------------------ the robots' own sensors (issue 28.1)
     def use_sensors(self, sensing: SensingConfig | None, *, obstacles: ArrayLike | None = None,
                     seed: int | None = None) -> Sensors | None:
@@ -312,6 +343,8 @@ class Arena:
         distance sensors see (default: the arena config's obstacle ``segments`` when it has them). The noise is seeded
         from ``seed`` (default: the arena config's seed; None: fresh entropy). Returns the
         :class:`~swarmdeck.sensing.Sensors`."""
+        if isinstance(self.backend, SensesElsewhere):  # the sandbox's child: the trusted side computes the readings
+            self.backend.use_sensors(sensing)
         if sensing is None:
             self.sensors, self._readings = None, None
             return None

@@ -26,6 +26,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from swarmdeck.devices.arena import Arena
+from swarmdeck.devices.isolated_controllers import ProcessControllers
 from swarmdeck.network.config import NetworkConfig
 from swarmdeck.network.errors import MessageError
 from swarmdeck.network.network import Network, NetworkTraffic
@@ -57,13 +58,14 @@ class RobotControllers:
 
     def __init__(self, n: int, controller: Controller, config: NetworkConfig | None = None, *,
                  positions: ArrayLike | None = None, sensors: ReadingsSource | None = None, strict: bool = False,
-                 seal: Callable[[str | None], None] | None = None) -> None:
+                 seal: Callable[[str | None], None] | None = None, network: Any = None) -> None:
         if not callable(controller):
             raise ValueError(f"controller must be a function (i, view) -> velocity, got {controller!r}")
         self.n = int(n)
         self.controller = controller
         self.config = config if config is not None else NetworkConfig()
-        self.network = Network(self.n, self.config, positions=positions)
+        # ``network``: a stand-in with Network's interface (the sandbox's child: the trusted side holds the network)
+        self.network = network if network is not None else Network(self.n, self.config, positions=positions)
         self.sensors = sensors
         self.strict = strict
         self.seal = seal
@@ -73,6 +75,21 @@ class RobotControllers:
         self.events: deque[str] = deque(maxlen=200)
         self.last_commands = np.zeros((self.n, 2))
         self.on_event: Callable[[str], None] | None = None  # also told every event (the Arena's event list)
+        self.workers: ProcessControllers | None = None  # isolate(): each controller in its own process
+
+    def isolate(self, in_worker: Callable[[int], None] | None = None) -> None:
+        """From now on each robot's controller runs in its own forked process
+        (:mod:`swarmdeck.devices.isolated_controllers`): no controller can read another robot's memory.
+        ``in_worker(i)`` runs first in robot i's process. RuntimeError when the processes cannot be started."""
+        if self.workers is None:
+            self.workers = ProcessControllers(self.n, self.controller, (self.config.max_message_bytes,
+                                                                        self.config.max_messages_per_tick), in_worker)
+
+    def close(self) -> None:
+        """End the controllers' processes (when isolated)."""
+        if self.workers is not None:
+            self.workers.close()
+            self.workers = None
 
     def _fail(self, kind: str, text: str, exc: BaseException | None = None) -> None:
         self.errors[kind] += 1
@@ -108,10 +125,38 @@ class RobotControllers:
             return np.zeros(2)
         return u
 
+    def _decide_isolated(self, poses: NDArray[np.float64], time: float) -> tuple[NDArray[np.float64], list[Outbox]]:
+        """:meth:`decide` with every controller in its own process (:attr:`workers`)."""
+        assert self.workers is not None
+        net, n = self.network, self.n
+        views = [(poses[i].copy(), float(time), self.tick, net.inbox(i),
+                  self.sensors(i) if self.sensors is not None else None, net.neighbours(i)) for i in range(n)]
+        commands = np.zeros((n, 2))
+        outboxes = []
+        for i, (command, error, messages, refusals) in enumerate(self.workers.decide(views)):
+            outbox = Outbox(i, n, self.config.max_message_bytes, self.config.max_messages_per_tick, 0)
+            outbox.messages.extend(messages)
+            outbox.refusals.extend(refusals)
+            outboxes.append(outbox)
+            if error is not None:
+                self._fail(error[0], f"tick {self.tick}: robot {i}'s controller {error[1]}")
+            elif command is None or not np.all(np.isfinite(command)):
+                self._fail("bad_command", f"tick {self.tick}: robot {i}'s controller returned a non-finite "
+                                          f"velocity: stopped")
+            else:
+                commands[i] = command
+        return commands, outboxes
+
     def decide(self, poses: ArrayLike, time: float) -> NDArray[np.float64]:
         """Every robot's command ``(n, 2)`` m/s for ``poses`` ``(n, 3)`` at ``time`` s; their messages are queued."""
         net, cfg, n = self.network, self.config, self.n
         poses = np.asarray(poses, dtype=float).reshape(n, 3)
+        if self.workers is not None:
+            commands, outboxes = self._decide_isolated(poses, time)
+            self._post(outboxes)
+            self.last_commands = commands
+            self.tick += 1
+            return commands
         commands = np.zeros((n, 2))
         outboxes = []
         for i in range(n):
@@ -121,6 +166,15 @@ class RobotControllers:
             view = RobotView(i, poses[i], time, self.tick, net.inbox(i), readings, self.states[i], neighbours, outbox)
             commands[i] = self._command(i, view)
             outboxes.append(outbox)
+        self._post(outboxes)
+        self.last_commands = commands
+        self.tick += 1
+        return commands
+
+    def _post(self, outboxes: list[Outbox]) -> None:
+        """Every robot's refusals counted, then its messages handed to the network."""
+        net = self.network
+        for outbox in outboxes:
             for reason, text in outbox.refusals:
                 net.stats[f"refused:{reason}"] += 1
                 net.errors.append(text)
@@ -133,11 +187,8 @@ class RobotControllers:
                         net.broadcast_encoded(outbox.i, data)
                     else:
                         net.send_encoded(outbox.i, j, data)
-                except MessageError as exc:  # limits the outbox already checked: cannot happen, but never crash
+                except MessageError as exc:  # the outbox checked the limits; a worker's answer is checked here
                     self._fail("message", str(exc))
-        self.last_commands = commands
-        self.tick += 1
-        return commands
 
     def report(self) -> dict[str, Any]:
         """Counts of the run: the network's (sent, delivered, lost, unreachable, over_bandwidth, refused:*)
@@ -156,14 +207,23 @@ class Decentralised:
         sensors: robot index → its readings; default: ``arena.sense().robot(i)`` when the arena has sensors,
             else None.
         strict: raise the first controller error instead of counting it and stopping that robot.
+        isolate: run each robot's controller in its own process (:mod:`swarmdeck.devices.isolated_controllers`):
+            no controller can read another's memory; None: not in process. Robots that ask for it (the sandbox's
+            ``PipeRobots.isolate_controllers``) always get it, whatever is passed here.
     """
 
     def __init__(self, arena: Arena, controller: Controller, config: NetworkConfig | None = None, *,
-                 sensors: ReadingsSource | None = None, strict: bool = False) -> None:
+                 sensors: ReadingsSource | None = None, strict: bool = False, isolate: bool | None = None) -> None:
         self.arena = arena
+        remote = getattr(arena.backend, "remote_network", None)  # the sandbox's child: the trusted side's network
+        network = remote(config if config is not None else NetworkConfig()) if callable(remote) else None
         self.robots = RobotControllers(arena.n, controller, config, positions=arena.poses()[:, :2],
                                        sensors=sensors if sensors is not None else _arena_readings(arena),
-                                       strict=strict, seal=self._seal)
+                                       strict=strict, seal=self._seal, network=network)
+        if getattr(arena.backend, "isolate_controllers", False):  # the sandbox's child always isolates (PipeRobots)
+            isolate = True
+        if isolate:
+            self.robots.isolate(in_worker=self._seal_for_good)
         self.robots.on_event = arena.events.append
         self.network = self.robots.network
         self.config = self.robots.config
@@ -174,6 +234,14 @@ class Decentralised:
 
     def _seal(self, who: str | None) -> None:
         self.arena._sealed_for = who
+
+    def _seal_for_good(self, i: int) -> None:
+        """In robot i's own process (isolated): the Arena refuses every look at the swarm for good."""
+        self.arena._sealed_for = f"robot {i}'s controller"
+
+    def close(self) -> None:
+        """End the controllers' processes (``isolate``); the run's end does it too."""
+        self.robots.close()
 
     @property
     def tick(self) -> int:

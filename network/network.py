@@ -274,6 +274,13 @@ class Network:
         senders, sent = self._in_s[lo:hi].tolist(), self._in_sent[lo:hi].tolist()
         return tuple(Message(s, i, t, decode_payload(d)) for s, t, d in zip(senders, sent, self._in_data[lo:hi]))
 
+    def encoded_inbox(self, i: int) -> tuple[tuple[int, int, bytes], ...]:
+        """Robot ``i``'s inbox as :meth:`inbox` has it, payloads still encoded: ``(sender, sent_tick, data)`` each (what
+        the sandbox's trusted side sends to the script's process)."""
+        i = _index("robot", i, self.n)
+        lo, hi = int(self._in_start[i]), int(self._in_start[i + 1])
+        return tuple(zip(self._in_s[lo:hi].tolist(), self._in_sent[lo:hi].tolist(), self._in_data[lo:hi]))
+
     def traffic(self) -> NetworkTraffic:
         """The last step's links and the messages and bytes delivered over each."""
         return self._traffic

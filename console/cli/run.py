@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import argparse
 import contextlib
+import dataclasses
 import json
 import math
 import os
@@ -136,7 +137,7 @@ def _params_env(values: dict[str, Any] | None) -> Iterator[None]:
 def _run_sandboxed(args: argparse.Namespace) -> int:
     from swarmdeck.console.cli.env import checked_script_env
     from swarmdeck.console.sandbox.confinement import ConfinementUnavailable, JailConfig
-    from swarmdeck.console.sandbox.plant import ArenaPlant
+    from swarmdeck.console.sandbox.plant import ArenaPlant, with_obstacles
     from swarmdeck.console.sandbox.run import run_sandboxed
     from swarmdeck.core.robot_models import robot_params
     from swarmdeck.devices.arena import Arena
@@ -146,8 +147,9 @@ def _run_sandboxed(args: argparse.Namespace) -> int:
     config = ArenaConfig(seed=args.seed, obstacles=obstacles_argument(args))
     model = args.robot_model or _script_robot_model(args)
 
-    def make_plant(n, initial):
-        return ArenaPlant(Arena(n, initial_conditions=initial, config=config,
+    def make_plant(n, initial, obstacles=None):  # obstacles: the script's own (rps 2.x), solid beside the lab's
+        cfg = config if obstacles is None else dataclasses.replace(config, obstacles=with_obstacles(config, obstacles))
+        return ArenaPlant(Arena(n, initial_conditions=initial, config=cfg,
                                 safety=not (args.no_safety or args.rps_semantics), duration=args.duration,
                                 params=robot_params(model)))
 

@@ -93,7 +93,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
     add_script_env_argument(parser)
     parser.add_argument("--console-port", type=int, default=None, metavar="P",
-                        help="also show the running job in the operator's viser view on port P (on --host)")
+                        help="also show the running job in the operator's viser view on port P (on --host); with "
+                             "--projector it has the projector's folder (layers, brightness, blackout)")
     parser.add_argument("--projector", nargs="?", type=int, const=8090, default=None, metavar="PORT",
                         help="also serve the overhead projector's page for the arena on http://HOST:PORT/projector "
                              "(default port 8090; `chromium --kiosk --app=URL` on the projector's screen)")
@@ -377,6 +378,8 @@ def main(args: argparse.Namespace) -> int:
                              f"{exc.strerror or exc}") from None
 
         runners[0].frame_listeners.append(projector.offer)
+        if view is not None:  # the operator page's Projector folder: layers, brightness, blackout
+            view.add_projector(projector)
         projector.start()
         print(f"swarmdeck server: projector page at {projector.url}" + (
             "" if projector.feed.calibration is not None else " (no homography: run `swarmdeck calibrate projector`)"),

@@ -94,7 +94,7 @@ from swarmdeck.console.runtime.loop import ControlLoop, DensityParams, LoopConfi
 from swarmdeck.console.runtime.network_frame import NetworkFrame
 from swarmdeck.console.sandbox.bundle import ScriptBundle
 from swarmdeck.console.sandbox.confinement import ConfinementUnavailable, SandboxLimits
-from swarmdeck.console.sandbox.plant import SandboxPlant
+from swarmdeck.console.sandbox.plant import SandboxPlant, script_obstacles_config
 from swarmdeck.console.sandbox.run import SandboxOutcome, run_sandboxed
 from swarmdeck.console.sandbox.start_poses import arena_start
 from swarmdeck.console.sandbox.verification import user_message, without_run_folder
@@ -447,22 +447,24 @@ class ArenaRunner:
 
         capsule, capsule_files = _job_capsule(self.service, job, bypass)
 
-        def make_plant(n_script: int, script_initial: NDArray[np.float64] | None) -> SandboxPlant:
+        def make_plant(n_script: int, script_initial: NDArray[np.float64] | None,
+                       obstacles: NDArray[np.float64] | None = None) -> SandboxPlant:
             poses = arena_start(n_script, n, initial, script_initial, self.fleet.start_poses, s.bounds).poses
+            config = loop_config if obstacles is None else script_obstacles_config(loop_config, obstacles, poses)
             try:
                 robots = self._set_up(job.id, np.asarray(poses, dtype=float))
             except ValueError as exc:
                 state["setup_failed"] = str(exc)
                 raise
             notes.append(self._upkeep["setup"]["message"])
-            loop = ControlLoop(loop_config, source=robots, sink=robots, clock=time.monotonic if s.real_time else None,
+            loop = ControlLoop(config, source=robots, sink=robots, clock=time.monotonic if s.real_time else None,
                                guard=s.guard)
             with self._lock:
                 self._loop = loop
             state["loop"] = loop
             source = redact_url(s.robots_via) if s.robots_via else "simulation"
             fleet_ids = robots.fleet_ids.tolist()
-            rec = Recorder(folder / "recording.mcap", session_metadata(loop_config, None, source=source, guard=s.guard,
+            rec = Recorder(folder / "recording.mcap", session_metadata(config, None, source=source, guard=s.guard,
                                                                       job=job.id, bypass=bypass,
                                                                       fleet_ids=fleet_ids),
                            capsule=None if capsule is None else capsule.to_dict(), capsule_files=capsule_files)

@@ -25,6 +25,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from swarmdeck.console.sandbox.import_policy import install as install_import_policy
+from swarmdeck.console.sandbox.network_link import RemoteNetwork, network_config_message
 from swarmdeck.console.sandbox.protocol import (
     MAX_NETWORK_LINKS,
     MESSAGE,
@@ -36,6 +37,7 @@ from swarmdeck.console.sandbox.protocol import (
     write_frame,
 )
 from swarmdeck.console.sandbox.protocol import poses as read_poses
+from swarmdeck.console.sandbox.senses import leds_message, readings_from_message, sensing_message
 from swarmdeck.core.annotations import EMPTY as EMPTY_ANNOTATIONS
 from swarmdeck.core.annotations import Annotations
 from swarmdeck.core.kinematics import GritsBotParams, unicycle_to_si
@@ -44,6 +46,8 @@ from swarmdeck.devices.arena import ExperimentFinished
 from swarmdeck.devices.experiment_params import METRICS_SINK, PARAMS_ENV
 from swarmdeck.devices.runner import RunnerArenaError, ScriptError, run_experiment
 from swarmdeck.devices.simulator import ArenaConfig
+from swarmdeck.network import NetworkConfig
+from swarmdeck.sensing import SensingConfig, SensorReadings
 
 
 class Link:
@@ -110,17 +114,68 @@ class PipeRobots:
         self._metrics = metrics
         self._network: Any = None  # a decentralised run's swarmdeck.network.Network (attach_network)
         self._drawn: dict[str, Any] = encode_annotations(EMPTY_ANNOTATIONS)
-        link.send({"t": "arena", "n": n, "initial": None if ic is None else pack(ic)})
+        self._readings: SensorReadings | None = None
+        self._remote: RemoteNetwork | None = None  # a decentralised run's network stand-in (remote_network)
+        arena: dict[str, Any] = {"t": "arena", "n": n, "initial": None if ic is None else pack(ic)}
+        if config.obstacles is not None:  # the script's own (an rps 2.x Robotarium(obstacles=...)): solid on the trusted side
+            arena["obstacles"] = pack(config.obstacles.segments)
+            arena["m"] = int(config.obstacles.m)
+        link.send(arena)
         self._take()
 
     def _take(self) -> None:
-        kind, body = self.link.receive()
-        if kind == MESSAGE:
+        while True:
+            kind, body = self.link.receive()
+            if kind != MESSAGE:
+                break
             message = decode(body)
+            if message["t"] == "readings":  # what the robots sensed, computed on the trusted side (senses.py)
+                self._readings = readings_from_message(message)
+                continue
+            if message["t"] == "inboxes" and self._remote is not None:  # the trusted network's deliveries
+                self._remote.deliver(message)
+                continue
             if message["t"] == "end":
                 raise ExperimentFinished(str(message.get("reason", "the run is over")))
             raise RuntimeError(f"unexpected message from the trusted side: {message['t']!r}")
         self._k, self._time, self._poses = read_poses(body, self.n_robots)
+
+    #: every decentralised run's controllers each in their own process (devices/isolated_controllers.py)
+    isolate_controllers = True
+
+    def remote_network(self, config: NetworkConfig) -> RemoteNetwork:
+        """The network of a decentralised run (``devices.decentralised``): modelled on the trusted side
+        (console/sandbox/network_link.py); returns the stand-in the controllers use, after the trusted side's first
+        topology arrived."""
+        if self._remote is not None:
+            raise RuntimeError("a sandboxed script may run one decentralised experiment per Arena")
+        self._remote = RemoteNetwork(self.n_robots, config)
+        self.link.send(network_config_message(config))
+        kind, body = self.link.receive()  # the trusted side answers at once with the first topology
+        message = decode(body) if kind == MESSAGE else {}
+        if message.get("t") != "inboxes":
+            raise RuntimeError("the trusted side did not answer the network's configuration")
+        self._remote.deliver(message)
+        return self._remote
+
+    def use_sensors(self, config: SensingConfig | None) -> None:
+        """The script's sensors: the trusted side simulates them (or reads the robots' own) and sends the readings
+        with every tick's poses (:class:`~swarmdeck.core.ports.SensesElsewhere`)."""
+        if config is None:
+            self.link.send({"t": "sensors", "config": None})
+            self._readings = None
+            return
+        self.link.send(sensing_message(config))
+
+    def sensor_readings(self) -> SensorReadings | None:
+        """The trusted side's readings of the last tick (None before the first)."""
+        return self._readings
+
+    def set_leds(self, ids: NDArray[np.int64], rgb: NDArray[np.uint8]) -> None:
+        """The LEDs as the script set them ``(N, 3)`` (the Arena passes every robot's): shown on the trusted side."""
+        full = np.zeros((self.n_robots, 3), dtype=np.uint8)
+        full[np.asarray(ids, dtype=np.int64)] = rgb
+        self.link.send(leds_message(full))
 
     def read(self, now: float = 0.0) -> SensedPoses:
         """The poses and time the trusted side sent last (every robot seen)."""
@@ -133,7 +188,9 @@ class PipeRobots:
 
     def send_nominal(self, ids: NDArray[np.int64], nominal: NDArray[np.float64]) -> None:
         """Send the nominal ``(N, 2)`` for the current poses; waits for the next poses."""
-        if self._network is not None:
+        if self._remote is not None:  # what the controllers sent: the trusted network checks and delivers it
+            self.link.send({"t": "outbox", "k": self._k, "messages": self._remote.take_outgoing()})
+        elif self._network is not None:
             traffic = self._network.traffic()
             if len(traffic.links) <= MAX_NETWORK_LINKS:
                 self.link.send({"t": "network", "k": self._k, "links": pack(traffic.links.astype(float)),

@@ -22,6 +22,8 @@ from numpy.typing import ArrayLike, NDArray
 from scipy.spatial import cKDTree
 
 from swarmdeck.console.runtime.network_frame import NetworkFrame
+from swarmdeck.console.sandbox.network_link import TrustedNetwork
+from swarmdeck.console.sandbox.protocol import ProtocolError
 from swarmdeck.core.annotations import Annotations
 from swarmdeck.core.annotator import Annotator
 from swarmdeck.core.constants import ROBOT_DIAMETER
@@ -32,7 +34,9 @@ from swarmdeck.devices.arena import Arena
 from swarmdeck.devices.clock import RealTimePacer
 from swarmdeck.devices.simulator import SimulatedArena
 from swarmdeck.devices.validation import ValidationReport
+from swarmdeck.network import NetworkConfig
 from swarmdeck.safety.verifier import ContactLog, step_contacts
+from swarmdeck.sensing import SensingConfig, SensorReadings, Sensors
 
 
 @dataclass(frozen=True)
@@ -216,6 +220,34 @@ class VerificationRobots:
         return self._observed.copy()
 
 
+@dataclass(frozen=True)
+class LoopWorld:
+    """What a loop plant's sensors need of its ControlLoop: the robot model, bounds (m), period (s), obstacle
+    segments (M, 2, 2) m, seed, and ``commanded() -> (v (N,), w (N,))`` the last Frame's commands."""
+
+    robot: GritsBotParams
+    bounds: Any
+    dt: float
+    segments: NDArray[np.float64] | None
+    seed: int | None
+    commanded: Callable[[], tuple[NDArray[np.float64], NDArray[np.float64]]]
+
+    @classmethod
+    def of(cls, loop: Any) -> LoopWorld:
+        cfg = loop.config
+        n = int(cfg.n_robots)
+
+        def commanded() -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+            frame = loop.latest
+            if frame is None:
+                return np.zeros(n), np.zeros(n)
+            return np.asarray(frame.v, dtype=float), np.asarray(frame.w, dtype=float)
+
+        segments = None if cfg.obstacles is None else cfg.obstacles.segments
+        return cls(getattr(loop, "robot", None) or GritsBotParams(), cfg.bounds, float(cfg.dt), segments,
+                   None if cfg.seed is None else int(cfg.seed), commanded)
+
+
 class SandboxPlant:
     """The sandbox's one :class:`~swarmdeck.console.sandbox.run.Plant`: each tick, the script's nominal
     look-ahead velocities (N, 2) go to a trusted driver that certifies them (wheel limits, the barrier,
@@ -242,6 +274,10 @@ class SandboxPlant:
         self.n, self._observe, self._step, self._finished, self.arena = int(n), observe, step, finished, arena
         self.network: NetworkFrame | None = None  # the script's last account of its robots' traffic (display only)
         self.on_network: Callable[[NetworkFrame], None] | None = None
+        self.trusted_network: TrustedNetwork | None = None  # a decentralised script's network (use_network)
+        self._world: LoopWorld | None = None  # the loop driver's robots, for sensors the script asks for
+        self._sensors: Sensors | None = None
+        self._sensed: SensorReadings | None = None
         self.drawer = drawer if drawer is not None else (arena.draw if arena is not None else None)
         """where what the script draws goes (its Frames' annotations), capped there; None: dropped"""
 
@@ -280,12 +316,61 @@ class SandboxPlant:
 
         plant = cls(n, observe, step, lambda: loop.run_time >= duration - 1e-9,
                     drawer=drawer if isinstance(drawer, Annotator) else None)
+        plant._world = LoopWorld.of(loop)
         if hasattr(commands, "network"):  # a behaviour that reports it puts it in the loop's Frames (behaviours.ReportsNetwork)
             plant.on_network = lambda frame: setattr(commands, "network", frame)
         return plant
 
     def observe(self) -> tuple[float, NDArray[np.float64]]:
         return self._observe()
+
+    def use_sensors(self, config: SensingConfig | None) -> None:
+        """The sensors the script asked for (its ``sensors`` message), simulated here: on the driver's Arena (its seed,
+        its obstacles, the commands the robots really ran; a robot port with its own readings gives those), or for
+        the loop driver from the loop's Frames (their poses and the commands sent, ``v``, ``w``)."""
+        if self.arena is not None:
+            self.arena.use_sensors(config)
+            return
+        self._sensors = None if config is None or self._world is None else Sensors(
+            self.n, config, rng=np.random.default_rng(self._world.seed), params=self._world.robot,
+            bounds=self._world.bounds, obstacles=self._world.segments)
+        self._sensed = None if self._sensors is None else self._sensors.first(self.observe()[1])
+
+    def set_leds(self, rgb: NDArray[np.uint8]) -> None:
+        """The LEDs ``(N, 3)`` 0…255 the script set (its ``leds`` message): shown (and sent to robots with LEDs)."""
+        if self.arena is not None and self.arena.sensors is not None and self.arena.sensors.config.leds:
+            self.arena.set_leds(rgb)
+
+    def use_network(self, config: NetworkConfig) -> None:
+        """A decentralised script's network (its ``decentralised`` message), modelled here: the script's messages go
+        through it (:meth:`post_messages`), it steps at the robots' true positions after every tick, and what it
+        shows is its own traffic, not the script's account."""
+        self.trusted_network = TrustedNetwork(self.n, config, self.observe()[1][:, :2])
+
+    def post_messages(self, message: dict[str, Any]) -> None:
+        """The script's ``outbox`` message for this tick (refusals counted by the network)."""
+        if self.trusted_network is None:
+            raise ProtocolError("an 'outbox' message before the network's configuration")
+        self.trusted_network.post(message)
+
+    def inboxes(self, k: int) -> dict[str, Any] | None:
+        """The ``inboxes`` message of tick ``k`` (None: no network)."""
+        return None if self.trusted_network is None else self.trusted_network.inboxes_message(k)
+
+    def readings(self) -> SensorReadings | None:
+        """What the robots sensed in the last tick (sent to the script before the next poses); None without
+        sensors."""
+        if self.arena is None:
+            return self._sensed
+        return None if self.arena.sensors is None else self.arena.sense()
+
+    def add_obstacles(self, obstacles: NDArray[np.float64]) -> None:
+        """The script's declared obstacle segments ``(M, 2, 2)`` m, solid from now on (:meth:`Arena.add_obstacles`:
+        barrier, contact, validation, sensors); ValueError naming a bad segment. A loop plant takes them where its
+        loop is built (the portal's ``make_plant(..., obstacles=)``)."""
+        if self.arena is None:
+            raise ValueError("the script declares obstacles, and this arena cannot make them solid")
+        self.arena.add_obstacles(obstacles)
 
     def draw(self, ann: Annotations) -> None:
         """What the script draws from the next tick on (its ``draw`` message, structure checked by the
@@ -297,9 +382,21 @@ class SandboxPlant:
     def apply(self, nominal: NDArray[np.float64] | None) -> None:
         """One tick: the script's nominal look-ahead velocities (N, 2) through the driver's pipeline; None: stop."""
         self._step(nominal)
+        if self.trusted_network is not None:
+            traffic = self.trusted_network.step(self.observe()[1][:, :2])
+            self.show_network(traffic.links.astype(np.int64), traffic.messages / self._dt())
+        if self._sensors is not None and self._world is not None:
+            v, w = self._world.commanded()
+            self._sensed = self._sensors.update(self.observe()[1], v, w, self._world.dt)
 
     def finished(self) -> bool:
         return self._finished()
+
+    def _dt(self) -> float:
+        """The control period, s."""
+        if self.arena is not None:
+            return float(self.arena.config.dt)
+        return self._world.dt if self._world is not None else 1.0
 
     def show_network(self, links: NDArray[np.int64], rate: NDArray[np.float64]) -> None:
         """The sandboxed script's account of its network this tick (checked by ``protocol.network_traffic``):
@@ -307,6 +404,31 @@ class SandboxPlant:
         self.network = NetworkFrame(links, rate)
         if self.on_network is not None:
             self.on_network(self.network)
+
+
+def with_obstacles(config: Any, obstacles: ArrayLike) -> Any:
+    """``config.obstacles`` (an Obstacles or None) with the segments ``obstacles`` ``(M, 2, 2)`` m added, as one
+    :class:`~swarmdeck.core.obstacles.Obstacles` (ObstacleError, a ValueError, naming a bad segment)."""
+    from swarmdeck.core.obstacles import Obstacles
+
+    new = Obstacles.of(np.asarray(obstacles, dtype=float))
+    old = config.obstacles
+    return new if old is None else Obstacles(np.concatenate([Obstacles.of(old).segments, new.segments]))
+
+
+def script_obstacles_config(config: Any, obstacles: ArrayLike, poses: ArrayLike) -> Any:
+    """``config`` (a frozen configuration with ``obstacles`` and ``bounds``, e.g. a ``LoopConfig``) with the
+    obstacle segments a sandboxed script declared (``(M, 2, 2)`` m) added to its own: the portal's loop is built
+    with them (barrier, guard, Frames). ObstacleError (ValueError) naming a segment that is invalid, outside the
+    bounds or within START_CLEARANCE of a start pose ``poses`` (N, 3)."""
+    from dataclasses import replace
+
+    from swarmdeck.core.bounds import Bounds
+    from swarmdeck.core.obstacles import START_CLEARANCE
+
+    merged = with_obstacles(config, obstacles).check_inside(Bounds.of(config.bounds))
+    merged.check_clear(np.asarray(poses, dtype=float), START_CLEARANCE, "start pose")
+    return replace(config, obstacles=merged)
 
 
 #: the plant on a trusted Arena (``ArenaPlant(arena)``: ``swarmdeck run --sandbox``, verification, the tests)

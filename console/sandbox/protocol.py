@@ -18,10 +18,14 @@ types and shapes, so a child that writes garbage gets a clear
 Messages, parent → child:
     ``{"t": "start", ...}`` the run's settings (see :mod:`.child`);
     ``P`` frames: the poses the script sees;
-    ``{"t": "end", "reason": str}`` the run is over (the script's next step ends it).
+    ``{"t": "end", "reason": str}`` the run is over (the script's next step ends it);
+    ``{"t": "readings", ...}`` before a ``P`` frame: what the robots sensed (:mod:`.senses`), when the script has sensors;
+    ``{"t": "inboxes", ...}`` before a ``P`` frame, and once in answer to ``decentralised``: the trusted network's
+    deliveries (:mod:`.network_link`).
 Child → parent:
     ``{"t": "ready"}`` swarmdeck's side of the child is loaded and confined; the script starts now;
-    ``{"t": "arena", "n": N, "initial": bytes | None}`` the script built its Arena;
+    ``{"t": "arena", "n": N, "initial": bytes | None[, "m": M, "obstacles": bytes]}`` the script built its Arena
+    (``obstacles``: the M × 2 × 2 segments it declared, m — made solid on the trusted side, :func:`obstacles`);
     ``{"t": "draw", "kinds", "offsets", "vertices", "sizes", "colors", "filled": bytes, "texts": [str]}``
     what the script draws from its next ``C`` frame on (sent before it, only when the drawing changed;
     :func:`encode_annotations` / :func:`decode_draw`: the arrays as raw little-endian bytes, vertices and
@@ -34,6 +38,11 @@ Child → parent:
     ``{"t": "metrics", "k": k, "values": {name: float}}`` before the ``C`` frame of tick k, at most once per tick and
     only when they changed: what the script recorded with ``swarmdeck.devices.record_metrics`` (checked by
     ``check_metrics``: its own account, for a sweep's table);
+    ``{"t": "sensors", "config": {...} | None}``, ``{"t": "leds", "rgb": bytes}`` the script's sensors and LEDs
+    (:mod:`.senses`: the readings are computed on the trusted side);
+    ``{"t": "decentralised", ...}`` once, ``{"t": "outbox", "k", "messages"}`` before tick k's ``C`` frame: a
+    decentralised run's network configuration and its robots' messages (:mod:`.network_link`: the network lives on
+    the trusted side);
     ``{"t": "done", "error": str | None, "error_line": str | None, "cpu_s": s, "metrics": {...}}`` the script finished
     (``cpu_s``: the child's own CPU time, as it reports it: informational only; ``metrics``: the last ones).
 """
@@ -187,6 +196,22 @@ def decode_draw(message: dict[str, Any]) -> Annotations:
                            colors=arrays["colors"], filled=arrays["filled"].astype(bool), texts=tuple(texts))
     except ValueError as exc:  # shapes and offsets that disagree
         raise ProtocolError(f"'draw' message: {exc}") from None
+
+
+MAX_OBSTACLES = 4096  # segments a script may declare
+
+
+def obstacles(message: dict[str, Any]) -> NDArray[np.float64] | None:
+    """The ``(M, 2, 2)`` segments (m) of an ``arena`` message, None when it declares none; ProtocolError when
+    ``m`` and the bytes disagree or M is out of 1..MAX_OBSTACLES (the segments themselves are checked by
+    :class:`~swarmdeck.core.obstacles.Obstacles` where they are used)."""
+    if message.get("obstacles") is None:
+        return None
+    m = message.get("m")
+    if not isinstance(m, int) or not 1 <= m <= MAX_OBSTACLES:
+        raise ProtocolError(f"'arena' message: m (the number of obstacle segments) must be an integer in "
+                            f"1..{MAX_OBSTACLES}, got {m!r}")
+    return floats(message, "obstacles", (m, 2, 2))
 
 
 def write_frame(fd: int, frame: bytes | dict[str, Any]) -> None:

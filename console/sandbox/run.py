@@ -51,6 +51,7 @@ the uid and clears its keyrings (see :mod:`swarmdeck.console.sandbox.confinement
 from __future__ import annotations
 
 import contextlib
+import inspect
 import logging
 import os
 import select
@@ -86,6 +87,7 @@ from swarmdeck.console.sandbox.keyrings import join_session_keyring
 from swarmdeck.console.sandbox.keyrings import warm as warm_keyctl
 from swarmdeck.console.sandbox.namespaces import mount_scratch, private_mounts, scratch_options
 from swarmdeck.console.sandbox.namespaces import warm as warm_mounts
+from swarmdeck.console.sandbox.network_link import network_config_from_message
 from swarmdeck.console.sandbox.protocol import (
     COMMANDS,
     MESSAGE,
@@ -99,7 +101,9 @@ from swarmdeck.console.sandbox.protocol import (
     network_traffic,
     write_frame,
 )
+from swarmdeck.console.sandbox.protocol import obstacles as script_obstacles
 from swarmdeck.console.sandbox.script_env import ScriptEnv
+from swarmdeck.console.sandbox.senses import leds_from_message, readings_message, sensing_from_message
 from swarmdeck.console.sandbox.zygote import CHILD_ENV, ForkServerError, shared_fork_server
 from swarmdeck.core.robot_models import DEFAULT_ROBOT_MODEL
 from swarmdeck.devices.experiment_params import check_metrics
@@ -487,6 +491,39 @@ def _write_private(bundle: ScriptBundle, folder: Path, uid: int | None) -> Path:
     return script
 
 
+def _use_sensors(plant: Plant, config: Any) -> None:
+    """The script's sensors on the plant (a ``sensors`` message); ProtocolError when the plant has none to give."""
+    use = getattr(plant, "use_sensors", None)
+    try:
+        if not callable(use):
+            raise ValueError("this arena simulates no sensors for scripts")
+        use(config)
+    except ValueError as exc:
+        raise ProtocolError(f"'sensors' message refused: {exc}") from None
+
+
+def _make_plant(make_plant: PlantFactory, n: int, initial: NDArray[np.float64] | None,
+                obstacles: NDArray[np.float64] | None) -> Plant:
+    """``make_plant(n, initial)``, then the obstacles the script declared (``(M, 2, 2)`` m) made solid: passed as
+    ``make_plant(..., obstacles=)`` to a factory that takes them (the portal builds its loop with them), else given
+    to the plant's ``add_obstacles`` (an Arena's: barrier, contact, validation, sensors). ValueError (the Arena is
+    refused) when they are invalid, or when the plant cannot hold them."""
+    if obstacles is None:
+        return make_plant(n, initial)
+    try:
+        takes = "obstacles" in inspect.signature(make_plant).parameters
+    except (TypeError, ValueError):
+        takes = False
+    if takes:
+        return make_plant(n, initial, obstacles=obstacles)  # type: ignore[call-arg]
+    plant = make_plant(n, initial)
+    add = getattr(plant, "add_obstacles", None)
+    if add is None:
+        raise ValueError("the script declares obstacles, and this arena cannot make them solid")
+    add(obstacles)
+    return plant
+
+
 def run_sandboxed(
     script: str | Path | ScriptBundle,
     make_plant: PlantFactory,
@@ -799,6 +836,25 @@ def _loop(child: _Child, script: Path, scratch: Path, uid: int | None, make_plan
                         metrics_tick = sent
                         _note_metrics(outcome, message.get("values"))
                         continue
+                    if t == "decentralised" and plant is not None:  # the network lives here (network_link.py)
+                        use_network = getattr(plant, "use_network", None)
+                        if not callable(use_network):
+                            raise ProtocolError("this arena models no network for decentralised scripts")
+                        use_network(network_config_from_message(message))
+                        child.send(plant.inboxes(sent))  # type: ignore[attr-defined]
+                        continue
+                    if t == "outbox" and plant is not None and outstanding:
+                        plant.post_messages(message)  # type: ignore[attr-defined]
+                        continue
+                    if t == "sensors" and plant is not None:  # computed here, sent with every tick (senses.py)
+                        config = message.get("config")
+                        _use_sensors(plant, None if config is None else sensing_from_message(message))
+                        continue
+                    if t == "leds" and plant is not None:
+                        set_leds = getattr(plant, "set_leds", None)
+                        if callable(set_leds):
+                            set_leds(leds_from_message(message, plant.n))
+                        continue
                     if t == "draw" and plant is not None:
                         draw = getattr(plant, "draw", None)
                         if draw is not None:
@@ -810,9 +866,10 @@ def _loop(child: _Child, script: Path, scratch: Path, uid: int | None, make_plan
                     if not isinstance(n, int) or n < 1:
                         raise ProtocolError(f"'arena' message: n must be a positive integer, got {n!r}")
                     ic = None if message.get("initial") is None else floats(message, "initial", (n, 3))
+                    declared = script_obstacles(message)
                     outcome.n_robots = n
                     try:
-                        plant = make_plant(n, ic)
+                        plant = _make_plant(make_plant, n, ic, declared)
                     except ValueError as exc:
                         child.send({"t": "end", "reason": str(exc)})
                         end("arena", f"the Arena the script asked for was refused: {exc}")
@@ -837,6 +894,14 @@ def _loop(child: _Child, script: Path, scratch: Path, uid: int | None, make_plan
                 t_now, poses = plant.observe()
                 sent = outcome.ticks
                 start_budget()
+                readings = getattr(plant, "readings", None)
+                sensed = readings() if callable(readings) else None
+                if sensed is not None:  # what the robots sensed, before the poses of the same tick
+                    child.send(readings_message(sent, sensed))
+                inboxes = getattr(plant, "inboxes", None)
+                delivered = inboxes(sent) if callable(inboxes) else None
+                if delivered is not None:  # the trusted network's deliveries of this tick
+                    child.send(delivered)
                 child.send(encode_poses(sent, t_now, poses))
                 outstanding = True
     finally:

@@ -64,7 +64,7 @@ from swarmdeck.console.sandbox.bundle import ScriptBundle
 from swarmdeck.console.sandbox.confinement import JailConfig, SandboxLimits
 from swarmdeck.console.sandbox.falsify import Probe
 from swarmdeck.console.sandbox.guarantee import Guarantee
-from swarmdeck.console.sandbox.plant import ArenaPlant, Disturbances, SandboxPlant, VerificationRobots
+from swarmdeck.console.sandbox.plant import ArenaPlant, Disturbances, SandboxPlant, VerificationRobots, with_obstacles
 from swarmdeck.console.sandbox.run import run_sandboxed
 from swarmdeck.console.sandbox.start_poses import arena_start, check_initial_poses, perturb
 from swarmdeck.core.bounds import DEFAULT_BOUNDS, Bounds, check_bounds
@@ -263,7 +263,10 @@ def run_task_plant(task: RunTask) -> tuple[dict[str, Any], SandboxPlant | None]:
         return random_initial_poses(n, arena_config.bounds, rng=np.random.default_rng(seeds[0]),
                                     obstacles=arena_config.segments)
 
-    def make_plant(n: int, initial: np.ndarray | None) -> SandboxPlant:
+    def make_plant(n: int, initial: np.ndarray | None, obstacles: np.ndarray | None = None) -> SandboxPlant:
+        nonlocal arena_config  # the script's own obstacles (rps 2.x) are solid beside the lab's: random starts avoid them
+        if obstacles is not None:
+            arena_config = replace(arena_config, obstacles=with_obstacles(arena_config, obstacles))
         chosen = arena_start(n, cfg.n_robots, cfg.initial_poses, initial, random_poses, arena_config.bounds,
                              declared_by=cfg.declared_by)
         if arena_config.obstacles is not None:  # the script's own initial conditions too

@@ -25,6 +25,7 @@ from numpy.typing import ArrayLike, NDArray
 from swarmdeck.core.bounds import Bounds
 from swarmdeck.core.constants import RPS_MAX_ROBOTS
 from swarmdeck.core.kinematics import limit_unicycle
+from swarmdeck.core.obstacles import Obstacles
 from swarmdeck.core.robot_models import DEFAULT_ROBOT_MODEL, model_name, robot_params
 from swarmdeck.devices.arena import RUN_DEFAULTS, Arena
 from swarmdeck.devices.rps import quiet_canvas
@@ -89,6 +90,13 @@ def unsupported_argument_message(names: list[str]) -> str:
     return ("Robotarium() got argument(s) swarmdeck's rps facade does not support: " + "; ".join(parts))
 
 
+def _with_lab_obstacles(script: NDArray[np.float64] | None, lab: Any) -> Obstacles | None:
+    """The script's checked ``obstacles`` (M, 2, 2) and the lab's (``RunDefaults.obstacles``) as one
+    :class:`~swarmdeck.core.obstacles.Obstacles` (ObstacleError naming a zero-length segment); None without any."""
+    parts = [o.segments for o in (Obstacles.of(lab), Obstacles.of(script)) if o]
+    return Obstacles(np.concatenate(parts)) if parts else None
+
+
 class Robotarium(RpsSensors, ARobotarium):
     """The rps experiment object: ``get_poses()`` → (3, N), ``set_velocities(ids, (2, N))``, ``step()``.
 
@@ -98,7 +106,9 @@ class Robotarium(RpsSensors, ARobotarium):
     time; never under ``swarmdeck run``), initial_conditions ((3, N) floats). rps 2.x's ``skip_initialization``
     and ``show_*`` flags are accepted (the robots start at their initial conditions — ``swarmdeck run
     --from-docks`` drives them there from the chargers, as 2.x's initialisation phase does; nothing is drawn);
-    ``obstacles`` (M × 2 × 2, checked) are segments the sensors see (as in rps 2.0). rps 2.0's sensors
+    ``obstacles`` (M × 2 × 2, checked) are solid, beside the lab's ``[arena] obstacles``: the sensors see them (as
+    in rps 2.0), and swarmdeck's barrier, the simulator's contact and validation hold them too (``self.obstacles``:
+    all of them). rps 2.0's sensors
     (:mod:`swarmdeck.devices.rps.sensors`): ``use_distance_sensors=True`` simulates the seven ToF sensors; encoders,
     IMU and LEDs are always there. Flags must be bools (rps 2.x's own checks); any other keyword is refused, named,
     with what to use instead.
@@ -148,12 +158,17 @@ class Robotarium(RpsSensors, ARobotarium):
         config = defaults.arena_config(real_time=real_time)
         if robot_model is None:
             robot_model = defaults.robot_model or ("gternal" if defaults.rps_generation == 2 else DEFAULT_ROBOT_MODEL)
+        # the script's obstacles are solid (barrier, contact, validation, sensors) beside the lab's ([arena] obstacles,
+        # swarmdeck run --obstacles); under a sandbox the trusted side receives them with the Arena and adds them
+        solid = _with_lab_obstacles(obstacles, defaults.obstacles)
         self._arena = Arena(n, initial_conditions=ic.T if ic.size else None, config=config, from_docks=from_docks,
-                            safety=False if self.rps_semantics else None, params=robot_params(robot_model))
+                            safety=False if self.rps_semantics else None, params=robot_params(robot_model),
+                            obstacles=solid)
         self.robot_model = model_name(self._arena.params) or robot_model
         self.number_of_robots = self._arena.n
-        self._arena.use_sensors(sensing, obstacles=obstacles)
-        self.obstacles = obstacles
+        self._arena.use_sensors(sensing)  # the Arena's segments: the script's and the lab's
+        # rps 2.x: what is on the floor, (M, 2, 2) (an empty array stays one); None when neither gave any
+        self.obstacles = np.array(solid.segments) if solid is not None else obstacles
         self.show_figure = show_figure
         self.time_step = config.dt
         b = Bounds.of(config.bounds)

@@ -21,7 +21,7 @@
   const DROP_ORDER = ["safety", "halos", "graph", "centroids", "annotations", "cells", "goals"];
   const st = (window.swarmdeckProjector = {
     frames: 0, seq: null, tick: null, config: null, drawn: [], latency: [], drawMs: [], dropped: [],
-    message: "", connected: false, lastDraw: null, layersDrawn: [],
+    message: "", connected: false, lastDraw: null, layersDrawn: [], annotationsDrawn: 0,
   });
   let config = null, pending = null, last = null, ema = 0;
 
@@ -146,6 +146,7 @@
     }
     if (on("annotations") && m.annotations) {
       drawAnnotations(m.annotations, X, Y);
+      st.annotationsDrawn = m.annotations.kinds.length;
       drawnLayers.push("annotations");
     }
     ctx.strokeStyle = P.boundary; ctx.lineWidth = 4 * K;
