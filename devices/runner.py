@@ -21,7 +21,9 @@ import importlib.util
 import re
 import runpy
 import sys
+import threading
 import traceback
+import types
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -96,6 +98,25 @@ def describe_error(exc: BaseException, script: str | None = None) -> str:
     where = f"{Path(mine[-1].filename).name}:{mine[-1].lineno} (in {mine[-1].name}): " if mine else ""
     text = " ".join(str(exc).split()) or "(no message)"
     return f"{where}{type(exc).__name__}: {text}"
+
+
+def run_as_main(path: Path, source: str) -> dict[str, Any]:
+    """Run a script's ``source`` (read from ``path``) as ``python path`` runs it, ``__name__ == "__main__"``;
+    returns its globals.
+
+    In the main thread through :func:`runpy.run_path`: the script is ``sys.modules["__main__"]`` while it runs,
+    exactly as under ``python``. In any other thread (several scripts at once: the regions of a shared floor, a
+    portal's runners) in a module of its own that is never registered: ``sys.modules["__main__"]`` is one per
+    process, and runpy's save-and-restore of it from two threads at once left the first script registered as the
+    process's main for good (a later ``multiprocessing`` spawn then ran that script in every child it started,
+    and a verification pool waited for its workers forever).
+    """
+    if threading.current_thread() is threading.main_thread():
+        return runpy.run_path(str(path), run_name="__main__")
+    module = types.ModuleType("__main__")
+    module.__dict__.update(__file__=str(path), __cached__=None, __loader__=None, __package__="", __spec__=None)
+    exec(compile(source, str(path), "exec"), module.__dict__)  # noqa: S102 - the user's own script, as python runs it
+    return dict(module.__dict__)
 
 
 def _nothing_runnable(path: Path, source: str) -> str:
@@ -187,7 +208,7 @@ def run_experiment(
                     with aliases as notes:
                         result.notes = notes  # the facade adds to it while the script runs
                         # as `python script.py` runs it: code under `if __name__ == "__main__":` runs too
-                        namespace = runpy.run_path(str(path), run_name="__main__")
+                        namespace = run_as_main(path, source)
                         fn = namespace.get("experiment")
                         if callable(fn) and not result.arenas:
                             result.returned = fn(_runner_arena())
