@@ -32,8 +32,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="an arena behind this portal; repeat for several (one queue, one set of accounts, one "
                              "operator page). SPEC: sim[,robots=N][,fast] (simulated, in this process), "
                              "mqtt://HOST:PORT[,robots=N] (GRITSBots), remote[,robots=N][,kind=physical|simulated] "
-                             "(a `swarmdeck runner --portal URL --arena NAME` on another machine), and slots=K (jobs "
-                             "at once: regions). E.g. --arena floor=sim,robots=50 --arena annex=remote,robots=12,"
+                             "(a `swarmdeck runner --portal URL --arena NAME` on another machine), slots=K (jobs "
+                             "at once) and regions=COLSxROWS|FILE.toml (sim: its floor divided, one job per region at "
+                             "once; the operator page stops one region). E.g. --arena floor=sim,robots=50 --arena annex=remote,robots=12,"
                              "kind=physical. Without --arena: one arena from --robots/--robots-via/--fast. Jobs "
                              "choose with the manifest's \"arena\" and \"needs\" (physical|simulated|either)")
     parser.add_argument("--robots-via", default=None, metavar="URL",
@@ -47,7 +48,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--regions", default=None, metavar="LAYOUT",
                         help="divide the simulated floor into regions and run one job per region at once: a TOML "
                              "file with a [regions] table or COLSxROWS, e.g. 2x2 (see `swarmdeck regions`); --robots "
-                             "robots are parked, shared out between the regions")
+                             "robots are parked, shared out between the regions; with --arena: divides the one simulated arena "
+                             "given (or write regions= in its SPEC)")
     parser.add_argument("--fast", action="store_true",
                         help="simulated arena: run jobs, and the robots' set-up and return, as fast as they compute instead of "
                              "in real time (tests, benchmarks)")

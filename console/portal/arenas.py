@@ -194,7 +194,8 @@ def check_request(arenas: tuple[ArenaSpec, ...], robots: int, needs: str, arena:
         if needs not in ("either", a.kind):
             raise BadInput(f"arena {arena!r} is {a.kind}, the manifest needs {needs}", "needs")
         if robots > a.largest:
-            held = f"its largest region holds {a.largest}" if a.slot_names else f"has {a.robots}"
+            held = f"(its floor divided into regions): the largest region holds {a.largest}" if a.slot_names \
+                else f"has {a.robots}"
             raise BadInput(f"arena {arena!r} {held} robots, the manifest asks for {robots}", "robots")
         return
     kinds = [a for a in arenas if needs in ("either", a.kind)]
