@@ -161,7 +161,8 @@ class RegionRunner:
     parked in each region (one count or one per region)."""
 
     def __init__(self, service: PortalService, settings: ArenaSettings, layout: RegionLayout,
-                 per_region: int | dict[str, int], live: LiveFeed | None = None, *, poll_s: float = 1.0) -> None:
+                 per_region: int | dict[str, int], live: LiveFeed | None = None, *, poll_s: float = 1.0,
+                 exports: JobExports | None = None) -> None:
         if settings.robots_via is not None:
             raise ValueError("regions run on the simulated floor for now (no --robots-via)")
         name = settings.name or service.config.arena_specs()[0].name
@@ -175,11 +176,14 @@ class RegionRunner:
         self.floor = simulated_floor(layout, per_region, dt=settings.dt)
         self.live = live if live is not None else LiveFeed()
         cap = {k: min(v, len(self.floor.free_robots(k))) for k, v in layout.capacity().items()}
+        # one exports process for the floor (not one per region): the ended jobs' CSV, replay and video in turn
+        self._exports = exports if exports is not None else JobExports(service)
         self.lanes: dict[str, ArenaRunner] = {}
         for k, r in enumerate(layout.regions):
             fleet = RegionFleet(self.floor, r.name, settings.seed)
             self.lanes[r.name] = ArenaRunner(service, replace(settings, bounds=r.local_bounds, fleet=cap[r.name],
-                                                              slot=k), self.live, poll_s=poll_s, fleet=fleet)
+                                                              slot=k), self.live, poll_s=poll_s, fleet=fleet,
+                                             exports=self._exports)
         self.frame_listeners: list[Callable[[Any], None]] = []
         for lane in self.lanes.values():
             lane.frame_listeners = self.frame_listeners
@@ -187,8 +191,8 @@ class RegionRunner:
 
     @property
     def exports(self) -> JobExports:
-        """The first region's exports process (the portal resumes unfinished exports through it at start)."""
-        return next(iter(self.lanes.values())).exports
+        """The floor's exports process, shared by its regions (the portal resumes unfinished exports through it)."""
+        return self._exports
 
     # ------------------------------------------------------------------ what the service asks
     def start(self) -> RegionRunner:

@@ -16,6 +16,7 @@ from mqtt_broker import wait_until
 from portal_fixtures import make_portal, wait_for_state
 
 from swarmdeck.console.portal.arenas import ArenaSpec
+from swarmdeck.console.portal.exports import JobExports
 from swarmdeck.console.portal.region_runner import RegionRunner, region_arena
 from swarmdeck.console.portal.runner import ArenaSettings
 from swarmdeck.console.recording.reader import open_recording
@@ -38,7 +39,7 @@ SLOW = ("import time\n"
         "while True:\n"
         "    time.sleep(0.01)\n"
         "    arena.step_unicycle(np.full(arena.n, 0.05), np.zeros(arena.n))\n")
-START = [[0.0, 0.26, 0.0], [0.0, -0.26, 0.0]]  # region frame: 0.6 m from where each region parks its robots
+START = [[0.2, 0.26, 0.0], [0.2, -0.26, 0.0]]  # region frame: a short way from where either region parks
 ENDED = ("done", "failed", "cancelled")
 WAIT_S = 120
 
@@ -50,7 +51,8 @@ def lab(tmp_path_factory):
     spec = region_arena(ArenaSpec("arena", robots=6, fast=True), layout, 3)
     portal = make_portal(tmp_path_factory.mktemp("regions"), arenas=(spec,), fleet=2, max_duration=60.0,
                          max_upload_bytes=64 << 10)
-    runner = RegionRunner(portal.service, ArenaSettings(fast=True, seed=5), layout, 3, poll_s=0.2)
+    runner = RegionRunner(portal.service, ArenaSettings(fast=True, seed=5), layout, 3, poll_s=0.2,
+                          exports=JobExports(portal.service, video=False))
     portal.service.arena = runner
     runner.start()
     try:
@@ -88,31 +90,27 @@ def placed(portal, jid):
     return portal.service.store.get(jid).placed
 
 
-def test_two_jobs_run_at_once_each_in_its_region_with_its_own_live_view(lab):
+def test_two_jobs_run_at_once_each_in_its_region_and_a_researcher_stops_theirs(lab):
     portal, regions = lab
-    a = queued(portal, "alice", SLOW, robots=2, duration=60.0)
-    running(portal, a)
-    b = queued(portal, "bob", FAST, robots=2, duration=3.0)
-    running(portal, b)  # while a runs: the plan put b on the other region at once
-    seen = wait_until(lambda: regions.live.latest_of(a)[2], timeout=WAIT_S, what="a live frame of alice's job")
-    assert seen.poses.shape == (2, 3) and tuple(seen.bounds) == (-0.8, 0.8, -1.0, 1.0)  # her region only
-    assert ended(portal, "bob", b)["state"] == "done"
-    assert portal.service.job_state(a) == "running"  # both ran at once
+    a = queued(portal, "alice", FAST, robots=2, duration=2.0)
+    b = queued(portal, "bob", SLOW, robots=2, duration=60.0)
+    assert ended(portal, "alice", a)["state"] == "done"
+    assert portal.service.job_state(b) == "running"  # both ran at once (b lives ≥ 18 s of wall time)
     assert {placed(portal, a), placed(portal, b)} == {"arena/r0c0", "arena/r0c1"}
-    with portal.client("alice") as c:  # a researcher stops their own job
-        assert c.post(f"/api/jobs/{a}/cancel").status_code == 200
-    assert ended(portal, "alice", a)["state"] == "cancelled"
+    with portal.client("bob") as c:  # a researcher stops their own job: its region's robots stop at once
+        assert c.post(f"/api/jobs/{b}/cancel").status_code == 200
+    assert ended(portal, "bob", b)["state"] == "cancelled"
     stats = regions.floor.stats
     assert stats.outside == 0 and stats.barrier_failures == 0
     assert regions.floor.ports.report.collision_pairs == 0
-    folder = portal.service.job_dir(b)
+    folder = portal.service.job_dir(a)
     run = json.loads((folder / "run.json").read_text())
     assert run["ended_by"] == "duration" and run["setup"]["ok"] and run["return"]["ok"], run
     with open_recording(folder / "recording.mcap") as rec:
         frames = [f for _, f in rec.frames()]
     assert frames[-1].poses.shape == (2, 3) and tuple(frames[-1].bounds) == (-0.8, 0.8, -1.0, 1.0)
-    with portal.client("bob") as c:
-        assert "BOUNDS [-0.8, 0.8, -1.0, 1.0]" in c.get(f"/api/jobs/{b}/files/script.log").text
+    with portal.client("alice") as c:
+        assert "BOUNDS [-0.8, 0.8, -1.0, 1.0]" in c.get(f"/api/jobs/{a}/files/script.log").text
     wait_until(lambda: not regions.floor.busy(), timeout=WAIT_S, what="both regions' robots returned")
 
 
@@ -121,6 +119,9 @@ def test_an_operator_stops_one_region_the_other_runs_on_and_it_waits_for_the_rel
     a = queued(portal, "alice", SLOW, robots=2, duration=60.0)
     b = queued(portal, "bob", SLOW, robots=2, duration=8.0)
     running(portal, a, b)
+    for jid in (a, b):  # each job's live view: its region's robots only, in its region's frame
+        seen = wait_until(lambda j=jid: regions.live.latest_of(j)[2], timeout=WAIT_S, what=f"a live frame of job {jid}")
+        assert seen.poses.shape == (2, 3) and tuple(seen.bounds) == (-0.8, 0.8, -1.0, 1.0)
     region = placed(portal, a).split("/")[1]
     with portal.client("alice") as c:
         assert c.post(f"/api/operator/arenas/arena/regions/{region}/estop").status_code == 403
