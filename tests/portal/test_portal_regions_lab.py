@@ -6,6 +6,7 @@ import time
 
 import pytest
 from lab_fixtures import make_lab, queued
+from portal_fixtures import sign_in
 
 from swarmdeck.console.portal.arenas import ArenaSpec, parse_arena_spec
 from swarmdeck.console.portal.region_runner import region_arena
@@ -86,3 +87,18 @@ def test_a_stopped_region_leaves_the_plan_until_released(lab):
     with lab.client("op1") as c:
         assert c.post("/api/operator/arenas/big/regions/r0c0/release").status_code == 200
     assert svc.claim_for_arena(lambda j: None, arena="big", slot=0).id == first
+
+
+def test_the_operator_page_stops_and_releases_one_region(lab):
+    c, csrf = sign_in(lab, "op1")
+    try:
+        page = c.get("/operator").text
+        assert 'id="region-big-r1c0"' in page and "Stop this region" in page
+        assert c.post("/operator/arenas/big/regions/r1c0/estop", data={"csrf": "forged"}).status_code == 403
+        assert c.post("/operator/arenas/big/regions/r1c0/estop", data={"csrf": csrf}).status_code == 303
+        assert "Release region" in c.get("/operator").text
+        assert lab.service.regions_state("big")["regions"][2]["stopped"] is True
+        assert c.post("/operator/arenas/big/regions/r1c0/release", data={"csrf": csrf}).status_code == 303
+    finally:
+        c.close()
+    assert lab.service.regions_state("big")["regions"][2]["stopped"] is False
