@@ -9,7 +9,8 @@ from lab_fixtures import make_lab, queued
 from portal_fixtures import sign_in
 
 from swarmdeck.console.portal.arenas import ArenaSpec, parse_arena_spec
-from swarmdeck.console.portal.region_runner import region_arena
+from swarmdeck.console.portal.region_runner import RegionRunner, region_arena
+from swarmdeck.console.portal.runner import ArenaSettings
 from swarmdeck.devices.fleet.regions import RegionLayout
 
 LAYOUT = RegionLayout.grid(columns=2, rows=2)
@@ -102,3 +103,15 @@ def test_the_operator_page_stops_and_releases_one_region(lab):
     finally:
         c.close()
     assert lab.service.regions_state("big")["regions"][2]["stopped"] is False
+
+
+def test_after_the_whole_floors_emergency_stop_a_released_region_moves_again(lab):
+    runner = RegionRunner(lab.service, ArenaSettings(name="big", fast=True), LAYOUT, 3)  # its lanes not started
+    try:
+        runner.emergency_stop()
+        assert all(runner.floor.stopped(name) for name in LAYOUT.names)
+        runner.floor.release("r0c0")  # what the region's return does once the operator released the portal
+        assert not runner.floor.stopped("r0c0")  # (failed before: the floor's own latch kept every region stopped)
+        assert runner.floor.stopped("r0c1")
+    finally:
+        runner.stop()
