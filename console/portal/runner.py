@@ -294,8 +294,7 @@ class ArenaRunner:
                 tidy = False
             # a release landing after _between_jobs saw the arena stopped must not let a job start with robots
             # still on the floor: only claim after a pass that found the arena running (and returned them)
-            job = self.service.claim_for_arena(self._admit, arena=self.settings.name,
-                                               slot=self.settings.slot) if tidy else None
+            job = self._claim() if tidy else None
             if job is None:
                 self.service.wait_for_change(self.poll_s)
                 continue
@@ -333,6 +332,13 @@ class ArenaRunner:
         if away:
             return bool(self._return_fleet("before the next job")["ok"])
         return True
+
+    def _claim(self) -> Job | None:
+        """The next job for this arena (or this region of it: ``ArenaSettings.slot``) from the service (in-process,
+        or a remote runner's :class:`~.remote_runner.PortalLink`, which knows no regions)."""
+        if self.settings.slot is None:
+            return self.service.claim_for_arena(self._admit, arena=self.settings.name)
+        return self.service.claim_for_arena(self._admit, arena=self.settings.name, slot=self.settings.slot)
 
     def _region_stopped(self) -> bool:
         """This runner's region (a floor divided into regions) is latched stopped by an operator: its robots stay
