@@ -77,9 +77,9 @@ def sign_in(portal: Portal, who: str) -> tuple[httpx.Client, str]:
 
 
 def make_portal(tmp_path: Path, *, http: HttpSettings | None = None, quotas: Quotas | None = None,
-                retain_days: float | None = None, verify_runs: int = 1, **limits) -> Portal:
+                retain_days: float | None = None, verify_runs: int = 1, arenas: tuple = (), **limits) -> Portal:
     config = PortalConfig(data=tmp_path / "data", limits=Limits(**limits), verify_runs=verify_runs,
-                          quotas=quotas if quotas is not None else Quotas(), retain_days=retain_days)
+                          quotas=quotas if quotas is not None else Quotas(), retain_days=retain_days, arenas=arenas)
     service = PortalService(config)
     tokens = {}
     for name, role in (("alice", "researcher"), ("bob", "researcher"), ("op1", "operator"), ("op2", "operator")):

@@ -3,6 +3,7 @@ from __future__ import annotations
 
 import argparse
 import sys
+from dataclasses import replace
 from typing import Any
 
 from swarmdeck.console.cli import UsageError
@@ -31,8 +32,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="an arena behind this portal; repeat for several (one queue, one set of accounts, one "
                              "operator page). SPEC: sim[,robots=N][,fast] (simulated, in this process), "
                              "mqtt://HOST:PORT[,robots=N] (GRITSBots), remote[,robots=N][,kind=physical|simulated] "
-                             "(a `swarmdeck runner --portal URL --arena NAME` on another machine), and slots=K (jobs "
-                             "at once: regions). E.g. --arena floor=sim,robots=50 --arena annex=remote,robots=12,"
+                             "(a `swarmdeck runner --portal URL --arena NAME` on another machine), slots=K (jobs "
+                             "at once) and regions=COLSxROWS|FILE.toml (sim: its floor divided, one job per region at "
+                             "once; the operator page stops one region). E.g. --arena floor=sim,robots=50 --arena annex=remote,robots=12,"
                              "kind=physical. Without --arena: one arena from --robots/--robots-via/--fast. Jobs "
                              "choose with the manifest's \"arena\" and \"needs\" (physical|simulated|either)")
     parser.add_argument("--robots-via", default=None, metavar="URL",
@@ -46,7 +48,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--regions", default=None, metavar="LAYOUT",
                         help="divide the simulated floor into regions and run one job per region at once: a TOML "
                              "file with a [regions] table or COLSxROWS, e.g. 2x2 (see `swarmdeck regions`); --robots "
-                             "robots are parked, shared out between the regions")
+                             "robots are parked, shared out between the regions; with --arena: divides the one simulated arena "
+                             "given (or write regions= in its SPEC)")
     parser.add_argument("--fast", action="store_true",
                         help="simulated arena: run jobs, and the robots' set-up and return, as fast as they compute instead of "
                              "in real time (tests, benchmarks)")
@@ -193,8 +196,6 @@ def check_arguments(args: argparse.Namespace) -> None:
         raise UsageError("--fast is for the simulated arena: networked robots run in real time")
     if args.regions is not None and args.robots_via:
         raise UsageError("--regions runs on the simulated floor for now: it does not combine with --robots-via")
-    if args.arena and args.regions is not None:
-        raise UsageError("--regions divides the single arena's floor: it does not combine with --arena (yet)")
     if args.arena:
         from swarmdeck.console.portal.arenas import check_unique, parse_arena_spec
 
@@ -205,6 +206,12 @@ def check_arguments(args: argparse.Namespace) -> None:
             raise UsageError(str(exc)) from None
         if args.robots_via or args.fast or args.robots != 12:
             raise UsageError("--arena describes each arena's robots: leave out --robots, --robots-via and --fast")
+        if args.regions is not None:
+            plain = [s for s in specs if not s.remote and s.robots_via is None and s.regions is None]
+            if len(plain) != 1:
+                raise UsageError("--regions with --arena divides the one simulated arena's floor; with several, "
+                                 "give each its own: --arena NAME=sim,robots=N,regions=2x2")
+            specs = [replace(s, regions=args.regions) if s is plain[0] else s for s in specs]
         args.arena_specs = tuple(specs)
     else:
         args.arena_specs = ()
@@ -224,19 +231,36 @@ def check_arguments(args: argparse.Namespace) -> None:
             raise UsageError(f"--robots-via: {exc}") from None
 
 
-def _region_runner(service: Any, settings: Any, spec: str, robots: int, live: Any) -> Any:
-    """The portal's arena as regions of one simulated floor: ``robots`` parked, shared out between them."""
+def _region_specs(specs: tuple[Any, ...]) -> tuple[tuple[Any, ...], dict[str, Any]]:
+    """The arenas with their floors divided (``regions=``) planned as one slot per region
+    (:func:`~swarmdeck.console.portal.region_runner.region_arena`), and their layouts by arena name."""
     from swarmdeck.console.cli.regions import load_layout
-    from swarmdeck.console.portal.region_runner import RegionRunner
+    from swarmdeck.console.portal.region_runner import region_arena
 
-    layout = load_layout(spec)
-    names = layout.names
-    share = {name: robots // len(names) + (1 if k < robots % len(names) else 0) for k, name in enumerate(names)}
+    out, layouts = [], {}
+    for spec in specs:
+        if spec.regions is None:
+            out.append(spec)
+            continue
+        layout = load_layout(spec.regions)  # UsageError naming a bad layout
+        try:
+            out.append(region_arena(spec, layout))
+        except ValueError as exc:
+            raise UsageError(f"--arena {spec.name}: regions={spec.regions}: {exc}") from None
+        layouts[spec.name] = layout
+    return tuple(out), layouts
+
+
+def _region_runner(service: Any, settings: Any, layout: Any, live: Any) -> Any:
+    """An arena whose simulated floor is divided into regions: its ``settings.fleet`` robots parked, shared out
+    between them."""
+    from swarmdeck.console.portal.region_runner import RegionRunner, share_robots
+
     try:
-        return RegionRunner(service, settings, layout, share, live)
+        return RegionRunner(service, settings, layout, share_robots(layout, settings.fleet), live)
     except ValueError as exc:
         service.close()
-        raise UsageError(f"--regions {spec}: {exc}") from None
+        raise UsageError(f"--arena {settings.name}: {exc}") from None
 
 
 def main(args: argparse.Namespace) -> int:
@@ -267,13 +291,19 @@ def main(args: argparse.Namespace) -> int:
     for spec in args.arena_specs:
         if not spec.remote and spec.robots > ChargerLayout().n_slots:
             raise UsageError(f"--arena {spec.name}: at most {ChargerLayout().n_slots} robots, one per charger slot")
-    if args.arena_specs:
-        fleet = max(s.robots for s in args.arena_specs)  # the most any job may ask for; each arena checks its own
+    specs = args.arena_specs
+    if not specs and args.regions is not None:  # the one arena, its floor divided
+        from swarmdeck.console.portal.arenas import DEFAULT_ARENA, ArenaSpec
+
+        specs = (ArenaSpec(DEFAULT_ARENA, robots=fleet, fast=args.fast, regions=args.regions),)
+    specs, layouts = _region_specs(specs)
+    if specs:
+        fleet = max(s.largest for s in specs)  # the most any job may ask for; each arena checks its own
     from swarmdeck.console.portal.notify import SmtpSettings
 
     smtp = None if args.smtp is None else SmtpSettings(args.smtp_host[0], args.smtp_host[1], sender=args.smtp_from,
                                                        starttls=args.smtp_starttls)
-    config = PortalConfig(data=args.data, arenas=args.arena_specs, smtp=smtp,
+    config = PortalConfig(data=args.data, arenas=specs, smtp=smtp,
                           limits=Limits(fleet=fleet, max_duration=args.max_duration,
                                                         max_upload_bytes=args.max_upload),
                           verify_runs=args.verify_runs, verify_epsilon=args.verify_epsilon,
@@ -313,16 +343,18 @@ def main(args: argparse.Namespace) -> int:
 
     guard = GuardConfig(guard_distance=args.guard_distance, max_intervention=args.guard_intervention)
     runners = []
-    for spec in args.arena_specs or ():
-        if not spec.remote:
-            runners.append(ArenaRunner(service, ArenaSettings(robots_via=spec.robots_via, fleet=spec.robots,
-                                                              fast=spec.fast, seed=args.seed, guard=guard,
-                                                              name=spec.name, sensors=args.sensors), live))
+    for spec in (specs if args.arena_specs else ()):
+        settings = ArenaSettings(robots_via=spec.robots_via, fleet=spec.robots, fast=spec.fast, seed=args.seed,
+                                 guard=guard, name=spec.name, sensors=args.sensors)
+        if spec.name in layouts:
+            runners.append(_region_runner(service, settings, layouts[spec.name], live))
+        elif not spec.remote:
+            runners.append(ArenaRunner(service, settings, live))
     if not args.arena_specs:
         settings = ArenaSettings(robots_via=args.robots_via, fleet=fleet, fast=args.fast, seed=args.seed,
                                  guard=guard, obstacles=obstacles, sensors=args.sensors)
         runners.append(ArenaRunner(service, settings, live) if args.regions is None else _region_runner(
-            service, settings, args.regions, args.robots, live))
+            service, replace(settings, fleet=specs[0].robots), layouts[specs[0].name], live))
     # one recovery for the whole portal (every in-process arena's jobs); remote runners' jobs follow their leases
     from swarmdeck.console.portal.exports import JobExports
     from swarmdeck.console.portal.remote import LeaseReaper, RemoteArenas
@@ -394,7 +426,7 @@ def main(args: argparse.Namespace) -> int:
     arena = args.robots_via and f"MQTT robots 0..{fleet - 1} via {_redacted(args.robots_via)}" or \
         f"{fleet} simulated robots docked on the chargers{' (fast)' if args.fast else ''}"
     if args.arena_specs:
-        arena = "arenas " + "; ".join(s.describe() for s in args.arena_specs)
+        arena = "arenas " + "; ".join(s.describe() for s in specs)
     print(f"swarmdeck server: http://{host}:{sock.getsockname()[1]}  ({arena}; data in {args.data}; "
           "API docs at /docs; Ctrl-C to stop)", flush=True)
     print(f"swarmdeck server: user code confined by: {describe(JailConfig(allow_no_cgroup=args.allow_no_cgroup))}",

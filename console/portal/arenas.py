@@ -8,9 +8,12 @@ SPEC is comma-separated, its first item says where the robots are:
   pulls this arena's jobs over HTTP and pushes their results (:mod:`.remote`);
 
 then ``robots=N`` (default 12), ``kind=physical|simulated`` (``remote`` only; ``sim`` is simulated, ``mqtt``
-physical), ``fast``, and ``slots=K`` (jobs the arena runs at once: regions on one floor; default 1).
+physical), ``fast``, ``slots=K`` (jobs the arena runs at once; default 1) and ``regions=LAYOUT`` (``sim`` only: the
+floor divided into regions, one job per region at once — ``COLSxROWS`` or a TOML file with a ``[regions]`` table,
+as ``swarmdeck regions`` takes; its robots are shared out between the regions; each region is one slot of the plan,
+holding as many robots as are parked in it: :mod:`.region_runner`).
 
-Examples: ``--arena floor=sim,robots=50,fast``, ``--arena lab=mqtt://127.0.0.1:1883,robots=20``,
+Examples: ``--arena floor=sim,robots=50,fast``, ``--arena big=sim,robots=24,regions=2x2``, ``--arena lab=mqtt://127.0.0.1:1883,robots=20``,
 ``--arena annex=remote,robots=12,kind=physical``. Pure Python (the thin CLI client may import it).
 """
 from __future__ import annotations
@@ -26,6 +29,8 @@ NEEDS = ("either", "physical", "simulated")
 KINDS = ("physical", "simulated")
 #: an arena's name: what a manifest's ``arena``, URLs and the runner's ``--arena`` use
 NAME_RE = re.compile(r"^[a-z][a-z0-9_-]{0,31}$")
+#: a region layout written as a grid, COLSxROWS (``regions=2x2``)
+GRID_RE = re.compile(r"^(\d+)x(\d+)$")
 #: the arena of a portal started without ``--arena`` (the one arena of earlier versions)
 DEFAULT_ARENA = "arena"
 
@@ -42,6 +47,10 @@ class ArenaSpec:
         fast: simulated, in-process: jobs tick as fast as they compute.
         remote: its runner is another process that connects over HTTP (:mod:`.remote`).
         slots: jobs it runs at once (regions of one floor; 1: one job at a time).
+        regions: the layout its floor is divided into (``COLSxROWS`` or a TOML file); None: one floor.
+        slot_names: the regions' names, one per slot (filled in when the layout is loaded:
+            :func:`~.region_runner.region_arena`); empty: slots are numbered.
+        slot_robots: robots each slot (region) holds; empty: ``robots // slots``.
     """
 
     name: str
@@ -51,19 +60,51 @@ class ArenaSpec:
     fast: bool = False
     remote: bool = False
     slots: int = 1
+    regions: str | None = None
+    slot_names: tuple[str, ...] = ()
+    slot_robots: tuple[int, ...] = ()
+
+    def slot_capacity(self, slot: int) -> int:
+        """Robots a job on slot ``slot`` may use (its region's; the whole fleet with one slot)."""
+        if self.slot_robots:
+            return int(self.slot_robots[slot])
+        return self.robots if self.slots == 1 else self.robots // self.slots
+
+    @property
+    def largest(self) -> int:
+        """The most robots one job on this arena may use (the largest slot's)."""
+        return max(self.slot_capacity(k) for k in range(self.slots))
+
+    def placed_name(self, slot: int | None) -> str:
+        """What a job claimed on ``slot`` records as ``placed``: ``NAME/REGION`` on a divided floor, else ``NAME``."""
+        if slot is None or not self.slot_names:
+            return self.name
+        return f"{self.name}/{self.slot_names[slot]}"
+
+    def slot_of(self, placed: str | None) -> int | None:
+        """The slot a job's ``placed`` names (None: no region named, or not one of this arena's)."""
+        if placed is None or "/" not in placed:
+            return None
+        arena, _, region = placed.partition("/")
+        if arena != self.name or region not in self.slot_names:
+            return None
+        return self.slot_names.index(region)
 
     def fits(self, robots: int, needs: str = "either", arena: str | None = None) -> bool:
         """Whether a job of ``robots`` robots that ``needs`` that kind (and asked for ``arena``) can run here."""
-        return robots <= self.robots and needs in ("either", self.kind) and arena in (None, self.name)
+        return robots <= self.largest and needs in ("either", self.kind) and arena in (None, self.name)
 
     def describe(self) -> str:
         where = "remote runner" if self.remote else (f"MQTT robots via {self.robots_via}" if self.robots_via
                                                      else "simulated" + (", fast" if self.fast else ""))
-        return f"{self.name}: {self.robots} {self.kind} robots ({where}{f', {self.slots} slots' if self.slots > 1 else ''})"
+        parts = f", regions {self.regions} ({self.slots} at once)" if self.regions else (
+            f", {self.slots} slots" if self.slots > 1 else "")
+        return f"{self.name}: {self.robots} {self.kind} robots ({where}{parts})"
 
     def to_dict(self) -> dict[str, object]:
         return {"name": self.name, "kind": self.kind, "robots": self.robots, "remote": self.remote,
-                "slots": self.slots, "fast": self.fast}
+                "slots": self.slots, "fast": self.fast, "regions": list(self.slot_names) or None,
+                "slot_robots": [self.slot_capacity(k) for k in range(self.slots)]}
 
 
 def parse_arena_spec(text: str) -> ArenaSpec:
@@ -87,7 +128,7 @@ def parse_arena_spec(text: str) -> ArenaSpec:
         remote = True
     else:
         raise ValueError(f"--arena {name}: {where!r} is not sim, mqtt://HOST:PORT or remote")
-    robots, fast, slots, kind_set = 12, False, 1, None
+    robots, fast, slots, kind_set, regions = 12, False, 1, None, None
     for opt in options:
         key, eq, value = opt.partition("=")
         try:
@@ -99,11 +140,13 @@ def parse_arena_spec(text: str) -> ArenaSpec:
                 kind_set = value
             elif key == "fast" and not eq:
                 fast = True
+            elif key == "regions" and eq and value.strip():
+                regions = value.strip()
             else:
                 raise ValueError
         except ValueError:
             raise ValueError(f"--arena {name}: unknown or malformed option {opt!r} (robots=N, slots=K, "
-                             "kind=physical|simulated, fast)") from None
+                             "kind=physical|simulated, fast, regions=COLSxROWS|FILE.toml)") from None
     if robots < 1:
         raise ValueError(f"--arena {name}: robots must be >= 1, got {robots}")
     if slots < 1:
@@ -116,8 +159,18 @@ def parse_arena_spec(text: str) -> ArenaSpec:
         kind = kind_set
     if fast and (robots_via is not None or remote):
         raise ValueError(f"--arena {name}: fast is for an in-process simulated arena")
+    if regions is not None:
+        if where != "sim":
+            raise ValueError(f"--arena {name}: regions= divides an in-process simulated floor (sim) for now")
+        if slots != 1:
+            raise ValueError(f"--arena {name}: regions= sets the slots (one per region): leave out slots=")
+        grid = GRID_RE.match(regions)
+        if grid is not None:
+            slots = int(grid.group(1)) * int(grid.group(2))
+            if slots < 1:
+                raise ValueError(f"--arena {name}: regions={regions} has no region")
     return ArenaSpec(name=name, kind=kind, robots=robots, robots_via=robots_via, fast=fast, remote=remote,
-                     slots=slots)
+                     slots=slots, regions=regions)
 
 
 def check_unique(specs: list[ArenaSpec]) -> None:
@@ -140,12 +193,14 @@ def check_request(arenas: tuple[ArenaSpec, ...], robots: int, needs: str, arena:
         a = named[0]
         if needs not in ("either", a.kind):
             raise BadInput(f"arena {arena!r} is {a.kind}, the manifest needs {needs}", "needs")
-        if robots > a.robots:
-            raise BadInput(f"arena {arena!r} has {a.robots} robots, the manifest asks for {robots}", "robots")
+        if robots > a.largest:
+            held = f"(its floor divided into regions): the largest region holds {a.largest}" if a.slot_names \
+                else f"has {a.robots}"
+            raise BadInput(f"arena {arena!r} {held} robots, the manifest asks for {robots}", "robots")
         return
     kinds = [a for a in arenas if needs in ("either", a.kind)]
     if not kinds:
         raise BadInput(f"no arena here is {needs} (arenas: {', '.join(a.describe() for a in arenas)})", "needs")
-    if not any(robots <= a.robots for a in kinds):
-        raise BadInput(f"no {'' if needs == 'either' else needs + ' '}arena has {robots} robots (the largest has "
-                       f"{max(a.robots for a in kinds)})", "robots")
+    if not any(robots <= a.largest for a in kinds):
+        raise BadInput(f"no {'' if needs == 'either' else needs + ' '}arena has {robots} robots for one job (the "
+                       f"most one job may use is {max(a.largest for a in kinds)})", "robots")

@@ -35,6 +35,10 @@ PRE_QUEUE: tuple[JobState, ...] = (JobState.AWAITING_VERIFICATION, JobState.VERI
 Tx = sqlite3.Connection
 
 
+#: SQL: the job was placed on arena ? (``placed`` is the arena, or ``ARENA/REGION`` on a floor divided into regions;
+#: NULL counts on the default arena). Parameters: default, arena, arena, arena.
+_ON_ARENA = "COALESCE({p}placed, ?) = ? OR substr({p}placed, 1, length(?) + 1) = ? || '/'"
+
 def _marks(values: Sequence[object]) -> str:
     return ", ".join("?" * len(values))
 
@@ -157,15 +161,15 @@ class JobStore:
         """The jobs on ``arena`` now (setting up or running); jobs placed before there were several arenas count
         on ``default``."""
         conn = tx if tx is not None else self.db.connection()
-        rows = conn.execute(f"{JOB_SELECT} WHERE j.state IN ({_marks(ACTIVE)}) AND COALESCE(j.placed, ?) = ? "
-                            "ORDER BY j.id", (*ACTIVE, default, arena)).fetchall()
+        rows = conn.execute(f"{JOB_SELECT} WHERE j.state IN ({_marks(ACTIVE)}) AND ({_ON_ARENA.format(p='j.')}) "
+                            "ORDER BY j.id", (*ACTIVE, default, arena, arena, arena)).fetchall()
         return [Job.from_row(r) for r in rows]
 
     def recent_runs(self, arena: str, default: str, limit: int) -> builtins.list[tuple[float, float, float]]:
         """(started, ended, declared duration) of the last ``limit`` jobs ``done`` on ``arena``, oldest first."""
-        rows = self.db.query("SELECT started, ended, duration FROM jobs WHERE state = ? AND COALESCE(placed, ?) = ? "
+        rows = self.db.query(f"SELECT started, ended, duration FROM jobs WHERE state = ? AND ({_ON_ARENA.format(p='')}) "
                              "AND started IS NOT NULL AND ended IS NOT NULL ORDER BY ended DESC LIMIT ?",
-                             (JobState.DONE, default, arena, int(limit)))
+                             (JobState.DONE, default, arena, arena, arena, int(limit)))
         return [(float(r["started"]), float(r["ended"]), float(r["duration"])) for r in reversed(rows)]
 
     def set_holder(self, tx: Tx, job_id: int, holder: str | None) -> None:

@@ -2,6 +2,7 @@
 
 * ``GET /api/arenas``: every arena, its kind, robots, whether it is stopped or connected, its jobs now;
 * ``POST /api/operator/arenas/{name}/estop`` and ``/release``: one arena's emergency stop;
+* ``POST /api/operator/arenas/{name}/regions/{region}/estop`` and ``/release``: one region's (a divided floor);
 * ``GET /api/reservations``; ``POST /api/operator/reservations`` (book an arena for a researcher or a group);
   ``DELETE /api/operator/reservations/{id}``;
 * ``PUT /api/operator/users/{name}/group``: a researcher's group (reservations for a group cover its members);
@@ -26,6 +27,7 @@ from swarmdeck.console.portal.models import (
     NotifyIn,
     NotifyOut,
     OkOut,
+    RegionsOut,
     ReservationIn,
     ReservationOut,
 )
@@ -49,6 +51,17 @@ def lab_router(service: PortalService, user: Callable[[Request], Awaitable[User]
     @router.post("/operator/arenas/{name}/release", tags=["operator"], response_model=ArenaOut)
     def arena_release(name: str, u: User = Depends(user)) -> dict[str, Any]:
         return service.release_arena(u, name).to_dict()
+
+    @router.post("/operator/arenas/{name}/regions/{region}/estop", tags=["operator"], response_model=RegionsOut)
+    def region_estop(name: str, region: str, u: User = Depends(user)) -> dict[str, Any]:
+        """Emergency stop of one region of a divided floor: its robots stop now (the other regions run on), its job
+        ends, it takes no job until released."""
+        return service.emergency_stop_region(u, name, region)
+
+    @router.post("/operator/arenas/{name}/regions/{region}/release", tags=["operator"], response_model=RegionsOut)
+    def region_release(name: str, region: str, u: User = Depends(user)) -> dict[str, Any]:
+        """Release one region: its robots return to their parking places, it takes the next job."""
+        return service.release_region(u, name, region)
 
     @router.get("/reservations", tags=["arenas"], response_model=list[ReservationOut])
     def reservations(u: User = Depends(user)) -> list[dict[str, Any]]:

@@ -203,6 +203,22 @@ class AlertsOut(BaseModel):
     messages: list[str]
 
 
+class RegionOut(BaseModel):
+    """One region of a floor divided into regions (``--arena NAME=sim,regions=2x2``)."""
+
+    name: str
+    robots: int = Field(description="robots a job there may use")
+    stopped: bool = Field(description="emergency-stopped by an operator (until released)")
+    job: int | None = Field(description="the job running there now")
+
+
+class RegionsOut(BaseModel):
+    """The regions of one arena (``POST /api/operator/arenas/{name}/regions/{region}/estop``)."""
+
+    arena: str
+    regions: list[RegionOut]
+
+
 class ArenaInfoOut(BaseModel):
     """One arena behind the portal (``swarmdeck server --arena NAME=SPEC``) and how it is now."""
 
@@ -216,6 +232,7 @@ class ArenaInfoOut(BaseModel):
     connected: bool = Field(description="can take jobs now (a remote runner was heard from lately)")
     running: list[int] = Field(description="the ids of the jobs on it now")
     fleet: dict[str, Any] | None = Field(default=None, description="its fleet table (in-process arenas)")
+    regions: list[RegionOut] | None = Field(default=None, description="its regions (a floor divided into regions)")
 
 
 class ReservationIn(BaseModel):

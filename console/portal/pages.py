@@ -425,6 +425,14 @@ def router(service: PortalService, live: LiveFeed) -> APIRouter:
     async def arena_release(request: Request, name: str, s: Session = Depends(signed_in)) -> Response:
         return await operator_post(request, s, lambda s, form: service.release_arena(s.user, name))
 
+    @r.post("/operator/arenas/{name}/regions/{region}/estop")
+    async def region_estop(request: Request, name: str, region: str, s: Session = Depends(signed_in)) -> Response:
+        return await operator_post(request, s, lambda s, form: service.emergency_stop_region(s.user, name, region))
+
+    @r.post("/operator/arenas/{name}/regions/{region}/release")
+    async def region_release(request: Request, name: str, region: str, s: Session = Depends(signed_in)) -> Response:
+        return await operator_post(request, s, lambda s, form: service.release_region(s.user, name, region))
+
     @r.post("/operator/approval")
     async def approval(request: Request, s: Session = Depends(signed_in)) -> Response:
         def act(s: Session, form: FormData) -> None:

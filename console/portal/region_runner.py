@@ -9,9 +9,17 @@ job of the queue that its region holds, so up to one job per region runs at once
 ``run.json``, exports and result exactly as on a whole arena, the script sees its region as its arena, its robots
 are set up and returned inside the region.
 
-An operator's emergency stop (``POST /api/operator/estop``) stops every region and the floor; :meth:`estop_region`
-stops one region's job and robots (the others run on). Live frames of every running job go to the one LiveFeed
-(tagged with their job).
+The queue sees the divided floor as one arena with one *slot* per region (:func:`region_arena`: the
+:class:`~.arenas.ArenaSpec`'s ``slot_names`` and ``slot_robots``, from ``--arena NAME=sim,regions=2x2`` or
+``--regions``): the plan places each job on a region that holds its robots, ETAs and fair share are the plan's as on
+any arena, and the lane of region R claims with ``claim_for_arena(arena=NAME, slot=R)`` (the job's ``placed`` is
+``NAME/R``).
+
+An operator's emergency stop (``POST /api/operator/estop``) stops every region and the floor; one region's
+(:meth:`~.service.PortalService.emergency_stop_region`, ``POST /api/operator/arenas/NAME/regions/R/estop``) stops that
+region's robots and ends its job (the floor's barrier keeps the other regions' robots running; :meth:`estop_region`)
+and latches the region until released. Live frames of every running job go to the one LiveFeed (tagged with their
+job: each job's live view shows its region's robots only, in its region's frame).
 """
 from __future__ import annotations
 
@@ -23,6 +31,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from swarmdeck.console.portal.arenas import ArenaSpec
 from swarmdeck.console.portal.exports import JobExports
 from swarmdeck.console.portal.livefeed import LiveFeed
 from swarmdeck.console.portal.runner import ArenaRunner, ArenaSettings
@@ -124,23 +133,57 @@ def _result(report: dict[str, Any], fleet_ids: NDArray[np.int64], what: str) -> 
                         math.nan, 0, 0, message)
 
 
+def share_robots(layout: RegionLayout, robots: int) -> dict[str, int]:
+    """``robots`` parked robots shared out between the layout's regions (layout order; the first regions get one
+    more when it does not divide)."""
+    names = layout.names
+    return {name: robots // len(names) + (1 if k < robots % len(names) else 0) for k, name in enumerate(names)}
+
+
+def region_arena(spec: ArenaSpec, layout: RegionLayout, per_region: int | dict[str, int] | None = None) -> ArenaSpec:
+    """``spec`` as the plan sees a floor divided by ``layout``: one slot per region (its name), each holding the
+    robots parked there (``per_region``; None: ``spec.robots`` shared out, :func:`share_robots`) up to the region's
+    capacity (:meth:`RegionLayout.capacity`). ValueError when a region would hold no robot."""
+    share = share_robots(layout, spec.robots) if per_region is None else (
+        per_region if isinstance(per_region, dict) else {n: int(per_region) for n in layout.names})
+    cap = layout.capacity()
+    held = tuple(min(int(share.get(n, 0)), int(cap[n])) for n in layout.names)
+    empty = [n for n, k in zip(layout.names, held) if k < 1]
+    if empty:
+        raise ValueError(f"regions {', '.join(empty)} would hold no robot: give the arena more robots "
+                         f"({spec.robots} for {len(layout.names)} regions)")
+    return replace(spec, slots=len(layout.names), slot_names=tuple(layout.names), slot_robots=held,
+                   robots=sum(int(share.get(n, 0)) for n in layout.names))
+
+
 class RegionRunner:
     """Several jobs at once, one per region of one floor (module docstring). ``per_region``: simulated robots
     parked in each region (one count or one per region)."""
 
     def __init__(self, service: PortalService, settings: ArenaSettings, layout: RegionLayout,
-                 per_region: int | dict[str, int], live: LiveFeed | None = None, *, poll_s: float = 1.0) -> None:
+                 per_region: int | dict[str, int], live: LiveFeed | None = None, *, poll_s: float = 1.0,
+                 exports: JobExports | None = None) -> None:
         if settings.robots_via is not None:
             raise ValueError("regions run on the simulated floor for now (no --robots-via)")
+        name = settings.name or service.config.arena_specs()[0].name
+        spec = next((a for a in service.config.arena_specs() if a.name == name), None)
+        if spec is None or spec.slot_names != tuple(layout.names):
+            raise ValueError(f"the portal's arena {name!r} is not planned as these regions: give PortalConfig.arenas "
+                             f"region_arena(ArenaSpec({name!r}, ...), layout) (swarmdeck server does)")
+        settings = replace(settings, name=name)
+        self.name = name
         self.service, self.layout, self.settings = service, layout, settings
         self.floor = simulated_floor(layout, per_region, dt=settings.dt)
         self.live = live if live is not None else LiveFeed()
         cap = {k: min(v, len(self.floor.free_robots(k))) for k, v in layout.capacity().items()}
+        # one exports process for the floor (not one per region): the ended jobs' CSV, replay and video in turn
+        self._exports = exports if exports is not None else JobExports(service)
         self.lanes: dict[str, ArenaRunner] = {}
-        for r in layout.regions:
+        for k, r in enumerate(layout.regions):
             fleet = RegionFleet(self.floor, r.name, settings.seed)
-            self.lanes[r.name] = ArenaRunner(service, replace(settings, bounds=r.local_bounds, fleet=cap[r.name]),
-                                             self.live, poll_s=poll_s, fleet=fleet)
+            self.lanes[r.name] = ArenaRunner(service, replace(settings, bounds=r.local_bounds, fleet=cap[r.name],
+                                                              slot=k), self.live, poll_s=poll_s, fleet=fleet,
+                                             exports=self._exports)
         self.frame_listeners: list[Callable[[Any], None]] = []
         for lane in self.lanes.values():
             lane.frame_listeners = self.frame_listeners
@@ -148,8 +191,8 @@ class RegionRunner:
 
     @property
     def exports(self) -> JobExports:
-        """The first region's exports process (the portal resumes unfinished exports through it at start)."""
-        return next(iter(self.lanes.values())).exports
+        """The floor's exports process, shared by its regions (the portal resumes unfinished exports through it)."""
+        return self._exports
 
     # ------------------------------------------------------------------ what the service asks
     def start(self) -> RegionRunner:
@@ -171,8 +214,9 @@ class RegionRunner:
         return next(iter(self.lanes.values())).recover()
 
     def emergency_stop(self) -> None:
-        """Every region: the floor stops at once and every job ends."""
-        self.floor.estop()
+        """Every region: the floor stops at once and every job ends (each region is released by its next return)."""
+        for name in self.layout.names:
+            self.floor.estop(name)
         for lane in self.lanes.values():
             lane.emergency_stop()
 
@@ -190,7 +234,11 @@ class RegionRunner:
         return job
 
     def cancel(self, job_id: int) -> None:
-        for lane in self.lanes.values():
+        """End job ``job_id`` (its owner or an operator cancelled it): its region's robots stop at the next tick (the
+        others run on), then return to their parking places; the region takes the next job."""
+        for name, lane in self.lanes.items():
+            if lane.current_job == int(job_id):
+                self.floor.estop(name)
             lane.cancel(job_id)
 
     @property

@@ -133,6 +133,8 @@ class ArenaSettings:
         sensors: the robots' sensors in every job's Frames (``swarmdeck server --sensors``; issue 28.1: Robotarium
             2.0's seven ToF sensors, encoders, IMU and LEDs, :mod:`swarmdeck.console.runtime.tick_sensing`): in the
             recording, the live view (rays and end points), the video and the replay.
+        slot: the region (slot of the arena's plan) this runner claims for, on a floor divided into regions
+            (:mod:`.region_runner`); None: the whole arena.
     """
 
     robots_via: str | None = None
@@ -147,6 +149,7 @@ class ArenaSettings:
     obstacles: Obstacles | None = None
     name: str | None = None
     sensors: bool = False
+    slot: int | None = None
 
     @property
     def real_time(self) -> bool:
@@ -291,7 +294,7 @@ class ArenaRunner:
                 tidy = False
             # a release landing after _between_jobs saw the arena stopped must not let a job start with robots
             # still on the floor: only claim after a pass that found the arena running (and returned them)
-            job = self.service.claim_for_arena(self._admit, arena=self.settings.name) if tidy else None
+            job = self._claim() if tidy else None
             if job is None:
                 self.service.wait_for_change(self.poll_s)
                 continue
@@ -320,7 +323,7 @@ class ArenaRunner:
         now = time.monotonic()
         self.fleet.idle(now - self._idle_mark)
         self._idle_mark = now
-        if self.service.arena_stopped:
+        if self.service.arena_stopped or self._region_stopped():
             return False
         try:
             away = self.fleet.away()
@@ -329,6 +332,18 @@ class ArenaRunner:
         if away:
             return bool(self._return_fleet("before the next job")["ok"])
         return True
+
+    def _claim(self) -> Job | None:
+        """The next job for this arena (or this region of it: ``ArenaSettings.slot``) from the service (in-process,
+        or a remote runner's :class:`~.remote_runner.PortalLink`, which knows no regions)."""
+        if self.settings.slot is None:
+            return self.service.claim_for_arena(self._admit, arena=self.settings.name)
+        return self.service.claim_for_arena(self._admit, arena=self.settings.name, slot=self.settings.slot)
+
+    def _region_stopped(self) -> bool:
+        """This runner's region (a floor divided into regions) is latched stopped by an operator: its robots stay
+        where they stopped, no job starts there, until the region is released."""
+        return self.settings.slot is not None and self.service.stopped_here(self.settings.name, self.settings.slot)
 
     def _hold_loop(self, loop: ControlLoop | None) -> None:
         """The loop a fleet maneuver runs on, for the emergency stop (None: the maneuver is over)."""
@@ -353,7 +368,7 @@ class ArenaRunner:
         """Every robot on the floor back to the chargers (unless the arena is stopped); a failure latches
         the arena "needs operator" with the robots named. The return's report."""
         self._halt.clear()  # cleared before the check: an emergency stop from now on halts the return
-        if self.service.arena_stopped or self._stop.is_set():
+        if self.service.arena_stopped or self._region_stopped() or self._stop.is_set():
             return {"ok": False, "message": "not returned: the arena is stopped (emergency stop); the robots "
                                             "return to the chargers when an operator releases it", "robots": []}
         t = time.monotonic()

@@ -655,6 +655,57 @@ class PortalService:
         self.notify()
         return self.arena_state(user)
 
+    def emergency_stop_region(self, user: User, arena: str, region: str) -> dict[str, Any]:
+        """Stop region ``region`` of ``arena`` (a floor divided into regions) now: its robots stop (the floor's one
+        barrier keeps the other regions' robots running), its job ends (``cancelled``), and the region is latched
+        stopped — its robots stay where they stopped and it takes no job — until :meth:`release_region`. Operators
+        only; audited. The region's state (:meth:`regions_state`)."""
+        self._require_operator(user)
+        spec, placed = self._region(arena, region)
+        with self.store.transaction() as tx:
+            self.store.set_arena_stopped_named(tx, placed, True)
+            active = [j.id for j in self.store.active_on(spec.name, self._default, tx) if j.placed == placed]
+            for job_id in active:
+                self.store.transition(tx, job_id, JobState.CANCELLED, ended=time.time(),
+                                      reason=f"emergency stop of region {region} by operator {user.name}")
+                self._event(tx, job_id, "ended")
+            self.accounts.audit(user, f"emergency stop of region {placed}", None if not active else active[0], tx=tx)
+        control = dict(self._named_controls()).get(spec.name)
+        estop_region = getattr(control, "estop_region", None)
+        if estop_region is not None:
+            estop_region(region)
+        self.notify()
+        return self.regions_state(spec.name)
+
+    def release_region(self, user: User, arena: str, region: str) -> dict[str, Any]:
+        """Release region ``region``'s emergency stop: its robots return to their parking places and it takes the
+        next job. Operators only; audited; :class:`~.errors.Conflict` when it is not stopped."""
+        self._require_operator(user)
+        spec, placed = self._region(arena, region)
+        with self.store.transaction() as tx:
+            if not self.store.arena_stopped_named(placed):
+                raise Conflict(f"region {placed} is not stopped", "region")
+            self.store.set_arena_stopped_named(tx, placed, False)
+            self.accounts.audit(user, f"release emergency stop of region {placed}", tx=tx)
+        self.notify()
+        return self.regions_state(spec.name)
+
+    def regions_state(self, arena: str) -> dict[str, Any]:
+        """``{"arena", "regions": [{"name", "robots", "stopped", "job"}]}`` of a floor divided into regions."""
+        spec = self._spec(arena)
+        on = {j.placed: j.id for j in self.store.active_on(spec.name, self._default)}
+        return {"arena": spec.name, "regions": [
+            {"name": r, "robots": spec.slot_capacity(k), "stopped": self.store.arena_stopped_named(spec.placed_name(k)),
+             "job": on.get(spec.placed_name(k))} for k, r in enumerate(spec.slot_names)]}
+
+    def _region(self, arena: str, region: str) -> tuple[ArenaSpec, str]:
+        """The arena's spec and ``ARENA/REGION``; NotFound naming the arena's regions."""
+        spec = self._spec(arena)
+        if region not in spec.slot_names:
+            known = ", ".join(spec.slot_names) or "none: its floor is not divided"
+            raise NotFound(f"arena {spec.name} has no region {region!r} (regions: {known})", "region")
+        return spec, spec.placed_name(spec.slot_names.index(region))
+
     def arena_state(self, user: User) -> ArenaState:
         """The arena, its queue, its alerts and its fleet as operators see it (:class:`ArenaState`)."""
         self._require_operator(user)
@@ -724,7 +775,7 @@ class PortalService:
                               bool(job.get("barrier_forbidden")), job.get("bypass_decision"), BypassDecision.APPROVED)
 
     def claim_for_arena(self, admit: Callable[[Job], str | None] | None = None, arena: str | None = None,
-                        holder: str | None = None, only: int | None = None) -> Job | None:
+                        holder: str | None = None, only: int | None = None, slot: int | None = None) -> Job | None:
         """The first job of the arena queue the plan puts on ``arena`` now (:meth:`next_for`; None: the portal's
         first arena), now ``setting up`` on it — None when there is none or the arena is stopped. Of several
         arenas claiming at once each job goes to exactly one (the conditional transition).
@@ -733,14 +784,16 @@ class PortalService:
         must wait: it stays first in the queue with that ``reason`` (jobs run in queue order:
         a smaller job behind it does not overtake it). ``admit`` runs outside the database transaction.
         ``holder``: the remote runner's lease that will hold the job; ``only``: claim that job or none (the
-        remote runner checked its robots for it; :mod:`.remote`).
+        remote runner checked its robots for it; :mod:`.remote`). ``slot``: the region of a divided floor that claims
+        (:mod:`.region_runner`): the first job the plan starts on that region now; ``placed`` records ``ARENA/REGION``.
         """
         name = self._default if arena is None else arena
+        spec = self._spec(name) if slot is not None else None
         admitted = None
         if admit is not None:
-            if self._stopped(name):
+            if self.stopped_here(name, slot):
                 return None
-            first = self.next_for(name)
+            first = self.next_for(name, slot=slot)
             if first is None:
                 return None
             why = admit(first)
@@ -750,14 +803,14 @@ class PortalService:
                 return None
             admitted = first.id
         with self.store.transaction() as tx:
-            if self._stopped(name):
+            if self.stopped_here(name, slot):
                 return None
-            job = self.next_for(name)  # this thread's connection is tx's: the plan reads what tx sees
+            job = self.next_for(name, slot=slot)  # this thread's connection is tx's: the plan reads what tx sees
             if job is None or (admit is not None and job.id != admitted) or (only is not None and job.id != only):
                 return None  # the queue changed meanwhile: the arena asks again
             self.store.transition(tx, job.id, JobState.SETTING_UP, sources=(JobState.IN_ARENA_QUEUE,),
-                                  started=time.time(), bypass=int(job.bypass_allowed), reason=None, placed=name,
-                                  holder=holder)
+                                  started=time.time(), bypass=int(job.bypass_allowed), reason=None,
+                                  placed=name if spec is None else spec.placed_name(slot), holder=holder)
         self.notify()
         return self.store.get(job.id)
 
@@ -882,22 +935,35 @@ class PortalService:
             busy: list[list[tuple[float, float]]] = [[] for _ in range(spec.slots)]
             for k, j in enumerate(self.store.active_on(spec.name, default)):
                 t0 = j.started if j.started is not None else now
-                busy[k % spec.slots].append((t0, t0 + occupancy(j.duration, est)))
-            per = spec.robots if spec.slots == 1 else spec.robots // spec.slots
-            lanes += [Lane(spec.name, k, spec.kind, per, busy[k]) for k in range(spec.slots)]
+                on = spec.slot_of(j.placed)  # a region's job: its region's lane
+                busy[k % spec.slots if on is None else on].append((t0, t0 + occupancy(j.duration, est)))
+            lanes += [Lane(spec.name, k, spec.kind, spec.slot_capacity(k), busy[k]) for k in range(spec.slots)
+                      if not (spec.slot_names and self.store.arena_stopped_named(spec.placed_name(k)))]
         pending = [Pending(j.id, j.user_id, j.robots, j.duration, j.arena, j.needs) for j in jobs]
         return plan(pending, lanes, self._windows(now), now, overheads)
 
-    def next_for(self, arena: str, now: float | None = None) -> Job | None:
-        """The first job of the arena queue the plan starts on ``arena`` now (None: none)."""
+    def next_for(self, arena: str, now: float | None = None, slot: int | None = None) -> Job | None:
+        """The first job of the arena queue the plan starts on ``arena`` (on its ``slot``: None, any) now (None:
+        none)."""
         now = time.time() if now is None else now
         queue = self.store.queue()
         placements = self.plan(queue, now)
         for job in queue:
             p = placements.get(job.id)
-            if p is not None and p.arena == arena and p.start <= now:
+            if p is not None and p.arena == arena and (slot is None or p.slot == slot) and p.start <= now:
                 return job
         return None
+
+    def stopped_here(self, arena: str | None, slot: int | None = None) -> bool:
+        """Whether ``arena`` (None: the portal's first) — or its region ``slot`` — may not start a job now: the
+        portal's latch, the arena's, or the region's (:meth:`emergency_stop_region`)."""
+        name = self._default if arena is None else arena
+        if self._stopped(name):
+            return True
+        if slot is None:
+            return False
+        spec = self._spec(name)
+        return bool(spec.slot_names) and self.store.arena_stopped_named(spec.placed_name(slot))
 
     def with_eta(self, jobs: list[Job]) -> list[Job]:
         """``jobs`` with the estimated start, end and arena of those waiting (the arena queue, verification and
@@ -921,7 +987,8 @@ class PortalService:
             control = controls.get(spec.name)
             fleet = control.fleet_status() if isinstance(control, ArenaReports) else None
             out.append({**spec.to_dict(), "stopped": self._stopped(spec.name), "connected": self.connected(spec.name),
-                        "running": [j.id for j in on], "fleet": fleet})
+                        "running": [j.id for j in on], "fleet": fleet,
+                        "regions": self.regions_state(spec.name)["regions"] if spec.slot_names else None})
         return out
 
     # ------------------------------------------------------------------ reservations

@@ -201,6 +201,7 @@ class SharedFloor:
                 if name not in self.stats.stopped:
                     self.stats.stopped.append(name)
             self._cv.notify_all()
+            self._maybe_tick()  # the others may have been waiting for the stopped region's commands
 
     def release(self, name: str | None = None) -> None:
         """Undo :meth:`estop` for region ``name`` or the whole floor (None)."""
@@ -240,8 +241,12 @@ class SharedFloor:
                 raise FloorClosed("the floor was closed")
 
     def _maybe_tick(self) -> None:
-        """Under the lock: tick when every open region sent its commands."""
-        if self._closed or not self._open or any(n not in self._pending for n in self._open):
+        """Under the lock: tick when every open region that is not stopped sent its commands (a stopped region leaves
+        the lockstep: its robots are zero and fixed, and its job may never send again — the others run on)."""
+        if self._closed or not self._open or any(n not in self._pending for n in self._open
+                                                  if not (self._all_stopped or n in self._stopped)):
+            return
+        if not self._pending:
             return
         try:
             self._step()
