@@ -47,8 +47,6 @@ from __future__ import annotations
 import math
 import os
 import re
-import shutil
-import tempfile
 import time
 from collections.abc import Callable, Sequence
 from contextlib import nullcontext
@@ -61,6 +59,7 @@ import numpy as np
 
 from swarmdeck.console.recording.arena_recording import ArenaRecording
 from swarmdeck.console.sandbox.bundle import ScriptBundle
+from swarmdeck.console.sandbox.cancel_file import cancel_file
 from swarmdeck.console.sandbox.confinement import JailConfig, SandboxLimits
 from swarmdeck.console.sandbox.falsify import Probe
 from swarmdeck.console.sandbox.guarantee import Guarantee
@@ -71,7 +70,6 @@ from swarmdeck.core.bounds import DEFAULT_BOUNDS, Bounds, check_bounds
 from swarmdeck.core.checks import in_range
 from swarmdeck.core.kinematics import wrap_angle
 from swarmdeck.core.obstacles import START_CLEARANCE, Obstacles
-from swarmdeck.core.service_thread import ServiceThread
 from swarmdeck.devices.arena import Arena
 from swarmdeck.devices.initial_conditions import random_initial_poses
 from swarmdeck.devices.simulator import ArenaConfig, SimulatedArena
@@ -636,40 +634,26 @@ def verify(scripts: Sequence[str | Path | ScriptBundle], config: VerificationCon
         raise ConfinementUnavailable(f"cannot confine untrusted code on this machine: {reason}; "
                                      "pass --trusted to run it unconfined")
     executor = executor if executor is not None else LocalPoolExecutor()
-    cancel_dir = Path(tempfile.mkdtemp(prefix="swarmdeck-cancel-"))
-    cancel_path = str(cancel_dir / "cancel")
     runnable = [k for k in range(len(loaded)) if k not in unrunnable]
-    tasks = [RunTask(loaded[k], config, i, mode, cancel_path)
-             for k in runnable for i in range(config.runs) for mode in ("raw", "wrapped")]
+    with cancel_file(cancel, "swarmdeck-verification-cancel") as (cancel_path, cancelled):
+        tasks = [RunTask(loaded[k], config, i, mode, cancel_path)
+                 for k in runnable for i in range(config.runs) for mode in ("raw", "wrapped")]
 
-    total = len(tasks) + config.falsify_budget * len(runnable)
-    searched_done = [0]
+        total = len(tasks) + config.falsify_budget * len(runnable)
+        searched_done = [0]
 
-    def done(k: int, result: dict[str, Any], finished: int) -> None:
-        if on_progress is not None:
-            t = tasks[k]
-            on_progress(Progress(finished, total, t.bundle.name, t.index, t.mode))
+        def done(k: int, result: dict[str, Any], finished: int) -> None:
+            if on_progress is not None:
+                t = tasks[k]
+                on_progress(Progress(finished, total, t.bundle.name, t.index, t.mode))
 
-    def done_searched(name: str, task: RunTask, result: dict[str, Any], finished: int) -> None:
-        searched_done[0] += 1
-        if on_progress is not None:
-            on_progress(Progress(len(tasks) + searched_done[0], total, name, task.index, task.mode))
+        def done_searched(name: str, task: RunTask, result: dict[str, Any], finished: int) -> None:
+            searched_done[0] += 1
+            if on_progress is not None:
+                on_progress(Progress(len(tasks) + searched_done[0], total, name, task.index, task.mode))
 
-    def cancelled() -> bool:
-        if cancel is not None and cancel.is_set():
-            Path(cancel_path).touch()  # runs under way (in any worker on this machine) stop at their next tick
-            return True
-        return False
-
-    def watch() -> None:
-        while not watcher.wait(0.1) and not cancelled():
-            pass
-
-    watcher = ServiceThread(watch, "swarmdeck-verification-cancel", join_timeout=None)
-    watcher.start()
-    searched_cpu = [0.0]
-    kept = getattr(executor, "kept", None)  # with a search: one pool for the runs and every generation
-    try:
+        searched_cpu = [0.0]
+        kept = getattr(executor, "kept", None)  # with a search: one pool for the runs and every generation
         with kept() if kept is not None and config.falsify_budget else nullcontext():
             results = executor.run(tasks, done, cancelled)
             cpu_s = sum(float(r.pop("cpu_s", 0.0)) for r in results if r is not None)  # a timing: not in the report
@@ -689,7 +673,4 @@ def verify(scripts: Sequence[str | Path | ScriptBundle], config: VerificationCon
                                      searched_cpu, partial(done_searched, shown[k]), worst_case_name)
                     verdict = script_verdict(bundle, runs, config, shown[k], found)
                 reports.append(verdict)
-    finally:
-        watcher.stop()
-        shutil.rmtree(cancel_dir, ignore_errors=True)
     return VerificationReport(config, reports, getattr(executor, "name", type(executor).__name__), searched_cpu[0])

@@ -25,7 +25,6 @@ from __future__ import annotations
 
 import json
 import os
-import shutil
 import tempfile
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
@@ -36,7 +35,6 @@ from swarmdeck.console.sandbox.bundle import ScriptBundle
 from swarmdeck.console.sandbox.verification import RunTask, VerificationConfig, compile_check
 from swarmdeck.console.sweep.design import Axis, DesignError, check_axes, check_size, grid_points, random_points
 from swarmdeck.console.sweep.runs import SweepRun, run_key, run_point, swarmdeck_version
-from swarmdeck.core.service_thread import ServiceThread
 from swarmdeck.devices.experiment_params import ParamError, Value, declared_in_source
 
 #: columns of every row; a script parameter may not be called so (``robots`` is the robot count: see :class:`SweepSpec`)
@@ -224,6 +222,7 @@ def run_sweep(spec: SweepSpec, out: str | Path, executor: Any = None, *,
     naming the runs not done (as when the executor fails, e.g. a Ray cluster gone). DesignError for a sweep that
     cannot run; ConfinementUnavailable where the sandbox cannot confine code (and the config is not trusted).
     """
+    from swarmdeck.console.sandbox.cancel_file import cancel_file
     from swarmdeck.console.sandbox.confinement import ConfinementUnavailable, probe
     from swarmdeck.console.sandbox.executors import LocalPoolExecutor
     from swarmdeck.console.sweep.outputs import write_outputs
@@ -244,47 +243,32 @@ def run_sweep(spec: SweepSpec, out: str | Path, executor: Any = None, *,
         if reason is not None and not spec.config.trusted:
             raise ConfinementUnavailable(f"cannot confine untrusted code on this machine: {reason}; "
                                          "pass --trusted to run it unconfined")
-        cancel_dir = Path(tempfile.mkdtemp(prefix="swarmdeck-cancel-"))
-        cancel_path = str(cancel_dir / "cancel")
         from dataclasses import replace
 
-        tasks = [replace(the_plan.runs[k], task=replace(the_plan.runs[k].task, cancel_path=cancel_path)) for k in todo]
         finished = [cached]
-
-        def done(i: int, row: dict[str, Any], _count: int) -> None:
-            if row.get("ended_by") == "cancelled":
-                return  # stopped half-way: nothing to keep
-            cpu.append(float(row.get("cpu_s") or 0.0))
-            kept = _table_row(row)
-            if kept.get("ended_by") not in TRANSIENT:
-                cache.put(kept)
-            rows[todo[i]] = kept
-            finished[0] += 1
-            if on_progress is not None:
-                on_progress(SweepProgress(finished[0], len(rows), tasks[i], kept))
-
-        def cancelled() -> bool:
-            if cancel is not None and cancel.is_set():
-                Path(cancel_path).touch()
-                return True
-            return False
-
-        def watch() -> None:
-            while not watcher.wait(0.1) and not cancelled():
-                pass
-
-        watcher = ServiceThread(watch, "swarmdeck-sweep-cancel", join_timeout=None)
-        watcher.start()
         failure: BaseException | None = None
-        try:
-            executor.run(tasks, done, cancelled, fn=run_point)
-        except KeyboardInterrupt as exc:
-            failure = exc
-        except Exception as exc:  # noqa: BLE001 - the executor's infrastructure (a Ray cluster gone, a pool broken)
-            failure = exc
-        finally:
-            watcher.stop()
-            shutil.rmtree(cancel_dir, ignore_errors=True)
+        with cancel_file(cancel, "swarmdeck-sweep-cancel") as (cancel_path, cancelled):
+            tasks = [replace(the_plan.runs[k], task=replace(the_plan.runs[k].task, cancel_path=cancel_path))
+                     for k in todo]
+
+            def done(i: int, row: dict[str, Any], _count: int) -> None:
+                if row.get("ended_by") == "cancelled":
+                    return  # stopped half-way: nothing to keep
+                cpu.append(float(row.get("cpu_s") or 0.0))
+                kept = _table_row(row)
+                if kept.get("ended_by") not in TRANSIENT:
+                    cache.put(kept)
+                rows[todo[i]] = kept
+                finished[0] += 1
+                if on_progress is not None:
+                    on_progress(SweepProgress(finished[0], len(rows), tasks[i], kept))
+
+            try:
+                executor.run(tasks, done, cancelled, fn=run_point)
+            except KeyboardInterrupt as exc:
+                failure = exc
+            except Exception as exc:  # noqa: BLE001 - the executor's infrastructure (a Ray cluster gone, a pool broken)
+                failure = exc
         missing = [the_plan.runs[k] for k, row in enumerate(rows) if row is None]
         if missing or failure is not None:
             complete = [r for r in rows if r is not None]
