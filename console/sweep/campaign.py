@@ -11,7 +11,7 @@ The output folder (``-o DIR``)::
     DIR/report.html         the summary, the plots and the failures, one page
 
 **Resumable.** Each run's row is written (atomically) the moment it finishes, keyed by
-:func:`~swarmdeck.console.sweep.runs.run_key` (script files, parameter values, robot count, seed, configuration,
+:func:`~swarmdeck.console.recording.capsule.run_key` (script files, parameter values, robot count, seed, configuration,
 swarmdeck's version). An interrupted sweep (Ctrl-C, a cancel, a Ray cluster gone, a killed process) continues
 where it stopped when the same command runs again; a changed script or configuration runs anew. Runs cancelled
 half-way leave nothing behind. A run whose script fails is a ``failed`` row with its error (cached: it fails the
@@ -31,10 +31,11 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from swarmdeck.console.recording.capsule import run_key
 from swarmdeck.console.sandbox.bundle import ScriptBundle
 from swarmdeck.console.sandbox.verification import RunTask, VerificationConfig, compile_check
 from swarmdeck.console.sweep.design import Axis, DesignError, check_axes, check_size, grid_points, random_points
-from swarmdeck.console.sweep.runs import SweepRun, run_key, run_point, swarmdeck_version
+from swarmdeck.console.sweep.runs import SweepRun, run_point, swarmdeck_version
 from swarmdeck.devices.experiment_params import ParamError, Value, declared_in_source
 
 #: columns of every row; a script parameter may not be called so (``robots`` is the robot count: see :class:`SweepSpec`)
@@ -138,7 +139,8 @@ def plan(spec: SweepSpec) -> Plan:
                 values["robots"] = robots
             for s in range(spec.first_seed, spec.first_seed + spec.seeds):
                 cfg = _run_config(spec.config, robots, s)
-                key = run_key(spec.bundle.sha256, values, robots, s, cfg.to_dict(), mode, version)
+                key = run_key(dict(spec.bundle.files), entry=spec.bundle.entry, params=values, seed=s,
+                              config={"run": cfg.to_dict(), "robots": robots, "mode": mode}, swarmdeck=version)
                 params = tuple(values.items()) if declared else None
                 runs.append(SweepRun(key, p, tuple(values.items()), robots, s,
                                      RunTask(spec.bundle, cfg, 0, mode, params=params)))

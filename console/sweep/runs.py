@@ -8,8 +8,6 @@ process, a Ray worker); its row is JSON-ready and a pure function of the run (no
 """
 from __future__ import annotations
 
-import hashlib
-import json
 from dataclasses import dataclass
 from importlib import metadata
 from typing import Any
@@ -50,17 +48,6 @@ def swarmdeck_version() -> str:
         return metadata.version("swarmdeck")
     except metadata.PackageNotFoundError:
         return "unknown"
-
-
-def run_key(script_sha256: str, params: dict[str, Value], robots: int | None, seed: int, config: dict[str, Any],
-            mode: str, version: str) -> str:
-    """The cache key of a run: SHA-256 (hex) over the script's files, the parameter values, the robot count, the
-    seed, the run's configuration, the mode (``"wrapped"``: with the barrier; ``"raw"``) and swarmdeck's version.
-    Pure; the one place a sweep run's identity is computed (the capsules' ``run_key`` may replace it)."""
-    ident = {"script": script_sha256, "params": {k: params[k] for k in sorted(params)}, "robots": robots,
-             "seed": seed, "config": config, "mode": mode, "swarmdeck": version}
-    text = json.dumps(ident, sort_keys=True, separators=(",", ":"), allow_nan=False)
-    return hashlib.sha256(text.encode()).hexdigest()
 
 
 def coverage_cost(positions: np.ndarray, bounds: Bounds) -> float | None:
