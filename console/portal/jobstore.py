@@ -129,6 +129,10 @@ class JobStore:
              self.fair_priority(tx, user_id), now, now, arena, needs))
         return int(cur.lastrowid or 0)
 
+    def set_sweep(self, tx: Tx, job_id: int, request: dict[str, Any]) -> None:
+        """Make the new job ``job_id`` a sweep job with ``request`` (:class:`.sweep_job.SweepRequest` as a dict)."""
+        tx.execute("UPDATE jobs SET sweep = ? WHERE id = ?", (json.dumps(request, sort_keys=True), int(job_id)))
+
     def fair_priority(self, tx: Tx, user_id: int) -> float:
         """The priority of a new job of ``user_id``: fair share between researchers (issue 30).
 
@@ -364,6 +368,8 @@ class JobStoreAPI(Protocol):
     def insert(self, tx: Tx, *, user_id: int, name: str, kind: str, script: str, entry: str, robots: int,
                duration: float, initial_poses: Sequence[Sequence[float]] | None, no_barrier: bool, now: float,
                arena: str | None = None, needs: str = "either") -> int: ...
+
+    def set_sweep(self, tx: Tx, job_id: int, request: dict[str, Any]) -> None: ...
 
     def fair_priority(self, tx: Tx, user_id: int) -> float: ...
 
