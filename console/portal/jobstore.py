@@ -152,9 +152,10 @@ class JobStore:
     # ------------------------------------------------------------------ several arenas (issue 30)
     def waiting_in_order(self) -> builtins.list[Job]:
         """Every job not yet on an arena and not held, in the order the plan takes them: the arena queue first,
-        then the jobs still in verification or awaiting approval (by priority)."""
-        rows = self.db.query(f"{JOB_SELECT} WHERE j.state IN ({_marks(PRE_QUEUE)}) ORDER BY j.priority, j.id",
-                             PRE_QUEUE)
+        then the jobs still in verification or awaiting approval (by priority). Sweep jobs never go to an arena:
+        not here."""
+        rows = self.db.query(f"{JOB_SELECT} WHERE j.state IN ({_marks(PRE_QUEUE)}) AND j.sweep IS NULL "
+                             "ORDER BY j.priority, j.id", PRE_QUEUE)
         return [*self.queue(), *(Job.from_row(r) for r in rows)]
 
     def active_on(self, arena: str, default: str, tx: Tx | None = None) -> builtins.list[Job]:
