@@ -2,9 +2,10 @@
 the arena queue), ends done with its table, summary and report on the API and the job page, its runs' CPU is
 charged to the researcher's daily limit, and another researcher sees nothing of it (404)."""
 import json
+import subprocess
 
 import pytest
-from portal_fixtures import sign_in, wait_for_state
+from portal_fixtures import CLI, sign_in, wait_for_state
 
 from swarmdeck.console.portal.workers import VerificationWorkers
 from swarmdeck.console.sandbox.confinement import probe
@@ -25,18 +26,23 @@ def experiment(arena):
 """
 
 
-def test_a_sweep_is_one_job_run_in_simulation_with_its_report_on_the_api_and_the_page(portal):
+def test_a_sweep_is_one_job_run_in_simulation_with_its_report_on_the_api_and_the_page(portal, tmp_path):
     sweep = {"name": "gain sweep", "params": ["gain=0.5,1"], "robots": 2, "seeds": 1, "duration": 1.0}
     with portal.client("alice") as c:
         # the CLI's refusal, as 422 with its message, before anything is stored
         bad = c.post("/api/sweeps", files={"script": ("g.py", SCRIPT)},
                      data={"sweep": json.dumps({**sweep, "params": ["speed=1,2"]})})
         assert bad.status_code == 422 and "does not declare a parameter 'speed'" in bad.json()["error"], bad.text
-        r = c.post("/api/sweeps", files={"script": ("g.py", SCRIPT)}, data={"sweep": json.dumps(sweep)})
-        assert r.status_code == 201, r.text
-        job = r.json()
-        assert job["state"] == "awaiting verification" and job["sweep"]["params"] == ["gain=0.5,1"]
-        jid = job["id"]
+    script = tmp_path / "gain.py"
+    script.write_text(SCRIPT)
+    out = subprocess.run([*CLI, "submit", str(script), "--sweep", "--param", "gain=0.5,1", "--seeds", "1",
+                          "--robots", "2", "--duration", "1", "--json", "--server", portal.url,
+                          "--token", portal.tokens["alice"]], capture_output=True, text=True, timeout=120)
+    assert out.returncode == 0, out.stderr
+    job = json.loads(out.stdout)
+    assert job["state"] == "awaiting verification" and job["sweep"]["params"] == ["gain=0.5,1"], job
+    assert job["name"] == "gain" and job["sweep"]["seeds"] == 1
+    jid = job["id"]
     workers = VerificationWorkers(portal.service, SerialExecutor(), poll_s=0.2).start()
     try:
         with portal.client("alice") as c:

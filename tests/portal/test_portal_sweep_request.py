@@ -110,3 +110,17 @@ def test_a_sweep_job_is_cancellable_and_its_late_end_changes_nothing(service):
     assert service.cancel(user, job.id).state == "cancelled" and service.verifying_cancelled(job.id)
     service.finish_sweep(job.id, True, None)  # the runs stopped after the cancel: it stays cancelled
     assert service.store.get(job.id).state == "cancelled"
+
+
+@pytest.mark.parametrize(("words", "says"), [
+    (["--param", "gain=1"], "add --sweep"),
+    (["--sweep", "--param", "gain=1", "--duration", "1"], "--robots N"),
+    (["--sweep", "--robots", "2", "--param", "robots=2,4", "--duration", "1"], "give the robot counts once"),
+])
+def test_swarmdeck_submit_refuses_a_sweep_it_cannot_send(words, says, tmp_path, capsys):
+    from swarmdeck.console.cli import main
+
+    script = tmp_path / "gain.py"
+    script.write_bytes(SCRIPT)
+    assert main(["submit", str(script), *words, "--server", "http://127.0.0.1:9", "--token", "t"]) == 2
+    assert says in capsys.readouterr().err
