@@ -258,7 +258,10 @@ def api_router(service: PortalService, counter: RejectionCounter, *, max_upload_
                                 headers=REPORT_HEADERS)
         return FileResponse(path, filename=f"job{job_id}-{name}")
 
-    @router.get("/jobs/{job_id}/files/plots/{name}", tags=["results"], response_class=FileResponse)
+    @router.get("/jobs/{job_id}/files/plots/{name}", tags=["results"], response_class=FileResponse,
+                responses={200: {"content": {"application/octet-stream": {"schema": {"type": "string",
+                                                                                     "format": "binary"}}},
+                                 "description": "the PNG (a name sweep-report.html links)"}})
     def sweep_plot(job_id: int, name: str, u: User = Depends(user)) -> FileResponse:
         """A sweep job's plot ``plots/NAME.png`` (as its report links it)."""
         path = service.file_path(u, job_id, f"plots/{name}")
