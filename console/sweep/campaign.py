@@ -253,9 +253,9 @@ def run_sweep(spec: SweepSpec, out: str | Path, executor: Any = None, *,
         finished = [cached]
 
         def done(i: int, row: dict[str, Any], _count: int) -> None:
+            cpu.append(float(row.get("cpu_s") or 0.0))  # a run stopped half-way used CPU too (the portal charges it)
             if row.get("ended_by") == "cancelled":
                 return  # stopped half-way: nothing to keep
-            cpu.append(float(row.get("cpu_s") or 0.0))
             kept = _table_row(row)
             if kept.get("ended_by") not in TRANSIENT:
                 cache.put(kept)
