@@ -32,6 +32,19 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="ask to run without the safety barrier: granted only if verification allows it and an "
                              "operator approves this job's bypass (until then it waits); the walls, the docked robots "
                              "and the guard stay on, and the barrier comes back if two robots get too close")
+    sweep = parser.add_argument_group("a parameter sweep (one job, run in simulation on the lab's verification "
+                                      "workers, never on the arena; see docs/sweeps.md)")
+    sweep.add_argument("--sweep", action="store_true",
+                       help="submit a sweep of the script's declared parameters instead of an arena run; its "
+                            "results: the report, the table and the summary with CIs (swarmdeck results ID)")
+    sweep.add_argument("--param", action="append", default=[], metavar="NAME=VALUES",
+                       help="with --sweep: a swept parameter (repeat for each), as swarmdeck sweep takes it: "
+                            "NAME=0.5:2:4, NAME=log:0.1:10:5, NAME=0.5,1,2; --param robots=2,4 sweeps the robot count")
+    sweep.add_argument("--seeds", type=int, default=None, metavar="K", help="with --sweep: runs per point (default 1)")
+    sweep.add_argument("--seed", type=int, default=None, metavar="S",
+                       help="with --sweep: the first seed and the random design's seed (default 0)")
+    sweep.add_argument("--design", choices=("grid", "random"), default=None, help="with --sweep: grid (default) or random")
+    sweep.add_argument("--samples", type=int, default=None, metavar="M", help="with --sweep: points of a random design")
     parser.add_argument("--wait", action="store_true",
                         help="follow the job until it ends (states on stderr), then print its results in short: did "
                              "the barrier step in, the minimum distance, contacts, the files, the download command")
@@ -60,6 +73,56 @@ def manifest_from(args: argparse.Namespace) -> dict | None:
     return manifest
 
 
+def sweep_from(args: argparse.Namespace) -> dict:
+    """The sweep request (:mod:`swarmdeck.console.portal.sweep_job`) of ``--sweep``'s options; the portal checks it."""
+    params = [p for p in args.param if p.partition("=")[0].strip() != "robots"]
+    counts = [p.partition("=")[2] for p in args.param if p.partition("=")[0].strip() == "robots"]
+    if counts and args.robots is not None:
+        raise UsageError("give the robot counts once: --robots N or --param robots=..., not both")
+    robots: int | str | None = counts[0] if counts else args.robots
+    if robots is None or args.duration is None:
+        raise UsageError("a sweep needs the robots and how long each run is: --robots N (or --param robots=...) "
+                         "--duration S")
+    sweep: dict = {"name": args.name or Path(args.script).stem, "params": params, "robots": robots,
+                   "duration": args.duration}
+    for key in ("seeds", "seed", "design", "samples"):
+        if getattr(args, key) is not None:
+            sweep[key] = getattr(args, key)
+    if args.no_barrier:
+        sweep["no_barrier"] = True
+    return sweep
+
+
+def main_sweep(args: argparse.Namespace) -> int:
+    """``swarmdeck submit --sweep``: the sweep as one job; with --wait, its summary when it ended."""
+    from swarmdeck.console.portal.client import ClientError
+
+    if args.manifest:
+        raise UsageError("--manifest is for an arena run; a sweep takes --robots, --duration and --param")
+    sweep = sweep_from(args)
+    with client(args) as c:
+        try:
+            job = c.submit_sweep(args.script, sweep, args.entry)
+            if not args.json:
+                print(f"submitted sweep job {job['id']}: {job['state']}")
+            results = None
+            if args.wait:
+                job = c.wait(job["id"], on_state=lambda j: print(job_line(j), file=sys.stderr))
+                if not job.get("results_deleted"):
+                    results = c.results(job["id"])
+        except ClientError as exc:
+            return fail(NAME, exc, args.json)
+    if args.json:
+        print(json.dumps(job if results is None else {**job, "results": results}))
+    elif args.wait:
+        print(f"job {job['id']}: {job['state']}" + (f" ({job['reason']})" if job.get("reason") else ""))
+        found = (results or {}).get("sweep")
+        if found:
+            print(f"  {found['runs']} runs, {found['failed']} failed; the report: "
+                  f"swarmdeck results {job['id']} -o job{job['id']}/ (sweep-report.html, results.csv, summary.csv)")
+    return 0 if not args.wait or job["state"] == JobState.DONE else 1
+
+
 def main(args: argparse.Namespace) -> int:
     from swarmdeck.console.portal.client import ClientError
 
@@ -67,6 +130,10 @@ def main(args: argparse.Namespace) -> int:
         raise UsageError(f"script {args.script!r} does not exist or is not a file")
     if args.entry is not None and not args.script.lower().endswith(".zip"):
         raise UsageError("--entry names the script inside a .zip; a .py is its own entry")
+    if args.sweep:
+        return main_sweep(args)
+    if args.param or any(getattr(args, k) is not None for k in ("seeds", "seed", "design", "samples")):
+        raise UsageError("--param, --seeds, --seed, --design and --samples are for a sweep: add --sweep")
     manifest = manifest_from(args)
     if manifest is not None and ("robots" not in manifest or "duration" not in manifest):
         raise UsageError("say how many robots and for how long: --robots N --duration S (or --manifest M)")

@@ -28,6 +28,7 @@ Routes (researchers see only their own jobs; other ids are 404):
   0-based here, 1-based on the pages and in ``swarmdeck jobs``)
 * ``GET /api/jobs`` · ``GET /api/jobs/{id}`` · ``POST /api/jobs/{id}/cancel``
 * ``GET /api/jobs/{id}/report`` · ``GET /api/jobs/{id}/files`` · ``GET /api/jobs/{id}/files/{name}``
+* ``POST /api/sweeps`` (a parameter sweep as one job, run in simulation: :mod:`.sweep_job`)
 * ``GET /api/jobs/{id}/results`` (an ended job in short) · ``GET /api/jobs/{id}/log?since=B`` (the script's output,
   live while it runs)
 * operators: ``POST /api/operator/jobs/{id}/{approve|hold|release|cancel}``,
@@ -76,6 +77,7 @@ from swarmdeck.console.portal.models import (
 from swarmdeck.console.portal.remote import MAX_PIECE, RemoteArenas
 from swarmdeck.console.portal.remote_api import remote_router
 from swarmdeck.console.portal.service import PortalService
+from swarmdeck.console.portal.sweep_job import REPORT_HEADERS
 
 _Body = TypeVar("_Body")
 SESSION_COOKIE = "swarmdeck_session"
@@ -188,6 +190,28 @@ def api_router(service: PortalService, counter: RejectionCounter, *, max_upload_
         finally:
             await form.close()
 
+    @router.post("/sweeps", status_code=201, tags=["jobs"], openapi_extra=UPLOAD_SCHEMA, response_model=JobOut)
+    async def submit_sweep(request: Request, u: User = Depends(user)) -> dict[str, Any]:
+        """Submit a parameter sweep as ONE job: the script (multipart file ``script``) and the ``sweep`` (JSON text:
+        ``params`` ["NAME=VALUES", …] as ``swarmdeck sweep --param``, ``robots``, ``seeds``, ``seed``, ``design``,
+        ``samples``, ``duration``, ``name``). It runs in simulation on the verification executors, never on the
+        arena: ``awaiting verification`` → ``verifying`` → ``done`` | ``failed``; its results are
+        ``GET /api/jobs/{id}/results`` and the files ``sweep-report.html``, ``results.csv``, ``summary.csv``."""
+        form = await request.form(max_files=1, max_fields=5, max_part_size=max_upload_bytes)
+        try:
+            script, sweep, entry = form.get("script"), form.get("sweep"), form.get("entry")
+            if not isinstance(script, UploadFile):
+                raise BadInput("send the script as the multipart file field 'script'", "script")
+            if not isinstance(sweep, str):
+                raise BadInput("send the sweep as the form field 'sweep' holding JSON text", "sweep")
+            if entry is not None and not isinstance(entry, str):
+                raise BadInput("entry is a form field naming the .py file inside the .zip, not a file", "entry")
+            data = await script.read(max_upload_bytes + 1)
+            job = await run_in_threadpool(service.submit_sweep, u, script.filename, data, sweep, entry)
+            return job.to_dict()
+        finally:
+            await form.close()
+
     @router.get("/jobs", tags=["jobs"], response_model=list[JobOut])
     def jobs(mine: bool = False, u: User = Depends(user)) -> list[dict[str, Any]]:
         """Your jobs, newest first (operators: everyone's, unless ``mine``)."""
@@ -236,7 +260,20 @@ def api_router(service: PortalService, counter: RejectionCounter, *, max_upload_
                                  "description": "the file (one of the names GET /api/jobs/{id}/files lists)"}})
     def download(job_id: int, name: str, u: User = Depends(user)) -> FileResponse:
         path = service.file_path(u, job_id, name)
+        # a sweep's report opens in the browser (its plots and tables are the links beside it)
+        if name == "sweep-report.html":
+            return FileResponse(path, filename=f"job{job_id}-{name}", content_disposition_type="inline",
+                                headers=REPORT_HEADERS)
         return FileResponse(path, filename=f"job{job_id}-{name}")
+
+    @router.get("/jobs/{job_id}/files/plots/{name}", tags=["results"], response_class=FileResponse,
+                responses={200: {"content": {"application/octet-stream": {"schema": {"type": "string",
+                                                                                     "format": "binary"}}},
+                                 "description": "the PNG (a name sweep-report.html links)"}})
+    def sweep_plot(job_id: int, name: str, u: User = Depends(user)) -> FileResponse:
+        """A sweep job's plot ``plots/NAME.png`` (as its report links it)."""
+        path = service.file_path(u, job_id, f"plots/{name}")
+        return FileResponse(path, media_type="image/png", content_disposition_type="inline")
 
     # ------------------------------------------------------------------ operators
     simple = {"approve": service.approve, "hold": service.hold, "release": service.release,

@@ -70,6 +70,16 @@ class PortalClient:
         with open(path, "rb") as f:
             return self._call("POST", "/api/jobs", files={"script": (path.name, f)}, data=data).json()
 
+    def submit_sweep(self, script: str | Path, sweep: dict[str, Any], entry: str | None = None) -> dict[str, Any]:
+        """Submit a parameter sweep of ``script`` as one job (``POST /api/sweeps``; ``sweep``: params, robots, seeds,
+        seed, design, samples, duration, name)."""
+        path = Path(script)
+        data = {"sweep": json.dumps(sweep)}
+        if entry is not None:
+            data["entry"] = entry
+        with open(path, "rb") as f:
+            return self._call("POST", "/api/sweeps", files={"script": (path.name, f)}, data=data).json()
+
     def arena(self) -> dict[str, Any]:
         """The arena as operators see it (operator token): stopped, needs_operator, running, queue, fleet."""
         return self._call("GET", "/api/operator/arena").json()

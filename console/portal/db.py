@@ -50,8 +50,9 @@ STATES: tuple[JobState, ...] = tuple(JobState)
 #: state -> the states it may move to.
 TRANSITIONS: dict[JobState, tuple[JobState, ...]] = {
     S.AWAITING_VERIFICATION: (S.VERIFYING, S.CANCELLED, S.HELD),
-    # -> awaiting verification: a worker stopped mid-way (restart)
-    S.VERIFYING: (S.REJECTED, S.AWAITING_APPROVAL, S.AWAITING_VERIFICATION, S.CANCELLED),
+    # -> awaiting verification: a worker stopped mid-way (restart); -> done | failed: a sweep job (issue 31), which
+    # runs in simulation on the verification executors and never enters the arena queue
+    S.VERIFYING: (S.REJECTED, S.AWAITING_APPROVAL, S.AWAITING_VERIFICATION, S.CANCELLED, S.DONE, S.FAILED),
     S.AWAITING_APPROVAL: (S.IN_ARENA_QUEUE, S.CANCELLED, S.HELD),
     S.IN_ARENA_QUEUE: (S.SETTING_UP, S.CANCELLED, S.HELD),
     S.HELD: (S.AWAITING_VERIFICATION, S.AWAITING_APPROVAL, S.IN_ARENA_QUEUE, S.CANCELLED),
@@ -220,6 +221,8 @@ MIGRATIONS: tuple[str, ...] = (
         since REAL NOT NULL
     );
     """,
+    # 7: sweep jobs (issue 31): the sweep's request (JSON, console.portal.sweep_job.SweepRequest); NULL: an arena job
+    "ALTER TABLE jobs ADD COLUMN sweep TEXT",
 )
 
 

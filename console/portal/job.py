@@ -84,6 +84,8 @@ class Job:
     eta_start: float | None = None
     eta_end: float | None = None
     eta_arena: str | None = None
+    # a sweep job (issue 31): its request (console.portal.sweep_job.SweepRequest.to_dict); None: an arena job
+    sweep: dict[str, Any] | None = None
 
     @classmethod
     def from_row(cls, row: sqlite3.Row | Mapping[str, Any], position: int | None = None) -> Job:
@@ -130,14 +132,17 @@ class Job:
             "position": self.position, "created": self.created, "updated": self.updated, "started": self.started,
             "ended": self.ended, "exports": self.exports, "results_deleted": self.results_deleted,
             "arena": self.arena, "needs": self.needs, "placed": self.placed, "eta_start": self.eta_start,
-            "eta_end": self.eta_end, "eta_arena": self.eta_arena,
+            "eta_end": self.eta_end, "eta_arena": self.eta_arena, "sweep": self.sweep,
         }
 
 
 def _lab_columns(row: sqlite3.Row | Mapping[str, Any]) -> dict[str, Any]:
     """The columns of migration 6 (an arena asked for, needs, where it ran), when the row has them."""
     keys = row.keys()
-    return {k: row[k] for k in ("arena", "needs", "placed") if k in keys and row[k] is not None}
+    found: dict[str, Any] = {k: row[k] for k in ("arena", "needs", "placed") if k in keys and row[k] is not None}
+    if "sweep" in keys and row["sweep"] is not None:  # migration 7: a sweep job's request
+        found["sweep"] = json.loads(row["sweep"])
+    return found
 
 
 def bypass_decided(verdict: str | None, request_no_barrier: bool, barrier_forbidden: bool,

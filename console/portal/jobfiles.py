@@ -121,8 +121,9 @@ class JobFiles:
     def listing(self, job_id: int) -> list[ResultFile]:
         """The job's result files that exist, in :data:`RESULT_FILES` order."""
         folder = self.folder(job_id)
-        return [ResultFile(name, (folder / name).stat().st_size, what)
-                for name, what in RESULT_FILES.items() if (folder / name).is_file()]
+        listed = [ResultFile(name, (folder / name).stat().st_size, what)
+                  for name, what in RESULT_FILES.items() if (folder / name).is_file()]
+        return listed + _sweep_listing(folder)
 
     def video_to_come(self, job: Job, listed: list[ResultFile]) -> ResultFile | None:
         """The video as a download to offer although it is not made yet: the run ended and left a recording, the
@@ -138,6 +139,11 @@ class JobFiles:
         from the recording on its first request (:meth:`video`)."""
         if name == VIDEO:
             return self.video(job)
+        sweep = _sweep_path(self.folder(job.id), name) if job.sweep is not None else None
+        if sweep is not None:
+            if not sweep.is_file():
+                raise NotFound(f"job {job.id} has no {name} (yet)", "name")
+            return sweep
         if name not in RESULT_FILES:
             raise NotFound(f"no result file called {name[:100]!r}", "name")
         path = self.folder(job.id) / name
@@ -177,3 +183,20 @@ class JobFiles:
     def delete(self, job_id: int) -> None:
         """Delete the job's folder and everything in it (the retention sweep)."""
         shutil.rmtree(self.folder(job_id), ignore_errors=True)
+
+
+def _sweep_listing(folder: Path) -> list[ResultFile]:
+    """A sweep job's outputs (:data:`.sweep_job.SWEEP_FILES`) that exist; none for another job."""
+    from swarmdeck.console.portal.sweep_job import SWEEP_DIR, SWEEP_FILES
+
+    out = folder / SWEEP_DIR
+    if not out.is_dir():
+        return []
+    return [ResultFile(name, (out / rel).stat().st_size, what)
+            for name, (rel, what) in SWEEP_FILES.items() if (out / rel).is_file()]
+
+
+def _sweep_path(folder: Path, name: str) -> Path | None:
+    from swarmdeck.console.portal.sweep_job import file_path
+
+    return file_path(folder, name)

@@ -133,6 +133,10 @@ class JobStore:
              self.fair_priority(tx, user_id), now, now, arena, needs))
         return int(cur.lastrowid or 0)
 
+    def set_sweep(self, tx: Tx, job_id: int, request: dict[str, Any]) -> None:
+        """Make the new job ``job_id`` a sweep job with ``request`` (:class:`.sweep_job.SweepRequest` as a dict)."""
+        tx.execute("UPDATE jobs SET sweep = ? WHERE id = ?", (json.dumps(request, sort_keys=True), int(job_id)))
+
     def fair_priority(self, tx: Tx, user_id: int) -> float:
         """The priority of a new job of ``user_id``: fair share between researchers (issue 30).
 
@@ -152,9 +156,10 @@ class JobStore:
     # ------------------------------------------------------------------ several arenas (issue 30)
     def waiting_in_order(self) -> builtins.list[Job]:
         """Every job not yet on an arena and not held, in the order the plan takes them: the arena queue first,
-        then the jobs still in verification or awaiting approval (by priority)."""
-        rows = self.db.query(f"{JOB_SELECT} WHERE j.state IN ({_marks(PRE_QUEUE)}) ORDER BY j.priority, j.id",
-                             PRE_QUEUE)
+        then the jobs still in verification or awaiting approval (by priority). Sweep jobs never go to an arena:
+        not here."""
+        rows = self.db.query(f"{JOB_SELECT} WHERE j.state IN ({_marks(PRE_QUEUE)}) AND j.sweep IS NULL "
+                             "ORDER BY j.priority, j.id", PRE_QUEUE)
         return [*self.queue(), *(Job.from_row(r) for r in rows)]
 
     def active_on(self, arena: str, default: str, tx: Tx | None = None) -> builtins.list[Job]:
@@ -368,6 +373,8 @@ class JobStoreAPI(Protocol):
     def insert(self, tx: Tx, *, user_id: int, name: str, kind: str, script: str, entry: str, robots: int,
                duration: float, initial_poses: Sequence[Sequence[float]] | None, no_barrier: bool, now: float,
                arena: str | None = None, needs: str = "either") -> int: ...
+
+    def set_sweep(self, tx: Tx, job_id: int, request: dict[str, Any]) -> None: ...
 
     def fair_priority(self, tx: Tx, user_id: int) -> float: ...
 

@@ -138,6 +138,8 @@ class JobOut(BaseModel):
     eta_start: float | None = Field(default=None, description="estimated start, UNIX s (null: not planned)")
     eta_end: float | None = Field(default=None, description="estimated end (after the robots' return), UNIX s")
     eta_arena: str | None = Field(default=None, description="the arena the plan puts the waiting job on")
+    sweep: dict[str, Any] | None = Field(default=None, description="a sweep job's request (params, seeds, robots, "
+                                         "design, samples, duration); null: an arena job")
 
 
 class ReportOut(_Open):
@@ -180,6 +182,8 @@ class ResultsOut(BaseModel):
     files: list[str]
     exports: ExportState | None
     command: str = Field(description="the command that downloads the files")
+    sweep: dict[str, Any] | None = Field(default=None, description="a sweep job's results: runs, failed, the "
+                                         "summary table (rows of summary.csv) and the report's file name")
 
 
 class LogOut(BaseModel):

@@ -67,6 +67,7 @@ from swarmdeck.console.portal.results import summary_lines
 from swarmdeck.console.portal.service import PortalService
 from swarmdeck.console.portal.states import ACTIVE, FINAL, JobState
 from swarmdeck.console.portal.submission import Limits, display_name, manifest_errors
+from swarmdeck.console.portal.sweep_job import REPORT_HEADERS
 from swarmdeck.core.errors import SwarmdeckError
 
 HERE = Path(__file__).resolve().parent
@@ -248,11 +249,12 @@ def router(service: PortalService, live: LiveFeed) -> APIRouter:
         except PortalError:
             report = None
         run = service.run_summary(s.user, job_id) if job.state in FINAL else None
-        results = None
+        results, sweep = None, None
         if job.state in FINAL and job.state != JobState.REJECTED and not job.results_deleted:
-            results = summary_lines(service.results(s.user, job_id))
+            full = service.results(s.user, job_id)
+            results, sweep = summary_lines(full), full.get("sweep")
         others = comparable(s, job_id) if job.state in FINAL and not job.results_deleted else []
-        return page(request, "job.html", s, job=job, files=files, report=report, run=run, results=results,
+        return page(request, "job.html", s, job=job, files=files, report=report, run=run, results=results, sweep=sweep,
                     live=job.state in ACTIVE, final=job.state in FINAL, live_states=ACTIVE, final_states=FINAL,
                     others=others)
 
@@ -305,7 +307,18 @@ def router(service: PortalService, live: LiveFeed) -> APIRouter:
             path = await run_in_threadpool(service.file_path, s.user, job_id, name)  # video.mp4: made now if need be
         except PortalError as exc:
             return refused(request, s, exc.message, exc.status)
+        if name == "sweep-report.html":  # a sweep's report opens here, sandboxed (sweep_job.REPORT_HEADERS)
+            return FileResponse(path, filename=f"job{job_id}-{name}", content_disposition_type="inline",
+                                headers=REPORT_HEADERS)
         return FileResponse(path, filename=f"job{job_id}-{name}")
+
+    @r.get("/jobs/{job_id}/files/plots/{name}")
+    async def sweep_plot(request: Request, job_id: int, name: str, s: Session = Depends(signed_in)) -> Response:
+        try:
+            path = await run_in_threadpool(service.file_path, s.user, job_id, f"plots/{name}")
+        except PortalError as exc:
+            return refused(request, s, exc.message, exc.status)
+        return FileResponse(path, media_type="image/png", content_disposition_type="inline")
 
     @r.get("/jobs/{job_id}/live")
     async def live_stream(request: Request, job_id: int, s: Session | None = Depends(session_of)) -> Response:

@@ -93,6 +93,7 @@ from swarmdeck.console.portal.scheduler import (
 )
 from swarmdeck.console.portal.states import ACTIVE, FINAL, JobState
 from swarmdeck.console.portal.submission import Limits, Manifest, Upload, check_bundle, check_upload, parse_manifest
+from swarmdeck.console.portal.submission import display_name as _display_name
 from swarmdeck.console.sandbox.confinement import JailConfig, SandboxLimits
 from swarmdeck.console.sandbox.script_env import ScriptEnv, listing
 
@@ -312,6 +313,54 @@ class PortalService:
         self.notify()
         return self.job(user, job_id)
 
+    def submit_sweep(self, user: User, filename: str | None, data: bytes, sweep: Any, entry: str | None = None) -> Job:
+        """Check and store a sweep (:mod:`.sweep_job`): ONE job, ``awaiting verification``, whose runs go to the
+        verification executors and which never enters the arena queue. ``sweep``: the request (JSON text or object);
+        the CLI's refusals (undeclared parameter, empty range, too many points) are 422 with its messages."""
+        from swarmdeck.console.portal.sweep_job import check_sweep, parse_request
+        from swarmdeck.console.sandbox.bundle import ScriptBundle
+
+        upload = check_upload(filename, data, self.config.limits)
+        request = parse_request(sweep, self.config.limits, _display_name(upload.display_name).rsplit('.', 1)[0] or 'sweep')
+        if entry is not None and str(entry).strip() and upload.kind != "zip":
+            raise BadInput("an entry file is only for a .zip (a .py is its own entry)", "entry")
+        m = Manifest(request.name, max(request.counts), request.duration,
+                     entry=str(entry).strip() if entry is not None and str(entry).strip() else None,
+                     needs="simulated")
+        entry = self._entry(m, upload)
+        try:
+            bundle = ScriptBundle.from_files(upload.files, entry)
+        except ValueError as exc:
+            raise BadInput(str(exc), "script") from None
+        check_sweep(request, bundle)
+        if not user.is_operator:
+            check_disk(self.store.kept_job_ids(user.id), self.config.quotas, self.job_files.root)
+        now = time.time()
+        with self.store.transaction() as tx:
+            if not user.is_operator:
+                check_counts(self.config.quotas, self.store.unfinished_count(user.id, tx),
+                             self.store.verification_cpu(user.id, now - DAY_S, tx), now)
+            job_id = self.store.insert(tx, user_id=user.id, name=m.name, kind=upload.kind, script=upload.display_name,
+                                       entry=entry, robots=m.robots, duration=m.duration, initial_poses=None,
+                                       no_barrier=False, now=now, needs="simulated")
+            self.store.set_sweep(tx, job_id, request.to_dict())
+            self.job_files.store(job_id, upload, m, entry)
+        self.notify()
+        return self.job(user, job_id)
+
+    def finish_sweep(self, job_id: int, ok: bool, reason: str | None) -> None:
+        """A sweep job's runs ended: ``done`` (every run finished; a run whose script failed is a row of the table)
+        or ``failed`` with the reason (the sweep could not run). A job cancelled meanwhile stays cancelled."""
+        with self.store.transaction() as tx:
+            try:
+                self.store.transition(tx, job_id, JobState.DONE if ok else JobState.FAILED,
+                                      sources=(JobState.VERIFYING,), ended=time.time(),
+                                      reason=None if reason is None else reason[:4000])
+            except TransitionConflict:
+                return
+            self._event(tx, job_id, "ended")
+        self.notify()
+
     @staticmethod
     def _entry(m: Manifest, upload: Upload) -> str:
         if upload.kind == "py":
@@ -372,8 +421,13 @@ class PortalService:
         job = self._visible(user, job_id)
         if job.state not in FINAL:
             raise NotFound(f"job {job_id} is {job.state}: its results come when it has ended", "job")
-        return results_summary(job.to_dict(), self.job_files.run_summary(job.id),
-                               [f.to_dict() for f in self.job_files.listing(job.id)])
+        summary = results_summary(job.to_dict(), self.job_files.run_summary(job.id),
+                                  [f.to_dict() for f in self.job_files.listing(job.id)])
+        if job.sweep is not None:  # a sweep job: its table in short (sweep_job.results)
+            from swarmdeck.console.portal.sweep_job import results as sweep_results
+
+            summary["sweep"] = sweep_results(self.job_dir(job.id))
+        return summary
 
     def compare(self, user: User, job_id: int, other_id: int) -> dict[str, Any]:
         """Job ``job_id`` compared with job ``other_id`` (:func:`.compare.compare_recordings`: the metric table,

@@ -79,17 +79,15 @@ class VerificationWorkers:
                                   initial_poses=poses, obstacles=self.obstacles)
 
     def verify_job(self, job: Job) -> None:
-        """Verify one claimed job and record the verdict (never raises)."""
+        """Verify one claimed job and record the verdict (never raises); a sweep job's runs instead
+        (:meth:`sweep_job`)."""
+        if job.sweep is not None:
+            self.sweep_job(job)
+            return
         service, job_id = self.service, int(job.id)
         cancel = threading.Event()
 
-        def watch() -> None:  # the job cancelled (or the service stopping) cancels the verification
-            while not watcher.wait(0.2):
-                if self._thread.stopping or service.verifying_cancelled(job_id):
-                    cancel.set()
-                    return
-
-        watcher = ServiceThread(watch, f"swarmdeck-portal-verify-watch-{job_id}", join_timeout=None).start()
+        watcher = self._watch(job_id, cancel)
         try:
             script, entry = service.script(job)
             # messages name the file the researcher uploaded, not the name the portal stored it under
@@ -118,3 +116,48 @@ class VerificationWorkers:
         self.verified += 1
         service.finish_verification(job_id, report.verdict, report.safety_score, data["reasons"])
 
+
+    def _watch(self, job_id: int, cancel: threading.Event) -> ServiceThread:
+        """A thread that sets ``cancel`` once the job is cancelled (or the service stops)."""
+        service = self.service
+
+        def watch() -> None:  # the job cancelled (or the service stopping) cancels the verification
+            while not watcher.wait(0.2):
+                if self._thread.stopping or service.verifying_cancelled(job_id):
+                    cancel.set()
+                    return
+
+        watcher = ServiceThread(watch, f"swarmdeck-portal-verify-watch-{job_id}", join_timeout=None)
+        return watcher.start()  # started once ``watcher`` is bound: watch() reads it
+
+    def sweep_job(self, job: Job) -> None:
+        """Run a claimed sweep job's runs on the executor (:mod:`.sweep_job`), charge their CPU to the owner's daily
+        verification limit, and end it ``done`` or ``failed`` (never raises). A cancelled sweep stops within a tick
+        of each run; the runs finished before are kept in its folder."""
+        from swarmdeck.console.portal.sweep_job import SweepRequest, parse_request, run_job
+        from swarmdeck.console.sandbox.verification import load_script
+        from swarmdeck.console.sweep.campaign import SweepIncomplete
+
+        service, job_id = self.service, int(job.id)
+        cancel = threading.Event()
+        watcher = self._watch(job_id, cancel)
+        try:
+            request: SweepRequest = parse_request(job.sweep, service.config.limits)
+            script, entry = service.script(job)
+            bundle = load_script(script, entry)
+            result = run_job(request, bundle, self.config_for(job), service.job_dir(job_id), self.executor, cancel)
+        except SweepIncomplete as exc:
+            service.record_verification_cpu(job_id, exc.cpu_s)  # a cancel does not make the CPU free
+            if not cancel.is_set():
+                self.errors += 1
+                service.finish_sweep(job_id, False, str(exc))
+            return
+        except Exception as exc:  # noqa: BLE001 - a sweep that cannot run fails with the reason; the worker goes on
+            self.errors += 1
+            service.finish_sweep(job_id, False, f"the sweep could not run: {exc}")
+            return
+        finally:
+            watcher.stop()
+        service.record_verification_cpu(job_id, sum(result.cpu_s))
+        self.verified += 1
+        service.finish_sweep(job_id, True, f"{len(result.rows)} runs, {result.failed} failed" if result.failed else None)

@@ -93,9 +93,10 @@ class SweepIncomplete(RuntimeError):
     """The sweep stopped before every run finished (cancelled, interrupted, the executor failed): ``missing``
     names the runs not done; what finished is kept, and running the same sweep again continues."""
 
-    def __init__(self, message: str, missing: Sequence[SweepRun]) -> None:
+    def __init__(self, message: str, missing: Sequence[SweepRun], cpu_s: float = 0.0) -> None:
         super().__init__(message)
         self.missing = tuple(missing)
+        self.cpu_s = float(cpu_s)  # CPU s of the runs that did finish (the portal charges it to the daily limit)
 
 
 def describe(run: SweepRun) -> str:
@@ -254,9 +255,9 @@ def run_sweep(spec: SweepSpec, out: str | Path, executor: Any = None, *,
                      for k in todo]
 
             def done(i: int, row: dict[str, Any], _count: int) -> None:
+                cpu.append(float(row.get("cpu_s") or 0.0))  # a run stopped half-way used CPU too (the portal charges it)
                 if row.get("ended_by") == "cancelled":
                     return  # stopped half-way: nothing to keep
-                cpu.append(float(row.get("cpu_s") or 0.0))
                 kept = _table_row(row)
                 if kept.get("ended_by") not in TRANSIENT:
                     cache.put(kept)
@@ -281,7 +282,7 @@ def run_sweep(spec: SweepSpec, out: str | Path, executor: Any = None, *,
             shown = ", ".join(describe(r) for r in missing[:10]) + (f" and {len(missing) - 10} more" if len(missing) > 10 else "")
             raise SweepIncomplete(f"the sweep stopped before {len(missing)} of {len(rows)} runs finished ({why}); "
                                   f"the {len(rows) - len(missing)} finished are kept in {folder}: run the same command "
-                                  f"again to continue. Not done: {shown}", missing) from failure
+                                  f"again to continue. Not done: {shown}", missing, sum(cpu)) from failure
     complete_rows = [r for r in rows if r is not None]
     write_outputs(folder, the_plan, complete_rows, spec)
     return SweepResult(the_plan, complete_rows, len(todo), cached, name, cpu)
