@@ -26,6 +26,7 @@ from numpy.typing import NDArray
 from swarmdeck.console.sandbox.bundle import ScriptBundle
 from swarmdeck.console.sandbox.falsify import SearchSpace, cross_entropy
 from swarmdeck.console.sandbox.verification import RunTask, VerificationConfig, run_task
+from swarmdeck.core.errors import SwarmdeckError
 
 METHOD = "cross-entropy"
 #: the report's note on the bound
@@ -35,7 +36,7 @@ NOT_IN_BOUND = "searched runs are chosen, not random: the bound counts the raw r
 RunBatch = Callable[[Sequence[RunTask]], list[dict[str, Any] | None]]
 
 
-class SearchCancelled(Exception):
+class SearchCancelled(SwarmdeckError):
     """A searched run was cancelled: the verification stops."""
 
 

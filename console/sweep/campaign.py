@@ -36,6 +36,7 @@ from swarmdeck.console.sandbox.bundle import ScriptBundle
 from swarmdeck.console.sandbox.verification import RunTask, VerificationConfig, compile_check
 from swarmdeck.console.sweep.design import Axis, DesignError, check_axes, check_size, grid_points, random_points
 from swarmdeck.console.sweep.runs import SweepRun, run_point, swarmdeck_version
+from swarmdeck.core.errors import SwarmdeckError
 from swarmdeck.devices.experiment_params import ParamError, Value, declared_in_source
 
 #: columns of every row; a script parameter may not be called so (``robots`` is the robot count: see :class:`SweepSpec`)
@@ -89,7 +90,7 @@ class Plan:
     axes: tuple[Axis, ...]
 
 
-class SweepIncomplete(RuntimeError):
+class SweepIncomplete(RuntimeError, SwarmdeckError):
     """The sweep stopped before every run finished (cancelled, interrupted, the executor failed): ``missing``
     names the runs not done; what finished is kept, and running the same sweep again continues."""
 
