@@ -13,7 +13,16 @@ on matplotlib's Agg backend (no window), in these modes, interleaved:
 * ``swarmdeck rps`` — ``swarmdeck run --rps-semantics`` (the script's own barrier only).
 
 The rps runs stop at the same experiment time by counting ``step()`` calls after rps's initialisation (the script is
-not edited; the count is a wrapper around rps's ``step``). Wall time of the whole script run (import excluded).
+not edited; the count is a wrapper around rps's ``step``).
+
+Measured per run: *CPU* — user + system seconds of the whole child process (``resource.getrusage(RUSAGE_CHILDREN)``
+before and after it, so the interpreter's start, every import — rps's matplotlib and cvxopt, swarmdeck's scipy and
+numba and its cached kernels — and the run itself; robust to the load of a shared machine), and *wall* — seconds of the
+script's run in the child (from just before the script starts, imports of swarmdeck's runner excluded). Each cell is
+the median over ``--repeats`` runs (default 3), the modes interleaved within each repeat. The ratio column is rps
+unpaced / swarmdeck on CPU. swarmdeck's numba kernels are compiled once per installation into ``__pycache__``
+(``cache=True``); a first warm-up run per example (not counted) makes every counted run load them, as every run after
+the first does for a user (``--no-warm-up`` counts the first too).
 
 Get rps 2.0 and cvxopt beside it (any folders)::
 
@@ -28,7 +37,9 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import resource
 import shutil
+import statistics
 import subprocess
 import sys
 import tempfile
@@ -118,7 +129,10 @@ def main() -> None:
     parser.add_argument("--rps-path", action="append", default=[], metavar="DIR",
                         help="a folder with rps 2.0 (and one with cvxopt); without: swarmdeck only")
     parser.add_argument("--duration", type=float, default=10.0, help="simulated experiment seconds per run")
-    parser.add_argument("--repeats", type=int, default=1)
+    parser.add_argument("--repeats", type=int, default=3, help="runs per example and mode; cells are medians")
+    parser.add_argument("--no-warm-up", action="store_true",
+                        help="count the first swarmdeck run too (by default one uncounted run loads or compiles numba's "
+                             "kernel cache first)")
     parser.add_argument("--only", default=None, help="run the examples whose path contains this")
     parser.add_argument("--modes", default=",".join(MODES), help=f"comma-separated, of {', '.join(MODES)}")
     parser.add_argument("--child", nargs=3, metavar=("MODE", "SCRIPT", "DURATION"), help=argparse.SUPPRESS)
@@ -129,6 +143,8 @@ def main() -> None:
         out = run(mode, script, duration)
         print("RESULT " + json.dumps(out))
         return
+    if args.repeats < 1:
+        raise SystemExit(f"--repeats must be at least 1, got {args.repeats}")
     print(harness.machine())
     cases = [(n, fig) for n, fig in CASES if args.only is None or args.only in n]
     chosen = [m.strip() for m in args.modes.split(",")]
@@ -136,29 +152,44 @@ def main() -> None:
     if unknown:
         raise SystemExit(f"--modes: unknown mode(s) {unknown}; choose from {', '.join(MODES)}")
     modes = [m for m in MODES if m in chosen and (args.rps_path or not m.startswith("rps"))]
-    print(harness.table_header(["example", *[f"{m} (s)" for m in modes], "rps unpaced / swarmdeck"]))
+    print(harness.table_header(["example", *[f"{m} CPU (wall) s" for m in modes], "rps unpaced / swarmdeck (CPU)"]))
     for name, uses_figure in cases:
-        best: dict[str, float] = {}
+        cpu: dict[str, list[float]] = {}
+        wall: dict[str, list[float]] = {}
+        if not args.no_warm_up:
+            for mode in modes:
+                if mode.startswith("swarmdeck"):
+                    _run_child(args, name, mode)
         for _ in range(args.repeats):
             for mode in modes:  # interleaved: a change of the machine's load hits every mode alike
                 if mode == "rps headless" and uses_figure:
                     continue
-                with tempfile.TemporaryDirectory() as tmp:
-                    folder = Path(tmp) / Path(name).parent
-                    shutil.copytree((EXAMPLES / name).parent, folder)
-                    env = dict(os.environ, MPLBACKEND="Agg")
-                    if mode.startswith("rps"):
-                        env["PYTHONPATH"] = os.pathsep.join([*args.rps_path, env.get("PYTHONPATH", "")]).rstrip(os.pathsep)
-                    done = subprocess.run([*harness.python(), __file__, "--child", mode, str(folder / Path(name).name),
-                                           str(args.duration)], env=env, capture_output=True, text=True, cwd=folder,
-                                          check=False)
-                if done.returncode != 0:
-                    raise SystemExit(f"{name} under {mode} failed:\n{done.stdout[-2000:]}\n{done.stderr[-4000:]}")
-                result = json.loads(next(x for x in done.stdout.splitlines() if x.startswith("RESULT "))[7:])
-                best[mode] = min(best.get(mode, float("inf")), result["seconds"])
-        cells = [f"{best[m]:.2f}" if m in best else "—" for m in modes]
-        ratio = f"{best['rps unpaced'] / best['swarmdeck']:.1f}×" if {"rps unpaced", "swarmdeck"} <= set(best) else "—"
+                seconds, result = _run_child(args, name, mode)
+                cpu.setdefault(mode, []).append(seconds)
+                wall.setdefault(mode, []).append(result["seconds"])
+        med = {m: statistics.median(v) for m, v in cpu.items()}
+        cells = [f"{med[m]:.2f} ({statistics.median(wall[m]):.2f})" if m in med else "—" for m in modes]
+        ratio = f"{med['rps unpaced'] / med['swarmdeck']:.1f}×" if {"rps unpaced", "swarmdeck"} <= set(med) else "—"
         print(harness.table_row(name, *cells, ratio), flush=True)
+
+
+def _run_child(args: argparse.Namespace, name: str, mode: str) -> tuple[float, dict]:
+    """One run of example ``name`` under ``mode`` in a fresh process: (its CPU seconds, user + system, the child's
+    RESULT dict); a SystemExit naming the example, the mode and the child's output when it failed."""
+    with tempfile.TemporaryDirectory() as tmp:
+        folder = Path(tmp) / Path(name).parent
+        shutil.copytree((EXAMPLES / name).parent, folder)
+        env = dict(os.environ, MPLBACKEND="Agg")
+        if mode.startswith("rps"):
+            env["PYTHONPATH"] = os.pathsep.join([*args.rps_path, env.get("PYTHONPATH", "")]).rstrip(os.pathsep)
+        before = resource.getrusage(resource.RUSAGE_CHILDREN)
+        done = subprocess.run([*harness.python(), __file__, "--child", mode, str(folder / Path(name).name),
+                               str(args.duration)], env=env, capture_output=True, text=True, cwd=folder, check=False)
+        after = resource.getrusage(resource.RUSAGE_CHILDREN)
+    if done.returncode != 0:
+        raise SystemExit(f"{name} under {mode} failed:\n{done.stdout[-2000:]}\n{done.stderr[-4000:]}")
+    seconds = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
+    return seconds, json.loads(next(x for x in done.stdout.splitlines() if x.startswith("RESULT "))[7:])
 
 
 if __name__ == "__main__":
