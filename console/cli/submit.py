@@ -4,7 +4,9 @@ from __future__ import annotations
 import argparse
 import json
 import sys
+from collections.abc import Callable
 from pathlib import Path
+from typing import Any
 
 from swarmdeck.console.cli import UsageError
 from swarmdeck.console.cli._client import add_client_arguments, client, fail, job_line
@@ -93,6 +95,20 @@ def sweep_from(args: argparse.Namespace) -> dict:
     return sweep
 
 
+def _submitted(args: argparse.Namespace, c: Any, send: Callable[[], dict], what: str) -> tuple[dict, dict | None]:
+    """Submit with ``send()`` and say so (``what``: "job", "sweep job"); with --wait, follow the job to its end and
+    fetch its results (None: rejected, results deleted, or not waited for). ClientError from the portal."""
+    job = send()
+    if not args.json:
+        print(f"submitted {what} {job['id']}: {job['state']}")
+    results = None
+    if args.wait:
+        job = c.wait(job["id"], on_state=lambda j: print(job_line(j), file=sys.stderr))
+        if job["state"] != JobState.REJECTED and not job.get("results_deleted"):
+            results = c.results(job["id"])
+    return job, results
+
+
 def main_sweep(args: argparse.Namespace) -> int:
     """``swarmdeck submit --sweep``: the sweep as one job; with --wait, its summary when it ended."""
     from swarmdeck.console.portal.client import ClientError
@@ -102,14 +118,7 @@ def main_sweep(args: argparse.Namespace) -> int:
     sweep = sweep_from(args)
     with client(args) as c:
         try:
-            job = c.submit_sweep(args.script, sweep, args.entry)
-            if not args.json:
-                print(f"submitted sweep job {job['id']}: {job['state']}")
-            results = None
-            if args.wait:
-                job = c.wait(job["id"], on_state=lambda j: print(job_line(j), file=sys.stderr))
-                if not job.get("results_deleted"):
-                    results = c.results(job["id"])
+            job, results = _submitted(args, c, lambda: c.submit_sweep(args.script, sweep, args.entry), "sweep job")
         except ClientError as exc:
             return fail(NAME, exc, args.json)
     if args.json:
@@ -139,14 +148,7 @@ def main(args: argparse.Namespace) -> int:
         raise UsageError("say how many robots and for how long: --robots N --duration S (or --manifest M)")
     with client(args) as c:
         try:
-            job = c.submit(args.script, manifest, args.entry)
-            if not args.json:
-                print(f"submitted job {job['id']}: {job['state']}")
-            results = None
-            if args.wait:
-                job = c.wait(job["id"], on_state=lambda j: print(job_line(j), file=sys.stderr))
-                if job["state"] != JobState.REJECTED and not job.get("results_deleted"):
-                    results = c.results(job["id"])
+            job, results = _submitted(args, c, lambda: c.submit(args.script, manifest, args.entry), "job")
         except ClientError as exc:
             return fail(NAME, exc, args.json)
     if args.json:

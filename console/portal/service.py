@@ -298,6 +298,14 @@ class PortalService:
         m = parse_manifest(manifest, self.config.limits)
         check_request(self.config.arena_specs(), m.robots, m.needs, m.arena)
         entry = self._entry(m, upload)
+        return self._admit(user, upload, m, entry, initial_poses=m.initial_poses, no_barrier=m.no_barrier,
+                           arena=m.arena, needs=m.needs)
+
+    def _admit(self, user: User, upload: Upload, m: Manifest, entry: str, *,
+               then: Callable[[Any, int], None] | None = None, **fields: Any) -> Job:
+        """Store a checked submission as a new job: the researcher's disk, job-count and daily CPU limits checked
+        (operators are exempt), the row (``fields``: the store's insert columns beyond the manifest's), ``then(tx,
+        job_id)`` and the job's files in one transaction (no job row without its files); the queue is woken."""
         if not user.is_operator:
             check_disk(self.store.kept_job_ids(user.id), self.config.quotas, self.job_files.root)
         now = time.time()
@@ -306,10 +314,10 @@ class PortalService:
                 check_counts(self.config.quotas, self.store.unfinished_count(user.id, tx),
                              self.store.verification_cpu(user.id, now - DAY_S, tx), now)
             job_id = self.store.insert(tx, user_id=user.id, name=m.name, kind=upload.kind, script=upload.display_name,
-                                       entry=entry, robots=m.robots, duration=m.duration,
-                                       initial_poses=m.initial_poses, no_barrier=m.no_barrier, now=now,
-                                       arena=m.arena, needs=m.needs)
-            self.job_files.store(job_id, upload, m, entry)  # inside the transaction: no job row without its files
+                                       entry=entry, robots=m.robots, duration=m.duration, now=now, **fields)
+            if then is not None:
+                then(tx, job_id)
+            self.job_files.store(job_id, upload, m, entry)
         self.notify()
         return self.job(user, job_id)
 
@@ -333,20 +341,8 @@ class PortalService:
         except ValueError as exc:
             raise BadInput(str(exc), "script") from None
         check_sweep(request, bundle)
-        if not user.is_operator:
-            check_disk(self.store.kept_job_ids(user.id), self.config.quotas, self.job_files.root)
-        now = time.time()
-        with self.store.transaction() as tx:
-            if not user.is_operator:
-                check_counts(self.config.quotas, self.store.unfinished_count(user.id, tx),
-                             self.store.verification_cpu(user.id, now - DAY_S, tx), now)
-            job_id = self.store.insert(tx, user_id=user.id, name=m.name, kind=upload.kind, script=upload.display_name,
-                                       entry=entry, robots=m.robots, duration=m.duration, initial_poses=None,
-                                       no_barrier=False, now=now, needs="simulated")
-            self.store.set_sweep(tx, job_id, request.to_dict())
-            self.job_files.store(job_id, upload, m, entry)
-        self.notify()
-        return self.job(user, job_id)
+        return self._admit(user, upload, m, entry, initial_poses=None, no_barrier=False, needs="simulated",
+                           then=lambda tx, job_id: self.store.set_sweep(tx, job_id, request.to_dict()))
 
     def finish_sweep(self, job_id: int, ok: bool, reason: str | None) -> None:
         """A sweep job's runs ended: ``done`` (every run finished; a run whose script failed is a row of the table)
