@@ -107,15 +107,22 @@ def display_name(filename: str | None) -> str:
     return clean or "script"
 
 
-def parse_manifest(data: Any, limits: Limits, first: int = 0) -> Manifest:
-    """The manifest from a JSON text (or an already parsed object); :class:`BadInput` naming the key."""
+def json_object(data: Any, what: str) -> dict[str, Any]:
+    """A request's JSON object (``what``: the form field it came in, e.g. "manifest") from JSON text or an already
+    parsed object; :class:`BadInput` naming ``what`` when it is not valid JSON or not an object."""
     if isinstance(data, (str, bytes)):
         try:
             data = json.loads(data)
         except (ValueError, UnicodeDecodeError) as exc:
-            raise BadInput(f"the manifest is not valid JSON: {exc}", "manifest") from None
+            raise BadInput(f"the {what} is not valid JSON: {exc}", what) from None
     if not isinstance(data, dict):
-        raise BadInput(f"the manifest must be a JSON object, got {type(data).__name__}", "manifest")
+        raise BadInput(f"the {what} must be a JSON object, got {type(data).__name__}", what)
+    return data
+
+
+def parse_manifest(data: Any, limits: Limits, first: int = 0) -> Manifest:
+    """The manifest from a JSON text (or an already parsed object); :class:`BadInput` naming the key."""
+    data = json_object(data, "manifest")
     manifest, errors = _checked(data, limits, first)
     if errors:
         raise errors[0]

@@ -19,7 +19,6 @@ from __future__ import annotations
 
 import csv
 import io
-import json
 import math
 import re
 from dataclasses import dataclass, replace
@@ -27,7 +26,7 @@ from pathlib import Path
 from typing import Any
 
 from swarmdeck.console.portal.errors import BadInput
-from swarmdeck.console.portal.submission import Limits
+from swarmdeck.console.portal.submission import Limits, json_object
 from swarmdeck.console.sandbox.bundle import ScriptBundle
 from swarmdeck.console.sandbox.verification import VerificationConfig
 from swarmdeck.console.sweep.campaign import Plan, SweepResult, SweepSpec, plan, run_sweep
@@ -86,13 +85,7 @@ def _int(data: dict[str, Any], key: str, default: int | None, least: int) -> int
 
 def parse_request(data: Any, limits: Limits, default_name: str = "sweep") -> SweepRequest:
     """The checked request from JSON text or an object; :class:`BadInput` (422) naming the key."""
-    if isinstance(data, (str, bytes)):
-        try:
-            data = json.loads(data)
-        except (ValueError, UnicodeDecodeError) as exc:
-            raise BadInput(f"the sweep is not valid JSON: {exc}", "sweep") from None
-    if not isinstance(data, dict):
-        raise BadInput(f"the sweep must be a JSON object, got {type(data).__name__}", "sweep")
+    data = json_object(data, "sweep")
     unknown = sorted(set(data) - set(REQUEST_KEYS))
     if unknown:
         raise BadInput(f"unknown sweep key {unknown[0]!r} (known: {', '.join(REQUEST_KEYS)})", unknown[0])
