@@ -330,11 +330,12 @@ def main(args: argparse.Namespace) -> int:
 
     from swarmdeck.console.portal.files import UMASK
 
-    os.umask(UMASK)  # every file the server (its workers, the exports) writes is 0600, every folder 0700
+    caller_umask = os.umask(UMASK)  # every file the server (its workers, the exports) writes is 0600, every folder 0700
     try:
         service = PortalService(config)
     except (SchemaError, OSError) as exc:
         sock.close()
+        os.umask(caller_umask)  # a refused start leaves the caller's process as it found it
         raise UsageError(f"cannot open the data folder {args.data!r}: {exc}") from None
     import sqlite3
 
@@ -368,6 +369,7 @@ def main(args: argparse.Namespace) -> int:
     except sqlite3.DatabaseError as exc:
         sock.close()
         service.close()
+        os.umask(caller_umask)
         raise UsageError(f"the database in {args.data!r} is damaged: {exc}") from None
     for job_id in interrupted:
         print(f"swarmdeck server: job {job_id} was on the arena when the server stopped: interrupted "
