@@ -24,6 +24,7 @@ them in the sweep's table; run alone, the values are checked and go nowhere (a s
 from __future__ import annotations
 
 import ast
+import contextlib
 import contextvars
 import json
 import math
@@ -133,6 +134,25 @@ def resolve(defaults: Mapping[str, Any], overrides: Mapping[str, Any]) -> dict[s
         raise ParamError(f"parameter{'s' if len(unknown) > 1 else ''} {', '.join(map(repr, unknown))} not declared "
                          f"by the script (it declares: {', '.join(checked) or 'none'})")
     return {name: coerce(name, d, overrides[name]) if name in overrides else d for name, d in checked.items()}
+
+
+@contextlib.contextmanager
+def params_in_environment(values: Mapping[str, Any] | None) -> Iterator[None]:
+    """The script's parameter values in this process's environment (:data:`PARAMS_ENV`) while a script runs in it
+    (``swarmdeck run --param``, a capsule's re-execution); the caller's environment given back after. None: left
+    as it is."""
+    if values is None:
+        yield
+        return
+    saved = os.environ.get(PARAMS_ENV)
+    os.environ[PARAMS_ENV] = json.dumps(dict(values))
+    try:
+        yield
+    finally:
+        if saved is None:
+            os.environ.pop(PARAMS_ENV, None)
+        else:
+            os.environ[PARAMS_ENV] = saved
 
 
 def params(**defaults: Value) -> Params:

@@ -7,17 +7,16 @@ Also the plumbing every headless run shares (``swarmdeck example NAME`` uses it 
 from __future__ import annotations
 
 import argparse
-import contextlib
 import dataclasses
 import json
 import math
-import os
 import sys
-from collections.abc import Callable, Iterator
+from collections.abc import Callable
 from typing import Any
 
 from swarmdeck.console.cli import UsageError
 from swarmdeck.core.robot_models import ROBOT_MODELS
+from swarmdeck.devices.experiment_params import params_in_environment
 
 NAME = "run"
 HELP = "run an experiment script headless on the simulated arena and print its report"
@@ -96,14 +95,15 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                              "the script runs as __main__, so code under `if __name__ == \"__main__\":` runs")
 
 
-def _params(args: argparse.Namespace) -> dict[str, Any] | None:
-    """--param NAME=VALUE as {name: value} (None: none given); UsageError for a range or a malformed one."""
+def param_values(specs: list[str]) -> dict[str, Any] | None:
+    """``--param NAME=VALUE`` options (``swarmdeck run``, ``swarmdeck submit``) as {name: value} (None: none given);
+    UsageError for a range or a malformed one."""
     from swarmdeck.console.sweep.design import DesignError, parse_axis
 
-    if not args.param:
+    if not specs:
         return None
     values: dict[str, Any] = {}
-    for spec in args.param:
+    for spec in specs:
         try:
             axis = parse_axis(spec)
         except DesignError as exc:
@@ -112,26 +112,6 @@ def _params(args: argparse.Namespace) -> dict[str, Any] | None:
             raise UsageError(f"--param {spec!r}: one value per parameter here (`swarmdeck sweep` sweeps ranges)")
         values[axis.name] = axis.values[0]
     return values
-
-
-@contextlib.contextmanager
-def _params_env(values: dict[str, Any] | None) -> Iterator[None]:
-    """The script's parameter values in its environment (swarmdeck.devices.experiment_params.PARAMS_ENV) while it
-    runs in this process; the caller's environment given back after."""
-    from swarmdeck.devices.experiment_params import PARAMS_ENV
-
-    if values is None:
-        yield
-        return
-    saved = os.environ.get(PARAMS_ENV)
-    os.environ[PARAMS_ENV] = json.dumps(values)
-    try:
-        yield
-    finally:
-        if saved is None:
-            os.environ.pop(PARAMS_ENV, None)
-        else:
-            os.environ[PARAMS_ENV] = saved
 
 
 def _run_sandboxed(args: argparse.Namespace) -> int:
@@ -157,7 +137,7 @@ def _run_sandboxed(args: argparse.Namespace) -> int:
         outcome = run_sandboxed(args.script, make_plant, entry=args.entry, n_robots=args.robots, duration=args.duration, rps=args.rps,
                                 argv=_script_args(args), rps_semantics=args.rps_semantics,
                                 rps_call_order=args.rps_call_order,
-                                robot_model=model, rps_generation=args.rps_generation, params=_params(args),
+                                robot_model=model, rps_generation=args.rps_generation, params=param_values(args.param),
                                 trusted=args.trusted, jail=JailConfig(order=(args.jail,) if args.jail else JailConfig().order,
                                                                      allow_no_cgroup=args.allow_no_cgroup,
                                                                      script_env=checked_script_env(args.script_env)))
@@ -272,6 +252,7 @@ def _capsule_of(args: argparse.Namespace) -> tuple[Any, dict[str, bytes]]:
     except (CapsuleError, OSError) as exc:
         raise UsageError(str(exc)) from None
     run = {"robots": args.robots, "duration": args.duration, "seed": args.seed, "safety": not args.no_safety,
+           "params": param_values(args.param),
            "from_docks": bool(args.from_docks), "rps": args.rps, "rps_semantics": bool(args.rps_semantics),
            "rps_call_order": bool(args.rps_call_order), "robot_model": args.robot_model,
            "rps_generation": args.rps_generation, "argv": _script_args(args), "sandbox": False,
@@ -336,7 +317,7 @@ def main(args: argparse.Namespace) -> int:
                                    foxglove_channels=args.foxglove_channels, capsule=capsule,
                                    capsule_files=capsule_files)
     try:
-        with _params_env(_params(args)):
+        with params_in_environment(param_values(args.param)):
             result = run_headless(args.script, args, rps=args.rps, from_docks=args.from_docks, argv=_script_args(args),
                                   obstacles=obstacles_argument(args),
                                   rps_semantics=args.rps_semantics, rps_call_order=args.rps_call_order,

@@ -10,6 +10,7 @@ from typing import Any
 
 from swarmdeck.console.cli import UsageError
 from swarmdeck.console.cli._client import add_client_arguments, client, fail, job_line
+from swarmdeck.console.cli.run import param_values
 from swarmdeck.console.portal.states import JobState
 
 NAME = "submit"
@@ -41,7 +42,13 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                             "results: the report, the table and the summary with CIs (swarmdeck results ID)")
     sweep.add_argument("--param", action="append", default=[], metavar="NAME=VALUES",
                        help="with --sweep: a swept parameter (repeat for each), as swarmdeck sweep takes it: "
-                            "NAME=0.5:2:4, NAME=log:0.1:10:5, NAME=0.5,1,2; --param robots=2,4 sweeps the robot count")
+                            "NAME=0.5:2:4, NAME=log:0.1:10:5, NAME=0.5,1,2; --param robots=2,4 sweeps the robot count. "
+                            "Without --sweep: NAME=VALUE, one value of a parameter the script declares, for the "
+                            "arena run and its verification (the manifest's params)")
+    sweep.add_argument("--promote", default=None, metavar="METRIC[:min|max]",
+                       help="with --sweep: when the sweep is done, submit its best point by METRIC (a built-in one: "
+                            "min_distance, contacts, barrier_interventions, coverage_cost_H, time_to_goal; or one "
+                            "the script records, with :min or :max) as an arena job with that point's values")
     sweep.add_argument("--seeds", type=int, default=None, metavar="K", help="with --sweep: runs per point (default 1)")
     sweep.add_argument("--seed", type=int, default=None, metavar="S",
                        help="with --sweep: the first seed and the random design's seed (default 0)")
@@ -64,7 +71,8 @@ def manifest_from(args: argparse.Namespace) -> dict | None:
             raise UsageError(f"the manifest {args.manifest!r} is not valid JSON: {exc}") from None
         if not isinstance(manifest, dict):
             raise UsageError(f"the manifest {args.manifest!r} must hold a JSON object")
-    for key, value in (("robots", args.robots), ("duration", args.duration), ("name", args.name)):
+    for key, value in (("robots", args.robots), ("duration", args.duration), ("name", args.name),
+                       ("params", param_values(args.param))):
         if value is not None:
             manifest[key] = value
     if args.no_barrier:
@@ -92,6 +100,9 @@ def sweep_from(args: argparse.Namespace) -> dict:
             sweep[key] = getattr(args, key)
     if args.no_barrier:
         sweep["no_barrier"] = True
+    if args.promote is not None:
+        metric, _, goal = args.promote.partition(":")
+        sweep["promote"] = {"metric": metric, **({"goal": goal} if goal else {})}
     return sweep
 
 
@@ -141,8 +152,8 @@ def main(args: argparse.Namespace) -> int:
         raise UsageError("--entry names the script inside a .zip; a .py is its own entry")
     if args.sweep:
         return main_sweep(args)
-    if args.param or any(getattr(args, k) is not None for k in ("seeds", "seed", "design", "samples")):
-        raise UsageError("--param, --seeds, --seed, --design and --samples are for a sweep: add --sweep")
+    if any(getattr(args, k) is not None for k in ("seeds", "seed", "design", "samples", "promote")):
+        raise UsageError("--seeds, --seed, --design, --samples and --promote are for a sweep: add --sweep")
     manifest = manifest_from(args)
     if manifest is not None and ("robots" not in manifest or "duration" not in manifest):
         raise UsageError("say how many robots and for how long: --robots N --duration S (or --manifest M)")

@@ -223,6 +223,12 @@ MIGRATIONS: tuple[str, ...] = (
     """,
     # 7: sweep jobs (issue 31): the sweep's request (JSON, console.portal.sweep_job.SweepRequest); NULL: an arena job
     "ALTER TABLE jobs ADD COLUMN sweep TEXT",
+    # 8: a job's script parameters (JSON object, console.portal.submission.parse_params; NULL: the defaults) and
+    # the sweep job whose best point it is (issue 31: a sweep's "promote"; NULL: submitted by the researcher)
+    """
+    ALTER TABLE jobs ADD COLUMN params TEXT;
+    ALTER TABLE jobs ADD COLUMN origin INTEGER REFERENCES jobs (id)
+    """,
 )
 
 

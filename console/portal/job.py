@@ -86,6 +86,10 @@ class Job:
     eta_arena: str | None = None
     # a sweep job (issue 31): its request (console.portal.sweep_job.SweepRequest.to_dict); None: an arena job
     sweep: dict[str, Any] | None = None
+    # the script's parameter values (manifest ``params``; None: its defaults) and the sweep job whose best point
+    # this job runs (None: submitted directly) — migration 8
+    params: dict[str, Any] | None = None
+    origin: int | None = None
 
     @classmethod
     def from_row(cls, row: sqlite3.Row | Mapping[str, Any], position: int | None = None) -> Job:
@@ -133,6 +137,7 @@ class Job:
             "ended": self.ended, "exports": self.exports, "results_deleted": self.results_deleted,
             "arena": self.arena, "needs": self.needs, "placed": self.placed, "eta_start": self.eta_start,
             "eta_end": self.eta_end, "eta_arena": self.eta_arena, "sweep": self.sweep,
+            "params": self.params, "origin": self.origin,
         }
 
 
@@ -142,6 +147,10 @@ def _lab_columns(row: sqlite3.Row | Mapping[str, Any]) -> dict[str, Any]:
     found: dict[str, Any] = {k: row[k] for k in ("arena", "needs", "placed") if k in keys and row[k] is not None}
     if "sweep" in keys and row["sweep"] is not None:  # migration 7: a sweep job's request
         found["sweep"] = json.loads(row["sweep"])
+    if "params" in keys and row["params"] is not None:  # migration 8: the script's parameters, the promoting sweep
+        found["params"] = json.loads(row["params"])
+    if "origin" in keys and row["origin"] is not None:
+        found["origin"] = int(row["origin"])
     return found
 
 

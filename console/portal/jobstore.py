@@ -13,7 +13,7 @@ import builtins
 import json
 import sqlite3
 import time
-from collections.abc import Iterator, Sequence
+from collections.abc import Iterator, Mapping, Sequence
 from contextlib import contextmanager
 from typing import Any, Protocol
 
@@ -122,15 +122,20 @@ class JobStore:
     # ------------------------------------------------------------------ changing jobs
     def insert(self, tx: Tx, *, user_id: int, name: str, kind: str, script: str, entry: str, robots: int,
                duration: float, initial_poses: Sequence[Sequence[float]] | None, no_barrier: bool, now: float,
-               arena: str | None = None, needs: str = "either") -> int:
-        """A new job, ``awaiting verification``, at its fair-share place (:meth:`fair_priority`); its id."""
+               arena: str | None = None, needs: str = "either", params: Mapping[str, Any] | None = None,
+               origin: int | None = None) -> int:
+        """A new job, ``awaiting verification``, at its fair-share place (:meth:`fair_priority`); its id.
+        ``params``: the script's parameter values (None: its defaults); ``origin``: the sweep job it was promoted
+        from."""
         cur = tx.execute(
             "INSERT INTO jobs (user_id, name, state, kind, script_name, entry, n_robots, duration, initial_poses, "
-            "request_no_barrier, priority, created, updated, arena, needs) "
-            "VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)",
+            "request_no_barrier, priority, created, updated, arena, needs, params, origin) "
+            "VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)",
             (user_id, name, JobState.AWAITING_VERIFICATION, kind, script, entry, robots, duration,
              None if initial_poses is None else json.dumps(initial_poses), int(no_barrier),
-             self.fair_priority(tx, user_id), now, now, arena, needs))
+             self.fair_priority(tx, user_id), now, now, arena, needs,
+             None if params is None else json.dumps(dict(params), sort_keys=True),
+             None if origin is None else int(origin)))
         return int(cur.lastrowid or 0)
 
     def set_sweep(self, tx: Tx, job_id: int, request: dict[str, Any]) -> None:
@@ -372,7 +377,8 @@ class JobStoreAPI(Protocol):
 
     def insert(self, tx: Tx, *, user_id: int, name: str, kind: str, script: str, entry: str, robots: int,
                duration: float, initial_poses: Sequence[Sequence[float]] | None, no_barrier: bool, now: float,
-               arena: str | None = None, needs: str = "either") -> int: ...
+               arena: str | None = None, needs: str = "either", params: Mapping[str, Any] | None = None,
+               origin: int | None = None) -> int: ...
 
     def set_sweep(self, tx: Tx, job_id: int, request: dict[str, Any]) -> None: ...
 

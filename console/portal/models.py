@@ -140,6 +140,10 @@ class JobOut(BaseModel):
     eta_arena: str | None = Field(default=None, description="the arena the plan puts the waiting job on")
     sweep: dict[str, Any] | None = Field(default=None, description="a sweep job's request (params, seeds, robots, "
                                          "design, samples, duration); null: an arena job")
+    params: dict[str, Any] | None = Field(default=None, description="the script's parameter values "
+                                          "(swarmdeck.devices.params); null: its defaults")
+    origin: int | None = Field(default=None, description="the sweep job whose best point this job runs "
+                                                          "(null: submitted directly)")
 
 
 class ReportOut(_Open):

@@ -234,7 +234,7 @@ def _job(data: dict[str, Any]) -> Job:
                reason=data.get("reason"), bypass_decision=None, created=float(data["created"]),
                updated=float(data["updated"]), started=data.get("started"), ended=data.get("ended"), exports=None,
                results_deleted=None, arena=data.get("arena"), needs=str(data.get("needs", "either")),
-               placed=data.get("placed"))
+               placed=data.get("placed"), params=data.get("params"))
 
 
 class RemoteRunner:

@@ -519,7 +519,7 @@ class ArenaRunner:
             script, entry = self.service.script(job)
             outcome = run_sandboxed(script, make_plant, entry=entry, n_robots=n, duration=duration,
                                     limits=limits, trusted=cfg.trusted, cancelled=stopped,
-                                    jail=cfg.jail(), bounds=region,
+                                    jail=cfg.jail(), bounds=region, params=job.params,
                                     on_log=lambda chunk: self._append_log(job.id, chunk))
         finally:
             loop = state["loop"]
@@ -647,8 +647,10 @@ def _job_capsule(service: PortalService, job: Job, bypass: bool) -> tuple[Any, d
         files, main = script_files(path, entry)
     except (CapsuleError, OSError, ValueError):
         return None, {}
-    run = {"robots": int(job.robots), "duration": float(job.duration), "bypass": bool(bypass), "job": int(job.id),
+    run: dict[str, Any] = {"robots": int(job.robots), "duration": float(job.duration), "bypass": bool(bypass), "job": int(job.id),
            "single": not path.is_dir(), "sandbox": True}
+    if job.params is not None:  # the script's parameter values (the manifest's, or a sweep's best point)
+        run["params"] = dict(job.params)
     return manifest_for("portal", files, entry=main, run=run), files
 
 

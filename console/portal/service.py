@@ -92,8 +92,17 @@ from swarmdeck.console.portal.scheduler import (
     plan,
 )
 from swarmdeck.console.portal.states import ACTIVE, FINAL, JobState
-from swarmdeck.console.portal.submission import Limits, Manifest, Upload, check_bundle, check_upload, parse_manifest
+from swarmdeck.console.portal.submission import (
+    Limits,
+    Manifest,
+    Upload,
+    check_bundle,
+    check_declared,
+    check_upload,
+    parse_manifest,
+)
 from swarmdeck.console.portal.submission import display_name as _display_name
+from swarmdeck.console.sandbox.bundle import ScriptBundle
 from swarmdeck.console.sandbox.confinement import JailConfig, SandboxLimits
 from swarmdeck.console.sandbox.script_env import ScriptEnv, listing
 
@@ -298,8 +307,17 @@ class PortalService:
         m = parse_manifest(manifest, self.config.limits)
         check_request(self.config.arena_specs(), m.robots, m.needs, m.arena)
         entry = self._entry(m, upload)
+        if m.params is not None:  # names the script declares, values of their kinds
+            check_declared(self._bundle(upload, entry), m.params)
         return self._admit(user, upload, m, entry, initial_poses=m.initial_poses, no_barrier=m.no_barrier,
-                           arena=m.arena, needs=m.needs)
+                           arena=m.arena, needs=m.needs, params=None if m.params is None else dict(m.params))
+
+    @staticmethod
+    def _bundle(upload: Upload, entry: str) -> ScriptBundle:
+        try:
+            return ScriptBundle.from_files(upload.files, entry)
+        except ValueError as exc:
+            raise BadInput(str(exc), "script") from None
 
     def _admit(self, user: User, upload: Upload, m: Manifest, entry: str, *,
                then: Callable[[Any, int], None] | None = None, **fields: Any) -> Job:
@@ -326,7 +344,6 @@ class PortalService:
         verification executors and which never enters the arena queue. ``sweep``: the request (JSON text or object);
         the CLI's refusals (undeclared parameter, empty range, too many points) are 422 with its messages."""
         from swarmdeck.console.portal.sweep_job import check_sweep, parse_request
-        from swarmdeck.console.sandbox.bundle import ScriptBundle
 
         upload = check_upload(filename, data, self.config.limits)
         request = parse_request(sweep, self.config.limits, _display_name(upload.display_name).rsplit('.', 1)[0] or 'sweep')
@@ -336,11 +353,9 @@ class PortalService:
                      entry=str(entry).strip() if entry is not None and str(entry).strip() else None,
                      needs="simulated")
         entry = self._entry(m, upload)
-        try:
-            bundle = ScriptBundle.from_files(upload.files, entry)
-        except ValueError as exc:
-            raise BadInput(str(exc), "script") from None
-        check_sweep(request, bundle)
+        check_sweep(request, self._bundle(upload, entry))
+        if request.promote is not None:  # its best point must be able to run on an arena of this portal
+            check_request(self.config.arena_specs(), max(request.counts), "either", None)
         return self._admit(user, upload, m, entry, initial_poses=None, no_barrier=False, needs="simulated",
                            then=lambda tx, job_id: self.store.set_sweep(tx, job_id, request.to_dict()))
 
@@ -356,6 +371,28 @@ class PortalService:
                 return
             self._event(tx, job_id, "ended")
         self.notify()
+
+    def promote(self, sweep_job: Job, params: dict[str, Any] | None, robots: int, duration: float,
+                name: str) -> Job:
+        """Submit a sweep's best point as a normal arena job of the sweep's owner (issue 31.2): the sweep's stored
+        script, ``params`` (the point's values; None: the defaults), ``robots``, ``duration``; ``origin`` names the
+        sweep. It is verified and queued like any job; the owner's limits apply (QuotaExceeded), and BadInput when
+        no arena can run it or the owner's account is disabled."""
+        user = self.accounts.user_named(sweep_job.owner)
+        if user.disabled:
+            raise BadInput(f"{user.name}'s account is disabled", "promote")
+        path, entry = self.script(sweep_job)
+        if sweep_job.kind == "py":
+            files, entry = {"script.py": path.read_bytes()}, "script.py"
+        else:
+            files, entry = dict(ScriptBundle.from_path(path, entry).files), str(entry)
+        upload = Upload(kind=sweep_job.kind, display_name=sweep_job.script, files=files, entry=entry)
+        values = None if params is None else tuple(sorted(params.items()))
+        m = Manifest(name[:100], int(robots), float(duration), entry=None if sweep_job.kind == "py" else entry,
+                     params=values)
+        check_request(self.config.arena_specs(), m.robots, m.needs, None)
+        return self._admit(user, upload, m, entry, initial_poses=None, no_barrier=False, needs=m.needs,
+                           params=params, origin=int(sweep_job.id))
 
     @staticmethod
     def _entry(m: Manifest, upload: Upload) -> str:

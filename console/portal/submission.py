@@ -8,7 +8,10 @@ inside the arena and pairwise at least ``MIN_SEPARATION`` apart — the same che
 initial conditions), optional
 ``no_barrier`` (bool: the request to run without the barrier, granted only if
 verification allows it and no operator forbids it), optional ``entry`` (the
-script inside a ``.zip``). Unknown keys are refused. Every error is a
+script inside a ``.zip``), optional ``params`` (an object of the values
+``swarmdeck.devices.params()`` returns in the script: names it declares, values of the declared defaults' kinds —
+checked against the script's declaration by :func:`check_declared`; verification and the arena run both use them).
+Unknown keys are refused. Every error is a
 :class:`~swarmdeck.console.portal.errors.BadInput` naming the key.
 
 **Upload** (:func:`check_upload`): a ``.py`` (UTF-8 text, at most
@@ -45,7 +48,10 @@ from swarmdeck.console.sandbox.bundle import MAX_BYTES, ScriptBundle
 from swarmdeck.console.sandbox.start_poses import check_initial_poses
 from swarmdeck.core.bounds import DEFAULT_BOUNDS, Bounds
 
-MANIFEST_KEYS = ("name", "robots", "duration", "initial_poses", "no_barrier", "entry", "arena", "needs")
+MANIFEST_KEYS = ("name", "robots", "duration", "initial_poses", "no_barrier", "entry", "arena", "needs", "params")
+#: the most script parameters a manifest may set, and the longest text value
+MAX_PARAMS = 64
+MAX_PARAM_TEXT = 200
 COMPONENT_RE = re.compile(r"^[A-Za-z0-9_][A-Za-z0-9_.-]{0,99}$")
 MANIFEST_NAME = "manifest.json"
 
@@ -73,6 +79,8 @@ class Manifest:
     entry: str | None = None
     arena: str | None = None  # the arena the job must run on (None: any that fits; issue 30)
     needs: str = "either"  # physical | simulated | either robots
+    #: the script's parameter values (``swarmdeck.devices.params``; None: its defaults), name -> bool|int|float|str
+    params: tuple[tuple[str, bool | int | float | str], ...] | None = None
 
     def to_dict(self) -> dict[str, Any]:
         d: dict[str, Any] = {"name": self.name, "robots": self.robots, "duration": self.duration,
@@ -85,6 +93,8 @@ class Manifest:
             d["arena"] = self.arena
         if self.needs != "either":
             d["needs"] = self.needs
+        if self.params is not None:
+            d["params"] = dict(self.params)
         return d
 
 
@@ -159,13 +169,14 @@ def _checked(data: dict[str, Any], limits: Limits, first: int = 0) -> tuple[Mani
     entry = check("entry", lambda: _entry(data))
     arena = check("arena", lambda: _arena(data))
     needs = check("needs", lambda: _needs(data))
+    params = check("params", lambda: parse_params(data.get("params")))
     poses = data.get("initial_poses")
     if poses is not None:  # with a bad robot count the poses are still checked (against their own count)
         n = robots if robots is not None else (len(poses) if isinstance(poses, list) else 0)
         poses = check("initial_poses", lambda: _initial_poses(poses, n, limits.bounds, first))
     if errors:
         return None, errors
-    return Manifest(name, robots, float(duration), poses, no_barrier, entry, arena, needs), []
+    return Manifest(name, robots, float(duration), poses, no_barrier, entry, arena, needs, params), []
 
 
 def _required(data: dict[str, Any], key: str) -> Any:
@@ -222,6 +233,47 @@ def _needs(data: dict[str, Any]) -> str:
     if needs not in NEEDS:
         raise BadInput(f"needs must be one of {', '.join(NEEDS)}, got {needs!r}", "needs")
     return str(needs)
+
+
+def parse_params(value: Any) -> tuple[tuple[str, bool | int | float | str], ...] | None:
+    """A manifest's ``params`` (None: not given): an object of at most :data:`MAX_PARAMS` identifiers, each a
+    bool, a finite number or printable text of at most :data:`MAX_PARAM_TEXT` characters; :class:`BadInput`
+    naming ``params`` and the offending name otherwise. Sorted by name (one job, one order)."""
+    if value is None:
+        return None
+    if not isinstance(value, dict):
+        raise BadInput(f"params must be an object of parameter values, got {type(value).__name__}", "params")
+    if len(value) > MAX_PARAMS:
+        raise BadInput(f"params may set at most {MAX_PARAMS} parameters, got {len(value)}", "params")
+    out: list[tuple[str, bool | int | float | str]] = []
+    for name, v in sorted(value.items()):
+        if not isinstance(name, str) or not name.isidentifier() or len(name) > 64:
+            raise BadInput(f"params: {name!r} is not a parameter name (an identifier of at most 64 characters)",
+                           "params")
+        if isinstance(v, float) and not math.isfinite(v):
+            raise BadInput(f"params: {name} must be finite, got {v!r}", "params")
+        if isinstance(v, str) and (len(v) > MAX_PARAM_TEXT or not v.isprintable()):
+            raise BadInput(f"params: {name} must be printable text of at most {MAX_PARAM_TEXT} characters",
+                           "params")
+        if not isinstance(v, (bool, int, float, str)):
+            raise BadInput(f"params: {name} must be a number, true/false or text, got {type(v).__name__}", "params")
+        out.append((name, v))
+    return tuple(out)
+
+
+def check_declared(bundle: ScriptBundle, params: tuple[tuple[str, Any], ...] | None) -> None:
+    """:class:`BadInput` (``params``) when ``params`` names a parameter the bundle's entry script does not declare
+    with ``swarmdeck.devices.params(...)``, or a value that does not fit the declared default's kind (the message
+    names the declared ones); nothing to check for None."""
+    if params is None:
+        return
+    from swarmdeck.devices.experiment_params import ParamError, declared_in_source, resolve
+
+    try:
+        declared = declared_in_source(bundle.source.decode("utf-8", "replace"), bundle.entry) or {}
+        resolve(declared, dict(params))
+    except (ParamError, SyntaxError) as exc:
+        raise BadInput(f"params: {exc}", "params") from None
 
 
 def _entry(data: dict[str, Any]) -> str | None:

@@ -11,7 +11,10 @@ printable characters), ``params`` (list of ``NAME=VALUES`` strings as ``--param`
 integer, or ``N[,N...]`` / ``a:b:n`` text as ``--robots``; required, each count 1 … the fleet), ``seeds`` (runs per
 point, ≥ 1), ``seed`` (the first seed and the random design's seed, ≥ 0), ``design`` (``grid`` | ``random``),
 ``samples`` (points of a random design), ``duration`` (simulated s per run, > 0, at most the portal's maximum),
-``no_barrier`` (run raw). Unknown keys are refused. The CLI's refusals (an undeclared parameter, an empty range, too
+``no_barrier`` (run raw), ``promote`` (optional ``{"metric": NAME, "goal": "min"|"max"}``: when the sweep is done,
+its best point by that metric — :func:`swarmdeck.console.sweep.best.best_point` — is submitted as a normal arena job
+of the same researcher, with the point's parameter values and robot count; it is verified and queued like any job;
+``goal`` may be left out for a built-in metric). Unknown keys are refused. The CLI's refusals (an undeclared parameter, an empty range, too
 many points) are :class:`~.errors.BadInput` (422) with the CLI's message; a sweep of more than :data:`MAX_RUNS` runs
 is refused too.
 """
@@ -29,10 +32,11 @@ from swarmdeck.console.portal.errors import BadInput
 from swarmdeck.console.portal.submission import Limits, json_object
 from swarmdeck.console.sandbox.bundle import ScriptBundle
 from swarmdeck.console.sandbox.verification import VerificationConfig
+from swarmdeck.console.sweep.best import Objective, objective
 from swarmdeck.console.sweep.campaign import Plan, SweepResult, SweepSpec, plan, run_sweep
 from swarmdeck.console.sweep.design import DesignError, parse_axis, parse_counts
 
-REQUEST_KEYS = ("name", "params", "robots", "seeds", "seed", "design", "samples", "duration", "no_barrier")
+REQUEST_KEYS = ("name", "params", "robots", "seeds", "seed", "design", "samples", "duration", "no_barrier", "promote")
 #: the most runs one portal sweep may have (points × robot counts × seeds); the daily CPU limit applies as well
 MAX_RUNS = 2000
 #: the folder of a sweep job's outputs inside its job folder
@@ -66,12 +70,13 @@ class SweepRequest:
     samples: int | None = None
     duration: float = 30.0
     no_barrier: bool = False
+    promote: Objective | None = None  # the best point by this goes to the arena when the sweep is done
 
     def to_dict(self) -> dict[str, Any]:
         """The request as stored with the job (and shown on the API): :func:`parse_request` reads it back."""
         return {"name": self.name, "params": list(self.params), "robots": self.robots, "seeds": self.seeds,
                 "seed": self.seed, "design": self.design, "samples": self.samples, "duration": self.duration,
-                "no_barrier": self.no_barrier}
+                "no_barrier": self.no_barrier, "promote": None if self.promote is None else self.promote.to_dict()}
 
 
 def _int(data: dict[str, Any], key: str, default: int | None, least: int) -> int | None:
@@ -121,7 +126,15 @@ def parse_request(data: Any, limits: Limits, default_name: str = "sweep") -> Swe
     no_barrier = data.get("no_barrier", False)
     if not isinstance(no_barrier, bool):
         raise BadInput(f"no_barrier must be true or false, got {no_barrier!r}", "no_barrier")
-    return SweepRequest(name=name.strip(), params=tuple(params), robots=robots,
+    promote = data.get("promote")
+    if promote is not None:
+        if not isinstance(promote, dict) or set(promote) - {"metric", "goal"}:
+            raise BadInput('promote must be an object {"metric": NAME, "goal": "min" or "max"}', "promote")
+        try:
+            promote = objective(promote.get("metric"), promote.get("goal"))
+        except ValueError as exc:
+            raise BadInput(f"promote: {exc}", "promote") from None
+    return SweepRequest(name=name.strip(), params=tuple(params), robots=robots, promote=promote,
                         counts=tuple(int(c) for c in counts if c is not None),
                         seeds=int(_int(data, "seeds", 1, 1) or 1), seed=int(_int(data, "seed", 0, 0) or 0),
                         design=str(design), samples=_int(data, "samples", None, 1), duration=float(duration),

@@ -93,7 +93,7 @@ class VerificationWorkers:
             # messages name the file the researcher uploaded, not the name the portal stored it under
             names = [job.script] if job.kind == "py" else None
             report = verify([script], self.config_for(job), self.executor, cancel=cancel, entry=entry, names=names,
-                            worst_case_dir=service.job_dir(job_id), worst_case_name=WORST_CASE)
+                            worst_case_dir=service.job_dir(job_id), worst_case_name=WORST_CASE, params=job.params)
         except VerificationCancelled as exc:
             service.record_verification_cpu(job_id, exc.cpu_s)  # a cancel does not make the CPU free
             return  # cancelled: the job is already cancelled (or requeued on restart)
@@ -160,4 +160,25 @@ class VerificationWorkers:
             watcher.stop()
         service.record_verification_cpu(job_id, sum(result.cpu_s))
         self.verified += 1
-        service.finish_sweep(job_id, True, f"{len(result.rows)} runs, {result.failed} failed" if result.failed else None)
+        said = [f"{len(result.rows)} runs, {result.failed} failed"] if result.failed else []
+        if request.promote is not None:
+            said.append(self._promote(job, request, result))
+        service.finish_sweep(job_id, True, "; ".join(said) or None)
+
+    def _promote(self, job: Job, request: Any, result: Any) -> str:
+        """Submit the finished sweep's best point as an arena job (:meth:`.service.PortalService.promote`); what
+        happened, for the sweep's reason line (never raises: a sweep that ran is done whatever the promotion)."""
+        from swarmdeck.console.sweep.best import best_point
+
+        wanted = request.promote
+        try:
+            best = best_point(result.plan, result.rows, wanted)
+            if best is None:
+                return (f"best point not promoted: no point has {wanted.column} from runs that all finished")
+            robots = best.robots if best.robots is not None else job.robots
+            promoted = self.service.promote(job, best.params, robots, request.duration,
+                                            f"{request.name}: best {wanted.column} ({wanted.goal})")
+        except Exception as exc:  # noqa: BLE001 - quota, no arena, disabled account: said on the sweep, never raised
+            self.errors += 1
+            return f"best point not promoted: {exc}"
+        return f"best point ({best.describe(wanted)}) promoted to job {promoted.id}"

@@ -22,7 +22,7 @@ package version is named, and then identical frames are reported as identical, n
 from __future__ import annotations
 
 import sys
-from collections.abc import Iterable, Iterator
+from collections.abc import Iterable, Iterator, Mapping
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -33,6 +33,7 @@ from swarmdeck.console.recording.capsule import environment, environment_differe
 from swarmdeck.console.recording.capsule_zip import CapsuleError, OpenedCapsule
 from swarmdeck.console.recording.resimulate import compare_frames
 from swarmdeck.console.runtime.frame import Frame
+from swarmdeck.devices.experiment_params import params_in_environment
 
 #: Exit codes of ``swarmdeck run run.zip``: bit-identical; frames differ; identical frames in another environment.
 EXIT_IDENTICAL, EXIT_DIFFERENT, EXIT_ENVIRONMENT = 0, 1, 3
@@ -206,13 +207,15 @@ def _rerun_script(opened: OpenedCapsule, workdir: Path, sandbox: bool = False) -
         if sandbox or run.get("sandbox"):
             notes += _rerun_sandboxed(opened, recording, obstacles)
         else:
-            result = run_experiment(script, n_robots=run.get("robots"), duration=run.get("duration"),
-                                    seed=run.get("seed"), safety=bool(run.get("safety", True)), rps=run.get("rps"),
-                                    from_docks=bool(run.get("from_docks", False)), argv=list(run.get("argv") or []),
-                                    obstacles=obstacles, rps_semantics=bool(run.get("rps_semantics", False)),
-                                    rps_call_order=bool(run.get("rps_call_order", True)),
-                                    robot_model=run.get("robot_model"), rps_generation=run.get("rps_generation"),
-                                    on_create=recording.on_create, on_step=recording.on_step)
+            with params_in_environment(_params(run)):
+                result = run_experiment(script, n_robots=run.get("robots"), duration=run.get("duration"),
+                                        seed=run.get("seed"), safety=bool(run.get("safety", True)),
+                                        rps=run.get("rps"), from_docks=bool(run.get("from_docks", False)),
+                                        argv=list(run.get("argv") or []), obstacles=obstacles,
+                                        rps_semantics=bool(run.get("rps_semantics", False)),
+                                        rps_call_order=bool(run.get("rps_call_order", True)),
+                                        robot_model=run.get("robot_model"), rps_generation=run.get("rps_generation"),
+                                        on_create=recording.on_create, on_step=recording.on_step)
             if result.error_line:
                 notes.append(f"the reproduced run raised: {result.error_line}")
     except (ScriptError, ValueError) as exc:
@@ -223,6 +226,15 @@ def _rerun_script(opened: OpenedCapsule, workdir: Path, sandbox: bool = False) -
     if k >= len(recording.paths):
         raise CapsuleError(f"the reproduced run built {len(recording.paths)} Arena(s); the recording is of Arena {k + 1}")
     return recording.paths[k], notes
+
+
+def _params(run: Mapping[str, Any]) -> dict[str, Any] | None:
+    """The script's parameter values the capsule's run had (``run["params"]``; None: its defaults); CapsuleError
+    for anything but a JSON object (a tampered capsule fails its hash first; this is for a hand-made one)."""
+    values = run.get("params")
+    if values is not None and not isinstance(values, dict):
+        raise CapsuleError(f"the capsule's run params must be an object of parameter values, got {values!r}")
+    return values
 
 
 def _rerun_sandboxed(opened: OpenedCapsule, recording: Any, obstacles: Any) -> list[str]:
@@ -262,7 +274,7 @@ def _rerun_sandboxed(opened: OpenedCapsule, recording: Any, obstacles: Any) -> l
                                 rps=run.get("rps"), argv=list(run.get("argv") or []),
                                 rps_semantics=bool(run.get("rps_semantics", False)),
                                 rps_call_order=bool(run.get("rps_call_order", True)), robot_model=model,
-                                rps_generation=run.get("rps_generation"))
+                                rps_generation=run.get("rps_generation"), params=_params(run))
     except ConfinementUnavailable as exc:
         raise CapsuleError(f"cannot sandbox the capsule's script here: {exc}") from None
     return [f"the reproduced script ended: {outcome.error_line}"] if outcome.error_line else []

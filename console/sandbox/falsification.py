@@ -74,8 +74,10 @@ def skipped(reason: str, budget: int) -> dict[str, Any]:
 
 def falsify_script(bundle: ScriptBundle, config: VerificationConfig, n_robots: int, run_batch: RunBatch,
                    cancel_path: str | None = None, record_dir: str | Path | None = None,
-                   record_name: str | None = None) -> dict[str, Any]:
-    """Search ``config.falsify_budget`` raw runs of ``bundle`` (``n_robots`` robots) for the closest approach.
+                   record_name: str | None = None,
+                   params: tuple[tuple[str, Any], ...] | None = None) -> dict[str, Any]:
+    """Search ``config.falsify_budget`` raw runs of ``bundle`` (``n_robots`` robots) for the closest approach
+    (``params``: the script's parameter values in every searched run, :attr:`RunTask.params`).
 
     ``run_batch`` runs one generation's tasks (in parallel on the executor); :class:`SearchCancelled` when one
     was cancelled. With ``record_dir``, the worst case is run once more in this process and recorded to
@@ -89,7 +91,7 @@ def falsify_script(bundle: ScriptBundle, config: VerificationConfig, n_robots: i
 
     def objective(batch: NDArray[np.float64]) -> NDArray[np.float64]:
         first = len(runs)
-        tasks = [RunTask(bundle, config, first + k, "falsify", cancel_path, space.decode(z))
+        tasks = [RunTask(bundle, config, first + k, "falsify", cancel_path, space.decode(z), params=params)
                  for k, z in enumerate(batch)]
         results = run_batch(tasks)
         if any(r is None or r["ended_by"] == "cancelled" for r in results):
@@ -116,7 +118,8 @@ def falsify_script(bundle: ScriptBundle, config: VerificationConfig, n_robots: i
     if record_dir is not None:
         name = record_name or f"{Path(bundle.entry).stem}-worst-case.mcap"
         path = Path(record_dir) / name
-        replay = run_task(RunTask(bundle, config, best, "falsify", cancel_path, probe, record=str(path)))
+        replay = run_task(RunTask(bundle, config, best, "falsify", cancel_path, probe, record=str(path),
+                                  params=params))
         if replay["ended_by"] == "cancelled":
             raise SearchCancelled("the worst case's replay was cancelled")
         recorded = bool(replay.get("recorded")) and path.exists()

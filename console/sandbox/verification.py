@@ -48,7 +48,7 @@ import math
 import os
 import re
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from contextlib import nullcontext
 from dataclasses import asdict, dataclass, field, replace
 from functools import partial
@@ -520,9 +520,10 @@ def script_verdict(bundle: ScriptBundle, runs: Sequence[dict[str, Any]], cfg: Ve
 def _falsify(bundle: ScriptBundle, runs: Sequence[dict[str, Any]], entry: dict[str, Any], config: VerificationConfig,
              executor: Any, cancel_path: str, cancelled: Callable[[], bool], record_dir: str | Path | None,
              cpu: list[float], on_done: Callable[[RunTask, dict[str, Any], int], None],
-             record_name: str | None = None) -> dict[str, Any]:
+             record_name: str | None = None, params: tuple[tuple[str, Any], ...] | None = None) -> dict[str, Any]:
     """The falsifier's entry of one script (:mod:`.falsification`): skipped for a rejected script or one whose raw
-    runs never built an Arena; VerificationCancelled when cancelled meanwhile."""
+    runs never built an Arena; VerificationCancelled when cancelled meanwhile. ``params``: the runs' parameter
+    values (as :attr:`RunTask.params`)."""
     from swarmdeck.console.sandbox.falsification import SearchCancelled, falsify_script, skipped
 
     if entry["verdict"] == REJECTED:
@@ -537,7 +538,7 @@ def _falsify(bundle: ScriptBundle, runs: Sequence[dict[str, Any]], entry: dict[s
         return results
 
     try:
-        return falsify_script(bundle, config, int(n), run_batch, cancel_path, record_dir, record_name)
+        return falsify_script(bundle, config, int(n), run_batch, cancel_path, record_dir, record_name, params)
     except SearchCancelled as exc:
         raise VerificationCancelled("verification was cancelled", cpu[0]) from exc
 
@@ -598,7 +599,8 @@ def verify(scripts: Sequence[str | Path | ScriptBundle], config: VerificationCon
            executor: Any = None, *, on_progress: Callable[[Progress], None] | None = None,
            cancel: Any = None, entry: str | None = None,
            names: Sequence[str | None] | None = None,
-           worst_case_dir: str | Path | None = None, worst_case_name: str | None = None) -> VerificationReport:
+           worst_case_dir: str | Path | None = None, worst_case_name: str | None = None,
+           params: Mapping[str, Any] | None = None) -> VerificationReport:
     """Verify ``scripts`` under ``config`` on ``executor`` (default: a local process pool).
 
     ``on_progress(Progress)`` is called after each run; ``cancel`` is a
@@ -616,6 +618,9 @@ def verify(scripts: Sequence[str | Path | ScriptBundle], config: VerificationCon
     With ``config.falsify_budget`` > 0, every script not rejected is then searched for its worst case
     (:mod:`.falsification`, on the same executor); ``worst_case_dir``: where its recording is kept
     (``worst_case_name``, default ``<entry stem>-worst-case.mcap``; None: not recorded).
+
+    ``params``: the scripts' parameter values (``swarmdeck.devices.params``; None: their defaults), the same in
+    every run — raw, wrapped and searched.
     """
     from swarmdeck.console.sandbox.confinement import ConfinementUnavailable, probe
     from swarmdeck.console.sandbox.executors import LocalPoolExecutor
@@ -636,7 +641,8 @@ def verify(scripts: Sequence[str | Path | ScriptBundle], config: VerificationCon
     executor = executor if executor is not None else LocalPoolExecutor()
     runnable = [k for k in range(len(loaded)) if k not in unrunnable]
     with cancel_file(cancel, "swarmdeck-verification-cancel") as (cancel_path, cancelled):
-        tasks = [RunTask(loaded[k], config, i, mode, cancel_path)
+        values = None if params is None else tuple(sorted(dict(params).items()))
+        tasks = [RunTask(loaded[k], config, i, mode, cancel_path, params=values)
                  for k in runnable for i in range(config.runs) for mode in ("raw", "wrapped")]
 
         total = len(tasks) + config.falsify_budget * len(runnable)
@@ -670,7 +676,7 @@ def verify(scripts: Sequence[str | Path | ScriptBundle], config: VerificationCon
                 verdict = script_verdict(bundle, runs, config, shown[k])
                 if config.falsify_budget:
                     found = _falsify(bundle, runs, verdict, config, executor, cancel_path, cancelled, worst_case_dir,
-                                     searched_cpu, partial(done_searched, shown[k]), worst_case_name)
+                                     searched_cpu, partial(done_searched, shown[k]), worst_case_name, values)
                     verdict = script_verdict(bundle, runs, config, shown[k], found)
                 reports.append(verdict)
     return VerificationReport(config, reports, getattr(executor, "name", type(executor).__name__), searched_cpu[0])
