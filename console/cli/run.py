@@ -15,6 +15,7 @@ from collections.abc import Callable
 from typing import Any
 
 from swarmdeck.console.cli import UsageError
+from swarmdeck.console.cli._param_option import param_values
 from swarmdeck.core.robot_models import ROBOT_MODELS
 from swarmdeck.devices.experiment_params import params_in_environment
 
@@ -93,25 +94,6 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("script_args", nargs="*", metavar="ARGS",
                         help="arguments for the script after `--` (its sys.argv[1:], as `python SCRIPT.py ARGS`); "
                              "the script runs as __main__, so code under `if __name__ == \"__main__\":` runs")
-
-
-def param_values(specs: list[str]) -> dict[str, Any] | None:
-    """``--param NAME=VALUE`` options (``swarmdeck run``, ``swarmdeck submit``) as {name: value} (None: none given);
-    UsageError for a range or a malformed one."""
-    from swarmdeck.console.sweep.design import DesignError, parse_axis
-
-    if not specs:
-        return None
-    values: dict[str, Any] = {}
-    for spec in specs:
-        try:
-            axis = parse_axis(spec)
-        except DesignError as exc:
-            raise UsageError(str(exc)) from None
-        if len(axis.values) != 1:
-            raise UsageError(f"--param {spec!r}: one value per parameter here (`swarmdeck sweep` sweeps ranges)")
-        values[axis.name] = axis.values[0]
-    return values
 
 
 def _run_sandboxed(args: argparse.Namespace) -> int:

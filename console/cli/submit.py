@@ -10,7 +10,7 @@ from typing import Any
 
 from swarmdeck.console.cli import UsageError
 from swarmdeck.console.cli._client import add_client_arguments, client, fail, job_line
-from swarmdeck.console.cli.run import param_values
+from swarmdeck.console.cli._param_option import param_values
 from swarmdeck.console.portal.states import JobState
 
 NAME = "submit"
@@ -19,8 +19,8 @@ ORDER = 72
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    parser.epilog = ("The manifest is JSON: {\"name\", \"robots\", \"duration\", \"initial_poses\"?, \"no_barrier\"?}; "
-                     "--robots/--duration/--name/--no-barrier build or override it. Exit status: 0 submitted "
+    parser.epilog = ("The manifest is JSON: {\"name\", \"robots\", \"duration\", \"initial_poses\"?, \"no_barrier\"?, "
+                     "\"params\"?}; --robots/--duration/--name/--no-barrier/--param build or override it. Exit status: 0 submitted "
                      "(with --wait: the job is done), 1 a server error or (with --wait) the job did not end done, "
                      "2 usage.")
     parser.add_argument("script", metavar="SCRIPT", help="the experiment (.py), or a .zip with it (and manifest.json)")

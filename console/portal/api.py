@@ -92,7 +92,8 @@ UPLOAD_SCHEMA = {
             "properties": {
                 "script": {"type": "string", "format": "binary", "description": "the script (.py) or a .zip"},
                 "manifest": {"type": "string", "description": 'JSON: {"name", "robots", "duration", '
-                             '"initial_poses"?, "no_barrier"?, "entry"?} (optional for a .zip with manifest.json)'},
+                             '"initial_poses"?, "no_barrier"?, "entry"?, "arena"?, "needs"?, "params"?} '
+                             '(optional for a .zip with manifest.json)'},
                 "entry": {"type": "string", "description": "for a .zip: the .py file inside it to run "
                           "(overrides the manifest's entry)"},
             }}}},

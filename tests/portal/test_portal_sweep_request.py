@@ -113,7 +113,9 @@ def test_a_sweep_job_is_cancellable_and_its_late_end_changes_nothing(service):
 
 
 @pytest.mark.parametrize(("words", "says"), [
-    (["--param", "gain=1"], "add --sweep"),
+    (["--seeds", "3", "--robots", "2", "--duration", "1"], "add --sweep"),
+    (["--promote", "min_distance", "--robots", "2", "--duration", "1"], "add --sweep"),
+    (["--param", "gain=1,2", "--robots", "2", "--duration", "1"], "one value per parameter here"),
     (["--sweep", "--param", "gain=1", "--duration", "1"], "--robots N"),
     (["--sweep", "--robots", "2", "--param", "robots=2,4", "--duration", "1"], "give the robot counts once"),
 ])
