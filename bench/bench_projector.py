@@ -26,6 +26,7 @@ import subprocess
 import sys
 import threading
 import time
+from dataclasses import replace
 
 import harness  # first: pins BLAS/OpenMP to one thread, before numpy loads
 import msgspec
@@ -81,13 +82,14 @@ def old_page(ref: str) -> dict[str, str]:
 
 
 def run(n: int, browser, rate: float = 60.0, page_files: dict[str, str] | None = None,
-        empty: bool = False) -> dict:
+        empty: bool = False, off: tuple[str, ...] = ()) -> dict:
     b = Bounds.of(ARENAS[n])
     loop = ControlLoop(LoopConfig(n_robots=n, bounds=b, seed=1))
     frames = [loop.tick() for _ in range(FRAMES)]
     loop.close()
     settings = (ProjectorParams(density=False, cells=False, centroids=False, goals=False, halos=False, graph=False,
                                 annotations=False) if empty else ProjectorParams(safety=True))
+    settings = replace(settings, **{layer: False for layer in off})
     ser = harness.measure(lambda: msgspec.json.encode(projector_message(frames[-1], 1, settings, 0.0)), 15,
                           clock="thread")  # what the server does once per Frame
     m = 0.05 * max(b.width, b.height)
@@ -96,7 +98,7 @@ def run(n: int, browser, rate: float = 60.0, page_files: dict[str, str] | None =
     page = browser.new_page(viewport={"width": proj.width, "height": proj.height})
     for pattern, body in (page_files or {}).items():
         kind = "text/html" if pattern.endswith("/projector") else "text/javascript"
-        page.route(pattern, lambda route, body=body, kind=kind: route.fulfill(body=body, content_type=kind))
+        page.route(pattern, lambda route, *_, body=body, kind=kind: route.fulfill(body=body, content_type=kind))
     page.goto(srv.url)
     page.wait_for_function("window.swarmdeckProjector && window.swarmdeckProjector.connected", timeout=30000)
     stop = threading.Event()

@@ -1,7 +1,8 @@
 // The projector page: the arena drawn straight in projector pixels, every vertex warped here through the floor →
 // projector homography H (a homography maps lines to lines, so segments and polygons stay exact; a circle maps to
-// a conic, drawn exactly as the ellipse it is: one arc under that ellipse's affine transform). Only the small
-// density canvas is warped by the compositor (a CSS matrix3d on its few thousand pixels). Fed by the console (a
+// a conic, drawn exactly as the ellipse it is: one arc under that ellipse's affine transform); the density is
+// resampled through H every STEP projector px (bilinear, only when it changed) and drawn smoothed up, so the
+// compositor warps nothing (a perspective-transformed layer cost it ≈ 10 ms a frame). Fed by the console (a
 // long poll of /projector/next, one request at a time: the config — H, the projector's size, the layers,
 // brightness and blackout — and the newest Frame's picture, swarmdeck.console.projector.message). Messages are
 // only stored; one requestAnimationFrame draws the newest, so a slow page skips frames and never lags. If drawing
@@ -12,7 +13,7 @@
 (() => {
   const floor = document.getElementById("floor");
   const warp = document.getElementById("warp");
-  const heatCanvas = document.getElementById("heat");
+  const heatCanvas = document.createElement("canvas");  // the density resampled in projector px / STEP (offscreen)
   const hctx = heatCanvas.getContext("2d");
   const notice = document.getElementById("notice");
   const ctx = floor.getContext("2d", { desynchronized: true });
@@ -37,7 +38,9 @@
     const w = g6 * x + g7 * y + g8;
     px = (g0 * x + g1 * y + g2) / w; py = (g3 * x + g4 * y + g5) / w;
   }
-  let heatImg = null, heatRgb = null, heatShown = false;
+  const STEP = 4;                 // the density is resampled every STEP projector px, then drawn smoothed up
+  let heatImg = null, heatRgb = null, heatKey = "", heatSrc = null;
+  let heatIdx = null, heatFx = null, heatFy = null;
 
   function fitNotice() {
     notice.width = window.innerWidth; notice.height = window.innerHeight;
@@ -61,10 +64,6 @@
     const v = [A, c * h - b * i, b * f - c * e, B, a * i - c * g, c * d - a * f, C, b * g - a * h, a * e - b * d];
     for (let k = 0; k < 9; k += 1) Gi[k] = v[k] / det;
   }
-  function matrix3d(M) {
-    return `matrix3d(${M[0][0]},${M[1][0]},0,${M[2][0]},${M[0][1]},${M[1][1]},0,${M[2][1]},` +
-      `0,0,1,0,${M[0][2]},${M[1][2]},0,${M[2][2]})`;
-  }
 
   function applyConfig(c) {
     config = c;
@@ -85,26 +84,52 @@
     P(cx + e, cy); const bx = px - ax, by = py - ay;
     P(cx, cy + e); const dx = px - ax, dy = py - ay;
     S = Math.sqrt(Math.abs(bx * dy - by * dx)) / e;
-    heatRgb = null;  // the density canvas's warp is set when its size is known
+    heatKey = "";  // the density's lookup is rebuilt for the new homography
     warp.style.display = c.settings.blackout ? "none" : "block";
     say("");
     if (last) pending = last;
   }
 
-  function warpHeat(w, h, bounds) {  // the density canvas (w × h CSS px, edges) → metres → projector px → CSS px
-    const [x0, x1, y0, y1] = bounds, dpr = window.devicePixelRatio || 1;
-    const A = [[(x1 - x0) / w, 0, x0], [0, -(y1 - y0) / h, y1], [0, 0, 1]];
-    const T = [[1 / dpr, 0, 0.5 / dpr], [0, 1 / dpr, 0.5 / dpr], [0, 0, 1]];
-    heatCanvas.style.width = w + "px"; heatCanvas.style.height = h + "px";
-    heatCanvas.style.transform = matrix3d(mul(T, mul(config.H, A)));
+  // The density's lookup: for every STEP × STEP cell of the canvas, the heat map's pixel (top-left of the four
+  // it blends, −1 outside the arena) and the bilinear weights, through Gi. Built once per homography and size.
+  function heatLookup(w, h, bounds) {
+    const W = Math.ceil(floor.width / STEP), Hh = Math.ceil(floor.height / STEP), n = W * Hh;
+    const [x0, x1, y0, y1] = bounds, sx = w / (x1 - x0), sy = h / (y1 - y0);
+    heatIdx = new Int32Array(n); heatFx = new Float32Array(n); heatFy = new Float32Array(n);
+    for (let j = 0, k = 0; j < Hh; j += 1) {
+      for (let i = 0; i < W; i += 1, k += 1) {
+        const X = (i + 0.5) * STEP, Y = (j + 0.5) * STEP, q = Gi[6] * X + Gi[7] * Y + Gi[8];
+        const x = (Gi[0] * X + Gi[1] * Y + Gi[2]) / q, y = (Gi[3] * X + Gi[4] * Y + Gi[5]) / q;
+        if (!(x >= x0 && x <= x1 && y >= y0 && y <= y1)) { heatIdx[k] = -1; continue; }
+        const u = Math.min(Math.max((x - x0) * sx - 0.5, 0), w - 1), v = Math.min(Math.max((y1 - y) * sy - 0.5, 0), h - 1);
+        const iu = Math.max(0, Math.min(Math.floor(u), w - 2)), iv = Math.max(0, Math.min(Math.floor(v), h - 2));
+        heatIdx[k] = iv * w + iu; heatFx[k] = u - iu; heatFy[k] = v - iv;
+      }
+    }
+    heatCanvas.width = W; heatCanvas.height = Hh;
+    heatImg = hctx.createImageData(W, Hh);
+    heatSrc = new Uint8Array(3 * w * h);
+    heatRgb = null;
+  }
+
+  function heatPixels(d) {  // the density's new pixels through the lookup (bilinear), into the offscreen canvas
+    const raw = atob(d.rgb), src = heatSrc, out = heatImg.data, n = heatIdx.length, row = 3 * d.w;
+    for (let j = 0; j < src.length; j += 1) src[j] = raw.charCodeAt(j);
+    for (let k = 0, o = 0; k < n; k += 1, o += 4) {
+      const i = heatIdx[k];
+      if (i < 0) { out[o + 3] = 0; continue; }
+      const a = heatFx[k], b = heatFy[k], s = 3 * i;
+      const w00 = (1 - a) * (1 - b), w10 = a * (1 - b), w01 = (1 - a) * b, w11 = a * b;
+      out[o] = w00 * src[s] + w10 * src[s + 3] + w01 * src[s + row] + w11 * src[s + row + 3];
+      out[o + 1] = w00 * src[s + 1] + w10 * src[s + 4] + w01 * src[s + row + 1] + w11 * src[s + row + 4];
+      out[o + 2] = w00 * src[s + 2] + w10 * src[s + 5] + w01 * src[s + row + 2] + w11 * src[s + row + 5];
+      out[o + 3] = 255;
+    }
+    hctx.putImageData(heatImg, 0, 0);
   }
 
   function on(layer) {
     return config && config.settings[layer] && !st.dropped.includes(layer);
-  }
-
-  function showHeat(show) {
-    if (show !== heatShown) { heatCanvas.style.display = show ? "block" : "none"; heatShown = show; }
   }
 
   // A circle on the floor (centre x, y, radius r m) added to the current path as the ellipse H makes of it: the
@@ -141,25 +166,13 @@
     ctx.setTransform(1, 0, 0, 1, 0, 0);
     ctx.clearRect(0, 0, floor.width, floor.height);
     if (config.settings.blackout) { st.layersDrawn = []; return performance.now() - t0; }
-    if (m.density && config.settings.density) {  // raw RGB, a few thousand pixels: the compositor warps it up
-      const d = m.density;
-      if (heatCanvas.width !== d.w || heatCanvas.height !== d.h || !heatImg) {
-        heatCanvas.width = d.w; heatCanvas.height = d.h;
-        heatImg = hctx.createImageData(d.w, d.h); heatImg.data.fill(255); heatRgb = null;
-      }
-      if (heatRgb === null) warpHeat(d.w, d.h, m.bounds);
-      if (d.rgb !== heatRgb) {  // only when the density changed
-        const raw = atob(d.rgb), n = d.w * d.h, px4 = heatImg.data;
-        for (let i = 0, j = 0; i < n; i += 1, j += 3) {
-          px4[4 * i] = raw.charCodeAt(j); px4[4 * i + 1] = raw.charCodeAt(j + 1); px4[4 * i + 2] = raw.charCodeAt(j + 2);
-        }
-        hctx.putImageData(heatImg, 0, 0);
-        heatRgb = d.rgb;
-      }
-      showHeat(true);
+    if (m.density && config.settings.density && m.density.w > 1 && m.density.h > 1) {
+      const d = m.density, key = `${d.w}x${d.h}:${m.bounds}`;
+      if (key !== heatKey) { heatLookup(d.w, d.h, m.bounds); heatKey = key; }
+      if (d.rgb !== heatRgb) { heatPixels(d); heatRgb = d.rgb; }  // only when the density changed
+      ctx.imageSmoothingEnabled = true;
+      ctx.drawImage(heatCanvas, 0, 0, heatCanvas.width * STEP, heatCanvas.height * STEP);
       drawnLayers.push("density");
-    } else {
-      showHeat(false);
     }
     if (on("cells") && m.edges.length) {
       ctx.strokeStyle = P_.voronoi; ctx.lineWidth = LINE_M * S;
