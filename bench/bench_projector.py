@@ -15,9 +15,10 @@ core could give from it.
 let the compositor warp the whole 1280 × 800 layer by a CSS matrix3d) serves that commit's ``projector.html`` and
 ``projector.js`` (``git show``, through Playwright's request routing: same server, same Frames, same browser) beside
 the current page (every vertex warped in JavaScript, only the small density canvas warped by the compositor);
-``--before none`` measures the current page only. ``--empty`` adds a row with every layer off (the page's own cost).
+``--before none`` measures the current page only. ``--empty`` adds a row with every layer off (the page's own cost);
+``--rounds R`` alternates before and after R times and prints the median CPU per frame (a loaded machine).
 
-Rerun: ``.venv/bin/python bench/bench_projector.py [--before REF] [--empty] [N ...]`` (≈ 2 min).
+Rerun: ``.venv/bin/python bench/bench_projector.py [--before REF] [--empty] [--rounds R] [N ...]`` (≈ 2 min).
 """
 from __future__ import annotations
 
@@ -138,7 +139,11 @@ def run(n: int, browser, rate: float = 60.0, page_files: dict[str, str] | None =
 def main(argv: list[str]) -> int:
     from playwright.sync_api import sync_playwright
 
-    before, empty = "a6d5fe5", False
+    before, empty, rounds = "a6d5fe5", False, 1
+    if "--rounds" in argv:  # before and after alternated R times (a loaded machine: compare medians)
+        k = argv.index("--rounds")
+        rounds = int(argv[k + 1])
+        argv = argv[:k] + argv[k + 2:]
     if "--before" in argv:
         k = argv.index("--before")
         before = argv[k + 1]
@@ -158,14 +163,20 @@ def main(argv: list[str]) -> int:
         browser = pw.chromium.launch(executable_path=CHROMIUM, args=["--no-sandbox"])
         try:
             cases = [(n, False) for n in ns] + ([(ns[0], True)] if empty else [])
-            for (n, blank), (name, files) in itertools.product(cases, pages):
+            cpu: dict[tuple[str, int], list[float]] = {}
+            for (n, blank), _, (name, files) in itertools.product(cases, range(rounds), pages):
                 r = run(n, browser, page_files=files, empty=blank)
                 label = name + (" (every layer off)" if blank else "")
+                cpu.setdefault((label, n), []).append(r["browser_cpu"] + r["server_cpu"])
                 print(f"| {label} | {r['n']} | {r['fps']:.1f} | {r['lat_med']:.1f} ({r['lat_p95']:.1f}) | "
                       f"{r['draw_med']:.2f} ({r['draw_max']:.1f}) | {r['ser']:.2f} | "
                       f"{r['browser_cpu']:.1f} + {r['server_cpu']:.1f} | "
                       f"{1000.0 / (r['browser_cpu'] + r['server_cpu']):.0f} | {r['dropped']} | "
                       f"{r['sent']} / {r['skipped']} |", flush=True)
+            if rounds > 1:
+                for (label, n), v in cpu.items():
+                    print(f"{label}, N = {n}: CPU ms per frame over {len(v)} rounds, median {np.median(v):.1f} "
+                          f"(min {min(v):.1f}) → {1000.0 / np.median(v):.0f} frames/s on one core")
         finally:
             browser.close()
     return 0

@@ -16,7 +16,7 @@
   const heatCanvas = document.createElement("canvas");  // the density resampled in projector px / STEP (offscreen)
   const hctx = heatCanvas.getContext("2d");
   const notice = document.getElementById("notice");
-  const ctx = floor.getContext("2d", { desynchronized: true });
+  const ctx = floor.getContext("2d", { alpha: false });  // opaque: black where nothing is drawn
   const nctx = notice.getContext("2d");
   const BUDGET_MS = 20;           // a frame's drawing budget (30 frames/s with room for the browser)
   const DROP_ORDER = ["safety", "halos", "graph", "centroids", "annotations", "cells", "goals"];
@@ -164,7 +164,8 @@
     const P_ = m.palette;
     const drawnLayers = [];
     ctx.setTransform(1, 0, 0, 1, 0, 0);
-    ctx.clearRect(0, 0, floor.width, floor.height);
+    ctx.fillStyle = "#000000";
+    ctx.fillRect(0, 0, floor.width, floor.height);
     if (config.settings.blackout) { st.layersDrawn = []; return performance.now() - t0; }
     if (m.density && config.settings.density && m.density.w > 1 && m.density.h > 1) {
       const d = m.density, key = `${d.w}x${d.h}:${m.bounds}`;
