@@ -21,17 +21,20 @@
   const BUDGET_MS = 20;           // a frame's drawing budget (30 frames/s with room for the browser)
   const DROP_ORDER = ["safety", "halos", "graph", "centroids", "annotations", "cells", "goals"];
   // Sizes on the floor, m (the lines' widths are scaled to projector px at the arena's centre).
+  const MARGIN_M = 0.3;           // how far round the arena the canvas reaches (halos, look-ahead discs), m
   const LINE_M = 0.01, GRAPH_M = 0.0075, HALO_LINE_M = 0.015, CENTROID_M = 0.02, GOAL_M = 0.03, ESTOP_M = 0.06;
   const st = (window.swarmdeckProjector = {
     frames: 0, seq: null, tick: null, config: null, drawn: [], latency: [], drawMs: [], dropped: [],
     message: "", connected: false, lastDraw: null, layersDrawn: [], annotationsDrawn: 0,
     // floor m → projector px, as this page computes it (tests compare it with the homography)
-    project: (x, y) => { P(x, y); return [px - 0.5, py - 0.5]; },
+    project: (x, y) => { P(x, y); return [px - 0.5 + offL, py - 0.5 + offT]; },
   });
   let config = null, pending = null, last = null, ema = 0;
-  // G = C·H: floor m → canvas px (pixel edges; projector pixel centre i is at canvas i + 0.5); Gi its inverse
+  // G = C·H: floor m → canvas px (pixel edges; projector pixel centre i is at canvas i + 0.5 − the canvas's
+  // offset on the screen); Gi its inverse
   let g0 = 1, g1 = 0, g2 = 0, g3 = 0, g4 = 1, g5 = 0, g6 = 0, g7 = 0, g8 = 1;
   const Gi = new Float64Array(9);
+  let offL = 0, offT = 0;        // the canvas's place on the screen, projector px
   let S = 1;                      // projector px per floor m at the arena's centre (line widths, text)
   let px = 0, py = 0;             // P's answer (no allocation per vertex)
   function P(x, y) {
@@ -68,18 +71,35 @@
   function applyConfig(c) {
     config = c;
     st.config = c;
-    const dpr = window.devicePixelRatio || 1;
-    floor.width = Math.round(window.innerWidth * dpr); floor.height = Math.round(window.innerHeight * dpr);
+    const dpr = window.devicePixelRatio || 1, screenW = Math.round(window.innerWidth * dpr);
+    const screenH = Math.round(window.innerHeight * dpr);
+    floor.width = screenW; floor.height = screenH;
     warp.style.opacity = String(c.settings.opacity);
     if (!c.H) {
       warp.style.display = "none";
       say("no homography — run swarmdeck calibrate projector");
       return;
     }
-    const G = mul([[1, 0, 0.5], [0, 1, 0.5], [0, 0, 1]], c.H);
+    // The canvas covers only the arena (and MARGIN_M round it) on the screen: less for the browser to composite.
+    const [x0, x1, y0, y1] = c.bounds, M = MARGIN_M;
+    const corners = [[x0 - M, y0 - M], [x1 + M, y0 - M], [x1 + M, y1 + M], [x0 - M, y1 + M]];
+    const w = corners.map(([x, y]) => c.H[2][0] * x + c.H[2][1] * y + c.H[2][2]);
+    let left = 0, top = 0, right = screenW, bottom = screenH;
+    if (w.every((v) => v > 0)) {
+      const cxs = corners.map(([x, y], k) => (c.H[0][0] * x + c.H[0][1] * y + c.H[0][2]) / w[k] + 0.5);
+      const cys = corners.map(([x, y], k) => (c.H[1][0] * x + c.H[1][1] * y + c.H[1][2]) / w[k] + 0.5);
+      left = Math.max(0, Math.floor(Math.min(...cxs))); right = Math.min(screenW, Math.ceil(Math.max(...cxs)));
+      top = Math.max(0, Math.floor(Math.min(...cys))); bottom = Math.min(screenH, Math.ceil(Math.max(...cys)));
+      if (right - left < 2 || bottom - top < 2) { left = 0; top = 0; right = screenW; bottom = screenH; }
+    }
+    offL = left; offT = top;
+    floor.width = right - left; floor.height = bottom - top;
+    floor.style.left = left / dpr + "px"; floor.style.top = top / dpr + "px";
+    floor.style.width = floor.width / dpr + "px"; floor.style.height = floor.height / dpr + "px";
+    const G = mul([[1, 0, 0.5 - left], [0, 1, 0.5 - top], [0, 0, 1]], c.H);
     [[g0, g1, g2], [g3, g4, g5], [g6, g7, g8]] = G;
     inverse(G);
-    const [x0, x1, y0, y1] = c.bounds, cx = (x0 + x1) / 2, cy = (y0 + y1) / 2, e = 1e-3;
+    const cx = (x0 + x1) / 2, cy = (y0 + y1) / 2, e = 1e-3;
     P(cx, cy); const ax = px, ay = py;
     P(cx + e, cy); const bx = px - ax, by = py - ay;
     P(cx, cy + e); const dx = px - ax, dy = py - ay;
