@@ -269,7 +269,7 @@
 
   // What the experiment drew (console.picture.annotations.annotations_json, as the portal's live view draws it):
   // kinds 0 point, 1 polyline, 2 circle, 3 polygon, 4 text; vertices and sizes (radius, line width, text height)
-  // in metres, colours given. Text is drawn under the homography's local affine map at its anchor (1 unit = 1 cm).
+  // in metres, colours given. Text is drawn under the homography's local affine map at its anchor (1 unit = 1 mm).
   function drawAnnotations(a) {
     ctx.save();
     ctx.lineCap = "round"; ctx.lineJoin = "round"; ctx.textAlign = "center"; ctx.textBaseline = "middle";
@@ -294,8 +294,8 @@
         P(x, y); const ax = px, ay = py;
         P(x + e, y); const bx = (px - ax) / e, by = (py - ay) / e;
         P(x, y + e); const dx = (px - ax) / e, dy = (py - ay) / e;
-        ctx.setTransform(0.01 * bx, 0.01 * by, -0.01 * dx, -0.01 * dy, ax, ay);
-        ctx.font = `${Math.max(1, Math.round(size * 100))}px system-ui, sans-serif`;
+        ctx.setTransform(0.001 * bx, 0.001 * by, -0.001 * dx, -0.001 * dy, ax, ay);
+        ctx.font = `${Math.max(1, Math.round(size * 1000))}px system-ui, sans-serif`;
         ctx.fillText(a.texts[i], 0, 0);
         ctx.setTransform(1, 0, 0, 1, 0, 0);
       }
