@@ -120,9 +120,10 @@ class BarrierConfig:
         polish), and clarabel's polish (at most 4 of them); beyond it the warm paths go straight to
         clarabel cold and the polish keeps clarabel's answer (the active set's inner Lawson–Hanson steps have no other
         bound on their work). None is unlimited.
-    warm_share: with ``active_set_max_solves`` set, each active-set stage of one call may also spend at
-        most this fraction of the iterations (KKT factorisations) clarabel cold took the last time this
-        filter ran it (at least 1; before any cold solve only ``active_set_max_solves`` applies), so a
+    warm_share: with ``active_set_max_solves`` set, once last tick held more than ``warm_max_rows``
+        active rows (below that the Gram matrices are small and dense, and cheap), each active-set
+        stage of one call may also spend at most this fraction of the iterations (KKT factorisations)
+        clarabel cold took the last time this filter ran it (at least 1), so a
         tick whose warm paths fail costs at most about (1 + 2·share·c) clarabel solves, c the cost of a
         Gram factorisation over a clarabel iteration (≈ 0.6 at N = 1000). Stages that spent their
         cap and failed are skipped on the next 1, 3, 7, … 31 calls (doubling per consecutive failure,

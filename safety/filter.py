@@ -225,10 +225,12 @@ class SafetyFilter:
 
     def _warm_cap(self) -> int | None:
         """Factorisations each active-set stage of this call may spend (``active_set_max_solves``,
-        and at most ``warm_share`` of clarabel's last cold iteration count, at least 1)."""
+        and, when last tick held more than ``warm_max_rows`` active rows, at most ``warm_share`` of
+        clarabel's last cold iteration count, at least 1)."""
         cfg = self.config
         cap = cfg.active_set_max_solves
-        if cap is None or cfg.warm_share is None or not self._cold_iters:
+        if (cap is None or cfg.warm_share is None or not self._cold_iters
+                or self._warm_keys.size <= cfg.warm_max_rows):
             return cap
         return min(cap, max(1, int(cfg.warm_share * self._cold_iters)))
 

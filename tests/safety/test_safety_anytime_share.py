@@ -1,7 +1,7 @@
 """Anytime barrier (issue 27 item 1): a failing capped stage costs a bounded share of clarabel.
 
-``BarrierConfig.warm_share`` (on in the pipelines): each active-set stage of a call (the warm paths,
-clarabel's polish) may spend at most that fraction of the iterations clarabel cold took last time,
+``BarrierConfig.warm_share`` (on in the pipelines): beyond ``warm_max_rows`` active rows each
+active-set stage of a call (the warm paths, clarabel's polish) may spend at most that fraction of the iterations clarabel cold took last time,
 and a stage that spent its cap and failed is skipped on the next 1, 3, 7, … calls. Counted, never
 timed, so the pattern is the same on every run. On a pinned jammed crossing (N = 150 after 30
 ticks) the spies below call through to the real solvers and only record what they were asked.
@@ -67,7 +67,8 @@ def test_a_failing_warm_stage_backs_off_1_3_7_ticks(monkeypatch, jammed) -> None
 def test_each_stage_spends_at_most_its_share_of_clarabels_iterations(monkeypatch, jammed) -> None:
     cfg, x, goals = jammed
     share = 0.25
-    shared = dataclasses.replace(cfg, mode="anytime", active_set_max_solves=12, warm_share=share)
+    # the share applies beyond warm_max_rows active rows (N = 150 holds ≈ 150-250 of them)
+    shared = dataclasses.replace(cfg, mode="anytime", active_set_max_solves=12, warm_share=share, warm_max_rows=20)
     log: list[tuple[str, int | None, int]] = []  # (solver, cap asked, work spent)
     real_as, real_qp = filter_module.solve_active_set, filter_module.solve_qp
 
