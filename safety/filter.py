@@ -144,12 +144,15 @@ class _Budget:
 
     total: factorisations (active-set Gram solves + clarabel iterations) the centralised QP may
     spend in this call (None: unlimited); warm: those the closed-loop warm paths may spend before
-    the filter goes to clarabel cold, and clarabel's polish on its own (None: unlimited); deadline: ``time.perf_counter()`` value
-    (None: none). ``spent`` counts everything, ``warm_spent`` the warm paths' share.
+    the filter goes to clarabel cold (None: unlimited); deadline: ``time.perf_counter()`` value
+    (None: none); polish: those clarabel's polish may spend on its own (None: ``warm``). ``spent``
+    counts everything, ``warm_spent`` the warm paths' share.
     """
 
-    def __init__(self, total: int | None, warm: int | None, deadline: float | None) -> None:
+    def __init__(self, total: int | None, warm: int | None, deadline: float | None,
+                 polish: int | None = None) -> None:
         self.total, self.warm, self.deadline = total, warm, deadline
+        self.polish = warm if polish is None else polish
         self.spent = 0
         self.warm_spent = 0
 
@@ -224,9 +227,9 @@ class SafetyFilter:
         return 1 if self.config.warm_share is None else 2 ** min(fails, 5) - 1
 
     def _warm_cap(self) -> int | None:
-        """Factorisations each active-set stage of this call may spend (``active_set_max_solves``,
-        and, when last tick held more than ``warm_max_rows`` active rows, at most ``warm_share`` of
-        clarabel's last cold iteration count, at least 1)."""
+        """Factorisations the warm paths of this call may spend (``active_set_max_solves``, and, when
+        last tick held more than ``warm_max_rows`` active rows, at most ``warm_share`` of clarabel's
+        last cold iteration count, at least 1). Clarabel's polish keeps its own allowance."""
         cfg = self.config
         cap = cfg.active_set_max_solves
         if (cap is None or cfg.warm_share is None or not self._cold_iters
@@ -315,7 +318,8 @@ class SafetyFilter:
             return self._solve_distributed(P, U, O, rows, max_speed, t0)
         anytime = cfg.anytime_for(n)
         deadline = t0 + cfg.time_budget_s if anytime and cfg.time_budget_s is not None else None
-        budget = _Budget(cfg.work_budget if anytime else None, self._warm_cap(), deadline)
+        budget = _Budget(cfg.work_budget if anytime else None, self._warm_cap(), deadline,
+                         cfg.active_set_max_solves)
         unsafe = (rows.h < 0) & (rows.kind != LIMIT)
         n_unsafe = int(unsafe.sum())
         recovering = cfg.recovery and n_unsafe > 0
@@ -392,8 +396,8 @@ class SafetyFilter:
         """``solve_active_set`` within what ``budget`` has left (the warm cap too when ``warm``; for
         clarabel's ``polish`` its own allowance, at most ``_POLISH_SOLVES``, under an active-set cap), tallied."""
         left = budget.left(warm)
-        if polish and budget.warm is not None:
-            polish_cap = min(budget.warm, _POLISH_SOLVES)
+        if polish and budget.polish is not None:
+            polish_cap = min(budget.polish, _POLISH_SOLVES)
             left = polish_cap if left is None else min(left, polish_cap)
         res = solve_active_set(rows, U, max_speed, warm_rows, max_iter, multipliers=multipliers,
                                max_solves=left, deadline=budget.deadline)
