@@ -120,8 +120,8 @@ class BarrierConfig:
         polish), and clarabel's polish (at most 4 of them); beyond it the warm paths go straight to
         clarabel cold and the polish keeps clarabel's answer (the active set's inner Lawson–Hanson steps have no other
         bound on their work). None is unlimited.
-    warm_share: with ``active_set_max_solves`` set, once last tick held more than ``warm_max_rows``
-        active rows (below that the Gram matrices are small and dense, and cheap), the warm paths of
+    warm_share: with ``active_set_max_solves`` set, once last tick held more than 200 active
+        rows (below that the Gram matrices are small and dense, and cheap), the warm paths of
         one call may also spend at most this fraction of the iterations (KKT factorisations) clarabel
         cold took the last time this filter ran it (at least 1), so a tick whose warm paths fail costs
         about (1 + share·c) clarabel solves plus the polish, c the cost of a Gram factorisation over a

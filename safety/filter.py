@@ -65,6 +65,11 @@ _CLARABEL_FEAS = 1e-7  # m/s: an interior-point answer violating a row by more t
 # certifies in one or two iterations or not at all (bench_barrier_anytime: a capped polish that failed
 # spent its whole cap on the worst ticks)
 _POLISH_SOLVES = 4
+# BarrierConfig.warm_share applies once last tick held more than this many active rows: on the dense
+# crossing N = 100 holds 140-180 (small dense Gram matrices; a capped failure costs < ½ clarabel cold)
+# and N = 200 holds 270-360, where one Gram factorisation costs about one clarabel iteration
+# (bench_barrier_anytime; 300 left N = 200's first failing ticks uncapped at 1.8× clarabel's worst)
+_SHARE_MIN_ROWS = 200
 _KIND_NAMES = {PAIR: "pair", WALL: "wall", OBSTACLE: "obstacle", LIMIT: "limit", SEGMENT: "segment"}
 
 
@@ -228,12 +233,12 @@ class SafetyFilter:
 
     def _warm_cap(self) -> int | None:
         """Factorisations the warm paths of this call may spend (``active_set_max_solves``, and, when
-        last tick held more than ``warm_max_rows`` active rows, at most ``warm_share`` of clarabel's
+        last tick held more than ``_SHARE_MIN_ROWS`` active rows, at most ``warm_share`` of clarabel's
         last cold iteration count, at least 1). Clarabel's polish keeps its own allowance."""
         cfg = self.config
         cap = cfg.active_set_max_solves
         if (cap is None or cfg.warm_share is None or not self._cold_iters
-                or self._warm_keys.size <= cfg.warm_max_rows):
+                or self._warm_keys.size <= _SHARE_MIN_ROWS):
             return cap
         return min(cap, max(1, int(cfg.warm_share * self._cold_iters)))
 
