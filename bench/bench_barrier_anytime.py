@@ -12,8 +12,11 @@ same process, so ratios hold under the machine's load):
 
 * *centralised*: today's warm-started exact filter (``mode="centralised"``, no caps);
 * *warm-capped*: the same with ``active_set_max_solves`` (the warm paths stop and go to clarabel cold);
-* *anytime*: ``mode="anytime"`` with the pipelines' caps (``safety.config.pipeline_defaults``:
-  clarabel cold after the active-set cap, the distributed floor when the work budget runs out);
+* *anytime, fixed caps*: ``mode="anytime"`` with the pipelines' caps before ``warm_share`` (clarabel
+  cold after 12 active-set factorisations, the distributed floor after 120);
+* *anytime*: ``mode="anytime"`` with the pipelines' settings (``safety.config.pipeline_defaults``:
+  the same caps, each active-set stage also capped at ``warm_share`` of clarabel's last cold
+  iteration count and skipped for 1, 3, 7 … 31 ticks after a capped failure);
 * *anytime, floor at the cap*: the same with ``work_budget`` equal to the active-set cap, so the
   floor answers as soon as the warm paths give up (the alternative to clarabel cold);
 * *clarabel*: a fresh ``solver="clarabel"`` filter (cold interior point on the same rows);
@@ -48,13 +51,14 @@ def timed(fn, *args):
     return time.process_time() - t, out
 
 
-def run(n: int, ticks: int, uncapped: bool = True) -> dict:
+def run(n: int, ticks: int, uncapped: bool = True, only: list[str] | None = None) -> dict:
     cfg, x, goals = crossing_scene(n, np.random.default_rng(0))
     filters = {
         "centralised": SafetyFilter(dataclasses.replace(cfg, mode="centralised")),
         "warm-capped": SafetyFilter(dataclasses.replace(cfg, mode="centralised", active_set_max_solves=WARM_CAP)),
-        "anytime": SafetyFilter(dataclasses.replace(cfg, mode="anytime", active_set_max_solves=WARM_CAP,
-                                                    work_budget=BUDGET)),
+        "anytime, fixed caps": SafetyFilter(dataclasses.replace(cfg, mode="anytime", active_set_max_solves=WARM_CAP,
+                                                                work_budget=BUDGET)),
+        "anytime": SafetyFilter(dataclasses.replace(cfg, **{**DEFAULTS, "mode": "anytime"})),
         "anytime, floor at the cap": SafetyFilter(dataclasses.replace(cfg, mode="anytime", active_set_max_solves=WARM_CAP,
                                                                       work_budget=WARM_CAP)),
         "distributed": SafetyFilter(dataclasses.replace(cfg, mode="distributed")),
@@ -63,7 +67,9 @@ def run(n: int, ticks: int, uncapped: bool = True) -> dict:
     }
     if not uncapped:  # --no-uncapped: the optimum for the cost ratios from the warm-capped filter
         del filters["centralised"]
-    reference = "centralised" if uncapped else "warm-capped"
+    if only:  # --only: these filters (the cost ratios over the first exact one kept)
+        filters = {k: v for k, v in filters.items() if k in only or k == "anytime"}
+    reference = next(k for k in ("centralised", "warm-capped", "anytime, fixed caps", "anytime") if k in filters)
     clar_cfg = dataclasses.replace(cfg, solver="clarabel")
     times = collections.defaultdict(list)
     cost = collections.defaultdict(list)
@@ -80,7 +86,8 @@ def run(n: int, ticks: int, uncapped: bool = True) -> dict:
         assert d.ok, d.status
         times["clarabel"].append(t)
         for name in ("anytime", "anytime, floor at the cap"):
-            answers[name][out[name][1].answer] += 1
+            if name in out:
+                answers[name][out[name][1].answer] += 1
         c_opt = float(np.sum((out[reference][0] - nom) ** 2))
         if c_opt > 1e-12:
             for name, (u, _) in out.items():
@@ -95,12 +102,14 @@ def main() -> None:
     ap.add_argument("--ticks", type=int, default=120)
     ap.add_argument("--no-uncapped", action="store_true",
                     help="leave out the uncapped centralised filter (seconds per tick at N = 1000)")
+    ap.add_argument("--only", nargs="+", default=None,
+                    help="only these filters (anytime and clarabel are always run), e.g. --only distributed")
     args = ap.parse_args()
-    print(f"{harness.machine()}; warm cap {WARM_CAP}, budget {BUDGET}")
+    print(f"{harness.machine()}; warm cap {WARM_CAP}, budget {BUDGET}, warm share {DEFAULTS['warm_share']}")
     print("| N | filter | median ms | worst ms | worst / clarabel's worst | mean cost / optimum | worst cost / optimum |")
     print("| --- | --- | --- | --- | --- | --- | --- |")
     for n in args.n:
-        r = run(n, args.ticks, not args.no_uncapped)
+        r = run(n, args.ticks, not args.no_uncapped, args.only)
         worst_c = max(r["times"]["clarabel"])
         for name, v in r["times"].items():
             c = r["cost"].get(name, [])

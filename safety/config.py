@@ -47,10 +47,11 @@ def pipeline_defaults() -> dict[str, object]:
     """The barrier settings the pipelines default to (``Arena``, ``swarmdeck run``, the console,
     verification and the learning environments, through ``devices.pipeline.barrier_filter``):
     ``mode="auto"`` (distributed above ``distributed_above`` robots, anytime at or below) with a
-    bounded amount of work per call — at most 12 factorisations per active-set stage, then clarabel
-    cold, and 120 in all, then the distributed floor (bench/RESULTS.md, "barrier: anytime").
+    bounded amount of work per call — at most 12 factorisations per active-set stage, the warm
+    paths at most a tenth of clarabel's last cold iteration count (``warm_share``), then clarabel cold, and 120
+    in all, then the distributed floor (bench/RESULTS.md, "barrier: anytime").
     A fresh dict; a ``BarrierConfig()`` built directly keeps ``mode="centralised"`` and no caps."""
-    return {"mode": "auto", "work_budget": 120, "active_set_max_solves": 12}
+    return {"mode": "auto", "work_budget": 120, "active_set_max_solves": 12, "warm_share": 0.1}
 
 
 @dataclass(frozen=True)
@@ -119,6 +120,16 @@ class BarrierConfig:
         polish), and clarabel's polish (at most 4 of them); beyond it the warm paths go straight to
         clarabel cold and the polish keeps clarabel's answer (the active set's inner Lawson–Hanson steps have no other
         bound on their work). None is unlimited.
+    warm_share: with ``active_set_max_solves`` set, once last tick held more than 200 active
+        rows (below that the Gram matrices are small and dense, and cheap), the warm paths of
+        one call may also spend at most this fraction of the iterations (KKT factorisations) clarabel
+        cold took the last time this filter ran it (at least 1), so a tick whose warm paths fail costs
+        about (1 + share·c) clarabel solves plus the polish, c the cost of a Gram factorisation over a
+        clarabel iteration (≈ 0.6 at N = 1000, ≈ 2 at N = 200 where the Gram matrices are larger
+        than clarabel's per-iteration work). The warm paths and clarabel's polish, when they spent
+        their cap and failed, are skipped on the next 1, 3, 7, … 31 calls (doubling per consecutive
+        failure, reset by a success). Deterministic: counts, never time. None: only ``active_set_max_solves``
+        (and the warm stage skipped on the one call after a capped failure).
     distributed_second_pass: the distributed filter solves a second pass in which each pair row's
         margin unused by one robot goes to the other (:func:`safety.distributed.reallocate_halves`;
         certified as the first, never more invasive for any robot, ≈ 2× the distributed cost).
@@ -156,6 +167,7 @@ class BarrierConfig:
     work_budget: int | None = None
     time_budget_s: float | None = None
     active_set_max_solves: int | None = None
+    warm_share: float | None = None
     distributed_second_pass: bool = True
     sensing_radius: float | None = None
     pairs: bool = True
@@ -178,6 +190,8 @@ class BarrierConfig:
             _real(self, "wall_margin", self.wall_margin, lower=0.0, strict=False)
         if self.sensing_radius is not None:
             _real(self, "sensing_radius", self.sensing_radius, lower=0.0, strict=True)
+        if self.warm_share is not None:
+            _real(self, "warm_share", self.warm_share, lower=0.0, strict=True)
         if self.time_budget_s is not None:
             _real(self, "time_budget_s", self.time_budget_s, lower=0.0, strict=True)
         for name in ("work_budget", "active_set_max_solves"):

@@ -65,6 +65,11 @@ _CLARABEL_FEAS = 1e-7  # m/s: an interior-point answer violating a row by more t
 # certifies in one or two iterations or not at all (bench_barrier_anytime: a capped polish that failed
 # spent its whole cap on the worst ticks)
 _POLISH_SOLVES = 4
+# BarrierConfig.warm_share applies once last tick held more than this many active rows: on the dense
+# crossing N = 100 holds 140-180 (small dense Gram matrices; a capped failure costs < ½ clarabel cold)
+# and N = 200 holds 270-360, where one Gram factorisation costs about one clarabel iteration
+# (bench_barrier_anytime; 300 left N = 200's first failing ticks uncapped at 1.8× clarabel's worst)
+_SHARE_MIN_ROWS = 200
 _KIND_NAMES = {PAIR: "pair", WALL: "wall", OBSTACLE: "obstacle", LIMIT: "limit", SEGMENT: "segment"}
 
 
@@ -144,12 +149,15 @@ class _Budget:
 
     total: factorisations (active-set Gram solves + clarabel iterations) the centralised QP may
     spend in this call (None: unlimited); warm: those the closed-loop warm paths may spend before
-    the filter goes to clarabel cold, and clarabel's polish on its own (None: unlimited); deadline: ``time.perf_counter()`` value
-    (None: none). ``spent`` counts everything, ``warm_spent`` the warm paths' share.
+    the filter goes to clarabel cold (None: unlimited); deadline: ``time.perf_counter()`` value
+    (None: none); polish: those clarabel's polish may spend on its own (None: ``warm``). ``spent``
+    counts everything, ``warm_spent`` the warm paths' share.
     """
 
-    def __init__(self, total: int | None, warm: int | None, deadline: float | None) -> None:
+    def __init__(self, total: int | None, warm: int | None, deadline: float | None,
+                 polish: int | None = None) -> None:
         self.total, self.warm, self.deadline = total, warm, deadline
+        self.polish = warm if polish is None else polish
         self.spent = 0
         self.warm_spent = 0
 
@@ -193,7 +201,7 @@ class SafetyFilter:
         self._warm_shape: tuple[int, int] = (-1, -1)
         self._lam_keys = np.zeros(0, dtype=np.int64)
         self._lam = np.zeros(0)
-        self._skip_warm = False  # the previous call's warm paths reached the active-set cap
+        self._reset_backoff()
         self._walls: np.ndarray | None = None  # this call's per-robot wall rectangles (N, 4), for its diagnostics
         if self.config.solver == "auto":
             dual_ascent.warm_up()  # numba's compile (or cache load) here, never in a tick
@@ -209,7 +217,30 @@ class SafetyFilter:
         self._warm_shape = (-1, -1)
         self._lam_keys = np.zeros(0, dtype=np.int64)
         self._lam = np.zeros(0)
-        self._skip_warm = False
+        self._reset_backoff()
+
+    def _reset_backoff(self) -> None:
+        # capped stages that failed (BarrierConfig.warm_share): consecutive failures and calls left
+        # to skip, for the warm paths and clarabel's polish; clarabel's last cold iteration count
+        self._warm_fails = self._warm_wait = 0
+        self._polish_fails = self._polish_wait = 0
+        self._cold_iters = 0
+
+    def _wait(self, fails: int) -> int:
+        """Calls a capped stage is skipped after its ``fails``-th consecutive failure: 1 without
+        ``warm_share``; with it 2^k − 1 (k = fails, at most 5): 1, 3, 7, 15, 31."""
+        return 1 if self.config.warm_share is None else 2 ** min(fails, 5) - 1
+
+    def _warm_cap(self) -> int | None:
+        """Factorisations the warm paths of this call may spend (``active_set_max_solves``, and, when
+        last tick held more than ``_SHARE_MIN_ROWS`` active rows, at most ``warm_share`` of clarabel's
+        last cold iteration count, at least 1). Clarabel's polish keeps its own allowance."""
+        cfg = self.config
+        cap = cfg.active_set_max_solves
+        if (cap is None or cfg.warm_share is None or not self._cold_iters
+                or self._warm_keys.size <= _SHARE_MIN_ROWS):
+            return cap
+        return min(cap, max(1, int(cfg.warm_share * self._cold_iters)))
 
     # ------------------------------------------------------------------ public
     def filter(self, points: ArrayLike, nominal: ArrayLike, obstacles: ArrayLike | None = None, *,
@@ -292,7 +323,8 @@ class SafetyFilter:
             return self._solve_distributed(P, U, O, rows, max_speed, t0)
         anytime = cfg.anytime_for(n)
         deadline = t0 + cfg.time_budget_s if anytime and cfg.time_budget_s is not None else None
-        budget = _Budget(cfg.work_budget if anytime else None, cfg.active_set_max_solves, deadline)
+        budget = _Budget(cfg.work_budget if anytime else None, self._warm_cap(), deadline,
+                         cfg.active_set_max_solves)
         unsafe = (rows.h < 0) & (rows.kind != LIMIT)
         n_unsafe = int(unsafe.sum())
         recovering = cfg.recovery and n_unsafe > 0
@@ -369,8 +401,8 @@ class SafetyFilter:
         """``solve_active_set`` within what ``budget`` has left (the warm cap too when ``warm``; for
         clarabel's ``polish`` its own allowance, at most ``_POLISH_SOLVES``, under an active-set cap), tallied."""
         left = budget.left(warm)
-        if polish and budget.warm is not None:
-            polish_cap = min(budget.warm, _POLISH_SOLVES)
+        if polish and budget.polish is not None:
+            polish_cap = min(budget.polish, _POLISH_SOLVES)
             left = polish_cap if left is None else min(left, polish_cap)
         res = solve_active_set(rows, U, max_speed, warm_rows, max_iter, multipliers=multipliers,
                                max_solves=left, deadline=budget.deadline)
@@ -401,37 +433,14 @@ class SafetyFilter:
         cfg = self.config
         iterations = 0
         if cfg.solver == "auto":
-            warm = None
-            if self._warm_shape == (n, n_obs) and self._warm_keys.size:
-                warm = np.isin(rows.key, self._warm_keys, assume_unique=True)
-            closed_loop = warm is not None and bool(warm.any())
-            if closed_loop and self._skip_warm:
-                # last tick's warm paths spent the whole active-set cap and gave up: this tick goes
-                # to clarabel cold at once (its polished answer warm-starts the next tick, which tries again)
-                self._skip_warm = False
-                closed_loop, warm, skipped = False, None, True
-            else:
-                skipped = False
-            if closed_loop and self._dual_enabled():
-                solved = self._solve_dual(rows, U, max_speed, budget)
-                if solved is not None:
-                    return solved
-            if closed_loop and warm is not None:  # the previous tick's active rows: few iterations while they are few
-                start, limit, method = int(warm.sum()), cfg.warm_max_rows, "warm active-set"
-            else:
-                start, limit, method = int(np.sum(rows.lhs(U) > rows.b)), cfg.active_set_max_rows, "active-set"
-            if start <= limit and budget.left(True) != 0 and not skipped:
-                res = self._active_set(rows, U, max_speed, warm, cfg.max_active_set_iterations, budget, True)
-                iterations += res.iterations
-                if res.ok:
-                    return _Solved(res.u, res.active, int(res.speed_active.sum()), method, iterations,
-                                   res.multipliers)
-            elif start > limit and closed_loop and self._near_keys.size:
-                solved = self._solve_pruned(rows, U, max_speed, budget)
-                if solved is not None:
-                    return solved
+            solved, iterations = self._solve_warm(rows, U, max_speed, n, n_obs, budget)
+            if solved is not None:
+                self._warm_fails = 0
+                return solved
         if budget.warm is not None and budget.warm_spent >= budget.warm:
-            self._skip_warm = True
+            # the warm paths spent the whole active-set cap and gave up: skip them for a while
+            self._warm_fails += 1
+            self._warm_wait = self._wait(self._warm_fails)
         if budget.out():
             return f"{_BUDGET}: work cap reached before clarabel"
         qp = self._clarabel(rows, U, max_speed, cfg.clarabel_max_iter, cfg.clarabel_tol, budget)
@@ -455,7 +464,45 @@ class SafetyFilter:
             qp = retry if retry.ok else qp
         if not qp.ok:
             return qp.reason
+        self._cold_iters = qp.iterations
         return self._finish_clarabel(rows, U, qp.u, max_speed, iterations + qp.iterations, budget)
+
+    def _solve_warm(self, rows: Rows, U: np.ndarray, max_speed: float | None, n: int, n_obs: int,
+                    budget: _Budget) -> tuple[_Solved | None, int]:
+        """The closed-loop warm paths and the small cold active set (certified), within the budget's
+        warm cap: (the answer or None, active-set iterations spent)."""
+        cfg = self.config
+        iterations = 0
+        warm = None
+        if self._warm_shape == (n, n_obs) and self._warm_keys.size:
+            warm = np.isin(rows.key, self._warm_keys, assume_unique=True)
+        closed_loop = warm is not None and bool(warm.any())
+        if closed_loop and self._warm_wait > 0:
+            # a recent tick's warm paths spent the whole active-set cap and gave up: this tick goes to
+            # clarabel cold at once (its polished answer warm-starts the next tick, which may try again)
+            self._warm_wait -= 1
+            closed_loop, warm, skipped = False, None, True
+        else:
+            skipped = False
+        if closed_loop and self._dual_enabled():
+            solved = self._solve_dual(rows, U, max_speed, budget)
+            if solved is not None:
+                return solved, iterations
+        if closed_loop and warm is not None:  # the previous tick's active rows: few iterations while they are few
+            start, limit, method = int(warm.sum()), cfg.warm_max_rows, "warm active-set"
+        else:
+            start, limit, method = int(np.sum(rows.lhs(U) > rows.b)), cfg.active_set_max_rows, "active-set"
+        if start <= limit and budget.left(True) != 0 and not skipped:
+            res = self._active_set(rows, U, max_speed, warm, cfg.max_active_set_iterations, budget, True)
+            iterations += res.iterations
+            if res.ok:
+                return _Solved(res.u, res.active, int(res.speed_active.sum()), method, iterations,
+                               res.multipliers), iterations
+        elif start > limit and closed_loop and self._near_keys.size:
+            solved = self._solve_pruned(rows, U, max_speed, budget)
+            if solved is not None:
+                return solved, iterations
+        return None, iterations
 
     def _solve_pruned(self, rows: Rows, U: np.ndarray, max_speed: float | None, budget: _Budget
                       ) -> _Solved | None:
@@ -518,12 +565,19 @@ class SafetyFilter:
         """
         cfg = self.config
         near = rows.lhs(u) >= rows.b - _ACTIVE_TOL
-        if cfg.solver == "auto":
+        shared = budget.warm is not None and cfg.warm_share is not None
+        if cfg.solver == "auto" and shared and self._polish_wait > 0:
+            self._polish_wait -= 1  # the polish spent its cap and failed recently: clarabel's answer
+        elif cfg.solver == "auto":
             res = self._active_set(rows, U, max_speed, near, cfg.max_active_set_iterations, budget, polish=True)
             iterations += res.iterations
             if res.ok:
+                self._polish_fails = 0
                 return _Solved(res.u, res.active, int(res.speed_active.sum()), "clarabel+active-set", iterations,
                                res.multipliers)
+            if shared and res.reason == "work cap":
+                self._polish_fails += 1
+                self._polish_wait = self._wait(self._polish_fails)
         vmax = np.inf if max_speed is None else float(max_speed)
         out = clip_speed(u, vmax)
         touched = np.zeros(U.shape[0], dtype=bool)

@@ -1,7 +1,8 @@
 """Anytime barrier (issue 27 item 1): every answer satisfies every row, whatever the budget.
 
 A hypothesis closed loop over the dense crossing (``safety.scenes.crossing_scene``) at N up to 300
-with work budgets from 1 factorisation (the distributed floor on nearly every tick) to unlimited:
+with work budgets from 1 factorisation (the distributed floor on nearly every tick) to unlimited,
+with and without ``warm_share`` (the stages' share of clarabel's iterations, skipped after failures):
 every tick's answer meets every pair and wall row the filter builds (robots already inside the
 unsafe set: "no further approach") and every speed bound, and says which answer it is. Certified
 answers meet the rows to 2e-10 m/s; an interior-point answer whose polish hit the active-set cap
@@ -24,10 +25,12 @@ TICKS = 6
 
 @settings(max_examples=12)
 @given(n=st.integers(2, 300), seed=st.integers(0, 2**16), budget=st.sampled_from([1, 3, 10, 40, None]),
-       warm_cap=st.sampled_from([1, 8, None]))
-def test_every_anytime_answer_meets_every_row(n: int, seed: int, budget: int | None, warm_cap: int | None) -> None:
+       warm_cap=st.sampled_from([1, 8, None]), share=st.sampled_from([None, 0.25]))
+def test_every_anytime_answer_meets_every_row(n: int, seed: int, budget: int | None, warm_cap: int | None,
+                                              share: float | None) -> None:
     cfg, x, goals = crossing_scene(n, np.random.default_rng(seed))
-    cfg = dataclasses.replace(cfg, mode="anytime", work_budget=budget, active_set_max_solves=warm_cap)
+    cfg = dataclasses.replace(cfg, mode="anytime", work_budget=budget, active_set_max_solves=warm_cap,
+                              warm_share=share)
     flt = SafetyFilter(cfg)
     for _ in range(TICKS):
         nom = toward(goals, x, cfg.max_speed)
