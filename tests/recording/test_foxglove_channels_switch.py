@@ -41,7 +41,7 @@ def test_foxglove_channels_follow_the_flag_and_the_file(tmp_path, file_says, fla
     topics = _run(tmp_path, *args)
     assert set(CHANNELS) - {"/swarmdeck/datagram"} <= topics  # swarmdeck's own channels always
     if channels:
-        assert {"/foxglove/robots", "/foxglove/poses", "/foxglove/tf", "/swarmdeck/metrics"} <= topics
+        assert {"/foxglove/robots", "/foxglove/robot_points", "/foxglove/tf", "/swarmdeck/metrics"} <= topics
     else:
         assert not set(TOPICS) & topics
 
