@@ -57,7 +57,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--foxglove-entities", action="store_true",
                         help="record the robots for Foxglove as before packing was the default: a disc, an arrow and "
                              "a label per robot on /foxglove/robots and /foxglove/poses, every frame up to 100 robots "
-                             "(≈ 3.6x larger at 100 robots; default: one packed PointCloud, /foxglove/robot_points, "
+                             "(≈ 4x larger at 100 robots; default: one packed PointCloud, /foxglove/robot_points, "
                              "10 scenes/s at 100 robots; [recording] packed = false)")
     parser.add_argument("--foxglove", nargs="?", type=int, const=8765, default=None, metavar="PORT",
                         help="also serve the run live to Foxglove over its WebSocket protocol (default port 8765, "

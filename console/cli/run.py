@@ -58,7 +58,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                              "still played by `swarmdeck play`)")
     parser.add_argument("--foxglove-entities", action="store_true",
                         help="with --record: the robots for Foxglove as a disc, an arrow and a label each, every frame "
-                             "up to 100 robots (≈ 3.6x larger at 100 robots; default: one packed PointCloud on "
+                             "up to 100 robots (≈ 4x larger at 100 robots; default: one packed PointCloud on "
                              "/foxglove/robot_points, 10 scenes/s at 100 robots)")
     parser.add_argument("--rps", action=argparse.BooleanOptionalAction, default=None,
                         help="resolve `import rps...` to swarmdeck's rps facade (default: when no rps is installed)")

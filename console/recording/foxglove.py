@@ -61,7 +61,7 @@ Packed (the default since issue 27; ``FoxgloveConfig.per_entity()``, ``--foxglov
 ``foxglove.PointCloud`` on ``/foxglove/robot_points`` (:data:`PACKED_TOPICS`; x, y, z, yaw float32 and
 rgba uint8, :data:`POINT_STRIDE` = 20 bytes a robot) instead of their primitives on ``/foxglove/robots``
 (which keeps the boundary) and ``/foxglove/poses`` (left out); ``lines_period`` thins the cells and
-barrier scenes, every second by default (bench/RESULTS.md, "recording size": ≈ 3.6× smaller at N = 100).
+barrier scenes, every second by default (bench/RESULTS.md, "recording size": ≈ 4× smaller at N = 100).
 """
 from __future__ import annotations
 
