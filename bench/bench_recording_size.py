@@ -1,12 +1,13 @@
 """Recording MB/min at N = 12, 100, 1000 with and without the Foxglove channels (issue 27 item 5).
 
-Run: ``.venv/bin/python bench/bench_recording_size.py`` (~2 min). Real ControlLoop frames (coverage +
-barrier) at 30 Hz, written by the real Recorder (zstd chunks of ``chunk_frames`` = 8 frames); each
+Run: ``.venv/bin/python bench/bench_recording_size.py`` (~4 min). Real ControlLoop frames (coverage +
+barrier) at 30 Hz, written by the real Recorder (zstd chunks of ``chunk_frames`` = 20 frames unless said); each
 configuration recorded 3 times: file MB per minute of recorded time, and the writer's process CPU per
 frame, median (worst) of the 3 — beside the same-process baseline (harness.baseline) of the same run.
-Rows: Foxglove channels off; on with today's defaults (robot_rate 3000: every frame up to N = 100);
-on, thinned (robot_rate 1000: 10 scenes/s at N = 100, 1/s at N = 1000); on, packed (the robots as one
-PointCloud, Voronoi edges and barrier pairs every 0.5 s); packed and thinned.
+Rows: Foxglove channels off; on with today's defaults (packed: the robots as one PointCloud; robot_rate 1000: 10
+scenes/s at N = 100, 1/s at N = 1000; Voronoi edges and barrier pairs every 1 s; a keyframe every 20 frames); on,
+one entity per robot (``FoxgloveConfig.per_entity()``, ``--foxglove-entities``: the default before issue 27 item 5);
+and the defaults with the chunks (keyframes) of 8 frames of before, channels off and on.
 """
 from __future__ import annotations
 
@@ -24,11 +25,10 @@ from swarmdeck.console.runtime.loop import ControlLoop, LoopConfig
 # N, ticks recorded, arena bounds (m; N = 1000 does not fit the default 3.2 m x 2 m floor)
 SIZES = ((12, 300, None), (100, 150, None), (1000, 60, (-6.0, 6.0, -4.0, 4.0)))
 CONFIGS = (("off", RecorderConfig(foxglove=False), None),
-           ("on (robot_rate 3000, default)", RecorderConfig(), FoxgloveConfig()),
-           ("on, thinned (robot_rate 1000)", RecorderConfig(), FoxgloveConfig(robot_rate=1000.0)),
-           ("on, packed (lines_period 0.5)", RecorderConfig(), FoxgloveConfig(packed=True, lines_period=0.5)),
-           ("on, packed + thinned (robot_rate 1000, lines_period 1)", RecorderConfig(),
-            FoxgloveConfig(packed=True, robot_rate=1000.0, lines_period=1.0)))
+           ("on (default: packed, robot_rate 1000, lines_period 1)", RecorderConfig(), FoxgloveConfig()),
+           ("on, per entity (--foxglove-entities)", RecorderConfig(), FoxgloveConfig.per_entity()),
+           ("off, chunk_frames 8 (before)", RecorderConfig(foxglove=False, chunk_frames=8), None),
+           ("on (default), chunk_frames 8 (before)", RecorderConfig(chunk_frames=8), FoxgloveConfig()))
 
 
 def loop_frames(n: int, ticks: int, bounds: tuple[float, float, float, float] | None) -> list:

@@ -54,6 +54,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                              "recording beside swarmdeck's (default on; --no-foxglove-channels: a file ≈ 6x "
                              "smaller at 100 robots that Foxglove still opens as raw messages; [console] "
                              "foxglove_channels in --config's [recording])")
+    parser.add_argument("--foxglove-entities", action="store_true",
+                        help="record the robots for Foxglove as before packing was the default: a disc, an arrow and "
+                             "a label per robot on /foxglove/robots and /foxglove/poses, every frame up to 100 robots "
+                             "(≈ 4x larger at 100 robots; default: one packed PointCloud, /foxglove/robot_points, "
+                             "10 scenes/s at 100 robots; [recording] packed = false)")
     parser.add_argument("--foxglove", nargs="?", type=int, const=8765, default=None, metavar="PORT",
                         help="also serve the run live to Foxglove over its WebSocket protocol (default port 8765, "
                              "on --host; clients asking for foxglove.sdk.v1 or foxglove.websocket.v1 are both "
@@ -146,8 +151,7 @@ def main(args: argparse.Namespace) -> int:
         images = source.image if isinstance(source, ProvidesImage) else None
         rec = _recorder(args.record, config, settings.inputs, source_name, images,
                         virtual=args.virtual or 0, foxglove_channels=fox, chunk_frames=settings.chunk_frames,
-                        robot_rate=settings.robot_rate, packed=settings.packed,
-                        lines_period=settings.lines_period)
+                        **_foxglove_form(settings, args.foxglove_entities))
     hub = None
     if not args.no_inputs:
         hub = _start_inputs(settings.inputs, rec)
@@ -318,9 +322,21 @@ def _robots(config, camera: str | None, robots_via: str | None, virtual: int | N
     return ports.source, ports.sink
 
 
+def _foxglove_form(settings, entities: bool) -> dict[str, Any]:
+    """``robot_rate``, ``packed``, ``lines_period`` of the recording's Foxglove channels: the config file's
+    ``[recording]`` (default packed), or with ``--foxglove-entities`` the per-robot form
+    (:meth:`~swarmdeck.console.recording.foxglove.FoxgloveConfig.per_entity`)."""
+    if entities:
+        from swarmdeck.console.recording.foxglove import FoxgloveConfig
+
+        form = FoxgloveConfig.per_entity()
+        return {"robot_rate": form.robot_rate, "packed": form.packed, "lines_period": form.lines_period}
+    return {"robot_rate": settings.robot_rate, "packed": settings.packed, "lines_period": settings.lines_period}
+
+
 def _recorder(path: str | None, config, inputs_table: dict | None, source: str, image_provider=None,
-              virtual: int = 0, foxglove_channels: bool = True, chunk_frames: int = 8, robot_rate: float = 3000.0,
-              packed: bool = False, lines_period: float = 0.0):
+              virtual: int = 0, foxglove_channels: bool = True, chunk_frames: int = 20, robot_rate: float = 1000.0,
+              packed: bool = True, lines_period: float = 1.0):
     """The session recorder (MCAP), writing in the background; never raises into the run. ``image_provider``
     (the camera source's ``image``) feeds the Foxglove camera channel; ``virtual``: how many virtual robots
     (each Frame's ``is_virtual`` says which); ``foxglove_channels``: also write Foxglove's own channels;

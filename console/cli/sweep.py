@@ -39,6 +39,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--duration", type=float, default=30.0, metavar="S", help="simulated seconds per run (default 30)")
     parser.add_argument("--no-barrier", action="store_true",
                         help="run without the safety barrier (raw runs: what the controller does alone)")
+    parser.add_argument("--capsules", action="store_true",
+                        help="record every run and write its capsule to DIR/capsules/KEY.zip (KEY: the run's row in "
+                             "DIR/runs): `swarmdeck run DIR/capsules/KEY.zip` reproduces that run bit for bit")
     parser.add_argument("--workers", type=int, default=None, metavar="W",
                         help="local worker processes (default: number of cores)")
     parser.add_argument("--ray", default=None, metavar="auto|ADDRESS|local",
@@ -87,7 +90,7 @@ def spec_from(args: argparse.Namespace):
                                     jail=JailConfig(allow_no_cgroup=args.allow_no_cgroup))
         return SweepSpec(bundle, tuple(axes), seeds=args.seeds, first_seed=args.seed, robots=robots,
                          design=args.design, samples=args.samples, design_seed=args.seed, config=config,
-                         barrier=not args.no_barrier)
+                         barrier=not args.no_barrier, capsules=args.capsules)
     except ValueError as exc:
         raise UsageError(str(exc)) from None
 
@@ -127,4 +130,6 @@ def main(args: argparse.Namespace) -> int:
     print(f"{len(result.rows)} runs ({result.ran} run now, {result.cached} from earlier), {result.failed} failed "
           f"[{result.executor}]")
     print(f"table: {Path(args.output) / 'results.csv'}; report: {Path(args.output) / 'report.html'}")
+    if args.capsules:
+        print(f"capsules: {Path(args.output) / 'capsules'}/KEY.zip (`swarmdeck run KEY.zip` reproduces a run)")
     return 0

@@ -59,15 +59,17 @@ class ArenaRecording:
 
     ``path``: the MCAP file of the first Arena; ``script``: the script's path (names the behaviour);
     ``seed``: the run's seed (in the metadata); ``foxglove_channels``: also write Foxglove's own channels
-    (``swarmdeck run --record PATH --no-foxglove-channels``: only swarmdeck's); ``capsule``/``capsule_files``: what
+    (``swarmdeck run --record PATH --no-foxglove-channels``: only swarmdeck's); ``foxglove_entities``: the robots as
+    an entity each (``--foxglove-entities``; default one packed PointCloud, ``FoxgloveConfig``); ``capsule``/``capsule_files``: what
     reproduces the run (a ``capsule.Manifest`` and the script files, relative path → bytes), written into every
     recording with ``run.arena`` set to the Arena's index (``swarmdeck capsule PATH -o run.zip``).
     """
 
     def __init__(self, path: str | Path, *, script: str | Path, seed: int | None = None,
                  foxglove_channels: bool = True, capsule: Any = None,
-                 capsule_files: dict[str, bytes] | None = None) -> None:
+                 capsule_files: dict[str, bytes] | None = None, foxglove_entities: bool = False) -> None:
         self.path = Path(path)
+        self.foxglove_entities = bool(foxglove_entities)
         self.capsule = capsule
         self.capsule_files = dict(capsule_files or {})
         self.foxglove_channels = bool(foxglove_channels)
@@ -84,6 +86,7 @@ class ArenaRecording:
 
     def on_create(self, arena: Any) -> None:
         """Open the recording of a new Arena (its start poses are the first frame's)."""
+        from swarmdeck.console.recording.foxglove import FoxgloveConfig
         from swarmdeck.console.recording.recorder import Recorder, RecorderConfig
         from swarmdeck.console.recording.resimulate import session_metadata
         from swarmdeck.console.runtime.loop import LoopConfig, SafetyParams
@@ -102,6 +105,7 @@ class ArenaRecording:
         self._recorders[id(arena)] = Recorder(path, session_metadata(config, None, source="simulation",
                                                                       run="swarmdeck run"),
                                               RecorderConfig(foxglove=self.foxglove_channels), capsule=capsule,
+                                              foxglove=FoxgloveConfig.per_entity() if self.foxglove_entities else None,
                                               capsule_files=self.capsule_files if capsule is not None else None)
         self._previous[id(arena)] = arena.poses()
         self._ticks[id(arena)] = 0

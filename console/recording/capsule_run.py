@@ -10,6 +10,8 @@
 * a console session (kind ``console``) is re-simulated by
   :func:`~swarmdeck.console.recording.resimulate.resimulate` (the recorded configuration, operator events and input
   datagrams on a virtual clock);
+* one run of a sweep (kind ``verification``, ``swarmdeck sweep --capsules``) runs its task again in the sandbox with
+  the same recording hooks (:func:`swarmdeck.console.sweep.capsules.reproduce_task`); the recordings are compared;
 * a portal job (kind ``portal``) runs its script again in the sandbox on a simulated loop built as the portal built it
   (:func:`swarmdeck.console.portal.reproduce.resimulate_job`).
 
@@ -289,6 +291,15 @@ def reproduce(opened: OpenedCapsule, workdir: str | Path, *, sandbox: bool = Fal
     env = tuple(environment_differences(m.environment, environment()))
     if m.kind == "run":
         reproduced, notes = _rerun_script(opened, work, sandbox)
+        compared, n_a, n_b, first = compare_recordings(opened.recording, reproduced)
+        return Verdict(compared, n_a, n_b, first, env, tuple(notes))
+    if m.kind == "verification":  # one run of a sweep (console/sweep/capsules.py): its task again, recorded
+        from swarmdeck.console.sweep.capsules import reproduce_task
+
+        try:
+            reproduced, notes = reproduce_task(opened, work)
+        except ValueError as exc:
+            raise CapsuleError(f"{opened.recording.name}: {exc}") from None
         compared, n_a, n_b, first = compare_recordings(opened.recording, reproduced)
         return Verdict(compared, n_a, n_b, first, env, tuple(notes))
     if m.kind in ("console", "portal"):

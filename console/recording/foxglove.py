@@ -51,16 +51,17 @@ live bridge's thread, never on the control loop's.
 Thinning at large N (:class:`FoxgloveConfig`): the per-robot channels (``/foxglove/robots``,
 ``/foxglove/poses``, ``/foxglove/cells``, ``/foxglove/barrier``) carry at most ``robot_rate``
 robots per second of recorded time: with N robots they are written every ``N / robot_rate`` s
-(:meth:`FoxgloveConfig.scene_period`; every frame up to 100 robots at 30 Hz, 3 per second at
+(:meth:`FoxgloveConfig.scene_period`; by default 10 a second at N = 100, 1 per second at
 N = 1000), and the id labels only up to ``max_labels`` robots (as in the console's scene). The
 other channels — transforms, contacts, metrics, log, density, camera — keep their rates.
 ``/swarmdeck/frame`` always has every frame (the full state; Foxglove plays it as raw messages).
 
-Packed (``FoxgloveConfig(packed=True)``, ``[recording] packed = true``): the robots are one
+Packed (the default since issue 27; ``FoxgloveConfig.per_entity()``, ``--foxglove-entities`` or
+``[recording] packed = false`` give the per-robot form): the robots are one
 ``foxglove.PointCloud`` on ``/foxglove/robot_points`` (:data:`PACKED_TOPICS`; x, y, z, yaw float32 and
 rgba uint8, :data:`POINT_STRIDE` = 20 bytes a robot) instead of their primitives on ``/foxglove/robots``
 (which keeps the boundary) and ``/foxglove/poses`` (left out); ``lines_period`` thins the cells and
-barrier scenes (bench/RESULTS.md, "recording size": ≈ 3× smaller at N = 100).
+barrier scenes, every second by default (bench/RESULTS.md, "recording size": ≈ 4× smaller at N = 100).
 """
 from __future__ import annotations
 
@@ -172,15 +173,16 @@ class FoxgloveConfig:
     camera_height: height of the ``camera`` frame above the arena centre, m. labels: draw robot ids.
     robot_rate: robots per second of recorded time the per-robot scene channels may carry (robots,
         poses, cells, barrier): with N robots they are written every N / robot_rate s (0: every
-        frame). The default keeps 30 Hz up to 100 robots and writes 3 scenes per second at N = 1000
-        (bench/RESULTS.md, "foxglove": ≈ 12 ms of writer CPU and 40 kB per scene at N = 1000).
+        frame). The default (1000) writes 30 scenes a second up to 33 robots, 10 at N = 100 and 1 at
+        N = 1000 (bench/RESULTS.md, "recording size"); 3000 was the default before the packed form.
     max_labels: id labels only up to this many robots (default: the picture's ``PictureStyle.max_labels``, 100).
-    packed: the robots as one packed ``foxglove.PointCloud`` on ``/foxglove/robot_points``
+    packed: (default) the robots as one packed ``foxglove.PointCloud`` on ``/foxglove/robot_points``
         (:data:`POINT_STRIDE` = 20 bytes a robot: x, y, z, yaw float32, rgba uint8) instead of a
         cylinder, an arrow and a label per robot; ``/foxglove/robots`` then carries the arena
         boundary only and ``/foxglove/poses`` is left out (the heading is the cloud's ``yaw``).
+        False: one entity per robot (:meth:`per_entity`; ``--foxglove-entities``, ``[recording] packed = false``).
     lines_period: s of recorded time between the Voronoi-edge and barrier-pair scenes (0: with the
-        robots' scenes).
+        robots' scenes; default 1).
     """
 
     density_period: float = 0.25
@@ -189,10 +191,17 @@ class FoxgloveConfig:
     camera_quality: int = 75
     camera_height: float = 2.5
     labels: bool = True
-    robot_rate: float = 3000.0
+    robot_rate: float = 1000.0
     max_labels: int = PictureStyle.max_labels
-    packed: bool = False
-    lines_period: float = 0.0
+    packed: bool = True
+    lines_period: float = 1.0
+
+    @classmethod
+    def per_entity(cls, **changes: Any) -> FoxgloveConfig:
+        """The form before packing was the default: a cylinder, an arrow and a label per robot on
+        ``/foxglove/robots`` and its pose on ``/foxglove/poses``, every frame up to 100 robots at 30 Hz
+        (robot_rate 3000), the lines with the robots' scenes; ``changes`` override any field."""
+        return cls(**{"packed": False, "robot_rate": 3000.0, "lines_period": 0.0, **changes})
 
     def scene_period(self, n: int) -> float:
         """s of recorded time between the per-robot scene messages of N robots (0: every frame)."""

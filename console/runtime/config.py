@@ -16,11 +16,12 @@ Tables (every key optional; defaults from REFERENCE.md)::
                 (line-segment obstacles, m: solid in the simulator, kept clear by the barrier; core.obstacles)
     [arena]     robot_model = "gritsbot" (or "gternal": Robotarium 2.x's robot, base length 0.11 m;
                 swarmdeck.core.robot_models)
-    [recording] foxglove_channels = true (as in [console]; give it in one table), chunk_frames = 8
-                (frames per MCAP chunk, each chunk starts with a keyframe), robot_rate = 3000 (robots per
-                second the per-robot Foxglove scene channels carry: N = 1000 → 3 scenes/s), packed = false
-                (true: the robots as one packed PointCloud, /foxglove/robot_points), lines_period = 0 (s
-                between the Voronoi-edge and barrier-pair scenes; 0: with the robots')
+    [recording] foxglove_channels = true (as in [console]; give it in one table), chunk_frames = 20
+                (frames per MCAP chunk, each chunk starts with a keyframe: ≈ 0.67 s at 30 Hz), robot_rate = 1000 (robots per
+                second the per-robot Foxglove scene channels carry: N = 100 → 10 scenes/s, N = 1000 → 1),
+                packed = true (the robots as one packed PointCloud, /foxglove/robot_points; false: a disc,
+                an arrow and a label per robot), lines_period = 1 (s between the Voronoi-edge and
+                barrier-pair scenes; 0: with the robots')
 
 The keys of ``[behaviour]``, ``[safety]``, ``[density]`` and the loop's keys of ``[console]`` are the
 operator parameters declared in :mod:`swarmdeck.console.runtime.params` (units, ranges and defaults
@@ -85,10 +86,10 @@ class ConsoleSettings:
     port: int = 8080
     inputs: dict | None = None
     foxglove_channels: bool = True
-    chunk_frames: int = 8
-    robot_rate: float = 3000.0
-    packed: bool = False
-    lines_period: float = 0.0
+    chunk_frames: int = 20
+    robot_rate: float = 1000.0
+    packed: bool = True
+    lines_period: float = 1.0
     robot_model: str = DEFAULT_ROBOT_MODEL
 
 
@@ -167,20 +168,20 @@ def load_settings(path: str | Path) -> ConsoleSettings:
     fox = rec.get("foxglove_channels", con.get("foxglove_channels", True))
     if not isinstance(fox, bool):
         raise ConfigFileError(f"{p}: [{where}] foxglove_channels must be true or false, got {fox!r}")
-    chunk_frames = rec.get("chunk_frames", 8)
+    chunk_frames = rec.get("chunk_frames", ConsoleSettings.chunk_frames)
     if isinstance(chunk_frames, bool) or not in_range(chunk_frames, 1, 1_000_000, integer=True):
         raise ConfigFileError(f"{p}: [recording] chunk_frames must be an integer >= 1 (frames), got {chunk_frames!r}")
-    robot_rate = rec.get("robot_rate", 3000.0)
+    robot_rate = rec.get("robot_rate", ConsoleSettings.robot_rate)
     if isinstance(robot_rate, bool) or not in_range(robot_rate, 0, 1e9):
         raise ConfigFileError(f"{p}: [recording] robot_rate must be a number >= 0 (robots/s; 0: every frame), "
                               f"got {robot_rate!r}")
     inputs = doc.get("inputs")
     if inputs is not None and not isinstance(inputs, dict):
         raise ConfigFileError(f"{p}: [inputs] must be a table")
-    packed = rec.get("packed", False)
+    packed = rec.get("packed", ConsoleSettings.packed)
     if not isinstance(packed, bool):
         raise ConfigFileError(f"{p}: [recording] packed must be true or false, got {packed!r}")
-    lines_period = rec.get("lines_period", 0.0)
+    lines_period = rec.get("lines_period", ConsoleSettings.lines_period)
     if isinstance(lines_period, bool) or not in_range(lines_period, 0, 1e6):
         raise ConfigFileError(f"{p}: [recording] lines_period must be a number >= 0 (s), got {lines_period!r}")
     return ConsoleSettings(loop, host, port, inputs, fox, int(chunk_frames), float(robot_rate), packed,

@@ -9,6 +9,7 @@ The output folder (``-o DIR``)::
     DIR/summary.csv         per point and robot count: runs, failures, mean and 95 % CI of every metric
     DIR/plots/*.png         each metric against each swept parameter, with its CI band
     DIR/report.html         the summary, the plots and the failures, one page
+    DIR/capsules/KEY.zip    with --capsules: each run recorded, as a capsule (``swarmdeck run KEY.zip`` reproduces it)
 
 **Resumable.** Each run's row is written (atomically) the moment it finishes, keyed by
 :func:`~swarmdeck.console.recording.capsule.run_key` (script files, parameter values, robot count, seed, configuration,
@@ -34,6 +35,7 @@ from typing import Any
 from swarmdeck.console.recording.capsule import run_key
 from swarmdeck.console.sandbox.bundle import ScriptBundle
 from swarmdeck.console.sandbox.verification import RunTask, VerificationConfig, compile_check
+from swarmdeck.console.sweep.capsules import CAPSULES_DIR
 from swarmdeck.console.sweep.design import Axis, DesignError, check_axes, check_size, grid_points, random_points
 from swarmdeck.console.sweep.runs import SweepRun, run_point, swarmdeck_version
 from swarmdeck.core.errors import SwarmdeckError
@@ -56,7 +58,8 @@ class SweepSpec:
     ``first_seed`` … ``first_seed + seeds − 1``; ``robots``: robot counts (``(None,)``: the script's own; a script
     declaring a ``robots`` parameter gets the count as its value too); ``config``: the runs' configuration (duration,
     sandbox, disturbances, jail; its ``runs``/``seed`` are set per run); ``barrier``: runs with the barrier on (as
-    the arena runs them), else raw.
+    the arena runs them), else raw; ``capsules``: record every run and write its capsule, ``DIR/capsules/KEY.zip``
+    (``swarmdeck run KEY.zip`` reproduces it: :mod:`~swarmdeck.console.sweep.capsules`).
     """
 
     bundle: ScriptBundle
@@ -69,6 +72,7 @@ class SweepSpec:
     design_seed: int = 0
     config: VerificationConfig = field(default_factory=VerificationConfig)
     barrier: bool = True
+    capsules: bool = False
 
     def __post_init__(self) -> None:
         if self.design not in ("grid", "random"):
@@ -236,7 +240,15 @@ def run_sweep(spec: SweepSpec, out: str | Path, executor: Any = None, *,
     folder.mkdir(parents=True, exist_ok=True)
     cache = RunCache(folder / "runs")
     _write_atomic(folder / "sweep.json", json.dumps(_spec_json(spec, the_plan), indent=2, sort_keys=True))
-    rows: list[dict[str, Any] | None] = [cache.get(r.key) for r in the_plan.runs]
+    capsule_dir = folder / CAPSULES_DIR
+
+    def capsule_of(run: SweepRun) -> str | None:
+        return str(capsule_dir / f"{run.key}.zip") if spec.capsules else None
+
+    # with --capsules, a run whose capsule is missing runs again (its row alone reproduces nothing)
+    rows: list[dict[str, Any] | None] = [
+        cache.get(r.key) if not spec.capsules or (capsule_dir / f"{r.key}.zip").exists() else None
+        for r in the_plan.runs]
     todo = [k for k, row in enumerate(rows) if row is None]
     cached = len(rows) - len(todo)
     executor = executor if executor is not None else LocalPoolExecutor()
@@ -252,8 +264,8 @@ def run_sweep(spec: SweepSpec, out: str | Path, executor: Any = None, *,
         finished = [cached]
         failure: BaseException | None = None
         with cancel_file(cancel, "swarmdeck-sweep-cancel") as (cancel_path, cancelled):
-            tasks = [replace(the_plan.runs[k], task=replace(the_plan.runs[k].task, cancel_path=cancel_path))
-                     for k in todo]
+            tasks = [replace(the_plan.runs[k], task=replace(the_plan.runs[k].task, cancel_path=cancel_path),
+                             capsule=capsule_of(the_plan.runs[k])) for k in todo]
 
             def done(i: int, row: dict[str, Any], _count: int) -> None:
                 cpu.append(float(row.get("cpu_s") or 0.0))  # a run stopped half-way used CPU too (the portal charges it)

@@ -32,7 +32,8 @@ TIME_TO_GOAL = "time_to_goal"
 @dataclass(frozen=True)
 class SweepRun:
     """One run of a sweep: ``point`` (index in the design), its ``params`` (name, value) in the axes' order,
-    ``robots`` (None: the script's own count), ``seed``, the sandboxed ``task`` and the ``key`` it is cached under."""
+    ``robots`` (None: the script's own count), ``seed``, the sandboxed ``task`` and the ``key`` it is cached under;
+    ``capsule``: where to write the run's capsule zip, recorded (``swarmdeck sweep --capsules``; None: not recorded)."""
 
     key: str
     point: int
@@ -40,6 +41,7 @@ class SweepRun:
     robots: int | None
     seed: int
     task: RunTask
+    capsule: str | None = None
 
 
 def swarmdeck_version() -> str:
@@ -61,7 +63,13 @@ def run_point(run: SweepRun) -> dict[str, Any]:
     """Run ``run`` in the sandbox and give its row: key, point, parameters, robots, seed, status (``ok`` or
     ``failed``), error, ended_by, time_s, the built-in metrics (:data:`BUILTIN`) and the script's (prefixed
     :data:`METRIC_PREFIX`); ``cpu_s`` beside them (a timing, not part of the table)."""
-    result, plant = run_task_plant(run.task)
+    if run.capsule is not None:  # recorded, and its capsule written (console/sweep/capsules.py)
+        from swarmdeck.console.sweep.capsules import run_recorded
+
+        done = run_recorded(run.task, run.capsule, sweep_key=run.key)
+        result, plant = done["result"], done["plant"]
+    else:
+        result, plant = run_task_plant(run.task)
     metrics = dict(result.get("metrics") or {})
     filt = result.get("safety_filter") or {}
     contacts = result.get("contacts")

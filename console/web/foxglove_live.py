@@ -52,7 +52,9 @@ class FoxgloveBridge:
         host: interface to bind (127.0.0.1: this machine only).
         port: TCP port (0 picks a free one; see :attr:`port`).
         robot_radius: disc radius, m.
-        config: :class:`FoxgloveConfig` (density and camera rates).
+        config: :class:`FoxgloveConfig` (density and camera rates; default
+            :meth:`FoxgloveConfig.per_entity`: live there is no file to keep small, so a disc, an arrow and a
+            label per robot every frame up to 100 robots; a packed config is served packed).
         image_provider: the camera source's ``image(ref)``, when a camera runs.
 
     Use: ``bridge = FoxgloveBridge(bounds); unsubscribe = loop.subscribe(bridge.offer); bridge.start()``;
@@ -64,13 +66,14 @@ class FoxgloveBridge:
                  image_provider: Callable[[str], Any] | None = None) -> None:
         import foxglove
 
-        self.encoder = FoxgloveEncoder(bounds, robot_radius, config, image_provider)
+        self.encoder = FoxgloveEncoder(bounds, robot_radius, config if config is not None else FoxgloveConfig.per_entity(),
+                                       image_provider)
         self.context = foxglove.Context()
         self.channels = {
             s.topic: foxglove.Channel(s.topic, schema=foxglove.Schema(name=s.schema_name, encoding=s.schema_encoding,
                                                                        data=s.schema_data),
                                       message_encoding=s.message_encoding, context=self.context)
-            for s in channel_specs()
+            for s in channel_specs(packed=self.encoder.config.packed)
         }
         import errno
 

@@ -18,6 +18,7 @@ from mcap.reader import make_reader
 from swarmdeck.console.cli import main as cli
 from swarmdeck.console.recording.foxglove import (
     METRICS_SCHEMA,
+    PACKED_TOPICS,
     TOPIC_BARRIER,
     TOPIC_CAMERA,
     TOPIC_CELLS,
@@ -29,6 +30,7 @@ from swarmdeck.console.recording.foxglove import (
     TOPIC_ROBOTS,
     TOPIC_TF,
     TOPICS,
+    FoxgloveConfig,
 )
 from swarmdeck.console.recording.reader import open_recording
 from swarmdeck.console.recording.recorder import Recorder
@@ -65,7 +67,7 @@ def session(tmp_path_factory):
             events=(f"event {k}",), alerts=("script failing",) if k < 2 else ()))
     frames += extra
     path = tmp_path_factory.mktemp("fox") / "s.mcap"
-    with Recorder(path, {"config": {"test": 1}}, image_provider=_image) as rec:
+    with Recorder(path, {"config": {"test": 1}}, image_provider=_image, foxglove=FoxgloveConfig.per_entity()) as rec:
         for f in frames:
             rec.write_frame(f)
         rec.write_event(frames[-1].time, "operator", "e-stop")
@@ -202,7 +204,8 @@ def test_the_shipped_layout_refers_only_to_recorded_topics(session, tmp_path, ca
     assert layout == json.loads(files("swarmdeck.console.recording").joinpath("foxglove_layout.json").read_text())
     used = _topics_in_layout(layout, set())
     assert {TOPIC_ROBOTS, TOPIC_CELLS, TOPIC_BARRIER, TOPIC_DENSITY, TOPIC_LOG, TOPIC_CAMERA, TOPIC_METRICS} <= used
-    assert used <= set(by_topic), f"layout refers to topics no recording has: {used - set(by_topic)}"
+    recorded = set(by_topic) | set(PACKED_TOPICS)  # the per-entity session's topics and the packed form's
+    assert used <= recorded, f"layout refers to topics no recording has: {used - recorded}"
     plotted = {v["value"].split(".", 1)[1] for p in layout["configById"].values() for v in p.get("paths", [])}
     assert plotted <= set(METRICS_SCHEMA["properties"])
     panels = set(layout["configById"])

@@ -41,7 +41,7 @@ def test_foxglove_channels_follow_the_flag_and_the_file(tmp_path, file_says, fla
     topics = _run(tmp_path, *args)
     assert set(CHANNELS) - {"/swarmdeck/datagram"} <= topics  # swarmdeck's own channels always
     if channels:
-        assert {"/foxglove/robots", "/foxglove/poses", "/foxglove/tf", "/swarmdeck/metrics"} <= topics
+        assert {"/foxglove/robots", "/foxglove/robot_points", "/foxglove/tf", "/swarmdeck/metrics"} <= topics
     else:
         assert not set(TOPICS) & topics
 
@@ -51,3 +51,18 @@ def test_a_bad_foxglove_channels_value_names_the_key(tmp_path):
     p.write_text('[console]\nfoxglove_channels = "no"\n')
     with pytest.raises(ConfigFileError, match=r"\[console\] foxglove_channels must be true or false"):
         load_settings(p)
+
+
+def _written(path) -> set[str]:
+    """The topics that have messages (a channel may be declared and never written)."""
+    with open(path, "rb") as fh:
+        return {c.topic for _, c, _ in make_reader(fh).iter_messages()}
+
+
+def test_foxglove_entities_records_one_entity_per_robot_instead_of_the_packed_default(tmp_path):
+    _run(tmp_path)
+    packed = _written(tmp_path / "s.mcap")
+    assert "/foxglove/robot_points" in packed and "/foxglove/poses" not in packed
+    _run(tmp_path, "--foxglove-entities")
+    entities = _written(tmp_path / "s.mcap")
+    assert "/foxglove/poses" in entities and "/foxglove/robot_points" not in entities

@@ -1,7 +1,8 @@
 """Foxglove channels packed (``FoxgloveConfig(packed=True)``, ``[recording] packed = true``): the robots are
 one ``foxglove.PointCloud`` on ``/foxglove/robot_points`` (x, y, z, yaw float32 + rgba uint8, 20 bytes a
 robot) that decodes to the frame's poses and the picture's colours; ``/foxglove/robots`` keeps the arena
-boundary; ``lines_period`` thins the Voronoi-edge and barrier scenes; the default stays unpacked."""
+boundary; ``lines_period`` thins the Voronoi-edge and barrier scenes; packed and thinned is the default, one entity
+per robot (``FoxgloveConfig.per_entity()``, ``--foxglove-entities``, ``packed = false``) stays selectable."""
 from __future__ import annotations
 
 import numpy as np
@@ -72,8 +73,11 @@ def test_lines_period_thins_cells_and_barrier(tmp_path, frames):
     assert len(got[TOPIC_ROBOT_POINTS]) == len(frames)
 
 
-def test_the_default_is_unpacked(tmp_path, frames):
-    got = _record(tmp_path / "d.mcap", frames, None)
+def test_the_default_is_packed_and_thinned_and_per_entity_stays_selectable(tmp_path, frames):
+    got = _record(tmp_path / "d.mcap", frames, None)  # 7 robots: every frame (robot_rate 1000), lines every 1 s
+    assert TOPIC_POSES not in got and len(got[TOPIC_ROBOT_POINTS]) == len(frames) and len(got[TOPIC_CELLS]) == 1
+    assert FoxgloveConfig() == FoxgloveConfig(packed=True, robot_rate=1000.0, lines_period=1.0)
+    got = _record(tmp_path / "e.mcap", frames, FoxgloveConfig.per_entity())
     assert TOPIC_ROBOT_POINTS not in got and len(got[TOPIC_POSES]) == len(got[TOPIC_CELLS]) == len(frames)
 
 

@@ -48,7 +48,7 @@ def _written(enc: FoxgloveEncoder, frames: list[Frame]) -> dict[str, list[int]]:
 @pytest.mark.parametrize("n,every", [(12, 1), (100, 1), (300, 3), (1000, 10)])
 def test_per_robot_channels_carry_at_most_robot_rate_robots_per_second(n: int, every: int) -> None:
     frames = _frames(n, 30)
-    got = _written(FoxgloveEncoder((-5.0, 5.0, -3.0, 3.0)), frames)
+    got = _written(FoxgloveEncoder((-5.0, 5.0, -3.0, 3.0), config=FoxgloveConfig.per_entity()), frames)
     for topic in PER_ROBOT:
         assert got[topic] == list(range(0, 30, every)), topic
     for topic in (TOPIC_TF, TOPIC_METRICS):  # the cheap channels keep every frame
@@ -62,7 +62,7 @@ def test_no_limit_writes_every_frame_and_a_smaller_rate_thins_more() -> None:
 
 
 def test_a_clock_that_jumps_back_gets_a_scene_at_once() -> None:
-    enc = FoxgloveEncoder()
+    enc = FoxgloveEncoder(config=FoxgloveConfig.per_entity())
     late = _frames(1000, 3, t0=100.0)
     early = _frames(1000, 1, t0=0.0)
     assert _written(enc, late)[TOPIC_ROBOTS] == [0]

@@ -42,7 +42,7 @@ def frames():
 
 
 def test_a_slow_console_writes_the_keyframes_a_fast_one_writes(tmp_path, frames):
-    # chunk_frames: the default, 8. The slow run spans ≈ 3.4 s > flush_interval (the old wall-time rule closes a
+    # chunk_frames: the default, 20. The slow run spans ≈ 3.4 s > flush_interval (the old wall-time rule closes a
     # chunk in it) while each gap (≈ 0.07 s) stays far below it, so a loaded machine's stall cannot close one either
     config = RecorderConfig(foxglove=False, flush_interval=3.0)
     fast = tmp_path / "fast.mcap"
@@ -57,7 +57,7 @@ def test_a_slow_console_writes_the_keyframes_a_fast_one_writes(tmp_path, frames)
             while rec.status().frames <= k and time.monotonic() < deadline:  # the writer has it
                 time.sleep(0.005)
             time.sleep(0.07)
-    assert keyframe_ticks(fast) == keyframe_ticks(slow) == list(range(0, 48, 8))
+    assert keyframe_ticks(fast) == keyframe_ticks(slow) == list(range(0, 48, RecorderConfig().chunk_frames))
 
 
 def test_chunk_frames_sets_the_cadence(tmp_path, frames):

@@ -85,10 +85,10 @@ def test_every_chunk_starts_with_a_keyframe_and_decodes_alone(tmp_path, frames, 
     predicted = sum(b'"pred"' in m for c in chunks for m in c)
     if config:  # a frame (≈ 2.2 kB) fills a chunk: every frame is a keyframe
         assert len(chunks) == len(frames) and predicted == 0
-    else:  # 0.25 s chunks at 30 Hz (8 frames); the gap before the tracker's frames
+    else:  # chunks of chunk_frames frames (20: ≈ 0.67 s at 30 Hz); the gap before the tracker's frames
         keyframes = {json.loads(m)["tick"] for c in chunks for m in c if b'"pred"' not in m}
         assert keyframes == {json.loads(c[0])["tick"] for c in chunks} | {81}
-        assert len(chunks) >= len(frames) // 9
+        assert len(chunks) >= len(frames) // (RecorderConfig().chunk_frames + 1)
 
 
 def test_seeking_into_the_middle_gives_the_frames_a_linear_read_gives(recorded, frames):

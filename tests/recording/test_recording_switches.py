@@ -40,12 +40,13 @@ def test_run_record_switches_the_foxglove_channels(tmp_path, flag, channels):
 
 def test_the_recording_table_is_read(tmp_path):
     p = tmp_path / "c.toml"
-    p.write_text("[recording]\nfoxglove_channels = false\nchunk_frames = 30\nrobot_rate = 1000\n")
+    p.write_text("[recording]\nfoxglove_channels = false\nchunk_frames = 30\nrobot_rate = 500\n")
     s = load_settings(p)
-    assert (s.foxglove_channels, s.chunk_frames, s.robot_rate) == (False, 30, 1000.0)
+    assert (s.foxglove_channels, s.chunk_frames, s.robot_rate) == (False, 30, 500.0)
     p.write_text("[console]\nrobots = 3\n")
     s = load_settings(p)
-    assert (s.foxglove_channels, s.chunk_frames, s.robot_rate) == (True, 8, 3000.0)
+    assert (s.foxglove_channels, s.chunk_frames, s.robot_rate) == (True, 20, 1000.0)
+    assert (s.packed, s.lines_period) == (True, 1.0)
 
 
 def test_the_console_records_with_the_recording_table(tmp_path):

@@ -17,8 +17,9 @@ from swarmdeck.console.recording.export_video import (
     export_video,
     video_frame_count,
 )
+from swarmdeck.console.recording.foxglove import FoxgloveConfig
 from swarmdeck.console.recording.reader import open_recording
-from swarmdeck.console.recording.recorder import Recorder
+from swarmdeck.console.recording.recorder import Recorder, RecorderConfig
 from swarmdeck.console.web.scene import robot_colors
 
 W, H = 320, 200
@@ -53,7 +54,8 @@ def _picture(ref: str):
 @pytest.fixture(scope="module")
 def recording(tmp_path_factory):
     path = tmp_path_factory.mktemp("video") / "run.mcap"
-    with Recorder(path, image_provider=_picture) as rec:
+    with Recorder(path, config=RecorderConfig(chunk_frames=8), image_provider=_picture,
+                  foxglove=FoxgloveConfig.per_entity()) as rec:  # the bytes spread evenly over the frames: a cut halves them
         for f in _frames():
             rec.write_frame(f)
     return path
