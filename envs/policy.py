@@ -38,6 +38,7 @@ ACTION_KINDS = ("velocity", "goal", "moves")
 MAX_LAYERS = 8
 MAX_PARAMETERS = 1 << 20  # weights and biases together
 MAX_FILE_BYTES = 8 << 20  # a portal bundle's limit (swarmdeck.console.sandbox.bundle.MAX_BYTES)
+MAX_INFLATED_BYTES = 8 * MAX_PARAMETERS + (1 << 20)  # float64 parameters, headers and the metadata
 _LAYER_KEY = re.compile(r"^[wb](\d+)$")
 
 
@@ -130,6 +131,11 @@ def load_policy(source: str | os.PathLike[str] | bytes) -> Policy:
     if len(data) > MAX_FILE_BYTES:
         raise PolicyError(f"{shown} is more than {MAX_FILE_BYTES} bytes")
     try:
+        if zipfile.is_zipfile(io.BytesIO(data)):  # an .npz: bound what its members inflate to before reading them
+            with zipfile.ZipFile(io.BytesIO(data)) as archive:
+                inflated = sum(info.file_size for info in archive.infolist())
+            if inflated > MAX_INFLATED_BYTES:
+                raise PolicyError(f"{shown} inflates to {inflated} bytes, more than the limit of {MAX_INFLATED_BYTES}")
         loaded = np.load(io.BytesIO(data), allow_pickle=False)
         if not isinstance(loaded, np.lib.npyio.NpzFile):
             raise PolicyError(f"{shown} is a single .npy array, not an .npz of a policy's arrays")

@@ -108,6 +108,16 @@ def test_too_many_parameters_are_refused(tmp_path, monkeypatch):
         load_policy(path)
 
 
+def test_a_compressed_file_that_inflates_past_the_limit_is_refused_before_it_is_read(tmp_path):
+    path = tmp_path / "bomb.npz"
+    arrays = _arrays(_policy())
+    arrays["w0"] = np.zeros((D, 1 << 17))  # 15 MB of zeros, a few kB compressed
+    np.savez_compressed(path, **arrays)
+    assert path.stat().st_size < 1 << 20
+    with pytest.raises(PolicyError, match="inflates to .* bytes, more than the limit"):
+        load_policy(path)
+
+
 def test_an_object_array_is_never_unpickled(tmp_path):
     path = tmp_path / "evil.npz"
     arrays = _arrays(_policy())
