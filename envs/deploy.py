@@ -11,6 +11,7 @@ Only numpy and swarmdeck are imported (no gymnasium, no torch): it runs in the l
 """
 from __future__ import annotations
 
+import re
 from typing import Any
 
 import numpy as np
@@ -85,14 +86,16 @@ def experiment_script(policy: Policy, robots: int, duration: float) -> str:
     portal's manifest override them)."""
     trained = policy.meta.get("trained", {})
     how = ", ".join(f"{k} {v}" for k, v in trained.items() if isinstance(v, (str, int, float)))
-    return f'''"""A policy trained by `swarmdeck train` on the {policy.scenario} scenario ({how}) driving the arena.
+    how = re.sub(r"[^\w .,:=+-]", "", how)[:200]  # the file's words go into a docstring: no quotes, no newlines
+    scenario = re.sub(r"[^\w-]", "", policy.scenario)[:60]
+    return f'''"""A policy trained by `swarmdeck train` on the {scenario} scenario ({how}) driving the arena.
 
 The policy is policy.npz beside this file: plain numpy weights, checked when loaded (swarmdeck.envs.policy).
 Every command passes the arena's safety barrier.
 
     swarmdeck run main.py                      # in simulation, on this machine
     swarmdeck run . --sandbox                  # as the portal runs it: this folder in the jail
-    swarmdeck submit ../$(basename $PWD).zip   # onto the lab's portal (the archive carries its manifest)
+    swarmdeck submit ../FOLDER.zip             # onto the lab's portal: the archive beside this folder
 """
 from pathlib import Path
 

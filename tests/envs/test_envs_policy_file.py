@@ -12,7 +12,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from swarmdeck.devices import Arena
-from swarmdeck.envs.deploy import drive, scenario_for
+from swarmdeck.envs.deploy import drive, experiment_script, scenario_for
 from swarmdeck.envs.policy import PolicyError, load_policy, make_policy, policy_arrays, save_policy
 from swarmdeck.envs.scenarios import make_scenario
 
@@ -162,3 +162,14 @@ def test_drive_runs_a_policy_inside_the_barrier_for_the_arenas_duration():
     report = arena.report().to_dict()
     assert report["safety"]["enabled"] and report["safety"]["calls"] >= out["policy steps"]
     assert report["safety"]["failures"] == 0
+
+
+def test_the_experiment_script_keeps_a_policy_files_words_out_of_its_code():
+    p = make_policy(_layers(np.random.default_rng(0), [D, 4, 2]), scenario="rendezvous", scenario_args={"n_agents": 3},
+                    action="velocity", action_low=[-0.2, -0.2], action_high=[0.2, 0.2],
+                    trained={"library": '"""\nimport os; os.system("x")\n"""'})
+    script = experiment_script(p, 3, 5.0)
+    compile(script, "main.py", "exec")
+    assert script.count('"""') == experiment_script(_policy(), 3, 5.0).count('"""')
+    assert not any(line.startswith("import os") for line in script.splitlines())
+    assert '"x"' not in script  # the quotes are gone: the words stay inside the docstring
