@@ -32,7 +32,7 @@ from swarmdeck.core.constants import CONTROL_PERIOD
 from swarmdeck.devices.controllers import si_position_controller
 from swarmdeck.devices.simulator import check_poses
 from swarmdeck.envs.batched_swarm import BatchedSwarm
-from swarmdeck.envs.scenario import MOVES, Scenario, State, View
+from swarmdeck.envs.scenario import Scenario, State, View, goal_points
 
 try:  # the optional extra: pip install 'swarmdeck[rl]'
     import gymnasium
@@ -99,6 +99,17 @@ class BatchedEnv:
         last[which] = self._zero_actions(len(which))
         self._last_actions = last
 
+    def reset_done(self) -> NDArray[np.float32]:
+        """Start now the swarms whose episode the last step ended (same-step autoreset, Stable-Baselines3's VecEnv
+        convention, instead of on the next step); returns every swarm's observation (E, N, D)."""
+        restart = np.flatnonzero(self._done)
+        if restart.size:
+            self._reset_swarms(restart)
+            done = self._done.copy()
+            done[restart] = False
+            self._done = done
+        return self._observe()
+
     def _view(self) -> View:
         return View(self.sim.poses, self.sim.points(), self.state, self._last_actions, self.steps, self.scenario.bounds)
 
@@ -128,12 +139,7 @@ class BatchedEnv:
         act = self.scenario.actions
         if act.kind == "velocity":
             return None
-        if act.kind == "goal":
-            return actions
-        x0, x1, y0, y1 = act.box or self.scenario.bounds
-        centre = self.sim.poses[..., :2]
-        goal = centre + act.step * MOVES[actions]
-        return np.stack((np.clip(goal[..., 0], x0, x1), np.clip(goal[..., 1], y0, y1)), axis=-1)
+        return goal_points(act, actions, self.sim.poses[..., :2], self.scenario.bounds)
 
     # ------------------------------------------------------------------ the step
     def step(self, actions: Any) -> tuple[NDArray[np.float32], FloatArray, NDArray[np.bool_], NDArray[np.bool_],

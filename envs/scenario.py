@@ -62,6 +62,16 @@ class Actions:
             raise ValueError(f"Actions.step must be > 0 m, got {self.step!r}")
 
 
+def goal_points(actions: Actions, chosen: np.ndarray, centres: FloatArray, bounds: Bounds) -> FloatArray:
+    """The goal points (…, 2) m of ``chosen`` goal actions ((…, 2) m, returned as they are) or moves ((…,) ints 0…4:
+    ``actions.step`` metres from the robots' ``centres`` (…, 2) m), clipped into ``actions.box`` (else ``bounds``)."""
+    if actions.kind == "goal":
+        return chosen
+    x0, x1, y0, y1 = actions.box or bounds
+    goal = centres + actions.step * MOVES[chosen]
+    return np.stack((np.clip(goal[..., 0], x0, x1), np.clip(goal[..., 1], y0, y1)), axis=-1)
+
+
 @dataclass(frozen=True)
 class View:
     """What the hooks see, per swarm. poses (E, N, 3) m/rad; points (E, N, 2) look-ahead points, m;

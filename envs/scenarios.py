@@ -240,3 +240,19 @@ class Warehouse(Scenario):
         load = ~loaded & (x > 1.5 - self.goal_width) & np.where(green, ~upper, upper)
         r = np.where(unload, self.unload_reward, np.where(load, self.load_reward, 0.0))
         return r, dict(view.state, loaded=(loaded & ~unload) | load, shown=loaded)
+
+
+#: The shipped scenarios by the name ``swarmdeck train`` and a policy file use.
+SHIPPED: dict[str, type[Scenario]] = {"rendezvous": Rendezvous, "formation": Formation,
+                                      "predator_capture_prey": PredatorCapturePrey, "warehouse": Warehouse}
+
+
+def make_scenario(name: str, **kwargs: object) -> Scenario:
+    """The shipped scenario ``name`` (:data:`SHIPPED`) with ``kwargs`` (e.g. ``n_agents=4``); ValueError naming an
+    unknown scenario or argument."""
+    if name not in SHIPPED:
+        raise ValueError(f"unknown scenario {name!r}; the shipped scenarios are {', '.join(SHIPPED)}")
+    try:
+        return SHIPPED[name](**kwargs)  # type: ignore[arg-type]
+    except TypeError as exc:
+        raise ValueError(f"scenario {name!r}: {exc}") from None
