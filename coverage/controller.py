@@ -11,7 +11,7 @@ Example::
 """
 from __future__ import annotations
 
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -103,7 +103,8 @@ class CoverageState:
     dc_dt (N, 2) [m/s]; cost_H: locational cost H = Σ_i ∫_{V_i} ‖q − p_i‖² φ;
     cost_H_normalised: H / ∫φ; mean_centroid_distance, max_centroid_distance: ‖p_i − c_i‖ [m];
     edges (E, 2, 2) shared Voronoi edge segments [m]; neighbours (E, 2) int robot pairs;
-    cells: N counter-clockwise polygons (V_i, 2) [m]; packing_warning: str | None;
+    cells: N counter-clockwise polygons (V_i, 2) [m] (a flat
+    :class:`~swarmdeck.coverage.cells.CellPolygons` from a tick, read-only); packing_warning: str | None;
     repaired: robots moved by pre-conditioning; saturated: robots whose speed was limited;
     geometry_config: what the cells were computed with (recordings store it to derive them again).
     """
@@ -121,7 +122,7 @@ class CoverageState:
     max_centroid_distance: float
     edges: NDArray[np.float64]
     neighbours: NDArray[np.intp]
-    cells: list[NDArray[np.float64]]
+    cells: Sequence[NDArray[np.float64]]
     packing_warning: str | None
     repaired: int
     saturated: int
@@ -187,8 +188,8 @@ def coverage_tick(positions: ArrayLike, density: GaussianMixture, config: Covera
     dist = geo.centroid_distances()
     total = float(mom.masses.sum())
     edges = geo.edges
-    cells = geo.cells()
-    for arr in (pts, mom.centroids, mom.masses, mom.dc_dt, edges, vor.edge_pairs, *cells):
+    cells = geo.cell_polygons()  # flat and read-only: no Python object per robot
+    for arr in (pts, mom.centroids, mom.masses, mom.dc_dt, edges, vor.edge_pairs):
         if arr.flags.writeable:
             arr.setflags(write=False)
     state = CoverageState(
@@ -229,7 +230,13 @@ class CoverageController:
 
     def __call__(self, positions: ArrayLike, t: float) -> tuple[NDArray[np.float64], CoverageState]:
         """Nominal single-integrator velocities (N, 2) [m/s] and the tick's :class:`CoverageState`."""
-        snap = self._density.at(float(t))
+        return self.step(positions, self._density.at(float(t)), t)
+
+    def step(self, positions: ArrayLike, snapshot: GaussianMixture, t: float
+             ) -> tuple[NDArray[np.float64], CoverageState]:
+        """:meth:`__call__` with the density's snapshot at ``t`` already taken (``density.at(t)``, e.g. on
+        another thread than the one computing): the same velocities (N, 2) m/s and state."""
+        snap = snapshot
         if not isinstance(snap, GaussianMixture):
             raise TypeError(f"density.at(t) must return a GaussianMixture, got {type(snap).__name__}")
         n = int(np.shape(positions)[0]) if np.ndim(positions) == 2 else 0

@@ -26,6 +26,7 @@ from scipy.spatial import QhullError
 
 from swarmdeck.core.bounds import DEFAULT_BOUNDS, Bounds, check_bounds
 from swarmdeck.core.config import from_mapping
+from swarmdeck.coverage.cells import CellPolygons
 from swarmdeck.coverage.density import GaussianMixture
 from swarmdeck.coverage.quadrature import CellMoments, QuadratureOptions, cell_moments
 from swarmdeck.coverage.voronoi import BoundedVoronoi, bounded_voronoi, precondition_positions
@@ -128,6 +129,10 @@ class CoverageGeometry:
     def cells(self) -> list[NDArray[np.float64]]:
         """N counter-clockwise polygons (V_i, 2) m."""
         return self._need()[0].polygons()
+
+    def cell_polygons(self) -> CellPolygons:
+        """The same polygons, flat (concatenated vertices and offsets; what the Frame stores)."""
+        return self._need()[0].cell_polygons()
 
     @property
     def cost_H(self) -> float:
