@@ -1,0 +1,129 @@
+"""Coverage one tick behind, on a worker thread: the console at thousands of robots (issue 27 item 2).
+
+At N = 5000 the coverage stage (bounded Voronoi, cell moments, Jacobian: ≈ 100 ms of CPU) is most of
+a tick; the rest (sense, barrier, send, Frame) does not need it until the barrier. With the worker,
+the ``coverage`` behaviour runs *pipelined*: at tick k it hands tick k's look-ahead points, run time
+and density snapshot (taken on the loop thread) to one worker thread and returns the command the
+worker computed from tick k − 1's, so the next coverage step runs while this tick's barrier, Frame,
+subscribers and pacing run. qhull, the numba kernels (``nogil``) and numpy's large-array loops release
+the GIL, so on two cores the tick costs about max(coverage, rest) instead of their sum.
+
+What changes for the robots: the nominal velocity of tick k is the coverage law at tick k − 1's
+positions (one control period late; the first tick's is computed at once, so ticks 0 and 1 both use
+tick 0's). The barrier still certifies every command at the current poses, so safety is unchanged,
+and the Frame's coverage (cells, centroids) is that of tick k − 1. It is deterministic: tick k's
+command is always computed from exactly tick k − 1's inputs, never "whatever was ready"
+(tests/console/test_console_coverage_worker.py). A worker that has not answered within ``timeout``
+s stops the robots for the tick (BehaviourError, counted by the loop's error policy); the next tick
+waits for the same answer again. When the robots change (another N or other ids) or the density
+object is replaced, the pipeline restarts as on the first tick.
+
+When it is used: ``LoopConfig.coverage_worker`` (``[console] coverage_worker``, ``swarmdeck console
+--coverage-worker``): "on", "off", or "auto" (on from :data:`AUTO_MIN_ROBOTS` robots; below that the
+tick is short and the synchronous path — the one the pipeline identity tests pin — is kept).
+"""
+from __future__ import annotations
+
+import weakref
+from concurrent.futures import Future, ThreadPoolExecutor
+from concurrent.futures import TimeoutError as FutureTimeout
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from swarmdeck.console.runtime.behaviours import TickInput
+from swarmdeck.console.runtime.params import BehaviourError, BehaviourParams
+from swarmdeck.core.bounds import Bounds
+
+__all__ = ["AUTO_MIN_ROBOTS", "PipelinedCoverage", "use_worker"]
+
+#: ``coverage_worker = "auto"`` runs coverage on the worker from this many robots on (at N = 1000 the
+#: synchronous console holds ≈ 29 ticks/s; bench/RESULTS.md "console at any size").
+AUTO_MIN_ROBOTS = 2000
+
+FloatArray = NDArray[np.float64]
+_Result = tuple[FloatArray, Any]
+
+
+def use_worker(setting: str, n_robots: int) -> bool:
+    """Whether ``coverage_worker = setting`` ("on", "off", "auto") runs coverage on the worker for
+    ``n_robots`` robots; ValueError naming a bad setting."""
+    if setting == "auto":
+        return int(n_robots) >= AUTO_MIN_ROBOTS
+    if setting in ("on", "off"):
+        return setting == "on"
+    raise ValueError(f"coverage_worker must be 'auto', 'on' or 'off', got {setting!r}")
+
+
+def _done(result: _Result) -> Future[_Result]:
+    fut: Future[_Result] = Future()
+    fut.set_result(result)
+    return fut
+
+
+class PipelinedCoverage:
+    """The ``coverage`` behaviour, one tick behind on a worker thread (module docstring).
+
+    params, bounds, max_speed (m/s), safety_distance (m): as :class:`~swarmdeck.console.runtime.behaviours.
+    Coverage`; timeout: s a tick waits for the worker's answer (> 0). ``close()`` ends the worker.
+    """
+
+    name = "coverage"
+
+    def __init__(self, params: BehaviourParams, bounds: Bounds, max_speed: float, safety_distance: float,
+                 timeout: float = 10.0) -> None:
+        from swarmdeck.coverage import CoverageConfig
+
+        if not timeout > 0:
+            raise ValueError(f"coverage worker timeout must be > 0 s, got {timeout!r}")
+        self._config = CoverageConfig(law=params.law, kappa=params.kappa, max_speed=max_speed, bounds=bounds,
+                                      safety_distance=safety_distance)
+        self.timeout = float(timeout)
+        self._ctrl: Any = None
+        self._density: Any = None
+        self._ids: NDArray[np.int64] | None = None
+        self._next: Future[_Result] | None = None
+        self._pool = ThreadPoolExecutor(max_workers=1, thread_name_prefix="swarmdeck-coverage")
+        self.late = 0
+        weakref.finalize(self, self._pool.shutdown, wait=False, cancel_futures=True)
+
+    def _restart(self, tick: TickInput) -> None:
+        from swarmdeck.coverage import CoverageController
+
+        self._ctrl = CoverageController(self._config, tick.density)
+        self._density = tick.density
+        self._next = None
+
+    def __call__(self, tick: TickInput) -> tuple[FloatArray, Any]:
+        n = len(tick.points)
+        ids = np.arange(n, dtype=np.int64) if tick.ids is None else np.asarray(tick.ids, dtype=np.int64)
+        if (self._ctrl is None or tick.density is not self._density or self._ids is None
+                or not np.array_equal(ids, self._ids)):
+            self._restart(tick)
+        self._ids = ids.copy()
+        snap = tick.density.at(float(tick.t))              # on the loop thread: the operator's density now
+        points, t = np.array(tick.points, dtype=float), float(tick.t)
+        ctrl = self._ctrl
+        if self._next is None:                             # first tick: this tick's coverage, now
+            self._next = _done(ctrl.step(points, snap, t))
+        try:
+            result = self._next.result(timeout=self.timeout)
+        except FutureTimeout:
+            self.late += 1
+            raise BehaviourError(f"coverage worker late: no answer within {self.timeout:g} s "
+                                 "(robots stopped for this tick)") from None
+        except BaseException:
+            self._next = None                              # its error is this tick's; start afresh next tick
+            raise
+        self._next = self._pool.submit(ctrl.step, points, snap, t)
+        return result
+
+    def health(self) -> str:
+        """The console's health line for the worker: one tick behind, and how often it was late."""
+        return f"coverage worker: one tick behind, {self.late} ticks late"
+
+    def close(self) -> None:
+        """End the worker thread (a step still running finishes on its own; its result is dropped)."""
+        self._next = None
+        self._pool.shutdown(wait=False, cancel_futures=True)

@@ -1,0 +1,120 @@
+"""Coverage one tick behind on a worker thread (console/runtime/coverage_worker.py): tick k's coverage is
+exactly the coverage of tick k − 1's inputs (bit for bit), two runs give the same bits, a late worker
+stops the robots for the tick and is counted, and "auto" keeps the synchronous path below 2000 robots."""
+from __future__ import annotations
+
+import threading
+
+import numpy as np
+import pytest
+
+from swarmdeck.console.runtime.behaviours import Coverage, TickInput
+from swarmdeck.console.runtime.coverage_worker import AUTO_MIN_ROBOTS, PipelinedCoverage, use_worker
+from swarmdeck.console.runtime.loop import ControlLoop, LoopConfig
+from swarmdeck.console.runtime.params import BehaviourParams
+from swarmdeck.coverage import CoverageConfig, coverage_tick
+
+N, TICKS = 24, 6
+
+
+def _run(worker: str) -> list:
+    loop = ControlLoop(LoopConfig(n_robots=N, seed=5, coverage_worker=worker))
+    try:
+        return [loop.tick() for _ in range(TICKS)]
+    finally:
+        loop.close()
+
+
+@pytest.fixture(scope="module")
+def piped() -> list:
+    return _run("on")
+
+
+def test_tick_k_runs_the_coverage_of_tick_k_minus_1_inputs_bit_for_bit(piped: list) -> None:
+    config = CoverageConfig(max_speed=LoopConfig().max_speed, bounds=LoopConfig().bounds)
+    for k in range(1, TICKS):
+        before, frame = piped[max(k - 1, 0)], piped[k]
+        _, state, _ = coverage_tick(before.points, before.density, config, before.run_time)
+        assert state.ok and frame.coverage is not None
+        assert np.array_equal(frame.coverage.centroids, state.centroids), k
+        assert np.array_equal(frame.coverage.cell_vertices, state.cells.vertices), k
+    # the first tick's coverage is computed at once and used twice (ticks 0 and 1)
+    assert np.array_equal(piped[0].coverage.centroids, piped[1].coverage.centroids)
+    assert any(np.any(f.nominal != 0.0) for f in piped)
+
+
+def test_two_pipelined_runs_give_the_same_bits(piped: list) -> None:
+    again = _run("on")
+    for a, b in zip(piped, again):
+        for name in ("poses", "nominal", "safe", "v", "w"):
+            assert np.array_equal(getattr(a, name), getattr(b, name)), name
+        assert np.array_equal(a.coverage.centroids, b.coverage.centroids)
+
+
+def test_auto_keeps_the_synchronous_path_below_the_threshold() -> None:
+    assert not use_worker("auto", AUTO_MIN_ROBOTS - 1) and use_worker("auto", AUTO_MIN_ROBOTS)
+    assert use_worker("on", 1) and not use_worker("off", 10**6)
+    with pytest.raises(ValueError, match="coverage_worker"):
+        use_worker("sometimes", 10)
+    with pytest.raises(ValueError, match="coverage_worker"):
+        LoopConfig(coverage_worker="sometimes")
+    loop = ControlLoop(LoopConfig(n_robots=12, seed=1))
+    try:
+        assert type(loop._behaviour) is Coverage
+    finally:
+        loop.close()
+
+
+def test_a_late_worker_stops_the_robots_for_the_tick_and_is_counted() -> None:
+    loop = ControlLoop(LoopConfig(n_robots=N, seed=5, coverage_worker="on"))
+    gate = threading.Event()
+    behaviour = loop._behaviour
+    assert isinstance(behaviour, PipelinedCoverage)
+    behaviour.timeout = 0.05
+    try:
+        loop.tick()                                   # tick 0: computed at once; tick 0's inputs go to the worker
+        ctrl = behaviour._ctrl
+        step = ctrl.step
+
+        def held(*args: object) -> object:
+            assert gate.wait(60), "the test never opened the gate"
+            return step(*args)
+
+        ctrl.step = held
+        loop.tick()                                   # tick 1: tick 0's answer, ready; tick 1's job waits at the gate
+        late = loop.tick()                            # tick 2: the worker is held: robots stopped, counted
+        assert behaviour.late == 1 and loop.errors.get("behaviour", 0) == 1
+        assert np.all(late.v == 0.0) and np.all(late.w == 0.0)
+        gate.set()
+        behaviour.timeout = 60.0
+        ok = loop.tick()                              # tick 3: tick 1's answer (waited for again), robots move
+        assert loop.errors.get("behaviour", 0) == 1 and np.any(ok.v != 0.0)
+        assert "ticks late" in ok.health.get("coverage", "")
+    finally:
+        gate.set()
+        loop.close()
+
+
+def test_an_error_in_the_worker_is_reported_on_the_next_tick_and_the_pipeline_restarts() -> None:
+    b = PipelinedCoverage(BehaviourParams(), LoopConfig().bounds, 0.2, 0.17)
+    loop = ControlLoop(LoopConfig(n_robots=N, seed=5))
+    density = loop.density
+    rng = np.random.default_rng(2)
+    pts = rng.uniform([-1.4, -0.8], [1.4, 0.8], (N, 2))
+
+    def tick(points: np.ndarray) -> TickInput:
+        poses = np.column_stack([points, np.zeros(len(points))])
+        return TickInput(poses, points, 0.0, density, LoopConfig().bounds, 0.2, np.arange(len(points)))
+
+    try:
+        b(tick(pts))
+        bad = pts.copy()
+        bad[0] = np.nan
+        b(tick(bad))                                  # the worker gets non-finite points ...
+        with pytest.raises(ValueError, match="NaN"):
+            b(tick(pts))                              # ... and its error is the next tick's
+        u, state = b(tick(pts))                       # afresh: this tick's coverage, at once
+        assert state.ok and u.shape == (N, 2)
+    finally:
+        b.close()
+        loop.close()
