@@ -25,13 +25,20 @@ from swarmdeck.core.config import from_mapping
 from swarmdeck.core.constants import MAX_LINEAR_SPEED, SAFETY_DISTANCE
 from swarmdeck.core.kinematics import saturate
 from swarmdeck.coverage.density import Density, GaussianMixture
-from swarmdeck.coverage.geometry import DEFAULT_QUADRATURE, NUMERICAL_ERRORS, GeometryConfig, coverage_geometry
+from swarmdeck.coverage.geometry import (
+    DEFAULT_QUADRATURE,
+    NUMERICAL_ERRORS,
+    CoverageGeometry,
+    GeometryConfig,
+    geometry_diagram,
+    geometry_moments,
+)
 from swarmdeck.coverage.jacobian import EdgeOptions, centroid_jacobian
 from swarmdeck.coverage.laws import law_command, parse_law
 from swarmdeck.coverage.packing import packing_warning
 from swarmdeck.coverage.quadrature import QuadratureOptions
 
-__all__ = ["CoverageConfig", "CoverageState", "CoverageController", "coverage_tick"]
+__all__ = ["CoverageConfig", "CoverageState", "CoverageController", "coverage_tick", "coverage_tick_on"]
 
 
 @dataclass(frozen=True)
@@ -159,7 +166,17 @@ def coverage_tick(positions: ArrayLike, density: GaussianMixture, config: Covera
     """
     if not isinstance(density, GaussianMixture):
         raise TypeError(f"a density snapshot must be a GaussianMixture, got {type(density).__name__}")
-    geo = coverage_geometry(positions, density, config.geometry)
+    return coverage_tick_on(geometry_diagram(positions, config.geometry), density, config, t, packing)
+
+
+def coverage_tick_on(diagram: CoverageGeometry, density: GaussianMixture, config: CoverageConfig,
+                     t: float = 0.0, packing: str | None = None
+                     ) -> tuple[NDArray[np.float64], CoverageState, sp.csr_array | None]:
+    """:func:`coverage_tick` from the tick's diagram already built (``geometry_diagram(positions,
+    config.geometry)``): the same result, bit for bit."""
+    if not isinstance(density, GaussianMixture):
+        raise TypeError(f"a density snapshot must be a GaussianMixture, got {type(density).__name__}")
+    geo = geometry_moments(diagram, density)
     pts, repaired, vor, mom = geo.positions, geo.repaired, geo.voronoi, geo.moments
     n = pts.shape[0]
     family, k = parse_law(config.law, config.hops)
@@ -236,15 +253,25 @@ class CoverageController:
              ) -> tuple[NDArray[np.float64], CoverageState]:
         """:meth:`__call__` with the density's snapshot at ``t`` already taken (``density.at(t)``, e.g. on
         another thread than the one computing): the same velocities (N, 2) m/s and state."""
+        return self.finish(self.diagram(positions), snapshot, t)
+
+    def diagram(self, positions: ArrayLike) -> CoverageGeometry:
+        """The first half of :meth:`step`: pre-conditioning and the Voronoi diagram of ``positions``
+        (N, 2) m (no density needed; touches no state of the controller)."""
+        return geometry_diagram(positions, self.config.geometry)
+
+    def finish(self, diagram: CoverageGeometry, snapshot: GaussianMixture, t: float
+               ) -> tuple[NDArray[np.float64], CoverageState]:
+        """The second half of :meth:`step`: moments, Jacobian and law on :meth:`diagram`'s result."""
         snap = snapshot
         if not isinstance(snap, GaussianMixture):
             raise TypeError(f"density.at(t) must return a GaussianMixture, got {type(snap).__name__}")
-        n = int(np.shape(positions)[0]) if np.ndim(positions) == 2 else 0
+        n = int(diagram.positions.shape[0])
         key = (id(self._density), n)
         if key != self._packing_key or self._ticks % self.config.packing_every == 0:
             self._packing = (packing_warning(snap, n, self.config.bounds, self.config.safety_distance)
                              if n >= 2 else None)
             self._packing_key = key
         self._ticks += 1
-        u, state, _ = coverage_tick(positions, snap, self.config, t, self._packing)
+        u, state, _ = coverage_tick_on(diagram, snap, self.config, t, self._packing)
         return u, state

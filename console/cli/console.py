@@ -63,10 +63,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                              "LEDs; docs/sensing.md): every Frame carries their readings, the scene draws the rays "
                              "(layer 'sensors'), recordings keep them ([console] sensors = true in --config)")
     parser.add_argument("--coverage-worker", choices=("auto", "on", "off"), default=None,
-                        help="run the coverage behaviour one tick behind on a worker thread, so its Voronoi cells "
-                             "and moments overlap the barrier and the Frame: 'auto' (default) from 2000 robots "
-                             "(N = 5000: ≈ 10 ticks/s on two cores instead of ≈ 6; docs/console-scale.md); "
-                             "[console] coverage_worker in --config")
+                        help="run the coverage behaviour two ticks behind on two worker threads (one builds the "
+                             "Voronoi diagram, one integrates the cells), overlapping the barrier and the Frame: "
+                             "'auto' (default) from 2000 robots; the barrier still certifies every command at the "
+                             "current poses (docs/console-scale.md; [console] coverage_worker in --config)")
     parser.add_argument("--projector", nargs="?", type=int, const=8090, default=None, metavar="PORT",
                         help="also serve the overhead projector's page on http://HOST:PORT/projector (default port "
                              "8090): open it full screen on the projector (`chromium --kiosk --app=URL`); it "

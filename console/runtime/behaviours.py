@@ -305,7 +305,7 @@ def make_behaviour(name: str, params: BehaviourParams, bounds: Bounds,
                    coverage_worker: bool = False) -> Behaviour:
     """The behaviour called ``name`` (see the module docstring); BehaviourError for unknown names.
     ``script_budget``: s a ``script:`` behaviour may take per tick (:class:`Script`); ``coverage_worker``:
-    ``coverage`` runs one tick behind on a worker thread (:mod:`swarmdeck.console.runtime.coverage_worker`)."""
+    ``coverage`` runs two ticks behind on worker threads (:mod:`swarmdeck.console.runtime.coverage_worker`)."""
     if name == "coverage":
         if coverage_worker:
             from swarmdeck.console.runtime.coverage_worker import PipelinedCoverage

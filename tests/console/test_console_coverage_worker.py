@@ -1,6 +1,7 @@
-"""Coverage one tick behind on a worker thread (console/runtime/coverage_worker.py): tick k's coverage is
-exactly the coverage of tick k − 1's inputs (bit for bit), two runs give the same bits, a late worker
-stops the robots for the tick and is counted, and "auto" keeps the synchronous path below 2000 robots."""
+"""Coverage behind on worker threads (console/runtime/coverage_worker.py): tick k's coverage is exactly
+the coverage of tick k − depth's inputs (bit for bit; depth 2 in the console, 1 on request), two runs give
+the same bits, a late worker stops the robots for the tick and is counted, an error in a worker is the
+next tick's, and "auto" keeps the synchronous path below 2000 robots."""
 from __future__ import annotations
 
 import threading
@@ -14,11 +15,14 @@ from swarmdeck.console.runtime.loop import ControlLoop, LoopConfig
 from swarmdeck.console.runtime.params import BehaviourParams
 from swarmdeck.coverage import CoverageConfig, coverage_tick
 
-N, TICKS = 24, 6
+N, TICKS = 24, 7
 
 
-def _run(worker: str) -> list:
+def _run(worker: str, depth: int | None = None) -> list:
     loop = ControlLoop(LoopConfig(n_robots=N, seed=5, coverage_worker=worker))
+    if depth is not None:
+        loop.use_behaviour(PipelinedCoverage(BehaviourParams(), LoopConfig().bounds, LoopConfig().max_speed, 0.17,
+                                             depth=depth))
     try:
         return [loop.tick() for _ in range(TICKS)]
     finally:
@@ -30,17 +34,27 @@ def piped() -> list:
     return _run("on")
 
 
-def test_tick_k_runs_the_coverage_of_tick_k_minus_1_inputs_bit_for_bit(piped: list) -> None:
+def _check_behind(frames: list, depth: int) -> None:
     config = CoverageConfig(max_speed=LoopConfig().max_speed, bounds=LoopConfig().bounds)
-    for k in range(1, TICKS):
-        before, frame = piped[max(k - 1, 0)], piped[k]
+    for k in range(depth, TICKS):
+        before, frame = frames[k - depth], frames[k]
         _, state, _ = coverage_tick(before.points, before.density, config, before.run_time)
         assert state.ok and frame.coverage is not None
         assert np.array_equal(frame.coverage.centroids, state.centroids), k
         assert np.array_equal(frame.coverage.cell_vertices, state.cells.vertices), k
-    # the first tick's coverage is computed at once and used twice (ticks 0 and 1)
-    assert np.array_equal(piped[0].coverage.centroids, piped[1].coverage.centroids)
-    assert any(np.any(f.nominal != 0.0) for f in piped)
+    # the first tick's coverage is computed at once and used for the first depth + 1 ticks
+    for k in range(1, depth + 1):
+        assert np.array_equal(frames[0].coverage.centroids, frames[k].coverage.centroids)
+    assert not np.array_equal(frames[depth].coverage.centroids, frames[depth + 1].coverage.centroids)
+    assert any(np.any(f.nominal != 0.0) for f in frames)
+
+
+def test_the_console_runs_the_coverage_of_tick_k_minus_2_bit_for_bit(piped: list) -> None:
+    _check_behind(piped, 2)
+
+
+def test_one_worker_runs_the_coverage_of_tick_k_minus_1_bit_for_bit() -> None:
+    _check_behind(_run("off", depth=1), 1)
 
 
 def test_two_pipelined_runs_give_the_same_bits(piped: list) -> None:
@@ -72,22 +86,23 @@ def test_a_late_worker_stops_the_robots_for_the_tick_and_is_counted() -> None:
     assert isinstance(behaviour, PipelinedCoverage)
     behaviour.timeout = 0.05
     try:
-        loop.tick()                                   # tick 0: computed at once; tick 0's inputs go to the worker
+        loop.tick()                                   # tick 0: computed at once, used for ticks 0, 1, 2
         ctrl = behaviour._ctrl
-        step = ctrl.step
+        diagram = ctrl.diagram
 
         def held(*args: object) -> object:
             assert gate.wait(60), "the test never opened the gate"
-            return step(*args)
+            return diagram(*args)
 
-        ctrl.step = held
-        loop.tick()                                   # tick 1: tick 0's answer, ready; tick 1's job waits at the gate
-        late = loop.tick()                            # tick 2: the worker is held: robots stopped, counted
+        ctrl.diagram = held
+        loop.tick()                                   # tick 1: tick 0's answer; tick 1's diagram waits at the gate
+        loop.tick()                                   # tick 2: tick 0's answer again
+        late = loop.tick()                            # tick 3: tick 1's answer is held: robots stopped, counted
         assert behaviour.late == 1 and loop.errors.get("behaviour", 0) == 1
         assert np.all(late.v == 0.0) and np.all(late.w == 0.0)
         gate.set()
         behaviour.timeout = 60.0
-        ok = loop.tick()                              # tick 3: tick 1's answer (waited for again), robots move
+        ok = loop.tick()                              # tick 4: tick 1's answer (waited for again), robots move
         assert loop.errors.get("behaviour", 0) == 1 and np.any(ok.v != 0.0)
         assert "ticks late" in ok.health.get("coverage", "")
     finally:
@@ -110,7 +125,8 @@ def test_an_error_in_the_worker_is_reported_on_the_next_tick_and_the_pipeline_re
         b(tick(pts))
         bad = pts.copy()
         bad[0] = np.nan
-        b(tick(bad))                                  # the worker gets non-finite points ...
+        b(tick(bad))                                  # the workers get non-finite points ...
+        b(tick(pts))
         with pytest.raises(ValueError, match="NaN"):
             b(tick(pts))                              # ... and its error is the next tick's
         u, state = b(tick(pts))                       # afresh: this tick's coverage, at once
