@@ -134,3 +134,13 @@ def test_an_error_in_the_worker_is_reported_on_the_next_tick_and_the_pipeline_re
     finally:
         b.close()
         loop.close()
+
+
+def test_a_recording_from_before_the_setting_resimulates_synchronously() -> None:
+    from swarmdeck.console.recording.resimulate import _with_worker_setting, loop_config_from_dict, loop_config_to_dict
+
+    old = loop_config_to_dict(LoopConfig(n_robots=5000))
+    del old["coverage_worker"]
+    assert loop_config_from_dict(_with_worker_setting(old)).coverage_worker == "off"
+    kept = loop_config_to_dict(LoopConfig(n_robots=5000, coverage_worker="on"))
+    assert loop_config_from_dict(_with_worker_setting(kept)).coverage_worker == "on"
