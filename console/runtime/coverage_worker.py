@@ -99,6 +99,7 @@ class PipelinedCoverage:
         self._pools = [ThreadPoolExecutor(max_workers=1, thread_name_prefix=f"swarmdeck-coverage-{k}")
                        for k in range(self.depth)]
         self.late = 0
+        self._closed = False
         for pool in self._pools:
             weakref.finalize(self, pool.shutdown, wait=False, cancel_futures=True)
 
@@ -125,6 +126,8 @@ class PipelinedCoverage:
         self._ids = ids.copy()
         snap = tick.density.at(float(tick.t))              # on the loop thread: the operator's density now
         points, t = np.array(tick.points, dtype=float), float(tick.t)
+        if self._closed:                                   # replaced while a tick still held it: at once
+            return self._ctrl.step(points, snap, t)
         if not self._queue:                                # first tick: this tick's coverage, now, used
             first = _done(self._ctrl.step(points, snap, t))  # for this tick and the next `depth` ticks
             self._queue.extend([first] * self.depth)
@@ -148,6 +151,7 @@ class PipelinedCoverage:
 
     def close(self) -> None:
         """End the worker threads (a step still running finishes on its own; its result is dropped)."""
+        self._closed = True
         self._queue.clear()
         for pool in self._pools:
             pool.shutdown(wait=False, cancel_futures=True)

@@ -131,6 +131,9 @@ def test_an_error_in_the_worker_is_reported_on_the_next_tick_and_the_pipeline_re
             b(tick(pts))                              # ... and its error is the next tick's
         u, state = b(tick(pts))                       # afresh: this tick's coverage, at once
         assert state.ok and u.shape == (N, 2)
+        b.close()                                     # replaced while the loop still held it: computed at once
+        u, state = b(tick(pts))
+        assert state.ok and u.shape == (N, 2)
     finally:
         b.close()
         loop.close()
