@@ -4,12 +4,17 @@ Run: ``.venv/bin/python bench/bench_console_scale.py [N ...]`` (a few minutes; p
 
 Real ``ControlLoop`` ticks (simulated robots, TVD-D1 coverage on the console's moving density, the
 barrier in "auto" mode) on the floors ``swarmdeck console --robots N --arena WxH`` uses: 22 × 13 m up to
-N = 5000 (the issue's command), 31 × 19 m at 10,000. Two loops with the same seed tick alternately in
-one process: *compiled* (today: the coverage sums in numba kernels) and *numpy* (the same loop with
-``swarmdeck.coverage.kernels.AVAILABLE`` off — the code before the kernels; both give the same bits).
-Per tick, process CPU time of ``loop.tick()`` and of the coverage stages inside it (pre-condition,
-Voronoi, cell moments, Jacobian, law; "rest" = the tick minus these: sense, density, barrier, Frame).
-ticks/s = 1 / median tick CPU (one core, no scene or recorder). Baseline: harness sort workload.
+N = 5000 (the issue's command), 31 × 19 m at 10,000. Three loops with the same seed tick alternately in
+one process: *numpy* (``coverage_worker="off"`` and ``swarmdeck.coverage.kernels.AVAILABLE`` off: the
+coverage sums before the kernels), *sync* (``coverage_worker="off"``: every stage on the loop thread,
+the console below 2000 robots) and *worker* (``coverage_worker="on"``: coverage one tick behind on its
+worker thread, the console's default from 2000 robots). Per tick: the loop thread's CPU time of
+``loop.tick()`` (*loop*), the coverage stages' CPU time on whichever thread ran them (pre-condition,
+Voronoi, cell moments, Jacobian, law; *rest* = the loop thread's tick minus the stages it ran itself:
+sense, density, barrier, Frame) and, for *worker*, the worker thread's CPU (*worker* = process CPU −
+loop thread CPU from the tick's start until the worker's step of this tick's inputs is done). ticks/s (2 cores) = 1 / max(loop, worker) medians: what the tick holds
+when each thread has a core (sync: 1 / loop, one core); the wall ticks/s of the back-to-back ticks is
+printed too (meaningful only on an idle machine). No scene or recorder. Baseline: harness sort workload.
 """
 from __future__ import annotations
 
@@ -21,27 +26,37 @@ from contextlib import contextmanager
 import harness  # first: pins BLAS/OpenMP to one thread, before numpy loads
 
 from swarmdeck.console.runtime.config import arena_bounds  # noqa: E402
+from swarmdeck.console.runtime.coverage_worker import PipelinedCoverage  # noqa: E402
 from swarmdeck.console.runtime.loop import ControlLoop, LoopConfig  # noqa: E402
+from swarmdeck.console.runtime.params import BehaviourParams, SafetyParams  # noqa: E402
 from swarmdeck.coverage import controller, geometry, kernels  # noqa: E402
 
 ARENAS = {1000: "22x13", 3000: "22x13", 5000: "22x13", 10000: "31x19"}
 STAGES = (("precondition", geometry, "precondition_positions"), ("voronoi", geometry, "bounded_voronoi"),
           ("moments", geometry, "cell_moments"), ("jacobian", controller, "centroid_jacobian"),
           ("law", controller, "law_command"))
+VARIANTS = {"numpy": "off", "sync": "off", "worker": "on", "worker2": "on"}
 
 
 @contextmanager
-def stage_clock(acc: dict[str, float]):
-    """Wrap the coverage stages where the tick looks them up; add each call's CPU time to ``acc``."""
+def stage_clock(acc: dict[str, float], own: dict[str, float]):
+    """Wrap the coverage stages where the tick looks them up; add each call's CPU time (of the thread
+    running it) to ``acc``, and to ``own`` when that thread is the caller's."""
     saved = [(mod, name, getattr(mod, name)) for _, mod, name in STAGES]
+    import threading
+
+    me = threading.get_ident()
 
     def wrap(key, fn):
         def timed(*a, **k):
-            t0 = time.process_time()
+            t0 = time.thread_time()
             try:
                 return fn(*a, **k)
             finally:
-                acc[key] += time.process_time() - t0
+                dt = time.thread_time() - t0
+                acc[key] += dt
+                if threading.get_ident() == me:
+                    own[key] += dt
         return timed
 
     for (key, mod, name), (_, _, fn) in zip(STAGES, saved):
@@ -54,22 +69,37 @@ def stage_clock(acc: dict[str, float]):
 
 
 def run(n: int, ticks: int, warm: int = 3) -> dict[str, dict[str, list[float]]]:
-    loops = {v: ControlLoop(LoopConfig(n_robots=n, seed=1, bounds=arena_bounds(ARENAS[n]))) for v in ("numpy", "compiled")}
+    loops = {v: ControlLoop(LoopConfig(n_robots=n, seed=1, bounds=arena_bounds(ARENAS[n]), coverage_worker=w))
+             for v, w in VARIANTS.items()}
+    loops["worker2"].use_behaviour(PipelinedCoverage(BehaviourParams(), arena_bounds(ARENAS[n]), LoopConfig().max_speed,
+                                                     SafetyParams().safety_distance, depth=2))
     out: dict[str, dict[str, list[float]]] = {v: defaultdict(list) for v in loops}
-    for k in range(warm + ticks):
-        for variant, loop in loops.items():
-            acc: dict[str, float] = defaultdict(float)
-            kernels.AVAILABLE = variant == "compiled" and harness_available
-            with stage_clock(acc):
-                t0 = time.process_time()
-                loop.tick()
-                total = time.process_time() - t0
-            if k >= warm:
-                out[variant]["tick"].append(total)
-                for key, _, _ in STAGES:
-                    out[variant][key].append(acc[key])
-                out[variant]["rest"].append(total - sum(acc.values()))
-    kernels.AVAILABLE = harness_available
+    try:
+        for k in range(warm + ticks):
+            for variant, loop in loops.items():
+                acc: dict[str, float] = defaultdict(float)
+                own: dict[str, float] = defaultdict(float)
+                kernels.AVAILABLE = variant != "numpy" and harness_available
+                with stage_clock(acc, own):
+                    w0, c0, p0 = time.perf_counter(), time.thread_time(), time.process_time()
+                    loop.tick()
+                    queue = getattr(loop._behaviour, "_queue", None)
+                    for pending in list(queue or ()):  # the workers' steps of this tick's inputs: in this tick
+                        pending.result(timeout=600)
+                    wall = time.perf_counter() - w0
+                    total = time.thread_time() - c0
+                    proc = time.process_time() - p0
+                if k >= warm:
+                    out[variant]["tick"].append(total)
+                    out[variant]["wall"].append(wall)
+                    out[variant]["worker"].append(max(proc - total, 0.0) if variant.startswith("worker") else 0.0)
+                    for key, _, _ in STAGES:
+                        out[variant][key].append(acc[key])
+                    out[variant]["rest"].append(total - sum(own.values()))
+    finally:
+        kernels.AVAILABLE = harness_available
+        for loop in loops.values():
+            loop.close()
     return out
 
 
@@ -96,20 +126,30 @@ def delaunay_alternatives(sizes: list[int]) -> None:
 def main(sizes: list[int]) -> None:
     print(harness.machine())
     print("baseline (sort 1e5 ×10, thread CPU):", harness.baseline().ms())
-    cols = ["N", "floor", "variant", "tick CPU ms (worst)", "ticks/s", "precondition", "voronoi", "moments",
-            "jacobian", "law", "rest", "tick / numpy tick"]
+    cols = ["N", "floor", "variant", "loop CPU ms (worst)", "worker CPU ms", "ticks/s (2 cores)", "wall ticks/s",
+            "precondition", "voronoi", "moments", "jacobian", "law", "rest", "ticks/s / sync"]
     print(harness.table_header(cols))
     for n in sizes:
         ticks = 10 if n <= 5000 else 6
         res = run(n, ticks)
-        ref = harness.timing(res["numpy"]["tick"], "cpu").median
-        for variant in ("numpy", "compiled"):
+        med = {v: harness.timing(res[v]["tick"], "cpu").median for v in res}
+        rate = {}
+        for v in res:
+            worker = harness.timing(res[v]["worker"], "cpu").median
+            if v == "worker2":  # two workers: the diagram (pre-condition, Voronoi) and the rest; two cores
+                a = sum(harness.timing(res[v][key], "cpu").median for key in ("precondition", "voronoi"))
+                rate[v] = 1.0 / max(med[v], a, worker - a, 0.5 * (med[v] + worker))
+            else:
+                rate[v] = 1.0 / max(med[v], worker)
+        for variant in VARIANTS:
             r = res[variant]
             tick = harness.timing(r["tick"], "cpu")
             parts = [f"{harness.timing(r[key], 'cpu').median_ms:.1f}" for key in
                      ("precondition", "voronoi", "moments", "jacobian", "law", "rest")]
-            print(harness.table_row(n, ARENAS[n], variant, tick.ms(1), f"{1.0 / tick.median:.1f}", *parts,
-                                    f"{tick.median / ref:.2f}"))
+            worker = harness.timing(r["worker"], "cpu").median_ms
+            wall = harness.timing(r["wall"], "wall").median
+            print(harness.table_row(n, ARENAS[n], variant, tick.ms(1), f"{worker:.1f}", f"{rate[variant]:.1f}",
+                                    f"{1.0 / wall:.1f}", *parts, f"{rate[variant] / rate['sync']:.2f}"))
         sys.stdout.flush()
     delaunay_alternatives(sizes)
 

@@ -11,7 +11,7 @@ Example::
 """
 from __future__ import annotations
 
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -25,13 +25,20 @@ from swarmdeck.core.config import from_mapping
 from swarmdeck.core.constants import MAX_LINEAR_SPEED, SAFETY_DISTANCE
 from swarmdeck.core.kinematics import saturate
 from swarmdeck.coverage.density import Density, GaussianMixture
-from swarmdeck.coverage.geometry import DEFAULT_QUADRATURE, NUMERICAL_ERRORS, GeometryConfig, coverage_geometry
+from swarmdeck.coverage.geometry import (
+    DEFAULT_QUADRATURE,
+    NUMERICAL_ERRORS,
+    CoverageGeometry,
+    GeometryConfig,
+    geometry_diagram,
+    geometry_moments,
+)
 from swarmdeck.coverage.jacobian import EdgeOptions, centroid_jacobian
 from swarmdeck.coverage.laws import law_command, parse_law
 from swarmdeck.coverage.packing import packing_warning
 from swarmdeck.coverage.quadrature import QuadratureOptions
 
-__all__ = ["CoverageConfig", "CoverageState", "CoverageController", "coverage_tick"]
+__all__ = ["CoverageConfig", "CoverageState", "CoverageController", "coverage_tick", "coverage_tick_on"]
 
 
 @dataclass(frozen=True)
@@ -103,7 +110,8 @@ class CoverageState:
     dc_dt (N, 2) [m/s]; cost_H: locational cost H = Σ_i ∫_{V_i} ‖q − p_i‖² φ;
     cost_H_normalised: H / ∫φ; mean_centroid_distance, max_centroid_distance: ‖p_i − c_i‖ [m];
     edges (E, 2, 2) shared Voronoi edge segments [m]; neighbours (E, 2) int robot pairs;
-    cells: N counter-clockwise polygons (V_i, 2) [m]; packing_warning: str | None;
+    cells: N counter-clockwise polygons (V_i, 2) [m] (a flat
+    :class:`~swarmdeck.coverage.cells.CellPolygons` from a tick, read-only); packing_warning: str | None;
     repaired: robots moved by pre-conditioning; saturated: robots whose speed was limited;
     geometry_config: what the cells were computed with (recordings store it to derive them again).
     """
@@ -121,7 +129,7 @@ class CoverageState:
     max_centroid_distance: float
     edges: NDArray[np.float64]
     neighbours: NDArray[np.intp]
-    cells: list[NDArray[np.float64]]
+    cells: Sequence[NDArray[np.float64]]
     packing_warning: str | None
     repaired: int
     saturated: int
@@ -158,7 +166,17 @@ def coverage_tick(positions: ArrayLike, density: GaussianMixture, config: Covera
     """
     if not isinstance(density, GaussianMixture):
         raise TypeError(f"a density snapshot must be a GaussianMixture, got {type(density).__name__}")
-    geo = coverage_geometry(positions, density, config.geometry)
+    return coverage_tick_on(geometry_diagram(positions, config.geometry), density, config, t, packing)
+
+
+def coverage_tick_on(diagram: CoverageGeometry, density: GaussianMixture, config: CoverageConfig,
+                     t: float = 0.0, packing: str | None = None
+                     ) -> tuple[NDArray[np.float64], CoverageState, sp.csr_array | None]:
+    """:func:`coverage_tick` from the tick's diagram already built (``geometry_diagram(positions,
+    config.geometry)``): the same result, bit for bit."""
+    if not isinstance(density, GaussianMixture):
+        raise TypeError(f"a density snapshot must be a GaussianMixture, got {type(density).__name__}")
+    geo = geometry_moments(diagram, density)
     pts, repaired, vor, mom = geo.positions, geo.repaired, geo.voronoi, geo.moments
     n = pts.shape[0]
     family, k = parse_law(config.law, config.hops)
@@ -187,8 +205,8 @@ def coverage_tick(positions: ArrayLike, density: GaussianMixture, config: Covera
     dist = geo.centroid_distances()
     total = float(mom.masses.sum())
     edges = geo.edges
-    cells = geo.cells()
-    for arr in (pts, mom.centroids, mom.masses, mom.dc_dt, edges, vor.edge_pairs, *cells):
+    cells = geo.cell_polygons()  # flat and read-only: no Python object per robot
+    for arr in (pts, mom.centroids, mom.masses, mom.dc_dt, edges, vor.edge_pairs):
         if arr.flags.writeable:
             arr.setflags(write=False)
     state = CoverageState(
@@ -229,15 +247,31 @@ class CoverageController:
 
     def __call__(self, positions: ArrayLike, t: float) -> tuple[NDArray[np.float64], CoverageState]:
         """Nominal single-integrator velocities (N, 2) [m/s] and the tick's :class:`CoverageState`."""
-        snap = self._density.at(float(t))
+        return self.step(positions, self._density.at(float(t)), t)
+
+    def step(self, positions: ArrayLike, snapshot: GaussianMixture, t: float
+             ) -> tuple[NDArray[np.float64], CoverageState]:
+        """:meth:`__call__` with the density's snapshot at ``t`` already taken (``density.at(t)``, e.g. on
+        another thread than the one computing): the same velocities (N, 2) m/s and state."""
+        return self.finish(self.diagram(positions), snapshot, t)
+
+    def diagram(self, positions: ArrayLike) -> CoverageGeometry:
+        """The first half of :meth:`step`: pre-conditioning and the Voronoi diagram of ``positions``
+        (N, 2) m (no density needed; touches no state of the controller)."""
+        return geometry_diagram(positions, self.config.geometry)
+
+    def finish(self, diagram: CoverageGeometry, snapshot: GaussianMixture, t: float
+               ) -> tuple[NDArray[np.float64], CoverageState]:
+        """The second half of :meth:`step`: moments, Jacobian and law on :meth:`diagram`'s result."""
+        snap = snapshot
         if not isinstance(snap, GaussianMixture):
             raise TypeError(f"density.at(t) must return a GaussianMixture, got {type(snap).__name__}")
-        n = int(np.shape(positions)[0]) if np.ndim(positions) == 2 else 0
+        n = int(diagram.positions.shape[0])
         key = (id(self._density), n)
         if key != self._packing_key or self._ticks % self.config.packing_every == 0:
             self._packing = (packing_warning(snap, n, self.config.bounds, self.config.safety_distance)
                              if n >= 2 else None)
             self._packing_key = key
         self._ticks += 1
-        u, state, _ = coverage_tick(positions, snap, self.config, t, self._packing)
+        u, state, _ = coverage_tick_on(diagram, snap, self.config, t, self._packing)
         return u, state

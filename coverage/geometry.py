@@ -17,7 +17,7 @@ Example::
 from __future__ import annotations
 
 from collections.abc import Mapping
-from dataclasses import asdict, dataclass, field, fields
+from dataclasses import asdict, dataclass, field, fields, replace
 from typing import Any
 
 import numpy as np
@@ -26,11 +26,13 @@ from scipy.spatial import QhullError
 
 from swarmdeck.core.bounds import DEFAULT_BOUNDS, Bounds, check_bounds
 from swarmdeck.core.config import from_mapping
+from swarmdeck.coverage.cells import CellPolygons
 from swarmdeck.coverage.density import GaussianMixture
 from swarmdeck.coverage.quadrature import CellMoments, QuadratureOptions, cell_moments
 from swarmdeck.coverage.voronoi import BoundedVoronoi, bounded_voronoi, precondition_positions
 
-__all__ = ["GeometryConfig", "CoverageGeometry", "coverage_geometry", "NUMERICAL_ERRORS", "DEFAULT_QUADRATURE"]
+__all__ = ["GeometryConfig", "CoverageGeometry", "coverage_geometry", "geometry_diagram", "geometry_moments",
+           "NUMERICAL_ERRORS", "DEFAULT_QUADRATURE"]
 
 #: The quadrature of the coverage controller (REFERENCE.md §5): sub-triangles ≤ 1.25 σ of a nearby bump.
 DEFAULT_QUADRATURE = QuadratureOptions(resolution=1.25)
@@ -129,6 +131,10 @@ class CoverageGeometry:
         """N counter-clockwise polygons (V_i, 2) m."""
         return self._need()[0].polygons()
 
+    def cell_polygons(self) -> CellPolygons:
+        """The same polygons, flat (concatenated vertices and offsets; what the Frame stores)."""
+        return self._need()[0].cell_polygons()
+
     @property
     def cost_H(self) -> float:
         """Locational cost H = Σ_i ∫_{V_i} ‖q − p_i‖² φ."""
@@ -147,10 +153,29 @@ def coverage_geometry(positions: ArrayLike, density: GaussianMixture, config: Ge
     Raises ValueError for malformed positions (wrong shape, not finite); a degenerate diagram or a
     failed integration gives a :class:`CoverageGeometry` with ``error`` set instead.
     """
+    return geometry_moments(geometry_diagram(positions, config), density)
+
+
+def geometry_diagram(positions: ArrayLike, config: GeometryConfig) -> CoverageGeometry:
+    """The first half of :func:`coverage_geometry`: pre-conditioning and the diagram, no moments yet
+    (``moments`` None; ``error`` set when the diagram could not be built). It needs no density, so a
+    pipeline can build tick k's diagram while tick k − 1's moments are integrated. ValueError for
+    malformed positions."""
     pts, repaired = precondition_positions(positions, config.bounds, config.wall_margin, config.min_separation)
     try:
         vor = bounded_voronoi(pts, config.bounds)
-        mom = cell_moments(vor, density, config.quadrature)
     except NUMERICAL_ERRORS as exc:
         return CoverageGeometry(pts, repaired, None, None, config, str(exc))
-    return CoverageGeometry(pts, repaired, vor, mom, config)
+    return CoverageGeometry(pts, repaired, vor, None, config)
+
+
+def geometry_moments(diagram: CoverageGeometry, density: GaussianMixture) -> CoverageGeometry:
+    """The second half of :func:`coverage_geometry`: the cell moments of :func:`geometry_diagram`'s
+    diagram under ``density`` (the same bits as the whole); an earlier error is kept."""
+    if diagram.voronoi is None:
+        return diagram
+    try:
+        mom = cell_moments(diagram.voronoi, density, diagram.config.quadrature)
+    except NUMERICAL_ERRORS as exc:
+        return replace(diagram, voronoi=None, moments=None, error=str(exc))
+    return replace(diagram, moments=mom)

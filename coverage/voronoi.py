@@ -25,6 +25,7 @@ from numpy.typing import ArrayLike, NDArray
 from scipy.spatial import Delaunay, QhullError, cKDTree
 
 from swarmdeck.core.bounds import DEFAULT_BOUNDS, Bounds, check_bounds
+from swarmdeck.coverage.cells import CellPolygons
 
 __all__ = ["BoundedVoronoi", "bounded_voronoi", "precondition_positions"]
 
@@ -113,15 +114,22 @@ class BoundedVoronoi:
         tri = 0.5 * (a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0])
         return np.bincount(self.tri_cell, weights=tri, minlength=self.n)  # type: ignore[return-value]  # bincount with weights is float64
 
-    def polygons(self) -> list[NDArray[np.float64]]:
-        """Cells as counter-clockwise polygons, a list of N arrays (V_i, 2) [m]."""
+    def cell_polygons(self) -> CellPolygons:
+        """Cells as counter-clockwise polygons, flat: N polygons (V_i, 2) [m] as one
+        :class:`~swarmdeck.coverage.cells.CellPolygons` (read-only)."""
         p = self.points[self.tri_cell]
         a = self.vertices[self.tri_a] - p
         ang = np.arctan2(a[:, 1], a[:, 0])
         order = np.lexsort((ang, self.tri_cell))
         verts = self.vertices[self.tri_a[order]]
-        ends = np.cumsum(np.bincount(self.tri_cell, minlength=self.n)).tolist()
-        return [verts[a:b] for a, b in zip([0] + ends[:-1], ends)]
+        offsets = np.zeros(self.n + 1, dtype=np.int64)
+        np.cumsum(np.bincount(self.tri_cell, minlength=self.n), out=offsets[1:])
+        return CellPolygons(verts, offsets)
+
+    def polygons(self) -> list[NDArray[np.float64]]:
+        """Cells as counter-clockwise polygons, a list of N read-only arrays (V_i, 2) [m]
+        (:meth:`cell_polygons` without the list)."""
+        return list(self.cell_polygons())
 
     def neighbours_of(self, i: int) -> NDArray[np.intp]:
         """Robots sharing an edge with robot i."""

@@ -67,6 +67,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="give the robots Robotarium 2.0's sensors (seven ToF distance sensors, encoders, IMU, "
                              "LEDs; docs/sensing.md): every Frame carries their readings, the scene draws the rays "
                              "(layer 'sensors'), recordings keep them ([console] sensors = true in --config)")
+    parser.add_argument("--coverage-worker", choices=("auto", "on", "off"), default=None,
+                        help="run the coverage behaviour two ticks behind on two worker threads (one builds the "
+                             "Voronoi diagram, one integrates the cells), overlapping the barrier and the Frame: "
+                             "'auto' (default) from 2000 robots; the barrier still certifies every command at the "
+                             "current poses (docs/console-scale.md; [console] coverage_worker in --config)")
     parser.add_argument("--projector", nargs="?", type=int, const=8090, default=None, metavar="PORT",
                         help="also serve the overhead projector's page on http://HOST:PORT/projector (default port "
                              "8090): open it full screen on the projector (`chromium --kiosk --app=URL`); it "
@@ -100,6 +105,8 @@ def main(args: argparse.Namespace) -> int:
         changes["seed"] = args.seed
     if args.sensors:
         changes["sensors"] = True
+    if args.coverage_worker is not None:
+        changes["coverage_worker"] = args.coverage_worker
     if args.arena is not None:
         from swarmdeck.console.runtime.config import arena_bounds
 

@@ -59,6 +59,12 @@ def loop_config_from_dict(d: Mapping[str, Any]) -> Any:
         raise ValueError(f"recorded loop configuration is not a LoopConfig: {exc}") from None
 
 
+def _with_worker_setting(loop: Mapping[str, Any]) -> dict[str, Any]:
+    """A recorded loop configuration with its ``coverage_worker``: a recording made before the setting
+    existed ran coverage synchronously ("off"), whatever today's default would pick for its N."""
+    return {"coverage_worker": "off", **dict(loop)}
+
+
 def session_metadata(loop_config: Any, inputs: Mapping[str, Any] | None = None, *,
                      robots: list[int] | None = None, source: str = "simulation",
                      guard: GuardConfig | None = GuardConfig(), **extra: Any) -> dict[str, Any]:
@@ -227,7 +233,7 @@ def resimulate(recording: Recording, *, max_frames: int | None = None,
     if first is None:
         raise ValueError(f"{recording.path} holds no readable frame")
     cfg = recording.config().get("config", {}) or {}
-    loop_cfg = loop_config_from_dict(cfg["loop"]) if cfg.get("loop") else None
+    loop_cfg = loop_config_from_dict(_with_worker_setting(cfg["loop"])) if cfg.get("loop") else None
     if loop_cfg is None:
         from swarmdeck.console.runtime.loop import LoopConfig
 

@@ -301,10 +301,16 @@ def load_script(path: Path) -> Callable[..., Any]:
 
 
 def make_behaviour(name: str, params: BehaviourParams, bounds: Bounds,
-                   max_speed: float, safety_distance: float, *, script_budget: float = 0.0165) -> Behaviour:
+                   max_speed: float, safety_distance: float, *, script_budget: float = 0.0165,
+                   coverage_worker: bool = False) -> Behaviour:
     """The behaviour called ``name`` (see the module docstring); BehaviourError for unknown names.
-    ``script_budget``: s a ``script:`` behaviour may take per tick (:class:`Script`)."""
+    ``script_budget``: s a ``script:`` behaviour may take per tick (:class:`Script`); ``coverage_worker``:
+    ``coverage`` runs two ticks behind on worker threads (:mod:`swarmdeck.console.runtime.coverage_worker`)."""
     if name == "coverage":
+        if coverage_worker:
+            from swarmdeck.console.runtime.coverage_worker import PipelinedCoverage
+
+            return PipelinedCoverage(params, bounds, max_speed, safety_distance)
         return Coverage(params, bounds, max_speed, safety_distance)
     if name == "rendezvous":
         return Rendezvous(params)

@@ -23,6 +23,7 @@ import numpy as np
 
 from swarmdeck.console.runtime import operator_events as ev
 from swarmdeck.console.runtime.behaviours import Behaviour, BehaviourError, HasBarrierSettings, make_behaviour
+from swarmdeck.console.runtime.coverage_worker import use_worker
 from swarmdeck.console.runtime.density import BumpSet, ConsoleDensity
 from swarmdeck.console.runtime.notices import Notices
 from swarmdeck.console.runtime.params import BehaviourParams, DensityParams, LoopConfig, SafetyParams
@@ -95,7 +96,8 @@ class OperatorCommands:
     # ------------------------------------------------------------------ construction helpers
     def _make_behaviour(self, name: str, params: BehaviourParams, safety: SafetyParams) -> Behaviour:
         return make_behaviour(name, params, self.config.bounds, self.config.max_speed, safety.safety_distance,
-                              script_budget=self.config.script_budget_s)
+                              script_budget=self.config.script_budget_s,
+                              coverage_worker=use_worker(self.config.coverage_worker, self.config.n_robots))
 
     def _make_filter(self, p: SafetyParams, pairs: bool = True) -> Any:
         """The unicycle barrier: the QP on the look-ahead points plus each robot's four wheel-limit
@@ -259,9 +261,11 @@ class OperatorCommands:
         b = self._make_behaviour(name, params, self._safety_params) if not name.startswith("script:") else self._behaviour
         with self._lock:
             self._behaviour_params = params
-            self._behaviour = b
+            old, self._behaviour = self._behaviour, b
             self.notices.post("parameters: " + ", ".join(f"{k}={shown(v)}" for k, v in changes.items()))
             self._queue(ev.SetParams(ev.changes_of(params, changes)))
+        if old is not b:
+            close_behaviour(old)  # a coverage worker's thread
         return params
 
     def set_safety(self, **changes: Any) -> SafetyParams:
@@ -280,7 +284,8 @@ class OperatorCommands:
             self._safety_params = params
             self._filter, self._hard_filter = filt, hard
             if rebuild and self._behaviour.name == "coverage":
-                self._behaviour = self._make_behaviour("coverage", self._behaviour_params, params)
+                old, self._behaviour = self._behaviour, self._make_behaviour("coverage", self._behaviour_params, params)
+                close_behaviour(old)  # a coverage worker's thread
             self.notices.post("safety: " + ", ".join(f"{k}={shown(v)}" for k, v in changes.items()))
             if not params.enabled:
                 self.notices.post("WARNING: safety barrier OFF" if self.guard is None else

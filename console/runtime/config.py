@@ -5,7 +5,9 @@ Tables (every key optional; defaults from REFERENCE.md)::
     [console]   host = "127.0.0.1", port = 8080, robots = 12, behaviour = "coverage",
                 seed = 1, dt = 0.033, max_speed = 0.2, bounds = [-1.6, 1.6, -1.0, 1.0],
                 script_budget = dt / 2 (s a script: behaviour may take per tick),
-                foxglove_channels = true (false: recordings carry only swarmdeck's own channels)
+                foxglove_channels = true (false: recordings carry only swarmdeck's own channels),
+                coverage_worker = "auto" ("on" | "off": coverage two ticks behind on two worker threads;
+                auto: from 2000 robots; console/runtime/coverage_worker.py)
                 (or arena = "10x6" instead of bounds: a W x H m arena centred on the origin)
     [behaviour] kappa, law, gain, formation_edge, formation_gain, goals = [[x, y], ...],
                 goal_centre = [x, y]

@@ -84,6 +84,7 @@ from swarmdeck.core.bounds import DEFAULT_BOUNDS, Bounds
 from swarmdeck.core.constants import CONTROL_PERIOD, LOOKAHEAD, SAFETY_DISTANCE
 from swarmdeck.core.kinematics import lookahead_points
 from swarmdeck.core.obstacles import Obstacles
+from swarmdeck.coverage.cells import CellPolygons
 from swarmdeck.coverage.density import GaussianMixture
 from swarmdeck.coverage.geometry import GeometryConfig
 
@@ -260,12 +261,11 @@ class BarrierFrame:
         )
 
 
-def _flat_cells(cells: list[Any]) -> tuple[FloatArray, IntArray]:
-    """Polygons (V_i, 2) m → their concatenated vertices (V, 2) and offsets (N + 1,)."""
-    if not cells:
-        return np.empty((0, 2)), np.zeros(1, dtype=np.int64)
-    arrs = [np.asarray(c, dtype=float).reshape(-1, 2) for c in cells]
-    return np.concatenate(arrs, axis=0), np.concatenate(([0], np.cumsum([len(a) for a in arrs]))).astype(np.int64)
+def _flat_cells(cells: Any) -> tuple[FloatArray, IntArray]:
+    """Polygons (V_i, 2) m → their concatenated vertices (V, 2) and offsets (N + 1,) (a flat
+    ``CellPolygons`` is taken as it is: no copy)."""
+    flat = CellPolygons.from_list(cells if cells is not None else [])
+    return flat.vertices, flat.offsets
 
 
 @dataclass(frozen=True, eq=False)
@@ -305,7 +305,7 @@ class CoverageFrame:
     @classmethod
     def from_state(cls, state: Any) -> CoverageFrame:
         """Build from a ``CoverageState``-like object (attributes per the coverage contract)."""
-        verts, offsets = _flat_cells(list(getattr(state, "cells", None) or []))
+        verts, offsets = _flat_cells(getattr(state, "cells", None))
         return cls(
             centroids=state.centroids, masses=state.masses, edges=state.edges,
             neighbours=getattr(state, "neighbours", np.empty((0, 2), dtype=np.int64)),
@@ -319,7 +319,7 @@ class CoverageFrame:
                       packing_warning: str | None = None) -> CoverageFrame:
         """Build from a ``swarmdeck.coverage.CoverageGeometry`` that has a diagram (a recorded frame's
         cells, derived again) and the tick's scalars."""
-        verts, offsets = _flat_cells(geometry.cells())
+        verts, offsets = _flat_cells(geometry.cell_polygons())
         return cls(centroids=geometry.centroids, masses=geometry.masses, edges=geometry.edges,
                    neighbours=geometry.neighbours, cost_H=cost_H, mean_centroid_distance=mean_centroid_distance,
                    packing_warning=packing_warning, cell_vertices=verts, cell_offsets=offsets,

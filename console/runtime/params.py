@@ -232,6 +232,8 @@ class LoopConfig:
     # the robots' sensors in every Frame (issue 28.1: Robotarium 2.0's ToF sensors, encoders, IMU and LEDs;
     # swarmdeck.sensing), seeded from `seed`; robots whose firmware reports readings give theirs
     sensors: bool = param(False)
+    # coverage two ticks behind on two worker threads (console/runtime/coverage_worker.py): "auto" = from 2000 robots
+    coverage_worker: str = param("auto", choices=("auto", "on", "off"))
     # line-segment obstacles on the floor ([arena] obstacles; core.obstacles): static for the run, not an operator knob
     obstacles: Obstacles | None = None
 
