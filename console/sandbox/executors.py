@@ -24,6 +24,7 @@ from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wai
 from contextlib import ExitStack, contextmanager
 from typing import Any
 
+from swarmdeck.console.sandbox.cores import claim_core
 from swarmdeck.console.sandbox.verification import RunTask, run_task
 
 OnDone = Callable[[int, dict[str, Any], int], None]
@@ -159,6 +160,13 @@ class LocalPoolExecutor:
         return results
 
 
+def _on_a_core(fn: TaskFn, task: Any) -> dict[str, Any]:
+    """A Ray task: this worker process on a core no other claims (:func:`~.cores.claim_core`, kept for its life),
+    then ``fn(task)`` — what :class:`LocalPoolExecutor` does with ``pin``."""
+    claim_core()
+    return fn(task)
+
+
 class RayExecutor:
     """The same tasks on a Ray cluster: ``address`` "auto" (a running cluster), "local" (start one
     here with ``num_cpus``) or ``ray://host:port``. Needs ``pip install 'swarmdeck[ray]'`` and
@@ -188,9 +196,10 @@ class RayExecutor:
             fn: TaskFn = run_task) -> list[dict | None]:
         ray = self.ray
         self._connect()
-        remote = ray.remote(num_cpus=1, max_retries=0)(fn)
-        paced = _paced(tasks)  # real-time runs mostly wait: they ask for no CPU, beside the computing ones
-        refs = {(remote.options(num_cpus=0) if paced[k] else remote).remote(tasks[k]): k
+        computing = ray.remote(num_cpus=1, max_retries=0)(_on_a_core)  # as the local pool's workers: a core each
+        waiting = ray.remote(num_cpus=0, max_retries=0)(fn)  # real-time runs mostly wait, beside the computing ones
+        paced = _paced(tasks)
+        refs = {(waiting.remote(tasks[k]) if paced[k] else computing.remote(fn, tasks[k])): k
                 for k in sorted(range(len(tasks)), key=lambda k: not paced[k])}
         results: list[dict | None] = [None] * len(tasks)
         finished = 0
