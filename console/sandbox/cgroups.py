@@ -170,6 +170,7 @@ class RunCgroup:
 
     def __init__(self, version: int, folders: dict[str, Path], limits: CgroupLimits, missing: tuple[str, ...]) -> None:
         self.version, self.folders, self.limits, self.missing = version, folders, limits, missing
+        self._clock: tuple[int, int] | None = None  # cpu_time_s's open file (format, fd)
 
     @property
     def procs_files(self) -> list[str]:
@@ -212,23 +213,49 @@ class RunCgroup:
 
     def cpu_time_s(self) -> float | None:
         """CPU time (user + system) all the run's processes have used so far, s, as the kernel accounts it
-        (v2 ``cpu.stat`` usage_usec, v1 ``cpuacct.usage``); None where this group cannot tell."""
-        if self.version == 2:
-            folder = next(iter(self.folders.values()), None)
-            try:
-                text = (folder / "cpu.stat").read_text() if folder is not None else ""
-            except OSError:
-                return None
+        (v2 ``cpu.stat`` usage_usec, v1 ``cpuacct.usage``); None where this group cannot tell.
+
+        Read once per tick by the sandbox's loop: the file is opened once and re-read with ``pread`` (a tenth
+        of the cost of opening it each time on this VM, bench/RESULTS.md "sandbox per tick"); closed by
+        :meth:`remove`."""
+        if self._clock is None:
+            self._clock = self._open_clock()
+        kind, fd = self._clock
+        if fd < 0:
+            return None
+        try:
+            text = os.pread(fd, 4096, 0).decode("ascii", "replace")
+        except OSError:
+            return None
+        if kind == 2:
             for line in text.splitlines():
                 parts = line.split()
                 if len(parts) == 2 and parts[0] == "usage_usec" and parts[1].isdigit():
                     return int(parts[1]) * 1e-6
             return None
-        for controller in (ACCOUNTING_V1, "cpu"):  # v1: its own hierarchy, or mounted together with cpu
-            text = self._read(controller, "cpuacct.usage").strip()
-            if text.isdigit():
-                return int(text) * 1e-9
-        return None
+        text = text.strip()
+        return int(text) * 1e-9 if text.isdigit() else None
+
+    def _open_clock(self) -> tuple[int, int]:
+        """(2 or 1: the format, fd of the CPU-time file, or −1 where there is none)."""
+        if self.version == 2:
+            candidates = [(2, folder / "cpu.stat") for folder in list(self.folders.values())[:1]]
+        else:  # v1: its own hierarchy, or mounted together with cpu
+            candidates = [(1, self.folders[c] / "cpuacct.usage") for c in (ACCOUNTING_V1, "cpu") if c in self.folders]
+        for kind, path in candidates:
+            try:
+                fd = os.open(path, os.O_RDONLY | os.O_CLOEXEC)
+            except OSError:
+                continue
+            if kind == 2 or os.pread(fd, 64, 0).strip().isdigit():
+                return kind, fd
+            os.close(fd)
+        return 0, -1
+
+    def _close_clock(self) -> None:
+        clock, self._clock = self._clock, None
+        if clock is not None and clock[1] >= 0:
+            os.close(clock[1])
 
     def pids_refused(self) -> int:
         """Forks refused because the run had ``processes`` processes already."""
@@ -246,6 +273,7 @@ class RunCgroup:
 
     def remove(self, timeout: float = 10.0) -> str | None:
         """Kill what is left in the group and delete it; None, or what could not be removed."""
+        self._close_clock()
         survivors = self.kill(timeout)
         problems = [f"processes {survivors} survived"] if survivors else []
         deadline = time.monotonic() + timeout

@@ -114,6 +114,8 @@ class PipeRobots:
         self._metrics = metrics
         self._network: Any = None  # a decentralised run's swarmdeck.network.Network (attach_network)
         self._drawn: dict[str, Any] = encode_annotations(EMPTY_ANNOTATIONS)
+        self._drawn_from: Annotations | None = None  # the drawing last encoded (the Arena's annotator keeps one
+        # object while the drawing is unchanged: then nothing is encoded or compared, bench/RESULTS.md "sandbox per tick")
         self._readings: SensorReadings | None = None
         self._remote: RemoteNetwork | None = None  # a decentralised run's network stand-in (remote_network)
         arena: dict[str, Any] = {"t": "arena", "n": n, "initial": None if ic is None else pack(ic)}
@@ -204,6 +206,9 @@ class PipeRobots:
     def send_annotations(self, ann: Annotations) -> None:
         """What the script draws from this tick on (``Arena.draw``), sent before the commands — only when it
         changed since the last tick."""
+        if ann is self._drawn_from:
+            return
+        self._drawn_from = ann
         message = encode_annotations(ann)
         if message != self._drawn:
             self.link.send(message)

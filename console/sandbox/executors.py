@@ -8,6 +8,11 @@ the same report. ``run(tasks, on_done, cancelled)`` calls ``on_done(index,
 result, finished_count)`` as runs finish and stops starting runs once
 ``cancelled()`` is true (results of runs never started are None). Each run's
 sandbox is built inside the worker, so Ray workers confine user code too.
+
+A task whose ``paced`` attribute is true (a verification's paced runs, :attr:`RunTask.paced`) ticks in real time
+and mostly waits: the pool and Ray run it beside the computing runs (a worker of its own, unpinned; on Ray a task
+that asks for no CPU), so a 60 s paced run no longer holds one of the ``workers`` for 60 s while the others idle
+(bench/RESULTS.md "verification that scales").
 """
 from __future__ import annotations
 
@@ -16,12 +21,20 @@ import os
 import queue
 from collections.abc import Callable, Iterator, Sequence
 from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
-from contextlib import contextmanager
+from contextlib import ExitStack, contextmanager
 from typing import Any
 
+from swarmdeck.console.sandbox.cores import claim_core
 from swarmdeck.console.sandbox.verification import RunTask, run_task
 
 OnDone = Callable[[int, dict[str, Any], int], None]
+#: most workers a pool starts for paced tasks (each mostly waits for the clock)
+MAX_PACED_WORKERS = 4
+
+
+def _paced(tasks: Sequence[Any]) -> list[bool]:
+    """Which tasks tick in real time (their ``paced`` attribute; tasks without one compute)."""
+    return [bool(getattr(task, "paced", False)) for task in tasks]
 #: what runs one task in a worker (default :func:`run_task`; a sweep's ``console.sweep.runs.run_point``): a
 #: module-level function of one picklable task returning a JSON-ready dict
 TaskFn = Callable[[Any], dict[str, Any]]
@@ -81,10 +94,10 @@ class LocalPoolExecutor:
         self.pin = pin
         self._kept: ProcessPoolExecutor | None = None
 
-    def _pool(self, workers: int) -> ProcessPoolExecutor:
+    def _pool(self, workers: int, pin: bool | None = None) -> ProcessPoolExecutor:
         context = multiprocessing.get_context("spawn")  # no fork of a threaded caller (the portal)
         cpus = None
-        if self.pin and hasattr(os, "sched_getaffinity"):
+        if (self.pin if pin is None else pin) and hasattr(os, "sched_getaffinity"):
             cores = sorted(os.sched_getaffinity(0))
             cpus = context.Queue()
             for k in range(workers):
@@ -111,15 +124,26 @@ class LocalPoolExecutor:
         results: list[dict | None] = [None] * len(tasks)
         if not tasks:
             return results
-        if self._kept is not None:
-            return self._run_on(self._kept, tasks, on_done, cancelled, results, fn)
-        with self._pool(min(self.workers, len(tasks))) as pool:
-            return self._run_on(pool, tasks, on_done, cancelled, results, fn)
+        paced = _paced(tasks)
+        computing = len(tasks) - sum(paced)
+        with ExitStack() as stack:
+            pool = self._kept
+            if pool is None and computing:
+                pool = stack.enter_context(self._pool(min(self.workers, computing)))
+            aside = None  # the paced tasks' own workers: they wait for the clock, beside the computing ones
+            if computing < len(tasks):
+                aside = stack.enter_context(self._pool(min(len(tasks) - computing, MAX_PACED_WORKERS), pin=False))
+            order = sorted(range(len(tasks)), key=lambda k: not paced[k])  # the long paced runs start first
+            pending: dict[Future, int] = {}
+            for k in order:
+                target = aside if paced[k] else pool
+                assert target is not None
+                pending[target.submit(fn, tasks[k])] = k
+            return self._run_on(pending, on_done, cancelled, results)
 
     @staticmethod
-    def _run_on(pool: ProcessPoolExecutor, tasks: Sequence[RunTask], on_done: OnDone, cancelled: Callable[[], bool],
-                results: list[dict | None], fn: TaskFn) -> list[dict | None]:
-        pending: dict[Future, int] = {pool.submit(fn, t): k for k, t in enumerate(tasks)}
+    def _run_on(pending: dict[Future, int], on_done: OnDone, cancelled: Callable[[], bool],
+                results: list[dict | None]) -> list[dict | None]:
         finished = 0
         while pending:
             done, _ = wait(pending, timeout=0.5, return_when=FIRST_COMPLETED)
@@ -134,6 +158,13 @@ class LocalPoolExecutor:
                 for future in pending:
                     future.cancel()
         return results
+
+
+def _on_a_core(fn: TaskFn, task: Any) -> dict[str, Any]:
+    """A Ray task: this worker process on a core no other claims (:func:`~.cores.claim_core`, kept for its life),
+    then ``fn(task)`` — what :class:`LocalPoolExecutor` does with ``pin``."""
+    claim_core()
+    return fn(task)
 
 
 class RayExecutor:
@@ -165,8 +196,11 @@ class RayExecutor:
             fn: TaskFn = run_task) -> list[dict | None]:
         ray = self.ray
         self._connect()
-        remote = ray.remote(num_cpus=1, max_retries=0)(fn)
-        refs = {remote.remote(t): k for k, t in enumerate(tasks)}
+        computing = ray.remote(num_cpus=1, max_retries=0)(_on_a_core)  # as the local pool's workers: a core each
+        waiting = ray.remote(num_cpus=0, max_retries=0)(fn)  # real-time runs mostly wait, beside the computing ones
+        paced = _paced(tasks)
+        refs = {(waiting.remote(tasks[k]) if paced[k] else computing.remote(fn, tasks[k])): k
+                for k in sorted(range(len(tasks)), key=lambda k: not paced[k])}
         results: list[dict | None] = [None] * len(tasks)
         finished = 0
         while refs:

@@ -713,14 +713,17 @@ def _loop(child: _Child, script: Path, scratch: Path, uid: int | None, make_plan
         consecutive = 0
         metrics_tick = -1  # the tick of the last 'metrics' message (one per tick at most)
         charged_from = (0.0, 0.0)  # (wall, CPU s) when the current tick's budget started
+        waited_out = False  # a wait of the current tick ran out (only then is its CPU time read again)
+        cores = os.cpu_count() or 1  # the run's processes use at most this many cores at once
 
         def cpu_now() -> float:
             value = cpu_clock() if cpu_clock is not None else None
             return charged_from[1] if value is None else value  # an unreadable count charges nothing more
 
         def start_budget() -> None:
-            nonlocal charged_from
+            nonlocal charged_from, waited_out
             charged_from = (time.monotonic(), cpu_now() if cpu_clock is not None else 0.0)
+            waited_out = False
 
         def tick_over(now: float) -> bool:
             """The current tick has used up its budget (CPU time, or wall time without a CPU clock) or its
@@ -763,6 +766,10 @@ def _loop(child: _Child, script: Path, scratch: Path, uid: int | None, make_plan
                 deadline = min(ready + limits.startup_s, wall_deadline)
             elif cpu_clock is None:
                 deadline = min(charged_from[0] + limits.tick_s, wall_deadline)
+            elif not waited_out:  # before tick_s / cores of wall time the run cannot have used its budget:
+                # no clock read (one per tick, at its start: bench/RESULTS.md "sandbox per tick")
+                deadline = min(charged_from[0] + limits.tick_s / cores, charged_from[0] + limits.tick_backstop_s,
+                               wall_deadline)
             else:  # wake when the budget could be used up at one core, at the backstop at the latest
                 left = limits.tick_s - (cpu_now() - charged_from[1])
                 deadline = min(now + max(left, 0.0), charged_from[0] + limits.tick_backstop_s, wall_deadline)
@@ -784,6 +791,7 @@ def _loop(child: _Child, script: Path, scratch: Path, uid: int | None, make_plan
                     end("startup", f"the script did not build its Arena within {limits.startup_s:g} s "
                                    "(an endless loop at import time?)")
                     break
+                waited_out = True
                 if not tick_over(time.monotonic()):
                     continue  # waiting without using CPU (sleeping, or not scheduled on a loaded machine)
                 if missed():

@@ -45,7 +45,6 @@ that watches every run without the barrier (docs/security.md), not this disguise
 from __future__ import annotations
 
 import math
-import os
 import re
 import time
 from collections.abc import Callable, Mapping, Sequence
@@ -59,7 +58,7 @@ import numpy as np
 
 from swarmdeck.console.recording.arena_recording import ArenaRecording
 from swarmdeck.console.sandbox.bundle import ScriptBundle
-from swarmdeck.console.sandbox.cancel_file import cancel_file
+from swarmdeck.console.sandbox.cancel_file import CancelSeen, cancel_file
 from swarmdeck.console.sandbox.confinement import JailConfig, SandboxLimits
 from swarmdeck.console.sandbox.falsify import Probe
 from swarmdeck.console.sandbox.guarantee import Guarantee
@@ -215,6 +214,12 @@ class RunTask:
     #: the script's parameter values (``swarmdeck.devices.params``; a sweep's point), None: its defaults
     params: tuple[tuple[str, Any], ...] | None = None
 
+    @property
+    def paced(self) -> bool:
+        """The run ticks in real time (the first ``paced_runs`` raw runs): it mostly waits for the clock, so the
+        executors run it beside the computing runs instead of in one of their workers' turns (executors.py)."""
+        return self.mode == "raw" and self.index < self.config.paced_runs
+
 
 def load_script(path: str | Path | ScriptBundle, entry: str | None = None) -> ScriptBundle:
     """The files of a script to verify: a ``.py`` file, or a directory with its ``entry`` file
@@ -251,7 +256,7 @@ def run_task_plant(task: RunTask) -> tuple[dict[str, Any], SandboxPlant | None]:
     seeds = np.random.SeedSequence(cfg.seed, spawn_key=(0 if searched else task.index,)).spawn(3)
     if searched:
         seeds[1] = np.random.SeedSequence(cfg.seed, spawn_key=(FALSIFY_STREAM, task.index))
-    paced = task.mode == "raw" and task.index < cfg.paced_runs
+    paced = task.paced
     # paced: each step waits for the next period
     arena_config = ArenaConfig(seed=None, real_time=paced, obstacles=cfg.obstacles, bounds=cfg.bounds)
     rules = cfg.rules
@@ -286,7 +291,7 @@ def run_task_plant(task: RunTask) -> tuple[dict[str, Any], SandboxPlant | None]:
 
     recording: dict[str, ArenaRecording] = {}
     cancel_path = task.cancel_path
-    cancelled = (lambda: os.path.exists(cancel_path)) if cancel_path else None
+    cancelled = CancelSeen(cancel_path) if cancel_path else None
     cpu0 = time.process_time()  # this worker's CPU (the trusted side: plant, barrier, protocol) for the run
     outcome = run_sandboxed(task.bundle, make_plant, n_robots=cfg.n_robots,
                             duration=cfg.duration, rps=cfg.rps, limits=cfg.run_limits, trusted=cfg.trusted,
