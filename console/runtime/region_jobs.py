@@ -209,14 +209,16 @@ def run_queue(floor: SharedFloor, jobs: list[QueuedJob], *, regions: tuple[str, 
               upkeep_limit_s: float = UPKEEP_LIMIT_S) -> list[tuple[QueuedJob, RegionJobResult]]:
     """Run ``jobs`` in queue order, one per region at a time, every region busy while jobs wait (one worker
     thread per region; a job goes to the first free region that holds it, :meth:`RegionLayout.capacity`).
-    ``regions``: the regions to use (default: all). Returns ``(job, result)`` in the order the jobs ended.
+    ``regions``: the regions to use (default: all; a nested layout's leaves — regions allocated per job are the
+    portal's plan, :class:`~swarmdeck.console.portal.region_runner.RegionRunner`). Returns ``(job, result)`` in the
+    order the jobs ended.
     ValueError before anything moves when a job fits no region (:meth:`RegionLayout.never_fits`)."""
     import functools
     import threading
 
     from swarmdeck.core.service_thread import ServiceThread
 
-    names = regions if regions is not None else floor.layout.names
+    names = regions if regions is not None else (floor.layout.leaves if floor.layout.nested else floor.layout.names)
     cap = floor.layout.capacity()
     for job in jobs:
         if not any(cap[n] >= job.robots for n in names):

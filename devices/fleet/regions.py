@@ -89,8 +89,9 @@ class Region:
 
     @property
     def local_bounds(self) -> Bounds:
-        """The region as its job sees it: the same rectangle centred on ``(0, 0)``, m."""
-        hw, hh = self.bounds.width / 2, self.bounds.height / 2
+        """The region as its job sees it: the same rectangle centred on ``(0, 0)``, m (rounded to 1 nm, so that
+        regions of one size have equal bounds whatever the rounding of their floor-frame edges)."""
+        hw, hh = round(self.bounds.width / 2, 9), round(self.bounds.height / 2, 9)
         return Bounds(-hw, hw, -hh, hh)
 
     def to_local(self, poses: ArrayLike) -> FloatArray:
