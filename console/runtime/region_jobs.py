@@ -48,7 +48,8 @@ NEAR_M = 0.25
 class RegionJobResult:
     """What :func:`run_in_region` did: the region, the floor ids of the job's robots, the script's
     :class:`~swarmdeck.devices.runner.RunResult` (as a solo run's), the set-up and return (``ok``, ``seconds`` of
-    floor time, ``robots`` not there) and why the job could not run (``error``)."""
+    floor time, ``robots`` not there), why the job could not run (``error``) and, from :func:`run_queue`, the floor
+    time it was taken from the queue and ended at (``started_s``, ``ended_s``, s; None otherwise)."""
 
     region: str
     fleet_ids: list[int] = field(default_factory=list)
@@ -56,6 +57,8 @@ class RegionJobResult:
     setup: dict[str, Any] = field(default_factory=dict)
     returned: dict[str, Any] = field(default_factory=dict)
     error: str | None = None
+    started_s: float | None = None
+    ended_s: float | None = None
 
 
 def drive_to(view: RegionRobots, goals: ArrayLike, limit_s: float = UPKEEP_LIMIT_S,
@@ -234,8 +237,10 @@ def run_queue(floor: SharedFloor, jobs: list[QueuedJob], *, regions: tuple[str, 
                 if job is None:
                     return
                 waiting.remove(job)
+            started = _floor_time(floor)
             result = run_in_region(floor, region, job.target, n_robots=job.robots, duration=job.duration,
                                    seed=job.seed, upkeep_limit_s=upkeep_limit_s, start_poses=job.start_poses)
+            result.started_s, result.ended_s = started, _floor_time(floor)
             with lock:
                 done.append((job, result))
 
@@ -245,3 +250,9 @@ def run_queue(floor: SharedFloor, jobs: list[QueuedJob], *, regions: tuple[str, 
     for t in threads:
         t.stop()  # joins: each worker ends when no waiting job fits its region
     return done
+
+
+def _floor_time(floor: SharedFloor) -> float | None:
+    """The floor's clock now, s (its robots' reading; None when they keep no time)."""
+    t = floor.reading().time
+    return None if t is None else float(t)
