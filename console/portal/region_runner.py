@@ -88,10 +88,13 @@ class RegionFleet:
         self._view, self._parked = view, view.read().poses.copy()
         report = drive_to(view, goals_arr, UPKEEP_LIMIT_S, stop)
         result = _result(report, view.fleet_ids, "set up in region " + self.name)
+        view.watched = bool(report["ok"])  # the script drives them now: a stall stops the region
         return result, (view if report["ok"] else None)
 
     def end_assignment(self) -> None:
-        """The job is over (its robots return next)."""
+        """The job is over (its robots return next, the runner's own maneuver: no longer watched for stalls)."""
+        if self._view is not None:
+            self._view.watched = False
 
     def away(self) -> bool:
         """The region still holds a job's robots off their parking places (after a stop)."""

@@ -173,6 +173,7 @@ def run_in_region(floor: SharedFloor, name: str, target: str | Path | Callable[.
         if not result.setup["ok"]:
             raise ValueError(f"region {name}: set-up failed, robots {result.setup['robots']} did not reach their "
                              "start poses")
+        view.watched = True  # the script drives them now: a stall stops the region (SharedFloor.stall_s)
         if on_start is not None:
             on_start(view)
         return view
@@ -185,6 +186,7 @@ def run_in_region(floor: SharedFloor, name: str, target: str | Path | Callable[.
     finally:
         view = held.get("view")
         if view is not None:
+            view.watched = False
             try:
                 if not floor.stopped(name):
                     result.returned = drive_to(view, held["parked"], upkeep_limit_s)

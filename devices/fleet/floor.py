@@ -272,10 +272,12 @@ class SharedFloor:
             raise FloorClosed("the floor was closed")
 
     def _stop_stalled(self, waiting: str) -> list[tuple[str, str]]:
-        """Under the lock, after region ``waiting`` waited :attr:`stall_s` for this tick: the open regions that did
+        """Under the lock, after region ``waiting`` waited :attr:`stall_s` for this tick: the open regions running
+        their job's script (:attr:`RegionRobots.watched`; set-ups and returns are the runner's own code) that did
         not send their commands are stopped (robots zero and fixed, as by :meth:`estop`) and counted in
         ``stats.stalled``, and the floor ticks without them; ``[(name, why)]``."""
-        late = [n for n in self._open if n not in self._pending and not (self._all_stopped or n in self._stopped)]
+        late = [n for n, view in self._open.items() if view.watched and n not in self._pending
+                and not (self._all_stopped or n in self._stopped)]
         out = []
         for n in late:  # a handful of regions
             why = (f"region {n} stalled: its job sent no commands for {self.stall_s:g} s of wall time while region "
@@ -369,6 +371,9 @@ class RegionRobots:
             raise ValueError(f"region {region.name}: robots {self.fleet_ids.tolist()} are not all on the floor")
         self._t0 = first.time
         self._closed = False
+        #: the job's script drives these robots now (after the set-up, until the return): the floor stops the region
+        #: when the others wait more than ``stall_s`` for its commands (:meth:`SharedFloor._stop_stalled`)
+        self.watched = False
 
     def rows(self, floor_ids: NDArray[np.int64]) -> NDArray[np.intp]:
         """Rows of the job's robots in a floor reading with ids ``floor_ids`` (job order; missing ones left out)."""
