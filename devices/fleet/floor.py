@@ -99,19 +99,21 @@ class SharedFloor:
         safety_filter: the floor's barrier (default: :func:`~swarmdeck.devices.pipeline.barrier_filter` over the
             floor; its wall rows are replaced by each robot's region, robot by robot).
         on_tick: called on the ticking thread after every tick with the floor's reading (e.g. a floor-wide view).
-        stall_s: wall s the other regions wait for one region's commands before it is stopped as stalled
-            (:data:`STALL_LIMIT_S`).
+        stall_s: wall s the other regions wait for one region's commands before it is stopped as stalled (the
+            portal's :class:`~swarmdeck.console.portal.region_runner.RegionRunner`: :data:`STALL_LIMIT_S`); None: they
+            wait as long as it takes (trusted in-process jobs, :func:`~swarmdeck.console.runtime.region_jobs.run_queue`,
+            where a slow thread on a loaded machine is no stall).
         on_stall: called (on the waiting region's thread, outside the floor's lock) with a stalled region's name
             and why, e.g. to end its job (:class:`~swarmdeck.console.portal.region_runner.RegionRunner` fails it).
     """
 
     def __init__(self, ports: Any, layout: RegionLayout, *, params: GritsBotParams | None = None,
                  dt: float = CONTROL_PERIOD, safety_filter: Any = None,
-                 on_tick: Callable[[SensedPoses], None] | None = None, stall_s: float = STALL_LIMIT_S,
+                 on_tick: Callable[[SensedPoses], None] | None = None, stall_s: float | None = None,
                  on_stall: Callable[[str, str], None] | None = None) -> None:
-        if not (math.isfinite(stall_s) and stall_s > 0):
+        if stall_s is not None and not (math.isfinite(stall_s) and stall_s > 0):
             raise ValueError(f"stall_s must be a positive number of seconds, got {stall_s!r}")
-        self.stall_s = float(stall_s)
+        self.stall_s: float | None = None if stall_s is None else float(stall_s)
         self.on_stall = on_stall
         self.ports, self.layout = ports, layout
         self.params = params if params is not None else GritsBotParams()
@@ -258,7 +260,7 @@ class SharedFloor:
             waited_from = time.monotonic()
             stalled: list[tuple[str, str]] = []
             while self._tick < target and not self._closed:
-                left = waited_from + self.stall_s - time.monotonic()
+                left = math.inf if self.stall_s is None else waited_from + self.stall_s - time.monotonic()
                 if left <= 0:
                     stalled.extend(self._stop_stalled(name))
                     waited_from = time.monotonic()

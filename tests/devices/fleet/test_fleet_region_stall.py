@@ -45,11 +45,12 @@ def test_a_stalled_region_is_stopped_and_told_and_the_other_region_goes_on():
     assert floor.stats.to_dict()["stalled"] == ["r0c0"]
 
 
-def test_the_stall_limit_must_be_a_positive_time():
+def test_the_stall_limit_is_off_in_process_and_must_be_a_positive_time():
     layout = RegionLayout.grid(columns=2)
     ports = simulated_floor(layout, 1).ports
     from swarmdeck.devices.fleet.floor import SharedFloor
 
+    assert SharedFloor(ports, layout).stall_s is None  # trusted in-process jobs wait as long as it takes
     for bad in (0.0, -1.0, float("nan"), float("inf")):
         with pytest.raises(ValueError, match="stall_s must be a positive number of seconds"):
             SharedFloor(ports, layout, stall_s=bad)
