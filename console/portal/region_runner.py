@@ -232,9 +232,19 @@ class RegionRunner:
             lane.emergency_stop()
 
     def estop_region(self, name: str) -> int | None:
-        """Stop region ``name``'s robots and end its job (the other regions run on); the job's id, or None."""
+        """Stop region ``name``'s robots and end its job (the other regions run on); the job's id, or None. On a
+        floor of regions allocated per job (nested), a job running on a region around it or inside it is stopped
+        too (its robots stand in the stopped region)."""
         lane = self.lanes[self.layout.region(name).name]
         job = lane.current_job
+        for other in self.layout.conflicts(name):  # nested regions: a handful
+            if self.lanes[other].current_job is not None:
+                self._stop_lane(other)
+        self._stop_lane(name)
+        return job
+
+    def _stop_lane(self, name: str) -> None:
+        lane = self.lanes[name]
         self.floor.estop(name)
         with lane._lock:
             loop = lane._loop
@@ -242,7 +252,6 @@ class RegionRunner:
                 lane._end_job.set()
         if loop is not None:
             loop.estop()
-        return job
 
     def _stalled(self, name: str, why: str) -> None:
         """The floor stopped region ``name`` as stalled (its job sent no commands while the others waited): its job
