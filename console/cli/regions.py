@@ -26,7 +26,9 @@ ORDER = 63
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("layout", metavar="LAYOUT",
                         help="a TOML file with a [regions] table (and optionally [floor] bounds = [x0, x1, y0, y1]), "
-                             "or COLSxROWS for equal regions, e.g. 2x2")
+                             "or COLSxROWS for equal regions, e.g. 2x2, or auto:COLSxROWS for regions allocated per "
+                             "job (the floor's guillotine cuts down to that grid: a job gets the smallest that holds "
+                             "its robots)")
     parser.add_argument("--run", action="append", default=[], metavar="REGION=SCRIPT",
                         help="run SCRIPT (unmodified) in REGION; repeat for several jobs at once")
     parser.add_argument("--robots", type=int, default=4, metavar="N", help="robots of each job (default %(default)s)")
@@ -39,16 +41,18 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def load_layout(spec: str) -> Any:
-    """The :class:`~swarmdeck.devices.fleet.regions.RegionLayout` of ``spec`` (a TOML file or COLSxROWS);
+    """The :class:`~swarmdeck.devices.fleet.regions.RegionLayout` of ``spec`` (a TOML file, COLSxROWS, or
+    ``auto:COLSxROWS`` — regions allocated per job, :meth:`~swarmdeck.devices.fleet.regions.RegionLayout.guillotine`);
     UsageError naming what is wrong."""
     from swarmdeck.core.bounds import DEFAULT_BOUNDS, check_bounds
     from swarmdeck.core.config import read_toml
     from swarmdeck.devices.fleet.regions import RegionLayout
 
-    grid = re.fullmatch(r"(\d+)x(\d+)", spec.strip())
+    grid = re.fullmatch(r"(auto:)?(\d+)x(\d+)", spec.strip())
     try:
         if grid:
-            return RegionLayout.grid(DEFAULT_BOUNDS, int(grid.group(1)), int(grid.group(2)))
+            build = RegionLayout.guillotine if grid.group(1) else RegionLayout.grid
+            return build(DEFAULT_BOUNDS, int(grid.group(2)), int(grid.group(3)))
         data = read_toml(spec, error=UsageError)
         floor = data.get("floor", {}).get("bounds", DEFAULT_BOUNDS) if isinstance(data.get("floor"), dict) \
             else DEFAULT_BOUNDS

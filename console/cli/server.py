@@ -33,7 +33,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                              "operator page). SPEC: sim[,robots=N][,fast] (simulated, in this process), "
                              "mqtt://HOST:PORT[,robots=N] (GRITSBots), remote[,robots=N][,kind=physical|simulated] "
                              "(a `swarmdeck runner --portal URL --arena NAME` on another machine), slots=K (jobs "
-                             "at once) and regions=COLSxROWS|FILE.toml (sim: its floor divided, one job per region at "
+                             "at once) and regions=COLSxROWS|auto:COLSxROWS|FILE.toml (sim: its floor divided, one job per region at "
                              "once; the operator page stops one region). E.g. --arena floor=sim,robots=50 --arena annex=remote,robots=12,"
                              "kind=physical. Without --arena: one arena from --robots/--robots-via/--fast. Jobs "
                              "choose with the manifest's \"arena\" and \"needs\" (physical|simulated|either)")
@@ -47,7 +47,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                              "sensors, encoders, IMU, LEDs): in the recording, the live view, the video and the replay")
     parser.add_argument("--regions", default=None, metavar="LAYOUT",
                         help="divide the simulated floor into regions and run one job per region at once: a TOML "
-                             "file with a [regions] table or COLSxROWS, e.g. 2x2 (see `swarmdeck regions`); --robots "
+                             "file with a [regions] table or COLSxROWS, e.g. 2x2, or auto:COLSxROWS (regions allocated per job: "
+                             "each job gets the smallest of the floor's guillotine cuts down to that grid that holds "
+                             "its robots; see `swarmdeck regions`); --robots "
                              "robots are parked, shared out between the regions; with --arena: divides the one simulated arena "
                              "given (or write regions= in its SPEC)")
     parser.add_argument("--fast", action="store_true",

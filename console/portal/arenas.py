@@ -9,7 +9,8 @@ SPEC is comma-separated, its first item says where the robots are:
 
 then ``robots=N`` (default 12), ``kind=physical|simulated`` (``remote`` only; ``sim`` is simulated, ``mqtt``
 physical), ``fast``, ``slots=K`` (jobs the arena runs at once; default 1) and ``regions=LAYOUT`` (``sim`` only: the
-floor divided into regions, one job per region at once — ``COLSxROWS`` or a TOML file with a ``[regions]`` table,
+floor divided into regions, one job per region at once — ``COLSxROWS``, ``auto:COLSxROWS`` (regions allocated per
+job: :meth:`~swarmdeck.devices.fleet.regions.RegionLayout.guillotine`) or a TOML file with a ``[regions]`` table,
 as ``swarmdeck regions`` takes; its robots are shared out between the regions; each region is one slot of the plan,
 holding as many robots as are parked in it: :mod:`.region_runner`).
 
@@ -22,6 +23,7 @@ import re
 from dataclasses import dataclass
 
 from swarmdeck.console.portal.errors import BadInput
+from swarmdeck.core.bounds import DEFAULT_BOUNDS, Bounds
 from swarmdeck.devices.net.mqtt_config import parse_broker_url
 
 #: what a job may ask for: physical robots, simulated ones, or either (the manifest's ``needs``)
@@ -51,6 +53,13 @@ class ArenaSpec:
         slot_names: the regions' names, one per slot (filled in when the layout is loaded:
             :func:`~.region_runner.region_arena`); empty: slots are numbered.
         slot_robots: robots each slot (region) holds; empty: ``robots // slots``.
+        slot_bounds: each slot's region as its job's script sees it (local bounds, m, centred on the region's
+            origin; filled in with the layout: :func:`~.region_runner.region_arena`); empty: the whole floor
+            (:data:`~swarmdeck.core.bounds.DEFAULT_BOUNDS`) for every slot. A job is verified against the region it
+            will get (:meth:`job_bounds`) and planned only on slots of exactly those bounds.
+        slot_conflicts: for each slot, the slots that cannot run a job at the same time (regions allocated per
+            job: a region and the regions inside or around it, :meth:`~swarmdeck.devices.fleet.regions.RegionLayout.
+            conflicts`); empty: none.
     """
 
     name: str
@@ -63,6 +72,27 @@ class ArenaSpec:
     regions: str | None = None
     slot_names: tuple[str, ...] = ()
     slot_robots: tuple[int, ...] = ()
+    slot_bounds: tuple[Bounds, ...] = ()
+    slot_conflicts: tuple[tuple[int, ...], ...] = ()
+
+    def conflicts(self, slot: int) -> tuple[int, ...]:
+        """The slots that cannot run a job while slot ``slot`` does (none unless its regions are nested)."""
+        return tuple(self.slot_conflicts[slot]) if self.slot_conflicts else ()
+
+    def slot_shape(self, slot: int) -> Bounds:
+        """The arena a job on slot ``slot`` sees, m: its region's local bounds, else the whole floor."""
+        return Bounds(*self.slot_bounds[slot]) if self.slot_bounds else DEFAULT_BOUNDS
+
+    def job_bounds(self, robots: int) -> Bounds:
+        """The arena a job of ``robots`` robots placed here sees, m — what it is verified against: the region of the
+        smallest capacity that holds it (then the smallest area, then layout order), else the whole floor."""
+        fitting = [k for k in range(self.slots) if self.slot_capacity(k) >= int(robots)] or list(range(self.slots))
+
+        def key(k: int) -> tuple[int, float, int]:
+            b = self.slot_shape(k)
+            return self.slot_capacity(k), (b[1] - b[0]) * (b[3] - b[2]), k
+
+        return self.slot_shape(min(fitting, key=key))
 
     def slot_capacity(self, slot: int) -> int:
         """Robots a job on slot ``slot`` may use (its region's; the whole fleet with one slot)."""

@@ -40,7 +40,7 @@ from swarmdeck.console.runtime.fleet_upkeep import UpkeepResult
 from swarmdeck.console.runtime.region_jobs import UPKEEP_LIMIT_S, drive_to, region_start_poses
 from swarmdeck.core.bounds import Bounds
 from swarmdeck.core.ports import rows_of
-from swarmdeck.devices.fleet.floor import FloorClosed, RegionRobots, SharedFloor, simulated_floor
+from swarmdeck.devices.fleet.floor import STALL_LIMIT_S, FloorClosed, RegionRobots, SharedFloor, simulated_floor
 from swarmdeck.devices.fleet.regions import RegionLayout
 
 
@@ -88,10 +88,13 @@ class RegionFleet:
         self._view, self._parked = view, view.read().poses.copy()
         report = drive_to(view, goals_arr, UPKEEP_LIMIT_S, stop)
         result = _result(report, view.fleet_ids, "set up in region " + self.name)
+        view.watched = bool(report["ok"])  # the script drives them now: a stall stops the region
         return result, (view if report["ok"] else None)
 
     def end_assignment(self) -> None:
-        """The job is over (its robots return next)."""
+        """The job is over (its robots return next, the runner's own maneuver: no longer watched for stalls)."""
+        if self._view is not None:
+            self._view.watched = False
 
     def away(self) -> bool:
         """The region still holds a job's robots off their parking places (after a stop)."""
@@ -134,9 +137,9 @@ def _result(report: dict[str, Any], fleet_ids: NDArray[np.int64], what: str) -> 
 
 
 def share_robots(layout: RegionLayout, robots: int) -> dict[str, int]:
-    """``robots`` parked robots shared out between the layout's regions (layout order; the first regions get one
-    more when it does not divide)."""
-    names = layout.names
+    """``robots`` parked robots shared out between the layout's regions — a nested layout's leaves
+    (:attr:`RegionLayout.leaves`) — in layout order; the first regions get one more when it does not divide."""
+    names = layout.leaves
     return {name: robots // len(names) + (1 if k < robots % len(names) else 0) for k, name in enumerate(names)}
 
 
@@ -145,24 +148,31 @@ def region_arena(spec: ArenaSpec, layout: RegionLayout, per_region: int | dict[s
     robots parked there (``per_region``; None: ``spec.robots`` shared out, :func:`share_robots`) up to the region's
     capacity (:meth:`RegionLayout.capacity`). ValueError when a region would hold no robot."""
     share = share_robots(layout, spec.robots) if per_region is None else (
-        per_region if isinstance(per_region, dict) else {n: int(per_region) for n in layout.names})
+        per_region if isinstance(per_region, dict) else {n: int(per_region) for n in layout.leaves})
     cap = layout.capacity()
-    held = tuple(min(int(share.get(n, 0)), int(cap[n])) for n in layout.names)
+    parked = {n: sum(int(share.get(leaf, 0)) for leaf in (n, *layout.conflicts(n)) if leaf in layout.leaves)
+              for n in layout.names}  # a nested layout's region: the robots parked in the leaves inside it
+    held = tuple(min(parked[n], int(cap[n])) for n in layout.names)
     empty = [n for n, k in zip(layout.names, held) if k < 1]
     if empty:
         raise ValueError(f"regions {', '.join(empty)} would hold no robot: give the arena more robots "
                          f"({spec.robots} for {len(layout.names)} regions)")
     return replace(spec, slots=len(layout.names), slot_names=tuple(layout.names), slot_robots=held,
-                   robots=sum(int(share.get(n, 0)) for n in layout.names))
+                   slot_bounds=tuple(r.local_bounds for r in layout.regions),
+                   slot_conflicts=tuple(tuple(layout.names.index(c) for c in layout.conflicts(n))
+                                        for n in layout.names),
+                   robots=sum(int(share.get(n, 0)) for n in layout.leaves))
 
 
 class RegionRunner:
     """Several jobs at once, one per region of one floor (module docstring). ``per_region``: simulated robots
-    parked in each region (one count or one per region)."""
+    parked in each region (one count or one per region). ``stall_s``: wall s the other regions wait for one region's
+    commands before that region is stopped and its job failed as stalled (:data:`~swarmdeck.devices.fleet.floor.
+    STALL_LIMIT_S`; :meth:`_stalled`)."""
 
     def __init__(self, service: PortalService, settings: ArenaSettings, layout: RegionLayout,
                  per_region: int | dict[str, int], live: LiveFeed | None = None, *, poll_s: float = 1.0,
-                 exports: JobExports | None = None) -> None:
+                 exports: JobExports | None = None, stall_s: float = STALL_LIMIT_S) -> None:
         if settings.robots_via is not None:
             raise ValueError("regions run on the simulated floor for now (no --robots-via)")
         name = settings.name or service.config.arena_specs()[0].name
@@ -174,6 +184,7 @@ class RegionRunner:
         self.name = name
         self.service, self.layout, self.settings = service, layout, settings
         self.floor = simulated_floor(layout, per_region, dt=settings.dt)
+        self.floor.stall_s, self.floor.on_stall = float(stall_s), self._stalled
         self.live = live if live is not None else LiveFeed()
         cap = {k: min(v, len(self.floor.free_robots(k))) for k, v in layout.capacity().items()}
         # one exports process for the floor (not one per region): the ended jobs' CSV, replay and video in turn
@@ -221,9 +232,19 @@ class RegionRunner:
             lane.emergency_stop()
 
     def estop_region(self, name: str) -> int | None:
-        """Stop region ``name``'s robots and end its job (the other regions run on); the job's id, or None."""
+        """Stop region ``name``'s robots and end its job (the other regions run on); the job's id, or None. On a
+        floor of regions allocated per job (nested), a job running on a region around it or inside it is stopped
+        too (its robots stand in the stopped region)."""
         lane = self.lanes[self.layout.region(name).name]
         job = lane.current_job
+        for other in self.layout.conflicts(name):  # nested regions: a handful
+            if self.lanes[other].current_job is not None:
+                self._stop_lane(other)
+        self._stop_lane(name)
+        return job
+
+    def _stop_lane(self, name: str) -> None:
+        lane = self.lanes[name]
         self.floor.estop(name)
         with lane._lock:
             loop = lane._loop
@@ -231,7 +252,11 @@ class RegionRunner:
                 lane._end_job.set()
         if loop is not None:
             loop.estop()
-        return job
+
+    def _stalled(self, name: str, why: str) -> None:
+        """The floor stopped region ``name`` as stalled (its job sent no commands while the others waited): its job
+        fails with ``why`` (counted in ``floor.stats.stalled``); its robots return, the region takes the next job."""
+        self.lanes[name].fail_job(why)
 
     def cancel(self, job_id: int) -> None:
         """End job ``job_id`` (its owner or an operator cancelled it): its region's robots stop at the next tick (the

@@ -229,6 +229,7 @@ class ArenaRunner:
         self._barrier: dict[str, Any] | None = None  # the current job's barrier tally (BarrierTally.report)
         self._alerts: tuple[int | None, list[str]] = (None, [])  # the last job's guard and contact events
         self._log: tuple[int | None, bytearray] = (None, bytearray())  # the running job's script output so far
+        self._failure: str | None = None  # why the current job must fail (fail_job), None: it ends on its own
 
     # ------------------------------------------------------------------ control (any thread)
     def start(self) -> ArenaRunner:
@@ -259,6 +260,20 @@ class ArenaRunner:
         with self._lock:
             if self._job == int(job_id):
                 self._end_job.set()
+
+    def fail_job(self, reason: str) -> int | None:
+        """End the current job as **failed** with ``reason`` (e.g. its region of a shared floor stalled: the floor
+        already stopped its robots); the job's id, or None when none runs. The reason is the job's and run.json's
+        ``error``, and an event in its recording."""
+        with self._lock:
+            job, loop = self._job, self._loop
+            if job is None:
+                return None
+            self._failure = reason
+            self._end_job.set()
+        if loop is not None:
+            loop.post(reason)
+        return job
 
     @property
     def current_job(self) -> int | None:
@@ -393,6 +408,7 @@ class ArenaRunner:
         """Run one claimed job to its end; its final state."""
         job_id, folder = job.id, self.service.job_dir(job.id)
         self._end_job.clear()
+        self._failure = None
         self._upkeep, self._safety, self._barrier = {}, {}, None
         self._alerts = (job_id, [])
         with self._lock:
@@ -424,11 +440,14 @@ class ArenaRunner:
             state, reason = JobState.CANCELLED, "cancelled"
         else:
             state, reason = JobState.FAILED, outcome.error_line
+        if self._failure is not None:  # fail_job: the runner ended it (e.g. its region stalled)
+            state, reason = JobState.FAILED, self._failure
         said = _safety_note(self._safety)
         if said:
             reason = f"{reason}; {said}" if reason else said
         reason = None if reason is None else _user_reason(without_server_paths(reason, folder), job, folder)
-        summary = {"ended_by": None if outcome is None else outcome.ended_by, "barrier": self._barrier,
+        ended_by = None if outcome is None else outcome.ended_by
+        summary = {"ended_by": "stalled" if self._failure is not None else ended_by, "barrier": self._barrier,
                    "error": reason if state == JobState.FAILED else None,
                    "ticks": None if outcome is None else outcome.ticks,
                    "overruns": None if outcome is None else outcome.overruns, "note": note, **self._safety,

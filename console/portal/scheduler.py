@@ -38,7 +38,8 @@ OVERHEAD_RUNS = 20
 @dataclass(frozen=True)
 class Pending:
     """A waiting job as the plan needs it: id, owner, robots, declared duration s, the arena it asked for (None:
-    any) and what it needs (``either`` | ``physical`` | ``simulated``)."""
+    any), what it needs (``either`` | ``physical`` | ``simulated``) and the arena bounds it was verified against
+    (``(x_min, x_max, y_min, y_max)`` m as its script sees them; None: any — it goes only on a lane of these)."""
 
     id: int
     user_id: int
@@ -46,6 +47,7 @@ class Pending:
     duration: float
     arena: str | None = None
     needs: str = "either"
+    bounds: tuple[float, float, float, float] | None = None
 
 
 @dataclass(frozen=True)
@@ -66,16 +68,22 @@ class Window:
 
 @dataclass
 class Lane:
-    """One slot of one arena: its capacity and the intervals it is busy (module docstring)."""
+    """One slot of one arena: its capacity, the intervals it is busy (module docstring) and the bounds its jobs'
+    scripts see (m; None: not checked) — a job verified against other bounds does not fit it. ``conflicts``: the
+    slots of its arena that are busy whenever it is and the other way round (regions allocated per job: a region
+    and the regions inside or around it); a job placed on it makes them busy too."""
 
     arena: str
     slot: int
     kind: str
     robots: int
     busy: list[tuple[float, float]] = field(default_factory=list)
+    bounds: tuple[float, float, float, float] | None = None
+    conflicts: tuple[int, ...] = ()  # slots of the same arena busy whenever this one is (nested regions)
 
     def fits(self, job: Pending) -> bool:
-        return job.robots <= self.robots and job.needs in ("either", self.kind) and job.arena in (None, self.arena)
+        return (job.robots <= self.robots and job.needs in ("either", self.kind) and job.arena in (None, self.arena)
+                and (job.bounds is None or self.bounds is None or tuple(job.bounds) == tuple(self.bounds)))
 
     def earliest(self, job: Pending, length: float, now: float, windows: Sequence[Window]) -> float:
         """The earliest start ≥ now of a gap of ``length`` s on this lane that crosses no busy interval and no
@@ -123,8 +131,9 @@ def plan(pending: Sequence[Pending], lanes: Sequence[Lane], windows: Sequence[Wi
          overheads: Mapping[str, float]) -> dict[int, Placement]:
     """The placement of each of ``pending`` (in queue order) that some lane can take (module docstring); a job no
     available lane fits is absent. ``lanes`` are copied, never changed; ``overheads``: arena → s."""
-    work = [Lane(l.arena, l.slot, l.kind, l.robots, [(b0, max(b1, now + OVERDUE_S)) for b0, b1 in l.busy])
-            for l in lanes]
+    work = [Lane(l.arena, l.slot, l.kind, l.robots, [(b0, max(b1, now + OVERDUE_S)) for b0, b1 in l.busy], l.bounds,
+                 l.conflicts) for l in lanes]
+    index = {(l.arena, l.slot): k for k, l in enumerate(work)}
     out: dict[int, Placement] = {}
     for job in pending:
         best: tuple[float, int, int] | None = None
@@ -142,5 +151,9 @@ def plan(pending: Sequence[Pending], lanes: Sequence[Lane], windows: Sequence[Wi
         start = best[0]
         end = start + occupancy(job.duration, overheads.get(lane.arena, DEFAULT_OVERHEAD_S))
         lane.busy.append((start, end))
+        for slot in lane.conflicts:  # nested regions: the regions inside and around it are taken as long
+            other = index.get((lane.arena, slot))
+            if other is not None:
+                work[other].busy.append((start, end))
         out[job.id] = Placement(lane.arena, lane.slot, start, end)
     return out

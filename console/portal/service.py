@@ -105,6 +105,7 @@ from swarmdeck.console.portal.submission import display_name as _display_name
 from swarmdeck.console.sandbox.bundle import ScriptBundle
 from swarmdeck.console.sandbox.confinement import JailConfig, SandboxLimits
 from swarmdeck.console.sandbox.script_env import ScriptEnv, listing
+from swarmdeck.core.bounds import DEFAULT_BOUNDS, Bounds
 
 __all__ = ["BYPASS_VERDICT", "BYPASS_WAIT", "RESULT_FILES", "ArenaControl", "ArenaReports", "ArenaState", "PortalConfig",
            "PortalService"]
@@ -1022,12 +1023,28 @@ class PortalService:
             busy: list[list[tuple[float, float]]] = [[] for _ in range(spec.slots)]
             for k, j in enumerate(self.store.active_on(spec.name, default)):
                 t0 = j.started if j.started is not None else now
-                on = spec.slot_of(j.placed)  # a region's job: its region's lane
-                busy[k % spec.slots if on is None else on].append((t0, t0 + occupancy(j.duration, est)))
-            lanes += [Lane(spec.name, k, spec.kind, spec.slot_capacity(k), busy[k]) for k in range(spec.slots)
-                      if not (spec.slot_names and self.store.arena_stopped_named(spec.placed_name(k)))]
-        pending = [Pending(j.id, j.user_id, j.robots, j.duration, j.arena, j.needs) for j in jobs]
+                on = spec.slot_of(j.placed)  # a region's job: its region's lane (and the regions nested with it)
+                slot = k % spec.slots if on is None else on
+                for taken in (slot, *spec.conflicts(slot)):
+                    busy[taken].append((t0, t0 + occupancy(j.duration, est)))
+            lanes += [Lane(spec.name, k, spec.kind, spec.slot_capacity(k), busy[k], spec.slot_shape(k),
+                           spec.conflicts(k))
+                      for k in range(spec.slots)
+                      if not (spec.slot_names and any(self.store.arena_stopped_named(spec.placed_name(s))
+                                                      for s in (k, *spec.conflicts(k))))]
+        pending = [Pending(j.id, j.user_id, j.robots, j.duration, j.arena, j.needs, self.job_bounds(j))
+                   for j in jobs]
         return plan(pending, lanes, self._windows(now), now, overheads)
+
+    def job_bounds(self, job: Job) -> Bounds:
+        """The arena ``job``'s script will see, m — what verification checks it against
+        (:meth:`.workers.VerificationWorkers.config_for`) and the only lanes the plan puts it on: on the first
+        arena that fits it, the region it gets there (:meth:`.arenas.ArenaSpec.job_bounds`: on a floor divided into
+        regions, the smallest region that holds its robots), else the whole floor."""
+        for spec in self.config.arena_specs():
+            if spec.fits(job.robots, job.needs, job.arena):
+                return spec.job_bounds(job.robots)
+        return DEFAULT_BOUNDS
 
     def next_for(self, arena: str, now: float | None = None, slot: int | None = None) -> Job | None:
         """The first job of the arena queue the plan starts on ``arena`` (on its ``slot``: None, any) now (None:

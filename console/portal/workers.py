@@ -65,7 +65,8 @@ class VerificationWorkers:
             self.verify_job(job)
 
     def config_for(self, job: Job) -> VerificationConfig:
-        """The job's verification: its declared robots, duration and start poses (as the arena will run it);
+        """The job's verification: its declared robots, duration and start poses, in the arena (or region of a
+        divided floor) it will get (:meth:`~.service.PortalService.job_bounds`), as the arena will run it;
         each run's wall time is bounded by the declared duration (``VerificationConfig.run_wall_s``)."""
         cfg = self.service.config
         # rows [x, y, θ]: submission stored them checked (N, 3) (console.sandbox.start_poses.check_initial_poses)
@@ -76,7 +77,8 @@ class VerificationWorkers:
                                   seed=cfg.verify_seed + int(job.id), trusted=cfg.trusted,
                                   jail=cfg.jail(),
                                   limits=SandboxLimits(tick_s=cfg.tick_budget_s),
-                                  initial_poses=poses, obstacles=self.obstacles)
+                                  initial_poses=poses, obstacles=self.obstacles,
+                                  bounds=self.service.job_bounds(job))
 
     def verify_job(self, job: Job) -> None:
         """Verify one claimed job and record the verdict (never raises); a sweep job's runs instead

@@ -48,7 +48,8 @@ NEAR_M = 0.25
 class RegionJobResult:
     """What :func:`run_in_region` did: the region, the floor ids of the job's robots, the script's
     :class:`~swarmdeck.devices.runner.RunResult` (as a solo run's), the set-up and return (``ok``, ``seconds`` of
-    floor time, ``robots`` not there) and why the job could not run (``error``)."""
+    floor time, ``robots`` not there), why the job could not run (``error``) and, from :func:`run_queue`, the floor
+    time it was taken from the queue and ended at (``started_s``, ``ended_s``, s; None otherwise)."""
 
     region: str
     fleet_ids: list[int] = field(default_factory=list)
@@ -56,6 +57,8 @@ class RegionJobResult:
     setup: dict[str, Any] = field(default_factory=dict)
     returned: dict[str, Any] = field(default_factory=dict)
     error: str | None = None
+    started_s: float | None = None
+    ended_s: float | None = None
 
 
 def drive_to(view: RegionRobots, goals: ArrayLike, limit_s: float = UPKEEP_LIMIT_S,
@@ -170,6 +173,7 @@ def run_in_region(floor: SharedFloor, name: str, target: str | Path | Callable[.
         if not result.setup["ok"]:
             raise ValueError(f"region {name}: set-up failed, robots {result.setup['robots']} did not reach their "
                              "start poses")
+        view.watched = True  # the script drives them now: a stall stops the region (SharedFloor.stall_s)
         if on_start is not None:
             on_start(view)
         return view
@@ -182,6 +186,7 @@ def run_in_region(floor: SharedFloor, name: str, target: str | Path | Callable[.
     finally:
         view = held.get("view")
         if view is not None:
+            view.watched = False
             try:
                 if not floor.stopped(name):
                     result.returned = drive_to(view, held["parked"], upkeep_limit_s)
@@ -209,14 +214,16 @@ def run_queue(floor: SharedFloor, jobs: list[QueuedJob], *, regions: tuple[str, 
               upkeep_limit_s: float = UPKEEP_LIMIT_S) -> list[tuple[QueuedJob, RegionJobResult]]:
     """Run ``jobs`` in queue order, one per region at a time, every region busy while jobs wait (one worker
     thread per region; a job goes to the first free region that holds it, :meth:`RegionLayout.capacity`).
-    ``regions``: the regions to use (default: all). Returns ``(job, result)`` in the order the jobs ended.
+    ``regions``: the regions to use (default: all; a nested layout's leaves — regions allocated per job are the
+    portal's plan, :class:`~swarmdeck.console.portal.region_runner.RegionRunner`). Returns ``(job, result)`` in the
+    order the jobs ended.
     ValueError before anything moves when a job fits no region (:meth:`RegionLayout.never_fits`)."""
     import functools
     import threading
 
     from swarmdeck.core.service_thread import ServiceThread
 
-    names = regions if regions is not None else floor.layout.names
+    names = regions if regions is not None else (floor.layout.leaves if floor.layout.nested else floor.layout.names)
     cap = floor.layout.capacity()
     for job in jobs:
         if not any(cap[n] >= job.robots for n in names):
@@ -232,8 +239,10 @@ def run_queue(floor: SharedFloor, jobs: list[QueuedJob], *, regions: tuple[str, 
                 if job is None:
                     return
                 waiting.remove(job)
+            started = _floor_time(floor)
             result = run_in_region(floor, region, job.target, n_robots=job.robots, duration=job.duration,
                                    seed=job.seed, upkeep_limit_s=upkeep_limit_s, start_poses=job.start_poses)
+            result.started_s, result.ended_s = started, _floor_time(floor)
             with lock:
                 done.append((job, result))
 
@@ -243,3 +252,9 @@ def run_queue(floor: SharedFloor, jobs: list[QueuedJob], *, regions: tuple[str, 
     for t in threads:
         t.stop()  # joins: each worker ends when no waiting job fits its region
     return done
+
+
+def _floor_time(floor: SharedFloor) -> float | None:
+    """The floor's clock now, s (its robots' reading; None when they keep no time)."""
+    t = floor.reading().time
+    return None if t is None else float(t)

@@ -29,6 +29,7 @@ from __future__ import annotations
 
 import math
 import threading
+import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
@@ -52,6 +53,10 @@ FloatArray = NDArray[np.float64]
 
 #: m between parked simulated robots (:func:`simulated_floor`): wide enough to drive back between neighbours
 PARKING_SPACING = 0.3
+#: wall s the floor's other regions wait for one region's commands of a tick before that region is stopped as
+#: stalled (:meth:`SharedFloor.stall`): a script that stops answering (it sleeps, blocks, or answers just inside its
+#: own per-tick wall backstop) must not hold the other regions' jobs up to its wall-time limit
+STALL_LIMIT_S = 5.0
 
 
 class FloorClosed(RuntimeError, SwarmdeckError):
@@ -65,7 +70,8 @@ class FloorStats:
     ticks: periods run; barrier_failures: ticks the barrier failed (every robot stopped);
     outside: robot-ticks with a robot's centre outside its region's rectangle (0 expected);
     min_between_regions: the smallest distance between the centres of two robots of different regions, m;
-    stopped: regions stopped by an emergency stop.
+    stopped: regions stopped by an emergency stop (or as stalled);
+    stalled: regions stopped because the others waited more than ``stall_s`` for their commands (one entry per stall).
     """
 
     ticks: int = 0
@@ -73,11 +79,13 @@ class FloorStats:
     outside: int = 0
     min_between_regions: float = math.inf
     stopped: list[str] = field(default_factory=list)
+    stalled: list[str] = field(default_factory=list)
 
     def to_dict(self) -> dict[str, Any]:
         d = self.min_between_regions
         return {"ticks": self.ticks, "barrier_failures": self.barrier_failures, "outside": self.outside,
-                "min_between_regions_m": None if not math.isfinite(d) else round(d, 4), "stopped": list(self.stopped)}
+                "min_between_regions_m": None if not math.isfinite(d) else round(d, 4), "stopped": list(self.stopped),
+                "stalled": list(self.stalled)}
 
 
 class SharedFloor:
@@ -91,11 +99,22 @@ class SharedFloor:
         safety_filter: the floor's barrier (default: :func:`~swarmdeck.devices.pipeline.barrier_filter` over the
             floor; its wall rows are replaced by each robot's region, robot by robot).
         on_tick: called on the ticking thread after every tick with the floor's reading (e.g. a floor-wide view).
+        stall_s: wall s the other regions wait for one region's commands before it is stopped as stalled (the
+            portal's :class:`~swarmdeck.console.portal.region_runner.RegionRunner`: :data:`STALL_LIMIT_S`); None: they
+            wait as long as it takes (trusted in-process jobs, :func:`~swarmdeck.console.runtime.region_jobs.run_queue`,
+            where a slow thread on a loaded machine is no stall).
+        on_stall: called (on the waiting region's thread, outside the floor's lock) with a stalled region's name
+            and why, e.g. to end its job (:class:`~swarmdeck.console.portal.region_runner.RegionRunner` fails it).
     """
 
     def __init__(self, ports: Any, layout: RegionLayout, *, params: GritsBotParams | None = None,
                  dt: float = CONTROL_PERIOD, safety_filter: Any = None,
-                 on_tick: Callable[[SensedPoses], None] | None = None) -> None:
+                 on_tick: Callable[[SensedPoses], None] | None = None, stall_s: float | None = None,
+                 on_stall: Callable[[str, str], None] | None = None) -> None:
+        if stall_s is not None and not (math.isfinite(stall_s) and stall_s > 0):
+            raise ValueError(f"stall_s must be a positive number of seconds, got {stall_s!r}")
+        self.stall_s: float | None = None if stall_s is None else float(stall_s)
+        self.on_stall = on_stall
         self.ports, self.layout = ports, layout
         self.params = params if params is not None else GritsBotParams()
         self.dt = float(dt)
@@ -161,6 +180,9 @@ class SharedFloor:
         with self._cv:
             if name in self._open:
                 raise ValueError(f"region {name} already runs a job")
+            clash = [n for n in self.layout.conflicts(name) if n in self._open]
+            if clash:  # a nested layout: a region and one inside it (or around it) never run jobs at once
+                raise ValueError(f"region {name} overlaps region {clash[0]}, which runs a job")
             self._open[name] = view
             self._stopped.discard(name)
         return view
@@ -235,10 +257,41 @@ class SharedFloor:
             target = self._tick + 1
             self._pending[name] = (v, w)
             self._maybe_tick()
+            waited_from = time.monotonic()
+            stalled: list[tuple[str, str]] = []
             while self._tick < target and not self._closed:
-                self._cv.wait(1.0)
-            if self._tick < target:
-                raise FloorClosed("the floor was closed")
+                left = math.inf if self.stall_s is None else waited_from + self.stall_s - time.monotonic()
+                if left <= 0:
+                    stalled.extend(self._stop_stalled(name))
+                    waited_from = time.monotonic()
+                    continue
+                self._cv.wait(min(left, 1.0))
+            closed = self._tick < target
+        for stalled_name, why in stalled:  # outside the lock: the callback may stop or end the region's job
+            if self.on_stall is not None:
+                self.on_stall(stalled_name, why)
+        if closed:
+            raise FloorClosed("the floor was closed")
+
+    def _stop_stalled(self, waiting: str) -> list[tuple[str, str]]:
+        """Under the lock, after region ``waiting`` waited :attr:`stall_s` for this tick: the open regions running
+        their job's script (:attr:`RegionRobots.watched`; set-ups and returns are the runner's own code) that did
+        not send their commands are stopped (robots zero and fixed, as by :meth:`estop`) and counted in
+        ``stats.stalled``, and the floor ticks without them; ``[(name, why)]``."""
+        late = [n for n, view in self._open.items() if view.watched and n not in self._pending
+                and not (self._all_stopped or n in self._stopped)]
+        out = []
+        for n in late:  # a handful of regions
+            why = (f"region {n} stalled: its job sent no commands for {self.stall_s:g} s of wall time while region "
+                   f"{waiting} waited for the floor's tick {self._tick + 1}; its robots were stopped and the other "
+                   f"regions went on")
+            self._stopped.add(n)
+            if n not in self.stats.stopped:
+                self.stats.stopped.append(n)
+            self.stats.stalled.append(n)
+            out.append((n, why))
+        self._maybe_tick()
+        return out
 
     def _maybe_tick(self) -> None:
         """Under the lock: tick when every open region that is not stopped sent its commands (a stopped region leaves
@@ -320,6 +373,9 @@ class RegionRobots:
             raise ValueError(f"region {region.name}: robots {self.fleet_ids.tolist()} are not all on the floor")
         self._t0 = first.time
         self._closed = False
+        #: the job's script drives these robots now (after the set-up, until the return): the floor stops the region
+        #: when the others wait more than ``stall_s`` for its commands (:meth:`SharedFloor._stop_stalled`)
+        self.watched = False
 
     def rows(self, floor_ids: NDArray[np.int64]) -> NDArray[np.intp]:
         """Rows of the job's robots in a floor reading with ids ``floor_ids`` (job order; missing ones left out)."""
@@ -387,11 +443,15 @@ class RegionRobots:
 def simulated_floor(layout: RegionLayout, per_region: int | dict[str, int], *, params: GritsBotParams | None = None,
                     dt: float = CONTROL_PERIOD, spacing: float = PARKING_SPACING) -> SharedFloor:
     """A :class:`SharedFloor` over simulated robots parked in every region: ``per_region`` robots (one count, or
-    one per region name) on a lattice of pitch ``spacing`` m inside each region (D_s from its edges), heading +x,
+    one per region name; a nested layout's leaves only: :attr:`RegionLayout.leaves`) on a lattice of pitch ``spacing``
+    m inside each region (D_s from its edges), heading +x,
     the sites nearest the region's floor walls first; floor ids region by region in layout order. ValueError naming
     the region that cannot hold its count."""
     parts = []
+    leaves = set(layout.leaves)  # a nested layout parks its robots in its leaves only
     for r in layout.regions:  # a handful of regions, once
+        if r.name not in leaves:
+            continue
         n = per_region if isinstance(per_region, int) else int(per_region.get(r.name, 0))
         sites = lattice_sites(r.bounds, spacing, SAFETY_DISTANCE)
         if len(sites) < n:

@@ -23,6 +23,14 @@ margin); a slot on the edge between two regions belongs to neither and is not us
 
 Capacity (:meth:`RegionLayout.capacity`): the robots a region holds at once — the start-pose lattice
 inside it (clear of its chargers' approach area), and at most its charger slots when it has chargers.
+
+**Regions allocated per job** (:meth:`RegionLayout.guillotine`, ``--arena NAME=sim,regions=auto:4x2``): the floor
+as a tree of guillotine cuts — the whole floor, cut in two across its longer side, each half cut again, down to a
+``COLS × ROWS`` grid of leaves. Every node of the tree is a region (``nested``: a region may lie inside another,
+never partly over it); robots are parked in the leaves. A job gets the smallest region that holds its robots, and
+a region is free only when no region above or below it in the tree runs a job (:meth:`RegionLayout.conflicts`:
+a buddy allocator): small jobs share the floor one leaf each, a job asking for more robots than a leaf holds gets
+a half, a quarter, … or the whole floor — so the floor is split into as many regions as what the queue asks fits.
 """
 from __future__ import annotations
 
@@ -81,8 +89,9 @@ class Region:
 
     @property
     def local_bounds(self) -> Bounds:
-        """The region as its job sees it: the same rectangle centred on ``(0, 0)``, m."""
-        hw, hh = self.bounds.width / 2, self.bounds.height / 2
+        """The region as its job sees it: the same rectangle centred on ``(0, 0)``, m (rounded to 1 nm, so that
+        regions of one size have equal bounds whatever the rounding of their floor-frame edges)."""
+        hw, hh = round(self.bounds.width / 2, 9), round(self.bounds.height / 2, 9)
         return Bounds(-hw, hw, -hh, hh)
 
     def to_local(self, poses: ArrayLike) -> FloatArray:
@@ -108,6 +117,16 @@ def _overlap(a: Bounds, b: Bounds) -> bool:
             and min(a.y_max, b.y_max) - max(a.y_min, b.y_min) > _TOL)
 
 
+def _inside(inner: Bounds, outer: Bounds) -> bool:
+    return (inner.x_min >= outer.x_min - _TOL and inner.x_max <= outer.x_max + _TOL
+            and inner.y_min >= outer.y_min - _TOL and inner.y_max <= outer.y_max + _TOL)
+
+
+def _nested(a: Bounds, b: Bounds) -> bool:
+    """One of the rectangles lies wholly inside the other."""
+    return _inside(a, b) or _inside(b, a)
+
+
 def _reaches(region: Bounds, floor: Bounds, wall: str) -> bool:
     k = WALLS.index(wall)
     return abs((region.y_min, region.y_max, region.x_min, region.x_max)[k]
@@ -122,11 +141,14 @@ class RegionLayout:
         floor: the whole floor, m.
         regions: the regions (at least one).
         charger_layout: the floor's charger strips (default: a :class:`ChargerLayout` of ``floor``).
+        nested: a region may lie wholly inside another (the tree of :meth:`guillotine`; two such regions never run
+            jobs at once: :meth:`conflicts`); partial overlaps are refused either way.
     """
 
     floor: Bounds = DEFAULT_BOUNDS
     regions: tuple[Region, ...] = ()
     charger_layout: ChargerLayout | None = field(default=None, compare=False)
+    nested: bool = False
 
     def __post_init__(self) -> None:
         floor = check_bounds(self.floor, "regions: floor")
@@ -151,7 +173,8 @@ class RegionLayout:
                                  f"footprint with the barrier's wall margins ({MIN_REGION_SIDE:.2f} m a side)")
         for k, first in enumerate(regions):
             for second in regions[k + 1:]:  # a handful of regions, once per layout
-                if _overlap(first.bounds, second.bounds):
+                if _overlap(first.bounds, second.bounds) and not (self.nested and _nested(first.bounds,
+                                                                                          second.bounds)):
                     raise ValueError(f"regions {first.name} and {second.name} overlap: {tuple(first.bounds)} and "
                                      f"{tuple(second.bounds)}")
         self._check_chargers(chargers)
@@ -174,7 +197,8 @@ class RegionLayout:
                                      f"region (robots would dock through another region); make it deeper than "
                                      f"{chargers.dock_depth + chargers.approach_distance + chargers.approach_stagger:.2f} m")
             for w in WALLS:
-                others = [n for n in declared[w] if n != r.name]
+                others = [n for n in declared[w] if n != r.name
+                          and not (self.nested and _nested(r.bounds, self.region(n).bounds))]
                 if w not in r.chargers and others and (inside & (walls == WALLS.index(w))).any():
                     raise ValueError(f"region {r.name} covers part of the {w} charger strip that region "
                                      f"{others[0]} docks on")
@@ -222,10 +246,58 @@ class RegionLayout:
                 regions.append(Region(f"r{r}c{c}", b, walls))
         return cls(floor, tuple(regions), chargers)
 
+    @classmethod
+    def guillotine(cls, floor: Bounds = DEFAULT_BOUNDS, columns: int = 2, rows: int = 2, *,
+                   charger_layout: ChargerLayout | None = None) -> RegionLayout:
+        """Regions allocated per job (module docstring): the tree of guillotine cuts of ``floor`` down to a
+        ``columns`` × ``rows`` grid of leaves — each node cut in two across its longer side (at the middle grid line
+        of that side), leaves named as :meth:`grid`'s (``r<row>c<col>``), the other nodes
+        ``r<row0>-<row1>c<col0>-<col1>`` (the grid cells they span) and the whole floor ``all``. Regions are listed
+        smallest first (leaves, …, ``all``); ``nested`` is set. Each region docks on the strips of the floor walls
+        it reaches."""
+        if columns < 1 or rows < 1:
+            raise ValueError(f"regions: a grid needs at least 1 column and 1 row, got {columns} x {rows}")
+        floor = check_bounds(floor, "regions: floor")
+        chargers = charger_layout if charger_layout is not None else ChargerLayout(bounds=floor)
+        xs = np.linspace(floor.x_min, floor.x_max, columns + 1)
+        ys = np.linspace(floor.y_min, floor.y_max, rows + 1)
+        nodes: list[tuple[int, int, int, int]] = []  # (col0, col1, row0, row1), cells [col0, col1) x [row0, row1)
+        todo = [(0, columns, 0, rows)]
+        while todo:  # at most 2 × columns × rows nodes, once per layout
+            c0, c1, r0, r1 = todo.pop()
+            nodes.append((c0, c1, r0, r1))
+            wide, high = xs[c1] - xs[c0], ys[r1] - ys[r0]
+            if c1 - c0 > 1 and (wide >= high or r1 - r0 == 1):
+                m = (c0 + c1) // 2
+                todo += [(c0, m, r0, r1), (m, c1, r0, r1)]
+            elif r1 - r0 > 1:
+                m = (r0 + r1) // 2
+                todo += [(c0, c1, r0, m), (c0, c1, m, r1)]
+        regions = []
+        for c0, c1, r0, r1 in sorted(nodes, key=lambda n: ((n[1] - n[0]) * (n[3] - n[2]), n[2], n[0])):
+            b = Bounds(float(xs[c0]), float(xs[c1]), float(ys[r0]), float(ys[r1]))
+            name = ("all" if (c0, c1, r0, r1) == (0, columns, 0, rows) else f"r{r0}c{c0}"
+                    if (c1 - c0, r1 - r0) == (1, 1) else f"r{r0}-{r1 - 1}c{c0}-{c1 - 1}")
+            regions.append(Region(name, b, tuple(w for w in chargers.walls if _reaches(b, floor, w))))
+        return cls(floor, tuple(regions), chargers, nested=True)
+
     # ------------------------------------------------------------------ questions
     @property
     def names(self) -> tuple[str, ...]:
         return tuple(r.name for r in self.regions)
+
+    @property
+    def leaves(self) -> tuple[str, ...]:
+        """The regions no other region lies inside (every region of a layout that is not ``nested``): where robots
+        are parked."""
+        return tuple(r.name for r in self.regions
+                     if not any(o is not r and _inside(o.bounds, r.bounds) for o in self.regions))
+
+    def conflicts(self, name: str) -> tuple[str, ...]:
+        """The other regions that cannot run a job while region ``name`` does: those it lies in or that lie in it
+        (none unless ``nested``)."""
+        me = self.region(name)
+        return tuple(r.name for r in self.regions if r is not me and _overlap(r.bounds, me.bounds))
 
     def region(self, name: str) -> Region:
         """The region called ``name``; KeyError naming the known ones."""
@@ -272,10 +344,12 @@ class RegionLayout:
         return out
 
     def fit(self, robots: int, busy: Collection[str] = ()) -> Region | None:
-        """The smallest free region (not in ``busy``) that holds ``robots`` robots — by capacity, then name; None
-        when none does now (:meth:`never_fits` says whether one ever will)."""
+        """The smallest free region (not in ``busy``, nor in conflict with one: :meth:`conflicts`) that holds
+        ``robots`` robots — by capacity, then name; None when none does now (:meth:`never_fits` says whether one ever
+        will)."""
         cap = self.capacity()
-        free = [r for r in self.regions if r.name not in set(busy) and cap[r.name] >= int(robots)]
+        blocked = set(busy).union(*(self.conflicts(n) for n in busy)) if busy else set()
+        free = [r for r in self.regions if r.name not in blocked and cap[r.name] >= int(robots)]
         return min(free, key=lambda r: (cap[r.name], r.name)) if free else None
 
     def never_fits(self, robots: int) -> str | None:
@@ -291,7 +365,8 @@ class RegionLayout:
         position ``(N, 2+)`` lies in, else the floor."""
         pos = np.asarray(positions, dtype=float).reshape(len(np.asarray(positions)), -1)
         out = np.tile(np.asarray(self.floor, dtype=float), (len(pos), 1))
-        for r in self.regions:  # a handful of regions
+        # a handful of regions, largest first: a robot gets the smallest region it lies in (nested layouts)
+        for r in sorted(self.regions, key=lambda r: -r.bounds.width * r.bounds.height):
             out[r.bounds.contains(pos[:, :2])] = r.bounds
         for name, rows in assignment.items():
             out[np.asarray(rows, dtype=np.intp)] = self.region(name).bounds
