@@ -144,7 +144,6 @@ def main_sweep(args: argparse.Namespace) -> int:
 
 
 def main(args: argparse.Namespace) -> int:
-    from swarmdeck.console.portal.client import ClientError
 
     if not Path(args.script).is_file():
         raise UsageError(f"script {args.script!r} does not exist or is not a file")
@@ -157,11 +156,21 @@ def main(args: argparse.Namespace) -> int:
     manifest = manifest_from(args)
     if manifest is not None and ("robots" not in manifest or "duration" not in manifest):
         raise UsageError("say how many robots and for how long: --robots N --duration S (or --manifest M)")
+    return submit_job(args, args.script, manifest, args.entry)
+
+
+def submit_job(args: argparse.Namespace, script: str | Path, manifest: dict | None, entry: str | None,
+               command: str = NAME) -> int:
+    """Submit ``script`` as an arena job (``manifest``; None: the .zip's own) on the portal of ``args``' client
+    options and say so; with --wait follow it to its end and print its results in short; with --json print the job.
+    Exit status as ``swarmdeck submit``'s (``swarmdeck train --submit`` too; ``command`` names it in errors)."""
+    from swarmdeck.console.portal.client import ClientError
+
     with client(args) as c:
         try:
-            job, results = _submitted(args, c, lambda: c.submit(args.script, manifest, args.entry), "job")
+            job, results = _submitted(args, c, lambda: c.submit(script, manifest, entry), "job")
         except ClientError as exc:
-            return fail(NAME, exc, args.json)
+            return fail(command, exc, args.json)
     if args.json:
         print(json.dumps(job if results is None else {**job, "results": results}))
     elif args.wait:

@@ -15,7 +15,7 @@ import zipfile
 from pathlib import Path
 
 from swarmdeck.console.cli import UsageError
-from swarmdeck.console.cli._client import add_client_arguments, client, fail
+from swarmdeck.console.cli._client import add_client_arguments, client
 
 NAME = "train"
 HELP = "train a small policy (PPO) on a shipped learning scenario; write it as an experiment, --submit it to the portal"
@@ -101,21 +101,6 @@ def main(args: argparse.Namespace) -> int:
             print(json.dumps({"policy": str(out / POLICY_FILE), "script": str(out / SCRIPT_FILE),
                               "archive": str(archive)}))
         return 0
-    from swarmdeck.console.cli.submit import _submitted
-    from swarmdeck.console.portal.client import ClientError
-    from swarmdeck.console.portal.states import JobState
+    from swarmdeck.console.cli.submit import submit_job
 
-    with client(args) as c:
-        try:
-            job, results = _submitted(args, c, lambda: c.submit(archive, None), "job")
-        except ClientError as exc:
-            return fail(NAME, exc, args.json)
-    if args.json:
-        print(json.dumps(job if results is None else {**job, "results": results}))
-    elif args.wait:
-        from swarmdeck.console.portal.results import summary_lines
-
-        print(f"job {job['id']}: {job['state']}" + (f" ({job['reason']})" if job.get("reason") else ""))
-        for line in [] if results is None else summary_lines(results):
-            print(f"  {line}")
-    return 0 if not args.wait or job["state"] == JobState.DONE else 1
+    return submit_job(args, archive, None, None, NAME)
