@@ -6,13 +6,16 @@ CPython. :func:`ascend` is :func:`swarmdeck.safety.dual_ascent._ascend` and :fun
 :func:`swarmdeck.safety.compiled.gram_dense`, operation for operation in the same order on IEEE doubles (numba
 compiles without fast-math: no reassociation, no fused multiply-add), so they return the same bits
 (tests/safety/test_safety_small_kernels.py checks it against the compiled kernels). Problems with more than
-:data:`SMALL_ROBOTS` robots use the compiled kernels; :func:`small` is the one test.
+:data:`SMALL_ROBOTS` robots, and every problem once numba is imported, use the compiled kernels; :func:`small` is
+the one test.
 """
 from __future__ import annotations
 
 import math
 
 import numpy as np
+
+from swarmdeck.core.compiled import imported
 
 #: robots up to which the barrier's kernels run in plain Python (no numba import); measured on rps 2.x's examples
 #: (1–12 robots, 303 steps, two barriers a step): 0.002–0.28 s CPU of Python kernels a run against ≈ 0.5 s CPU of
@@ -21,8 +24,10 @@ SMALL_ROBOTS = 12
 
 
 def small(n: int) -> bool:
-    """Whether a barrier problem on ``n`` robots uses these kernels instead of numba's."""
-    return n <= SMALL_ROBOTS
+    """Whether a barrier problem on ``n`` robots uses these kernels instead of numba's: at most SMALL_ROBOTS
+    robots while this process has not imported numba (once something has, its kernels are the faster way to the
+    same bits)."""
+    return n <= SMALL_ROBOTS and not imported()
 
 
 def ascend(ri: np.ndarray, rj: np.ndarray, ci: np.ndarray, cj: np.ndarray, b: np.ndarray, nominal: np.ndarray,

@@ -29,7 +29,7 @@ def _same(a: object, b: object) -> bool:
     return bool(np.array_equal(np.asarray(a), np.asarray(b))) and np.asarray(a).dtype == np.asarray(b).dtype
 
 
-@settings(max_examples=40, deadline=None)
+@settings(max_examples=25, deadline=None)
 @given(seed=st.integers(0, 2**32 - 1), n=st.integers(1, small_kernels.SMALL_ROBOTS), m=st.integers(1, 40),
        capped=st.booleans(), warm=st.booleans(), max_sweeps=st.integers(1, 80))
 def test_dual_ascent_same_bits(seed: int, n: int, m: int, capped: bool, warm: bool, max_sweeps: int) -> None:
@@ -58,6 +58,6 @@ def test_gram_same_bits(seed: int, n: int, w: int, use_j: bool) -> None:
     assert _same(compiled.gram_dense(ai, aj, aci, acj, J, use_j), small_kernels.gram_dense(ai, aj, aci, acj, J, use_j))
 
 
-def test_small_is_the_robot_count() -> None:
-    assert small_kernels.small(1) and small_kernels.small(small_kernels.SMALL_ROBOTS)
-    assert not small_kernels.small(small_kernels.SMALL_ROBOTS + 1)
+def test_small_is_the_robot_count_before_numba_is_imported() -> None:
+    compiled.warm_up_gram()  # numba imported (as in any process that has used a compiled kernel)
+    assert not small_kernels.small(1) and not small_kernels.small(small_kernels.SMALL_ROBOTS + 1)
