@@ -308,7 +308,7 @@ class Arena:
     def _barrier(self) -> UnicycleCommandFilter:
         """swarmdeck's barrier for this Arena's robots, bounds, period and obstacle segments."""
         config = self.config
-        return barrier_filter(self.params, config.bounds, config.dt, max_speed=self.params.max_speed,
+        return barrier_filter(self.params, config.bounds, config.dt, robots=self.n, max_speed=self.params.max_speed,
                               **({} if config.obstacles is None else {"obstacles": config.obstacles}))
 
     def add_obstacles(self, obstacles: Any) -> None:

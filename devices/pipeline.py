@@ -126,12 +126,17 @@ def barrier_filter(robot: GritsBotParams, bounds: Bounds, dt: float,
 
     ``barrier``: further :class:`~swarmdeck.safety.BarrierConfig` fields (``safety_distance``,
     ``gamma``, ``class_k``, ``max_speed``); their defaults are REFERENCE.md's, and the mode and
-    work caps default to ``safety.config.pipeline_defaults()`` (anytime, bounded work per tick).
+    work caps default to ``safety.config.pipeline_defaults()`` (anytime, bounded work per tick). ``robots``
+    (int, not a config field): the robot count it will filter, when known (a small one needs no numba:
+    ``safety.small_kernels``).
     """
     from swarmdeck.safety import BarrierConfig, UnicycleSafetyFilter  # devices -> safety (one way)
     from swarmdeck.safety.config import pipeline_defaults
 
-    return UnicycleSafetyFilter(BarrierConfig(bounds=bounds, dt=dt, **{**pipeline_defaults(), **barrier}), robot)
+    options = dict(barrier)
+    robots = options.pop("robots", None)
+    return UnicycleSafetyFilter(BarrierConfig(bounds=bounds, dt=dt, **{**pipeline_defaults(), **options}), robot,
+                                robots=None if robots is None else int(robots))
 
 
 def is_unicycle_filter(filt: object) -> bool:

@@ -34,6 +34,8 @@ import scipy.sparse.linalg as spla
 from .compiled import AVAILABLE as _COMPILED
 from .compiled import gram_dense
 from .constraints import Rows
+from .small_kernels import gram_dense as _gram_small
+from .small_kernels import small
 
 _DENSE_ROWS = 400  # dense Cholesky of the Gram matrix up to this many working rows
 _DIRECT_LIMIT = 40_000  # below this (rows × 2N) the dense A_W is formed directly
@@ -142,7 +144,8 @@ class _Working:
         if _COMPILED and w <= _DENSE_ROWS:  # compiled: per robot, independent of N
             use_j = J is not None
             Jc = np.ascontiguousarray(J, dtype=float) if use_j else np.zeros((n, 2, 2))
-            G = gram_dense(np.ascontiguousarray(self.ai, dtype=np.int64), np.ascontiguousarray(self.aj, dtype=np.int64),
+            gram = _gram_small if small(n) else gram_dense  # the same bits; plain Python needs no numba
+            G = gram(np.ascontiguousarray(self.ai, dtype=np.int64), np.ascontiguousarray(self.aj, dtype=np.int64),
                            np.ascontiguousarray(self.aci, dtype=float), np.ascontiguousarray(self.acj, dtype=float),
                            Jc, use_j)
             return _dense_spd_solve(G, rhs)

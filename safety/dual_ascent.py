@@ -15,7 +15,8 @@ used as the command: the rows it predicts start the certified active set
 
 The sweeps are compiled by numba (``safety.compiled``; :func:`warm_up` compiles or loads them
 once per process, outside any tick). Without an importable numba, :data:`AVAILABLE` is False and
-the filter keeps its uncompiled paths.
+the filter keeps its uncompiled paths. Problems on at most ``small_kernels.SMALL_ROBOTS`` robots run the same
+sweeps in plain Python (``small_kernels.ascend``, the same bits), so a small run never imports numba.
 """
 from __future__ import annotations
 
@@ -25,6 +26,8 @@ import numpy as np
 
 from .compiled import AVAILABLE, jit, warm_up_gram
 from .constraints import Rows
+from .small_kernels import ascend as _ascend_small
+from .small_kernels import small
 
 OMEGA = 1.8  # over-relaxation of the coordinate steps (measured: ≈ 2× fewer sweeps than ω = 1)
 RESTRICT_SLACK = 3e-3  # m/s: between full sweeps, only rows with λ > 0 or within this of their bound
@@ -136,7 +139,8 @@ def ascend(rows: Rows, nominal: np.ndarray, max_speed: float | None, lam0: np.nd
     if not AVAILABLE:
         raise RuntimeError("dual ascent needs numba, which is not importable")
     vmax = np.inf if max_speed is None else float(max_speed)
-    lam, u, sweeps, worst = _ascend(
+    kernel = _ascend_small if small(int(np.shape(nominal)[0])) else _ascend
+    lam, u, sweeps, worst = kernel(
         np.ascontiguousarray(rows.i, dtype=np.int64), np.ascontiguousarray(rows.jj, dtype=np.int64),
         np.ascontiguousarray(rows.ci, dtype=float), np.ascontiguousarray(rows.cj, dtype=float),
         np.ascontiguousarray(rows.b, dtype=float), np.ascontiguousarray(nominal, dtype=float), vmax,
@@ -145,15 +149,17 @@ def ascend(rows: Rows, nominal: np.ndarray, max_speed: float | None, lam0: np.nd
     return DualAscent(lam, u, predicted, int(sweeps), float(worst))
 
 
-def warm_up() -> None:
+def warm_up(robots: int | None = None) -> None:
     """Compile (or load from numba's cache) the kernels on a two-robot problem, once per process;
-    later calls cost microseconds. A no-op without numba."""
-    if not AVAILABLE:
+    later calls cost microseconds. A no-op without numba, and when the caller's problems have ``robots`` robots
+    and those are small (``small_kernels.small``: the plain-Python kernels, no numba)."""
+    if not AVAILABLE or (robots is not None and small(robots)):
         return
     warm_up_gram()
     rows = Rows(np.array([0]), np.array([1]), np.array([[-1.0, 0.0]]), np.array([[1.0, 0.0]]),
                 np.array([0.0]), np.array([0.0]), np.array([0], dtype=np.int8), np.array([1]))
-    ascend(rows, np.array([[0.1, 0.0], [-0.1, 0.0]]), 0.2, np.zeros(1), 4)
+    _ascend(np.array([0]), np.array([1]), rows.ci, rows.cj, rows.b, np.array([[0.1, 0.0], [-0.1, 0.0]]), 0.2,
+            np.zeros(1), 4, 1e-5, OMEGA, RESTRICT_SLACK, FULL_EVERY)  # the compiled kernel (2 robots are small)
 
 
 __all__ = ["AVAILABLE", "DualAscent", "ascend", "warm_up"]

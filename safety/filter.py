@@ -194,7 +194,9 @@ class SafetyFilter:
     automatically when N or the obstacle count changes, and after a failure).
     """
 
-    def __init__(self, config: BarrierConfig | None = None) -> None:
+    def __init__(self, config: BarrierConfig | None = None, *, robots: int | None = None) -> None:
+        """``robots``: the robot count the caller will filter, when known: a small one (``small_kernels.small``)
+        runs the kernels in plain Python, so numba is not loaded here (a larger problem later loads it then)."""
         self.config = BarrierConfig() if config is None else config
         self._warm_keys = np.zeros(0, dtype=np.int64)
         self._near_keys = np.zeros(0, dtype=np.int64)
@@ -204,7 +206,7 @@ class SafetyFilter:
         self._reset_backoff()
         self._walls: np.ndarray | None = None  # this call's per-robot wall rectangles (N, 4), for its diagnostics
         if self.config.solver == "auto":
-            dual_ascent.warm_up()  # numba's compile (or cache load) here, never in a tick
+            dual_ascent.warm_up(robots)  # numba's compile (or cache load) here, never in a tick
 
     def _dual_enabled(self) -> bool:
         cfg = self.config

@@ -62,11 +62,13 @@ class UnicycleSafetyFilter:
     (it sets the neighbour radius). A safe nominal is returned bit-for-bit.
     """
 
-    def __init__(self, config: BarrierConfig | None = None, params: UnicycleParams | None = None) -> None:
+    def __init__(self, config: BarrierConfig | None = None, params: UnicycleParams | None = None, *,
+                 robots: int | None = None) -> None:
+        """``robots``: the robot count the caller will filter, when known (:class:`SafetyFilter`)."""
         self.params = UnicycleParams() if params is None else params
         base = BarrierConfig() if config is None else config
         self.config = dataclasses.replace(base, max_speed=max_point_speed(self.params))
-        self._si = SafetyFilter(self.config)
+        self._si = SafetyFilter(self.config, robots=robots)
 
     def reset(self) -> None:
         """Forget the warm start."""

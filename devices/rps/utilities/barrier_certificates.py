@@ -27,11 +27,14 @@ def _boundary(points) -> tuple[float, float, float, float]:
 
 
 def _si(barrier_gain, safety_radius, magnitude_limit, bounds):
-    flt = SafetyFilter(BarrierConfig(safety_distance=safety_radius, gamma=barrier_gain, max_speed=magnitude_limit,
-                                     bounds=bounds))
+    config = BarrierConfig(safety_distance=safety_radius, gamma=barrier_gain, max_speed=magnitude_limit, bounds=bounds)
+    made: list[SafetyFilter] = []  # the filter, built on the first call: it knows the robot count then
 
     def f(dxi, x):
-        safe, _ = flt.filter(np.asarray(x, dtype=float)[:2].T, np.asarray(dxi, dtype=float).T)
+        x = np.asarray(x, dtype=float)
+        if not made:
+            made.append(SafetyFilter(config, robots=x.shape[-1] if x.ndim == 2 else None))
+        safe, _ = made[0].filter(x[:2].T, np.asarray(dxi, dtype=float).T)
         return safe.T
 
     return f
@@ -83,15 +86,18 @@ def _unicycle_dd(barrier_gain, safety_radius, projection_distance, wheel_vel_lim
 
     if not (np.isfinite(disturbance) and disturbance >= 0):
         raise ValueError(f"disturbance must be a finite number >= 0 rad/s, got {disturbance!r}")
-    flt = UnicycleSafetyFilter(
-        BarrierConfig(safety_distance=safety_radius, gamma=barrier_gain, bounds=bounds),
-        UnicycleParams(wheel_radius=wheel_radius, axle_length=base_length, max_wheel_speed=wheel_vel_limit,
-                       lookahead=projection_distance))
+    config = BarrierConfig(safety_distance=safety_radius, gamma=barrier_gain, bounds=bounds)
+    params = UnicycleParams(wheel_radius=wheel_radius, axle_length=base_length, max_wheel_speed=wheel_vel_limit,
+                            lookahead=projection_distance)
+    made: list[UnicycleSafetyFilter] = []  # built on the first call: it knows the robot count then
 
     def f(dxu, x, obstacles=np.empty(0)):
         dxu = np.asarray(dxu, dtype=float)
         obs = np.asarray(obstacles, dtype=float)
-        v, w, _ = flt.filter(np.asarray(x, dtype=float).T, dxu[0], dxu[1],
+        x = np.asarray(x, dtype=float)
+        if not made:
+            made.append(UnicycleSafetyFilter(config, params, robots=x.shape[-1] if x.ndim == 2 else None))
+        v, w, _ = made[0].filter(x.T, dxu[0], dxu[1],
                              obs.reshape(2, -1).T if obs.size else None)
         return np.vstack((v, w))
 

@@ -1,0 +1,58 @@
+"""An rps 2.x script's run does not import numba (issue 28: start-up cost of the rps examples).
+
+numba's import and kernel load cost ≈ 0.5 s CPU per process; at rps sizes (≤ SMALL_ROBOTS robots) the barrier's
+kernels run in plain Python (the same bits: tests/safety/test_safety_small_kernels.py), so numba stays out of
+``sys.modules``: importing the facade and the runner, and running an rps example (the arena's barrier and the
+script's own) for 1 s of experiment time. A barrier on more robots still gets the compiled kernels.
+Each check in a fresh interpreter (``sys.modules`` of this test process is shared with every other test).
+"""
+from __future__ import annotations
+
+import json
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[2]
+EXAMPLE = ROOT / "tests" / "data" / "rps2_examples" / "master" / "barrier_certificates" / "si_barriers.py"
+
+
+def _child(code: str, cwd: Path) -> dict:
+    out = subprocess.run([sys.executable, "-c", code], cwd=cwd, capture_output=True, text=True, timeout=300)
+    assert out.returncode == 0, out.stdout[-2000:] + out.stderr[-4000:]
+    return json.loads(out.stdout.strip().splitlines()[-1])
+
+
+def test_an_rps_example_runs_without_numba(tmp_path: Path) -> None:
+    script = tmp_path / EXAMPLE.name
+    shutil.copy(EXAMPLE, script)
+    code = (
+        "import json, sys\n"
+        "import swarmdeck.devices.rps.robotarium, swarmdeck.devices.rps.utilities.barrier_certificates\n"
+        "after_facade = 'numba' in sys.modules\n"
+        "from swarmdeck.devices.runner import run_experiment\n"
+        "after_runner = 'numba' in sys.modules\n"
+        f"r = run_experiment({str(script)!r}, duration=1.0, seed=1, rps=True)\n"
+        "print(json.dumps({'ok': r.ok, 'error': r.error, 'steps': r.reports[0].validation.steps,\n"
+        "                  'facade': after_facade, 'runner': after_runner, 'run': 'numba' in sys.modules}))\n"
+    )
+    res = _child(code, tmp_path)
+    assert res["ok"], res["error"]
+    assert res["steps"] > 0
+    assert res == {**res, "facade": False, "runner": False, "run": False}, res
+
+
+def test_a_larger_barrier_loads_the_compiled_kernels(tmp_path: Path) -> None:
+    code = (
+        "import json, sys\n"
+        "import numpy as np\n"
+        "from swarmdeck.safety import SafetyFilter\n"
+        "from swarmdeck.safety.small_kernels import SMALL_ROBOTS\n"
+        "n = SMALL_ROBOTS + 1\n"
+        "f = SafetyFilter(robots=n)\n"
+        "x = np.column_stack([np.linspace(-1.4, 1.4, n), np.zeros(n)])\n"
+        "safe, _ = f.filter(x, np.zeros((n, 2)))\n"
+        "print(json.dumps({'numba': 'numba' in sys.modules, 'finite': bool(np.isfinite(safe).all())}))\n"
+    )
+    assert _child(code, tmp_path) == {"numba": True, "finite": True}
