@@ -127,6 +127,18 @@ def _nested(a: Bounds, b: Bounds) -> bool:
     return _inside(a, b) or _inside(b, a)
 
 
+def _grid_lines(floor: Bounds, columns: int, rows: int, charger_layout: ChargerLayout | None
+                ) -> tuple[Bounds, ChargerLayout, NDArray[np.float64], NDArray[np.float64]]:
+    """A ``columns`` × ``rows`` grid of ``floor``: the checked floor, its charger layout (``charger_layout``, else
+    the floor's default) and the grid lines' x (columns + 1) and y (rows + 1), m; ValueError for an empty grid."""
+    if columns < 1 or rows < 1:
+        raise ValueError(f"regions: a grid needs at least 1 column and 1 row, got {columns} x {rows}")
+    floor = check_bounds(floor, "regions: floor")
+    chargers = charger_layout if charger_layout is not None else ChargerLayout(bounds=floor)
+    return (floor, chargers, np.linspace(floor.x_min, floor.x_max, columns + 1),
+            np.linspace(floor.y_min, floor.y_max, rows + 1))
+
+
 def _reaches(region: Bounds, floor: Bounds, wall: str) -> bool:
     k = WALLS.index(wall)
     return abs((region.y_min, region.y_max, region.x_min, region.x_max)[k]
@@ -232,12 +244,7 @@ class RegionLayout:
              charger_layout: ChargerLayout | None = None) -> RegionLayout:
         """``columns`` × ``rows`` equal regions named ``r<row>c<col>`` (from the bottom left), each docking on
         the strips of the floor walls it reaches among those with chargers."""
-        if columns < 1 or rows < 1:
-            raise ValueError(f"regions: a grid needs at least 1 column and 1 row, got {columns} x {rows}")
-        floor = check_bounds(floor, "regions: floor")
-        chargers = charger_layout if charger_layout is not None else ChargerLayout(bounds=floor)
-        xs = np.linspace(floor.x_min, floor.x_max, columns + 1)
-        ys = np.linspace(floor.y_min, floor.y_max, rows + 1)
+        floor, chargers, xs, ys = _grid_lines(floor, columns, rows, charger_layout)
         regions = []
         for r in range(rows):  # a handful of cells, once per layout
             for c in range(columns):
@@ -255,12 +262,7 @@ class RegionLayout:
         ``r<row0>-<row1>c<col0>-<col1>`` (the grid cells they span) and the whole floor ``all``. Regions are listed
         smallest first (leaves, …, ``all``); ``nested`` is set. Each region docks on the strips of the floor walls
         it reaches."""
-        if columns < 1 or rows < 1:
-            raise ValueError(f"regions: a grid needs at least 1 column and 1 row, got {columns} x {rows}")
-        floor = check_bounds(floor, "regions: floor")
-        chargers = charger_layout if charger_layout is not None else ChargerLayout(bounds=floor)
-        xs = np.linspace(floor.x_min, floor.x_max, columns + 1)
-        ys = np.linspace(floor.y_min, floor.y_max, rows + 1)
+        floor, chargers, xs, ys = _grid_lines(floor, columns, rows, charger_layout)
         nodes: list[tuple[int, int, int, int]] = []  # (col0, col1, row0, row1), cells [col0, col1) x [row0, row1)
         todo = [(0, columns, 0, rows)]
         while todo:  # at most 2 × columns × rows nodes, once per layout
