@@ -31,6 +31,8 @@ from typing import Any, cast
 import numpy as np
 from numpy.typing import NDArray
 
+from swarmdeck.core.errors import SwarmdeckError
+
 FORMAT = "swarmdeck-policy"
 VERSION = 1
 ACTIVATIONS = ("tanh", "relu")
@@ -42,7 +44,7 @@ MAX_INFLATED_BYTES = 8 * MAX_PARAMETERS + (1 << 20)  # float64 parameters, heade
 _LAYER_KEY = re.compile(r"^[wb](\d+)$")
 
 
-class PolicyError(ValueError):
+class PolicyError(ValueError, SwarmdeckError):
     """A policy file that cannot be used; the message names the file and the problem."""
 
 

@@ -93,31 +93,33 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--html", default=None, metavar="OUT.html", help="write the HTML report there")
 
 
-def _declared(args: argparse.Namespace) -> tuple[int | None, float, tuple | None, str]:
-    """(robots, duration, start poses, who declared the count) from --manifest, --robots, --duration and
-    --initial-poses (the options win over the manifest); UsageError naming what is wrong."""
+def _declared(args: argparse.Namespace) -> tuple[int | None, float, tuple | None, str, dict | None]:
+    """(robots, duration, start poses, who declared the count, the script's parameter values) from --manifest,
+    --robots, --duration and --initial-poses (the options win over the manifest; the values are the manifest's
+    ``params``, as the portal's verification uses them); UsageError naming what is wrong."""
     from swarmdeck.console.cli import UsageError
     from swarmdeck.console.cli.submit import manifest_from
     from swarmdeck.console.portal.errors import BadInput
     from swarmdeck.console.portal.submission import Limits, parse_manifest
     from swarmdeck.console.runtime.fleet_upkeep import read_poses_csv
 
-    robots, duration, poses, declared_by = args.robots, args.duration, None, "--robots"
+    robots, duration, poses, declared_by, params = args.robots, args.duration, None, "--robots", None
     if args.manifest:
         found = manifest_from(argparse.Namespace(manifest=args.manifest, robots=args.robots, duration=args.duration,
-                                                 name=None, no_barrier=False, script="verify"))
+                                                 name=None, no_barrier=False, script="verify", param=[]))
         try:  # checked as the portal checks it (its fleet size and maximum duration aside)
             m = parse_manifest(found, Limits(fleet=1 << 20, max_duration=float("inf")))
         except BadInput as exc:
             raise UsageError(f"the manifest {args.manifest!r}: {exc}") from None
         robots, duration, poses = m.robots, m.duration, m.initial_poses
+        params = None if m.params is None else dict(m.params)
         declared_by = "--robots" if args.robots is not None else "the manifest"
     if args.initial_poses:
         try:
             poses = tuple((float(x), float(y), float(theta)) for x, y, theta in read_poses_csv(args.initial_poses))
         except ValueError as exc:
             raise UsageError(str(exc)) from None
-    return robots, 30.0 if duration is None else duration, poses, declared_by
+    return robots, 30.0 if duration is None else duration, poses, declared_by, params
 
 
 def _runs(args: argparse.Namespace) -> int:
@@ -164,7 +166,7 @@ def main(args: argparse.Namespace) -> int:
     from swarmdeck.console.sandbox.report_html import render_html
     from swarmdeck.console.sandbox.verification import REJECTED, VerificationConfig, verify
 
-    robots, duration, poses, declared_by = _declared(args)
+    robots, duration, poses, declared_by, params = _declared(args)
     check_run_arguments(robots, duration, seed=args.seed)
     runs = _runs(args)
     if args.workers is not None and args.workers < 1:
@@ -192,7 +194,7 @@ def main(args: argparse.Namespace) -> int:
     on_progress, close = _progress((2 * runs + args.falsify_budget) * len(args.scripts))
     try:
         report = verify(args.scripts, config, executor, on_progress=on_progress, entry=args.entry,
-                        worst_case_dir=worst_case_dir)
+                        worst_case_dir=worst_case_dir, params=params)
     except (ValueError, ConfinementUnavailable) as exc:
         raise UsageError(str(exc)) from exc
     except ConnectionError as exc:

@@ -49,4 +49,11 @@ def test_swarmdeck_run_records_the_decentralised_traffic(tmp_path, capsys):
     assert sum(float(n.rate.sum()) for n in nets if n is not None) > 0
     with open(path, "rb") as fh:
         topics = [channel.topic for _, channel, _ in make_reader(fh).iter_messages()]
+    # the default (packed) Foxglove channels draw the links with the other line scenes, once a recorded second
+    assert topics.count("/foxglove/network") == 2
+    entities = tmp_path / "entities.mcap"
+    assert main(["run", script, "--robots", "4", "--duration", "1", "--seed", "2", "--record", str(entities),
+                 "--foxglove-entities"]) == 0
+    with open(entities, "rb") as fh:  # one entity per robot: the links every frame, as before
+        topics = [channel.topic for _, channel, _ in make_reader(fh).iter_messages()]
     assert topics.count("/foxglove/network") >= 30

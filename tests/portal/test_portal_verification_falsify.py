@@ -15,7 +15,7 @@ from swarmdeck.console.sandbox.executors import SerialExecutor
 def test_the_portals_falsify_budget_reaches_each_jobs_verification(tmp_path):
     service = PortalService(PortalConfig(data=tmp_path / "data", verify_falsify_budget=30))
     try:
-        job = SimpleNamespace(id=3, robots=2, duration=2.0, initial_poses=None)
+        job = SimpleNamespace(id=3, robots=2, duration=2.0, initial_poses=None, needs="either", arena=None)
         config = VerificationWorkers(service, SerialExecutor()).config_for(job)  # type: ignore[arg-type]
     finally:
         service.close()
