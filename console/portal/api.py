@@ -173,20 +173,26 @@ def api_router(service: PortalService, counter: RejectionCounter, *, max_upload_
         response.delete_cookie(SESSION_COOKIE, path="/")
         return {"ok": True}
 
+    async def _script_upload(form: Any) -> tuple[str | None, bytes, str | None]:
+        """The multipart form's script upload: (its file name, at most ``max_upload_bytes`` + 1 bytes, the ``entry``
+        field); BadInput naming the field that is not what it must be."""
+        script, entry = form.get("script"), form.get("entry")
+        if not isinstance(script, UploadFile):
+            raise BadInput("send the script as the multipart file field 'script'", "script")
+        if entry is not None and not isinstance(entry, str):
+            raise BadInput("entry is a form field naming the .py file inside the .zip, not a file", "entry")
+        return script.filename, await script.read(max_upload_bytes + 1), entry
+
     @router.post("/jobs", status_code=201, tags=["jobs"], openapi_extra=UPLOAD_SCHEMA, response_model=JobOut)
     async def submit(request: Request, u: User = Depends(user)) -> dict[str, Any]:
         """Submit a script (multipart file ``script``) with its ``manifest`` (JSON text): the new job, ``awaiting verification``."""
         form = await request.form(max_files=1, max_fields=5, max_part_size=max_upload_bytes)
         try:
-            script, manifest, entry = form.get("script"), form.get("manifest"), form.get("entry")
-            if not isinstance(script, UploadFile):
-                raise BadInput("send the script as the multipart file field 'script'", "script")
+            filename, data, entry = await _script_upload(form)
+            manifest = form.get("manifest")
             if manifest is not None and not isinstance(manifest, str):
                 raise BadInput("the manifest is a form field holding JSON text, not a file", "manifest")
-            if entry is not None and not isinstance(entry, str):
-                raise BadInput("entry is a form field naming the .py file inside the .zip, not a file", "entry")
-            data = await script.read(max_upload_bytes + 1)
-            job = await run_in_threadpool(service.submit, u, script.filename, data, manifest, entry)
+            job = await run_in_threadpool(service.submit, u, filename, data, manifest, entry)
             return job.to_dict()
         finally:
             await form.close()
@@ -200,15 +206,11 @@ def api_router(service: PortalService, counter: RejectionCounter, *, max_upload_
         ``GET /api/jobs/{id}/results`` and the files ``sweep-report.html``, ``results.csv``, ``summary.csv``."""
         form = await request.form(max_files=1, max_fields=5, max_part_size=max_upload_bytes)
         try:
-            script, sweep, entry = form.get("script"), form.get("sweep"), form.get("entry")
-            if not isinstance(script, UploadFile):
-                raise BadInput("send the script as the multipart file field 'script'", "script")
+            filename, data, entry = await _script_upload(form)
+            sweep = form.get("sweep")
             if not isinstance(sweep, str):
                 raise BadInput("send the sweep as the form field 'sweep' holding JSON text", "sweep")
-            if entry is not None and not isinstance(entry, str):
-                raise BadInput("entry is a form field naming the .py file inside the .zip, not a file", "entry")
-            data = await script.read(max_upload_bytes + 1)
-            job = await run_in_threadpool(service.submit_sweep, u, script.filename, data, sweep, entry)
+            job = await run_in_threadpool(service.submit_sweep, u, filename, data, sweep, entry)
             return job.to_dict()
         finally:
             await form.close()
