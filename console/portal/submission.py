@@ -274,6 +274,8 @@ def check_declared(bundle: ScriptBundle, params: tuple[tuple[str, Any], ...] | N
         resolve(declared, dict(params))
     except (ParamError, SyntaxError) as exc:
         raise BadInput(f"params: {exc}", "params") from None
+    except (MemoryError, RecursionError):  # the parser's own bound on nesting
+        raise BadInput("the script nests expressions deeper than Python's parser allows", "script") from None
 
 
 def _entry(data: dict[str, Any]) -> str | None:

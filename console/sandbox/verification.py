@@ -444,6 +444,9 @@ def compile_check(bundle: ScriptBundle, shown: str | None = None) -> str | None:
                 + " (found by compiling the script: nothing was run)")
     except ValueError as exc:  # null bytes
         return f"the script cannot be compiled: {exc} (nothing was run)"
+    except (MemoryError, RecursionError):  # the parser's own bound: expressions nested tens of thousands deep
+        return ("the script cannot be compiled: it nests expressions deeper than Python's parser allows "
+                "(nothing was run)")
     return None
 
 
