@@ -214,7 +214,7 @@ def router(service: PortalService, live: LiveFeed) -> APIRouter:
         form = await checked_form(request, s)
         if isinstance(form, Response):
             return form
-        values = {k: form.get(k) for k in ("name", "robots", "duration", "initial_poses", "entry")
+        values = {k: form.get(k) for k in ("name", "robots", "duration", "initial_poses", "entry", "params")
                   if isinstance(form.get(k), str)}
         values["no_barrier"] = form.get("no_barrier") == "on"
         script = form.get("script")
@@ -508,7 +508,7 @@ def manifest_from_form(values: dict[str, Any], filename: str | None,
     like the lines. A .zip with every manifest field empty uses its own ``manifest.json`` (None; the entry
     field may still name the script to run).
     """
-    text = {k: str(values.get(k) or "").strip() for k in ("name", "robots", "duration", "initial_poses")}
+    text = {k: str(values.get(k) or "").strip() for k in ("name", "robots", "duration", "initial_poses", "params")}
     if (filename or "").lower().endswith(".zip") and not any(text.values()) and not values.get("no_barrier"):
         return None, []
     errors: list[PortalError] = []
@@ -524,6 +524,11 @@ def manifest_from_form(values: dict[str, Any], filename: str | None,
             m["initial_poses"] = _poses(text["initial_poses"])
         except BadInput as exc:
             errors.append(exc)
+    if text["params"]:
+        try:
+            m["params"] = _params(text["params"])
+        except BadInput as exc:
+            errors.append(exc)
     entry = str(values.get("entry") or "").strip()
     if entry and not (filename or "").lower().endswith(".zip"):
         errors.append(BadInput("the entry file is only for a .zip (a .py is its own entry): leave it empty", "entry"))
@@ -537,6 +542,27 @@ def manifest_from_form(values: dict[str, Any], filename: str | None,
     probe.setdefault("duration", min(1.0, limits.max_duration))
     errors += [e for e in manifest_errors(probe, limits, first=1) if e.field not in known]  # poses: as the lines
     return m, errors
+
+
+def _params(text: str) -> dict[str, Any]:
+    """The Parameters field: one ``name = value`` a line (values read as ``--param`` reads them); BadInput
+    (``params``) naming the line. The names and kinds are checked against the script's declaration later."""
+    from swarmdeck.console.sweep.design import scalar
+
+    out: dict[str, Any] = {}
+    for k, line in enumerate(ln for ln in text.splitlines() if ln.strip()):
+        name, sep, value = line.partition("=")
+        name, value = name.strip(), value.strip()
+        where = f"parameters, line {k + 1}: {line.strip()[:60]!r}"
+        if not sep or not name.isidentifier() or not value:
+            raise BadInput(f"{where} is not name = value (e.g. gain = 0.5)", "params")
+        if name in out:
+            raise BadInput(f"{where} sets {name} a second time", "params")
+        if any(c in value for c in ",") or value.count(":") >= 2:
+            raise BadInput(f"{where}: one value per parameter here (a sweep of values is `swarmdeck submit "
+                           "--sweep`)", "params")
+        out[name] = scalar(value)
+    return out
 
 
 def _number(text: str, kind: type) -> Any:

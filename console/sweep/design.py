@@ -73,7 +73,9 @@ def _count(text: str, where: str) -> int:
     return n
 
 
-def _scalar(text: str) -> Value:
+def scalar(text: str) -> Value:
+    """One typed value as the command line and the Submit page read it: ``true``/``false``, an integer, a finite
+    number, else the text itself (stripped)."""
     t = text.strip()
     if t.lower() in ("true", "false"):
         return t.lower() == "true"
@@ -118,7 +120,7 @@ def parse_axis(spec: str) -> Axis:
     items = [v for v in values.split(",")]
     if any(not v.strip() for v in items):
         raise DesignError(f"{where}: an empty value in the list")
-    listed = tuple(dict.fromkeys(_scalar(v) for v in items))  # repeated values run once
+    listed = tuple(dict.fromkeys(scalar(v) for v in items))  # repeated values run once
     return Axis(name, listed, "list")
 
 
