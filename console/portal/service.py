@@ -100,6 +100,7 @@ from swarmdeck.console.portal.submission import (
     check_declared,
     check_upload,
     parse_manifest,
+    parse_params,
 )
 from swarmdeck.console.portal.submission import display_name as _display_name
 from swarmdeck.console.sandbox.bundle import ScriptBundle
@@ -388,7 +389,7 @@ class PortalService:
         else:
             files, entry = dict(ScriptBundle.from_path(path, entry).files), str(entry)
         upload = Upload(kind=sweep_job.kind, display_name=sweep_job.script, files=files, entry=entry)
-        values = None if params is None else tuple(sorted(params.items()))
+        values = parse_params(params)  # the one check of a job's values, as for a submitted manifest
         m = Manifest(name[:100], int(robots), float(duration), entry=None if sweep_job.kind == "py" else entry,
                      params=values)
         check_request(self.config.arena_specs(), m.robots, m.needs, None)

@@ -74,3 +74,21 @@ def test_the_best_point_becomes_an_arena_job_with_its_values(portal):
         browser.close()
     with portal.client("bob") as c:
         assert c.get(f"/api/jobs/{job['id']}").status_code == 404
+
+
+def test_promoted_values_pass_the_same_check_as_a_submitted_manifest(portal):
+    """Before the fix, promote stored whatever values it was handed (a NaN gain became a queued job's parameter)."""
+    from swarmdeck.console.portal.errors import BadInput
+
+    sweep = {"params": ["gain=0.5,1"], "robots": 2, "duration": 1.0}
+    with portal.client("alice") as c:
+        r = c.post("/api/sweeps", files={"script": ("g.py", SCRIPT)}, data={"sweep": json.dumps(sweep)})
+        assert r.status_code in (200, 201), r.text
+        sid = r.json()["id"]
+    alice = portal.service.accounts.user_named("alice")
+    job = portal.service.job(alice, sid)
+    for bad in ({"gain": float("nan")}, {"not a name": 1.0}, {"gain": [1, 2]}):
+        with pytest.raises(BadInput) as err:
+            portal.service.promote(job, bad, 2, 1.0, "best")
+        assert err.value.field == "params", err.value
+    assert [j.id for j in portal.service.jobs(alice)] == [sid]  # nothing was queued
