@@ -87,9 +87,10 @@ def config_from_dict(d: Any) -> VerificationConfig:
 
 
 def task_args(task: RunTask, *, sweep_key: str = "") -> dict[str, Any]:
-    """The manifest's ``run`` of ``task``: ``mode``, ``index``, ``params`` (``[[name, value], …]`` or None),
+    """The manifest's ``run`` of ``task``: ``mode``, ``index``, ``params`` (``{name: value}`` as the other capsule
+    kinds write it, or None),
     ``config`` (:func:`config_dict`), ``seed`` (the config's: the capsule's key covers it) and ``sweep_key``."""
-    params = None if task.params is None else [[k, v] for k, v in task.params]
+    params = None if task.params is None else dict(task.params)
     return {"mode": task.mode, "index": task.index, "params": params, "config": config_dict(task.config),
             "seed": task.config.seed, "sweep_key": sweep_key}
 
@@ -104,9 +105,13 @@ def task_from_capsule(run: Mapping[str, Any], files: Mapping[str, bytes], entry:
     if isinstance(index, bool) or not isinstance(index, int) or index < 0:
         raise ValueError(f"capsule run.index must be an integer >= 0, got {index!r}")
     params = run.get("params")
-    if params is not None and not (isinstance(params, list) and all(
+    if isinstance(params, dict):  # the form every capsule kind writes
+        params = list(params.items())  # JSON keeps the order it was written in
+    elif params is not None and not (isinstance(params, list) and all(  # capsules written before 2026-11-27
             isinstance(p, list) and len(p) == 2 and isinstance(p[0], str) for p in params)):
-        raise ValueError("capsule run.params must be a list of [name, value] pairs")
+        raise ValueError("capsule run.params must be an object of parameter values")
+    if params is not None and not all(isinstance(k, str) for k, _ in params):
+        raise ValueError("capsule run.params must be an object of parameter values")
     if entry is None:
         raise ValueError("the capsule names no entry script")
     bundle = ScriptBundle(entry, tuple(sorted(files.items())))

@@ -12,7 +12,7 @@ from swarmdeck.console.recording.reader import open_recording
 from swarmdeck.console.sandbox.confinement import SandboxLimits, probe
 from swarmdeck.console.sandbox.plant import Disturbances
 from swarmdeck.console.sandbox.verification import VerificationConfig
-from swarmdeck.console.sweep.capsules import config_dict, config_from_dict, task_from_capsule
+from swarmdeck.console.sweep.capsules import config_dict, config_from_dict, task_args, task_from_capsule
 from swarmdeck.core.obstacles import Obstacles
 
 SCRIPT = """
@@ -79,3 +79,19 @@ def test_a_capsule_that_is_not_a_zip_is_refused(tmp_path):
     with pytest.raises(CapsuleError):
         open_capsule(bad, tmp_path / "o")
     assert not zipfile.is_zipfile(bad)
+
+
+def test_a_verification_capsule_writes_its_params_as_every_capsule_kind_does_and_reads_the_old_form():
+    """Sweep runs' capsules wrote ``[[name, value], …]`` while ``run`` and ``portal`` capsules write an object; they
+    now write the object too, and a capsule of the old form still reads to the same task."""
+    files = {"main.py": b"pass\n"}
+    config = config_dict(VerificationConfig(n_robots=2, duration=1.0, runs=1))
+    task = task_from_capsule({"mode": "raw", "index": 1, "params": {"gain": 0.5, "label": "x"}, "config": config},
+                             files, "main.py")
+    assert task.params == (("gain", 0.5), ("label", "x"))
+    assert task_args(task)["params"] == {"gain": 0.5, "label": "x"}
+    old = task_from_capsule({"mode": "raw", "index": 1, "params": [["gain", 0.5], ["label", "x"]], "config": config},
+                            files, "main.py")
+    assert old.params == task.params
+    with pytest.raises(ValueError, match="run.params"):
+        task_from_capsule({"mode": "raw", "index": 1, "params": "gain=1", "config": config}, files, "main.py")
