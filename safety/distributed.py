@@ -41,8 +41,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from swarmdeck.core.compiled import AVAILABLE as _COMPILED
+
 from .config import BarrierConfig
 from .constraints import LIMIT, Rows
+from .distributed_kernel import solve_small_qps_kernel
+from .dual_ascent import ascend
+from .small_kernels import small
 
 _SIGN_TOL = 1e-12  # multipliers ≥ −tol count as non-negative (m/s scale)
 _FEAS_TOL = 1e-10  # m/s: a candidate satisfies a row when aᵀu ≤ b + tol
@@ -175,7 +180,28 @@ def solve_small_qps(owner: np.ndarray, a: np.ndarray, b: np.ndarray, nominal: np
     violates row k — so the optimum is the cheapest candidate. Stage 1 tries
     the most violated line alone and accepts it when its KKT multipliers are
     ≥ 0 (then it is the optimum); stage 2 takes the cheapest over all hot lines.
+
+    With numba (``core.compiled``) and more than ``small_kernels.SMALL_ROBOTS`` robots (or numba already
+    imported) the compiled kernel :func:`safety.distributed_kernel.solve_small_qps_kernel` answers instead:
+    the same answers bit for bit, without the GIL.
     """
+    n = nominal.shape[0]
+    if _COMPILED and not small(n):
+        vm = np.inf if max_speed is None else float(max_speed)
+        use_todo = todo is not None
+        u_c, solved_c, active_c, disc_c, _ = solve_small_qps_kernel(
+            np.ascontiguousarray(owner, dtype=np.int64), np.ascontiguousarray(a, dtype=float),
+            np.ascontiguousarray(b, dtype=float), np.ascontiguousarray(nominal, dtype=float), max_speed is not None,
+            vm, np.inf if reach is None else float(reach),
+            np.ascontiguousarray(todo, dtype=np.bool_) if use_todo else np.zeros(0, dtype=np.bool_), use_todo)
+        return SmallQPResult(u_c, solved_c, active_c, disc_c)
+    return _solve_small_qps_numpy(owner, a, b, nominal, max_speed, reach, todo)
+
+
+def _solve_small_qps_numpy(owner: np.ndarray, a: np.ndarray, b: np.ndarray, nominal: np.ndarray,
+                           max_speed: float | None, reach: float | None = None,
+                           todo: np.ndarray | None = None) -> SmallQPResult:
+    """:func:`solve_small_qps` in numpy, vectorised across robots (padded arrays): the path without numba."""
     n = nominal.shape[0]
     m = b.shape[0]
     uh = nominal
@@ -208,7 +234,8 @@ def solve_small_qps(owner: np.ndarray, a: np.ndarray, b: np.ndarray, nominal: np
     tau = np.ones(n) if not disc else np.minimum(1.0, vmax / np.maximum(speed, 1e-300))
     np.minimum.at(tau, owner, tau_row)
     radius = np.where(tau >= 0, (1.0 - np.clip(tau, 0.0, 1.0)) * speed, np.inf)
-    idx = np.flatnonzero(bad[owner] & (norm > 0) & (b < lim * norm) & (b - lhs <= radius[owner] * norm))
+    with np.errstate(invalid="ignore"):  # inf·0 for a zero row, which (norm > 0) leaves out
+        idx = np.flatnonzero(bad[owner] & (norm > 0) & (b < lim * norm) & (b - lhs <= radius[owner] * norm))
 
     # ---- the rows of the robots to solve, normalised, padded to (S, K)
     robots = np.flatnonzero(bad)
@@ -336,6 +363,93 @@ def reallocate_halves(split: SplitRows, u: np.ndarray, n_pairs: int) -> tuple[np
 
 
 @dataclass(frozen=True)
+class ConsensusShares:
+    """Two splits of every pair row's margin from an estimate ũ of the joint optimum (both add up to the row).
+
+    target (M,): robot i's share ``c_iᵀũ_i + slack/2`` (slack = b − c_iᵀũ_i − c_jᵀũ_j, of either sign): when ũ
+    is the optimum, every robot's own QP returns it. safe (M,): the target clipped to ``[c_iᵀu⁰_i, b − c_jᵀu⁰_j]``
+    (u⁰ the first pass's answer), so u⁰ stays feasible for every robot. Single-robot rows keep their bound."""
+
+    target: np.ndarray
+    safe: np.ndarray
+
+
+def consensus_shares(split: SplitRows, u: np.ndarray, estimate: np.ndarray, n_pairs: int) -> ConsensusShares:
+    """Shares of each pair row's margin from ``estimate`` (N, 2) m/s, e.g. a few sweeps of dual ascent.
+
+    split: :func:`split_rows`'s half/half split (pair halves first, as :func:`reallocate_halves`); u (N, 2)
+    the first pass's answer on it. See :class:`ConsensusShares`.
+    """
+    target = split.b.copy()
+    safe = split.b.copy()
+    if n_pairs == 0:
+        return ConsensusShares(target, safe)
+    p2 = 2 * n_pairs
+    a, own = split.a[:p2], split.owner[:p2]
+    want = np.einsum("kd,kd->k", a, estimate[own])
+    use = np.einsum("kd,kd->k", a, u[own])
+    total = split.b[:n_pairs] + split.b[n_pairs:p2]  # the row's bound (halving and doubling are exact)
+    ti, tj = want[:n_pairs], want[n_pairs:]
+    bi = ti + 0.5 * (total - ti - tj)
+    target[:n_pairs], target[n_pairs:p2] = bi, total - bi
+    si = np.minimum(np.maximum(bi, use[:n_pairs]), total - use[n_pairs:])
+    safe[:n_pairs], safe[n_pairs:p2] = si, total - si
+    return ConsensusShares(target, safe)
+
+
+@dataclass(frozen=True)
+class _Pass:
+    u: np.ndarray
+    active: np.ndarray
+    on_disc: np.ndarray
+
+
+def _consensus_pass(rows: Rows, split: SplitRows, first: _Pass, nominal: np.ndarray, max_speed: float | None,
+                    reach: float | None, sweeps: int) -> _Pass:
+    """The second pass on consensus shares (:func:`consensus_shares`): every pair on its target split; a robot
+    whose own QP is then infeasible puts all of its pairs on their safe split, and the robots whose shares
+    changed solve again, until every robot is solved (at most one round per robot: each round makes a pair
+    safe for good, and a robot whose pairs are all safe has its first answer feasible). If a round still
+    fails, or after ``_MAX_ROUNDS``, the first pass's answer stands."""
+    n_pairs = int(np.sum(rows.j >= 0))
+    if n_pairs == 0:
+        return first
+    est = ascend(rows, nominal, max_speed, np.zeros(rows.m), sweeps, tol=0.0).u
+    sh = consensus_shares(split, first.u, est, n_pairs)
+    p2 = 2 * n_pairs
+    b = sh.target
+    u, act, on_disc = first.u.copy(), first.active.copy(), first.on_disc.copy()
+    changed = np.zeros(nominal.shape[0], dtype=bool)
+    changed[split.owner[np.flatnonzero(b != split.b)]] = True
+    safe_pair = np.zeros(n_pairs, dtype=bool)
+    for _ in range(_MAX_ROUNDS):
+        if not changed.any():
+            return _Pass(u, act, on_disc)
+        res = solve_small_qps(split.owner, split.a, b, nominal, max_speed, reach, todo=changed)
+        ok = changed & res.solved
+        u = np.where(ok[:, None], res.u, u)
+        act = np.where(ok[split.owner], res.active, act)
+        on_disc = np.where(ok, res.on_disc, on_disc)
+        fail = changed & ~res.solved
+        if not fail.any():
+            return _Pass(u, act, on_disc)
+        newly = ~safe_pair & (fail[split.owner[:n_pairs]] | fail[split.owner[n_pairs:p2]])
+        if not newly.any():
+            return first
+        safe_pair |= newly
+        b = b.copy()
+        both = np.concatenate([newly, newly])
+        b[:p2] = np.where(both, sh.safe[:p2], b[:p2])
+        changed = np.zeros_like(changed)
+        changed[split.owner[:p2][both]] = True
+        changed |= fail
+    return first
+
+
+_MAX_ROUNDS = 8  # cascade rounds of the consensus pass before it gives up (the first pass stands)
+
+
+@dataclass(frozen=True)
 class DistributedResult:
     """u (N, 2); ok; reason; active (m,) centralised rows with an active half (or whole row);
     n_speed robots on the speed bound; n_fallback robots that fell back to "no further approach"."""
@@ -367,7 +481,12 @@ def filter_distributed(rows: Rows, nominal: np.ndarray, max_speed: float | None,
     res = solve_small_qps(split.owner, split.a, split.b, nominal, max_speed, reach)
     u, solved, act, on_disc = res.u, res.solved, res.active, res.on_disc
     n_fallback = 0
-    if cfg.distributed_second_pass and not recovering and solved.all():
+    sweeps = cfg.distributed_consensus_sweeps
+    if cfg.distributed_second_pass and not recovering and solved.all() and sweeps > 0 and _COMPILED:
+        # the second pass on shares from a few sweeps of dual ascent (an estimate of the joint optimum)
+        p = _consensus_pass(rows, split, _Pass(u, act, on_disc), nominal, max_speed, reach, sweeps)
+        u, act, on_disc = p.u, p.active, p.on_disc
+    elif cfg.distributed_second_pass and not recovering and solved.all():
         # a second pass on a better split of each pair's margin (reallocate_halves): less invasive
         b2, again = reallocate_halves(split, u, int(np.sum(rows.j >= 0)))
         if again.any():
@@ -406,5 +525,5 @@ def filter_distributed(rows: Rows, nominal: np.ndarray, max_speed: float | None,
     return DistributedResult(u, True, "optimal per robot", active, int(on_disc.sum()), n_fallback)
 
 
-__all__ = ["SplitRows", "split_rows", "reallocate_halves", "SmallQPResult", "solve_small_qps", "DistributedResult",
+__all__ = ["SplitRows", "split_rows", "reallocate_halves", "ConsensusShares", "consensus_shares", "SmallQPResult", "solve_small_qps", "DistributedResult",
            "filter_distributed"]
