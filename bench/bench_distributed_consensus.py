@@ -1,4 +1,4 @@
-"""Distributed barrier (issue 27 item 1): cost/optimum and CPU time against the consensus sweeps K, compiled.
+"""Distributed barrier (issue 27 item 1): cost/optimum and CPU time against the consensus passes K, compiled.
 
 Run: ``.venv/bin/python bench/bench_distributed_consensus.py [--n 100 200 1000 5000] [--ticks 60] [--every 3]``
 (≈ 10 min idle with the defaults; BLAS pinned to one thread).
@@ -10,8 +10,9 @@ each filter below is called once and timed in process CPU time (``time.process_t
 so the ratios hold under the machine's load):
 
 * *distributed 1 pass*: the half/half split only (``distributed_second_pass=False``);
-* *distributed K = k*: the second pass on shares from k sweeps of dual ascent (``distributed_consensus_sweeps``;
-  K = 0 is the default second pass, ``reallocate_halves``);
+* *distributed K = k*: the default two passes (half/half, then ``reallocate_halves``) and k consensus passes
+  (``distributed_consensus_passes``: each pair's remaining slack shared equally at the last answer);
+* *distributed K = 2, numpy*: K = 2 with the per-robot QPs on the numpy path (the speed-up of the kernel);
 * *clarabel*: a fresh ``solver="clarabel"`` filter on the same rows (the optimum: its cost is the denominator);
 * *centralised*: the default exact filter, warm (N ≤ 1000 only: seconds per tick beyond).
 
@@ -27,23 +28,37 @@ import dataclasses  # noqa: E402
 import harness  # first: pins BLAS/OpenMP to one thread, before numpy loads
 import numpy as np  # noqa: E402
 
-from swarmdeck.safety import SafetyFilter  # noqa: E402
+from swarmdeck.safety import SafetyFilter, distributed  # noqa: E402
 from swarmdeck.safety.constraints import barrier_rows  # noqa: E402
-from swarmdeck.safety.dual_ascent import warm_up  # noqa: E402
 from swarmdeck.safety.scenes import crossing_scene, toward  # noqa: E402
 
-SWEEPS = (0, 1, 2, 4, 8)
+PASSES = (0, 1, 2, 4, 8)
 
 
 timed = harness.timed  # (process CPU s, result)
+
+
+class NumpyPath:
+    """A filter whose per-robot QPs run on ``solve_small_qps``'s numpy path (the kernel switched off for the call)."""
+
+    def __init__(self, flt: SafetyFilter) -> None:
+        self.flt = flt
+
+    def filter(self, x: np.ndarray, nom: np.ndarray):
+        distributed._COMPILED = False
+        try:
+            return self.flt.filter(x, nom)
+        finally:
+            distributed._COMPILED = True
 
 
 def run(n: int, ticks: int, every: int) -> dict:
     cfg, x, goals = crossing_scene(n, np.random.default_rng(0))
     dist = dataclasses.replace(cfg, mode="distributed")
     filters = {"distributed 1 pass": SafetyFilter(dataclasses.replace(dist, distributed_second_pass=False))}
-    for k in SWEEPS:
-        filters[f"distributed K = {k}"] = SafetyFilter(dataclasses.replace(dist, distributed_consensus_sweeps=k))
+    for k in PASSES:
+        filters[f"distributed K = {k}"] = SafetyFilter(dataclasses.replace(dist, distributed_consensus_passes=k))
+    filters["distributed K = 2, numpy"] = NumpyPath(SafetyFilter(dataclasses.replace(dist, distributed_consensus_passes=2)))
     if n <= 1000:
         filters["centralised"] = SafetyFilter(dataclasses.replace(cfg, mode="centralised"))
     clar = dataclasses.replace(cfg, solver="clarabel")
@@ -80,7 +95,6 @@ def main() -> None:
     ap.add_argument("--ticks", type=int, default=60)
     ap.add_argument("--every", type=int, default=3, help="measure every this many ticks of the trajectory")
     args = ap.parse_args()
-    warm_up()
     print(harness.machine())
     print("| N | filter | median ms | worst ms | mean cost / optimum | worst cost / optimum | worst row excess m/s |")
     print("| --- | --- | --- | --- | --- | --- | --- |")

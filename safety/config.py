@@ -133,13 +133,11 @@ class BarrierConfig:
     distributed_second_pass: the distributed filter solves a second pass in which each pair row's
         margin unused by one robot goes to the other (:func:`safety.distributed.reallocate_halves`;
         certified as the first, never more invasive for any robot, ≈ 2× the distributed cost).
-    distributed_consensus_sweeps: with the second pass, the split of each pair row's margin comes from
-        an estimate of the joint optimum instead: this many sweeps of dual coordinate ascent on all rows
-        (:mod:`safety.dual_ascent`, from zero multipliers), robot i's share ``c_iᵀũ_i + slack/2``
-        (:func:`safety.distributed.consensus_shares`; certified as the first pass: the shares still add
-        up to the row). 0 (the default) keeps :func:`~safety.distributed.reallocate_halves`. Needs numba
-        (without it the second pass reallocates). bench/RESULTS.md, "distributed barrier: compiled and
-        consensus shares", has the cost/optimum against the sweeps.
+    distributed_consensus_passes: after the second pass, this many consensus passes: each pair row's
+        remaining slack at the last answer is shared equally between its two robots, and the robots given
+        more margin solve again (:func:`safety.distributed.consensus_shares`; certified as the first pass, no
+        robot's intervention grows; each pass costs about one more distributed solve). bench/RESULTS.md,
+        "distributed barrier: compiled, consensus passes", has cost/optimum and time per pass count.
     pairs: False builds no pair rows: the filter keeps the walls and the fixed obstacles
         (e.g. docked robots) only — the hard layer of a bypassed run (:mod:`safety.guard`).
     obstacles: line-segment obstacles on the floor (:class:`~swarmdeck.core.obstacles.Obstacles`, or
@@ -176,7 +174,7 @@ class BarrierConfig:
     active_set_max_solves: int | None = None
     warm_share: float | None = None
     distributed_second_pass: bool = True
-    distributed_consensus_sweeps: int = 0
+    distributed_consensus_passes: int = 0
     sensing_radius: float | None = None
     pairs: bool = True
     obstacles: Obstacles | None = None
@@ -211,7 +209,7 @@ class BarrierConfig:
         _real(self, "clarabel_tol", self.clarabel_tol, lower=0.0, strict=True, upper=1e-3)
         for name, lower in (("max_active_set_iterations", 1), ("active_set_max_rows", 0), ("warm_max_rows", 0),
                             ("warm_dual_sweeps", 0), ("warm_dual_iterations", 1), ("clarabel_max_iter", 1),
-                            ("distributed_above", 0), ("distributed_consensus_sweeps", 0)):
+                            ("distributed_above", 0), ("distributed_consensus_passes", 0)):
             value = getattr(self, name)
             if isinstance(value, bool) or not isinstance(value, numbers.Integral) or value < lower:
                 raise ValueError(f"BarrierConfig: {name} must be an integer >= {lower}, got {value!r}")

@@ -46,7 +46,6 @@ from swarmdeck.core.compiled import AVAILABLE as _COMPILED
 from .config import BarrierConfig
 from .constraints import LIMIT, Rows
 from .distributed_kernel import solve_small_qps_kernel
-from .dual_ascent import ascend
 from .small_kernels import small
 
 _SIGN_TOL = 1e-12  # multipliers ≥ −tol count as non-negative (m/s scale)
@@ -362,91 +361,31 @@ def reallocate_halves(split: SplitRows, u: np.ndarray, n_pairs: int) -> tuple[np
     return b, loosened
 
 
-@dataclass(frozen=True)
-class ConsensusShares:
-    """Two splits of every pair row's margin from an estimate ũ of the joint optimum (both add up to the row).
+def consensus_shares(split: SplitRows, b: np.ndarray, u: np.ndarray, n_pairs: int) -> tuple[np.ndarray, np.ndarray]:
+    """A consensus pass's split: each pair row's margin shared at the last answer, its slack halved.
 
-    target (M,): robot i's share ``c_iᵀũ_i + slack/2`` (slack = b − c_iᵀũ_i − c_jᵀũ_j, of either sign): when ũ
-    is the optimum, every robot's own QP returns it. safe (M,): the target clipped to ``[c_iᵀu⁰_i, b − c_jᵀu⁰_j]``
-    (u⁰ the first pass's answer), so u⁰ stays feasible for every robot. Single-robot rows keep their bound."""
-
-    target: np.ndarray
-    safe: np.ndarray
-
-
-def consensus_shares(split: SplitRows, u: np.ndarray, estimate: np.ndarray, n_pairs: int) -> ConsensusShares:
-    """Shares of each pair row's margin from ``estimate`` (N, 2) m/s, e.g. a few sweeps of dual ascent.
-
-    split: :func:`split_rows`'s half/half split (pair halves first, as :func:`reallocate_halves`); u (N, 2)
-    the first pass's answer on it. See :class:`ConsensusShares`.
+    split: :func:`split_rows`'s split (pair halves first, as :func:`reallocate_halves`); b (M,) the last pass's
+    bounds on it; u (N, 2) m/s that pass's answer. Robot i's share of pair row k becomes
+    ``c_iᵀu_i + s_k/2`` and robot j's ``c_jᵀu_j + s_k/2``, s_k = b_k − c_iᵀu_i − c_jᵀu_j ≥ 0 the slack
+    the answer leaves in the row (single-robot rows keep their bound). The shares add up to the row, so the
+    pass is certified as the first; every robot's last answer satisfies its new shares, so no robot's
+    intervention grows; and were u the joint optimum, every robot's own QP would return it. Returns (b (M,)
+    new bounds, grown (N,) robots with a share larger than before — the only ones to re-solve: the others'
+    answers stay optimal on a feasible set that shrank around them).
     """
-    target = split.b.copy()
-    safe = split.b.copy()
+    out = b.copy()
+    grown = np.zeros(u.shape[0], dtype=bool)
     if n_pairs == 0:
-        return ConsensusShares(target, safe)
+        return out, grown
     p2 = 2 * n_pairs
-    a, own = split.a[:p2], split.owner[:p2]
-    want = np.einsum("kd,kd->k", a, estimate[own])
-    use = np.einsum("kd,kd->k", a, u[own])
-    total = split.b[:n_pairs] + split.b[n_pairs:p2]  # the row's bound (halving and doubling are exact)
-    ti, tj = want[:n_pairs], want[n_pairs:]
-    bi = ti + 0.5 * (total - ti - tj)
-    target[:n_pairs], target[n_pairs:p2] = bi, total - bi
-    si = np.minimum(np.maximum(bi, use[:n_pairs]), total - use[n_pairs:])
-    safe[:n_pairs], safe[n_pairs:p2] = si, total - si
-    return ConsensusShares(target, safe)
-
-
-@dataclass(frozen=True)
-class _Pass:
-    u: np.ndarray
-    active: np.ndarray
-    on_disc: np.ndarray
-
-
-def _consensus_pass(rows: Rows, split: SplitRows, first: _Pass, nominal: np.ndarray, max_speed: float | None,
-                    reach: float | None, sweeps: int) -> _Pass:
-    """The second pass on consensus shares (:func:`consensus_shares`): every pair on its target split; a robot
-    whose own QP is then infeasible puts all of its pairs on their safe split, and the robots whose shares
-    changed solve again, until every robot is solved (at most one round per robot: each round makes a pair
-    safe for good, and a robot whose pairs are all safe has its first answer feasible). If a round still
-    fails, or after ``_MAX_ROUNDS``, the first pass's answer stands."""
-    n_pairs = int(np.sum(rows.j >= 0))
-    if n_pairs == 0:
-        return first
-    est = ascend(rows, nominal, max_speed, np.zeros(rows.m), sweeps, tol=0.0).u
-    sh = consensus_shares(split, first.u, est, n_pairs)
-    p2 = 2 * n_pairs
-    b = sh.target
-    u, act, on_disc = first.u.copy(), first.active.copy(), first.on_disc.copy()
-    changed = np.zeros(nominal.shape[0], dtype=bool)
-    changed[split.owner[np.flatnonzero(b != split.b)]] = True
-    safe_pair = np.zeros(n_pairs, dtype=bool)
-    for _ in range(_MAX_ROUNDS):
-        if not changed.any():
-            return _Pass(u, act, on_disc)
-        res = solve_small_qps(split.owner, split.a, b, nominal, max_speed, reach, todo=changed)
-        ok = changed & res.solved
-        u = np.where(ok[:, None], res.u, u)
-        act = np.where(ok[split.owner], res.active, act)
-        on_disc = np.where(ok, res.on_disc, on_disc)
-        fail = changed & ~res.solved
-        if not fail.any():
-            return _Pass(u, act, on_disc)
-        newly = ~safe_pair & (fail[split.owner[:n_pairs]] | fail[split.owner[n_pairs:p2]])
-        if not newly.any():
-            return first
-        safe_pair |= newly
-        b = b.copy()
-        both = np.concatenate([newly, newly])
-        b[:p2] = np.where(both, sh.safe[:p2], b[:p2])
-        changed = np.zeros_like(changed)
-        changed[split.owner[:p2][both]] = True
-        changed |= fail
-    return first
-
-
-_MAX_ROUNDS = 8  # cascade rounds of the consensus pass before it gives up (the first pass stands)
+    own = split.owner[:p2]
+    use = np.einsum("kd,kd->k", split.a[:p2], u[own])
+    total = split.b[:n_pairs] + split.b[n_pairs:p2]  # the row's bound (the halves of split_rows add up exactly)
+    ci, cj = use[:n_pairs], use[n_pairs:]
+    bi = ci + 0.5 * (total - ci - cj)
+    out[:n_pairs], out[n_pairs:p2] = bi, total - bi
+    grown[own[out[:p2] > b[:p2]]] = True
+    return out, grown
 
 
 @dataclass(frozen=True)
@@ -481,20 +420,30 @@ def filter_distributed(rows: Rows, nominal: np.ndarray, max_speed: float | None,
     res = solve_small_qps(split.owner, split.a, split.b, nominal, max_speed, reach)
     u, solved, act, on_disc = res.u, res.solved, res.active, res.on_disc
     n_fallback = 0
-    sweeps = cfg.distributed_consensus_sweeps
-    if cfg.distributed_second_pass and not recovering and solved.all() and sweeps > 0 and _COMPILED:
-        # the second pass on shares from a few sweeps of dual ascent (an estimate of the joint optimum)
-        p = _consensus_pass(rows, split, _Pass(u, act, on_disc), nominal, max_speed, reach, sweeps)
-        u, act, on_disc = p.u, p.active, p.on_disc
-    elif cfg.distributed_second_pass and not recovering and solved.all():
+    if cfg.distributed_second_pass and not recovering and solved.all():
         # a second pass on a better split of each pair's margin (reallocate_halves): less invasive
-        b2, again = reallocate_halves(split, u, int(np.sum(rows.j >= 0)))
+        n_pairs = int(np.sum(rows.j >= 0))
+        b2, again = reallocate_halves(split, u, n_pairs)
+        res2 = None
         if again.any():
             res2 = solve_small_qps(split.owner, split.a, b2, nominal, max_speed, reach, todo=again)
             if res2.solved.all():
                 u = np.where(again[:, None], res2.u, u)
                 act = np.where(again[split.owner], res2.active, act)
                 on_disc = np.where(again, res2.on_disc, on_disc)
+        b_last = b2 if res2 is None or res2.solved.all() else split.b
+        for _ in range(cfg.distributed_consensus_passes):
+            # consensus passes: every pair's remaining slack shared equally at the last answer
+            b3, grown = consensus_shares(split, b_last, u, n_pairs)
+            if not grown.any():
+                break
+            res3 = solve_small_qps(split.owner, split.a, b3, nominal, max_speed, reach, todo=grown)
+            if not res3.solved.all():  # rounding on a degenerate robot: the last certified answer stands
+                break
+            u = np.where(grown[:, None], res3.u, u)
+            act = np.where(grown[split.owner], res3.active, act)
+            on_disc = np.where(grown, res3.on_disc, on_disc)
+            b_last = b3
     if recovering and not solved.all():
         # conflicting separation targets: those robots hold "no further approach" instead
         retry = ~solved
@@ -525,5 +474,5 @@ def filter_distributed(rows: Rows, nominal: np.ndarray, max_speed: float | None,
     return DistributedResult(u, True, "optimal per robot", active, int(on_disc.sum()), n_fallback)
 
 
-__all__ = ["SplitRows", "split_rows", "reallocate_halves", "ConsensusShares", "consensus_shares", "SmallQPResult", "solve_small_qps", "DistributedResult",
+__all__ = ["SplitRows", "split_rows", "reallocate_halves", "consensus_shares", "SmallQPResult", "solve_small_qps", "DistributedResult",
            "filter_distributed"]

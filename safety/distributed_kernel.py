@@ -10,7 +10,7 @@ products and sums, no fused multiply-add: numba compiles without ``fastmath``), 
 (``tests/safety/test_safety_distributed_compiled.py`` checks it on random and jammed problems).
 
 Cost: O(Σ_robots rows_kept²) like the numpy path, without its padding, temporaries and per-call overhead
-(bench/RESULTS.md, "distributed barrier: compiled and consensus shares").
+(bench/RESULTS.md, "distributed barrier: compiled, consensus passes").
 """
 from __future__ import annotations
 
@@ -283,6 +283,10 @@ def solve_small_qps_kernel(owner: np.ndarray, a: np.ndarray, b: np.ndarray, nomi
             u[r, 1] = 0.0
             solved[r] = False
     return u, solved, active, on_disc, n_bad
+
+
+
+
 
 
 __all__ = ["solve_small_qps_kernel"]
