@@ -45,7 +45,7 @@ from swarmdeck.core.compiled import AVAILABLE as _COMPILED
 
 from .config import BarrierConfig
 from .constraints import LIMIT, Rows
-from .distributed_kernel import solve_small_qps_kernel
+from .distributed_kernel import reallocate_kernel, solve_small_qps_kernel, worst_row
 from .small_kernels import small
 
 _SIGN_TOL = 1e-12  # multipliers ≥ −tol count as non-negative (m/s scale)
@@ -343,6 +343,11 @@ def reallocate_halves(split: SplitRows, u: np.ndarray, n_pairs: int) -> tuple[np
     its new rows, so the second pass is certified as the first and no robot's intervention grows.
     Returns (b (M,) new bounds, loosened (N,) robots with a loosened half — the only ones to re-solve).
     """
+    if _COMPILED and not small(u.shape[0]):  # the same arithmetic compiled (bit for bit)
+        f = np.ascontiguousarray
+        out, grown = reallocate_kernel(f(split.owner, dtype=np.int64), f(split.a, dtype=float),
+                                       f(split.b, dtype=float), f(u, dtype=float), int(n_pairs))
+        return out, grown
     b = split.b.copy()
     loosened = np.zeros(u.shape[0], dtype=bool)
     if n_pairs == 0:
@@ -386,6 +391,20 @@ def consensus_shares(split: SplitRows, b: np.ndarray, u: np.ndarray, n_pairs: in
     out[:n_pairs], out[n_pairs:p2] = bi, total - bi
     grown[own[out[:p2] > b[:p2]]] = True
     return out, grown
+
+
+def _worst_row(rows: Rows, u: np.ndarray, b: np.ndarray) -> tuple[float, int]:
+    """(largest row excess ``lhs(u) − b`` m/s, its first row), compiled above the small sizes; (−inf, −1): no rows."""
+    if rows.m == 0:
+        return -np.inf, -1
+    if _COMPILED and not small(u.shape[0]):
+        f = np.ascontiguousarray
+        worst, k = worst_row(f(rows.i, dtype=np.int64), f(rows.jj, dtype=np.int64), f(rows.ci, dtype=float),
+                             f(rows.cj, dtype=float), f(b, dtype=float), f(u, dtype=float))
+        return float(worst), int(k)
+    excess = rows.lhs(u) - b
+    k = int(np.argmax(excess))
+    return float(excess[k]), k
 
 
 @dataclass(frozen=True)
@@ -462,11 +481,10 @@ def filter_distributed(rows: Rows, nominal: np.ndarray, max_speed: float | None,
                                  f"no certified answer for robot(s) {bad[:10].tolist()} (infeasible own QP)",
                                  active, 0, n_fallback)
     # certificate: every centralised row (halves added up) and every speed bound
-    excess = rows.lhs(u) - b_hard
-    if rows.m and float(excess.max()) > 2 * _FEAS_TOL:
-        k = int(np.argmax(excess))
+    worst, k = _worst_row(rows, u, b_hard)
+    if rows.m and worst > 2 * _FEAS_TOL:
         return DistributedResult(np.zeros((n, 2)), False,
-                                 f"row {k} violated by {float(excess[k]):.3g} m/s after the split", active, 0,
+                                 f"row {k} violated by {worst:.3g} m/s after the split", active, 0,
                                  n_fallback)
     if max_speed is not None and np.any(np.einsum("kd,kd->k", u, u) > (max_speed * (1 + 1e-9)) ** 2):
         return DistributedResult(np.zeros((n, 2)), False, "speed bound exceeded", active, 0, n_fallback)

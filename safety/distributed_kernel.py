@@ -289,4 +289,50 @@ def solve_small_qps_kernel(owner: np.ndarray, a: np.ndarray, b: np.ndarray, nomi
 
 
 
-__all__ = ["solve_small_qps_kernel"]
+@jit
+def reallocate_kernel(owner: np.ndarray, a: np.ndarray, b: np.ndarray, u: np.ndarray,
+                      n_pairs: int) -> tuple[np.ndarray, np.ndarray]:  # pragma: no cover - compiled
+    """``safety.distributed.reallocate_halves`` robot pair by robot pair, the same arithmetic (bit for bit)."""
+    out = b.copy()
+    loosened = np.zeros(u.shape[0], np.bool_)
+    for k in range(n_pairs):
+        oi = owner[k]
+        oj = owner[n_pairs + k]
+        ci = a[k, 0] * u[oi, 0] + a[k, 1] * u[oi, 1]
+        cj = a[n_pairs + k, 0] * u[oj, 0] + a[n_pairs + k, 1] * u[oj, 1]
+        half = b[k]
+        bind_i = ci >= half - _FEAS_TOL
+        bind_j = cj >= half - _FEAS_TOL
+        total = 2.0 * half
+        if bind_i and not bind_j:
+            out[k] = total - cj
+            out[n_pairs + k] = cj
+            loosened[oi] = True
+        elif bind_j and not bind_i:
+            out[k] = ci
+            out[n_pairs + k] = total - ci
+            loosened[oj] = True
+        else:
+            out[k] = half
+            out[n_pairs + k] = half
+    return out, loosened
+
+
+@jit
+def worst_row(ri: np.ndarray, rj: np.ndarray, ci: np.ndarray, cj: np.ndarray, b: np.ndarray,
+              u: np.ndarray) -> tuple[float, int]:  # pragma: no cover - compiled
+    """(largest ``ci·u_ri + cj·u_rj − b`` over the rows, its first row; −inf, −1 without rows): ``Rows.lhs``'s
+    arithmetic (rj = ri and cj = 0 for single-robot rows)."""
+    worst = -np.inf
+    at = -1
+    for k in range(b.shape[0]):
+        i = ri[k]
+        j = rj[k]
+        e = (ci[k, 0] * u[i, 0] + ci[k, 1] * u[i, 1]) + (cj[k, 0] * u[j, 0] + cj[k, 1] * u[j, 1]) - b[k]
+        if e > worst or at < 0:
+            worst = e
+            at = k
+    return worst, at
+
+
+__all__ = ["reallocate_kernel", "solve_small_qps_kernel", "worst_row"]
