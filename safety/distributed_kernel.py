@@ -16,7 +16,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from swarmdeck.core.compiled import jit
+from swarmdeck.core.compiled import AVAILABLE, jit
 
 _SIGN_TOL = 1e-12  # the same tolerances as safety.distributed (m/s)
 _FEAS_TOL = 1e-10
@@ -334,5 +334,18 @@ def worst_row(ri: np.ndarray, rj: np.ndarray, ci: np.ndarray, cj: np.ndarray, b:
             at = k
     return worst, at
 
+def warm_up_distributed() -> None:
+    """Compile (or load from numba's cache) the kernels above on a two-robot problem, once per process (called by
+    ``dual_ascent.warm_up``, i.e. by ``SafetyFilter()``, never inside a tick); a no-op without numba."""
+    if not AVAILABLE:
+        return
+    owner = np.array([0, 1], dtype=np.int64)
+    a = np.array([[-1.0, 0.0], [1.0, 0.0]])
+    b = np.array([0.01, 0.01])
+    u = np.array([[0.1, 0.0], [-0.1, 0.0]])
+    solve_small_qps_kernel(owner, a, b, u, True, 0.2, 0.2, np.zeros(0, np.bool_), False)
+    reallocate_kernel(owner, a, b, u, 1)
+    worst_row(np.array([0]), np.array([1]), a[:1], a[1:], b[:1], u)
 
-__all__ = ["reallocate_kernel", "solve_small_qps_kernel", "worst_row"]
+
+__all__ = ["reallocate_kernel", "solve_small_qps_kernel", "warm_up_distributed", "worst_row"]
