@@ -45,7 +45,7 @@ from swarmdeck.core.compiled import AVAILABLE as _COMPILED
 
 from .config import BarrierConfig
 from .constraints import LIMIT, Rows
-from .distributed_kernel import reallocate_kernel, solve_small_qps_kernel, worst_row
+from .distributed_kernel import consensus_kernel, reallocate_kernel, solve_small_qps_kernel, worst_row
 from .small_kernels import small
 
 _SIGN_TOL = 1e-12  # multipliers ≥ −tol count as non-negative (m/s scale)
@@ -378,6 +378,11 @@ def consensus_shares(split: SplitRows, b: np.ndarray, u: np.ndarray, n_pairs: in
     new bounds, grown (N,) robots with a share larger than before — the only ones to re-solve: the others'
     answers stay optimal on a feasible set that shrank around them).
     """
+    if _COMPILED and not small(u.shape[0]):  # the same arithmetic compiled (bit for bit)
+        f = np.ascontiguousarray
+        new, more = consensus_kernel(f(split.owner, dtype=np.int64), f(split.a, dtype=float), f(split.b, dtype=float),
+                                     f(b, dtype=float), f(u, dtype=float), int(n_pairs))
+        return new, more
     out = b.copy()
     grown = np.zeros(u.shape[0], dtype=bool)
     if n_pairs == 0:

@@ -334,6 +334,31 @@ def worst_row(ri: np.ndarray, rj: np.ndarray, ci: np.ndarray, cj: np.ndarray, b:
             at = k
     return worst, at
 
+
+@jit
+def consensus_kernel(owner: np.ndarray, a: np.ndarray, half: np.ndarray, b: np.ndarray, u: np.ndarray,
+                     n_pairs: int) -> tuple[np.ndarray, np.ndarray]:  # pragma: no cover - compiled
+    """``safety.distributed.consensus_shares`` pair by pair, the same arithmetic (bit for bit); ``half`` (M,) the
+    half/half split's bounds (``split.b``), ``b`` (M,) the last pass's."""
+    out = b.copy()
+    grown = np.zeros(u.shape[0], np.bool_)
+    for k in range(n_pairs):
+        oi = owner[k]
+        oj = owner[n_pairs + k]
+        ci = a[k, 0] * u[oi, 0] + a[k, 1] * u[oi, 1]
+        cj = a[n_pairs + k, 0] * u[oj, 0] + a[n_pairs + k, 1] * u[oj, 1]
+        total = half[k] + half[n_pairs + k]
+        bi = ci + 0.5 * (total - ci - cj)
+        bj = total - bi
+        out[k] = bi
+        out[n_pairs + k] = bj
+        if bi > b[k]:
+            grown[oi] = True
+        if bj > b[n_pairs + k]:
+            grown[oj] = True
+    return out, grown
+
+
 def warm_up_distributed() -> None:
     """Compile (or load from numba's cache) the kernels above on a two-robot problem, once per process (called by
     ``dual_ascent.warm_up``, i.e. by ``SafetyFilter()``, never inside a tick); a no-op without numba."""
@@ -345,7 +370,8 @@ def warm_up_distributed() -> None:
     u = np.array([[0.1, 0.0], [-0.1, 0.0]])
     solve_small_qps_kernel(owner, a, b, u, True, 0.2, 0.2, np.zeros(0, np.bool_), False)
     reallocate_kernel(owner, a, b, u, 1)
+    consensus_kernel(owner, a, b, b, u, 1)
     worst_row(np.array([0]), np.array([1]), a[:1], a[1:], b[:1], u)
 
 
-__all__ = ["reallocate_kernel", "solve_small_qps_kernel", "warm_up_distributed", "worst_row"]
+__all__ = ["consensus_kernel", "reallocate_kernel", "solve_small_qps_kernel", "warm_up_distributed", "worst_row"]
