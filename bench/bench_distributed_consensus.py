@@ -13,6 +13,9 @@ so the ratios hold under the machine's load):
 * *distributed K = k*: the default two passes (half/half, then ``reallocate_halves``) and k consensus passes
   (``distributed_consensus_passes``: each pair's remaining slack shared equally at the last answer);
 * *distributed K = 2, numpy*: K = 2 with the per-robot QPs on the numpy path (the speed-up of the kernel);
+* *K = 0, filter_distributed only* (and *…, numpy*): ``safety.distributed.filter_distributed`` alone on the
+  same rows (split, per-robot QPs, second pass, certificate: no row building, no diagnostics), compiled
+  kernels and numpy path;
 * *clarabel*: a fresh ``solver="clarabel"`` filter on the same rows (the optimum: its cost is the denominator);
 * *centralised*: the default exact filter, warm (N ≤ 1000 only: seconds per tick beyond).
 
@@ -45,11 +48,11 @@ class NumpyPath:
         self.flt = flt
 
     def filter(self, x: np.ndarray, nom: np.ndarray):
-        distributed._COMPILED = False
+        saved, distributed._COMPILED = distributed._COMPILED, False
         try:
             return self.flt.filter(x, nom)
         finally:
-            distributed._COMPILED = True
+            distributed._COMPILED = saved
 
 
 def run(n: int, ticks: int, every: int) -> dict:
@@ -76,6 +79,15 @@ def run(n: int, ticks: int, every: int) -> dict:
                 times[name].append(t)
                 out[name] = u
                 excess[name] = max(excess[name], float(np.max(rows.lhs(u) - rows.b, initial=-np.inf)))
+            for name, compiled in (("K = 0, filter_distributed only", True),
+                                   ("K = 0, filter_distributed only, numpy", False)):
+                saved, distributed._COMPILED = distributed._COMPILED, compiled and distributed._COMPILED
+                try:
+                    t, res = timed(distributed.filter_distributed, rows, nom, cfg.max_speed, dist)
+                finally:
+                    distributed._COMPILED = saved
+                assert res.ok, res.reason
+                times[name].append(t)
             t, (u_opt, d) = timed(SafetyFilter(clar).filter, x, nom)
             assert d.ok, d.status
             times["clarabel"].append(t)
@@ -104,7 +116,8 @@ def main() -> None:
             c = r["cost"].get(name, [])
             e = r["excess"].get(name)
             print(f"| {n} | {name} | {1e3 * np.median(v):.2f} | {1e3 * max(v):.2f} | "
-                  + (f"{np.mean(c):.3f} | {max(c):.3f} |" if c else "1 (the optimum) | – |")
+                  + (f"{np.mean(c):.3f} | {max(c):.3f} |" if c else
+                     "1 (the optimum) | – |" if name == "clarabel" else "– | – |")
                   + (f" {e:.1e} |" if e is not None else " – |"), flush=True)
 
 
