@@ -136,8 +136,8 @@ class BarrierConfig:
     distributed_consensus_passes: after the second pass, this many consensus passes: each pair row's
         remaining slack at the last answer is shared equally between its two robots, and the robots given
         more margin solve again (:func:`safety.distributed.consensus_shares`; certified as the first pass, no
-        robot's intervention grows; each pass costs about one more distributed solve). bench/RESULTS.md,
-        "distributed barrier: compiled, consensus passes", has cost/optimum and time per pass count.
+        robot's intervention grows; each pass costs about one more distributed solve). bench/RESULTS.md
+        ("distributed barrier", "Compiled, consensus passes") has cost/optimum and time per pass count.
     pairs: False builds no pair rows: the filter keeps the walls and the fixed obstacles
         (e.g. docked robots) only — the hard layer of a bypassed run (:mod:`safety.guard`).
     obstacles: line-segment obstacles on the floor (:class:`~swarmdeck.core.obstacles.Obstacles`, or

@@ -10,7 +10,7 @@ products and sums, no fused multiply-add: numba compiles without ``fastmath``), 
 (``tests/safety/test_safety_distributed_compiled.py`` checks it on random and jammed problems).
 
 Cost: O(Σ_robots rows_kept²) like the numpy path, without its padding, temporaries and per-call overhead
-(bench/RESULTS.md, "distributed barrier: compiled, consensus passes").
+(bench/RESULTS.md, "distributed barrier", "Compiled, consensus passes").
 """
 from __future__ import annotations
 
