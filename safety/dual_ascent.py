@@ -26,6 +26,7 @@ import numpy as np
 
 from .compiled import AVAILABLE, jit, warm_up_gram
 from .constraints import Rows
+from .distributed_kernel import warm_up_distributed
 from .small_kernels import ascend as _ascend_small
 from .small_kernels import small
 
@@ -156,6 +157,7 @@ def warm_up(robots: int | None = None) -> None:
     if not AVAILABLE or (robots is not None and small(robots)):
         return
     warm_up_gram()
+    warm_up_distributed()  # the distributed filter's per-robot QPs (safety.distributed_kernel)
     rows = Rows(np.array([0]), np.array([1]), np.array([[-1.0, 0.0]]), np.array([[1.0, 0.0]]),
                 np.array([0.0]), np.array([0.0]), np.array([0], dtype=np.int8), np.array([1]))
     _ascend(np.array([0]), np.array([1]), rows.ci, rows.cj, rows.b, np.array([[0.1, 0.0], [-0.1, 0.0]]), 0.2,

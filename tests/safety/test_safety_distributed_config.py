@@ -38,3 +38,12 @@ def test_auto_switches_above_the_robot_count() -> None:
         assert diag.ok and diag.method in method, (n, diag.method)
     assert BarrierConfig.from_dict({"mode": "distributed"}).mode == "distributed"
     assert BarrierConfig(mode="auto").to_dict()["distributed_above"] == BarrierConfig().distributed_above
+
+
+@pytest.mark.parametrize("bad", [-1, 1.5, True, "4"])
+def test_consensus_passes_must_be_a_count(bad: object) -> None:
+    """``distributed_consensus_passes`` from a config file: a non-negative integer, else refused naming it."""
+    with pytest.raises(ValueError, match="distributed_consensus_passes"):
+        BarrierConfig.from_dict({"distributed_consensus_passes": bad})
+    assert BarrierConfig.from_dict({"distributed_consensus_passes": 4}).distributed_consensus_passes == 4
+    assert BarrierConfig().distributed_consensus_passes == 0
