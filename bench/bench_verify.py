@@ -1,7 +1,7 @@
 """Benchmark: verification throughput and the sandbox's overhead (issue 15).
 
 Run: ``.venv/bin/python bench/bench_verify.py [--duration 60] [--runs 8] [--robots 20] [--repeats 3] [--no-ray]
-[--overhead-only]``
+[--overhead-only | --throughput-only] [--queue K [--concurrent J]]`` from the repository root
 (prints markdown tables).
 
 * Sandbox overhead: the same script and the same trusted Arena (barrier on), once in-process
@@ -28,6 +28,13 @@ Run: ``.venv/bin/python bench/bench_verify.py [--duration 60] [--runs 8] [--robo
   printed: the ratio only means something on an otherwise idle machine. Measured twice: with the default
   ``paced_runs`` (one raw run ticks in real time, so no verification takes less than the declared duration of wall
   time) and with none (``--paced-runs K`` sets the first), where the ratio is the pool's scaling alone.
+  With ``--queue K``: K verifications submitted together and drained by ``--concurrent J`` threads on one executor
+  whose workers are kept (as the portal's verification threads run a queue of jobs); verifications per minute, the
+  ratio to 1 worker, per worker, and the CPU per verification of the runs and of this (collecting) process.
+
+* Fairness of the overhead table: every kind runs once untimed first (lazy imports, the barrier's first solves, the
+  jail layout: a worker pays them once), the kinds alternate in an order rotating every repeat, and the median and
+  the worst of the repeats are printed with every run (bench/RESULTS.md "verification queue").
 """
 from __future__ import annotations
 
