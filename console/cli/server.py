@@ -59,6 +59,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="local verification worker processes (default: number of cores)")
     parser.add_argument("--ray", default=None, metavar="ADDRESS",
                         help="verify on a Ray cluster ('auto', 'local' or ray://HOST:PORT); needs swarmdeck[ray]")
+    parser.add_argument("--verify-concurrent", type=int, default=2, metavar="J",
+                        help="jobs verified at once on those workers (default 2: the next job's runs use the cores "
+                             "while a job's real-time paced run waits for the clock)")
     parser.add_argument("--verify-runs", type=int, default=4, metavar="K",
                         help="verification runs per job, each without and with the barrier (default 4)")
     parser.add_argument("--verify-epsilon", type=float, default=None, metavar="EPS",
@@ -151,6 +154,8 @@ def check_arguments(args: argparse.Namespace) -> None:
         raise UsageError(f"--workers must be >= 1, got {args.workers}")
     if args.verify_runs < 1:
         raise UsageError(f"--verify-runs must be >= 1, got {args.verify_runs}")
+    if args.verify_concurrent < 1:
+        raise UsageError(f"--verify-concurrent must be >= 1, got {args.verify_concurrent}")
     try:
         from swarmdeck.console.sandbox.guarantee import Guarantee
 
@@ -420,7 +425,8 @@ def main(args: argparse.Namespace) -> int:
         print(f"swarmdeck server: projector page at {projector.url}" + (
             "" if projector.feed.calibration is not None else " (no homography: run `swarmdeck calibrate projector`)"),
             flush=True)
-    workers = VerificationWorkers(service, executor, obstacles=obstacles).start()
+    workers = VerificationWorkers(service, executor, obstacles=obstacles,
+                                  concurrent=args.verify_concurrent).start()
     for r in runners:
         r.start()
     sweeper = RetentionSweeper(service).start() if args.retain_days is not None else None

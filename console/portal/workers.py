@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import json
 import threading
+from contextlib import nullcontext
 from typing import Any, cast
 
 from swarmdeck.console.portal.files import write_private
@@ -36,33 +37,55 @@ def make_executor(workers: int | None = None, ray: str | None = None) -> Any:
 
 
 class VerificationWorkers:
-    """The thread that verifies queued jobs one after another (each job's runs in parallel on the executor)."""
+    """The threads that verify queued jobs (each job's runs in parallel on the executor).
+
+    ``concurrent``: how many jobs are verified at once (one thread each, all on the one executor). With 1, a job
+    waits for the one before it to end — and a verification cannot end before its paced run's declared duration of
+    real time, during which that run mostly waits; with 2, the next job's computing runs use the cores meanwhile
+    (bench/RESULTS.md "verification queue"). The executor's workers (a local pool's processes and their fork
+    servers) are kept while the threads run (:meth:`~swarmdeck.console.sandbox.executors.LocalPoolExecutor.kept`).
+    """
 
     def __init__(self, service: PortalService, executor: Any, *, poll_s: float = 1.0,
-                 obstacles: Obstacles | None = None) -> None:
+                 obstacles: Obstacles | None = None, concurrent: int = 1) -> None:
+        if isinstance(concurrent, bool) or not isinstance(concurrent, int) or concurrent < 1:
+            raise ValueError(f"concurrent must be a positive integer (jobs verified at once), got {concurrent!r}")
         self.service, self.executor, self.poll_s = service, executor, float(poll_s)
         self.obstacles = obstacles  # the arena's line-segment obstacles: every verification run has them
-        self._thread = ServiceThread(self._run, "swarmdeck-portal-verify", join_timeout=10.0,
-                                      wake=self.service.notify)
+        self._threads = [ServiceThread(self._run, "swarmdeck-portal-verify" + (f"-{k}" if k else ""),
+                                       join_timeout=10.0, wake=self.service.notify) for k in range(concurrent)]
+        self._thread = self._threads[0]
+        self._count_lock = threading.Lock()
         self.verified = 0
         self.errors = 0
 
+    def _count(self, verified: int = 0, errors: int = 0) -> None:
+        with self._count_lock:  # several threads count
+            self.verified += verified
+            self.errors += errors
+
     def start(self) -> VerificationWorkers:
         """Start verifying queued jobs; idempotent."""
-        self._thread.start()
+        for thread in self._threads:
+            thread.start()
         return self
 
     def stop(self, timeout: float = 10.0) -> None:
-        """Stop (a job being verified is cancelled within a tick) and join the thread (up to ``timeout`` s)."""
-        self._thread.stop(timeout)
+        """Stop (a job being verified is cancelled within a tick) and join the threads (up to ``timeout`` s each)."""
+        for thread in self._threads:
+            thread.stop_event.set()  # all asked first: they stop together
+        for thread in self._threads:
+            thread.stop(timeout)
 
     def _run(self) -> None:
-        while not self._thread.stopping:
-            job = self.service.claim_for_verification()
-            if job is None:
-                self.service.wait_for_change(self.poll_s)
-                continue
-            self.verify_job(job)
+        kept = getattr(self.executor, "kept", None)  # one pool (warm workers) for every job, not one per job
+        with kept() if kept is not None else nullcontext():
+            while not self._thread.stopping:
+                job = self.service.claim_for_verification()
+                if job is None:
+                    self.service.wait_for_change(self.poll_s)
+                    continue
+                self.verify_job(job)
 
     def config_for(self, job: Job) -> VerificationConfig:
         """The job's verification: its declared robots, duration and start poses, in the arena (or region of a
@@ -100,7 +123,7 @@ class VerificationWorkers:
             service.record_verification_cpu(job_id, exc.cpu_s)  # a cancel does not make the CPU free
             return  # cancelled: the job is already cancelled (or requeued on restart)
         except (ValueError, ConfinementUnavailable, RuntimeError, ConnectionError, OSError) as exc:
-            self.errors += 1
+            self._count(errors=1)
             service.fail_verification(job_id, str(exc))
             return
         finally:
@@ -114,8 +137,8 @@ class VerificationWorkers:
         try:
             write_private(folder / "report.html", render_html(data))
         except Exception:  # noqa: BLE001 - the HTML is a convenience; the JSON is the report
-            self.errors += 1
-        self.verified += 1
+            self._count(errors=1)
+        self._count(verified=1)
         service.finish_verification(job_id, report.verdict, report.safety_score, data["reasons"])
 
 
@@ -151,17 +174,17 @@ class VerificationWorkers:
         except SweepIncomplete as exc:
             service.record_verification_cpu(job_id, exc.cpu_s)  # a cancel does not make the CPU free
             if not cancel.is_set():
-                self.errors += 1
+                self._count(errors=1)
                 service.finish_sweep(job_id, False, str(exc))
             return
         except Exception as exc:  # noqa: BLE001 - a sweep that cannot run fails with the reason; the worker goes on
-            self.errors += 1
+            self._count(errors=1)
             service.finish_sweep(job_id, False, f"the sweep could not run: {exc}")
             return
         finally:
             watcher.stop()
         service.record_verification_cpu(job_id, sum(result.cpu_s))
-        self.verified += 1
+        self._count(verified=1)
         said = [f"{len(result.rows)} runs, {result.failed} failed"] if result.failed else []
         if request.promote is not None:
             said.append(self._promote(job, request, result))
@@ -181,6 +204,6 @@ class VerificationWorkers:
             promoted = self.service.promote(job, best.params, robots, request.duration,
                                             f"{request.name}: best {wanted.column} ({wanted.goal})")
         except Exception as exc:  # noqa: BLE001 - quota, no arena, disabled account: said on the sweep, never raised
-            self.errors += 1
+            self._count(errors=1)
             return f"best point not promoted: {exc}"
         return f"best point ({best.describe(wanted)}) promoted to job {promoted.id}"

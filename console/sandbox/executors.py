@@ -19,8 +19,9 @@ from __future__ import annotations
 import multiprocessing
 import os
 import queue
+import threading
 from collections.abc import Callable, Iterator, Sequence
-from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
+from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, ThreadPoolExecutor, wait
 from contextlib import ExitStack, contextmanager
 from typing import Any
 
@@ -92,7 +93,13 @@ class LocalPoolExecutor:
             raise ValueError(f"workers must be a positive integer, got {workers!r}")
         self.workers = workers or os.cpu_count() or 1
         self.pin = pin
-        self._kept: ProcessPoolExecutor | None = None
+        self._lock = threading.Lock()  # guards the kept pools: several verification threads share one executor
+        self._holders = 0  # open kept() blocks (any thread)
+        self._kept: ProcessPoolExecutor | None = None  # the computing workers, while kept
+        self._kept_aside: ProcessPoolExecutor | None = None  # the paced tasks' workers, while kept (started when needed)
+        # the one thread that submits to the kept pools: a worker process is started by the thread whose submit
+        # needs it and dies with that thread (PR_SET_PDEATHSIG, _init_worker), so it must outlive every kept run
+        self._submitter: ThreadPoolExecutor | None = None
 
     def _pool(self, workers: int, pin: bool | None = None) -> ProcessPoolExecutor:
         context = multiprocessing.get_context("spawn")  # no fork of a threaded caller (the portal)
@@ -107,17 +114,46 @@ class LocalPoolExecutor:
 
     @contextmanager
     def kept(self) -> Iterator[LocalPoolExecutor]:
-        """Keep one pool of ``workers`` processes (and their warm fork servers) for every :meth:`run` inside the
-        block — the falsifier's generations are many small batches; without it each run starts a pool."""
-        if self._kept is not None:
-            yield self
-            return
-        self._kept = self._pool(self.workers)
+        """Keep one pool of ``workers`` processes (and their warm fork servers) — and, once a paced task came, the
+        paced tasks' workers — for every :meth:`run` inside the block, from any thread: the falsifier's generations
+        are many small batches, and the portal's verification threads run one verification after another on the
+        same executor (``console/portal/workers.py``). Without it each :meth:`run` starts its pools (Python,
+        numpy, swarmdeck and a fork server per worker: ≈ 0.5–1 s of CPU each, bench/RESULTS.md "verification
+        queue"). Blocks may nest and overlap across threads: the pools end with the last one."""
+        with self._lock:
+            self._holders += 1
+            if self._kept is None:
+                self._submitter = ThreadPoolExecutor(1, thread_name_prefix="swarmdeck-pool-submit")
+                self._kept = self._pool(self.workers)
         try:
             yield self
         finally:
-            pool, self._kept = self._kept, None
-            pool.shutdown(wait=True, cancel_futures=True)
+            with self._lock:
+                self._holders -= 1
+                ending: list[ProcessPoolExecutor | ThreadPoolExecutor | None] = []
+                if not self._holders:
+                    ending = [self._kept, self._kept_aside, self._submitter]
+                    self._kept = self._kept_aside = self._submitter = None
+            for pool in ending:
+                if pool is not None:
+                    pool.shutdown(wait=True, cancel_futures=True)
+
+    def _pools(self, computing: int, paced: int, stack: ExitStack) -> tuple[
+            ProcessPoolExecutor | None, ProcessPoolExecutor | None, ThreadPoolExecutor | None]:
+        """The pools for ``computing`` computing and ``paced`` paced tasks and the thread to submit to them from:
+        the kept ones (the paced one started on first need and kept with them), else new ones that end with
+        ``stack`` (submitted to from this thread: None)."""
+        with self._lock:
+            pool, aside, submitter = self._kept, self._kept_aside, self._submitter
+            if pool is not None and paced and aside is None:
+                aside = self._kept_aside = self._pool(MAX_PACED_WORKERS, pin=False)
+        if pool is None:
+            submitter = None
+            if computing:
+                pool = stack.enter_context(self._pool(min(self.workers, computing)))
+            if paced:
+                aside = stack.enter_context(self._pool(min(paced, MAX_PACED_WORKERS), pin=False))
+        return pool, aside, submitter
 
     def run(self, tasks: Sequence[RunTask], on_done: OnDone, cancelled: Callable[[], bool],
             fn: TaskFn = run_task) -> list[dict | None]:
@@ -127,18 +163,17 @@ class LocalPoolExecutor:
         paced = _paced(tasks)
         computing = len(tasks) - sum(paced)
         with ExitStack() as stack:
-            pool = self._kept
-            if pool is None and computing:
-                pool = stack.enter_context(self._pool(min(self.workers, computing)))
-            aside = None  # the paced tasks' own workers: they wait for the clock, beside the computing ones
-            if computing < len(tasks):
-                aside = stack.enter_context(self._pool(min(len(tasks) - computing, MAX_PACED_WORKERS), pin=False))
+            # the paced tasks' own workers (aside) wait for the clock, beside the computing ones
+            pool, aside, submitter = self._pools(computing, len(tasks) - computing, stack)
             order = sorted(range(len(tasks)), key=lambda k: not paced[k])  # the long paced runs start first
             pending: dict[Future, int] = {}
             for k in order:
                 target = aside if paced[k] else pool
                 assert target is not None
-                pending[target.submit(fn, tasks[k])] = k
+                if submitter is None:
+                    pending[target.submit(fn, tasks[k])] = k
+                else:  # kept pools: their workers are started by the submitting thread, which lives as long as they
+                    pending[submitter.submit(target.submit, fn, tasks[k]).result(timeout=600)] = k
             return self._run_on(pending, on_done, cancelled, results)
 
     @staticmethod

@@ -10,6 +10,7 @@ from swarmdeck.console.cli import main
     (["--robots", "500"], "at most"),
     (["--workers", "0"], "--workers must be >= 1"),
     (["--verify-runs", "0"], "--verify-runs must be >= 1"),
+    (["--verify-concurrent", "0"], "--verify-concurrent must be >= 1"),
     (["--max-duration", "-1"], "--max-duration must be > 0"),
     (["--max-upload", "10"], "--max-upload must be at least 1024"),
     (["--grace", "0"], "--grace must be > 0"),
