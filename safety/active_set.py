@@ -27,9 +27,6 @@ import time
 from dataclasses import dataclass
 
 import numpy as np
-import scipy.linalg as sla
-import scipy.sparse as sp
-import scipy.sparse.linalg as spla
 
 from .compiled import AVAILABLE as _COMPILED
 from .compiled import gram_dense
@@ -103,6 +100,8 @@ def _dense_spd_solve(G: np.ndarray, rhs: np.ndarray) -> np.ndarray | None:
     Cholesky (half the work of LU); a Gram matrix that is not numerically positive definite
     (dependent rows beyond what the ridge covers) goes through LU.
     """
+    import scipy.linalg as sla  # lazy: see test_devices_rps_startup_imports
+
     G[np.diag_indices_from(G)] += _RIDGE
     try:
         return sla.cho_solve(sla.cho_factor(G, lower=True, check_finite=False), rhs, check_finite=False)
@@ -157,6 +156,9 @@ class _Working:
             B = Ad if J is None else np.einsum("wnd,nde->wne", Ad, J)
             Gd = B.reshape(w, 2 * n) @ Ad.reshape(w, 2 * n).T
             return _dense_spd_solve(Gd, rhs)
+        import scipy.sparse as sp  # lazy: see test_devices_rps_startup_imports
+        import scipy.sparse.linalg as spla
+
         indptr = np.arange(0, 4 * w + 1, 4)
         cols = np.stack([2 * self.ai, 2 * self.ai + 1, 2 * self.aj, 2 * self.aj + 1], axis=1).reshape(-1)
         data = np.concatenate([self.aci, self.acj], axis=1).reshape(-1)
