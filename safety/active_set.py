@@ -28,6 +28,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from . import small_lapack
 from .compiled import AVAILABLE as _COMPILED
 from .compiled import gram_dense
 from .constraints import Rows
@@ -97,14 +98,13 @@ def clip_speed(u: np.ndarray, vmax: float) -> np.ndarray:
 def _dense_spd_solve(G: np.ndarray, rhs: np.ndarray) -> np.ndarray | None:
     """Solve (G + ridge·I) x = rhs for a small dense Gram matrix (LAPACK, little call overhead).
 
-    Cholesky (half the work of LU); a Gram matrix that is not numerically positive definite
+    Cholesky (half the work of LU; :mod:`~swarmdeck.safety.small_lapack`); a Gram matrix that is not
+    numerically positive definite
     (dependent rows beyond what the ridge covers) goes through LU.
     """
-    import scipy.linalg as sla  # lazy: see test_devices_rps_startup_imports
-
     G[np.diag_indices_from(G)] += _RIDGE
     try:
-        return sla.cho_solve(sla.cho_factor(G, lower=True, check_finite=False), rhs, check_finite=False)
+        return small_lapack.cho_solve(G, rhs)  # scipy.linalg's cho_factor/cho_solve without importing scipy.linalg
     except np.linalg.LinAlgError:
         pass
     try:

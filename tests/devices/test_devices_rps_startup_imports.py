@@ -5,7 +5,8 @@ kernels run in plain Python (the same bits: tests/safety/test_safety_small_kerne
 ``sys.modules``: importing the facade and the runner, and running an rps example (the arena's barrier and the
 script's own) for 1 s of experiment time. A barrier on more robots still gets the compiled kernels.
 Nor scipy at import, nor its k-d trees and sparse matrices in the run (a few robots' geometry is all-pairs:
-tests/core/test_core_pairs_within.py; only scipy.linalg's Cholesky of the active set remains), clarabel, matplotlib
+tests/core/test_core_pairs_within.py; the active set's Cholesky loads only scipy's LAPACK module:
+swarmdeck.safety.small_lapack), clarabel, matplotlib
 (the script does not touch the figure), the console's viewer, the recording's writers, torch.
 Each check in a fresh interpreter (``sys.modules`` of this test process is shared with every other test).
 """
@@ -19,7 +20,7 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[2]
 #: modules an rps run that does not touch the figure never needs (absent from ``sys.modules`` after it)
-NOT_IMPORTED = ("numba", "scipy.spatial", "scipy.sparse", "clarabel", "matplotlib", "viser", "mcap", "torch")
+NOT_IMPORTED = ("numba", "scipy.linalg", "scipy.spatial", "scipy.sparse", "clarabel", "matplotlib", "viser", "mcap", "torch")
 EXAMPLE = ROOT / "tests" / "data" / "rps2_examples" / "master" / "barrier_certificates" / "si_barriers.py"
 
 
