@@ -19,8 +19,9 @@ Measured per run: *CPU* — user + system seconds of the whole child process (``
 before and after it, so the interpreter's start, every import — rps's matplotlib and cvxopt, swarmdeck's scipy and
 numba and its cached kernels — and the run itself; robust to the load of a shared machine), and *wall* — seconds of the
 script's run in the child (from just before the script starts, imports of swarmdeck's runner excluded). Each cell is
-the median over ``--repeats`` runs (default 3), the modes interleaved within each repeat. The ratio column is rps
-unpaced / swarmdeck on CPU. swarmdeck's numba kernels are compiled once per installation into ``__pycache__``
+the median over ``--repeats`` runs (default 3) and the worst (slowest) of them, the modes interleaved within each
+repeat. The ratio columns are rps unpaced / swarmdeck on CPU: of the medians, and the worst case (rps's fastest run
+against swarmdeck's slowest). swarmdeck's numba kernels are compiled once per installation into ``__pycache__``
 (``cache=True``); a first warm-up run per example (not counted) makes every counted run load them, as every run after
 the first does for a user (``--no-warm-up`` counts the first too).
 
@@ -152,7 +153,9 @@ def main() -> None:
     if unknown:
         raise SystemExit(f"--modes: unknown mode(s) {unknown}; choose from {', '.join(MODES)}")
     modes = [m for m in MODES if m in chosen and (args.rps_path or not m.startswith("rps"))]
-    print(harness.table_header(["example", *[f"{m} CPU (wall) s" for m in modes], "rps unpaced / swarmdeck (CPU)"]))
+    print(harness.table_header(["example", *[f"{m} CPU median / worst (wall) s" for m in modes],
+                                "rps unpaced / swarmdeck (CPU, medians)",
+                                "worst case (rps's fastest / swarmdeck's slowest)"]))
     for name, uses_figure in cases:
         cpu: dict[str, list[float]] = {}
         wall: dict[str, list[float]] = {}
@@ -168,9 +171,12 @@ def main() -> None:
                 cpu.setdefault(mode, []).append(seconds)
                 wall.setdefault(mode, []).append(result["seconds"])
         med = {m: statistics.median(v) for m, v in cpu.items()}
-        cells = [f"{med[m]:.2f} ({statistics.median(wall[m]):.2f})" if m in med else "—" for m in modes]
-        ratio = f"{med['rps unpaced'] / med['swarmdeck']:.1f}×" if {"rps unpaced", "swarmdeck"} <= set(med) else "—"
-        print(harness.table_row(name, *cells, ratio), flush=True)
+        cells = [f"{med[m]:.2f} / {max(cpu[m]):.2f} ({statistics.median(wall[m]):.2f})" if m in med else "—"
+                 for m in modes]
+        both = {"rps unpaced", "swarmdeck"} <= set(med)
+        ratio = f"{med['rps unpaced'] / med['swarmdeck']:.1f}×" if both else "—"
+        worst = f"{min(cpu['rps unpaced']) / max(cpu['swarmdeck']):.1f}×" if both else "—"
+        print(harness.table_row(name, *cells, ratio, worst), flush=True)
 
 
 def _run_child(args: argparse.Namespace, name: str, mode: str) -> tuple[float, dict]:

@@ -8,9 +8,38 @@ from __future__ import annotations
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-from scipy.spatial import cKDTree
 
 FloatArray = NDArray[np.float64]
+
+#: robots up to which :func:`pairs_within` compares all pairs (66 at 12: an rps 2.x arena) instead of building a
+#: k-d tree — fewer operations at that size, and no scipy import for an rps-sized run
+DENSE_PAIRS_ROBOTS = 12
+
+
+def pairs_within(points: ArrayLike, radius: float) -> NDArray[np.intp]:
+    """Pairs ``(K, 2)`` (i < j, sorted by i then j) of ``points`` ``(N, d)`` (m) at most ``radius`` m apart.
+
+    The pairs of ``scipy.spatial.cKDTree(points).query_pairs(radius)``, in key order: all pairs compared
+    (the squared distance ``Σ_k (p_ik − p_jk)²``, summed over k in order as the k-d tree does, against ``radius²``)
+    up to :data:`DENSE_PAIRS_ROBOTS` robots, the k-d tree above (tests/core/test_core_pairs_within.py checks
+    the two agree, boundary distances included).
+    """
+    p = np.asarray(points, dtype=float)
+    n = p.shape[0]
+    if n < 2:
+        return np.empty((0, 2), dtype=np.intp)
+    if n <= DENSE_PAIRS_ROBOTS:
+        i, j = np.triu_indices(n, 1)
+        e = p[i] - p[j]
+        d2 = e[:, 0] * e[:, 0]
+        for k in range(1, p.shape[1]):
+            d2 = d2 + e[:, k] * e[:, k]
+        keep = d2 <= radius * radius
+        return np.stack([i[keep], j[keep]], axis=1).astype(np.intp)
+    from scipy.spatial import cKDTree  # lazy: see test_devices_rps_startup_imports
+
+    pairs = cKDTree(p).query_pairs(radius, output_type="ndarray").astype(np.intp)
+    return pairs[np.lexsort((pairs[:, 1], pairs[:, 0]))]
 
 
 def _check_n(n: int, minimum: int = 1) -> int:
@@ -87,13 +116,32 @@ def topological_neighbors(laplacian: ArrayLike, agent: int) -> NDArray[np.intp]:
     return np.flatnonzero(row != 0).astype(np.intp)
 
 
+def nearest_pair_distance(points: ArrayLike) -> float:
+    """Smallest distance (m) between two of ``points`` ``(N, d)``, N ≥ 2: all pairs compared up to
+    :data:`DENSE_PAIRS_ROBOTS` robots (the same squared sums as :func:`pairs_within`), a k-d tree above; the same
+    number either way (the square root is monotone and correctly rounded)."""
+    p = np.asarray(points, dtype=float)
+    n = p.shape[0]
+    if n < 2:
+        raise ValueError(f"the nearest pair needs at least 2 points, got {n}")
+    if n <= DENSE_PAIRS_ROBOTS:
+        i, j = np.triu_indices(n, 1)
+        e = p[i] - p[j]
+        d2 = e[:, 0] * e[:, 0]
+        for k in range(1, p.shape[1]):
+            d2 = d2 + e[:, k] * e[:, k]
+        return float(np.sqrt(d2.min()))
+    from scipy.spatial import cKDTree  # lazy: see test_devices_rps_startup_imports
+
+    return float(cKDTree(p).query(p, k=2)[0][:, 1].min())
+
+
 def delta_disk_laplacian(positions: ArrayLike, delta: float) -> FloatArray:
     """Laplacian of the δ-disk proximity graph of ``positions`` ``(N, 2)``: i ~ j iff ‖p_i − p_j‖ ≤ δ."""
     p = np.asarray(positions, dtype=float)
     if not delta > 0:
         raise ValueError(f"delta must be > 0 m, got {delta!r}")
-    pairs = cKDTree(p[:, :2]).query_pairs(delta, output_type="ndarray")
-    return laplacian_from_edges(len(p), pairs)
+    return laplacian_from_edges(len(p), pairs_within(p[:, :2], delta))
 
 
 def delta_disk_neighbors(positions: ArrayLike, agent: int, delta: float) -> NDArray[np.intp]:

@@ -23,6 +23,7 @@ from numpy.typing import ArrayLike, NDArray
 from .bounds import Bounds
 from .constants import LOOKAHEAD, SAFETY_DISTANCE
 from .errors import SwarmdeckError
+from .graphs import DENSE_PAIRS_ROBOTS
 
 __all__ = ["ObstacleError", "Obstacles", "polygon_segments", "point_segment_distance",
            "nearest_points", "segments_near", "segments_cross", "MIN_SEGMENT_LENGTH", "START_CLEARANCE"]
@@ -223,13 +224,18 @@ def segments_near(points: ArrayLike, segments: ArrayLike, radius: float
     points answers a ball query per piece (radius + half the piece), so the cost grows with the
     candidate pairs, not with N × M. Exact distances are then computed for the candidates only.
     """
-    from scipy.spatial import cKDTree  # here, not at import: core stays light
-
     p = np.asarray(points, dtype=float)[:, :2]
     s = np.asarray(segments, dtype=float)
     empty = (np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64), np.zeros(0))
     if p.shape[0] == 0 or s.shape[0] == 0:
         return empty
+    if p.shape[0] <= DENSE_PAIRS_ROBOTS:  # a few robots: every (point, segment) is a candidate (no k-d tree)
+        i, k = (a.ravel() for a in np.meshgrid(np.arange(p.shape[0], dtype=np.int64),
+                                               np.arange(s.shape[0], dtype=np.int64), indexing="ij"))
+        d = np.linalg.norm(p[i] - nearest_points(p[i], s[k]), axis=1)
+        keep = d <= radius
+        return i[keep], k[keep], d[keep]
+    from scipy.spatial import cKDTree  # here, not at import: core stays light
     length = np.linalg.norm(s[:, 1] - s[:, 0], axis=1)
     pieces = np.maximum(1, np.ceil(length / _PIECE)).astype(np.int64)
     seg_of = np.repeat(np.arange(s.shape[0], dtype=np.int64), pieces)

@@ -11,7 +11,6 @@ from typing import Protocol, runtime_checkable
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-from scipy.spatial import cKDTree
 
 from swarmdeck.core.graphs import edges_of
 
@@ -80,6 +79,8 @@ class DiskTopology:
         p = np.asarray(positions, dtype=float).reshape(-1, 2)
         if len(p) < 2:
             return np.empty((0, 2), dtype=np.intp)
+        from scipy.spatial import cKDTree  # lazy: see test_devices_rps_startup_imports
+
         pairs = cKDTree(p).query_pairs(self.delta, output_type="ndarray").astype(np.intp)
         return sorted_links(np.vstack((pairs, pairs[:, ::-1])))
 
@@ -100,6 +101,8 @@ class KNearestTopology:
         k = min(int(self.k), n - 1)
         if k < 1:
             return np.empty((0, 2), dtype=np.intp)
+        from scipy.spatial import cKDTree  # lazy: see test_devices_rps_startup_imports
+
         _, idx = cKDTree(p).query(p, k=k + 1)
         idx = np.asarray(idx, dtype=np.intp).reshape(n, k + 1)
         receiver = np.repeat(np.arange(n, dtype=np.intp), k + 1)

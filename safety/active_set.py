@@ -27,10 +27,8 @@ import time
 from dataclasses import dataclass
 
 import numpy as np
-import scipy.linalg as sla
-import scipy.sparse as sp
-import scipy.sparse.linalg as spla
 
+from . import small_lapack
 from .compiled import AVAILABLE as _COMPILED
 from .compiled import gram_dense
 from .constraints import Rows
@@ -100,12 +98,13 @@ def clip_speed(u: np.ndarray, vmax: float) -> np.ndarray:
 def _dense_spd_solve(G: np.ndarray, rhs: np.ndarray) -> np.ndarray | None:
     """Solve (G + ridge·I) x = rhs for a small dense Gram matrix (LAPACK, little call overhead).
 
-    Cholesky (half the work of LU); a Gram matrix that is not numerically positive definite
+    Cholesky (half the work of LU; :mod:`~swarmdeck.safety.small_lapack`); a Gram matrix that is not
+    numerically positive definite
     (dependent rows beyond what the ridge covers) goes through LU.
     """
     G[np.diag_indices_from(G)] += _RIDGE
     try:
-        return sla.cho_solve(sla.cho_factor(G, lower=True, check_finite=False), rhs, check_finite=False)
+        return small_lapack.cho_solve(G, rhs)  # scipy.linalg's cho_factor/cho_solve without importing scipy.linalg
     except np.linalg.LinAlgError:
         pass
     try:
@@ -157,6 +156,9 @@ class _Working:
             B = Ad if J is None else np.einsum("wnd,nde->wne", Ad, J)
             Gd = B.reshape(w, 2 * n) @ Ad.reshape(w, 2 * n).T
             return _dense_spd_solve(Gd, rhs)
+        import scipy.sparse as sp  # lazy: see test_devices_rps_startup_imports
+        import scipy.sparse.linalg as spla
+
         indptr = np.arange(0, 4 * w + 1, 4)
         cols = np.stack([2 * self.ai, 2 * self.ai + 1, 2 * self.aj, 2 * self.aj + 1], axis=1).reshape(-1)
         data = np.concatenate([self.aci, self.acj], axis=1).reshape(-1)

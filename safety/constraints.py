@@ -23,11 +23,15 @@ not built.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
-from scipy.spatial import cKDTree
 
+from swarmdeck.core.graphs import DENSE_PAIRS_ROBOTS, pairs_within
 from swarmdeck.core.obstacles import nearest_points, segments_near
+
+if TYPE_CHECKING:
+    from scipy.spatial import cKDTree
 
 from .config import BarrierConfig
 
@@ -99,12 +103,15 @@ def _unit_or_fallback(e: np.ndarray, d: np.ndarray, seed: np.ndarray) -> np.ndar
 
 
 def pair_rows(points: np.ndarray, cfg: BarrierConfig, tree: cKDTree | None = None) -> Rows:
-    """Pair rows for all pairs closer than ``cfg.neighbour_radius()`` (k-d tree query)."""
+    """Pair rows for all pairs closer than ``cfg.neighbour_radius()`` (``tree``'s query, or
+    :func:`~swarmdeck.core.graphs.pairs_within`: all pairs compared for a few robots, a k-d tree above)."""
     n_robots = points.shape[0]
     if n_robots < 2:
         return Rows.empty()
-    tree = cKDTree(points) if tree is None else tree
-    pairs = tree.query_pairs(cfg.neighbour_radius(), output_type="ndarray")
+    if tree is None:
+        pairs = pairs_within(points, cfg.neighbour_radius())
+    else:
+        pairs = tree.query_pairs(cfg.neighbour_radius(), output_type="ndarray")
     if pairs.shape[0] == 0:
         return Rows.empty()
     # rows in key order (i, then j; query_pairs gives i < j): one sort of int64 keys
@@ -125,6 +132,8 @@ def obstacle_rows(points: np.ndarray, obstacles: np.ndarray, cfg: BarrierConfig,
     n_robots, n_obs = points.shape[0], obstacles.shape[0]
     if n_robots == 0 or n_obs == 0:
         return Rows.empty()
+    from scipy.spatial import cKDTree  # lazy: see test_devices_rps_startup_imports
+
     tree = cKDTree(points) if tree is None else tree
     close = tree.sparse_distance_matrix(cKDTree(obstacles), cfg.neighbour_radius(),
                                         output_type="ndarray")
@@ -219,9 +228,13 @@ def barrier_rows(points: np.ndarray, cfg: BarrierConfig, obstacles: np.ndarray |
     ``robot_bounds`` ``(N, 4)``: each robot's own wall rectangle (:func:`wall_rows`), None: ``cfg.bounds``."""
     if points.shape[0] == 0:
         return Rows.empty()
-    tree = cKDTree(points) if tree is None else tree
+    with_obstacles = obstacles is not None and obstacles.shape[0] > 0
+    if tree is None and (points.shape[0] > DENSE_PAIRS_ROBOTS or with_obstacles):  # one tree for both queries
+        from scipy.spatial import cKDTree  # lazy: see test_devices_rps_startup_imports
+
+        tree = cKDTree(points)
     parts = ([pair_rows(points, cfg, tree)] if cfg.pairs else []) + [wall_rows(points, cfg, robot_bounds)]
-    if obstacles is not None and obstacles.shape[0]:
+    if obstacles is not None and with_obstacles:
         parts.append(obstacle_rows(points, obstacles, cfg, tree))
     if cfg.obstacles is not None and cfg.obstacles.m:
         parts.append(segment_rows(points, cfg, 0 if obstacles is None else obstacles.shape[0]))

@@ -37,12 +37,10 @@ import time
 from dataclasses import dataclass
 
 import numpy as np
-import scipy.sparse as sp
 from numpy.typing import ArrayLike
-from scipy.sparse.csgraph import connected_components
-from scipy.spatial import cKDTree
 
 from swarmdeck.core.errors import SwarmdeckError
+from swarmdeck.core.graphs import nearest_pair_distance
 
 from . import dual_ascent
 from .active_set import FEAS_TOL, ActiveSetResult, clip_speed, solve_active_set
@@ -310,7 +308,7 @@ class SafetyFilter:
             return self.fail_stop(n, U, problem, t0)
         try:
             with np.errstate(over="ignore", invalid="ignore"):
-                rows = barrier_rows(P, cfg, O, cKDTree(P), robot_bounds)
+                rows = barrier_rows(P, cfg, O, None, robot_bounds)
         except (ValueError, FloatingPointError, OverflowError) as exc:  # never out of the filter
             return self.fail_stop(n, U, f"cannot build the barrier rows: {exc}", t0)
         if extra is not None and extra.m:
@@ -674,6 +672,9 @@ class SafetyFilter:
         two = rows.j >= 0
         if not two.any():
             return n, np.arange(n)
+        import scipy.sparse as sp  # lazy: see test_devices_rps_startup_imports
+        from scipy.sparse.csgraph import connected_components
+
         graph = sp.coo_matrix((np.ones(int(two.sum())), (rows.i[two], rows.j[two])), shape=(n, n))
         return connected_components(graph, directed=False)
 
@@ -687,7 +688,7 @@ class SafetyFilter:
         if pair.any():
             min_d = float(np.sqrt(np.min(rows.h[pair]) + cfg.safety_distance**2))
         elif n >= 2:
-            min_d = float(cKDTree(P).query(P, k=2)[0][:, 1].min())
+            min_d = nearest_pair_distance(P)
         else:
             min_d = float("inf")
         x_min, x_max, y_min, y_max = cfg.bounds if self._walls is None else self._walls.T
@@ -700,6 +701,8 @@ class SafetyFilter:
         if obs.any():
             min_obs = float(np.sqrt(np.min(rows.h[obs]) + cfg.safety_distance**2))
         elif O is not None and O.shape[0] and n:
+            from scipy.spatial import cKDTree  # lazy: see test_devices_rps_startup_imports
+
             min_obs = float(cKDTree(O).query(P, k=1)[0].min())
         else:
             min_obs = float("inf")

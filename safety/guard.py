@@ -40,7 +40,6 @@ from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import NDArray
-from scipy.spatial import cKDTree
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
@@ -100,6 +99,8 @@ def _candidates(p0: FloatArray, step: FloatArray, distance: float) -> IntArray:
         return np.zeros((0, 2), dtype=np.int64)
     reach = float(np.sqrt(np.max(step[:, 0] * step[:, 0] + step[:, 1] * step[:, 1])))
     # an unbalanced, non-compacted tree builds faster for one query (the same pairs)
+    from scipy.spatial import cKDTree  # lazy: see test_devices_rps_startup_imports
+
     tree = cKDTree(p0, balanced_tree=False, compact_nodes=False)
     pairs = tree.query_pairs(distance + 2.0 * reach + TOLERANCE, output_type="ndarray")
     return pairs.astype(np.int64, copy=False).reshape(-1, 2)

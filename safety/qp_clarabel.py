@@ -16,9 +16,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-import clarabel
 import numpy as np
-import scipy.sparse as sp
 
 from .constraints import Rows
 
@@ -71,6 +69,9 @@ def solve_qp(rows: Rows, nominal: np.ndarray, max_speed: float | None, *,
     that get the speed cone (default all, when max_speed is given); time_limit: clarabel's own
     wall-time limit in s (None: none; the answer is then refused as "time limit" when reached).
     """
+    import clarabel
+    import scipy.sparse as sp  # lazy: see test_devices_rps_startup_imports
+
     n = nominal.shape[0]
     nv = 2 * n
     b_hard = rows.b if b_hard is None else b_hard
@@ -157,6 +158,9 @@ def project_onto_polytope(nominal: np.ndarray, a: np.ndarray, b: np.ndarray, *, 
     variables). ``u`` of the result is the (n,) answer (zeros when not ok); the status is checked as in
     :func:`solve_qp`.
     """
+    import clarabel
+    import scipy.sparse as sp  # lazy: see test_devices_rps_startup_imports
+
     x_hat = np.asarray(nominal, dtype=float).reshape(-1)
     a = np.asarray(a, dtype=float)
     b = np.asarray(b, dtype=float).reshape(-1)

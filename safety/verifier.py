@@ -23,7 +23,6 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import numpy as np
-from scipy.spatial import cKDTree
 
 from swarmdeck.core.constants import CONTROL_PERIOD, MAX_LINEAR_SPEED, ROBOT_DIAMETER
 
@@ -99,6 +98,8 @@ def step_contacts(x: np.ndarray, u: np.ndarray, dt: float, contact_distance: flo
         return empty, np.empty(0), np.empty(0), t_stop
     step_len = np.linalg.norm(u, axis=1) * dt
     radius = contact_distance + 2 * float(step_len.max())
+    from scipy.spatial import cKDTree  # lazy: see test_devices_rps_startup_imports
+
     pairs = cKDTree(x).query_pairs(radius + 1e-12, output_type="ndarray")
     if not pairs.size:
         return empty, np.empty(0), np.empty(0), t_stop

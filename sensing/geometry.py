@@ -12,7 +12,6 @@ from __future__ import annotations
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-from scipy.spatial import cKDTree
 
 from swarmdeck.core.bounds import Bounds
 from swarmdeck.sensing import kernels
@@ -113,6 +112,8 @@ def _first_circle_hits(origins: FloatArray, directions: FloatArray, max_range: f
     best = np.full(n_rays, np.inf)
     if n_rays == 0 or len(centres) == 0:
         return best
+    from scipy.spatial import cKDTree  # lazy: see test_devices_rps_startup_imports
+
     tree = cKDTree(centres)
     open_rays = np.arange(n_rays)
     for frac in _STAGES:
@@ -162,6 +163,8 @@ def cast_sensor_rays(centres: ArrayLike, headings: ArrayLike, origins: ArrayLike
     sorted_h = h[order]
     twice = np.concatenate((sorted_h, sorted_h + 2 * np.pi))
     o_flat, u_flat = o.reshape(-1, 2), u.reshape(-1, 2)
+    from scipy.spatial import cKDTree  # lazy: see test_devices_rps_startup_imports
+
     tree = cKDTree(c)
     near = radius + mount
     if kernels.AVAILABLE:  # compiled: every sensor of every pair within reach, one loop

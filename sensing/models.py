@@ -10,10 +10,10 @@ from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-from scipy.spatial import cKDTree
 
 from swarmdeck.core.bounds import Bounds
 from swarmdeck.core.constants import GRAVITY
+from swarmdeck.core.graphs import pairs_within
 from swarmdeck.core.kinematics import UnicycleParams, unicycle_to_wheels, wrap_angle
 from swarmdeck.sensing.config import DistanceSensorConfig, ImuConfig, RangeBearingConfig, SensingConfigError
 from swarmdeck.sensing.geometry import cast_rays, cast_sensor_rays, check_segments
@@ -122,12 +122,12 @@ class RangeBearing:
 
 def range_and_bearing(poses: ArrayLike, config: RangeBearingConfig, rng: np.random.Generator) -> RangeBearing:
     """Range and bearing from every robot to each neighbour within ``config.radius`` (centre to centre) and inside
-    its field of view, with Gaussian noise and dropout (a k-d tree finds the pairs). See :class:`RangeBearing`."""
+    its field of view, with Gaussian noise and dropout (:func:`~swarmdeck.core.graphs.pairs_within` finds the pairs). See :class:`RangeBearing`."""
     p = check_sensing_poses(poses)
     empty = RangeBearing(np.empty(0, np.intp), np.empty(0, np.intp), np.empty(0), np.empty(0))
     if len(p) < 2:
         return empty
-    pairs = cKDTree(p[:, :2]).query_pairs(config.radius, output_type="ndarray").astype(np.intp)
+    pairs = pairs_within(p[:, :2], config.radius)
     i = np.concatenate((pairs[:, 0], pairs[:, 1]))
     j = np.concatenate((pairs[:, 1], pairs[:, 0]))
     order = np.lexsort((j, i))

@@ -31,7 +31,6 @@ from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
-from scipy.spatial import cKDTree
 
 from swarmdeck.console.picture.picture import changed_mask
 from swarmdeck.console.recording.reader import Recording
@@ -115,6 +114,8 @@ def _nearest(xy: NDArray[np.float64]) -> tuple[float, NDArray[np.int64]]:
     """(smallest centre distance m (inf below 2 robots), pairs closer than the robot diameter (K, 2) i < j)."""
     if len(xy) < 2:
         return math.inf, np.empty((0, 2), dtype=np.int64)
+    from scipy.spatial import cKDTree  # lazy: see test_devices_rps_startup_imports
+
     tree = cKDTree(xy)
     d, _ = tree.query(xy, k=2)
     pairs = tree.query_pairs(ROBOT_DIAMETER, output_type="ndarray").astype(np.int64)

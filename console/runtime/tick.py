@@ -17,7 +17,6 @@ from typing import Any, cast
 
 import numpy as np
 from numpy.typing import NDArray
-from scipy.spatial import cKDTree
 
 from swarmdeck.console.runtime.batteries import BatteryWatch, low_battery_alert
 from swarmdeck.console.runtime.behaviours import (
@@ -90,6 +89,8 @@ class Stage:
 def _min_distance(points: NDArray[np.float64]) -> float:
     if len(points) < 2:
         return math.inf
+    from scipy.spatial import cKDTree  # lazy: see test_devices_rps_startup_imports
+
     d, _ = cKDTree(points).query(points, k=2)
     return float(d[:, 1].min())
 

@@ -36,7 +36,6 @@ from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-from scipy.spatial import cKDTree
 
 from swarmdeck.core.constants import CONTROL_PERIOD, SAFETY_DISTANCE
 from swarmdeck.core.errors import SwarmdeckError
@@ -347,6 +346,8 @@ class SharedFloor:
             pts = xy[placed]
             lab = label[placed]
             k = min(len(pts), 8)
+            from scipy.spatial import cKDTree  # lazy: see test_devices_rps_startup_imports
+
             d, j = cKDTree(pts).query(pts, k=k)
             other = lab[j] != lab[:, None]
             if other.any():

@@ -14,7 +14,6 @@ from dataclasses import dataclass, field
 
 import numpy as np
 from numpy.typing import NDArray
-from scipy.sparse.csgraph import shortest_path
 
 from swarmdeck.core.bounds import Bounds
 from swarmdeck.core.obstacles import START_CLEARANCE, Obstacles, point_segment_distance
@@ -103,6 +102,8 @@ class Router:
         length = np.linalg.norm(self.nodes[i] - self.nodes[j], axis=1)
         graph[i[visible], j[visible]] = length[visible]
         graph = graph + graph.T
+        from scipy.sparse.csgraph import shortest_path  # lazy: see test_devices_rps_startup_imports
+
         self._between = shortest_path(graph, method="D", directed=False) if p else np.zeros((0, 0))
 
     def for_goals(self, goals: FloatArray) -> RoutePlan:
