@@ -124,6 +124,9 @@ class BoundedVoronoi:
         p = self.points[self.tri_cell]
         a = self.vertices[self.tri_a] - p
         ang = np.arctan2(a[:, 1], a[:, 0])
+        if kernels.AVAILABLE:
+            order, offsets = voronoi_kernels.polygon_order(self.tri_cell, ang, self.n)
+            return CellPolygons(self.vertices[self.tri_a[order]], offsets)
         order = np.lexsort((ang, self.tri_cell))
         verts = self.vertices[self.tri_a[order]]
         offsets = np.zeros(self.n + 1, dtype=np.int64)

@@ -24,7 +24,7 @@ from numpy.typing import NDArray
 
 from swarmdeck.core.compiled import jit
 
-__all__ = ["areas_compiled", "assemble_compiled", "ridges_compiled"]
+__all__ = ["areas_compiled", "assemble_compiled", "polygon_order", "ridges_compiled"]
 
 
 @jit
@@ -220,3 +220,38 @@ def areas_compiled(points: NDArray[np.float64], vertices: NDArray[np.float64], t
     bit (each triangle added to its cell in input order, as ``np.bincount``)."""
     return _areas(np.ascontiguousarray(points, dtype=np.float64), np.ascontiguousarray(vertices, dtype=np.float64),
                   np.ascontiguousarray(tri_cell), np.ascontiguousarray(tri_a), np.ascontiguousarray(tri_b), int(n))
+
+
+@jit
+def _polygon_order(tri_cell: Any, ang: Any, n: int) -> Any:  # pragma: no cover - compiled
+    count = np.zeros(n + 1, dtype=np.int64)
+    for t in range(tri_cell.shape[0]):
+        count[tri_cell[t] + 1] += 1
+    for c in range(n):
+        count[c + 1] += count[c]
+    offsets = count.copy()
+    order = np.empty(tri_cell.shape[0], dtype=np.int64)
+    fill = count[:n].copy()
+    for t in range(tri_cell.shape[0]):                # stable counting sort by cell
+        c = tri_cell[t]
+        order[fill[c]] = t
+        fill[c] += 1
+    for c in range(n):                                # stable insertion sort by angle within a cell
+        lo, hi = offsets[c], offsets[c + 1]
+        for s in range(lo + 1, hi):
+            cur = order[s]
+            key = ang[cur]
+            j = s
+            while j > lo and ang[order[j - 1]] > key:
+                order[j] = order[j - 1]
+                j -= 1
+            order[j] = cur
+    return order, offsets
+
+
+def polygon_order(tri_cell: NDArray[np.intp], ang: NDArray[np.float64],
+                  n: int) -> tuple[NDArray[np.intp], NDArray[np.int64]]:
+    """``np.lexsort((ang, tri_cell))`` (triangles by cell, then by angle, ties in input order) and the cells'
+    offsets (n + 1,) into it (``cumsum`` of the per-cell counts): what
+    :meth:`~swarmdeck.coverage.voronoi.BoundedVoronoi.cell_polygons` sorts, bit for bit."""
+    return _polygon_order(np.ascontiguousarray(tri_cell), np.ascontiguousarray(ang, dtype=np.float64), int(n))
