@@ -71,3 +71,14 @@ def test_five_thousand_robots_on_the_console_floor() -> None:
     bounds = FLOORS[1]
     p, _ = precondition_positions(np.random.default_rng(7).uniform([-11.0, -6.5], [11.0, 6.5], (5000, 2)), bounds)
     _check(p, bounds)
+
+
+def test_quadrature_points_equal_the_numpy_points_bit_for_bit() -> None:
+    rng = np.random.default_rng(3)
+    tri = rng.normal(0.0, 0.3, (500, 3, 2))
+    cell = np.sort(rng.integers(0, 40, 500))
+    origin = rng.uniform(-11.0, 11.0, (40, 2))
+    bary = rng.dirichlet(np.ones(3), 7)
+    for got, want in zip(kernels.quadrature_points(tri, cell, bary, origin),
+                         kernels.quadrature_points_numpy(tri, cell, bary, origin)):
+        _same(got, want)
