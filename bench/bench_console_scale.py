@@ -15,6 +15,16 @@ sense, density, barrier, Frame) and, for *worker*, the worker thread's CPU (*wor
 loop thread CPU from the tick's start until the worker's step of this tick's inputs is done). ticks/s (2 cores) = 1 / max(loop, worker) medians: what the tick holds
 when each thread has a core (sync: 1 / loop, one core); the wall ticks/s of the back-to-back ticks is
 printed too (meaningful only on an idle machine). No scene or recorder. Baseline: harness sort workload.
+
+The console's own rate, for a quiet machine (the issue's "done when": ``swarmdeck console --robots 5000 --arena
+22x13`` holds 10 ticks/s by the wall clock):
+
+- ``bench_console_scale.py --alone [N ...]``: ONE loop in the console's configuration (``coverage_worker="auto"``:
+  two workers from 2000 robots), ticking back to back, nothing interleaved: wall ticks/s, process CPU per tick
+  (all threads) and the loop thread's CPU, medians (worst) over 40 ticks after 5 warm-up (20 at 10,000).
+- ``bench_console_scale.py --console [N ...]``: the real ``swarmdeck console --robots N --arena WxH --no-record``
+  in a child process, run for 10 s and for 40 s (``--duration``); its tick counter ("ran K ticks") gives
+  ticks/s = (K40 − K10) / 30 s by the wall clock, start-up (imports, kernel loads, first tick) cancelled out.
 """
 from __future__ import annotations
 
@@ -154,5 +164,64 @@ def main(sizes: list[int]) -> None:
     delaunay_alternatives(sizes)
 
 
+def alone(sizes: list[int]) -> None:
+    """One loop in the console's configuration, back to back (module docstring, ``--alone``)."""
+
+    print(harness.machine())
+    print(harness.table_header(["N", "floor", "wall ticks/s", "wall ms/tick (worst)", "process CPU ms/tick (worst)",
+                                "loop thread CPU ms (worst)"]))
+    for n in sizes:
+        warm, ticks = 5, (40 if n <= 5000 else 20)
+        loop = ControlLoop(LoopConfig(n_robots=n, seed=1, bounds=arena_bounds(ARENAS[n]), coverage_worker="auto"))
+        wall, proc, own = [], [], []
+        try:
+            for _ in range(warm):
+                loop.tick()
+            t_start = time.perf_counter()
+            for _ in range(ticks):
+                w0, p0, c0 = time.perf_counter(), time.process_time(), time.thread_time()
+                loop.tick()
+                wall.append(time.perf_counter() - w0)
+                proc.append(time.process_time() - p0)
+                own.append(time.thread_time() - c0)
+            span = time.perf_counter() - t_start
+        finally:
+            loop.close()
+        print(harness.table_row(n, ARENAS[n], f"{ticks / span:.1f}", harness.timing(wall, "wall").ms(1),
+                                harness.timing(proc, "cpu").ms(1), harness.timing(own, "cpu").ms(1)))
+        sys.stdout.flush()
+
+
+def console(sizes: list[int], short: float = 10.0, long: float = 40.0) -> None:
+    """The real ``swarmdeck console`` in a child process; ticks/s from its tick counter (``--console``)."""
+    import re
+    import subprocess
+
+    def ticks(n: int, duration: float) -> int:
+        argv = [*harness.swarmdeck_cli(), "console", "--robots", str(n), "--arena", ARENAS[n], "--port", "0",
+                "--no-record", "--duration", f"{duration:g}"]
+        done = subprocess.run(argv, capture_output=True, text=True, timeout=duration + 600, check=False)
+        found = re.search(r"ran (\d+) ticks", done.stdout)
+        if done.returncode != 0 or found is None:
+            raise RuntimeError(f"swarmdeck console exited {done.returncode}: {done.stderr[-2000:]}")
+        return int(found.group(1))
+
+    print(harness.machine())
+    print(harness.table_header(["N", "floor", f"ticks in {short:g} s", f"ticks in {long:g} s",
+                                "console ticks/s (wall)"]))
+    for n in sizes:
+        k_short, k_long = ticks(n, short), ticks(n, long)
+        print(harness.table_row(n, ARENAS[n], k_short, k_long, f"{(k_long - k_short) / (long - short):.1f}"))
+        sys.stdout.flush()
+
+
 if __name__ == "__main__":
-    main([int(a) for a in sys.argv[1:]] or [1000, 3000, 5000, 10000])
+    args = sys.argv[1:]
+    mode = args.pop(0) if args and args[0] in ("--alone", "--console") else None
+    chosen = [int(a) for a in args]
+    if mode == "--alone":
+        alone(chosen or [5000])
+    elif mode == "--console":
+        console(chosen or [5000])
+    else:
+        main(chosen or [1000, 3000, 5000, 10000])

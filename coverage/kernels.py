@@ -19,7 +19,7 @@ from numpy.typing import NDArray
 from swarmdeck.core.compiled import AVAILABLE, jit
 
 __all__ = ["AVAILABLE", "cell_sums", "cell_sums_numpy", "edge_blocks", "edge_blocks_numpy", "edge_nodes",
-           "edge_nodes_numpy", "refine_need", "refine_need_numpy"]
+           "edge_nodes_numpy", "quadrature_points", "quadrature_points_numpy", "refine_need", "refine_need_numpy"]
 
 
 def cell_sums_numpy(phi: NDArray[np.float64], phi_t: NDArray[np.float64], r: NDArray[np.float64],
@@ -301,3 +301,49 @@ def edge_nodes(a: NDArray[np.float64], b: NDArray[np.float64], mid: NDArray[np.f
         return edge_nodes_numpy(a, b, mid, length, pieces, x, w)
     c = np.ascontiguousarray
     return _edge_nodes_compiled(c(a), c(b), c(mid), c(length), c(pieces, dtype=np.intp), c(x), c(w))
+
+
+def quadrature_points_numpy(tri: NDArray[np.float64], cell: NDArray[np.intp], bary: NDArray[np.float64],
+                            origin: NDArray[np.float64]
+                            ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
+    """The quadrature points of T triangles: tri (T, 3, 2) m relative to their robot ``origin[cell]``
+    ((N, 2) m), bary (P, 3) barycentric rule points → areas (T,) m², the points relative to the robot r
+    (T, P, 2) m and absolute q (T, P, 2) m (the code that was inline in ``cell_moments``)."""
+    ea, eb = tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0]
+    area = 0.5 * np.abs(ea[:, 0] * eb[:, 1] - ea[:, 1] * eb[:, 0])
+    r = (bary[None, :, 0, None] * tri[:, None, 0] + bary[None, :, 1, None] * tri[:, None, 1]
+         + bary[None, :, 2, None] * tri[:, None, 2])
+    return area, r, r + origin[cell][:, None, :]
+
+
+@jit
+def _quadrature_points_compiled(tri, cell, bary, origin):  # pragma: no cover - compiled
+    t_count, p_count = tri.shape[0], bary.shape[0]
+    area = np.empty(t_count)
+    r = np.empty((t_count, p_count, 2))
+    q = np.empty((t_count, p_count, 2))
+    for t in range(t_count):
+        eax = tri[t, 1, 0] - tri[t, 0, 0]
+        eay = tri[t, 1, 1] - tri[t, 0, 1]
+        ebx = tri[t, 2, 0] - tri[t, 0, 0]
+        eby = tri[t, 2, 1] - tri[t, 0, 1]
+        area[t] = 0.5 * abs(eax * eby - eay * ebx)
+        c = cell[t]
+        for j in range(p_count):
+            for d in range(2):
+                v = bary[j, 0] * tri[t, 0, d] + bary[j, 1] * tri[t, 1, d] + bary[j, 2] * tri[t, 2, d]
+                r[t, j, d] = v
+                q[t, j, d] = v + origin[c, d]
+    return area, r, q
+
+
+def quadrature_points(tri: NDArray[np.float64], cell: NDArray[np.intp], bary: NDArray[np.float64],
+                      origin: NDArray[np.float64]
+                      ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
+    """:func:`quadrature_points_numpy`, compiled when numba is available (the same bits)."""
+    if not AVAILABLE:
+        return quadrature_points_numpy(tri, cell, bary, origin)
+    return _quadrature_points_compiled(np.ascontiguousarray(tri, dtype=np.float64),
+                                       np.ascontiguousarray(cell, dtype=np.intp),
+                                       np.ascontiguousarray(bary, dtype=np.float64),
+                                       np.ascontiguousarray(origin, dtype=np.float64))

@@ -20,7 +20,7 @@ from numpy.typing import NDArray
 
 from swarmdeck.core.checks import in_range
 from swarmdeck.coverage.density import GaussianMixture
-from swarmdeck.coverage.kernels import cell_sums, refine_need
+from swarmdeck.coverage.kernels import cell_sums, quadrature_points, refine_need
 from swarmdeck.coverage.voronoi import BoundedVoronoi
 
 __all__ = ["CellMoments", "QuadratureOptions", "cell_moments", "triangle_rule"]
@@ -165,12 +165,9 @@ def cell_moments(vor: BoundedVoronoi, density: GaussianMixture,
     tri, cell = _refine(tri, vor.tri_cell, p, density, opts)
     order = np.argsort(cell, kind="stable")          # cells are compact: keeps points local
     tri, cell = tri[order], cell[order]
-    ea, eb = tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0]
-    area = 0.5 * np.abs(ea[:, 0] * eb[:, 1] - ea[:, 1] * eb[:, 0])         # (T,)
     bary, w = _dunavant7()
-    r = (bary[None, :, 0, None] * tri[:, None, 0] + bary[None, :, 1, None] * tri[:, None, 1]
-         + bary[None, :, 2, None] * tri[:, None, 2])                        # (T, 7, 2) = q − p_i
-    phi, phi_t = density.evaluate_both(r + p[cell][:, None, :])             # (T, 7)
+    area, r, q = quadrature_points(tri, cell, bary, p)      # (T,), (T, 7, 2) = q − p_i, (T, 7, 2); compiled
+    phi, phi_t = density.evaluate_both(q)                                   # (T, 7)
     acc = cell_sums(phi, phi_t, r, area, w, cell, n)                     # compiled (coverage/kernels.py)
     n_points = phi.size
     m, mx, my, m2, g0, gx, gy, ax, ay = acc

@@ -25,6 +25,7 @@ from numpy.typing import ArrayLike, NDArray
 from scipy.spatial import Delaunay, QhullError, cKDTree
 
 from swarmdeck.core.bounds import DEFAULT_BOUNDS, Bounds, check_bounds
+from swarmdeck.coverage import kernels, voronoi_kernels
 from swarmdeck.coverage.cells import CellPolygons
 
 __all__ = ["BoundedVoronoi", "bounded_voronoi", "precondition_positions"]
@@ -108,6 +109,9 @@ class BoundedVoronoi:
 
     def areas(self) -> NDArray[np.float64]:
         """Cell areas (N,) [m²] from the fan triangles."""
+        if kernels.AVAILABLE:
+            return voronoi_kernels.areas_compiled(self.points, self.vertices, self.tri_cell, self.tri_a, self.tri_b,
+                                                  self.n)
         p = self.points[self.tri_cell]
         a = self.vertices[self.tri_a] - p
         b = self.vertices[self.tri_b] - p
@@ -120,6 +124,9 @@ class BoundedVoronoi:
         p = self.points[self.tri_cell]
         a = self.vertices[self.tri_a] - p
         ang = np.arctan2(a[:, 1], a[:, 0])
+        if kernels.AVAILABLE:
+            order, offsets = voronoi_kernels.polygon_order(self.tri_cell, ang, self.n)
+            return CellPolygons(self.vertices[self.tri_a[order]], offsets)
         order = np.lexsort((ang, self.tri_cell))
         verts = self.vertices[self.tri_a[order]]
         offsets = np.zeros(self.n + 1, dtype=np.int64)
@@ -175,9 +182,12 @@ def _ridges_delaunay(allp: NDArray[np.float64]) -> tuple[NDArray[np.intp], NDArr
     Also returns the circumcentres. Hull edges give ridges with a NaN vertex (infinite).
     """
     tri = Delaunay(allp)
-    simp = tri.simplices
+    return _ridges_of(tri.simplices, tri.neighbors, allp)
+
+
+def _ridges_of(simp: NDArray[np.intp], nb: NDArray[np.intp],
+               allp: NDArray[np.float64]) -> tuple[NDArray[np.intp], NDArray[np.float64], NDArray[np.float64]]:
     cc = _circumcentres(allp, simp)
-    nb = tri.neighbors
     t = np.repeat(np.arange(simp.shape[0]), 3)
     k = np.tile(np.arange(3), simp.shape[0])
     tn = nb.ravel()
@@ -188,6 +198,53 @@ def _ridges_delaunay(allp: NDArray[np.float64]) -> tuple[NDArray[np.intp], NDArr
     va = cc[t]
     vb = np.where((tn >= 0)[:, None], cc[np.maximum(tn, 0)], np.nan)
     return np.column_stack([pa, pb]), np.stack([va, vb], axis=1), cc
+
+
+def _ridges_numpy(simp: NDArray[np.intp], nb: NDArray[np.intp], allp: NDArray[np.float64], n: int,
+                  cb: tuple[float, float, float, float],
+                  tol: float) -> tuple[NDArray[np.intp], NDArray[np.float64], NDArray[np.bool_]]:
+    """The real ridges (a robot on at least one side) of the triangulation ``simp``/``nb`` of ``allp``: robot
+    pairs (R, 2), vertex pairs (R, 2, 2) m, and per wall which ridges leave ``cb`` by > ``tol`` or are
+    infinite (4, R). The reference of :func:`~swarmdeck.coverage.voronoi_kernels.ridges_compiled`."""
+    pairs, seg, _cc = _ridges_of(simp, nb, allp)
+    real = (pairs < n).any(axis=1)
+    pairs, seg = pairs[real], seg[real]
+    bad_inf = ~np.all(np.isfinite(seg), axis=(1, 2))
+    v = seg.reshape(-1, 2)
+    out = np.stack([v[:, 0] < cb[0] - tol, v[:, 0] > cb[1] + tol,
+                    v[:, 1] < cb[2] - tol, v[:, 1] > cb[3] + tol])          # (4, 2R)
+    out = out.reshape(4, -1, 2).any(axis=2) | bad_inf[None, :]             # (4, R)
+    return pairs, seg, out
+
+
+def _assemble_numpy(pairs: NDArray[np.intp], seg: NDArray[np.float64], points: NDArray[np.float64],
+                    centre: NDArray[np.float64], bounds: tuple[float, float, float, float],
+                    n: int) -> tuple[NDArray[np.float64], NDArray[np.intp], NDArray[np.intp], NDArray[np.intp],
+                                     NDArray[np.intp], NDArray[np.intp]]:
+    """The diagram's arrays from the settled real ridges: vertices, fan triangles (cell, a, b), shared edges
+    (pairs, vertex pairs) sorted. The reference of :func:`~swarmdeck.coverage.voronoi_kernels.assemble_compiled`."""
+    x0, x1, y0, y1 = bounds
+    verts = seg.reshape(-1, 2) + centre
+    np.clip(verts, [x0, y0], [x1, y1], out=verts)
+    rv = np.arange(verts.shape[0]).reshape(-1, 2)
+    d = verts[rv[:, 1]] - verts[rv[:, 0]]
+    long_enough = np.hypot(d[:, 0], d[:, 1]) > 1e-12 * max(x1 - x0, y1 - y0)
+    rp, rv = pairs[long_enough], rv[long_enough]
+    # Fan triangles: one per (real robot, ridge) incidence.
+    cells = np.concatenate([rp[:, 0], rp[:, 1]])
+    va = np.concatenate([rv[:, 0], rv[:, 0]])
+    vb = np.concatenate([rv[:, 1], rv[:, 1]])
+    real = cells < n
+    cells, va, vb = cells[real], va[real], vb[real]
+    qa = verts[va] - points[cells]
+    qb = verts[vb] - points[cells]
+    flip = qa[:, 0] * qb[:, 1] - qa[:, 1] * qb[:, 0] < 0.0
+    va, vb = np.where(flip, vb, va), np.where(flip, va, vb)
+    inner = (rp < n).all(axis=1)
+    epairs = np.sort(rp[inner], axis=1)
+    evs = rv[inner]
+    order = np.lexsort((epairs[:, 1], epairs[:, 0]))
+    return verts, cells, va, vb, epairs[order], evs[order]
 
 
 def _diagram(points: NDArray[np.float64], bounds: tuple[float, float, float, float],
@@ -212,16 +269,12 @@ def _diagram(points: NDArray[np.float64], bounds: tuple[float, float, float, flo
         spacing = np.sqrt(b.area / n)
         masks = wall_dist < 2.5 * spacing
     tol = 1e-9 * max(b.width, b.height)
+    compiled = kernels.AVAILABLE
     for _ in range(8):
         allp = _mirrors(pts, cb, masks)
-        pairs, seg, _cc = _ridges_delaunay(allp)
-        real = (pairs < n).any(axis=1)
-        pairs, seg = pairs[real], seg[real]
-        bad_inf = ~np.all(np.isfinite(seg), axis=(1, 2))
-        v = seg.reshape(-1, 2)
-        out = np.stack([v[:, 0] < cb[0] - tol, v[:, 0] > cb[1] + tol,
-                        v[:, 1] < cb[2] - tol, v[:, 1] > cb[3] + tol])          # (4, 2R)
-        out = out.reshape(4, -1, 2).any(axis=2) | bad_inf[None, :]             # (4, R)
+        tri = Delaunay(allp)
+        pairs, seg, out = (voronoi_kernels.ridges_compiled if compiled else _ridges_numpy)(
+            tri.simplices, tri.neighbors, allp, n, cb, tol)
         if not out.any():
             break
         add = np.zeros((4, n), dtype=bool)
@@ -236,28 +289,10 @@ def _diagram(points: NDArray[np.float64], bounds: tuple[float, float, float, flo
         masks |= add
     else:
         raise QhullError("bounded Voronoi did not settle")
-    verts = seg.reshape(-1, 2) + centre
-    np.clip(verts, [x0, y0], [x1, y1], out=verts)
-    rv = np.arange(verts.shape[0]).reshape(-1, 2)
-    d = verts[rv[:, 1]] - verts[rv[:, 0]]
-    long_enough = np.hypot(d[:, 0], d[:, 1]) > 1e-12 * max(x1 - x0, y1 - y0)
-    rp, rv = pairs[long_enough], rv[long_enough]
-    # Fan triangles: one per (real robot, ridge) incidence.
-    cells = np.concatenate([rp[:, 0], rp[:, 1]])
-    va = np.concatenate([rv[:, 0], rv[:, 0]])
-    vb = np.concatenate([rv[:, 1], rv[:, 1]])
-    real = cells < n
-    cells, va, vb = cells[real], va[real], vb[real]
-    qa = verts[va] - points[cells]
-    qb = verts[vb] - points[cells]
-    flip = qa[:, 0] * qb[:, 1] - qa[:, 1] * qb[:, 0] < 0.0
-    va, vb = np.where(flip, vb, va), np.where(flip, va, vb)
-    inner = (rp < n).all(axis=1)
-    epairs = np.sort(rp[inner], axis=1)
-    evs = rv[inner]
-    order = np.lexsort((epairs[:, 1], epairs[:, 0]))
+    verts, cells, va, vb, epairs, evs = (voronoi_kernels.assemble_compiled if compiled else _assemble_numpy)(
+        pairs, seg, points, centre, (x0, x1, y0, y1), n)
     return BoundedVoronoi(points=points, vertices=verts, tri_cell=cells, tri_a=va, tri_b=vb,
-                          edge_pairs=epairs[order], edge_vertices=evs[order], bounds=bounds)
+                          edge_pairs=epairs, edge_vertices=evs, bounds=bounds)
 
 
 def bounded_voronoi(points: ArrayLike,

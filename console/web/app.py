@@ -5,6 +5,11 @@ The loop hands each Frame to :class:`FrameViewer`, which only stores it
 Frame and refreshes the panel. So any number of browser tabs, or a slow one,
 never slows the loop: at worst frames are skipped in the drawing (viser then
 also coalesces per node, so a slow tab sees the newest state, not a backlog).
+
+From :data:`THIN_FROM` robots on the viewer also draws at most every :func:`draw_interval` s (0.25 s at
+5000 robots, 0.5 s at 10,000): a scene update of thousands of robots costs the drawing thread tens of ms,
+much of it holding the GIL the loop and the coverage workers also need, and the browser as long to apply
+(at 10,000 robots a page updated every Frame was too busy to take the emergency-stop click in time).
 """
 from __future__ import annotations
 
@@ -19,13 +24,32 @@ from swarmdeck.console.web.scene import ArenaScene
 from swarmdeck.core.ports import ProvidesImage
 from swarmdeck.core.service_thread import ServiceThread
 
+#: robots from which the console's viewer thins its scene draws (:func:`draw_interval`)
+THIN_FROM = 2000
+#: robots drawn per second of spacing between draws when thinned: interval = N / this (s)
+THIN_ROBOTS_PER_S = 20000.0
+
+
+def draw_interval(n_robots: int) -> float:
+    """Least time between two scene draws, s, for ``n_robots`` robots: 0 (every Frame the viewer gets)
+    below :data:`THIN_FROM`, else N / :data:`THIN_ROBOTS_PER_S` (0.25 s at 5000, 0.5 s at 10,000)."""
+    n = int(n_robots)
+    return 0.0 if n < THIN_FROM else n / THIN_ROBOTS_PER_S
+
 
 class FrameViewer:
-    """Draws the newest Frame on its own thread (latest-frame-wins)."""
+    """Draws the newest Frame on its own thread (latest-frame-wins), at most every ``min_interval`` s
+    (0: as often as Frames come; ``clock``: monotonic seconds, for tests)."""
 
     def __init__(self, scene: ArenaScene, gui: ConsoleGui | None = None,
-                 on_error: Callable[[str], None] | None = None) -> None:
+                 on_error: Callable[[str], None] | None = None, min_interval: float = 0.0,
+                 clock: Callable[[], float] = time.monotonic) -> None:
+        if not min_interval >= 0.0:
+            raise ValueError(f"min_interval must be >= 0 s, got {min_interval!r}")
         self.scene, self.gui = scene, gui
+        self.min_interval = float(min_interval)
+        self._clock = clock
+        self._last_draw: float | None = None
         self._pending: Frame | None = None
         self._lock = threading.Lock()
         self._wake = threading.Event()
@@ -50,12 +74,19 @@ class FrameViewer:
         self._service.start()
         return self
 
+    def until_next(self) -> float:
+        """Seconds the thread still waits before it may draw again (0: now)."""
+        if self._last_draw is None or self.min_interval <= 0.0:
+            return 0.0
+        return max(0.0, self._last_draw + self.min_interval - self._clock())
+
     def draw_pending(self) -> Frame | None:
         """Draw the newest pending frame now (the thread's body; callable directly in tests)."""
         with self._lock:
             frame, self._pending = self._pending, None
         if frame is None:
             return None
+        self._last_draw = self._clock()
         try:
             self.scene.draw(frame)
             if self.gui is not None:
@@ -74,6 +105,9 @@ class FrameViewer:
             if not self._wake.wait(0.5):
                 continue
             self._wake.clear()
+            wait = self.until_next()
+            if wait > 0.0 and self._service.wait(wait):  # thinned: the newest Frame at the end of the wait
+                return
             self.draw_pending()
 
     def stop(self) -> None:
@@ -97,7 +131,8 @@ class ConsoleApp:
         self.scene = ArenaScene(self.server, loop.config.bounds, robot_radius=loop.robot.radius,
                                 image_provider=loop.source.image if isinstance(loop.source, ProvidesImage) else None)
         self.gui = ConsoleGui(self.server, loop, self.scene)
-        self.viewer = FrameViewer(self.scene, self.gui, on_error=loop.post)
+        self.viewer = FrameViewer(self.scene, self.gui, on_error=loop.post,
+                                  min_interval=draw_interval(loop.config.n_robots))
         self._unsubscribe = loop.subscribe(self.viewer.offer)
         self.host = host
 
