@@ -2,9 +2,9 @@
 
 E swarms of N unicycles, flattened to E·N robots: robot ``e·N + i`` is robot i of swarm e. The
 rows are the unicycle filter's (:class:`swarmdeck.safety.UnicycleSafetyFilter` in
-``mode="distributed"``): pair rows (:func:`swarmdeck.safety.constraints.pair_rows`) from one k-d
-tree over all swarms lifted apart (:func:`swarmdeck.envs.neighbours.lifted_tree`, so no row ever
-joins two swarms), wall rows, and the four wheel-limit rows of each robot. Each robot's own QP is
+``mode="distributed"``): pair rows (:func:`swarmdeck.safety.constraints.pair_rows`) from one compiled
+sweep over all swarms (:class:`swarmdeck.envs.neighbours.SwarmPairs`; without numba one k-d tree over
+all swarms lifted apart, :func:`swarmdeck.envs.neighbours.lifted_tree`), so no row ever joins two swarms, wall rows, and the four wheel-limit rows of each robot. Each robot's own QP is
 solved by :func:`swarmdeck.safety.distributed.solve_small_qps` — the same code, on rows in the same
 order per robot — for all E·N robots in one vectorised call. The certificate, the recovery retry and
 the fail-stop are decided per swarm: a swarm whose answer does not certify stops (all its commands
@@ -18,10 +18,13 @@ from __future__ import annotations
 
 import dataclasses
 from dataclasses import dataclass
+from typing import cast
 
 import numpy as np
 from numpy.typing import NDArray
+from scipy.spatial import cKDTree
 
+from swarmdeck.core.compiled import AVAILABLE as _COMPILED
 from swarmdeck.core.kinematics import (
     UnicycleParams,
     lookahead_points,
@@ -29,7 +32,7 @@ from swarmdeck.core.kinematics import (
     unicycle_to_si,
     unicycle_to_wheels,
 )
-from swarmdeck.envs.neighbours import lifted_tree
+from swarmdeck.envs.neighbours import SwarmPairs, lifted_tree
 from swarmdeck.safety import BarrierConfig
 from swarmdeck.safety.constraints import LIMIT, Rows, pair_rows, wall_rows
 from swarmdeck.safety.distributed import reallocate_halves, solve_small_qps, split_rows
@@ -84,7 +87,9 @@ class BatchedDistributedBarrier:
         for e in np.unique(swarm_of[far]) if far.any() else ():
             fail[e], reasons[e] = True, f"points beyond ±{MAX_COORDINATE:g} m"
         with np.errstate(over="ignore", invalid="ignore"):
-            tree = lifted_tree(P.reshape(n_swarms, n, 2))
+            points = P.reshape(n_swarms, n, 2)
+            # pair_rows asks only query_pairs: the compiled sweep answers it (the same pairs) without a tree
+            tree = cast(cKDTree, SwarmPairs(points)) if _COMPILED else lifted_tree(points)
             parts = ([pair_rows(P, cfg, tree)] if cfg.pairs else []) + [wall_rows(P, cfg)]
             rows = Rows.concat(parts + [wheel_limit_rows(poses, params)])
         row_swarm = swarm_of[rows.i]

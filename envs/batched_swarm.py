@@ -7,7 +7,7 @@ swarm (:class:`~swarmdeck.envs.batched_barrier.BatchedDistributedBarrier`; a swa
 fails stops, the others carry on), the simulator's wheel limits and the exact unicycle step
 (:func:`swarmdeck.core.kinematics.unicycle_step`). So swarm e equals an ``Arena`` with the
 distributed barrier (``swarmdeck.envs.parallel_env(..., barrier="distributed")``) fed the same
-commands, bit for bit. No per-robot Python loop; neighbour queries by one k-d tree.
+commands, bit for bit. No per-robot Python loop; neighbour queries by one compiled sweep (:mod:`swarmdeck.envs.neighbours`).
 
 Units: poses (E, N, 3) ``[x, y, θ]`` m/rad; look-ahead velocities (E, N, 2) m/s; ``dt`` s.
 """
@@ -24,7 +24,7 @@ from swarmdeck.core.kinematics import GritsBotParams, limit_unicycle, lookahead_
 from swarmdeck.devices.pipeline import certify
 from swarmdeck.devices.validation import ValidationRules
 from swarmdeck.envs.batched_barrier import BatchedDistributedBarrier
-from swarmdeck.envs.neighbours import lifted_tree
+from swarmdeck.envs.neighbours import swarm_pairs
 
 FloatArray = NDArray[np.float64]
 BoolArray = NDArray[np.bool_]
@@ -115,7 +115,7 @@ class BatchedSwarm:
             return np.zeros(self.n_swarms, dtype=bool), boundary
         s = self.rules.collision_shift
         shifted = p[..., :2] + s * np.stack((np.cos(p[..., 2]), np.sin(p[..., 2])), axis=-1)
-        pairs = lifted_tree(shifted).query_pairs(self.rules.collision_distance, output_type="ndarray")
+        pairs = swarm_pairs(shifted, self.rules.collision_distance)
         collision = np.zeros(self.n_swarms, dtype=bool)
         collision[pairs[:, 0] // self.n_robots] = True
         return collision, boundary
