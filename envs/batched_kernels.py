@@ -20,7 +20,7 @@ import numpy as np
 
 from swarmdeck.core.compiled import jit
 
-__all__ = ["certify_off", "step_prepare", "step_move"]
+__all__ = ["certify_off", "step_prepare", "step_move", "task_observations"]
 
 SMALL_TURN = 1e-6  # rad: core.kinematics.unicycle_step's switch to the series of sin(a)/a, (1 − cos a)/a
 
@@ -92,3 +92,36 @@ def step_move(poses, c, s, v, a, small, a_safe, sin_a, cos_a, cube, dt, out, hea
         out[k, 0] = poses[k, 0] + d * (f * ck - g * sk)
         out[k, 1] = poses[k, 1] + d * (f * sk + g * ck)
         heading_out[k] = poses[k, 2] + ak
+
+
+@jit
+def task_observations(poses, cos_t, sin_t, points, idx, n, k, x0, x1, y0, y1, slots, out):  # pragma: no cover
+    """``envs.scenarios.task_observations`` (the layout of ``envs.observations``) into out (E·N, D) float32:
+    own [x, y, cos θ, sin θ], p_j − p_i of the neighbours idx (E·N, k') within the swarm (zeros beyond k'),
+    the four wall distances of the look-ahead point, then ``slots[i] − p_i`` when slots has rows (formation).
+    Each entry is the float64 expression rounded once to float32, as numpy's ``astype``."""
+    kk = idx.shape[1]
+    for r in range(poses.shape[0]):
+        base = (r // n) * n
+        px = points[r, 0]
+        py = points[r, 1]
+        out[r, 0] = poses[r, 0]
+        out[r, 1] = poses[r, 1]
+        out[r, 2] = cos_t[r]
+        out[r, 3] = sin_t[r]
+        for h in range(k):
+            if h < kk:
+                j = base + idx[r, h]
+                out[r, 4 + 2 * h] = points[j, 0] - px
+                out[r, 5 + 2 * h] = points[j, 1] - py
+            else:
+                out[r, 4 + 2 * h] = 0.0
+                out[r, 5 + 2 * h] = 0.0
+        c = 4 + 2 * k
+        out[r, c] = px - x0
+        out[r, c + 1] = x1 - px
+        out[r, c + 2] = py - y0
+        out[r, c + 3] = y1 - py
+        if slots.shape[0] > 0:
+            out[r, c + 4] = slots[r - base, 0] - px
+            out[r, c + 5] = slots[r - base, 1] - py

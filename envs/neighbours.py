@@ -144,6 +144,8 @@ def batched_min_distance(points: FloatArray, tree: cKDTree | None = None) -> Flo
 
 
 # ---------------------------------------------------------------------------- compiled sweeps (one call for E swarms)
+_BRUTE = 24  # robots per swarm up to which the k-nearest scan visits every other robot instead of sorting (faster)
+
 @jit
 def _sweep_axis(points, base, n):  # pragma: no cover - compiled
     """0 (x) or 1 (y): the axis along which swarm rows ``base … base + n`` spread more (the sweep's axis)."""
@@ -161,13 +163,15 @@ def _knn_sweep(points, n_swarms, n, k, dist, idx):  # pragma: no cover - compile
     writes dist (E·N, k) m and idx (E·N, k) within the swarm; ties by the lower index."""
     bd = np.empty(k)
     bi = np.empty(k, dtype=np.int64)
+    order = np.arange(n)
+    rank = np.arange(n)
     for e in range(n_swarms):
         base = e * n
         ax = _sweep_axis(points, base, n)
-        order = np.argsort(points[base:base + n, ax], kind="mergesort")
-        rank = np.empty(n, dtype=np.int64)
-        for r in range(n):
-            rank[order[r]] = r
+        if n > _BRUTE:  # few robots: scan them all (no sort), every one is within the "strip"
+            order = np.argsort(points[base:base + n, ax], kind="mergesort")
+            for r in range(n):
+                rank[order[r]] = r
         for i in range(n):
             xi = points[base + i, 0]
             yi = points[base + i, 1]
@@ -182,7 +186,7 @@ def _knn_sweep(points, n_swarms, n, k, dist, idx):  # pragma: no cover - compile
                     dy = yi - points[base + q, 1]
                     d2 = dx * dx + dy * dy
                     gap = dx if ax == 0 else dy
-                    if gap * gap > bd[k - 1]:
+                    if n > _BRUTE and gap * gap > bd[k - 1]:
                         break
                     if d2 < bd[k - 1] or (d2 == bd[k - 1] and q < bi[k - 1]):
                         p = k - 1
