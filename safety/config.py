@@ -133,6 +133,11 @@ class BarrierConfig:
     distributed_second_pass: the distributed filter solves a second pass in which each pair row's
         margin unused by one robot goes to the other (:func:`safety.distributed.reallocate_halves`;
         certified as the first, never more invasive for any robot, ≈ 2× the distributed cost).
+    distributed_consensus_passes: after the second pass, this many consensus passes: each pair row's
+        remaining slack at the last answer is shared equally between its two robots, and the robots given
+        more margin solve again (:func:`safety.distributed.consensus_shares`; certified as the first pass, no
+        robot's intervention grows; each pass costs about one more distributed solve). bench/RESULTS.md,
+        "distributed barrier: compiled, consensus passes", has cost/optimum and time per pass count.
     pairs: False builds no pair rows: the filter keeps the walls and the fixed obstacles
         (e.g. docked robots) only — the hard layer of a bypassed run (:mod:`safety.guard`).
     obstacles: line-segment obstacles on the floor (:class:`~swarmdeck.core.obstacles.Obstacles`, or
@@ -169,6 +174,7 @@ class BarrierConfig:
     active_set_max_solves: int | None = None
     warm_share: float | None = None
     distributed_second_pass: bool = True
+    distributed_consensus_passes: int = 0
     sensing_radius: float | None = None
     pairs: bool = True
     obstacles: Obstacles | None = None
@@ -203,7 +209,7 @@ class BarrierConfig:
         _real(self, "clarabel_tol", self.clarabel_tol, lower=0.0, strict=True, upper=1e-3)
         for name, lower in (("max_active_set_iterations", 1), ("active_set_max_rows", 0), ("warm_max_rows", 0),
                             ("warm_dual_sweeps", 0), ("warm_dual_iterations", 1), ("clarabel_max_iter", 1),
-                            ("distributed_above", 0)):
+                            ("distributed_above", 0), ("distributed_consensus_passes", 0)):
             value = getattr(self, name)
             if isinstance(value, bool) or not isinstance(value, numbers.Integral) or value < lower:
                 raise ValueError(f"BarrierConfig: {name} must be an integer >= {lower}, got {value!r}")

@@ -41,8 +41,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from swarmdeck.core.compiled import AVAILABLE as _COMPILED
+
 from .config import BarrierConfig
 from .constraints import LIMIT, Rows
+from .distributed_kernel import solve_small_qps_kernel
+from .small_kernels import small
 
 _SIGN_TOL = 1e-12  # multipliers ≥ −tol count as non-negative (m/s scale)
 _FEAS_TOL = 1e-10  # m/s: a candidate satisfies a row when aᵀu ≤ b + tol
@@ -175,7 +179,28 @@ def solve_small_qps(owner: np.ndarray, a: np.ndarray, b: np.ndarray, nominal: np
     violates row k — so the optimum is the cheapest candidate. Stage 1 tries
     the most violated line alone and accepts it when its KKT multipliers are
     ≥ 0 (then it is the optimum); stage 2 takes the cheapest over all hot lines.
+
+    With numba (``core.compiled``) and more than ``small_kernels.SMALL_ROBOTS`` robots (or numba already
+    imported) the compiled kernel :func:`safety.distributed_kernel.solve_small_qps_kernel` answers instead:
+    the same answers bit for bit, without the GIL.
     """
+    n = nominal.shape[0]
+    if _COMPILED and not small(n):
+        vm = np.inf if max_speed is None else float(max_speed)
+        use_todo = todo is not None
+        u_c, solved_c, active_c, disc_c, _ = solve_small_qps_kernel(
+            np.ascontiguousarray(owner, dtype=np.int64), np.ascontiguousarray(a, dtype=float),
+            np.ascontiguousarray(b, dtype=float), np.ascontiguousarray(nominal, dtype=float), max_speed is not None,
+            vm, np.inf if reach is None else float(reach),
+            np.ascontiguousarray(todo, dtype=np.bool_) if use_todo else np.zeros(0, dtype=np.bool_), use_todo)
+        return SmallQPResult(u_c, solved_c, active_c, disc_c)
+    return _solve_small_qps_numpy(owner, a, b, nominal, max_speed, reach, todo)
+
+
+def _solve_small_qps_numpy(owner: np.ndarray, a: np.ndarray, b: np.ndarray, nominal: np.ndarray,
+                           max_speed: float | None, reach: float | None = None,
+                           todo: np.ndarray | None = None) -> SmallQPResult:
+    """:func:`solve_small_qps` in numpy, vectorised across robots (padded arrays): the path without numba."""
     n = nominal.shape[0]
     m = b.shape[0]
     uh = nominal
@@ -208,7 +233,8 @@ def solve_small_qps(owner: np.ndarray, a: np.ndarray, b: np.ndarray, nominal: np
     tau = np.ones(n) if not disc else np.minimum(1.0, vmax / np.maximum(speed, 1e-300))
     np.minimum.at(tau, owner, tau_row)
     radius = np.where(tau >= 0, (1.0 - np.clip(tau, 0.0, 1.0)) * speed, np.inf)
-    idx = np.flatnonzero(bad[owner] & (norm > 0) & (b < lim * norm) & (b - lhs <= radius[owner] * norm))
+    with np.errstate(invalid="ignore"):  # inf·0 for a zero row, which (norm > 0) leaves out
+        idx = np.flatnonzero(bad[owner] & (norm > 0) & (b < lim * norm) & (b - lhs <= radius[owner] * norm))
 
     # ---- the rows of the robots to solve, normalised, padded to (S, K)
     robots = np.flatnonzero(bad)
@@ -335,6 +361,33 @@ def reallocate_halves(split: SplitRows, u: np.ndarray, n_pairs: int) -> tuple[np
     return b, loosened
 
 
+def consensus_shares(split: SplitRows, b: np.ndarray, u: np.ndarray, n_pairs: int) -> tuple[np.ndarray, np.ndarray]:
+    """A consensus pass's split: each pair row's margin shared at the last answer, its slack halved.
+
+    split: :func:`split_rows`'s split (pair halves first, as :func:`reallocate_halves`); b (M,) the last pass's
+    bounds on it; u (N, 2) m/s that pass's answer. Robot i's share of pair row k becomes
+    ``c_iᵀu_i + s_k/2`` and robot j's ``c_jᵀu_j + s_k/2``, s_k = b_k − c_iᵀu_i − c_jᵀu_j ≥ 0 the slack
+    the answer leaves in the row (single-robot rows keep their bound). The shares add up to the row, so the
+    pass is certified as the first; every robot's last answer satisfies its new shares, so no robot's
+    intervention grows; and were u the joint optimum, every robot's own QP would return it. Returns (b (M,)
+    new bounds, grown (N,) robots with a share larger than before — the only ones to re-solve: the others'
+    answers stay optimal on a feasible set that shrank around them).
+    """
+    out = b.copy()
+    grown = np.zeros(u.shape[0], dtype=bool)
+    if n_pairs == 0:
+        return out, grown
+    p2 = 2 * n_pairs
+    own = split.owner[:p2]
+    use = np.einsum("kd,kd->k", split.a[:p2], u[own])
+    total = split.b[:n_pairs] + split.b[n_pairs:p2]  # the row's bound (the halves of split_rows add up exactly)
+    ci, cj = use[:n_pairs], use[n_pairs:]
+    bi = ci + 0.5 * (total - ci - cj)
+    out[:n_pairs], out[n_pairs:p2] = bi, total - bi
+    grown[own[out[:p2] > b[:p2]]] = True
+    return out, grown
+
+
 @dataclass(frozen=True)
 class DistributedResult:
     """u (N, 2); ok; reason; active (m,) centralised rows with an active half (or whole row);
@@ -369,13 +422,28 @@ def filter_distributed(rows: Rows, nominal: np.ndarray, max_speed: float | None,
     n_fallback = 0
     if cfg.distributed_second_pass and not recovering and solved.all():
         # a second pass on a better split of each pair's margin (reallocate_halves): less invasive
-        b2, again = reallocate_halves(split, u, int(np.sum(rows.j >= 0)))
+        n_pairs = int(np.sum(rows.j >= 0))
+        b2, again = reallocate_halves(split, u, n_pairs)
+        res2 = None
         if again.any():
             res2 = solve_small_qps(split.owner, split.a, b2, nominal, max_speed, reach, todo=again)
             if res2.solved.all():
                 u = np.where(again[:, None], res2.u, u)
                 act = np.where(again[split.owner], res2.active, act)
                 on_disc = np.where(again, res2.on_disc, on_disc)
+        b_last = b2 if res2 is None or res2.solved.all() else split.b
+        for _ in range(cfg.distributed_consensus_passes):
+            # consensus passes: every pair's remaining slack shared equally at the last answer
+            b3, grown = consensus_shares(split, b_last, u, n_pairs)
+            if not grown.any():
+                break
+            res3 = solve_small_qps(split.owner, split.a, b3, nominal, max_speed, reach, todo=grown)
+            if not res3.solved.all():  # rounding on a degenerate robot: the last certified answer stands
+                break
+            u = np.where(grown[:, None], res3.u, u)
+            act = np.where(grown[split.owner], res3.active, act)
+            on_disc = np.where(grown, res3.on_disc, on_disc)
+            b_last = b3
     if recovering and not solved.all():
         # conflicting separation targets: those robots hold "no further approach" instead
         retry = ~solved
@@ -406,5 +474,5 @@ def filter_distributed(rows: Rows, nominal: np.ndarray, max_speed: float | None,
     return DistributedResult(u, True, "optimal per robot", active, int(on_disc.sum()), n_fallback)
 
 
-__all__ = ["SplitRows", "split_rows", "reallocate_halves", "SmallQPResult", "solve_small_qps", "DistributedResult",
+__all__ = ["SplitRows", "split_rows", "reallocate_halves", "consensus_shares", "SmallQPResult", "solve_small_qps", "DistributedResult",
            "filter_distributed"]
