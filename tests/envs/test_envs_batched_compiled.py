@@ -60,3 +60,34 @@ def test_poses_are_read_only_and_points_are_fresh_arrays() -> None:
     p = sim.points()
     p[:] = 5.0  # the caller's copy
     assert not np.array_equal(sim.points(), p)
+
+
+def _pair_keys(pairs: np.ndarray, m: int) -> np.ndarray:
+    return np.sort(pairs[:, 0].astype(np.int64) * m + pairs[:, 1])
+
+
+@pytest.mark.skipif(not AVAILABLE, reason="numba is a dependency; without it the queries are the k-d tree itself")
+def test_compiled_neighbour_queries_equal_the_lifted_k_d_tree() -> None:
+    from swarmdeck.envs.neighbours import batched_query, lifted_tree, swarm_pairs
+
+    rng = np.random.default_rng(12)
+    for e, n, k, spread in ((64, 10, 3, 1.5), (3, 60, 5, 2.0), (2, 400, 4, 6.0), (4, 2, 1, 1.0)):
+        pts = rng.uniform(-spread, spread, (e, n, 2))
+        if n == 60:
+            pts[1, :, 0] = 0.25  # a column of robots: the sweep's worst case, still exact
+            pts[2, 5] = pts[2, 6]  # two coincident robots
+        tree = lifted_tree(pts)
+        d_tree, i_tree = batched_query(pts, k, tree)
+        d_fast, i_fast = batched_query(pts, k)
+        assert np.array_equal(d_tree, d_fast), (e, n)
+        if n == 60:  # which of two coincident robots comes first (equal distances) is the tree's business
+            i_tree, i_fast = np.where(i_tree == 6, 5, i_tree), np.where(i_fast == 6, 5, i_fast)
+            i_tree[2, [5, 6]], i_fast[2, [5, 6]] = 0, 0
+        assert np.array_equal(i_tree, i_fast), (e, n)
+        for radius in (0.17, 0.5):
+            want = np.asarray(tree.query_pairs(radius, output_type="ndarray"), dtype=np.int64)
+            got = swarm_pairs(pts, radius)
+            assert np.all(got[:, 0] < got[:, 1]) and np.all(got[:, 0] // n == got[:, 1] // n)
+            assert np.array_equal(_pair_keys(want, e * n), _pair_keys(got, e * n)), (e, n, radius)
+    with pytest.raises(ValueError, match="finite"):
+        batched_query(np.full((2, 3, 2), np.nan), 1)
