@@ -72,14 +72,20 @@ class BatchedDistributedBarrier:
         base = BarrierConfig() if config is None else config
         self.config = dataclasses.replace(base, max_speed=max_point_speed(self.params), mode="distributed")
 
-    def filter(self, poses: FloatArray, v: FloatArray, w: FloatArray, n_swarms: int) -> BatchedFilterResult:
-        """Safe ``(v, ω)`` for poses ``(E·N, 3)`` and nominal ``v, w`` ``(E·N,)`` (finite; see the module docstring)."""
+    def filter(self, poses: FloatArray, v: FloatArray, w: FloatArray, n_swarms: int, *,
+               trig: tuple[FloatArray, FloatArray] | None = None, points: FloatArray | None = None
+               ) -> BatchedFilterResult:
+        """Safe ``(v, ω)`` for poses ``(E·N, 3)`` and nominal ``v, w`` ``(E·N,)`` (finite; see the module docstring).
+
+        ``trig``: (cos θ, sin θ) ``(E·N,)`` of these poses and ``points`` their look-ahead points ``(E·N, 2)`` m, when
+        the caller has them (:class:`~swarmdeck.envs.batched_swarm.BatchedSwarm` keeps them per pose update): the
+        same numbers, not computed again."""
         cfg, params = self.config, self.params
         total = poses.shape[0]
         n = total // n_swarms
         ell = params.lookahead
-        P = lookahead_points(poses, ell)
-        U = unicycle_to_si(poses, v, w, ell)
+        P = lookahead_points(poses, ell) if points is None else points
+        U = unicycle_to_si(poses, v, w, ell) if trig is None else _to_si(trig, v, w, ell)
         swarm_of = np.repeat(np.arange(n_swarms), n)
         fail = np.zeros(n_swarms, dtype=bool)
         reasons = [""] * n_swarms
@@ -137,7 +143,7 @@ class BatchedDistributedBarrier:
             if not fail[e]:
                 fail[e], reasons[e] = True, "distributed: a row is violated after the split"
 
-        vs, ws = si_to_unicycle(poses, u, ell)
+        vs, ws = si_to_unicycle(poses, u, ell) if trig is None else _to_unicycle(trig, u, ell)
         wr, wl = unicycle_to_wheels(vs, ws, params)
         peak = np.maximum(np.abs(wr), np.abs(wl))
         scale = np.minimum(1.0, params.max_wheel_speed / np.maximum(peak, 1e-300))
@@ -149,3 +155,15 @@ class BatchedDistributedBarrier:
         inter = np.where(failed, np.linalg.norm(U, axis=1), np.sqrt(np.einsum("kd,kd->k", d, d)))  # as fail_stop, _diag
         return BatchedFilterResult(np.where(failed, 0.0, v_out), np.where(failed, 0.0, w_out), ~fail, inter,
                                    tuple(reasons))
+
+
+def _to_si(trig: tuple[FloatArray, FloatArray], v: FloatArray, w: FloatArray, ell: float) -> FloatArray:
+    """:func:`~swarmdeck.core.kinematics.unicycle_to_si` from its cos θ, sin θ (the same expression, the same bits)."""
+    c, s = trig
+    return np.column_stack((c * v - ell * s * w, s * v + ell * c * w))
+
+
+def _to_unicycle(trig: tuple[FloatArray, FloatArray], u: FloatArray, ell: float) -> tuple[FloatArray, FloatArray]:
+    """:func:`~swarmdeck.core.kinematics.si_to_unicycle` from its cos θ, sin θ (the same expression, the same bits)."""
+    c, s = trig
+    return c * u[:, 0] + s * u[:, 1], (-s * u[:, 0] + c * u[:, 1]) / ell

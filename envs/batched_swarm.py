@@ -89,16 +89,20 @@ class BatchedSwarm:
 
     def points(self) -> FloatArray:
         """(E, N, 2) look-ahead points, m (a new array each call)."""
+        return self._points_flat().reshape(self.n_swarms, self.n_robots, 2).copy()
+
+    def _points_flat(self) -> FloatArray:
+        """(E·N, 2) look-ahead points, m: the cached read-only array."""
         c, s = self._trig()
         assert self._cache is not None
         pts = self._cache[3]
         if pts is None:  # lookahead_points with the cached cos θ, sin θ: x + ℓ cos θ, y + ℓ sin θ
             flat = self._poses.reshape(-1, 3)
             ell = self.params.lookahead
-            pts = np.column_stack((flat[:, 0] + ell * c, flat[:, 1] + ell * s)).reshape(self.n_swarms, self.n_robots, 2)
+            pts = np.column_stack((flat[:, 0] + ell * c, flat[:, 1] + ell * s))
             pts.setflags(write=False)
             self._cache = (self._cache[0], c, s, pts)
-        return pts.copy()
+        return pts
 
     def set_poses(self, poses: FloatArray, swarms: NDArray[np.intp] | None = None) -> None:
         """Place the robots: poses (E, N, 3), or (len(swarms), N, 3) for the given swarms only."""
@@ -130,7 +134,7 @@ class BatchedSwarm:
             ok = np.ones(e, dtype=bool)
             change = np.zeros(m)
         else:
-            res = self.barrier.filter(flat, v, w, e)
+            res = self.barrier.filter(flat, v, w, e, trig=(c, s), points=self._points_flat())
             v, w, ok, change = res.v, res.w, res.ok, res.intervention
         # the simulator's own wheel limits (limit_unicycle) are a no-op after the pipeline's: skipped
         command_change, a, small, a_safe = np.empty(m), np.empty(m), np.empty(m, dtype=bool), np.empty(m)
