@@ -24,7 +24,6 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.spatial import cKDTree
 
-from swarmdeck.core.compiled import AVAILABLE as _COMPILED
 from swarmdeck.core.kinematics import (
     UnicycleParams,
     lookahead_points,
@@ -32,6 +31,7 @@ from swarmdeck.core.kinematics import (
     unicycle_to_si,
     unicycle_to_wheels,
 )
+from swarmdeck.envs.batched_kernels import use_compiled
 from swarmdeck.envs.neighbours import SwarmPairs, lifted_tree
 from swarmdeck.safety import BarrierConfig
 from swarmdeck.safety.constraints import LIMIT, Rows, pair_rows, wall_rows
@@ -95,7 +95,7 @@ class BatchedDistributedBarrier:
         with np.errstate(over="ignore", invalid="ignore"):
             points = P.reshape(n_swarms, n, 2)
             # pair_rows asks only query_pairs: the compiled sweep answers it (the same pairs) without a tree
-            tree = cast(cKDTree, SwarmPairs(points)) if _COMPILED else lifted_tree(points)
+            tree = cast(cKDTree, SwarmPairs(points)) if use_compiled(total) else lifted_tree(points)
             parts = ([pair_rows(P, cfg, tree)] if cfg.pairs else []) + [wall_rows(P, cfg)]
             rows = Rows.concat(parts + [wheel_limit_rows(poses, params)])
         row_swarm = swarm_of[rows.i]

@@ -7,7 +7,8 @@ the same floating-point operations, in the same order, as the numpy functions th
 :func:`~swarmdeck.core.kinematics.unicycle_to_si`, :func:`~swarmdeck.core.kinematics.unicycle_step` and the
 pipeline's ``certify`` without a filter), one robot at a time: products and sums of two terms, no fused
 multiply-add (numba compiles without fast-math), so the results are the same bits
-(tests/envs/test_envs_batched_equal.py: swarm e equals an ``Arena`` bit for bit). Every transcendental function
+(tests/envs/test_envs_batched_equal.py: swarm e equals an ``Arena`` bit for bit). Small calls without numba
+imported take the numpy paths (:func:`use_compiled`). Every transcendental function
 (cos, sin, arctan2, the power a³) stays with numpy, computed on the same array layouts as in
 ``core.kinematics``, so its bits are numpy's on every machine. Without numba the numpy functions run instead
 (``batched_swarm``).
@@ -18,9 +19,20 @@ from __future__ import annotations
 
 import numpy as np
 
-from swarmdeck.core.compiled import jit
+from swarmdeck.core.compiled import AVAILABLE, imported, jit
 
-__all__ = ["certify_off", "step_prepare", "step_move", "task_observations"]
+__all__ = ["COMPILED_FROM", "certify_off", "step_prepare", "step_move", "task_observations", "use_compiled"]
+
+#: robots (E·N in one call) from which the batched environment's compiled paths run when numba is not imported yet:
+#: a deployed policy's observations (:mod:`swarmdeck.envs.deploy`: one swarm of a few robots, in the sandbox) never
+#: import numba or compile a kernel there (seconds of CPU on the first tick, over the script's per-tick budget)
+COMPILED_FROM = 64
+
+
+def use_compiled(robots: int) -> bool:
+    """Whether a call on ``robots`` robots takes the compiled path: numba installed, and the call large enough or
+    numba already imported (then the kernels are the faster way to the same bits)."""
+    return AVAILABLE and (robots >= COMPILED_FROM or imported())
 
 SMALL_TURN = 1e-6  # rad: core.kinematics.unicycle_step's switch to the series of sin(a)/a, (1 − cos a)/a
 

@@ -19,7 +19,6 @@ import numpy as np
 from numpy.typing import NDArray
 
 from swarmdeck.core.bounds import DEFAULT_BOUNDS, Bounds
-from swarmdeck.core.compiled import AVAILABLE as _COMPILED
 from swarmdeck.core.constants import CONTROL_PERIOD
 from swarmdeck.core.kinematics import GritsBotParams, limit_unicycle, unicycle_step, unicycle_to_si, wrap_angle
 from swarmdeck.devices.pipeline import certify
@@ -119,7 +118,7 @@ class BatchedSwarm:
         all False)."""
         e, n = self.n_swarms, self.n_robots
         nom = np.asarray(nominal, dtype=float).reshape(e * n, 2)
-        if not _COMPILED:
+        if not kern.use_compiled(e * n):
             return self._tick_numpy(nom, check)
         flat = self._poses.reshape(e * n, 3)
         c, s = self._trig()

@@ -9,7 +9,8 @@ pairs robots of different swarms. Robots of the same swarm differ by exactly 0 i
 coordinate, so every distance (and every pair within a radius) is bit for bit the one a tree over
 that swarm alone computes. :func:`lifted_tree` builds it.
 
-With numba (:mod:`swarmdeck.core.compiled`) the batched queries need no tree: one compiled call sweeps every swarm
+With numba (:mod:`swarmdeck.core.compiled`; calls on fewer than ``batched_kernels.COMPILED_FROM`` robots only once
+numba is imported) the batched queries need no tree: one compiled call sweeps every swarm
 along its wider axis (sorted once, scanning outwards until the gap alone exceeds the k-th distance or the radius),
 O(N log N + N·s) per swarm for s robots in the strip, no N×N array, and the same answers bit for bit as the tree
 (squared distances dx·dx + dy·dy, the square root at the end, as ``cKDTree``; ties by the lower index, as a stable
@@ -23,7 +24,8 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.spatial import cKDTree
 
-from swarmdeck.core.compiled import AVAILABLE, jit
+from swarmdeck.core.compiled import jit
+from swarmdeck.envs.batched_kernels import use_compiled
 
 FloatArray = NDArray[np.float64]
 IndexArray = NDArray[np.intp]
@@ -73,7 +75,7 @@ def batched_query(points: FloatArray, k: int, tree: cKDTree | None = None) -> tu
     e, n, _ = points.shape
     if k <= 0 or n < 2:
         return np.zeros((e, n, 0)), np.zeros((e, n, 0), dtype=np.intp)
-    if tree is None and AVAILABLE:
+    if tree is None and use_compiled(e * n):
         flat = _finite_flat(points, "batched_query")
         dist = np.empty((e * n, k))
         idx = np.empty((e * n, k), dtype=np.intp)
@@ -104,7 +106,7 @@ def swarm_pairs(points: FloatArray, radius: float) -> IndexArray:
     e, n, _ = points.shape
     if n < 2:
         return np.zeros((0, 2), dtype=np.intp)
-    if not AVAILABLE:
+    if not use_compiled(e * n):
         return np.asarray(lifted_tree(points).query_pairs(radius, output_type="ndarray"), dtype=np.intp)
     flat = _finite_flat(points, "swarm_pairs")
     r2 = float(radius) * float(radius)

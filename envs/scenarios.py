@@ -19,7 +19,6 @@ import numpy as np
 from numpy.typing import NDArray
 
 from swarmdeck.core.bounds import Bounds
-from swarmdeck.core.compiled import AVAILABLE as _COMPILED
 from swarmdeck.envs import batched_kernels as kern
 from swarmdeck.envs.observations import observation_bounds
 from swarmdeck.envs.scenario import Actions, Scenario, State, View
@@ -37,7 +36,7 @@ def task_observations(view: View, k: int, slots: FloatArray | None = None) -> ND
     x0, x1, y0, y1 = view.bounds
     kk = min(k, n - 1)
     cos_t, sin_t = np.cos(poses[..., 2:3]), np.sin(poses[..., 2:3])
-    if _COMPILED:
+    if kern.use_compiled(e * n):
         idx = view.nearest_points(kk)[1] if kk > 0 else np.zeros((e, n, 0), dtype=np.intp)
         out = np.empty((e * n, 10 + 2 * k if slots is not None else 8 + 2 * k), dtype=np.float32)
         kern.task_observations(np.ascontiguousarray(poses).reshape(e * n, 3), cos_t.reshape(e * n),

@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 
 from swarmdeck.core.compiled import AVAILABLE
+from swarmdeck.envs.batched_kernels import COMPILED_FROM
 from swarmdeck.envs.batched_swarm import BatchedSwarm
 
 
@@ -32,7 +33,8 @@ def _scene(rng: np.random.Generator, e: int, n: int) -> tuple[np.ndarray, np.nda
 @pytest.mark.parametrize("safety", [False, True])
 def test_compiled_tick_equals_the_numpy_pipeline_bit_for_bit(safety: bool) -> None:
     rng = np.random.default_rng(7)
-    e, n = 3, 12
+    e, n = 6, 12  # E·N >= COMPILED_FROM: the compiled path even before numba is imported
+    assert e * n >= COMPILED_FROM
     fast = BatchedSwarm(e, n, safety=safety)
     slow = BatchedSwarm(e, n, safety=safety)
     poses, u = _scene(rng, e, n)
@@ -91,3 +93,28 @@ def test_compiled_neighbour_queries_equal_the_lifted_k_d_tree() -> None:
             assert np.array_equal(_pair_keys(want, e * n), _pair_keys(got, e * n)), (e, n, radius)
     with pytest.raises(ValueError, match="finite"):
         batched_query(np.full((2, 3, 2), np.nan), 1)
+
+
+def test_a_deployed_policys_small_observations_never_import_numba() -> None:
+    """drive() observes one swarm of a few robots every tick inside the sandbox: compiling a kernel there (seconds of
+    CPU on the first tick) missed the script's per-tick budget (tests/envs/test_envs_train_submit.py failed so)."""
+    import subprocess
+    import sys
+
+    code = """
+import sys
+import numpy as np
+from swarmdeck.envs.scenario import View
+from swarmdeck.envs.scenarios import Rendezvous
+from swarmdeck.envs.batched_swarm import BatchedSwarm
+sc = Rendezvous(n_agents=4)
+sim = BatchedSwarm(1, 4, safety=False)
+sim.set_poses(np.array([[[0.0, 0.0, 0.0], [0.5, 0.0, 1.0], [0.0, 0.5, 2.0], [-0.5, 0.0, 3.0]]]))
+sim.tick(np.full((1, 4, 2), 0.05))
+view = View(sim.poses, sim.points(), {}, np.zeros((1, 4, 2)), np.zeros(1, dtype=np.int64), sc.bounds)
+assert sc.observe(view).shape == (1, 4, 14)
+print("numba" in sys.modules)
+"""
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
+    assert out.returncode == 0, out.stderr[-2000:]
+    assert out.stdout.strip() == "False"
