@@ -61,6 +61,7 @@ class BatchedEnv:
             x0, x1, y0, y1 = sc.actions.box or sc.bounds
             self.action_low = np.array([x0, y0], dtype=np.float32)
             self.action_high = np.array([x1, y1], dtype=np.float32)
+        self._act_lo, self._act_hi = self.action_low.astype(float), self.action_high.astype(float)
         self.obs_low, self.obs_high = (np.asarray(b, dtype=np.float32) for b in sc.observation_bounds())
         self._rngs: list[np.random.Generator] = []
         self.state: State = {}
@@ -79,7 +80,7 @@ class BatchedEnv:
         seeds = np.random.SeedSequence(None).spawn(self.n_envs) if seed is None else [seed + e for e in range(self.n_envs)]
         self._rngs = [np.random.default_rng(s) for s in seeds]
         self._reset_swarms(np.arange(self.n_envs))
-        self._done[:] = False
+        self._done = np.zeros(self.n_envs, dtype=bool)  # a new array: earlier infos' "reset" keep theirs
         info = {"reset": np.ones(self.n_envs, dtype=bool)}
         return self._observe(), info
 
@@ -130,10 +131,10 @@ class BatchedEnv:
         a = np.asarray(actions, dtype=float)
         if a.shape != (e, n, 2):
             raise ValueError(f"actions must have shape ({e}, {n}, 2) ({kind}), got shape {a.shape}")
-        if not np.all(np.isfinite(a)):
+        if not np.isfinite(a).all():
             bad = np.argwhere(~np.all(np.isfinite(a), axis=2))[:5].tolist()
             raise ValueError(f"actions contain NaN or inf at (swarm, agent) {bad}")
-        return np.clip(a, self.action_low, self.action_high)
+        return np.minimum(np.maximum(a, self._act_lo), self._act_hi)  # np.clip (finite), without its wrappers
 
     def _goals(self, actions: np.ndarray) -> FloatArray | None:
         act = self.scenario.actions
@@ -151,56 +152,79 @@ class BatchedEnv:
             raise RuntimeError("call reset() before step()")
         act = self._check_actions(actions)
         e, n = self.n_envs, self.n_agents
-        restart = np.flatnonzero(self._done)
-        if restart.size:
-            self._reset_swarms(restart)
-        fresh = self._done.copy()
+        fresh = self._done  # swarms whose episode ended: reset now, they do not move this step
+        any_fresh = bool(fresh.any())
+        if any_fresh:
+            self._reset_swarms(np.flatnonzero(fresh))
         sc = self.scenario
         goals = self._goals(act)
+        check = sc.violation_penalty is not None
         live = ~fresh
-        message = np.full(e, "", dtype=object)
+        everyone = not any_fresh  # every swarm moves (the common case: no masking)
+        code = np.zeros(e, dtype=np.int8)  # violations: 1 collision, 2 boundary, 3 both (_VIOLATIONS)
         filter_change = np.zeros((e, n))
         command_change = np.zeros((e, n))
         filter_ok = np.ones(e, dtype=bool)
         for _ in range(sc.actions.hold):
-            if not live.any():
+            if not everyone and not live.any():
                 break
             nominal = act if goals is None else si_position_controller(
                 self.sim.points().reshape(-1, 2), goals.reshape(-1, 2),
                 speed_limit=self.sim.params.max_speed).reshape(e, n, 2)
-            everyone = bool(live.all())
             before = self.sim.poses
-            res = self.sim.tick(nominal if everyone else np.where(live[:, None, None], nominal, 0.0),
-                                check=sc.violation_penalty is not None)
-            if not everyone:  # swarms that are over (or start afresh) stay where they are
+            res = self.sim.tick(nominal if everyone else np.where(live[:, None, None], nominal, 0.0), check=check)
+            if everyone:
+                filter_change += res.filter_change
+                command_change += res.command_change
+                filter_ok &= res.filter_ok
+            else:  # swarms that are over (or start afresh) stay where they are
                 self.sim.set_poses(np.where(live[:, None, None], self.sim.poses, before))
-            filter_change += np.where(live[:, None], res.filter_change, 0.0)
-            command_change += np.where(live[:, None], res.command_change, 0.0)
-            filter_ok &= res.filter_ok | ~live
-            if sc.violation_penalty is not None:
+                filter_change += np.where(live[:, None], res.filter_change, 0.0)
+                command_change += np.where(live[:, None], res.command_change, 0.0)
+                filter_ok &= res.filter_ok | ~live
+            if check:
                 hit = live & (res.collision | res.boundary)
-                message[hit] = np.where(res.collision[hit] & res.boundary[hit], "collision_boundary",
-                                        np.where(res.collision[hit], "collision", "boundary"))
-                live = live & ~hit
-        self.steps = np.where(fresh, 0, self.steps + 1)
-        last = self._last_actions.copy()
-        last[~fresh] = act[~fresh]
+                if hit.any():
+                    code[hit] = res.collision[hit].astype(np.int8) + 2 * res.boundary[hit].astype(np.int8)
+                    live = live & ~hit
+                    everyone = False
+        steps = self.steps + 1
+        if any_fresh:
+            steps[fresh] = 0
+            last = self._last_actions.copy()
+            last[~fresh] = act[~fresh]
+        else:
+            last = act  # a new array (_check_actions)
+        self.steps = steps
         self._last_actions = last
         view = self._view()
         rewards, state = sc.reward(view)
-        violated = message != ""
-        self.state = {k: np.where(_rows(violated, v), self.state[k], v) for k, v in state.items()} if state else state
-        rewards = np.where(violated[:, None], sc.violation_penalty or 0.0, rewards)
-        rewards = np.where(fresh[:, None], 0.0, rewards)
+        violated = code != 0
+        any_violated = bool(violated.any())
+        if state and any_violated:  # a violating swarm keeps its state
+            self.state = {k: np.where(_rows(violated, v), self.state[k], v) for k, v in state.items()}
+        else:
+            self.state = dict(state) if state else state
+        rewards = np.array(rewards, dtype=float)
+        if any_violated:
+            rewards[violated] = sc.violation_penalty or 0.0
+        if any_fresh:
+            rewards[fresh] = 0.0
         view = view.with_state(self.state)
-        terminated = (violated | np.asarray(sc.terminated(view), dtype=bool)) & ~fresh
-        truncated = (self.steps >= sc.max_steps) & ~terminated & ~fresh
+        terminated = violated | np.asarray(sc.terminated(view), dtype=bool)
+        truncated = (steps >= sc.max_steps) & ~terminated
+        if any_fresh:
+            terminated &= ~fresh
+            truncated &= ~fresh
         self._done = terminated | truncated
         obs = self._observe(view)  # before the minimum distance: it reuses the observation's neighbour query
         info = {"filter_change": filter_change, "command_change": command_change, "filter_ok": filter_ok,
-                "violation": message.astype(str), "min_distance": _min_distance(view),
-                "reset": fresh}
+                "violation": _VIOLATIONS[code], "min_distance": _min_distance(view), "reset": fresh}
         return obs, rewards, terminated, truncated, info
+
+
+_VIOLATIONS = np.array(["", "collision", "boundary", "collision_boundary"])  # info["violation"] by code
+_VIOLATIONS.setflags(write=False)
 
 
 def _min_distance(view: View) -> FloatArray:

@@ -2,9 +2,9 @@
 
 E swarms of N unicycles, flattened to E·N robots: robot ``e·N + i`` is robot i of swarm e. The
 rows are the unicycle filter's (:class:`swarmdeck.safety.UnicycleSafetyFilter` in
-``mode="distributed"``): pair rows (:func:`swarmdeck.safety.constraints.pair_rows`) from one k-d
-tree over all swarms lifted apart (:func:`swarmdeck.envs.neighbours.lifted_tree`, so no row ever
-joins two swarms), wall rows, and the four wheel-limit rows of each robot. Each robot's own QP is
+``mode="distributed"``): pair rows (:func:`swarmdeck.safety.constraints.pair_rows`) from one compiled
+sweep over all swarms (:class:`swarmdeck.envs.neighbours.SwarmPairs`; without numba one k-d tree over
+all swarms lifted apart, :func:`swarmdeck.envs.neighbours.lifted_tree`), so no row ever joins two swarms, wall rows, and the four wheel-limit rows of each robot. Each robot's own QP is
 solved by :func:`swarmdeck.safety.distributed.solve_small_qps` — the same code, on rows in the same
 order per robot — for all E·N robots in one vectorised call. The certificate, the recovery retry and
 the fail-stop are decided per swarm: a swarm whose answer does not certify stops (all its commands
@@ -18,9 +18,11 @@ from __future__ import annotations
 
 import dataclasses
 from dataclasses import dataclass
+from typing import cast
 
 import numpy as np
 from numpy.typing import NDArray
+from scipy.spatial import cKDTree
 
 from swarmdeck.core.kinematics import (
     UnicycleParams,
@@ -29,7 +31,8 @@ from swarmdeck.core.kinematics import (
     unicycle_to_si,
     unicycle_to_wheels,
 )
-from swarmdeck.envs.neighbours import lifted_tree
+from swarmdeck.envs.batched_kernels import use_compiled
+from swarmdeck.envs.neighbours import SwarmPairs, lifted_tree
 from swarmdeck.safety import BarrierConfig
 from swarmdeck.safety.constraints import LIMIT, Rows, pair_rows, wall_rows
 from swarmdeck.safety.distributed import reallocate_halves, solve_small_qps, split_rows
@@ -69,14 +72,20 @@ class BatchedDistributedBarrier:
         base = BarrierConfig() if config is None else config
         self.config = dataclasses.replace(base, max_speed=max_point_speed(self.params), mode="distributed")
 
-    def filter(self, poses: FloatArray, v: FloatArray, w: FloatArray, n_swarms: int) -> BatchedFilterResult:
-        """Safe ``(v, ω)`` for poses ``(E·N, 3)`` and nominal ``v, w`` ``(E·N,)`` (finite; see the module docstring)."""
+    def filter(self, poses: FloatArray, v: FloatArray, w: FloatArray, n_swarms: int, *,
+               trig: tuple[FloatArray, FloatArray] | None = None, points: FloatArray | None = None
+               ) -> BatchedFilterResult:
+        """Safe ``(v, ω)`` for poses ``(E·N, 3)`` and nominal ``v, w`` ``(E·N,)`` (finite; see the module docstring).
+
+        ``trig``: (cos θ, sin θ) ``(E·N,)`` of these poses and ``points`` their look-ahead points ``(E·N, 2)`` m, when
+        the caller has them (:class:`~swarmdeck.envs.batched_swarm.BatchedSwarm` keeps them per pose update): the
+        same numbers, not computed again."""
         cfg, params = self.config, self.params
         total = poses.shape[0]
         n = total // n_swarms
         ell = params.lookahead
-        P = lookahead_points(poses, ell)
-        U = unicycle_to_si(poses, v, w, ell)
+        P = lookahead_points(poses, ell) if points is None else points
+        U = unicycle_to_si(poses, v, w, ell) if trig is None else _to_si(trig, v, w, ell)
         swarm_of = np.repeat(np.arange(n_swarms), n)
         fail = np.zeros(n_swarms, dtype=bool)
         reasons = [""] * n_swarms
@@ -84,7 +93,9 @@ class BatchedDistributedBarrier:
         for e in np.unique(swarm_of[far]) if far.any() else ():
             fail[e], reasons[e] = True, f"points beyond ±{MAX_COORDINATE:g} m"
         with np.errstate(over="ignore", invalid="ignore"):
-            tree = lifted_tree(P.reshape(n_swarms, n, 2))
+            points = P.reshape(n_swarms, n, 2)
+            # pair_rows asks only query_pairs: the compiled sweep answers it (the same pairs) without a tree
+            tree = cast(cKDTree, SwarmPairs(points)) if use_compiled(total) else lifted_tree(points)
             parts = ([pair_rows(P, cfg, tree)] if cfg.pairs else []) + [wall_rows(P, cfg)]
             rows = Rows.concat(parts + [wheel_limit_rows(poses, params)])
         row_swarm = swarm_of[rows.i]
@@ -132,7 +143,7 @@ class BatchedDistributedBarrier:
             if not fail[e]:
                 fail[e], reasons[e] = True, "distributed: a row is violated after the split"
 
-        vs, ws = si_to_unicycle(poses, u, ell)
+        vs, ws = si_to_unicycle(poses, u, ell) if trig is None else _to_unicycle(trig, u, ell)
         wr, wl = unicycle_to_wheels(vs, ws, params)
         peak = np.maximum(np.abs(wr), np.abs(wl))
         scale = np.minimum(1.0, params.max_wheel_speed / np.maximum(peak, 1e-300))
@@ -144,3 +155,15 @@ class BatchedDistributedBarrier:
         inter = np.where(failed, np.linalg.norm(U, axis=1), np.sqrt(np.einsum("kd,kd->k", d, d)))  # as fail_stop, _diag
         return BatchedFilterResult(np.where(failed, 0.0, v_out), np.where(failed, 0.0, w_out), ~fail, inter,
                                    tuple(reasons))
+
+
+def _to_si(trig: tuple[FloatArray, FloatArray], v: FloatArray, w: FloatArray, ell: float) -> FloatArray:
+    """:func:`~swarmdeck.core.kinematics.unicycle_to_si` from its cos θ, sin θ (the same expression, the same bits)."""
+    c, s = trig
+    return np.column_stack((c * v - ell * s * w, s * v + ell * c * w))
+
+
+def _to_unicycle(trig: tuple[FloatArray, FloatArray], u: FloatArray, ell: float) -> tuple[FloatArray, FloatArray]:
+    """:func:`~swarmdeck.core.kinematics.si_to_unicycle` from its cos θ, sin θ (the same expression, the same bits)."""
+    c, s = trig
+    return c * u[:, 0] + s * u[:, 1], (-s * u[:, 0] + c * u[:, 1]) / ell

@@ -93,10 +93,11 @@ class View:
 
     def nearest_points(self, k: int) -> tuple[FloatArray, NDArray[np.intp]]:
         """Each agent's k nearest other look-ahead points (k ≤ N − 1): distances (E, N, k) m and indices (E, N, k),
-        nearest first (:func:`swarmdeck.envs.neighbours.batched_query`; one query per view, reused for smaller k)."""
+        nearest first (:func:`swarmdeck.envs.neighbours.batched_query`, compiled, no tree; one query per view, reused
+        for smaller k)."""
         cached = self.__dict__.get("_nearest")
         if cached is None or cached[0].shape[2] < k:
-            cached = batched_query(self.points, k, self.points_tree)
+            cached = batched_query(self.points, k, self.__dict__.get("points_tree"))  # a tree only if already made
             self.__dict__["_nearest"] = cached
         return cached[0][..., :k], cached[1][..., :k]
 

@@ -19,6 +19,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from swarmdeck.core.bounds import Bounds
+from swarmdeck.envs import batched_kernels as kern
 from swarmdeck.envs.observations import observation_bounds
 from swarmdeck.envs.scenario import Actions, Scenario, State, View
 from swarmdeck.envs.tasks import formation_slots
@@ -28,13 +29,24 @@ FloatArray = NDArray[np.float64]
 
 # ---------------------------------------------------------------------------- swarmdeck's tasks
 def task_observations(view: View, k: int, slots: FloatArray | None = None) -> NDArray[np.float32]:
-    """(E, N, D) :func:`swarmdeck.envs.observations.observe` for E swarms at once (no density part)."""
+    """(E, N, D) :func:`swarmdeck.envs.observations.observe` for E swarms at once (no density part); compiled
+    (:func:`swarmdeck.envs.batched_kernels.task_observations`, the same bits) when numba is installed."""
     poses, points = view.poses, view.points
     e, n, _ = poses.shape
     x0, x1, y0, y1 = view.bounds
-    parts = [poses[..., :2], np.cos(poses[..., 2:3]), np.sin(poses[..., 2:3])]
-    rel = np.zeros((e, n, k, 2))
     kk = min(k, n - 1)
+    cos_t, sin_t = np.cos(poses[..., 2:3]), np.sin(poses[..., 2:3])
+    if kern.use_compiled(e * n):
+        idx = view.nearest_points(kk)[1] if kk > 0 else np.zeros((e, n, 0), dtype=np.intp)
+        out = np.empty((e * n, 10 + 2 * k if slots is not None else 8 + 2 * k), dtype=np.float32)
+        kern.task_observations(np.ascontiguousarray(poses).reshape(e * n, 3), cos_t.reshape(e * n),
+                               sin_t.reshape(e * n), np.ascontiguousarray(points).reshape(e * n, 2),
+                               np.ascontiguousarray(idx).reshape(e * n, kk), n, k, float(x0), float(x1), float(y0),
+                               float(y1), np.zeros((0, 2)) if slots is None else np.ascontiguousarray(slots, float),
+                               out)
+        return out.reshape(e, n, -1)
+    parts = [poses[..., :2], cos_t, sin_t]
+    rel = np.zeros((e, n, k, 2))
     if kk > 0:
         idx = view.nearest_points(kk)[1]
         rel[:, :, :kk] = np.take_along_axis(points[:, None, :, :], idx[..., None], axis=2) - points[:, :, None, :]
