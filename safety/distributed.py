@@ -29,6 +29,13 @@ per-robot Python loop. Rows with ``b ≥ reach`` (every feasible command has
 ‖u‖ ≤ reach) are redundant and left out of the enumeration; every answer is
 checked against all rows afterwards.
 
+A second pass gives each pair's unused half to the robot that needed it
+(:func:`reallocate_halves`), and optional consensus passes share each pair's
+remaining slack at the last answer equally (:func:`consensus_shares`,
+``BarrierConfig.distributed_consensus_passes``): any split whose two shares add
+up to the row is exactly as safe. With numba the per-robot QPs run in one
+compiled kernel (:mod:`safety.distributed_kernel`), the same answers bit for bit.
+
 Robots already inside the unsafe set (h < 0) aim at separating: their halves
 ask for ``−recovery_speed/2`` each; a robot whose separation targets conflict
 (its own QP is infeasible) falls back to "no further approach" (bounds
@@ -432,7 +439,10 @@ def filter_distributed(rows: Rows, nominal: np.ndarray, max_speed: float | None,
     rows: the centralised candidate rows (pairs, walls, obstacles, limits);
     nominal (N, 2) m/s; max_speed: the speed disc (None: the rows bound u, and
     ``cfg.max_speed`` bounds every feasible ‖u‖). On success every centralised
-    row holds (the halves add up) to 2·1e-10 m/s.
+    row holds (the halves add up) to 2·1e-10 m/s. Passes: half/half; with
+    ``cfg.distributed_second_pass`` the reallocated split (:func:`reallocate_halves`);
+    then ``cfg.distributed_consensus_passes`` consensus passes (:func:`consensus_shares`),
+    each keeping the last certified answer if a robot's own QP fails.
     """
     n = nominal.shape[0]
     unsafe = (rows.h < 0) & (rows.kind != LIMIT)
