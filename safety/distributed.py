@@ -52,7 +52,7 @@ from swarmdeck.core.compiled import AVAILABLE as _COMPILED
 
 from .config import BarrierConfig
 from .constraints import LIMIT, Rows
-from .distributed_kernel import consensus_kernel, reallocate_kernel, solve_small_qps_kernel, worst_row
+from .distributed_kernel import consensus_kernel, reallocate_kernel, solve_small_qps_kernel, split_kernel, worst_row
 from .small_kernels import small
 
 _SIGN_TOL = 1e-12  # multipliers ≥ −tol count as non-negative (m/s scale)
@@ -82,6 +82,10 @@ def split_rows(rows: Rows, b: np.ndarray | None = None) -> SplitRows:
     robot j, so their sum is exactly row k.
     """
     b = rows.b if b is None else b
+    if _COMPILED and not small(rows.m):  # the same arrays, built by a compiled kernel
+        f = np.ascontiguousarray
+        return SplitRows(*split_kernel(f(rows.i, dtype=np.int64), f(rows.j, dtype=np.int64), f(rows.ci, dtype=float),
+                                       f(rows.cj, dtype=float), f(b, dtype=float)))
     pair = np.flatnonzero(rows.j >= 0)
     single = np.flatnonzero(rows.j < 0)
     owner = np.concatenate([rows.i[pair], rows.j[pair], rows.i[single]])
