@@ -133,7 +133,7 @@ class BarrierConfig:
     distributed_second_pass: the distributed filter solves a second pass in which each pair row's
         margin unused by one robot goes to the other (:func:`safety.distributed.reallocate_halves`;
         certified as the first, never more invasive for any robot, ≈ 2× the distributed cost).
-    distributed_consensus_passes: after the second pass, this many consensus passes: each pair row's
+    distributed_consensus_passes: (from Python or ``from_dict``) after the second pass, this many consensus passes: each pair row's
         remaining slack at the last answer is shared equally between its two robots, and the robots given
         more margin solve again (:func:`safety.distributed.consensus_shares`; certified as the first pass, no
         robot's intervention grows; each pass costs about one more distributed solve). bench/RESULTS.md

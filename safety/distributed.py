@@ -29,6 +29,13 @@ per-robot Python loop. Rows with ``b ≥ reach`` (every feasible command has
 ‖u‖ ≤ reach) are redundant and left out of the enumeration; every answer is
 checked against all rows afterwards.
 
+A second pass gives each pair's unused half to the robot that needed it
+(:func:`reallocate_halves`), and optional consensus passes share each pair's
+remaining slack at the last answer equally (:func:`consensus_shares`,
+``BarrierConfig.distributed_consensus_passes``): any split whose two shares add
+up to the row is exactly as safe. With numba the per-robot QPs run in one
+compiled kernel (:mod:`safety.distributed_kernel`), the same answers bit for bit.
+
 Robots already inside the unsafe set (h < 0) aim at separating: their halves
 ask for ``−recovery_speed/2`` each; a robot whose separation targets conflict
 (its own QP is infeasible) falls back to "no further approach" (bounds
@@ -45,7 +52,7 @@ from swarmdeck.core.compiled import AVAILABLE as _COMPILED
 
 from .config import BarrierConfig
 from .constraints import LIMIT, Rows
-from .distributed_kernel import consensus_kernel, reallocate_kernel, solve_small_qps_kernel, worst_row
+from .distributed_kernel import consensus_kernel, reallocate_kernel, solve_small_qps_kernel, split_kernel, worst_row
 from .small_kernels import small
 
 _SIGN_TOL = 1e-12  # multipliers ≥ −tol count as non-negative (m/s scale)
@@ -75,6 +82,10 @@ def split_rows(rows: Rows, b: np.ndarray | None = None) -> SplitRows:
     robot j, so their sum is exactly row k.
     """
     b = rows.b if b is None else b
+    if _COMPILED and not small(rows.m):  # the same arrays, built by a compiled kernel
+        f = np.ascontiguousarray
+        return SplitRows(*split_kernel(f(rows.i, dtype=np.int64), f(rows.j, dtype=np.int64), f(rows.ci, dtype=float),
+                                       f(rows.cj, dtype=float), f(b, dtype=float)))
     pair = np.flatnonzero(rows.j >= 0)
     single = np.flatnonzero(rows.j < 0)
     owner = np.concatenate([rows.i[pair], rows.j[pair], rows.i[single]])
@@ -432,7 +443,10 @@ def filter_distributed(rows: Rows, nominal: np.ndarray, max_speed: float | None,
     rows: the centralised candidate rows (pairs, walls, obstacles, limits);
     nominal (N, 2) m/s; max_speed: the speed disc (None: the rows bound u, and
     ``cfg.max_speed`` bounds every feasible ‖u‖). On success every centralised
-    row holds (the halves add up) to 2·1e-10 m/s.
+    row holds (the halves add up) to 2·1e-10 m/s. Passes: half/half; with
+    ``cfg.distributed_second_pass`` the reallocated split (:func:`reallocate_halves`);
+    then ``cfg.distributed_consensus_passes`` consensus passes (:func:`consensus_shares`),
+    each keeping the last certified answer if a robot's own QP fails.
     """
     n = nominal.shape[0]
     unsafe = (rows.h < 0) & (rows.kind != LIMIT)

@@ -359,6 +359,49 @@ def consensus_kernel(owner: np.ndarray, a: np.ndarray, half: np.ndarray, b: np.n
     return out, grown
 
 
+
+@jit
+def split_kernel(ri: np.ndarray, rj: np.ndarray, ci: np.ndarray, cj: np.ndarray,
+                 b: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:  # pragma: no cover
+    """``safety.distributed.split_rows``'s arrays (owner, a, b, source): the pair rows' i halves, their j halves,
+    then the single-robot rows, each in row order (the same values: copies and exact halvings)."""
+    m = b.shape[0]
+    n_pairs = 0
+    for k in range(m):
+        if rj[k] >= 0:
+            n_pairs += 1
+    total = m + n_pairs
+    owner = np.empty(total, np.int64)
+    a = np.empty((total, 2))
+    bb = np.empty(total)
+    source = np.empty(total, np.int64)
+    p = 0
+    q = n_pairs
+    s = 2 * n_pairs
+    for k in range(m):
+        if rj[k] >= 0:
+            owner[p] = ri[k]
+            a[p, 0] = ci[k, 0]
+            a[p, 1] = ci[k, 1]
+            bb[p] = 0.5 * b[k]
+            source[p] = k
+            owner[q] = rj[k]
+            a[q, 0] = cj[k, 0]
+            a[q, 1] = cj[k, 1]
+            bb[q] = 0.5 * b[k]
+            source[q] = k
+            p += 1
+            q += 1
+        else:
+            owner[s] = ri[k]
+            a[s, 0] = ci[k, 0]
+            a[s, 1] = ci[k, 1]
+            bb[s] = b[k]
+            source[s] = k
+            s += 1
+    return owner, a, bb, source
+
+
 def warm_up_distributed() -> None:
     """Compile (or load from numba's cache) the kernels above on a two-robot problem, once per process (called by
     ``dual_ascent.warm_up``, i.e. by ``SafetyFilter()``, never inside a tick); a no-op without numba."""
@@ -371,7 +414,9 @@ def warm_up_distributed() -> None:
     solve_small_qps_kernel(owner, a, b, u, True, 0.2, 0.2, np.zeros(0, np.bool_), False)
     reallocate_kernel(owner, a, b, u, 1)
     consensus_kernel(owner, a, b, b, u, 1)
+    split_kernel(np.array([0]), np.array([1]), a[:1], a[1:], b[:1])
     worst_row(np.array([0]), np.array([1]), a[:1], a[1:], b[:1], u)
 
 
-__all__ = ["consensus_kernel", "reallocate_kernel", "solve_small_qps_kernel", "warm_up_distributed", "worst_row"]
+__all__ = ["consensus_kernel", "reallocate_kernel", "solve_small_qps_kernel", "split_kernel", "warm_up_distributed",
+           "worst_row"]

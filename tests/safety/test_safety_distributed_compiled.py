@@ -77,8 +77,8 @@ def test_the_public_function_takes_the_compiled_path_with_the_same_bits() -> Non
 @settings(max_examples=6, deadline=None)
 @given(seed=st.integers(0, 2**32 - 1), n=st.integers(20, 300))
 def test_reallocation_and_certificate_bit_for_bit(seed: int, n: int) -> None:
-    """The second pass's split (``reallocate_halves``), the consensus pass's (``consensus_shares``) and the
-    certificate's worst row, compiled and numpy."""
+    """The half/half split (``split_rows``), the second pass's (``reallocate_halves``), the consensus pass's
+    (``consensus_shares``) and the certificate's worst row, compiled and numpy."""
     rng = np.random.default_rng(seed)
     cfg = BarrierConfig(bounds=arena_for(n, 0.188, fill=0.9))
     x, nominal = grid_scene(n, rng, cfg, pitch=0.188)
@@ -89,14 +89,18 @@ def test_reallocation_and_certificate_bit_for_bit(seed: int, n: int) -> None:
     b_c, loose_c = distributed.reallocate_halves(split, u, n_pairs)
     worst_c = distributed._worst_row(rows, u, rows.b)
     s_c, grown_c = distributed.consensus_shares(split, b_c, u, n_pairs)
+    split_c = distributed.split_rows(rows)
     saved = distributed._COMPILED
     distributed._COMPILED = False
     try:
         b_n, loose_n = distributed.reallocate_halves(split, u, n_pairs)
         worst_n = distributed._worst_row(rows, u, rows.b)
         s_n, grown_n = distributed.consensus_shares(split, b_n, u, n_pairs)
+        split_n = distributed.split_rows(rows)
     finally:
         distributed._COMPILED = saved
     assert np.array_equal(b_c, b_n) and np.array_equal(loose_c, loose_n)
     assert worst_c == worst_n
     assert np.array_equal(s_c, s_n) and np.array_equal(grown_c, grown_n)
+    for field in ("owner", "a", "b", "source"):
+        assert np.array_equal(getattr(split_c, field), getattr(split_n, field)), field
