@@ -410,7 +410,8 @@ def consensus_shares(split: SplitRows, b: np.ndarray, u: np.ndarray, n_pairs: in
 
 
 def _worst_row(rows: Rows, u: np.ndarray, b: np.ndarray) -> tuple[float, int]:
-    """(largest row excess ``lhs(u) − b`` m/s, its first row), compiled above the small sizes; (−inf, −1): no rows."""
+    """(largest row excess ``lhs(u) − b`` m/s, its first row), compiled above the small sizes; (−inf, −1): no rows.
+    A NaN excess is the largest (the first NaN row), so that the certificate fails closed."""
     if rows.m == 0:
         return -np.inf, -1
     if _COMPILED and not small(u.shape[0]):
@@ -501,11 +502,11 @@ def filter_distributed(rows: Rows, nominal: np.ndarray, max_speed: float | None,
                                  active, 0, n_fallback)
     # certificate: every centralised row (halves added up) and every speed bound
     worst, k = _worst_row(rows, u, b_hard)
-    if rows.m and worst > 2 * _FEAS_TOL:
+    if rows.m and not worst <= 2 * _FEAS_TOL:  # a NaN excess fails the certificate (it never compares true)
         return DistributedResult(np.zeros((n, 2)), False,
                                  f"row {k} violated by {worst:.3g} m/s after the split", active, 0,
                                  n_fallback)
-    if max_speed is not None and np.any(np.einsum("kd,kd->k", u, u) > (max_speed * (1 + 1e-9)) ** 2):
+    if max_speed is not None and not np.all(np.einsum("kd,kd->k", u, u) <= (max_speed * (1 + 1e-9)) ** 2):
         return DistributedResult(np.zeros((n, 2)), False, "speed bound exceeded", active, 0, n_fallback)
     active[split.source[act]] = True
     return DistributedResult(u, True, "optimal per robot", active, int(on_disc.sum()), n_fallback)

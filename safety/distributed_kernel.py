@@ -322,13 +322,15 @@ def reallocate_kernel(owner: np.ndarray, a: np.ndarray, b: np.ndarray, u: np.nda
 def worst_row(ri: np.ndarray, rj: np.ndarray, ci: np.ndarray, cj: np.ndarray, b: np.ndarray,
               u: np.ndarray) -> tuple[float, int]:  # pragma: no cover - compiled
     """(largest ``ci·u_ri + cj·u_rj − b`` over the rows, its first row; −inf, −1 without rows): ``Rows.lhs``'s
-    arithmetic (rj = ri and cj = 0 for single-robot rows)."""
+    arithmetic (rj = ri and cj = 0 for single-robot rows); a NaN excess is returned at once, at its row."""
     worst = -np.inf
     at = -1
     for k in range(b.shape[0]):
         i = ri[k]
         j = rj[k]
         e = (ci[k, 0] * u[i, 0] + ci[k, 1] * u[i, 1]) + (cj[k, 0] * u[j, 0] + cj[k, 1] * u[j, 1]) - b[k]
+        if e != e:  # NaN: the worst there is (np.argmax's first NaN), so the certificate fails closed
+            return e, k
         if e > worst or at < 0:
             worst = e
             at = k
