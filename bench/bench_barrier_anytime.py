@@ -17,6 +17,8 @@ same process, so ratios hold under the machine's load):
 * *anytime*: ``mode="anytime"`` with the pipelines' settings (``safety.config.pipeline_defaults``:
   the same caps, each active-set stage also capped at ``warm_share`` of clarabel's last cold
   iteration count and skipped for 1, 3, 7 … 31 ticks after a capped failure);
+* *auto (pipelines)*: exactly ``pipeline_defaults()`` (``mode="auto"``: anytime up to 200 robots,
+  distributed above);
 * *anytime, floor at the cap*: the same with ``work_budget`` equal to the active-set cap, so the
   floor answers as soon as the warm paths give up (the alternative to clarabel cold);
 * *clarabel*: a fresh ``solver="clarabel"`` filter (cold interior point on the same rows);
@@ -59,6 +61,7 @@ def run(n: int, ticks: int, uncapped: bool = True, only: list[str] | None = None
         "anytime, fixed caps": SafetyFilter(dataclasses.replace(cfg, mode="anytime", active_set_max_solves=WARM_CAP,
                                                                 work_budget=BUDGET)),
         "anytime": SafetyFilter(dataclasses.replace(cfg, **{**DEFAULTS, "mode": "anytime"})),
+        "auto (pipelines)": SafetyFilter(dataclasses.replace(cfg, **DEFAULTS)),
         "anytime, floor at the cap": SafetyFilter(dataclasses.replace(cfg, mode="anytime", active_set_max_solves=WARM_CAP,
                                                                       work_budget=WARM_CAP)),
         "distributed": SafetyFilter(dataclasses.replace(cfg, mode="distributed")),

@@ -126,7 +126,9 @@ class BarrierConfig:
         cold took the last time this filter ran it (at least 1), so a tick whose warm paths fail costs
         about (1 + share·c) clarabel solves plus the polish, c the cost of a Gram factorisation over a
         clarabel iteration (≈ 0.6 at N = 1000, ≈ 2 at N = 200 where the Gram matrices are larger
-        than clarabel's per-iteration work). The warm paths and clarabel's polish, when they spent
+        than clarabel's per-iteration work). Clarabel's polish likewise, once its answer holds more than
+        200 rows near their bound: at most this fraction of that cold solve's iterations (≥ 1; ≤ 4 as
+        before). The warm paths and clarabel's polish, when they spent
         their cap and failed, are skipped on the next 1, 3, 7, … 31 calls (doubling per consecutive
         failure, reset by a success). Deterministic: counts, never time. None: only ``active_set_max_solves``
         (and the warm stage skipped on the one call after a capped failure).

@@ -571,6 +571,10 @@ class SafetyFilter:
         if cfg.solver == "auto" and shared and self._polish_wait > 0:
             self._polish_wait -= 1  # the polish spent its cap and failed recently: clarabel's answer
         elif cfg.solver == "auto":
+            if shared and cfg.warm_share is not None and int(near.sum()) > _SHARE_MIN_ROWS and budget.polish is not None:
+                # many rows: the polish too gets at most warm_share of this cold solve's iterations (≥ 1);
+                # on the dense crossing at N = 200 it needs 56-128 factorisations or certifies in one
+                budget.polish = min(budget.polish, max(1, int(cfg.warm_share * self._cold_iters)))
             res = self._active_set(rows, U, max_speed, near, cfg.max_active_set_iterations, budget, polish=True)
             iterations += res.iterations
             if res.ok:
