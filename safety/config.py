@@ -100,6 +100,11 @@ class BarrierConfig:
         iterations); if it does not certify, the paths above run. 0 turns the prediction off (it is
         off anyway when numba cannot be imported).
     warm_dual_iterations: active-set iterations allowed after the dual-ascent prediction.
+    cold_dual: on a cold call (no warm start, or one that cannot serve), when the active set from
+        the rows û violates does not apply or certify, the same prediction from zero multipliers
+        and the certified active set run before clarabel (random scenes: every call certified, the
+        same bits as clarabel + polish, ≈ 1/4 of the time at N = 100–1000; bench/RESULTS.md "barrier:
+        anytime"). Within ``active_set_max_solves``; False goes to clarabel at once as before.
     clarabel_max_iter, clarabel_tol: clarabel's max_iter and tol_gap_abs/rel/tol_feas.
     mode: ``"centralised"`` (one QP over all robots), ``"distributed"`` (every robot
         solves its own QP on half of each pair row, REFERENCE.md §12,
@@ -162,6 +167,7 @@ class BarrierConfig:
     warm_slack: float = 0.01
     warm_dual_sweeps: int = 200
     warm_dual_iterations: int = 4
+    cold_dual: bool = True
     clarabel_max_iter: int = 100
     clarabel_tol: float = 1e-9
     mode: Literal["centralised", "distributed", "anytime", "auto"] = "centralised"
@@ -209,7 +215,7 @@ class BarrierConfig:
             value = getattr(self, name)
             if isinstance(value, bool) or not isinstance(value, numbers.Integral) or value < lower:
                 raise ValueError(f"BarrierConfig: {name} must be an integer >= {lower}, got {value!r}")
-        for name in ("recovery", "pairs", "distributed_second_pass"):
+        for name in ("recovery", "pairs", "distributed_second_pass", "cold_dual"):
             if not isinstance(getattr(self, name), bool):
                 raise ValueError(f"BarrierConfig: {name} must be true or false, got {getattr(self, name)!r}")
         checks = [

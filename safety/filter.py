@@ -70,6 +70,11 @@ _POLISH_SOLVES = 4
 # and N = 200 holds 270-360, where one Gram factorisation costs about one clarabel iteration
 # (bench_barrier_anytime; 300 left N = 200's first failing ticks uncapped at 1.8× clarabel's worst)
 _SHARE_MIN_ROWS = 200
+# factorisations an active-set stage may spend when BarrierConfig.active_set_max_solves is None (a plain
+# BarrierConfig(), mode "centralised"): no stage runs away (the dense crossing's uncapped warm paths and
+# polish spent up to 2 s on one tick at N = 1000, 13-27x clarabel's worst) while every stage that
+# certifies in the pinned tests and benches keeps its answer bit for bit (successful ones spend < 60)
+_RUNAWAY_SOLVES = 60
 _KIND_NAMES = {PAIR: "pair", WALL: "wall", OBSTACLE: "obstacle", LIMIT: "limit", SEGMENT: "segment"}
 
 
@@ -233,13 +238,24 @@ class SafetyFilter:
         ``warm_share``; with it 2^k − 1 (k = fails, at most 5): 1, 3, 7, 15, 31."""
         return 1 if self.config.warm_share is None else 2 ** min(fails, 5) - 1
 
+    def _stage_cap(self) -> int:
+        """Factorisations one active-set stage may spend: ``active_set_max_solves``, or ``_RUNAWAY_SOLVES``."""
+        cap = self.config.active_set_max_solves
+        return _RUNAWAY_SOLVES if cap is None else cap
+
+    def _polish_cap(self) -> int:
+        """Factorisations clarabel's polish may spend: ``active_set_max_solves`` but at most
+        ``_POLISH_SOLVES``, or ``_RUNAWAY_SOLVES`` when that is None."""
+        cap = self.config.active_set_max_solves
+        return _RUNAWAY_SOLVES if cap is None else min(cap, _POLISH_SOLVES)
+
     def _warm_cap(self) -> int | None:
         """Factorisations the warm paths of this call may spend (``active_set_max_solves``, and, when
         last tick held more than ``_SHARE_MIN_ROWS`` active rows, at most ``warm_share`` of clarabel's
         last cold iteration count, at least 1). Clarabel's polish keeps its own allowance."""
         cfg = self.config
-        cap = cfg.active_set_max_solves
-        if (cap is None or cfg.warm_share is None or not self._cold_iters
+        cap = self._stage_cap()
+        if (cfg.active_set_max_solves is None or cfg.warm_share is None or not self._cold_iters
                 or self._warm_keys.size <= _SHARE_MIN_ROWS):
             return cap
         return min(cap, max(1, int(cfg.warm_share * self._cold_iters)))
@@ -326,7 +342,7 @@ class SafetyFilter:
         anytime = cfg.anytime_for(n)
         deadline = t0 + cfg.time_budget_s if anytime and cfg.time_budget_s is not None else None
         budget = _Budget(cfg.work_budget if anytime else None, self._warm_cap(), deadline,
-                         cfg.active_set_max_solves)
+                         self._polish_cap())
         unsafe = (rows.h < 0) & (rows.kind != LIMIT)
         n_unsafe = int(unsafe.sum())
         recovering = cfg.recovery and n_unsafe > 0
@@ -401,11 +417,10 @@ class SafetyFilter:
                     max_iter: int, budget: _Budget, warm: bool = False, multipliers: np.ndarray | None = None,
                     polish: bool = False) -> ActiveSetResult:
         """``solve_active_set`` within what ``budget`` has left (the warm cap too when ``warm``; for
-        clarabel's ``polish`` its own allowance, at most ``_POLISH_SOLVES``, under an active-set cap), tallied."""
+        clarabel's ``polish`` its own allowance, ``_polish_cap``), tallied."""
         left = budget.left(warm)
         if polish and budget.polish is not None:
-            polish_cap = min(budget.polish, _POLISH_SOLVES)
-            left = polish_cap if left is None else min(left, polish_cap)
+            left = budget.polish if left is None else min(left, budget.polish)
         res = solve_active_set(rows, U, max_speed, warm_rows, max_iter, multipliers=multipliers,
                                max_solves=left, deadline=budget.deadline)
         budget.spend(res.solves, warm)
@@ -504,6 +519,13 @@ class SafetyFilter:
             solved = self._solve_pruned(rows, U, max_speed, budget)
             if solved is not None:
                 return solved, iterations
+        if not closed_loop and not skipped and cfg.cold_dual and self._dual_enabled() and budget.left(True) != 0:
+            # cold: the dual ascent from zero multipliers predicts the active rows and the active set
+            # certifies from them, before clarabel (random scenes: every call certified, the same bits
+            # as clarabel + polish, 1/5 of the time at N = 100; bench/RESULTS.md "cold calls")
+            solved = self._solve_dual(rows, U, max_speed, budget, cold=True)
+            if solved is not None:
+                return solved, iterations
         return None, iterations
 
     def _solve_pruned(self, rows: Rows, U: np.ndarray, max_speed: float | None, budget: _Budget
@@ -529,17 +551,19 @@ class SafetyFilter:
         return _Solved(res.u, res.active, int(res.speed_active.sum()), "warm clarabel+active-set",
                        qp.iterations + res.iterations, res.multipliers)
 
-    def _solve_dual(self, rows: Rows, U: np.ndarray, max_speed: float | None, budget: _Budget
-                    ) -> _Solved | None:
-        """Closed loop: the compiled dual coordinate ascent from last tick's multipliers (by row key)
-        predicts the active rows; the active set from them certifies the exact optimum (KKT, every
-        row, every speed bound) within ``warm_dual_iterations``. None otherwise (the caller goes on)."""
+    def _solve_dual(self, rows: Rows, U: np.ndarray, max_speed: float | None, budget: _Budget,
+                    cold: bool = False) -> _Solved | None:
+        """Closed loop: the compiled dual coordinate ascent from last tick's multipliers (by row key;
+        ``cold``: from zero) predicts the active rows; the active set from them certifies the exact
+        optimum (KKT, every row, every speed bound) within ``warm_dual_iterations``. None otherwise
+        (the caller goes on)."""
         cfg = self.config
         lam0 = np.zeros(rows.m)
-        if self._lam_keys.size:
+        if self._lam_keys.size and not cold:
             at = np.minimum(np.searchsorted(self._lam_keys, rows.key), self._lam_keys.size - 1)
             hit = self._lam_keys[at] == rows.key
             lam0[hit] = self._lam[at[hit]]
+        method = "dual+active-set" if cold else "warm dual+active-set"
         guess = dual_ascent.ascend(rows, U, max_speed, lam0, cfg.warm_dual_sweeps)
         res = self._active_set(rows, U, max_speed, guess.predicted, cfg.warm_dual_iterations, budget, True,
                                multipliers=guess.lam)
@@ -551,10 +575,9 @@ class SafetyFilter:
             # second call on the same tick do), not one that depends on which wrong rows left when
             again = self._active_set(rows, U, max_speed, res.active, cfg.max_active_set_iterations, budget, True)
             if again.ok:
-                return _Solved(again.u, again.active, int(again.speed_active.sum()), "warm dual+active-set",
+                return _Solved(again.u, again.active, int(again.speed_active.sum()), method,
                                res.iterations + again.iterations, again.multipliers)
-        return _Solved(res.u, res.active, int(res.speed_active.sum()), "warm dual+active-set",
-                       res.iterations, res.multipliers)
+        return _Solved(res.u, res.active, int(res.speed_active.sum()), method, res.iterations, res.multipliers)
 
     def _finish_clarabel(self, rows: Rows, U: np.ndarray, u: np.ndarray, max_speed: float | None,
                          iterations: int, budget: _Budget) -> _Solved | str:
