@@ -384,8 +384,10 @@ class SafetyFilter:
                 return self._solve_floor(P, U, O, plain, max_speed, t0, budget, solved)
             if isinstance(solved, str) and part is in_bad and solved.startswith("infeasible"):
                 solved = self._solve_soft(restrict(plain, part, n)[0] if not part.all() else plain,
-                                          unsafe[keep], U[part], max_speed)
+                                          unsafe[keep], U[part], max_speed, budget)
                 soft_used = True
+                if isinstance(solved, str) and solved.startswith(_BUDGET):
+                    return self._solve_floor(P, U, O, plain, max_speed, t0, budget, solved)
             if isinstance(solved, str):
                 detail = f" (recovering {n_unsafe} unsafe rows)" if recovering else ""
                 return self.fail_stop(n, U, solved + detail, t0, rows.m)
@@ -624,22 +626,32 @@ class SafetyFilter:
         speed = 0 if max_speed is None else int(np.sum(np.linalg.norm(out, axis=1) >= max_speed - _ACTIVE_TOL))
         return _Solved(out, rows.lhs(out) >= rows.b - _ACTIVE_TOL, speed, "clarabel", iterations)
 
-    def _solve_soft(self, rows: Rows, unsafe: np.ndarray, U: np.ndarray, max_speed: float | None
-                    ) -> _Solved | str:
+    def _solve_soft(self, rows: Rows, unsafe: np.ndarray, U: np.ndarray, max_speed: float | None,
+                    budget: _Budget | None = None) -> _Solved | str:
         """Recovery when the capped plain rows are infeasible: hard "no further approach" rows
         (b = max(b, 0), always feasible: u = 0 meets them) and slack-penalised separation
-        targets at the capped bound, by clarabel, retried at a 10× looser tolerance."""
+        targets at the capped bound, by clarabel, retried at a 10× looser tolerance; within what
+        ``budget`` has left (a reason starting with ``_BUDGET`` when it runs out: anytime's floor)."""
         cfg = self.config
         soft = np.flatnonzero(unsafe)
         b_hard = np.where(unsafe, np.maximum(rows.b, 0.0), rows.b)
         b_soft = np.maximum(rows.b[soft], -cfg.recovery_speed)
         iterations = 0
         for tol in (cfg.clarabel_tol, 10 * cfg.clarabel_tol):
+            left = None if budget is None else budget.left()
+            if left is not None and left <= 0:
+                return f"{_BUDGET}: work cap reached in the soft recovery"
             res = solve_qp(rows, U, max_speed, b_hard=b_hard, soft=soft, b_soft=b_soft,
-                           soft_weight=cfg.recovery_weight, max_iter=cfg.clarabel_max_iter, tol=tol)
+                           soft_weight=cfg.recovery_weight,
+                           max_iter=cfg.clarabel_max_iter if left is None else min(cfg.clarabel_max_iter, left),
+                           tol=tol, time_limit=None if budget is None else budget.seconds_left())
             iterations += res.iterations
+            if budget is not None:
+                budget.spend(res.iterations)
             if res.ok:
                 break
+        if not res.ok and budget is not None and budget.out():
+            return f"{_BUDGET}: work cap reached in the soft recovery ({res.reason})"
         if not res.ok:
             return res.reason
         hard = dataclasses.replace(rows, b=b_hard)
