@@ -75,6 +75,11 @@ _SHARE_MIN_ROWS = 200
 # polish spent up to 2 s on one tick at N = 1000, 13-27x clarabel's worst) while every stage that
 # certifies in the pinned tests and benches keeps its answer bit for bit (successful ones spend < 60)
 _RUNAWAY_SOLVES = 60
+# clarabel's cold iteration count assumed before this filter has run it (the dense crossing: 13-28 at
+# N = 100-5000): with warm_share, a cold call's dual prediction on more than _SHARE_MIN_ROWS predicted
+# rows may spend warm_share of it (the crossing's first tick at N = 200 needs 20 Gram factorisations,
+# 1.65x clarabel's worst with the fixed cap of 12)
+_COLD_ITERS_GUESS = 25
 _KIND_NAMES = {PAIR: "pair", WALL: "wall", OBSTACLE: "obstacle", LIMIT: "limit", SEGMENT: "segment"}
 
 
@@ -567,6 +572,10 @@ class SafetyFilter:
             lam0[hit] = self._lam[at[hit]]
         method = "dual+active-set" if cold else "warm dual+active-set"
         guess = dual_ascent.ascend(rows, U, max_speed, lam0, cfg.warm_dual_sweeps)
+        if (cold and cfg.warm_share is not None and budget.warm is not None
+                and int(guess.predicted.sum()) > _SHARE_MIN_ROWS):
+            share = max(1, int(cfg.warm_share * (self._cold_iters or _COLD_ITERS_GUESS)))
+            budget.warm = min(budget.warm, budget.warm_spent + share)
         res = self._active_set(rows, U, max_speed, guess.predicted, cfg.warm_dual_iterations, budget, True,
                                multipliers=guess.lam)
         if not res.ok:

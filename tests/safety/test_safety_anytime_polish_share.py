@@ -77,3 +77,24 @@ def test_the_polish_spends_at_most_its_share_of_clarabels_iterations(monkeypatch
         assert np.all(np.einsum("kd,kd->k", u, u) <= cfg.max_speed**2)
         x = x + u * cfg.dt
     assert polished >= 1  # the polish ran on many rows and was held to its share
+
+
+def test_a_cold_prediction_on_many_rows_spends_at_most_its_share(monkeypatch) -> None:
+    """The crossing's first tick at N = 200 (no warm start, no clarabel count yet): the cold dual
+    prediction holds > 200 rows, so its active set gets warm_share of 25 assumed clarabel iterations."""
+    cfg, x, goals = crossing_scene(N, np.random.default_rng(0))
+    share = pipeline_defaults()["warm_share"]
+    assert isinstance(share, float)
+    caps: list[int | None] = []
+    real = filter_module.solve_active_set
+
+    def spy(*args, **kwargs):
+        caps.append(kwargs.get("max_solves"))
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(filter_module, "solve_active_set", spy)
+    u, d = SafetyFilter(dataclasses.replace(cfg, **{**pipeline_defaults(), "mode": "anytime"})).filter(
+        x, toward(goals, x, cfg.max_speed))
+    assert d.ok and d.answer == "optimum", d.status
+    allowed = max(1, int(share * filter_module._COLD_ITERS_GUESS))
+    assert caps and caps[0] is not None and caps[0] <= allowed, caps  # the cold prediction's active set
