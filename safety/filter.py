@@ -22,7 +22,8 @@ in stages, cheapest first:
    active set certifies the optimum from them (KKT). Otherwise (or if that does not certify): the
    active-set solver, warm-started from the previous tick's active rows and certified by the KKT
    conditions, when the starting working set is small (``BarrierConfig.active_set_max_rows``,
-   ``warm_max_rows`` in closed loop); otherwise clarabel, whose answer is
+   ``warm_max_rows`` in closed loop); on a cold call the dual ascent from zero multipliers and the
+   certified active set from its prediction (``BarrierConfig.cold_dual``); otherwise clarabel, whose answer is
    polished by the active set from clarabel's active rows (certified), or else projected
    onto the speed discs with robots no row touches given their nominal exactly.
 
