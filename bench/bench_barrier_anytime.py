@@ -1,7 +1,8 @@
 """Barrier closed loop, dense crossing (issue 27 item 1): worst and median tick per mode, same rows.
 
 Run: ``.venv/bin/python bench/bench_barrier_anytime.py [--n 100 1000] [--ticks 120]`` (≈ 10 min at
-N = 1000 on a loaded 2-core machine; BLAS threads pinned to one below).
+N = 1000 on a loaded 2-core machine; BLAS threads pinned to one below);
+``... --cold [20 100 1000] [--scenes 30]``: single cold calls instead (see ``cold`` below).
 
 Scene: N robots on a jittered grid filling half of the floor's central disc, each driven by a
 proportional controller (gain 1, capped at v_max) to its point reflected through the centre: the
@@ -17,6 +18,8 @@ same process, so ratios hold under the machine's load):
 * *anytime*: ``mode="anytime"`` with the pipelines' settings (``safety.config.pipeline_defaults``:
   the same caps, each active-set stage also capped at ``warm_share`` of clarabel's last cold
   iteration count and skipped for 1, 3, 7 … 31 ticks after a capped failure);
+* *auto (pipelines)*: exactly ``pipeline_defaults()`` (``mode="auto"``: anytime up to 200 robots,
+  distributed above);
 * *anytime, floor at the cap*: the same with ``work_budget`` equal to the active-set cap, so the
   floor answers as soon as the warm paths give up (the alternative to clarabel cold);
 * *clarabel*: a fresh ``solver="clarabel"`` filter (cold interior point on the same rows);
@@ -59,6 +62,7 @@ def run(n: int, ticks: int, uncapped: bool = True, only: list[str] | None = None
         "anytime, fixed caps": SafetyFilter(dataclasses.replace(cfg, mode="anytime", active_set_max_solves=WARM_CAP,
                                                                 work_budget=BUDGET)),
         "anytime": SafetyFilter(dataclasses.replace(cfg, **{**DEFAULTS, "mode": "anytime"})),
+        "auto (pipelines)": SafetyFilter(dataclasses.replace(cfg, **DEFAULTS)),
         "anytime, floor at the cap": SafetyFilter(dataclasses.replace(cfg, mode="anytime", active_set_max_solves=WARM_CAP,
                                                                       work_budget=WARM_CAP)),
         "distributed": SafetyFilter(dataclasses.replace(cfg, mode="distributed")),
@@ -96,6 +100,36 @@ def run(n: int, ticks: int, uncapped: bool = True, only: list[str] | None = None
     return dict(n=n, times=times, cost=cost, answers=answers)
 
 
+def cold(n: int, scenes: int) -> dict:
+    """Single cold calls (a fresh filter per scene, no warm start) on the random dense scenes of
+    ``bench_safety.py`` (jittered grid at 0.8 occupancy, pitch 0.188 m, random nominals): the
+    default filter, the same without the cold dual prediction (``cold_dual=False``: clarabel and
+    its polish, as before), and clarabel alone; process CPU time, the same scenes in one run."""
+    from swarmdeck.safety import BarrierConfig
+    from swarmdeck.safety.scenes import arena_for, grid_scene
+
+    cfg = BarrierConfig() if n <= 100 else BarrierConfig(bounds=arena_for(n, 0.188, fill=0.8))
+    rng = np.random.default_rng(1)
+    variants = {"cold (default)": cfg, "cold, no dual prediction (before)": dataclasses.replace(cfg, cold_dual=False),
+                "clarabel": dataclasses.replace(cfg, solver="clarabel")}
+    SafetyFilter(cfg).filter(*grid_scene(n, rng, cfg, pitch=0.188))  # numba's load, not timed
+    times = collections.defaultdict(list)
+    methods: collections.Counter = collections.Counter()
+    worst_diff = 0.0
+    for _ in range(scenes):
+        x, nom = grid_scene(n, rng, cfg, pitch=0.188)
+        out = {}
+        for name, c in variants.items():
+            t, (u, d) = timed(SafetyFilter(c).filter, x, nom)
+            assert d.ok, (name, d.status)
+            times[name].append(t)
+            out[name] = u
+            if name == "cold (default)":
+                methods[d.method] += 1
+        worst_diff = max(worst_diff, float(np.max(np.abs(out["cold (default)"] - out["cold, no dual prediction (before)"]))))
+    return dict(times=times, methods=methods, diff=worst_diff)
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--n", type=int, nargs="+", default=[100, 1000])
@@ -104,7 +138,22 @@ def main() -> None:
                     help="leave out the uncapped centralised filter (seconds per tick at N = 1000)")
     ap.add_argument("--only", nargs="+", default=None,
                     help="only these filters (anytime and clarabel are always run), e.g. --only distributed")
+    ap.add_argument("--cold", type=int, nargs="*", default=None,
+                    help="instead: single cold calls at these N (default 20 100 1000), e.g. --cold 20 100")
+    ap.add_argument("--scenes", type=int, default=30, help="scenes per N for --cold")
     args = ap.parse_args()
+    if args.cold is not None:
+        print(harness.machine())
+        print("| N | scenes | filter | median ms | worst ms | median / clarabel's |")
+        print("| --- | ---: | --- | ---: | ---: | ---: |")
+        for n in args.cold or [20, 100, 1000]:
+            r = cold(n, args.scenes)
+            ref = np.median(r["times"]["clarabel"])
+            for name, v in r["times"].items():
+                print(f"| {n} | {args.scenes} | {name} | {1e3 * np.median(v):.2f} | {1e3 * max(v):.2f} | "
+                      f"{np.median(v) / ref:.2f} |", flush=True)
+            print(f"N = {n}: methods {dict(r['methods'])}; max |default − before| {r['diff']:.1e} m/s", flush=True)
+        return
     print(f"{harness.machine()}; warm cap {WARM_CAP}, budget {BUDGET}, warm share {DEFAULTS['warm_share']}")
     print("| N | filter | median ms | worst ms | worst / clarabel's worst | mean cost / optimum | worst cost / optimum |")
     print("| --- | --- | --- | --- | --- | --- | --- |")

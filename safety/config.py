@@ -100,6 +100,11 @@ class BarrierConfig:
         iterations); if it does not certify, the paths above run. 0 turns the prediction off (it is
         off anyway when numba cannot be imported).
     warm_dual_iterations: active-set iterations allowed after the dual-ascent prediction.
+    cold_dual: on a cold call (no warm start, or one that cannot serve), when the active set from
+        the rows û violates does not apply or certify, the same prediction from zero multipliers
+        and the certified active set run before clarabel (random scenes: every call certified, the
+        same bits as clarabel + polish, ≈ 1/4 of the time at N = 100–1000; bench/RESULTS.md "barrier:
+        anytime"). Within ``active_set_max_solves``; False goes to clarabel at once as before.
     clarabel_max_iter, clarabel_tol: clarabel's max_iter and tol_gap_abs/rel/tol_feas.
     mode: ``"centralised"`` (one QP over all robots), ``"distributed"`` (every robot
         solves its own QP on half of each pair row, REFERENCE.md §12,
@@ -126,7 +131,9 @@ class BarrierConfig:
         cold took the last time this filter ran it (at least 1), so a tick whose warm paths fail costs
         about (1 + share·c) clarabel solves plus the polish, c the cost of a Gram factorisation over a
         clarabel iteration (≈ 0.6 at N = 1000, ≈ 2 at N = 200 where the Gram matrices are larger
-        than clarabel's per-iteration work). The warm paths and clarabel's polish, when they spent
+        than clarabel's per-iteration work). Clarabel's polish likewise, once its answer holds more than
+        200 rows near their bound: at most this fraction of that cold solve's iterations (≥ 1; ≤ 4 as
+        before). The warm paths and clarabel's polish, when they spent
         their cap and failed, are skipped on the next 1, 3, 7, … 31 calls (doubling per consecutive
         failure, reset by a success). Deterministic: counts, never time. None: only ``active_set_max_solves``
         (and the warm stage skipped on the one call after a capped failure).
@@ -165,6 +172,7 @@ class BarrierConfig:
     warm_slack: float = 0.01
     warm_dual_sweeps: int = 200
     warm_dual_iterations: int = 4
+    cold_dual: bool = True
     clarabel_max_iter: int = 100
     clarabel_tol: float = 1e-9
     mode: Literal["centralised", "distributed", "anytime", "auto"] = "centralised"
@@ -213,7 +221,7 @@ class BarrierConfig:
             value = getattr(self, name)
             if isinstance(value, bool) or not isinstance(value, numbers.Integral) or value < lower:
                 raise ValueError(f"BarrierConfig: {name} must be an integer >= {lower}, got {value!r}")
-        for name in ("recovery", "pairs", "distributed_second_pass"):
+        for name in ("recovery", "pairs", "distributed_second_pass", "cold_dual"):
             if not isinstance(getattr(self, name), bool):
                 raise ValueError(f"BarrierConfig: {name} must be true or false, got {getattr(self, name)!r}")
         checks = [

@@ -22,7 +22,8 @@ in stages, cheapest first:
    active set certifies the optimum from them (KKT). Otherwise (or if that does not certify): the
    active-set solver, warm-started from the previous tick's active rows and certified by the KKT
    conditions, when the starting working set is small (``BarrierConfig.active_set_max_rows``,
-   ``warm_max_rows`` in closed loop); otherwise clarabel, whose answer is
+   ``warm_max_rows`` in closed loop); on a cold call the dual ascent from zero multipliers and the
+   certified active set from its prediction (``BarrierConfig.cold_dual``); otherwise clarabel, whose answer is
    polished by the active set from clarabel's active rows (certified), or else projected
    onto the speed discs with robots no row touches given their nominal exactly.
 
@@ -68,6 +69,16 @@ _POLISH_SOLVES = 4
 # and N = 200 holds 270-360, where one Gram factorisation costs about one clarabel iteration
 # (bench_barrier_anytime; 300 left N = 200's first failing ticks uncapped at 1.8× clarabel's worst)
 _SHARE_MIN_ROWS = 200
+# factorisations an active-set stage may spend when BarrierConfig.active_set_max_solves is None (a plain
+# BarrierConfig(), mode "centralised"): no stage runs away (the dense crossing's uncapped warm paths and
+# polish spent up to 2 s on one tick at N = 1000, 13-27x clarabel's worst) while every stage that
+# certifies in the pinned tests and benches keeps its answer bit for bit (successful ones spend < 60)
+_RUNAWAY_SOLVES = 60
+# clarabel's cold iteration count assumed before this filter has run it (the dense crossing: 13-28 at
+# N = 100-5000): with warm_share, a cold call's dual prediction on more than _SHARE_MIN_ROWS predicted
+# rows may spend warm_share of it (the crossing's first tick at N = 200 needs 20 Gram factorisations,
+# 1.65x clarabel's worst with the fixed cap of 12)
+_COLD_ITERS_GUESS = 25
 _KIND_NAMES = {PAIR: "pair", WALL: "wall", OBSTACLE: "obstacle", LIMIT: "limit", SEGMENT: "segment"}
 
 
@@ -231,13 +242,24 @@ class SafetyFilter:
         ``warm_share``; with it 2^k − 1 (k = fails, at most 5): 1, 3, 7, 15, 31."""
         return 1 if self.config.warm_share is None else 2 ** min(fails, 5) - 1
 
+    def _stage_cap(self) -> int:
+        """Factorisations one active-set stage may spend: ``active_set_max_solves``, or ``_RUNAWAY_SOLVES``."""
+        cap = self.config.active_set_max_solves
+        return _RUNAWAY_SOLVES if cap is None else cap
+
+    def _polish_cap(self) -> int:
+        """Factorisations clarabel's polish may spend: ``active_set_max_solves`` but at most
+        ``_POLISH_SOLVES``, or ``_RUNAWAY_SOLVES`` when that is None."""
+        cap = self.config.active_set_max_solves
+        return _RUNAWAY_SOLVES if cap is None else min(cap, _POLISH_SOLVES)
+
     def _warm_cap(self) -> int | None:
         """Factorisations the warm paths of this call may spend (``active_set_max_solves``, and, when
         last tick held more than ``_SHARE_MIN_ROWS`` active rows, at most ``warm_share`` of clarabel's
         last cold iteration count, at least 1). Clarabel's polish keeps its own allowance."""
         cfg = self.config
-        cap = cfg.active_set_max_solves
-        if (cap is None or cfg.warm_share is None or not self._cold_iters
+        cap = self._stage_cap()
+        if (cfg.active_set_max_solves is None or cfg.warm_share is None or not self._cold_iters
                 or self._warm_keys.size <= _SHARE_MIN_ROWS):
             return cap
         return min(cap, max(1, int(cfg.warm_share * self._cold_iters)))
@@ -324,7 +346,7 @@ class SafetyFilter:
         anytime = cfg.anytime_for(n)
         deadline = t0 + cfg.time_budget_s if anytime and cfg.time_budget_s is not None else None
         budget = _Budget(cfg.work_budget if anytime else None, self._warm_cap(), deadline,
-                         cfg.active_set_max_solves)
+                         self._polish_cap())
         unsafe = (rows.h < 0) & (rows.kind != LIMIT)
         n_unsafe = int(unsafe.sum())
         recovering = cfg.recovery and n_unsafe > 0
@@ -366,8 +388,10 @@ class SafetyFilter:
                 return self._solve_floor(P, U, O, plain, max_speed, t0, budget, solved)
             if isinstance(solved, str) and part is in_bad and solved.startswith("infeasible"):
                 solved = self._solve_soft(restrict(plain, part, n)[0] if not part.all() else plain,
-                                          unsafe[keep], U[part], max_speed)
+                                          unsafe[keep], U[part], max_speed, budget)
                 soft_used = True
+                if isinstance(solved, str) and solved.startswith(_BUDGET):
+                    return self._solve_floor(P, U, O, plain, max_speed, t0, budget, solved)
             if isinstance(solved, str):
                 detail = f" (recovering {n_unsafe} unsafe rows)" if recovering else ""
                 return self.fail_stop(n, U, solved + detail, t0, rows.m)
@@ -399,11 +423,10 @@ class SafetyFilter:
                     max_iter: int, budget: _Budget, warm: bool = False, multipliers: np.ndarray | None = None,
                     polish: bool = False) -> ActiveSetResult:
         """``solve_active_set`` within what ``budget`` has left (the warm cap too when ``warm``; for
-        clarabel's ``polish`` its own allowance, at most ``_POLISH_SOLVES``, under an active-set cap), tallied."""
+        clarabel's ``polish`` its own allowance, ``_polish_cap``), tallied."""
         left = budget.left(warm)
         if polish and budget.polish is not None:
-            polish_cap = min(budget.polish, _POLISH_SOLVES)
-            left = polish_cap if left is None else min(left, polish_cap)
+            left = budget.polish if left is None else min(left, budget.polish)
         res = solve_active_set(rows, U, max_speed, warm_rows, max_iter, multipliers=multipliers,
                                max_solves=left, deadline=budget.deadline)
         budget.spend(res.solves, warm)
@@ -502,6 +525,13 @@ class SafetyFilter:
             solved = self._solve_pruned(rows, U, max_speed, budget)
             if solved is not None:
                 return solved, iterations
+        if not closed_loop and not skipped and cfg.cold_dual and self._dual_enabled() and budget.left(True) != 0:
+            # cold: the dual ascent from zero multipliers predicts the active rows and the active set
+            # certifies from them, before clarabel (random scenes: every call certified, the same bits
+            # as clarabel + polish, 1/5 of the time at N = 100; bench/RESULTS.md "cold calls")
+            solved = self._solve_dual(rows, U, max_speed, budget, cold=True)
+            if solved is not None:
+                return solved, iterations
         return None, iterations
 
     def _solve_pruned(self, rows: Rows, U: np.ndarray, max_speed: float | None, budget: _Budget
@@ -527,18 +557,24 @@ class SafetyFilter:
         return _Solved(res.u, res.active, int(res.speed_active.sum()), "warm clarabel+active-set",
                        qp.iterations + res.iterations, res.multipliers)
 
-    def _solve_dual(self, rows: Rows, U: np.ndarray, max_speed: float | None, budget: _Budget
-                    ) -> _Solved | None:
-        """Closed loop: the compiled dual coordinate ascent from last tick's multipliers (by row key)
-        predicts the active rows; the active set from them certifies the exact optimum (KKT, every
-        row, every speed bound) within ``warm_dual_iterations``. None otherwise (the caller goes on)."""
+    def _solve_dual(self, rows: Rows, U: np.ndarray, max_speed: float | None, budget: _Budget,
+                    cold: bool = False) -> _Solved | None:
+        """Closed loop: the compiled dual coordinate ascent from last tick's multipliers (by row key;
+        ``cold``: from zero) predicts the active rows; the active set from them certifies the exact
+        optimum (KKT, every row, every speed bound) within ``warm_dual_iterations``. None otherwise
+        (the caller goes on)."""
         cfg = self.config
         lam0 = np.zeros(rows.m)
-        if self._lam_keys.size:
+        if self._lam_keys.size and not cold:
             at = np.minimum(np.searchsorted(self._lam_keys, rows.key), self._lam_keys.size - 1)
             hit = self._lam_keys[at] == rows.key
             lam0[hit] = self._lam[at[hit]]
+        method = "dual+active-set" if cold else "warm dual+active-set"
         guess = dual_ascent.ascend(rows, U, max_speed, lam0, cfg.warm_dual_sweeps)
+        if (cold and cfg.warm_share is not None and budget.warm is not None
+                and int(guess.predicted.sum()) > _SHARE_MIN_ROWS):
+            share = max(1, int(cfg.warm_share * (self._cold_iters or _COLD_ITERS_GUESS)))
+            budget.warm = min(budget.warm, budget.warm_spent + share)
         res = self._active_set(rows, U, max_speed, guess.predicted, cfg.warm_dual_iterations, budget, True,
                                multipliers=guess.lam)
         if not res.ok:
@@ -549,10 +585,9 @@ class SafetyFilter:
             # second call on the same tick do), not one that depends on which wrong rows left when
             again = self._active_set(rows, U, max_speed, res.active, cfg.max_active_set_iterations, budget, True)
             if again.ok:
-                return _Solved(again.u, again.active, int(again.speed_active.sum()), "warm dual+active-set",
+                return _Solved(again.u, again.active, int(again.speed_active.sum()), method,
                                res.iterations + again.iterations, again.multipliers)
-        return _Solved(res.u, res.active, int(res.speed_active.sum()), "warm dual+active-set",
-                       res.iterations, res.multipliers)
+        return _Solved(res.u, res.active, int(res.speed_active.sum()), method, res.iterations, res.multipliers)
 
     def _finish_clarabel(self, rows: Rows, U: np.ndarray, u: np.ndarray, max_speed: float | None,
                          iterations: int, budget: _Budget) -> _Solved | str:
@@ -569,6 +604,10 @@ class SafetyFilter:
         if cfg.solver == "auto" and shared and self._polish_wait > 0:
             self._polish_wait -= 1  # the polish spent its cap and failed recently: clarabel's answer
         elif cfg.solver == "auto":
+            if shared and cfg.warm_share is not None and int(near.sum()) > _SHARE_MIN_ROWS and budget.polish is not None:
+                # many rows: the polish too gets at most warm_share of this cold solve's iterations (≥ 1);
+                # on the dense crossing at N = 200 it needs 56-128 factorisations or certifies in one
+                budget.polish = min(budget.polish, max(1, int(cfg.warm_share * self._cold_iters)))
             res = self._active_set(rows, U, max_speed, near, cfg.max_active_set_iterations, budget, polish=True)
             iterations += res.iterations
             if res.ok:
@@ -595,22 +634,32 @@ class SafetyFilter:
         speed = 0 if max_speed is None else int(np.sum(np.linalg.norm(out, axis=1) >= max_speed - _ACTIVE_TOL))
         return _Solved(out, rows.lhs(out) >= rows.b - _ACTIVE_TOL, speed, "clarabel", iterations)
 
-    def _solve_soft(self, rows: Rows, unsafe: np.ndarray, U: np.ndarray, max_speed: float | None
-                    ) -> _Solved | str:
+    def _solve_soft(self, rows: Rows, unsafe: np.ndarray, U: np.ndarray, max_speed: float | None,
+                    budget: _Budget | None = None) -> _Solved | str:
         """Recovery when the capped plain rows are infeasible: hard "no further approach" rows
         (b = max(b, 0), always feasible: u = 0 meets them) and slack-penalised separation
-        targets at the capped bound, by clarabel, retried at a 10× looser tolerance."""
+        targets at the capped bound, by clarabel, retried at a 10× looser tolerance; within what
+        ``budget`` has left (a reason starting with ``_BUDGET`` when it runs out: anytime's floor)."""
         cfg = self.config
         soft = np.flatnonzero(unsafe)
         b_hard = np.where(unsafe, np.maximum(rows.b, 0.0), rows.b)
         b_soft = np.maximum(rows.b[soft], -cfg.recovery_speed)
         iterations = 0
         for tol in (cfg.clarabel_tol, 10 * cfg.clarabel_tol):
+            left = None if budget is None else budget.left()
+            if left is not None and left <= 0:
+                return f"{_BUDGET}: work cap reached in the soft recovery"
             res = solve_qp(rows, U, max_speed, b_hard=b_hard, soft=soft, b_soft=b_soft,
-                           soft_weight=cfg.recovery_weight, max_iter=cfg.clarabel_max_iter, tol=tol)
+                           soft_weight=cfg.recovery_weight,
+                           max_iter=cfg.clarabel_max_iter if left is None else min(cfg.clarabel_max_iter, left),
+                           tol=tol, time_limit=None if budget is None else budget.seconds_left())
             iterations += res.iterations
+            if budget is not None:
+                budget.spend(res.iterations)
             if res.ok:
                 break
+        if not res.ok and budget is not None and budget.out():
+            return f"{_BUDGET}: work cap reached in the soft recovery ({res.reason})"
         if not res.ok:
             return res.reason
         hard = dataclasses.replace(rows, b=b_hard)

@@ -58,7 +58,8 @@ def _warm_tries(monkeypatch, cfg: BarrierConfig, x: np.ndarray, goals: np.ndarra
 
 def test_a_failing_warm_stage_backs_off_1_3_7_ticks(monkeypatch, jammed) -> None:
     cfg, x, goals = jammed
-    capped = dataclasses.replace(cfg, mode="anytime", active_set_max_solves=1)
+    # cold_dual off: tick 0 goes to clarabel at once (the cold prediction would shift the pattern by one tick)
+    capped = dataclasses.replace(cfg, mode="anytime", active_set_max_solves=1, cold_dual=False)
     # one factorisation never certifies this jam: without warm_share the warm paths are tried every other tick
     assert _warm_tries(monkeypatch, capped, x, goals) == list(range(1, TICKS, 2))
     shared = dataclasses.replace(capped, warm_share=0.25)
@@ -68,7 +69,9 @@ def test_a_failing_warm_stage_backs_off_1_3_7_ticks(monkeypatch, jammed) -> None
 def test_the_warm_paths_spend_at_most_their_share_of_clarabels_iterations(monkeypatch, jammed) -> None:
     cfg, x, goals = jammed
     share = 0.1
-    shared = dataclasses.replace(cfg, mode="anytime", active_set_max_solves=12, warm_share=share)
+    # cold_dual off: with it the cold prediction certifies tick 0 and the warm paths every tick after
+    # (clarabel never runs, so there is no share to apply)
+    shared = dataclasses.replace(cfg, mode="anytime", active_set_max_solves=12, warm_share=share, cold_dual=False)
     log: list[tuple[str, int | None, int]] = []  # (solver, cap asked, work spent)
     real_as, real_qp = filter_module.solve_active_set, filter_module.solve_qp
 
