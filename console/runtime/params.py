@@ -180,14 +180,15 @@ class BehaviourParams:
 @dataclass(frozen=True)
 class SafetyParams:
     """The barrier filter as the operator sets it (REFERENCE.md §3: rps's D_s = 0.17 m, γ = 100, cubic κ);
-    ``mode``: "auto" is distributed above 200 robots (``swarmdeck.safety``)."""
+    ``mode``: "auto" is distributed above 200 robots, "anytime" the optimum within the per-tick work budget else the
+    distributed answer (``swarmdeck.safety``)."""
 
     enabled: bool = param(True, label="Barrier on", frame="safety_enabled")
     safety_distance: float = param(SAFETY_DISTANCE, unit="m", lo=ROBOT_DIAMETER, hi=0.4, label="D_s (m)", step=0.01,
                                    frame="safety_distance", shown="safety_distance (D_s)")
     gamma: float = param(100.0, lo=1.0, hi=1000.0, label="γ", step=1.0, frame="gamma")
     class_k: str = param("cubic", choices=("cubic", "linear"), label="κ(h)", frame="class_k")
-    mode: str = param("auto", choices=("centralised", "distributed", "auto"), frame="barrier_mode")
+    mode: str = param("auto", choices=("centralised", "distributed", "anytime", "auto"), frame="barrier_mode")
 
     def __post_init__(self) -> None:
         check_params(self)
