@@ -16,6 +16,17 @@ FloatArray = NDArray[np.float64]
 DENSE_PAIRS_ROBOTS = 12
 
 
+def _all_pairs(p: np.ndarray) -> tuple[NDArray[np.intp], NDArray[np.intp], np.ndarray]:
+    """(i, j, squared distance m²) of every pair i < j of ``p`` ``(N, d)``, summed coordinate by coordinate (the
+    arithmetic both dense paths share, so they agree with each other to the bit)."""
+    i, j = np.triu_indices(p.shape[0], 1)
+    e = p[i] - p[j]
+    d2 = e[:, 0] * e[:, 0]
+    for k in range(1, p.shape[1]):
+        d2 = d2 + e[:, k] * e[:, k]
+    return i, j, d2
+
+
 def pairs_within(points: ArrayLike, radius: float) -> NDArray[np.intp]:
     """Pairs ``(K, 2)`` (i < j, sorted by i then j) of ``points`` ``(N, d)`` (m) at most ``radius`` m apart.
 
@@ -29,11 +40,7 @@ def pairs_within(points: ArrayLike, radius: float) -> NDArray[np.intp]:
     if n < 2:
         return np.empty((0, 2), dtype=np.intp)
     if n <= DENSE_PAIRS_ROBOTS:
-        i, j = np.triu_indices(n, 1)
-        e = p[i] - p[j]
-        d2 = e[:, 0] * e[:, 0]
-        for k in range(1, p.shape[1]):
-            d2 = d2 + e[:, k] * e[:, k]
+        i, j, d2 = _all_pairs(p)
         keep = d2 <= radius * radius
         return np.stack([i[keep], j[keep]], axis=1).astype(np.intp)
     from scipy.spatial import cKDTree  # lazy: see test_devices_rps_startup_imports
@@ -125,12 +132,7 @@ def nearest_pair_distance(points: ArrayLike) -> float:
     if n < 2:
         raise ValueError(f"the nearest pair needs at least 2 points, got {n}")
     if n <= DENSE_PAIRS_ROBOTS:
-        i, j = np.triu_indices(n, 1)
-        e = p[i] - p[j]
-        d2 = e[:, 0] * e[:, 0]
-        for k in range(1, p.shape[1]):
-            d2 = d2 + e[:, k] * e[:, k]
-        return float(np.sqrt(d2.min()))
+        return float(np.sqrt(_all_pairs(p)[2].min()))
     from scipy.spatial import cKDTree  # lazy: see test_devices_rps_startup_imports
 
     return float(cKDTree(p).query(p, k=2)[0][:, 1].min())

@@ -68,3 +68,21 @@ def toward(goals: np.ndarray, points: np.ndarray, max_speed: float) -> np.ndarra
     u = goals - points
     s = np.sqrt(np.einsum("kd,kd->k", u, u))[:, None]
     return u * np.minimum(1.0, max_speed / np.maximum(s, 1e-12))
+
+
+def jammed_crossing(n: int, seed: int, ticks: int) -> tuple[BarrierConfig, np.ndarray, np.ndarray]:
+    """(config, points (n, 2) m, goals (n, 2) m) of :func:`crossing_scene` (``default_rng(seed)``) after
+    ``ticks`` ticks of clarabel's trajectory (every robot driven :func:`toward` its goal): a jammed scene
+    for tests that need many active rows. ValueError if clarabel fails on a tick."""
+    import dataclasses
+
+    from .filter import SafetyFilter
+
+    cfg, x, goals = crossing_scene(n, np.random.default_rng(seed))
+    flt = SafetyFilter(dataclasses.replace(cfg, solver="clarabel"))
+    for _ in range(ticks):
+        u, d = flt.filter(x, toward(goals, x, cfg.max_speed))
+        if not d.ok:
+            raise ValueError(f"clarabel failed on the crossing (n = {n}, seed = {seed}): {d.reason}")
+        x = x + u * cfg.dt
+    return cfg, x, goals

@@ -17,7 +17,7 @@ import pytest
 from swarmdeck.safety import SafetyFilter
 from swarmdeck.safety import filter as filter_module
 from swarmdeck.safety.constraints import barrier_rows
-from swarmdeck.safety.scenes import crossing_scene, toward
+from swarmdeck.safety.scenes import jammed_crossing, toward
 
 N = 150
 
@@ -25,12 +25,7 @@ N = 150
 @pytest.fixture(scope="module")
 def jammed():
     """(cfg, points, nominal) of the jammed crossing at tick 30 (clarabel's trajectory)."""
-    cfg, x, goals = crossing_scene(N, np.random.default_rng(7))
-    flt = SafetyFilter(dataclasses.replace(cfg, solver="clarabel"))
-    for _ in range(30):
-        u, d = flt.filter(x, toward(goals, x, cfg.max_speed))
-        assert d.ok
-        x = x + u * cfg.dt
+    cfg, x, goals = jammed_crossing(N, 7, 30)
     return cfg, x, toward(goals, x, cfg.max_speed)
 
 

@@ -18,7 +18,7 @@ from swarmdeck.safety import SafetyFilter
 from swarmdeck.safety import filter as filter_module
 from swarmdeck.safety.config import pipeline_defaults
 from swarmdeck.safety.constraints import barrier_rows
-from swarmdeck.safety.scenes import crossing_scene, toward
+from swarmdeck.safety.scenes import crossing_scene, jammed_crossing, toward
 
 N = 200
 
@@ -26,12 +26,7 @@ N = 200
 @pytest.fixture(scope="module")
 def jammed():
     """(cfg, points, goals) of the crossing at N = 200 after 20 ticks (clarabel's trajectory)."""
-    cfg, x, goals = crossing_scene(N, np.random.default_rng(0))
-    flt = SafetyFilter(dataclasses.replace(cfg, solver="clarabel"))
-    for _ in range(20):
-        u, d = flt.filter(x, toward(goals, x, cfg.max_speed))
-        assert d.ok
-        x = x + u * cfg.dt
+    cfg, x, goals = jammed_crossing(N, 0, 20)
     return cfg, x, goals
 
 

@@ -18,7 +18,7 @@ from swarmdeck.safety import SafetyFilter, dual_ascent
 from swarmdeck.safety import filter as filter_module
 from swarmdeck.safety.config import BarrierConfig, pipeline_defaults
 from swarmdeck.safety.constraints import barrier_rows
-from swarmdeck.safety.scenes import crossing_scene, toward
+from swarmdeck.safety.scenes import jammed_crossing, toward
 
 N = 150
 TICKS = 16
@@ -27,12 +27,7 @@ TICKS = 16
 @pytest.fixture(scope="module")
 def jammed():
     """(cfg, points, goals) of the jammed crossing at tick 30 (clarabel's trajectory)."""
-    cfg, x, goals = crossing_scene(N, np.random.default_rng(7))
-    flt = SafetyFilter(dataclasses.replace(cfg, solver="clarabel"))
-    for _ in range(30):
-        u, d = flt.filter(x, toward(goals, x, cfg.max_speed))
-        assert d.ok
-        x = x + u * cfg.dt
+    cfg, x, goals = jammed_crossing(N, 7, 30)
     return cfg, x, goals
 
 
