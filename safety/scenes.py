@@ -83,6 +83,6 @@ def jammed_crossing(n: int, seed: int, ticks: int) -> tuple[BarrierConfig, np.nd
     for _ in range(ticks):
         u, d = flt.filter(x, toward(goals, x, cfg.max_speed))
         if not d.ok:
-            raise ValueError(f"clarabel failed on the crossing (n = {n}, seed = {seed}): {d.reason}")
+            raise ValueError(f"clarabel failed on the crossing (n = {n}, seed = {seed}): {d.status}")
         x = x + u * cfg.dt
     return cfg, x, goals
