@@ -84,11 +84,15 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="do not open the TUIO/OSC input listeners (UDP 3333 by default)")
 
 
+#: what an interrupt during start-up closes, in this order: the servers, the loop (robots stopped) or, before it
+#: exists, the inputs and the robots' sink, then the recording (its summary and index written).
+_CLOSE_ORDER = ("projector", "bridge", "app", "loop", "hub", "sink", "rec")
+
+
 def main(args: argparse.Namespace) -> int:
     from swarmdeck.console.runtime.behaviours import BehaviourError, make_behaviour
     from swarmdeck.console.runtime.config import ConfigFileError, ConsoleSettings, load_settings
-    from swarmdeck.console.runtime.loop import ControlLoop, LoopConfig
-    from swarmdeck.core.ports import ProvidesImage
+    from swarmdeck.console.runtime.loop import LoopConfig
 
     try:
         settings = load_settings(args.config) if args.config else ConsoleSettings(LoopConfig())
@@ -149,6 +153,34 @@ def main(args: argparse.Namespace) -> int:
                                robot=robot)
     except (ValueError, OSError) as exc:
         raise UsageError(str(exc)) from None
+    started: dict[str, Any] = {"sink": sink.close}  # closers of what start-up has opened, by name
+    restore = _stop_on_signals()  # SIGTERM/SIGHUP act as Ctrl-C from here on, start-up included
+    try:
+        return _serve(args, settings, config, source, sink, robot, host, port, projector_cal, started)
+    except KeyboardInterrupt:
+        if not started:  # the run's own try/finally had taken over and closed everything
+            raise
+        # interrupted while starting: stop the robots, then close the recording, before leaving
+        for name in _CLOSE_ORDER:
+            try:
+                if name in started:
+                    started[name]()
+            except Exception as exc:  # noqa: BLE001 - keep closing the rest
+                print(f"swarmdeck console: while stopping: {exc}", file=sys.stderr)
+        print("swarmdeck console: interrupted while starting (robots stopped)", file=sys.stderr)
+        return 130
+    finally:
+        restore()
+
+
+def _serve(args: argparse.Namespace, settings: Any, config: Any, source: Any, sink: Any, robot: Any, host: str,
+           port: int, projector_cal: Any, started: dict[str, Any]) -> int:
+    """Open the recorder, inputs, loop, servers; run until the duration, Ctrl-C, SIGTERM or SIGHUP. Each
+    thing opened puts its closer in ``started`` (emptied once the run's own try/finally owns them), so an
+    interrupt during start-up closes what is open, in :data:`_CLOSE_ORDER`: :func:`main`."""
+    from swarmdeck.console.runtime.behaviours import BehaviourError
+    from swarmdeck.console.runtime.loop import ControlLoop
+    from swarmdeck.core.ports import ProvidesImage
     rec = None
     if not args.no_record:
         from swarmdeck.devices.net.mqtt_config import redact_url  # never record a broker password
@@ -159,9 +191,12 @@ def main(args: argparse.Namespace) -> int:
         rec = _recorder(args.record, config, settings.inputs, source_name, images,
                         virtual=args.virtual or 0, foxglove_channels=fox, chunk_frames=settings.chunk_frames,
                         **_foxglove_form(settings, args.foxglove_entities))
+        started["rec"] = lambda: print(f"swarmdeck console: {rec.close().message}", file=sys.stderr)
     hub = None
     if not args.no_inputs:
         hub = _start_inputs(settings.inputs, rec)
+        if hub is not None:
+            started["hub"] = hub.close
     try:
         # One monotonic clock for the loop and the input listeners' receive stamps.
         loop = ControlLoop(config, source=source, sink=sink, inputs=hub, contact_density=_contact_density(hub),
@@ -173,6 +208,9 @@ def main(args: argparse.Namespace) -> int:
         if rec is not None:
             rec.close()
         raise UsageError(str(exc)) from None
+    started.pop("sink")  # the loop owns the robots' sink and the inputs now: closing it stops the robots
+    started.pop("hub", None)
+    started["loop"] = loop.close
     if rec is not None:
         rec.follow(loop)  # its Frames and typed operator actions (re-simulation replays them)
         loop.add_health("recording", lambda: rec.status().message)
@@ -192,6 +230,7 @@ def main(args: argparse.Namespace) -> int:
             if rec is not None:
                 rec.close()
             raise UsageError(f"{exc}: choose another with --foxglove PORT") from None
+        started["bridge"] = bridge.close
     try:
         app = ConsoleApp(loop, host=host, port=port)
     except OSError as exc:
@@ -199,6 +238,8 @@ def main(args: argparse.Namespace) -> int:
         if bridge is not None:
             bridge.close()
         raise UsageError(f"cannot serve on {host}:{port}: {exc}") from None
+    started.pop("loop")  # the app owns the loop now (its close stops the loop, the viewer and the server)
+    started["app"] = app.close
     projector = None
     if args.projector is not None:
         from swarmdeck.console.projector.server import ProjectorServer
@@ -213,6 +254,7 @@ def main(args: argparse.Namespace) -> int:
             if rec is not None:
                 rec.close()
             raise UsageError(f"--projector: cannot serve on {host}:{args.projector}: {exc}") from None
+        started["projector"] = projector.close
         loop.subscribe(projector.offer)
         ProjectorPanel(app.gui.gui, projector, on_error=loop.post)
         projector.start()
@@ -226,7 +268,7 @@ def main(args: argparse.Namespace) -> int:
     app.start()
     if port and app.port != port:
         print(f"swarmdeck console: port {port} is in use; serving on port {app.port} instead", file=sys.stderr)
-    restore = _stop_on_signals()  # before the URL line: whoever reads it may signal at once
+    started.clear()  # from here the try/finally below closes everything
     try:
         virtual = f" + {args.virtual} virtual" if args.virtual else ""
         print(f"swarmdeck console: {app.url}  ({config.n_robots}{virtual} robots, {loop.behaviour_name}; "
@@ -235,7 +277,6 @@ def main(args: argparse.Namespace) -> int:
     except KeyboardInterrupt:
         print("swarmdeck console: stopping (robots stopped)", file=sys.stderr)
     finally:
-        restore()
         frame = loop.latest
         app.close()
         if projector is not None:

@@ -203,6 +203,7 @@ class McapFile:
         chunks: list[ChunkRef] = []
         channels: dict[int, str] = {}
         counts: dict[int, int] | None = None
+        chunk_count: int | None = None
         p = 0
         try:
             while p + HEAD.size <= len(buf):
@@ -219,10 +220,11 @@ class McapFile:
                 elif op == OP_STATISTICS:
                     stats = Statistics.read(ReadDataStream(io.BytesIO(buf[body:end])))
                     counts = {int(k): int(v) for k, v in stats.channel_message_counts.items()}
+                    chunk_count = int(stats.chunk_count)
                 p = end
         except (struct.error, ValueError, UnicodeDecodeError):
             return None, None
-        if not chunks:
+        if not chunks and chunk_count != 0:  # no index although the file has chunks (or says nothing)
             return None, None
         if any(c.offset < len(MAGIC) or c.offset >= summary_start for c in chunks):
             return None, "the MCAP summary points outside the data; scanned the file instead"
