@@ -12,13 +12,18 @@ import pytest
 from swarmdeck.console.recording.reader import open_recording
 
 
+def _console(path, **popen) -> subprocess.Popen:
+    """A real `swarmdeck console` process (4 robots, no inputs) recording to ``path``; pipes as text."""
+    return subprocess.Popen(
+        [sys.executable, "-c", "import sys; from swarmdeck.console.cli import main; sys.exit(main())",
+         "console", "--port", "0", "--robots", "4", "--no-inputs", "--record", str(path)],
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, **popen)
+
+
 @pytest.mark.parametrize("sig", [signal.SIGTERM, signal.SIGHUP])
 def test_signal_closes_the_recording_cleanly(tmp_path, sig) -> None:
     path = tmp_path / "run.mcap"
-    proc = subprocess.Popen(
-        [sys.executable, "-c", "import sys; from swarmdeck.console.cli import main; sys.exit(main())",
-         "console", "--port", "0", "--robots", "4", "--no-inputs", "--record", str(path)],
-        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    proc = _console(path)
     try:
         for line in proc.stdout:  # the URL line: the loop and the recorder are running
             if "swarmdeck console: http://" in line:
@@ -44,11 +49,7 @@ def test_a_signal_during_start_up_still_stops_the_robots_and_closes_the_recordin
     by scanning, no summary) and the robots' sink was never told to stop. Wherever in start-up the signal lands,
     the console now stops the robots and closes the recording."""
     path = tmp_path / "run.mcap"
-    proc = subprocess.Popen(
-        [sys.executable, "-c", "import sys; from swarmdeck.console.cli import main; sys.exit(main())",
-         "console", "--port", "0", "--robots", "4", "--no-inputs", "--record", str(path)],
-        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-        preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))  # as a terminal's Ctrl-C finds it
+    proc = _console(path, preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))  # as a terminal's Ctrl-C finds it
     try:
         for line in proc.stderr:  # the recorder is open; the app, its server and the loop come next
             if "recording to" in line:

@@ -10,16 +10,20 @@ import numpy as np
 import pytest
 
 from swarmdeck.safety import BarrierConfig, distributed
-from swarmdeck.safety.constraints import barrier_rows
+from swarmdeck.safety.constraints import Rows, barrier_rows
 from swarmdeck.safety.scenes import arena_for, grid_scene
+
+
+def _jammed(n: int, seed: int) -> tuple[BarrierConfig, np.ndarray, Rows]:
+    """(config, nominal (n, 2) m/s, the barrier's rows) of a jammed grid of ``n`` robots."""
+    cfg = BarrierConfig(bounds=arena_for(n, 0.188, fill=0.9))
+    x, nominal = grid_scene(n, np.random.default_rng(seed), cfg, pitch=0.188)
+    return cfg, nominal, barrier_rows(x, cfg)
 
 
 @pytest.mark.parametrize("n", [8, 60])  # the numpy path, the compiled one
 def test_a_nan_row_is_the_worst_row(n: int) -> None:
-    rng = np.random.default_rng(1)
-    cfg = BarrierConfig(bounds=arena_for(n, 0.188, fill=0.9))
-    x, nominal = grid_scene(n, rng, cfg, pitch=0.188)
-    rows = barrier_rows(x, cfg)
+    _, _, rows = _jammed(n, seed=1)
     b = rows.b.copy()
     b[rows.m // 2] = np.nan
     worst, k = distributed._worst_row(rows, np.zeros((n, 2)), b)
@@ -32,10 +36,7 @@ def test_a_nan_row_is_the_worst_row(n: int) -> None:
 
 @pytest.mark.parametrize("n", [8, 60])
 def test_the_filter_refuses_an_answer_it_cannot_certify(n: int) -> None:
-    rng = np.random.default_rng(2)
-    cfg = BarrierConfig(bounds=arena_for(n, 0.188, fill=0.9))
-    x, nominal = grid_scene(n, rng, cfg, pitch=0.188)
-    rows = barrier_rows(x, cfg)
+    cfg, nominal, rows = _jammed(n, seed=2)
     b = rows.b.copy()
     b[rows.j >= 0] = np.where(np.arange(int(np.sum(rows.j >= 0))) == 0, np.nan, b[rows.j >= 0])
     out = distributed.filter_distributed(dataclasses.replace(rows, b=b), nominal, cfg.max_speed, cfg)
