@@ -23,7 +23,10 @@ the median over ``--repeats`` runs (default 3) and the worst (slowest) of them, 
 repeat. The ratio columns are rps unpaced / swarmdeck on CPU: of the medians, and the worst case (rps's fastest run
 against swarmdeck's slowest). swarmdeck's numba kernels are compiled once per installation into ``__pycache__``
 (``cache=True``); a first warm-up run per example (not counted) makes every counted run load them, as every run after
-the first does for a user (``--no-warm-up`` counts the first too).
+the first does for a user (``--no-warm-up`` counts the first too). Compiled Python modules (``__pycache__``) are kept
+the same way for both sides: the children run without ``PYTHONDONTWRITEBYTECODE`` (a sandbox's shell may set it; a
+user's Python does not), swarmdeck's are written by the warm-up run and rps's (the ``--rps-path`` folders) are
+byte-compiled before the first run, so neither side pays for compiling its own source on every run.
 
 Get rps 2.0 and cvxopt beside it (any folders)::
 
@@ -36,6 +39,7 @@ Results: bench/RESULTS.md, "Robotarium 2.x examples".
 from __future__ import annotations
 
 import argparse
+import compileall
 import json
 import os
 import resource
@@ -147,6 +151,8 @@ def main() -> None:
     if args.repeats < 1:
         raise SystemExit(f"--repeats must be at least 1, got {args.repeats}")
     print(harness.machine())
+    for folder in args.rps_path:  # rps's modules compiled once, as swarmdeck's are by the warm-up run
+        compileall.compile_dir(folder, quiet=1)
     cases = [(n, fig) for n, fig in CASES if args.only is None or args.only in n]
     chosen = [m.strip() for m in args.modes.split(",")]
     unknown = sorted(set(chosen) - set(MODES))
@@ -186,6 +192,7 @@ def _run_child(args: argparse.Namespace, name: str, mode: str) -> tuple[float, d
         folder = Path(tmp) / Path(name).parent
         shutil.copytree((EXAMPLES / name).parent, folder)
         env = dict(os.environ, MPLBACKEND="Agg")
+        env.pop("PYTHONDONTWRITEBYTECODE", None)  # a user's Python keeps compiled modules (see the docstring)
         if mode.startswith("rps"):
             env["PYTHONPATH"] = os.pathsep.join([*args.rps_path, env.get("PYTHONPATH", "")]).rstrip(os.pathsep)
         before = resource.getrusage(resource.RUSAGE_CHILDREN)
