@@ -200,7 +200,8 @@ def nearest_points(points: NDArray[np.float64], segments: NDArray[np.float64]) -
     """Nearest point of segment ``segments[k]`` (``(K, 2, 2)``) to ``points[k]`` (``(K, 2)``), pairwise, m."""
     a, b = segments[:, 0], segments[:, 1]
     ab = b - a
-    t = np.einsum("kd,kd->k", points - a, ab) / np.einsum("kd,kd->k", ab, ab)
+    num, den = np.einsum("kd,kd->k", points - a, ab), np.einsum("kd,kd->k", ab, ab)
+    t = np.divide(num, den, out=np.zeros_like(num), where=den > 0.0)  # a zero-length segment is its end point
     return a + np.clip(t, 0.0, 1.0)[:, None] * ab
 
 
@@ -212,7 +213,8 @@ def point_segment_distance(points: ArrayLike, segments: ArrayLike) -> NDArray[np
     p = np.asarray(points, dtype=float)[:, None, :2]  # (N, 1, 2)
     s = np.asarray(segments, dtype=float)
     a, ab = s[None, :, 0], (s[:, 1] - s[:, 0])[None]  # (1, M, 2)
-    t = np.clip(np.sum((p - a) * ab, axis=2) / np.sum(ab * ab, axis=2), 0.0, 1.0)
+    num, den = np.sum((p - a) * ab, axis=2), np.broadcast_to(np.sum(ab * ab, axis=2), (p.shape[0], s.shape[0]))
+    t = np.clip(np.divide(num, den, out=np.zeros_like(num), where=den > 0.0), 0.0, 1.0)  # zero length: the end
     return np.linalg.norm(p - (a + t[..., None] * ab), axis=2)
 
 
