@@ -370,7 +370,10 @@ class _Child:
                     scratch=None if tmpfs is None else (scratch.resolve(), tmpfs),
                     cgroup=setup.group.procs_files if setup.group is not None else [], keyring=setup.hardening.keyring)
             else:
-                argv = [sys.executable, "-s", "-m", "swarmdeck.console.sandbox.child", str(to_child_r), str(from_child_w)]
+                # normalised, not resolved: a venv's python must stay the venv's; "…/bench/../.venv/bin/python" names a
+                # folder the jail does not have
+                argv = [os.path.abspath(sys.executable), "-s", "-m", "swarmdeck.console.sandbox.child", str(to_child_r),
+                        str(from_child_w)]
                 extra: tuple[int, ...] = ()
                 if jail == "bwrap":
                     seccomp_fd = None
