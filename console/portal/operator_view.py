@@ -3,7 +3,8 @@
 The console's own scene (:class:`~swarmdeck.console.web.scene.ArenaScene`) drawn by
 its :class:`~swarmdeck.console.web.app.FrameViewer` (latest-frame-wins on its own
 thread, so a slow browser never slows the arena), fed with every Frame of the
-job the runner is running (:attr:`~.runner.ArenaRunner.frame_listeners`). It shows;
+job the runner is running (:attr:`~.runner.ArenaRunner.frame_listeners`), thinned as the console's is from
+:data:`~swarmdeck.console.web.app.THIN_FROM` robots (by each Frame's robot count: jobs differ). It shows;
 it does not steer: the emergency stop and the queue are the portal's operator API. With ``--projector`` it has
 the projector's folder (:meth:`OperatorView.add_projector`: layers, brightness, blackout).
 """
@@ -12,7 +13,7 @@ from __future__ import annotations
 import logging
 from typing import TYPE_CHECKING, Any
 
-from swarmdeck.console.web.app import FrameViewer
+from swarmdeck.console.web.app import FrameViewer, draw_interval
 from swarmdeck.console.web.scene import ArenaScene
 from swarmdeck.core.bounds import DEFAULT_BOUNDS, Bounds
 from swarmdeck.core.kinematics import GritsBotParams
@@ -32,7 +33,7 @@ class OperatorView:
 
         self.server = viser.ViserServer(host=host, port=port, verbose=False)
         self.scene = ArenaScene(self.server, bounds, robot_radius=GritsBotParams().radius)
-        self.viewer = FrameViewer(self.scene).start()
+        self.viewer = FrameViewer(self.scene, interval_for=draw_interval).start()  # thinned from thousands of robots
         self.host = host
         self.projector_panel: ProjectorPanel | None = None  # add_projector
 

@@ -39,17 +39,22 @@ def draw_interval(n_robots: int) -> float:
 
 class FrameViewer:
     """Draws the newest Frame on its own thread (latest-frame-wins), at most every ``min_interval`` s
-    (0: as often as Frames come; ``clock``: monotonic seconds, for tests)."""
+    (0: as often as Frames come; ``clock``: monotonic seconds, for tests). ``interval_for``: a viewer that does not
+    know its robot count in advance (the portal's operator view: each job has its own) also waits at least
+    ``interval_for(N)`` s after drawing a Frame of N robots (:func:`draw_interval`)."""
 
     def __init__(self, scene: ArenaScene, gui: ConsoleGui | None = None,
                  on_error: Callable[[str], None] | None = None, min_interval: float = 0.0,
-                 clock: Callable[[], float] = time.monotonic) -> None:
+                 clock: Callable[[], float] = time.monotonic,
+                 interval_for: Callable[[int], float] | None = None) -> None:
         if not min_interval >= 0.0:
             raise ValueError(f"min_interval must be >= 0 s, got {min_interval!r}")
         self.scene, self.gui = scene, gui
         self.min_interval = float(min_interval)
+        self.interval_for = interval_for
         self._clock = clock
         self._last_draw: float | None = None
+        self._last_n = 0
         self._pending: Frame | None = None
         self._lock = threading.Lock()
         self._wake = threading.Event()
@@ -76,9 +81,12 @@ class FrameViewer:
 
     def until_next(self) -> float:
         """Seconds the thread still waits before it may draw again (0: now)."""
-        if self._last_draw is None or self.min_interval <= 0.0:
+        interval = self.min_interval
+        if self.interval_for is not None:
+            interval = max(interval, self.interval_for(self._last_n))
+        if self._last_draw is None or interval <= 0.0:
             return 0.0
-        return max(0.0, self._last_draw + self.min_interval - self._clock())
+        return max(0.0, self._last_draw + interval - self._clock())
 
     def draw_pending(self) -> Frame | None:
         """Draw the newest pending frame now (the thread's body; callable directly in tests)."""
@@ -87,6 +95,7 @@ class FrameViewer:
         if frame is None:
             return None
         self._last_draw = self._clock()
+        self._last_n = frame.n
         try:
             self.scene.draw(frame)
             if self.gui is not None:

@@ -2,9 +2,12 @@
 newest Frame each time; below THIN_FROM robots every Frame it gets is drawn as before."""
 from __future__ import annotations
 
+import numpy as np
 import pytest
 import viser
 
+from swarmdeck.console.portal.operator_view import OperatorView
+from swarmdeck.console.runtime.frame import Frame
 from swarmdeck.console.runtime.loop import ControlLoop, DensityParams, LoopConfig
 from swarmdeck.console.web.app import THIN_FROM, FrameViewer, draw_interval
 from swarmdeck.console.web.scene import ArenaScene
@@ -54,3 +57,32 @@ def test_a_stopped_thinned_viewer_ends_while_it_waits(scene) -> None:
     viewer.offer(ControlLoop(LoopConfig(seed=3, n_robots=3)).tick())
     viewer.stop()                                               # ServiceThread.stop joins with its timeout
     assert not viewer._service.alive
+
+
+def _frame(n: int, tick: int = 0) -> Frame:
+    z = np.zeros(n)
+    return Frame(tick=tick, time=0.0, poses=np.zeros((n, 3)), ids=np.arange(n), nominal=np.zeros((n, 2)),
+                 safe=np.zeros((n, 2)), v=z, w=z)
+
+
+def test_a_viewer_thinned_by_each_frames_robot_count(scene) -> None:
+    """The portal's operator view does not know a job's robot count in advance: it thins by the Frame it drew
+    (it drew every Frame of a 5000-robot job before, holding the GIL the arena's loop needs)."""
+    now = [10.0]
+    viewer = FrameViewer(scene, clock=lambda: now[0], interval_for=draw_interval)
+    viewer.offer(_frame(5))
+    viewer.draw_pending()
+    assert viewer.until_next() == 0.0                     # a few robots: every Frame
+    viewer.offer(_frame(THIN_FROM + 500, tick=1))
+    viewer.draw_pending()
+    assert viewer.until_next() == pytest.approx(draw_interval(THIN_FROM + 500))
+    now[0] += draw_interval(THIN_FROM + 500)
+    assert viewer.until_next() == 0.0
+
+
+def test_the_operator_view_thins_by_robot_count() -> None:
+    view = OperatorView(port=0)
+    try:
+        assert view.viewer.interval_for is draw_interval
+    finally:
+        view.close()
