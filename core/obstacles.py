@@ -218,6 +218,24 @@ def point_segment_distance(points: ArrayLike, segments: ArrayLike) -> NDArray[np
     return np.linalg.norm(p - (a + t[..., None] * ab), axis=2)
 
 
+def _near_all(p: NDArray[np.float64], s: NDArray[np.float64], radius: float
+              ) -> tuple[NDArray[np.int64], NDArray[np.int64], NDArray[np.float64]]:
+    """:func:`segments_near` for a few points: every (point, segment) on the ``(N, M)`` grid, without gathering
+    rows. The arithmetic of :func:`nearest_points` and ``np.linalg.norm`` written out per coordinate (a sum of two
+    products, the same bits: tests/core/test_core_obstacles_near_all.py), so the answer is the gathered form's."""
+    a, ab = s[:, 0], s[:, 1] - s[:, 0]  # (M, 2)
+    abx, aby = ab[:, 0], ab[:, 1]
+    den = abx * abx + aby * aby  # (M,)
+    px, py = p[:, 0:1], p[:, 1:2]  # (N, 1)
+    num = (px - a[:, 0]) * abx + (py - a[:, 1]) * aby  # (N, M)
+    t = np.clip(np.divide(num, den, out=np.zeros_like(num), where=den > 0.0), 0.0, 1.0)
+    dx = px - (a[:, 0] + t * abx)
+    dy = py - (a[:, 1] + t * aby)
+    d = np.sqrt(dx * dx + dy * dy)
+    i, k = np.nonzero(d <= radius)  # row-major: sorted by (i, k)
+    return i.astype(np.int64, copy=False), k.astype(np.int64, copy=False), d[i, k]
+
+
 def segments_near(points: ArrayLike, segments: ArrayLike, radius: float
                   ) -> tuple[NDArray[np.int64], NDArray[np.int64], NDArray[np.float64]]:
     """Every (point i, segment k) within ``radius`` m: ``(i, k, distance)``, sorted by (i, k).
@@ -232,11 +250,7 @@ def segments_near(points: ArrayLike, segments: ArrayLike, radius: float
     if p.shape[0] == 0 or s.shape[0] == 0:
         return empty
     if p.shape[0] <= DENSE_PAIRS_ROBOTS:  # a few robots: every (point, segment) is a candidate (no k-d tree)
-        i, k = (a.ravel() for a in np.meshgrid(np.arange(p.shape[0], dtype=np.int64),
-                                               np.arange(s.shape[0], dtype=np.int64), indexing="ij"))
-        d = np.linalg.norm(p[i] - nearest_points(p[i], s[k]), axis=1)
-        keep = d <= radius
-        return i[keep], k[keep], d[keep]
+        return _near_all(p, s, radius)
     from scipy.spatial import cKDTree  # here, not at import: core stays light
     length = np.linalg.norm(s[:, 1] - s[:, 0], axis=1)
     pieces = np.maximum(1, np.ceil(length / _PIECE)).astype(np.int64)
