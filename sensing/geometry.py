@@ -14,6 +14,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from swarmdeck.core.bounds import Bounds
+from swarmdeck.core.graphs import DENSE_PAIRS_ROBOTS, pairs_within
 from swarmdeck.sensing import kernels
 from swarmdeck.sensing.config import SensingConfigError
 
@@ -26,6 +27,10 @@ _PARALLEL = 1e-12
 _STAGES = (0.125, 0.375, 1.0)
 #: The same for :func:`cast_sensor_rays`, whose stages work on robots (open while any of its rays is).
 _SENSOR_STAGES = (0.25, 1.0)
+#: Up to this many (ray, segment) pairs :func:`ray_segments` takes its numpy form even where numba is installed:
+#: the same bits (tests/sensing/test_sensing_small_paths.py), no numba import (≈ 0.5-1 s of CPU) for an rps-sized
+#: run (84 rays of 12 robots × 48 segments).
+SMALL_RAY_SEGMENTS = 4096
 
 
 def check_segments(segments: ArrayLike | None, name: str = "obstacles") -> FloatArray:
@@ -57,7 +62,7 @@ def ray_segments(origins: FloatArray, directions: FloatArray, segments: FloatArr
     out = np.full(len(origins), np.inf)
     if len(segments) == 0 or len(origins) == 0:
         return out
-    if kernels.AVAILABLE:
+    if kernels.AVAILABLE and len(origins) * len(segments) > SMALL_RAY_SEGMENTS:
         kernels.call(kernels.segment_hits, np.ascontiguousarray(origins, dtype=float),
                      np.ascontiguousarray(directions, dtype=float), np.ascontiguousarray(segments, dtype=float),
                      _PARALLEL, out)
@@ -136,6 +141,28 @@ def _first_circle_hits(origins: FloatArray, directions: FloatArray, max_range: f
     return best
 
 
+def _dense_pair_circle_hits(centres: FloatArray, origins: FloatArray, directions: FloatArray,
+                            pairs: NDArray[np.intp], radius: float, k: int) -> FloatArray:
+    """:func:`kernels.pair_circle_hits` in numpy, for a few robots: the K rays of each robot of every pair
+    ``(P, 2)`` (both directions) against the other's circle; ``(N·K,)`` first hits, inf where none. The same
+    arithmetic in the same order, so the same bits (a NaN never lowers a hit, as the kernel's ``t < best``)."""
+    n = len(centres)
+    best = np.full((n, n, k), np.inf)  # [a, b, sensor]: ray of a against body b
+    if len(pairs):
+        a = np.concatenate((pairs[:, 0], pairs[:, 1]))
+        b = np.concatenate((pairs[:, 1], pairs[:, 0]))
+        rows = a[:, None] * k + np.arange(k)  # (2P, K) rays of a
+        with np.errstate(invalid="ignore", over="ignore"):
+            wx = centres[b, 0][:, None] - origins[rows, 0]
+            wy = centres[b, 1][:, None] - origins[rows, 1]
+            bb = wx * directions[rows, 0] + wy * directions[rows, 1]
+            cc = (wx * wx + wy * wy) - radius * radius
+            disc = bb * bb - cc
+            t = np.where(cc <= 0.0, 0.0, np.where((bb < 0.0) | (disc < 0.0), np.inf, bb - np.sqrt(disc)))
+            best[a, b] = np.where(t < np.inf, t, np.inf)
+    return best.min(axis=1).reshape(-1)
+
+
 def cast_sensor_rays(centres: ArrayLike, headings: ArrayLike, origins: ArrayLike, directions: ArrayLike,
                      sensor_headings: ArrayLike, max_range: float, radius: float) -> FloatArray:
     """The first hit ``(N, K)`` m of each robot's K sensor rays against the other robots' bodies (circles of
@@ -147,7 +174,10 @@ def cast_sensor_rays(centres: ArrayLike, headings: ArrayLike, origins: ArrayLike
     closer); of a pair (a, b) at centre distance d only the sensors
     whose heading lies within asin((radius + m)/d) of the direction from a to b can hit b (every sensor when
     d ≤ 2(radius + m)), found by a binary search over the sorted sensor headings — so the exact ray–circle test
-    runs on a few (pair, sensor) candidates, not on every pair times K.
+    runs on a few (pair, sensor) candidates, not on every pair times K. Up to
+    :data:`~swarmdeck.core.graphs.DENSE_PAIRS_ROBOTS` robots (an rps arena: 84 rays, 11 bodies each) every sensor of
+    every pair within reach (:func:`~swarmdeck.core.graphs.pairs_within`, all pairs compared) is tested in numpy: the
+    compiled kernel's bits, without scipy or numba.
     """
     c = np.asarray(centres, dtype=float).reshape(-1, 2)
     th = np.asarray(headings, dtype=float).reshape(-1)
@@ -163,10 +193,14 @@ def cast_sensor_rays(centres: ArrayLike, headings: ArrayLike, origins: ArrayLike
     sorted_h = h[order]
     twice = np.concatenate((sorted_h, sorted_h + 2 * np.pi))
     o_flat, u_flat = o.reshape(-1, 2), u.reshape(-1, 2)
+    near = radius + mount
+    if n <= DENSE_PAIRS_ROBOTS:  # a few robots: every pair within reach, every sensor, in numpy (no scipy, no numba)
+        best = _dense_pair_circle_hits(c, o_flat, u_flat, pairs_within(c, max_range + near), float(radius), k)
+        best[best > max_range] = np.inf
+        return best.reshape(n, k)
     from scipy.spatial import cKDTree  # lazy: see test_devices_rps_startup_imports
 
     tree = cKDTree(c)
-    near = radius + mount
     if kernels.AVAILABLE:  # compiled: every sensor of every pair within reach, one loop
         pairs = tree.query_pairs(max_range + near, output_type="ndarray").astype(np.intp)
         a = np.ascontiguousarray(np.concatenate((pairs[:, 0], pairs[:, 1])))
