@@ -18,7 +18,8 @@ from swarmdeck.core.graphs import DENSE_PAIRS_ROBOTS, pairs_within
 from swarmdeck.sensing import kernels
 from swarmdeck.sensing.config import SensingConfigError
 
-__all__ = ["cast_rays", "cast_sensor_rays", "check_segments", "ray_box", "ray_circles", "ray_segments"]
+__all__ = ["cast_rays", "cast_sensor_rays", "check_segments", "ray_box", "ray_circles", "ray_segments",
+           "segments_and_walls"]
 
 FloatArray = NDArray[np.float64]
 #: Below this |cross(ray, segment)| a ray and a segment are parallel: no single crossing point.
@@ -270,10 +271,21 @@ def cast_rays(origins: ArrayLike, directions: ArrayLike, max_range: float, *, ce
         c = np.asarray(centres, dtype=float).reshape(-1, 2)
         own = None if owners is None else np.asarray(owners, dtype=np.intp).reshape(-1)
         best = _first_circle_hits(o, u, max_range, c, float(radius), own)
-    seg = check_segments(segments)
-    if len(seg):
-        best = np.minimum(best, ray_segments(o, u, seg))
+    return segments_and_walls(best, o, u, max_range, check_segments(segments), bounds)
+
+
+def segments_and_walls(best: FloatArray, origins: FloatArray, directions: FloatArray, max_range: float,
+                       segments: FloatArray, bounds: Bounds | None) -> FloatArray:
+    """``best`` ``(R,)`` m lowered to each ray's first crossing of ``segments`` (checked ``(M, 2, 2)``, see
+    :func:`check_segments`) and of the walls of ``bounds`` (None: none), then inf beyond ``max_range``: the end of
+    :func:`cast_rays`, for callers that checked their rays and segments once (:class:`~swarmdeck.sensing.Sensors`).
+    Returns a new array."""
+    out = best
+    if len(segments):
+        out = np.minimum(out, ray_segments(origins, directions, segments))
     if bounds is not None:
-        best = np.minimum(best, ray_box(o, u, Bounds.of(bounds)))
-    best[best > max_range] = np.inf
-    return best
+        out = np.minimum(out, ray_box(origins, directions, Bounds.of(bounds)))
+    if out is best:
+        out = best.copy()
+    out[out > max_range] = np.inf
+    return out
