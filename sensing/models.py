@@ -48,11 +48,16 @@ def sensor_rays(poses: ArrayLike, config: DistanceSensorConfig) -> tuple[FloatAr
     s = config.pose_array()  # (K, 3)
     th = p[:, 2:3]  # (N, 1)
     c, sn = np.cos(th), np.sin(th)
-    centre = body_centres(p, config.body_offset)
-    ox = centre[:, 0:1] + c * s[None, :, 0] - sn * s[None, :, 1]
-    oy = centre[:, 1:2] + sn * s[None, :, 0] + c * s[None, :, 1]
+    offset = config.body_offset  # the body centre: body_centres' arithmetic, with these cos and sin
+    n, k = len(p), len(s)
+    origins = np.empty((n, k, 2))
+    origins[..., 0] = (p[:, 0:1] + offset * c) + c * s[None, :, 0] - sn * s[None, :, 1]
+    origins[..., 1] = (p[:, 1:2] + offset * sn) + sn * s[None, :, 0] + c * s[None, :, 1]
     heading = th + s[None, :, 2]
-    return np.stack((ox, oy), axis=-1), np.stack((np.cos(heading), np.sin(heading)), axis=-1)
+    directions = np.empty((n, k, 2))
+    directions[..., 0] = np.cos(heading)
+    directions[..., 1] = np.sin(heading)
+    return origins, directions
 
 
 def true_distances(poses: ArrayLike, config: DistanceSensorConfig, *, obstacles: ArrayLike | None = None,
@@ -73,8 +78,11 @@ def distances_along(poses: FloatArray, origins: FloatArray, directions: FloatArr
     ``origins``, ``directions`` ``(N, K, 2)`` against checked ``segments`` ``(M, 2, 2)``
     (:func:`~swarmdeck.sensing.geometry.check_segments`): for a caller that has the rays already. ``(N, K)`` m."""
     n, k = len(poses), config.n_sensors
-    t = cast_sensor_rays(body_centres(poses, config.body_offset), poses[:, 2], origins, directions,
-                         config.pose_array()[:, 2], config.max_range, config.body_radius)
+    if n < 2:  # no other body to hit (cast_sensor_rays' answer, without its set-up)
+        t = np.full((n, k), np.inf)
+    else:
+        t = cast_sensor_rays(body_centres(poses, config.body_offset), poses[:, 2], origins, directions,
+                             config.pose_array()[:, 2], config.max_range, config.body_radius)
     rest = segments_and_walls(np.full(n * k, np.inf), origins.reshape(-1, 2), directions.reshape(-1, 2),
                               config.max_range, segments, bounds if config.walls else None)
     return np.minimum(t, rest.reshape(n, k))

@@ -17,6 +17,7 @@ from swarmdeck.core.bounds import DEFAULT_BOUNDS
 from swarmdeck.core.kinematics import GritsBotParams
 from swarmdeck.sensing import DistanceSensorConfig, RangeBearingConfig, SensingConfig, Sensors
 from swarmdeck.sensing.models import (
+    body_centres,
     distance_endpoints,
     encoder_increment,
     encoders_and_imu,
@@ -135,3 +136,26 @@ def test_the_readings_before_the_first_step_are_unchanged():
     assert first.orientation is not None and np.array_equal(first.orientation, want.orientation)
     with pytest.raises(ValueError, match="read-only"):
         first.accel[0, 0] = 1.0
+
+
+def _sensor_rays_as_composed(poses: np.ndarray, config: DistanceSensorConfig) -> tuple[np.ndarray, np.ndarray]:
+    """sensor_rays as it was written before: the body centres, then each sensor's mount turned by the heading."""
+    s = config.pose_array()
+    th = poses[:, 2:3]
+    c, sn = np.cos(th), np.sin(th)
+    centre = body_centres(poses, config.body_offset)
+    ox = centre[:, 0:1] + c * s[None, :, 0] - sn * s[None, :, 1]
+    oy = centre[:, 1:2] + sn * s[None, :, 0] + c * s[None, :, 1]
+    heading = th + s[None, :, 2]
+    return np.stack((ox, oy), axis=-1), np.stack((np.cos(heading), np.sin(heading)), axis=-1)
+
+
+@settings(max_examples=30, deadline=None)
+@given(n=st.integers(0, 20), seed=st.integers(0, 2**31 - 1), scale=st.sampled_from([1e-3, 1.0, 1e3]))
+def test_the_sensor_rays_are_the_body_centres_and_mounts_bits(n, seed, scale):
+    rng = np.random.default_rng(seed)
+    poses = np.column_stack((rng.uniform(-scale, scale, (n, 2)), rng.uniform(-10.0, 10.0, n)))
+    cfg = DistanceSensorConfig()
+    got, want = sensor_rays(poses, cfg), _sensor_rays_as_composed(poses, cfg)
+    for a, b in zip(got, want):
+        assert a.shape == b.shape and np.array_equal(a, b)
