@@ -145,23 +145,26 @@ def _first_circle_hits(origins: FloatArray, directions: FloatArray, max_range: f
 def _dense_pair_circle_hits(centres: FloatArray, origins: FloatArray, directions: FloatArray,
                             pairs: NDArray[np.intp], radius: float, k: int) -> FloatArray:
     """:func:`kernels.pair_circle_hits` in numpy, for a few robots: the K rays of each robot of every pair
-    ``(P, 2)`` (both directions) against the other's circle; ``(N·K,)`` first hits, inf where none. The same
-    arithmetic in the same order, so the same bits (a NaN never lowers a hit, as the kernel's ``t < best``)."""
+    ``(P, 2)`` (both directions) against the other's circle; ``(N·K,)`` first hits, inf where none. Every (robot,
+    body, sensor) of the ``(N, N, K)`` grid is computed with the kernel's arithmetic in its order, those of no pair
+    are dropped — so the same bits (a NaN never lowers a hit, as the kernel's ``t < best``)."""
     n = len(centres)
-    best = np.full((n, n, k), np.inf)  # [a, b, sensor]: ray of a against body b
-    if len(pairs):
-        a = np.concatenate((pairs[:, 0], pairs[:, 1]))
-        b = np.concatenate((pairs[:, 1], pairs[:, 0]))
-        rows = a[:, None] * k + np.arange(k)  # (2P, K) rays of a
-        with np.errstate(invalid="ignore", over="ignore"):
-            wx = centres[b, 0][:, None] - origins[rows, 0]
-            wy = centres[b, 1][:, None] - origins[rows, 1]
-            bb = wx * directions[rows, 0] + wy * directions[rows, 1]
-            cc = (wx * wx + wy * wy) - radius * radius
-            disc = bb * bb - cc
-            t = np.where(cc <= 0.0, 0.0, np.where((bb < 0.0) | (disc < 0.0), np.inf, bb - np.sqrt(disc)))
-            best[a, b] = np.where(t < np.inf, t, np.inf)
-    return best.min(axis=1).reshape(-1)
+    if not len(pairs):
+        return np.full(n * k, np.inf)
+    o = origins.reshape(n, 1, k, 2)  # [a, ·, sensor]
+    u = directions.reshape(n, 1, k, 2)
+    paired = np.zeros((n, n, 1), dtype=bool)  # [a, b]: b is within reach of a
+    paired[pairs[:, 0], pairs[:, 1]] = True
+    paired[pairs[:, 1], pairs[:, 0]] = True
+    with np.errstate(invalid="ignore", over="ignore"):
+        wx = centres[None, :, 0, None] - o[..., 0]  # (N, N, K): body b's centre from a's sensor
+        wy = centres[None, :, 1, None] - o[..., 1]
+        bb = wx * u[..., 0] + wy * u[..., 1]
+        cc = (wx * wx + wy * wy) - radius * radius
+        disc = bb * bb - cc
+        t = np.where(cc <= 0.0, 0.0, np.where((bb < 0.0) | (disc < 0.0), np.inf, bb - np.sqrt(disc)))
+        t = np.where(paired & (t < np.inf), t, np.inf)
+    return t.min(axis=1).reshape(-1)
 
 
 def cast_sensor_rays(centres: ArrayLike, headings: ArrayLike, origins: ArrayLike, directions: ArrayLike,
