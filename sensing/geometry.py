@@ -193,15 +193,15 @@ def cast_sensor_rays(centres: ArrayLike, headings: ArrayLike, origins: ArrayLike
     if n < 2:
         return best.reshape(n, k)
     mount = float(np.max(np.hypot(*(o - c[:, None, :]).reshape(-1, 2).T))) if n else 0.0
-    order = np.argsort(h, kind="stable")
-    sorted_h = h[order]
-    twice = np.concatenate((sorted_h, sorted_h + 2 * np.pi))
     o_flat, u_flat = o.reshape(-1, 2), u.reshape(-1, 2)
     near = radius + mount
     if n <= DENSE_PAIRS_ROBOTS:  # a few robots: every pair within reach, every sensor, in numpy (no scipy, no numba)
         best = _dense_pair_circle_hits(c, o_flat, u_flat, pairs_within(c, max_range + near), float(radius), k)
         best[best > max_range] = np.inf
         return best.reshape(n, k)
+    order = np.argsort(h, kind="stable")  # the numpy fallback's angular windows
+    sorted_h = h[order]
+    twice = np.concatenate((sorted_h, sorted_h + 2 * np.pi))
     from scipy.spatial import cKDTree  # lazy: see test_devices_rps_startup_imports
 
     tree = cKDTree(c)
