@@ -36,7 +36,7 @@ from swarmdeck.core.kinematics import (
     wheels_to_unicycle,
 )
 from swarmdeck.core.obstacles import START_CLEARANCE
-from swarmdeck.core.ports import ReportsSensors, SensesElsewhere, ShowsLeds
+from swarmdeck.core.ports import SensesElsewhere, ShowsLeds
 from swarmdeck.core.robot_models import DEFAULT_ROBOT_MODEL, robot_params
 from swarmdeck.devices.controllers import (
     HybridPoseController,
@@ -384,9 +384,11 @@ class Arena:
         if self.sensors is None:
             return
         readings = None
-        port = self.backend
-        if isinstance(port, ReportsSensors):
-            readings = port.sensor_readings()
+        # isinstance(self.backend, ReportsSensors), as typing's protocol check decides it (its method present and not
+        # None), without its ≈ 20 µs per step
+        report = getattr(self.backend, "sensor_readings", None)
+        if report is not None:
+            readings = report()
         self._readings = readings if readings is not None else self.sensors.update(poses, v, w, self.config.dt)
 
     def _refuse_if_sealed(self, what: str) -> None:

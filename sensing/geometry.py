@@ -14,10 +14,12 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from swarmdeck.core.bounds import Bounds
+from swarmdeck.core.graphs import DENSE_PAIRS_ROBOTS, pairs_within
 from swarmdeck.sensing import kernels
 from swarmdeck.sensing.config import SensingConfigError
 
-__all__ = ["cast_rays", "cast_sensor_rays", "check_segments", "ray_box", "ray_circles", "ray_segments"]
+__all__ = ["cast_rays", "cast_sensor_rays", "check_segments", "ray_box", "ray_circles", "ray_segments",
+           "segments_and_walls"]
 
 FloatArray = NDArray[np.float64]
 #: Below this |cross(ray, segment)| a ray and a segment are parallel: no single crossing point.
@@ -26,6 +28,10 @@ _PARALLEL = 1e-12
 _STAGES = (0.125, 0.375, 1.0)
 #: The same for :func:`cast_sensor_rays`, whose stages work on robots (open while any of its rays is).
 _SENSOR_STAGES = (0.25, 1.0)
+#: Up to this many (ray, segment) pairs :func:`ray_segments` takes its numpy form even where numba is installed:
+#: the same bits (tests/sensing/test_sensing_small_paths.py), no numba import (≈ 0.5-1 s of CPU) for an rps-sized
+#: run (84 rays of 12 robots × 48 segments).
+SMALL_RAY_SEGMENTS = 4096
 
 
 def check_segments(segments: ArrayLike | None, name: str = "obstacles") -> FloatArray:
@@ -57,7 +63,7 @@ def ray_segments(origins: FloatArray, directions: FloatArray, segments: FloatArr
     out = np.full(len(origins), np.inf)
     if len(segments) == 0 or len(origins) == 0:
         return out
-    if kernels.AVAILABLE:
+    if kernels.AVAILABLE and len(origins) * len(segments) > SMALL_RAY_SEGMENTS:
         kernels.call(kernels.segment_hits, np.ascontiguousarray(origins, dtype=float),
                      np.ascontiguousarray(directions, dtype=float), np.ascontiguousarray(segments, dtype=float),
                      _PARALLEL, out)
@@ -136,6 +142,31 @@ def _first_circle_hits(origins: FloatArray, directions: FloatArray, max_range: f
     return best
 
 
+def _dense_pair_circle_hits(centres: FloatArray, origins: FloatArray, directions: FloatArray,
+                            pairs: NDArray[np.intp], radius: float, k: int) -> FloatArray:
+    """:func:`kernels.pair_circle_hits` in numpy, for a few robots: the K rays of each robot of every pair
+    ``(P, 2)`` (both directions) against the other's circle; ``(N·K,)`` first hits, inf where none. Every (robot,
+    body, sensor) of the ``(N, N, K)`` grid is computed with the kernel's arithmetic in its order, those of no pair
+    are dropped — so the same bits (a NaN never lowers a hit, as the kernel's ``t < best``)."""
+    n = len(centres)
+    if not len(pairs):
+        return np.full(n * k, np.inf)
+    o = origins.reshape(n, 1, k, 2)  # [a, ·, sensor]
+    u = directions.reshape(n, 1, k, 2)
+    paired = np.zeros((n, n, 1), dtype=bool)  # [a, b]: b is within reach of a
+    paired[pairs[:, 0], pairs[:, 1]] = True
+    paired[pairs[:, 1], pairs[:, 0]] = True
+    with np.errstate(invalid="ignore", over="ignore"):
+        wx = centres[None, :, 0, None] - o[..., 0]  # (N, N, K): body b's centre from a's sensor
+        wy = centres[None, :, 1, None] - o[..., 1]
+        bb = wx * u[..., 0] + wy * u[..., 1]
+        cc = (wx * wx + wy * wy) - radius * radius
+        disc = bb * bb - cc
+        t = np.where(cc <= 0.0, 0.0, np.where((bb < 0.0) | (disc < 0.0), np.inf, bb - np.sqrt(disc)))
+        t = np.where(paired & (t < np.inf), t, np.inf)
+    return t.min(axis=1).reshape(-1)
+
+
 def cast_sensor_rays(centres: ArrayLike, headings: ArrayLike, origins: ArrayLike, directions: ArrayLike,
                      sensor_headings: ArrayLike, max_range: float, radius: float) -> FloatArray:
     """The first hit ``(N, K)`` m of each robot's K sensor rays against the other robots' bodies (circles of
@@ -147,7 +178,10 @@ def cast_sensor_rays(centres: ArrayLike, headings: ArrayLike, origins: ArrayLike
     closer); of a pair (a, b) at centre distance d only the sensors
     whose heading lies within asin((radius + m)/d) of the direction from a to b can hit b (every sensor when
     d ≤ 2(radius + m)), found by a binary search over the sorted sensor headings — so the exact ray–circle test
-    runs on a few (pair, sensor) candidates, not on every pair times K.
+    runs on a few (pair, sensor) candidates, not on every pair times K. Up to
+    :data:`~swarmdeck.core.graphs.DENSE_PAIRS_ROBOTS` robots (an rps arena: 84 rays, 11 bodies each) every sensor of
+    every pair within reach (:func:`~swarmdeck.core.graphs.pairs_within`, all pairs compared) is tested in numpy: the
+    compiled kernel's bits, without scipy or numba.
     """
     c = np.asarray(centres, dtype=float).reshape(-1, 2)
     th = np.asarray(headings, dtype=float).reshape(-1)
@@ -159,14 +193,18 @@ def cast_sensor_rays(centres: ArrayLike, headings: ArrayLike, origins: ArrayLike
     if n < 2:
         return best.reshape(n, k)
     mount = float(np.max(np.hypot(*(o - c[:, None, :]).reshape(-1, 2).T))) if n else 0.0
-    order = np.argsort(h, kind="stable")
+    o_flat, u_flat = o.reshape(-1, 2), u.reshape(-1, 2)
+    near = radius + mount
+    if n <= DENSE_PAIRS_ROBOTS:  # a few robots: every pair within reach, every sensor, in numpy (no scipy, no numba)
+        best = _dense_pair_circle_hits(c, o_flat, u_flat, pairs_within(c, max_range + near), float(radius), k)
+        best[best > max_range] = np.inf
+        return best.reshape(n, k)
+    order = np.argsort(h, kind="stable")  # the numpy fallback's angular windows
     sorted_h = h[order]
     twice = np.concatenate((sorted_h, sorted_h + 2 * np.pi))
-    o_flat, u_flat = o.reshape(-1, 2), u.reshape(-1, 2)
     from scipy.spatial import cKDTree  # lazy: see test_devices_rps_startup_imports
 
     tree = cKDTree(c)
-    near = radius + mount
     if kernels.AVAILABLE:  # compiled: every sensor of every pair within reach, one loop
         pairs = tree.query_pairs(max_range + near, output_type="ndarray").astype(np.intp)
         a = np.ascontiguousarray(np.concatenate((pairs[:, 0], pairs[:, 1])))
@@ -236,10 +274,21 @@ def cast_rays(origins: ArrayLike, directions: ArrayLike, max_range: float, *, ce
         c = np.asarray(centres, dtype=float).reshape(-1, 2)
         own = None if owners is None else np.asarray(owners, dtype=np.intp).reshape(-1)
         best = _first_circle_hits(o, u, max_range, c, float(radius), own)
-    seg = check_segments(segments)
-    if len(seg):
-        best = np.minimum(best, ray_segments(o, u, seg))
+    return segments_and_walls(best, o, u, max_range, check_segments(segments), bounds)
+
+
+def segments_and_walls(best: FloatArray, origins: FloatArray, directions: FloatArray, max_range: float,
+                       segments: FloatArray, bounds: Bounds | None) -> FloatArray:
+    """``best`` ``(R,)`` m lowered to each ray's first crossing of ``segments`` (checked ``(M, 2, 2)``, see
+    :func:`check_segments`) and of the walls of ``bounds`` (None: none), then inf beyond ``max_range``: the end of
+    :func:`cast_rays`, for callers that checked their rays and segments once (:class:`~swarmdeck.sensing.Sensors`).
+    Returns a new array."""
+    out = best
+    if len(segments):
+        out = np.minimum(out, ray_segments(origins, directions, segments))
     if bounds is not None:
-        best = np.minimum(best, ray_box(o, u, Bounds.of(bounds)))
-    best[best > max_range] = np.inf
-    return best
+        out = np.minimum(out, ray_box(origins, directions, Bounds.of(bounds)))
+    if out is best:
+        out = best.copy()
+    out[out > max_range] = np.inf
+    return out

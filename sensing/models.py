@@ -16,10 +16,11 @@ from swarmdeck.core.constants import GRAVITY
 from swarmdeck.core.graphs import pairs_within
 from swarmdeck.core.kinematics import UnicycleParams, unicycle_to_wheels, wrap_angle
 from swarmdeck.sensing.config import DistanceSensorConfig, ImuConfig, RangeBearingConfig, SensingConfigError
-from swarmdeck.sensing.geometry import cast_rays, cast_sensor_rays, check_segments
+from swarmdeck.sensing.geometry import cast_sensor_rays, check_segments, segments_and_walls
 
-__all__ = ["ImuReadings", "RangeBearing", "check_sensing_poses", "distance_endpoints", "encoder_increment",
-           "imu_readings", "noisy_distances", "range_and_bearing", "sensor_rays", "true_distances"]
+__all__ = ["ImuReadings", "RangeBearing", "check_sensing_poses", "distance_endpoints", "distances_along",
+           "encoder_increment", "encoders_and_imu", "endpoints_along", "imu_readings", "noisy_distances",
+           "range_and_bearing", "sensor_rays", "true_distances"]
 
 FloatArray = NDArray[np.float64]
 
@@ -47,11 +48,16 @@ def sensor_rays(poses: ArrayLike, config: DistanceSensorConfig) -> tuple[FloatAr
     s = config.pose_array()  # (K, 3)
     th = p[:, 2:3]  # (N, 1)
     c, sn = np.cos(th), np.sin(th)
-    centre = body_centres(p, config.body_offset)
-    ox = centre[:, 0:1] + c * s[None, :, 0] - sn * s[None, :, 1]
-    oy = centre[:, 1:2] + sn * s[None, :, 0] + c * s[None, :, 1]
+    offset = config.body_offset  # the body centre: body_centres' arithmetic, with these cos and sin
+    n, k = len(p), len(s)
+    origins = np.empty((n, k, 2))
+    origins[..., 0] = (p[:, 0:1] + offset * c) + c * s[None, :, 0] - sn * s[None, :, 1]
+    origins[..., 1] = (p[:, 1:2] + offset * sn) + sn * s[None, :, 0] + c * s[None, :, 1]
     heading = th + s[None, :, 2]
-    return np.stack((ox, oy), axis=-1), np.stack((np.cos(heading), np.sin(heading)), axis=-1)
+    directions = np.empty((n, k, 2))
+    directions[..., 0] = np.cos(heading)
+    directions[..., 1] = np.sin(heading)
+    return origins, directions
 
 
 def true_distances(poses: ArrayLike, config: DistanceSensorConfig, *, obstacles: ArrayLike | None = None,
@@ -60,14 +66,25 @@ def true_distances(poses: ArrayLike, config: DistanceSensorConfig, *, obstacles:
     (a circle of ``body_radius`` centred ``body_offset`` ahead of its axle), an obstacle segment ``(M, 2, 2)`` or —
     when ``config.walls`` and ``bounds`` are given — a wall; inf where nothing lies within ``max_range``."""
     p = check_sensing_poses(poses)
-    n, k = len(p), config.n_sensors
-    if n == 0:
-        return np.empty((0, k))
+    if len(p) == 0:
+        return np.empty((0, config.n_sensors))
     origins, directions = sensor_rays(p, config)
-    t = cast_sensor_rays(body_centres(p, config.body_offset), p[:, 2], origins, directions,
-                         config.pose_array()[:, 2], config.max_range, config.body_radius)
-    rest = cast_rays(origins.reshape(-1, 2), directions.reshape(-1, 2), config.max_range,
-                     segments=check_segments(obstacles), bounds=bounds if config.walls else None)
+    return distances_along(p, origins, directions, config, check_segments(obstacles), bounds)
+
+
+def distances_along(poses: FloatArray, origins: FloatArray, directions: FloatArray, config: DistanceSensorConfig,
+                    segments: FloatArray, bounds: Bounds | None) -> FloatArray:
+    """:func:`true_distances` of checked ``poses`` ``(N, 3)`` (N ≥ 1) along their :func:`sensor_rays`
+    ``origins``, ``directions`` ``(N, K, 2)`` against checked ``segments`` ``(M, 2, 2)``
+    (:func:`~swarmdeck.sensing.geometry.check_segments`): for a caller that has the rays already. ``(N, K)`` m."""
+    n, k = len(poses), config.n_sensors
+    if n < 2:  # no other body to hit (cast_sensor_rays' answer, without its set-up)
+        t = np.full((n, k), np.inf)
+    else:
+        t = cast_sensor_rays(body_centres(poses, config.body_offset), poses[:, 2], origins, directions,
+                             config.pose_array()[:, 2], config.max_range, config.body_radius)
+    rest = segments_and_walls(np.full(n * k, np.inf), origins.reshape(-1, 2), directions.reshape(-1, 2),
+                              config.max_range, segments, bounds if config.walls else None)
     return np.minimum(t, rest.reshape(n, k))
 
 
@@ -92,6 +109,12 @@ def noisy_distances(true: ArrayLike, config: DistanceSensorConfig, rng: np.rando
 def distance_endpoints(poses: ArrayLike, readings: ArrayLike, config: DistanceSensorConfig) -> FloatArray:
     """Where each reading ends: ``(N, K, 2)`` m, NaN where the reading is −1 (nothing) or NaN."""
     origins, directions = sensor_rays(poses, config)
+    return endpoints_along(origins, directions, readings)
+
+
+def endpoints_along(origins: FloatArray, directions: FloatArray, readings: ArrayLike) -> FloatArray:
+    """:func:`distance_endpoints` along rays the caller has: ``origins``, ``directions`` ``(N, K, 2)``,
+    ``readings`` ``(N, K)`` m. ``(N, K, 2)`` m, NaN where the reading is −1 or NaN."""
     r = np.asarray(readings, dtype=float)
     with np.errstate(invalid="ignore"):
         ok = (r >= 0.0)[..., None]
@@ -185,3 +208,39 @@ def imu_readings(v: ArrayLike, w: ArrayLike, v_prev: ArrayLike, w_prev: ArrayLik
     mag = mag + np.asarray(config.mag_sigma) * rng.standard_normal((n, 3))
     orientation = np.mod(np.degrees(th) + config.orientation_sigma_deg * rng.standard_normal(n), 360.0)
     return ImuReadings(accel, gyro, mag, orientation)
+
+
+def encoders_and_imu(v: FloatArray, w: FloatArray, v_prev: FloatArray, w_prev: FloatArray, theta: FloatArray,
+                     dt: float, params: UnicycleParams, config: ImuConfig, rng: np.random.Generator, *,
+                     encoders: bool) -> tuple[FloatArray | None, ImuReadings]:
+    """:func:`encoder_increment` (when ``encoders``; else None) then :func:`imu_readings`, for float arrays ``(N,)``
+    — the same readings, bit for bit (tests/sensing/test_sensing_step_cost.py), for a fraction of the calls: their
+    normal draws are taken in one call (a Generator fills an array draw by draw, so 12N normals are the 2N + 3N +
+    3N + 3N + N of the separate calls, in their order) and the accelerometer, gyro and magnetometer are one
+    ``(3, N, 3)`` array (each a read-only view once the caller freezes it)."""
+    n = len(v)
+    z = rng.standard_normal((12 if encoders else 10) * n)
+    increment = None
+    at = 0
+    if encoders:
+        right, left = unicycle_to_wheels(v, w, params)
+        delta = np.column_stack((left, right)) * dt * config.counts_per_radian
+        sigma = config.encoder_sigma * np.sqrt(np.maximum(np.abs(delta), 1.0))
+        increment = np.round(delta + sigma * z[:2 * n].reshape(n, 2))
+        at = 2 * n
+    lin = (v - v_prev) / dt
+    ang = (w - w_prev) / dt
+    ox, oy = config.imu_offset
+    base = np.empty((3, n, 3))
+    base[0, :, 0] = lin - ang * oy - w * w * ox
+    base[0, :, 1] = ang * ox - w * w * oy
+    base[0, :, 2] = -GRAVITY
+    base[1, :, :2] = 0.0
+    base[1, :, 2] = w
+    base[2, :, 0] = config.mag_xy * np.cos(theta)
+    base[2, :, 1] = -config.mag_xy * np.sin(theta)
+    base[2, :, 2] = config.mag_z
+    sigmas = np.array((config.accel_sigma, config.gyro_sigma, config.mag_sigma), dtype=float)[:, None, :]
+    three = base + sigmas * z[at:at + 9 * n].reshape(3, n, 3)
+    orientation = np.mod(np.degrees(theta) + config.orientation_sigma_deg * z[at + 9 * n:], 360.0)
+    return increment, ImuReadings(three[0], three[1], three[2], orientation)

@@ -20,13 +20,12 @@ from swarmdeck.sensing.geometry import check_segments
 from swarmdeck.sensing.models import (
     RangeBearing,
     check_sensing_poses,
-    distance_endpoints,
-    encoder_increment,
-    imu_readings,
+    distances_along,
+    encoders_and_imu,
+    endpoints_along,
     noisy_distances,
     range_and_bearing,
     sensor_rays,
-    true_distances,
 )
 
 __all__ = ["SensorReadings", "Sensors", "check_leds"]
@@ -40,6 +39,20 @@ def _frozen(a: NDArray[Any] | None) -> Any:
     a = np.array(a, copy=True)
     a.flags.writeable = False
     return a
+
+
+def _sealed(a: NDArray[Any] | None) -> Any:
+    """``a`` made read-only in place: only for an array this module has just made and hands out (no copy)."""
+    if a is not None:
+        a.flags.writeable = False
+    return a
+
+
+def _finite_or_zero(values: ArrayLike, n: int) -> FloatArray:
+    """``values`` as a new float ``(n,)`` array with NaN and ±inf replaced by 0 (``np.nan_to_num(..., nan=0.0,
+    posinf=0.0, neginf=0.0)``, in fewer calls)."""
+    a = np.asarray(values, dtype=float).reshape(n)
+    return np.where(np.isfinite(a), a, 0.0)
 
 
 @dataclass(frozen=True)
@@ -166,36 +179,40 @@ class Sensors:
         p = check_sensing_poses(poses)
         if len(p) != self.n:
             raise SensingConfigError(f"poses has {len(p)} robots, the sensors {self.n}")
-        vv = np.nan_to_num(np.asarray(v, dtype=float).reshape(self.n), nan=0.0, posinf=0.0, neginf=0.0)
-        ww = np.nan_to_num(np.asarray(w, dtype=float).reshape(self.n), nan=0.0, posinf=0.0, neginf=0.0)
-        distances = None
-        if self.config.distance is not None:
-            true = true_distances(p, self.config.distance, obstacles=self.obstacles, bounds=self.bounds)
-            distances = noisy_distances(true, self.config.distance, self.rng)
-        readings = self._assemble(p, vv, ww, float(dt), distances=distances, step=True)
+        vv = _finite_or_zero(v, self.n)
+        ww = _finite_or_zero(w, self.n)
+        distances = rays = None
+        cfg = self.config.distance
+        if cfg is not None:
+            rays = sensor_rays(p, cfg)  # once: the casts, the origins and the endpoints
+            true = (distances_along(p, rays[0], rays[1], cfg, self.obstacles, self.bounds) if self.n
+                    else np.empty((0, cfg.n_sensors)))
+            distances = noisy_distances(true, cfg, self.rng)
+        readings = self._assemble(p, vv, ww, float(dt), distances=distances, rays=rays, step=True)
         self._v_prev, self._w_prev = vv, ww
         return readings
 
     def _assemble(self, p: FloatArray, v: FloatArray, w: FloatArray, dt: float, *, distances: FloatArray | None,
-                  step: bool = False) -> SensorReadings:
+                  rays: tuple[FloatArray, FloatArray] | None = None, step: bool = False) -> SensorReadings:
         cfg = self.config
         origins = endpoints = None
         if cfg.distance is not None and distances is not None:
-            origins = sensor_rays(p, cfg.distance)[0]
-            endpoints = distance_endpoints(p, distances, cfg.distance)
+            origins, directions = rays if rays is not None else sensor_rays(p, cfg.distance)
+            endpoints = endpoints_along(origins, directions, distances)
         encoders = accel = gyro = mag = orientation = None
         if cfg.imu is not None:
-            if step:
-                self._encoders = self._encoders + encoder_increment(v, w, dt, self.params, cfg.imu, self.rng)
-            imu = imu_readings(v, w, self._v_prev if step else v, self._w_prev if step else w, p[:, 2], dt, cfg.imu,
-                               self.rng)
+            increment, imu = encoders_and_imu(v, w, self._v_prev if step else v, self._w_prev if step else w, p[:, 2],
+                                              dt, self.params, cfg.imu, self.rng, encoders=step)
+            if increment is not None:
+                self._encoders = self._encoders + increment
             encoders = self._encoders.astype(np.int64)
             accel, gyro, mag, orientation = imu.accel, imu.gyro, imu.mag, imu.orientation
         rb = range_and_bearing(p, cfg.range_bearing, self.rng) if cfg.range_bearing is not None else None
         if rb is not None:
-            rb = RangeBearing(*(_frozen(a) for a in (rb.i, rb.j, rb.range, rb.bearing)))
+            rb = RangeBearing(*(_sealed(a) for a in (rb.i, rb.j, rb.range, rb.bearing)))
+        # every array below was made for these readings alone: read-only in place, no copies
         self.readings = SensorReadings(
-            distances=_frozen(distances), origins=_frozen(origins), endpoints=_frozen(endpoints),
-            encoders=_frozen(encoders), accel=_frozen(accel), gyro=_frozen(gyro), mag=_frozen(mag),
-            orientation=_frozen(orientation), range_bearing=rb, leds=_frozen(self._leds) if cfg.leds else None)
+            distances=_sealed(distances), origins=_sealed(origins), endpoints=_sealed(endpoints),
+            encoders=_sealed(encoders), accel=_sealed(accel), gyro=_sealed(gyro), mag=_sealed(mag),
+            orientation=_sealed(orientation), range_bearing=rb, leds=_frozen(self._leds) if cfg.leds else None)
         return self.readings

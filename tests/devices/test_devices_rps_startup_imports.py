@@ -67,3 +67,23 @@ def test_a_larger_barrier_loads_the_compiled_kernels(tmp_path: Path) -> None:
         "print(json.dumps({'numba': 'numba' in sys.modules, 'finite': bool(np.isfinite(safe).all())}))\n"
     )
     assert _child(code, tmp_path) == {"numba": True, "finite": True}
+
+
+SENSORS_EXAMPLE = ROOT / "tests" / "data" / "rps2_examples" / "master" / "sensors" / "sensor_readings.py"
+
+
+def test_an_rps_example_reading_its_distance_sensors_runs_without_numba_or_scipy(tmp_path: Path) -> None:
+    """sensor_readings.py (ToF sensors against eight obstacle segments) under ``swarmdeck run``: a few robots' rays
+    are cast in numpy (the compiled kernels' bits: tests/sensing/test_sensing_small_paths.py). Failed before: the ray
+    casts imported numba (and scipy.linalg with it)."""
+    script = tmp_path / SENSORS_EXAMPLE.name
+    shutil.copy(SENSORS_EXAMPLE, script)
+    code = (
+        "import json, sys\n"
+        "from swarmdeck.console.cli import main\n"
+        f"rc = main(['run', {str(script)!r}, '--duration', '1.0', '--seed', '1'])\n"
+        "print(json.dumps({'rc': rc, 'loaded': sorted(m for m in ('scipy', *" + repr(NOT_IMPORTED) + ")\n"
+        "                                            if m in sys.modules)}))\n"
+    )
+    res = _child(code, tmp_path)
+    assert res == {"rc": 0, "loaded": []}, res
