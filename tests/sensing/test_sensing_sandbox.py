@@ -1,6 +1,7 @@
 """Sensors inside the sandbox's jail (issue 28.1): an experiment and an rps 2.x script that read the ToF sensors run
 confined. The jail's code folders are read-only, so numba cannot save the ray-cast kernels it compiles there; the
-kernels still run (failed before: OSError, Read-only file system)."""
+kernels still run (failed before: OSError, Read-only file system). The experiment runs more robots than
+``core.graphs.DENSE_PAIRS_ROBOTS``, so its casts take the compiled kernels (fewer robots take numpy)."""
 from pathlib import Path
 
 import numpy as np
@@ -9,6 +10,7 @@ import pytest
 from swarmdeck.console.sandbox.confinement import probe
 from swarmdeck.console.sandbox.plant import ArenaPlant
 from swarmdeck.console.sandbox.run import run_sandboxed
+from swarmdeck.core.graphs import DENSE_PAIRS_ROBOTS
 from swarmdeck.devices.arena import Arena
 from swarmdeck.devices.simulator import ArenaConfig
 
@@ -36,7 +38,7 @@ def plant(n, initial):
 
 @confined
 def test_an_experiment_reading_its_sensors_runs_in_the_jail():
-    out = run_sandboxed(EXAMPLE, plant, n_robots=3, duration=1.0)
+    out = run_sandboxed(EXAMPLE, plant, n_robots=DENSE_PAIRS_ROBOTS + 1, duration=1.0)  # the compiled casts
     assert out.ok, out.error
     assert out.ticks > 0
 
