@@ -30,7 +30,7 @@ from swarmdeck.core.robot_models import DEFAULT_ROBOT_MODEL, model_name, robot_p
 from swarmdeck.devices.arena import RUN_DEFAULTS, Arena
 from swarmdeck.devices.rps import quiet_canvas
 from swarmdeck.devices.rps.errors import call_at_scripts_end_text, count_errors, debug_text
-from swarmdeck.devices.rps.figure_annotations import figure_annotations
+from swarmdeck.devices.rps.figure_annotations import Colours, figure_annotations
 from swarmdeck.devices.rps.robotarium_abc import ARobotarium
 from swarmdeck.devices.rps.sensors import RpsSensors, sensing_for
 from swarmdeck.devices.simulated_robots import SimulatedRobots
@@ -198,6 +198,7 @@ class Robotarium(RpsSensors, ARobotarium):
         self.skip_initialization = bool(skip_initialization)
         self._sim_in_real_time = real_time
         self._figure: Any = None
+        self._colours = Colours()  # the figure's colour conversions, by value, from step to step
 
     # ------------------------------------------------------------------ figure
     @property
@@ -296,7 +297,7 @@ class Robotarium(RpsSensors, ARobotarium):
         if self._figure is None:
             return
         x0, x1, y0, y1 = self._bounds
-        self._arena.draw.add(figure_annotations(self._figure[1], (x0, x1, y0, y1)), key="rps-figure")
+        self._arena.draw.add(figure_annotations(self._figure[1], (x0, x1, y0, y1), colours=self._colours), key="rps-figure")
 
     def _validate(self, errors: dict | None = None) -> dict:
         """rps's validation of the current poses and commanded velocities, counted into ``errors``
