@@ -114,10 +114,24 @@ class Certified:
     diagnostics: FilterDiagnostics | None
 
     def changed(self) -> BoolArray:
-        """``(N,)`` robots whose command the filter changed (beyond round-off of a non-unicycle filter)."""
-        same = (np.isclose(self.v, self.v_nominal, rtol=1e-9, atol=1e-12)
-                & np.isclose(self.w, self.w_nominal, rtol=1e-9, atol=1e-12))
-        return ~same
+        """``(N,)`` robots whose command the filter changed (beyond round-off of a non-unicycle filter): not
+        ``np.isclose(…, rtol=1e-9, atol=1e-12)`` in v or in ω (:func:`_close`, the same test)."""
+        return ~(_close(self.v, self.v_nominal) & _close(self.w, self.w_nominal))
+
+
+#: :meth:`Certified.changed`'s tolerances (np.isclose's rtol and atol)
+_CHANGED_RTOL, _CHANGED_ATOL = 1e-9, 1e-12
+
+
+def _close(x: Any, y: Any) -> BoolArray:
+    """``np.isclose(x, y, rtol=1e-9, atol=1e-12)`` for float64 arrays of one shape, without its argument handling
+    (its own expression: ``|x − y| ≤ atol + rtol·|y|`` where y is finite, or ``x == y``); anything else goes to
+    ``np.isclose`` itself."""
+    if not (type(x) is np.ndarray and type(y) is np.ndarray and x.dtype == np.float64 and y.dtype == np.float64
+            and x.shape == y.shape):
+        return np.asarray(np.isclose(x, y, rtol=_CHANGED_RTOL, atol=_CHANGED_ATOL))
+    with np.errstate(invalid="ignore"):
+        return (np.less_equal(np.abs(x - y), _CHANGED_ATOL + _CHANGED_RTOL * np.abs(y)) & np.isfinite(y)) | (x == y)
 
 
 def barrier_filter(robot: GritsBotParams, bounds: Bounds, dt: float,
