@@ -89,7 +89,7 @@ class SteppedRobots:
         reading = self.source.read(0.0)
         self._reading = reading
         ids = np.asarray(reading.ids, dtype=np.int64)
-        if len(ids) == self.n_robots and np.array_equal(ids, self.ids):
+        if len(ids) == self.n_robots and ids.shape == self.ids.shape and bool((ids == self.ids).all()):
             p = np.asarray(reading.poses, dtype=float)
         else:  # robots left out of this reading keep their last known pose
             rows, have = rows_of(ids, self.ids)

@@ -92,3 +92,17 @@ def test_the_ports_capabilities_are_read_once_when_the_robots_are_built():
     for _ in range(3):
         assert robots.obstacles().tolist() == [[1.0, 1.0], [1.2, 1.0]]  # the sink's obstacles, read every step
     assert walls.lookups == built + 3
+
+
+@settings(max_examples=100, deadline=None)
+@given(st.integers(0, 12).flatmap(lambda n: arrays(np.float64, (n, 3), elements=st.floats(-0.3, 0.3))))
+def test_colliding_pairs_without_a_pair_is_the_same_empty_answer(poses):
+    from swarmdeck.devices.validation import ValidationRules, colliding_pairs
+
+    rules = ValidationRules()
+    got = colliding_pairs(poses, rules)
+    x = poses[:, 0] + rules.collision_shift * np.cos(poses[:, 2])
+    y = poses[:, 1] + rules.collision_shift * np.sin(poses[:, 2])
+    want = [(i, j) for i in range(len(poses)) for j in range(i + 1, len(poses))
+            if np.hypot(x[i] - x[j], y[i] - y[j]) <= rules.collision_distance]
+    assert got.dtype == np.intp and got.shape == (len(want), 2) and got.tolist() == [list(p) for p in want]
