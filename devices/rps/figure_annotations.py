@@ -28,18 +28,35 @@ SWARMDECK_GID = "swarmdeck-arena"
 
 class _Builder:
     """The primitives of one figure, in the artists' order, joined into one :class:`Annotations` at the end: each
-    :meth:`add` only remembers its pieces (no array work per artist), :meth:`build` joins them with a few numpy
-    calls."""
+    :meth:`one`/:meth:`add` only remembers its pieces (no array work per artist), :meth:`build` joins them with a
+    few numpy calls."""
 
     def __init__(self) -> None:
-        self.kinds: list[int] = []  # per add: its kind, its primitive count, filled
+        self.kinds: list[int] = []  # per piece: its kind, its primitive count, filled
         self.ps: list[int] = []
         self.filled: list[bool] = []
-        self.counts: list[Any] = []  # per add: (p,) vertex counts
+        self.counts: list[Any] = []  # per piece: one vertex count (int), or (p,) of them
         self.vertices: list[NDArray[np.float64]] = []
-        self.sizes: list[Any] = []  # per add: one size or (p,)
-        self.colors: list[NDArray[np.uint8]] = []  # per add: (p, 4), or (1, 4) / (4,) for all of them
+        self.sizes: list[Any] = []  # per piece: one size, or (p,)
+        self.colors: list[NDArray[np.uint8]] = []  # per piece: (p, 4)
         self.texts: list[str] = []
+
+    def one(self, kind: int, vertices: NDArray[np.float64], size: Any, colour: Any, filled: bool,
+            text: str = "") -> None:
+        """One primitive of ``kind`` over ``vertices`` (V, 2) m, ``size`` m, ``colour`` (4,) or (1, 4) uint8 (no rows:
+        an invisible colour, nothing is added): what :meth:`add` does with one primitive."""
+        colour = np.asarray(colour, dtype=np.uint8)
+        if not colour.size:
+            return
+        vertices = np.asarray(vertices, dtype=float).reshape(-1, 2)
+        self.kinds.append(kind)
+        self.ps.append(1)
+        self.filled.append(bool(filled))
+        self.counts.append(len(vertices))
+        self.vertices.append(vertices)
+        self.sizes.append(size if np.ndim(size) == 0 else np.broadcast_to(np.asarray(size, dtype=float), (1,)))
+        self.colors.append(colour if colour.shape == (1, 4) else np.broadcast_to(colour, (1, 4)))
+        self.texts.append(text)
 
     def add(self, kind: int, vertices: NDArray[np.float64], counts: Any, sizes: Any, colors: Any,
             filled: bool, texts: list[str] | None = None) -> None:
@@ -54,26 +71,38 @@ class _Builder:
         self.kinds.append(kind)
         self.ps.append(p)
         self.filled.append(bool(filled))
-        self.counts.append(counts)
+        self.counts.append(np.asarray(counts, dtype=np.int64).reshape(-1))
         self.vertices.append(np.asarray(vertices, dtype=float).reshape(-1, 2))
-        self.sizes.append(sizes if p == 1 or np.ndim(sizes) == 0 else np.broadcast_to(np.asarray(sizes, dtype=float),
-                                                                                     (p,)))
+        self.sizes.append(np.broadcast_to(np.asarray(sizes, dtype=float), (p,)))
         self.colors.append(colors)
         self.texts.extend(texts if texts is not None else [""] * p)
+
+    @staticmethod
+    def _join(pieces: list[Any], dtype: Any) -> NDArray[Any]:
+        """Pieces of one value each (ints, floats) or arrays of several, in order, as one 1-D array of ``dtype``."""
+        parts: list[NDArray[Any]] = []
+        run: list[Any] = []
+        for piece in pieces:
+            if isinstance(piece, np.ndarray) and piece.ndim:
+                if run:
+                    parts.append(np.array(run, dtype=dtype))
+                    run = []
+                parts.append(piece)
+            else:
+                run.append(piece)
+        if run:
+            parts.append(np.array(run, dtype=dtype))
+        return parts[0].astype(dtype, copy=False) if len(parts) == 1 else np.concatenate(parts).astype(dtype,
+                                                                                                       copy=False)
 
     def build(self) -> Annotations:
         if not self.kinds:
             return EMPTY
         ps = np.array(self.ps, dtype=np.intp)
-        counts = np.concatenate([np.asarray(c, dtype=np.int64).reshape(-1) for c in self.counts])
-        if all(np.ndim(s) == 0 for s in self.sizes):
-            sizes = np.repeat(np.array(self.sizes, dtype=float), ps)
-        else:
-            sizes = np.concatenate([np.broadcast_to(np.asarray(s, dtype=float).reshape(-1), (p,))
-                                    for s, p in zip(self.sizes, self.ps)])
+        counts = self._join(self.counts, np.int64)
         return Annotations(kinds=np.repeat(np.array(self.kinds, dtype=np.uint8), ps),
                            offsets=np.concatenate(([0], np.cumsum(counts))),
-                           vertices=np.concatenate(self.vertices), sizes=sizes,
+                           vertices=np.concatenate(self.vertices), sizes=self._join(self.sizes, float),
                            colors=np.concatenate(self.colors), filled=np.repeat(np.array(self.filled), ps),
                            texts=tuple(self.texts))
 
@@ -143,6 +172,12 @@ def _inside(xy: NDArray[np.float64], b: Bounds) -> NDArray[np.bool_]:
                       & (xy[..., 1] <= b.y_max))
 
 
+def _inside_one(xy: NDArray[np.float64], b: Bounds) -> bool:
+    """:func:`_inside` of the one point ``xy`` (1, 2) (the same comparisons, on its two floats)."""
+    x, y = xy[0]
+    return bool(b.x_min <= x <= b.x_max and b.y_min <= y <= b.y_max)
+
+
 def figure_annotations(axes: Any, bounds: Bounds | tuple[float, float, float, float], *,
                        colours: Colours | None = None) -> Annotations:
     """The annotations of what the script drew on ``axes`` inside the arena ``bounds`` (module docstring).
@@ -181,30 +216,41 @@ def figure_annotations(axes: Any, bounds: Bounds | tuple[float, float, float, fl
             if isinstance(artist, Circle):
                 c = data([artist.center], artist.get_data_transform())
                 edge = data([[artist.center[0] + artist.radius, artist.center[1]]], artist.get_data_transform())
-                if _inside(c, b).all():
-                    out.add(CIRCLE, c, np.ones(1, dtype=np.int64), float(np.linalg.norm(edge - c)), colour, filled)
+                if _inside_one(c, b):
+                    out.one(CIRCLE, c, float(np.linalg.norm(edge - c)), colour, filled)
                 continue
             for poly in artist.get_path().to_polygons(artist.get_patch_transform()):
                 xy = data(poly, artist.get_data_transform())
                 if len(xy) > 1 and np.allclose(xy[0], xy[-1]):
                     xy = xy[:-1]
                 if len(xy) >= 3 and _inside(xy, b).any():
-                    out.add(POLYGON, xy, np.array([len(xy)]), width, colour, filled)
+                    out.one(POLYGON, xy, width, colour, filled)
         elif isinstance(artist, Line2D):
             xy = data(artist.get_xydata(), artist.get_transform())
-            xy = xy[np.isfinite(xy).all(axis=1)]
-            inside_mask = _inside(xy, b)
-            if not len(xy) or not inside_mask.any():
-                continue
+            finite = np.isfinite(xy).all(axis=1)
+            if not finite.all():
+                xy = xy[finite]
+            if len(xy) == 1:
+                if not _inside_one(xy, b):
+                    continue
+                inside_mask = None  # the one point
+            else:
+                inside_mask = _inside(xy, b)
+                if not len(xy) or not inside_mask.any():
+                    continue
             colour = rgba(artist.get_color(), artist.get_alpha())
             if artist.get_linestyle() not in ("None", "", " ", "none") and len(xy) >= 2:
-                out.add(POLYLINE, xy, np.array([len(xy)]), artist.get_linewidth() * m_per_pt, colour, False)
+                out.one(POLYLINE, xy, artist.get_linewidth() * m_per_pt, colour, False)
             if artist.get_marker() not in (None, "None", "", " ", "none"):
-                inside = xy[inside_mask]
+                inside = xy if inside_mask is None else xy[inside_mask]
                 face = rgba(artist.get_markerfacecolor(), artist.get_alpha())
                 hollow = not len(face)  # markerfacecolor "none": an outlined marker in its edge colour
-                out.add(POINT, inside, np.ones(len(inside), dtype=np.int64), artist.get_markersize() / 2 * m_per_pt,
-                        rgba(artist.get_markeredgecolor(), artist.get_alpha()) if hollow else face, not hollow)
+                dot_colour = rgba(artist.get_markeredgecolor(), artist.get_alpha()) if hollow else face
+                if len(inside) == 1:
+                    out.one(POINT, inside, artist.get_markersize() / 2 * m_per_pt, dot_colour, not hollow)
+                else:
+                    out.add(POINT, inside, np.ones(len(inside), dtype=np.int64),
+                            artist.get_markersize() / 2 * m_per_pt, dot_colour, not hollow)
         elif isinstance(artist, Collection):
             alpha = artist.get_alpha()
             if isinstance(artist, PathCollection):  # scatter
@@ -226,7 +272,7 @@ def figure_annotations(axes: Any, bounds: Bounds | tuple[float, float, float, fl
                 for i, seg in enumerate(segs):
                     xy = data(seg, artist.get_transform())
                     if len(xy) >= 2 and _inside(xy, b).any():
-                        out.add(POLYLINE, xy, np.array([len(xy)]), widths[i % len(widths)] * m_per_pt if len(widths) else 0.01,
+                        out.one(POLYLINE, xy, widths[i % len(widths)] * m_per_pt if len(widths) else 0.01,
                                 cols[i % len(cols)], False)
             else:  # polygon / patch collections
                 faces = artist.get_facecolor()
@@ -238,13 +284,13 @@ def figure_annotations(axes: Any, bounds: Bounds | tuple[float, float, float, fl
                         if len(xy) > 1 and np.allclose(xy[0], xy[-1]):
                             xy = xy[:-1]
                         if len(xy) >= 3 and _inside(xy, b).any():
-                            out.add(POLYGON, xy, np.array([len(xy)]), 0.01, cols[i % len(cols)], filled)
+                            out.one(POLYGON, xy, 0.01, cols[i % len(cols)], filled)
         elif isinstance(artist, Text):
             text = artist.get_text()
             if not text:
                 continue
             xy = data([artist.get_position()], artist.get_transform())
-            if _inside(xy, b).all():
-                out.add(TEXT, xy, np.ones(1, dtype=np.int64), artist.get_fontsize() * m_per_pt,
-                        rgba(artist.get_color(), artist.get_alpha()), False, [text])
+            if _inside_one(xy, b):
+                out.one(TEXT, xy, artist.get_fontsize() * m_per_pt, rgba(artist.get_color(), artist.get_alpha()),
+                        False, text)
     return out.build()
