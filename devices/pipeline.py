@@ -186,16 +186,18 @@ def certify(poses: ArrayLike, nominal: ArrayLike, robot: GritsBotParams, filt: S
     if robot_bounds is not None and np.shape(robot_bounds) != (n, 4):
         raise ValueError(f"certify: robot_bounds {np.shape(robot_bounds)} must be (N, 4) for {n} robots")
     invalid = ~np.all(np.isfinite(nominal), axis=1)
-    u = np.where((invalid | ~seen_mask)[:, None], 0.0, nominal)
+    all_seen = bool(seen_mask.all())
+    zero = invalid if all_seen else invalid | ~seen_mask
+    u = np.where(zero[:, None], 0.0, nominal) if zero.any() else nominal  # (nothing to zero: the nominal as it is)
     ell = robot.lookahead
     v0, w0, saturated = limit_unicycle(*si_to_unicycle(poses, u, ell), robot)
     if filt is None:
         v, w, ok, status, diag = v0, w0, True, "off", None
     else:
         v, w, ok, status, diag = _filter(filt, poses, v0, w0, seen_mask, obstacles, robot, robot_bounds)
-    if not seen_mask.all():
+    if not all_seen:
         v, w = np.where(seen_mask, v, 0.0), np.where(seen_mask, w, 0.0)
-    safe = unicycle_to_si(np.where(seen_mask[:, None], poses, 0.0), v, w, ell)
+    safe = unicycle_to_si(poses if all_seen else np.where(seen_mask[:, None], poses, 0.0), v, w, ell)
     return Certified(v, w, safe, v0, w0, saturated, invalid, ok, status, diag)
 
 

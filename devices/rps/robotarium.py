@@ -273,7 +273,9 @@ class Robotarium(RpsSensors, ARobotarium):
         if vel.shape[1] != len(idx):
             raise ValueError(f"velocities has {vel.shape[1]} columns for {len(idx)} ids")
         if not self.rps_semantics:  # (rps semantics: step() hands the velocities to the robots itself)
-            self._arena.set_unicycle(vel[0], vel[1], ids=idx)
+            n = self.number_of_robots  # every robot in order (rps scripts pass np.arange(N)): the same command
+            every = idx.shape == (n,) and bool((idx == np.arange(n)).all())
+            self._arena.set_unicycle(vel[0], vel[1], ids=None if every else idx)
         self._velocities[:, idx] = vel
 
     def step(self) -> None:
@@ -309,7 +311,8 @@ class Robotarium(RpsSensors, ARobotarium):
             pairs = robots.sim.last_collisions  # the simulator validated these very poses after its last step
         v, w = self._velocities
         limit = 2 * self.wheel_radius * self.max_wheel_velocity  # |2v ± Lω| / (2r) > max wheel speed
-        over = bool(np.any(np.abs(2 * v - self.base_length * w) > limit) or np.any(np.abs(2 * v + self.base_length * w) > limit))
+        two_v, turn = 2 * v, self.base_length * w
+        over = bool((np.abs(two_v - turn) > limit).any() or (np.abs(two_v + turn) > limit).any())
         count_errors(errors, self._arena.poses(), over, self._bounds, pairs)
         return errors
 
