@@ -214,10 +214,18 @@ def unicycle_step(poses: ArrayLike, v: ArrayLike, w: ArrayLike, dt: float) -> Fl
     theta = poses[:, 2]
     a = w * dt  # heading change over the step
     small = np.abs(a) < 1e-6
-    a_safe = np.where(small, 1.0, a)
-    # f = sin(a)/a, g = (1 - cos a)/a with their Taylor series near 0.
-    f = np.where(small, 1.0 - a * a / 6.0, np.sin(a_safe) / a_safe)
-    g = np.where(small, a / 2.0 - a**3 / 24.0, (1.0 - np.cos(a_safe)) / a_safe)
+    # f = sin(a)/a, g = (1 - cos a)/a with their Taylor series near 0 (when every robot takes one form, only that
+    # form is computed: the same numbers np.where would pick).
+    if not small.any():
+        f = np.sin(a) / a
+        g = (1.0 - np.cos(a)) / a
+    elif small.all():
+        f = 1.0 - a * a / 6.0
+        g = a / 2.0 - a**3 / 24.0
+    else:
+        a_safe = np.where(small, 1.0, a)
+        f = np.where(small, 1.0 - a * a / 6.0, np.sin(a_safe) / a_safe)
+        g = np.where(small, a / 2.0 - a**3 / 24.0, (1.0 - np.cos(a_safe)) / a_safe)
     d = v * dt
     c, s = np.cos(theta), np.sin(theta)
     out = np.empty_like(poses)

@@ -560,8 +560,6 @@ class Arena:
         """
         kind, cmd = self._command
         ell, dt = self.ell, self.config.dt
-        if points is None:
-            points = lookahead_points(poses, ell)
         if kind == "si":
             return cmd.copy()
         if kind == "unicycle":
@@ -569,6 +567,8 @@ class Arena:
         if kind == "wheels":
             v, w = wheels_to_unicycle(cmd[:, 0], cmd[:, 1], self.params)
             return unicycle_to_si(poses, v, w, ell)
+        if points is None:  # the kinds below move from the look-ahead points
+            points = lookahead_points(poses, ell)
         if kind == "next":
             return (cmd - points) / dt
         if kind == "goals":

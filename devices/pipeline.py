@@ -114,10 +114,24 @@ class Certified:
     diagnostics: FilterDiagnostics | None
 
     def changed(self) -> BoolArray:
-        """``(N,)`` robots whose command the filter changed (beyond round-off of a non-unicycle filter)."""
-        same = (np.isclose(self.v, self.v_nominal, rtol=1e-9, atol=1e-12)
-                & np.isclose(self.w, self.w_nominal, rtol=1e-9, atol=1e-12))
-        return ~same
+        """``(N,)`` robots whose command the filter changed (beyond round-off of a non-unicycle filter): not
+        ``np.isclose(…, rtol=1e-9, atol=1e-12)`` in v or in ω (:func:`_close`, the same test)."""
+        return ~(_close(self.v, self.v_nominal) & _close(self.w, self.w_nominal))
+
+
+#: :meth:`Certified.changed`'s tolerances (np.isclose's rtol and atol)
+_CHANGED_RTOL, _CHANGED_ATOL = 1e-9, 1e-12
+
+
+def _close(x: Any, y: Any) -> BoolArray:
+    """``np.isclose(x, y, rtol=1e-9, atol=1e-12)`` for float64 arrays of one shape, without its argument handling
+    (its own expression: ``|x − y| ≤ atol + rtol·|y|`` where y is finite, or ``x == y``); anything else goes to
+    ``np.isclose`` itself."""
+    if not (type(x) is np.ndarray and type(y) is np.ndarray and x.dtype == np.float64 and y.dtype == np.float64
+            and x.shape == y.shape):
+        return np.asarray(np.isclose(x, y, rtol=_CHANGED_RTOL, atol=_CHANGED_ATOL))
+    with np.errstate(invalid="ignore"):
+        return (np.less_equal(np.abs(x - y), _CHANGED_ATOL + _CHANGED_RTOL * np.abs(y)) & np.isfinite(y)) | (x == y)
 
 
 def barrier_filter(robot: GritsBotParams, bounds: Bounds, dt: float,
@@ -172,16 +186,18 @@ def certify(poses: ArrayLike, nominal: ArrayLike, robot: GritsBotParams, filt: S
     if robot_bounds is not None and np.shape(robot_bounds) != (n, 4):
         raise ValueError(f"certify: robot_bounds {np.shape(robot_bounds)} must be (N, 4) for {n} robots")
     invalid = ~np.all(np.isfinite(nominal), axis=1)
-    u = np.where((invalid | ~seen_mask)[:, None], 0.0, nominal)
+    all_seen = bool(seen_mask.all())
+    zero = invalid if all_seen else invalid | ~seen_mask
+    u = np.where(zero[:, None], 0.0, nominal) if zero.any() else nominal  # (nothing to zero: the nominal as it is)
     ell = robot.lookahead
     v0, w0, saturated = limit_unicycle(*si_to_unicycle(poses, u, ell), robot)
     if filt is None:
         v, w, ok, status, diag = v0, w0, True, "off", None
     else:
         v, w, ok, status, diag = _filter(filt, poses, v0, w0, seen_mask, obstacles, robot, robot_bounds)
-    if not seen_mask.all():
+    if not all_seen:
         v, w = np.where(seen_mask, v, 0.0), np.where(seen_mask, w, 0.0)
-    safe = unicycle_to_si(np.where(seen_mask[:, None], poses, 0.0), v, w, ell)
+    safe = unicycle_to_si(poses if all_seen else np.where(seen_mask[:, None], poses, 0.0), v, w, ell)
     return Certified(v, w, safe, v0, w0, saturated, invalid, ok, status, diag)
 
 

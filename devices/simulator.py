@@ -165,8 +165,9 @@ class SimulatedArena:
         if v.shape != (n,) or w.shape != (n,):
             raise ValueError(f"v and w must each have shape ({n},), got {v.shape} and {w.shape}")
         invalid = ~(np.isfinite(v) & np.isfinite(w))
-        v = np.where(invalid, 0.0, v)
-        w = np.where(invalid, 0.0, w)
+        if invalid.any():
+            v = np.where(invalid, 0.0, v)
+            w = np.where(invalid, 0.0, w)
         v, w, saturated = limit_unicycle(v, w, self.params)
         self._v, self._w = v, w
         new = unicycle_step(self._poses, v, w, self.config.dt)

@@ -26,9 +26,9 @@ from swarmdeck.core.ports import (
     CommandSink,
     NominalSink,
     PoseSource,
+    ReportsObstacles,
     ReportsValidation,
     SensedPoses,
-    obstacles_of,
     rows_of,
 )
 from swarmdeck.devices.clock import RealTimePacer
@@ -74,6 +74,10 @@ class SteppedRobots:
         self.simulated = reading.time is not None
         self._t0 = float(reading.time) if reading.time is not None else clock()
         self._pacer = None if self.simulated else RealTimePacer(self.dt)
+        # the ports' optional capabilities, checked once: isinstance on a runtime_checkable Protocol walks the
+        # protocol's attributes at every call, and a port's class does not change while it drives the robots
+        self._nominal_sink: NominalSink | None = self.sink if isinstance(self.sink, NominalSink) else None
+        self._reports_obstacles = isinstance(self.sink, ReportsObstacles)
 
     def start_clock(self) -> None:
         """Time 0 is now (robots in the real world; a simulated clock keeps its first reading's time)."""
@@ -85,7 +89,7 @@ class SteppedRobots:
         reading = self.source.read(0.0)
         self._reading = reading
         ids = np.asarray(reading.ids, dtype=np.int64)
-        if len(ids) == self.n_robots and np.array_equal(ids, self.ids):
+        if len(ids) == self.n_robots and ids.shape == self.ids.shape and bool((ids == self.ids).all()):
             p = np.asarray(reading.poses, dtype=float)
         else:  # robots left out of this reading keep their last known pose
             rows, have = rows_of(ids, self.ids)
@@ -118,11 +122,11 @@ class SteppedRobots:
     @property
     def nominal_sink(self) -> NominalSink | None:
         """The sink when it is behind a trust boundary (it takes nominal velocities), else None."""
-        return self.sink if isinstance(self.sink, NominalSink) else None
+        return self._nominal_sink
 
     def obstacles(self) -> FloatArray | None:
         """``(M, 2)`` fixed obstacles the sink knows (robots excluded from control, docked robots), m."""
-        found = obstacles_of(self.sink)
+        found = self.sink.obstacles() if self._reports_obstacles else None
         if found is None:
             return None
         obs = np.asarray(found, dtype=float).reshape(-1, 2)

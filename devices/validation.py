@@ -74,6 +74,8 @@ def colliding_pairs(poses: ArrayLike, rules: ValidationRules = ValidationRules()
         y = p[:, 1] + rules.collision_shift * np.sin(p[:, 2])
         i, j = _upper_pairs(n)  # lexicographic
         close = np.hypot(x[i] - x[j], y[i] - y[j]) <= rules.collision_distance  # (no overflow in a square)
+        if not close.any():  # the usual step: no pair (the same empty (0, 2) intp answer)
+            return np.empty((0, 2), dtype=np.intp)
         return np.column_stack((i[close], j[close]))
     shifted = lookahead_points(p, rules.collision_shift)
     from scipy.spatial import cKDTree  # here, not at import: a sandboxed script's process never needs scipy
@@ -161,11 +163,14 @@ class ValidationReport:
             self.collision_pairs += len(pairs)
             if self.first_collision_time is None:
                 self.first_collision_time = time
-        self.boundary_per_robot += oob
-        self.steps_with_boundary += bool(oob.any())
-        self.actuator_per_robot += saturated
-        self.steps_with_actuator += bool(np.any(saturated))
-        self.invalid_command_per_robot += invalid
+        if oob.any():  # (a mask without a robot adds nothing)
+            self.boundary_per_robot += oob
+            self.steps_with_boundary += 1
+        if np.any(saturated):
+            self.actuator_per_robot += saturated
+            self.steps_with_actuator += 1
+        if np.any(invalid):
+            self.invalid_command_per_robot += invalid
         return pairs
 
     def verdict(self, declared_duration: float | None = None, rules: ValidationRules = ValidationRules()) -> list[str]:

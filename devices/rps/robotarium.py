@@ -30,7 +30,7 @@ from swarmdeck.core.robot_models import DEFAULT_ROBOT_MODEL, model_name, robot_p
 from swarmdeck.devices.arena import RUN_DEFAULTS, Arena
 from swarmdeck.devices.rps import quiet_canvas
 from swarmdeck.devices.rps.errors import call_at_scripts_end_text, count_errors, debug_text
-from swarmdeck.devices.rps.figure_annotations import figure_annotations
+from swarmdeck.devices.rps.figure_annotations import Colours, figure_annotations
 from swarmdeck.devices.rps.robotarium_abc import ARobotarium
 from swarmdeck.devices.rps.sensors import RpsSensors, sensing_for
 from swarmdeck.devices.simulated_robots import SimulatedRobots
@@ -198,6 +198,7 @@ class Robotarium(RpsSensors, ARobotarium):
         self.skip_initialization = bool(skip_initialization)
         self._sim_in_real_time = real_time
         self._figure: Any = None
+        self._colours = Colours()  # the figure's colour conversions, by value, from step to step
 
     # ------------------------------------------------------------------ figure
     @property
@@ -272,7 +273,9 @@ class Robotarium(RpsSensors, ARobotarium):
         if vel.shape[1] != len(idx):
             raise ValueError(f"velocities has {vel.shape[1]} columns for {len(idx)} ids")
         if not self.rps_semantics:  # (rps semantics: step() hands the velocities to the robots itself)
-            self._arena.set_unicycle(vel[0], vel[1], ids=idx)
+            n = self.number_of_robots  # every robot in order (rps scripts pass np.arange(N)): the same command
+            every = idx.shape == (n,) and bool((idx == np.arange(n)).all())
+            self._arena.set_unicycle(vel[0], vel[1], ids=None if every else idx)
         self._velocities[:, idx] = vel
 
     def step(self) -> None:
@@ -296,7 +299,7 @@ class Robotarium(RpsSensors, ARobotarium):
         if self._figure is None:
             return
         x0, x1, y0, y1 = self._bounds
-        self._arena.draw.add(figure_annotations(self._figure[1], (x0, x1, y0, y1)), key="rps-figure")
+        self._arena.draw.add(figure_annotations(self._figure[1], (x0, x1, y0, y1), colours=self._colours), key="rps-figure")
 
     def _validate(self, errors: dict | None = None) -> dict:
         """rps's validation of the current poses and commanded velocities, counted into ``errors``
@@ -308,7 +311,8 @@ class Robotarium(RpsSensors, ARobotarium):
             pairs = robots.sim.last_collisions  # the simulator validated these very poses after its last step
         v, w = self._velocities
         limit = 2 * self.wheel_radius * self.max_wheel_velocity  # |2v ± Lω| / (2r) > max wheel speed
-        over = bool(np.any(np.abs(2 * v - self.base_length * w) > limit) or np.any(np.abs(2 * v + self.base_length * w) > limit))
+        two_v, turn = 2 * v, self.base_length * w
+        over = bool((np.abs(two_v - turn) > limit).any() or (np.abs(two_v + turn) > limit).any())
         count_errors(errors, self._arena.poses(), over, self._bounds, pairs)
         return errors
 
