@@ -102,7 +102,7 @@ def _dense_spd_solve(G: np.ndarray, rhs: np.ndarray) -> np.ndarray | None:
     numerically positive definite
     (dependent rows beyond what the ridge covers) goes through LU.
     """
-    G[np.diag_indices_from(G)] += _RIDGE
+    G.flat[:: G.shape[0] + 1] += _RIDGE  # the diagonal (np.diag_indices_from's elements, the same additions)
     try:
         return small_lapack.cho_solve(G, rhs)  # scipy.linalg's cho_factor/cho_solve without importing scipy.linalg
     except np.linalg.LinAlgError:
@@ -269,10 +269,13 @@ def solve_active_set(rows: Rows, nominal: np.ndarray, max_speed: float | None,
         while True:
             idx = np.flatnonzero(W)
             cidx = np.flatnonzero(cut)
-            work = _Working(np.concatenate([rows.i[idx], cidx]), np.concatenate([jj[idx], cidx]),
-                            np.concatenate([rows.ci[idx], normals[cidx]]),
-                            np.concatenate([rows.cj[idx], np.zeros((cidx.size, 2))]),
-                            np.concatenate([rows.b[idx], np.full(cidx.size, vmax)]), n)
+            if cidx.size:
+                work = _Working(np.concatenate([rows.i[idx], cidx]), np.concatenate([jj[idx], cidx]),
+                                np.concatenate([rows.ci[idx], normals[cidx]]),
+                                np.concatenate([rows.cj[idx], np.zeros((cidx.size, 2))]),
+                                np.concatenate([rows.b[idx], np.full(cidx.size, vmax)]), n)
+            else:  # no speed cut: the working rows alone (what the concatenations give, without copying twice)
+                work = _Working(rows.i[idx], jj[idx], rows.ci[idx], rows.cj[idx], rows.b[idx], n)
             if work.ai.size == 0:
                 lam = np.zeros(0)
                 break

@@ -498,7 +498,9 @@ class SafetyFilter:
         iterations = 0
         warm = None
         if self._warm_shape == (n, n_obs) and self._warm_keys.size:
-            warm = np.isin(rows.key, self._warm_keys, assume_unique=True)
+            # rows.key in the sorted unique _warm_keys (np.isin's answer, by one binary search)
+            keys = self._warm_keys
+            warm = keys[np.minimum(np.searchsorted(keys, rows.key), keys.size - 1)] == rows.key
         closed_loop = warm is not None and bool(warm.any())
         if closed_loop and self._warm_wait > 0:
             # a recent tick's warm paths spent the whole active-set cap and gave up: this tick goes to
@@ -740,8 +742,13 @@ class SafetyFilter:
             min_d = nearest_pair_distance(P)
         else:
             min_d = float("inf")
-        x_min, x_max, y_min, y_max = cfg.bounds if self._walls is None else self._walls.T
-        if n:
+        if n and self._walls is None:
+            # one rectangle: min(x − c) = min(x) − c and min(c − x) = c − max(x) exactly (rounding is monotonic)
+            x_min, x_max, y_min, y_max = (float(v) for v in cfg.bounds)
+            lo, hi = P.min(axis=0).tolist(), P.max(axis=0).tolist()
+            min_wall = min(lo[0] - x_min, x_max - hi[0], lo[1] - y_min, y_max - hi[1])
+        elif n:
+            x_min, x_max, y_min, y_max = self._walls.T
             clear = np.stack([P[:, 0] - x_min, x_max - P[:, 0], P[:, 1] - y_min, y_max - P[:, 1]], axis=1)
             min_wall = float(clear.min())
         else:
