@@ -23,6 +23,7 @@ falls back to clarabel. Robots no row touches are solved in closed form.
 """
 from __future__ import annotations
 
+import math
 import time
 from dataclasses import dataclass
 
@@ -82,8 +83,13 @@ def clip_speed(u: np.ndarray, vmax: float) -> np.ndarray:
     out = np.array(u, dtype=float, copy=True)
     if not np.isfinite(vmax):
         return out
+    return _clip_into(out, vmax, np.einsum("kd,kd->k", out, out))
+
+
+def _clip_into(out: np.ndarray, vmax: float, s2: np.ndarray) -> np.ndarray:
+    """:func:`clip_speed`'s scaling of ``out`` (N, 2) (a float array of the caller's own, changed in place and
+    returned) whose squared speeds are ``s2`` (N,) (``einsum("kd,kd->k", out, out)``), finite ``vmax`` m/s."""
     limit = vmax * vmax
-    s2 = np.einsum("kd,kd->k", out, out)
     over = np.flatnonzero(s2 > limit)
     if over.size:
         out[over] *= (vmax / np.sqrt(s2[over]))[:, None]
@@ -229,6 +235,7 @@ def solve_active_set(rows: Rows, nominal: np.ndarray, max_speed: float | None,
     involved[rows.i] = True
     involved[jj] = True
     vmax = np.inf if max_speed is None else float(max_speed)
+    finite = math.isfinite(vmax)
 
     # closed form for robots without rows: û scaled into the speed disc
     base, _, _ = _project(uh, vmax)
@@ -249,8 +256,10 @@ def solve_active_set(rows: Rows, nominal: np.ndarray, max_speed: float | None,
     def fail(reason: str, it: int) -> ActiveSetResult:
         return ActiveSetResult(np.zeros((n, 2)), False, reason, W, cut, it, solves=count[0])
 
-    def certify(u: np.ndarray, work: _Working | None, lam: np.ndarray, it: int) -> ActiveSetResult | None:
-        if np.any(rows.lhs(u) - rows.b > feas_tol):
+    def certify(u: np.ndarray, work: _Working | None, lam: np.ndarray, it: int,
+                slack: np.ndarray | None = None) -> ActiveSetResult | None:
+        # slack: rows.lhs(u) − rows.b when the caller has it for this u already
+        if np.any((rows.lhs(u) - rows.b if slack is None else slack) > feas_tol):
             return None
         if work is not None and lam.size:
             eq = work.A(u) - work.b
@@ -259,7 +268,7 @@ def solve_active_set(rows: Rows, nominal: np.ndarray, max_speed: float | None,
         speed = np.einsum("kd,kd->k", u, u)
         if np.any(speed > (vmax * (1 + 1e-9)) ** 2):
             return None
-        u = clip_speed(u, vmax)  # rounding only
+        u = u.astype(float) if not finite else _clip_into(u.astype(float), vmax, speed)  # rounding only (clip_speed)
         held = W & (lam_rows > 0)
         return ActiveSetResult(u, True, "certified", held, speed >= vmax * vmax * (1 - 1e-9), it,
                                np.where(held, lam_rows, 0.0), count[0])
@@ -310,12 +319,13 @@ def solve_active_set(rows: Rows, nominal: np.ndarray, max_speed: float | None,
         lam_rows[idx] = lam[: idx.size]
         lam_cut[cidx] = lam[idx.size:]
         u = base - work.At(lam) if lam.size else base.copy()
-        viol = (rows.lhs(u) - rows.b > feas_tol) & ~W
+        slack = rows.lhs(u) - rows.b
+        viol = (slack > feas_tol) & ~W
         sp2 = np.einsum("kd,kd->k", u, u)
         new_cut = involved & ~cut & (sp2 > vmax * vmax * (1 + 1e-12))
         if not viol.any() and not new_cut.any():
             if cidx.size == 0:
-                done = certify(u, work, lam, it)
+                done = certify(u, work, lam, it, slack)
                 return done if done is not None else fail("not certified", it)
             # the rows have settled: solve the discs exactly (Newton on u(λ) = Π_D(û − Aᵀλ))
             rw = _Working(rows.i[idx], jj[idx], rows.ci[idx], rows.cj[idx], rows.b[idx], n)

@@ -204,6 +204,8 @@ def wall_rows(points: np.ndarray, cfg: BarrierConfig, bounds: np.ndarray | None 
     x, y = points[:, 0], points[:, 1]
     clearance = np.stack([x_max - m - x, x - x_min - m, y_max - m - y, y - y_min - m], axis=1)  # (N,4)
     near = clearance <= cfg.wall_radius() - m
+    if not near.any():
+        return Rows.empty()  # the same empty arrays (dtypes and shapes) as below
     i, side = np.nonzero(near)
     i = i.astype(np.int64)
     side = side.astype(np.int64)

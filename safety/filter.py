@@ -366,6 +366,17 @@ class SafetyFilter:
             return U.copy(), self._diag(True, "nominal safe", t0, rows, P, U, U, O, np.zeros(rows.m, bool),
                                         0, True, "pass-through", 0, 0, n_unsafe, answer="optimum")
 
+        if not recovering:  # one part, every robot: the loop below's answer without its copies
+            solved = self._solve_plain(rows, U, max_speed, n, n_obs, budget)
+            if isinstance(solved, str) and solved.startswith(_BUDGET):
+                return self._solve_floor(P, U, O, plain, max_speed, t0, budget, solved)
+            if isinstance(solved, str):
+                return self.fail_stop(n, U, solved, t0, rows.m)
+            lam = np.zeros(rows.m) if solved.lam is None else solved.lam
+            self._remember(rows, solved.active, n, n_obs, solved.u, lam)
+            return solved.u, self._diag(True, "optimal", t0, rows, P, U, solved.u, O, solved.active, solved.n_speed,
+                                        False, solved.method, solved.iterations, 0, n_unsafe, answer="optimum",
+                                        work=budget.spent)
         n_clusters = 0
         if recovering:  # clusters with unsafe rows are solved apart (their QP may be infeasible)
             n_clusters, labels = self._clusters(rows, n)
