@@ -140,6 +140,14 @@ def restrict(rows: Rows, robots: np.ndarray, n: int) -> tuple[Rows, np.ndarray]:
     return Rows(remap[sub.i], j, sub.ci, sub.cj, sub.b, sub.h, sub.kind, sub.key), keep
 
 
+def _pair_columns(i: np.ndarray, j: np.ndarray) -> np.ndarray:
+    """``np.stack([i, j], axis=1)`` (K, 2) for two (K,) index arrays, without stack's generality."""
+    out = np.empty((i.shape[0], 2), dtype=np.result_type(i, j))
+    out[:, 0] = i
+    out[:, 1] = j
+    return out
+
+
 @dataclass(frozen=True)
 class _Solved:
     u: np.ndarray
@@ -777,7 +785,7 @@ class SafetyFilter:
         return BarrierDiagnostics(
             ok=ok, status=status, solve_time_s=time.perf_counter() - t0, n_constraints=rows.m,
             n_active=int(active.sum()) + int(n_speed),
-            active_pairs=np.stack([rows.i[act_pair], rows.j[act_pair]], axis=1),
+            active_pairs=_pair_columns(rows.i[act_pair], rows.j[act_pair]),
             active_h=rows.h[act_pair].copy(), min_distance=min_d, min_wall_clearance=min_wall,
             intervention=inter, nominal_was_safe=was_safe, method=method, iterations=iterations,
             n_clusters=int(n_clusters), n_unsafe=n_unsafe, min_obstacle_distance=min_obs,

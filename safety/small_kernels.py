@@ -88,14 +88,21 @@ def ascend(ri: np.ndarray, rj: np.ndarray, ci: np.ndarray, cj: np.ndarray, b: np
                 wy[i] -= d * c1
                 wx[j] -= d * d0
                 wy[j] -= d * d1
-                for r in (i, j):
-                    x, y = wx[r], wy[r]
+                x, y = wx[i], wy[i]
+                s = x * x + y * y
+                if s > vv:
+                    f = vmax / math.sqrt(s)
+                    ux[i], uy[i] = x * f, y * f
+                else:
+                    ux[i], uy[i] = x, y
+                if j != i:  # a single-robot row (j = i) has projected its robot already: the same numbers
+                    x, y = wx[j], wy[j]
                     s = x * x + y * y
                     if s > vv:
                         f = vmax / math.sqrt(s)
-                        ux[r], uy[r] = x * f, y * f
+                        ux[j], uy[j] = x * f, y * f
                     else:
-                        ux[r], uy[r] = x, y
+                        ux[j], uy[j] = x, y
         return worst
 
     every_row = list(range(m))
