@@ -259,14 +259,14 @@ def solve_active_set(rows: Rows, nominal: np.ndarray, max_speed: float | None,
     def certify(u: np.ndarray, work: _Working | None, lam: np.ndarray, it: int,
                 slack: np.ndarray | None = None) -> ActiveSetResult | None:
         # slack: rows.lhs(u) − rows.b when the caller has it for this u already
-        if np.any((rows.lhs(u) - rows.b if slack is None else slack) > feas_tol):
+        if ((rows.lhs(u) - rows.b if slack is None else slack) > feas_tol).any():
             return None
         if work is not None and lam.size:
             eq = work.A(u) - work.b
             if float(np.max(np.abs(eq[lam > 0]), initial=0.0)) > 1e-8:
                 return None
         speed = np.einsum("kd,kd->k", u, u)
-        if np.any(speed > (vmax * (1 + 1e-9)) ** 2):
+        if (speed > (vmax * (1 + 1e-9)) ** 2).any():
             return None
         u = u.astype(float) if not finite else _clip_into(u.astype(float), vmax, speed)  # rounding only (clip_speed)
         held = W & (lam_rows > 0)
@@ -294,7 +294,7 @@ def solve_active_set(rows: Rows, nominal: np.ndarray, max_speed: float | None,
                 return fail("work cap", it)
             count[0] += 1
             lam = work.solve(None, rhs)  # type: ignore[assignment]
-            if lam is None or not np.all(np.isfinite(lam)):
+            if lam is None or not np.isfinite(lam).all():
                 return fail("singular working set", it)
             neg = lam < 0
             if not neg.any():

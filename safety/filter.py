@@ -96,7 +96,7 @@ def as_points(x: ArrayLike, name: str, n: int | None = None) -> np.ndarray:
         raise InputError(f"{name} must have shape (N, 2), got {arr.shape}")
     if n is not None and arr.shape[0] != n:
         raise InputError(f"{name} must have shape ({n}, 2) like points, got {arr.shape}")
-    if not np.all(np.isfinite(arr)):
+    if not np.isfinite(arr).all():
         bad = np.flatnonzero(~np.all(np.isfinite(arr), axis=1))
         raise InputError(f"{name} contains NaN or inf in rows {bad[:10].tolist()}")
     return arr
@@ -343,7 +343,7 @@ class SafetyFilter:
             return self.fail_stop(n, U, f"cannot build the barrier rows: {exc}", t0)
         if extra is not None and extra.m:
             rows = Rows.concat([rows, extra])
-        if not np.all(np.isfinite(rows.b)):
+        if not np.isfinite(rows.b).all():
             # an overflowing bound (inf) or inf·0 (NaN) would silently drop its row from the QP
             bad = ~np.isfinite(rows.b)
             kinds = sorted({_KIND_NAMES[int(k)] for k in np.unique(rows.kind[bad])})
@@ -433,9 +433,9 @@ class SafetyFilter:
     @staticmethod
     def _satisfies(rows: Rows, U: np.ndarray, max_speed: float | None) -> bool:
         """û meets every row (to _PASS_TOL) and every speed bound (exactly)."""
-        if max_speed is not None and not bool(np.all(np.einsum("kd,kd->k", U, U) <= max_speed**2)):
+        if max_speed is not None and not bool((np.einsum("kd,kd->k", U, U) <= max_speed**2).all()):
             return False
-        return bool(np.all(rows.lhs(U) <= rows.b + _PASS_TOL))
+        return bool((rows.lhs(U) <= rows.b + _PASS_TOL).all())
 
     @staticmethod
     def _active_set(rows: Rows, U: np.ndarray, max_speed: float | None, warm_rows: np.ndarray | None,
@@ -781,7 +781,11 @@ class SafetyFilter:
             min_obs = float(cKDTree(O).query(P, k=1)[0].min())
         else:
             min_obs = float("inf")
-        inter = np.zeros(n) if was_safe else np.sqrt(np.einsum("kd,kd->k", u - U, u - U))
+        if was_safe:
+            inter = np.zeros(n)
+        else:
+            du = u - U
+            inter = np.sqrt(np.einsum("kd,kd->k", du, du))
         return BarrierDiagnostics(
             ok=ok, status=status, solve_time_s=time.perf_counter() - t0, n_constraints=rows.m,
             n_active=int(active.sum()) + int(n_speed),

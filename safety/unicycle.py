@@ -94,7 +94,7 @@ class UnicycleSafetyFilter:
             Wc = np.asarray(w, dtype=float)
             if V.shape != (n,) or Wc.shape != (n,):
                 raise InputError(f"v and w must have shape ({n},), got {V.shape} and {Wc.shape}")
-            if not (np.all(np.isfinite(X)) and np.all(np.isfinite(V)) and np.all(np.isfinite(Wc))):
+            if not (np.isfinite(X).all() and np.isfinite(V).all() and np.isfinite(Wc).all()):
                 raise InputError("poses, v or w contain NaN or inf")
             O = None if obstacles is None else as_points(obstacles, "obstacles")
             B = None if robot_bounds is None else as_robot_bounds(robot_bounds, n)
