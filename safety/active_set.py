@@ -257,12 +257,14 @@ def solve_active_set(rows: Rows, nominal: np.ndarray, max_speed: float | None,
         return ActiveSetResult(np.zeros((n, 2)), False, reason, W, cut, it, solves=count[0])
 
     def certify(u: np.ndarray, work: _Working | None, lam: np.ndarray, it: int,
-                slack: np.ndarray | None = None) -> ActiveSetResult | None:
-        # slack: rows.lhs(u) − rows.b when the caller has it for this u already
+                slack: np.ndarray | None = None, rows_of_work: np.ndarray | None = None) -> ActiveSetResult | None:
+        # slack: rows.lhs(u) − rows.b when the caller has it for this u already; rows_of_work: the rows ``work``
+        # holds, when it holds rows only (no speed cut): its residuals are then those rows' slack (the same
+        # products and sums row by row; at most the sign of a zero differs, which |·| below cannot see)
         if ((rows.lhs(u) - rows.b if slack is None else slack) > feas_tol).any():
             return None
         if work is not None and lam.size:
-            eq = work.A(u) - work.b
+            eq = work.A(u) - work.b if slack is None or rows_of_work is None else slack[rows_of_work]
             if float(np.max(np.abs(eq[lam > 0]), initial=0.0)) > 1e-8:
                 return None
         speed = np.einsum("kd,kd->k", u, u)
@@ -325,7 +327,7 @@ def solve_active_set(rows: Rows, nominal: np.ndarray, max_speed: float | None,
         new_cut = involved & ~cut & (sp2 > vmax * vmax * (1 + 1e-12))
         if not viol.any() and not new_cut.any():
             if cidx.size == 0:
-                done = certify(u, work, lam, it, slack)
+                done = certify(u, work, lam, it, slack, idx)
                 return done if done is not None else fail("not certified", it)
             # the rows have settled: solve the discs exactly (Newton on u(λ) = Π_D(û − Aᵀλ))
             rw = _Working(rows.i[idx], jj[idx], rows.ci[idx], rows.cj[idx], rows.b[idx], n)

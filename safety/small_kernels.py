@@ -66,16 +66,18 @@ def ascend(ri: np.ndarray, rj: np.ndarray, ci: np.ndarray, cj: np.ndarray, b: np
     inv = [1.0 / (CI0[k] * CI0[k] + CI1[k] * CI1[k] + CJ0[k] * CJ0[k] + CJ1[k] * CJ1[k]) for k in range(m)]
     resid = [0.0] * m
 
-    def sweep(idx: list[int]) -> float:
+    table = list(zip(RI, RJ, CI0, CI1, CJ0, CJ1, B, inv))  # one row's numbers, read by one index
+
+    def sweep(idx: list[int], table: list = table, ux: list[float] = ux, uy: list[float] = uy,
+              wx: list[float] = wx, wy: list[float] = wy, lam: list[float] = lam, resid: list[float] = resid,
+              omega: float = omega, vv: float = vv, vmax: float = vmax, sqrt=math.sqrt) -> float:  # noqa: ANN001
         worst = 0.0
         for k in idx:
-            i = RI[k]
-            j = RJ[k]
-            c0, c1, d0, d1 = CI0[k], CI1[k], CJ0[k], CJ1[k]
-            res = c0 * ux[i] + c1 * uy[i] + d0 * ux[j] + d1 * uy[j] - B[k]
+            i, j, c0, c1, d0, d1, bk, ik = table[k]
+            res = c0 * ux[i] + c1 * uy[i] + d0 * ux[j] + d1 * uy[j] - bk
             resid[k] = res
             old = lam[k]
-            new = old + omega * res * inv[k]
+            new = old + omega * res * ik
             if new < 0.0:
                 new = 0.0
             e = abs(res) if old > 0.0 else (0.0 if 0.0 > res else res)  # numba's max(res, 0.0)
@@ -91,7 +93,7 @@ def ascend(ri: np.ndarray, rj: np.ndarray, ci: np.ndarray, cj: np.ndarray, b: np
                 x, y = wx[i], wy[i]
                 s = x * x + y * y
                 if s > vv:
-                    f = vmax / math.sqrt(s)
+                    f = vmax / sqrt(s)
                     ux[i], uy[i] = x * f, y * f
                 else:
                     ux[i], uy[i] = x, y
@@ -99,7 +101,7 @@ def ascend(ri: np.ndarray, rj: np.ndarray, ci: np.ndarray, cj: np.ndarray, b: np
                     x, y = wx[j], wy[j]
                     s = x * x + y * y
                     if s > vv:
-                        f = vmax / math.sqrt(s)
+                        f = vmax / sqrt(s)
                         ux[j], uy[j] = x * f, y * f
                     else:
                         ux[j], uy[j] = x, y
