@@ -761,17 +761,18 @@ class SafetyFilter:
             min_d = nearest_pair_distance(P)
         else:
             min_d = float("inf")
-        if n and self._walls is None:
+        walls = self._walls
+        if not n:
+            min_wall = float("inf")
+        elif walls is None:
             # one rectangle: min(x − c) = min(x) − c and min(c − x) = c − max(x) exactly (rounding is monotonic)
-            x_min, x_max, y_min, y_max = (float(v) for v in cfg.bounds)
+            left, right, bottom, top = (float(v) for v in cfg.bounds)
             lo, hi = P.min(axis=0).tolist(), P.max(axis=0).tolist()
-            min_wall = min(lo[0] - x_min, x_max - hi[0], lo[1] - y_min, y_max - hi[1])
-        elif n:
-            x_min, x_max, y_min, y_max = self._walls.T
+            min_wall = min(lo[0] - left, right - hi[0], lo[1] - bottom, top - hi[1])
+        else:
+            x_min, x_max, y_min, y_max = walls.T
             clear = np.stack([P[:, 0] - x_min, x_max - P[:, 0], P[:, 1] - y_min, y_max - P[:, 1]], axis=1)
             min_wall = float(clear.min())
-        else:
-            min_wall = float("inf")
         obs = rows.kind == OBSTACLE
         if obs.any():
             min_obs = float(np.sqrt(np.min(rows.h[obs]) + cfg.safety_distance**2))

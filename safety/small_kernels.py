@@ -12,6 +12,7 @@ the one test.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 
 import numpy as np
 
@@ -70,7 +71,8 @@ def ascend(ri: np.ndarray, rj: np.ndarray, ci: np.ndarray, cj: np.ndarray, b: np
 
     def sweep(idx: list[int], table: list = table, ux: list[float] = ux, uy: list[float] = uy,
               wx: list[float] = wx, wy: list[float] = wy, lam: list[float] = lam, resid: list[float] = resid,
-              omega: float = omega, vv: float = vv, vmax: float = vmax, sqrt=math.sqrt) -> float:  # noqa: ANN001
+              omega: float = omega, vv: float = vv, vmax: float = vmax,
+              sqrt: Callable[[float], float] = math.sqrt) -> float:
         worst = 0.0
         for k in idx:
             i, j, c0, c1, d0, d1, bk, ik = table[k]

@@ -44,12 +44,12 @@ def wheel_limit_rows(poses: np.ndarray, params: UnicycleParams, n_obs: int = 0) 
     g[:, 2, 1] = s - k * c
     g[:, 0::2] /= r
     np.negative(g[:, 0::2], out=g[:, 1::2])
-    g = g.reshape(-1, 2)  # (4N, 2)
+    flat = g.reshape(-1, 2)  # (4N, 2)
     norm = np.sqrt(1 + k * k) / r
     row = np.arange(4 * n, dtype=np.int64)
     i = row // 4
     key = n * n + 4 * n + n * n_obs + row  # 4i + side
-    return Rows(i, np.full_like(i, -1), g / norm, np.zeros_like(g), np.full(4 * n, params.max_wheel_speed / norm),
+    return Rows(i, np.full_like(i, -1), flat / norm, np.zeros_like(flat), np.full(4 * n, params.max_wheel_speed / norm),
                 np.full(4 * n, np.inf), np.full(4 * n, LIMIT, dtype=np.int8), key)
 
 
