@@ -85,8 +85,8 @@ class Rows:
     def concat(parts: list[Rows]) -> Rows:
         """The rows of ``parts`` in order (one part holding rows alone: that part itself, whose arrays are the
         concatenation's values and dtypes: every builder makes int64 indices, int8 kinds and float rows)."""
-        full = [p for p in parts if p.m]
-        if len(full) == 1 and all(getattr(p, f).dtype == _DTYPES[f] for p in parts for f in _FIELDS):
+        full = [p for p in parts if p.b.shape[0]]
+        if len(full) == 1 and all(map(_canonical, parts)):
             return full[0]
         return Rows(*(np.concatenate([getattr(p, f) for p in parts]) for f in _FIELDS))
 
@@ -99,8 +99,14 @@ class Rows:
 
 
 _FIELDS = ("i", "j", "ci", "cj", "b", "h", "kind", "key")
-_DTYPES = {"i": np.dtype(np.int64), "j": np.dtype(np.int64), "ci": np.dtype(float), "cj": np.dtype(float),
-           "b": np.dtype(float), "h": np.dtype(float), "kind": np.dtype(np.int8), "key": np.dtype(np.int64)}
+_INT64, _FLOAT, _INT8 = np.dtype(np.int64), np.dtype(float), np.dtype(np.int8)
+
+
+def _canonical(p: Rows) -> bool:
+    """Whether ``p``'s arrays have the dtypes every row builder makes (int64 indices and keys, float rows, int8
+    kinds): then concatenating it with others of the same kind changes no dtype."""
+    return (p.i.dtype == _INT64 and p.j.dtype == _INT64 and p.key.dtype == _INT64 and p.kind.dtype == _INT8
+            and p.ci.dtype == _FLOAT and p.cj.dtype == _FLOAT and p.b.dtype == _FLOAT and p.h.dtype == _FLOAT)
 
 
 def _unit_or_fallback(e: np.ndarray, d: np.ndarray, seed: np.ndarray) -> np.ndarray:

@@ -34,6 +34,7 @@ and ``diag.ok`` is False with the reason in ``diag.status``.
 from __future__ import annotations
 
 import dataclasses
+import math
 import time
 from dataclasses import dataclass
 
@@ -370,8 +371,9 @@ class SafetyFilter:
 
         # pass-through: û satisfies every row and speed bound → u* = û exactly
         if self._satisfies(rows, U, max_speed):
-            self._remember(rows, np.zeros(rows.m, bool), n, n_obs, U)
-            return U.copy(), self._diag(True, "nominal safe", t0, rows, P, U, U, O, np.zeros(rows.m, bool),
+            none = np.zeros(rows.m, bool)
+            self._remember_none(rows, n, n_obs)
+            return U.copy(), self._diag(True, "nominal safe", t0, rows, P, U, U, O, none,
                                         0, True, "pass-through", 0, 0, n_unsafe, answer="optimum")
 
         if not recovering:  # one part, every robot: the loop below's answer without its copies
@@ -737,6 +739,15 @@ class SafetyFilter:
             self._near_keys = np.sort(rows.key[rows.lhs(u) >= rows.b - self.config.warm_slack])
         self._warm_shape = (n, n_obs)
 
+    def _remember_none(self, rows: Rows, n: int, n_obs: int) -> None:
+        """:meth:`_remember` of no active row and no multipliers (the pass-through): empty keys of ``rows.key``'s
+        dtype, no multipliers."""
+        self._warm_keys = rows.key[:0].copy()
+        self._lam_keys = rows.key[:0].copy()
+        self._lam = np.zeros(0)
+        self._near_keys = np.zeros(0, dtype=np.int64)
+        self._warm_shape = (n, n_obs)
+
     @staticmethod
     def _clusters(rows: Rows, n: int) -> tuple[int, np.ndarray]:
         two = rows.j >= 0
@@ -755,8 +766,8 @@ class SafetyFilter:
         n = P.shape[0]
         pair = rows.kind == PAIR
         act_pair = pair & active
-        if pair.any():
-            min_d = float(np.sqrt(np.min(rows.h[pair]) + cfg.safety_distance**2))
+        if pair.any():  # h + D_s² ≥ 0 (h = d² − D_s² rounds to ≥ −D_s²): math.sqrt, the same IEEE root as np.sqrt
+            min_d = math.sqrt(float(rows.h[pair].min()) + cfg.safety_distance**2)
         elif n >= 2:
             min_d = nearest_pair_distance(P)
         else:
@@ -791,7 +802,7 @@ class SafetyFilter:
             ok=ok, status=status, solve_time_s=time.perf_counter() - t0, n_constraints=rows.m,
             n_active=int(active.sum()) + int(n_speed),
             active_pairs=_pair_columns(rows.i[act_pair], rows.j[act_pair]),
-            active_h=rows.h[act_pair].copy(), min_distance=min_d, min_wall_clearance=min_wall,
+            active_h=rows.h[act_pair], min_distance=min_d, min_wall_clearance=min_wall,  # (indexing copies h)
             intervention=inter, nominal_was_safe=was_safe, method=method, iterations=iterations,
             n_clusters=int(n_clusters), n_unsafe=n_unsafe, min_obstacle_distance=min_obs,
             answer=answer, work=int(work), gap=0.0 if answer == "optimum" else None,
