@@ -90,7 +90,7 @@ def _clip_into(out: np.ndarray, vmax: float, s2: np.ndarray) -> np.ndarray:
     """:func:`clip_speed`'s scaling of ``out`` (N, 2) (a float array of the caller's own, changed in place and
     returned) whose squared speeds are ``s2`` (N,) (``einsum("kd,kd->k", out, out)``), finite ``vmax`` m/s."""
     limit = vmax * vmax
-    over = np.flatnonzero(s2 > limit)
+    over = (s2 > limit).nonzero()[0]
     if over.size:
         out[over] *= (vmax / np.sqrt(s2[over]))[:, None]
         for _ in range(8):
@@ -265,7 +265,7 @@ def solve_active_set(rows: Rows, nominal: np.ndarray, max_speed: float | None,
             return None
         if work is not None and lam.size:
             eq = work.A(u) - work.b if slack is None or rows_of_work is None else slack[rows_of_work]
-            if float(np.max(np.abs(eq[lam > 0]), initial=0.0)) > 1e-8:
+            if float(np.abs(eq[lam > 0]).max(initial=0.0)) > 1e-8:
                 return None
         speed = np.einsum("kd,kd->k", u, u)
         if (speed > (vmax * (1 + 1e-9)) ** 2).any():
@@ -278,8 +278,8 @@ def solve_active_set(rows: Rows, nominal: np.ndarray, max_speed: float | None,
     for it in range(1, max_iter + 1):
         aggressive = it <= first_aggressive
         while True:
-            idx = np.flatnonzero(W)
-            cidx = np.flatnonzero(cut)
+            idx = W.nonzero()[0]  # np.flatnonzero of a 1-D array
+            cidx = cut.nonzero()[0]
             if cidx.size:
                 work = _Working(np.concatenate([rows.i[idx], cidx]), np.concatenate([jj[idx], cidx]),
                                 np.concatenate([rows.ci[idx], normals[cidx]]),

@@ -298,7 +298,7 @@ class SafetyFilter:
     def coordinate_problem(P: np.ndarray, O: np.ndarray | None) -> str | None:
         """Why the positions cannot be filtered (|coordinate| > MAX_COORDINATE), or None."""
         for name, arr in (("points", P), ("obstacles", O)):
-            if arr is not None and arr.size and float(np.max(np.abs(arr))) > MAX_COORDINATE:
+            if arr is not None and arr.size and float(np.abs(arr).max()) > MAX_COORDINATE:
                 bad = np.flatnonzero(np.max(np.abs(arr), axis=1) > MAX_COORDINATE)
                 return (f"{name} coordinates beyond ±{MAX_COORDINATE:g} m in rows {bad[:10].tolist()} "
                         "(not a position: tracking or units error)")
@@ -521,7 +521,7 @@ class SafetyFilter:
         if self._warm_shape == (n, n_obs) and self._warm_keys.size:
             # rows.key in the sorted unique _warm_keys (np.isin's answer, by one binary search)
             keys = self._warm_keys
-            warm = keys[np.minimum(np.searchsorted(keys, rows.key), keys.size - 1)] == rows.key
+            warm = keys[np.minimum(keys.searchsorted(rows.key), keys.size - 1)] == rows.key
         closed_loop = warm is not None and bool(warm.any())
         if closed_loop and self._warm_wait > 0:
             # a recent tick's warm paths spent the whole active-set cap and gave up: this tick goes to
@@ -589,7 +589,7 @@ class SafetyFilter:
         cfg = self.config
         lam0 = np.zeros(rows.m)
         if self._lam_keys.size and not cold:
-            at = np.minimum(np.searchsorted(self._lam_keys, rows.key), self._lam_keys.size - 1)
+            at = np.minimum(self._lam_keys.searchsorted(rows.key), self._lam_keys.size - 1)
             hit = self._lam_keys[at] == rows.key
             lam0[hit] = self._lam[at[hit]]
         method = "dual+active-set" if cold else "warm dual+active-set"
@@ -730,7 +730,7 @@ class SafetyFilter:
         start and, when they are too many for the warm active set, the keys of every row within
         ``warm_slack`` of its bound at ``u``."""
         self._warm_keys = np.sort(rows.key[active])
-        held = np.flatnonzero(lam > 0) if lam is not None else np.zeros(0, dtype=np.int64)
+        held = (lam > 0).nonzero()[0] if lam is not None else np.zeros(0, dtype=np.int64)
         order = np.argsort(rows.key[held])
         self._lam_keys = rows.key[held][order]
         self._lam = lam[held][order] if lam is not None else np.zeros(0)
