@@ -65,6 +65,8 @@ class ActiveSetResult:
 
 def _project(w: np.ndarray, vmax: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Π_D(w) per robot; also the mask of robots outside the disc and their norms."""
+    if vmax == math.inf:  # no disc: s2 > inf holds for no robot (not even s2 = inf)
+        return w.copy(), np.zeros(w.shape[0], dtype=bool), np.zeros(0)
     s2 = np.einsum("kd,kd->k", w, w)
     over = s2 > vmax * vmax
     u = w.copy()
@@ -257,17 +259,19 @@ def solve_active_set(rows: Rows, nominal: np.ndarray, max_speed: float | None,
         return ActiveSetResult(np.zeros((n, 2)), False, reason, W, cut, it, solves=count[0])
 
     def certify(u: np.ndarray, work: _Working | None, lam: np.ndarray, it: int,
-                slack: np.ndarray | None = None, rows_of_work: np.ndarray | None = None) -> ActiveSetResult | None:
+                slack: np.ndarray | None = None, rows_of_work: np.ndarray | None = None,
+                squared: np.ndarray | None = None) -> ActiveSetResult | None:
         # slack: rows.lhs(u) − rows.b when the caller has it for this u already; rows_of_work: the rows ``work``
         # holds, when it holds rows only (no speed cut): its residuals are then those rows' slack (the same
-        # products and sums row by row; at most the sign of a zero differs, which |·| below cannot see)
+        # products and sums row by row; at most the sign of a zero differs, which |·| below cannot see);
+        # squared: einsum("kd,kd->k", u, u) when the caller has it
         if ((rows.lhs(u) - rows.b if slack is None else slack) > feas_tol).any():
             return None
         if work is not None and lam.size:
             eq = work.A(u) - work.b if slack is None or rows_of_work is None else slack[rows_of_work]
             if float(np.abs(eq[lam > 0]).max(initial=0.0)) > 1e-8:
                 return None
-        speed = np.einsum("kd,kd->k", u, u)
+        speed = np.einsum("kd,kd->k", u, u) if squared is None else squared
         if (speed > (vmax * (1 + 1e-9)) ** 2).any():
             return None
         u = u.astype(float) if not finite else _clip_into(u.astype(float), vmax, speed)  # rounding only (clip_speed)
@@ -324,10 +328,11 @@ def solve_active_set(rows: Rows, nominal: np.ndarray, max_speed: float | None,
         slack = rows.lhs(u) - rows.b
         viol = (slack > feas_tol) & ~W
         sp2 = np.einsum("kd,kd->k", u, u)
-        new_cut = involved & ~cut & (sp2 > vmax * vmax * (1 + 1e-12))
-        if not viol.any() and not new_cut.any():
+        # no speed bound (vmax = inf): sp2 > inf holds for no robot, no cut is ever made
+        new_cut = involved & ~cut & (sp2 > vmax * vmax * (1 + 1e-12)) if finite else None
+        if not viol.any() and (new_cut is None or not new_cut.any()):
             if cidx.size == 0:
-                done = certify(u, work, lam, it, slack, idx)
+                done = certify(u, work, lam, it, slack, idx, sp2)
                 return done if done is not None else fail("not certified", it)
             # the rows have settled: solve the discs exactly (Newton on u(λ) = Π_D(û − Aᵀλ))
             rw = _Working(rows.i[idx], jj[idx], rows.ci[idx], rows.cj[idx], rows.b[idx], n)
@@ -351,7 +356,7 @@ def solve_active_set(rows: Rows, nominal: np.ndarray, max_speed: float | None,
                 return fail("degenerate speed cut", it)
             normals[cidx] = u[cidx] / sc[:, None]
         W |= viol
-        if new_cut.any():
+        if new_cut is not None and new_cut.any():
             normals[new_cut] = u[new_cut] / np.sqrt(sp2[new_cut])[:, None]
             cut |= new_cut
     return fail("active-set iteration limit", max_iter)
