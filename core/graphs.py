@@ -16,10 +16,22 @@ FloatArray = NDArray[np.float64]
 DENSE_PAIRS_ROBOTS = 12
 
 
+def _upper(n: int) -> tuple[NDArray[np.intp], NDArray[np.intp]]:
+    """``np.triu_indices(n, 1)``, read-only (built once per size at import: the dense paths run on every tick)."""
+    i, j = np.triu_indices(n, 1)
+    i.flags.writeable = False
+    j.flags.writeable = False
+    return i, j
+
+
+_UPPER = tuple(_upper(n) for n in range(DENSE_PAIRS_ROBOTS + 1))
+
+
 def _all_pairs(p: np.ndarray) -> tuple[NDArray[np.intp], NDArray[np.intp], np.ndarray]:
     """(i, j, squared distance m²) of every pair i < j of ``p`` ``(N, d)``, summed coordinate by coordinate (the
     arithmetic both dense paths share, so they agree with each other to the bit)."""
-    i, j = np.triu_indices(p.shape[0], 1)
+    n = p.shape[0]
+    i, j = _UPPER[n] if n <= DENSE_PAIRS_ROBOTS else np.triu_indices(n, 1)
     e = p[i] - p[j]
     d2 = e[:, 0] * e[:, 0]
     for k in range(1, p.shape[1]):

@@ -23,6 +23,7 @@ falls back to clarabel. Robots no row touches are solved in closed form.
 """
 from __future__ import annotations
 
+import math
 import time
 from dataclasses import dataclass
 
@@ -64,6 +65,8 @@ class ActiveSetResult:
 
 def _project(w: np.ndarray, vmax: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Π_D(w) per robot; also the mask of robots outside the disc and their norms."""
+    if vmax == math.inf:  # no disc: s2 > inf holds for no robot (not even s2 = inf)
+        return w.copy(), np.zeros(w.shape[0], dtype=bool), np.zeros(0)
     s2 = np.einsum("kd,kd->k", w, w)
     over = s2 > vmax * vmax
     u = w.copy()
@@ -82,9 +85,14 @@ def clip_speed(u: np.ndarray, vmax: float) -> np.ndarray:
     out = np.array(u, dtype=float, copy=True)
     if not np.isfinite(vmax):
         return out
+    return _clip_into(out, vmax, np.einsum("kd,kd->k", out, out))
+
+
+def _clip_into(out: np.ndarray, vmax: float, s2: np.ndarray) -> np.ndarray:
+    """:func:`clip_speed`'s scaling of ``out`` (N, 2) (a float array of the caller's own, changed in place and
+    returned) whose squared speeds are ``s2`` (N,) (``einsum("kd,kd->k", out, out)``), finite ``vmax`` m/s."""
     limit = vmax * vmax
-    s2 = np.einsum("kd,kd->k", out, out)
-    over = np.flatnonzero(s2 > limit)
+    over = (s2 > limit).nonzero()[0]
     if over.size:
         out[over] *= (vmax / np.sqrt(s2[over]))[:, None]
         for _ in range(8):
@@ -102,7 +110,7 @@ def _dense_spd_solve(G: np.ndarray, rhs: np.ndarray) -> np.ndarray | None:
     numerically positive definite
     (dependent rows beyond what the ridge covers) goes through LU.
     """
-    G[np.diag_indices_from(G)] += _RIDGE
+    G.flat[:: G.shape[0] + 1] += _RIDGE  # the diagonal (np.diag_indices_from's elements, the same additions)
     try:
         return small_lapack.cho_solve(G, rhs)  # scipy.linalg's cho_factor/cho_solve without importing scipy.linalg
     except np.linalg.LinAlgError:
@@ -229,6 +237,7 @@ def solve_active_set(rows: Rows, nominal: np.ndarray, max_speed: float | None,
     involved[rows.i] = True
     involved[jj] = True
     vmax = np.inf if max_speed is None else float(max_speed)
+    finite = math.isfinite(vmax)
 
     # closed form for robots without rows: û scaled into the speed disc
     base, _, _ = _project(uh, vmax)
@@ -249,17 +258,23 @@ def solve_active_set(rows: Rows, nominal: np.ndarray, max_speed: float | None,
     def fail(reason: str, it: int) -> ActiveSetResult:
         return ActiveSetResult(np.zeros((n, 2)), False, reason, W, cut, it, solves=count[0])
 
-    def certify(u: np.ndarray, work: _Working | None, lam: np.ndarray, it: int) -> ActiveSetResult | None:
-        if np.any(rows.lhs(u) - rows.b > feas_tol):
+    def certify(u: np.ndarray, work: _Working | None, lam: np.ndarray, it: int,
+                slack: np.ndarray | None = None, rows_of_work: np.ndarray | None = None,
+                squared: np.ndarray | None = None) -> ActiveSetResult | None:
+        # slack: rows.lhs(u) − rows.b when the caller has it for this u already; rows_of_work: the rows ``work``
+        # holds, when it holds rows only (no speed cut): its residuals are then those rows' slack (the same
+        # products and sums row by row; at most the sign of a zero differs, which |·| below cannot see);
+        # squared: einsum("kd,kd->k", u, u) when the caller has it
+        if ((rows.lhs(u) - rows.b if slack is None else slack) > feas_tol).any():
             return None
         if work is not None and lam.size:
-            eq = work.A(u) - work.b
-            if float(np.max(np.abs(eq[lam > 0]), initial=0.0)) > 1e-8:
+            eq = work.A(u) - work.b if slack is None or rows_of_work is None else slack[rows_of_work]
+            if float(np.abs(eq[lam > 0]).max(initial=0.0)) > 1e-8:
                 return None
-        speed = np.einsum("kd,kd->k", u, u)
-        if np.any(speed > (vmax * (1 + 1e-9)) ** 2):
+        speed = np.einsum("kd,kd->k", u, u) if squared is None else squared
+        if (speed > (vmax * (1 + 1e-9)) ** 2).any():
             return None
-        u = clip_speed(u, vmax)  # rounding only
+        u = u.astype(float) if not finite else _clip_into(u.astype(float), vmax, speed)  # rounding only (clip_speed)
         held = W & (lam_rows > 0)
         return ActiveSetResult(u, True, "certified", held, speed >= vmax * vmax * (1 - 1e-9), it,
                                np.where(held, lam_rows, 0.0), count[0])
@@ -267,12 +282,15 @@ def solve_active_set(rows: Rows, nominal: np.ndarray, max_speed: float | None,
     for it in range(1, max_iter + 1):
         aggressive = it <= first_aggressive
         while True:
-            idx = np.flatnonzero(W)
-            cidx = np.flatnonzero(cut)
-            work = _Working(np.concatenate([rows.i[idx], cidx]), np.concatenate([jj[idx], cidx]),
-                            np.concatenate([rows.ci[idx], normals[cidx]]),
-                            np.concatenate([rows.cj[idx], np.zeros((cidx.size, 2))]),
-                            np.concatenate([rows.b[idx], np.full(cidx.size, vmax)]), n)
+            idx = W.nonzero()[0]  # np.flatnonzero of a 1-D array
+            cidx = cut.nonzero()[0]
+            if cidx.size:
+                work = _Working(np.concatenate([rows.i[idx], cidx]), np.concatenate([jj[idx], cidx]),
+                                np.concatenate([rows.ci[idx], normals[cidx]]),
+                                np.concatenate([rows.cj[idx], np.zeros((cidx.size, 2))]),
+                                np.concatenate([rows.b[idx], np.full(cidx.size, vmax)]), n)
+            else:  # no speed cut: the working rows alone (what the concatenations give, without copying twice)
+                work = _Working(rows.i[idx], jj[idx], rows.ci[idx], rows.cj[idx], rows.b[idx], n)
             if work.ai.size == 0:
                 lam = np.zeros(0)
                 break
@@ -282,7 +300,7 @@ def solve_active_set(rows: Rows, nominal: np.ndarray, max_speed: float | None,
                 return fail("work cap", it)
             count[0] += 1
             lam = work.solve(None, rhs)  # type: ignore[assignment]
-            if lam is None or not np.all(np.isfinite(lam)):
+            if lam is None or not np.isfinite(lam).all():
                 return fail("singular working set", it)
             neg = lam < 0
             if not neg.any():
@@ -307,12 +325,14 @@ def solve_active_set(rows: Rows, nominal: np.ndarray, max_speed: float | None,
         lam_rows[idx] = lam[: idx.size]
         lam_cut[cidx] = lam[idx.size:]
         u = base - work.At(lam) if lam.size else base.copy()
-        viol = (rows.lhs(u) - rows.b > feas_tol) & ~W
+        slack = rows.lhs(u) - rows.b
+        viol = (slack > feas_tol) & ~W
         sp2 = np.einsum("kd,kd->k", u, u)
-        new_cut = involved & ~cut & (sp2 > vmax * vmax * (1 + 1e-12))
-        if not viol.any() and not new_cut.any():
+        # no speed bound (vmax = inf): sp2 > inf holds for no robot, no cut is ever made
+        new_cut = involved & ~cut & (sp2 > vmax * vmax * (1 + 1e-12)) if finite else None
+        if not viol.any() and (new_cut is None or not new_cut.any()):
             if cidx.size == 0:
-                done = certify(u, work, lam, it)
+                done = certify(u, work, lam, it, slack, idx, sp2)
                 return done if done is not None else fail("not certified", it)
             # the rows have settled: solve the discs exactly (Newton on u(λ) = Π_D(û − Aᵀλ))
             rw = _Working(rows.i[idx], jj[idx], rows.ci[idx], rows.cj[idx], rows.b[idx], n)
@@ -336,7 +356,7 @@ def solve_active_set(rows: Rows, nominal: np.ndarray, max_speed: float | None,
                 return fail("degenerate speed cut", it)
             normals[cidx] = u[cidx] / sc[:, None]
         W |= viol
-        if new_cut.any():
+        if new_cut is not None and new_cut.any():
             normals[new_cut] = u[new_cut] / np.sqrt(sp2[new_cut])[:, None]
             cut |= new_cut
     return fail("active-set iteration limit", max_iter)

@@ -23,6 +23,7 @@ not built.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -36,6 +37,8 @@ if TYPE_CHECKING:
 from .config import BarrierConfig
 
 PAIR, WALL, OBSTACLE, LIMIT, SEGMENT = 0, 1, 2, 3, 4
+_WALL_NORMALS = np.array([[1.0, 0.0], [-1.0, 0.0], [0.0, 1.0], [0.0, -1.0]])  # sides +x, −x, +y, −y
+_WALL_NORMALS.flags.writeable = False
 _GOLDEN = 2.399963229728653  # golden angle, rad: deterministic directions for coincident points
 
 
@@ -63,9 +66,10 @@ class Rows:
     def m(self) -> int:
         return int(self.b.shape[0])
 
-    @property
+    @cached_property
     def jj(self) -> np.ndarray:
-        """Second robot index with single-robot rows pointing at their own robot (cj = 0 there)."""
+        """Second robot index with single-robot rows pointing at their own robot (cj = 0 there); computed once per
+        Rows (its arrays are never modified: every change makes a new Rows)."""
         return np.where(self.j < 0, self.i, self.j)
 
     def lhs(self, u: np.ndarray) -> np.ndarray:
@@ -79,6 +83,11 @@ class Rows:
 
     @staticmethod
     def concat(parts: list[Rows]) -> Rows:
+        """The rows of ``parts`` in order (one part holding rows alone: that part itself, whose arrays are the
+        concatenation's values and dtypes: every builder makes int64 indices, int8 kinds and float rows)."""
+        full = [p for p in parts if p.b.shape[0]]
+        if len(full) == 1 and all(map(_canonical, parts)):
+            return full[0]
         return Rows(*(np.concatenate([getattr(p, f) for p in parts]) for f in _FIELDS))
 
     @staticmethod
@@ -90,6 +99,14 @@ class Rows:
 
 
 _FIELDS = ("i", "j", "ci", "cj", "b", "h", "kind", "key")
+_INT64, _FLOAT, _INT8 = np.dtype(np.int64), np.dtype(float), np.dtype(np.int8)
+
+
+def _canonical(p: Rows) -> bool:
+    """Whether ``p``'s arrays have the dtypes every row builder makes (int64 indices and keys, float rows, int8
+    kinds): then concatenating it with others of the same kind changes no dtype."""
+    return (p.i.dtype == _INT64 and p.j.dtype == _INT64 and p.key.dtype == _INT64 and p.kind.dtype == _INT8
+            and p.ci.dtype == _FLOAT and p.cj.dtype == _FLOAT and p.b.dtype == _FLOAT and p.h.dtype == _FLOAT)
 
 
 def _unit_or_fallback(e: np.ndarray, d: np.ndarray, seed: np.ndarray) -> np.ndarray:
@@ -114,9 +131,14 @@ def pair_rows(points: np.ndarray, cfg: BarrierConfig, tree: cKDTree | None = Non
         pairs = tree.query_pairs(cfg.neighbour_radius(), output_type="ndarray")
     if pairs.shape[0] == 0:
         return Rows.empty()
-    # rows in key order (i, then j; query_pairs gives i < j): one sort of int64 keys
-    key = np.sort(pairs[:, 0].astype(np.int64) * n_robots + pairs[:, 1])
-    i, j = np.divmod(key, n_robots)
+    if tree is None:  # pairs_within's pairs are in key order already (i, then j; i < j < N)
+        i = pairs[:, 0].astype(np.int64)
+        j = pairs[:, 1].astype(np.int64)
+        key = i * n_robots + j
+    else:
+        # rows in key order (i, then j; query_pairs gives i < j): one sort of int64 keys
+        key = np.sort(pairs[:, 0].astype(np.int64) * n_robots + pairs[:, 1])
+        i, j = np.divmod(key, n_robots)
     e = points[i] - points[j]
     d = np.sqrt(np.einsum("kd,kd->k", e, e))
     n = _unit_or_fallback(e, d, key)
@@ -173,8 +195,12 @@ def wall_rows(points: np.ndarray, cfg: BarrierConfig, bounds: np.ndarray | None 
     ``cfg``'s for every robot. Vectorised: one comparison per robot and side.
     """
     n_robots = points.shape[0]
-    if bounds is None:
-        x_min, x_max, y_min, y_max = (np.full(n_robots, float(v)) for v in cfg.bounds)
+    x_min: float | np.ndarray
+    x_max: float | np.ndarray
+    y_min: float | np.ndarray
+    y_max: float | np.ndarray
+    if bounds is None:  # one rectangle: scalars (the same IEEE operations as per-robot arrays of them)
+        x_min, x_max, y_min, y_max = (float(v) for v in cfg.bounds)
     else:
         per = np.asarray(bounds, dtype=float)
         if per.shape != (n_robots, 4):
@@ -184,15 +210,16 @@ def wall_rows(points: np.ndarray, cfg: BarrierConfig, bounds: np.ndarray | None 
     x, y = points[:, 0], points[:, 1]
     clearance = np.stack([x_max - m - x, x - x_min - m, y_max - m - y, y - y_min - m], axis=1)  # (N,4)
     near = clearance <= cfg.wall_radius() - m
+    if not near.any():
+        return Rows.empty()  # the same empty arrays (dtypes and shapes) as below
     i, side = np.nonzero(near)
     i = i.astype(np.int64)
     side = side.astype(np.int64)
-    normals = np.array([[1.0, 0.0], [-1.0, 0.0], [0.0, 1.0], [0.0, -1.0]])
     delta = clearance[i, side]
     b = cfg.wall_gain * cfg.gamma * cfg.kappa(delta)
     kind = np.full(i.shape[0], WALL, dtype=np.int8)
     key = n_robots * n_robots + 4 * i + side
-    ci = normals[side]
+    ci = _WALL_NORMALS[side]
     return Rows(i, np.full_like(i, -1), ci, np.zeros_like(ci), b, delta, kind, key)
 
 

@@ -146,7 +146,7 @@ def ascend(rows: Rows, nominal: np.ndarray, max_speed: float | None, lam0: np.nd
         np.ascontiguousarray(rows.ci, dtype=float), np.ascontiguousarray(rows.cj, dtype=float),
         np.ascontiguousarray(rows.b, dtype=float), np.ascontiguousarray(nominal, dtype=float), vmax,
         np.ascontiguousarray(lam0, dtype=float), int(max_sweeps), float(tol), OMEGA, RESTRICT_SLACK, FULL_EVERY)
-    predicted = (lam > PREDICT_REL * float(np.max(lam, initial=0.0))) | ((lam0 > 0.0) & (lam > 0.0))
+    predicted = (lam > PREDICT_REL * float(lam.max(initial=0.0))) | ((lam0 > 0.0) & (lam > 0.0))
     return DualAscent(lam, u, predicted, int(sweeps), float(worst))
 
 

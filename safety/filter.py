@@ -34,6 +34,7 @@ and ``diag.ok`` is False with the reason in ``diag.status``.
 from __future__ import annotations
 
 import dataclasses
+import math
 import time
 from dataclasses import dataclass
 
@@ -96,7 +97,7 @@ def as_points(x: ArrayLike, name: str, n: int | None = None) -> np.ndarray:
         raise InputError(f"{name} must have shape (N, 2), got {arr.shape}")
     if n is not None and arr.shape[0] != n:
         raise InputError(f"{name} must have shape ({n}, 2) like points, got {arr.shape}")
-    if not np.all(np.isfinite(arr)):
+    if not np.isfinite(arr).all():
         bad = np.flatnonzero(~np.all(np.isfinite(arr), axis=1))
         raise InputError(f"{name} contains NaN or inf in rows {bad[:10].tolist()}")
     return arr
@@ -138,6 +139,14 @@ def restrict(rows: Rows, robots: np.ndarray, n: int) -> tuple[Rows, np.ndarray]:
     sub = rows.select(keep)
     j = np.where(sub.j >= 0, remap[np.maximum(sub.j, 0)], -1)
     return Rows(remap[sub.i], j, sub.ci, sub.cj, sub.b, sub.h, sub.kind, sub.key), keep
+
+
+def _pair_columns(i: np.ndarray, j: np.ndarray) -> np.ndarray:
+    """``np.stack([i, j], axis=1)`` (K, 2) for two (K,) index arrays, without stack's generality."""
+    out = np.empty((i.shape[0], 2), dtype=np.result_type(i, j))
+    out[:, 0] = i
+    out[:, 1] = j
+    return out
 
 
 @dataclass(frozen=True)
@@ -289,7 +298,7 @@ class SafetyFilter:
     def coordinate_problem(P: np.ndarray, O: np.ndarray | None) -> str | None:
         """Why the positions cannot be filtered (|coordinate| > MAX_COORDINATE), or None."""
         for name, arr in (("points", P), ("obstacles", O)):
-            if arr is not None and arr.size and float(np.max(np.abs(arr))) > MAX_COORDINATE:
+            if arr is not None and arr.size and float(np.abs(arr).max()) > MAX_COORDINATE:
                 bad = np.flatnonzero(np.max(np.abs(arr), axis=1) > MAX_COORDINATE)
                 return (f"{name} coordinates beyond ±{MAX_COORDINATE:g} m in rows {bad[:10].tolist()} "
                         "(not a position: tracking or units error)")
@@ -335,7 +344,7 @@ class SafetyFilter:
             return self.fail_stop(n, U, f"cannot build the barrier rows: {exc}", t0)
         if extra is not None and extra.m:
             rows = Rows.concat([rows, extra])
-        if not np.all(np.isfinite(rows.b)):
+        if not np.isfinite(rows.b).all():
             # an overflowing bound (inf) or inf·0 (NaN) would silently drop its row from the QP
             bad = ~np.isfinite(rows.b)
             kinds = sorted({_KIND_NAMES[int(k)] for k in np.unique(rows.kind[bad])})
@@ -362,10 +371,22 @@ class SafetyFilter:
 
         # pass-through: û satisfies every row and speed bound → u* = û exactly
         if self._satisfies(rows, U, max_speed):
-            self._remember(rows, np.zeros(rows.m, bool), n, n_obs, U)
-            return U.copy(), self._diag(True, "nominal safe", t0, rows, P, U, U, O, np.zeros(rows.m, bool),
+            none = np.zeros(rows.m, bool)
+            self._remember_none(rows, n, n_obs)
+            return U.copy(), self._diag(True, "nominal safe", t0, rows, P, U, U, O, none,
                                         0, True, "pass-through", 0, 0, n_unsafe, answer="optimum")
 
+        if not recovering:  # one part, every robot: the loop below's answer without its copies
+            solved = self._solve_plain(rows, U, max_speed, n, n_obs, budget)
+            if isinstance(solved, str) and solved.startswith(_BUDGET):
+                return self._solve_floor(P, U, O, plain, max_speed, t0, budget, solved)
+            if isinstance(solved, str):
+                return self.fail_stop(n, U, solved, t0, rows.m)
+            lam = np.zeros(rows.m) if solved.lam is None else solved.lam
+            self._remember(rows, solved.active, n, n_obs, solved.u, lam)
+            return solved.u, self._diag(True, "optimal", t0, rows, P, U, solved.u, O, solved.active, solved.n_speed,
+                                        False, solved.method, solved.iterations, 0, n_unsafe, answer="optimum",
+                                        work=budget.spent)
         n_clusters = 0
         if recovering:  # clusters with unsafe rows are solved apart (their QP may be infeasible)
             n_clusters, labels = self._clusters(rows, n)
@@ -414,9 +435,9 @@ class SafetyFilter:
     @staticmethod
     def _satisfies(rows: Rows, U: np.ndarray, max_speed: float | None) -> bool:
         """û meets every row (to _PASS_TOL) and every speed bound (exactly)."""
-        if max_speed is not None and not bool(np.all(np.einsum("kd,kd->k", U, U) <= max_speed**2)):
+        if max_speed is not None and not bool((np.einsum("kd,kd->k", U, U) <= max_speed**2).all()):
             return False
-        return bool(np.all(rows.lhs(U) <= rows.b + _PASS_TOL))
+        return bool((rows.lhs(U) <= rows.b + _PASS_TOL).all())
 
     @staticmethod
     def _active_set(rows: Rows, U: np.ndarray, max_speed: float | None, warm_rows: np.ndarray | None,
@@ -498,7 +519,9 @@ class SafetyFilter:
         iterations = 0
         warm = None
         if self._warm_shape == (n, n_obs) and self._warm_keys.size:
-            warm = np.isin(rows.key, self._warm_keys, assume_unique=True)
+            # rows.key in the sorted unique _warm_keys (np.isin's answer, by one binary search)
+            keys = self._warm_keys
+            warm = keys[np.minimum(keys.searchsorted(rows.key), keys.size - 1)] == rows.key
         closed_loop = warm is not None and bool(warm.any())
         if closed_loop and self._warm_wait > 0:
             # a recent tick's warm paths spent the whole active-set cap and gave up: this tick goes to
@@ -566,7 +589,7 @@ class SafetyFilter:
         cfg = self.config
         lam0 = np.zeros(rows.m)
         if self._lam_keys.size and not cold:
-            at = np.minimum(np.searchsorted(self._lam_keys, rows.key), self._lam_keys.size - 1)
+            at = np.minimum(self._lam_keys.searchsorted(rows.key), self._lam_keys.size - 1)
             hit = self._lam_keys[at] == rows.key
             lam0[hit] = self._lam[at[hit]]
         method = "dual+active-set" if cold else "warm dual+active-set"
@@ -707,13 +730,22 @@ class SafetyFilter:
         start and, when they are too many for the warm active set, the keys of every row within
         ``warm_slack`` of its bound at ``u``."""
         self._warm_keys = np.sort(rows.key[active])
-        held = np.flatnonzero(lam > 0) if lam is not None else np.zeros(0, dtype=np.int64)
+        held = (lam > 0).nonzero()[0] if lam is not None else np.zeros(0, dtype=np.int64)
         order = np.argsort(rows.key[held])
         self._lam_keys = rows.key[held][order]
         self._lam = lam[held][order] if lam is not None else np.zeros(0)
         self._near_keys = np.zeros(0, dtype=np.int64)
         if self._warm_keys.size > self.config.warm_max_rows:
             self._near_keys = np.sort(rows.key[rows.lhs(u) >= rows.b - self.config.warm_slack])
+        self._warm_shape = (n, n_obs)
+
+    def _remember_none(self, rows: Rows, n: int, n_obs: int) -> None:
+        """:meth:`_remember` of no active row and no multipliers (the pass-through): empty keys of ``rows.key``'s
+        dtype, no multipliers."""
+        self._warm_keys = rows.key[:0].copy()
+        self._lam_keys = rows.key[:0].copy()
+        self._lam = np.zeros(0)
+        self._near_keys = np.zeros(0, dtype=np.int64)
         self._warm_shape = (n, n_obs)
 
     @staticmethod
@@ -734,18 +766,24 @@ class SafetyFilter:
         n = P.shape[0]
         pair = rows.kind == PAIR
         act_pair = pair & active
-        if pair.any():
-            min_d = float(np.sqrt(np.min(rows.h[pair]) + cfg.safety_distance**2))
+        if pair.any():  # h + D_s² ≥ 0 (h = d² − D_s² rounds to ≥ −D_s²): math.sqrt, the same IEEE root as np.sqrt
+            min_d = math.sqrt(float(rows.h[pair].min()) + cfg.safety_distance**2)
         elif n >= 2:
             min_d = nearest_pair_distance(P)
         else:
             min_d = float("inf")
-        x_min, x_max, y_min, y_max = cfg.bounds if self._walls is None else self._walls.T
-        if n:
+        walls = self._walls
+        if not n:
+            min_wall = float("inf")
+        elif walls is None:
+            # one rectangle: min(x − c) = min(x) − c and min(c − x) = c − max(x) exactly (rounding is monotonic)
+            left, right, bottom, top = (float(v) for v in cfg.bounds)
+            lo, hi = P.min(axis=0).tolist(), P.max(axis=0).tolist()
+            min_wall = min(lo[0] - left, right - hi[0], lo[1] - bottom, top - hi[1])
+        else:
+            x_min, x_max, y_min, y_max = walls.T
             clear = np.stack([P[:, 0] - x_min, x_max - P[:, 0], P[:, 1] - y_min, y_max - P[:, 1]], axis=1)
             min_wall = float(clear.min())
-        else:
-            min_wall = float("inf")
         obs = rows.kind == OBSTACLE
         if obs.any():
             min_obs = float(np.sqrt(np.min(rows.h[obs]) + cfg.safety_distance**2))
@@ -755,12 +793,16 @@ class SafetyFilter:
             min_obs = float(cKDTree(O).query(P, k=1)[0].min())
         else:
             min_obs = float("inf")
-        inter = np.zeros(n) if was_safe else np.sqrt(np.einsum("kd,kd->k", u - U, u - U))
+        if was_safe:
+            inter = np.zeros(n)
+        else:
+            du = u - U
+            inter = np.sqrt(np.einsum("kd,kd->k", du, du))
         return BarrierDiagnostics(
             ok=ok, status=status, solve_time_s=time.perf_counter() - t0, n_constraints=rows.m,
             n_active=int(active.sum()) + int(n_speed),
-            active_pairs=np.stack([rows.i[act_pair], rows.j[act_pair]], axis=1),
-            active_h=rows.h[act_pair].copy(), min_distance=min_d, min_wall_clearance=min_wall,
+            active_pairs=_pair_columns(rows.i[act_pair], rows.j[act_pair]),
+            active_h=rows.h[act_pair], min_distance=min_d, min_wall_clearance=min_wall,  # (indexing copies h)
             intervention=inter, nominal_was_safe=was_safe, method=method, iterations=iterations,
             n_clusters=int(n_clusters), n_unsafe=n_unsafe, min_obstacle_distance=min_obs,
             answer=answer, work=int(work), gap=0.0 if answer == "optimum" else None,

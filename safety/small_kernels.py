@@ -12,6 +12,7 @@ the one test.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 
 import numpy as np
 
@@ -66,16 +67,19 @@ def ascend(ri: np.ndarray, rj: np.ndarray, ci: np.ndarray, cj: np.ndarray, b: np
     inv = [1.0 / (CI0[k] * CI0[k] + CI1[k] * CI1[k] + CJ0[k] * CJ0[k] + CJ1[k] * CJ1[k]) for k in range(m)]
     resid = [0.0] * m
 
-    def sweep(idx: list[int]) -> float:
+    table = list(zip(RI, RJ, CI0, CI1, CJ0, CJ1, B, inv))  # one row's numbers, read by one index
+
+    def sweep(idx: list[int], table: list = table, ux: list[float] = ux, uy: list[float] = uy,
+              wx: list[float] = wx, wy: list[float] = wy, lam: list[float] = lam, resid: list[float] = resid,
+              omega: float = omega, vv: float = vv, vmax: float = vmax,
+              sqrt: Callable[[float], float] = math.sqrt) -> float:
         worst = 0.0
         for k in idx:
-            i = RI[k]
-            j = RJ[k]
-            c0, c1, d0, d1 = CI0[k], CI1[k], CJ0[k], CJ1[k]
-            res = c0 * ux[i] + c1 * uy[i] + d0 * ux[j] + d1 * uy[j] - B[k]
+            i, j, c0, c1, d0, d1, bk, ik = table[k]
+            res = c0 * ux[i] + c1 * uy[i] + d0 * ux[j] + d1 * uy[j] - bk
             resid[k] = res
             old = lam[k]
-            new = old + omega * res * inv[k]
+            new = old + omega * res * ik
             if new < 0.0:
                 new = 0.0
             e = abs(res) if old > 0.0 else (0.0 if 0.0 > res else res)  # numba's max(res, 0.0)
@@ -88,14 +92,21 @@ def ascend(ri: np.ndarray, rj: np.ndarray, ci: np.ndarray, cj: np.ndarray, b: np
                 wy[i] -= d * c1
                 wx[j] -= d * d0
                 wy[j] -= d * d1
-                for r in (i, j):
-                    x, y = wx[r], wy[r]
+                x, y = wx[i], wy[i]
+                s = x * x + y * y
+                if s > vv:
+                    f = vmax / sqrt(s)
+                    ux[i], uy[i] = x * f, y * f
+                else:
+                    ux[i], uy[i] = x, y
+                if j != i:  # a single-robot row (j = i) has projected its robot already: the same numbers
+                    x, y = wx[j], wy[j]
                     s = x * x + y * y
                     if s > vv:
-                        f = vmax / math.sqrt(s)
-                        ux[r], uy[r] = x * f, y * f
+                        f = vmax / sqrt(s)
+                        ux[j], uy[j] = x * f, y * f
                     else:
-                        ux[r], uy[r] = x, y
+                        ux[j], uy[j] = x, y
         return worst
 
     every_row = list(range(m))

@@ -36,14 +36,20 @@ def wheel_limit_rows(poses: np.ndarray, params: UnicycleParams, n_obs: int = 0) 
     n = poses.shape[0]
     c, s = np.cos(poses[:, 2]), np.sin(poses[:, 2])
     k = params.axle_length / (2 * params.lookahead)
-    g_right = np.stack([c - k * s, s + k * c], axis=1) / params.wheel_radius
-    g_left = np.stack([c + k * s, s - k * c], axis=1) / params.wheel_radius
-    g = np.stack([g_right, -g_right, g_left, -g_left], axis=1).reshape(-1, 2)  # (4N, 2)
-    norm = np.sqrt(1 + k * k) / params.wheel_radius
-    i = np.repeat(np.arange(n, dtype=np.int64), 4)
-    side = np.tile(np.arange(4, dtype=np.int64), n)
-    key = n * n + 4 * n + n * n_obs + 4 * i + side
-    return Rows(i, np.full_like(i, -1), g / norm, np.zeros_like(g), np.full(4 * n, params.max_wheel_speed / norm),
+    r = params.wheel_radius
+    g = np.empty((n, 4, 2))  # per robot: right, −right, left, −left wheel's row
+    g[:, 0, 0] = c - k * s
+    g[:, 0, 1] = s + k * c
+    g[:, 2, 0] = c + k * s
+    g[:, 2, 1] = s - k * c
+    g[:, 0::2] /= r
+    np.negative(g[:, 0::2], out=g[:, 1::2])
+    flat = g.reshape(-1, 2)  # (4N, 2)
+    norm = np.sqrt(1 + k * k) / r
+    row = np.arange(4 * n, dtype=np.int64)
+    i = row // 4
+    key = n * n + 4 * n + n * n_obs + row  # 4i + side
+    return Rows(i, np.full_like(i, -1), flat / norm, np.zeros_like(flat), np.full(4 * n, params.max_wheel_speed / norm),
                 np.full(4 * n, np.inf), np.full(4 * n, LIMIT, dtype=np.int8), key)
 
 
@@ -88,7 +94,7 @@ class UnicycleSafetyFilter:
             Wc = np.asarray(w, dtype=float)
             if V.shape != (n,) or Wc.shape != (n,):
                 raise InputError(f"v and w must have shape ({n},), got {V.shape} and {Wc.shape}")
-            if not (np.all(np.isfinite(X)) and np.all(np.isfinite(V)) and np.all(np.isfinite(Wc))):
+            if not (np.isfinite(X).all() and np.isfinite(V).all() and np.isfinite(Wc).all()):
                 raise InputError("poses, v or w contain NaN or inf")
             O = None if obstacles is None else as_points(obstacles, "obstacles")
             B = None if robot_bounds is None else as_robot_bounds(robot_bounds, n)
