@@ -10,7 +10,12 @@ on matplotlib's Agg backend (no window), in these modes, interleaved:
 * ``rps unpaced`` — the same with ``sim_in_real_time=False`` (forced; what a user can do to get results fast);
 * ``rps headless`` — unpaced and ``show_figure=False`` (forced; only for examples that never touch the figure);
 * ``swarmdeck`` — ``swarmdeck run SCRIPT --duration D``: the arena's barrier on every step, headless;
-* ``swarmdeck rps`` — ``swarmdeck run --rps-semantics`` (the script's own barrier only).
+* ``swarmdeck rps`` — ``swarmdeck run --rps-semantics`` (the script's own barrier only);
+* ``floor`` — what both sides pay before any simulator runs: a process that starts Python and imports numpy, and
+  matplotlib's pyplot on Agg for the examples that plot (the script imports it, or draws on ``r.axes``, which needs
+  it under either simulator). The last two columns compare what each simulator adds above it: (rps unpaced − floor)
+  / (swarmdeck − floor), medians. rps 2.0 imports pyplot in every example (``robotarium_abc``); that is counted as
+  rps's own cost where the script does not plot.
 
 The rps runs stop at the same experiment time by counting ``step()`` calls after rps's initialisation (the script is
 not edited; the count is a wrapper around rps's ``step``).
@@ -69,7 +74,7 @@ CASES = [
     ("sensors/sensor_readings.py", False),
     ("state_estimation/dead_reckoning/dead_reckoning.py", True),
 ]
-MODES = ("rps", "rps unpaced", "rps headless", "swarmdeck", "swarmdeck rps")
+MODES = ("rps", "rps unpaced", "rps headless", "swarmdeck", "swarmdeck rps", "floor")
 
 
 class _Enough(Exception):
@@ -114,6 +119,18 @@ def _child_rps(mode: str, script: Path, duration: float) -> dict:
     return {"seconds": time.perf_counter() - start, "steps": counted["n"]}
 
 
+def _child_floor(mode: str, script: Path, duration: float) -> dict:
+    """The imports both sides pay (see ``floor`` in the module docstring)."""
+    import numpy  # noqa: F401
+
+    if next(fig for name, fig in CASES if Path(name).name == script.name):
+        import matplotlib
+
+        matplotlib.use("Agg")
+        import matplotlib.pyplot  # noqa: F401
+    return {"seconds": 0.0, "steps": 0}
+
+
 def _child_swarmdeck(mode: str, script: Path, duration: float) -> dict:
     import numpy as np
 
@@ -144,7 +161,7 @@ def main() -> None:
     args = parser.parse_args()
     if args.child:
         mode, script, duration = args.child[0], Path(args.child[1]), float(args.child[2])
-        run = _child_rps if mode.startswith("rps") else _child_swarmdeck
+        run = _child_rps if mode.startswith("rps") else _child_floor if mode == "floor" else _child_swarmdeck
         out = run(mode, script, duration)
         print("RESULT " + json.dumps(out))
         return
@@ -161,7 +178,8 @@ def main() -> None:
     modes = [m for m in MODES if m in chosen and (args.rps_path or not m.startswith("rps"))]
     print(harness.table_header(["example", *[f"{m} CPU median / worst (wall) s" for m in modes],
                                 "rps unpaced / swarmdeck (CPU, medians)",
-                                "worst case (rps's fastest / swarmdeck's slowest)"]))
+                                "worst case (rps's fastest / swarmdeck's slowest)",
+                                "above the floor: rps unpaced / swarmdeck (medians; worst case)"]))
     for name, uses_figure in cases:
         cpu: dict[str, list[float]] = {}
         wall: dict[str, list[float]] = {}
@@ -182,7 +200,12 @@ def main() -> None:
         both = {"rps unpaced", "swarmdeck"} <= set(med)
         ratio = f"{med['rps unpaced'] / med['swarmdeck']:.1f}×" if both else "—"
         worst = f"{min(cpu['rps unpaced']) / max(cpu['swarmdeck']):.1f}×" if both else "—"
-        print(harness.table_row(name, *cells, ratio, worst), flush=True)
+        above = "—"
+        if both and "floor" in med:
+            f = med["floor"]
+            above = (f"{(med['rps unpaced'] - f) / (med['swarmdeck'] - f):.1f}× "
+                     f"({(min(cpu['rps unpaced']) - f) / (max(cpu['swarmdeck']) - f):.1f}×)")
+        print(harness.table_row(name, *cells, ratio, worst, above), flush=True)
 
 
 def _run_child(args: argparse.Namespace, name: str, mode: str) -> tuple[float, dict]:

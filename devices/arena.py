@@ -242,6 +242,7 @@ class Arena:
         the recording, the video, the portal's live view and on the projector."""
         self.last_annotations: Annotations = EMPTY
         self._on_step = defaults.on_step
+        self._annotations_read = False  # read_annotations()
         self.sensors: Sensors | None = None
         self._readings: SensorReadings | None = None
         if sensing is not None:
@@ -664,6 +665,23 @@ class Arena:
         if self._on_step is not None:
             self._on_step(self)
         return new_poses
+
+    def read_annotations(self) -> None:
+        """Say that something reads :attr:`last_annotations` (a recording does when it opens, the rps facade's
+        ``arena`` property does when a script asks for its Arena): see :attr:`annotations_read`."""
+        self._annotations_read = True
+
+    @property
+    def annotations_read(self) -> bool:
+        """Whether anything may read what is drawn: :meth:`read_annotations` was called, the robots sit behind a
+        trust boundary (their sink takes the annotations: the sandbox, the portal, the console's live view and
+        projector), or a per-step hook runs (it gets the Arena; swarmdeck's progress bar says it does not read them:
+        ``reads_annotations = False``). Work that only feeds the annotations may be skipped while this is False:
+        the rps facade then does not project a script's matplotlib figure (:mod:`swarmdeck.devices.rps.figure`),
+        which nothing would show; what an experiment draws itself (:attr:`draw`) is collected every step regardless."""
+        if self._annotations_read or getattr(self.backend, "send_annotations", None) is not None:
+            return True
+        return self._on_step is not None and bool(getattr(self._on_step, "reads_annotations", True))
 
     def _annotate(self, time: float) -> None:
         """What :attr:`draw` holds for the step ending at ``time`` s → :attr:`last_annotations` (and, for robots

@@ -267,11 +267,19 @@ def progress_bar(total_time: float | None) -> tuple[Callable[[Arena], None] | No
     desc = "simulating" if total is not None else "simulating (Ctrl-C stops and prints the report)"
     bar = tqdm(total=total, unit="s", desc=desc, file=sys.stderr, leave=False,
                bar_format=None if total is not None else "{desc}: {n:.1f} s simulated [{elapsed}, {rate_fmt}]")
-    state = {"t": 0.0}
+    return _Progress(bar, total_time), bar.close
 
-    def on_step(arena: Arena) -> None:
-        t = arena.time if total_time is None else min(arena.time, total_time)
-        bar.update(round(t - state["t"], 3))
-        state["t"] = t
 
-    return on_step, bar.close
+class _Progress:
+    """The progress bar's per-step callback: it reads the Arena's time, not its annotations
+    (:attr:`Arena.annotations_read`)."""
+
+    reads_annotations = False
+
+    def __init__(self, bar: Any, total_time: float | None) -> None:
+        self.bar, self.total_time, self.t = bar, total_time, 0.0
+
+    def __call__(self, arena: Arena) -> None:
+        t = arena.time if self.total_time is None else min(arena.time, self.total_time)
+        self.bar.update(round(t - self.t, 3))
+        self.t = t

@@ -85,7 +85,11 @@ class ArenaRecording:
         return self.path if k == 0 else self.path.with_name(f"{self.path.stem}-{k + 1}{self.path.suffix or '.mcap'}")
 
     def on_create(self, arena: Any) -> None:
-        """Open the recording of a new Arena (its start poses are the first frame's)."""
+        """Open the recording of a new Arena (its start poses are the first frame's); it reads the Arena's
+        annotations (:meth:`~swarmdeck.devices.arena.Arena.read_annotations`)."""
+        read = getattr(arena, "read_annotations", None)
+        if read is not None:
+            read()
         from swarmdeck.console.recording.foxglove import FoxgloveConfig
         from swarmdeck.console.recording.recorder import Recorder, RecorderConfig
         from swarmdeck.console.recording.resimulate import session_metadata

@@ -226,7 +226,9 @@ class Robotarium(RpsSensors, ARobotarium):
 
     @property
     def arena(self) -> Arena:
-        """The swarmdeck Arena underneath."""
+        """The swarmdeck Arena underneath (asking for it counts as reading its annotations: from then on the
+        figure is projected every step, :meth:`Arena.read_annotations`)."""
+        self._arena.read_annotations()
         return self._arena
 
     # ------------------------------------------------------------------ rps's API
@@ -295,8 +297,10 @@ class Robotarium(RpsSensors, ARobotarium):
 
     def _project_figure(self) -> None:
         """What the script plotted on :attr:`axes` inside the arena → the arena's annotations for this step
-        (the Robotarium 2.0 projects it onto the testbed); nothing when the script never touched the figure."""
-        if self._figure is None:
+        (the Robotarium 2.0 projects it onto the testbed); nothing when the script never touched the figure, or
+        when nothing reads the arena's annotations (:attr:`Arena.annotations_read`: a headless ``swarmdeck run``
+        without ``--record`` shows no figure, so it is not projected)."""
+        if self._figure is None or not self._arena.annotations_read:
             return
         x0, x1, y0, y1 = self._bounds
         self._arena.draw.add(figure_annotations(self._figure[1], (x0, x1, y0, y1), colours=self._colours), key="rps-figure")
