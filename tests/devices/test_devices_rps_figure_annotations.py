@@ -42,6 +42,7 @@ def test_lines_patches_and_what_lies_outside():
 
         r = robotarium.Robotarium(2, initial_conditions=np.array([[-0.5, 0.5], [0.0, 0.0], [0.0, 0.0]]),
                                   sim_in_real_time=False)
+        r.arena  # noqa: B018 - a script reading its Arena's annotations asks for it first (figure projected from then on)
         r.axes.plot([-1.0, 0.0, 1.0], [0.5, 0.6, 0.5], "r-", linewidth=2)
         r.axes.plot([0.2], [0.2], "go")
         r.axes.add_patch(mpatches.Circle((0.3, -0.4), 0.2, color="blue", alpha=0.5))
