@@ -25,8 +25,10 @@ before and after it, so the interpreter's start, every import — rps's matplotl
 numba and its cached kernels — and the run itself; robust to the load of a shared machine), and *wall* — seconds of the
 script's run in the child (from just before the script starts, imports of swarmdeck's runner excluded). Each cell is
 the median over ``--repeats`` runs (default 3) and the worst (slowest) of them, the modes interleaved within each
-repeat. The ratio columns are rps unpaced / swarmdeck on CPU: of the medians, and the worst case (rps's fastest run
-against swarmdeck's slowest). swarmdeck's numba kernels are compiled once per installation into ``__pycache__``
+repeat, their order turned by one from repeat to repeat (so no mode always runs right after another; with
+``--repeats`` a multiple of the number of modes, every mode runs once in every position). The ratio columns
+are rps unpaced / swarmdeck on CPU: of the medians, and the worst case (rps's fastest run against swarmdeck's
+slowest). swarmdeck's numba kernels are compiled once per installation into ``__pycache__``
 (``cache=True``); a first warm-up run per example (not counted) makes every counted run load them, as every run after
 the first does for a user (``--no-warm-up`` counts the first too). Compiled Python modules (``__pycache__``) are kept
 the same way for both sides: the children run without ``PYTHONDONTWRITEBYTECODE`` (a sandbox's shell may set it; a
@@ -187,8 +189,10 @@ def main() -> None:
             for mode in modes:
                 if mode.startswith("swarmdeck"):
                     _run_child(args, name, mode)
-        for _ in range(args.repeats):
-            for mode in modes:  # interleaved: a change of the machine's load hits every mode alike
+        for k in range(args.repeats):
+            # interleaved: a change of the machine's load hits every mode alike; the order turns by one each repeat,
+            # so no mode always runs right after another
+            for mode in modes[k % len(modes):] + modes[:k % len(modes)]:
                 if mode == "rps headless" and uses_figure:
                     continue
                 seconds, result = _run_child(args, name, mode)
