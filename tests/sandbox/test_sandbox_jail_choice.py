@@ -1,6 +1,7 @@
 """Which jail confines a script: unshare (the fork server) or bubblewrap, the fallback between them,
 a refusal with the reason when none works, and a fresh jail for every script."""
 import os
+import sys
 import textwrap
 
 import pytest
@@ -130,3 +131,17 @@ def test_a_dead_fork_server_is_replaced(tmp_path):
     out = run_sandboxed(script(tmp_path), plant, n_robots=2, duration=0.3, jail=JailConfig(order=("unshare",)))
     assert out.ok, out.error
     assert shared_fork_server() is not server
+
+
+@needs_bwrap
+def test_an_interpreter_path_through_a_folder_the_jail_lacks_still_runs(tmp_path, monkeypatch):
+    """Bubblewrap runs the interpreter by its normalised path: started as ``…/bench/../.venv/bin/python``, the jail
+    has no ``bench/`` folder and execvp failed before the fix (every run "ended unexpectedly (exit status 1)")."""
+    outside = tmp_path / "not_in_the_jail"
+    outside.mkdir()
+    detour = os.path.join(str(outside), *[".."] * len(outside.parts[1:]), sys.executable.lstrip("/"))
+    assert os.path.samefile(detour, sys.executable) and ".." in detour
+    monkeypatch.setattr(sys, "executable", detour)
+    out = run_sandboxed(script(tmp_path), plant, n_robots=2, duration=0.3, jail=JailConfig(order=("bwrap",)))
+    assert out.ok, (out.error, out.log)
+    assert out.jail == "bwrap" and out.ticks > 0
